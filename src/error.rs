@@ -1,0 +1,137 @@
+//! The one error type of brume. Every variant says what failed, on which file, shader or
+//! extension, and what the user can do about it.
+
+use std::path::PathBuf;
+
+/// Result alias used across brume.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong in brume, typed so that callers can react and the CLI can
+/// print one clear line.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be opened, read or written.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file involved.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file was read but its content is not what its format requires.
+    #[error("{}: {detail}", path.display())]
+    Format {
+        /// The offending file.
+        path: PathBuf,
+        /// What was found and what was expected.
+        detail: String,
+    },
+    /// A parameter given by the user (or a library caller) is out of its domain.
+    #[error("invalid {name} = {value}: expected {expected}")]
+    InvalidParameter {
+        /// The option or field name, e.g. `--ks`.
+        name: String,
+        /// The value given, as text.
+        value: String,
+        /// What would have been accepted.
+        expected: String,
+    },
+    /// Two inputs that must have the same size do not.
+    #[error("size mismatch: {a} is {aw}x{ah} but {b} is {bw}x{bh}; both must have the same size")]
+    SizeMismatch {
+        /// First input.
+        a: String,
+        /// Its width.
+        aw: u32,
+        /// Its height.
+        ah: u32,
+        /// Second input.
+        b: String,
+        /// Its width.
+        bw: u32,
+        /// Its height.
+        bh: u32,
+    },
+    /// A range or depth map holds no usable value at all.
+    #[error("{}: no valid depth value (all pixels unknown, zero, NaN or infinite)", path.display())]
+    NoValidDepth {
+        /// The depth file.
+        path: PathBuf,
+    },
+    /// EGL could not be loaded or no display/context could be created.
+    #[error("EGL: {0}")]
+    Egl(String),
+    /// A GL capability that brume needs is missing on this driver.
+    #[error("the GL driver ({renderer}) lacks {capability}: {hint}")]
+    MissingCapability {
+        /// The extension or limit, e.g. `GL_EXT_color_buffer_float`.
+        capability: String,
+        /// GL_RENDERER of the driver.
+        renderer: String,
+        /// What to do instead.
+        hint: String,
+    },
+    /// A shader failed to compile or a program failed to link.
+    #[error("shader {name} failed to {stage}:\n{log}")]
+    Shader {
+        /// Shader file name, e.g. `diffuse.frag`.
+        name: String,
+        /// `compile` or `link`.
+        stage: &'static str,
+        /// The driver's info log.
+        log: String,
+    },
+    /// Any other GL failure (object creation, incomplete framebuffer, glGetError).
+    #[error("GL: {0}")]
+    Gl(String),
+    /// An image is larger than the driver can hold in one texture.
+    #[error("{what} is {width}x{height} but GL_MAX_TEXTURE_SIZE of {renderer} is {max}: downscale the input")]
+    TooLarge {
+        /// Which input.
+        what: String,
+        /// Its width.
+        width: u32,
+        /// Its height.
+        height: u32,
+        /// The driver limit.
+        max: u32,
+        /// GL_RENDERER.
+        renderer: String,
+    },
+    /// Range pre-processing (hole filling, sky, horizon margin) cannot proceed.
+    #[error("pre-processing: {0}")]
+    Prep(String),
+}
+
+impl Error {
+    /// Wraps an I/O error with the path it concerns.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+
+    /// A format error on `path` with a message saying what was found and expected.
+    pub fn format(path: impl Into<PathBuf>, detail: impl Into<String>) -> Self {
+        Error::Format {
+            path: path.into(),
+            detail: detail.into(),
+        }
+    }
+
+    /// An out-of-domain parameter.
+    pub fn invalid(
+        name: impl Into<String>,
+        value: impl std::fmt::Display,
+        expected: impl Into<String>,
+    ) -> Self {
+        Error::InvalidParameter {
+            name: name.into(),
+            value: value.to_string(),
+            expected: expected.into(),
+        }
+    }
+}
