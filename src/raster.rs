@@ -114,7 +114,10 @@ impl<T> Grid<T> {
     where
         T: Clone,
     {
-        assert!(x0 + w <= self.width && y0 + h <= self.height, "crop outside grid");
+        assert!(
+            x0 + w <= self.width && y0 + h <= self.height,
+            "crop outside grid"
+        );
         Grid::from_fn(w, h, |x, y| self.get(x0 + x, y0 + y).clone())
     }
 }

@@ -1,0 +1,133 @@
+//! What the GL driver can do, detected once per context and kept: strings, the float
+//! render/filter extensions brume depends on, timer queries and the texture size limit.
+
+use crate::egl::GlContext;
+use crate::error::{Error, Result};
+use crate::Precision;
+use glow::HasContext;
+
+/// The driver facts brume needs, read once after the context is made current.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Capabilities {
+    /// EGL platform the display was opened on.
+    pub egl_platform: String,
+    /// `EGL_VENDOR`.
+    pub egl_vendor: String,
+    /// `EGL_VERSION`.
+    pub egl_version: String,
+    /// `GL_VENDOR`.
+    pub vendor: String,
+    /// `GL_RENDERER`, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`.
+    pub renderer: String,
+    /// `GL_VERSION`, e.g. `OpenGL ES 3.2 Mesa 22.3.6`.
+    pub version: String,
+    /// `GL_SHADING_LANGUAGE_VERSION`.
+    pub shading_language_version: String,
+    /// GLES major.minor of the context.
+    pub gles_version: (u32, u32),
+    /// `GL_EXT_color_buffer_float`: RGBA32F (and RGBA16F) are renderable.
+    pub color_buffer_float: bool,
+    /// `GL_EXT_color_buffer_half_float`: RGBA16F is renderable.
+    pub color_buffer_half_float: bool,
+    /// `GL_OES_texture_float_linear`: RGBA32F can be sampled with bilinear filtering.
+    pub texture_float_linear: bool,
+    /// `GL_EXT_disjoint_timer_query`: GL_TIME_ELAPSED queries.
+    pub disjoint_timer_query: bool,
+    /// `GL_MAX_TEXTURE_SIZE`.
+    pub max_texture_size: u32,
+}
+
+impl Capabilities {
+    /// Reads the driver strings and extensions of the current context.
+    pub fn detect(ctx: &GlContext) -> Self {
+        let gl = ctx.gl();
+        let exts = gl.supported_extensions();
+        let has = |name: &str| exts.contains(name);
+        // SAFETY: plain state queries on the context that is current on this thread.
+        let (vendor, renderer, version, glsl, max_texture_size) = unsafe {
+            (
+                gl.get_parameter_string(glow::VENDOR),
+                gl.get_parameter_string(glow::RENDERER),
+                gl.get_parameter_string(glow::VERSION),
+                gl.get_parameter_string(glow::SHADING_LANGUAGE_VERSION),
+                gl.get_parameter_i32(glow::MAX_TEXTURE_SIZE).max(0) as u32,
+            )
+        };
+        let v = gl.version();
+        Capabilities {
+            egl_platform: ctx.platform().name().to_string(),
+            egl_vendor: ctx.egl_vendor().to_string(),
+            egl_version: ctx.egl_version().to_string(),
+            vendor,
+            renderer,
+            version,
+            shading_language_version: glsl,
+            gles_version: (v.major, v.minor),
+            color_buffer_float: has("GL_EXT_color_buffer_float"),
+            color_buffer_half_float: has("GL_EXT_color_buffer_half_float"),
+            texture_float_linear: has("GL_OES_texture_float_linear"),
+            disjoint_timer_query: has("GL_EXT_disjoint_timer_query"),
+            max_texture_size,
+        }
+    }
+
+    /// Checks that textures of `precision` can be rendered to and filtered, so that a
+    /// missing extension is reported here and not as a GL error later.
+    pub fn require_precision(&self, precision: Precision) -> Result<()> {
+        match precision {
+            Precision::F32 => {
+                if !self.color_buffer_float {
+                    return Err(self.missing(
+                        "GL_EXT_color_buffer_float",
+                        "RGBA32F cannot be rendered to; try --precision f16",
+                    ));
+                }
+                if !self.texture_float_linear {
+                    return Err(self.missing(
+                        "GL_OES_texture_float_linear",
+                        "RGBA32F cannot be sampled bilinearly (common on Mali); use --precision f16",
+                    ));
+                }
+            }
+            Precision::F16 => {
+                if !(self.color_buffer_half_float || self.color_buffer_float) {
+                    return Err(self.missing(
+                        "GL_EXT_color_buffer_half_float",
+                        "RGBA16F cannot be rendered to on this driver; no float precision is available",
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Checks a `width x height` image against `GL_MAX_TEXTURE_SIZE`.
+    pub fn require_size(&self, what: &str, width: usize, height: usize) -> Result<()> {
+        let max = self.max_texture_size as usize;
+        if width == 0 || height == 0 {
+            return Err(Error::invalid(
+                what,
+                format!("{width}x{height}"),
+                "a non-empty image",
+            ));
+        }
+        if width > max || height > max {
+            return Err(Error::TooLarge {
+                what: what.to_string(),
+                width: width as u32,
+                height: height as u32,
+                max: self.max_texture_size,
+                renderer: self.renderer.clone(),
+            });
+        }
+        Ok(())
+    }
+
+    fn missing(&self, capability: &str, hint: &str) -> Error {
+        Error::MissingCapability {
+            capability: capability.to_string(),
+            renderer: self.renderer.clone(),
+            hint: hint.to_string(),
+        }
+    }
+}

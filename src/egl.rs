@@ -1,0 +1,364 @@
+//! A headless OpenGL ES context through EGL, loaded at run time (`libEGL.so.1`), so that a
+//! machine without Mesa gets a clear error instead of a link failure.
+//!
+//! Display order, unless the caller picks one: `EGL_MESA_platform_surfaceless`, then
+//! `EGL_EXT_platform_device` (the headless route on NVIDIA), then
+//! `eglGetDisplay(EGL_DEFAULT_DISPLAY)`. The context is OpenGL ES 3.2 (3.0 if the driver
+//! has no 3.2) with no surface where `EGL_KHR_surfaceless_context` allows it, else a 1x1
+//! pbuffer.
+
+use crate::error::{Error, Result};
+use khronos_egl as egl;
+use std::ffi::c_void;
+use std::fmt;
+use std::rc::Rc;
+use std::str::FromStr;
+
+type EglInstance = egl::DynamicInstance<egl::EGL1_4>;
+
+const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
+const PLATFORM_DEVICE_EXT: egl::Enum = 0x313F;
+const DEBIAN_PACKAGES: &str = "libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri";
+
+/// Which EGL display to open.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Platform {
+    /// `EGL_MESA_platform_surfaceless`: Mesa with no window system (llvmpipe, or a GPU's
+    /// render node).
+    Surfaceless,
+    /// `EGL_EXT_platform_device`: an EGL device enumerated by `eglQueryDevicesEXT`.
+    Device,
+    /// `eglGetDisplay(EGL_DEFAULT_DISPLAY)`: whatever the EGL vendor picks (needs a display
+    /// server unless `EGL_PLATFORM=surfaceless` is set).
+    Default,
+}
+
+impl Platform {
+    /// The order tried when the user does not choose.
+    pub const AUTO_ORDER: [Platform; 3] =
+        [Platform::Surfaceless, Platform::Device, Platform::Default];
+
+    /// The lowercase name used by `--egl` and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Platform::Surfaceless => "surfaceless",
+            Platform::Device => "device",
+            Platform::Default => "default",
+        }
+    }
+}
+
+impl fmt::Display for Platform {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Platform {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Platform::AUTO_ORDER
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| Error::invalid("--egl", s, "one of surfaceless, device, default"))
+    }
+}
+
+/// An EGL display plus a current OpenGL ES context on this thread, and the `glow` function
+/// table loaded from it. Not `Send`: EGL contexts belong to the thread that made them
+/// current.
+pub struct GlContext {
+    gl: Rc<glow::Context>,
+    egl: EglInstance,
+    display: egl::Display,
+    context: egl::Context,
+    pbuffer: Option<egl::Surface>,
+    platform: Platform,
+    egl_vendor: String,
+    egl_version: String,
+}
+
+impl fmt::Debug for GlContext {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("GlContext")
+            .field("platform", &self.platform)
+            .field("egl_vendor", &self.egl_vendor)
+            .field("egl_version", &self.egl_version)
+            .finish_non_exhaustive()
+    }
+}
+
+impl GlContext {
+    /// Opens a display (the given platform, or the first that works in
+    /// [`Platform::AUTO_ORDER`]) and makes a GLES 3.2 context current on this thread.
+    pub fn new(platform: Option<Platform>) -> Result<Self> {
+        // SAFETY: loading libEGL runs its initialisers; it is the system's EGL loader.
+        let egl = unsafe { EglInstance::load_required() }.map_err(|e| {
+            Error::Egl(format!(
+                "cannot load libEGL.so.1 ({e}); install Mesa's EGL and GLES: \
+                 apt-get install {DEBIAN_PACKAGES}"
+            ))
+        })?;
+        let order: Vec<Platform> = match platform {
+            Some(p) => vec![p],
+            None => Platform::AUTO_ORDER.to_vec(),
+        };
+        let mut tried = Vec::new();
+        for p in order {
+            match open_display(&egl, p).and_then(|display| create_context(&egl, display)) {
+                Ok(parts) => {
+                    return Ok(GlContext {
+                        gl: Rc::new(parts.gl),
+                        egl,
+                        display: parts.display,
+                        context: parts.context,
+                        pbuffer: parts.pbuffer,
+                        platform: p,
+                        egl_vendor: parts.egl_vendor,
+                        egl_version: parts.egl_version,
+                    })
+                }
+                Err(reason) => {
+                    log::debug!("EGL {p}: {reason}");
+                    tried.push(format!("{p}: {reason}"));
+                }
+            }
+        }
+        Err(Error::Egl(format!(
+            "no usable display (tried {}); on Debian/Ubuntu install Mesa's EGL and GLES \
+             with: apt-get install {DEBIAN_PACKAGES}",
+            tried.join("; ")
+        )))
+    }
+
+    /// The `glow` function table of this context.
+    pub fn gl(&self) -> &Rc<glow::Context> {
+        &self.gl
+    }
+
+    /// The platform the display was opened on.
+    pub fn platform(&self) -> Platform {
+        self.platform
+    }
+
+    /// `EGL_VENDOR` of the display.
+    pub fn egl_vendor(&self) -> &str {
+        &self.egl_vendor
+    }
+
+    /// `EGL_VERSION` of the display.
+    pub fn egl_version(&self) -> &str {
+        &self.egl_version
+    }
+}
+
+impl Drop for GlContext {
+    fn drop(&mut self) {
+        // The display is not terminated: EGL displays are process-wide singletons, and
+        // terminating one would pull it from under contexts that other threads (other
+        // tests, say) still use.
+        let _ = self.egl.make_current(self.display, None, None, None);
+        let _ = self.egl.destroy_context(self.display, self.context);
+        if let Some(surface) = self.pbuffer.take() {
+            let _ = self.egl.destroy_surface(self.display, surface);
+        }
+    }
+}
+
+/// What went wrong on one platform, as one line for the error message.
+type Reason = String;
+
+fn client_extensions(egl: &EglInstance) -> String {
+    egl.query_string(None, egl::EXTENSIONS)
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default()
+}
+
+fn has_extension(list: &str, name: &str) -> bool {
+    list.split_ascii_whitespace().any(|e| e == name)
+}
+
+fn open_display(
+    egl: &EglInstance,
+    platform: Platform,
+) -> std::result::Result<egl::Display, Reason> {
+    let display = match platform {
+        Platform::Surfaceless => {
+            require_client_extension(egl, "EGL_MESA_platform_surfaceless")?;
+            platform_display(egl, PLATFORM_SURFACELESS_MESA, std::ptr::null_mut())?
+        }
+        Platform::Device => device_display(egl)?,
+        Platform::Default => {
+            // SAFETY: EGL_DEFAULT_DISPLAY is the documented null native display.
+            unsafe { egl.get_display(egl::DEFAULT_DISPLAY) }.ok_or_else(|| {
+                "eglGetDisplay(EGL_DEFAULT_DISPLAY) returned no display".to_string()
+            })?
+        }
+    };
+    egl.initialize(display)
+        .map_err(|e| format!("eglInitialize failed: {e}"))?;
+    Ok(display)
+}
+
+fn require_client_extension(egl: &EglInstance, name: &str) -> std::result::Result<(), Reason> {
+    if has_extension(&client_extensions(egl), name) {
+        Ok(())
+    } else {
+        Err(format!("{name} is not offered by this libEGL"))
+    }
+}
+
+type GetPlatformDisplayExt =
+    unsafe extern "system" fn(egl::Enum, *mut c_void, *const egl::Int) -> egl::EGLDisplay;
+type QueryDevicesExt =
+    unsafe extern "system" fn(egl::Int, *mut *mut c_void, *mut egl::Int) -> egl::Boolean;
+
+/// eglGetPlatformDisplay of EGL 1.5, or the EXT entry point on a 1.4 libEGL.
+fn platform_display(
+    egl: &EglInstance,
+    platform: egl::Enum,
+    native: *mut c_void,
+) -> std::result::Result<egl::Display, Reason> {
+    if let Some(egl15) = egl.upcast::<egl::EGL1_5>() {
+        // SAFETY: `native` is null or an EGLDeviceEXT handle returned by the driver.
+        return unsafe { egl15.get_platform_display(platform, native, &[egl::ATTRIB_NONE]) }
+            .map_err(|e| format!("eglGetPlatformDisplay failed: {e}"));
+    }
+    let f = egl
+        .get_proc_address("eglGetPlatformDisplayEXT")
+        .ok_or("libEGL has neither EGL 1.5 nor eglGetPlatformDisplayEXT")?;
+    // SAFETY: the EXT_platform_base signature; the attribute list is EGL_NONE-terminated.
+    let raw = unsafe {
+        let f: GetPlatformDisplayExt = std::mem::transmute(f);
+        f(platform, native, [egl::NONE].as_ptr())
+    };
+    if raw.is_null() {
+        Err("eglGetPlatformDisplayEXT returned no display".into())
+    } else {
+        // SAFETY: a non-null display handle from the driver.
+        Ok(unsafe { egl::Display::from_ptr(raw) })
+    }
+}
+
+/// The first EGL device whose display initialises.
+fn device_display(egl: &EglInstance) -> std::result::Result<egl::Display, Reason> {
+    require_client_extension(egl, "EGL_EXT_platform_device")?;
+    let query = egl
+        .get_proc_address("eglQueryDevicesEXT")
+        .ok_or("eglQueryDevicesEXT is missing")?;
+    let mut devices = [std::ptr::null_mut(); 16];
+    let mut count: egl::Int = 0;
+    // SAFETY: EGL_EXT_device_enumeration's signature; the array holds 16 handles.
+    let ok = unsafe {
+        let query: QueryDevicesExt = std::mem::transmute(query);
+        query(devices.len() as egl::Int, devices.as_mut_ptr(), &mut count)
+    };
+    if ok != egl::TRUE || count <= 0 {
+        return Err("eglQueryDevicesEXT found no device".into());
+    }
+    let mut errors = Vec::new();
+    for (i, &device) in devices.iter().take(count as usize).enumerate() {
+        match platform_display(egl, PLATFORM_DEVICE_EXT, device) {
+            Ok(display) => match egl.initialize(display) {
+                Ok(_) => return Ok(display),
+                Err(e) => errors.push(format!("device {i}: eglInitialize: {e}")),
+            },
+            Err(e) => errors.push(format!("device {i}: {e}")),
+        }
+    }
+    Err(errors.join(", "))
+}
+
+fn choose_config(
+    egl: &EglInstance,
+    display: egl::Display,
+) -> std::result::Result<egl::Config, Reason> {
+    // A surfaceless display offers pbuffer-capable configs only; asking for the default
+    // EGL_WINDOW_BIT finds none. SURFACE_TYPE 0 means "any" as the last resort.
+    for surface_type in [egl::PBUFFER_BIT, 0] {
+        let attribs = [
+            egl::RENDERABLE_TYPE,
+            egl::OPENGL_ES3_BIT,
+            egl::SURFACE_TYPE,
+            surface_type,
+            egl::NONE,
+        ];
+        if let Ok(Some(config)) = egl.choose_first_config(display, &attribs) {
+            return Ok(config);
+        }
+    }
+    Err("no EGLConfig with EGL_OPENGL_ES3_BIT".into())
+}
+
+/// A current context before it is wrapped in a [`GlContext`].
+struct ContextParts {
+    gl: glow::Context,
+    display: egl::Display,
+    context: egl::Context,
+    pbuffer: Option<egl::Surface>,
+    egl_vendor: String,
+    egl_version: String,
+}
+
+fn create_context(
+    egl: &EglInstance,
+    display: egl::Display,
+) -> std::result::Result<ContextParts, Reason> {
+    egl.bind_api(egl::OPENGL_ES_API)
+        .map_err(|e| format!("eglBindAPI(OPENGL_ES) failed: {e}"))?;
+    let config = choose_config(egl, display)?;
+    let context = [(3, 2), (3, 0)]
+        .into_iter()
+        .find_map(|(major, minor)| {
+            let attribs = [
+                egl::CONTEXT_MAJOR_VERSION,
+                major,
+                egl::CONTEXT_MINOR_VERSION,
+                minor,
+                egl::NONE,
+            ];
+            egl.create_context(display, config, None, &attribs).ok()
+        })
+        .ok_or("eglCreateContext failed for OpenGL ES 3.2 and 3.0")?;
+    let display_exts = egl
+        .query_string(Some(display), egl::EXTENSIONS)
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let pbuffer = if has_extension(&display_exts, "EGL_KHR_surfaceless_context") {
+        None
+    } else {
+        let attribs = [egl::WIDTH, 1, egl::HEIGHT, 1, egl::NONE];
+        Some(
+            egl.create_pbuffer_surface(display, config, &attribs)
+                .map_err(|e| {
+                    format!("no surfaceless contexts and eglCreatePbufferSurface failed: {e}")
+                })?,
+        )
+    };
+    egl.make_current(display, pbuffer, pbuffer, Some(context))
+        .map_err(|e| format!("eglMakeCurrent failed: {e}"))?;
+    let query = |name| {
+        egl.query_string(Some(display), name)
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    };
+    let egl_vendor = query(egl::VENDOR);
+    let egl_version = query(egl::VERSION);
+    // SAFETY: the context is current on this thread (glow panics otherwise), and every
+    // pointer comes from eglGetProcAddress of the same libEGL.
+    let gl = unsafe {
+        glow::Context::from_loader_function(|name| {
+            egl.get_proc_address(name)
+                .map_or(std::ptr::null(), |f| f as *const c_void)
+        })
+    };
+    Ok(ContextParts {
+        gl,
+        display,
+        context,
+        pbuffer,
+        egl_vendor,
+        egl_version,
+    })
+}

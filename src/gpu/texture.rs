@@ -1,0 +1,192 @@
+//! 2D textures: float images uploaded from the CPU and the float render targets of the
+//! diffusion passes.
+
+use crate::error::{Error, Result};
+use glow::HasContext;
+use std::rc::Rc;
+
+/// A texel format brume uses, with its GL triple.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TexelFormat {
+    /// RGBA 32-bit float.
+    Rgba32F,
+    /// RGBA 16-bit float.
+    Rgba16F,
+    /// One 32-bit float channel.
+    R32F,
+    /// One 16-bit float channel.
+    R16F,
+    /// Two 32-bit float channels.
+    Rg32F,
+}
+
+impl TexelFormat {
+    fn internal(self) -> u32 {
+        match self {
+            TexelFormat::Rgba32F => glow::RGBA32F,
+            TexelFormat::Rgba16F => glow::RGBA16F,
+            TexelFormat::R32F => glow::R32F,
+            TexelFormat::R16F => glow::R16F,
+            TexelFormat::Rg32F => glow::RG32F,
+        }
+    }
+
+    /// The client format of data uploaded as f32.
+    fn client_format(self) -> u32 {
+        match self {
+            TexelFormat::Rgba32F | TexelFormat::Rgba16F => glow::RGBA,
+            TexelFormat::R32F | TexelFormat::R16F => glow::RED,
+            TexelFormat::Rg32F => glow::RG,
+        }
+    }
+
+    /// Float channels per texel.
+    pub fn channels(self) -> usize {
+        match self {
+            TexelFormat::Rgba32F | TexelFormat::Rgba16F => 4,
+            TexelFormat::R32F | TexelFormat::R16F => 1,
+            TexelFormat::Rg32F => 2,
+        }
+    }
+}
+
+/// How a texture is sampled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    /// Exact texel reads (texelFetch).
+    Nearest,
+    /// Hardware bilinear interpolation.
+    Linear,
+}
+
+/// An owned 2D texture with clamp-to-edge wrapping.
+pub struct Texture {
+    gl: Rc<glow::Context>,
+    raw: glow::Texture,
+    width: usize,
+    height: usize,
+    format: TexelFormat,
+}
+
+impl Texture {
+    /// Allocates a `width x height` texture and fills it from `data` (f32, row 0 first,
+    /// `format.channels()` per texel) or leaves it undefined when `data` is `None`.
+    pub fn new(
+        gl: &Rc<glow::Context>,
+        width: usize,
+        height: usize,
+        format: TexelFormat,
+        filter: Filter,
+        data: Option<&[f32]>,
+    ) -> Result<Self> {
+        if let Some(d) = data {
+            assert_eq!(
+                d.len(),
+                width * height * format.channels(),
+                "texture data size"
+            );
+        }
+        let filter = match filter {
+            Filter::Nearest => glow::NEAREST,
+            Filter::Linear => glow::LINEAR,
+        } as i32;
+        // SAFETY: texture creation and upload on the current context; `data` has exactly
+        // width*height*channels f32 values (asserted above).
+        unsafe {
+            let raw = gl.create_texture().map_err(Error::Gl)?;
+            gl.bind_texture(glow::TEXTURE_2D, Some(raw));
+            for (param, value) in [
+                (glow::TEXTURE_MIN_FILTER, filter),
+                (glow::TEXTURE_MAG_FILTER, filter),
+                (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE as i32),
+                (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE as i32),
+            ] {
+                gl.tex_parameter_i32(glow::TEXTURE_2D, param, value);
+            }
+            gl.tex_storage_2d(
+                glow::TEXTURE_2D,
+                1,
+                format.internal(),
+                width as i32,
+                height as i32,
+            );
+            if let Some(d) = data {
+                gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
+                gl.tex_sub_image_2d(
+                    glow::TEXTURE_2D,
+                    0,
+                    0,
+                    0,
+                    width as i32,
+                    height as i32,
+                    format.client_format(),
+                    glow::FLOAT,
+                    glow::PixelUnpackData::Slice(Some(f32_bytes(d))),
+                );
+            }
+            gl.bind_texture(glow::TEXTURE_2D, None);
+            let tex = Texture {
+                gl: Rc::clone(gl),
+                raw,
+                width,
+                height,
+                format,
+            };
+            super::check_gl(
+                gl,
+                &format!("creating a {width}x{height} {format:?} texture"),
+            )?;
+            Ok(tex)
+        }
+    }
+
+    /// The GL texture object.
+    pub fn raw(&self) -> glow::Texture {
+        self.raw
+    }
+
+    /// Width in texels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in texels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Texel format.
+    pub fn format(&self) -> TexelFormat {
+        self.format
+    }
+
+    /// Binds the texture to texture unit `unit`.
+    pub fn bind(&self, unit: u32) {
+        // SAFETY: binding an owned texture on the current context.
+        unsafe {
+            self.gl.active_texture(glow::TEXTURE0 + unit);
+            self.gl.bind_texture(glow::TEXTURE_2D, Some(self.raw));
+        }
+    }
+}
+
+impl Drop for Texture {
+    fn drop(&mut self) {
+        // SAFETY: the texture belongs to this wrapper; the context outlives it (Rc).
+        unsafe { self.gl.delete_texture(self.raw) };
+    }
+}
+
+/// Views f32 data as bytes for upload.
+pub fn f32_bytes(data: &[f32]) -> &[u8] {
+    // SAFETY: f32 has no padding and every byte pattern is a valid u8.
+    unsafe { std::slice::from_raw_parts(data.as_ptr().cast::<u8>(), std::mem::size_of_val(data)) }
+}
+
+/// Views f32 data as mutable bytes for read-back.
+pub fn f32_bytes_mut(data: &mut [f32]) -> &mut [u8] {
+    // SAFETY: as above; any bytes written form valid f32 values.
+    unsafe {
+        std::slice::from_raw_parts_mut(data.as_mut_ptr().cast::<u8>(), std::mem::size_of_val(data))
+    }
+}

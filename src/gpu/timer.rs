@@ -1,0 +1,196 @@
+//! Per-pass timing: `GL_TIME_ELAPSED` queries where `GL_EXT_disjoint_timer_query` exists,
+//! else `glFinish` + a monotonic clock. Every figure says which clock produced it.
+//!
+//! Driver facts this module works around (GUIDE.md): llvmpipe's first TIME_ELAPSED query
+//! on a fresh context returns nonsense (about the system uptime), so [`warm_up`] spends
+//! one; a disjoint event (`GPU_DISJOINT_EXT`) invalidates a batch of queries; and some
+//! mobile drivers return values that cannot be right, so a batch whose sum exceeds the
+//! wall time that enclosed it is rejected and the caller re-measures by the wall clock.
+
+use crate::error::{Error, Result};
+use glow::HasContext;
+use std::rc::Rc;
+use std::time::Instant;
+
+/// `GL_GPU_DISJOINT_EXT`, which glow does not export.
+pub const GPU_DISJOINT_EXT: u32 = 0x8FBB;
+
+/// Which clock produced a figure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Clock {
+    /// `GL_TIME_ELAPSED` queries (on llvmpipe this is CPU time of the rasteriser threads).
+    #[serde(rename = "gpu-timer")]
+    GpuTimer,
+    /// `glFinish` after each pass and a monotonic wall clock.
+    #[serde(rename = "wall")]
+    Wall,
+}
+
+impl Clock {
+    /// The name used in reports and JSON: `gpu-timer` or `wall`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Clock::GpuTimer => "gpu-timer",
+            Clock::Wall => "wall",
+        }
+    }
+}
+
+/// Times of each pass of one render, in milliseconds.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct PassTimes {
+    /// The clock used.
+    pub clock: Clock,
+    /// One figure per pass, in pass order.
+    pub pass_ms: Vec<f64>,
+    /// Sum of `pass_ms`.
+    pub total_ms: f64,
+}
+
+/// Why a GPU-timer batch was thrown away.
+#[derive(Debug)]
+pub enum Rejected {
+    /// The driver flagged a disjoint event during the batch.
+    Disjoint,
+    /// The figures cannot be right (sum above the enclosing wall time, or not finite).
+    Implausible(String),
+}
+
+/// Spends the first TIME_ELAPSED query of a fresh context, whose result is meaningless on
+/// llvmpipe, and clears any pending disjoint flag.
+pub fn warm_up(gl: &glow::Context) -> Result<()> {
+    // SAFETY: one query object created, begun and ended around no work (a surfaceless
+    // context has no framebuffer to clear), read and deleted on the current context.
+    unsafe {
+        let q = gl.create_query().map_err(Error::Gl)?;
+        gl.begin_query(glow::TIME_ELAPSED, q);
+        gl.end_query(glow::TIME_ELAPSED);
+        let _ = query_result_ns(gl, q);
+        gl.delete_query(q);
+        let _ = gl.get_parameter_i32(GPU_DISJOINT_EXT);
+    }
+    super::check_gl(gl, "warming up the timer query")
+}
+
+/// Times a sequence of passes with one clock.
+pub struct PassTimer {
+    gl: Rc<glow::Context>,
+    clock: Clock,
+    queries: Vec<glow::Query>,
+    wall_ms: Vec<f64>,
+    pass_start: Instant,
+    batch_start: Instant,
+}
+
+impl PassTimer {
+    /// Starts timing. With the wall clock, waits for earlier GL work first so that it is
+    /// not charged to the first pass.
+    pub fn start(gl: &Rc<glow::Context>, clock: Clock) -> Self {
+        // SAFETY: glFinish and a state query on the current context.
+        unsafe {
+            match clock {
+                Clock::Wall => gl.finish(),
+                // Reading the flag resets it, so a later read sees only this batch.
+                Clock::GpuTimer => {
+                    let _ = gl.get_parameter_i32(GPU_DISJOINT_EXT);
+                }
+            }
+        }
+        let now = Instant::now();
+        PassTimer {
+            gl: Rc::clone(gl),
+            clock,
+            queries: Vec::new(),
+            wall_ms: Vec::new(),
+            pass_start: now,
+            batch_start: now,
+        }
+    }
+
+    /// Runs `draw` as one timed pass.
+    pub fn pass(&mut self, draw: impl FnOnce()) -> Result<()> {
+        match self.clock {
+            Clock::GpuTimer => {
+                // SAFETY: a query object owned by this timer (deleted in Drop) brackets
+                // the draw; no other TIME_ELAPSED query is active.
+                unsafe {
+                    let q = self.gl.create_query().map_err(Error::Gl)?;
+                    self.queries.push(q);
+                    self.gl.begin_query(glow::TIME_ELAPSED, q);
+                    draw();
+                    self.gl.end_query(glow::TIME_ELAPSED);
+                }
+            }
+            Clock::Wall => {
+                self.pass_start = Instant::now();
+                draw();
+                // SAFETY: glFinish has no preconditions.
+                unsafe { self.gl.finish() };
+                self.wall_ms
+                    .push(self.pass_start.elapsed().as_secs_f64() * 1e3);
+            }
+        }
+        Ok(())
+    }
+
+    /// Collects the figures. A GPU-timer batch can be rejected (see [`Rejected`]); the
+    /// caller then measures again with [`Clock::Wall`].
+    pub fn finish(mut self) -> Result<std::result::Result<PassTimes, Rejected>> {
+        let pass_ms = match self.clock {
+            Clock::Wall => std::mem::take(&mut self.wall_ms),
+            Clock::GpuTimer => {
+                // SAFETY: results of queries this timer created and ended.
+                let ns: Vec<u64> = self
+                    .queries
+                    .iter()
+                    .map(|&q| unsafe { query_result_ns(&self.gl, q) })
+                    .collect();
+                let enclosing_ms = self.batch_start.elapsed().as_secs_f64() * 1e3;
+                // SAFETY: a state query on the current context, after all results are in.
+                if unsafe { self.gl.get_parameter_i32(GPU_DISJOINT_EXT) } != 0 {
+                    return Ok(Err(Rejected::Disjoint));
+                }
+                let ms: Vec<f64> = ns.iter().map(|&n| n as f64 / 1e6).collect();
+                let sum: f64 = ms.iter().sum();
+                // 1 ms of slack for clock granularity on tiny renders.
+                if !sum.is_finite() || sum > enclosing_ms * 1.05 + 1.0 {
+                    return Ok(Err(Rejected::Implausible(format!(
+                        "timer queries sum to {sum:.3} ms inside {enclosing_ms:.3} ms of wall time"
+                    ))));
+                }
+                ms
+            }
+        };
+        super::check_gl(&self.gl, "reading timer queries")?;
+        let total_ms = pass_ms.iter().sum();
+        Ok(Ok(PassTimes {
+            clock: self.clock,
+            pass_ms,
+            total_ms,
+        }))
+    }
+}
+
+impl Drop for PassTimer {
+    fn drop(&mut self) {
+        for &q in &self.queries {
+            // SAFETY: queries created by this timer on the context it holds.
+            unsafe { self.gl.delete_query(q) };
+        }
+    }
+}
+
+/// Waits for a query's result and returns it (nanoseconds for TIME_ELAPSED).
+unsafe fn query_result_ns(gl: &glow::Context, q: glow::Query) -> u64 {
+    while gl.get_query_parameter_u32(q, glow::QUERY_RESULT_AVAILABLE) == 0 {
+        std::thread::yield_now();
+    }
+    let mut value: u64 = 0;
+    // glow's "offset" is the destination pointer when no query buffer is bound.
+    gl.get_query_parameter_u64_with_offset(
+        q,
+        glow::QUERY_RESULT,
+        std::ptr::addr_of_mut!(value) as usize,
+    );
+    value
+}

@@ -1,0 +1,57 @@
+//! Shared helpers for the GL tests: one renderer at a time (EGL contexts are per thread
+//! and llvmpipe is CPU-bound), deterministic synthetic inputs, and the Aloe crops.
+#![allow(dead_code)]
+
+use brume::raster::{Grid, RgbImage, ScalarMap};
+use brume::Renderer;
+use std::sync::{Mutex, MutexGuard};
+
+static GL_LOCK: Mutex<()> = Mutex::new(());
+
+/// Serialises GL tests and gives each its own context. A missing EGL is a test failure,
+/// never a skip: CI must prove the GL path.
+pub fn renderer() -> (MutexGuard<'static, ()>, Renderer) {
+    let guard = GL_LOCK.lock().unwrap_or_else(|e| e.into_inner());
+    let r = Renderer::new(None).unwrap_or_else(|e| panic!("cannot open a GL context: {e}"));
+    (guard, r)
+}
+
+/// A small xorshift generator so that synthetic images are the same on every machine.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1)
+    }
+    pub fn next_f32(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// Random colours in [0, 1] with a few hard edges: the worst case for diffusion error.
+pub fn noise_image(w: usize, h: usize, seed: u64) -> RgbImage {
+    let mut rng = Rng::new(seed);
+    Grid::from_fn(w, h, |x, _| {
+        let band = if x < w / 3 { 0.2 } else { 0.0 };
+        [
+            (rng.next_f32() * 0.8 + band).min(1.0),
+            rng.next_f32(),
+            rng.next_f32() * 0.5,
+        ]
+    })
+}
+
+/// A normalised range map: a slanted ramp with a near box in front (a depth edge).
+pub fn ramp_range(w: usize, h: usize) -> ScalarMap {
+    Grid::from_fn(w, h, |x, y| {
+        let near_box = x > w / 4 && x < w / 2 && y > h / 4 && y < 3 * h / 4;
+        if near_box {
+            0.1
+        } else {
+            (0.3 + 0.7 * (x + y) as f32 / (w + h) as f32).min(1.0)
+        }
+    })
+}
