@@ -1,0 +1,230 @@
+//! Argument definitions (clap derive). Help texts are the user manual: say units, defaults
+//! and what each value does.
+
+use brume::bench::args::BenchCommand;
+use brume::egl::Platform;
+use brume::haze;
+use brume::io::depth::{DepthFormat, DepthKind};
+use brume::{Precision, Scheme};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+/// Add physically based haze and fog to RGBD images, on OpenGL ES 3.2 through EGL
+/// (headless: no display needed).
+///
+/// Quick start: `brume render` renders the built-in demo scene to brume-demo.png.
+#[derive(Parser, Debug)]
+#[command(name = "brume", version, propagate_version = true)]
+pub struct Cli {
+    /// EGL display to open: surfaceless (Mesa, no window system), device (EGL device,
+    /// the headless route on NVIDIA) or default (eglGetDisplay). Default: the first of
+    /// these that works, in that order.
+    #[arg(long, global = true, value_name = "PLATFORM")]
+    pub egl: Option<Platform>,
+
+    /// More log output on stderr (-v info, -vv debug). RUST_LOG overrides.
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render haze into an image (no input: the built-in demo scene).
+    Render(RenderArgs),
+    /// Show the EGL platform, GL driver and the capabilities brume uses.
+    Info(InfoArgs),
+    /// Pre-process a range map (fill holes, find the sky, matte the horizon) and write it.
+    Prep(PrepArgs),
+    /// Reproduce paper 000's accuracy (fig. 6) and speed (fig. 7) experiments.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+/// `brume info`.
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// Print one JSON object on stdout instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Where the depth comes from and how to read it.
+#[derive(Args, Debug, Clone)]
+pub struct DepthArgs {
+    /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (with --calib), 8-bit
+    /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM or --depth-scale),
+    /// float EXR/TIFF/PFM, or .npy.
+    #[arg(long, value_name = "PATH")]
+    pub depth: Option<PathBuf>,
+
+    /// Middlebury calib.txt with the intrinsics, baseline and doffs of the depth map.
+    #[arg(long, value_name = "PATH")]
+    pub calib: Option<PathBuf>,
+
+    /// What the depth values are: depth (along the optical axis), range (distance to the
+    /// camera centre) or disparity (px). Default: what the format implies.
+    #[arg(long, value_name = "KIND")]
+    pub depth_kind: Option<DepthKind>,
+
+    /// Depth file format: auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16,
+    /// float.
+    #[arg(long, value_name = "FORMAT", default_value = "auto")]
+    pub depth_format: DepthFormat,
+
+    /// Units per stored value of a 16-bit PNG (e.g. 0.001 for millimetres to metres).
+    #[arg(long, value_name = "S")]
+    pub depth_scale: Option<f64>,
+
+    /// Focal length in px, for disparity to depth and depth to range (Middlebury 2006
+    /// default: 3740).
+    #[arg(long, value_name = "PX")]
+    pub focal: Option<f64>,
+
+    /// Stereo baseline in mm, for disparity to depth (Middlebury 2006 default: 160).
+    #[arg(long, value_name = "MM")]
+    pub baseline: Option<f64>,
+
+    /// Disparity offset (doffs / dmin) in px added to every disparity (Middlebury 2006
+    /// default: 270).
+    #[arg(long, value_name = "PX")]
+    pub disparity_offset: Option<f64>,
+}
+
+/// Options of the range pre-processing (paper 000, sec. 4.1).
+#[derive(Args, Debug, Clone)]
+pub struct PrepOptionArgs {
+    /// Width µ of the horizon margin matted into the sky, in px.
+    #[arg(long, value_name = "PX")]
+    pub margin: Option<f32>,
+
+    /// Sky range Smax as a multiple of the largest measured range Rmax (> 1).
+    #[arg(long, value_name = "F")]
+    pub sky_factor: Option<f32>,
+
+    /// Never classify unknown regions as sky (fill every hole).
+    #[arg(long)]
+    pub no_sky: bool,
+
+    /// Smallest area of an unknown region, as a fraction of the image, that can be sky.
+    #[arg(long, value_name = "FRACTION")]
+    pub sky_min_area: Option<f64>,
+
+    /// Seed of the RANSAC hole filling (results are reproducible for a given seed).
+    #[arg(long, value_name = "N")]
+    pub seed: Option<u64>,
+}
+
+/// `brume render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Colour image (PNG or JPEG, 8- or 16-bit sRGB). Without --image and --depth the
+    /// built-in demo scene is rendered.
+    #[arg(long, value_name = "PATH", requires = "depth")]
+    pub image: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub depth: DepthArgs,
+
+    /// Output file: .png (8-bit sRGB), .pfm (float RGB, linear) or .exr (float RGBA,
+    /// linear). Default for the demo: brume-demo.png. Must not be one of the inputs.
+    #[arg(long, short, value_name = "PATH")]
+    pub out: Option<PathBuf>,
+
+    /// Absorption coefficient κa per unit of normalised range (attenuation only).
+    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KA)]
+    pub ka: f64,
+
+    /// Scattering coefficient κs per unit of normalised range (attenuation and blur).
+    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KS)]
+    pub ks: f64,
+
+    /// Blur factor λ in px: the farthest point is blurred to σmax = σ0 + λ·√κs.
+    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_LAMBDA)]
+    pub lambda: f64,
+
+    /// Inner scale σ0 of the input image in px (its own blur).
+    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_SIGMA0)]
+    pub sigma0: f64,
+
+    /// Largest diffusion rate per step, in (0, 0.25]; smaller means more, smaller steps.
+    #[arg(long, value_name = "RHO", default_value_t = haze::DEFAULT_RHO_MAX)]
+    pub rho_max: f64,
+
+    /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: estimated from
+    /// the sky, or from the farthest pixels when there is none.
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub airlight: Option<[f32; 3]>,
+
+    /// Diffusion scheme: matched (default; variance-matched, most accurate), invariant
+    /// (paper eq. 18, literally; under-blurs) or euler (eq. 13; hundreds of passes).
+    #[arg(long, value_name = "SCHEME", default_value = "matched")]
+    pub scheme: Scheme,
+
+    /// Texture precision of the diffusion passes: f32 (RGBA32F) or f16 (RGBA16F).
+    #[arg(long, value_name = "P", default_value = "f32")]
+    pub precision: Precision,
+
+    /// Blur the whole image to scale S px, with no attenuation and no airlight (an
+    /// accuracy check against a Gaussian of std sqrt(S² − σ0²)).
+    #[arg(long, value_name = "S")]
+    pub uniform_sigma: Option<f64>,
+
+    /// Skip pre-processing: unknown range values are taken as the farthest range.
+    #[arg(long)]
+    pub no_prep: bool,
+
+    #[command(flatten)]
+    pub prep: PrepOptionArgs,
+
+    /// Print the time of every pass.
+    #[arg(long)]
+    pub timings: bool,
+
+    /// Print one JSON object on stdout (width, height, scheme, precision,
+    /// diffusion_passes, renderer, clock, total_ms, pass_ms, out, ...).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// `brume prep`.
+#[derive(Args, Debug)]
+pub struct PrepArgs {
+    #[command(flatten)]
+    pub depth: DepthArgs,
+
+    /// Colour image, for the airlight estimate (optional).
+    #[arg(long, value_name = "PATH")]
+    pub image: Option<PathBuf>,
+
+    /// Output range map: .pfm (float, rows bottom to top) or .exr (float).
+    #[arg(long, short, value_name = "PATH")]
+    pub out: PathBuf,
+
+    /// Also write a picture of the range before and after (near dark, far light, holes
+    /// red), like paper 000's fig. 3.
+    #[arg(long, value_name = "PATH.png")]
+    pub vis: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub prep: PrepOptionArgs,
+
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Parses `R,G,B` into three floats.
+fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let values: Result<Vec<f32>, _> = parts.iter().map(|p| p.parse::<f32>()).collect();
+    match values {
+        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok([v[0], v[1], v[2]]),
+        _ => Err(format!(
+            "'{s}' is not three finite linear values ≥ 0 separated by commas, e.g. 0.8,0.8,0.8"
+        )),
+    }
+}

@@ -1,0 +1,89 @@
+//! `brume prep`: pre-process a range map on its own and show what happened.
+
+use super::args::PrepArgs;
+use super::render::{airlight_source_name, depth_inputs, load_depth, prep_options, refuse_overwriting_inputs};
+use brume::io::{image, output};
+use brume::prep;
+use brume::Result;
+use serde_json::json;
+
+pub fn run(args: &PrepArgs) -> Result<()> {
+    let opts = prep_options(&args.prep)?;
+    let mut inputs = depth_inputs(&args.depth);
+    inputs.extend(args.image.iter().cloned());
+    refuse_overwriting_inputs(&args.out, &inputs)?;
+    if let Some(vis) = &args.vis {
+        refuse_overwriting_inputs(vis, &inputs)?;
+    }
+    let loaded = load_depth(&args.depth)?;
+    let prepared = prep::prepare(&loaded.range, &opts)?;
+    output::write_scalar(&args.out, &prepared.range)?;
+    if let Some(vis) = &args.vis {
+        let (w, h, rgb) = prep::visualize(&loaded.range, &prepared);
+        output::write_png_rgb8(vis, w, h, &rgb)?;
+    }
+    let airlight = match &args.image {
+        Some(path) => {
+            let img = image::load_linear_rgb(path)?;
+            if (img.width(), img.height()) != (loaded.range.width(), loaded.range.height()) {
+                return Err(brume::Error::SizeMismatch {
+                    a: path.display().to_string(),
+                    aw: img.width() as u32,
+                    ah: img.height() as u32,
+                    b: args.depth.depth.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
+                    bw: loaded.range.width() as u32,
+                    bh: loaded.range.height() as u32,
+                });
+            }
+            Some(prep::estimate_airlight(&img, &prepared))
+        }
+        None => None,
+    };
+    let s = &prepared.stats;
+    if args.json {
+        let report = json!({
+            "width": loaded.range.width(), "height": loaded.range.height(),
+            "out": args.out.display().to_string(),
+            "vis": args.vis.as_ref().map(|p| p.display().to_string()),
+            "depth_format": loaded.format.to_string(), "depth_kind": loaded.kind.to_string(),
+            "depth_notes": loaded.notes, "unknown_pixels": loaded.unknown_pixels,
+            "holes": s.holes, "hole_pixels": s.hole_pixels,
+            "sky_components": s.sky_components, "sky_pixels": s.sky_pixels,
+            "margin_pixels": s.margin_pixels, "r_max": s.r_max, "s_max": s.s_max,
+            "fill_ms": s.fill_ms, "sky_ms": s.sky_ms, "margin_ms": s.margin_ms, "total_ms": s.total_ms,
+            "airlight": airlight.as_ref().map(|a| a.rgb),
+            "airlight_source": airlight.as_ref().map(|a| airlight_source_name(a.source)),
+        });
+        println!("{report}");
+    } else {
+        println!(
+            "{} unknown px: {} holes ({} px) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
+            loaded.unknown_pixels,
+            s.holes,
+            s.hole_pixels,
+            s.sky_components,
+            s.sky_pixels,
+            s.margin_pixels,
+            s.r_max,
+            s.s_max.map_or("-".to_string(), |v| format!("{v:.4}"))
+        );
+        println!(
+            "CPU time: fill {:.1} ms, sky {:.1} ms, margin {:.1} ms, total {:.1} ms",
+            s.fill_ms, s.sky_ms, s.margin_ms, s.total_ms
+        );
+        if let Some(a) = &airlight {
+            println!(
+                "airlight {:.3},{:.3},{:.3} (from {})",
+                a.rgb[0],
+                a.rgb[1],
+                a.rgb[2],
+                airlight_source_name(a.source)
+            );
+        }
+        println!("wrote {}", args.out.display());
+        if let Some(vis) = &args.vis {
+            println!("wrote {}", vis.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,367 @@
+//! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
+
+use super::args::{DepthArgs, PrepOptionArgs, RenderArgs};
+use brume::egl::Platform;
+use brume::haze::{self, Haze, RenderSpec};
+use brume::io::depth::{self, DepthOptions, LoadedDepth};
+use brume::io::{demo, image, output};
+use brume::pipeline::Rendered;
+use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
+use brume::raster::RgbImage;
+use brume::{Error, Result};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+const DEMO_OUT: &str = "brume-demo.png";
+
+/// The inputs of one render and where they came from.
+struct Scene {
+    image: RgbImage,
+    depth: LoadedDepth,
+    image_name: String,
+    depth_name: String,
+    inputs: Vec<PathBuf>,
+}
+
+/// What pre-processing did, for the report.
+struct PrepReport {
+    prepared: Option<Prepared>,
+    airlight: [f32; 3],
+    airlight_source: &'static str,
+}
+
+pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
+    let haze = haze_from_args(args)?;
+    let out = output_path(args)?;
+    let scene = load_scene(args)?;
+    refuse_overwriting_inputs(&out, &scene.inputs)?;
+    check_same_size(&scene)?;
+
+    let prep = preprocess(args, &scene)?;
+    let range = prep
+        .prepared
+        .as_ref()
+        .map_or(&scene.depth.range, |p| &p.range);
+    let (normalised, r_max) = haze::normalise_range(range)?;
+    let spec = render_spec(args, &haze, prep.airlight);
+
+    let mut renderer = super::open_renderer(egl)?;
+    let rendered = renderer.render(&scene.image, &normalised, &spec)?;
+    output::write_rgba(&out, &rendered.image)?;
+
+    let renderer_name = renderer.caps().renderer.clone();
+    if args.json {
+        let report = json_report(args, &scene, &prep, &spec, &rendered, &renderer_name, &out, r_max);
+        println!("{report}");
+    } else {
+        print_summary(&scene, &prep, &spec, &rendered, &renderer_name, &out);
+        if args.timings {
+            print_timings(&rendered);
+        }
+    }
+    Ok(())
+}
+
+fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
+    let haze = Haze {
+        ka: args.ka,
+        ks: args.ks,
+        lambda: args.lambda,
+        sigma0: args.sigma0,
+        airlight: args.airlight.unwrap_or(haze::DEFAULT_AIRLIGHT),
+    };
+    haze.validate()?;
+    if !(args.rho_max > 0.0 && args.rho_max <= 0.25) {
+        return Err(Error::invalid("--rho-max", args.rho_max, "a rate in (0, 0.25]"));
+    }
+    if let Some(s) = args.uniform_sigma {
+        if !(s.is_finite() && s >= args.sigma0) {
+            return Err(Error::invalid(
+                "--uniform-sigma",
+                s,
+                format!("a finite scale ≥ --sigma0 ({} px)", args.sigma0),
+            ));
+        }
+    }
+    Ok(haze)
+}
+
+fn output_path(args: &RenderArgs) -> Result<PathBuf> {
+    match (&args.out, &args.image) {
+        (Some(out), _) => Ok(out.clone()),
+        (None, None) if args.depth.depth.is_none() => Ok(PathBuf::from(DEMO_OUT)),
+        _ => Err(Error::invalid(
+            "--out",
+            "(missing)",
+            "an output path ending in .png, .pfm or .exr when --image/--depth are given",
+        )),
+    }
+}
+
+fn load_scene(args: &RenderArgs) -> Result<Scene> {
+    match (&args.image, &args.depth.depth) {
+        (None, None) => Ok(Scene {
+            image: demo::demo_image()?,
+            depth: demo::demo_range()?,
+            image_name: "built-in demo image".into(),
+            depth_name: "built-in demo disparity".into(),
+            inputs: Vec::new(),
+        }),
+        (Some(image_path), Some(_)) => {
+            let depth = load_depth(&args.depth)?;
+            let mut inputs = vec![image_path.clone()];
+            inputs.extend(depth_inputs(&args.depth));
+            Ok(Scene {
+                image: image::load_linear_rgb(image_path)?,
+                depth,
+                image_name: image_path.display().to_string(),
+                depth_name: args.depth.depth.as_ref().expect("checked").display().to_string(),
+                inputs,
+            })
+        }
+        (None, Some(_)) => Err(Error::invalid(
+            "--image",
+            "(missing)",
+            "a colour image to go with --depth",
+        )),
+        (Some(_), None) => Err(Error::invalid(
+            "--depth",
+            "(missing)",
+            "a depth, range or disparity map to go with --image",
+        )),
+    }
+}
+
+/// Loads the depth named by `args` (which must have one) as a range map.
+pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
+    let path = args
+        .depth
+        .as_ref()
+        .ok_or_else(|| Error::invalid("--depth", "(missing)", "a depth, range or disparity map"))?;
+    let opts = DepthOptions {
+        format: args.depth_format,
+        kind: args.depth_kind,
+        calib: args.calib.clone(),
+        scale: args.depth_scale,
+        focal: args.focal,
+        baseline: args.baseline,
+        disparity_offset: args.disparity_offset,
+    };
+    let loaded = depth::load_range(path, &opts)?;
+    for note in &loaded.notes {
+        log::info!("{}: {note}", path.display());
+    }
+    Ok(loaded)
+}
+
+/// The files a depth argument set reads.
+pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
+    args.depth.iter().chain(args.calib.iter()).cloned().collect()
+}
+
+/// Refuses an output path that is one of the inputs: nothing a user gave us is
+/// overwritten.
+pub fn refuse_overwriting_inputs(out: &Path, inputs: &[PathBuf]) -> Result<()> {
+    match inputs.iter().find(|input| output::same_file(out, input)) {
+        Some(input) => Err(Error::invalid(
+            "--out",
+            out.display(),
+            format!("a path other than the input {}", input.display()),
+        )),
+        None => Ok(()),
+    }
+}
+
+fn check_same_size(scene: &Scene) -> Result<()> {
+    let (i, d) = (&scene.image, &scene.depth.range);
+    if (i.width(), i.height()) == (d.width(), d.height()) {
+        return Ok(());
+    }
+    Err(Error::SizeMismatch {
+        a: scene.image_name.clone(),
+        aw: i.width() as u32,
+        ah: i.height() as u32,
+        b: scene.depth_name.clone(),
+        bw: d.width() as u32,
+        bh: d.height() as u32,
+    })
+}
+
+/// Builds the pre-processing options from the command line over the library defaults.
+pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
+    let mut opts = PrepOptions::default();
+    if let Some(m) = args.margin {
+        opts.margin_px = m;
+    }
+    if let Some(f) = args.sky_factor {
+        opts.sky_range_factor = f;
+    }
+    if let Some(a) = args.sky_min_area {
+        opts.sky.min_area_fraction = a;
+    }
+    if let Some(s) = args.seed {
+        opts.seed = s;
+    }
+    opts.detect_sky = !args.no_sky;
+    opts.validate()?;
+    Ok(opts)
+}
+
+fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
+    let given = args.airlight.map(|b| (b, "given"));
+    // A uniform blur ignores range and airlight: nothing to pre-process.
+    if args.no_prep || args.uniform_sigma.is_some() {
+        let (airlight, source) = given.unwrap_or((haze::DEFAULT_AIRLIGHT, "default"));
+        return Ok(PrepReport {
+            prepared: None,
+            airlight,
+            airlight_source: source,
+        });
+    }
+    let opts = prep_options(&args.prep)?;
+    let started = Instant::now();
+    let prepared = prep::prepare(&scene.depth.range, &opts)?;
+    log::info!(
+        "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
+        prepared.stats.holes,
+        prepared.stats.hole_pixels,
+        prepared.stats.sky_pixels,
+        started.elapsed().as_secs_f64() * 1e3
+    );
+    let (airlight, source) = match given {
+        Some(g) => g,
+        None => {
+            let AirlightEstimate { rgb, source, .. } = prep::estimate_airlight(&scene.image, &prepared);
+            (rgb, airlight_source_name(source))
+        }
+    };
+    Ok(PrepReport {
+        prepared: Some(prepared),
+        airlight,
+        airlight_source: source,
+    })
+}
+
+/// How the airlight estimate was made, for reports.
+pub fn airlight_source_name(source: AirlightSource) -> &'static str {
+    match source {
+        AirlightSource::Sky => "sky",
+        AirlightSource::Farthest => "farthest",
+    }
+}
+
+fn render_spec(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> RenderSpec {
+    let mut spec = match args.uniform_sigma {
+        Some(s) => RenderSpec::uniform(s, args.sigma0, args.scheme, args.precision),
+        None => RenderSpec::haze(
+            &Haze {
+                airlight,
+                ..*haze
+            },
+            args.scheme,
+            args.precision,
+        ),
+    };
+    spec.rho_max = args.rho_max;
+    spec
+}
+
+#[allow(clippy::too_many_arguments)]
+fn json_report(
+    args: &RenderArgs,
+    scene: &Scene,
+    prep: &PrepReport,
+    spec: &RenderSpec,
+    rendered: &Rendered,
+    renderer: &str,
+    out: &Path,
+    r_max: f32,
+) -> serde_json::Value {
+    let prep_json = prep.prepared.as_ref().map(|p| {
+        let s = &p.stats;
+        json!({
+            "holes": s.holes, "hole_pixels": s.hole_pixels,
+            "sky_components": s.sky_components, "sky_pixels": s.sky_pixels,
+            "margin_pixels": s.margin_pixels, "r_max": s.r_max, "s_max": s.s_max,
+            "fill_ms": s.fill_ms, "sky_ms": s.sky_ms, "margin_ms": s.margin_ms,
+            "total_ms": s.total_ms,
+        })
+    });
+    json!({
+        "width": scene.image.width(),
+        "height": scene.image.height(),
+        "scheme": spec.scheme,
+        "precision": spec.precision,
+        "diffusion_passes": rendered.schedule.steps,
+        "passes": rendered.times.pass_ms.len(),
+        "renderer": renderer,
+        "clock": rendered.times.clock,
+        "total_ms": rendered.times.total_ms,
+        "pass_ms": rendered.times.pass_ms,
+        "out": out.display().to_string(),
+        "image": scene.image_name,
+        "depth": scene.depth_name,
+        "depth_format": scene.depth.format.to_string(),
+        "depth_kind": scene.depth.kind.to_string(),
+        "depth_notes": scene.depth.notes,
+        "sigma0": spec.sigma0,
+        "sigma_max": spec.sigma_max(),
+        "uniform_sigma": args.uniform_sigma,
+        "extinction": spec.extinction,
+        "range_divisor": r_max,
+        "airlight": spec.airlight,
+        "airlight_source": prep.airlight_source,
+        "prep": prep_json,
+    })
+}
+
+fn print_summary(
+    scene: &Scene,
+    prep: &PrepReport,
+    spec: &RenderSpec,
+    rendered: &Rendered,
+    renderer: &str,
+    out: &Path,
+) {
+    let t = &rendered.times;
+    if let Some(p) = &prep.prepared {
+        let s = &p.stats;
+        println!(
+            "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
+            s.holes, s.hole_pixels, s.sky_pixels, s.total_ms
+        );
+    }
+    let b = spec.airlight;
+    println!(
+        "airlight {:.3},{:.3},{:.3} ({}), σmax {:.2} px, κ {:.3}",
+        b[0], b[1], b[2], prep.airlight_source, spec.sigma_max(), spec.extinction
+    );
+    println!(
+        "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
+        out.display(),
+        scene.image.width(),
+        scene.image.height(),
+        spec.scheme,
+        spec.precision,
+        rendered.schedule.steps,
+        t.total_ms,
+        t.clock.name(),
+        renderer
+    );
+}
+
+fn print_timings(rendered: &Rendered) {
+    let t = &rendered.times;
+    let n = t.pass_ms.len();
+    println!("{:>6}  {:<12} {:>10}", "pass", "shader", "ms");
+    for (i, ms) in t.pass_ms.iter().enumerate() {
+        let name = match i {
+            0 => "premultiply",
+            _ if i + 1 == n => "composite",
+            _ => "diffuse",
+        };
+        println!("{:>6}  {:<12} {:>10.3}", i + 1, name, ms);
+    }
+    println!("{:>6}  {:<12} {:>10.3}  ({})", "total", "", t.total_ms, t.clock.name());
+}

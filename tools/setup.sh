@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Installs what brume needs at run time and in CI, if it is missing: Mesa's EGL and
+# OpenGL ES (llvmpipe works headless, no GPU or display needed) and the rustfmt/clippy
+# components. Safe to run again: it installs nothing that is already there.
+set -euo pipefail
+
+packages=(libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri)
+
+missing=()
+for p in "${packages[@]}"; do
+    if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+        missing+=("$p")
+    fi
+done
+
+if ((${#missing[@]})); then
+    echo "setup: installing ${missing[*]}"
+    sudo=""
+    if [ "$(id -u)" -ne 0 ]; then
+        command -v sudo >/dev/null || { echo "setup: need root or sudo to install ${missing[*]}" >&2; exit 1; }
+        sudo="sudo"
+    fi
+    $sudo apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+else
+    echo "setup: Mesa EGL/GLES present (${packages[*]})"
+fi
+
+for component in rustfmt clippy; do
+    if ! cargo "${component/rustfmt/fmt}" --version >/dev/null 2>&1; then
+        echo "setup: adding the $component component"
+        rustup component add "$component"
+    fi
+done
