@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use image::{DynamicImage, ImageReader};
+use image::{DynamicImage, ImageFormat, ImageReader};
 
 use crate::raster::RgbImage;
 use crate::{Error, Result};
@@ -60,12 +60,68 @@ pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
             ),
         ));
     };
+    if format == ImageFormat::Jpeg && !jpeg_reaches_end_marker(bytes) {
+        // The JPEG decoder pads a truncated scan with grey instead of failing.
+        return Err(Error::format(
+            name,
+            "JPEG data ends before its end-of-image marker; the file is truncated",
+        ));
+    }
     reader.decode().map_err(|e| {
         Error::format(
             name,
             format!("cannot decode as {format:?}: {e}; the file may be truncated or corrupt"),
         )
     })
+}
+
+/// Walks the JPEG marker segments from SOI and the entropy-coded data after each SOS, and
+/// says whether an EOI marker is reached before the bytes run out. Segments are skipped by
+/// their length, so an EXIF thumbnail's own EOI does not count.
+fn jpeg_reaches_end_marker(b: &[u8]) -> bool {
+    if !b.starts_with(&[0xFF, 0xD8]) {
+        return false;
+    }
+    let mut i = 2;
+    while i < b.len() {
+        if b[i] != 0xFF {
+            i += 1;
+            continue;
+        }
+        while i < b.len() && b[i] == 0xFF {
+            i += 1; // fill bytes
+        }
+        let Some(&marker) = b.get(i) else {
+            return false;
+        };
+        i += 1;
+        match marker {
+            0xD9 => return true,
+            // Stuffed zero, restart markers and TEM carry no length.
+            0x00 | 0x01 | 0xD0..=0xD7 => {}
+            _ => {
+                let Some(len) = b.get(i..i + 2) else {
+                    return false;
+                };
+                i += usize::from(u16::from_be_bytes([len[0], len[1]]));
+                if marker == 0xDA {
+                    i = skip_entropy_coded_data(b, i);
+                }
+            }
+        }
+    }
+    false
+}
+
+/// Index of the first marker after a scan's entropy-coded data (or `b.len()`).
+fn skip_entropy_coded_data(b: &[u8], mut i: usize) -> usize {
+    while i + 1 < b.len() {
+        if b[i] == 0xFF && !matches!(b[i + 1], 0x00 | 0xD0..=0xD7) {
+            return i;
+        }
+        i += 1;
+    }
+    b.len()
 }
 
 fn hex_prefix(bytes: &[u8]) -> String {
