@@ -319,7 +319,7 @@ pub fn parse_calib_str(text: &str, path: &Path) -> Result<Calib> {
 
 fn check_calib(c: &Calib, path: &Path) -> Result<()> {
     let k = c.intrinsics();
-    if !(k.fx > 0.0 && k.fy > 0.0) {
+    if k.fx <= 0.0 || k.fy <= 0.0 {
         return Err(Error::format(
             path,
             format!(
@@ -328,7 +328,7 @@ fn check_calib(c: &Calib, path: &Path) -> Result<()> {
             ),
         ));
     }
-    if !(c.baseline > 0.0) {
+    if c.baseline <= 0.0 {
         return Err(Error::format(
             path,
             format!("baseline={}; expected a positive length in mm", c.baseline),
