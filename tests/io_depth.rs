@@ -110,6 +110,9 @@ fn pfm_little_and_big_endian_hand_built() {
         let map = grey(parse_pfm(&bytes, Path::new("h.pfm")).unwrap());
         assert_eq!(map.as_slice(), &[3.0, 4.0, 1.0, 2.0], "scale {scale}");
     }
+    let crlf = pfm_bytes("Pf\r", 2, 1, "-1.0\r", &[1.0, 2.0], true);
+    let map = grey(parse_pfm(&crlf, Path::new("crlf.pfm")).unwrap());
+    assert_eq!(map.as_slice(), &[1.0, 2.0]);
     let rgb = pfm_bytes("PF", 1, 2, "-1", &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], true);
     match parse_pfm(&rgb, Path::new("c.pfm")).unwrap() {
         Pfm::Rgb(img) => assert_eq!(img.as_slice(), &[[4.0, 5.0, 6.0], [1.0, 2.0, 3.0]]),

@@ -103,6 +103,29 @@ fn truncated_png_and_jpeg_are_errors_naming_the_file() {
 }
 
 #[test]
+fn jpeg_cut_anywhere_is_an_error_but_trailing_data_is_fine() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.jpg");
+    let px: Vec<u8> = (0..48 * 40 * 3).map(|i| (i * 13 % 256) as u8).collect();
+    save(&full, &px, 48, 40, image::ExtendedColorType::Rgb8);
+    let bytes = std::fs::read(&full).unwrap();
+    for cut in [
+        4,
+        bytes.len() / 4,
+        bytes.len() * 3 / 4,
+        bytes.len() - 2,
+        bytes.len() - 1,
+    ] {
+        let err = expect_err(decode_linear_rgb(&bytes[..cut], "cut.jpg"));
+        assert!(err.to_string().contains("cut.jpg"), "{err}");
+    }
+    // Cameras append data (maker notes, a second image) after the end marker.
+    let mut trailer = bytes.clone();
+    trailer.extend_from_slice(b"\xFF\xD8trailing maker data");
+    assert!(decode_linear_rgb(&trailer, "trailer.jpg").is_ok());
+}
+
+#[test]
 fn garbage_and_empty_bytes_are_errors() {
     assert_format_error_naming(
         expect_err(decode_linear_rgb(b"not an image", "x.png")),

@@ -437,8 +437,13 @@ pub fn parse_pfm(bytes: &[u8], path: &Path) -> Result<Pfm> {
             ))
         }
     };
-    // Exactly one whitespace byte separates the header from the data.
-    let data = &bytes[(header.pos + 1).min(bytes.len())..];
+    // Exactly one whitespace byte separates the header from the data; a writer on Windows
+    // may have used "\r\n".
+    let mut start = header.pos + 1;
+    if bytes.get(header.pos..header.pos + 2) == Some(b"\r\n".as_slice()) {
+        start += 1;
+    }
+    let data = &bytes[start.min(bytes.len())..];
     let expected = width
         .checked_mul(height)
         .and_then(|n| n.checked_mul(channels * 4))
