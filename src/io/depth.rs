@@ -1,1 +1,1151 @@
+//! Depth, range and disparity maps in the formats users bring, turned into one thing: a
+//! range map (distance from the camera centre to the surface seen at each pixel) with NaN
+//! where the distance is unknown.
+//!
+//! Units: every conversion that knows the physical scale returns metres. Baselines are
+//! taken in millimetres everywhere (the Middlebury convention), so disparity-based ranges
+//! are computed in millimetres and divided by 1000. Float depth or range maps keep the
+//! units of the file. For haze only relative range matters, so a wrong absolute scale
+//! changes the look only through the haze density the user picks.
 
+use std::fmt;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use image::DynamicImage;
+
+use crate::raster::{Grid, RgbImage, ScalarMap};
+use crate::{Error, Result};
+
+/// Focal length in pixels assumed for Middlebury 2006 full-size images when `--focal` is
+/// not given. Approximate, quoted from memory of the dataset page, not read from a file.
+pub const MIDDLEBURY2006_FOCAL_PX: f64 = 3740.0;
+/// Baseline in millimetres assumed for Middlebury 2006 when `--baseline` is not given.
+/// Approximate, from memory, not from a file.
+pub const MIDDLEBURY2006_BASELINE_MM: f64 = 160.0;
+/// Disparity offset in pixels (the scene's `dmin`) assumed for Middlebury 2006 when
+/// `--disparity-offset` is not given. Each scene has its own; this is a typical value from
+/// memory, not from a file. Only relative range matters for haze.
+pub const MIDDLEBURY2006_DISPARITY_OFFSET_PX: f64 = 270.0;
+
+/// What the values of a map measure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthKind {
+    /// Distance along the optical axis (the z coordinate in camera space).
+    Depth,
+    /// Distance from the camera centre to the surface (what haze needs).
+    Range,
+    /// Stereo disparity in pixels; depth = focal * baseline / (disparity + offset).
+    Disparity,
+}
+
+impl DepthKind {
+    const NAMES: &'static str = "depth, range or disparity";
+}
+
+impl FromStr for DepthKind {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "depth" => Ok(DepthKind::Depth),
+            "range" => Ok(DepthKind::Range),
+            "disparity" => Ok(DepthKind::Disparity),
+            _ => Err(Error::invalid("--depth-kind", s, DepthKind::NAMES)),
+        }
+    }
+}
+
+impl fmt::Display for DepthKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DepthKind::Depth => "depth",
+            DepthKind::Range => "range",
+            DepthKind::Disparity => "disparity",
+        })
+    }
+}
+
+/// How a depth file is laid out and scaled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthFormat {
+    /// Guess from the extension, bit depth and the presence of a calibration file.
+    Auto,
+    /// Middlebury 2014: `disp0.pfm` disparity plus `calib.txt`.
+    Middlebury2014,
+    /// Middlebury 2005/2006: 8-bit disparity PNG, `0` unknown, no calibration file.
+    Middlebury2006,
+    /// KITTI depth: 16-bit PNG, metres = value / 256, `0` unknown.
+    Kitti,
+    /// NYU Depth v2: 16-bit PNG in millimetres, `0` unknown.
+    Nyu,
+    /// TUM RGB-D: 16-bit PNG, metres = value / 5000, `0` unknown.
+    Tum,
+    /// Any 16-bit PNG, metres = value * `--depth-scale`, `0` unknown.
+    Png16,
+    /// Float map (`.exr`, float `.tif`, `.npy`, `.pfm` without calibration); NaN, infinite
+    /// or non-positive values are unknown.
+    Float,
+}
+
+impl DepthFormat {
+    const NAMES: &'static str =
+        "one of auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16, float";
+}
+
+impl FromStr for DepthFormat {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(DepthFormat::Auto),
+            "middlebury2014" => Ok(DepthFormat::Middlebury2014),
+            "middlebury2006" => Ok(DepthFormat::Middlebury2006),
+            "kitti" => Ok(DepthFormat::Kitti),
+            "nyu" => Ok(DepthFormat::Nyu),
+            "tum" => Ok(DepthFormat::Tum),
+            "png16" => Ok(DepthFormat::Png16),
+            "float" => Ok(DepthFormat::Float),
+            _ => Err(Error::invalid("--depth-format", s, DepthFormat::NAMES)),
+        }
+    }
+}
+
+impl fmt::Display for DepthFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DepthFormat::Auto => "auto",
+            DepthFormat::Middlebury2014 => "middlebury2014",
+            DepthFormat::Middlebury2006 => "middlebury2006",
+            DepthFormat::Kitti => "kitti",
+            DepthFormat::Nyu => "nyu",
+            DepthFormat::Tum => "tum",
+            DepthFormat::Png16 => "png16",
+            DepthFormat::Float => "float",
+        })
+    }
+}
+
+/// Pinhole intrinsics in pixels. Pixel `(x, y)` has its centre at integer coordinates
+/// `(x, y)`, row 0 at the top, as in Middlebury's `calib.txt`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    /// Focal length along x, in pixels.
+    pub fx: f64,
+    /// Focal length along y, in pixels.
+    pub fy: f64,
+    /// Principal point x, in pixels.
+    pub cx: f64,
+    /// Principal point y, in pixels.
+    pub cy: f64,
+}
+
+impl Intrinsics {
+    /// Square pixels of focal `focal` with the principal point at the image centre
+    /// `((width - 1) / 2, (height - 1) / 2)`.
+    pub fn centred(focal: f64, width: usize, height: usize) -> Self {
+        Intrinsics {
+            fx: focal,
+            fy: focal,
+            cx: (width as f64 - 1.0) / 2.0,
+            cy: (height as f64 - 1.0) / 2.0,
+        }
+    }
+
+    /// Range / depth at pixel `(x, y)`: the length of the ray through the pixel per unit
+    /// of depth, `sqrt(1 + ((x - cx) / fx)^2 + ((y - cy) / fy)^2)`.
+    pub fn range_per_depth(&self, x: usize, y: usize) -> f64 {
+        let u = (x as f64 - self.cx) / self.fx;
+        let v = (y as f64 - self.cy) / self.fy;
+        (1.0 + u * u + v * v).sqrt()
+    }
+}
+
+/// How to read a depth file. `Default` guesses everything.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthOptions {
+    /// Layout and scale of the file; `Auto` guesses.
+    pub format: DepthFormat,
+    /// What the values measure; `None` takes the format's usual kind.
+    pub kind: Option<DepthKind>,
+    /// Middlebury 2014 `calib.txt`; `None` looks for `calib.txt` next to a `.pfm`.
+    pub calib: Option<PathBuf>,
+    /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity).
+    pub scale: Option<f64>,
+    /// Focal length in pixels.
+    pub focal: Option<f64>,
+    /// Stereo baseline in millimetres.
+    pub baseline: Option<f64>,
+    /// Added to disparity before dividing (Middlebury `doffs`/`dmin`), in pixels.
+    pub disparity_offset: Option<f64>,
+}
+
+impl Default for DepthOptions {
+    fn default() -> Self {
+        DepthOptions {
+            format: DepthFormat::Auto,
+            kind: None,
+            calib: None,
+            scale: None,
+            focal: None,
+            baseline: None,
+            disparity_offset: None,
+        }
+    }
+}
+
+/// A range map and how it was obtained.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedDepth {
+    /// Range per pixel, row 0 at the top; NaN where unknown.
+    pub range: ScalarMap,
+    /// The format actually used (never `Auto`).
+    pub format: DepthFormat,
+    /// What the file's values measured.
+    pub kind: DepthKind,
+    /// Units of `range`: `m`, or `file units` for float maps of depth or range.
+    pub units: String,
+    /// Intrinsics used to turn depth into range, if any.
+    pub intrinsics: Option<Intrinsics>,
+    /// Remarks for the user: assumptions made, options ignored.
+    pub notes: Vec<String>,
+    /// Number of NaN pixels in `range`.
+    pub unknown_pixels: usize,
+}
+
+/// The content of a Middlebury 2014 `calib.txt`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Calib {
+    /// Left camera matrix `[f 0 cx; 0 f cy; 0 0 1]`, row-major.
+    pub cam0: [[f64; 3]; 3],
+    /// Right camera matrix.
+    pub cam1: [[f64; 3]; 3],
+    /// Disparity offset `cx1 - cx0`, pixels.
+    pub doffs: f64,
+    /// Baseline, millimetres.
+    pub baseline: f64,
+    /// Image width, pixels.
+    pub width: usize,
+    /// Image height, pixels.
+    pub height: usize,
+    /// Conservative bound on the number of disparity levels.
+    pub ndisp: u32,
+    /// Whether the disparities are integers.
+    pub isint: bool,
+    /// Tight lower bound on the disparities.
+    pub vmin: f64,
+    /// Tight upper bound on the disparities.
+    pub vmax: f64,
+    /// Average vertical disparity (imperfect rectification), if given.
+    pub dyavg: Option<f64>,
+    /// Maximum vertical disparity, if given.
+    pub dymax: Option<f64>,
+}
+
+impl Calib {
+    /// The left camera's intrinsics, which `disp0.pfm` is aligned with.
+    pub fn intrinsics(&self) -> Intrinsics {
+        Intrinsics {
+            fx: self.cam0[0][0],
+            fy: self.cam0[1][1],
+            cx: self.cam0[0][2],
+            cy: self.cam0[1][2],
+        }
+    }
+}
+
+/// Reads and checks a Middlebury 2014 `calib.txt`.
+pub fn parse_calib(path: &Path) -> Result<Calib> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_calib_str(&text, path)
+}
+
+/// Parses the text of a `calib.txt`; `path` names it in errors. Missing or non-numeric
+/// keys are errors naming the key; unknown keys are ignored.
+pub fn parse_calib_str(text: &str, path: &Path) -> Result<Calib> {
+    let mut pairs: Vec<(&str, &str)> = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let Some((key, value)) = line.split_once('=') else {
+            return Err(Error::format(
+                path,
+                format!("line {}: `{line}` is not `key=value`", n + 1),
+            ));
+        };
+        pairs.push((key.trim(), value.trim()));
+    }
+    let lookup = |key: &str| pairs.iter().rev().find(|(k, _)| *k == key).map(|p| p.1);
+    let required = |key: &str| {
+        lookup(key).ok_or_else(|| {
+            Error::format(
+                path,
+                format!("missing key `{key}`; a Middlebury 2014 calib.txt has it"),
+            )
+        })
+    };
+    let number = |key: &str| parse_number(required(key)?, key, path);
+    let integer = |key: &str| -> Result<u64> {
+        let v = required(key)?;
+        v.parse::<u64>().map_err(|_| {
+            Error::format(
+                path,
+                format!("`{key}={v}`: expected a non-negative integer"),
+            )
+        })
+    };
+    let optional = |key: &str| lookup(key).map(|v| parse_number(v, key, path)).transpose();
+
+    let calib = Calib {
+        cam0: parse_matrix(required("cam0")?, "cam0", path)?,
+        cam1: parse_matrix(required("cam1")?, "cam1", path)?,
+        doffs: number("doffs")?,
+        baseline: number("baseline")?,
+        width: integer("width")? as usize,
+        height: integer("height")? as usize,
+        ndisp: integer("ndisp")? as u32,
+        isint: integer("isint")? != 0,
+        vmin: number("vmin")?,
+        vmax: number("vmax")?,
+        dyavg: optional("dyavg")?,
+        dymax: optional("dymax")?,
+    };
+    check_calib(&calib, path)?;
+    Ok(calib)
+}
+
+fn check_calib(c: &Calib, path: &Path) -> Result<()> {
+    let k = c.intrinsics();
+    if k.fx <= 0.0 || k.fy <= 0.0 {
+        return Err(Error::format(
+            path,
+            format!(
+                "cam0 focal lengths are {} and {}; expected positive values",
+                k.fx, k.fy
+            ),
+        ));
+    }
+    if c.baseline <= 0.0 {
+        return Err(Error::format(
+            path,
+            format!("baseline={}; expected a positive length in mm", c.baseline),
+        ));
+    }
+    if c.width == 0 || c.height == 0 {
+        return Err(Error::format(
+            path,
+            format!(
+                "width={} height={}; expected positive sizes",
+                c.width, c.height
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn parse_number(value: &str, key: &str, path: &Path) -> Result<f64> {
+    match value.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(Error::format(
+            path,
+            format!("`{key}={value}`: expected a finite number"),
+        )),
+    }
+}
+
+fn parse_matrix(value: &str, key: &str, path: &Path) -> Result<[[f64; 3]; 3]> {
+    let bad = || {
+        Error::format(
+            path,
+            format!("`{key}={value}`: expected a 3x3 matrix like `[f 0 cx; 0 f cy; 0 0 1]`"),
+        )
+    };
+    let inner = value
+        .strip_prefix('[')
+        .and_then(|v| v.strip_suffix(']'))
+        .ok_or_else(bad)?;
+    let rows: Vec<&str> = inner.split(';').collect();
+    if rows.len() != 3 {
+        return Err(bad());
+    }
+    let mut m = [[0.0; 3]; 3];
+    for (r, row) in rows.iter().enumerate() {
+        let cells: Vec<&str> = row.split_whitespace().collect();
+        if cells.len() != 3 {
+            return Err(bad());
+        }
+        for (c, cell) in cells.iter().enumerate() {
+            m[r][c] = cell
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(bad)?;
+        }
+    }
+    Ok(m)
+}
+
+/// The content of a PFM file, rows already flipped to top-to-bottom.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Pfm {
+    /// A `Pf` file: one channel.
+    Grey(ScalarMap),
+    /// A `PF` file: three channels.
+    Rgb(RgbImage),
+}
+
+/// Reads a PFM file (`Pf` or `PF`, either byte order).
+pub fn read_pfm(path: &Path) -> Result<Pfm> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_pfm(&bytes, path)
+}
+
+/// Parses PFM bytes; `path` names the file in errors. The header is `Pf` or `PF`, width,
+/// height and scale separated by whitespace, then one whitespace byte, then rows of
+/// 32-bit floats from the BOTTOM row to the top, little-endian if scale < 0.
+pub fn parse_pfm(bytes: &[u8], path: &Path) -> Result<Pfm> {
+    let mut header = HeaderTokens { bytes, pos: 0 };
+    let magic = header.next(path, "the magic `Pf` or `PF`")?;
+    let channels = match magic {
+        "Pf" => 1,
+        "PF" => 3,
+        _ => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "PFM header must start with `Pf` (grey) or `PF` (colour), found `{}`",
+                    magic.escape_default()
+                ),
+            ))
+        }
+    };
+    let width = header.positive_int(path, "width")?;
+    let height = header.positive_int(path, "height")?;
+    let scale_text = header.next(path, "the scale")?;
+    let scale = match scale_text.parse::<f64>() {
+        Ok(s) if s.is_finite() && s != 0.0 => s,
+        _ => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "PFM scale is `{}`; expected a non-zero number (negative: little-endian)",
+                    scale_text.escape_default()
+                ),
+            ))
+        }
+    };
+    // Exactly one whitespace byte separates the header from the data; a writer on Windows
+    // may have used "\r\n".
+    let mut start = header.pos + 1;
+    if bytes.get(header.pos..header.pos + 2) == Some(b"\r\n".as_slice()) {
+        start += 1;
+    }
+    let data = &bytes[start.min(bytes.len())..];
+    let expected = width
+        .checked_mul(height)
+        .and_then(|n| n.checked_mul(channels * 4))
+        .ok_or_else(|| Error::format(path, format!("PFM size {width}x{height} is too large")))?;
+    if data.len() != expected {
+        return Err(Error::format(
+            path,
+            format!(
+                "expected {width}*{height}*{}4 = {expected} bytes of data, found {}",
+                if channels == 3 { "3*" } else { "" },
+                data.len()
+            ),
+        ));
+    }
+    let little = scale < 0.0;
+    let value = |i: usize| {
+        let b: [u8; 4] = data[4 * i..4 * i + 4].try_into().expect("4 bytes");
+        if little {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let index = |x: usize, y: usize, c: usize| ((height - 1 - y) * width + x) * channels + c;
+    Ok(if channels == 1 {
+        Pfm::Grey(Grid::from_fn(width, height, |x, y| value(index(x, y, 0))))
+    } else {
+        Pfm::Rgb(Grid::from_fn(width, height, |x, y| {
+            [0, 1, 2].map(|c| value(index(x, y, c)))
+        }))
+    })
+}
+
+struct HeaderTokens<'a> {
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> HeaderTokens<'a> {
+    /// Longest header token accepted: stops a binary file from being scanned as text.
+    const MAX_TOKEN: usize = 32;
+
+    fn next(&mut self, path: &Path, what: &str) -> Result<&'a str> {
+        while self.pos < self.bytes.len() && self.bytes[self.pos].is_ascii_whitespace() {
+            self.pos += 1;
+        }
+        let start = self.pos;
+        while self.pos < self.bytes.len()
+            && !self.bytes[self.pos].is_ascii_whitespace()
+            && self.pos - start <= Self::MAX_TOKEN
+        {
+            self.pos += 1;
+        }
+        let token = &self.bytes[start..self.pos];
+        if token.is_empty() {
+            return Err(Error::format(
+                path,
+                format!("PFM header ends before {what}; the file is truncated or not a PFM"),
+            ));
+        }
+        std::str::from_utf8(token).map_err(|_| {
+            Error::format(
+                path,
+                format!("PFM header: expected {what}, found binary data"),
+            )
+        })
+    }
+
+    fn positive_int(&mut self, path: &Path, what: &str) -> Result<usize> {
+        let token = self.next(path, what)?;
+        match token.parse::<usize>() {
+            Ok(v) if v > 0 => Ok(v),
+            _ => Err(Error::format(
+                path,
+                format!(
+                    "PFM {what} is `{}`; expected a positive integer",
+                    token.escape_default()
+                ),
+            )),
+        }
+    }
+}
+
+/// Reads a one-channel float map from an OpenEXR file: the first channel named `Z`, `Y`,
+/// `R` or `depth` (in that order of preference), or the only channel.
+pub fn read_exr_scalar(path: &Path) -> Result<ScalarMap> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_exr_scalar(&bytes, path)
+}
+
+fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
+    use exr::prelude::{read, FlatSamples, ReadChannels, ReadLayers};
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(|e| Error::format(path, format!("cannot read as OpenEXR: {e}")))?;
+    let layer = image.layer_data;
+    let channels = &layer.channel_data.list;
+    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
+    let chosen = ["Z", "Y", "R", "depth"]
+        .iter()
+        .find_map(|want| names.iter().position(|n| n == want))
+        .or(if names.len() == 1 { Some(0) } else { None })
+        .ok_or_else(|| {
+            Error::format(
+                path,
+                format!(
+                    "EXR channels are [{}]; expected one named Z, Y, R or depth, or a single channel",
+                    names.join(", ")
+                ),
+            )
+        })?;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    let data: Vec<f32> = match &channels[chosen].sample_data {
+        FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
+        FlatSamples::F32(v) => v.clone(),
+        FlatSamples::U32(v) => v.iter().map(|&x| x as f32).collect(),
+    };
+    if data.len() != w * h {
+        return Err(Error::format(
+            path,
+            format!(
+                "EXR channel {} is subsampled ({} samples for {w}x{h} pixels); expected full resolution",
+                names[chosen],
+                data.len()
+            ),
+        ));
+    }
+    Ok(Grid::from_vec(w, h, data))
+}
+
+/// Reads a one-channel 32- or 64-bit float TIFF.
+pub fn read_tiff_scalar(path: &Path) -> Result<ScalarMap> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_tiff_scalar(&bytes, path)
+}
+
+fn parse_tiff_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
+    use tiff::decoder::{Decoder, DecodingResult};
+    let bad = |e: tiff::TiffError| Error::format(path, format!("cannot read as TIFF: {e}"));
+    let mut decoder = Decoder::new(Cursor::new(bytes)).map_err(bad)?;
+    let (w, h) = decoder.dimensions().map_err(bad)?;
+    let colour = decoder.colortype().map_err(bad)?;
+    if !matches!(colour, tiff::ColorType::Gray(_)) {
+        return Err(Error::format(
+            path,
+            format!("TIFF colour type is {colour:?}; expected one float channel"),
+        ));
+    }
+    let data: Vec<f32> = match decoder.read_image().map_err(bad)? {
+        DecodingResult::F32(v) => v,
+        DecodingResult::F64(v) => v.into_iter().map(|x| x as f32).collect(),
+        _ => {
+            return Err(Error::format(
+                path,
+                format!("TIFF samples are {colour:?} integers; expected 32- or 64-bit floats"),
+            ))
+        }
+    };
+    let (w, h) = (w as usize, h as usize);
+    if data.len() != w * h {
+        return Err(Error::format(
+            path,
+            format!("TIFF holds {} samples; expected {w}*{h}", data.len()),
+        ));
+    }
+    Ok(Grid::from_vec(w, h, data))
+}
+
+/// Reads a 2-D (or `h x w x 1`) float32 or float64 NumPy `.npy` array, C or Fortran order.
+pub fn read_npy_scalar(path: &Path) -> Result<ScalarMap> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    parse_npy_scalar(&bytes, path)
+}
+
+fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
+    let npy = npyz::NpyFile::new(bytes)
+        .map_err(|e| Error::format(path, format!("not a valid .npy file: {e}")))?;
+    let shape = npy.shape().to_vec();
+    let (h, w) = match shape[..] {
+        [h, w] | [h, w, 1] if h > 0 && w > 0 => (h as usize, w as usize),
+        _ => {
+            return Err(Error::format(
+                path,
+                format!("array shape is {shape:?}; expected (height, width)"),
+            ))
+        }
+    };
+    let fortran = npy.order() == npyz::Order::Fortran;
+    let dtype = npy.dtype().descr();
+    let truncated = |e: std::io::Error| {
+        Error::format(
+            path,
+            format!("cannot read {h}*{w} values of {dtype}: {e}; the file may be truncated"),
+        )
+    };
+    let values: Vec<f32> = match npy.try_data::<f32>() {
+        Ok(reader) => reader.collect::<std::io::Result<_>>().map_err(truncated)?,
+        Err(npy) => match npy.try_data::<f64>() {
+            Ok(reader) => reader
+                .map(|v| v.map(|x| x as f32))
+                .collect::<std::io::Result<_>>()
+                .map_err(truncated)?,
+            Err(_) => {
+                return Err(Error::format(
+                    path,
+                    format!("array dtype is {dtype}; expected float32 or float64"),
+                ))
+            }
+        },
+    };
+    if values.len() != w * h {
+        return Err(Error::format(
+            path,
+            format!("expected {h}*{w} values, found {}", values.len()),
+        ));
+    }
+    Ok(if fortran {
+        Grid::from_fn(w, h, |x, y| values[x * h + y])
+    } else {
+        Grid::from_vec(w, h, values)
+    })
+}
+
+/// A depth file decoded but not yet interpreted.
+enum Raw {
+    Grey8(Grid<u8>),
+    Grey16(Grid<u16>),
+    Float { map: ScalarMap, from_pfm: bool },
+}
+
+impl Raw {
+    fn describe(&self) -> &'static str {
+        match self {
+            Raw::Grey8(_) => "an 8-bit PNG",
+            Raw::Grey16(_) => "a 16-bit PNG",
+            Raw::Float { from_pfm: true, .. } => "a float PFM",
+            Raw::Float { .. } => "a float map",
+        }
+    }
+
+    fn size(&self) -> (usize, usize) {
+        match self {
+            Raw::Grey8(g) => (g.width(), g.height()),
+            Raw::Grey16(g) => (g.width(), g.height()),
+            Raw::Float { map, .. } => (map.width(), map.height()),
+        }
+    }
+}
+
+/// Loads a depth, range or disparity file and returns a range map with NaN for unknown
+/// pixels. See [`DepthFormat`] for the layouts and [`DepthOptions`] for the knobs.
+pub fn load_range(path: &Path, opts: &DepthOptions) -> Result<LoadedDepth> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let mut notes = Vec::new();
+    let ext = extension_of(path);
+    let calib = find_calib(path, &ext, opts, &mut notes)?;
+    let raw = decode_raw(&bytes, path, &ext)?;
+    interpret(raw, path, opts, calib, notes, 1.0)
+}
+
+/// Decodes embedded depth bytes as if read from a file with extension `ext`. `pixel_scale`
+/// is how many full-size pixels one pixel of this map spans: a Middlebury 2006 map
+/// downsampled by 2 keeps full-size disparities but its pixels see twice the angle.
+pub(crate) fn range_from_bytes(
+    bytes: &[u8],
+    name: &Path,
+    ext: &str,
+    opts: &DepthOptions,
+    pixel_scale: f64,
+) -> Result<LoadedDepth> {
+    let raw = decode_raw(bytes, name, ext)?;
+    interpret(raw, name, opts, None, Vec::new(), pixel_scale)
+}
+
+fn extension_of(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}
+
+fn find_calib(
+    path: &Path,
+    ext: &str,
+    opts: &DepthOptions,
+    notes: &mut Vec<String>,
+) -> Result<Option<(Calib, PathBuf)>> {
+    let wants_calib =
+        matches!(opts.format, DepthFormat::Auto | DepthFormat::Middlebury2014) && ext == "pfm";
+    if let Some(given) = &opts.calib {
+        if !wants_calib {
+            notes.push(format!(
+                "--calib {} ignored: only Middlebury 2014 .pfm disparities use it",
+                given.display()
+            ));
+            return Ok(None);
+        }
+        return Ok(Some((parse_calib(given)?, given.clone())));
+    }
+    if !wants_calib {
+        return Ok(None);
+    }
+    let beside = path.with_file_name("calib.txt");
+    if !beside.is_file() {
+        return Ok(None);
+    }
+    let calib = parse_calib(&beside)?;
+    notes.push(format!("calibration read from {}", beside.display()));
+    Ok(Some((calib, beside)))
+}
+
+fn decode_raw(bytes: &[u8], path: &Path, ext: &str) -> Result<Raw> {
+    match ext {
+        "png" => decode_png_depth(bytes, path),
+        "pfm" => match parse_pfm(bytes, path)? {
+            Pfm::Grey(map) => Ok(Raw::Float {
+                map,
+                from_pfm: true,
+            }),
+            Pfm::Rgb(_) => Err(Error::format(
+                path,
+                "PFM is `PF` (3 colour channels); a depth or disparity PFM must be `Pf` (1 channel)",
+            )),
+        },
+        "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
+        "tif" | "tiff" => Ok(float(parse_tiff_scalar(bytes, path)?)),
+        "npy" => Ok(float(parse_npy_scalar(bytes, path)?)),
+        "jpg" | "jpeg" => Err(Error::format(
+            path,
+            "JPEG is lossy and cannot hold depth; expected .png, .pfm, .exr, .tif, .tiff or .npy",
+        )),
+        _ => Err(Error::format(
+            path,
+            format!(
+                "unknown depth file extension `{ext}`; expected .png, .pfm, .exr, .tif, .tiff or .npy"
+            ),
+        )),
+    }
+}
+
+fn float(map: ScalarMap) -> Raw {
+    Raw::Float {
+        map,
+        from_pfm: false,
+    }
+}
+
+fn decode_png_depth(bytes: &[u8], path: &Path) -> Result<Raw> {
+    let name = path.display().to_string();
+    match super::image::decode_any(bytes, &name)? {
+        DynamicImage::ImageLuma8(g) => Ok(Raw::Grey8(to_grid(g))),
+        DynamicImage::ImageLuma16(g) => Ok(Raw::Grey16(to_grid(g))),
+        // Alpha on a depth PNG carries nothing we use.
+        DynamicImage::ImageLumaA8(g) => Ok(Raw::Grey8(first_channel(g))),
+        DynamicImage::ImageLumaA16(g) => Ok(Raw::Grey16(first_channel(g))),
+        other => Err(Error::format(
+            path,
+            format!(
+                "depth PNG has colour type {:?}; expected one grey channel (8- or 16-bit)",
+                other.color()
+            ),
+        )),
+    }
+}
+
+fn to_grid<T: image::Primitive>(img: image::ImageBuffer<image::Luma<T>, Vec<T>>) -> Grid<T> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    Grid::from_vec(w, h, img.into_raw())
+}
+
+fn first_channel<T: image::Primitive>(img: image::ImageBuffer<image::LumaA<T>, Vec<T>>) -> Grid<T> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    Grid::from_vec(w, h, img.pixels().map(|p| p.0[0]).collect())
+}
+
+fn resolve_format(
+    requested: DepthFormat,
+    raw: &Raw,
+    has_calib: bool,
+    opts: &DepthOptions,
+    path: &Path,
+) -> Result<DepthFormat> {
+    use DepthFormat as F;
+    let format = match (requested, raw) {
+        (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
+        (F::Auto, Raw::Float { .. }) => F::Float,
+        (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
+        (F::Auto, Raw::Grey16(_)) if opts.scale.is_some() => F::Png16,
+        (F::Auto, Raw::Grey16(_)) => {
+            return Err(Error::format(
+                path,
+                "16-bit PNG depth has no standard scale: pass --depth-format kitti|nyu|tum, \
+                 or --depth-scale with the metres per unit",
+            ))
+        }
+        (f, _) => f,
+    };
+    let fits = match format {
+        F::Middlebury2014 => matches!(raw, Raw::Float { from_pfm: true, .. }),
+        F::Middlebury2006 => matches!(raw, Raw::Grey8(_)),
+        F::Kitti | F::Nyu | F::Tum | F::Png16 => matches!(raw, Raw::Grey16(_)),
+        F::Float => matches!(raw, Raw::Float { .. }),
+        F::Auto => unreachable!("Auto resolved above"),
+    };
+    if !fits {
+        let expected = match format {
+            F::Middlebury2014 => "a `Pf` PFM disparity (disp0.pfm)",
+            F::Middlebury2006 => "an 8-bit grey PNG disparity",
+            F::Float => "a float map (.pfm, .exr, .tif, .tiff or .npy)",
+            _ => "a 16-bit grey PNG",
+        };
+        return Err(Error::format(
+            path,
+            format!(
+                "--depth-format {format} expects {expected}, found {}",
+                raw.describe()
+            ),
+        ));
+    }
+    if format == F::Middlebury2014 && !has_calib {
+        return Err(Error::format(
+            path,
+            "Middlebury 2014 disparity needs its calib.txt: none next to the file; pass --calib",
+        ));
+    }
+    Ok(format)
+}
+
+fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<DepthKind> {
+    use DepthFormat as F;
+    use DepthKind as K;
+    let default = match format {
+        F::Middlebury2014 | F::Middlebury2006 => K::Disparity,
+        _ => K::Depth,
+    };
+    let kind = requested.unwrap_or(default);
+    let allowed = match format {
+        F::Middlebury2014 | F::Middlebury2006 => kind == K::Disparity,
+        F::Kitti | F::Nyu | F::Tum => kind != K::Disparity,
+        _ => true,
+    };
+    if !allowed {
+        let expected = if default == K::Disparity {
+            format!("disparity for --depth-format {format}")
+        } else {
+            format!("depth or range for --depth-format {format}")
+        };
+        return Err(Error::invalid("--depth-kind", kind, expected));
+    }
+    Ok(kind)
+}
+
+fn positive_option(value: f64, name: &str, what: &str) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::invalid(name, value, what))
+    }
+}
+
+fn finite_option(value: f64, name: &str) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::invalid(name, value, "a finite number of pixels"))
+    }
+}
+
+/// Stereo geometry for disparity: depth in mm = `focal * baseline / (d + offset)`.
+struct Stereo {
+    focal: f64,
+    baseline_mm: f64,
+    offset: f64,
+}
+
+impl Stereo {
+    /// Depth in metres, `None` where the disparity cannot give one.
+    fn depth_m(&self, d: f64) -> Option<f64> {
+        let denom = d + self.offset;
+        (d.is_finite() && denom > 0.0).then(|| self.focal * self.baseline_mm / denom / 1000.0)
+    }
+
+    /// Focal, baseline and offset from the options, for disparity maps without a calib.
+    fn from_options(opts: &DepthOptions, format: DepthFormat) -> Result<Self> {
+        let missing = |name: &str| {
+            Error::invalid(
+                name,
+                "nothing",
+                format!("a value: --depth-format {format} with --depth-kind disparity needs --focal (px) and --baseline (mm)"),
+            )
+        };
+        let focal = opts.focal.ok_or_else(|| missing("--focal"))?;
+        let baseline = opts.baseline.ok_or_else(|| missing("--baseline"))?;
+        Ok(Stereo {
+            focal: positive_option(focal, "--focal", "a positive focal length in pixels")?,
+            baseline_mm: positive_option(baseline, "--baseline", "a positive length in mm")?,
+            offset: finite_option(opts.disparity_offset.unwrap_or(0.0), "--disparity-offset")?,
+        })
+    }
+}
+
+fn interpret(
+    raw: Raw,
+    path: &Path,
+    opts: &DepthOptions,
+    calib: Option<(Calib, PathBuf)>,
+    mut notes: Vec<String>,
+    pixel_scale: f64,
+) -> Result<LoadedDepth> {
+    let format = resolve_format(opts.format, &raw, calib.is_some(), opts, path)?;
+    let kind = resolve_kind(format, opts.kind)?;
+    let (width, height) = raw.size();
+    let metres = "m".to_string();
+    let (range, units, intrinsics) = match (format, raw) {
+        (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
+            let (calib, calib_path) = calib.expect("checked by resolve_format");
+            check_calib_size(&calib, &calib_path, &map, path)?;
+            note_ignored_stereo_options(opts, &mut notes);
+            let stereo = Stereo {
+                focal: calib.cam0[0][0],
+                baseline_mm: calib.baseline,
+                offset: calib.doffs,
+            };
+            let k = calib.intrinsics();
+            let range = to_range(&map, |d| stereo.depth_m(f64::from(d)), Some(&k));
+            (range, metres, Some(k))
+        }
+        (DepthFormat::Middlebury2006, Raw::Grey8(disp)) => {
+            let stereo = middlebury2006_stereo(opts, &disp, &mut notes)?;
+            let k = Intrinsics::centred(stereo.focal / pixel_scale, width, height);
+            notes.push("principal point assumed at the image centre".to_string());
+            let depth = |d: u8| (d != 0).then(|| stereo.depth_m(f64::from(d))).flatten();
+            (to_range(&disp, depth, Some(&k)), metres, Some(k))
+        }
+        (DepthFormat::Png16, Raw::Grey16(raw)) if kind == DepthKind::Disparity => {
+            let scale = png16_scale(opts)?;
+            let stereo = Stereo::from_options(opts, format)?;
+            let k = Intrinsics::centred(stereo.focal, width, height);
+            notes.push("principal point assumed at the image centre".to_string());
+            let depth = |v: u16| {
+                (v != 0)
+                    .then(|| stereo.depth_m(f64::from(v) * scale))
+                    .flatten()
+            };
+            (to_range(&raw, depth, Some(&k)), metres, Some(k))
+        }
+        (_, Raw::Grey16(raw)) => {
+            let scale = match format {
+                DepthFormat::Kitti => 1.0 / 256.0,
+                DepthFormat::Nyu => 1.0 / 1000.0,
+                DepthFormat::Tum => 1.0 / 5000.0,
+                _ => png16_scale(opts)?,
+            };
+            if format != DepthFormat::Png16 && opts.scale.is_some() {
+                notes.push(format!("--depth-scale ignored: {format} has a fixed scale"));
+            }
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let depth = |v: u16| (v != 0).then_some(f64::from(v) * scale);
+            (to_range(&raw, depth, k.as_ref()), metres, k)
+        }
+        (_, Raw::Float { map, .. }) if kind == DepthKind::Disparity => {
+            let stereo = Stereo::from_options(opts, format)?;
+            let k = Intrinsics::centred(stereo.focal, width, height);
+            notes.push("principal point assumed at the image centre".to_string());
+            let range = to_range(&map, |d| stereo.depth_m(f64::from(d)), Some(&k));
+            (range, metres, Some(k))
+        }
+        (_, Raw::Float { map, .. }) => {
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let range = to_range(&map, |v| Some(f64::from(v)), k.as_ref());
+            (range, "file units".to_string(), k)
+        }
+        (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
+    };
+    let unknown_pixels = range.as_slice().iter().filter(|v| v.is_nan()).count();
+    if unknown_pixels == range.len() {
+        return Err(Error::NoValidDepth {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(LoadedDepth {
+        range,
+        format,
+        kind,
+        units,
+        intrinsics,
+        notes,
+        unknown_pixels,
+    })
+}
+
+fn check_calib_size(calib: &Calib, calib_path: &Path, map: &ScalarMap, path: &Path) -> Result<()> {
+    if (calib.width, calib.height) == (map.width(), map.height()) {
+        return Ok(());
+    }
+    Err(Error::SizeMismatch {
+        a: format!("{} (width=, height=)", calib_path.display()),
+        aw: calib.width as u32,
+        ah: calib.height as u32,
+        b: path.display().to_string(),
+        bw: map.width() as u32,
+        bh: map.height() as u32,
+    })
+}
+
+fn note_ignored_stereo_options(opts: &DepthOptions, notes: &mut Vec<String>) {
+    if opts.focal.is_some() || opts.baseline.is_some() || opts.disparity_offset.is_some() {
+        notes.push(
+            "--focal, --baseline and --disparity-offset ignored: calib.txt gives them".to_string(),
+        );
+    }
+}
+
+fn middlebury2006_stereo(
+    opts: &DepthOptions,
+    disp: &Grid<u8>,
+    notes: &mut Vec<String>,
+) -> Result<Stereo> {
+    let focal = opts.focal.unwrap_or(MIDDLEBURY2006_FOCAL_PX);
+    let baseline = opts.baseline.unwrap_or(MIDDLEBURY2006_BASELINE_MM);
+    let offset = opts
+        .disparity_offset
+        .unwrap_or(MIDDLEBURY2006_DISPARITY_OFFSET_PX);
+    if opts.focal.is_none() || opts.baseline.is_none() || opts.disparity_offset.is_none() {
+        notes.push(format!(
+            "Middlebury 2006 geometry: focal {focal} px, baseline {baseline} mm, disparity \
+             offset {offset} px (defaults are approximate full-size values; only relative \
+             range matters for haze)"
+        ));
+    }
+    let stereo = Stereo {
+        focal: positive_option(focal, "--focal", "a positive focal length in pixels")?,
+        baseline_mm: positive_option(baseline, "--baseline", "a positive length in mm")?,
+        offset: finite_option(offset, "--disparity-offset")?,
+    };
+    if let Some(&smallest) = disp.as_slice().iter().filter(|&&d| d != 0).min() {
+        if f64::from(smallest) + stereo.offset <= 0.0 {
+            return Err(Error::invalid(
+                "--disparity-offset",
+                offset,
+                format!("a value above -{smallest} (the smallest known disparity) so that disparity + offset > 0"),
+            ));
+        }
+    }
+    Ok(stereo)
+}
+
+fn png16_scale(opts: &DepthOptions) -> Result<f64> {
+    let scale = opts.scale.ok_or_else(|| {
+        Error::invalid(
+            "--depth-scale",
+            "nothing",
+            "a positive multiplier for --depth-format png16 (e.g. 0.001 for millimetres)",
+        )
+    })?;
+    positive_option(scale, "--depth-scale", "a positive finite multiplier")
+}
+
+/// Intrinsics for a depth map without calibration: only if `--focal` is given.
+fn depth_intrinsics(
+    kind: DepthKind,
+    opts: &DepthOptions,
+    width: usize,
+    height: usize,
+    notes: &mut Vec<String>,
+) -> Result<Option<Intrinsics>> {
+    match (kind, opts.focal) {
+        (DepthKind::Range, Some(_)) => {
+            notes.push("--focal ignored: the map already holds range".to_string());
+            Ok(None)
+        }
+        (DepthKind::Range, None) => Ok(None),
+        (_, Some(f)) => {
+            let f = positive_option(f, "--focal", "a positive focal length in pixels")?;
+            notes.push("principal point assumed at the image centre".to_string());
+            Ok(Some(Intrinsics::centred(f, width, height)))
+        }
+        (_, None) => {
+            notes.push("no intrinsics: depth used as range".to_string());
+            Ok(None)
+        }
+    }
+}
+
+/// Applies `depth_of` to every raw value, keeps positive finite results, and stretches
+/// depth to range along each pixel's ray when intrinsics are known.
+fn to_range<T: Copy>(
+    raw: &Grid<T>,
+    depth_of: impl Fn(T) -> Option<f64>,
+    intrinsics: Option<&Intrinsics>,
+) -> ScalarMap {
+    Grid::from_fn(raw.width(), raw.height(), |x, y| {
+        match depth_of(*raw.get(x, y)).filter(|z| z.is_finite() && *z > 0.0) {
+            Some(z) => {
+                let stretch = intrinsics.map_or(1.0, |k| k.range_per_depth(x, y));
+                (z * stretch) as f32
+            }
+            None => f32::NAN,
+        }
+    })
+}

@@ -1,0 +1,686 @@
+//! Depth loaders: PFM, calib.txt, Middlebury 2014/2006, 16-bit PNG formats, float maps.
+
+use std::path::{Path, PathBuf};
+
+use brume::io::depth::{
+    load_range, parse_calib, parse_pfm, read_pfm, DepthFormat, DepthKind, DepthOptions,
+    LoadedDepth, Pfm,
+};
+use brume::io::output::write_scalar;
+use brume::raster::{Grid, ScalarMap};
+use brume::Error;
+
+/// Expects an error without printing a (large) map if there is none.
+fn expect_err<T>(r: brume::Result<T>) -> Error {
+    match r {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e,
+    }
+}
+
+fn expect_format_error(r: brume::Result<impl Sized>, needle: &str) -> String {
+    let err = expect_err(r);
+    let msg = err.to_string();
+    assert!(
+        matches!(err, Error::Format { .. }),
+        "not a Format error: {msg}"
+    );
+    assert!(msg.contains(needle), "`{msg}` should mention `{needle}`");
+    msg
+}
+
+fn grey(pfm: Pfm) -> ScalarMap {
+    match pfm {
+        Pfm::Grey(m) => m,
+        Pfm::Rgb(_) => panic!("expected a grey PFM"),
+    }
+}
+
+/// A PFM built by hand; `rows_bottom_up` are the rows in file order.
+fn pfm_bytes(
+    magic: &str,
+    w: usize,
+    h: usize,
+    scale: &str,
+    values: &[f32],
+    little: bool,
+) -> Vec<u8> {
+    let mut b = format!("{magic}\n{w} {h}\n{scale}\n").into_bytes();
+    for v in values {
+        b.extend_from_slice(&if little {
+            v.to_le_bytes()
+        } else {
+            v.to_be_bytes()
+        });
+    }
+    b
+}
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+fn opts(format: DepthFormat) -> DepthOptions {
+    DepthOptions {
+        format,
+        ..DepthOptions::default()
+    }
+}
+
+fn close(a: f32, b: f64) -> bool {
+    (f64::from(a) - b).abs() <= 1e-5 * b.abs().max(1.0)
+}
+
+// ---------------------------------------------------------------- PFM
+
+#[test]
+fn pfm_round_trip_is_bit_identical_with_top_row_first() {
+    let dir = tempfile::tempdir().unwrap();
+    let map = Grid::from_fn(3, 4, |x, y| {
+        if y == 0 {
+            100.0 + x as f32
+        } else {
+            y as f32 * 0.1 + x as f32
+        }
+    });
+    let path = dir.path().join("m.pfm");
+    write_scalar(&path, &map).unwrap();
+    let back = grey(read_pfm(&path).unwrap());
+    assert_eq!(back.width(), 3);
+    assert_eq!(back.height(), 4);
+    for (a, b) in map.as_slice().iter().zip(back.as_slice()) {
+        assert_eq!(a.to_bits(), b.to_bits());
+    }
+    assert_eq!(*back.get(2, 0), 102.0);
+    // The file stores the bottom row first.
+    let bytes = std::fs::read(&path).unwrap();
+    let header = b"Pf\n3 4\n-1.0\n".len();
+    let first = f32::from_le_bytes(bytes[header..header + 4].try_into().unwrap());
+    assert_eq!(first, *map.get(0, 3));
+}
+
+#[test]
+fn pfm_little_and_big_endian_hand_built() {
+    // File order: bottom row [1, 2], top row [3, 4].
+    let values = [1.0, 2.0, 3.0, 4.0];
+    for (scale, little) in [("-1.0", true), ("1.0", false), ("-0.5", true), ("2", false)] {
+        let bytes = pfm_bytes("Pf", 2, 2, scale, &values, little);
+        let map = grey(parse_pfm(&bytes, Path::new("h.pfm")).unwrap());
+        assert_eq!(map.as_slice(), &[3.0, 4.0, 1.0, 2.0], "scale {scale}");
+    }
+    let crlf = pfm_bytes("Pf\r", 2, 1, "-1.0\r", &[1.0, 2.0], true);
+    let map = grey(parse_pfm(&crlf, Path::new("crlf.pfm")).unwrap());
+    assert_eq!(map.as_slice(), &[1.0, 2.0]);
+    let rgb = pfm_bytes("PF", 1, 2, "-1", &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], true);
+    match parse_pfm(&rgb, Path::new("c.pfm")).unwrap() {
+        Pfm::Rgb(img) => assert_eq!(img.as_slice(), &[[4.0, 5.0, 6.0], [1.0, 2.0, 3.0]]),
+        Pfm::Grey(_) => panic!("PF is colour"),
+    }
+}
+
+#[test]
+fn pfm_bad_files_are_format_errors() {
+    let p = Path::new("bad.pfm");
+    let good = pfm_bytes("Pf", 2, 2, "-1.0", &[1.0; 4], true);
+    expect_format_error(
+        parse_pfm(&good[..good.len() - 3], p),
+        "expected 2*2*4 = 16 bytes of data, found 13",
+    );
+    let mut long = good.clone();
+    long.push(0);
+    expect_format_error(parse_pfm(&long, p), "found 17");
+    expect_format_error(
+        parse_pfm(&pfm_bytes("P5", 2, 2, "-1", &[1.0; 4], true), p),
+        "must start with `Pf`",
+    );
+    expect_format_error(parse_pfm(b"Pf\ntwo 2\n-1\n", p), "width");
+    expect_format_error(parse_pfm(b"Pf\n2 2\nabc\n", p), "scale");
+    expect_format_error(parse_pfm(b"Pf\n2 2\n0\n", p), "scale");
+    expect_format_error(parse_pfm(b"Pf\n2", p), "truncated");
+    expect_format_error(parse_pfm(b"", p), "truncated");
+    expect_format_error(
+        parse_pfm(b"Pf\n99999999999 99999999999\n-1\n", p),
+        "bad.pfm",
+    );
+}
+
+#[test]
+fn colour_pfm_is_rejected_as_depth() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = write(
+        dir.path(),
+        "c.pfm",
+        &pfm_bytes("PF", 1, 1, "-1", &[1.0; 3], true),
+    );
+    expect_format_error(
+        load_range(&path, &DepthOptions::default()),
+        "`Pf` (1 channel)",
+    );
+}
+
+// ---------------------------------------------------------------- Middlebury 2014
+
+const CALIB: &str = "cam0=[4161.221 0 1445.577; 0 4161.221 984.686; 0 0 1]
+cam1=[4161.221 0 1654.636; 0 4161.221 984.686; 0 0 1]
+doffs=209.059
+baseline=176.252
+width=2880
+height=1988
+ndisp=280
+isint=0
+vmin=27
+vmax=260
+dyavg=0
+dymax=0
+";
+
+#[test]
+fn calib_parses_a_realistic_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let c = parse_calib(&write(dir.path(), "calib.txt", CALIB.as_bytes())).unwrap();
+    assert_eq!(c.cam0[0], [4161.221, 0.0, 1445.577]);
+    assert_eq!(c.cam1[0][2], 1654.636);
+    assert_eq!(c.cam0[1][2], 984.686);
+    assert_eq!((c.doffs, c.baseline), (209.059, 176.252));
+    assert_eq!(
+        (c.width, c.height, c.ndisp, c.isint),
+        (2880, 1988, 280, false)
+    );
+    assert_eq!(
+        (c.vmin, c.vmax, c.dyavg, c.dymax),
+        (27.0, 260.0, Some(0.0), Some(0.0))
+    );
+    let k = c.intrinsics();
+    assert_eq!(
+        (k.fx, k.fy, k.cx, k.cy),
+        (4161.221, 4161.221, 1445.577, 984.686)
+    );
+}
+
+#[test]
+fn calib_errors_name_the_key_and_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = CALIB.replace("doffs=209.059", "doffs=twelve");
+    let path = write(dir.path(), "calib.txt", bad.as_bytes());
+    let msg = expect_format_error(parse_calib(&path), "doffs");
+    assert!(msg.contains("calib.txt"), "{msg}");
+    let missing = CALIB.replace("baseline=176.252\n", "");
+    let path = write(dir.path(), "calib2.txt", missing.as_bytes());
+    expect_format_error(parse_calib(&path), "baseline");
+    let matrix = CALIB.replace(
+        "0 4161.221 984.686; 0 0 1]\ncam1",
+        "0 4161.221; 0 0 1]\ncam1",
+    );
+    let path = write(dir.path(), "calib3.txt", matrix.as_bytes());
+    expect_format_error(parse_calib(&path), "cam0");
+    let path = write(dir.path(), "calib4.txt", b"just words\n");
+    expect_format_error(parse_calib(&path), "key=value");
+}
+
+fn middlebury2014_dir(w: usize, h: usize, file_rows_bottom_up: &[f32]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let calib = format!(
+        "cam0=[1000 0 1.5; 0 1000 0.5; 0 0 1]\ncam1=[1000 0 11.5; 0 1000 0.5; 0 0 1]\n\
+         doffs=10\nbaseline=200\nwidth={w}\nheight={h}\nndisp=100\nisint=0\nvmin=1\nvmax=90\n"
+    );
+    write(dir.path(), "calib.txt", calib.as_bytes());
+    write(
+        dir.path(),
+        "disp0.pfm",
+        &pfm_bytes("Pf", w, h, "-1.0", file_rows_bottom_up, true),
+    );
+    dir
+}
+
+#[test]
+fn middlebury2014_end_to_end() {
+    // Bottom row: [90, inf, 40, 30]; top row: [10, 20, inf, 0].
+    let inf = f32::INFINITY;
+    let dir = middlebury2014_dir(4, 2, &[90.0, inf, 40.0, 30.0, 10.0, 20.0, inf, 0.0]);
+    let d = load_range(&dir.path().join("disp0.pfm"), &DepthOptions::default()).unwrap();
+    assert_eq!(d.format, DepthFormat::Middlebury2014);
+    assert_eq!(d.kind, DepthKind::Disparity);
+    assert_eq!(d.units, "m");
+    assert_eq!(d.unknown_pixels, 2);
+    assert!(d.notes.iter().any(|n| n.contains("calib.txt")));
+    let k = d.intrinsics.unwrap();
+    assert_eq!((k.fx, k.cx, k.cy), (1000.0, 1.5, 0.5));
+    let r = &d.range;
+    assert!(r.get(2, 0).is_nan() && r.get(1, 1).is_nan());
+    let expect = |x: f64, y: f64, disp: f64| {
+        let z_mm = 200.0 * 1000.0 / (disp + 10.0);
+        z_mm / 1000.0 * (1.0 + ((x - 1.5).powi(2) + (y - 0.5).powi(2)) / 1000.0f64.powi(2)).sqrt()
+    };
+    assert!(close(*r.get(0, 0), expect(0.0, 0.0, 10.0)));
+    assert!(close(*r.get(3, 0), expect(3.0, 0.0, 0.0)));
+    assert!(close(*r.get(0, 1), expect(0.0, 1.0, 90.0)));
+    assert!(close(*r.get(3, 1), expect(3.0, 1.0, 30.0)));
+    assert!(r.get(0, 0) > r.get(0, 1), "bigger disparity is nearer");
+}
+
+#[test]
+fn middlebury2014_size_disagreement_and_missing_calib() {
+    let dir = middlebury2014_dir(5, 2, &[1.0; 8]);
+    // The PFM is 4x2 but calib says 5x2.
+    write(
+        dir.path(),
+        "disp0.pfm",
+        &pfm_bytes("Pf", 4, 2, "-1", &[1.0; 8], true),
+    );
+    let err = expect_err(load_range(
+        &dir.path().join("disp0.pfm"),
+        &DepthOptions::default(),
+    ));
+    assert!(matches!(err, Error::SizeMismatch { .. }), "{err}");
+    std::fs::remove_file(dir.path().join("calib.txt")).unwrap();
+    expect_format_error(
+        load_range(
+            &dir.path().join("disp0.pfm"),
+            &opts(DepthFormat::Middlebury2014),
+        ),
+        "--calib",
+    );
+    // Without calib, Auto reads a PFM as a float depth map.
+    let d = load_range(&dir.path().join("disp0.pfm"), &DepthOptions::default()).unwrap();
+    assert_eq!((d.format, d.kind), (DepthFormat::Float, DepthKind::Depth));
+    assert!(d
+        .notes
+        .iter()
+        .any(|n| n == "no intrinsics: depth used as range"));
+}
+
+// ---------------------------------------------------------------- 8- and 16-bit PNG
+
+fn save_png8(dir: &Path, name: &str, w: u32, h: u32, v: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    image::save_buffer(&p, v, w, h, image::ExtendedColorType::L8).unwrap();
+    p
+}
+
+fn save_png16(dir: &Path, name: &str, w: u32, h: u32, v: &[u16]) -> PathBuf {
+    let p = dir.join(name);
+    let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_ne_bytes()).collect();
+    image::save_buffer(&p, &bytes, w, h, image::ExtendedColorType::L16).unwrap();
+    p
+}
+
+#[test]
+fn middlebury2006_png_zero_is_unknown_and_defaults_apply() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = save_png8(dir.path(), "disp.png", 3, 1, &[0, 100, 200]);
+    let d = load_range(&p, &DepthOptions::default()).unwrap();
+    assert_eq!(d.format, DepthFormat::Middlebury2006);
+    assert_eq!(d.unknown_pixels, 1);
+    assert!(d.range.get(0, 0).is_nan());
+    assert!(d
+        .notes
+        .iter()
+        .any(|n| n.contains("3740") && n.contains("160") && n.contains("270")));
+    assert!(d.notes.iter().any(|n| n.contains("principal point")));
+    // Pixel 1 is the centre column: range = depth there.
+    assert!(close(
+        *d.range.get(1, 0),
+        3740.0 * 160.0 / (100.0 + 270.0) / 1000.0
+    ));
+    let custom = DepthOptions {
+        focal: Some(1000.0),
+        baseline: Some(100.0),
+        disparity_offset: Some(0.0),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&p, &custom).unwrap();
+    assert!(close(*d.range.get(1, 0), 1.0));
+    let bad = DepthOptions {
+        disparity_offset: Some(-150.0),
+        ..DepthOptions::default()
+    };
+    let err = expect_err(load_range(&p, &bad));
+    assert!(err.to_string().contains("-150"), "{err}");
+}
+
+#[test]
+fn real_aloe_disparity_loads() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/aloe/disparity.png");
+    if !path.exists() {
+        eprintln!("skipped: {} not present", path.display());
+        return;
+    }
+    let d = load_range(&path, &DepthOptions::default()).unwrap();
+    assert_eq!((d.range.width(), d.range.height()), (1282, 1110));
+    assert_eq!(d.unknown_pixels, 49_130);
+    // Undo the ray stretch: depth must be a strictly decreasing function of disparity.
+    let k = d.intrinsics.unwrap();
+    let raw = image::open(&path).unwrap().to_luma8();
+    let mut depth_of = [f64::NAN; 256];
+    for (x, y, p) in raw.enumerate_pixels() {
+        let v = usize::from(p.0[0]);
+        if v == 0 {
+            continue;
+        }
+        let depth = f64::from(*d.range.get(x as usize, y as usize))
+            / k.range_per_depth(x as usize, y as usize);
+        if depth_of[v].is_nan() {
+            depth_of[v] = depth;
+        }
+        assert!((depth - depth_of[v]).abs() < 1e-5 * depth, "disparity {v}");
+    }
+    let known: Vec<(usize, f64)> = (1..256)
+        .filter(|&v| !depth_of[v].is_nan())
+        .map(|v| (v, depth_of[v]))
+        .collect();
+    assert!(known.len() > 100);
+    for w in known.windows(2) {
+        assert!(
+            w[0].1 > w[1].1,
+            "disparity {} -> {} m but {} -> {} m",
+            w[0].0,
+            w[0].1,
+            w[1].0,
+            w[1].1
+        );
+    }
+    for (v, r) in d.range.as_slice().iter().zip(raw.as_raw()) {
+        assert_eq!(v.is_nan(), *r == 0);
+    }
+}
+
+#[test]
+fn sixteen_bit_png_scales() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = save_png16(dir.path(), "d.png", 3, 1, &[0, 5000, 65535]);
+    for (format, metres_per_unit) in [
+        (DepthFormat::Kitti, 1.0 / 256.0),
+        (DepthFormat::Nyu, 1.0 / 1000.0),
+        (DepthFormat::Tum, 1.0 / 5000.0),
+    ] {
+        let d = load_range(&p, &opts(format)).unwrap();
+        assert_eq!(
+            (d.format, d.kind, d.unknown_pixels),
+            (format, DepthKind::Depth, 1)
+        );
+        assert!(d.range.get(0, 0).is_nan());
+        assert!(
+            close(*d.range.get(1, 0), 5000.0 * metres_per_unit),
+            "{format}"
+        );
+        assert!(
+            close(*d.range.get(2, 0), 65535.0 * metres_per_unit),
+            "{format}"
+        );
+        assert!(d.intrinsics.is_none());
+    }
+    let scaled = DepthOptions {
+        scale: Some(0.01),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&p, &scaled).unwrap();
+    assert_eq!(d.format, DepthFormat::Png16);
+    assert!(close(*d.range.get(1, 0), 50.0));
+    // With a focal, depth is stretched to range off the centre.
+    let focal = DepthOptions {
+        focal: Some(2.0),
+        ..opts(DepthFormat::Tum)
+    };
+    let d = load_range(&p, &focal).unwrap();
+    let expect = 65535.0 / 5000.0 * (1.0f64 + 0.25).sqrt();
+    assert!(close(*d.range.get(2, 0), expect));
+    assert!(d.notes.iter().any(|n| n.contains("principal point")));
+}
+
+#[test]
+fn sixteen_bit_png_without_format_or_scale_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = save_png16(dir.path(), "d.png", 2, 1, &[1, 2]);
+    expect_format_error(
+        load_range(&p, &DepthOptions::default()),
+        "--depth-format kitti|nyu|tum",
+    );
+    let err = expect_err(load_range(&p, &opts(DepthFormat::Png16)));
+    assert!(err.to_string().contains("--depth-scale"), "{err}");
+    expect_format_error(load_range(&p, &opts(DepthFormat::Middlebury2006)), "8-bit");
+}
+
+#[test]
+fn all_unknown_is_no_valid_depth() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = save_png16(dir.path(), "zeros.png", 2, 2, &[0; 4]);
+    let err = expect_err(load_range(&p, &opts(DepthFormat::Kitti)));
+    assert!(matches!(err, Error::NoValidDepth { .. }), "{err}");
+}
+
+// ---------------------------------------------------------------- float maps
+
+fn check_float_map(d: &LoadedDepth) {
+    // Source values: [1, NaN, inf, -2, 0, 5].
+    assert_eq!((d.format, d.kind), (DepthFormat::Float, DepthKind::Depth));
+    assert_eq!(d.units, "file units");
+    assert_eq!(d.unknown_pixels, 4);
+    assert_eq!((d.range.width(), d.range.height()), (3, 2));
+    assert_eq!(*d.range.get(0, 0), 1.0);
+    assert_eq!(*d.range.get(2, 1), 5.0);
+    for (x, y) in [(1, 0), (2, 0), (0, 1), (1, 1)] {
+        assert!(d.range.get(x, y).is_nan(), "({x}, {y})");
+    }
+}
+
+const FLOATS: [f32; 6] = [1.0, f32::NAN, f32::INFINITY, -2.0, 0.0, 5.0];
+
+#[test]
+fn exr_float_map_picks_the_depth_channel() {
+    use exr::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("d.exr");
+    let channels = AnyChannels::sort(SmallVec::from_vec(vec![
+        AnyChannel::new("G", FlatSamples::F32(vec![7.0; 6])),
+        AnyChannel::new("Z", FlatSamples::F32(FLOATS.to_vec())),
+    ]));
+    let layer = Layer::new(
+        (3, 2),
+        LayerAttributes::default(),
+        Encoding::UNCOMPRESSED,
+        channels,
+    );
+    Image::from_layer(layer).write().to_file(&path).unwrap();
+    check_float_map(&load_range(&path, &DepthOptions::default()).unwrap());
+
+    let two = AnyChannels::sort(SmallVec::from_vec(vec![
+        AnyChannel::new("G", FlatSamples::F32(vec![7.0; 6])),
+        AnyChannel::new("B", FlatSamples::F32(vec![7.0; 6])),
+    ]));
+    let layer = Layer::new(
+        (3, 2),
+        LayerAttributes::default(),
+        Encoding::UNCOMPRESSED,
+        two,
+    );
+    let bad = dir.path().join("gb.exr");
+    Image::from_layer(layer).write().to_file(&bad).unwrap();
+    expect_format_error(
+        load_range(&bad, &DepthOptions::default()),
+        "Z, Y, R or depth",
+    );
+}
+
+#[test]
+fn tiff_float_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("d.tif");
+    let file = std::fs::File::create(&path).unwrap();
+    let mut enc = tiff::encoder::TiffEncoder::new(file).unwrap();
+    enc.write_image::<tiff::encoder::colortype::Gray32Float>(3, 2, &FLOATS)
+        .unwrap();
+    check_float_map(&load_range(&path, &DepthOptions::default()).unwrap());
+
+    let ints = dir.path().join("i.tiff");
+    let mut enc = tiff::encoder::TiffEncoder::new(std::fs::File::create(&ints).unwrap()).unwrap();
+    enc.write_image::<tiff::encoder::colortype::Gray16>(1, 1, &[3])
+        .unwrap();
+    expect_format_error(load_range(&ints, &DepthOptions::default()), "floats");
+}
+
+/// A version-1.0 .npy file written by hand, as numpy does.
+fn npy_bytes(descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8> {
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut b = b"\x93NUMPY\x01\x00".to_vec();
+    b.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    b.extend_from_slice(header.as_bytes());
+    b.extend_from_slice(data);
+    b
+}
+
+#[test]
+fn npy_float32_and_float64() {
+    let dir = tempfile::tempdir().unwrap();
+    let f32s: Vec<u8> = FLOATS.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let p = write(
+        dir.path(),
+        "a.npy",
+        &npy_bytes("<f4", "(2, 3)", false, &f32s),
+    );
+    check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
+    let f64s: Vec<u8> = FLOATS
+        .iter()
+        .flat_map(|v| f64::from(*v).to_le_bytes())
+        .collect();
+    let p = write(
+        dir.path(),
+        "b.npy",
+        &npy_bytes("<f8", "(2, 3)", false, &f64s),
+    );
+    check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
+    // Fortran order: column-major storage of the same 2x3 array.
+    let cols: Vec<u8> = [0, 3, 1, 4, 2, 5]
+        .iter()
+        .flat_map(|&i| FLOATS[i].to_be_bytes())
+        .collect();
+    let p = write(
+        dir.path(),
+        "c.npy",
+        &npy_bytes(">f4", "(2, 3)", true, &cols),
+    );
+    check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
+
+    let p = write(
+        dir.path(),
+        "i.npy",
+        &npy_bytes("<i4", "(1, 1)", false, &[0, 0, 0, 1]),
+    );
+    expect_format_error(
+        load_range(&p, &DepthOptions::default()),
+        "float32 or float64",
+    );
+    let p = write(
+        dir.path(),
+        "t.npy",
+        &npy_bytes("<f4", "(2, 3)", false, &f32s[..10]),
+    );
+    expect_format_error(load_range(&p, &DepthOptions::default()), "t.npy");
+    let p = write(dir.path(), "s.npy", &npy_bytes("<f4", "(6,)", false, &f32s));
+    expect_format_error(load_range(&p, &DepthOptions::default()), "(height, width)");
+}
+
+#[test]
+fn float_disparity_needs_focal_and_baseline() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "d.pfm",
+        &pfm_bytes("Pf", 3, 1, "-1", &[10.0, -5.0, 0.0], true),
+    );
+    let disparity = DepthOptions {
+        kind: Some(DepthKind::Disparity),
+        ..DepthOptions::default()
+    };
+    let err = expect_err(load_range(&p, &disparity));
+    assert!(err.to_string().contains("--focal"), "{err}");
+    let with_focal = DepthOptions {
+        focal: Some(100.0),
+        ..disparity.clone()
+    };
+    let err = expect_err(load_range(&p, &with_focal));
+    assert!(err.to_string().contains("--baseline"), "{err}");
+    let full = DepthOptions {
+        baseline: Some(50.0),
+        disparity_offset: Some(6.0),
+        ..with_focal
+    };
+    let d = load_range(&p, &full).unwrap();
+    assert_eq!(d.kind, DepthKind::Disparity);
+    // -5 + 6 > 0 is known, 0 + 6 too; x = 1 is the centre column.
+    assert_eq!(d.unknown_pixels, 0);
+    assert!(close(*d.range.get(1, 0), 100.0 * 50.0 / 1.0 / 1000.0));
+    let no_offset = DepthOptions {
+        disparity_offset: None,
+        ..full
+    };
+    assert_eq!(load_range(&p, &no_offset).unwrap().unknown_pixels, 2);
+}
+
+#[test]
+fn range_kind_is_not_converted() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "r.pfm",
+        &pfm_bytes("Pf", 3, 1, "-1", &[4.0, 5.0, 6.0], true),
+    );
+    let o = DepthOptions {
+        kind: Some(DepthKind::Range),
+        focal: Some(1.0),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&p, &o).unwrap();
+    assert_eq!(
+        d.range.as_slice(),
+        &[6.0, 5.0, 4.0][..]
+            .iter()
+            .rev()
+            .copied()
+            .collect::<Vec<_>>()[..]
+    );
+    assert!(d.intrinsics.is_none());
+}
+
+#[test]
+fn wrong_kind_for_format_and_unknown_extension() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = save_png8(dir.path(), "d.png", 1, 1, &[5]);
+    let o = DepthOptions {
+        kind: Some(DepthKind::Depth),
+        ..DepthOptions::default()
+    };
+    let err = expect_err(load_range(&p, &o));
+    assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
+    let p = write(dir.path(), "d.bmp", b"BM");
+    expect_format_error(load_range(&p, &DepthOptions::default()), ".exr");
+    let p = write(dir.path(), "d.png", b"\x89PNG\r\n\x1a\n\0\0");
+    expect_format_error(load_range(&p, &DepthOptions::default()), "d.png");
+}
+
+#[test]
+fn kind_and_format_parse_and_print() {
+    for k in [DepthKind::Depth, DepthKind::Range, DepthKind::Disparity] {
+        assert_eq!(k.to_string().parse::<DepthKind>().unwrap(), k);
+    }
+    let names = "auto middlebury2014 middlebury2006 kitti nyu tum png16 float";
+    for name in names.split(' ') {
+        assert_eq!(name.parse::<DepthFormat>().unwrap().to_string(), name);
+    }
+    assert_eq!("KITTI".parse::<DepthFormat>().unwrap(), DepthFormat::Kitti);
+    let err = "lidar".parse::<DepthFormat>().unwrap_err().to_string();
+    assert!(
+        err.contains("lidar") && err.contains("middlebury2014"),
+        "{err}"
+    );
+    let err = "far".parse::<DepthKind>().unwrap_err().to_string();
+    assert!(err.contains("far") && err.contains("disparity"), "{err}");
+}

@@ -1,0 +1,202 @@
+//! Output writers: formats, row order, atomicity, errors.
+
+use std::path::Path;
+
+use brume::io::depth::{read_pfm, Pfm};
+use brume::io::image::{linear_to_srgb, load_linear_rgb, srgb_to_linear};
+use brume::io::output::{same_file, write_png_rgb8, write_rgba, write_scalar};
+use brume::raster::{Grid, RgbaImage};
+use brume::Error;
+
+/// 3x2 image whose top row differs from the bottom row.
+fn sample() -> RgbaImage {
+    Grid::from_fn(3, 2, |x, y| {
+        let v = srgb_to_linear((x * 60 + y * 100) as f32 / 255.0);
+        [v, 1.0 - v, if y == 0 { 1.0 } else { 0.0 }, 0.5]
+    })
+}
+
+fn entries(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn png_round_trip_is_8bit_srgb() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("o.png");
+    let img = sample();
+    write_rgba(&path, &img).unwrap();
+    let raw = image::open(&path).unwrap();
+    assert_eq!(raw.color(), image::ColorType::Rgb8);
+    let raw = raw.to_rgb8();
+    assert_eq!(raw.get_pixel(1, 1).0[0], 160);
+    assert_eq!(raw.get_pixel(0, 0).0[2], 255);
+    let back = load_linear_rgb(&path).unwrap();
+    for (a, b) in img.as_slice().iter().zip(back.as_slice()) {
+        for c in 0..3 {
+            // Within half an 8-bit step, measured in the encoded domain.
+            let step = (linear_to_srgb(a[c]) - linear_to_srgb(b[c])).abs() * 255.0;
+            assert!(step <= 0.5 + 1e-3, "{a:?} vs {b:?}");
+        }
+    }
+    assert_eq!(entries(dir.path()), ["o.png"]);
+}
+
+#[test]
+fn png_clamps_out_of_range_and_nan() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("c.PNG");
+    let img = Grid::from_vec(2, 1, vec![[-1.0, 2.0, f32::NAN, 1.0], [0.5, 0.0, 1.0, 0.0]]);
+    write_rgba(&path, &img).unwrap();
+    let raw = image::open(&path).unwrap().to_rgb8();
+    assert_eq!(raw.get_pixel(0, 0).0, [0, 255, 0]);
+    assert_eq!(raw.get_pixel(1, 0).0, [188, 0, 255]);
+}
+
+#[test]
+fn pfm_rgb_is_linear_little_endian_bottom_to_top() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("o.pfm");
+    let img = sample();
+    write_rgba(&path, &img).unwrap();
+    let bytes = std::fs::read(&path).unwrap();
+    let header = b"PF\n3 2\n-1.0\n";
+    assert!(bytes.starts_with(header));
+    // The first pixel in the file is the bottom-left one.
+    let first: Vec<f32> = bytes[header.len()..header.len() + 12]
+        .chunks(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(first, img.get(0, 1)[..3]);
+    match read_pfm(&path).unwrap() {
+        Pfm::Rgb(back) => {
+            let want: Vec<[f32; 3]> = img.as_slice().iter().map(|p| [p[0], p[1], p[2]]).collect();
+            assert_eq!(back.as_slice(), &want[..]);
+        }
+        Pfm::Grey(_) => panic!("expected PF"),
+    }
+}
+
+#[test]
+fn exr_rgba_reads_back_equal() {
+    use exr::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("o.exr");
+    let img = sample();
+    write_rgba(&path, &img).unwrap();
+    let back = read_first_flat_layer_from_file(&path).unwrap();
+    let layer = back.layer_data;
+    assert_eq!((layer.size.width(), layer.size.height()), (3, 2));
+    for (c, name) in ["R", "G", "B", "A"].iter().enumerate() {
+        let ch = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|ch| ch.name.to_string() == *name)
+            .unwrap_or_else(|| panic!("channel {name}"));
+        let FlatSamples::F32(values) = &ch.sample_data else {
+            panic!("{name} is not f32")
+        };
+        let want: Vec<f32> = img.as_slice().iter().map(|p| p[c]).collect();
+        assert_eq!(values, &want, "{name}");
+    }
+}
+
+#[test]
+fn scalar_exr_has_one_y_channel() {
+    use exr::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("r.exr");
+    let map = Grid::from_fn(4, 3, |x, y| (x + 10 * y) as f32);
+    write_scalar(&path, &map).unwrap();
+    let back = read_first_flat_layer_from_file(&path).unwrap().layer_data;
+    assert_eq!(back.channel_data.list.len(), 1);
+    assert_eq!(back.channel_data.list[0].name.to_string(), "Y");
+    let FlatSamples::F32(values) = &back.channel_data.list[0].sample_data else {
+        panic!("not f32")
+    };
+    assert_eq!(values, map.as_slice());
+    // And the depth loader reads it back.
+    let d = brume::io::depth::read_exr_scalar(&path).unwrap();
+    assert_eq!(d, map);
+}
+
+#[test]
+fn unknown_extension_is_an_error_and_creates_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["o.jpg", "o", "o.tiff"] {
+        let err = write_rgba(&dir.path().join(name), &sample()).unwrap_err();
+        assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
+        assert!(err.to_string().contains(".png, .pfm or .exr"), "{err}");
+    }
+    let err = write_scalar(&dir.path().join("r.png"), &Grid::filled(1, 1, 1.0)).unwrap_err();
+    assert!(err.to_string().contains(".pfm or .exr"), "{err}");
+    assert!(entries(dir.path()).is_empty());
+}
+
+#[test]
+fn failing_write_leaves_nothing_and_keeps_the_old_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("no/such/dir/o.png");
+    let err = write_rgba(&missing, &sample()).unwrap_err();
+    assert!(matches!(err, Error::Io { .. }), "{err}");
+    assert!(err.to_string().contains("o.png"), "{err}");
+    assert!(entries(dir.path()).is_empty());
+
+    // A write that fails half-way (pixel count wrong) must not touch an existing file.
+    let existing = dir.path().join("keep.png");
+    std::fs::write(&existing, b"old").unwrap();
+    assert!(write_png_rgb8(&existing, 2, 2, &[[0, 0, 0]; 3]).is_err());
+    assert_eq!(std::fs::read(&existing).unwrap(), b"old");
+    // Overwriting an existing file works and leaves no temporary behind.
+    write_png_rgb8(&existing, 1, 1, &[[1, 2, 3]]).unwrap();
+    assert_eq!(
+        image::open(&existing).unwrap().to_rgb8().get_pixel(0, 0).0,
+        [1, 2, 3]
+    );
+    assert_eq!(entries(dir.path()), ["keep.png"]);
+}
+
+#[test]
+#[cfg(unix)]
+fn output_is_not_private() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("o.pfm");
+    write_scalar(&path, &Grid::filled(1, 1, 1.0)).unwrap();
+    let mode = std::fs::metadata(&path).unwrap().permissions().mode();
+    assert_ne!(
+        mode & 0o044,
+        0,
+        "mode {mode:o}: others cannot read the output"
+    );
+}
+
+#[test]
+fn same_file_resolves_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.png");
+    std::fs::write(&a, b"x").unwrap();
+    let sub = dir.path().join("sub");
+    std::fs::create_dir(&sub).unwrap();
+    assert!(same_file(&a, &sub.join("../a.png")));
+    assert!(!same_file(&a, &dir.path().join("b.png")));
+    assert!(!same_file(
+        &dir.path().join("b.png"),
+        &dir.path().join("b.png")
+    ));
+    #[cfg(unix)]
+    {
+        let link = dir.path().join("link.png");
+        std::os::unix::fs::symlink(&a, &link).unwrap();
+        assert!(same_file(&a, &link));
+        let hard = dir.path().join("hard.png");
+        std::fs::hard_link(&a, &hard).unwrap();
+        assert!(same_file(&a, &hard));
+    }
+}
