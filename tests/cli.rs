@@ -1,0 +1,362 @@
+//! The `brume` binary end to end: the demo, the JSON schema scripts rely on, `info`, and
+//! bad input giving one clear line, a non-zero exit and no output file.
+
+use brume::io::output::{write_rgba, write_scalar};
+use brume::raster::Grid;
+use serde_json::Value;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::Mutex;
+
+/// The binary opens a GL context per run; llvmpipe uses every core, so run one at a time.
+static SERIAL: Mutex<()> = Mutex::new(());
+
+fn brume(dir: &Path, args: &[&str]) -> Output {
+    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run brume")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn aloe(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/data/aloe")
+        .join(name)
+}
+
+/// A small scene on disk: a 24x16 PNG and a float PFM range map.
+fn small_scene(dir: &Path) -> (PathBuf, PathBuf) {
+    let image = dir.join("im.png");
+    let depth = dir.join("range.pfm");
+    write_rgba(
+        &image,
+        &Grid::from_fn(24, 16, |x, y| [x as f32 / 24.0, y as f32 / 16.0, 0.5, 1.0]),
+    )
+    .unwrap();
+    write_scalar(&depth, &Grid::from_fn(24, 16, |x, _| 1.0 + x as f32)).unwrap();
+    (image, depth)
+}
+
+fn assert_fails_cleanly(o: &Output, must_mention: &[&str]) {
+    assert!(
+        !o.status.success(),
+        "expected failure, stdout: {}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    let err = stderr(o);
+    assert!(err.starts_with("brume: error: "), "stderr: {err}");
+    assert!(!err.contains("panicked"), "panic: {err}");
+    for m in must_mention {
+        assert!(err.contains(m), "stderr should mention {m:?}: {err}");
+    }
+}
+
+#[test]
+fn render_without_input_writes_the_demo() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = brume(dir.path(), &["render"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.path().join("brume-demo.png");
+    let img = image::open(&out).expect("demo output is a PNG");
+    assert!(img.width() > 100 && img.height() > 100);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("brume-demo.png"));
+}
+
+#[test]
+fn json_report_has_the_stable_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--depth-kind",
+            "range",
+            "--out",
+            "out.exr",
+            "--json",
+            "--no-prep",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).expect("one JSON object on stdout");
+    for key in [
+        "width",
+        "height",
+        "scheme",
+        "precision",
+        "diffusion_passes",
+        "renderer",
+        "clock",
+        "total_ms",
+        "pass_ms",
+        "out",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key} in {v}");
+    }
+    assert_eq!(v["width"], 24);
+    assert_eq!(v["height"], 16);
+    assert_eq!(v["scheme"], "matched");
+    assert_eq!(v["precision"], "f32");
+    let n = v["diffusion_passes"].as_u64().unwrap();
+    assert_eq!(v["pass_ms"].as_array().unwrap().len() as u64, n + 2);
+    assert!(["gpu-timer", "wall"].contains(&v["clock"].as_str().unwrap()));
+    assert!(dir.path().join("out.exr").exists());
+}
+
+#[test]
+fn uniform_sigma_pfm_output_and_timings() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--depth-kind",
+            "range",
+            "--uniform-sigma",
+            "3",
+            "--precision",
+            "f16",
+            "--scheme",
+            "euler",
+            "--out",
+            "blur.pfm",
+            "--timings",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("premultiply") && text.contains("composite"),
+        "{text}"
+    );
+    let pfm = fs::read(dir.path().join("blur.pfm")).unwrap();
+    assert!(pfm.starts_with(b"PF\n"));
+}
+
+#[test]
+fn info_reports_the_driver() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = brume(dir.path(), &["info", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["renderer"].as_str().is_some_and(|s| !s.is_empty()));
+    assert!(v["max_texture_size"].as_u64().unwrap() >= 2048);
+    for key in [
+        "color_buffer_float",
+        "color_buffer_half_float",
+        "texture_float_linear",
+        "disjoint_timer_query",
+    ] {
+        assert!(v[key].is_boolean(), "{key}");
+    }
+}
+
+#[test]
+fn missing_input_file_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, _) = small_scene(dir.path());
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            "nope.pfm",
+            "--out",
+            "o.png",
+        ],
+    );
+    assert_fails_cleanly(&o, &["nope.pfm"]);
+    assert!(!dir.path().join("o.png").exists());
+}
+
+#[test]
+fn truncated_pfm_is_a_format_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let bytes = fs::read(&depth).unwrap();
+    fs::write(&depth, &bytes[..bytes.len() / 2]).unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--out",
+            "o.png",
+        ],
+    );
+    assert_fails_cleanly(&o, &["range.pfm"]);
+    assert!(!dir.path().join("o.png").exists());
+}
+
+#[test]
+fn non_numeric_calib_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let calib = dir.path().join("calib.txt");
+    fs::write(
+        &calib,
+        "cam0=[3997.684 0 1176.728; 0 3997.684 1011.728; 0 0 1]\ncam1=[3997.684 0 1307.839; 0 3997.684 1011.728; 0 0 1]\n\
+         doffs=abc\nbaseline=193.001\nwidth=24\nheight=16\nndisp=290\nisint=0\nvmin=31\nvmax=257\n",
+    )
+    .unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--calib",
+            calib.to_str().unwrap(),
+            "--out",
+            "o.png",
+        ],
+    );
+    assert_fails_cleanly(&o, &["calib.txt", "doffs"]);
+}
+
+#[test]
+fn image_and_depth_of_different_sizes_name_both() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, _) = small_scene(dir.path());
+    let other = dir.path().join("other.pfm");
+    write_scalar(&other, &Grid::filled(20, 16, 2.0f32)).unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            other.to_str().unwrap(),
+            "--out",
+            "o.png",
+        ],
+    );
+    assert_fails_cleanly(&o, &["im.png", "other.pfm", "24x16", "20x16"]);
+    assert!(!dir.path().join("o.png").exists());
+}
+
+#[test]
+fn depth_with_no_valid_value_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, _) = small_scene(dir.path());
+    let empty = dir.path().join("empty.pfm");
+    write_scalar(&empty, &Grid::filled(24, 16, f32::NAN)).unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            empty.to_str().unwrap(),
+            "--out",
+            "o.png",
+        ],
+    );
+    assert_fails_cleanly(&o, &["empty.pfm"]);
+}
+
+#[test]
+fn bad_parameters_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    for (flag, value) in [
+        ("--ks", "-1"),
+        ("--ka", "nan"),
+        ("--lambda", "inf"),
+        ("--sigma0", "0"),
+        ("--rho-max", "0.5"),
+    ] {
+        let o = brume(dir.path(), &["render", flag, value]);
+        assert_fails_cleanly(&o, &[flag]);
+    }
+    assert!(!dir.path().join("brume-demo.png").exists());
+    let o = brume(dir.path(), &["render", "--airlight", "1,2"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("--airlight"), "{}", stderr(&o));
+}
+
+#[test]
+fn output_never_overwrites_an_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let before = fs::read(&image).unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--depth-kind",
+            "range",
+            "--out",
+            image.to_str().unwrap(),
+        ],
+    );
+    assert_fails_cleanly(&o, &["--out"]);
+    assert_eq!(fs::read(&image).unwrap(), before);
+}
+
+#[test]
+fn unknown_output_extension_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = brume(dir.path(), &["render", "--out", "demo.bmp"]);
+    assert_fails_cleanly(&o, &["demo.bmp"]);
+    assert_eq!(
+        fs::read_dir(dir.path()).unwrap().count(),
+        0,
+        "left a file behind"
+    );
+}
+
+#[test]
+fn real_aloe_renders_with_pre_processing() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            aloe("left.jpg").to_str().unwrap(),
+            "--depth",
+            aloe("disparity.png").to_str().unwrap(),
+            "--out",
+            "aloe.png",
+            "--json",
+            "--lambda",
+            "4",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["width"], 1282);
+    assert_eq!(v["prep"]["sky_pixels"], 0, "Aloe is indoor: no sky");
+    assert!(v["prep"]["hole_pixels"].as_u64().unwrap() > 0);
+    assert_eq!(v["airlight_source"], "farthest");
+}
