@@ -8,7 +8,7 @@ use crate::{Error, Result};
 /// Boundaries longer than this are scored on an evenly strided subset of this many edges.
 const MAX_SCORED: usize = 1024;
 /// Plane candidates are only tried when the boundary has at least this many edges.
-const MIN_PLANE_EDGES: usize = 8;
+const MIN_PLANE_EDGES: usize = 4;
 /// 1.4826 x MAD estimates the standard deviation of Gaussian data.
 const MAD_TO_SIGMA: f64 = 1.4826;
 

@@ -34,7 +34,7 @@
 //!    floored at a few ulps of their median. Each of the `ransac_samples` (default 32)
 //!    trials draws one constant (a boundary value; all boundary values are tried when
 //!    there are no more of them than trials) and one plane `R = a + b x + c y` through
-//!    three boundary samples (only for boundaries of at least 8 edges; collinear triplets
+//!    three boundary samples (only for boundaries of at least 4 edges; collinear triplets
 //!    are skipped). Long boundaries are scored on an evenly strided subset of 1024 edges.
 //!    A winning plane is refitted by least squares to its inliers (jump `< delta`) if that
 //!    scores no worse; a plane must be strictly better than the best constant. This
