@@ -191,6 +191,10 @@ fn bad_options_are_invalid_parameters() {
             ..d()
         },
         PrepOptions {
+            margin_px: 1e9,
+            ..d()
+        },
+        PrepOptions {
             sky_range_factor: 1.0,
             ..d()
         },

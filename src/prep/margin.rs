@@ -19,8 +19,8 @@ pub(crate) fn margin_pixels(
     let r = mu.ceil() as usize;
     let (x0, y0) = (sky_bbox[0].saturating_sub(r), sky_bbox[1].saturating_sub(r));
     let (x1, y1) = (
-        (sky_bbox[2] + r).min(width - 1),
-        (sky_bbox[3] + r).min(height - 1),
+        sky_bbox[2].saturating_add(r).min(width - 1),
+        sky_bbox[3].saturating_add(r).min(height - 1),
     );
     let (ww, wh) = (x1 - x0 + 1, y1 - y0 + 1);
     let d2 = squared_edt_with(ww, wh, |x, y| !sky[(y + y0) * width + x + x0]);

@@ -113,12 +113,15 @@ impl Default for SkyRules {
     }
 }
 
+/// Largest accepted [`PrepOptions::margin_px`].
+const MAX_MARGIN_PX: f32 = 65535.0;
+
 /// Options of [`prepare`]. The defaults are those documented on each field.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PrepOptions {
     /// Sky detection rules.
     pub sky: SkyRules,
-    /// Width `µ` of the horizon margin in pixels (default 8; 0 disables the margin).
+    /// Width `µ` of the horizon margin in pixels, in [0, 65535] (default 8; 0: no margin).
     pub margin_px: f32,
     /// Jacobi sweeps in the margin; `None` (default) means `ceil(2 µ)`.
     pub jacobi_iterations: Option<usize>,
@@ -152,11 +155,11 @@ impl PrepOptions {
         check_fraction("sky.min_area_fraction", self.sky.min_area_fraction)?;
         check_fraction("sky.min_top_fraction", self.sky.min_top_fraction)?;
         check_fraction("sky.min_bbox_fill", self.sky.min_bbox_fill)?;
-        if !(self.margin_px.is_finite() && self.margin_px >= 0.0) {
+        if !(0.0..=MAX_MARGIN_PX).contains(&self.margin_px) {
             return Err(Error::invalid(
                 "margin_px",
                 self.margin_px,
-                "a finite number of pixels >= 0",
+                "a number of pixels in [0, 65535]",
             ));
         }
         if !(self.sky_range_factor.is_finite() && self.sky_range_factor > 1.0) {
