@@ -1,5 +1,6 @@
-//! Shared helpers for the GL tests: one renderer at a time (EGL contexts are per thread
-//! and llvmpipe is CPU-bound), deterministic synthetic inputs, and the Aloe crops.
+//! Shared helpers for the integration tests: one GL renderer at a time (EGL contexts are
+//! per thread and llvmpipe is CPU-bound), deterministic synthetic inputs, the real Aloe
+//! sample, and checks on range maps.
 #![allow(dead_code)]
 
 use brume::raster::{Grid, RgbImage, ScalarMap};
@@ -54,4 +55,44 @@ pub fn ramp_range(w: usize, h: usize) -> ScalarMap {
             (0.3 + 0.7 * (x + y) as f32 / (w + h) as f32).min(1.0)
         }
     })
+}
+
+/// The real Middlebury Aloe disparity as a range map through the real loader (NaN where
+/// the disparity is 0). The samples sit beside the checkout; missing is a failure.
+pub fn aloe_range() -> ScalarMap {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/aloe/disparity.png");
+    brume::io::depth::load_range(&path, &Default::default())
+        .unwrap_or_else(|e| panic!("{e} (check out shared/ beside the project)"))
+        .range
+}
+
+/// Asserts that every finite pixel of `before` has exactly the same bits in `after`.
+pub fn assert_known_unchanged(before: &ScalarMap, after: &ScalarMap) {
+    assert_eq!(
+        (before.width(), before.height()),
+        (after.width(), after.height())
+    );
+    for (i, (b, a)) in before.as_slice().iter().zip(after.as_slice()).enumerate() {
+        if b.is_finite() {
+            assert_eq!(
+                b.to_bits(),
+                a.to_bits(),
+                "known pixel {i} changed: {b} -> {a}"
+            );
+        }
+    }
+}
+
+/// Asserts that every pixel is finite.
+pub fn assert_all_finite(m: &ScalarMap) {
+    if let Some(i) = m.as_slice().iter().position(|v| !v.is_finite()) {
+        panic!("pixel {i} is {}", m.as_slice()[i]);
+    }
+}
+
+/// Writes an RGB picture as PNG (for looking at test output by hand).
+pub fn save_png(path: &str, w: usize, h: usize, px: &[[u8; 3]]) {
+    let buf: Vec<u8> = px.iter().flatten().copied().collect();
+    image::save_buffer(path, &buf, w as u32, h as u32, image::ColorType::Rgb8).expect("save png");
 }

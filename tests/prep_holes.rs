@@ -1,0 +1,249 @@
+//! Hole filling, indoor data (no sky) and bad inputs.
+
+mod common;
+
+use brume::prep::{prepare, PrepOptions, SkyRules};
+use brume::raster::{Grid, ScalarMap};
+use brume::Error;
+use common::*;
+
+fn plane(x: usize, y: usize) -> f32 {
+    (20.0 + 0.15 * x as f64 - 0.08 * y as f64) as f32
+}
+
+/// A tilted plane with a 20x15 hole is filled with the plane's own values: within 1e-4
+/// relative (the plane is exact at the boundary, so the RANSAC winner is the plane up to
+/// f32 rounding of the samples).
+#[test]
+fn tilted_plane_hole_is_filled_with_the_plane() {
+    let (w, h) = (80, 60);
+    let mut map = Grid::from_fn(w, h, plane);
+    for y in 20..35 {
+        for x in 30..50 {
+            *map.get_mut(x, y) = f32::NAN;
+        }
+    }
+    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    assert_eq!(
+        (p.stats.holes, p.stats.hole_pixels, p.stats.sky_components),
+        (1, 300, 0)
+    );
+    assert_known_unchanged(&map, &p.range);
+    for y in 20..35 {
+        for x in 30..50 {
+            let (got, want) = (*p.range.get(x, y), plane(x, y));
+            assert!(
+                (got - want).abs() <= 1e-4 * want.abs(),
+                "({x},{y}): {got} vs {want}"
+            );
+            assert!(*p.filled.get(x, y));
+        }
+    }
+}
+
+/// A hole in a flat region whose boundary touches a near object on one side: the robust
+/// score follows the majority (the background), and the fill never leaves the boundary's
+/// value range.
+#[test]
+fn fill_is_robust_to_a_minority_on_the_boundary() {
+    let (w, h) = (40, 40);
+    let mut map = Grid::from_fn(w, h, |x, _| if x < 12 { 3.0 } else { 50.0 });
+    for y in 10..30 {
+        for x in 12..30 {
+            *map.get_mut(x, y) = f32::NAN;
+        }
+    }
+    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    for y in 10..30 {
+        for x in 12..30 {
+            assert_eq!(*p.range.get(x, y), 50.0, "({x},{y})");
+        }
+    }
+}
+
+/// Holes touching the border, single-pixel holes and corner pixels.
+#[test]
+fn border_and_tiny_holes() {
+    let (w, h) = (30, 20);
+    let mut map = Grid::from_fn(w, h, plane);
+    for &(x, y) in &[(0, 0), (29, 19), (5, 5), (29, 0), (0, 19)] {
+        *map.get_mut(x, y) = f32::NAN;
+    }
+    for y in 8..12 {
+        *map.get_mut(0, y) = f32::NAN;
+    }
+    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    assert_all_finite(&p.range);
+    assert_known_unchanged(&map, &p.range);
+    assert_eq!(p.stats.sky_components, 0);
+    assert_eq!(p.stats.holes, 6);
+    for (i, v) in map.as_slice().iter().enumerate() {
+        if v.is_nan() {
+            let (x, y) = (i % w, i / w);
+            let got = p.range.as_slice()[i];
+            // Corner pixels have only 2 boundary edges: a constant (error <= one slope
+            // step, 0.15); the others get the plane.
+            let corner = (x == 0 || x == w - 1) && (y == 0 || y == h - 1);
+            let tol = if corner { 0.16 } else { 1e-3 };
+            assert!(
+                (got - plane(x, y)).abs() < tol,
+                "({x},{y}) {got} vs {}",
+                plane(x, y)
+            );
+        }
+    }
+}
+
+/// Indoor stereo data: a frame of unknown pixels round the image (touching the whole top
+/// row) and a full-height occlusion band are holes, not sky.
+#[test]
+fn indoor_frame_and_occlusion_band_are_not_sky() {
+    let (w, h) = (200, 150);
+    let mut map = Grid::from_fn(w, h, |x, y| 2.0 + 0.01 * x as f32 + 0.005 * y as f32);
+    for y in 0..h {
+        for x in 0..w {
+            let frame = x < 3 || y < 3 || x >= w - 3 || y >= h - 3;
+            let band = (20..45).contains(&x);
+            if frame || band {
+                *map.get_mut(x, y) = f32::NAN;
+            }
+        }
+    }
+    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    assert_eq!(p.stats.sky_components, 0, "{:?}", p.stats);
+    assert_eq!(p.stats.s_max, None);
+    assert!(p.sky.as_slice().iter().all(|s| !s));
+    assert_all_finite(&p.range);
+    assert_known_unchanged(&map, &p.range);
+    // Without the rules beyond the paper's (area, top), the frame would be sky.
+    let loose = PrepOptions {
+        sky: SkyRules {
+            min_top_fraction: 0.0,
+            min_bbox_fill: 0.0,
+            reject_bottom: false,
+            ..SkyRules::default()
+        },
+        ..PrepOptions::default()
+    };
+    assert_eq!(prepare(&map, &loose).unwrap().stats.sky_components, 1);
+}
+
+#[test]
+fn no_holes_means_unchanged() {
+    let map = Grid::from_fn(17, 9, plane);
+    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    assert_eq!(p.range, map);
+    assert_eq!(
+        (
+            p.stats.holes,
+            p.stats.hole_pixels,
+            p.stats.sky_pixels,
+            p.stats.margin_pixels
+        ),
+        (0, 0, 0, 0)
+    );
+    assert!(p.filled.as_slice().iter().all(|f| !f));
+}
+
+#[test]
+fn one_by_one_maps() {
+    let p = prepare(&Grid::filled(1, 1, 4.5f32), &PrepOptions::default()).unwrap();
+    assert_eq!(p.range.as_slice(), &[4.5]);
+    assert!(matches!(
+        prepare(&Grid::filled(1, 1, f32::NAN), &PrepOptions::default()),
+        Err(Error::Prep(_))
+    ));
+    let mut col: ScalarMap = Grid::from_fn(1, 5, |_, y| y as f32 + 1.0);
+    *col.get_mut(0, 2) = f32::NAN;
+    let p = prepare(&col, &PrepOptions::default()).unwrap();
+    assert_all_finite(&p.range);
+    assert!((2.0..=4.0).contains(p.range.get(0, 2)));
+}
+
+#[test]
+fn all_unknown_is_an_error_not_a_panic() {
+    for v in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+        match prepare(&Grid::filled(32, 24, v), &PrepOptions::default()) {
+            Err(Error::Prep(msg)) => assert!(msg.contains("no valid range value"), "{msg}"),
+            other => panic!("expected Error::Prep, got {other:?}"),
+        }
+    }
+    assert!(matches!(
+        prepare(&Grid::filled(0, 0, 1.0f32), &PrepOptions::default()),
+        Err(Error::Prep(_))
+    ));
+}
+
+#[test]
+fn bad_options_are_invalid_parameters() {
+    let d = PrepOptions::default;
+    let bad = [
+        PrepOptions {
+            margin_px: -1.0,
+            ..d()
+        },
+        PrepOptions {
+            margin_px: f32::NAN,
+            ..d()
+        },
+        PrepOptions {
+            margin_px: f32::INFINITY,
+            ..d()
+        },
+        PrepOptions {
+            margin_px: 1e9,
+            ..d()
+        },
+        PrepOptions {
+            sky_range_factor: 1.0,
+            ..d()
+        },
+        PrepOptions {
+            sky_range_factor: 0.5,
+            ..d()
+        },
+        PrepOptions {
+            sky_range_factor: f32::NAN,
+            ..d()
+        },
+        PrepOptions {
+            ransac_samples: 0,
+            ..d()
+        },
+        PrepOptions {
+            sky: SkyRules {
+                min_area_fraction: -0.1,
+                ..SkyRules::default()
+            },
+            ..d()
+        },
+        PrepOptions {
+            sky: SkyRules {
+                min_bbox_fill: f64::NAN,
+                ..SkyRules::default()
+            },
+            ..d()
+        },
+    ];
+    let map = Grid::filled(4, 4, 1.0f32);
+    for o in bad {
+        assert!(
+            matches!(o.validate(), Err(Error::InvalidParameter { .. })),
+            "{o:?}"
+        );
+        assert!(
+            matches!(prepare(&map, &o), Err(Error::InvalidParameter { .. })),
+            "{o:?}"
+        );
+    }
+    assert!(d().validate().is_ok());
+    assert_eq!(d().jacobi_sweeps(), 16);
+    assert_eq!(
+        PrepOptions {
+            margin_px: 2.5,
+            ..d()
+        }
+        .jacobi_sweeps(),
+        5
+    );
+}

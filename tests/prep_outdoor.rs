@@ -1,0 +1,233 @@
+//! Outdoor synthetic scene: sky, holes, horizon margin, airlight, reproducibility.
+
+mod common;
+
+use brume::prep::edt::squared_edt;
+use brume::prep::{
+    estimate_airlight, prepare, synthetic::outdoor_scene, visualize, AirlightSource, PrepOptions,
+    Prepared,
+};
+use brume::raster::{Grid, RgbImage, ScalarMap};
+use common::*;
+
+const W: usize = 400;
+const H: usize = 280;
+
+fn scene() -> (ScalarMap, Prepared) {
+    let map = outdoor_scene(W, H, 3);
+    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    (map, p)
+}
+
+#[test]
+fn sky_found_holes_filled_known_unchanged() {
+    let (map, p) = scene();
+    let s = &p.stats;
+    if let Ok(dir) = std::env::var("PREP_VIS_DIR") {
+        let (w, h, px) = visualize(&map, &p);
+        save_png(&format!("{dir}/outdoor.png"), w, h, &px);
+    }
+    assert_eq!(s.sky_components, 1, "{s:?}");
+    assert!((0..W).all(|x| *p.sky.get(x, 0)), "the whole top row is sky");
+    assert!(s.holes > 100 && s.hole_pixels > W * H / 25, "{s:?}");
+    assert_all_finite(&p.range);
+    assert_known_unchanged(&map, &p.range);
+    assert_eq!(s.s_max, Some(1.5 * s.r_max));
+    let max_known = map
+        .as_slice()
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(f32::MIN, f32::max);
+    assert_eq!(s.r_max, max_known);
+    for i in 0..map.len() {
+        let unknown = map.as_slice()[i].is_nan();
+        let (sky, filled) = (p.sky.as_slice()[i], p.filled.as_slice()[i]);
+        assert_eq!(unknown, sky || filled, "pixel {i}");
+        assert!(!(sky && filled), "pixel {i}");
+    }
+    assert_eq!(
+        s.sky_pixels + s.hole_pixels,
+        map.as_slice().iter().filter(|v| v.is_nan()).count()
+    );
+}
+
+/// The margin is exactly the sky within µ of the scene (checked with a full-image EDT);
+/// the sky beyond it is exactly Smax; margin values lie strictly between the scene and Smax.
+#[test]
+fn margin_is_exact_and_sky_beyond_is_smax() {
+    let (_, p) = scene();
+    let s_max = p.stats.s_max.unwrap();
+    let mu2 = 8.0f64 * 8.0;
+    let d2 = squared_edt(&p.sky.map(|s| !s));
+    let mut margin = 0;
+    for i in 0..p.range.len() {
+        if !p.sky.as_slice()[i] {
+            continue;
+        }
+        let v = p.range.as_slice()[i];
+        if d2.as_slice()[i] as f64 <= mu2 {
+            margin += 1;
+            assert!(v < s_max, "margin pixel {i} = {v} not relaxed");
+        } else {
+            assert_eq!(
+                v.to_bits(),
+                s_max.to_bits(),
+                "sky pixel {i} beyond the margin"
+            );
+        }
+    }
+    assert_eq!(margin, p.stats.margin_pixels);
+    assert!(
+        margin >= W * 8,
+        "a margin at least µ deep along the horizon: {margin}"
+    );
+}
+
+/// No hard transition at the interface. For every scene pixel `a` 4-adjacent to a sky
+/// pixel `b`, let `q = (S(b) - R(a)) / (Smax - R(a))` (q = 1 would be the hard step of a
+/// sky without margin).
+/// - Rigorous: after one Jacobi sweep, `S(b)` is the mean of four values of which one is
+///   `R(a)` and none exceeds `Smax` (maximum principle), so `q <= 3/4`.
+/// - Straight horizon: after `n = 2µ` sweeps from `Smax`, `q` is the probability that a
+///   lazy random walk (step probability 1/2) from `b` has not reached the scene, about
+///   `sqrt(2 / (pi n / 2)) = sqrt(2 / (pi µ))`, 0.28 for µ = 8. The median over the
+///   ragged horizon must not exceed it (convex foliage tips exceed it, concave bays are
+///   below).
+///
+/// In absolute terms, where the horizon is the far tree line (`R(a)` close to `Rmax`), a
+/// typical jump is about `sqrt(2 / (pi µ)) (Smax - Rmax)` instead of `Smax - Rmax`.
+#[test]
+fn margin_has_no_hard_transition() {
+    let (_, p) = scene();
+    let s_max = p.stats.s_max.unwrap();
+    let mu = 8.0f32;
+    let (r, sky) = (p.range.as_slice(), p.sky.as_slice());
+    let mut q = Vec::new();
+    for y in 0..H {
+        for x in 0..W {
+            let b = y * W + x;
+            if !sky[b] {
+                continue;
+            }
+            let nb = [
+                (x > 0).then(|| b - 1),
+                (x + 1 < W).then(|| b + 1),
+                (y > 0).then(|| b - W),
+                (y + 1 < H).then(|| b + W),
+            ];
+            for a in nb.into_iter().flatten().filter(|&a| !sky[a]) {
+                q.push((r[b] - r[a]) / (s_max - r[a]));
+            }
+        }
+    }
+    q.sort_by(f32::total_cmp);
+    let (median, max) = (q[q.len() / 2], q[q.len() - 1]);
+    let straight = (2.0 / (std::f32::consts::PI * mu)).sqrt();
+    assert!(max <= 0.75 + 1e-5, "max interface jump ratio {max}");
+    assert!(
+        median <= straight,
+        "median interface jump ratio {median} > {straight}"
+    );
+    assert!(q.len() > W, "interface pairs: {}", q.len());
+}
+
+#[test]
+fn same_seed_same_output() {
+    let map = outdoor_scene(W, H, 11);
+    let opts = PrepOptions {
+        seed: 42,
+        ..Default::default()
+    };
+    let a = prepare(&map, &opts).unwrap();
+    let b = prepare(&map, &opts).unwrap();
+    let bits = |p: &Prepared| {
+        p.range
+            .as_slice()
+            .iter()
+            .map(|v| v.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&a), bits(&b));
+    assert_eq!(a.sky, b.sky);
+    assert_eq!(a.filled, b.filled);
+    assert_eq!(outdoor_scene(W, H, 11).as_slice().len(), map.len());
+    let again = outdoor_scene(W, H, 11);
+    assert!(again
+        .as_slice()
+        .iter()
+        .zip(map.as_slice())
+        .all(|(x, y)| x.to_bits() == y.to_bits()));
+}
+
+/// A colour image for the scene: blue-grey sky with a few bright "sun" pixels, brownish
+/// scene getting lighter with range.
+fn colours(map: &ScalarMap, p: &Prepared) -> RgbImage {
+    const SKY: [f32; 3] = [0.55, 0.62, 0.75];
+    Grid::from_fn(W, H, |x, y| {
+        let i = y * W + x;
+        if p.sky.as_slice()[i] {
+            if (x * 7 + y * 13) % 50 == 0 {
+                [20.0, 20.0, 18.0]
+            } else {
+                let n = ((x * 31 + y * 17) % 11) as f32 / 10.0 - 0.5;
+                [SKY[0] + 0.02 * n, SKY[1] + 0.02 * n, SKY[2] - 0.02 * n]
+            }
+        } else {
+            let t = (map.as_slice()[i].max(1.0) / 320.0).min(1.0);
+            [0.2 + 0.3 * t, 0.15 + 0.3 * t, 0.1 + 0.3 * t]
+        }
+    })
+}
+
+#[test]
+fn airlight_from_sky_is_the_sky_colour() {
+    let (map, p) = scene();
+    let a = estimate_airlight(&colours(&map, &p), &p);
+    assert_eq!(a.source, AirlightSource::Sky);
+    assert_eq!(a.pixels, p.stats.sky_pixels);
+    for (c, want) in a.rgb.iter().zip([0.55, 0.62, 0.75]) {
+        assert!((c - want).abs() < 0.012, "{:?}", a.rgb);
+    }
+}
+
+#[test]
+fn airlight_without_sky_uses_the_farthest_pixels() {
+    let map = outdoor_scene(W, H, 3);
+    let p = prepare(
+        &map,
+        &PrepOptions {
+            detect_sky: false,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(p.stats.sky_components, 0);
+    assert_eq!(p.stats.s_max, None);
+    let a = estimate_airlight(&colours(&map, &p), &p);
+    assert_eq!(a.source, AirlightSource::Farthest);
+    let known = map.as_slice().iter().filter(|v| v.is_finite()).count();
+    assert!(
+        a.pixels >= known / 100 && a.pixels < known / 50,
+        "{} of {known}",
+        a.pixels
+    );
+    // The farthest 1 % is the tree line at about 300 m: t close to 0.95.
+    assert!((a.rgb[0] - 0.485).abs() < 0.02, "{:?}", a.rgb);
+}
+
+#[test]
+fn visualize_stacks_before_and_after() {
+    let (map, p) = scene();
+    let (w, h, px) = visualize(&map, &p);
+    assert_eq!((w, h, px.len()), (W, 2 * H, W * 2 * H));
+    assert_eq!(px[0], [255, 0, 0], "unknown is red before");
+    assert_eq!(px[W * H], [255, 255, 255], "sky is white after");
+    let bottom = &px[W * (2 * H - 1)..];
+    assert!(
+        bottom
+            .iter()
+            .all(|c| c[0] == c[1] && c[1] == c[2] && c[0] < 128),
+        "near is dark"
+    );
+}
