@@ -13,11 +13,11 @@ use crate::schedule::{PixelLaw, Schedule, Scheme};
 use crate::Precision;
 
 /// Default absorption coefficient κa (normalised units).
-pub const DEFAULT_KA: f64 = 0.5;
+pub const DEFAULT_KA: f64 = 0.25;
 /// Default scattering coefficient κs (normalised units).
-pub const DEFAULT_KS: f64 = 1.0;
+pub const DEFAULT_KS: f64 = 0.75;
 /// Default λ, the overall blur factor of eq. 7 (px).
-pub const DEFAULT_LAMBDA: f64 = 12.0;
+pub const DEFAULT_LAMBDA: f64 = 8.0;
 /// Default inner scale σ0 (px): reproduces the paper's step counts (GUIDE.md).
 pub const DEFAULT_SIGMA0: f64 = 1.0;
 /// Default maximum rate ρmax: the stability limit of the 4-neighbour update.

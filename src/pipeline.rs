@@ -164,8 +164,10 @@ impl Renderer {
         };
         // SAFETY: an empty VAO is required to draw in GLES 3; owned and deleted in Drop.
         let vao = unsafe { gl.create_vertex_array().map_err(Error::Gl)? };
+        // SAFETY: binding the VAO just created (the warm-up below draws with it).
+        unsafe { gl.bind_vertex_array(Some(vao)) };
         if caps.disjoint_timer_query {
-            timer::warm_up(&gl)?;
+            warm_up_timer(&gl, &programs.composite)?;
         }
         Ok(Renderer {
             programs,
@@ -426,6 +428,19 @@ impl Inputs {
             law: Texture::new(gl, w, h, TexelFormat::Rg32F, Filter::Nearest, Some(&law))?,
         })
     }
+}
+
+/// Spends the first timer query on a real 1x1 draw (see [`timer::warm_up`]).
+fn warm_up_timer(gl: &Rc<glow::Context>, program: &Program) -> Result<()> {
+    let target = RenderTarget::new(gl, 1, 1, TexelFormat::Rgba16F)?;
+    timer::warm_up(gl, || {
+        target.bind_for_drawing();
+        use_program(gl, program);
+        draw_fullscreen(gl);
+    })?;
+    // SAFETY: unbinding on the current context before the target is dropped.
+    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
+    Ok(())
 }
 
 fn use_program(gl: &glow::Context, p: &Program) {

@@ -1,7 +1,6 @@
 //! Argument definitions (clap derive). Help texts are the user manual: say units, defaults
 //! and what each value does.
 
-use brume::bench::args::BenchCommand;
 use brume::egl::Platform;
 use brume::haze;
 use brume::io::depth::{DepthFormat, DepthKind};
@@ -39,9 +38,6 @@ pub enum Command {
     Info(InfoArgs),
     /// Pre-process a range map (fill holes, find the sky, matte the horizon) and write it.
     Prep(PrepArgs),
-    /// Reproduce paper 000's accuracy (fig. 6) and speed (fig. 7) experiments.
-    #[command(subcommand)]
-    Bench(BenchCommand),
 }
 
 /// `brume info`.
@@ -98,11 +94,11 @@ pub struct DepthArgs {
 #[derive(Args, Debug, Clone)]
 pub struct PrepOptionArgs {
     /// Width µ of the horizon margin matted into the sky, in px.
-    #[arg(long, value_name = "PX")]
+    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
     pub margin: Option<f32>,
 
     /// Sky range Smax as a multiple of the largest measured range Rmax (> 1).
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub sky_factor: Option<f32>,
 
     /// Never classify unknown regions as sky (fill every hole).
@@ -135,23 +131,23 @@ pub struct RenderArgs {
     pub out: Option<PathBuf>,
 
     /// Absorption coefficient κa per unit of normalised range (attenuation only).
-    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KA)]
+    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KA, allow_negative_numbers = true)]
     pub ka: f64,
 
     /// Scattering coefficient κs per unit of normalised range (attenuation and blur).
-    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KS)]
+    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KS, allow_negative_numbers = true)]
     pub ks: f64,
 
     /// Blur factor λ in px: the farthest point is blurred to σmax = σ0 + λ·√κs.
-    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_LAMBDA)]
+    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_LAMBDA, allow_negative_numbers = true)]
     pub lambda: f64,
 
     /// Inner scale σ0 of the input image in px (its own blur).
-    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_SIGMA0)]
+    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_SIGMA0, allow_negative_numbers = true)]
     pub sigma0: f64,
 
     /// Largest diffusion rate per step, in (0, 0.25]; smaller means more, smaller steps.
-    #[arg(long, value_name = "RHO", default_value_t = haze::DEFAULT_RHO_MAX)]
+    #[arg(long, value_name = "RHO", default_value_t = haze::DEFAULT_RHO_MAX, allow_negative_numbers = true)]
     pub rho_max: f64,
 
     /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: estimated from
@@ -170,7 +166,7 @@ pub struct RenderArgs {
 
     /// Blur the whole image to scale S px, with no attenuation and no airlight (an
     /// accuracy check against a Gaussian of std sqrt(S² − σ0²)).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_negative_numbers = true)]
     pub uniform_sigma: Option<f64>,
 
     /// Skip pre-processing: unknown range values are taken as the farthest range.
@@ -222,7 +218,9 @@ fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let values: Result<Vec<f32>, _> = parts.iter().map(|p| p.parse::<f32>()).collect();
     match values {
-        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite() && *c >= 0.0) => Ok([v[0], v[1], v[2]]),
+        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite() && *c >= 0.0) => {
+            Ok([v[0], v[1], v[2]])
+        }
         _ => Err(format!(
             "'{s}' is not three finite linear values ≥ 0 separated by commas, e.g. 0.8,0.8,0.8"
         )),

@@ -9,7 +9,10 @@ pub fn run(args: &InfoArgs, egl: Option<Platform>) -> Result<()> {
     let renderer = super::open_renderer(egl)?;
     let caps = renderer.caps();
     if args.json {
-        println!("{}", serde_json::to_string_pretty(caps).expect("capabilities serialise"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(caps).expect("capabilities serialise")
+        );
     } else {
         print_text(caps);
     }
@@ -19,21 +22,41 @@ pub fn run(args: &InfoArgs, egl: Option<Platform>) -> Result<()> {
 fn print_text(c: &Capabilities) {
     let yes = |b: bool| if b { "yes" } else { "no" };
     println!("EGL platform       {}", c.egl_platform);
-    println!("EGL vendor         {} (EGL {})", c.egl_vendor, c.egl_version);
+    println!(
+        "EGL vendor         {} (EGL {})",
+        c.egl_vendor, c.egl_version
+    );
     println!("GL vendor          {}", c.vendor);
     println!("GL renderer        {}", c.renderer);
     println!("GL version         {}", c.version);
     println!("GLSL version       {}", c.shading_language_version);
     println!("max texture size   {}", c.max_texture_size);
     println!("EXT_color_buffer_float       {}", yes(c.color_buffer_float));
-    println!("EXT_color_buffer_half_float  {}", yes(c.color_buffer_half_float));
-    println!("OES_texture_float_linear     {}", yes(c.texture_float_linear));
-    println!("EXT_disjoint_timer_query     {}", yes(c.disjoint_timer_query));
+    println!(
+        "EXT_color_buffer_half_float  {}",
+        yes(c.color_buffer_half_float)
+    );
+    println!(
+        "OES_texture_float_linear     {}",
+        yes(c.texture_float_linear)
+    );
+    println!(
+        "EXT_disjoint_timer_query     {}",
+        yes(c.disjoint_timer_query)
+    );
     let f32_ok = c.require_precision(brume::Precision::F32).is_ok();
     let f16_ok = c.require_precision(brume::Precision::F16).is_ok();
-    println!("precisions usable  f32: {}, f16: {}", yes(f32_ok), yes(f16_ok));
+    println!(
+        "precisions usable  f32: {}, f16: {}",
+        yes(f32_ok),
+        yes(f16_ok)
+    );
     println!(
         "timing clock       {}",
-        if c.disjoint_timer_query { "gpu-timer (GL_TIME_ELAPSED)" } else { "wall (glFinish + monotonic clock)" }
+        if c.disjoint_timer_query {
+            "gpu-timer (GL_TIME_ELAPSED)"
+        } else {
+            "wall (glFinish + monotonic clock)"
+        }
     );
 }

@@ -1,7 +1,9 @@
 //! `brume prep`: pre-process a range map on its own and show what happened.
 
 use super::args::PrepArgs;
-use super::render::{airlight_source_name, depth_inputs, load_depth, prep_options, refuse_overwriting_inputs};
+use super::render::{
+    airlight_source_name, depth_inputs, load_depth, prep_options, refuse_overwriting_inputs,
+};
 use brume::io::{image, output};
 use brume::prep;
 use brume::Result;
@@ -9,6 +11,10 @@ use serde_json::json;
 
 pub fn run(args: &PrepArgs) -> Result<()> {
     let opts = prep_options(&args.prep)?;
+    output::check_scalar_output(&args.out, "--out")?;
+    if let Some(vis) = &args.vis {
+        output::check_image_output(vis, "--vis")?;
+    }
     let mut inputs = depth_inputs(&args.depth);
     inputs.extend(args.image.iter().cloned());
     refuse_overwriting_inputs(&args.out, &inputs)?;
@@ -30,7 +36,12 @@ pub fn run(args: &PrepArgs) -> Result<()> {
                     a: path.display().to_string(),
                     aw: img.width() as u32,
                     ah: img.height() as u32,
-                    b: args.depth.depth.as_ref().map(|p| p.display().to_string()).unwrap_or_default(),
+                    b: args
+                        .depth
+                        .depth
+                        .as_ref()
+                        .map(|p| p.display().to_string())
+                        .unwrap_or_default(),
                     bw: loaded.range.width() as u32,
                     bh: loaded.range.height() as u32,
                 });

@@ -34,6 +34,7 @@ struct PrepReport {
 pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let haze = haze_from_args(args)?;
     let out = output_path(args)?;
+    output::check_image_output(&out, "--out")?;
     let scene = load_scene(args)?;
     refuse_overwriting_inputs(&out, &scene.inputs)?;
     check_same_size(&scene)?;
@@ -52,7 +53,16 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
 
     let renderer_name = renderer.caps().renderer.clone();
     if args.json {
-        let report = json_report(args, &scene, &prep, &spec, &rendered, &renderer_name, &out, r_max);
+        let report = json_report(
+            args,
+            &scene,
+            &prep,
+            &spec,
+            &rendered,
+            &renderer_name,
+            &out,
+            r_max,
+        );
         println!("{report}");
     } else {
         print_summary(&scene, &prep, &spec, &rendered, &renderer_name, &out);
@@ -73,7 +83,11 @@ fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
     };
     haze.validate()?;
     if !(args.rho_max > 0.0 && args.rho_max <= 0.25) {
-        return Err(Error::invalid("--rho-max", args.rho_max, "a rate in (0, 0.25]"));
+        return Err(Error::invalid(
+            "--rho-max",
+            args.rho_max,
+            "a rate in (0, 0.25]",
+        ));
     }
     if let Some(s) = args.uniform_sigma {
         if !(s.is_finite() && s >= args.sigma0) {
@@ -116,7 +130,13 @@ fn load_scene(args: &RenderArgs) -> Result<Scene> {
                 image: image::load_linear_rgb(image_path)?,
                 depth,
                 image_name: image_path.display().to_string(),
-                depth_name: args.depth.depth.as_ref().expect("checked").display().to_string(),
+                depth_name: args
+                    .depth
+                    .depth
+                    .as_ref()
+                    .expect("checked")
+                    .display()
+                    .to_string(),
                 inputs,
             })
         }
@@ -157,7 +177,11 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
 
 /// The files a depth argument set reads.
 pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
-    args.depth.iter().chain(args.calib.iter()).cloned().collect()
+    args.depth
+        .iter()
+        .chain(args.calib.iter())
+        .cloned()
+        .collect()
 }
 
 /// Refuses an output path that is one of the inputs: nothing a user gave us is
@@ -232,7 +256,8 @@ fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     let (airlight, source) = match given {
         Some(g) => g,
         None => {
-            let AirlightEstimate { rgb, source, .. } = prep::estimate_airlight(&scene.image, &prepared);
+            let AirlightEstimate { rgb, source, .. } =
+                prep::estimate_airlight(&scene.image, &prepared);
             (rgb, airlight_source_name(source))
         }
     };
@@ -254,14 +279,7 @@ pub fn airlight_source_name(source: AirlightSource) -> &'static str {
 fn render_spec(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> RenderSpec {
     let mut spec = match args.uniform_sigma {
         Some(s) => RenderSpec::uniform(s, args.sigma0, args.scheme, args.precision),
-        None => RenderSpec::haze(
-            &Haze {
-                airlight,
-                ..*haze
-            },
-            args.scheme,
-            args.precision,
-        ),
+        None => RenderSpec::haze(&Haze { airlight, ..*haze }, args.scheme, args.precision),
     };
     spec.rho_max = args.rho_max;
     spec
@@ -335,7 +353,12 @@ fn print_summary(
     let b = spec.airlight;
     println!(
         "airlight {:.3},{:.3},{:.3} ({}), σmax {:.2} px, κ {:.3}",
-        b[0], b[1], b[2], prep.airlight_source, spec.sigma_max(), spec.extinction
+        b[0],
+        b[1],
+        b[2],
+        prep.airlight_source,
+        spec.sigma_max(),
+        spec.extinction
     );
     println!(
         "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
@@ -363,5 +386,11 @@ fn print_timings(rendered: &Rendered) {
         };
         println!("{:>6}  {:<12} {:>10.3}", i + 1, name, ms);
     }
-    println!("{:>6}  {:<12} {:>10.3}  ({})", "total", "", t.total_ms, t.clock.name());
+    println!(
+        "{:>6}  {:<12} {:>10.3}  ({})",
+        "total",
+        "",
+        t.total_ms,
+        t.clock.name()
+    );
 }

@@ -57,13 +57,15 @@ pub enum Rejected {
 }
 
 /// Spends the first TIME_ELAPSED query of a fresh context, whose result is meaningless on
-/// llvmpipe, and clears any pending disjoint flag.
-pub fn warm_up(gl: &glow::Context) -> Result<()> {
-    // SAFETY: one query object created, begun and ended around no work (a surfaceless
-    // context has no framebuffer to clear), read and deleted on the current context.
+/// llvmpipe, around `draw` (real work: an empty query does not absorb the bogus sample),
+/// and clears any pending disjoint flag.
+pub fn warm_up(gl: &glow::Context, draw: impl FnOnce()) -> Result<()> {
+    // SAFETY: one query object created, begun and ended around the draw, read and
+    // deleted on the current context.
     unsafe {
         let q = gl.create_query().map_err(Error::Gl)?;
         gl.begin_query(glow::TIME_ELAPSED, q);
+        draw();
         gl.end_query(glow::TIME_ELAPSED);
         let _ = query_result_ns(gl, q);
         gl.delete_query(q);

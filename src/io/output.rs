@@ -10,6 +10,53 @@ use crate::io::image::linear_to_srgb;
 use crate::raster::{RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
+/// Extensions [`write_rgba`] accepts.
+pub const IMAGE_EXTENSIONS: [&str; 3] = ["png", "pfm", "exr"];
+/// Extensions [`write_scalar`] accepts.
+pub const SCALAR_EXTENSIONS: [&str; 2] = ["pfm", "exr"];
+
+/// Checks, before any work is done, that `path` can take an image output: a known
+/// extension and an existing directory. `option` names the flag in the error.
+pub fn check_image_output(path: &Path, option: &str) -> Result<()> {
+    check_output(path, option, &IMAGE_EXTENSIONS)
+}
+
+/// Like [`check_image_output`] for scalar maps (`.pfm`, `.exr`).
+pub fn check_scalar_output(path: &Path, option: &str) -> Result<()> {
+    check_output(path, option, &SCALAR_EXTENSIONS)
+}
+
+fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()> {
+    if !extensions.contains(&extension_of(path).as_str()) {
+        return Err(Error::invalid(
+            option,
+            path.display(),
+            format!("a path ending in {}", list_extensions(extensions)),
+        ));
+    }
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::invalid(
+            option,
+            path.display(),
+            format!(
+                "a path in an existing directory ({} does not exist)",
+                dir.display()
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// `.png, .pfm or .exr`.
+fn list_extensions(extensions: &[&str]) -> String {
+    let dotted: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
+    match dotted.split_last() {
+        Some((last, [])) => last.clone(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    }
+}
+
 /// Writes a linear-light RGBA image, choosing the format by extension:
 /// `.png` 8-bit sRGB RGB (alpha dropped, values clamped to `[0, 1]` and rounded),
 /// `.pfm` float RGB `PF` (linear, little-endian, rows bottom to top),
@@ -37,11 +84,7 @@ pub fn write_rgba(path: &Path, img: &RgbaImage) -> Result<()> {
             ];
             write_atomically(path, |w| write_exr(w, img.width(), img.height(), channels))
         }
-        _ => Err(Error::invalid(
-            "--out",
-            path.display(),
-            "a path ending in .png, .pfm or .exr",
-        )),
+        _ => check_image_output(path, "--out"),
     }
 }
 
@@ -56,11 +99,7 @@ pub fn write_scalar(path: &Path, map: &ScalarMap) -> Result<()> {
             let channels = [("Y", map.as_slice().to_vec())];
             write_atomically(path, |w| write_exr(w, map.width(), map.height(), channels))
         }
-        _ => Err(Error::invalid(
-            "scalar output",
-            path.display(),
-            "a path ending in .pfm or .exr",
-        )),
+        _ => check_scalar_output(path, "scalar output"),
     }
 }
 
