@@ -226,8 +226,8 @@ mod tests {
         let img = Grid::filled(9, 7, [0.25, 0.5, 0.75, 1.0]);
         let out = gaussian_blur(&img, 2.0);
         for p in out.as_slice() {
-            for c in 0..4 {
-                assert!((p[c] - img.get(0, 0)[c]).abs() < 1e-12);
+            for (v, want) in p.iter().zip(img.get(0, 0)) {
+                assert!((v - want).abs() < 1e-12);
             }
         }
     }

@@ -37,7 +37,7 @@ use std::fmt;
 use std::str::FromStr;
 
 /// A diffusion scheme: how the per-step offsets and per-pixel rates are chosen.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Scheme {
     /// Forward Euler with unit offsets (paper 000, eq. 13). Slow at large scales.
@@ -47,6 +47,7 @@ pub enum Scheme {
     Invariant,
     /// The invariant scheme's N and rates with offsets chosen so that the variance,
     /// bilinear spread included, reaches σ(x)² exactly. The default.
+    #[default]
     Matched,
 }
 
@@ -66,12 +67,6 @@ impl Scheme {
     /// Whether the offset law is passed through m⁻¹(t²) (see the module docs).
     pub fn corrects_bilinear(self) -> bool {
         matches!(self, Scheme::Matched)
-    }
-}
-
-impl Default for Scheme {
-    fn default() -> Self {
-        Scheme::Matched
     }
 }
 
