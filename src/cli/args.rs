@@ -93,11 +93,11 @@ pub struct DepthArgs {
 /// Options of the range pre-processing (paper 000, sec. 4.1).
 #[derive(Args, Debug, Clone)]
 pub struct PrepOptionArgs {
-    /// Width µ of the horizon margin matted into the sky, in px.
+    /// Width µ of the horizon margin matted into the sky, in px [default: 8].
     #[arg(long, value_name = "PX", allow_negative_numbers = true)]
     pub margin: Option<f32>,
 
-    /// Sky range Smax as a multiple of the largest measured range Rmax (> 1).
+    /// Sky range Smax as a multiple of the largest measured range Rmax, > 1 [default: 1.5].
     #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub sky_factor: Option<f32>,
 
@@ -105,11 +105,13 @@ pub struct PrepOptionArgs {
     #[arg(long)]
     pub no_sky: bool,
 
-    /// Smallest area of an unknown region, as a fraction of the image, that can be sky.
+    /// Smallest area of an unknown region, as a fraction of the image, that can be sky
+    /// [default: 0.01].
     #[arg(long, value_name = "FRACTION")]
     pub sky_min_area: Option<f64>,
 
-    /// Seed of the RANSAC hole filling (results are reproducible for a given seed).
+    /// Seed of the RANSAC hole filling; a given seed always gives the same result
+    /// [default: 0].
     #[arg(long, value_name = "N")]
     pub seed: Option<u64>,
 }
