@@ -213,7 +213,11 @@ def markdown(args, img_desc, peers, report, versions):
             lines.append(
                 f"| {s:g} | {ms:.1f} | {cv:.1f} | {sp:.1f} | {cv / ms:.2f}x | {sp / ms:.2f}x |"
             )
-    lines += ["", f"Note: {NOTE}"]
+    lines += [
+        "",
+        "Ratios are peer time / brume time: above 1, brume is faster.",
+        f"Note: {NOTE}",
+    ]
     return "\n".join(lines)
 
 
@@ -228,6 +232,11 @@ def main(argv=None):
             report = parse_brume_json(f.read(), args.brume_json)
     else:
         report = run_brume(args.brume, args)
+    if (report["width"], report["height"]) != (args.width, args.height):
+        fail(
+            f"brume's report is {report['width']}x{report['height']} but --size is "
+            f"{args.width}x{args.height}: compare at one size"
+        )
 
     img, desc = test_image(np, cv2, args.width, args.height)
     peers = time_peers(np, ndi, cv2, img, args.sigma_list, args.runs)

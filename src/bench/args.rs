@@ -11,7 +11,6 @@ use crate::error::{Error, Result};
 use crate::raster::RgbImage;
 use crate::{Precision, Renderer, Scheme};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 /// The two experiments of paper 000, sec. 5.
@@ -204,15 +203,10 @@ fn emit(
     Ok(())
 }
 
-/// A bar on stderr; indicatif draws nothing when stderr is not a terminal, and it is
-/// hidden outright then so that logs stay clean.
+/// A bar on stderr; indicatif draws nothing when stderr is not a terminal, so logs and
+/// pipes stay clean.
 fn progress_bar() -> ProgressBar {
-    let target = if std::io::stderr().is_terminal() {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
-    };
-    let bar = ProgressBar::with_draw_target(None, target);
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
     let style = ProgressStyle::with_template(
         "{bar:40} {pos}/{len} passes  {elapsed_precise} (eta {eta})  {msg}",
     )

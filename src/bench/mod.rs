@@ -9,6 +9,22 @@
 //! [`report`] prints tables and writes CSV/JSON, [`plot`] draws the two figures, and
 //! [`args`] holds the `brume bench` command-line arguments and [`run`], the one entry point
 //! the CLI calls.
+//!
+//! ```text
+//! brume bench accuracy --plot fig6.png --csv fig6.csv       # about 1.5 min at 641x555
+//! brume bench speed --max-passes 200 --plot fig7.svg        # Euler at σ ≥ 12 left out
+//! brume bench speed --sigmas 5,25 --schemes matched --precisions f32 --json
+//! ```
+//!
+//! What the figures mean (defined once, here and in the submodules):
+//! - *RMS* / *max|err|*: over the RGB channels in linear light, against the exact
+//!   clamp-to-edge Gaussian of std √(σref² − σ0²); *interior* leaves ⌈3σref⌉ px out.
+//!   Euler's unit steps with clamp-to-edge sampling behave like a mirrored border, not a
+//!   replicated one, so its whole-image RMS is dominated by the border: read the interior.
+//! - *scale reached*: √(var + σ0²) of the GPU's impulse response, per axis; *ratio* is
+//!   that over σref (see [`accuracy`]).
+//! - *time*: `PassTimes::total_ms` of the N + 2 passes, median and sample std of
+//!   `--runs` renders after a warm-up, with the clock that produced it (see [`speed`]).
 
 pub mod accuracy;
 pub mod args;

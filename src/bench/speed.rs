@@ -134,8 +134,8 @@ pub struct SpeedReport {
     pub ratios: Vec<SpeedRatio>,
 }
 
-/// Runs the experiment. `progress` is called after each render with work counted in
-/// passes (see [`Progress`]).
+/// Runs the experiment. `progress` is called when a configuration starts and after each
+/// of its renders, with work counted in passes (see [`Progress`]).
 pub fn run_speed(
     renderer: &mut Renderer,
     opts: &SpeedOptions,
@@ -157,6 +157,12 @@ pub fn run_speed(
         let row = match skip {
             Some(reason) => skipped_row(spec, schedule, reason.clone()),
             None => {
+                // Say what is starting: one Euler render can take a minute.
+                progress(Progress {
+                    done,
+                    total,
+                    what: &label,
+                });
                 let laws = Grid::filled(opts.width, opts.height, schedule.law(spec.sigma_max()));
                 let mut samples = Vec::with_capacity(opts.runs);
                 let mut clocks = Vec::with_capacity(opts.runs);
