@@ -7,6 +7,7 @@
 //! [`schedule`] is the one place where the step count, rates and offsets are decided.
 #![warn(missing_docs)]
 
+pub mod bench;
 pub mod caps;
 pub mod egl;
 pub mod error;

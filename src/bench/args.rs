@@ -1,0 +1,359 @@
+//! `brume bench accuracy|speed`: the clap arguments and [`run`], which the CLI calls with
+//! an open renderer. Lists and sizes are taken as text and checked here, so that a bad
+//! value is an [`Error::invalid`] naming the option, like every other brume error.
+
+use super::accuracy::{run_accuracy, AccuracyOptions};
+use super::plot::{plot_accuracy, plot_speed, PlotFormat};
+use super::report;
+use super::speed::{run_speed, SpeedOptions};
+use super::{Configs, Progress};
+use crate::error::{Error, Result};
+use crate::raster::RgbImage;
+use crate::{Precision, Renderer, Scheme};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::path::{Path, PathBuf};
+
+/// The two experiments of paper 000, sec. 5.
+#[derive(clap::Subcommand, Debug, Clone)]
+pub enum BenchCommand {
+    /// Fig. 6: RMS error of each scheme and precision against the exact Gaussian, and the
+    /// blur scale actually reached (impulse response), for each σref.
+    Accuracy(AccuracyArgs),
+    /// Fig. 7: time of the N + 2 passes for each σref, scheme and precision (median and
+    /// standard deviation of several runs after a warm-up).
+    Speed(SpeedArgs),
+}
+
+/// Options shared by both experiments.
+#[derive(clap::Args, Debug, Clone)]
+pub struct CommonArgs {
+    /// Target blur scales σref in px, comma-separated; each must be ≥ σ0 = 1 px.
+    #[arg(long, value_delimiter = ',', default_value = "1,2,3,5,8,12,16,20,25")]
+    pub sigmas: Vec<String>,
+    /// Diffusion schemes to run, comma-separated: euler (eq. 13), invariant (eq. 18 as
+    /// written), matched (variance-matched offsets, the default renderer scheme).
+    #[arg(long, value_delimiter = ',', default_value = "euler,invariant,matched")]
+    pub schemes: Vec<String>,
+    /// Texture precisions of the diffusion passes, comma-separated: f32 (RGBA32F) and/or
+    /// f16 (RGBA16F).
+    #[arg(long, value_delimiter = ',', default_value = "f32,f16")]
+    pub precisions: Vec<String>,
+    /// Also write the table as CSV to this file (header + one row per configuration).
+    #[arg(long, value_name = "PATH")]
+    pub csv: Option<PathBuf>,
+    /// Print one JSON object on stdout instead of the table (the table goes to stderr).
+    #[arg(long)]
+    pub json: bool,
+    /// Draw the paper's figure to this file; the extension picks the format (.png or .svg).
+    #[arg(long, value_name = "PATH.png|PATH.svg")]
+    pub plot: Option<PathBuf>,
+}
+
+/// `brume bench accuracy`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct AccuracyArgs {
+    /// σ list, schemes, precisions and outputs.
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Image to blur (linear light is derived from sRGB as for `render`); default: the
+    /// built-in demo image (Aloe).
+    #[arg(long, value_name = "PATH")]
+    pub image: Option<PathBuf>,
+}
+
+/// `brume bench speed`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct SpeedArgs {
+    /// σ list, schemes, precisions and outputs.
+    #[command(flatten)]
+    pub common: CommonArgs,
+    /// Image size WIDTHxHEIGHT in px (the content is synthetic: it does not change the
+    /// time of a pass).
+    #[arg(long, value_name = "WxH", default_value = "1600x1120")]
+    pub size: String,
+    /// Timed runs per configuration, after one untimed warm-up render.
+    #[arg(long, default_value_t = super::speed::DEFAULT_RUNS)]
+    pub runs: usize,
+    /// Skip configurations with more than this many passes (N + 2), e.g. 200 to leave
+    /// out Euler at large σ (1250 passes at σ = 25); skipped rows say so.
+    #[arg(long, value_name = "P")]
+    pub max_passes: Option<u32>,
+}
+
+impl CommonArgs {
+    /// The checked configuration list.
+    pub fn configs(&self) -> Result<Configs> {
+        let configs = Configs {
+            sigmas: parse_list("--sigmas", &self.sigmas, |t| t.parse::<f64>().ok())?,
+            schemes: parse_list("--schemes", &self.schemes, |t| t.parse::<Scheme>().ok())?,
+            precisions: parse_list("--precisions", &self.precisions, |t| {
+                t.parse::<Precision>().ok()
+            })?,
+            ..Configs::default()
+        };
+        configs.validate()?;
+        Ok(configs)
+    }
+
+    /// Fails before any work if `--plot` has an unknown extension or an output's folder
+    /// does not exist (a benchmark can run for minutes).
+    pub fn check_outputs(&self) -> Result<()> {
+        if let Some(plot) = &self.plot {
+            PlotFormat::from_path(plot)?;
+            check_folder("--plot", plot)?;
+        }
+        if let Some(csv) = &self.csv {
+            check_folder("--csv", csv)?;
+        }
+        Ok(())
+    }
+}
+
+impl AccuracyArgs {
+    /// The library options these arguments stand for.
+    pub fn options(&self) -> Result<AccuracyOptions> {
+        Ok(AccuracyOptions {
+            configs: self.common.configs()?,
+        })
+    }
+}
+
+impl SpeedArgs {
+    /// The library options these arguments stand for.
+    pub fn options(&self) -> Result<SpeedOptions> {
+        let (width, height) = parse_size(&self.size)?;
+        let opts = SpeedOptions {
+            configs: self.common.configs()?,
+            width,
+            height,
+            runs: self.runs,
+            max_passes: self.max_passes,
+        };
+        opts.validate()?;
+        Ok(opts)
+    }
+}
+
+/// Runs a `brume bench` command: the experiment, then the table (or JSON) on stdout and
+/// the CSV and plot files. `demo` gives the built-in image when `--image` is absent;
+/// `load_image` reads `--image` as linear RGB.
+pub fn run(
+    cmd: &BenchCommand,
+    renderer: &mut Renderer,
+    demo: &dyn Fn() -> Result<RgbImage>,
+    load_image: &dyn Fn(&Path) -> Result<RgbImage>,
+) -> Result<()> {
+    match cmd {
+        BenchCommand::Accuracy(a) => {
+            let opts = a.options()?;
+            a.common.check_outputs()?;
+            let image = match &a.image {
+                Some(path) => load_image(path)?,
+                None => demo()?,
+            };
+            let bar = progress_bar();
+            let report = run_accuracy(renderer, &image, &opts, &|p| advance(&bar, p))?;
+            bar.finish_and_clear();
+            emit(
+                &a.common,
+                &report::accuracy_table(&report),
+                || report::accuracy_json(&report),
+                &report::accuracy_csv(&report),
+                |path| plot_accuracy(&report, path),
+            )
+        }
+        BenchCommand::Speed(s) => {
+            let opts = s.options()?;
+            s.common.check_outputs()?;
+            let bar = progress_bar();
+            let report = run_speed(renderer, &opts, &|p| advance(&bar, p))?;
+            bar.finish_and_clear();
+            emit(
+                &s.common,
+                &report::speed_table(&report),
+                || report::speed_json(&report),
+                &report::speed_csv(&report),
+                |path| plot_speed(&report, path),
+            )
+        }
+    }
+}
+
+/// Prints and writes the outputs that `common` asks for.
+fn emit(
+    common: &CommonArgs,
+    table: &str,
+    json: impl FnOnce() -> Result<String>,
+    csv: &str,
+    plot: impl FnOnce(&Path) -> Result<()>,
+) -> Result<()> {
+    if common.json {
+        // stdout holds exactly one JSON object; the human table goes to stderr.
+        eprint!("{table}");
+        println!("{}", json()?);
+    } else {
+        print!("{table}");
+    }
+    if let Some(path) = &common.csv {
+        report::write_atomic(path, csv.as_bytes())?;
+    }
+    if let Some(path) = &common.plot {
+        plot(path)?;
+    }
+    Ok(())
+}
+
+/// A bar on stderr; indicatif draws nothing when stderr is not a terminal, so logs and
+/// pipes stay clean.
+fn progress_bar() -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    let style = ProgressStyle::with_template(
+        "{bar:40} {pos}/{len} passes  {elapsed_precise} (eta {eta})  {msg}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style);
+    bar
+}
+
+fn advance(bar: &ProgressBar, p: Progress) {
+    bar.set_length(p.total);
+    bar.set_position(p.done);
+    bar.set_message(p.what.to_string());
+}
+
+/// Parses every item of a comma list (surrounding spaces allowed), naming `option` in
+/// the error; an empty list or an empty item is an error.
+fn parse_list<T>(
+    option: &str,
+    items: &[String],
+    parse: impl Fn(&str) -> Option<T>,
+) -> Result<Vec<T>> {
+    if items.is_empty() {
+        return Err(Error::invalid(option, "(empty)", "a comma-separated list"));
+    }
+    items
+        .iter()
+        .map(|item| {
+            parse(item.trim()).ok_or_else(|| Error::invalid(option, item, expected(option)))
+        })
+        .collect()
+}
+
+fn expected(option: &str) -> &'static str {
+    match option {
+        "--schemes" => "a comma list of euler, invariant, matched",
+        "--precisions" => "a comma list of f32, f16",
+        _ => "a comma list of numbers, e.g. 1,2,3,5",
+    }
+}
+
+/// `WIDTHxHEIGHT` → (width, height), both ≥ 1.
+pub fn parse_size(text: &str) -> Result<(usize, usize)> {
+    let bad = || {
+        Error::invalid(
+            "--size",
+            text,
+            "WIDTHxHEIGHT in px, both ≥ 1, e.g. 1600x1120",
+        )
+    };
+    let (w, h) = text.trim().split_once(['x', 'X']).ok_or_else(bad)?;
+    let w: usize = w.trim().parse().map_err(|_| bad())?;
+    let h: usize = h.trim().parse().map_err(|_| bad())?;
+    if w == 0 || h == 0 {
+        return Err(bad());
+    }
+    Ok((w, h))
+}
+
+fn check_folder(option: &str, path: &Path) -> Result<()> {
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => return Ok(()),
+    };
+    if dir.is_dir() {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            option,
+            path.display(),
+            format!(
+                "a file in an existing folder ({} is not one)",
+                dir.display()
+            ),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bench::DEFAULT_SIGMAS;
+    use clap::Parser;
+
+    #[derive(clap::Parser)]
+    struct Cli {
+        #[command(subcommand)]
+        cmd: BenchCommand,
+    }
+
+    fn parse(args: &[&str]) -> BenchCommand {
+        Cli::try_parse_from(std::iter::once("bench").chain(args.iter().copied()))
+            .unwrap()
+            .cmd
+    }
+
+    #[test]
+    fn defaults_are_the_papers() {
+        let BenchCommand::Accuracy(a) = parse(&["accuracy"]) else {
+            panic!("not accuracy")
+        };
+        let c = a.options().unwrap().configs;
+        assert_eq!(c.sigmas, DEFAULT_SIGMAS.to_vec());
+        assert_eq!(c.schemes, Scheme::ALL.to_vec());
+        assert_eq!(c.precisions, Precision::ALL.to_vec());
+        let BenchCommand::Speed(s) = parse(&["speed"]) else {
+            panic!("not speed")
+        };
+        let o = s.options().unwrap();
+        assert_eq!(
+            (o.width, o.height, o.runs, o.max_passes),
+            (1600, 1120, 5, None)
+        );
+    }
+
+    #[test]
+    fn bad_values_name_their_option() {
+        let cases: [(&[&str], &str); 6] = [
+            (&["speed", "--sigmas", "0.5"], "--sigmas"),
+            (&["speed", "--sigmas", "2,x"], "--sigmas"),
+            (&["speed", "--schemes", "fast"], "--schemes"),
+            (&["speed", "--precisions", "f64"], "--precisions"),
+            (&["speed", "--size", "0x10"], "--size"),
+            (&["speed", "--runs", "0"], "--runs"),
+        ];
+        for (args, option) in cases {
+            let BenchCommand::Speed(s) = parse(args) else {
+                panic!()
+            };
+            let err = s.options().unwrap_err().to_string();
+            assert!(err.contains(option), "{args:?}: {err}");
+        }
+        let BenchCommand::Accuracy(a) = parse(&["accuracy", "--plot", "x.jpg"]) else {
+            panic!()
+        };
+        assert!(a
+            .common
+            .check_outputs()
+            .unwrap_err()
+            .to_string()
+            .contains("--plot"));
+    }
+
+    #[test]
+    fn sizes_parse() {
+        assert_eq!(parse_size("400x280").unwrap(), (400, 280));
+        assert_eq!(parse_size(" 16X8 ").unwrap(), (16, 8));
+        assert!(parse_size("400").is_err());
+        assert!(parse_size("-1x3").is_err());
+    }
+}

@@ -1,0 +1,355 @@
+//! The speed experiment of paper 000, sec. 5.3 (fig. 7): for each σref, scheme and
+//! precision, one warm-up render and then `runs` timed renders of a uniform blur at one
+//! image size. The figure is `PassTimes::total_ms` of each run — the N + 2 passes, timed
+//! by `GL_TIME_ELAPSED` where the driver has it (else `glFinish` + wall clock; the report
+//! says which) — summarised by its median and sample standard deviation. Uploads and the
+//! read-back are outside the figure, as in the paper.
+//!
+//! The input is [`super::synthetic_image`]: a pass costs the same whatever the pixels
+//! hold, and the figure must not depend on which demo image is built in.
+
+use super::{config_label, Configs, Progress};
+use crate::error::{Error, Result};
+use crate::haze::RenderSpec;
+use crate::raster::Grid;
+use crate::schedule::Schedule;
+use crate::{Precision, Renderer, Scheme};
+use serde::Serialize;
+
+/// Default image size of the speed benchmark (px): the paper's 1600 x 1120.
+pub const DEFAULT_SIZE: (usize, usize) = (1600, 1120);
+/// Default number of timed runs per configuration.
+pub const DEFAULT_RUNS: usize = 5;
+
+/// What to time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpeedOptions {
+    /// σref list, schemes, precisions and σ0.
+    pub configs: Configs,
+    /// Image width (px).
+    pub width: usize,
+    /// Image height (px).
+    pub height: usize,
+    /// Timed runs per configuration (after one warm-up), ≥ 1.
+    pub runs: usize,
+    /// Skip configurations with more than this many passes (N + 2).
+    pub max_passes: Option<u32>,
+}
+
+impl Default for SpeedOptions {
+    fn default() -> Self {
+        SpeedOptions {
+            configs: Configs::default(),
+            width: DEFAULT_SIZE.0,
+            height: DEFAULT_SIZE.1,
+            runs: DEFAULT_RUNS,
+            max_passes: None,
+        }
+    }
+}
+
+impl SpeedOptions {
+    /// Rejects empty lists, scales below σ0, a zero size and zero runs.
+    pub fn validate(&self) -> Result<()> {
+        self.configs.validate()?;
+        if self.width == 0 || self.height == 0 {
+            return Err(Error::invalid(
+                "--size",
+                format!("{}x{}", self.width, self.height),
+                "WIDTHxHEIGHT, both ≥ 1, e.g. 1600x1120",
+            ));
+        }
+        if self.runs == 0 {
+            return Err(Error::invalid("--runs", 0, "at least 1 timed run"));
+        }
+        Ok(())
+    }
+}
+
+/// One configuration's timing, or why it was skipped.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SpeedRow {
+    /// Target scale σref (px).
+    pub sigma_ref: f64,
+    /// Diffusion scheme.
+    pub scheme: Scheme,
+    /// Texture precision.
+    pub precision: Precision,
+    /// Diffusion steps N.
+    pub steps: u32,
+    /// Passes per render, N + 2.
+    pub passes: u32,
+    /// True when `--max-passes` left this configuration out; the figures are then `None`.
+    pub skipped: bool,
+    /// Why it was skipped.
+    pub reason: Option<String>,
+    /// Clock of the timed runs: `gpu-timer`, `wall`, or `mixed` if the driver's timer
+    /// was rejected for some runs.
+    pub clock: Option<String>,
+    /// Timed runs.
+    pub runs: usize,
+    /// Median total time of the N + 2 passes (ms).
+    pub median_ms: Option<f64>,
+    /// Sample standard deviation of the total time (ms); `None` with one run.
+    pub std_ms: Option<f64>,
+    /// Median time per pass, median_ms / (N + 2) (ms).
+    pub ms_per_pass: Option<f64>,
+    /// Every timed total (ms), in run order.
+    pub samples_ms: Vec<f64>,
+}
+
+/// A speed ratio between two schemes at one σ and precision.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SpeedRatio {
+    /// σref (px): the largest one at which both schemes ran.
+    pub sigma_ref: f64,
+    /// Precision of both.
+    pub precision: Precision,
+    /// The slower scheme (numerator).
+    pub slow: Scheme,
+    /// The faster scheme (denominator).
+    pub fast: Scheme,
+    /// median(slow) / median(fast).
+    pub ratio: f64,
+}
+
+/// The whole experiment.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SpeedReport {
+    /// `GL_RENDERER` of the context that ran it.
+    pub renderer: String,
+    /// The clock the renderer prefers (`gpu-timer` or `wall`); each row says what it got.
+    pub clock: String,
+    /// Image width (px).
+    pub width: usize,
+    /// Image height (px).
+    pub height: usize,
+    /// Timed runs per configuration.
+    pub runs: usize,
+    /// The `--max-passes` limit, if any.
+    pub max_passes: Option<u32>,
+    /// One row per (σref, scheme, precision), σ outermost.
+    pub rows: Vec<SpeedRow>,
+    /// Euler / matched and Euler / invariant at the largest σ where both ran.
+    pub ratios: Vec<SpeedRatio>,
+}
+
+/// Runs the experiment. `progress` is called when a configuration starts and after each
+/// of its renders, with work counted in passes (see [`Progress`]).
+pub fn run_speed(
+    renderer: &mut Renderer,
+    opts: &SpeedOptions,
+    progress: &dyn Fn(Progress),
+) -> Result<SpeedReport> {
+    opts.validate()?;
+    let image = super::synthetic_image(opts.width, opts.height, 1);
+    let range = Grid::filled(opts.width, opts.height, 0.0f32);
+    let plans = plan(opts)?;
+    let total: u64 = plans
+        .iter()
+        .filter(|(_, _, skip)| skip.is_none())
+        .map(|(_, s, _)| (opts.runs as u64 + 1) * u64::from(s.steps + 2))
+        .sum();
+    let mut done = 0;
+    let mut rows = Vec::new();
+    for (spec, schedule, skip) in &plans {
+        let label = config_label(spec.sigma_max(), spec.scheme, spec.precision);
+        let row = match skip {
+            Some(reason) => skipped_row(spec, schedule, reason.clone()),
+            None => {
+                // Say what is starting: one Euler render can take a minute.
+                progress(Progress {
+                    done,
+                    total,
+                    what: &label,
+                });
+                let laws = Grid::filled(opts.width, opts.height, schedule.law(spec.sigma_max()));
+                let mut samples = Vec::with_capacity(opts.runs);
+                let mut clocks = Vec::with_capacity(opts.runs);
+                // Run 0 is the warm-up: shader caches, target allocation, first query.
+                for run in 0..=opts.runs {
+                    let out = renderer.render_laws(&image, &range, &laws, spec, schedule)?;
+                    if run > 0 {
+                        samples.push(out.times.total_ms);
+                        clocks.push(out.times.clock.name());
+                    }
+                    done += u64::from(schedule.steps + 2);
+                    progress(Progress {
+                        done,
+                        total,
+                        what: &label,
+                    });
+                }
+                timed_row(spec, schedule, samples, &clocks)
+            }
+        };
+        rows.push(row);
+    }
+    let ratios = ratios(&rows);
+    Ok(SpeedReport {
+        renderer: renderer.caps().renderer.clone(),
+        clock: renderer.preferred_clock().name().into(),
+        width: opts.width,
+        height: opts.height,
+        runs: opts.runs,
+        max_passes: opts.max_passes,
+        rows,
+        ratios,
+    })
+}
+
+/// Every configuration with its schedule and, if `--max-passes` rules it out, why.
+fn plan(opts: &SpeedOptions) -> Result<Vec<(RenderSpec, Schedule, Option<String>)>> {
+    let configs = &opts.configs;
+    configs
+        .each()
+        .map(|(sigma, scheme, precision)| {
+            let spec = RenderSpec::uniform(sigma, configs.sigma0, scheme, precision);
+            let schedule = spec.schedule()?;
+            let passes = schedule.steps + 2;
+            let skip = opts
+                .max_passes
+                .filter(|&max| passes > max)
+                .map(|max| format!("{passes} passes > --max-passes {max}"));
+            Ok((spec, schedule, skip))
+        })
+        .collect()
+}
+
+fn skipped_row(spec: &RenderSpec, schedule: &Schedule, reason: String) -> SpeedRow {
+    SpeedRow {
+        sigma_ref: spec.sigma_max(),
+        scheme: spec.scheme,
+        precision: spec.precision,
+        steps: schedule.steps,
+        passes: schedule.steps + 2,
+        skipped: true,
+        reason: Some(reason),
+        clock: None,
+        runs: 0,
+        median_ms: None,
+        std_ms: None,
+        ms_per_pass: None,
+        samples_ms: Vec::new(),
+    }
+}
+
+fn timed_row(
+    spec: &RenderSpec,
+    schedule: &Schedule,
+    samples: Vec<f64>,
+    clocks: &[&str],
+) -> SpeedRow {
+    let passes = schedule.steps + 2;
+    let median_ms = median(&samples);
+    let clock = match clocks.first() {
+        Some(first) if clocks.iter().all(|c| c == first) => first.to_string(),
+        _ => "mixed".into(),
+    };
+    SpeedRow {
+        sigma_ref: spec.sigma_max(),
+        scheme: spec.scheme,
+        precision: spec.precision,
+        steps: schedule.steps,
+        passes,
+        skipped: false,
+        reason: None,
+        clock: Some(clock),
+        runs: samples.len(),
+        median_ms,
+        std_ms: sample_std(&samples),
+        ms_per_pass: median_ms.map(|m| m / f64::from(passes)),
+        samples_ms: samples,
+    }
+}
+
+/// Median (mean of the middle two for an even count); `None` for no sample.
+pub fn median(samples: &[f64]) -> Option<f64> {
+    let mut v = samples.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some(0.5 * (v[n / 2 - 1] + v[n / 2])),
+    }
+}
+
+/// Sample standard deviation (n − 1); `None` below two samples.
+pub fn sample_std(samples: &[f64]) -> Option<f64> {
+    let n = samples.len();
+    if n < 2 {
+        return None;
+    }
+    let mean = samples.iter().sum::<f64>() / n as f64;
+    let ss: f64 = samples.iter().map(|v| (v - mean).powi(2)).sum();
+    Some((ss / (n - 1) as f64).sqrt())
+}
+
+/// Euler / matched and Euler / invariant, per precision, at the largest σ where both
+/// schemes were timed.
+fn ratios(rows: &[SpeedRow]) -> Vec<SpeedRatio> {
+    let median_of = |sigma: f64, scheme: Scheme, precision: Precision| {
+        rows.iter()
+            .find(|r| r.sigma_ref == sigma && r.scheme == scheme && r.precision == precision)
+            .and_then(|r| r.median_ms)
+    };
+    let mut out = Vec::new();
+    for precision in Precision::ALL {
+        for fast in [Scheme::Matched, Scheme::Invariant] {
+            let best = rows
+                .iter()
+                .filter(|r| r.scheme == Scheme::Euler && r.precision == precision)
+                .filter_map(|r| {
+                    let slow = r.median_ms?;
+                    let quick = median_of(r.sigma_ref, fast, precision)?;
+                    Some((r.sigma_ref, slow / quick))
+                })
+                .max_by(|a, b| a.0.total_cmp(&b.0));
+            if let Some((sigma_ref, ratio)) = best {
+                out.push(SpeedRatio {
+                    sigma_ref,
+                    precision,
+                    slow: Scheme::Euler,
+                    fast,
+                    ratio,
+                });
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_and_std() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), Some(2.0));
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), Some(2.5));
+        assert_eq!(median(&[]), None);
+        let s = sample_std(&[1.0, 2.0, 3.0, 4.0]).unwrap();
+        assert!((s - 1.290_994_448_7).abs() < 1e-9);
+        assert_eq!(sample_std(&[1.0]), None);
+    }
+
+    #[test]
+    fn max_passes_skips_with_a_reason() {
+        let opts = SpeedOptions {
+            configs: Configs {
+                sigmas: vec![25.0],
+                ..Configs::default()
+            },
+            max_passes: Some(100),
+            ..SpeedOptions::default()
+        };
+        let plans = plan(&opts).unwrap();
+        let euler = plans.iter().find(|p| p.0.scheme == Scheme::Euler).unwrap();
+        assert_eq!(euler.2.as_deref(), Some("1250 passes > --max-passes 100"));
+        assert!(plans
+            .iter()
+            .filter(|p| p.0.scheme != Scheme::Euler)
+            .all(|p| p.2.is_none()));
+    }
+}
