@@ -1,6 +1,7 @@
 //! Argument definitions (clap derive). Help texts are the user manual: say units, defaults
 //! and what each value does.
 
+use brume::bench::args::BenchCommand;
 use brume::egl::Platform;
 use brume::haze;
 use brume::io::depth::{DepthFormat, DepthKind};
@@ -38,6 +39,9 @@ pub enum Command {
     Info(InfoArgs),
     /// Pre-process a range map (fill holes, find the sky, matte the horizon) and write it.
     Prep(PrepArgs),
+    /// Reproduce paper 000's accuracy (fig. 6) and speed (fig. 7) experiments.
+    #[command(subcommand)]
+    Bench(BenchCommand),
 }
 
 /// `brume info`.

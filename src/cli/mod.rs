@@ -16,6 +16,12 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Render(a) => render::run(&a, cli.egl),
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Prep(a) => prep::run(&a),
+        Command::Bench(cmd) => {
+            let mut renderer = open_renderer(cli.egl)?;
+            brume::bench::run(&cmd, &mut renderer, &brume::io::demo::demo_image, &|p| {
+                brume::io::image::load_linear_rgb(p)
+            })
+        }
     }
 }
 
