@@ -12,6 +12,15 @@ use glow::HasContext;
 use std::rc::Rc;
 use std::time::Instant;
 
+/// How far the sum of per-pass figures may exceed the wall time that enclosed them.
+///
+/// Consecutive TIME_ELAPSED intervals can overlap on a pipelined driver: on llvmpipe
+/// (2 rasteriser threads) the per-pass sums run 5-20 % above the enclosing wall time.
+/// The values this check exists to catch are off by orders of magnitude (llvmpipe's
+/// first query reports the system uptime), so a factor of 1.5 separates the two; the
+/// extra 1 ms covers clock granularity on tiny renders.
+const OVERLAP_ALLOWANCE: f64 = 1.5;
+
 /// `GL_GPU_DISJOINT_EXT`, which glow does not export.
 pub const GPU_DISJOINT_EXT: u32 = 0x8FBB;
 
@@ -154,8 +163,7 @@ impl PassTimer {
                 }
                 let ms: Vec<f64> = ns.iter().map(|&n| n as f64 / 1e6).collect();
                 let sum: f64 = ms.iter().sum();
-                // 1 ms of slack for clock granularity on tiny renders.
-                if !sum.is_finite() || sum > enclosing_ms * 1.05 + 1.0 {
+                if !sum.is_finite() || sum > enclosing_ms * OVERLAP_ALLOWANCE + 1.0 {
                     return Ok(Err(Rejected::Implausible(format!(
                         "timer queries sum to {sum:.3} ms inside {enclosing_ms:.3} ms of wall time"
                     ))));
