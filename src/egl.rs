@@ -1,7 +1,8 @@
 //! A headless OpenGL ES context through EGL, loaded at run time (`libEGL.so.1`), so that a
 //! machine without Mesa gets a clear error instead of a link failure.
 //!
-//! Display order, unless the caller picks one: `EGL_MESA_platform_surfaceless`, then
+//! The library is `libEGL.so.1` unless `BRUME_EGL_LIBRARY` names another. Display order,
+//! unless the caller picks one: `EGL_MESA_platform_surfaceless`, then
 //! `EGL_EXT_platform_device` (the headless route on NVIDIA), then
 //! `eglGetDisplay(EGL_DEFAULT_DISPLAY)`. The context is OpenGL ES 3.2 (3.0 if the driver
 //! has no 3.2) with no surface where `EGL_KHR_surfaceless_context` allows it, else a 1x1
@@ -19,6 +20,10 @@ type EglInstance = egl::DynamicInstance<egl::EGL1_4>;
 const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
 const PLATFORM_DEVICE_EXT: egl::Enum = 0x313F;
 const DEBIAN_PACKAGES: &str = "libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri";
+
+/// Environment variable naming the EGL library to load instead of `libEGL.so.1` (a
+/// vendor's libEGL, or a path, e.g. `/usr/lib/x86_64-linux-gnu/libEGL_mesa.so.0`).
+pub const EGL_LIBRARY_ENV: &str = "BRUME_EGL_LIBRARY";
 
 /// Which EGL display to open.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -93,11 +98,14 @@ impl GlContext {
     /// Opens a display (the given platform, or the first that works in
     /// [`Platform::AUTO_ORDER`]) and makes a GLES 3.2 context current on this thread.
     pub fn new(platform: Option<Platform>) -> Result<Self> {
-        // SAFETY: loading libEGL runs its initialisers; it is the system's EGL loader.
-        let egl = unsafe { EglInstance::load_required() }.map_err(|e| {
+        let library = std::env::var_os(EGL_LIBRARY_ENV).unwrap_or_else(|| "libEGL.so.1".into());
+        // SAFETY: loading libEGL runs its initialisers; it is the system's EGL loader (or
+        // the one the user named).
+        let egl = unsafe { EglInstance::load_required_from_filename(&library) }.map_err(|e| {
             Error::Egl(format!(
-                "cannot load libEGL.so.1 ({e}); install Mesa's EGL and GLES: \
-                 apt-get install {DEBIAN_PACKAGES}"
+                "cannot load {} ({e}); install Mesa's EGL and GLES: \
+                 apt-get install {DEBIAN_PACKAGES}",
+                library.to_string_lossy()
             ))
         })?;
         let order: Vec<Platform> = match platform {
@@ -125,9 +133,15 @@ impl GlContext {
                 }
             }
         }
+        let default_hint = if platform == Some(Platform::Default) {
+            " (EGL_DEFAULT_DISPLAY needs a display server: use --egl surfaceless, or set \
+             EGL_PLATFORM=surfaceless)"
+        } else {
+            ""
+        };
         Err(Error::Egl(format!(
-            "no usable display (tried {}); on Debian/Ubuntu install Mesa's EGL and GLES \
-             with: apt-get install {DEBIAN_PACKAGES}",
+            "no usable display (tried {}){default_hint}; on Debian/Ubuntu install Mesa's EGL \
+             and GLES with: apt-get install {DEBIAN_PACKAGES}",
             tried.join("; ")
         )))
     }

@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::raster::{Grid, ScalarMap};
-use crate::schedule::{PixelLaw, Schedule, Scheme};
+use crate::schedule::{PackedLaws, PixelLaw, Schedule, Scheme};
 use crate::Precision;
 
 /// Default absorption coefficient κa (normalised units).
@@ -186,9 +186,20 @@ impl RenderSpec {
         (-self.extinction * r).exp()
     }
 
-    /// The per-pixel laws of `schedule` over a normalised range map.
+    /// The per-pixel laws of `schedule` over a normalised range map, in f64 (the CPU
+    /// reference).
     pub fn laws(&self, range: &ScalarMap, schedule: &Schedule) -> Grid<PixelLaw> {
-        range.map(|&r| schedule.law(self.sigma_at(f64::from(r))))
+        range.map(|&r| self.law_at(r, schedule))
+    }
+
+    /// The same laws packed in f32 for the GPU textures.
+    pub fn packed_laws(&self, range: &ScalarMap, schedule: &Schedule) -> PackedLaws {
+        let r = range.as_slice();
+        PackedLaws::from_fn(r.len(), |i| self.law_at(r[i], schedule))
+    }
+
+    fn law_at(&self, r: f32, schedule: &Schedule) -> PixelLaw {
+        schedule.law(self.sigma_at(f64::from(r)))
     }
 }
 

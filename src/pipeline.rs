@@ -7,7 +7,7 @@
 //!    its own texture (bilinear too, for ρ(x + u)), the offset law (a, b) in another.
 //! 3. `composite.frag` writes F.rgb + (1 − F.a)·B into the free target, which is read back.
 //!
-//! Textures: image RGBA32F and range R32F (texelFetch only); law RG32F (texelFetch only);
+//! Textures: image RGB32F and range R32F (texelFetch only); law RG32F (texelFetch only);
 //! ping-pong targets and the rate texture in the chosen precision (RGBA16F/R16F for `f16`,
 //! so that `f16` runs on drivers without `OES_texture_float_linear`).
 
@@ -20,7 +20,7 @@ use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, Rejected};
 use crate::haze::RenderSpec;
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
-use crate::schedule::{PixelLaw, Schedule};
+use crate::schedule::{PackedLaws, Schedule};
 use glow::HasContext;
 use std::fmt;
 use std::rc::Rc;
@@ -206,7 +206,7 @@ impl Renderer {
         spec: &RenderSpec,
     ) -> Result<Rendered> {
         let schedule = spec.schedule()?;
-        let laws = spec.laws(range, &schedule);
+        let laws = spec.packed_laws(range, &schedule);
         self.render_laws(image, range, &laws, spec, &schedule)
     }
 
@@ -216,11 +216,12 @@ impl Renderer {
         &mut self,
         image: &RgbImage,
         range: &ScalarMap,
-        laws: &Grid<PixelLaw>,
+        laws: &PackedLaws,
         spec: &RenderSpec,
         schedule: &Schedule,
     ) -> Result<Rendered> {
         self.check_inputs(image, range, spec)?;
+        assert_eq!(laws.len(), image.len(), "one packed law per pixel");
         let inputs = Inputs::upload(&self.gl, image, range, laws, spec.precision)?;
         self.ensure_targets(image.width(), image.height(), spec.precision)?;
         let mut clock = self.preferred_clock();
@@ -230,7 +231,7 @@ impl Renderer {
                 Ok(times) => {
                     let pixels = self.targets()[last].read_rgba()?;
                     return Ok(Rendered {
-                        image: rgba_grid(image.width(), image.height(), pixels),
+                        image: Grid::from_vec(image.width(), image.height(), pixels),
                         schedule: *schedule,
                         times,
                     });
@@ -392,23 +393,20 @@ impl Inputs {
         gl: &Rc<glow::Context>,
         image: &RgbImage,
         range: &ScalarMap,
-        laws: &Grid<PixelLaw>,
+        laws: &PackedLaws,
         precision: Precision,
     ) -> Result<Self> {
         let (w, h) = (image.width(), image.height());
-        let rgba: Vec<f32> = image
-            .as_slice()
-            .iter()
-            .flat_map(|p| [p[0], p[1], p[2], 1.0])
-            .collect();
-        let rate: Vec<f32> = laws.as_slice().iter().map(|l| l.rate as f32).collect();
-        let law: Vec<f32> = laws
-            .as_slice()
-            .iter()
-            .flat_map(|l| [l.a as f32, l.b as f32])
-            .collect();
+        // Uploaded from the caller's buffers as they are: no staging copies.
         Ok(Inputs {
-            image: Texture::new(gl, w, h, TexelFormat::Rgba32F, Filter::Nearest, Some(&rgba))?,
+            image: Texture::new(
+                gl,
+                w,
+                h,
+                TexelFormat::Rgb32F,
+                Filter::Nearest,
+                Some(image.as_slice().as_flattened()),
+            )?,
             range: Texture::new(
                 gl,
                 w,
@@ -423,9 +421,16 @@ impl Inputs {
                 h,
                 precision.rate_format(),
                 Filter::Linear,
-                Some(&rate),
+                Some(&laws.rate),
             )?,
-            law: Texture::new(gl, w, h, TexelFormat::Rg32F, Filter::Nearest, Some(&law))?,
+            law: Texture::new(
+                gl,
+                w,
+                h,
+                TexelFormat::Rg32F,
+                Filter::Nearest,
+                Some(laws.law.as_flattened()),
+            )?,
         })
     }
 }
@@ -451,12 +456,4 @@ fn use_program(gl: &glow::Context, p: &Program) {
 fn draw_fullscreen(gl: &glow::Context) {
     // SAFETY: the empty VAO is bound; the vertex shader uses gl_VertexID only.
     unsafe { gl.draw_arrays(glow::TRIANGLES, 0, 3) };
-}
-
-fn rgba_grid(width: usize, height: usize, pixels: Vec<f32>) -> RgbaImage {
-    let px = pixels
-        .chunks_exact(4)
-        .map(|c| [c[0], c[1], c[2], c[3]])
-        .collect();
-    Grid::from_vec(width, height, px)
 }

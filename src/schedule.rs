@@ -98,6 +98,48 @@ pub struct PixelLaw {
     pub b: f64,
 }
 
+/// Per-pixel laws packed as the GPU textures hold them: ρ for the rate texture and (a, b)
+/// for the law texture, in f32. Built straight from the range map so that a 1600x1120
+/// render does not also hold a 24-byte-per-pixel f64 copy.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PackedLaws {
+    /// ρ per pixel, row-major.
+    pub rate: Vec<f32>,
+    /// (a, b) per pixel, row-major.
+    pub law: Vec<[f32; 2]>,
+}
+
+impl PackedLaws {
+    /// Packs `law(i)` for the pixels `0..len`.
+    pub fn from_fn(len: usize, mut law: impl FnMut(usize) -> PixelLaw) -> Self {
+        let mut packed = PackedLaws {
+            rate: Vec::with_capacity(len),
+            law: Vec::with_capacity(len),
+        };
+        for i in 0..len {
+            let l = law(i);
+            packed.rate.push(l.rate as f32);
+            packed.law.push([l.a as f32, l.b as f32]);
+        }
+        packed
+    }
+
+    /// The same law for all `len` pixels (uniform blurs, benchmarks).
+    pub fn uniform(len: usize, law: PixelLaw) -> Self {
+        PackedLaws::from_fn(len, |_| law)
+    }
+
+    /// Number of pixels.
+    pub fn len(&self) -> usize {
+        self.rate.len()
+    }
+
+    /// True when there are no pixels.
+    pub fn is_empty(&self) -> bool {
+        self.rate.is_empty()
+    }
+}
+
 /// A schedule for one render: the scheme, σ0, ρmax and the number of steps N that takes
 /// the largest scale σmax from σ0.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -360,3 +360,149 @@ fn real_aloe_renders_with_pre_processing() {
     assert!(v["prep"]["hole_pixels"].as_u64().unwrap() > 0);
     assert_eq!(v["airlight_source"], "farthest");
 }
+
+#[test]
+fn a_missing_egl_library_says_what_to_install() {
+    let dir = tempfile::tempdir().unwrap();
+    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let o = Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(["render"])
+        .env("BRUME_EGL_LIBRARY", "libEGL-does-not-exist.so.1")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_fails_cleanly(
+        &o,
+        &[
+            "libEGL-does-not-exist.so.1",
+            "libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri",
+        ],
+    );
+    assert!(!dir.path().join("brume-demo.png").exists());
+}
+
+#[test]
+fn no_display_lists_what_was_tried() {
+    // eglGetDisplay(EGL_DEFAULT_DISPLAY) needs a display server; with none (and no
+    // EGL_PLATFORM override) the error must say what was tried and what to install.
+    let dir = tempfile::tempdir().unwrap();
+    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let o = Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(["info", "--egl", "default"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("EGL_PLATFORM")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    if o.status.success() {
+        // Some Mesa builds fall back to a surfaceless display by themselves: then the
+        // report must say which platform answered.
+        let v: String = String::from_utf8_lossy(&o.stdout).into_owned();
+        assert!(v.contains("EGL platform       default"), "{v}");
+    } else {
+        assert_fails_cleanly(&o, &["default", "apt-get install"]);
+    }
+}
+
+#[test]
+fn prep_writes_the_range_and_the_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let disparity = aloe("disparity.png");
+    let o = brume(
+        dir.path(),
+        &[
+            "prep",
+            "--depth",
+            disparity.to_str().unwrap(),
+            "--image",
+            aloe("left.jpg").to_str().unwrap(),
+            "--out",
+            "range.exr",
+            "--vis",
+            "range.png",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["unknown_pixels"], 49_130);
+    assert_eq!(
+        v["hole_pixels"], 49_130,
+        "indoor: every unknown pixel is a hole"
+    );
+    assert_eq!(v["sky_pixels"], 0);
+    assert_eq!(v["airlight_source"], "farthest");
+    assert!(v["airlight"].as_array().is_some_and(|a| a.len() == 3));
+    let vis = image::open(dir.path().join("range.png")).unwrap();
+    assert_eq!(
+        (vis.width(), vis.height()),
+        (1282, 2 * 1110),
+        "before above after"
+    );
+    assert!(dir.path().join("range.exr").exists());
+}
+
+#[test]
+fn prep_finds_the_sky_of_an_outdoor_scene_and_render_uses_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let range = brume::prep::synthetic::outdoor_scene(160, 120, 3);
+    write_scalar(&dir.path().join("outdoor.pfm"), &range).unwrap();
+    // A blue-grey sky where the range is unknown, darker ground below.
+    let image = Grid::from_fn(160, 120, |x, y| {
+        if range.get(x, y).is_finite() {
+            [0.1, 0.2, 0.05, 1.0]
+        } else {
+            [0.55, 0.6, 0.7, 1.0]
+        }
+    });
+    write_rgba(&dir.path().join("outdoor.exr.png"), &image).unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            "outdoor.exr.png",
+            "--depth",
+            "outdoor.pfm",
+            "--depth-kind",
+            "range",
+            "--out",
+            "fog.png",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["prep"]["sky_pixels"].as_u64().unwrap() > 0, "{v}");
+    assert_eq!(v["airlight_source"], "sky");
+    let b: Vec<f64> = v["airlight"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c.as_f64().unwrap())
+        .collect();
+    // The sky colour went through 8-bit sRGB: within a quantisation step in linear light.
+    for (got, want) in b.iter().zip([0.55, 0.6, 0.7]) {
+        assert!((got - want).abs() < 0.01, "airlight {b:?}");
+    }
+}
+
+#[test]
+fn prep_refuses_a_bad_margin_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "prep",
+            "--depth",
+            aloe("disparity.png").to_str().unwrap(),
+            "--out",
+            "r.pfm",
+            "--margin",
+            "-2",
+        ],
+    );
+    assert_fails_cleanly(&o, &["--margin", "-2"]);
+    assert!(!dir.path().join("r.pfm").exists());
+}

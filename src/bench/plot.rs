@@ -85,7 +85,7 @@ struct AccuracyFigure<'a> {
 
 impl Figure for AccuracyFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> DrawResult {
-        draw_accuracy(root, self.report, &self.title)
+        draw_panels(root, &self.report.rows, &self.title, accuracy_panel::<DB>)
     }
 }
 
@@ -96,7 +96,7 @@ struct SpeedFigure<'a> {
 
 impl Figure for SpeedFigure<'_> {
     fn draw<DB: DrawingBackend>(&self, root: DrawingArea<DB, Shift>) -> DrawResult {
-        draw_speed(root, self.report, &self.title)
+        draw_panels(root, &self.report.rows, &self.title, speed_panel::<DB>)
     }
 }
 
@@ -169,23 +169,52 @@ const PANELS: [(&str, &[Scheme]); 2] = [
     ),
 ];
 
-fn draw_accuracy<DB: DrawingBackend>(
+/// A row that lands in one of the two [`PANELS`] at abscissa σref.
+trait PanelRow {
+    fn sigma_ref(&self) -> f64;
+    fn scheme(&self) -> Scheme;
+}
+
+impl PanelRow for AccuracyRow {
+    fn sigma_ref(&self) -> f64 {
+        self.sigma_ref
+    }
+    fn scheme(&self) -> Scheme {
+        self.scheme
+    }
+}
+
+impl PanelRow for SpeedRow {
+    fn sigma_ref(&self) -> f64 {
+        self.sigma_ref
+    }
+    fn scheme(&self) -> Scheme {
+        self.scheme
+    }
+}
+
+/// The panel drawer of one figure: a fn pointer, since the backend type is generic.
+type Panel<DB, R> = fn(&DrawingArea<DB, Shift>, &str, &[&R], Range<f64>) -> DrawResult;
+
+/// The layout both figures share (the paper's figs. 6 and 7): a title over two panels,
+/// Euler on top and the invariant family below, on one σref axis.
+fn draw_panels<DB: DrawingBackend, R: PanelRow>(
     root: DrawingArea<DB, Shift>,
-    report: &AccuracyReport,
+    rows: &[R],
     title: &str,
+    panel: Panel<DB, R>,
 ) -> DrawResult {
     root.fill(&WHITE).map_err(|e| e.to_string())?;
     let root = root
         .titled(title, (FAMILY, 18))
         .map_err(|e| e.to_string())?;
-    let x_range = sigma_range(report.rows.iter().map(|r| r.sigma_ref));
+    let x_range = sigma_range(rows.iter().map(PanelRow::sigma_ref));
     for (area, (name, schemes)) in root.split_evenly((2, 1)).iter().zip(PANELS) {
-        let rows: Vec<&AccuracyRow> = report
-            .rows
+        let in_panel: Vec<&R> = rows
             .iter()
-            .filter(|r| schemes.contains(&r.scheme))
+            .filter(|r| schemes.contains(&r.scheme()))
             .collect();
-        accuracy_panel(area, name, &rows, x_range.clone())?;
+        panel(area, name, &in_panel, x_range.clone())?;
     }
     root.present().map_err(|e| e.to_string())
 }
@@ -259,27 +288,6 @@ fn accuracy_panel<DB: DrawingBackend>(
         }
     }
     legend(&mut chart)
-}
-
-fn draw_speed<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
-    report: &SpeedReport,
-    title: &str,
-) -> DrawResult {
-    root.fill(&WHITE).map_err(|e| e.to_string())?;
-    let root = root
-        .titled(title, (FAMILY, 18))
-        .map_err(|e| e.to_string())?;
-    let x_range = sigma_range(report.rows.iter().map(|r| r.sigma_ref));
-    for (area, (name, schemes)) in root.split_evenly((2, 1)).iter().zip(PANELS) {
-        let rows: Vec<&SpeedRow> = report
-            .rows
-            .iter()
-            .filter(|r| schemes.contains(&r.scheme))
-            .collect();
-        speed_panel(area, name, &rows, x_range.clone())?;
-    }
-    root.present().map_err(|e| e.to_string())
 }
 
 fn speed_panel<DB: DrawingBackend>(

@@ -12,7 +12,7 @@ use super::{config_label, Configs, Progress};
 use crate::error::{Error, Result};
 use crate::haze::RenderSpec;
 use crate::raster::Grid;
-use crate::schedule::Schedule;
+use crate::schedule::{PackedLaws, Schedule};
 use crate::{Precision, Renderer, Scheme};
 use serde::Serialize;
 
@@ -163,7 +163,8 @@ pub fn run_speed(
                     total,
                     what: &label,
                 });
-                let laws = Grid::filled(opts.width, opts.height, schedule.law(spec.sigma_max()));
+                let laws =
+                    PackedLaws::uniform(opts.width * opts.height, schedule.law(spec.sigma_max()));
                 let mut samples = Vec::with_capacity(opts.runs);
                 let mut clocks = Vec::with_capacity(opts.runs);
                 // Run 0 is the warm-up: shader caches, target allocation, first query.

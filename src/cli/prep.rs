@@ -52,19 +52,19 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     };
     let s = &prepared.stats;
     if args.json {
-        let report = json!({
+        let mut report = serde_json::to_value(s).expect("statistics serialise");
+        let extra = json!({
             "width": loaded.range.width(), "height": loaded.range.height(),
             "out": args.out.display().to_string(),
             "vis": args.vis.as_ref().map(|p| p.display().to_string()),
             "depth_format": loaded.format.to_string(), "depth_kind": loaded.kind.to_string(),
             "depth_notes": loaded.notes, "unknown_pixels": loaded.unknown_pixels,
-            "holes": s.holes, "hole_pixels": s.hole_pixels,
-            "sky_components": s.sky_components, "sky_pixels": s.sky_pixels,
-            "margin_pixels": s.margin_pixels, "r_max": s.r_max, "s_max": s.s_max,
-            "fill_ms": s.fill_ms, "sky_ms": s.sky_ms, "margin_ms": s.margin_ms, "total_ms": s.total_ms,
             "airlight": airlight.as_ref().map(|a| a.rgb),
             "airlight_source": airlight.as_ref().map(|a| airlight_source_name(a.source)),
         });
+        if let (Some(map), serde_json::Value::Object(more)) = (report.as_object_mut(), extra) {
+            map.extend(more);
+        }
         println!("{report}");
     } else {
         println!(

@@ -51,26 +51,33 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let rendered = renderer.render(&scene.image, &normalised, &spec)?;
     output::write_rgba(&out, &rendered.image)?;
 
-    let renderer_name = renderer.caps().renderer.clone();
+    let report = Report {
+        scene: &scene,
+        prep: &prep,
+        spec: &spec,
+        rendered: &rendered,
+        renderer: &renderer.caps().renderer,
+        out: &out,
+    };
     if args.json {
-        let report = json_report(
-            args,
-            &scene,
-            &prep,
-            &spec,
-            &rendered,
-            &renderer_name,
-            &out,
-            r_max,
-        );
-        println!("{report}");
+        println!("{}", report.json(args, r_max));
     } else {
-        print_summary(&scene, &prep, &spec, &rendered, &renderer_name, &out);
+        report.print_summary();
         if args.timings {
             print_timings(&rendered);
         }
     }
     Ok(())
+}
+
+/// Everything a render reports, gathered once for the JSON and the text forms.
+struct Report<'a> {
+    scene: &'a Scene,
+    prep: &'a PrepReport,
+    spec: &'a RenderSpec,
+    rendered: &'a Rendered,
+    renderer: &'a str,
+    out: &'a Path,
 }
 
 fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
@@ -285,93 +292,85 @@ fn render_spec(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> RenderSpec
     spec
 }
 
-#[allow(clippy::too_many_arguments)]
-fn json_report(
-    args: &RenderArgs,
-    scene: &Scene,
-    prep: &PrepReport,
-    spec: &RenderSpec,
-    rendered: &Rendered,
-    renderer: &str,
-    out: &Path,
-    r_max: f32,
-) -> serde_json::Value {
-    let prep_json = prep.prepared.as_ref().map(|p| {
-        let s = &p.stats;
+impl Report<'_> {
+    fn json(&self, args: &RenderArgs, r_max: f32) -> serde_json::Value {
+        let Report {
+            scene,
+            prep,
+            spec,
+            rendered,
+            renderer,
+            out,
+        } = *self;
+        let prep_json = prep.prepared.as_ref().map(|p| &p.stats);
         json!({
-            "holes": s.holes, "hole_pixels": s.hole_pixels,
-            "sky_components": s.sky_components, "sky_pixels": s.sky_pixels,
-            "margin_pixels": s.margin_pixels, "r_max": s.r_max, "s_max": s.s_max,
-            "fill_ms": s.fill_ms, "sky_ms": s.sky_ms, "margin_ms": s.margin_ms,
-            "total_ms": s.total_ms,
+            "width": scene.image.width(),
+            "height": scene.image.height(),
+            "scheme": spec.scheme,
+            "precision": spec.precision,
+            "diffusion_passes": rendered.schedule.steps,
+            "passes": rendered.times.pass_ms.len(),
+            "renderer": renderer,
+            "clock": rendered.times.clock,
+            "total_ms": rendered.times.total_ms,
+            "pass_ms": rendered.times.pass_ms,
+            "out": out.display().to_string(),
+            "image": scene.image_name,
+            "depth": scene.depth_name,
+            "depth_format": scene.depth.format.to_string(),
+            "depth_kind": scene.depth.kind.to_string(),
+            "depth_notes": scene.depth.notes,
+            "sigma0": spec.sigma0,
+            "sigma_max": spec.sigma_max(),
+            "uniform_sigma": args.uniform_sigma,
+            "extinction": spec.extinction,
+            "range_divisor": r_max,
+            "airlight": spec.airlight,
+            "airlight_source": prep.airlight_source,
+            "prep": prep_json,
         })
-    });
-    json!({
-        "width": scene.image.width(),
-        "height": scene.image.height(),
-        "scheme": spec.scheme,
-        "precision": spec.precision,
-        "diffusion_passes": rendered.schedule.steps,
-        "passes": rendered.times.pass_ms.len(),
-        "renderer": renderer,
-        "clock": rendered.times.clock,
-        "total_ms": rendered.times.total_ms,
-        "pass_ms": rendered.times.pass_ms,
-        "out": out.display().to_string(),
-        "image": scene.image_name,
-        "depth": scene.depth_name,
-        "depth_format": scene.depth.format.to_string(),
-        "depth_kind": scene.depth.kind.to_string(),
-        "depth_notes": scene.depth.notes,
-        "sigma0": spec.sigma0,
-        "sigma_max": spec.sigma_max(),
-        "uniform_sigma": args.uniform_sigma,
-        "extinction": spec.extinction,
-        "range_divisor": r_max,
-        "airlight": spec.airlight,
-        "airlight_source": prep.airlight_source,
-        "prep": prep_json,
-    })
-}
+    }
 
-fn print_summary(
-    scene: &Scene,
-    prep: &PrepReport,
-    spec: &RenderSpec,
-    rendered: &Rendered,
-    renderer: &str,
-    out: &Path,
-) {
-    let t = &rendered.times;
-    if let Some(p) = &prep.prepared {
-        let s = &p.stats;
+    fn print_summary(&self) {
+        let Report {
+            scene,
+            prep,
+            spec,
+            rendered,
+            renderer,
+            out,
+        } = *self;
+        let t = &rendered.times;
+        if let Some(p) = &prep.prepared {
+            let s = &p.stats;
+            println!(
+                "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
+                s.holes, s.hole_pixels, s.sky_pixels, s.total_ms
+            );
+        }
+        let b = spec.airlight;
         println!(
-            "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
-            s.holes, s.hole_pixels, s.sky_pixels, s.total_ms
+            "airlight {:.3},{:.3},{:.3} ({}), σmax {:.2} px, κ {:.3}",
+            b[0],
+            b[1],
+            b[2],
+            prep.airlight_source,
+            spec.sigma_max(),
+            spec.extinction
+        );
+        println!(
+            "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
+            out.display(),
+            scene.image.width(),
+            scene.image.height(),
+            spec.scheme,
+            spec.precision,
+            rendered.schedule.steps,
+            t.total_ms,
+            t.clock.name(),
+            renderer
         );
     }
-    let b = spec.airlight;
-    println!(
-        "airlight {:.3},{:.3},{:.3} ({}), σmax {:.2} px, κ {:.3}",
-        b[0],
-        b[1],
-        b[2],
-        prep.airlight_source,
-        spec.sigma_max(),
-        spec.extinction
-    );
-    println!(
-        "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
-        out.display(),
-        scene.image.width(),
-        scene.image.height(),
-        spec.scheme,
-        spec.precision,
-        rendered.schedule.steps,
-        t.total_ms,
-        t.clock.name(),
-        renderer
-    );
 }
 
 fn print_timings(rendered: &Rendered) {

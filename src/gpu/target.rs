@@ -70,9 +70,9 @@ impl RenderTarget {
     }
 
     /// Reads the whole target back as RGBA f32, row 0 first.
-    pub fn read_rgba(&self) -> Result<Vec<f32>> {
+    pub fn read_rgba(&self) -> Result<Vec<[f32; 4]>> {
         let (w, h) = (self.texture.width(), self.texture.height());
-        let mut out = vec![0f32; w * h * 4];
+        let mut out = vec![[0f32; 4]; w * h];
         // SAFETY: `out` holds w*h RGBA f32 values, which is what RGBA/FLOAT writes.
         unsafe {
             self.gl
@@ -85,7 +85,7 @@ impl RenderTarget {
                 h as i32,
                 glow::RGBA,
                 glow::FLOAT,
-                glow::PixelPackData::Slice(Some(f32_bytes_mut(&mut out))),
+                glow::PixelPackData::Slice(Some(f32_bytes_mut(out.as_flattened_mut()))),
             );
             self.gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
         }

@@ -18,6 +18,8 @@ pub enum TexelFormat {
     R16F,
     /// Two 32-bit float channels.
     Rg32F,
+    /// Three 32-bit float channels (sampled only: RGB32F is not colour-renderable).
+    Rgb32F,
 }
 
 impl TexelFormat {
@@ -28,6 +30,7 @@ impl TexelFormat {
             TexelFormat::R32F => glow::R32F,
             TexelFormat::R16F => glow::R16F,
             TexelFormat::Rg32F => glow::RG32F,
+            TexelFormat::Rgb32F => glow::RGB32F,
         }
     }
 
@@ -37,6 +40,7 @@ impl TexelFormat {
             TexelFormat::Rgba32F | TexelFormat::Rgba16F => glow::RGBA,
             TexelFormat::R32F | TexelFormat::R16F => glow::RED,
             TexelFormat::Rg32F => glow::RG,
+            TexelFormat::Rgb32F => glow::RGB,
         }
     }
 
@@ -46,6 +50,7 @@ impl TexelFormat {
             TexelFormat::Rgba32F | TexelFormat::Rgba16F => 4,
             TexelFormat::R32F | TexelFormat::R16F => 1,
             TexelFormat::Rg32F => 2,
+            TexelFormat::Rgb32F => 3,
         }
     }
 }

@@ -152,19 +152,22 @@ impl Default for PrepOptions {
 impl PrepOptions {
     /// Checks every field; an out-of-domain one gives [`Error::InvalidParameter`].
     pub fn validate(&self) -> Result<()> {
-        check_fraction("sky.min_area_fraction", self.sky.min_area_fraction)?;
+        check_fraction(
+            "sky.min_area_fraction (--sky-min-area)",
+            self.sky.min_area_fraction,
+        )?;
         check_fraction("sky.min_top_fraction", self.sky.min_top_fraction)?;
         check_fraction("sky.min_bbox_fill", self.sky.min_bbox_fill)?;
         if !(0.0..=MAX_MARGIN_PX).contains(&self.margin_px) {
             return Err(Error::invalid(
-                "margin_px",
+                "margin_px (--margin)",
                 self.margin_px,
                 "a number of pixels in [0, 65535]",
             ));
         }
         if !(self.sky_range_factor.is_finite() && self.sky_range_factor > 1.0) {
             return Err(Error::invalid(
-                "sky_range_factor",
+                "sky_range_factor (--sky-factor)",
                 self.sky_range_factor,
                 "a finite number > 1",
             ));
@@ -190,8 +193,9 @@ fn check_fraction(name: &str, v: f64) -> Result<()> {
     }
 }
 
-/// What [`prepare`] found and did, and how long it took.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What [`prepare`] found and did, and how long it took (serialised as is in the CLI's
+/// JSON reports).
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
 pub struct PrepStats {
     /// Number of holes (non-sky components of unknown pixels) filled.
     pub holes: usize,
