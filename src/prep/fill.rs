@@ -46,14 +46,6 @@ pub(crate) struct HoleFiller {
     scratch: Vec<f64>,
 }
 
-/// What was done to one hole.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct FillOutcome {
-    /// The chosen surface (before clamping).
-    #[allow(dead_code)]
-    pub model: Model,
-}
-
 impl HoleFiller {
     /// Fills the hole made of `pixels` in `work` (known pixels finite, the hole's pixels
     /// not finite), drawing candidates with `rng`, `trials` constants and `trials` planes.
@@ -65,7 +57,7 @@ impl HoleFiller {
         pixels: &[u32],
         trials: usize,
         rng: &mut SplitMix64,
-    ) -> Result<FillOutcome> {
+    ) -> Result<()> {
         self.collect_edges(work, width, height, pixels);
         if self.edges.is_empty() {
             return Err(Error::Prep(format!(
@@ -82,7 +74,7 @@ impl HoleFiller {
             let (dx, dy) = ((p % width) as f64 - origin.0, (p / width) as f64 - origin.1);
             work[p] = model.eval(dx, dy).clamp(lo, hi) as f32;
         }
-        Ok(FillOutcome { model })
+        Ok(())
     }
 
     /// Every (hole pixel, known 4-neighbour) pair, as the known pixel's position and value.
