@@ -195,7 +195,7 @@ fn emit(
         print!("{table}");
     }
     if let Some(path) = &common.csv {
-        report::write_atomic(path, csv.as_bytes())?;
+        crate::io::output::write_bytes(path, csv.as_bytes())?;
     }
     if let Some(path) = &common.plot {
         plot(path)?;

@@ -7,9 +7,9 @@
 //! `image` crate from plotters' raw RGB buffer, and every file is written atomically.
 
 use super::accuracy::{AccuracyReport, AccuracyRow};
-use super::report::write_atomic;
 use super::speed::{SpeedReport, SpeedRow};
 use crate::error::{Error, Result};
+use crate::io::output::write_bytes;
 use crate::{Precision, Scheme};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -119,7 +119,7 @@ fn render_to(path: &Path, figure: &impl Figure) -> Result<()> {
             svg.into_bytes()
         }
     };
-    write_atomic(path, &bytes)
+    write_bytes(path, &bytes)
 }
 
 fn register_font() -> Result<()> {

@@ -7,8 +7,6 @@ use super::speed::{SpeedReport, SpeedRow};
 use crate::error::{Error, Result};
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::io::Write as _;
-use std::path::Path;
 
 /// The accuracy report as a readable table (one line per configuration).
 pub fn accuracy_table(report: &AccuracyReport) -> String {
@@ -203,20 +201,6 @@ fn to_json<T: Serialize>(benchmark: &'static str, report: &T) -> Result<String> 
         .map_err(|e| Error::invalid("--json", "report", format!("serialisable data: {e}")))
 }
 
-/// Writes `bytes` to `path` through a temporary file in the same directory and a rename,
-/// so that a reader never sees a partial file and a failure leaves nothing behind.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut tmp = tempfile::NamedTempFile::new_in(dir).map_err(|e| Error::io(path, e))?;
-    tmp.write_all(bytes).map_err(|e| Error::io(path, e))?;
-    tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -230,11 +214,12 @@ mod tests {
 
     #[test]
     fn atomic_write_leaves_nothing_on_a_bad_directory() {
+        use crate::io::output::write_bytes;
         let dir = tempfile::tempdir().unwrap();
         let bad = dir.path().join("missing").join("out.csv");
-        assert!(write_atomic(&bad, b"x").is_err());
+        assert!(write_bytes(&bad, b"x").is_err());
         let good = dir.path().join("out.csv");
-        write_atomic(&good, b"hello").unwrap();
+        write_bytes(&good, b"hello").unwrap();
         assert_eq!(std::fs::read(&good).unwrap(), b"hello");
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }

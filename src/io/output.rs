@@ -47,6 +47,12 @@ fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()> {
     }
 }
 
+/// Writes `bytes` to `path` atomically (temporary file, then rename), with the same
+/// permissions as every other output: for text reports, CSV tables and plots.
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomically(path, |w| w.write_all(bytes))
+}
+
 /// `.png, .pfm or .exr`.
 fn list_extensions(extensions: &[&str]) -> String {
     let dotted: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
