@@ -13,12 +13,29 @@ use std::sync::Mutex;
 static SERIAL: Mutex<()> = Mutex::new(());
 
 fn brume(dir: &Path, args: &[&str]) -> Output {
+    brume_with_env(dir, args, &[], &[])
+}
+
+/// Runs brume with extra environment variables set and others removed.
+fn brume_with_env(dir: &Path, args: &[&str], set: &[(&str, &str)], remove: &[&str]) -> Output {
     let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    Command::new(env!("CARGO_BIN_EXE_brume"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run brume")
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_brume"));
+    cmd.args(args).current_dir(dir);
+    for (key, value) in set {
+        cmd.env(key, value);
+    }
+    for key in remove {
+        cmd.env_remove(key);
+    }
+    cmd.output().expect("run brume")
+}
+
+/// `brume render --image IMAGE --depth DEPTH EXTRA...` in `dir`.
+fn render_files(dir: &Path, image: &Path, depth: &Path, extra: &[&str]) -> Output {
+    let (image, depth) = (image.to_str().unwrap(), depth.to_str().unwrap());
+    let mut args = vec!["render", "--image", image, "--depth", depth];
+    args.extend_from_slice(extra);
+    brume(dir, &args)
 }
 
 fn stderr(o: &Output) -> String {
@@ -73,14 +90,11 @@ fn render_without_input_writes_the_demo() {
 fn json_report_has_the_stable_fields() {
     let dir = tempfile::tempdir().unwrap();
     let (image, depth) = small_scene(dir.path());
-    let o = brume(
+    let o = render_files(
         dir.path(),
+        &image,
+        &depth,
         &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            depth.to_str().unwrap(),
             "--depth-kind",
             "range",
             "--out",
@@ -119,14 +133,11 @@ fn json_report_has_the_stable_fields() {
 fn uniform_sigma_pfm_output_and_timings() {
     let dir = tempfile::tempdir().unwrap();
     let (image, depth) = small_scene(dir.path());
-    let o = brume(
+    let o = render_files(
         dir.path(),
+        &image,
+        &depth,
         &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            depth.to_str().unwrap(),
             "--depth-kind",
             "range",
             "--uniform-sigma",
@@ -172,17 +183,11 @@ fn info_reports_the_driver() {
 fn missing_input_file_is_named() {
     let dir = tempfile::tempdir().unwrap();
     let (image, _) = small_scene(dir.path());
-    let o = brume(
+    let o = render_files(
         dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            "nope.pfm",
-            "--out",
-            "o.png",
-        ],
+        &image,
+        Path::new("nope.pfm"),
+        &["--out", "o.png"],
     );
     assert_fails_cleanly(&o, &["nope.pfm"]);
     assert!(!dir.path().join("o.png").exists());
@@ -194,18 +199,7 @@ fn truncated_pfm_is_a_format_error() {
     let (image, depth) = small_scene(dir.path());
     let bytes = fs::read(&depth).unwrap();
     fs::write(&depth, &bytes[..bytes.len() / 2]).unwrap();
-    let o = brume(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            depth.to_str().unwrap(),
-            "--out",
-            "o.png",
-        ],
-    );
+    let o = render_files(dir.path(), &image, &depth, &["--out", "o.png"]);
     assert_fails_cleanly(&o, &["range.pfm"]);
     assert!(!dir.path().join("o.png").exists());
 }
@@ -221,19 +215,11 @@ fn non_numeric_calib_is_named() {
          doffs=abc\nbaseline=193.001\nwidth=24\nheight=16\nndisp=290\nisint=0\nvmin=31\nvmax=257\n",
     )
     .unwrap();
-    let o = brume(
+    let o = render_files(
         dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            depth.to_str().unwrap(),
-            "--calib",
-            calib.to_str().unwrap(),
-            "--out",
-            "o.png",
-        ],
+        &image,
+        &depth,
+        &["--calib", calib.to_str().unwrap(), "--out", "o.png"],
     );
     assert_fails_cleanly(&o, &["calib.txt", "doffs"]);
 }
@@ -244,18 +230,7 @@ fn image_and_depth_of_different_sizes_name_both() {
     let (image, _) = small_scene(dir.path());
     let other = dir.path().join("other.pfm");
     write_scalar(&other, &Grid::filled(20, 16, 2.0f32)).unwrap();
-    let o = brume(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            other.to_str().unwrap(),
-            "--out",
-            "o.png",
-        ],
-    );
+    let o = render_files(dir.path(), &image, &other, &["--out", "o.png"]);
     assert_fails_cleanly(&o, &["im.png", "other.pfm", "24x16", "20x16"]);
     assert!(!dir.path().join("o.png").exists());
 }
@@ -266,18 +241,7 @@ fn depth_with_no_valid_value_is_refused() {
     let (image, _) = small_scene(dir.path());
     let empty = dir.path().join("empty.pfm");
     write_scalar(&empty, &Grid::filled(24, 16, f32::NAN)).unwrap();
-    let o = brume(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            empty.to_str().unwrap(),
-            "--out",
-            "o.png",
-        ],
-    );
+    let o = render_files(dir.path(), &image, &empty, &["--out", "o.png"]);
     assert_fails_cleanly(&o, &["empty.pfm"]);
 }
 
@@ -305,19 +269,11 @@ fn output_never_overwrites_an_input() {
     let dir = tempfile::tempdir().unwrap();
     let (image, depth) = small_scene(dir.path());
     let before = fs::read(&image).unwrap();
-    let o = brume(
+    let o = render_files(
         dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            depth.to_str().unwrap(),
-            "--depth-kind",
-            "range",
-            "--out",
-            image.to_str().unwrap(),
-        ],
+        &image,
+        &depth,
+        &["--depth-kind", "range", "--out", image.to_str().unwrap()],
     );
     assert_fails_cleanly(&o, &["--out"]);
     assert_eq!(fs::read(&image).unwrap(), before);
@@ -338,20 +294,11 @@ fn unknown_output_extension_writes_nothing() {
 #[test]
 fn real_aloe_renders_with_pre_processing() {
     let dir = tempfile::tempdir().unwrap();
-    let o = brume(
+    let o = render_files(
         dir.path(),
-        &[
-            "render",
-            "--image",
-            aloe("left.jpg").to_str().unwrap(),
-            "--depth",
-            aloe("disparity.png").to_str().unwrap(),
-            "--out",
-            "aloe.png",
-            "--json",
-            "--lambda",
-            "4",
-        ],
+        &aloe("left.jpg"),
+        &aloe("disparity.png"),
+        &["--out", "aloe.png", "--json", "--lambda", "4"],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
@@ -364,13 +311,12 @@ fn real_aloe_renders_with_pre_processing() {
 #[test]
 fn a_missing_egl_library_says_what_to_install() {
     let dir = tempfile::tempdir().unwrap();
-    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let o = Command::new(env!("CARGO_BIN_EXE_brume"))
-        .args(["render"])
-        .env("BRUME_EGL_LIBRARY", "libEGL-does-not-exist.so.1")
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
+    let o = brume_with_env(
+        dir.path(),
+        &["render"],
+        &[("BRUME_EGL_LIBRARY", "libEGL-does-not-exist.so.1")],
+        &[],
+    );
     assert_fails_cleanly(
         &o,
         &[
@@ -386,15 +332,12 @@ fn no_display_lists_what_was_tried() {
     // eglGetDisplay(EGL_DEFAULT_DISPLAY) needs a display server; with none (and no
     // EGL_PLATFORM override) the error must say what was tried and what to install.
     let dir = tempfile::tempdir().unwrap();
-    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
-    let o = Command::new(env!("CARGO_BIN_EXE_brume"))
-        .args(["info", "--egl", "default"])
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .env_remove("EGL_PLATFORM")
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
+    let o = brume_with_env(
+        dir.path(),
+        &["info", "--egl", "default"],
+        &[],
+        &["DISPLAY", "WAYLAND_DISPLAY", "EGL_PLATFORM"],
+    );
     if o.status.success() {
         // Some Mesa builds fall back to a surfaceless display by themselves: then the
         // report must say which platform answered.
@@ -457,20 +400,11 @@ fn prep_finds_the_sky_of_an_outdoor_scene_and_render_uses_it() {
         }
     });
     write_rgba(&dir.path().join("outdoor.exr.png"), &image).unwrap();
-    let o = brume(
+    let o = render_files(
         dir.path(),
-        &[
-            "render",
-            "--image",
-            "outdoor.exr.png",
-            "--depth",
-            "outdoor.pfm",
-            "--depth-kind",
-            "range",
-            "--out",
-            "fog.png",
-            "--json",
-        ],
+        Path::new("outdoor.exr.png"),
+        Path::new("outdoor.pfm"),
+        &["--depth-kind", "range", "--out", "fog.png", "--json"],
     );
     assert!(o.status.success(), "{}", stderr(&o));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
