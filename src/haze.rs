@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use crate::raster::{Grid, ScalarMap};
-use crate::schedule::{PackedLaws, PixelLaw, Schedule, Scheme};
+use crate::schedule::{Schedule, Scheme};
 use crate::Precision;
 
 /// Default absorption coefficient κa (normalised units).
@@ -186,20 +186,25 @@ impl RenderSpec {
         (-self.extinction * r).exp()
     }
 
-    /// The per-pixel laws of `schedule` over a normalised range map, in f64 (the CPU
+    /// The per-pixel rates ρ of `schedule` over a normalised range map, in f64 (the CPU
     /// reference).
-    pub fn laws(&self, range: &ScalarMap, schedule: &Schedule) -> Grid<PixelLaw> {
-        range.map(|&r| self.law_at(r, schedule))
+    pub fn rates(&self, range: &ScalarMap, schedule: &Schedule) -> Grid<f64> {
+        range.map(|&r| self.rate_at(r, schedule))
     }
 
-    /// The same laws packed in f32 for the GPU textures.
-    pub fn packed_laws(&self, range: &ScalarMap, schedule: &Schedule) -> PackedLaws {
-        let r = range.as_slice();
-        PackedLaws::from_fn(r.len(), |i| self.law_at(r[i], schedule))
+    /// The same rates in f32, row-major, as the GPU's rate texture takes them. Built
+    /// straight from the range map so that a 1600x1120 render does not also hold an f64
+    /// copy.
+    pub fn packed_rates(&self, range: &ScalarMap, schedule: &Schedule) -> Vec<f32> {
+        range
+            .as_slice()
+            .iter()
+            .map(|&r| self.rate_at(r, schedule) as f32)
+            .collect()
     }
 
-    fn law_at(&self, r: f32, schedule: &Schedule) -> PixelLaw {
-        schedule.law(self.sigma_at(f64::from(r)))
+    fn rate_at(&self, r: f32, schedule: &Schedule) -> f64 {
+        schedule.rate(self.sigma_at(f64::from(r)))
     }
 }
 

@@ -4,12 +4,13 @@
 //! 1. `premultiply.frag` writes F = τ·(E, 1) into target A.
 //! 2. N × `diffuse.frag` reads one target and writes the other (eq. 11-12), neighbours
 //!    read by one hardware-bilinear `texture()` fetch each; the per-pixel rate ρ lives in
-//!    its own texture (bilinear too, for ρ(x + u)), the offset law (a, b) in another.
+//!    its own texture (bilinear too, for ρ(x + u)); the offset h_k(x) is computed from ρ(x)
+//!    by the scheme's [`OffsetLaw`] (two uniforms per pass, and a compile-time switch).
 //! 3. `composite.frag` writes F.rgb + (1 − F.a)·B into the free target, which is read back.
 //!
-//! Textures: image RGB32F and range R32F (texelFetch only); law RG32F (texelFetch only);
-//! ping-pong targets and the rate texture in the chosen precision (RGBA16F/R16F for `f16`,
-//! so that `f16` runs on drivers without `OES_texture_float_linear`).
+//! Textures: image RGB32F and range R32F (texelFetch only); ping-pong targets and the rate
+//! texture in the chosen precision (RGBA16F/R16F for `f16`, so that `f16` runs on drivers
+//! without `OES_texture_float_linear`).
 
 use crate::caps::Capabilities;
 use crate::egl::{GlContext, Platform};
@@ -20,7 +21,7 @@ use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, Rejected};
 use crate::haze::RenderSpec;
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
-use crate::schedule::{PackedLaws, Schedule};
+use crate::schedule::{OffsetLaw, Schedule};
 use glow::HasContext;
 use std::fmt;
 use std::rc::Rc;
@@ -93,8 +94,22 @@ pub struct Rendered {
 
 struct Programs {
     premultiply: Program,
+    /// `diffuse.frag` for offsets h = t (euler, invariant).
     diffuse: Program,
+    /// `diffuse.frag` for variance-matched offsets (matched).
+    diffuse_matched: Program,
     composite: Program,
+}
+
+impl Programs {
+    /// The diffusion program for `law`.
+    fn diffuse(&self, law: &OffsetLaw) -> &Program {
+        if law.matched {
+            &self.diffuse_matched
+        } else {
+            &self.diffuse
+        }
+    }
 }
 
 /// The two ping-pong targets, kept between renders of the same size and precision.
@@ -105,7 +120,7 @@ struct Targets {
     precision: Precision,
 }
 
-/// A GL context with the three programs compiled: renders any number of frames.
+/// A GL context with the programs compiled: renders any number of frames.
 pub struct Renderer {
     // Field order is drop order: GL objects go before the context that owns them.
     programs: Programs,
@@ -142,19 +157,8 @@ impl Renderer {
                 ("premultiply.frag", include_str!("../glsl/premultiply.frag")),
                 &["u_image", "u_range", "u_extinction"],
             )?,
-            diffuse: Program::new(
-                &gl,
-                version_line,
-                ("diffuse.frag", include_str!("../glsl/diffuse.frag")),
-                &[
-                    "u_f",
-                    "u_rate",
-                    "u_law",
-                    "u_step",
-                    "u_moment_offsets",
-                    "u_texel",
-                ],
-            )?,
+            diffuse: diffuse_program(&gl, version_line, false)?,
+            diffuse_matched: diffuse_program(&gl, version_line, true)?,
             composite: Program::new(
                 &gl,
                 version_line,
@@ -206,23 +210,23 @@ impl Renderer {
         spec: &RenderSpec,
     ) -> Result<Rendered> {
         let schedule = spec.schedule()?;
-        let laws = spec.packed_laws(range, &schedule);
-        self.render_laws(image, range, &laws, spec, &schedule)
+        let rates = spec.packed_rates(range, &schedule);
+        self.render_rates(image, range, &rates, spec, &schedule)
     }
 
-    /// Like [`Self::render`] with the per-pixel laws already computed (the benchmarks reuse
-    /// them across runs).
-    pub fn render_laws(
+    /// Like [`Self::render`] with the per-pixel rates of `schedule` already computed (the
+    /// benchmarks reuse them across runs).
+    pub fn render_rates(
         &mut self,
         image: &RgbImage,
         range: &ScalarMap,
-        laws: &PackedLaws,
+        rates: &[f32],
         spec: &RenderSpec,
         schedule: &Schedule,
     ) -> Result<Rendered> {
         self.check_inputs(image, range, spec)?;
-        assert_eq!(laws.len(), image.len(), "one packed law per pixel");
-        let inputs = Inputs::upload(&self.gl, image, range, laws, spec.precision)?;
+        assert_eq!(rates.len(), image.len(), "one rate per pixel");
+        let inputs = Inputs::upload(&self.gl, image, range, rates, spec.precision)?;
         self.ensure_targets(image.width(), image.height(), spec.precision)?;
         let mut clock = self.preferred_clock();
         loop {
@@ -326,7 +330,8 @@ impl Renderer {
             draw_fullscreen(gl);
         })?;
 
-        let d = &self.programs.diffuse;
+        let law = schedule.offset_law();
+        let d = self.programs.diffuse(&law);
         let mut current = 0;
         for k in 0..schedule.steps {
             let (src, dst) = (current, 1 - current);
@@ -335,17 +340,12 @@ impl Renderer {
                 use_program(gl, d);
                 targets[src].texture().bind(0);
                 inputs.rate.bind(1);
-                inputs.law.bind(2);
+                let [scale, coefficient] = law.uniform(k);
                 // SAFETY: uniforms of the bound program.
                 unsafe {
                     gl.uniform_1_i32(Some(d.uniform("u_f")), 0);
                     gl.uniform_1_i32(Some(d.uniform("u_rate")), 1);
-                    gl.uniform_1_i32(Some(d.uniform("u_law")), 2);
-                    gl.uniform_1_f32(Some(d.uniform("u_step")), k as f32);
-                    gl.uniform_1_i32(
-                        Some(d.uniform("u_moment_offsets")),
-                        i32::from(schedule.scheme.corrects_bilinear()),
-                    );
+                    gl.uniform_2_f32(Some(d.uniform("u_law")), scale, coefficient);
                     gl.uniform_2_f32(Some(d.uniform("u_texel")), 1.0 / w, 1.0 / h);
                 }
                 draw_fullscreen(gl);
@@ -385,7 +385,6 @@ struct Inputs {
     image: Texture,
     range: Texture,
     rate: Texture,
-    law: Texture,
 }
 
 impl Inputs {
@@ -393,7 +392,7 @@ impl Inputs {
         gl: &Rc<glow::Context>,
         image: &RgbImage,
         range: &ScalarMap,
-        laws: &PackedLaws,
+        rates: &[f32],
         precision: Precision,
     ) -> Result<Self> {
         let (w, h) = (image.width(), image.height());
@@ -421,18 +420,23 @@ impl Inputs {
                 h,
                 precision.rate_format(),
                 Filter::Linear,
-                Some(&laws.rate),
-            )?,
-            law: Texture::new(
-                gl,
-                w,
-                h,
-                TexelFormat::Rg32F,
-                Filter::Nearest,
-                Some(laws.law.as_flattened()),
+                Some(rates),
             )?,
         })
     }
+}
+
+/// `diffuse.frag` compiled with or without the variance-matched offsets.
+fn diffuse_program(gl: &Rc<glow::Context>, version_line: &str, matched: bool) -> Result<Program> {
+    Program::new(
+        gl,
+        &format!(
+            "{version_line}\n#define VARIANCE_MATCHED {}",
+            i32::from(matched)
+        ),
+        ("diffuse.frag", include_str!("../glsl/diffuse.frag")),
+        &["u_f", "u_rate", "u_law", "u_texel"],
+    )
 }
 
 /// Spends the first timer query on a real 1x1 draw (see [`timer::warm_up`]).

@@ -1,12 +1,12 @@
 //! The CPU reference, in f64: the same three passes as the GPU pipeline (premultiply, N
-//! diffusion steps, composite) from the same [`Schedule`] and [`PixelLaw`]s, with bilinear
+//! diffusion steps, composite) from the same [`Schedule`] and per-pixel rates, with bilinear
 //! reads that follow GL's clamp-to-edge rules exactly; and an exact Gaussian convolution
 //! with clamp-to-edge borders to measure how close each scheme comes to a true blur.
 
 use crate::error::Result;
 use crate::haze::RenderSpec;
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
-use crate::schedule::{PixelLaw, Schedule};
+use crate::schedule::Schedule;
 
 /// An RGBA image in f64, for the reference computations.
 pub type Rgba64 = Grid<[f64; 4]>;
@@ -14,9 +14,9 @@ pub type Rgba64 = Grid<[f64; 4]>;
 /// The whole render on the CPU: what the GPU pipeline computes, in f64.
 pub fn render(image: &RgbImage, range: &ScalarMap, spec: &RenderSpec) -> Result<RgbaImage> {
     let schedule = spec.schedule()?;
-    let laws = spec.laws(range, &schedule);
+    let rates = spec.rates(range, &schedule);
     let mut f = premultiply(image, range, spec);
-    diffuse(&mut f, &laws, &schedule);
+    diffuse(&mut f, &rates, &schedule);
     Ok(to_f32(&composite(&f, spec.airlight)))
 }
 
@@ -35,25 +35,19 @@ pub fn premultiply(image: &RgbImage, range: &ScalarMap, spec: &RenderSpec) -> Rg
 }
 
 /// Passes 2..N+1: N steps of eq. 11-12 with the offsets and rates of `schedule`.
-pub fn diffuse(f: &mut Rgba64, laws: &Grid<PixelLaw>, schedule: &Schedule) {
-    let rates: Grid<f64> = laws.map(|l| l.rate);
+pub fn diffuse(f: &mut Rgba64, rates: &Grid<f64>, schedule: &Schedule) {
     for k in 0..schedule.steps {
-        *f = diffusion_step(f, &rates, laws, schedule, k);
+        *f = diffusion_step(f, rates, schedule, k);
     }
 }
 
 /// One step k of eq. 11: F(x) += Σ_u ½(ρ(x+u) + ρ(x))·(F(x+u) − F(x)).
-pub fn diffusion_step(
-    f: &Rgba64,
-    rates: &Grid<f64>,
-    laws: &Grid<PixelLaw>,
-    schedule: &Schedule,
-    k: u32,
-) -> Rgba64 {
+pub fn diffusion_step(f: &Rgba64, rates: &Grid<f64>, schedule: &Schedule, k: u32) -> Rgba64 {
+    let law = schedule.offset_law();
     Grid::from_fn(f.width(), f.height(), |x, y| {
         let centre = *f.get(x, y);
         let rate = *rates.get(x, y);
-        let h = schedule.offset(laws.get(x, y), k);
+        let h = law.offset(rate, k);
         let (px, py) = (x as f64, y as f64);
         let mut out = centre;
         for (sx, sy) in [(px + h, py), (px - h, py), (px, py + h), (px, py - h)] {
@@ -249,8 +243,8 @@ mod tests {
         );
         let spec = RenderSpec::uniform(3.0, 1.0, Scheme::Euler, Precision::F32);
         let schedule = spec.schedule().unwrap();
-        let laws = Grid::filled(n, n, schedule.law(3.0));
-        diffuse(&mut f, &laws, &schedule);
+        let rates = Grid::filled(n, n, schedule.rate(3.0));
+        diffuse(&mut f, &rates, &schedule);
         let var_x: f64 = (0..n)
             .flat_map(|y| (0..n).map(move |x| (x, y)))
             .map(|(x, y)| f.get(x, y)[0] * ((x as f64 - c as f64).powi(2)))

@@ -31,7 +31,7 @@ import sys
 import time
 
 NOTE = (
-    "brume's figure is its space-variant machinery (per-pixel rates and offset laws, "
+    "brume's figure is its space-variant machinery (per-pixel rates and offsets, "
     "N+2 GPU passes) run with a uniform sigma; the peers are uniform-only separable "
     "filters on the CPU. The ratio is what the generality costs (or saves) on this "
     "machine, not a like-for-like filter comparison."

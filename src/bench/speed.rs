@@ -12,7 +12,7 @@ use super::{config_label, Configs, Progress};
 use crate::error::{Error, Result};
 use crate::haze::RenderSpec;
 use crate::raster::Grid;
-use crate::schedule::{PackedLaws, Schedule};
+use crate::schedule::Schedule;
 use crate::{Precision, Renderer, Scheme};
 use serde::Serialize;
 
@@ -163,13 +163,13 @@ pub fn run_speed(
                     total,
                     what: &label,
                 });
-                let laws =
-                    PackedLaws::uniform(opts.width * opts.height, schedule.law(spec.sigma_max()));
+                let rate = schedule.rate(spec.sigma_max()) as f32;
+                let rates = vec![rate; opts.width * opts.height];
                 let mut samples = Vec::with_capacity(opts.runs);
                 let mut clocks = Vec::with_capacity(opts.runs);
                 // Run 0 is the warm-up: shader caches, target allocation, first query.
                 for run in 0..=opts.runs {
-                    let out = renderer.render_laws(&image, &range, &laws, spec, schedule)?;
+                    let out = renderer.render_rates(&image, &range, &rates, spec, schedule)?;
                     if run > 0 {
                         samples.push(out.times.total_ms);
                         clocks.push(out.times.clock.name());

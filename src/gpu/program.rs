@@ -1,5 +1,6 @@
 //! Shader programs built from the `.glsl` files in `glsl/`, with the `#version` line chosen
-//! at run time for the context (320 es, or 300 es on a GLES 3.0/3.1 driver).
+//! at run time for the context (320 es, or 300 es on a GLES 3.0/3.1 driver) and any
+//! `#define`s that specialise a file (`diffuse.frag`'s `VARIANCE_MATCHED`).
 
 use crate::error::{Error, Result};
 use glow::HasContext;
@@ -22,10 +23,11 @@ pub struct Program {
 
 impl Program {
     /// Compiles `fragment` (file name and source, without `#version`) with the shared
-    /// vertex shader and links them. Errors carry the file name and the driver's log.
+    /// vertex shader and links them; `header` goes before each source: the `#version`
+    /// line, then any `#define`s. Errors carry the file name and the driver's log.
     pub fn new(
         gl: &Rc<glow::Context>,
-        version_line: &str,
+        header: &str,
         fragment: (&'static str, &str),
         uniforms: &[&'static str],
     ) -> Result<Self> {
@@ -33,8 +35,8 @@ impl Program {
         // created here is deleted on the error paths or owned by the returned Program.
         unsafe {
             let raw = gl.create_program().map_err(Error::Gl)?;
-            let vert = compile(gl, version_line, glow::VERTEX_SHADER, FULLSCREEN_VERT);
-            let frag = compile(gl, version_line, glow::FRAGMENT_SHADER, fragment);
+            let vert = compile(gl, header, glow::VERTEX_SHADER, FULLSCREEN_VERT);
+            let frag = compile(gl, header, glow::FRAGMENT_SHADER, fragment);
             let (vert, frag) = match (vert, frag) {
                 (Ok(v), Ok(f)) => (v, f),
                 (v, f) => {
@@ -109,12 +111,12 @@ impl Drop for Program {
 
 unsafe fn compile(
     gl: &glow::Context,
-    version_line: &str,
+    header: &str,
     kind: u32,
     (name, body): (&str, &str),
 ) -> Result<glow::Shader> {
     let shader = gl.create_shader(kind).map_err(Error::Gl)?;
-    gl.shader_source(shader, &format!("{version_line}\n{body}"));
+    gl.shader_source(shader, &format!("{header}\n{body}"));
     gl.compile_shader(shader);
     if gl.get_shader_compile_status(shader) {
         Ok(shader)
