@@ -4,7 +4,7 @@ use std::path::Path;
 
 use brume::io::depth::{read_pfm, Pfm};
 use brume::io::image::{linear_to_srgb, load_linear_rgb, srgb_to_linear};
-use brume::io::output::{same_file, write_png_rgb8, write_rgba, write_scalar};
+use brume::io::output::{same_file, write_bytes, write_png_rgb8, write_rgba, write_scalar};
 use brume::raster::{Grid, RgbaImage};
 use brume::Error;
 
@@ -199,4 +199,15 @@ fn same_file_resolves_paths() {
         std::fs::hard_link(&a, &hard).unwrap();
         assert!(same_file(&a, &hard));
     }
+}
+
+#[test]
+fn byte_write_leaves_nothing_on_a_bad_directory() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("missing").join("out.csv");
+    assert!(write_bytes(&bad, b"x").is_err());
+    let good = dir.path().join("out.csv");
+    write_bytes(&good, b"hello").unwrap();
+    assert_eq!(std::fs::read(&good).unwrap(), b"hello");
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }

@@ -1,6 +1,6 @@
-//! Text tables, CSV and JSON for the two benchmarks, and the atomic file writer that the
-//! plots share. A table states what a figure needs to be read (GL_RENDERER, clock, size)
-//! and no date, so that two runs can be diffed.
+//! Text tables, CSV and JSON for the two benchmarks (`io::output::write_bytes` writes
+//! them). A table states what a figure needs to be read (GL_RENDERER, clock, size) and no
+//! date, so that two runs can be diffed.
 
 use super::accuracy::{AccuracyReport, AccuracyRow};
 use super::speed::{SpeedReport, SpeedRow};
@@ -210,17 +210,5 @@ mod tests {
         assert_eq!(csv_text("plain"), "plain");
         assert_eq!(csv_text("a, b"), "\"a, b\"");
         assert_eq!(csv_text("say \"x\""), "\"say \"\"x\"\"\"");
-    }
-
-    #[test]
-    fn atomic_write_leaves_nothing_on_a_bad_directory() {
-        use crate::io::output::write_bytes;
-        let dir = tempfile::tempdir().unwrap();
-        let bad = dir.path().join("missing").join("out.csv");
-        assert!(write_bytes(&bad, b"x").is_err());
-        let good = dir.path().join("out.csv");
-        write_bytes(&good, b"hello").unwrap();
-        assert_eq!(std::fs::read(&good).unwrap(), b"hello");
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     }
 }
