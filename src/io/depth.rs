@@ -9,14 +9,20 @@
 //! changes the look only through the haze density the user picks.
 
 use std::fmt;
-use std::io::Cursor;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-use image::DynamicImage;
-
-use crate::raster::{Grid, RgbImage, ScalarMap};
+use crate::io::codec::png::{self, GreyPng};
+use crate::io::codec::{exr::parse_exr_scalar, npy::parse_npy_scalar, tiff::parse_tiff_scalar};
+use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
+
+// The file readers live with their writers in `io::codec`; they stay reachable here, where
+// callers loading depth have always found them.
+pub use crate::io::codec::exr::read_exr_scalar;
+pub use crate::io::codec::npy::read_npy_scalar;
+pub use crate::io::codec::pfm::{parse_pfm, read_pfm, Pfm};
+pub use crate::io::codec::tiff::read_tiff_scalar;
 
 /// Focal length in pixels assumed for Middlebury 2006 full-size images when `--focal` is
 /// not given. Approximate, quoted from memory of the dataset page, not read from a file.
@@ -388,290 +394,6 @@ fn parse_matrix(value: &str, key: &str, path: &Path) -> Result<[[f64; 3]; 3]> {
     Ok(m)
 }
 
-/// The content of a PFM file, rows already flipped to top-to-bottom.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Pfm {
-    /// A `Pf` file: one channel.
-    Grey(ScalarMap),
-    /// A `PF` file: three channels.
-    Rgb(RgbImage),
-}
-
-/// Reads a PFM file (`Pf` or `PF`, either byte order).
-pub fn read_pfm(path: &Path) -> Result<Pfm> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_pfm(&bytes, path)
-}
-
-/// Parses PFM bytes; `path` names the file in errors. The header is `Pf` or `PF`, width,
-/// height and scale separated by whitespace, then one whitespace byte, then rows of
-/// 32-bit floats from the BOTTOM row to the top, little-endian if scale < 0.
-pub fn parse_pfm(bytes: &[u8], path: &Path) -> Result<Pfm> {
-    let mut header = HeaderTokens { bytes, pos: 0 };
-    let magic = header.next(path, "the magic `Pf` or `PF`")?;
-    let channels = match magic {
-        "Pf" => 1,
-        "PF" => 3,
-        _ => {
-            return Err(Error::format(
-                path,
-                format!(
-                    "PFM header must start with `Pf` (grey) or `PF` (colour), found `{}`",
-                    magic.escape_default()
-                ),
-            ))
-        }
-    };
-    let width = header.positive_int(path, "width")?;
-    let height = header.positive_int(path, "height")?;
-    let scale_text = header.next(path, "the scale")?;
-    let scale = match scale_text.parse::<f64>() {
-        Ok(s) if s.is_finite() && s != 0.0 => s,
-        _ => {
-            return Err(Error::format(
-                path,
-                format!(
-                    "PFM scale is `{}`; expected a non-zero number (negative: little-endian)",
-                    scale_text.escape_default()
-                ),
-            ))
-        }
-    };
-    // Exactly one whitespace byte separates the header from the data; a writer on Windows
-    // may have used "\r\n".
-    let mut start = header.pos + 1;
-    if bytes.get(header.pos..header.pos + 2) == Some(b"\r\n".as_slice()) {
-        start += 1;
-    }
-    let data = &bytes[start.min(bytes.len())..];
-    let expected = width
-        .checked_mul(height)
-        .and_then(|n| n.checked_mul(channels * 4))
-        .ok_or_else(|| Error::format(path, format!("PFM size {width}x{height} is too large")))?;
-    if data.len() != expected {
-        return Err(Error::format(
-            path,
-            format!(
-                "expected {width}*{height}*{}4 = {expected} bytes of data, found {}",
-                if channels == 3 { "3*" } else { "" },
-                data.len()
-            ),
-        ));
-    }
-    let little = scale < 0.0;
-    let value = |i: usize| {
-        let b: [u8; 4] = data[4 * i..4 * i + 4].try_into().expect("4 bytes");
-        if little {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
-    };
-    let index = |x: usize, y: usize, c: usize| ((height - 1 - y) * width + x) * channels + c;
-    Ok(if channels == 1 {
-        Pfm::Grey(Grid::from_fn(width, height, |x, y| value(index(x, y, 0))))
-    } else {
-        Pfm::Rgb(Grid::from_fn(width, height, |x, y| {
-            [0, 1, 2].map(|c| value(index(x, y, c)))
-        }))
-    })
-}
-
-struct HeaderTokens<'a> {
-    bytes: &'a [u8],
-    pos: usize,
-}
-
-impl<'a> HeaderTokens<'a> {
-    /// Longest header token accepted: stops a binary file from being scanned as text.
-    const MAX_TOKEN: usize = 32;
-
-    fn next(&mut self, path: &Path, what: &str) -> Result<&'a str> {
-        while self.pos < self.bytes.len() && self.bytes[self.pos].is_ascii_whitespace() {
-            self.pos += 1;
-        }
-        let start = self.pos;
-        while self.pos < self.bytes.len()
-            && !self.bytes[self.pos].is_ascii_whitespace()
-            && self.pos - start <= Self::MAX_TOKEN
-        {
-            self.pos += 1;
-        }
-        let token = &self.bytes[start..self.pos];
-        if token.is_empty() {
-            return Err(Error::format(
-                path,
-                format!("PFM header ends before {what}; the file is truncated or not a PFM"),
-            ));
-        }
-        std::str::from_utf8(token).map_err(|_| {
-            Error::format(
-                path,
-                format!("PFM header: expected {what}, found binary data"),
-            )
-        })
-    }
-
-    fn positive_int(&mut self, path: &Path, what: &str) -> Result<usize> {
-        let token = self.next(path, what)?;
-        match token.parse::<usize>() {
-            Ok(v) if v > 0 => Ok(v),
-            _ => Err(Error::format(
-                path,
-                format!(
-                    "PFM {what} is `{}`; expected a positive integer",
-                    token.escape_default()
-                ),
-            )),
-        }
-    }
-}
-
-/// Reads a one-channel float map from an OpenEXR file: the first channel named `Z`, `Y`,
-/// `R` or `depth` (in that order of preference), or the only channel.
-pub fn read_exr_scalar(path: &Path) -> Result<ScalarMap> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_exr_scalar(&bytes, path)
-}
-
-fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
-    use exr::prelude::{read, FlatSamples, ReadChannels, ReadLayers};
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| Error::format(path, format!("cannot read as OpenEXR: {e}")))?;
-    let layer = image.layer_data;
-    let channels = &layer.channel_data.list;
-    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
-    let chosen = ["Z", "Y", "R", "depth"]
-        .iter()
-        .find_map(|want| names.iter().position(|n| n == want))
-        .or(if names.len() == 1 { Some(0) } else { None })
-        .ok_or_else(|| {
-            Error::format(
-                path,
-                format!(
-                    "EXR channels are [{}]; expected one named Z, Y, R or depth, or a single channel",
-                    names.join(", ")
-                ),
-            )
-        })?;
-    let (w, h) = (layer.size.width(), layer.size.height());
-    let data: Vec<f32> = match &channels[chosen].sample_data {
-        FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
-        FlatSamples::F32(v) => v.clone(),
-        FlatSamples::U32(v) => v.iter().map(|&x| x as f32).collect(),
-    };
-    if data.len() != w * h {
-        return Err(Error::format(
-            path,
-            format!(
-                "EXR channel {} is subsampled ({} samples for {w}x{h} pixels); expected full resolution",
-                names[chosen],
-                data.len()
-            ),
-        ));
-    }
-    Ok(Grid::from_vec(w, h, data))
-}
-
-/// Reads a one-channel 32- or 64-bit float TIFF.
-pub fn read_tiff_scalar(path: &Path) -> Result<ScalarMap> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_tiff_scalar(&bytes, path)
-}
-
-fn parse_tiff_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
-    use tiff::decoder::{Decoder, DecodingResult};
-    let bad = |e: tiff::TiffError| Error::format(path, format!("cannot read as TIFF: {e}"));
-    let mut decoder = Decoder::new(Cursor::new(bytes)).map_err(bad)?;
-    let (w, h) = decoder.dimensions().map_err(bad)?;
-    let colour = decoder.colortype().map_err(bad)?;
-    if !matches!(colour, tiff::ColorType::Gray(_)) {
-        return Err(Error::format(
-            path,
-            format!("TIFF colour type is {colour:?}; expected one float channel"),
-        ));
-    }
-    let data: Vec<f32> = match decoder.read_image().map_err(bad)? {
-        DecodingResult::F32(v) => v,
-        DecodingResult::F64(v) => v.into_iter().map(|x| x as f32).collect(),
-        _ => {
-            return Err(Error::format(
-                path,
-                format!("TIFF samples are {colour:?} integers; expected 32- or 64-bit floats"),
-            ))
-        }
-    };
-    let (w, h) = (w as usize, h as usize);
-    if data.len() != w * h {
-        return Err(Error::format(
-            path,
-            format!("TIFF holds {} samples; expected {w}*{h}", data.len()),
-        ));
-    }
-    Ok(Grid::from_vec(w, h, data))
-}
-
-/// Reads a 2-D (or `h x w x 1`) float32 or float64 NumPy `.npy` array, C or Fortran order.
-pub fn read_npy_scalar(path: &Path) -> Result<ScalarMap> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    parse_npy_scalar(&bytes, path)
-}
-
-fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
-    let npy = npyz::NpyFile::new(bytes)
-        .map_err(|e| Error::format(path, format!("not a valid .npy file: {e}")))?;
-    let shape = npy.shape().to_vec();
-    let (h, w) = match shape[..] {
-        [h, w] | [h, w, 1] if h > 0 && w > 0 => (h as usize, w as usize),
-        _ => {
-            return Err(Error::format(
-                path,
-                format!("array shape is {shape:?}; expected (height, width)"),
-            ))
-        }
-    };
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let dtype = npy.dtype().descr();
-    let truncated = |e: std::io::Error| {
-        Error::format(
-            path,
-            format!("cannot read {h}*{w} values of {dtype}: {e}; the file may be truncated"),
-        )
-    };
-    let values: Vec<f32> = match npy.try_data::<f32>() {
-        Ok(reader) => reader.collect::<std::io::Result<_>>().map_err(truncated)?,
-        Err(npy) => match npy.try_data::<f64>() {
-            Ok(reader) => reader
-                .map(|v| v.map(|x| x as f32))
-                .collect::<std::io::Result<_>>()
-                .map_err(truncated)?,
-            Err(_) => {
-                return Err(Error::format(
-                    path,
-                    format!("array dtype is {dtype}; expected float32 or float64"),
-                ))
-            }
-        },
-    };
-    if values.len() != w * h {
-        return Err(Error::format(
-            path,
-            format!("expected {h}*{w} values, found {}", values.len()),
-        ));
-    }
-    Ok(if fortran {
-        Grid::from_fn(w, h, |x, y| values[x * h + y])
-    } else {
-        Grid::from_vec(w, h, values)
-    })
-}
-
 /// A depth file decoded but not yet interpreted.
 enum Raw {
     Grey8(Grid<u8>),
@@ -761,7 +483,10 @@ fn find_calib(
 
 fn decode_raw(bytes: &[u8], path: &Path, ext: &str) -> Result<Raw> {
     match ext {
-        "png" => decode_png_depth(bytes, path),
+        "png" => Ok(match png::decode_grey(bytes, path)? {
+            GreyPng::Grey8(g) => Raw::Grey8(g),
+            GreyPng::Grey16(g) => Raw::Grey16(g),
+        }),
         "pfm" => match parse_pfm(bytes, path)? {
             Pfm::Grey(map) => Ok(Raw::Float {
                 map,
@@ -793,34 +518,6 @@ fn float(map: ScalarMap) -> Raw {
         map,
         from_pfm: false,
     }
-}
-
-fn decode_png_depth(bytes: &[u8], path: &Path) -> Result<Raw> {
-    let name = path.display().to_string();
-    match super::image::decode_any(bytes, &name)? {
-        DynamicImage::ImageLuma8(g) => Ok(Raw::Grey8(to_grid(g))),
-        DynamicImage::ImageLuma16(g) => Ok(Raw::Grey16(to_grid(g))),
-        // Alpha on a depth PNG carries nothing we use.
-        DynamicImage::ImageLumaA8(g) => Ok(Raw::Grey8(first_channel(g))),
-        DynamicImage::ImageLumaA16(g) => Ok(Raw::Grey16(first_channel(g))),
-        other => Err(Error::format(
-            path,
-            format!(
-                "depth PNG has colour type {:?}; expected one grey channel (8- or 16-bit)",
-                other.color()
-            ),
-        )),
-    }
-}
-
-fn to_grid<T: image::Primitive>(img: image::ImageBuffer<image::Luma<T>, Vec<T>>) -> Grid<T> {
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    Grid::from_vec(w, h, img.into_raw())
-}
-
-fn first_channel<T: image::Primitive>(img: image::ImageBuffer<image::LumaA<T>, Vec<T>>) -> Grid<T> {
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    Grid::from_vec(w, h, img.pixels().map(|p| p.0[0]).collect())
 }
 
 fn resolve_format(

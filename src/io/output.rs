@@ -1,11 +1,16 @@
 //! Writing results. Every writer goes through a temporary file in the destination's
 //! directory that is renamed over the destination only once complete, so a crash or an
 //! error never leaves a partial file and never damages an existing one.
+//!
+//! This module owns the path checks, that atomic write and the choice of format by
+//! extension; the bytes of each format come from its codec in `io::codec`, next to the
+//! reader of the same format.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
+use crate::io::codec::{exr, pfm, png};
 use crate::io::image::linear_to_srgb;
 use crate::raster::{RgbaImage, ScalarMap};
 use crate::{Error, Result};
@@ -77,19 +82,8 @@ pub fn write_rgba(path: &Path, img: &RgbaImage) -> Result<()> {
                 .collect();
             write_png_rgb8(path, img.width(), img.height(), &rgb)
         }
-        "pfm" => write_atomically(path, |w| {
-            write_pfm(w, img.width(), img.height(), 3, |x, y, c| img.get(x, y)[c])
-        }),
-        "exr" => {
-            let channel = |c: usize| img.as_slice().iter().map(|p| p[c]).collect::<Vec<f32>>();
-            let channels = [
-                ("R", channel(0)),
-                ("G", channel(1)),
-                ("B", channel(2)),
-                ("A", channel(3)),
-            ];
-            write_atomically(path, |w| write_exr(w, img.width(), img.height(), channels))
-        }
+        "pfm" => write_atomically(path, |w| pfm::write_rgba(w, img)),
+        "exr" => write_atomically(path, |w| exr::write_rgba(w, img)),
         _ => check_image_output(path, "--out"),
     }
 }
@@ -98,13 +92,8 @@ pub fn write_rgba(path: &Path, img: &RgbaImage) -> Result<()> {
 /// little-endian, rows bottom to top) or `.exr` (one 32-bit channel named `Y`).
 pub fn write_scalar(path: &Path, map: &ScalarMap) -> Result<()> {
     match extension_of(path).as_str() {
-        "pfm" => write_atomically(path, |w| {
-            write_pfm(w, map.width(), map.height(), 1, |x, y, _| *map.get(x, y))
-        }),
-        "exr" => {
-            let channels = [("Y", map.as_slice().to_vec())];
-            write_atomically(path, |w| write_exr(w, map.width(), map.height(), channels))
-        }
+        "pfm" => write_atomically(path, |w| pfm::write_scalar(w, map)),
+        "exr" => write_atomically(path, |w| exr::write_scalar(w, map)),
         _ => check_scalar_output(path, "scalar output"),
     }
 }
@@ -130,12 +119,7 @@ pub fn write_png_rgb8(path: &Path, width: usize, height: usize, rgb: &[[u8; 3]])
         }
     };
     let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
-    write_atomically(path, |out| {
-        use image::ImageEncoder;
-        image::codecs::png::PngEncoder::new(out)
-            .write_image(&bytes, w, h, image::ExtendedColorType::Rgb8)
-            .map_err(|e| std::io::Error::other(e.to_string()))
-    })
+    write_atomically(path, |out| png::write_rgb8(out, &bytes, w, h))
 }
 
 /// True if `a` and `b` name the same existing file (after resolving links and `..`), so
@@ -202,53 +186,4 @@ fn write_atomically(
     tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
     tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
     Ok(())
-}
-
-/// PFM: header, then rows from the bottom of the image to the top, little-endian floats.
-fn write_pfm(
-    out: &mut impl Write,
-    width: usize,
-    height: usize,
-    channels: usize,
-    value: impl Fn(usize, usize, usize) -> f32,
-) -> std::io::Result<()> {
-    let magic = if channels == 3 { "PF" } else { "Pf" };
-    write!(out, "{magic}\n{width} {height}\n-1.0\n")?;
-    let mut row = Vec::with_capacity(width * channels * 4);
-    for y in (0..height).rev() {
-        row.clear();
-        for x in 0..width {
-            for c in 0..channels {
-                row.extend_from_slice(&value(x, y, c).to_le_bytes());
-            }
-        }
-        out.write_all(&row)?;
-    }
-    Ok(())
-}
-
-fn write_exr<const N: usize>(
-    out: &mut BufWriter<&File>,
-    width: usize,
-    height: usize,
-    channels: [(&str, Vec<f32>); N],
-) -> std::io::Result<()> {
-    use exr::prelude::{
-        AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
-        WritableImage,
-    };
-    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
-        .into_iter()
-        .map(|(name, data)| AnyChannel::new(name, FlatSamples::F32(data)))
-        .collect();
-    let layer = Layer::new(
-        (width, height),
-        LayerAttributes::default(),
-        Encoding::FAST_LOSSLESS,
-        AnyChannels::sort(list),
-    );
-    Image::from_layer(layer)
-        .write()
-        .to_buffered(out)
-        .map_err(|e| std::io::Error::other(format!("OpenEXR encoder: {e}")))
 }

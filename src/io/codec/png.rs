@@ -1,0 +1,57 @@
+//! PNG through the `image` crate: one grey channel of 8 or 16 bits read as integer
+//! samples (depth and disparity maps keep their raw values; what they mean is decided by
+//! `io::depth`), and 8-bit RGB written. Colour photographs are read by `io::image`, which
+//! also converts them to linear light.
+
+use std::io::Write;
+use std::path::Path;
+
+use image::DynamicImage;
+
+use crate::raster::Grid;
+use crate::{Error, Result};
+
+/// The samples of a grey PNG, at the bit depth of the file.
+pub(crate) enum GreyPng {
+    /// 8-bit samples.
+    Grey8(Grid<u8>),
+    /// 16-bit samples.
+    Grey16(Grid<u16>),
+}
+
+/// Decodes a PNG with one grey channel (and optionally alpha, which is dropped).
+pub(crate) fn decode_grey(bytes: &[u8], path: &Path) -> Result<GreyPng> {
+    let name = path.display().to_string();
+    match crate::io::image::decode_any(bytes, &name)? {
+        DynamicImage::ImageLuma8(g) => Ok(GreyPng::Grey8(to_grid(g))),
+        DynamicImage::ImageLuma16(g) => Ok(GreyPng::Grey16(to_grid(g))),
+        // Alpha on a depth PNG carries nothing we use.
+        DynamicImage::ImageLumaA8(g) => Ok(GreyPng::Grey8(first_channel(g))),
+        DynamicImage::ImageLumaA16(g) => Ok(GreyPng::Grey16(first_channel(g))),
+        other => Err(Error::format(
+            path,
+            format!(
+                "depth PNG has colour type {:?}; expected one grey channel (8- or 16-bit)",
+                other.color()
+            ),
+        )),
+    }
+}
+
+fn to_grid<T: image::Primitive>(img: image::ImageBuffer<image::Luma<T>, Vec<T>>) -> Grid<T> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    Grid::from_vec(w, h, img.into_raw())
+}
+
+fn first_channel<T: image::Primitive>(img: image::ImageBuffer<image::LumaA<T>, Vec<T>>) -> Grid<T> {
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    Grid::from_vec(w, h, img.pixels().map(|p| p.0[0]).collect())
+}
+
+/// Encodes `bytes`, `w * h` RGB pixels of 8 bits each, row 0 at the top.
+pub(crate) fn write_rgb8(out: impl Write, bytes: &[u8], w: u32, h: u32) -> std::io::Result<()> {
+    use image::ImageEncoder;
+    image::codecs::png::PngEncoder::new(out)
+        .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| std::io::Error::other(e.to_string()))
+}
