@@ -12,6 +12,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
+use crate::io::camera::{to_range, Stereo};
 use crate::io::codec::png::{self, GreyPng};
 use crate::io::codec::{exr::parse_exr_scalar, npy::parse_npy_scalar, tiff::parse_tiff_scalar};
 use crate::raster::{Grid, ScalarMap};
@@ -23,6 +24,8 @@ pub use crate::io::codec::exr::read_exr_scalar;
 pub use crate::io::codec::npy::read_npy_scalar;
 pub use crate::io::codec::pfm::{parse_pfm, read_pfm, Pfm};
 pub use crate::io::codec::tiff::read_tiff_scalar;
+
+pub use crate::io::camera::Intrinsics;
 
 /// Focal length in pixels assumed for Middlebury 2006 full-size images when `--focal` is
 /// not given. Approximate, quoted from memory of the dataset page, not read from a file.
@@ -130,41 +133,6 @@ impl fmt::Display for DepthFormat {
             DepthFormat::Png16 => "png16",
             DepthFormat::Float => "float",
         })
-    }
-}
-
-/// Pinhole intrinsics in pixels. Pixel `(x, y)` has its centre at integer coordinates
-/// `(x, y)`, row 0 at the top, as in Middlebury's `calib.txt`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Intrinsics {
-    /// Focal length along x, in pixels.
-    pub fx: f64,
-    /// Focal length along y, in pixels.
-    pub fy: f64,
-    /// Principal point x, in pixels.
-    pub cx: f64,
-    /// Principal point y, in pixels.
-    pub cy: f64,
-}
-
-impl Intrinsics {
-    /// Square pixels of focal `focal` with the principal point at the image centre
-    /// `((width - 1) / 2, (height - 1) / 2)`.
-    pub fn centred(focal: f64, width: usize, height: usize) -> Self {
-        Intrinsics {
-            fx: focal,
-            fy: focal,
-            cx: (width as f64 - 1.0) / 2.0,
-            cy: (height as f64 - 1.0) / 2.0,
-        }
-    }
-
-    /// Range / depth at pixel `(x, y)`: the length of the ray through the pixel per unit
-    /// of depth, `sqrt(1 + ((x - cx) / fx)^2 + ((y - cy) / fy)^2)`.
-    pub fn range_per_depth(&self, x: usize, y: usize) -> f64 {
-        let u = (x as f64 - self.cx) / self.fx;
-        let v = (y as f64 - self.cy) / self.fy;
-        (1.0 + u * u + v * v).sqrt()
     }
 }
 
@@ -613,20 +581,9 @@ fn finite_option(value: f64, name: &str) -> Result<f64> {
     }
 }
 
-/// Stereo geometry for disparity: depth in mm = `focal * baseline / (d + offset)`.
-struct Stereo {
-    focal: f64,
-    baseline_mm: f64,
-    offset: f64,
-}
-
+// The geometry is in `io::camera`; which options supply it, and the messages naming
+// them, belong to the depth front end.
 impl Stereo {
-    /// Depth in metres, `None` where the disparity cannot give one.
-    fn depth_m(&self, d: f64) -> Option<f64> {
-        let denom = d + self.offset;
-        (d.is_finite() && denom > 0.0).then(|| self.focal * self.baseline_mm / denom / 1000.0)
-    }
-
     /// Focal, baseline and offset from the options, for disparity maps without a calib.
     fn from_options(opts: &DepthOptions, format: DepthFormat) -> Result<Self> {
         let missing = |name: &str| {
@@ -827,22 +784,4 @@ fn depth_intrinsics(
             Ok(None)
         }
     }
-}
-
-/// Applies `depth_of` to every raw value, keeps positive finite results, and stretches
-/// depth to range along each pixel's ray when intrinsics are known.
-fn to_range<T: Copy>(
-    raw: &Grid<T>,
-    depth_of: impl Fn(T) -> Option<f64>,
-    intrinsics: Option<&Intrinsics>,
-) -> ScalarMap {
-    Grid::from_fn(raw.width(), raw.height(), |x, y| {
-        match depth_of(*raw.get(x, y)).filter(|z| z.is_finite() && *z > 0.0) {
-            Some(z) => {
-                let stretch = intrinsics.map_or(1.0, |k| k.range_per_depth(x, y));
-                (z * stretch) as f32
-            }
-            None => f32::NAN,
-        }
-    })
 }

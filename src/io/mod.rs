@@ -2,6 +2,7 @@
 //! and disparity maps in the formats users bring, and float or 8-bit outputs written
 //! atomically (temporary file, then rename).
 
+pub mod camera;
 pub mod codec;
 pub mod demo;
 pub mod depth;

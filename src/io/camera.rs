@@ -1,0 +1,76 @@
+//! Camera geometry: pinhole intrinsics, depth along the optical axis stretched to range
+//! along each pixel's ray, and stereo disparity turned into depth. Kept apart from file
+//! formats and dataset conventions, which only decide the numbers fed in here.
+
+use crate::raster::{Grid, ScalarMap};
+
+/// Pinhole intrinsics in pixels. Pixel `(x, y)` has its centre at integer coordinates
+/// `(x, y)`, row 0 at the top, as in Middlebury's `calib.txt`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Intrinsics {
+    /// Focal length along x, in pixels.
+    pub fx: f64,
+    /// Focal length along y, in pixels.
+    pub fy: f64,
+    /// Principal point x, in pixels.
+    pub cx: f64,
+    /// Principal point y, in pixels.
+    pub cy: f64,
+}
+
+impl Intrinsics {
+    /// Square pixels of focal `focal` with the principal point at the image centre
+    /// `((width - 1) / 2, (height - 1) / 2)`.
+    pub fn centred(focal: f64, width: usize, height: usize) -> Self {
+        Intrinsics {
+            fx: focal,
+            fy: focal,
+            cx: (width as f64 - 1.0) / 2.0,
+            cy: (height as f64 - 1.0) / 2.0,
+        }
+    }
+
+    /// Range / depth at pixel `(x, y)`: the length of the ray through the pixel per unit
+    /// of depth, `sqrt(1 + ((x - cx) / fx)^2 + ((y - cy) / fy)^2)`.
+    pub fn range_per_depth(&self, x: usize, y: usize) -> f64 {
+        let u = (x as f64 - self.cx) / self.fx;
+        let v = (y as f64 - self.cy) / self.fy;
+        (1.0 + u * u + v * v).sqrt()
+    }
+}
+
+/// Stereo geometry for disparity: depth in mm = `focal * baseline / (d + offset)`.
+pub(crate) struct Stereo {
+    /// Focal length in pixels.
+    pub(crate) focal: f64,
+    /// Baseline in millimetres.
+    pub(crate) baseline_mm: f64,
+    /// Added to the disparity before dividing, in pixels.
+    pub(crate) offset: f64,
+}
+
+impl Stereo {
+    /// Depth in metres, `None` where the disparity cannot give one.
+    pub(crate) fn depth_m(&self, d: f64) -> Option<f64> {
+        let denom = d + self.offset;
+        (d.is_finite() && denom > 0.0).then(|| self.focal * self.baseline_mm / denom / 1000.0)
+    }
+}
+
+/// Applies `depth_of` to every raw value, keeps positive finite results, and stretches
+/// depth to range along each pixel's ray when intrinsics are known.
+pub(crate) fn to_range<T: Copy>(
+    raw: &Grid<T>,
+    depth_of: impl Fn(T) -> Option<f64>,
+    intrinsics: Option<&Intrinsics>,
+) -> ScalarMap {
+    Grid::from_fn(raw.width(), raw.height(), |x, y| {
+        match depth_of(*raw.get(x, y)).filter(|z| z.is_finite() && *z > 0.0) {
+            Some(z) => {
+                let stretch = intrinsics.map_or(1.0, |k| k.range_per_depth(x, y));
+                (z * stretch) as f32
+            }
+            None => f32::NAN,
+        }
+    })
+}
