@@ -1,0 +1,211 @@
+//! From a decoded file to a range map: settle the format and what the values measure,
+//! then apply the dataset's convention and the camera geometry. The rules for one
+//! dataset live in its own module; this is where they are chosen.
+
+use std::path::{Path, PathBuf};
+
+use super::middlebury::{self, Calib};
+use super::png16;
+use super::raw::Raw;
+use super::{finite_option, positive_option, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
+use crate::io::camera::{to_range, Intrinsics, Stereo};
+use crate::{Error, Result};
+
+fn resolve_format(
+    requested: DepthFormat,
+    raw: &Raw,
+    has_calib: bool,
+    opts: &DepthOptions,
+    path: &Path,
+) -> Result<DepthFormat> {
+    use DepthFormat as F;
+    let format = match (requested, raw) {
+        (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
+        (F::Auto, Raw::Float { .. }) => F::Float,
+        (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
+        (F::Auto, Raw::Grey16(_)) if opts.scale.is_some() => F::Png16,
+        (F::Auto, Raw::Grey16(_)) => {
+            return Err(Error::format(
+                path,
+                "16-bit PNG depth has no standard scale: pass --depth-format kitti|nyu|tum, \
+                 or --depth-scale with the metres per unit",
+            ))
+        }
+        (f, _) => f,
+    };
+    let fits = match format {
+        F::Middlebury2014 => matches!(raw, Raw::Float { from_pfm: true, .. }),
+        F::Middlebury2006 => matches!(raw, Raw::Grey8(_)),
+        F::Kitti | F::Nyu | F::Tum | F::Png16 => matches!(raw, Raw::Grey16(_)),
+        F::Float => matches!(raw, Raw::Float { .. }),
+        F::Auto => unreachable!("Auto resolved above"),
+    };
+    if !fits {
+        let expected = match format {
+            F::Middlebury2014 => "a `Pf` PFM disparity (disp0.pfm)",
+            F::Middlebury2006 => "an 8-bit grey PNG disparity",
+            F::Float => "a float map (.pfm, .exr, .tif, .tiff or .npy)",
+            _ => "a 16-bit grey PNG",
+        };
+        return Err(Error::format(
+            path,
+            format!(
+                "--depth-format {format} expects {expected}, found {}",
+                raw.describe()
+            ),
+        ));
+    }
+    if format == F::Middlebury2014 && !has_calib {
+        return Err(Error::format(
+            path,
+            "Middlebury 2014 disparity needs its calib.txt: none next to the file; pass --calib",
+        ));
+    }
+    Ok(format)
+}
+
+fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<DepthKind> {
+    use DepthFormat as F;
+    use DepthKind as K;
+    let default = match format {
+        F::Middlebury2014 | F::Middlebury2006 => K::Disparity,
+        _ => K::Depth,
+    };
+    let kind = requested.unwrap_or(default);
+    let allowed = match format {
+        F::Middlebury2014 | F::Middlebury2006 => kind == K::Disparity,
+        F::Kitti | F::Nyu | F::Tum => kind != K::Disparity,
+        _ => true,
+    };
+    if !allowed {
+        let expected = if default == K::Disparity {
+            format!("disparity for --depth-format {format}")
+        } else {
+            format!("depth or range for --depth-format {format}")
+        };
+        return Err(Error::invalid("--depth-kind", kind, expected));
+    }
+    Ok(kind)
+}
+
+// The geometry is in `io::camera`; which options supply it, and the messages naming
+// them, belong to the depth front end.
+impl Stereo {
+    /// Focal, baseline and offset from the options, for disparity maps without a calib.
+    fn from_options(opts: &DepthOptions, format: DepthFormat) -> Result<Self> {
+        let missing = |name: &str| {
+            Error::invalid(
+                name,
+                "nothing",
+                format!("a value: --depth-format {format} with --depth-kind disparity needs --focal (px) and --baseline (mm)"),
+            )
+        };
+        let focal = opts.focal.ok_or_else(|| missing("--focal"))?;
+        let baseline = opts.baseline.ok_or_else(|| missing("--baseline"))?;
+        Ok(Stereo {
+            focal: positive_option(focal, "--focal", "a positive focal length in pixels")?,
+            baseline_mm: positive_option(baseline, "--baseline", "a positive length in mm")?,
+            offset: finite_option(opts.disparity_offset.unwrap_or(0.0), "--disparity-offset")?,
+        })
+    }
+}
+
+/// Turns a decoded file into a range map, with the notes gathered so far (a calib.txt
+/// found) and those added here.
+pub(super) fn interpret(
+    raw: Raw,
+    path: &Path,
+    opts: &DepthOptions,
+    calib: Option<(Calib, PathBuf)>,
+    mut notes: Vec<String>,
+    pixel_scale: f64,
+) -> Result<LoadedDepth> {
+    let format = resolve_format(opts.format, &raw, calib.is_some(), opts, path)?;
+    let kind = resolve_kind(format, opts.kind)?;
+    let (width, height) = raw.size();
+    let metres = "m".to_string();
+    let (range, units, intrinsics) = match (format, raw) {
+        (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
+            let (calib, calib_path) = calib.expect("checked by resolve_format");
+            let (range, k) =
+                middlebury::range_2014(&map, path, &calib, &calib_path, opts, &mut notes)?;
+            (range, metres, Some(k))
+        }
+        (DepthFormat::Middlebury2006, Raw::Grey8(disp)) => {
+            let (range, k) = middlebury::range_2006(&disp, opts, pixel_scale, &mut notes)?;
+            (range, metres, Some(k))
+        }
+        (DepthFormat::Png16, Raw::Grey16(raw)) if kind == DepthKind::Disparity => {
+            let scale = png16::given_scale(opts)?;
+            let stereo = Stereo::from_options(opts, format)?;
+            let k = Intrinsics::centred(stereo.focal, width, height);
+            notes.push("principal point assumed at the image centre".to_string());
+            let depth = |v: u16| {
+                (v != 0)
+                    .then(|| stereo.depth_m(f64::from(v) * scale))
+                    .flatten()
+            };
+            (to_range(&raw, depth, Some(&k)), metres, Some(k))
+        }
+        (_, Raw::Grey16(raw)) => {
+            let scale = png16::scale(format, opts, &mut notes)?;
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let depth = |v: u16| (v != 0).then_some(f64::from(v) * scale);
+            (to_range(&raw, depth, k.as_ref()), metres, k)
+        }
+        (_, Raw::Float { map, .. }) if kind == DepthKind::Disparity => {
+            let stereo = Stereo::from_options(opts, format)?;
+            let k = Intrinsics::centred(stereo.focal, width, height);
+            notes.push("principal point assumed at the image centre".to_string());
+            let range = to_range(&map, |d| stereo.depth_m(f64::from(d)), Some(&k));
+            (range, metres, Some(k))
+        }
+        (_, Raw::Float { map, .. }) => {
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let range = to_range(&map, |v| Some(f64::from(v)), k.as_ref());
+            (range, "file units".to_string(), k)
+        }
+        (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
+    };
+    let unknown_pixels = range.as_slice().iter().filter(|v| v.is_nan()).count();
+    if unknown_pixels == range.len() {
+        return Err(Error::NoValidDepth {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok(LoadedDepth {
+        range,
+        format,
+        kind,
+        units,
+        intrinsics,
+        notes,
+        unknown_pixels,
+    })
+}
+
+/// Intrinsics for a depth map without calibration: only if `--focal` is given.
+fn depth_intrinsics(
+    kind: DepthKind,
+    opts: &DepthOptions,
+    width: usize,
+    height: usize,
+    notes: &mut Vec<String>,
+) -> Result<Option<Intrinsics>> {
+    match (kind, opts.focal) {
+        (DepthKind::Range, Some(_)) => {
+            notes.push("--focal ignored: the map already holds range".to_string());
+            Ok(None)
+        }
+        (DepthKind::Range, None) => Ok(None),
+        (_, Some(f)) => {
+            let f = positive_option(f, "--focal", "a positive focal length in pixels")?;
+            notes.push("principal point assumed at the image centre".to_string());
+            Ok(Some(Intrinsics::centred(f, width, height)))
+        }
+        (_, None) => {
+            notes.push("no intrinsics: depth used as range".to_string());
+            Ok(None)
+        }
+    }
+}

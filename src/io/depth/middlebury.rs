@@ -1,0 +1,322 @@
+//! Middlebury stereo datasets. 2014: `disp0.pfm` float disparity with a `calib.txt`
+//! beside it giving the cameras, baseline and disparity offset. 2005/2006: 8-bit
+//! disparity PNGs with no calibration file, for which approximate defaults stand in.
+
+use std::path::{Path, PathBuf};
+
+use super::{finite_option, positive_option, DepthFormat, DepthOptions};
+use crate::io::camera::{to_range, Intrinsics, Stereo};
+use crate::raster::{Grid, ScalarMap};
+use crate::{Error, Result};
+
+/// Focal length in pixels assumed for Middlebury 2006 full-size images when `--focal` is
+/// not given. Approximate, quoted from memory of the dataset page, not read from a file.
+pub const MIDDLEBURY2006_FOCAL_PX: f64 = 3740.0;
+/// Baseline in millimetres assumed for Middlebury 2006 when `--baseline` is not given.
+/// Approximate, from memory, not from a file.
+pub const MIDDLEBURY2006_BASELINE_MM: f64 = 160.0;
+/// Disparity offset in pixels (the scene's `dmin`) assumed for Middlebury 2006 when
+/// `--disparity-offset` is not given. Each scene has its own; this is a typical value from
+/// memory, not from a file. Only relative range matters for haze.
+pub const MIDDLEBURY2006_DISPARITY_OFFSET_PX: f64 = 270.0;
+
+/// The content of a Middlebury 2014 `calib.txt`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Calib {
+    /// Left camera matrix `[f 0 cx; 0 f cy; 0 0 1]`, row-major.
+    pub cam0: [[f64; 3]; 3],
+    /// Right camera matrix.
+    pub cam1: [[f64; 3]; 3],
+    /// Disparity offset `cx1 - cx0`, pixels.
+    pub doffs: f64,
+    /// Baseline, millimetres.
+    pub baseline: f64,
+    /// Image width, pixels.
+    pub width: usize,
+    /// Image height, pixels.
+    pub height: usize,
+    /// Conservative bound on the number of disparity levels.
+    pub ndisp: u32,
+    /// Whether the disparities are integers.
+    pub isint: bool,
+    /// Tight lower bound on the disparities.
+    pub vmin: f64,
+    /// Tight upper bound on the disparities.
+    pub vmax: f64,
+    /// Average vertical disparity (imperfect rectification), if given.
+    pub dyavg: Option<f64>,
+    /// Maximum vertical disparity, if given.
+    pub dymax: Option<f64>,
+}
+
+impl Calib {
+    /// The left camera's intrinsics, which `disp0.pfm` is aligned with.
+    pub fn intrinsics(&self) -> Intrinsics {
+        Intrinsics {
+            fx: self.cam0[0][0],
+            fy: self.cam0[1][1],
+            cx: self.cam0[0][2],
+            cy: self.cam0[1][2],
+        }
+    }
+}
+
+/// Reads and checks a Middlebury 2014 `calib.txt`.
+pub fn parse_calib(path: &Path) -> Result<Calib> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_calib_str(&text, path)
+}
+
+/// Parses the text of a `calib.txt`; `path` names it in errors. Missing or non-numeric
+/// keys are errors naming the key; unknown keys are ignored.
+pub fn parse_calib_str(text: &str, path: &Path) -> Result<Calib> {
+    let mut pairs: Vec<(&str, &str)> = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let Some((key, value)) = line.split_once('=') else {
+            return Err(Error::format(
+                path,
+                format!("line {}: `{line}` is not `key=value`", n + 1),
+            ));
+        };
+        pairs.push((key.trim(), value.trim()));
+    }
+    let lookup = |key: &str| pairs.iter().rev().find(|(k, _)| *k == key).map(|p| p.1);
+    let required = |key: &str| {
+        lookup(key).ok_or_else(|| {
+            Error::format(
+                path,
+                format!("missing key `{key}`; a Middlebury 2014 calib.txt has it"),
+            )
+        })
+    };
+    let number = |key: &str| parse_number(required(key)?, key, path);
+    let integer = |key: &str| -> Result<u64> {
+        let v = required(key)?;
+        v.parse::<u64>().map_err(|_| {
+            Error::format(
+                path,
+                format!("`{key}={v}`: expected a non-negative integer"),
+            )
+        })
+    };
+    let optional = |key: &str| lookup(key).map(|v| parse_number(v, key, path)).transpose();
+
+    let calib = Calib {
+        cam0: parse_matrix(required("cam0")?, "cam0", path)?,
+        cam1: parse_matrix(required("cam1")?, "cam1", path)?,
+        doffs: number("doffs")?,
+        baseline: number("baseline")?,
+        width: integer("width")? as usize,
+        height: integer("height")? as usize,
+        ndisp: integer("ndisp")? as u32,
+        isint: integer("isint")? != 0,
+        vmin: number("vmin")?,
+        vmax: number("vmax")?,
+        dyavg: optional("dyavg")?,
+        dymax: optional("dymax")?,
+    };
+    check_calib(&calib, path)?;
+    Ok(calib)
+}
+
+fn check_calib(c: &Calib, path: &Path) -> Result<()> {
+    let k = c.intrinsics();
+    if k.fx <= 0.0 || k.fy <= 0.0 {
+        return Err(Error::format(
+            path,
+            format!(
+                "cam0 focal lengths are {} and {}; expected positive values",
+                k.fx, k.fy
+            ),
+        ));
+    }
+    if c.baseline <= 0.0 {
+        return Err(Error::format(
+            path,
+            format!("baseline={}; expected a positive length in mm", c.baseline),
+        ));
+    }
+    if c.width == 0 || c.height == 0 {
+        return Err(Error::format(
+            path,
+            format!(
+                "width={} height={}; expected positive sizes",
+                c.width, c.height
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn parse_number(value: &str, key: &str, path: &Path) -> Result<f64> {
+    match value.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(Error::format(
+            path,
+            format!("`{key}={value}`: expected a finite number"),
+        )),
+    }
+}
+
+fn parse_matrix(value: &str, key: &str, path: &Path) -> Result<[[f64; 3]; 3]> {
+    let bad = || {
+        Error::format(
+            path,
+            format!("`{key}={value}`: expected a 3x3 matrix like `[f 0 cx; 0 f cy; 0 0 1]`"),
+        )
+    };
+    let inner = value
+        .strip_prefix('[')
+        .and_then(|v| v.strip_suffix(']'))
+        .ok_or_else(bad)?;
+    let rows: Vec<&str> = inner.split(';').collect();
+    if rows.len() != 3 {
+        return Err(bad());
+    }
+    let mut m = [[0.0; 3]; 3];
+    for (r, row) in rows.iter().enumerate() {
+        let cells: Vec<&str> = row.split_whitespace().collect();
+        if cells.len() != 3 {
+            return Err(bad());
+        }
+        for (c, cell) in cells.iter().enumerate() {
+            m[r][c] = cell
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(bad)?;
+        }
+    }
+    Ok(m)
+}
+
+/// The `calib.txt` to use for a Middlebury 2014 `.pfm`: `--calib`, or else one beside the
+/// file; none for other formats (noting an ignored `--calib`).
+pub(super) fn find_calib(
+    path: &Path,
+    ext: &str,
+    opts: &DepthOptions,
+    notes: &mut Vec<String>,
+) -> Result<Option<(Calib, PathBuf)>> {
+    let wants_calib =
+        matches!(opts.format, DepthFormat::Auto | DepthFormat::Middlebury2014) && ext == "pfm";
+    if let Some(given) = &opts.calib {
+        if !wants_calib {
+            notes.push(format!(
+                "--calib {} ignored: only Middlebury 2014 .pfm disparities use it",
+                given.display()
+            ));
+            return Ok(None);
+        }
+        return Ok(Some((parse_calib(given)?, given.clone())));
+    }
+    if !wants_calib {
+        return Ok(None);
+    }
+    let beside = path.with_file_name("calib.txt");
+    if !beside.is_file() {
+        return Ok(None);
+    }
+    let calib = parse_calib(&beside)?;
+    notes.push(format!("calibration read from {}", beside.display()));
+    Ok(Some((calib, beside)))
+}
+
+/// Range in metres from a Middlebury 2014 disparity map: focal, baseline, disparity
+/// offset and principal point all come from its `calib.txt`.
+pub(super) fn range_2014(
+    map: &ScalarMap,
+    path: &Path,
+    calib: &Calib,
+    calib_path: &Path,
+    opts: &DepthOptions,
+    notes: &mut Vec<String>,
+) -> Result<(ScalarMap, Intrinsics)> {
+    check_calib_size(calib, calib_path, map, path)?;
+    note_ignored_stereo_options(opts, notes);
+    let stereo = Stereo {
+        focal: calib.cam0[0][0],
+        baseline_mm: calib.baseline,
+        offset: calib.doffs,
+    };
+    let k = calib.intrinsics();
+    let range = to_range(map, |d| stereo.depth_m(f64::from(d)), Some(&k));
+    Ok((range, k))
+}
+
+/// Range in metres from a Middlebury 2006 8-bit disparity map (`0` unknown). The options
+/// or the 2006 defaults give the geometry; `pixel_scale` is how many full-size pixels one
+/// pixel of this map spans.
+pub(super) fn range_2006(
+    disp: &Grid<u8>,
+    opts: &DepthOptions,
+    pixel_scale: f64,
+    notes: &mut Vec<String>,
+) -> Result<(ScalarMap, Intrinsics)> {
+    let (width, height) = (disp.width(), disp.height());
+    let stereo = middlebury2006_stereo(opts, disp, notes)?;
+    let k = Intrinsics::centred(stereo.focal / pixel_scale, width, height);
+    notes.push("principal point assumed at the image centre".to_string());
+    let depth = |d: u8| (d != 0).then(|| stereo.depth_m(f64::from(d))).flatten();
+    Ok((to_range(disp, depth, Some(&k)), k))
+}
+
+fn check_calib_size(calib: &Calib, calib_path: &Path, map: &ScalarMap, path: &Path) -> Result<()> {
+    if (calib.width, calib.height) == (map.width(), map.height()) {
+        return Ok(());
+    }
+    Err(Error::SizeMismatch {
+        a: format!("{} (width=, height=)", calib_path.display()),
+        aw: calib.width as u32,
+        ah: calib.height as u32,
+        b: path.display().to_string(),
+        bw: map.width() as u32,
+        bh: map.height() as u32,
+    })
+}
+
+fn note_ignored_stereo_options(opts: &DepthOptions, notes: &mut Vec<String>) {
+    if opts.focal.is_some() || opts.baseline.is_some() || opts.disparity_offset.is_some() {
+        notes.push(
+            "--focal, --baseline and --disparity-offset ignored: calib.txt gives them".to_string(),
+        );
+    }
+}
+
+fn middlebury2006_stereo(
+    opts: &DepthOptions,
+    disp: &Grid<u8>,
+    notes: &mut Vec<String>,
+) -> Result<Stereo> {
+    let focal = opts.focal.unwrap_or(MIDDLEBURY2006_FOCAL_PX);
+    let baseline = opts.baseline.unwrap_or(MIDDLEBURY2006_BASELINE_MM);
+    let offset = opts
+        .disparity_offset
+        .unwrap_or(MIDDLEBURY2006_DISPARITY_OFFSET_PX);
+    if opts.focal.is_none() || opts.baseline.is_none() || opts.disparity_offset.is_none() {
+        notes.push(format!(
+            "Middlebury 2006 geometry: focal {focal} px, baseline {baseline} mm, disparity \
+             offset {offset} px (defaults are approximate full-size values; only relative \
+             range matters for haze)"
+        ));
+    }
+    let stereo = Stereo {
+        focal: positive_option(focal, "--focal", "a positive focal length in pixels")?,
+        baseline_mm: positive_option(baseline, "--baseline", "a positive length in mm")?,
+        offset: finite_option(offset, "--disparity-offset")?,
+    };
+    if let Some(&smallest) = disp.as_slice().iter().filter(|&&d| d != 0).min() {
+        if f64::from(smallest) + stereo.offset <= 0.0 {
+            return Err(Error::invalid(
+                "--disparity-offset",
+                offset,
+                format!("a value above -{smallest} (the smallest known disparity) so that disparity + offset > 0"),
+            ));
+        }
+    }
+    Ok(stereo)
+}

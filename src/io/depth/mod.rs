@@ -1,0 +1,243 @@
+//! Depth, range and disparity maps in the formats users bring, turned into one thing: a
+//! range map (distance from the camera centre to the surface seen at each pixel) with NaN
+//! where the distance is unknown.
+//!
+//! Units: every conversion that knows the physical scale returns metres. Baselines are
+//! taken in millimetres everywhere (the Middlebury convention), so disparity-based ranges
+//! are computed in millimetres and divided by 1000. Float depth or range maps keep the
+//! units of the file. For haze only relative range matters, so a wrong absolute scale
+//! changes the look only through the haze density the user picks.
+//!
+//! The front end is here: the options, the result, and loading a file. Each file format
+//! is decoded by its codec in `io::codec` (`raw` dispatches by extension), each dataset's
+//! convention is in a module of its own (`middlebury`, `png16`), the geometry is in
+//! `io::camera`, and `interpret` settles which convention a file follows. A new dataset
+//! format adds its module, its variant of [`DepthFormat`], and its arms in `interpret`.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use crate::raster::ScalarMap;
+use crate::{Error, Result};
+
+mod interpret;
+mod middlebury;
+mod png16;
+mod raw;
+
+use interpret::interpret;
+use raw::decode_raw;
+
+// The file readers live with their writers in `io::codec`; they stay reachable here, where
+// callers loading depth have always found them.
+pub use crate::io::codec::exr::read_exr_scalar;
+pub use crate::io::codec::npy::read_npy_scalar;
+pub use crate::io::codec::pfm::{parse_pfm, read_pfm, Pfm};
+pub use crate::io::codec::tiff::read_tiff_scalar;
+
+pub use crate::io::camera::Intrinsics;
+
+pub use middlebury::{
+    parse_calib, parse_calib_str, Calib, MIDDLEBURY2006_BASELINE_MM,
+    MIDDLEBURY2006_DISPARITY_OFFSET_PX, MIDDLEBURY2006_FOCAL_PX,
+};
+
+/// What the values of a map measure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthKind {
+    /// Distance along the optical axis (the z coordinate in camera space).
+    Depth,
+    /// Distance from the camera centre to the surface (what haze needs).
+    Range,
+    /// Stereo disparity in pixels; depth = focal * baseline / (disparity + offset).
+    Disparity,
+}
+
+impl DepthKind {
+    const NAMES: &'static str = "depth, range or disparity";
+}
+
+impl FromStr for DepthKind {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "depth" => Ok(DepthKind::Depth),
+            "range" => Ok(DepthKind::Range),
+            "disparity" => Ok(DepthKind::Disparity),
+            _ => Err(Error::invalid("--depth-kind", s, DepthKind::NAMES)),
+        }
+    }
+}
+
+impl fmt::Display for DepthKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DepthKind::Depth => "depth",
+            DepthKind::Range => "range",
+            DepthKind::Disparity => "disparity",
+        })
+    }
+}
+
+/// How a depth file is laid out and scaled.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthFormat {
+    /// Guess from the extension, bit depth and the presence of a calibration file.
+    Auto,
+    /// Middlebury 2014: `disp0.pfm` disparity plus `calib.txt`.
+    Middlebury2014,
+    /// Middlebury 2005/2006: 8-bit disparity PNG, `0` unknown, no calibration file.
+    Middlebury2006,
+    /// KITTI depth: 16-bit PNG, metres = value / 256, `0` unknown.
+    Kitti,
+    /// NYU Depth v2: 16-bit PNG in millimetres, `0` unknown.
+    Nyu,
+    /// TUM RGB-D: 16-bit PNG, metres = value / 5000, `0` unknown.
+    Tum,
+    /// Any 16-bit PNG, metres = value * `--depth-scale`, `0` unknown.
+    Png16,
+    /// Float map (`.exr`, float `.tif`, `.npy`, `.pfm` without calibration); NaN, infinite
+    /// or non-positive values are unknown.
+    Float,
+}
+
+impl DepthFormat {
+    const NAMES: &'static str =
+        "one of auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16, float";
+}
+
+impl FromStr for DepthFormat {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(DepthFormat::Auto),
+            "middlebury2014" => Ok(DepthFormat::Middlebury2014),
+            "middlebury2006" => Ok(DepthFormat::Middlebury2006),
+            "kitti" => Ok(DepthFormat::Kitti),
+            "nyu" => Ok(DepthFormat::Nyu),
+            "tum" => Ok(DepthFormat::Tum),
+            "png16" => Ok(DepthFormat::Png16),
+            "float" => Ok(DepthFormat::Float),
+            _ => Err(Error::invalid("--depth-format", s, DepthFormat::NAMES)),
+        }
+    }
+}
+
+impl fmt::Display for DepthFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DepthFormat::Auto => "auto",
+            DepthFormat::Middlebury2014 => "middlebury2014",
+            DepthFormat::Middlebury2006 => "middlebury2006",
+            DepthFormat::Kitti => "kitti",
+            DepthFormat::Nyu => "nyu",
+            DepthFormat::Tum => "tum",
+            DepthFormat::Png16 => "png16",
+            DepthFormat::Float => "float",
+        })
+    }
+}
+
+/// How to read a depth file. `Default` guesses everything.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DepthOptions {
+    /// Layout and scale of the file; `Auto` guesses.
+    pub format: DepthFormat,
+    /// What the values measure; `None` takes the format's usual kind.
+    pub kind: Option<DepthKind>,
+    /// Middlebury 2014 `calib.txt`; `None` looks for `calib.txt` next to a `.pfm`.
+    pub calib: Option<PathBuf>,
+    /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity).
+    pub scale: Option<f64>,
+    /// Focal length in pixels.
+    pub focal: Option<f64>,
+    /// Stereo baseline in millimetres.
+    pub baseline: Option<f64>,
+    /// Added to disparity before dividing (Middlebury `doffs`/`dmin`), in pixels.
+    pub disparity_offset: Option<f64>,
+}
+
+impl Default for DepthOptions {
+    fn default() -> Self {
+        DepthOptions {
+            format: DepthFormat::Auto,
+            kind: None,
+            calib: None,
+            scale: None,
+            focal: None,
+            baseline: None,
+            disparity_offset: None,
+        }
+    }
+}
+
+/// A range map and how it was obtained.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadedDepth {
+    /// Range per pixel, row 0 at the top; NaN where unknown.
+    pub range: ScalarMap,
+    /// The format actually used (never `Auto`).
+    pub format: DepthFormat,
+    /// What the file's values measured.
+    pub kind: DepthKind,
+    /// Units of `range`: `m`, or `file units` for float maps of depth or range.
+    pub units: String,
+    /// Intrinsics used to turn depth into range, if any.
+    pub intrinsics: Option<Intrinsics>,
+    /// Remarks for the user: assumptions made, options ignored.
+    pub notes: Vec<String>,
+    /// Number of NaN pixels in `range`.
+    pub unknown_pixels: usize,
+}
+
+// Checks of option values, shared by the dataset modules so that a bad value reads the
+// same whichever format it came with.
+fn positive_option(value: f64, name: &str, what: &str) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::invalid(name, value, what))
+    }
+}
+
+fn finite_option(value: f64, name: &str) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::invalid(name, value, "a finite number of pixels"))
+    }
+}
+
+/// Loads a depth, range or disparity file and returns a range map with NaN for unknown
+/// pixels. See [`DepthFormat`] for the layouts and [`DepthOptions`] for the knobs.
+pub fn load_range(path: &Path, opts: &DepthOptions) -> Result<LoadedDepth> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let mut notes = Vec::new();
+    let ext = extension_of(path);
+    let calib = middlebury::find_calib(path, &ext, opts, &mut notes)?;
+    let raw = decode_raw(&bytes, path, &ext)?;
+    interpret(raw, path, opts, calib, notes, 1.0)
+}
+
+/// Decodes embedded depth bytes as if read from a file with extension `ext`. `pixel_scale`
+/// is how many full-size pixels one pixel of this map spans: a Middlebury 2006 map
+/// downsampled by 2 keeps full-size disparities but its pixels see twice the angle.
+pub(crate) fn range_from_bytes(
+    bytes: &[u8],
+    name: &Path,
+    ext: &str,
+    opts: &DepthOptions,
+    pixel_scale: f64,
+) -> Result<LoadedDepth> {
+    let raw = decode_raw(bytes, name, ext)?;
+    interpret(raw, name, opts, None, Vec::new(), pixel_scale)
+}
+
+fn extension_of(path: &Path) -> String {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default()
+}

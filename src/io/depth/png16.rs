@@ -1,0 +1,37 @@
+//! 16-bit PNG depth conventions: KITTI, NYU Depth v2 and TUM RGB-D each fix the metres
+//! per unit, and `--depth-format png16` takes it from `--depth-scale`. A new dataset of
+//! this kind adds its scale here.
+
+use super::{positive_option, DepthFormat, DepthOptions};
+use crate::{Error, Result};
+
+/// Metres per unit of a 16-bit PNG in `format`: the dataset's fixed scale, or
+/// `--depth-scale` for `png16`.
+pub(super) fn scale(
+    format: DepthFormat,
+    opts: &DepthOptions,
+    notes: &mut Vec<String>,
+) -> Result<f64> {
+    let scale = match format {
+        DepthFormat::Kitti => 1.0 / 256.0,
+        DepthFormat::Nyu => 1.0 / 1000.0,
+        DepthFormat::Tum => 1.0 / 5000.0,
+        _ => given_scale(opts)?,
+    };
+    if format != DepthFormat::Png16 && opts.scale.is_some() {
+        notes.push(format!("--depth-scale ignored: {format} has a fixed scale"));
+    }
+    Ok(scale)
+}
+
+/// `--depth-scale`, required and positive.
+pub(super) fn given_scale(opts: &DepthOptions) -> Result<f64> {
+    let scale = opts.scale.ok_or_else(|| {
+        Error::invalid(
+            "--depth-scale",
+            "nothing",
+            "a positive multiplier for --depth-format png16 (e.g. 0.001 for millimetres)",
+        )
+    })?;
+    positive_option(scale, "--depth-scale", "a positive finite multiplier")
+}

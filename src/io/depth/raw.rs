@@ -1,0 +1,81 @@
+//! A depth file decoded by its codec but not yet interpreted: the sample type is known
+//! (8-bit, 16-bit or float), what the values measure is not.
+
+use std::path::Path;
+
+use crate::io::codec::pfm::{parse_pfm, Pfm};
+use crate::io::codec::png::{self, GreyPng};
+use crate::io::codec::{exr::parse_exr_scalar, npy::parse_npy_scalar, tiff::parse_tiff_scalar};
+use crate::raster::{Grid, ScalarMap};
+use crate::{Error, Result};
+
+/// A depth file decoded but not yet interpreted.
+pub(super) enum Raw {
+    /// 8-bit grey PNG samples.
+    Grey8(Grid<u8>),
+    /// 16-bit grey PNG samples.
+    Grey16(Grid<u16>),
+    /// Float samples; a PFM may be a Middlebury 2014 disparity, other float files may not.
+    Float { map: ScalarMap, from_pfm: bool },
+}
+
+impl Raw {
+    /// The kind of file, for messages.
+    pub(super) fn describe(&self) -> &'static str {
+        match self {
+            Raw::Grey8(_) => "an 8-bit PNG",
+            Raw::Grey16(_) => "a 16-bit PNG",
+            Raw::Float { from_pfm: true, .. } => "a float PFM",
+            Raw::Float { .. } => "a float map",
+        }
+    }
+
+    /// Width and height in pixels.
+    pub(super) fn size(&self) -> (usize, usize) {
+        match self {
+            Raw::Grey8(g) => (g.width(), g.height()),
+            Raw::Grey16(g) => (g.width(), g.height()),
+            Raw::Float { map, .. } => (map.width(), map.height()),
+        }
+    }
+}
+
+/// Decodes `bytes` with the codec for extension `ext`.
+pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str) -> Result<Raw> {
+    match ext {
+        "png" => Ok(match png::decode_grey(bytes, path)? {
+            GreyPng::Grey8(g) => Raw::Grey8(g),
+            GreyPng::Grey16(g) => Raw::Grey16(g),
+        }),
+        "pfm" => match parse_pfm(bytes, path)? {
+            Pfm::Grey(map) => Ok(Raw::Float {
+                map,
+                from_pfm: true,
+            }),
+            Pfm::Rgb(_) => Err(Error::format(
+                path,
+                "PFM is `PF` (3 colour channels); a depth or disparity PFM must be `Pf` (1 channel)",
+            )),
+        },
+        "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
+        "tif" | "tiff" => Ok(float(parse_tiff_scalar(bytes, path)?)),
+        "npy" => Ok(float(parse_npy_scalar(bytes, path)?)),
+        "jpg" | "jpeg" => Err(Error::format(
+            path,
+            "JPEG is lossy and cannot hold depth; expected .png, .pfm, .exr, .tif, .tiff or .npy",
+        )),
+        _ => Err(Error::format(
+            path,
+            format!(
+                "unknown depth file extension `{ext}`; expected .png, .pfm, .exr, .tif, .tiff or .npy"
+            ),
+        )),
+    }
+}
+
+fn float(map: ScalarMap) -> Raw {
+    Raw::Float {
+        map,
+        from_pfm: false,
+    }
+}
