@@ -44,7 +44,7 @@ fn stderr(o: &Output) -> String {
 
 fn aloe(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data/aloe")
+        .join("tests/data/aloe")
         .join(name)
 }
 
