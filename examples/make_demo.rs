@@ -5,7 +5,7 @@
 //! cargo run --example make_demo -- [SOURCE_DIR] [OUT_DIR]
 //! ```
 //!
-//! `SOURCE_DIR` defaults to `../shared/data/aloe` and `OUT_DIR` to `assets/demo`, both
+//! `SOURCE_DIR` defaults to `tests/data/aloe` and `OUT_DIR` to `assets/demo`, both
 //! relative to the crate root. Both outputs are half size (1282x1110 -> 641x555):
 //!
 //! - `aloe-left-half.jpg`: each 2x2 block averaged in linear light, re-encoded as sRGB
@@ -24,9 +24,7 @@ use brume::raster::Grid;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut args = std::env::args_os().skip(1).map(PathBuf::from);
-    let source = args
-        .next()
-        .unwrap_or_else(|| root.join("../shared/data/aloe"));
+    let source = args.next().unwrap_or_else(|| root.join("tests/data/aloe"));
     let out = args.next().unwrap_or_else(|| root.join("assets/demo"));
     std::fs::create_dir_all(&out)?;
 

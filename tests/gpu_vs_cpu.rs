@@ -142,11 +142,10 @@ fn near_pixels_stay_sharp_and_far_pixels_fade_to_airlight() {
 #[test]
 fn real_aloe_crop_matches_reference() {
     use brume::io::{depth, image};
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/aloe");
-    let full = image::load_linear_rgb(&dir.join("left.jpg"))
-        .expect("Aloe image (shared/ beside the checkout)");
-    let disp =
-        depth::load_range(&dir.join("disparity.png"), &Default::default()).expect("Aloe disparity");
+    let full = image::load_linear_rgb(&aloe_path("left.jpg"))
+        .expect("Aloe image (tests/data/aloe/left.jpg)");
+    let disp = depth::load_range(&aloe_path("disparity.png"), &Default::default())
+        .expect("Aloe disparity (tests/data/aloe/disparity.png)");
     // A 96x72 window across leaf edges in front of the cloth, with unknown pixels.
     let (x0, y0, w, h) = (560, 420, 96, 72);
     let image = full.crop(x0, y0, w, h);

@@ -41,13 +41,11 @@ fn demo_range_is_nan_exactly_where_disparity_is_zero() {
 
 #[test]
 fn real_aloe_left_loads() {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/aloe/left.jpg");
-    // The shared samples sit beside the checkout (CI clones them there): a missing file
-    // is a failure, not a skip.
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/aloe/left.jpg");
+    // The sample is part of the repository: a missing file is a failure, not a skip.
     assert!(
         path.exists(),
-        "{} is missing: check out shared/ beside the project",
+        "{} is missing: restore tests/data/aloe/ from the repository",
         path.display()
     );
     let img = brume::io::image::load_linear_rgb(&path).unwrap();

@@ -342,12 +342,11 @@ fn middlebury2006_png_zero_is_unknown_and_defaults_apply() {
 
 #[test]
 fn real_aloe_disparity_loads() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/aloe/disparity.png");
-    // The shared samples sit beside the checkout (CI clones them there): a missing file
-    // is a failure, not a skip.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/aloe/disparity.png");
+    // The sample is part of the repository: a missing file is a failure, not a skip.
     assert!(
         path.exists(),
-        "{} is missing: check out shared/ beside the project",
+        "{} is missing: restore tests/data/aloe/ from the repository",
         path.display()
     );
     let d = load_range(&path, &DepthOptions::default()).unwrap();

@@ -191,8 +191,8 @@ fn airlight_from_sky_is_the_sky_colour() {
     }
 }
 
-#[test]
-fn airlight_without_sky_uses_the_farthest_pixels() {
+/// The outdoor scene with sky detection off: every unknown pixel is a filled hole.
+fn scene_without_sky() -> (ScalarMap, Prepared) {
     let map = outdoor_scene(W, H, 3);
     let p = prepare(
         &map,
@@ -202,18 +202,69 @@ fn airlight_without_sky_uses_the_farthest_pixels() {
         },
     )
     .unwrap();
-    assert_eq!(p.stats.sky_components, 0);
+    assert_eq!(p.stats.sky_pixels, 0);
     assert_eq!(p.stats.s_max, None);
-    let a = estimate_airlight(&colours(&map, &p), &p);
-    assert_eq!(a.source, AirlightSource::Farthest);
-    let known = map.as_slice().iter().filter(|v| v.is_finite()).count();
-    assert!(
-        a.pixels >= known / 100 && a.pixels < known / 50,
-        "{} of {known}",
-        a.pixels
-    );
-    // The farthest 1 % is the tree line at about 300 m: t close to 0.95.
-    assert!((a.rgb[0] - 0.485).abs() < 0.02, "{:?}", a.rgb);
+    (map, p)
+}
+
+/// Rec. 709 luminance of linear RGB, summed in the estimator's order.
+fn luminance(c: [f32; 3]) -> f32 {
+    c.iter()
+        .zip([0.2126f32, 0.7152, 0.0722])
+        .map(|(v, w)| v * w)
+        .sum()
+}
+
+#[test]
+fn airlight_without_sky_is_neutral_at_the_bright_end() {
+    const RED_WALL: [f32; 3] = [0.078, 0.014, 0.005];
+    const BROWN: [f32; 3] = [0.6, 0.5, 0.3];
+    let (map, p) = scene_without_sky();
+    let mut far: Vec<f32> = map
+        .as_slice()
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .collect();
+    far.sort_by(f32::total_cmp);
+    let far_from = far[far.len() * 95 / 100];
+    // Known pixels: the farthest 5 % a dark red wall, the rest brown, under 1 % lamp
+    // highlights (which must not set the brightness) and some NaN colours (skipped).
+    // Filled pixels are brighter than everything: they must not count either.
+    let (mut nan, mut known) = (0, 0);
+    let image = Grid::from_fn(W, H, |x, y| {
+        let i = y * W + x;
+        if p.filled.as_slice()[i] {
+            return [50.0, 50.0, 50.0];
+        }
+        known += 1;
+        if i % 97 == 0 {
+            nan += 1;
+            [f32::NAN, 0.5, 0.5]
+        } else if i % 211 == 5 {
+            [20.0, 20.0, 18.0]
+        } else if map.as_slice()[i] >= far_from {
+            RED_WALL
+        } else {
+            BROWN
+        }
+    });
+    let a = estimate_airlight(&image, &p);
+    assert_eq!(a.source, AirlightSource::Neutral);
+    assert_eq!(a.pixels, known - nan);
+    assert!(a.rgb[0] == a.rgb[1] && a.rgb[1] == a.rgb[2], "{:?}", a.rgb);
+    assert!((a.rgb[0] - luminance(BROWN)).abs() < 1e-6, "{:?}", a.rgb);
+}
+
+#[test]
+fn neutral_airlight_of_black_overexposed_and_nan_images() {
+    let (_, p) = scene_without_sky();
+    let flat = |c: [f32; 3]| estimate_airlight(&Grid::from_fn(W, H, |_, _| c), &p);
+    assert_eq!(flat([0.0; 3]).rgb, [0.0; 3], "black: haze only absorbs");
+    assert_eq!(flat([1.0; 3]).rgb, [1.0; 3], "overexposed: white");
+    assert_eq!(flat([-0.2, -0.1, 0.0]).rgb, [0.0; 3], "never negative");
+    let none = flat([f32::NAN, 0.0, 0.0]);
+    assert_eq!((none.rgb, none.pixels), ([0.0; 3], 0), "no finite colour");
 }
 
 #[test]

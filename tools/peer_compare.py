@@ -10,9 +10,9 @@ On the same machine, image size (default 1600x1120, 4-channel float32) and scale
 
 Each peer is run once as a warm-up, then timed ``--runs`` times (default 5); the median is
 reported. brume reports its own median (GL_TIME_ELAPSED where available: see its clock).
-The image is /work/shared/data/aloe/left.jpg resized to the size (linear light), or
-random values if that file or OpenCV's decoder is missing; the content does not change
-the time of either method.
+The image is tests/data/aloe/left.jpg (in this repository) resized to the size (linear
+light), or random values if that file or OpenCV's decoder is missing; the content does
+not change the time of either method.
 
 Usage:  python3 tools/peer_compare.py [BRUME_BINARY] [--size 1600x1120] [--sigmas 5,25]
         python3 tools/peer_compare.py --brume-json FILE   (parse a saved brume JSON)
@@ -29,6 +29,7 @@ import statistics
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 NOTE = (
     "brume's figure is its space-variant machinery (per-pixel rates and offsets, "
@@ -36,7 +37,8 @@ NOTE = (
     "filters on the CPU. The ratio is what the generality costs (or saves) on this "
     "machine, not a like-for-like filter comparison."
 )
-ALOE = "/work/shared/data/aloe/left.jpg"
+# Found from the script itself, so that the tool works from any directory and any clone.
+ALOE = Path(__file__).resolve().parent.parent / "tests/data/aloe/left.jpg"
 
 
 def fail(message):
@@ -86,7 +88,7 @@ def import_peers():
 
 def test_image(np, cv2, width, height):
     """(image HxWx4 float32, description): Aloe resized in linear light, or noise."""
-    bgr = cv2.imread(ALOE, cv2.IMREAD_COLOR) if os.path.exists(ALOE) else None
+    bgr = cv2.imread(str(ALOE), cv2.IMREAD_COLOR) if ALOE.is_file() else None
     if bgr is None:
         rng = np.random.default_rng(1)
         return rng.random((height, width, 4), dtype=np.float32), "random (Aloe not found)"
@@ -94,7 +96,7 @@ def test_image(np, cv2, width, height):
     linear = np.where(srgb <= 0.04045, srgb / 12.92, ((srgb + 0.055) / 1.055) ** 2.4)
     resized = cv2.resize(linear.astype(np.float32), (width, height), interpolation=cv2.INTER_AREA)
     rgba = np.concatenate([resized, np.ones((height, width, 1), np.float32)], axis=2)
-    return np.ascontiguousarray(rgba), f"{ALOE} resized"
+    return np.ascontiguousarray(rgba), "tests/data/aloe/left.jpg resized"
 
 
 def time_median(fn, runs):

@@ -156,8 +156,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "RHO", default_value_t = haze::DEFAULT_RHO_MAX, allow_negative_numbers = true)]
     pub rho_max: f64,
 
-    /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: estimated from
-    /// the sky, or from the farthest pixels when there is none.
+    /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: the median sky
+    /// colour; with no sky, a neutral grey at the 99th percentile of the luminance.
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     pub airlight: Option<[f32; 3]>,
 

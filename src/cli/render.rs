@@ -275,11 +275,12 @@ fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     })
 }
 
-/// How the airlight estimate was made, for reports.
+/// How the airlight estimate was made, for reports (`airlight_source` in `--json`): `sky`
+/// (median sky colour) or `neutral` (no sky: a grey at the scene's bright end).
 pub fn airlight_source_name(source: AirlightSource) -> &'static str {
     match source {
         AirlightSource::Sky => "sky",
-        AirlightSource::Farthest => "farthest",
+        AirlightSource::Neutral => "neutral",
     }
 }
 

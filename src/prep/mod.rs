@@ -50,8 +50,9 @@
 //!    (default `ceil(2 µ)` sweeps, the paper's "about 2µ iterations"). Only margin pixels
 //!    change. The range therefore tapers from the data into the sky with no hard step.
 //! 5. **Airlight** ([`estimate_airlight`]): the per-channel median of the linear colour of
-//!    the sky pixels; without sky, the per-channel median colour of the 1 % most distant
-//!    known pixels. The median ignores the sun, birds, wires and saturated leakage.
+//!    the sky pixels (the median ignores the sun, birds, wires and saturated leakage);
+//!    without sky, a neutral grey (R = G = B) at the 99th percentile of the Rec. 709
+//!    luminance of the known pixels, since no pixel then shows the colour of the light.
 //!
 //! **Randomness.** A built-in SplitMix64 generator; each hole gets its own stream derived
 //! from [`PrepOptions::seed`] (default 0) and the index of its first pixel, so the output is

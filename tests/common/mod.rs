@@ -57,13 +57,18 @@ pub fn ramp_range(w: usize, h: usize) -> ScalarMap {
     })
 }
 
+/// A file of the real Middlebury Aloe sample, kept in the repository (`tests/data/aloe/`).
+pub fn aloe_path(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/aloe")
+        .join(name)
+}
+
 /// The real Middlebury Aloe disparity as a range map through the real loader (NaN where
-/// the disparity is 0). The samples sit beside the checkout; missing is a failure.
+/// the disparity is 0). The sample is part of the repository; missing is a failure.
 pub fn aloe_range() -> ScalarMap {
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/aloe/disparity.png");
-    brume::io::depth::load_range(&path, &Default::default())
-        .unwrap_or_else(|e| panic!("{e} (check out shared/ beside the project)"))
+    brume::io::depth::load_range(&aloe_path("disparity.png"), &Default::default())
+        .unwrap_or_else(|e| panic!("{e} (the sample belongs in tests/data/aloe/)"))
         .range
 }
 
