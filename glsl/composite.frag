@@ -1,14 +1,28 @@
-// Pass N+2 (paper 000, eq. 4): out = F.rgb + (1 − τ_blurred)·B, with τ_blurred the alpha of
-// the diffused pre-multiplied image, never the sharp τ.
-precision highp float;
-precision highp sampler2D;
+// Pass N+2 (paper 000, eq. 4): out = F.rgb + (1 − τ_blurred)·L∞, with τ_blurred the
+// diffused transmission (the alpha of F, and the second target of a chromatic medium),
+// never the sharp τ; L∞ is the medium's in-scattered light at this pixel.
+// Assembled like medium.frag: #version, #defines, prelude.glsl, medium_api.glsl, the
+// medium, then this file.
 
-uniform sampler2D u_f;
-uniform vec3 u_airlight;  // linear RGB
+uniform sampler2D u_f;      // diffused F
+#if CHROMATIC
+uniform sampler2D u_tau_gb; // diffused (τ_g, τ_b)
+#endif
+uniform sampler2D u_depth;  // the host's depth or range texture, for the medium
+uniform ivec2 u_origin;     // corner of the output rectangle in the destination (px)
+uniform int u_output_srgb;  // 1: encode to sRGB (an 8-bit destination without sRGB format)
 
 out vec4 o_colour;
 
 void main() {
-    vec4 f = texelFetch(u_f, ivec2(gl_FragCoord.xy), 0);
-    o_colour = vec4(f.rgb + (1.0 - f.a) * u_airlight, 1.0);
+    ivec2 p = ivec2(gl_FragCoord.xy) - u_origin;
+    vec4 f = texelFetch(u_f, p, 0);
+#if CHROMATIC
+    vec3 tau = vec3(f.a, texelFetch(u_tau_gb, p, 0).rg);
+#else
+    vec3 tau = vec3(f.a);
+#endif
+    vec3 inscatter = medium_sample(p, texelFetch(u_depth, p, 0).r).inscatter;
+    vec3 c = f.rgb + (1.0 - tau) * inscatter;
+    o_colour = vec4(u_output_srgb != 0 ? linear_to_srgb(c) : c, 1.0);
 }

@@ -3,18 +3,22 @@
 //   F(x) += Σ_u ½(ρ(x+u) + ρ(x)) (F(x+u) − F(x)).
 // The offset is a function of the pixel's rate and the step (OffsetLaw in src/schedule.rs;
 // keep the two identical): t = scale·e^(c_k·ρ), and h = t, or h = m⁻¹(t²·sinh(ρ)/ρ) for the
-// variance-matched scheme. VARIANCE_MATCHED (0 or 1) is #defined by the pipeline: a
-// compile-time switch, because every uniform a fragment reads costs it a load per lane
-// on llvmpipe.
-precision highp float;
-precision highp sampler2D;
+// variance-matched scheme. VARIANCE_MATCHED and CHROMATIC (0 or 1) are #defined by the
+// pipeline: compile-time switches, because every uniform a fragment reads costs it a load
+// per lane on llvmpipe. CHROMATIC diffuses a second target, (τ_g, τ_b), with the same
+// weights (multiple render targets), for media whose transmission differs per channel.
+// Preceded by the #version line, the #defines and prelude.glsl.
 
 uniform sampler2D u_f;    // F at step k (bilinear, clamp to edge)
 uniform sampler2D u_rate; // ρ in .r (bilinear, clamp to edge)
 uniform vec2 u_law;       // (scale, c_k) of the offset law at this step
 uniform vec2 u_texel;     // 1 / texture size
 
-out vec4 o_f;
+layout(location = 0) out vec4 o_f;
+#if CHROMATIC
+uniform sampler2D u_tau_gb; // (τ_g, τ_b) at step k (bilinear, clamp to edge)
+layout(location = 1) out vec2 o_tau_gb;
+#endif
 
 float offset_for_moment(float m) {
     float i = floor(sqrt(m));
@@ -40,9 +44,8 @@ float offset_at(float rate) {
 // textureLod at level 0, not texture(): the textures have one level, and an implicit
 // LOD costs derivatives and a log2 per quad (half the pass time on llvmpipe). It is still
 // one hardware-bilinear fetch per neighbour.
-vec4 flux(vec2 uv, vec4 f, float rate) {
-    float r = 0.5 * (textureLod(u_rate, uv, 0.0).r + rate);
-    return r * (textureLod(u_f, uv, 0.0) - f);
+float weight(vec2 uv, float rate) {
+    return 0.5 * (textureLod(u_rate, uv, 0.0).r + rate);
 }
 
 void main() {
@@ -53,6 +56,17 @@ void main() {
     vec2 uv = gl_FragCoord.xy * u_texel;
     vec2 dx = vec2(h * u_texel.x, 0.0);
     vec2 dy = vec2(0.0, h * u_texel.y);
-    o_f = f + flux(uv + dx, f, rate) + flux(uv - dx, f, rate)
-            + flux(uv + dy, f, rate) + flux(uv - dy, f, rate);
+    vec2 neighbours[4] = vec2[4](uv + dx, uv - dx, uv + dy, uv - dy);
+    o_f = f;
+#if CHROMATIC
+    vec2 g = texelFetch(u_tau_gb, p, 0).rg;
+    o_tau_gb = g;
+#endif
+    for (int i = 0; i < 4; i++) {
+        float r = weight(neighbours[i], rate);
+        o_f += r * (textureLod(u_f, neighbours[i], 0.0) - f);
+#if CHROMATIC
+        o_tau_gb += r * (textureLod(u_tau_gb, neighbours[i], 0.0).rg - g);
+#endif
+    }
 }

@@ -6,15 +6,38 @@ use crate::error::{Error, Result};
 use crate::Precision;
 use glow::HasContext;
 
+/// Where an EGL context came from: known for brume's own headless context, not for a
+/// host's context.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct EglInfo {
+    /// EGL platform the display was opened on.
+    #[serde(rename = "egl_platform")]
+    pub platform: String,
+    /// `EGL_VENDOR`.
+    #[serde(rename = "egl_vendor")]
+    pub vendor: String,
+    /// `EGL_VERSION`.
+    #[serde(rename = "egl_version")]
+    pub version: String,
+}
+
+impl EglInfo {
+    /// The facts of brume's headless context.
+    pub fn of(ctx: &GlContext) -> Self {
+        EglInfo {
+            platform: ctx.platform().name().to_string(),
+            vendor: ctx.egl_vendor().to_string(),
+            version: ctx.egl_version().to_string(),
+        }
+    }
+}
+
 /// The driver facts brume needs, read once after the context is made current.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Capabilities {
-    /// EGL platform the display was opened on.
-    pub egl_platform: String,
-    /// `EGL_VENDOR`.
-    pub egl_vendor: String,
-    /// `EGL_VERSION`.
-    pub egl_version: String,
+    /// The EGL display and platform, when brume opened the context itself.
+    #[serde(flatten)]
+    pub egl: Option<EglInfo>,
     /// `GL_VENDOR`.
     pub vendor: String,
     /// `GL_RENDERER`, e.g. `llvmpipe (LLVM 15.0.6, 256 bits)`.
@@ -38,9 +61,8 @@ pub struct Capabilities {
 }
 
 impl Capabilities {
-    /// Reads the driver strings and extensions of the current context.
-    pub fn detect(ctx: &GlContext) -> Self {
-        let gl = ctx.gl();
+    /// Reads the driver strings and extensions of the context current on this thread.
+    pub fn detect(gl: &glow::Context) -> Self {
         let exts = gl.supported_extensions();
         let has = |name: &str| exts.contains(name);
         // SAFETY: plain state queries on the context that is current on this thread.
@@ -55,9 +77,7 @@ impl Capabilities {
         };
         let v = gl.version();
         Capabilities {
-            egl_platform: ctx.platform().name().to_string(),
-            egl_vendor: ctx.egl_vendor().to_string(),
-            egl_version: ctx.egl_version().to_string(),
+            egl: None,
             vendor,
             renderer,
             version,
@@ -79,13 +99,13 @@ impl Capabilities {
                 if !self.color_buffer_float {
                     return Err(self.missing(
                         "GL_EXT_color_buffer_float",
-                        "RGBA32F cannot be rendered to; try --precision f16",
+                        "RGBA32F cannot be rendered to; use precision f16",
                     ));
                 }
                 if !self.texture_float_linear {
                     return Err(self.missing(
                         "GL_OES_texture_float_linear",
-                        "RGBA32F cannot be sampled bilinearly (common on Mali); use --precision f16",
+                        "RGBA32F cannot be sampled bilinearly (common on Mali); use precision f16",
                     ));
                 }
             }

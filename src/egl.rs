@@ -7,13 +7,18 @@
 //! `eglGetDisplay(EGL_DEFAULT_DISPLAY)`. The context is OpenGL ES 3.2 (3.0 if the driver
 //! has no 3.2) with no surface where `EGL_KHR_surfaceless_context` allows it, else a 1x1
 //! pbuffer.
+//!
+//! **Several contexts on one thread.** Creating a context makes it current; a context
+//! never releases another one: dropping a context that is not current leaves the current
+//! one alone, and [`GlContext::make_current`] is how an owner gets its own back (brume's
+//! [`crate::Headless`] does that before every call).
 
 use crate::error::{Error, Result};
 use khronos_egl as egl;
 use std::ffi::c_void;
 use std::fmt;
-use std::rc::Rc;
 use std::str::FromStr;
+use std::sync::Arc;
 
 type EglInstance = egl::DynamicInstance<egl::EGL1_4>;
 
@@ -66,7 +71,7 @@ impl FromStr for Platform {
         Platform::AUTO_ORDER
             .into_iter()
             .find(|p| p.name() == s)
-            .ok_or_else(|| Error::invalid("--egl", s, "one of surfaceless, device, default"))
+            .ok_or_else(|| Error::invalid("egl", s, "one of surfaceless, device, default"))
     }
 }
 
@@ -74,7 +79,7 @@ impl FromStr for Platform {
 /// table loaded from it. Not `Send`: EGL contexts belong to the thread that made them
 /// current.
 pub struct GlContext {
-    gl: Rc<glow::Context>,
+    gl: Arc<glow::Context>,
     egl: EglInstance,
     display: egl::Display,
     context: egl::Context,
@@ -117,7 +122,7 @@ impl GlContext {
             match open_display(&egl, p).and_then(|display| create_context(&egl, display)) {
                 Ok(parts) => {
                     return Ok(GlContext {
-                        gl: Rc::new(parts.gl),
+                        gl: Arc::new(parts.gl),
                         egl,
                         display: parts.display,
                         context: parts.context,
@@ -147,8 +152,34 @@ impl GlContext {
     }
 
     /// The `glow` function table of this context.
-    pub fn gl(&self) -> &Rc<glow::Context> {
+    pub fn gl(&self) -> &Arc<glow::Context> {
         &self.gl
+    }
+
+    /// Whether this context is the one current on the calling thread.
+    pub fn is_current(&self) -> bool {
+        self.egl.get_current_context() == Some(self.context)
+    }
+
+    /// Makes this context current on the calling thread (nothing to do if it is).
+    pub fn make_current(&self) -> Result<()> {
+        if self.is_current() {
+            return Ok(());
+        }
+        self.egl
+            .make_current(self.display, self.pbuffer, self.pbuffer, Some(self.context))
+            .map_err(|e| Error::Egl(format!("eglMakeCurrent failed: {e}")))
+    }
+
+    /// Runs `f` with this context current, then makes current again whatever context was
+    /// current before (or none): for work that must not disturb another owner's context,
+    /// such as deleting this context's objects.
+    pub fn with_current<T>(&self, f: impl FnOnce() -> T) -> Result<T> {
+        let previous = CurrentContext::save(&self.egl);
+        self.make_current()?;
+        let value = f();
+        previous.restore(&self.egl, self);
+        Ok(value)
     }
 
     /// The platform the display was opened on.
@@ -171,11 +202,49 @@ impl Drop for GlContext {
     fn drop(&mut self) {
         // The display is not terminated: EGL displays are process-wide singletons, and
         // terminating one would pull it from under contexts that other threads (other
-        // tests, say) still use.
-        let _ = self.egl.make_current(self.display, None, None, None);
+        // tests, say) still use. Only this context is released, and only if it is the
+        // current one: releasing unconditionally would leave another owner's context
+        // non-current (the bug of two headless renderers).
+        if self.is_current() {
+            let _ = self.egl.make_current(self.display, None, None, None);
+        }
         let _ = self.egl.destroy_context(self.display, self.context);
         if let Some(surface) = self.pbuffer.take() {
             let _ = self.egl.destroy_surface(self.display, surface);
+        }
+    }
+}
+
+/// The context current on the thread when [`GlContext::with_current`] started.
+struct CurrentContext {
+    display: Option<egl::Display>,
+    draw: Option<egl::Surface>,
+    read: Option<egl::Surface>,
+    context: Option<egl::Context>,
+}
+
+impl CurrentContext {
+    fn save(egl: &EglInstance) -> Self {
+        CurrentContext {
+            display: egl.get_current_display(),
+            draw: egl.get_current_surface(egl::DRAW),
+            read: egl.get_current_surface(egl::READ),
+            context: egl.get_current_context(),
+        }
+    }
+
+    /// Makes the saved context current again; with none saved, releases `ours`.
+    fn restore(self, egl: &EglInstance, ours: &GlContext) {
+        match (self.display, self.context) {
+            (Some(display), Some(context)) if context != ours.context => {
+                if let Err(e) = egl.make_current(display, self.draw, self.read, Some(context)) {
+                    log::warn!("could not make the previous EGL context current again: {e}");
+                }
+            }
+            (_, Some(_)) => {}
+            (_, None) => {
+                let _ = egl.make_current(ours.display, None, None, None);
+            }
         }
     }
 }

@@ -1,25 +1,35 @@
-//! brume: physically based haze and fog for RGBD images on OpenGL ES 3.2 through EGL.
+//! brume: physically based haze and fog for RGBD images and rendered frames, on OpenGL ES
+//! 3.2 through EGL or on any host's GLES context.
 //!
-//! The paper-000 pipeline: a range map gives transmission τ = exp(−(κa+κs)R) and a blur
-//! scale σ(x); the image is pre-multiplied by τ, diffused in N fragment passes to σ(x),
-//! and composited with the airlight. [`pipeline::Renderer`] runs it on the GPU (headless
-//! through EGL), [`reference`] runs the same arithmetic on the CPU in f64, and
-//! [`schedule`] is the one place where the step count, rates and offsets are decided.
+//! - [`Pipeline`] runs on the host's GL context: the host's colour and depth textures in,
+//!   the host's framebuffer or texture out (see [`pipeline`] for the contract).
+//! - A [`medium::Medium`] is a fog model: per pixel a transmission τ (RGB), in-scattered
+//!   light L∞ and a blur scale σ. [`medium::Haze`] is paper 000's.
+//! - The diffusion blur ([`Blur`], [`schedule`]) takes σ from any medium and knows nothing
+//!   else of it.
+//! - [`Renderer`] wraps the pipeline with CPU buffers, and [`Headless`] adds brume's own
+//!   EGL context (no window, no display) for the CLI, benchmarks and tests.
+//! - [`reference`] runs the same arithmetic on the CPU in f64.
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod blur;
 pub mod caps;
 pub mod egl;
 pub mod error;
 pub mod gpu;
-pub mod haze;
 pub mod io;
+pub mod medium;
 pub mod pipeline;
 pub mod prep;
 pub mod raster;
 pub mod reference;
+pub mod renderer;
 pub mod schedule;
 
+pub use blur::{Blur, Precision};
 pub use error::{Error, Result};
-pub use pipeline::{Precision, Renderer};
+pub use medium::{Haze, Medium, UniformBlur};
+pub use pipeline::{Encoding, Frame, Input, Output, Pipeline};
+pub use renderer::{Headless, Rendered, Renderer};
 pub use schedule::Scheme;

@@ -11,7 +11,7 @@ fn main() -> ExitCode {
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("brume: error: {e}");
+            eprintln!("brume: error: {}", cli::name_flags(e));
             ExitCode::FAILURE
         }
     }

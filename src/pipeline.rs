@@ -1,143 +1,274 @@
-//! The GPU haze pipeline of paper 000, sec. 4.2: N + 2 fragment passes over two float
-//! textures whose bindings swap (no copies).
+//! The GPU pipeline on a host's GL context: the host's colour and depth (or range)
+//! textures in, the host's framebuffer or texture out, N + 2 fragment passes between
+//! (paper 000, sec. 4.2) over float textures whose bindings swap (no copies).
 //!
-//! 1. `premultiply.frag` writes F = τ·(E, 1) into target A.
-//! 2. N × `diffuse.frag` reads one target and writes the other (eq. 11-12), neighbours
-//!    read by one hardware-bilinear `texture()` fetch each; the per-pixel rate ρ lives in
-//!    its own texture (bilinear too, for ρ(x + u)); the offset h_k(x) is computed from ρ(x)
-//!    by the scheme's [`OffsetLaw`] (two uniforms per pass, and a compile-time switch).
-//! 3. `composite.frag` writes F.rgb + (1 − F.a)·B into the free target, which is read back.
+//! 1. **Medium pass** (`medium.frag` + the medium's GLSL): per pixel, the medium gives τ
+//!    and σ; the pass writes F = (τ·E, τ_r), the diffusion rate ρ(σ) and, for a chromatic
+//!    medium only, (τ_g, τ_b) — three render targets in one pass.
+//! 2. **N × diffusion** (`diffuse.frag`, eq. 11-12): each reads one target and writes the
+//!    other, neighbours read by one hardware-bilinear fetch each, the rate bilinear too;
+//!    the offset h_k(x) comes from ρ(x) by the scheme's [`crate::schedule::OffsetLaw`].
+//! 3. **Composite** (`composite.frag` + the medium's GLSL): F.rgb + (1 − τ_blurred)·L∞
+//!    into the host's destination, L∞ evaluated by the medium at each pixel.
 //!
-//! Textures: image RGB32F and range R32F (texelFetch only); ping-pong targets and the rate
-//! texture in the chosen precision (RGBA16F/R16F for `f16`, so that `f16` runs on drivers
-//! without `OES_texture_float_linear`).
+//! The CPU computes per-frame constants only (N, the offset law, the medium's uniforms).
+//!
+//! **An RGB τ through the blur.** The paper blurs one τ, in the alpha of the
+//! pre-multiplied colour. brume keeps τ_r there; a chromatic medium adds a second target
+//! pair (RG, the same precision) holding (τ_g, τ_b), written by multiple render targets
+//! with the same weights and offsets, so every channel's τ is blurred exactly as its
+//! colour is. A grey medium (τ_r = τ_g = τ_b) compiles the passes without it and costs
+//! what paper 000's pipeline costs. (An approximation — blur one mean τ and rescale by
+//! the sharp channel ratios — would be cheaper, but it is wrong at depth edges, exactly
+//! where the blur matters.)
+//!
+//! # The host's contract
+//!
+//! - **Context.** [`Pipeline::new`] and every call run on the host's context, which must
+//!   be current on the calling thread (OpenGL ES 3.0 or later, or desktop GL with the ES3
+//!   compatibility of GL 4.3). brume never creates, makes current or destroys a context.
+//!   All of brume's GL objects belong to that context: drop the pipeline while it is
+//!   current (or share lists).
+//! - **Textures in.** The colour texture (RGB in `.rgb`: float, or 8-bit; sRGB-encoded
+//!   8-bit values are decoded if [`Input::colour_encoding`] says so, `SRGB8_ALPHA8` is
+//!   decoded by GL itself) and the depth or range texture (`.r`: `R32F`, `R16F`,
+//!   `DEPTH_COMPONENT*` with `TEXTURE_COMPARE_MODE` off …) are read with `texelFetch` at
+//!   level 0, so they must be complete (a `MIN_FILTER` that needs no mipmaps, or a full
+//!   chain). brume never deletes or modifies them.
+//! - **Out.** [`Output::Framebuffer`] draws the `width x height` result with its lower-left
+//!   corner at (x, y) of a host framebuffer (`None`: the default framebuffer, a window);
+//!   [`Output::Texture`] draws into level 0 of a host texture of a colour-renderable
+//!   format. Row 0 of the input lands on row y of the destination: brume does not flip.
+//! - **State changed and left.** A render binds its own framebuffers, program, vertex
+//!   array, and textures on units 0-2 (with no sampler objects); it disables `BLEND`,
+//!   `DEPTH_TEST`, `STENCIL_TEST`, `SCISSOR_TEST`, `CULL_FACE`, `RASTERIZER_DISCARD`,
+//!   `SAMPLE_ALPHA_TO_COVERAGE` and `SAMPLE_COVERAGE`, and sets the colour mask to all
+//!   channels. On return the framebuffer binding (draw and read) is 0, no program and no
+//!   vertex array are bound, units 0-2 have no texture and no sampler, the active unit is
+//!   `TEXTURE0`, the viewport is the output rectangle, and the capabilities above stay
+//!   disabled. Anything else (blend functions, clear colour, pixel store, buffers) is left
+//!   as it was. The host sets again whatever it needs, as with egui_glow's painter.
 
+use crate::blur::{Blur, Precision};
 use crate::caps::Capabilities;
-use crate::egl::{GlContext, Platform};
 use crate::error::{Error, Result};
+use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::program::Program;
-use crate::gpu::target::RenderTarget;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, Rejected};
-use crate::haze::RenderSpec;
-use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
-use crate::schedule::{OffsetLaw, Schedule};
+use crate::medium::{Medium, UniformValue, MEDIUM_API_GLSL};
+use crate::schedule::{Schedule, Scheme};
 use glow::HasContext;
-use std::fmt;
-use std::rc::Rc;
-use std::str::FromStr;
+use std::collections::HashMap;
+use std::sync::Arc;
 
-/// Float precision of the diffusion textures.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// RGBA32F (IEEE single).
+const PRELUDE_GLSL: &str = include_str!("../glsl/prelude.glsl");
+const MEDIUM_FRAG: &str = include_str!("../glsl/medium.frag");
+const DIFFUSE_FRAG: &str = include_str!("../glsl/diffuse.frag");
+const COMPOSITE_FRAG: &str = include_str!("../glsl/composite.frag");
+
+/// Texture units: the pipeline binds these three and no others.
+const UNIT_MAIN: u32 = 0;
+const UNIT_DEPTH: u32 = 1;
+const UNIT_SECOND: u32 = 2;
+const UNITS_USED: u32 = 3;
+
+/// Capabilities disabled for the passes (see the module docs).
+const DISABLED: [u32; 8] = [
+    glow::BLEND,
+    glow::DEPTH_TEST,
+    glow::STENCIL_TEST,
+    glow::SCISSOR_TEST,
+    glow::CULL_FACE,
+    glow::RASTERIZER_DISCARD,
+    glow::SAMPLE_ALPHA_TO_COVERAGE,
+    glow::SAMPLE_COVERAGE,
+];
+
+/// How colour values are encoded in a host texture or framebuffer.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Encoding {
+    /// Linear light (float textures, `SRGB8_ALPHA8`, which GL converts itself).
     #[default]
-    F32,
-    /// RGBA16F (IEEE half).
-    F16,
+    Linear,
+    /// sRGB-encoded values in a format GL does not convert (plain `RGBA8`).
+    Srgb,
 }
 
-impl Precision {
-    /// Both precisions, f32 first.
-    pub const ALL: [Precision; 2] = [Precision::F32, Precision::F16];
-
-    /// `f32` or `f16`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Precision::F32 => "f32",
-            Precision::F16 => "f16",
-        }
-    }
-
-    fn colour_format(self) -> TexelFormat {
-        match self {
-            Precision::F32 => TexelFormat::Rgba32F,
-            Precision::F16 => TexelFormat::Rgba16F,
-        }
-    }
-
-    fn rate_format(self) -> TexelFormat {
-        match self {
-            Precision::F32 => TexelFormat::R32F,
-            Precision::F16 => TexelFormat::R16F,
-        }
-    }
+/// The host's textures for one frame. Not owned: brume never deletes them.
+#[derive(Clone, Copy, Debug)]
+pub struct Input {
+    /// Colour, RGB in `.rgb`.
+    pub colour: glow::Texture,
+    /// How `colour` is encoded.
+    pub colour_encoding: Encoding,
+    /// Depth or range in `.r`, as the medium expects it.
+    pub depth: glow::Texture,
+    /// Width of both textures (px).
+    pub width: usize,
+    /// Height of both textures (px).
+    pub height: usize,
 }
 
-impl fmt::Display for Precision {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.name())
-    }
+/// Where the result goes. Not owned: brume never deletes it.
+#[derive(Clone, Copy, Debug)]
+pub enum Output {
+    /// A host framebuffer (`None`: the default framebuffer), the result's lower-left
+    /// corner at (`x`, `y`).
+    Framebuffer {
+        /// The framebuffer object.
+        framebuffer: Option<glow::Framebuffer>,
+        /// Left edge of the output rectangle (px).
+        x: i32,
+        /// Bottom edge of the output rectangle (px).
+        y: i32,
+        /// How to encode the colour written.
+        encoding: Encoding,
+    },
+    /// Level 0 of a host texture of the input's size and a colour-renderable format.
+    Texture {
+        /// The texture object.
+        texture: glow::Texture,
+        /// How to encode the colour written.
+        encoding: Encoding,
+    },
 }
 
-impl FromStr for Precision {
-    type Err = Error;
-    fn from_str(s: &str) -> Result<Self> {
-        Precision::ALL
-            .into_iter()
-            .find(|p| p.name() == s)
-            .ok_or_else(|| Error::invalid("--precision", s, "f32 or f16"))
-    }
-}
-
-/// The result of one render.
+/// What one render did.
 #[derive(Clone, Debug)]
-pub struct Rendered {
-    /// Final linear RGB (alpha 1), row 0 at the top.
-    pub image: RgbaImage,
+pub struct Frame {
     /// The schedule that ran.
     pub schedule: Schedule,
-    /// Per-pass times, with the clock that produced them.
+    /// Per-pass times (N + 2), with the clock that produced them.
     pub times: PassTimes,
 }
 
-struct Programs {
-    premultiply: Program,
-    /// `diffuse.frag` for offsets h = t (euler, invariant).
-    diffuse: Program,
-    /// `diffuse.frag` for variance-matched offsets (matched).
-    diffuse_matched: Program,
-    composite: Program,
+/// Which program: the medium's two passes are compiled per medium, and every pass per
+/// grey or chromatic τ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum ProgramKey {
+    Medium {
+        medium: &'static str,
+        chromatic: bool,
+        log_rate: bool,
+    },
+    Diffuse {
+        matched: bool,
+        chromatic: bool,
+    },
+    Composite {
+        medium: &'static str,
+        chromatic: bool,
+    },
 }
 
-impl Programs {
-    /// The diffusion program for `law`.
-    fn diffuse(&self, law: &OffsetLaw) -> &Program {
-        if law.matched {
-            &self.diffuse_matched
-        } else {
-            &self.diffuse
-        }
-    }
-}
-
-/// The two ping-pong targets, kept between renders of the same size and precision.
+/// The diffusion textures, kept between frames of the same size, precision and kind of τ.
 struct Targets {
-    pair: [RenderTarget; 2],
     width: usize,
     height: usize,
     precision: Precision,
+    chromatic: bool,
+    /// Pre-multiplied colour F, ping-pong.
+    f: [Texture; 2],
+    /// (τ_g, τ_b) of a chromatic medium, ping-pong.
+    tau_gb: Option<[Texture; 2]>,
+    /// Per-pixel rate ρ.
+    rate: Texture,
+    /// The medium pass's destination: F[0], ρ and (τ_g, τ_b)[0].
+    first: Framebuffer,
+    /// The diffusion passes' destinations: F[i] and (τ_g, τ_b)[i].
+    step: [Framebuffer; 2],
 }
 
-/// A GL context with the programs compiled: renders any number of frames.
-pub struct Renderer {
-    // Field order is drop order: GL objects go before the context that owns them.
-    programs: Programs,
+impl Targets {
+    fn new(
+        gl: &Arc<glow::Context>,
+        width: usize,
+        height: usize,
+        precision: Precision,
+        chromatic: bool,
+    ) -> Result<Self> {
+        let target = |format| Texture::new(gl, width, height, format, Filter::Linear, None);
+        let f = [
+            target(precision.colour_format())?,
+            target(precision.colour_format())?,
+        ];
+        let tau_gb = if chromatic {
+            Some([
+                target(precision.pair_format())?,
+                target(precision.pair_format())?,
+            ])
+        } else {
+            None
+        };
+        let rate = target(precision.rate_format())?;
+        let pair = |i: usize| tau_gb.as_ref().map(|p| &p[i]);
+        let first = Framebuffer::over(
+            gl,
+            &attachments(&[&f[0], &rate], pair(0)),
+            "the medium pass",
+        )?;
+        let step = [
+            Framebuffer::over(gl, &attachments(&[&f[0]], pair(0)), "a diffusion pass")?,
+            Framebuffer::over(gl, &attachments(&[&f[1]], pair(1)), "a diffusion pass")?,
+        ];
+        Ok(Targets {
+            width,
+            height,
+            precision,
+            chromatic,
+            f,
+            tau_gb,
+            rate,
+            first,
+            step,
+        })
+    }
+
+    fn fits(&self, width: usize, height: usize, precision: Precision, chromatic: bool) -> bool {
+        (self.width, self.height, self.precision, self.chromatic)
+            == (width, height, precision, chromatic)
+    }
+}
+
+/// `textures`, then `pair` if there is one: a framebuffer's attachments in order.
+fn attachments<'a>(textures: &[&'a Texture], pair: Option<&'a Texture>) -> Vec<&'a Texture> {
+    textures.iter().copied().chain(pair).collect()
+}
+
+/// Where the composite pass draws.
+enum Destination<'a> {
+    /// A host framebuffer at (x, y).
+    Host {
+        framebuffer: Option<glow::Framebuffer>,
+        x: i32,
+        y: i32,
+        encoding: Encoding,
+    },
+    /// brume's framebuffer over a host texture.
+    HostTexture(&'a Framebuffer, Encoding),
+    /// brume's free ping-pong target, to be read back ([`crate::Renderer`]).
+    Internal,
+}
+
+/// The brume pipeline on a host's GL context: compiles its programs once, keeps its
+/// diffusion textures between frames, and renders any number of frames.
+pub struct Pipeline {
+    // Field order is drop order; `gl` last, as the objects above need it.
+    programs: HashMap<ProgramKey, Program>,
     targets: Option<Targets>,
     vao: glow::VertexArray,
     caps: Capabilities,
-    gl: Rc<glow::Context>,
-    ctx: GlContext,
+    version_line: &'static str,
+    gl: Arc<glow::Context>,
 }
 
-impl Renderer {
-    /// Opens an EGL context (see [`GlContext::new`]), detects its capabilities once,
-    /// compiles the shaders and spends the first timer query.
-    pub fn new(platform: Option<Platform>) -> Result<Self> {
-        let ctx = GlContext::new(platform)?;
-        let caps = Capabilities::detect(&ctx);
-        let gl = Rc::clone(ctx.gl());
+impl Pipeline {
+    /// Builds the pipeline on the host's context `gl`, which must be current on this
+    /// thread: detects its capabilities once, compiles the diffusion programs and spends
+    /// the first timer query (see [`timer::warm_up`]).
+    pub fn new(gl: Arc<glow::Context>) -> Result<Self> {
+        let caps = Capabilities::detect(&gl);
         if caps.gles_version.0 < 3 {
             return Err(Error::MissingCapability {
                 capability: "OpenGL ES 3.0".into(),
@@ -150,37 +281,29 @@ impl Renderer {
         } else {
             "#version 300 es"
         };
-        let programs = Programs {
-            premultiply: Program::new(
-                &gl,
-                version_line,
-                ("premultiply.frag", include_str!("../glsl/premultiply.frag")),
-                &["u_image", "u_range", "u_extinction"],
-            )?,
-            diffuse: diffuse_program(&gl, version_line, false)?,
-            diffuse_matched: diffuse_program(&gl, version_line, true)?,
-            composite: Program::new(
-                &gl,
-                version_line,
-                ("composite.frag", include_str!("../glsl/composite.frag")),
-                &["u_f", "u_airlight"],
-            )?,
-        };
         // SAFETY: an empty VAO is required to draw in GLES 3; owned and deleted in Drop.
         let vao = unsafe { gl.create_vertex_array().map_err(Error::Gl)? };
-        // SAFETY: binding the VAO just created (the warm-up below draws with it).
-        unsafe { gl.bind_vertex_array(Some(vao)) };
-        if caps.disjoint_timer_query {
-            warm_up_timer(&gl, &programs.composite)?;
-        }
-        Ok(Renderer {
-            programs,
+        let mut pipeline = Pipeline {
+            programs: HashMap::new(),
             targets: None,
             vao,
             caps,
+            version_line,
             gl,
-            ctx,
-        })
+        };
+        for matched in [false, true] {
+            pipeline.program(
+                ProgramKey::Diffuse {
+                    matched,
+                    chromatic: false,
+                },
+                None,
+            )?;
+        }
+        if pipeline.caps.disjoint_timer_query {
+            pipeline.warm_up_timer()?;
+        }
+        Ok(pipeline)
     }
 
     /// The driver's capabilities, detected once.
@@ -188,9 +311,15 @@ impl Renderer {
         &self.caps
     }
 
-    /// The EGL context.
-    pub fn context(&self) -> &GlContext {
-        &self.ctx
+    /// Mutable capabilities, for an owner that knows more (brume's headless context adds
+    /// its EGL facts).
+    pub(crate) fn caps_mut(&mut self) -> &mut Capabilities {
+        &mut self.caps
+    }
+
+    /// The host's context.
+    pub fn gl(&self) -> &Arc<glow::Context> {
+        &self.gl
     }
 
     /// The clock renders are timed with: the GPU timer where the driver has one.
@@ -202,44 +331,135 @@ impl Renderer {
         }
     }
 
-    /// Renders `image` hazed by the normalised `range` map (R ∈ [0, 1]) as `spec` says.
+    /// Renders one frame: `input` fogged by `medium` and blurred as `blur` says, into
+    /// `output`. The host's context must be current; see the module docs for the GL state
+    /// this changes.
     pub fn render(
         &mut self,
-        image: &RgbImage,
-        range: &ScalarMap,
-        spec: &RenderSpec,
-    ) -> Result<Rendered> {
-        let schedule = spec.schedule()?;
-        let rates = spec.packed_rates(range, &schedule);
-        self.render_rates(image, range, &rates, spec, &schedule)
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &Blur,
+        output: &Output,
+    ) -> Result<Frame> {
+        let schedule = self.prepare(input, medium, blur)?;
+        let result = match *output {
+            Output::Framebuffer {
+                framebuffer,
+                x,
+                y,
+                encoding,
+            } => self.run(
+                input,
+                medium,
+                &schedule,
+                &Destination::Host {
+                    framebuffer,
+                    x,
+                    y,
+                    encoding,
+                },
+            ),
+            Output::Texture { texture, encoding } => {
+                let fb = Framebuffer::new(
+                    &self.gl,
+                    &[texture],
+                    input.width,
+                    input.height,
+                    "the output texture",
+                )?;
+                self.run(
+                    input,
+                    medium,
+                    &schedule,
+                    &Destination::HostTexture(&fb, encoding),
+                )
+            }
+        };
+        self.leave_state();
+        Ok(Frame {
+            schedule,
+            times: result?.0,
+        })
     }
 
-    /// Like [`Self::render`] with the per-pixel rates of `schedule` already computed (the
-    /// benchmarks reuse them across runs).
-    pub fn render_rates(
+    /// Renders into brume's own float target and reads it back (RGBA, texel row 0
+    /// first): the CPU-buffer path of [`crate::Renderer`].
+    pub(crate) fn render_and_read(
         &mut self,
-        image: &RgbImage,
-        range: &ScalarMap,
-        rates: &[f32],
-        spec: &RenderSpec,
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &Blur,
+    ) -> Result<(Frame, Vec<[f32; 4]>)> {
+        let schedule = self.prepare(input, medium, blur)?;
+        let result = self
+            .run(input, medium, &schedule, &Destination::Internal)
+            .and_then(|(times, out)| {
+                let pixels = self.targets()?.step[out].read_rgba()?;
+                Ok((times, pixels))
+            });
+        self.leave_state();
+        let (times, pixels) = result?;
+        Ok((Frame { schedule, times }, pixels))
+    }
+
+    /// Checks the frame, plans its schedule, compiles what it needs and sizes the targets.
+    fn prepare(&mut self, input: &Input, medium: &dyn Medium, blur: &Blur) -> Result<Schedule> {
+        medium.validate()?;
+        self.caps.require_precision(blur.precision)?;
+        self.caps.require_size("input", input.width, input.height)?;
+        let sigma_max = medium.sigma_max(blur.sigma0);
+        let schedule = blur.schedule(sigma_max, &format!("blur scale of {}", medium.name()))?;
+        let chromatic = medium.chromatic();
+        let keys = [
+            ProgramKey::Medium {
+                medium: medium.name(),
+                chromatic,
+                log_rate: schedule.scheme != Scheme::Euler,
+            },
+            ProgramKey::Diffuse {
+                matched: schedule.scheme == Scheme::Matched,
+                chromatic,
+            },
+            ProgramKey::Composite {
+                medium: medium.name(),
+                chromatic,
+            },
+        ];
+        for key in keys {
+            self.program(key, Some(medium))?;
+        }
+        self.check_medium_uniforms(medium, keys[0], keys[2])?;
+        let fits = self
+            .targets
+            .as_ref()
+            .is_some_and(|t| t.fits(input.width, input.height, blur.precision, chromatic));
+        if !fits {
+            self.targets = None; // free the old textures before allocating new ones
+            self.targets = Some(Targets::new(
+                &self.gl,
+                input.width,
+                input.height,
+                blur.precision,
+                chromatic,
+            )?);
+        }
+        Ok(schedule)
+    }
+
+    /// Runs the passes, again by the wall clock if the GPU timer's figures are rejected.
+    /// Returns the times and the index of the ping-pong target holding an internal result.
+    fn run(
+        &self,
+        input: &Input,
+        medium: &dyn Medium,
         schedule: &Schedule,
-    ) -> Result<Rendered> {
-        self.check_inputs(image, range, spec)?;
-        assert_eq!(rates.len(), image.len(), "one rate per pixel");
-        let inputs = Inputs::upload(&self.gl, image, range, rates, spec.precision)?;
-        self.ensure_targets(image.width(), image.height(), spec.precision)?;
+        destination: &Destination,
+    ) -> Result<(PassTimes, usize)> {
         let mut clock = self.preferred_clock();
         loop {
-            let (last, outcome) = self.run_passes(&inputs, spec, schedule, clock)?;
+            let (out, outcome) = self.run_passes(input, medium, schedule, destination, clock)?;
             match outcome {
-                Ok(times) => {
-                    let pixels = self.targets()[last].read_rgba()?;
-                    return Ok(Rendered {
-                        image: Grid::from_vec(image.width(), image.height(), pixels),
-                        schedule: *schedule,
-                        times,
-                    });
-                }
+                Ok(times) => return Ok((times, out)),
                 Err(rejected) => {
                     log::warn!(
                         "GPU timer figures rejected ({rejected:?}); timing again by wall clock"
@@ -250,211 +470,365 @@ impl Renderer {
         }
     }
 
-    fn check_inputs(&self, image: &RgbImage, range: &ScalarMap, spec: &RenderSpec) -> Result<()> {
-        spec.validate()?;
-        self.caps.require_precision(spec.precision)?;
-        self.caps
-            .require_size("image", image.width(), image.height())?;
-        if (image.width(), image.height()) != (range.width(), range.height()) {
-            return Err(Error::SizeMismatch {
-                a: "image".into(),
-                aw: image.width() as u32,
-                ah: image.height() as u32,
-                b: "range map".into(),
-                bw: range.width() as u32,
-                bh: range.height() as u32,
-            });
-        }
-        Ok(())
-    }
-
-    fn ensure_targets(&mut self, width: usize, height: usize, precision: Precision) -> Result<()> {
-        let fits = self
-            .targets
-            .as_ref()
-            .is_some_and(|t| (t.width, t.height, t.precision) == (width, height, precision));
-        if !fits {
-            self.targets = None; // free the old pair before allocating the new one
-            let format = precision.colour_format();
-            self.targets = Some(Targets {
-                pair: [
-                    RenderTarget::new(&self.gl, width, height, format)?,
-                    RenderTarget::new(&self.gl, width, height, format)?,
-                ],
-                width,
-                height,
-                precision,
-            });
-        }
-        Ok(())
-    }
-
-    fn targets(&self) -> &[RenderTarget; 2] {
-        &self
-            .targets
-            .as_ref()
-            .expect("targets allocated before passes")
-            .pair
-    }
-
-    /// Runs the N + 2 passes; returns the index of the target holding the result.
+    /// The N + 2 passes, timed with `clock`.
     fn run_passes(
         &self,
-        inputs: &Inputs,
-        spec: &RenderSpec,
+        input: &Input,
+        medium: &dyn Medium,
         schedule: &Schedule,
+        destination: &Destination,
         clock: Clock,
     ) -> Result<(usize, std::result::Result<PassTimes, Rejected>)> {
         let gl = &self.gl;
-        let targets = self.targets();
-        let (w, h) = (inputs.image.width() as f32, inputs.image.height() as f32);
-        // SAFETY: binding owned objects on the current context.
-        unsafe {
-            gl.bind_vertex_array(Some(self.vao));
-            gl.disable(glow::BLEND);
-        }
+        let targets = self.targets()?;
+        let chromatic = targets.tau_gb.is_some();
+        self.enter_state();
         let mut timer = PassTimer::start(gl, clock);
 
-        let p = &self.programs.premultiply;
+        let p = self.compiled(ProgramKey::Medium {
+            medium: medium.name(),
+            chromatic,
+            log_rate: schedule.scheme != Scheme::Euler,
+        })?;
         timer.pass(|| {
-            targets[0].bind_for_drawing();
-            use_program(gl, p);
-            inputs.image.bind(0);
-            inputs.range.bind(1);
-            // SAFETY: uniforms of the bound program.
-            unsafe {
-                gl.uniform_1_i32(Some(p.uniform("u_image")), 0);
-                gl.uniform_1_i32(Some(p.uniform("u_range")), 1);
-                gl.uniform_1_f32(Some(p.uniform("u_extinction")), spec.extinction as f32);
-            }
+            targets.first.bind_for_drawing();
+            self.use_program(p);
+            bind_texture(gl, UNIT_MAIN, Some(input.colour));
+            bind_texture(gl, UNIT_DEPTH, Some(input.depth));
+            set_int(gl, p, "u_colour", UNIT_MAIN as i32);
+            set_int(gl, p, "u_depth", UNIT_DEPTH as i32);
+            set_int(
+                gl,
+                p,
+                "u_colour_srgb",
+                i32::from(input.colour_encoding == Encoding::Srgb),
+            );
+            let inverse_steps = if schedule.steps == 0 {
+                0.0
+            } else {
+                1.0 / f64::from(schedule.steps)
+            };
+            set_value(
+                gl,
+                p,
+                "u_schedule",
+                Uniform::Vec2([schedule.sigma_max as f32, inverse_steps as f32]),
+            );
+            self.set_medium_uniforms(p, medium, input, schedule.sigma0);
             draw_fullscreen(gl);
         })?;
 
         let law = schedule.offset_law();
-        let d = self.programs.diffuse(&law);
+        let d = self.compiled(ProgramKey::Diffuse {
+            matched: law.matched,
+            chromatic,
+        })?;
+        let texel = [1.0 / input.width as f32, 1.0 / input.height as f32];
         let mut current = 0;
         for k in 0..schedule.steps {
             let (src, dst) = (current, 1 - current);
             timer.pass(|| {
-                targets[dst].bind_for_drawing();
-                use_program(gl, d);
-                targets[src].texture().bind(0);
-                inputs.rate.bind(1);
-                let [scale, coefficient] = law.uniform(k);
-                // SAFETY: uniforms of the bound program.
-                unsafe {
-                    gl.uniform_1_i32(Some(d.uniform("u_f")), 0);
-                    gl.uniform_1_i32(Some(d.uniform("u_rate")), 1);
-                    gl.uniform_2_f32(Some(d.uniform("u_law")), scale, coefficient);
-                    gl.uniform_2_f32(Some(d.uniform("u_texel")), 1.0 / w, 1.0 / h);
+                targets.step[dst].bind_for_drawing();
+                self.use_program(d);
+                targets.f[src].bind(UNIT_MAIN);
+                targets.rate.bind(UNIT_DEPTH);
+                if let Some(pair) = &targets.tau_gb {
+                    pair[src].bind(UNIT_SECOND);
                 }
+                let [scale, coefficient] = law.uniform(k);
+                set_int(gl, d, "u_f", UNIT_MAIN as i32);
+                set_int(gl, d, "u_rate", UNIT_DEPTH as i32);
+                set_int(gl, d, "u_tau_gb", UNIT_SECOND as i32);
+                set_value(gl, d, "u_law", Uniform::Vec2([scale, coefficient]));
+                set_value(gl, d, "u_texel", Uniform::Vec2(texel));
                 draw_fullscreen(gl);
             })?;
             current = dst;
         }
 
-        let c = &self.programs.composite;
-        let out = 1 - current;
+        let c = self.compiled(ProgramKey::Composite {
+            medium: medium.name(),
+            chromatic,
+        })?;
+        let free = 1 - current;
         timer.pass(|| {
-            targets[out].bind_for_drawing();
-            use_program(gl, c);
-            targets[current].texture().bind(0);
-            let b = spec.airlight;
-            // SAFETY: uniforms of the bound program.
-            unsafe {
-                gl.uniform_1_i32(Some(c.uniform("u_f")), 0);
-                gl.uniform_3_f32(Some(c.uniform("u_airlight")), b[0], b[1], b[2]);
+            let (origin, encoding) = self.bind_destination(destination, input, &targets.step[free]);
+            self.use_program(c);
+            targets.f[current].bind(UNIT_MAIN);
+            bind_texture(gl, UNIT_DEPTH, Some(input.depth));
+            if let Some(pair) = &targets.tau_gb {
+                pair[current].bind(UNIT_SECOND);
             }
+            set_int(gl, c, "u_f", UNIT_MAIN as i32);
+            set_int(gl, c, "u_depth", UNIT_DEPTH as i32);
+            set_int(gl, c, "u_tau_gb", UNIT_SECOND as i32);
+            set_value(gl, c, "u_origin", Uniform::IVec2(origin));
+            set_int(
+                gl,
+                c,
+                "u_output_srgb",
+                i32::from(encoding == Encoding::Srgb),
+            );
+            self.set_medium_uniforms(c, medium, input, schedule.sigma0);
             draw_fullscreen(gl);
         })?;
-        crate::gpu::check_gl(gl, "running the haze passes")?;
-        Ok((out, timer.finish()?))
+        crate::gpu::check_gl(gl, "running the passes")?;
+        Ok((free, timer.finish()?))
+    }
+
+    /// Binds the composite's destination and sets its viewport; returns the output
+    /// rectangle's corner and the encoding to write.
+    fn bind_destination(
+        &self,
+        destination: &Destination,
+        input: &Input,
+        internal: &Framebuffer,
+    ) -> ([i32; 2], Encoding) {
+        match *destination {
+            Destination::Host {
+                framebuffer,
+                x,
+                y,
+                encoding,
+            } => {
+                // SAFETY: binding the host's framebuffer (or the default one) and setting
+                // the viewport on the current context.
+                unsafe {
+                    self.gl.bind_framebuffer(glow::FRAMEBUFFER, framebuffer);
+                    self.gl
+                        .viewport(x, y, input.width as i32, input.height as i32);
+                }
+                ([x, y], encoding)
+            }
+            Destination::HostTexture(fb, encoding) => {
+                fb.bind_for_drawing();
+                ([0, 0], encoding)
+            }
+            Destination::Internal => {
+                internal.bind_for_drawing();
+                ([0, 0], Encoding::Linear)
+            }
+        }
+    }
+
+    fn targets(&self) -> Result<&Targets> {
+        self.targets
+            .as_ref()
+            .ok_or_else(|| Error::Gl("internal: diffusion targets not allocated".into()))
+    }
+
+    fn compiled(&self, key: ProgramKey) -> Result<&Program> {
+        self.programs
+            .get(&key)
+            .ok_or_else(|| Error::Gl(format!("internal: program {key:?} not compiled")))
+    }
+
+    /// The program for `key`, compiled on first use (`medium` is needed for the medium
+    /// and composite passes).
+    fn program(&mut self, key: ProgramKey, medium: Option<&dyn Medium>) -> Result<&Program> {
+        if !self.programs.contains_key(&key) {
+            let program = self.compile(key, medium)?;
+            self.programs.insert(key, program);
+        }
+        self.compiled(key)
+    }
+
+    fn compile(&self, key: ProgramKey, medium: Option<&dyn Medium>) -> Result<Program> {
+        let defines = |pairs: &[(&str, bool)]| {
+            let mut header = self.version_line.to_string();
+            for (name, on) in pairs {
+                header.push_str(&format!("\n#define {name} {}", i32::from(*on)));
+            }
+            header.push('\n');
+            header.push_str(PRELUDE_GLSL);
+            header
+        };
+        let with_medium = |pass: &str| {
+            let m = medium.expect("the medium passes need a medium");
+            format!("{MEDIUM_API_GLSL}\n{}\n{pass}", m.glsl())
+        };
+        let names = |pass: &str| {
+            let m = medium.expect("the medium passes need a medium");
+            format!("{pass} with glsl/medium/{}.glsl", m.name())
+        };
+        let optional = |extra: &[&'static str]| {
+            let mut list: Vec<&'static str> = vec!["brume_sigma0", "brume_size"];
+            list.extend_from_slice(extra);
+            if let Some(m) = medium {
+                list.extend(m.uniforms().into_iter().map(|(name, _)| name));
+            }
+            list
+        };
+        match key {
+            ProgramKey::Medium {
+                chromatic,
+                log_rate,
+                ..
+            } => Program::new(
+                &self.gl,
+                &defines(&[("CHROMATIC", chromatic), ("RATE_LAW_LOG", log_rate)]),
+                (&names("medium.frag"), &with_medium(MEDIUM_FRAG)),
+                &["u_colour"],
+                &optional(&["u_depth", "u_colour_srgb", "u_schedule"]),
+            ),
+            ProgramKey::Diffuse { matched, chromatic } => Program::new(
+                &self.gl,
+                &defines(&[("VARIANCE_MATCHED", matched), ("CHROMATIC", chromatic)]),
+                ("diffuse.frag", DIFFUSE_FRAG),
+                &["u_f", "u_rate", "u_law", "u_texel"],
+                &["u_tau_gb"],
+            ),
+            ProgramKey::Composite { chromatic, .. } => Program::new(
+                &self.gl,
+                &defines(&[("CHROMATIC", chromatic)]),
+                (&names("composite.frag"), &with_medium(COMPOSITE_FRAG)),
+                &["u_f"],
+                &optional(&["u_depth", "u_tau_gb", "u_origin", "u_output_srgb"]),
+            ),
+        }
+    }
+
+    /// A medium uniform that neither of its passes uses is misspelled (or dead): say so
+    /// instead of rendering with a default value.
+    fn check_medium_uniforms(
+        &self,
+        medium: &dyn Medium,
+        first: ProgramKey,
+        last: ProgramKey,
+    ) -> Result<()> {
+        let (first, last) = (self.compiled(first)?, self.compiled(last)?);
+        for (name, _) in medium.uniforms() {
+            if first.optional_uniform(name).is_none() && last.optional_uniform(name).is_none() {
+                return Err(Error::Gl(format!(
+                    "glsl/medium/{}.glsl: uniform {name} is not used by the shader \
+                     (misspelled, or not declared)",
+                    medium.name()
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    fn set_medium_uniforms(&self, p: &Program, medium: &dyn Medium, input: &Input, sigma0: f64) {
+        let gl = &self.gl;
+        set_value(gl, p, "brume_sigma0", Uniform::Float(sigma0 as f32));
+        set_value(
+            gl,
+            p,
+            "brume_size",
+            Uniform::IVec2([input.width as i32, input.height as i32]),
+        );
+        for (name, value) in medium.uniforms() {
+            let value = match value {
+                UniformValue::Float(v) => Uniform::Float(v),
+                UniformValue::Vec3(v) => Uniform::Vec3(v),
+            };
+            set_value(gl, p, name, value);
+        }
+    }
+
+    fn use_program(&self, p: &Program) {
+        // SAFETY: an owned, linked program on the current context.
+        unsafe { self.gl.use_program(Some(p.raw())) };
+    }
+
+    /// The state every pass relies on (module docs).
+    fn enter_state(&self) {
+        let gl = &self.gl;
+        // SAFETY: state setters on the current context; the VAO is owned.
+        unsafe {
+            gl.bind_vertex_array(Some(self.vao));
+            for cap in DISABLED {
+                gl.disable(cap);
+            }
+            gl.color_mask(true, true, true, true);
+            for unit in 0..UNITS_USED {
+                gl.bind_sampler(unit, None);
+            }
+        }
+    }
+
+    /// The state a render leaves (module docs).
+    fn leave_state(&self) {
+        let gl = &self.gl;
+        // SAFETY: unbinding on the current context.
+        unsafe {
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            gl.use_program(None);
+            gl.bind_vertex_array(None);
+            for unit in 0..UNITS_USED {
+                bind_texture(gl, unit, None);
+            }
+            gl.active_texture(glow::TEXTURE0);
+        }
+    }
+
+    /// Spends the first timer query on a real 1x1 draw (see [`timer::warm_up`]).
+    fn warm_up_timer(&self) -> Result<()> {
+        let gl = &self.gl;
+        let texture = Texture::new(gl, 1, 1, TexelFormat::Rgba16F, Filter::Nearest, None)?;
+        let target = Framebuffer::over(gl, &[&texture], "the timer warm-up")?;
+        let program = self.compiled(ProgramKey::Diffuse {
+            matched: false,
+            chromatic: false,
+        })?;
+        self.enter_state();
+        let warmed = timer::warm_up(gl, || {
+            target.bind_for_drawing();
+            self.use_program(program);
+            draw_fullscreen(gl);
+        });
+        self.leave_state();
+        warmed
     }
 }
 
-impl Drop for Renderer {
+impl Drop for Pipeline {
     fn drop(&mut self) {
-        // SAFETY: the VAO belongs to this renderer; the context is still alive (dropped
-        // after this body, as the last field).
+        // SAFETY: the VAO belongs to this pipeline, on the host's context (module docs).
         unsafe { self.gl.delete_vertex_array(self.vao) };
     }
 }
 
-/// The textures uploaded for one render.
-struct Inputs {
-    image: Texture,
-    range: Texture,
-    rate: Texture,
+/// A uniform value of the pipeline's own passes.
+enum Uniform {
+    Float(f32),
+    Vec2([f32; 2]),
+    Vec3([f32; 3]),
+    IVec2([i32; 2]),
 }
 
-impl Inputs {
-    fn upload(
-        gl: &Rc<glow::Context>,
-        image: &RgbImage,
-        range: &ScalarMap,
-        rates: &[f32],
-        precision: Precision,
-    ) -> Result<Self> {
-        let (w, h) = (image.width(), image.height());
-        // Uploaded from the caller's buffers as they are: no staging copies.
-        Ok(Inputs {
-            image: Texture::new(
-                gl,
-                w,
-                h,
-                TexelFormat::Rgb32F,
-                Filter::Nearest,
-                Some(image.as_slice().as_flattened()),
-            )?,
-            range: Texture::new(
-                gl,
-                w,
-                h,
-                TexelFormat::R32F,
-                Filter::Nearest,
-                Some(range.as_slice()),
-            )?,
-            rate: Texture::new(
-                gl,
-                w,
-                h,
-                precision.rate_format(),
-                Filter::Linear,
-                Some(rates),
-            )?,
-        })
+/// Sets a uniform of the bound program `p` if the program uses it.
+fn set_value(gl: &glow::Context, p: &Program, name: &str, value: Uniform) {
+    let Some(location) = p.optional_uniform(name) else {
+        return;
+    };
+    let location = Some(location);
+    // SAFETY: a uniform of the bound program, with the type the shader declares.
+    unsafe {
+        match value {
+            Uniform::Float(v) => gl.uniform_1_f32(location, v),
+            Uniform::Vec2([a, b]) => gl.uniform_2_f32(location, a, b),
+            Uniform::Vec3([a, b, c]) => gl.uniform_3_f32(location, a, b, c),
+            Uniform::IVec2([a, b]) => gl.uniform_2_i32(location, a, b),
+        }
     }
 }
 
-/// `diffuse.frag` compiled with or without the variance-matched offsets.
-fn diffuse_program(gl: &Rc<glow::Context>, version_line: &str, matched: bool) -> Result<Program> {
-    Program::new(
-        gl,
-        &format!(
-            "{version_line}\n#define VARIANCE_MATCHED {}",
-            i32::from(matched)
-        ),
-        ("diffuse.frag", include_str!("../glsl/diffuse.frag")),
-        &["u_f", "u_rate", "u_law", "u_texel"],
-    )
+fn set_int(gl: &glow::Context, p: &Program, name: &str, value: i32) {
+    if let Some(location) = p.optional_uniform(name) {
+        // SAFETY: an int or sampler uniform of the bound program.
+        unsafe { gl.uniform_1_i32(Some(location), value) };
+    }
 }
 
-/// Spends the first timer query on a real 1x1 draw (see [`timer::warm_up`]).
-fn warm_up_timer(gl: &Rc<glow::Context>, program: &Program) -> Result<()> {
-    let target = RenderTarget::new(gl, 1, 1, TexelFormat::Rgba16F)?;
-    timer::warm_up(gl, || {
-        target.bind_for_drawing();
-        use_program(gl, program);
-        draw_fullscreen(gl);
-    })?;
-    // SAFETY: unbinding on the current context before the target is dropped.
-    unsafe { gl.bind_framebuffer(glow::FRAMEBUFFER, None) };
-    Ok(())
-}
-
-fn use_program(gl: &glow::Context, p: &Program) {
-    // SAFETY: an owned, linked program on the current context.
-    unsafe { gl.use_program(Some(p.raw())) };
+/// Binds a texture (brume's or the host's, by handle) to `unit`.
+fn bind_texture(gl: &glow::Context, unit: u32, texture: Option<glow::Texture>) {
+    // SAFETY: binding a texture handle of the current context.
+    unsafe {
+        gl.active_texture(glow::TEXTURE0 + unit);
+        gl.bind_texture(glow::TEXTURE_2D, texture);
+    }
 }
 
 fn draw_fullscreen(gl: &glow::Context) {

@@ -3,46 +3,85 @@
 //! reads that follow GL's clamp-to-edge rules exactly; and an exact Gaussian convolution
 //! with clamp-to-edge borders to measure how close each scheme comes to a true blur.
 
+use crate::blur::Blur;
 use crate::error::Result;
-use crate::haze::RenderSpec;
+use crate::medium::{Medium, MediumSample, Pixel};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::schedule::Schedule;
 
 /// An RGBA image in f64, for the reference computations.
 pub type Rgba64 = Grid<[f64; 4]>;
 
-/// The whole render on the CPU: what the GPU pipeline computes, in f64.
-pub fn render(image: &RgbImage, range: &ScalarMap, spec: &RenderSpec) -> Result<RgbaImage> {
-    let schedule = spec.schedule()?;
-    let rates = spec.rates(range, &schedule);
-    let mut f = premultiply(image, range, spec);
+/// The diffused state in f64: τ·E (RGB) and τ (RGB). The GPU carries τ_r in the alpha of
+/// the colour target and (τ_g, τ_b) in a second one only for a chromatic medium; for a
+/// grey one the three are equal, so diffusing all six here is the same arithmetic.
+pub type Field = Grid<[f64; 6]>;
+
+/// The whole render on the CPU: what the GPU pipeline computes, in f64, through the same
+/// seam (the medium per pixel, then the blur, then the composite).
+pub fn render(
+    image: &RgbImage,
+    depth: &ScalarMap,
+    medium: &dyn Medium,
+    blur: &Blur,
+) -> Result<RgbaImage> {
+    medium.validate()?;
+    let schedule = blur.schedule(
+        medium.sigma_max(blur.sigma0),
+        &format!("blur scale of {}", medium.name()),
+    )?;
+    let samples = sample(depth, medium, blur.sigma0);
+    let rates = samples.map(|s| schedule.rate(s.sigma));
+    let mut f = premultiply(image, &samples);
     diffuse(&mut f, &rates, &schedule);
-    Ok(to_f32(&composite(&f, spec.airlight)))
+    Ok(to_f32(&composite(&f, &samples)))
 }
 
-/// Pass 1: F = τ·(E, 1), τ = exp(−κR) (eq. 1-2).
-pub fn premultiply(image: &RgbImage, range: &ScalarMap, spec: &RenderSpec) -> Rgba64 {
+/// The medium at every pixel of `depth`.
+pub fn sample(depth: &ScalarMap, medium: &dyn Medium, sigma0: f64) -> Grid<MediumSample> {
+    let (width, height) = (depth.width(), depth.height());
+    Grid::from_fn(width, height, |x, y| {
+        medium.sample(Pixel {
+            x,
+            y,
+            width,
+            height,
+            depth: f64::from(*depth.get(x, y)),
+            sigma0,
+        })
+    })
+}
+
+/// Pass 1: F = (τ·E, τ) (eq. 1-2).
+pub fn premultiply(image: &RgbImage, samples: &Grid<MediumSample>) -> Field {
     Grid::from_fn(image.width(), image.height(), |x, y| {
         let e = image.get(x, y);
-        let tau = spec.transmission(f64::from(*range.get(x, y)));
+        let tau = samples.get(x, y).transmission;
         [
-            tau * f64::from(e[0]),
-            tau * f64::from(e[1]),
-            tau * f64::from(e[2]),
-            tau,
+            tau[0] * f64::from(e[0]),
+            tau[1] * f64::from(e[1]),
+            tau[2] * f64::from(e[2]),
+            tau[0],
+            tau[1],
+            tau[2],
         ]
     })
 }
 
 /// Passes 2..N+1: N steps of eq. 11-12 with the offsets and rates of `schedule`.
-pub fn diffuse(f: &mut Rgba64, rates: &Grid<f64>, schedule: &Schedule) {
+pub fn diffuse<const C: usize>(f: &mut Grid<[f64; C]>, rates: &Grid<f64>, schedule: &Schedule) {
     for k in 0..schedule.steps {
         *f = diffusion_step(f, rates, schedule, k);
     }
 }
 
 /// One step k of eq. 11: F(x) += Σ_u ½(ρ(x+u) + ρ(x))·(F(x+u) − F(x)).
-pub fn diffusion_step(f: &Rgba64, rates: &Grid<f64>, schedule: &Schedule, k: u32) -> Rgba64 {
+pub fn diffusion_step<const C: usize>(
+    f: &Grid<[f64; C]>,
+    rates: &Grid<f64>,
+    schedule: &Schedule,
+    k: u32,
+) -> Grid<[f64; C]> {
     let law = schedule.offset_law();
     Grid::from_fn(f.width(), f.height(), |x, y| {
         let centre = *f.get(x, y);
@@ -53,7 +92,7 @@ pub fn diffusion_step(f: &Rgba64, rates: &Grid<f64>, schedule: &Schedule, k: u32
         for (sx, sy) in [(px + h, py), (px - h, py), (px, py + h), (px, py - h)] {
             let w = 0.5 * (bilinear(rates, sx, sy) + rate);
             let n = bilinear(f, sx, sy);
-            for c in 0..4 {
+            for c in 0..C {
                 out[c] += w * (n[c] - centre[c]);
             }
         }
@@ -61,14 +100,15 @@ pub fn diffusion_step(f: &Rgba64, rates: &Grid<f64>, schedule: &Schedule, k: u32
     })
 }
 
-/// Pass N+2: F.rgb + (1 − F.a)·B (eq. 4), alpha set to 1 as the GPU output does.
-pub fn composite(f: &Rgba64, airlight: [f32; 3]) -> Rgba64 {
-    f.map(|p| {
-        let t = 1.0 - p[3];
+/// Pass N+2: τE + (1 − τ_blurred)·L∞ per channel (eq. 4), alpha 1 as the GPU output.
+pub fn composite(f: &Field, samples: &Grid<MediumSample>) -> Rgba64 {
+    Grid::from_fn(f.width(), f.height(), |x, y| {
+        let p = f.get(x, y);
+        let l = samples.get(x, y).inscatter;
         [
-            p[0] + t * f64::from(airlight[0]),
-            p[1] + t * f64::from(airlight[1]),
-            p[2] + t * f64::from(airlight[2]),
+            p[0] + (1.0 - p[3]) * l[0],
+            p[1] + (1.0 - p[4]) * l[1],
+            p[2] + (1.0 - p[5]) * l[2],
             1.0,
         ]
     })
@@ -86,7 +126,7 @@ impl Lerp for f64 {
     }
 }
 
-impl Lerp for [f64; 4] {
+impl<const C: usize> Lerp for [f64; C] {
     fn lerp(a: Self, b: Self, t: f64) -> Self {
         std::array::from_fn(|c| a[c] + t * (b[c] - a[c]))
     }
@@ -204,7 +244,6 @@ pub struct ErrorStats {
 mod tests {
     use super::*;
     use crate::schedule::Scheme;
-    use crate::Precision;
 
     #[test]
     fn bilinear_matches_gl_clamp_to_edge() {
@@ -241,8 +280,11 @@ mod tests {
                 }
             },
         );
-        let spec = RenderSpec::uniform(3.0, 1.0, Scheme::Euler, Precision::F32);
-        let schedule = spec.schedule().unwrap();
+        let blur = Blur {
+            scheme: Scheme::Euler,
+            ..Blur::default()
+        };
+        let schedule = blur.schedule(3.0, "sigma").unwrap();
         let rates = Grid::filled(n, n, schedule.rate(3.0));
         diffuse(&mut f, &rates, &schedule);
         let var_x: f64 = (0..n)

@@ -90,7 +90,7 @@ impl FromStr for Scheme {
         Scheme::ALL
             .into_iter()
             .find(|scheme| scheme.name() == s)
-            .ok_or_else(|| Error::invalid("--scheme", s, "one of euler, invariant, matched"))
+            .ok_or_else(|| Error::invalid("scheme", s, "one of euler, invariant, matched"))
     }
 }
 
@@ -161,11 +161,11 @@ impl Schedule {
     /// Plans the N steps that take σ0 to `sigma_max` under `scheme` with rates ≤ `rho_max`
     /// (paper 000, eq. 13 and eq. 18).
     pub fn new(scheme: Scheme, sigma0: f64, sigma_max: f64, rho_max: f64) -> Result<Self> {
-        check_positive_finite("--sigma0", sigma0)?;
+        check_positive_finite("sigma0", sigma0)?;
         check_positive_finite("sigma_max", sigma_max)?;
         if !(rho_max > 0.0 && rho_max <= 0.25) {
             return Err(Error::invalid(
-                "--rho-max",
+                "rho_max",
                 rho_max,
                 "a rate in (0, 0.25] (larger rates make the 4-neighbour update unstable)",
             ));

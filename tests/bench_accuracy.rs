@@ -22,7 +22,7 @@ fn small_report() -> AccuracyReport {
     };
     let (_lock, mut r) = renderer();
     let calls = std::cell::Cell::new(0u64);
-    let report = run_accuracy(&mut r, &image, &opts, &|p| {
+    let report = run_accuracy(r.renderer().unwrap(), &image, &opts, &|p| {
         assert!(p.done <= p.total, "{} > {}", p.done, p.total);
         calls.set(calls.get() + 1);
     })

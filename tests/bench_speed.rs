@@ -3,16 +3,20 @@
 //! (GUIDE.md): only that they exist and are positive.
 mod common;
 
-use brume::bench::args::BenchCommand;
+use brume::bench::speed::Tau;
 use brume::bench::{run_speed, Configs, SpeedOptions};
 use brume::{Precision, Scheme};
-use clap::Parser;
 use common::*;
+use std::process::{Command, Output};
 
-#[derive(clap::Parser)]
-struct Cli {
-    #[command(subcommand)]
-    bench: BenchCommand,
+/// `brume bench ARGS...`, one at a time with the other GL tests.
+fn bench(args: &[&str]) -> Output {
+    let _lock = gl_lock();
+    Command::new(env!("CARGO_BIN_EXE_brume"))
+        .arg("bench")
+        .args(args)
+        .output()
+        .expect("run brume")
 }
 
 #[test]
@@ -29,9 +33,10 @@ fn max_passes_skips_euler_and_says_so() {
         runs: 2,
         // Euler at σ = 3 is 16 + 2 passes, the invariant family 5 + 2.
         max_passes: Some(10),
+        tau: Tau::Grey,
     };
     let (_lock, mut r) = renderer();
-    let report = run_speed(&mut r, &opts, &|_| {}).expect("speed run");
+    let report = run_speed(r.renderer().unwrap(), &opts, &|_| {}).expect("speed run");
     eprint!("{}", brume::bench::report::speed_table(&report));
     let euler = &report.rows[0];
     assert_eq!(euler.scheme, Scheme::Euler);
@@ -60,8 +65,7 @@ fn max_passes_skips_euler_and_says_so() {
 fn run_writes_csv_and_plot_and_reports_ratios() {
     let dir = tempfile::tempdir().unwrap();
     let (csv, svg) = (dir.path().join("speed.csv"), dir.path().join("fig7.svg"));
-    let cli = Cli::try_parse_from([
-        "bench",
+    let out = bench(&[
         "speed",
         "--sigmas",
         "2",
@@ -77,11 +81,12 @@ fn run_writes_csv_and_plot_and_reports_ratios() {
         csv.to_str().unwrap(),
         "--plot",
         svg.to_str().unwrap(),
-    ])
-    .unwrap();
-    let (_lock, mut r) = renderer();
-    let no_image = || -> brume::Result<_> { panic!("speed needs no image") };
-    brume::bench::run(&cli.bench, &mut r, &no_image, &|_| no_image()).expect("bench speed");
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 3, "{text}");
     assert!(text.starts_with("sigma_ref,scheme,precision"));
@@ -89,21 +94,48 @@ fn run_writes_csv_and_plot_and_reports_ratios() {
 }
 
 #[test]
+fn chromatic_tau_is_timed_and_reported() {
+    let out = bench(&[
+        "speed",
+        "--sigmas",
+        "3",
+        "--schemes",
+        "matched",
+        "--precisions",
+        "f32,f16",
+        "--size",
+        "24x16",
+        "--runs",
+        "1",
+        "--tau",
+        "rgb",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["tau"], "rgb");
+    for row in json["rows"].as_array().unwrap() {
+        assert!(row["median_ms"].as_f64().unwrap() > 0.0, "{row}");
+    }
+}
+
+#[test]
 fn bad_options_fail_before_any_work() {
-    let (_lock, mut r) = renderer();
     for (args, option) in [
         (vec!["speed", "--sigmas", ""], "--sigmas"),
         (vec!["speed", "--schemes", "euler,fast"], "--schemes"),
         (vec!["speed", "--size", "0x0"], "--size"),
+        (vec!["speed", "--tau", "blue"], "--tau"),
         (vec!["accuracy", "--sigmas", "0.5"], "--sigmas"),
         (vec!["accuracy", "--plot", "/no/such/dir/x.png"], "--plot"),
     ] {
-        let cli = Cli::try_parse_from(std::iter::once("bench").chain(args.clone())).unwrap();
-        let err = brume::bench::run(&cli.bench, &mut r, &|| panic!("no image needed"), &|_| {
-            panic!("no image needed")
-        })
-        .unwrap_err()
-        .to_string();
+        let out = bench(&args);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
         assert!(err.contains(option), "{args:?}: {err}");
     }
 }

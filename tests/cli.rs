@@ -176,7 +176,7 @@ fn uniform_sigma_pfm_output_and_timings() {
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(
-        text.contains("premultiply") && text.contains("composite"),
+        text.contains("medium") && text.contains("composite"),
         "{text}"
     );
     let pfm = fs::read(dir.path().join("blur.pfm")).unwrap();

@@ -1,9 +1,8 @@
 //! Bad inputs to the pipeline give typed errors that name the problem, never a panic.
 mod common;
 
-use brume::haze::{Haze, RenderSpec};
 use brume::raster::Grid;
-use brume::{Error, Precision, Scheme};
+use brume::{Blur, Error, Haze, UniformBlur};
 use common::*;
 
 #[test]
@@ -11,8 +10,7 @@ fn different_sizes_are_named() {
     let (_lock, mut r) = renderer();
     let image = noise_image(10, 8, 1);
     let range = Grid::filled(9, 8, 0.5f32);
-    let spec = RenderSpec::haze(&Haze::default(), Scheme::Matched, Precision::F32);
-    match r.render(&image, &range, &spec) {
+    match r.render(&image, &range, &Haze::default(), &Blur::default()) {
         Err(Error::SizeMismatch { aw: 10, bw: 9, .. }) => {}
         other => panic!("expected a size mismatch, got {other:?}"),
     }
@@ -37,7 +35,7 @@ fn negative_or_non_finite_parameters_are_rejected() {
             ..Haze::default()
         },
         Haze {
-            sigma0: 0.0,
+            tint: [1.0, 0.0, 1.0],
             ..Haze::default()
         },
         Haze {
@@ -46,17 +44,23 @@ fn negative_or_non_finite_parameters_are_rejected() {
         },
     ];
     for haze in bad {
-        let spec = RenderSpec::haze(&haze, Scheme::Matched, Precision::F32);
         let err = r
-            .render(&image, &range, &spec)
+            .render(&image, &range, &haze, &Blur::default())
             .expect_err("bad parameter accepted");
         assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
     }
-    let uniform = RenderSpec::uniform(0.5, 1.0, Scheme::Matched, Precision::F32);
-    assert!(matches!(
-        r.render(&image, &range, &uniform),
-        Err(Error::InvalidParameter { .. })
-    ));
+    let zero_sigma0 = Blur {
+        sigma0: 0.0,
+        ..Blur::default()
+    };
+    let below_sigma0 = UniformBlur::new(0.5);
+    for (medium, blur) in [
+        (&Haze::default() as &dyn brume::Medium, &zero_sigma0),
+        (&below_sigma0, &Blur::default()),
+    ] {
+        let err = r.render(&image, &range, medium, blur).unwrap_err();
+        assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
+    }
 }
 
 #[test]
@@ -65,8 +69,7 @@ fn images_above_the_texture_limit_are_refused_before_any_gl_call() {
     let max = r.caps().max_texture_size as usize;
     let image = Grid::filled(max + 1, 1, [0.5f32; 3]);
     let range = Grid::filled(max + 1, 1, 0.5f32);
-    let spec = RenderSpec::haze(&Haze::default(), Scheme::Matched, Precision::F32);
-    match r.render(&image, &range, &spec) {
+    match r.render(&image, &range, &Haze::default(), &Blur::default()) {
         Err(Error::TooLarge { width, max: m, .. }) => {
             assert_eq!(width as usize, max + 1);
             assert_eq!(m as usize, max);

@@ -10,10 +10,9 @@
 //!   after 8 steps, 3e-2 after 96 Euler steps (the paper's f16 Euler drift).
 mod common;
 
-use brume::haze::{Haze, RenderSpec};
-use brume::raster::Grid;
+use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::reference;
-use brume::{Precision, Scheme};
+use brume::{Blur, Haze, Medium, Precision, Scheme, UniformBlur};
 use common::*;
 
 const F32_PER_PASS: f64 = 4e-7;
@@ -28,27 +27,36 @@ fn tolerance(precision: Precision, steps: u32) -> f64 {
 }
 
 /// Renders on both sides and asserts the largest difference is within the budget.
-fn assert_gpu_matches_cpu(
-    image: &brume::raster::RgbImage,
-    range: &brume::raster::ScalarMap,
-    spec: &RenderSpec,
-) {
+fn assert_gpu_matches_cpu(image: &RgbImage, range: &ScalarMap, medium: &dyn Medium, blur: &Blur) {
     let (_lock, mut r) = renderer();
-    let gpu = r.render(image, range, spec).expect("GPU render");
-    let cpu = reference::render(image, range, spec).expect("CPU render");
+    let gpu = r.render(image, range, medium, blur).expect("GPU render");
+    let cpu = reference::render(image, range, medium, blur).expect("CPU render");
     let e = reference::rgb_error(&gpu.image, &cpu, 0);
-    let tol = tolerance(spec.precision, gpu.schedule.steps);
+    let tol = tolerance(blur.precision, gpu.schedule.steps);
     eprintln!(
-        "{} {} N={} rms {:.2e} max {:.2e} (tolerance {:.2e})",
-        spec.scheme, spec.precision, gpu.schedule.steps, e.rms, e.max_abs, tol
+        "{} {} {} N={} rms {:.2e} max {:.2e} (tolerance {:.2e})",
+        medium.name(),
+        blur.scheme,
+        blur.precision,
+        gpu.schedule.steps,
+        e.rms,
+        e.max_abs,
+        tol
     );
     assert!(gpu.image.as_slice().iter().flatten().all(|v| v.is_finite()));
     assert!(
         e.max_abs <= tol,
         "{} {}: {e:?} > {tol}",
-        spec.scheme,
-        spec.precision
+        blur.scheme,
+        blur.precision
     );
+}
+
+/// Every scheme with every precision.
+fn every_blur() -> impl Iterator<Item = Blur> {
+    Precision::ALL
+        .into_iter()
+        .flat_map(|p| Scheme::ALL.into_iter().map(move |s| Blur::new(s, p)))
 }
 
 #[test]
@@ -56,15 +64,55 @@ fn haze_matches_reference_for_every_scheme_and_precision() {
     let (w, h) = (48, 40);
     let image = noise_image(w, h, 7);
     let range = ramp_range(w, h);
-    for precision in Precision::ALL {
-        for scheme in Scheme::ALL {
-            let haze = Haze {
-                lambda: 6.0,
-                ..Haze::default()
-            };
-            assert_gpu_matches_cpu(&image, &range, &RenderSpec::haze(&haze, scheme, precision));
-        }
+    let haze = Haze {
+        lambda: 6.0,
+        ..Haze::default()
+    };
+    for blur in every_blur() {
+        assert_gpu_matches_cpu(&image, &range, &haze, &blur);
     }
+}
+
+/// A chromatic medium: each channel's τ is blurred with its colour (the second target of
+/// the pipeline), and the composite uses each channel's blurred τ.
+#[test]
+fn chromatic_haze_matches_reference_for_every_scheme_and_precision() {
+    let (w, h) = (48, 40);
+    let image = noise_image(w, h, 11);
+    let range = ramp_range(w, h);
+    let haze = Haze {
+        lambda: 6.0,
+        ka: 0.5,
+        ks: 1.5,
+        tint: [0.6, 1.0, 1.8],
+        airlight: [0.7, 0.8, 0.95],
+        ..Haze::default()
+    };
+    assert!(haze.chromatic());
+    for blur in every_blur() {
+        assert_gpu_matches_cpu(&image, &range, &haze, &blur);
+    }
+}
+
+/// The chromatic path is not a different model: a tint whose channels differ by a hair
+/// renders what the grey path renders, up to that hair.
+#[test]
+fn nearly_grey_tint_renders_like_grey() {
+    let (w, h) = (40, 32);
+    let image = noise_image(w, h, 5);
+    let range = ramp_range(w, h);
+    let grey = Haze::default();
+    let tinted = Haze {
+        tint: [1.0, 1.0, 1.0 + 1e-6],
+        ..grey
+    };
+    assert!(tinted.chromatic() && !grey.chromatic());
+    let (_lock, mut r) = renderer();
+    let blur = Blur::default();
+    let a = r.render(&image, &range, &grey, &blur).unwrap().image;
+    let b = r.render(&image, &range, &tinted, &blur).unwrap().image;
+    let e = reference::rgb_error(&a, &b, 0);
+    assert!(e.max_abs < 1e-5, "{e:?}");
 }
 
 #[test]
@@ -72,14 +120,8 @@ fn uniform_blur_matches_reference() {
     let (w, h) = (40, 33);
     let image = noise_image(w, h, 3);
     let range = Grid::filled(w, h, 0.0f32);
-    for precision in Precision::ALL {
-        for scheme in [Scheme::Invariant, Scheme::Matched] {
-            assert_gpu_matches_cpu(
-                &image,
-                &range,
-                &RenderSpec::uniform(6.5, 1.0, scheme, precision),
-            );
-        }
+    for blur in every_blur().filter(|b| b.scheme != Scheme::Euler) {
+        assert_gpu_matches_cpu(&image, &range, &UniformBlur::new(6.5), &blur);
     }
 }
 
@@ -89,8 +131,9 @@ fn pass_count_and_timings_are_reported() {
     let image = noise_image(w, h, 1);
     let range = ramp_range(w, h);
     let (_lock, mut r) = renderer();
-    let spec = RenderSpec::haze(&Haze::default(), Scheme::Matched, Precision::F32);
-    let out = r.render(&image, &range, &spec).unwrap();
+    let out = r
+        .render(&image, &range, &Haze::default(), &Blur::default())
+        .unwrap();
     let t = &out.times;
     assert_eq!(t.pass_ms.len() as u32, out.schedule.steps + 2);
     assert!(t.pass_ms.iter().all(|ms| ms.is_finite() && *ms >= 0.0));
@@ -117,9 +160,11 @@ fn near_pixels_stay_sharp_and_far_pixels_fade_to_airlight() {
         lambda: 2.0,
         ..Haze::default()
     };
-    let spec = RenderSpec::haze(&haze, Scheme::Matched, Precision::F32);
     let (_lock, mut r) = renderer();
-    let out = r.render(&image, &range, &spec).unwrap().image;
+    let out = r
+        .render(&image, &range, &haze, &Blur::default())
+        .unwrap()
+        .image;
     // Deep inside the near half nothing changes: zero rate and τ = 1.
     let p = out.get(2, 15);
     let q = image.get(2, 15);
@@ -149,16 +194,14 @@ fn real_aloe_crop_matches_reference() {
     // A 96x72 window across leaf edges in front of the cloth, with unknown pixels.
     let (x0, y0, w, h) = (560, 420, 96, 72);
     let image = full.crop(x0, y0, w, h);
-    let (range, _) = brume::haze::normalise_range(&disp.range.crop(x0, y0, w, h)).unwrap();
-    for precision in Precision::ALL {
-        for scheme in Scheme::ALL {
-            let haze = Haze {
-                ka: 1.0,
-                ks: 2.0,
-                lambda: 3.0,
-                ..Haze::default()
-            };
-            assert_gpu_matches_cpu(&image, &range, &RenderSpec::haze(&haze, scheme, precision));
-        }
+    let (range, _) = brume::medium::haze::normalise_range(&disp.range.crop(x0, y0, w, h)).unwrap();
+    let haze = Haze {
+        ka: 1.0,
+        ks: 2.0,
+        lambda: 3.0,
+        ..Haze::default()
+    };
+    for blur in every_blur() {
+        assert_gpu_matches_cpu(&image, &range, &haze, &blur);
     }
 }

@@ -23,9 +23,9 @@
 //! largest error exceeds the input's value range: a blur is a convex average, so a
 //! stable scheme can never be that far off.
 
-use super::{config_label, Configs, Progress};
+use super::{Config, Configs, Progress};
 use crate::error::Result;
-use crate::haze::RenderSpec;
+use crate::medium::Medium;
 use crate::raster::{Grid, RgbImage, RgbaImage};
 use crate::reference;
 use crate::{Precision, Renderer, Scheme};
@@ -108,30 +108,27 @@ pub fn run_accuracy(
         let reference_sigma = reference_std(sigma_ref, configs.sigma0);
         let expected = reference::to_f32(&reference::gaussian_blur(&input, reference_sigma));
         let impulse = Impulse::new(sigma_ref);
-        for &scheme in &configs.schemes {
-            for &precision in &configs.precisions {
-                let label = config_label(sigma_ref, scheme, precision);
-                progress(Progress {
-                    done,
-                    total,
-                    what: &label,
-                });
-                let spec = RenderSpec::uniform(sigma_ref, configs.sigma0, scheme, precision);
-                let steps = spec.schedule()?.steps;
-                let row = measure(renderer, image, &expected, &impulse, &spec, value_range)?;
-                rows.push(AccuracyRow {
-                    steps,
-                    reference_sigma,
-                    ..row
-                });
-                // The blur and the impulse: two renders of N + 2 passes.
-                done += 2 * u64::from(steps + 2);
-                progress(Progress {
-                    done,
-                    total,
-                    what: &label,
-                });
-            }
+        for config in configs.each().filter(|c| c.sigma_ref == sigma_ref) {
+            let label = config.label();
+            progress(Progress {
+                done,
+                total,
+                what: &label,
+            });
+            let steps = config.schedule()?.steps;
+            let row = measure(renderer, image, &expected, &impulse, &config, value_range)?;
+            rows.push(AccuracyRow {
+                steps,
+                reference_sigma,
+                ..row
+            });
+            // The blur and the impulse: two renders of N + 2 passes.
+            done += 2 * u64::from(steps + 2);
+            progress(Progress {
+                done,
+                total,
+                what: &label,
+            });
         }
     }
     Ok(AccuracyReport {
@@ -139,7 +136,7 @@ pub fn run_accuracy(
         width: image.width(),
         height: image.height(),
         sigma0: configs.sigma0,
-        rho_max: crate::haze::DEFAULT_RHO_MAX,
+        rho_max: crate::blur::DEFAULT_RHO_MAX,
         rows,
     })
 }
@@ -152,11 +149,8 @@ pub fn reference_std(sigma_ref: f64, sigma0: f64) -> f64 {
 /// Total passes of the whole run (two renders per configuration), for progress.
 fn planned_passes(configs: &Configs) -> Result<u64> {
     let mut total = 0;
-    for (sigma, scheme, precision) in configs.each() {
-        let steps = RenderSpec::uniform(sigma, configs.sigma0, scheme, precision)
-            .schedule()?
-            .steps;
-        total += 2 * u64::from(steps + 2);
+    for config in configs.each() {
+        total += 2 * u64::from(config.schedule()?.steps + 2);
     }
     Ok(total)
 }
@@ -168,23 +162,25 @@ fn measure(
     image: &RgbImage,
     expected: &RgbaImage,
     impulse: &Impulse,
-    spec: &RenderSpec,
+    config: &Config,
     value_range: f64,
 ) -> Result<AccuracyRow> {
-    let sigma_ref = spec.sigma_max();
+    let sigma_ref = config.sigma_ref;
     let range = Grid::filled(image.width(), image.height(), 0.0f32);
-    let blurred = renderer.render(image, &range, spec)?.image;
+    let blurred = renderer
+        .render(image, &range, &config.medium(), &config.blur)?
+        .image;
     let whole = reference::rgb_error(&blurred, expected, 0);
     let margin = (3.0 * sigma_ref).ceil() as usize;
     let interior = reference::rgb_error(&blurred, expected, margin);
-    let (var_x, var_y) = impulse.variances(renderer, spec)?;
-    let s0 = spec.sigma0 * spec.sigma0;
+    let (var_x, var_y) = impulse.variances(renderer, config)?;
+    let s0 = config.blur.sigma0 * config.blur.sigma0;
     let finite = whole.rms.is_finite() && all_finite(&blurred);
     let diverged = !finite || whole.max_abs > value_range.max(f64::EPSILON);
     Ok(AccuracyRow {
         sigma_ref,
-        scheme: spec.scheme,
-        precision: spec.precision,
+        scheme: config.blur.scheme,
+        precision: config.blur.precision,
         steps: 0,
         reference_sigma: 0.0,
         rms: whole.rms,
@@ -195,13 +191,13 @@ fn measure(
         scale_y: (var_y + s0).sqrt(),
         scale_ratio: ((var_x + var_y) / 2.0 + s0).sqrt() / sigma_ref,
         diverged,
-        note: row_note(spec, diverged)?,
+        note: row_note(config, diverged)?,
     })
 }
 
 /// Says plainly when a row has nothing to measure or blew up.
-fn row_note(spec: &RenderSpec, diverged: bool) -> Result<Option<String>> {
-    if spec.schedule()?.steps == 0 {
+fn row_note(config: &Config, diverged: bool) -> Result<Option<String>> {
+    if config.schedule()?.steps == 0 {
         return Ok(Some(
             "N = 0: σref = σ0 so there is nothing to diffuse (output = input)".into(),
         ));
@@ -250,12 +246,15 @@ impl Impulse {
         Impulse { image }
     }
 
-    /// Renders the impulse with `spec` and returns the response's variance along x and y
-    /// (red channel).
-    fn variances(&self, renderer: &mut Renderer, spec: &RenderSpec) -> Result<(f64, f64)> {
+    /// Renders the impulse with `config` and returns the response's variance along x and
+    /// y (red channel).
+    fn variances(&self, renderer: &mut Renderer, config: &Config) -> Result<(f64, f64)> {
         let side = self.image.width();
         let range = Grid::filled(side, side, 0.0f32);
-        let response = renderer.render(&self.image, &range, spec)?.image;
+        let medium: &dyn Medium = &config.medium();
+        let response = renderer
+            .render(&self.image, &range, medium, &config.blur)?
+            .image;
         Ok(central_variances(&response.map(|p| f64::from(p[0]))))
     }
 }

@@ -6,9 +6,8 @@
 //! - [`speed`] (fig. 7): the same configurations timed at one image size, median and
 //!   standard deviation of several runs after a warm-up.
 //!
-//! [`report`] prints tables and writes CSV/JSON, [`plot`] draws the two figures, and
-//! [`args`] holds the `brume bench` command-line arguments and [`run`], the one entry point
-//! the CLI calls.
+//! [`report`] prints tables and writes CSV/JSON and [`plot`] draws the two figures; the
+//! command-line arguments and progress bars belong to the `brume` program (`src/cli`).
 //!
 //! ```text
 //! brume bench accuracy --plot fig6.png --csv fig6.csv       # about 1.5 min at 641x555
@@ -27,17 +26,18 @@
 //!   `--runs` renders after a warm-up, with the clock that produced it (see [`speed`]).
 
 pub mod accuracy;
-pub mod args;
 pub mod plot;
 pub mod report;
 pub mod speed;
 
 pub use accuracy::{run_accuracy, AccuracyOptions, AccuracyReport, AccuracyRow};
-pub use args::{run, BenchCommand};
 pub use speed::{run_speed, SpeedOptions, SpeedReport, SpeedRow};
 
+use crate::blur::{Blur, DEFAULT_RHO_MAX};
 use crate::error::{Error, Result};
+use crate::medium::UniformBlur;
 use crate::raster::{Grid, RgbImage};
+use crate::schedule::Schedule;
 use crate::{Precision, Scheme};
 
 /// The σref list of paper 000's figures 6 and 7 (px).
@@ -76,7 +76,7 @@ impl Default for Configs {
             sigmas: DEFAULT_SIGMAS.to_vec(),
             schemes: Scheme::ALL.to_vec(),
             precisions: Precision::ALL.to_vec(),
-            sigma0: crate::haze::DEFAULT_SIGMA0,
+            sigma0: crate::blur::DEFAULT_SIGMA0,
         }
     }
 }
@@ -85,14 +85,10 @@ impl Configs {
     /// Rejects empty lists and scales below σ0, naming the command-line option.
     pub fn validate(&self) -> Result<()> {
         if !(self.sigma0.is_finite() && self.sigma0 > 0.0) {
-            return Err(Error::invalid(
-                "--sigma0",
-                self.sigma0,
-                "a finite scale > 0",
-            ));
+            return Err(Error::invalid("sigma0", self.sigma0, "a finite scale > 0"));
         }
         if self.sigmas.is_empty() {
-            return Err(Error::invalid("--sigmas", "(empty)", "at least one scale"));
+            return Err(Error::invalid("sigmas", "(empty)", "at least one scale"));
         }
         if let Some(bad) = self
             .sigmas
@@ -100,21 +96,17 @@ impl Configs {
             .find(|s| !(s.is_finite() && **s >= self.sigma0))
         {
             return Err(Error::invalid(
-                "--sigmas",
+                "sigmas",
                 bad,
                 format!("finite scales ≥ σ0 = {} px", self.sigma0),
             ));
         }
         if self.schemes.is_empty() {
-            return Err(Error::invalid(
-                "--schemes",
-                "(empty)",
-                "at least one scheme",
-            ));
+            return Err(Error::invalid("schemes", "(empty)", "at least one scheme"));
         }
         if self.precisions.is_empty() {
             return Err(Error::invalid(
-                "--precisions",
+                "precisions",
                 "(empty)",
                 "at least one precision",
             ));
@@ -123,12 +115,47 @@ impl Configs {
     }
 
     /// Every (σref, scheme, precision) in report order: σ outermost, as the figures read.
-    pub fn each(&self) -> impl Iterator<Item = (f64, Scheme, Precision)> + '_ {
-        self.sigmas.iter().flat_map(move |&s| {
-            self.schemes
-                .iter()
-                .flat_map(move |&sc| self.precisions.iter().map(move |&p| (s, sc, p)))
+    pub fn each(&self) -> impl Iterator<Item = Config> + '_ {
+        self.sigmas.iter().flat_map(move |&sigma_ref| {
+            self.schemes.iter().flat_map(move |&scheme| {
+                self.precisions.iter().map(move |&precision| Config {
+                    sigma_ref,
+                    blur: Blur {
+                        scheme,
+                        sigma0: self.sigma0,
+                        rho_max: DEFAULT_RHO_MAX,
+                        precision,
+                    },
+                })
+            })
         })
+    }
+}
+
+/// One configuration of either experiment: a uniform blur to σref with one scheme and
+/// precision.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Target scale σref (px).
+    pub sigma_ref: f64,
+    /// Scheme, σ0, ρmax and precision.
+    pub blur: Blur,
+}
+
+impl Config {
+    /// The medium: a pure blur to σref.
+    pub fn medium(&self) -> UniformBlur {
+        UniformBlur::new(self.sigma_ref)
+    }
+
+    /// The N steps that reach σref.
+    pub fn schedule(&self) -> Result<Schedule> {
+        self.blur.schedule(self.sigma_ref, "sigmas")
+    }
+
+    /// `scheme precision σ=…`, for progress and tables.
+    pub fn label(&self) -> String {
+        config_label(self.sigma_ref, self.blur.scheme, self.blur.precision)
     }
 }
 

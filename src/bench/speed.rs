@@ -8,9 +8,10 @@
 //! The input is [`super::synthetic_image`]: a pass costs the same whatever the pixels
 //! hold, and the figure must not depend on which demo image is built in.
 
-use super::{config_label, Configs, Progress};
+use super::{Config, Configs, Progress};
 use crate::error::{Error, Result};
-use crate::haze::RenderSpec;
+use crate::medium::uniform::CHROMATIC_TRANSMISSION;
+use crate::medium::UniformBlur;
 use crate::raster::Grid;
 use crate::schedule::Schedule;
 use crate::{Precision, Renderer, Scheme};
@@ -20,6 +21,31 @@ use serde::Serialize;
 pub const DEFAULT_SIZE: (usize, usize) = (1600, 1120);
 /// Default number of timed runs per configuration.
 pub const DEFAULT_RUNS: usize = 5;
+
+/// Whether the transmission is the same in every channel (paper 000: τ in the alpha of
+/// the pre-multiplied colour) or differs per channel (a second target in every pass).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Tau {
+    /// τ = 1 in every channel: the paper's pipeline.
+    #[default]
+    Grey,
+    /// τ = [`CHROMATIC_TRANSMISSION`]: the chromatic blur.
+    Rgb,
+}
+
+impl Tau {
+    /// The medium of a configuration: a uniform blur to σref through this τ.
+    fn medium(self, config: &Config) -> UniformBlur {
+        match self {
+            Tau::Grey => config.medium(),
+            Tau::Rgb => UniformBlur {
+                transmission: CHROMATIC_TRANSMISSION,
+                ..config.medium()
+            },
+        }
+    }
+}
 
 /// What to time.
 #[derive(Clone, Debug, PartialEq)]
@@ -34,6 +60,8 @@ pub struct SpeedOptions {
     pub runs: usize,
     /// Skip configurations with more than this many passes (N + 2).
     pub max_passes: Option<u32>,
+    /// Grey or chromatic transmission.
+    pub tau: Tau,
 }
 
 impl Default for SpeedOptions {
@@ -44,6 +72,7 @@ impl Default for SpeedOptions {
             height: DEFAULT_SIZE.1,
             runs: DEFAULT_RUNS,
             max_passes: None,
+            tau: Tau::Grey,
         }
     }
 }
@@ -54,13 +83,13 @@ impl SpeedOptions {
         self.configs.validate()?;
         if self.width == 0 || self.height == 0 {
             return Err(Error::invalid(
-                "--size",
+                "size",
                 format!("{}x{}", self.width, self.height),
                 "WIDTHxHEIGHT, both ≥ 1, e.g. 1600x1120",
             ));
         }
         if self.runs == 0 {
-            return Err(Error::invalid("--runs", 0, "at least 1 timed run"));
+            return Err(Error::invalid("runs", 0, "at least 1 timed run"));
         }
         Ok(())
     }
@@ -128,6 +157,8 @@ pub struct SpeedReport {
     pub runs: usize,
     /// The `--max-passes` limit, if any.
     pub max_passes: Option<u32>,
+    /// Grey or chromatic transmission.
+    pub tau: Tau,
     /// One row per (σref, scheme, precision), σ outermost.
     pub rows: Vec<SpeedRow>,
     /// Euler / matched and Euler / invariant at the largest σ where both ran.
@@ -152,10 +183,10 @@ pub fn run_speed(
         .sum();
     let mut done = 0;
     let mut rows = Vec::new();
-    for (spec, schedule, skip) in &plans {
-        let label = config_label(spec.sigma_max(), spec.scheme, spec.precision);
+    for (config, schedule, skip) in &plans {
+        let label = config.label();
         let row = match skip {
-            Some(reason) => skipped_row(spec, schedule, reason.clone()),
+            Some(reason) => skipped_row(config, schedule, reason.clone()),
             None => {
                 // Say what is starting: one Euler render can take a minute.
                 progress(Progress {
@@ -163,13 +194,12 @@ pub fn run_speed(
                     total,
                     what: &label,
                 });
-                let rate = schedule.rate(spec.sigma_max()) as f32;
-                let rates = vec![rate; opts.width * opts.height];
+                let medium = opts.tau.medium(config);
                 let mut samples = Vec::with_capacity(opts.runs);
                 let mut clocks = Vec::with_capacity(opts.runs);
                 // Run 0 is the warm-up: shader caches, target allocation, first query.
                 for run in 0..=opts.runs {
-                    let out = renderer.render_rates(&image, &range, &rates, spec, schedule)?;
+                    let out = renderer.render(&image, &range, &medium, &config.blur)?;
                     if run > 0 {
                         samples.push(out.times.total_ms);
                         clocks.push(out.times.clock.name());
@@ -181,7 +211,7 @@ pub fn run_speed(
                         what: &label,
                     });
                 }
-                timed_row(spec, schedule, samples, &clocks)
+                timed_row(config, schedule, samples, &clocks)
             }
         };
         rows.push(row);
@@ -194,34 +224,33 @@ pub fn run_speed(
         height: opts.height,
         runs: opts.runs,
         max_passes: opts.max_passes,
+        tau: opts.tau,
         rows,
         ratios,
     })
 }
 
 /// Every configuration with its schedule and, if `--max-passes` rules it out, why.
-fn plan(opts: &SpeedOptions) -> Result<Vec<(RenderSpec, Schedule, Option<String>)>> {
-    let configs = &opts.configs;
-    configs
+fn plan(opts: &SpeedOptions) -> Result<Vec<(Config, Schedule, Option<String>)>> {
+    opts.configs
         .each()
-        .map(|(sigma, scheme, precision)| {
-            let spec = RenderSpec::uniform(sigma, configs.sigma0, scheme, precision);
-            let schedule = spec.schedule()?;
+        .map(|config| {
+            let schedule = config.schedule()?;
             let passes = schedule.steps + 2;
             let skip = opts
                 .max_passes
                 .filter(|&max| passes > max)
                 .map(|max| format!("{passes} passes > --max-passes {max}"));
-            Ok((spec, schedule, skip))
+            Ok((config, schedule, skip))
         })
         .collect()
 }
 
-fn skipped_row(spec: &RenderSpec, schedule: &Schedule, reason: String) -> SpeedRow {
+fn skipped_row(config: &Config, schedule: &Schedule, reason: String) -> SpeedRow {
     SpeedRow {
-        sigma_ref: spec.sigma_max(),
-        scheme: spec.scheme,
-        precision: spec.precision,
+        sigma_ref: config.sigma_ref,
+        scheme: config.blur.scheme,
+        precision: config.blur.precision,
         steps: schedule.steps,
         passes: schedule.steps + 2,
         skipped: true,
@@ -235,12 +264,7 @@ fn skipped_row(spec: &RenderSpec, schedule: &Schedule, reason: String) -> SpeedR
     }
 }
 
-fn timed_row(
-    spec: &RenderSpec,
-    schedule: &Schedule,
-    samples: Vec<f64>,
-    clocks: &[&str],
-) -> SpeedRow {
+fn timed_row(config: &Config, schedule: &Schedule, samples: Vec<f64>, clocks: &[&str]) -> SpeedRow {
     let passes = schedule.steps + 2;
     let median_ms = median(&samples);
     let clock = match clocks.first() {
@@ -248,9 +272,9 @@ fn timed_row(
         _ => "mixed".into(),
     };
     SpeedRow {
-        sigma_ref: spec.sigma_max(),
-        scheme: spec.scheme,
-        precision: spec.precision,
+        sigma_ref: config.sigma_ref,
+        scheme: config.blur.scheme,
+        precision: config.blur.precision,
         steps: schedule.steps,
         passes,
         skipped: false,
@@ -346,11 +370,14 @@ mod tests {
             ..SpeedOptions::default()
         };
         let plans = plan(&opts).unwrap();
-        let euler = plans.iter().find(|p| p.0.scheme == Scheme::Euler).unwrap();
+        let euler = plans
+            .iter()
+            .find(|p| p.0.blur.scheme == Scheme::Euler)
+            .unwrap();
         assert_eq!(euler.2.as_deref(), Some("1250 passes > --max-passes 100"));
         assert!(plans
             .iter()
-            .filter(|p| p.0.scheme != Scheme::Euler)
+            .filter(|p| p.0.blur.scheme != Scheme::Euler)
             .all(|p| p.2.is_none()));
     }
 }

@@ -1,10 +1,11 @@
 //! Argument definitions (clap derive). Help texts are the user manual: say units, defaults
 //! and what each value does.
 
-use brume::bench::args::BenchCommand;
+use super::bench::BenchCommand;
+use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::egl::Platform;
-use brume::haze;
 use brume::io::depth::{DepthFormat, DepthKind};
+use brume::medium::haze;
 use brume::{Precision, Scheme};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -149,17 +150,24 @@ pub struct RenderArgs {
     pub lambda: f64,
 
     /// Inner scale σ0 of the input image in px (its own blur).
-    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_SIGMA0, allow_negative_numbers = true)]
+    #[arg(long, value_name = "PX", default_value_t = DEFAULT_SIGMA0, allow_negative_numbers = true)]
     pub sigma0: f64,
 
     /// Largest diffusion rate per step, in (0, 0.25]; smaller means more, smaller steps.
-    #[arg(long, value_name = "RHO", default_value_t = haze::DEFAULT_RHO_MAX, allow_negative_numbers = true)]
+    #[arg(long, value_name = "RHO", default_value_t = DEFAULT_RHO_MAX, allow_negative_numbers = true)]
     pub rho_max: f64,
 
     /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: the median sky
     /// colour; with no sky, a neutral grey at the 99th percentile of the luminance.
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     pub airlight: Option<[f32; 3]>,
+
+    /// Relative extinction per channel as R,G,B factors (default 1,1,1: grey haze, as
+    /// paper 000). E.g. 0.8,1,1.3 makes a bluish veil: blue is attenuated, and replaced by
+    /// airlight, most. A tint that is not grey blurs each channel's τ on its own (a second
+    /// texture in every pass).
+    #[arg(long, value_name = "R,G,B", value_parser = parse_tint)]
+    pub tint: Option<[f64; 3]>,
 
     /// Diffusion scheme: matched (default; variance-matched, most accurate), invariant
     /// (paper eq. 18, literally; under-blurs) or euler (eq. 13; hundreds of passes).
@@ -229,6 +237,19 @@ fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
         }
         _ => Err(format!(
             "'{s}' is not three finite linear values ≥ 0 separated by commas, e.g. 0.8,0.8,0.8"
+        )),
+    }
+}
+
+/// Parses `R,G,B` into three factors > 0.
+fn parse_tint(s: &str) -> Result<[f64; 3], String> {
+    let values: Result<Vec<f64>, _> = s.split(',').map(|p| p.trim().parse::<f64>()).collect();
+    match values {
+        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite() && *c > 0.0) => {
+            Ok([v[0], v[1], v[2]])
+        }
+        _ => Err(format!(
+            "'{s}' is not three finite factors > 0 separated by commas, e.g. 0.8,1,1.3"
         )),
     }
 }

@@ -21,11 +21,10 @@ pub fn run(args: &InfoArgs, egl: Option<Platform>) -> Result<()> {
 
 fn print_text(c: &Capabilities) {
     let yes = |b: bool| if b { "yes" } else { "no" };
-    println!("EGL platform       {}", c.egl_platform);
-    println!(
-        "EGL vendor         {} (EGL {})",
-        c.egl_vendor, c.egl_version
-    );
+    if let Some(egl) = &c.egl {
+        println!("EGL platform       {}", egl.platform);
+        println!("EGL vendor         {} (EGL {})", egl.vendor, egl.version);
+    }
     println!("GL vendor          {}", c.vendor);
     println!("GL renderer        {}", c.renderer);
     println!("GL version         {}", c.version);

@@ -1,14 +1,15 @@
 //! Command-line interface: argument definitions and the glue from arguments to the library.
 
 mod args;
+mod bench;
 mod info;
 mod prep;
 mod render;
 
-pub use args::Cli;
-use args::Command;
+pub use args::{Cli, Command};
 use brume::egl::Platform;
-use brume::{Renderer, Result};
+use brume::{Error, Headless, Result};
+use clap::CommandFactory;
 
 /// Runs the chosen subcommand.
 pub fn run(cli: Cli) -> Result<()> {
@@ -17,23 +18,86 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Prep(a) => prep::run(&a),
         Command::Bench(cmd) => {
-            let mut renderer = open_renderer(cli.egl)?;
-            brume::bench::run(&cmd, &mut renderer, &brume::io::demo::demo_image, &|p| {
-                brume::io::image::load_linear_rgb(p)
-            })
+            let mut headless = open_renderer(cli.egl)?;
+            bench::run(
+                &cmd,
+                headless.renderer()?,
+                &brume::io::demo::demo_image,
+                &|p| brume::io::image::load_linear_rgb(p),
+            )
         }
     }
 }
 
 /// Opens the GL context the way every subcommand does.
-fn open_renderer(egl: Option<Platform>) -> Result<Renderer> {
-    let r = Renderer::new(egl)?;
+fn open_renderer(egl: Option<Platform>) -> Result<Headless> {
+    let r = Headless::new(egl)?;
+    let caps = r.caps();
+    let egl = caps.egl.as_ref();
     log::info!(
         "{} on {} via EGL {} ({})",
-        r.caps().version,
-        r.caps().renderer,
-        r.caps().egl_platform,
-        r.caps().egl_vendor
+        caps.version,
+        caps.renderer,
+        egl.map_or("?", |e| e.platform.as_str()),
+        egl.map_or("?", |e| e.vendor.as_str()),
     );
     Ok(r)
+}
+
+/// The library names a bad parameter as its field (`rho_max`); on the command line it is
+/// a flag (`--rho-max`). Names that are a flag of `brume` become that flag; others (a
+/// file's field, `range map`) are kept.
+pub fn name_flags(e: Error) -> Error {
+    match e {
+        Error::InvalidParameter {
+            name,
+            value,
+            expected,
+        } => {
+            let flag = format!("--{}", name.replace('_', "-"));
+            let name = if is_flag(&flag) { flag } else { name };
+            Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            }
+        }
+        other => other,
+    }
+}
+
+/// Whether `flag` (`--name`) is a long option of any `brume` command.
+fn is_flag(flag: &str) -> bool {
+    fn walk(cmd: &clap::Command, flag: &str) -> bool {
+        cmd.get_arguments()
+            .filter_map(|a| a.get_long())
+            .any(|long| flag.strip_prefix("--") == Some(long))
+            || cmd.get_subcommands().any(|sub| walk(sub, flag))
+    }
+    walk(&Cli::command(), flag)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn library_names_become_flags() {
+        let cases = [
+            ("ka", "--ka"),
+            ("rho_max", "--rho-max"),
+            ("uniform_sigma", "--uniform-sigma"),
+            ("sigmas", "--sigmas"),
+            ("depth_scale", "--depth-scale"),
+            ("range map", "range map"),
+            ("sigma_max", "sigma_max"),
+        ];
+        for (name, shown) in cases {
+            let e = name_flags(Error::invalid(name, 1, "x"));
+            let Error::InvalidParameter { name, .. } = e else {
+                panic!("kind changed")
+            };
+            assert_eq!(name, shown);
+        }
+    }
 }

@@ -1,13 +1,15 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
 use super::args::{DepthArgs, PrepOptionArgs, RenderArgs};
+use brume::blur::Blur;
 use brume::egl::Platform;
-use brume::haze::{self, Haze, RenderSpec};
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::{demo, image, output};
-use brume::pipeline::Rendered;
+use brume::medium::haze::{self, Haze};
+use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
 use brume::raster::RgbImage;
+use brume::Rendered;
 use brume::{Error, Result};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -31,6 +33,44 @@ struct PrepReport {
     airlight_source: &'static str,
 }
 
+/// What is rendered: the medium (paper 000's haze, or a uniform blur) and the blur.
+struct Look {
+    haze: Haze,
+    uniform: Option<UniformBlur>,
+    blur: Blur,
+}
+
+impl Look {
+    fn medium(&self) -> &dyn Medium {
+        match &self.uniform {
+            Some(u) => u,
+            None => &self.haze,
+        }
+    }
+
+    /// κa + κs as the render applies it (0 for a uniform blur).
+    fn extinction(&self) -> f64 {
+        if self.uniform.is_some() {
+            0.0
+        } else {
+            self.haze.extinction()
+        }
+    }
+
+    /// The airlight as the render applies it (black for a uniform blur).
+    fn airlight(&self) -> [f32; 3] {
+        if self.uniform.is_some() {
+            [0.0; 3]
+        } else {
+            self.haze.airlight
+        }
+    }
+
+    fn sigma_max(&self) -> f64 {
+        self.medium().sigma_max(self.blur.sigma0)
+    }
+}
+
 pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let haze = haze_from_args(args)?;
     let out = output_path(args)?;
@@ -45,16 +85,16 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         .as_ref()
         .map_or(&scene.depth.range, |p| &p.range);
     let (normalised, r_max) = haze::normalise_range(range)?;
-    let spec = render_spec(args, &haze, prep.airlight);
+    let look = look_from_args(args, &haze, prep.airlight);
 
     let mut renderer = super::open_renderer(egl)?;
-    let rendered = renderer.render(&scene.image, &normalised, &spec)?;
+    let rendered = renderer.render(&scene.image, &normalised, look.medium(), &look.blur)?;
     output::write_rgba(&out, &rendered.image)?;
 
     let report = Report {
         scene: &scene,
         prep: &prep,
-        spec: &spec,
+        look: &look,
         rendered: &rendered,
         renderer: &renderer.caps().renderer,
         out: &out,
@@ -74,7 +114,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
 struct Report<'a> {
     scene: &'a Scene,
     prep: &'a PrepReport,
-    spec: &'a RenderSpec,
+    look: &'a Look,
     rendered: &'a Rendered,
     renderer: &'a str,
     out: &'a Path,
@@ -85,13 +125,17 @@ fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
         ka: args.ka,
         ks: args.ks,
         lambda: args.lambda,
-        sigma0: args.sigma0,
         airlight: args.airlight.unwrap_or(haze::DEFAULT_AIRLIGHT),
+        tint: args.tint.unwrap_or([1.0; 3]),
+        range_unit: 1.0,
     };
     haze.validate()?;
+    if !(args.sigma0.is_finite() && args.sigma0 > 0.0) {
+        return Err(Error::invalid("sigma0", args.sigma0, "a finite number > 0"));
+    }
     if !(args.rho_max > 0.0 && args.rho_max <= 0.25) {
         return Err(Error::invalid(
-            "--rho-max",
+            "rho_max",
             args.rho_max,
             "a rate in (0, 0.25]",
         ));
@@ -99,7 +143,7 @@ fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
     if let Some(s) = args.uniform_sigma {
         if !(s.is_finite() && s >= args.sigma0) {
             return Err(Error::invalid(
-                "--uniform-sigma",
+                "uniform_sigma",
                 s,
                 format!("a finite scale ≥ --sigma0 ({} px)", args.sigma0),
             ));
@@ -284,13 +328,17 @@ pub fn airlight_source_name(source: AirlightSource) -> &'static str {
     }
 }
 
-fn render_spec(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> RenderSpec {
-    let mut spec = match args.uniform_sigma {
-        Some(s) => RenderSpec::uniform(s, args.sigma0, args.scheme, args.precision),
-        None => RenderSpec::haze(&Haze { airlight, ..*haze }, args.scheme, args.precision),
-    };
-    spec.rho_max = args.rho_max;
-    spec
+fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Look {
+    Look {
+        haze: Haze { airlight, ..*haze },
+        uniform: args.uniform_sigma.map(UniformBlur::new),
+        blur: Blur {
+            scheme: args.scheme,
+            sigma0: args.sigma0,
+            rho_max: args.rho_max,
+            precision: args.precision,
+        },
+    }
 }
 
 impl Report<'_> {
@@ -298,7 +346,7 @@ impl Report<'_> {
         let Report {
             scene,
             prep,
-            spec,
+            look,
             rendered,
             renderer,
             out,
@@ -307,8 +355,9 @@ impl Report<'_> {
         json!({
             "width": scene.image.width(),
             "height": scene.image.height(),
-            "scheme": spec.scheme,
-            "precision": spec.precision,
+            "medium": look.medium().name(),
+            "scheme": look.blur.scheme,
+            "precision": look.blur.precision,
             "diffusion_passes": rendered.schedule.steps,
             "passes": rendered.times.pass_ms.len(),
             "renderer": renderer,
@@ -321,12 +370,13 @@ impl Report<'_> {
             "depth_format": scene.depth.format.to_string(),
             "depth_kind": scene.depth.kind.to_string(),
             "depth_notes": scene.depth.notes,
-            "sigma0": spec.sigma0,
-            "sigma_max": spec.sigma_max(),
+            "sigma0": look.blur.sigma0,
+            "sigma_max": look.sigma_max(),
             "uniform_sigma": args.uniform_sigma,
-            "extinction": spec.extinction,
+            "extinction": look.extinction(),
+            "tint": look.haze.tint,
             "range_divisor": r_max,
-            "airlight": spec.airlight,
+            "airlight": look.airlight(),
             "airlight_source": prep.airlight_source,
             "prep": prep_json,
         })
@@ -336,7 +386,7 @@ impl Report<'_> {
         let Report {
             scene,
             prep,
-            spec,
+            look,
             rendered,
             renderer,
             out,
@@ -349,23 +399,23 @@ impl Report<'_> {
                 s.holes, s.hole_pixels, s.sky_pixels, s.total_ms
             );
         }
-        let b = spec.airlight;
+        let b = look.airlight();
         println!(
             "airlight {:.3},{:.3},{:.3} ({}), σmax {:.2} px, κ {:.3}",
             b[0],
             b[1],
             b[2],
             prep.airlight_source,
-            spec.sigma_max(),
-            spec.extinction
+            look.sigma_max(),
+            look.extinction()
         );
         println!(
             "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
             out.display(),
             scene.image.width(),
             scene.image.height(),
-            spec.scheme,
-            spec.precision,
+            look.blur.scheme,
+            look.blur.precision,
             rendered.schedule.steps,
             t.total_ms,
             t.clock.name(),
@@ -380,7 +430,7 @@ fn print_timings(rendered: &Rendered) {
     println!("{:>6}  {:<12} {:>10}", "pass", "shader", "ms");
     for (i, ms) in t.pass_ms.iter().enumerate() {
         let name = match i {
-            0 => "premultiply",
+            0 => "medium",
             _ if i + 1 == n => "composite",
             _ => "diffuse",
         };

@@ -1,8 +1,8 @@
-//! GL objects with owners: each wrapper holds an `Rc<glow::Context>` and deletes its object
+//! GL objects with owners: each wrapper holds an `Arc<glow::Context>` and deletes its object
 //! in `Drop`, so nothing leaks when a render fails half-way.
 
+pub mod framebuffer;
 pub mod program;
-pub mod target;
 pub mod texture;
 pub mod timer;
 

@@ -5,7 +5,7 @@
 use crate::error::{Error, Result};
 use glow::HasContext;
 use std::collections::HashMap;
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// The vertex shader every pass shares: one triangle that covers the viewport.
 pub const FULLSCREEN_VERT: (&str, &str) = (
@@ -15,9 +15,9 @@ pub const FULLSCREEN_VERT: (&str, &str) = (
 
 /// A linked program and its uniform locations, looked up once.
 pub struct Program {
-    gl: Rc<glow::Context>,
+    gl: Arc<glow::Context>,
     raw: glow::Program,
-    name: &'static str,
+    name: String,
     uniforms: HashMap<&'static str, glow::UniformLocation>,
 }
 
@@ -25,11 +25,14 @@ impl Program {
     /// Compiles `fragment` (file name and source, without `#version`) with the shared
     /// vertex shader and links them; `header` goes before each source: the `#version`
     /// line, then any `#define`s. Errors carry the file name and the driver's log.
+    /// `uniforms` must be active in the program; `optional` ones may have been optimised
+    /// out (a medium's uniforms in a pass that needs only part of the medium).
     pub fn new(
-        gl: &Rc<glow::Context>,
+        gl: &Arc<glow::Context>,
         header: &str,
-        fragment: (&'static str, &str),
+        fragment: (&str, &str),
         uniforms: &[&'static str],
+        optional: &[&'static str],
     ) -> Result<Self> {
         // SAFETY: standard shader/program creation on the current context; every object
         // created here is deleted on the error paths or owned by the returned Program.
@@ -65,6 +68,13 @@ impl Program {
                 });
             }
             let mut found = HashMap::new();
+            // Owned from here: an error below deletes the program in Drop.
+            let mut program = Program {
+                gl: Arc::clone(gl),
+                raw,
+                name: fragment.0.to_string(),
+                uniforms: HashMap::new(),
+            };
             for &u in uniforms {
                 let loc = gl.get_uniform_location(raw, u).ok_or_else(|| {
                     Error::Gl(format!(
@@ -74,12 +84,13 @@ impl Program {
                 })?;
                 found.insert(u, loc);
             }
-            Ok(Program {
-                gl: Rc::clone(gl),
-                raw,
-                name: fragment.0,
-                uniforms: found,
-            })
+            for &u in optional {
+                if let Some(loc) = gl.get_uniform_location(raw, u) {
+                    found.insert(u, loc);
+                }
+            }
+            program.uniforms = found;
+            Ok(program)
         }
     }
 
@@ -89,8 +100,8 @@ impl Program {
     }
 
     /// The shader file name, for messages.
-    pub fn name(&self) -> &'static str {
-        self.name
+    pub fn name(&self) -> &str {
+        &self.name
     }
 
     /// The location of a uniform declared at construction. Panics on an undeclared name,
@@ -100,11 +111,16 @@ impl Program {
             .get(name)
             .unwrap_or_else(|| panic!("{}: uniform {name} was not declared", self.name))
     }
+
+    /// The location of an optional uniform, `None` where the compiler removed it.
+    pub fn optional_uniform(&self, name: &str) -> Option<&glow::UniformLocation> {
+        self.uniforms.get(name)
+    }
 }
 
 impl Drop for Program {
     fn drop(&mut self) {
-        // SAFETY: the program belongs to this wrapper and the context outlives it (Rc).
+        // SAFETY: the program belongs to this wrapper and the context outlives it (Arc).
         unsafe { self.gl.delete_program(self.raw) };
     }
 }

@@ -1,9 +1,10 @@
-//! 2D textures: float images uploaded from the CPU and the float render targets of the
-//! diffusion passes.
+//! 2D textures owned by brume: float images uploaded from the CPU and the float render
+//! targets of the passes. The host's textures are never wrapped in this type (brume must
+//! not delete them); they are used by their raw `glow::Texture` handle.
 
 use crate::error::{Error, Result};
 use glow::HasContext;
-use std::rc::Rc;
+use std::sync::Arc;
 
 /// A texel format brume uses, with its GL triple.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -18,6 +19,8 @@ pub enum TexelFormat {
     R16F,
     /// Two 32-bit float channels.
     Rg32F,
+    /// Two 16-bit float channels.
+    Rg16F,
     /// Three 32-bit float channels (sampled only: RGB32F is not colour-renderable).
     Rgb32F,
 }
@@ -30,6 +33,7 @@ impl TexelFormat {
             TexelFormat::R32F => glow::R32F,
             TexelFormat::R16F => glow::R16F,
             TexelFormat::Rg32F => glow::RG32F,
+            TexelFormat::Rg16F => glow::RG16F,
             TexelFormat::Rgb32F => glow::RGB32F,
         }
     }
@@ -39,7 +43,7 @@ impl TexelFormat {
         match self {
             TexelFormat::Rgba32F | TexelFormat::Rgba16F => glow::RGBA,
             TexelFormat::R32F | TexelFormat::R16F => glow::RED,
-            TexelFormat::Rg32F => glow::RG,
+            TexelFormat::Rg32F | TexelFormat::Rg16F => glow::RG,
             TexelFormat::Rgb32F => glow::RGB,
         }
     }
@@ -49,7 +53,7 @@ impl TexelFormat {
         match self {
             TexelFormat::Rgba32F | TexelFormat::Rgba16F => 4,
             TexelFormat::R32F | TexelFormat::R16F => 1,
-            TexelFormat::Rg32F => 2,
+            TexelFormat::Rg32F | TexelFormat::Rg16F => 2,
             TexelFormat::Rgb32F => 3,
         }
     }
@@ -66,7 +70,7 @@ pub enum Filter {
 
 /// An owned 2D texture with clamp-to-edge wrapping.
 pub struct Texture {
-    gl: Rc<glow::Context>,
+    gl: Arc<glow::Context>,
     raw: glow::Texture,
     width: usize,
     height: usize,
@@ -77,7 +81,7 @@ impl Texture {
     /// Allocates a `width x height` texture and fills it from `data` (f32, row 0 first,
     /// `format.channels()` per texel) or leaves it undefined when `data` is `None`.
     pub fn new(
-        gl: &Rc<glow::Context>,
+        gl: &Arc<glow::Context>,
         width: usize,
         height: usize,
         format: TexelFormat,
@@ -131,7 +135,7 @@ impl Texture {
             }
             gl.bind_texture(glow::TEXTURE_2D, None);
             let tex = Texture {
-                gl: Rc::clone(gl),
+                gl: Arc::clone(gl),
                 raw,
                 width,
                 height,

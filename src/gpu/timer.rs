@@ -9,7 +9,7 @@
 
 use crate::error::{Error, Result};
 use glow::HasContext;
-use std::rc::Rc;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// How far the sum of per-pass figures may exceed the wall time that enclosed them.
@@ -85,7 +85,7 @@ pub fn warm_up(gl: &glow::Context, draw: impl FnOnce()) -> Result<()> {
 
 /// Times a sequence of passes with one clock.
 pub struct PassTimer {
-    gl: Rc<glow::Context>,
+    gl: Arc<glow::Context>,
     clock: Clock,
     queries: Vec<glow::Query>,
     wall_ms: Vec<f64>,
@@ -96,7 +96,7 @@ pub struct PassTimer {
 impl PassTimer {
     /// Starts timing. With the wall clock, waits for earlier GL work first so that it is
     /// not charged to the first pass.
-    pub fn start(gl: &Rc<glow::Context>, clock: Clock) -> Self {
+    pub fn start(gl: &Arc<glow::Context>, clock: Clock) -> Self {
         // SAFETY: glFinish and a state query on the current context.
         unsafe {
             match clock {
@@ -109,7 +109,7 @@ impl PassTimer {
         }
         let now = Instant::now();
         PassTimer {
-            gl: Rc::clone(gl),
+            gl: Arc::clone(gl),
             clock,
             queries: Vec::new(),
             wall_ms: Vec::new(),

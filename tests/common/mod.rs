@@ -4,17 +4,26 @@
 #![allow(dead_code)]
 
 use brume::raster::{Grid, RgbImage, ScalarMap};
-use brume::Renderer;
+use brume::Headless;
 use std::sync::{Mutex, MutexGuard};
 
 static GL_LOCK: Mutex<()> = Mutex::new(());
 
 /// Serialises GL tests and gives each its own context. A missing EGL is a test failure,
 /// never a skip: CI must prove the GL path.
-pub fn renderer() -> (MutexGuard<'static, ()>, Renderer) {
-    let guard = GL_LOCK.lock().unwrap_or_else(|e| e.into_inner());
-    let r = Renderer::new(None).unwrap_or_else(|e| panic!("cannot open a GL context: {e}"));
-    (guard, r)
+pub fn renderer() -> (MutexGuard<'static, ()>, Headless) {
+    let guard = gl_lock();
+    (guard, headless())
+}
+
+/// The lock that serialises GL tests.
+pub fn gl_lock() -> MutexGuard<'static, ()> {
+    GL_LOCK.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// A new headless context and renderer; a missing EGL fails the test.
+pub fn headless() -> Headless {
+    Headless::new(None).unwrap_or_else(|e| panic!("cannot open a GL context: {e}"))
 }
 
 /// A small xorshift generator so that synthetic images are the same on every machine.

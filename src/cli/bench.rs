@@ -2,14 +2,13 @@
 //! an open renderer. Lists and sizes are taken as text and checked here, so that a bad
 //! value is an [`Error::invalid`] naming the option, like every other brume error.
 
-use super::accuracy::{run_accuracy, AccuracyOptions};
-use super::plot::{plot_accuracy, plot_speed, PlotFormat};
-use super::report;
-use super::speed::{run_speed, SpeedOptions};
-use super::{Configs, Progress};
-use crate::error::{Error, Result};
-use crate::raster::RgbImage;
-use crate::{Precision, Renderer, Scheme};
+use brume::bench::accuracy::{run_accuracy, AccuracyOptions};
+use brume::bench::plot::{plot_accuracy, plot_speed, PlotFormat};
+use brume::bench::report;
+use brume::bench::speed::{self, run_speed, SpeedOptions, Tau};
+use brume::bench::{Configs, Progress};
+use brume::raster::RgbImage;
+use brume::{Error, Precision, Renderer, Result, Scheme};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::path::{Path, PathBuf};
 
@@ -72,12 +71,24 @@ pub struct SpeedArgs {
     #[arg(long, value_name = "WxH", default_value = "1600x1120")]
     pub size: String,
     /// Timed runs per configuration, after one untimed warm-up render.
-    #[arg(long, default_value_t = super::speed::DEFAULT_RUNS)]
+    #[arg(long, default_value_t = speed::DEFAULT_RUNS)]
     pub runs: usize,
     /// Skip configurations with more than this many passes (N + 2), e.g. 200 to leave
     /// out Euler at large σ (1250 passes at σ = 25); skipped rows say so.
     #[arg(long, value_name = "P")]
     pub max_passes: Option<u32>,
+    /// Transmission: grey (τ = 1, paper 000's pipeline) or rgb (τ = 0.9,0.8,0.6, which
+    /// adds a second target to every pass: the cost of a chromatic medium).
+    #[arg(long, value_name = "TAU", default_value = "grey", value_parser = parse_tau)]
+    pub tau: Tau,
+}
+
+fn parse_tau(s: &str) -> std::result::Result<Tau, String> {
+    match s {
+        "grey" => Ok(Tau::Grey),
+        "rgb" => Ok(Tau::Rgb),
+        _ => Err(format!("'{s}' is not grey or rgb")),
+    }
 }
 
 impl CommonArgs {
@@ -128,6 +139,7 @@ impl SpeedArgs {
             height,
             runs: self.runs,
             max_passes: self.max_passes,
+            tau: self.tau,
         };
         opts.validate()?;
         Ok(opts)
@@ -195,7 +207,7 @@ fn emit(
         print!("{table}");
     }
     if let Some(path) = &common.csv {
-        crate::io::output::write_bytes(path, csv.as_bytes())?;
+        brume::io::output::write_bytes(path, csv.as_bytes())?;
     }
     if let Some(path) = &common.plot {
         plot(path)?;
@@ -287,19 +299,16 @@ fn check_folder(option: &str, path: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bench::DEFAULT_SIGMAS;
+    use crate::cli::{name_flags, Cli, Command};
+    use brume::bench::DEFAULT_SIGMAS;
     use clap::Parser;
 
-    #[derive(clap::Parser)]
-    struct Cli {
-        #[command(subcommand)]
-        cmd: BenchCommand,
-    }
-
     fn parse(args: &[&str]) -> BenchCommand {
-        Cli::try_parse_from(std::iter::once("bench").chain(args.iter().copied()))
-            .unwrap()
-            .cmd
+        let argv = ["brume", "bench"].into_iter().chain(args.iter().copied());
+        match Cli::try_parse_from(argv).unwrap().command {
+            Command::Bench(cmd) => cmd,
+            _ => panic!("not a bench command"),
+        }
     }
 
     #[test]
@@ -335,7 +344,7 @@ mod tests {
             let BenchCommand::Speed(s) = parse(args) else {
                 panic!()
             };
-            let err = s.options().unwrap_err().to_string();
+            let err = name_flags(s.options().unwrap_err()).to_string();
             assert!(err.contains(option), "{args:?}: {err}");
         }
         let BenchCommand::Accuracy(a) = parse(&["accuracy", "--plot", "x.jpg"]) else {

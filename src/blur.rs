@@ -1,0 +1,130 @@
+//! The diffusion blur's settings: scheme, inner scale σ0, rate limit ρmax and texture
+//! precision. The blur takes each pixel's target scale σ from a medium
+//! ([`crate::medium`]) and knows nothing else of it; [`crate::schedule`] turns the
+//! settings and the medium's largest σ into the N steps.
+
+use crate::error::{Error, Result};
+use crate::gpu::texture::TexelFormat;
+use crate::schedule::{Schedule, Scheme};
+use std::fmt;
+use std::str::FromStr;
+
+/// Default inner scale σ0 (px): reproduces the paper's step counts (GUIDE.md).
+pub const DEFAULT_SIGMA0: f64 = 1.0;
+/// Default maximum rate ρmax: the stability limit of the 4-neighbour update.
+pub const DEFAULT_RHO_MAX: f64 = 0.25;
+
+/// Float precision of the diffusion textures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// RGBA32F (IEEE single).
+    #[default]
+    F32,
+    /// RGBA16F (IEEE half).
+    F16,
+}
+
+impl Precision {
+    /// Both precisions, f32 first.
+    pub const ALL: [Precision; 2] = [Precision::F32, Precision::F16];
+
+    /// `f32` or `f16`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Precision::F32 => "f32",
+            Precision::F16 => "f16",
+        }
+    }
+
+    /// The format of the pre-multiplied colour targets.
+    pub(crate) fn colour_format(self) -> TexelFormat {
+        match self {
+            Precision::F32 => TexelFormat::Rgba32F,
+            Precision::F16 => TexelFormat::Rgba16F,
+        }
+    }
+
+    /// The format of the second target of a chromatic τ (τ_g, τ_b).
+    pub(crate) fn pair_format(self) -> TexelFormat {
+        match self {
+            Precision::F32 => TexelFormat::Rg32F,
+            Precision::F16 => TexelFormat::Rg16F,
+        }
+    }
+
+    /// The format of the per-pixel rate target.
+    pub(crate) fn rate_format(self) -> TexelFormat {
+        match self {
+            Precision::F32 => TexelFormat::R32F,
+            Precision::F16 => TexelFormat::R16F,
+        }
+    }
+}
+
+impl fmt::Display for Precision {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Precision {
+    type Err = Error;
+    fn from_str(s: &str) -> Result<Self> {
+        Precision::ALL
+            .into_iter()
+            .find(|p| p.name() == s)
+            .ok_or_else(|| Error::invalid("precision", s, "f32 or f16"))
+    }
+}
+
+/// How the diffusion blur runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Blur {
+    /// Diffusion scheme.
+    pub scheme: Scheme,
+    /// Inner scale σ0 of the input (px), > 0.
+    pub sigma0: f64,
+    /// Rate limit ρmax, in (0, 1/4].
+    pub rho_max: f64,
+    /// Texture precision of the diffusion passes.
+    pub precision: Precision,
+}
+
+impl Default for Blur {
+    fn default() -> Self {
+        Blur {
+            scheme: Scheme::default(),
+            sigma0: DEFAULT_SIGMA0,
+            rho_max: DEFAULT_RHO_MAX,
+            precision: Precision::default(),
+        }
+    }
+}
+
+impl Blur {
+    /// The default blur with another scheme and precision.
+    pub fn new(scheme: Scheme, precision: Precision) -> Self {
+        Blur {
+            scheme,
+            precision,
+            ..Blur::default()
+        }
+    }
+
+    /// The N-step schedule that takes σ0 to `sigma_max`, the largest scale a medium asks
+    /// for; a medium asking for less than σ0 is an error naming `what`.
+    pub fn schedule(&self, sigma_max: f64, what: &str) -> Result<Schedule> {
+        if !(self.sigma0.is_finite() && self.sigma0 > 0.0) {
+            return Err(Error::invalid("sigma0", self.sigma0, "a finite number > 0"));
+        }
+        if !(sigma_max.is_finite() && sigma_max >= self.sigma0) {
+            return Err(Error::invalid(
+                what,
+                sigma_max,
+                format!("a finite scale ≥ sigma0 = {} px", self.sigma0),
+            ));
+        }
+        Schedule::new(self.scheme, self.sigma0, sigma_max, self.rho_max)
+    }
+}

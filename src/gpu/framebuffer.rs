@@ -1,0 +1,118 @@
+//! Framebuffers owned by brume: one GL framebuffer object with one or more colour
+//! attachments (multiple render targets). The attached textures are not owned: they are
+//! brume's own [`super::texture::Texture`]s, or a host's texture that brume renders into
+//! and never deletes.
+
+use super::texture::{f32_bytes_mut, Texture};
+use crate::error::{Error, Result};
+use glow::HasContext;
+use std::sync::Arc;
+
+/// An owned framebuffer object over textures that outlive it.
+pub struct Framebuffer {
+    gl: Arc<glow::Context>,
+    fbo: glow::Framebuffer,
+    width: usize,
+    height: usize,
+}
+
+impl Framebuffer {
+    /// A framebuffer drawing into `textures` (all `width x height`), attachment i being
+    /// `COLOR_ATTACHMENTi` and draw buffer i. `what` names it in errors.
+    pub fn new(
+        gl: &Arc<glow::Context>,
+        textures: &[glow::Texture],
+        width: usize,
+        height: usize,
+        what: &str,
+    ) -> Result<Self> {
+        // SAFETY: framebuffer creation on the current context; the framebuffer is owned by
+        // the returned value (deleted in Drop, also on the error path below).
+        unsafe {
+            let fbo = gl.create_framebuffer().map_err(Error::Gl)?;
+            let framebuffer = Framebuffer {
+                gl: Arc::clone(gl),
+                fbo,
+                width,
+                height,
+            };
+            gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+            let mut buffers = Vec::with_capacity(textures.len());
+            for (i, &texture) in textures.iter().enumerate() {
+                let attachment = glow::COLOR_ATTACHMENT0 + i as u32;
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    attachment,
+                    glow::TEXTURE_2D,
+                    Some(texture),
+                    0,
+                );
+                buffers.push(attachment);
+            }
+            gl.draw_buffers(&buffers);
+            let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
+            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            if status != glow::FRAMEBUFFER_COMPLETE {
+                return Err(Error::Gl(format!(
+                    "the framebuffer for {what} is incomplete (status 0x{status:04X}): the \
+                     driver cannot render to its texture format"
+                )));
+            }
+            Ok(framebuffer)
+        }
+    }
+
+    /// A framebuffer over brume's own `textures`.
+    pub fn over(gl: &Arc<glow::Context>, textures: &[&Texture], what: &str) -> Result<Self> {
+        let first = textures.first().expect("at least one attachment");
+        let raw: Vec<glow::Texture> = textures.iter().map(|t| t.raw()).collect();
+        Self::new(gl, &raw, first.width(), first.height(), what)
+    }
+
+    /// The GL framebuffer object.
+    pub fn raw(&self) -> glow::Framebuffer {
+        self.fbo
+    }
+
+    /// Makes this framebuffer the destination of draws and sets the viewport to cover it.
+    pub fn bind_for_drawing(&self) {
+        // SAFETY: binding an owned framebuffer on the current context.
+        unsafe {
+            self.gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
+            self.gl
+                .viewport(0, 0, self.width as i32, self.height as i32);
+        }
+    }
+
+    /// Reads attachment 0 back as RGBA f32, texel row 0 first.
+    pub fn read_rgba(&self) -> Result<Vec<[f32; 4]>> {
+        let (w, h) = (self.width, self.height);
+        let mut out = vec![[0f32; 4]; w * h];
+        // SAFETY: `out` holds w*h RGBA f32 values, which is what RGBA/FLOAT writes.
+        unsafe {
+            self.gl
+                .bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
+            self.gl.read_buffer(glow::COLOR_ATTACHMENT0);
+            self.gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
+            self.gl.read_pixels(
+                0,
+                0,
+                w as i32,
+                h as i32,
+                glow::RGBA,
+                glow::FLOAT,
+                glow::PixelPackData::Slice(Some(f32_bytes_mut(out.as_flattened_mut()))),
+            );
+            self.gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        }
+        super::check_gl(&self.gl, "reading back the result")?;
+        Ok(out)
+    }
+}
+
+impl Drop for Framebuffer {
+    fn drop(&mut self) {
+        // SAFETY: the framebuffer belongs to this wrapper; the context outlives it (Arc).
+        unsafe { self.gl.delete_framebuffer(self.fbo) };
+    }
+}

@@ -1,0 +1,168 @@
+//! Media: what a fog model gives the pipeline, per pixel. A medium is one GLSL file plus
+//! its CPU reference, side by side in this folder; the diffusion blur ([`crate::blur`],
+//! [`crate::schedule`]) takes the medium's blur scale σ and knows nothing else of it.
+//!
+//! Per pixel, from the colour and the depth (or range) texture, a medium gives
+//!
+//! - the **transmission** τ (RGB: paper 002 attenuates each channel differently),
+//! - the **in-scattered light** L∞ (RGB: a constant airlight, a sky colour by view
+//!   direction, a fog colour brightened toward the sun …),
+//! - the **blur scale** σ (px) that the diffusion blur reaches at that pixel.
+//!
+//! The image is then `F = τ·E` pre-multiplied, diffused to σ(x), and composited as
+//! `F + (1 − τ_blurred)·L∞` (paper 000, eq. 2-4), τ blurred with the colour as the paper
+//! does (see [`crate::pipeline`] for how an RGB τ travels through the blur).
+//!
+//! # The blur law of a general medium
+//!
+//! Paper 000 eq. 6 is the small-angle beam spread of a homogeneous medium: a ray scattered
+//! at distance t from the camera lands (R − t)·θ off its target at range R, so the lateral
+//! variance is proportional to ∫₀^R κs(t)·(R − t)² dt = κs·R³/3. brume's law for any
+//! medium, in the normalised units of paper 000 (R ∈ [0, 1], κs per unit of that range):
+//!
+//! ```text
+//! σ(x) = σ0 + λ·√S(x),   S(x) = 3·∫₀^R(x) κs(t)·(R(x) − t)² dt     (the spread moment)
+//! ```
+//!
+//! For a homogeneous medium S = κs·R³, so σ = σ0 + λ·√κs·R^(3/2) = σ0 + R^(3/2)(σmax − σ0)
+//! with σmax = σ0 + λ·√κs: paper 000's eq. 7 exactly. [`blur_scale`] and [`spread_moment`]
+//! implement it; the test below checks the reduction by quadrature.
+//!
+//! # Adding a medium
+//!
+//! 1. `glsl/medium/NAME.glsl` defines `MediumSample medium_sample(ivec2 pixel, float depth)`
+//!    (the struct and the pipeline's uniforms `brume_sigma0` and `brume_size` are declared
+//!    before it, see `glsl/medium_api.glsl`), with its own uniforms.
+//! 2. `src/medium/NAME.rs` implements [`Medium`]: the same function on the CPU in f64
+//!    ([`Medium::sample`]), the uniform values, the largest σ, and whether τ is chromatic.
+//! 3. A test renders it on the GPU and compares with the CPU reference
+//!    (`tests/gpu_vs_cpu.rs` shows how).
+//!
+//! The pipeline compiles the medium's GLSL into the first pass (which writes τ·E, τ and the
+//! per-pixel diffusion rate) and into the last (which adds (1 − τ_blurred)·L∞), so a medium
+//! never writes a texture of its own.
+
+pub mod haze;
+pub mod uniform;
+
+pub use haze::Haze;
+pub use uniform::UniformBlur;
+
+use crate::error::Result;
+
+/// GLSL declarations every medium's shader sees before its own source: the
+/// [`MediumSample`] struct and the pipeline's uniforms.
+pub const MEDIUM_API_GLSL: &str = include_str!("../../glsl/medium_api.glsl");
+
+/// What a medium gives at one pixel (f64: the CPU reference).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MediumSample {
+    /// Transmission τ per channel, in [0, 1].
+    pub transmission: [f64; 3],
+    /// In-scattered light L∞ per channel (linear RGB).
+    pub inscatter: [f64; 3],
+    /// Blur scale σ (px), ≥ σ0.
+    pub sigma: f64,
+}
+
+/// One pixel as a medium sees it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pixel {
+    /// Column, 0 at the first texel of a row.
+    pub x: usize,
+    /// Row, 0 at the first row of the texture (GL's bottom row, the image's top row).
+    pub y: usize,
+    /// Image width (px).
+    pub width: usize,
+    /// Image height (px).
+    pub height: usize,
+    /// The value of the depth or range texture at this pixel (its `.r`).
+    pub depth: f64,
+    /// The inner scale σ0 of the blur (px).
+    pub sigma0: f64,
+}
+
+/// A uniform value a medium's shader takes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum UniformValue {
+    /// `float`.
+    Float(f32),
+    /// `vec3`.
+    Vec3([f32; 3]),
+}
+
+/// A fog model: per pixel a transmission, an in-scattered light and a blur scale, on the
+/// GPU (GLSL) and on the CPU (f64 reference). See the module docs for the contract.
+pub trait Medium {
+    /// A short name: the program cache key and the name in shader error messages.
+    fn name(&self) -> &'static str;
+
+    /// The GLSL source defining `MediumSample medium_sample(ivec2 pixel, float depth)`.
+    fn glsl(&self) -> &'static str;
+
+    /// The values of the uniforms the GLSL declares, set before each pass that uses it.
+    fn uniforms(&self) -> Vec<(&'static str, UniformValue)>;
+
+    /// Whether τ can differ between channels. A grey medium's τ travels in the alpha of
+    /// the pre-multiplied colour; a chromatic one adds a second target (see
+    /// [`crate::pipeline`]).
+    fn chromatic(&self) -> bool;
+
+    /// The largest σ any pixel can ask for (px), given the inner scale σ0: it sets the
+    /// number of diffusion steps.
+    fn sigma_max(&self, sigma0: f64) -> f64;
+
+    /// The same as the GLSL, on the CPU in f64.
+    fn sample(&self, pixel: Pixel) -> MediumSample;
+
+    /// Rejects out-of-domain parameters, naming the parameter (`ka`, `airlight` …).
+    fn validate(&self) -> Result<()>;
+}
+
+/// σ = σ0 + λ·√S: the blur scale for a spread moment `spread` (see the module docs).
+pub fn blur_scale(sigma0: f64, lambda: f64, spread: f64) -> f64 {
+    sigma0 + lambda * spread.max(0.0).sqrt()
+}
+
+/// S = 3·∫₀^R κs(t)·(R − t)² dt by the composite Simpson rule on `intervals` (even)
+/// sub-intervals: the spread moment of a medium whose scattering coefficient varies along
+/// the ray (normalised units). Media with a closed form use that instead; this is their
+/// test oracle.
+pub fn spread_moment(range: f64, intervals: usize, ks: impl Fn(f64) -> f64) -> f64 {
+    let n = intervals.max(2) + intervals % 2;
+    let h = range / n as f64;
+    let f = |t: f64| ks(t) * (range - t).powi(2);
+    let inner: f64 = (1..n)
+        .map(|i| {
+            let weight = if i % 2 == 1 { 4.0 } else { 2.0 };
+            weight * f(i as f64 * h)
+        })
+        .sum();
+    3.0 * h / 3.0 * (f(0.0) + inner + f(range))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn general_law_reduces_to_eq7_for_a_homogeneous_medium() {
+        let (sigma0, lambda, ks) = (1.0, 8.0, 0.75);
+        let sigma_max = sigma0 + lambda * f64::sqrt(ks);
+        for r in [0.0, 0.1, 0.37, 0.8, 1.0] {
+            let s = spread_moment(r, 64, |_| ks);
+            let general = blur_scale(sigma0, lambda, s);
+            let eq7 = sigma0 + f64::powf(r, 1.5) * (sigma_max - sigma0);
+            assert!((general - eq7).abs() < 1e-12, "R = {r}: {general} vs {eq7}");
+        }
+    }
+
+    #[test]
+    fn spread_moment_weights_scattering_near_the_camera_most() {
+        // The same optical depth near the camera blurs more than near the target: a ray
+        // bent early travels farther off course.
+        let near = spread_moment(1.0, 200, |t| if t < 0.5 { 2.0 } else { 0.0 });
+        let far = spread_moment(1.0, 200, |t| if t >= 0.5 { 2.0 } else { 0.0 });
+        assert!(near > 6.0 * far, "near {near}, far {far}");
+    }
+}

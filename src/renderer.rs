@@ -1,0 +1,186 @@
+//! CPU buffers in, CPU buffers out: a thin wrapper over [`Pipeline`] that uploads the
+//! image and the depth map as textures, renders into brume's own float target and reads
+//! the result back. [`Headless`] pairs it with brume's own EGL context, for the CLI, the
+//! benchmarks and the tests.
+
+use crate::blur::Blur;
+use crate::caps::{Capabilities, EglInfo};
+use crate::egl::{GlContext, Platform};
+use crate::error::{Error, Result};
+use crate::gpu::texture::{Filter, TexelFormat, Texture};
+use crate::gpu::timer::{Clock, PassTimes};
+use crate::medium::Medium;
+use crate::pipeline::{Encoding, Input, Pipeline};
+use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
+use crate::schedule::Schedule;
+use glow::HasContext;
+use std::mem::ManuallyDrop;
+use std::sync::Arc;
+
+/// The result of one render from CPU buffers.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// Final linear RGB (alpha 1), in the input's row order.
+    pub image: RgbaImage,
+    /// The schedule that ran.
+    pub schedule: Schedule,
+    /// Per-pass times, with the clock that produced them.
+    pub times: PassTimes,
+}
+
+/// The pipeline with CPU-buffer input and output, on a context that is current.
+pub struct Renderer {
+    pipeline: Pipeline,
+}
+
+impl Renderer {
+    /// Builds the pipeline on `gl`, which must be current on this thread.
+    pub fn new(gl: Arc<glow::Context>) -> Result<Self> {
+        Ok(Renderer {
+            pipeline: Pipeline::new(gl)?,
+        })
+    }
+
+    /// The driver's capabilities, detected once.
+    pub fn caps(&self) -> &Capabilities {
+        self.pipeline.caps()
+    }
+
+    /// The clock renders are timed with.
+    pub fn preferred_clock(&self) -> Clock {
+        self.pipeline.preferred_clock()
+    }
+
+    /// The texture-in, framebuffer-out pipeline underneath.
+    pub fn pipeline(&mut self) -> &mut Pipeline {
+        &mut self.pipeline
+    }
+
+    /// Renders `image` (linear RGB) fogged by `medium` from `depth` (what the medium
+    /// reads: normalised range for [`crate::medium::Haze`] by default) and blurred as
+    /// `blur` says.
+    pub fn render(
+        &mut self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+        medium: &dyn Medium,
+        blur: &Blur,
+    ) -> Result<Rendered> {
+        let (w, h) = (image.width(), image.height());
+        self.caps().require_size("image", w, h)?;
+        if (w, h) != (depth.width(), depth.height()) {
+            return Err(Error::SizeMismatch {
+                a: "image".into(),
+                aw: w as u32,
+                ah: h as u32,
+                b: "range map".into(),
+                bw: depth.width() as u32,
+                bh: depth.height() as u32,
+            });
+        }
+        medium.validate()?;
+        let gl = Arc::clone(self.pipeline.gl());
+        // SAFETY: a pixel-unpack buffer bound by someone else would turn the uploads below
+        // into offsets into it.
+        unsafe { gl.bind_buffer(glow::PIXEL_UNPACK_BUFFER, None) };
+        // Uploaded from the caller's buffers as they are: no staging copies.
+        let colour = Texture::new(
+            &gl,
+            w,
+            h,
+            TexelFormat::Rgb32F,
+            Filter::Nearest,
+            Some(image.as_slice().as_flattened()),
+        )?;
+        let depth = Texture::new(
+            &gl,
+            w,
+            h,
+            TexelFormat::R32F,
+            Filter::Nearest,
+            Some(depth.as_slice()),
+        )?;
+        let input = Input {
+            colour: colour.raw(),
+            colour_encoding: Encoding::Linear,
+            depth: depth.raw(),
+            width: w,
+            height: h,
+        };
+        let (frame, pixels) = self.pipeline.render_and_read(&input, medium, blur)?;
+        Ok(Rendered {
+            image: Grid::from_vec(w, h, pixels),
+            schedule: frame.schedule,
+            times: frame.times,
+        })
+    }
+}
+
+/// brume's own headless context (EGL, no window) with a [`Renderer`] on it. Every call
+/// makes the context current first, so several may live on one thread; dropping one
+/// deletes its objects on its own context and leaves the current context as it was.
+pub struct Headless {
+    // Dropped by hand in Drop, with the context current; `ctx` after it.
+    renderer: ManuallyDrop<Renderer>,
+    ctx: GlContext,
+}
+
+impl Headless {
+    /// Opens an EGL context (see [`GlContext::new`]) and builds the renderer on it.
+    pub fn new(platform: Option<Platform>) -> Result<Self> {
+        let ctx = GlContext::new(platform)?;
+        let mut renderer = Renderer::new(Arc::clone(ctx.gl()))?;
+        renderer.pipeline.caps_mut().egl = Some(EglInfo::of(&ctx));
+        Ok(Headless {
+            renderer: ManuallyDrop::new(renderer),
+            ctx,
+        })
+    }
+
+    /// The renderer, with this context made current.
+    pub fn renderer(&mut self) -> Result<&mut Renderer> {
+        self.ctx.make_current()?;
+        Ok(&mut self.renderer)
+    }
+
+    /// [`Renderer::render`] on this context.
+    pub fn render(
+        &mut self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+        medium: &dyn Medium,
+        blur: &Blur,
+    ) -> Result<Rendered> {
+        self.renderer()?.render(image, depth, medium, blur)
+    }
+
+    /// The driver's capabilities, with the EGL facts.
+    pub fn caps(&self) -> &Capabilities {
+        self.renderer.caps()
+    }
+
+    /// The clock renders are timed with.
+    pub fn preferred_clock(&self) -> Clock {
+        self.renderer.preferred_clock()
+    }
+
+    /// The EGL context.
+    pub fn context(&self) -> &GlContext {
+        &self.ctx
+    }
+}
+
+impl Drop for Headless {
+    fn drop(&mut self) {
+        let renderer = &mut self.renderer;
+        // SAFETY: dropped once, here, with its own context current so that the GL names
+        // it deletes are its own and not another context's.
+        let dropped = self
+            .ctx
+            .with_current(|| unsafe { ManuallyDrop::drop(renderer) });
+        if let Err(e) = dropped {
+            // Its objects go with the context, destroyed next.
+            log::warn!("could not make the context current to free its objects: {e}");
+        }
+    }
+}
