@@ -125,7 +125,7 @@ fn plots_are_written_whole_or_not_at_all() {
     let err = plot::plot_accuracy(&report, &wrong)
         .unwrap_err()
         .to_string();
-    assert!(err.contains("--plot"), "{err}");
+    assert!(err.contains("invalid plot = "), "{err}");
     let names: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name())

@@ -44,7 +44,7 @@ impl PlotFormat {
             Some("png") => Ok(PlotFormat::Png),
             Some("svg") => Ok(PlotFormat::Svg),
             _ => Err(Error::invalid(
-                "--plot",
+                "plot",
                 path.display(),
                 "a path ending in .png or .svg",
             )),

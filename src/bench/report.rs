@@ -197,8 +197,13 @@ pub fn speed_json(report: &SpeedReport) -> Result<String> {
 }
 
 fn to_json<T: Serialize>(benchmark: &'static str, report: &T) -> Result<String> {
-    serde_json::to_string_pretty(&Tagged { benchmark, report })
-        .map_err(|e| Error::invalid("--json", "report", format!("serialisable data: {e}")))
+    serde_json::to_string_pretty(&Tagged { benchmark, report }).map_err(|e| {
+        Error::invalid(
+            "report",
+            "(not serialisable)",
+            format!("serialisable data: {e}"),
+        )
+    })
 }
 
 #[cfg(test)]

@@ -350,12 +350,8 @@ mod tests {
         let BenchCommand::Accuracy(a) = parse(&["accuracy", "--plot", "x.jpg"]) else {
             panic!()
         };
-        assert!(a
-            .common
-            .check_outputs()
-            .unwrap_err()
-            .to_string()
-            .contains("--plot"));
+        let err = name_flags(a.common.check_outputs().unwrap_err()).to_string();
+        assert!(err.contains("--plot"), "{err}");
     }
 
     #[test]

@@ -84,7 +84,7 @@ pub fn write_rgba(path: &Path, img: &RgbaImage) -> Result<()> {
         }
         "pfm" => write_atomically(path, |w| pfm::write_rgba(w, img)),
         "exr" => write_atomically(path, |w| exr::write_rgba(w, img)),
-        _ => check_image_output(path, "--out"),
+        _ => check_image_output(path, "out"),
     }
 }
 

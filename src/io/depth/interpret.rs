@@ -83,7 +83,7 @@ fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<Dep
         } else {
             format!("depth or range for --depth-format {format}")
         };
-        return Err(Error::invalid("--depth-kind", kind, expected));
+        return Err(Error::invalid("depth_kind", kind, expected));
     }
     Ok(kind)
 }
@@ -100,12 +100,12 @@ impl Stereo {
                 format!("a value: --depth-format {format} with --depth-kind disparity needs --focal (px) and --baseline (mm)"),
             )
         };
-        let focal = opts.focal.ok_or_else(|| missing("--focal"))?;
-        let baseline = opts.baseline.ok_or_else(|| missing("--baseline"))?;
+        let focal = opts.focal.ok_or_else(|| missing("focal"))?;
+        let baseline = opts.baseline.ok_or_else(|| missing("baseline"))?;
         Ok(Stereo {
-            focal: positive_option(focal, "--focal", "a positive focal length in pixels")?,
-            baseline_mm: positive_option(baseline, "--baseline", "a positive length in mm")?,
-            offset: finite_option(opts.disparity_offset.unwrap_or(0.0), "--disparity-offset")?,
+            focal: positive_option(focal, "focal", "a positive focal length in pixels")?,
+            baseline_mm: positive_option(baseline, "baseline", "a positive length in mm")?,
+            offset: finite_option(opts.disparity_offset.unwrap_or(0.0), "disparity_offset")?,
         })
     }
 }
@@ -199,7 +199,7 @@ fn depth_intrinsics(
         }
         (DepthKind::Range, None) => Ok(None),
         (_, Some(f)) => {
-            let f = positive_option(f, "--focal", "a positive focal length in pixels")?;
+            let f = positive_option(f, "focal", "a positive focal length in pixels")?;
             notes.push("principal point assumed at the image centre".to_string());
             Ok(Some(Intrinsics::centred(f, width, height)))
         }

@@ -305,14 +305,14 @@ fn middlebury2006_stereo(
         ));
     }
     let stereo = Stereo {
-        focal: positive_option(focal, "--focal", "a positive focal length in pixels")?,
-        baseline_mm: positive_option(baseline, "--baseline", "a positive length in mm")?,
-        offset: finite_option(offset, "--disparity-offset")?,
+        focal: positive_option(focal, "focal", "a positive focal length in pixels")?,
+        baseline_mm: positive_option(baseline, "baseline", "a positive length in mm")?,
+        offset: finite_option(offset, "disparity_offset")?,
     };
     if let Some(&smallest) = disp.as_slice().iter().filter(|&&d| d != 0).min() {
         if f64::from(smallest) + stereo.offset <= 0.0 {
             return Err(Error::invalid(
-                "--disparity-offset",
+                "disparity_offset",
                 offset,
                 format!("a value above -{smallest} (the smallest known disparity) so that disparity + offset > 0"),
             ));

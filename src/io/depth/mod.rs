@@ -66,7 +66,7 @@ impl FromStr for DepthKind {
             "depth" => Ok(DepthKind::Depth),
             "range" => Ok(DepthKind::Range),
             "disparity" => Ok(DepthKind::Disparity),
-            _ => Err(Error::invalid("--depth-kind", s, DepthKind::NAMES)),
+            _ => Err(Error::invalid("depth_kind", s, DepthKind::NAMES)),
         }
     }
 }
@@ -121,7 +121,7 @@ impl FromStr for DepthFormat {
             "tum" => Ok(DepthFormat::Tum),
             "png16" => Ok(DepthFormat::Png16),
             "float" => Ok(DepthFormat::Float),
-            _ => Err(Error::invalid("--depth-format", s, DepthFormat::NAMES)),
+            _ => Err(Error::invalid("depth_format", s, DepthFormat::NAMES)),
         }
     }
 }

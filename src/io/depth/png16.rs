@@ -28,10 +28,10 @@ pub(super) fn scale(
 pub(super) fn given_scale(opts: &DepthOptions) -> Result<f64> {
     let scale = opts.scale.ok_or_else(|| {
         Error::invalid(
-            "--depth-scale",
+            "depth_scale",
             "nothing",
             "a positive multiplier for --depth-format png16 (e.g. 0.001 for millimetres)",
         )
     })?;
-    positive_option(scale, "--depth-scale", "a positive finite multiplier")
+    positive_option(scale, "depth_scale", "a positive finite multiplier")
 }
