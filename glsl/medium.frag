@@ -3,7 +3,7 @@
 //   ρ(σ)             the pixel's diffusion rate (eq. 13 for euler, eq. 18 otherwise; the
 //                    same as Schedule::rate in src/schedule.rs)
 //   (τ_g, τ_b)       a chromatic medium's other two transmissions (CHROMATIC only)
-// Assembled by src/pipeline.rs as: #version, #defines (CHROMATIC, RATE_LAW_LOG),
+// Assembled by src/pipeline.rs as: #version, #defines (CHROMATIC, RATE_LAW_LOG, RATE_HALF),
 // prelude.glsl, medium_api.glsl, the medium's glsl/medium/*.glsl, then this file.
 
 uniform sampler2D u_colour; // the host's colour texture
@@ -26,6 +26,17 @@ float rate_for(float sigma) {
 #endif
 }
 
+// Rounded to the nearest half float here when the rate target is R16F: render targets may
+// convert by truncation (llvmpipe does), a texture upload rounds to nearest, and the
+// half-float rate must not depend on which path wrote it.
+float store_rate(float rate) {
+#if RATE_HALF
+    return unpackHalf2x16(packHalf2x16(vec2(rate, 0.0))).x;
+#else
+    return rate;
+#endif
+}
+
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec3 e = texelFetch(u_colour, p, 0).rgb;
@@ -34,7 +45,7 @@ void main() {
     }
     MediumSample m = medium_sample(p, texelFetch(u_depth, p, 0).r);
     o_f = vec4(m.transmission * e, m.transmission.r);
-    o_rate = rate_for(m.sigma);
+    o_rate = store_rate(rate_for(m.sigma));
 #if CHROMATIC
     o_tau_gb = m.transmission.gb;
 #endif

@@ -151,6 +151,7 @@ enum ProgramKey {
         medium: &'static str,
         chromatic: bool,
         log_rate: bool,
+        half_rate: bool,
     },
     Diffuse {
         matched: bool,
@@ -228,6 +229,21 @@ impl Targets {
     fn fits(&self, width: usize, height: usize, precision: Precision, chromatic: bool) -> bool {
         (self.width, self.height, self.precision, self.chromatic)
             == (width, height, precision, chromatic)
+    }
+}
+
+/// The medium pass's program for this frame.
+fn medium_key(
+    medium: &dyn Medium,
+    precision: Precision,
+    schedule: &Schedule,
+    chromatic: bool,
+) -> ProgramKey {
+    ProgramKey::Medium {
+        medium: medium.name(),
+        chromatic,
+        log_rate: schedule.scheme != Scheme::Euler,
+        half_rate: precision == Precision::F16,
     }
 }
 
@@ -411,11 +427,7 @@ impl Pipeline {
         let schedule = blur.schedule(sigma_max, &format!("blur scale of {}", medium.name()))?;
         let chromatic = medium.chromatic();
         let keys = [
-            ProgramKey::Medium {
-                medium: medium.name(),
-                chromatic,
-                log_rate: schedule.scheme != Scheme::Euler,
-            },
+            medium_key(medium, blur.precision, &schedule, chromatic),
             ProgramKey::Diffuse {
                 matched: schedule.scheme == Scheme::Matched,
                 chromatic,
@@ -485,11 +497,7 @@ impl Pipeline {
         self.enter_state();
         let mut timer = PassTimer::start(gl, clock);
 
-        let p = self.compiled(ProgramKey::Medium {
-            medium: medium.name(),
-            chromatic,
-            log_rate: schedule.scheme != Scheme::Euler,
-        })?;
+        let p = self.compiled(medium_key(medium, targets.precision, schedule, chromatic))?;
         timer.pass(|| {
             targets.first.bind_for_drawing();
             self.use_program(p);
@@ -663,10 +671,15 @@ impl Pipeline {
             ProgramKey::Medium {
                 chromatic,
                 log_rate,
+                half_rate,
                 ..
             } => Program::new(
                 &self.gl,
-                &defines(&[("CHROMATIC", chromatic), ("RATE_LAW_LOG", log_rate)]),
+                &defines(&[
+                    ("CHROMATIC", chromatic),
+                    ("RATE_LAW_LOG", log_rate),
+                    ("RATE_HALF", half_rate),
+                ]),
                 (&names("medium.frag"), &with_medium(MEDIUM_FRAG)),
                 &["u_colour"],
                 &optional(&["u_depth", "u_colour_srgb", "u_schedule"]),
