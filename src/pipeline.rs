@@ -25,8 +25,10 @@
 //! # The host's contract
 //!
 //! - **Context.** [`Pipeline::new`] and every call run on the host's context, which must
-//!   be current on the calling thread (OpenGL ES 3.0 or later, or desktop GL with the ES3
-//!   compatibility of GL 4.3). brume never creates, makes current or destroys a context.
+//!   be current on the calling thread (OpenGL ES 3.0 or later; float render targets need
+//!   `EXT_color_buffer_float` or `EXT_color_buffer_half_float`, see
+//!   [`Capabilities::require_precision`]). brume never creates, makes current or destroys
+//!   a context.
 //!   All of brume's GL objects belong to that context: drop the pipeline while it is
 //!   current (or share lists).
 //! - **Textures in.** The colour texture (RGB in `.rgb`: float, or 8-bit; sRGB-encoded
@@ -292,7 +294,9 @@ impl Pipeline {
                 hint: format!("the context is {}; brume needs GLES 3.x", caps.version),
             });
         }
-        let version_line = if caps.gles_version >= (3, 2) {
+        // GLSL ES 3.20 only on a GLES 3.2 context: a desktop context reports 4.x and
+        // takes ES shaders at 3.00 (ARB_ES3_compatibility).
+        let version_line = if gl.version().is_embedded && caps.gles_version >= (3, 2) {
             "#version 320 es"
         } else {
             "#version 300 es"

@@ -276,6 +276,7 @@ fn bad_parameters_are_named() {
         ("--lambda", "inf"),
         ("--sigma0", "0"),
         ("--rho-max", "0.5"),
+        ("--uniform-sigma", "0.5"),
     ] {
         let o = brume(dir.path(), &["render", flag, value]);
         assert_fails_cleanly(&o, &[flag]);
@@ -284,6 +285,53 @@ fn bad_parameters_are_named() {
     let o = brume(dir.path(), &["render", "--airlight", "1,2"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("--airlight"), "{}", stderr(&o));
+    for tint in ["1,0,1", "1,1", "a,b,c"] {
+        let o = brume(dir.path(), &["render", "--tint", tint]);
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("--tint"), "{}", stderr(&o));
+    }
+}
+
+/// A chromatic tint renders through the second target and is reported; blue, the most
+/// attenuated channel, takes the most airlight.
+#[test]
+fn tint_makes_a_chromatic_haze() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let run = |extra: &[&str], out: &str| {
+        let mut args = vec!["--depth-kind", "range", "--airlight", "0,0,0", "--json"];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&["--out", out]);
+        let o = render_files(dir.path(), &image, &depth, &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        (v, fs::read(dir.path().join(out)).unwrap())
+    };
+    let (grey, grey_pfm) = run(&[], "grey.pfm");
+    let (tinted, tinted_pfm) = run(&["--tint", "0.5,1,2"], "tint.pfm");
+    assert_eq!(grey["tint"], serde_json::json!([1.0, 1.0, 1.0]));
+    assert_eq!(tinted["tint"], serde_json::json!([0.5, 1.0, 2.0]));
+    assert_eq!(tinted["medium"], "haze");
+    // With a black airlight the output is the attenuated colour. At the far right (R = 1,
+    // κ = 1) grey haze keeps e^-1 of every channel; the tint keeps e^-0.5 of red and
+    // e^-2 of blue: 1.65x and 0.37x the grey result.
+    let last_pixel_of_first_row = |pfm: &[u8]| -> [f32; 3] {
+        let data = &pfm[pfm.len() - 24 * 16 * 12..];
+        let px = &data[23 * 12..24 * 12];
+        [0, 1, 2].map(|c| f32::from_le_bytes(px[4 * c..4 * c + 4].try_into().unwrap()))
+    };
+    let (g, t) = (
+        last_pixel_of_first_row(&grey_pfm),
+        last_pixel_of_first_row(&tinted_pfm),
+    );
+    assert!(
+        t[0] / g[0] > 1.5 && t[2] / g[2] < 0.45,
+        "grey {g:?}, tinted {t:?}"
+    );
+    assert!(
+        (t[1] / g[1] - 1.0).abs() < 0.01,
+        "green untouched: {g:?} vs {t:?}"
+    );
 }
 
 #[test]
