@@ -9,7 +9,7 @@
 //!   else of it.
 //! - [`Renderer`] wraps the pipeline with CPU buffers, and [`Headless`] adds brume's own
 //!   EGL context (no window, no display) for the CLI, benchmarks and tests.
-//! - [`reference`] runs the same arithmetic on the CPU in f64.
+//! - [`reference`](mod@reference) runs the same arithmetic on the CPU in f64.
 #![warn(missing_docs)]
 
 pub mod bench;
