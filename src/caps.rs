@@ -121,6 +121,15 @@ impl Capabilities {
         Ok(())
     }
 
+    /// Whether the renderer runs on the CPU (llvmpipe, softpipe, SwiftShader): its
+    /// textures then live in system memory, which [`crate::memory`] can measure.
+    pub fn software(&self) -> bool {
+        let r = self.renderer.to_ascii_lowercase();
+        ["llvmpipe", "softpipe", "swiftshader", "swrast"]
+            .iter()
+            .any(|name| r.contains(name))
+    }
+
     /// Checks a `width x height` image against `GL_MAX_TEXTURE_SIZE`.
     pub fn require_size(&self, what: &str, width: usize, height: usize) -> Result<()> {
         let max = self.max_texture_size as usize;

@@ -100,6 +100,17 @@ pub enum Error {
         /// GL_RENDERER.
         renderer: String,
     },
+    /// Memory ran out, or would: the GL driver's `GL_OUT_OF_MEMORY`, or a render that
+    /// cannot fit in what the machine has left, refused before allocating.
+    #[error("out of memory: {what} {detail}; {hint}")]
+    OutOfMemory {
+        /// What needed the memory, e.g. `a 8000x6000 render`.
+        what: String,
+        /// How much was needed and how much there was, where known.
+        detail: String,
+        /// What to do instead.
+        hint: String,
+    },
     /// Range pre-processing (hole filling, sky, horizon margin) cannot proceed.
     #[error("pre-processing: {0}")]
     Prep(String),
@@ -130,8 +141,39 @@ impl Error {
     ) -> Self {
         Error::InvalidParameter {
             name: name.into(),
-            value: value.to_string(),
+            value: compact_number(value.to_string()),
             expected: expected.into(),
         }
+    }
+}
+
+/// A decimal that scientific notation says much shorter (`1e308` prints as 309 digits,
+/// `1e-9` as `0.000000001`) in scientific notation; anything else as it is.
+fn compact_number(text: String) -> String {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() => {
+            let scientific = format!("{v:e}");
+            if scientific.len() + 3 <= text.len() {
+                scientific
+            } else {
+                text
+            }
+        }
+        _ => text,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_numbers_are_shown_compactly() {
+        let shown = |v: f64| Error::invalid("x", v, "y").to_string();
+        assert_eq!(shown(1e308), "invalid x = 1e308: expected y");
+        assert_eq!(shown(1e-9), "invalid x = 1e-9: expected y");
+        assert_eq!(shown(0.25), "invalid x = 0.25: expected y");
+        assert_eq!(shown(207043.0), "invalid x = 207043: expected y");
+        assert_eq!(shown(f64::INFINITY), "invalid x = inf: expected y");
     }
 }

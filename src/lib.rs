@@ -20,6 +20,7 @@ pub mod error;
 pub mod gpu;
 pub mod io;
 pub mod medium;
+pub mod memory;
 pub mod pipeline;
 pub mod prep;
 pub mod raster;

@@ -303,6 +303,7 @@ impl Pipeline {
         };
         // SAFETY: an empty VAO is required to draw in GLES 3; owned and deleted in Drop.
         let vao = unsafe { gl.create_vertex_array().map_err(Error::Gl)? };
+        crate::gpu::object_created();
         let mut pipeline = Pipeline {
             programs: HashMap::new(),
             targets: None,
@@ -335,6 +336,18 @@ impl Pipeline {
     /// its EGL facts).
     pub(crate) fn caps_mut(&mut self) -> &mut Capabilities {
         &mut self.caps
+    }
+
+    /// Bytes per pixel of the textures the pipeline allocates for a frame: two colour
+    /// targets, the rate, and for a chromatic medium two (τ_g, τ_b) targets.
+    pub fn bytes_per_pixel(precision: Precision, chromatic: bool) -> u64 {
+        let texel = |format: TexelFormat| format.bytes_per_texel() as u64;
+        let pair = if chromatic {
+            2 * texel(precision.pair_format())
+        } else {
+            0
+        };
+        2 * texel(precision.colour_format()) + texel(precision.rate_format()) + pair
     }
 
     /// The host's context.
@@ -804,6 +817,7 @@ impl Drop for Pipeline {
     fn drop(&mut self) {
         // SAFETY: the VAO belongs to this pipeline, on the host's context (module docs).
         unsafe { self.gl.delete_vertex_array(self.vao) };
+        crate::gpu::object_deleted();
     }
 }
 

@@ -79,6 +79,7 @@ impl Renderer {
             });
         }
         medium.validate()?;
+        self.check_memory(w, h, medium, blur)?;
         let gl = Arc::clone(self.pipeline.gl());
         // SAFETY: a pixel-unpack buffer bound by someone else would turn the uploads below
         // into offsets into it.
@@ -113,6 +114,37 @@ impl Renderer {
             schedule: frame.schedule,
             times: frame.times,
         })
+    }
+}
+
+impl Renderer {
+    /// On a software renderer, refuses a frame whose textures and read-back would not fit
+    /// in the memory left, before allocating any of it (see [`crate::memory`]).
+    fn check_memory(&self, w: usize, h: usize, medium: &dyn Medium, blur: &Blur) -> Result<()> {
+        if !self.caps().software() {
+            return Ok(());
+        }
+        // Uploads (RGB32F colour, R32F depth) and the RGBA32F read-back, besides the
+        // pipeline's own textures.
+        let per_pixel = 12 + 4 + 16 + Pipeline::bytes_per_pixel(blur.precision, medium.chromatic());
+        let needed = per_pixel * (w as u64) * (h as u64);
+        let hint = match blur.precision {
+            crate::Precision::F32 => format!(
+                "this renderer keeps textures in system memory ({per_pixel} bytes per pixel \
+                 here); use precision f16 ({} bytes per pixel) or a smaller image",
+                12 + 4 + 16 + Pipeline::bytes_per_pixel(crate::Precision::F16, medium.chromatic())
+            ),
+            crate::Precision::F16 => format!(
+                "this renderer keeps textures in system memory ({per_pixel} bytes per pixel \
+                 here); use a smaller image"
+            ),
+        };
+        crate::memory::check_fits(
+            &format!("a {w}x{h} render"),
+            needed,
+            crate::memory::available(),
+            &hint,
+        )
     }
 }
 

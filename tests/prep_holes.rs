@@ -183,11 +183,11 @@ fn bad_options_are_invalid_parameters() {
             ..d()
         },
         PrepOptions {
-            margin_px: f32::NAN,
+            margin_px: f64::NAN,
             ..d()
         },
         PrepOptions {
-            margin_px: f32::INFINITY,
+            margin_px: f64::INFINITY,
             ..d()
         },
         PrepOptions {
@@ -203,7 +203,11 @@ fn bad_options_are_invalid_parameters() {
             ..d()
         },
         PrepOptions {
-            sky_range_factor: f32::NAN,
+            sky_range_factor: f64::NAN,
+            ..d()
+        },
+        PrepOptions {
+            sky_range_factor: 1e308,
             ..d()
         },
         PrepOptions {

@@ -24,7 +24,7 @@
 //! stable scheme can never be that far off.
 
 use super::{Config, Configs, Progress};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::medium::Medium;
 use crate::raster::{Grid, RgbImage, RgbaImage};
 use crate::reference;
@@ -36,6 +36,38 @@ use serde::Serialize;
 pub struct AccuracyOptions {
     /// σref list, schemes, precisions and σ0.
     pub configs: Configs,
+}
+
+/// The largest σref the accuracy experiment takes (px). Its cost grows with σ: the
+/// impulse test renders a (2⌈6σ⌉ + 1)² image (1201² at 100 px, 48 MB of RGBA32F per
+/// target) and the exact Gaussian reference takes 2(12σ + 1) taps per pixel of the whole
+/// image; at σ = 1500 the impulse image alone would be 18001² px (5 GB), beyond any GL
+/// texture limit. The paper's figures stop at 25 px.
+pub const MAX_ACCURACY_SIGMA: f64 = 100.0;
+
+impl AccuracyOptions {
+    /// Rejects what [`Configs::validate`] rejects, and scales above
+    /// [`MAX_ACCURACY_SIGMA`].
+    pub fn validate(&self) -> Result<()> {
+        self.configs.validate()?;
+        if let Some(&sigma) = self
+            .configs
+            .sigmas
+            .iter()
+            .find(|&&s| s > MAX_ACCURACY_SIGMA)
+        {
+            let side = 2 * (6.0 * sigma).ceil() as u64 + 1;
+            return Err(Error::invalid(
+                "sigmas",
+                sigma,
+                format!(
+                    "scales ≤ {MAX_ACCURACY_SIGMA} px for the accuracy experiment (its impulse \
+                     test at σ = {sigma} would render a {side}x{side} image)"
+                ),
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// One (σref, scheme, precision) measurement.
@@ -96,8 +128,8 @@ pub fn run_accuracy(
     opts: &AccuracyOptions,
     progress: &dyn Fn(Progress),
 ) -> Result<AccuracyReport> {
+    opts.validate()?;
     let configs = &opts.configs;
-    configs.validate()?;
     let total = planned_passes(configs)?;
     let input = reference::rgba64_from_rgb(image);
     let value_range = rgb_value_range(image);

@@ -125,6 +125,7 @@ impl Configs {
                         sigma0: self.sigma0,
                         rho_max: DEFAULT_RHO_MAX,
                         precision,
+                        ..Blur::default()
                     },
                 })
             })

@@ -100,11 +100,11 @@ pub struct DepthArgs {
 pub struct PrepOptionArgs {
     /// Width µ of the horizon margin matted into the sky, in px [default: 8].
     #[arg(long, value_name = "PX", allow_negative_numbers = true)]
-    pub margin: Option<f32>,
+    pub margin: Option<f64>,
 
     /// Sky range Smax as a multiple of the largest measured range Rmax, > 1 [default: 1.5].
     #[arg(long, value_name = "F", allow_negative_numbers = true)]
-    pub sky_factor: Option<f32>,
+    pub sky_factor: Option<f64>,
 
     /// Never classify unknown regions as sky (fill every hole).
     #[arg(long)]

@@ -44,6 +44,13 @@ fn open_renderer(egl: Option<Platform>) -> Result<Headless> {
     Ok(r)
 }
 
+/// Library fields whose flag is not the field's name with dashes.
+const FLAG_ALIASES: [(&str, &str); 3] = [
+    ("sky_range_factor", "--sky-factor"),
+    ("min_area_fraction", "--sky-min-area"),
+    ("margin_px", "--margin"),
+];
+
 /// The library names a bad parameter as its field (`rho_max`); on the command line it is
 /// a flag (`--rho-max`). Names that are a flag of `brume` become that flag; others (a
 /// file's field, `range map`) are kept.
@@ -54,7 +61,10 @@ pub fn name_flags(e: Error) -> Error {
             value,
             expected,
         } => {
-            let flag = format!("--{}", name.replace('_', "-"));
+            let flag = match FLAG_ALIASES.iter().find(|(field, _)| *field == name) {
+                Some((_, flag)) => flag.to_string(),
+                None => format!("--{}", name.replace('_', "-")),
+            };
             let name = if is_flag(&flag) { flag } else { name };
             Error::InvalidParameter {
                 name,
@@ -91,6 +101,8 @@ mod tests {
             ("depth_scale", "--depth-scale"),
             ("range map", "range map"),
             ("sigma_max", "sigma_max"),
+            ("sky_range_factor", "--sky-factor"),
+            ("margin_px", "--margin"),
         ];
         for (name, shown) in cases {
             let e = name_flags(Error::invalid(name, 1, "x"));

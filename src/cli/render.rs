@@ -337,6 +337,7 @@ fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Look {
             sigma0: args.sigma0,
             rho_max: args.rho_max,
             precision: args.precision,
+            ..Blur::default()
         },
     }
 }

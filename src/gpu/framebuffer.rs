@@ -30,6 +30,7 @@ impl Framebuffer {
         // the returned value (deleted in Drop, also on the error path below).
         unsafe {
             let fbo = gl.create_framebuffer().map_err(Error::Gl)?;
+            super::object_created();
             let framebuffer = Framebuffer {
                 gl: Arc::clone(gl),
                 fbo,
@@ -114,5 +115,6 @@ impl Drop for Framebuffer {
     fn drop(&mut self) {
         // SAFETY: the framebuffer belongs to this wrapper; the context outlives it (Arc).
         unsafe { self.gl.delete_framebuffer(self.fbo) };
+        super::object_deleted();
     }
 }

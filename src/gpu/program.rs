@@ -69,6 +69,7 @@ impl Program {
             }
             let mut found = HashMap::new();
             // Owned from here: an error below deletes the program in Drop.
+            super::object_created();
             let mut program = Program {
                 gl: Arc::clone(gl),
                 raw,
@@ -122,6 +123,7 @@ impl Drop for Program {
     fn drop(&mut self) {
         // SAFETY: the program belongs to this wrapper and the context outlives it (Arc).
         unsafe { self.gl.delete_program(self.raw) };
+        super::object_deleted();
     }
 }
 

@@ -48,6 +48,15 @@ impl TexelFormat {
         }
     }
 
+    /// Bytes per texel.
+    pub fn bytes_per_texel(self) -> usize {
+        let channel = match self {
+            TexelFormat::Rgba16F | TexelFormat::R16F | TexelFormat::Rg16F => 2,
+            _ => 4,
+        };
+        channel * self.channels()
+    }
+
     /// Float channels per texel.
     pub fn channels(self) -> usize {
         match self {
@@ -134,6 +143,7 @@ impl Texture {
                 );
             }
             gl.bind_texture(glow::TEXTURE_2D, None);
+            super::object_created();
             let tex = Texture {
                 gl: Arc::clone(gl),
                 raw,
@@ -183,6 +193,7 @@ impl Drop for Texture {
     fn drop(&mut self) {
         // SAFETY: the texture belongs to this wrapper; the context outlives it (Rc).
         unsafe { self.gl.delete_texture(self.raw) };
+        super::object_deleted();
     }
 }
 

@@ -126,6 +126,7 @@ impl PassTimer {
                 // the draw; no other TIME_ELAPSED query is active.
                 unsafe {
                     let q = self.gl.create_query().map_err(Error::Gl)?;
+                    super::object_created();
                     self.queries.push(q);
                     self.gl.begin_query(glow::TIME_ELAPSED, q);
                     draw();
@@ -186,6 +187,7 @@ impl Drop for PassTimer {
         for &q in &self.queries {
             // SAFETY: queries created by this timer on the context it holds.
             unsafe { self.gl.delete_query(q) };
+            super::object_deleted();
         }
     }
 }

@@ -115,7 +115,10 @@ impl Default for SkyRules {
 }
 
 /// Largest accepted [`PrepOptions::margin_px`].
-const MAX_MARGIN_PX: f32 = 65535.0;
+const MAX_MARGIN_PX: f64 = 65535.0;
+/// Largest accepted [`PrepOptions::sky_range_factor`]: beyond it the whole scene is
+/// squeezed into normalised range below 1/1000, where no haze shows.
+const MAX_SKY_RANGE_FACTOR: f64 = 1000.0;
 
 /// Options of [`prepare`]. The defaults are those documented on each field.
 #[derive(Clone, Debug, PartialEq)]
@@ -123,11 +126,11 @@ pub struct PrepOptions {
     /// Sky detection rules.
     pub sky: SkyRules,
     /// Width `µ` of the horizon margin in pixels, in [0, 65535] (default 8; 0: no margin).
-    pub margin_px: f32,
+    pub margin_px: f64,
     /// Jacobi sweeps in the margin; `None` (default) means `ceil(2 µ)`.
     pub jacobi_iterations: Option<usize>,
-    /// `Smax = sky_range_factor x Rmax`; must be finite and > 1 (default 1.5).
-    pub sky_range_factor: f32,
+    /// `Smax = sky_range_factor x Rmax`; must be in (1, 1000] (default 1.5).
+    pub sky_range_factor: f64,
     /// RANSAC trials per hole, each one constant and one plane candidate (default 32, >= 1).
     pub ransac_samples: usize,
     /// Seed of the RANSAC random streams (default 0).
@@ -153,24 +156,24 @@ impl Default for PrepOptions {
 impl PrepOptions {
     /// Checks every field; an out-of-domain one gives [`Error::InvalidParameter`].
     pub fn validate(&self) -> Result<()> {
-        check_fraction(
-            "sky.min_area_fraction (--sky-min-area)",
-            self.sky.min_area_fraction,
-        )?;
+        check_fraction("min_area_fraction", self.sky.min_area_fraction)?;
         check_fraction("sky.min_top_fraction", self.sky.min_top_fraction)?;
         check_fraction("sky.min_bbox_fill", self.sky.min_bbox_fill)?;
         if !(0.0..=MAX_MARGIN_PX).contains(&self.margin_px) {
             return Err(Error::invalid(
-                "margin_px (--margin)",
+                "margin_px",
                 self.margin_px,
                 "a number of pixels in [0, 65535]",
             ));
         }
-        if !(self.sky_range_factor.is_finite() && self.sky_range_factor > 1.0) {
+        if !(self.sky_range_factor > 1.0 && self.sky_range_factor <= MAX_SKY_RANGE_FACTOR) {
             return Err(Error::invalid(
-                "sky_range_factor (--sky-factor)",
+                "sky_range_factor",
                 self.sky_range_factor,
-                "a finite number > 1",
+                format!(
+                    "a number in (1, {MAX_SKY_RANGE_FACTOR}]: the sky's range as a multiple of \
+                     the farthest measured range"
+                ),
             ));
         }
         if self.ransac_samples == 0 {
@@ -293,7 +296,7 @@ pub fn prepare(range: &ScalarMap, opts: &PrepOptions) -> Result<Prepared> {
     let t2 = Instant::now();
 
     if let Some(bbox) = sky_bbox {
-        let margin = margin::margin_pixels(&sky, w, h, bbox, opts.margin_px);
+        let margin = margin::margin_pixels(&sky, w, h, bbox, opts.margin_px as f32);
         margin::jacobi(&mut work, w, h, &margin, opts.jacobi_sweeps());
         stats.margin_pixels = margin.len();
     }
@@ -358,7 +361,7 @@ fn assign_sky(
             stats.r_max
         )));
     }
-    let s_max = opts.sky_range_factor * stats.r_max;
+    let s_max = (opts.sky_range_factor * f64::from(stats.r_max)) as f32;
     let mut bbox = [usize::MAX, usize::MAX, 0, 0];
     for &i in sky_ids {
         let c = &comps.list[i];

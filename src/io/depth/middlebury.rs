@@ -244,8 +244,49 @@ pub(super) fn range_2014(
         offset: calib.doffs,
     };
     let k = calib.intrinsics();
+    check_doffs(map, calib, calib_path, path, notes)?;
     let range = to_range(map, |d| stereo.depth_m(f64::from(d)), Some(&k));
     Ok((range, k))
+}
+
+/// Z = baseline·f/(d + doffs) needs d + doffs > 0. When calib.txt's doffs makes that
+/// fail for every known disparity, the fault is calib.txt's, and the error says so
+/// (instead of "no valid depth" about the disparity file); when it fails for some, a note.
+fn check_doffs(
+    map: &ScalarMap,
+    calib: &Calib,
+    calib_path: &Path,
+    path: &Path,
+    notes: &mut Vec<String>,
+) -> Result<()> {
+    let known: Vec<f64> = map
+        .as_slice()
+        .iter()
+        .filter(|d| d.is_finite())
+        .map(|&d| f64::from(d))
+        .collect();
+    let behind = known.iter().filter(|&&d| d + calib.doffs <= 0.0).count();
+    if behind == 0 {
+        return Ok(());
+    }
+    let largest = known.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if behind == known.len() {
+        return Err(Error::format(
+            calib_path,
+            format!(
+                "doffs = {} makes every disparity of {} (the largest is {largest}) give no \
+                 positive depth, Z = baseline·f/(d + doffs): doffs is the x-offset of the \
+                 principal points (cx1 − cx0), ≥ 0 in Middlebury's calibrations",
+                calib.doffs,
+                path.display()
+            ),
+        ));
+    }
+    notes.push(format!(
+        "{behind} disparities d ≤ −doffs = {} give no positive depth: taken as unknown",
+        -calib.doffs
+    ));
+    Ok(())
 }
 
 /// Range in metres from a Middlebury 2006 8-bit disparity map (`0` unknown). The options

@@ -1,0 +1,173 @@
+//! Bounded work and clear limits: values that would cost hours or terabytes are refused up
+//! front, naming the option, the limit and why; memory that runs out is said plainly; a
+//! calib.txt at fault is named as the culprit.
+mod common;
+
+use brume::raster::Grid;
+use brume::{gpu, Blur, Haze, Precision, Scheme, UniformBlur};
+use common::*;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn brume(dir: &Path, args: &[&str]) -> Output {
+    let _lock = gl_lock();
+    Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run brume")
+}
+
+fn assert_refused(o: &Output, mentions: &[&str]) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("brume: error: "), "{err}");
+    for m in mentions {
+        assert!(err.contains(m), "should mention {m:?}: {err}");
+    }
+}
+
+#[test]
+fn a_tiny_rho_max_is_refused_not_run_for_hours() {
+    let dir = tempfile::tempdir().unwrap();
+    for rho in ["1e-9", "1e-5"] {
+        let o = brume(dir.path(), &["render", "--rho-max", rho, "--out", "x.png"]);
+        assert_refused(&o, &["--rho-max", "20000 diffusion steps"]);
+    }
+    assert!(!dir.path().join("x.png").exists());
+}
+
+#[test]
+fn euler_beyond_the_step_limit_suggests_matched() {
+    let blur = Blur {
+        scheme: Scheme::Euler,
+        ..Blur::default()
+    };
+    let err = blur.schedule(400.0, "sigma").unwrap_err().to_string();
+    assert!(err.contains("invalid sigma = 400"), "{err}");
+    assert!(err.contains("matched"), "{err}");
+    // The paper's own Euler experiment is well inside the limit.
+    assert_eq!(blur.schedule(25.0, "sigma").unwrap().steps, 1248);
+    // A library user may raise the limit.
+    let patient = Blur {
+        max_steps: 400_000,
+        ..blur
+    };
+    assert!(patient.schedule(400.0, "sigma").is_ok());
+}
+
+#[test]
+fn accuracy_sigmas_are_bounded_before_any_allocation() {
+    let dir = tempfile::tempdir().unwrap();
+    for sigma in ["1500", "1e5", "1e6"] {
+        let o = brume(dir.path(), &["bench", "accuracy", "--sigmas", sigma]);
+        assert_refused(&o, &["--sigmas", "≤ 100 px"]);
+    }
+}
+
+#[test]
+fn huge_sky_factor_and_margin_are_named_as_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/aloe/disparity.png");
+    let depth = depth.to_str().unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "prep",
+            "--depth",
+            depth,
+            "--out",
+            "r.pfm",
+            "--sky-factor",
+            "1e308",
+        ],
+    );
+    assert_refused(&o, &["--sky-factor = 1e308", "(1, 1000]"]);
+    let o = brume(
+        dir.path(),
+        &[
+            "prep", "--depth", depth, "--out", "r.pfm", "--margin", "1e39",
+        ],
+    );
+    assert_refused(&o, &["--margin = 1e39"]);
+}
+
+/// A calib.txt whose doffs puts every point behind the camera is the calib's fault.
+#[test]
+fn negative_doffs_names_the_calib_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut pfm = b"Pf\n4 2\n-1\n".to_vec();
+    for _ in 0..8 {
+        pfm.extend_from_slice(&10f32.to_le_bytes());
+    }
+    std::fs::write(dir.path().join("disp0.pfm"), pfm).unwrap();
+    std::fs::write(
+        dir.path().join("calib.txt"),
+        "cam0=[100 0 2; 0 100 1; 0 0 1]\ncam1=[100 0 2; 0 100 1; 0 0 1]\ndoffs=-50\n\
+         baseline=100\nwidth=4\nheight=2\nndisp=10\nisint=0\nvmin=1\nvmax=10\n",
+    )
+    .unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "prep",
+            "--depth",
+            "disp0.pfm",
+            "--calib",
+            "calib.txt",
+            "--out",
+            "r.pfm",
+        ],
+    );
+    assert_refused(&o, &["calib.txt: doffs = -50"]);
+}
+
+/// An image too large for the memory left is refused before the textures are made, with
+/// the size, what it needs, and what to do; the old error was "glGetError = 0x0505".
+#[test]
+fn an_image_too_large_for_memory_is_refused_with_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big");
+    let script = format!(
+        "ulimit -v 3000000 && exec {} render --image {} --depth {} --depth-format kitti \
+         --no-prep --out out.png",
+        env!("CARGO_BIN_EXE_brume"),
+        data.join("flat-8000x6000.png").display(),
+        data.join("flat-8000x6000-depth16.png").display(),
+    );
+    let _lock = gl_lock();
+    let o = Command::new("sh")
+        .args(["-c", &script])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_refused(&o, &["out of memory", "8000x6000", "GB", "f16"]);
+    assert!(!dir.path().join("out.png").exists());
+}
+
+/// The per-pixel estimate the memory check uses follows the textures the pipeline makes.
+#[test]
+fn bytes_per_pixel_follow_precision_and_chromatic_tau() {
+    use brume::Pipeline;
+    assert_eq!(Pipeline::bytes_per_pixel(Precision::F32, false), 2 * 16 + 4);
+    assert_eq!(Pipeline::bytes_per_pixel(Precision::F16, false), 2 * 8 + 2);
+    assert_eq!(
+        Pipeline::bytes_per_pixel(Precision::F32, true),
+        2 * 16 + 4 + 2 * 8
+    );
+    // And a render leaves no object behind but what the pipeline keeps.
+    let (_lock, mut r) = renderer();
+    let image = noise_image(16, 12, 1);
+    let range = Grid::filled(16, 12, 0.5f32);
+    r.render(&image, &range, &Haze::default(), &Blur::default())
+        .unwrap();
+    let kept = gpu::live_objects();
+    for _ in 0..3 {
+        r.render(&image, &range, &UniformBlur::new(2.0), &Blur::default())
+            .unwrap();
+    }
+    r.render(&image, &range, &Haze::default(), &Blur::default())
+        .unwrap();
+    // Two more programs (the uniform blur's medium and composite passes), nothing else.
+    assert_eq!(gpu::live_objects(), kept + 2);
+}
