@@ -3,7 +3,7 @@
 //! the result back. [`Headless`] pairs it with brume's own EGL context, for the CLI, the
 //! benchmarks and the tests.
 
-use crate::blur::Blur;
+use crate::blur::{Blur, Precision};
 use crate::caps::{Capabilities, EglInfo};
 use crate::egl::{GlContext, Platform};
 use crate::error::{Error, Result};
@@ -115,30 +115,25 @@ impl Renderer {
             times: frame.times,
         })
     }
-}
 
-impl Renderer {
     /// On a software renderer, refuses a frame whose textures and read-back would not fit
     /// in the memory left, before allocating any of it (see [`crate::memory`]).
     fn check_memory(&self, w: usize, h: usize, medium: &dyn Medium, blur: &Blur) -> Result<()> {
         if !self.caps().software() {
             return Ok(());
         }
-        // Uploads (RGB32F colour, R32F depth) and the RGBA32F read-back, besides the
-        // pipeline's own textures.
-        let per_pixel = 12 + 4 + 16 + Pipeline::bytes_per_pixel(blur.precision, medium.chromatic());
+        let per_pixel = bytes_per_pixel(blur.precision, medium.chromatic());
         let needed = per_pixel * (w as u64) * (h as u64);
-        let hint = match blur.precision {
-            crate::Precision::F32 => format!(
-                "this renderer keeps textures in system memory ({per_pixel} bytes per pixel \
-                 here); use precision f16 ({} bytes per pixel) or a smaller image",
-                12 + 4 + 16 + Pipeline::bytes_per_pixel(crate::Precision::F16, medium.chromatic())
-            ),
-            crate::Precision::F16 => format!(
-                "this renderer keeps textures in system memory ({per_pixel} bytes per pixel \
-                 here); use a smaller image"
-            ),
-        };
+        let mut hint = format!(
+            "this renderer keeps textures in system memory ({per_pixel} bytes per pixel here); "
+        );
+        if blur.precision == Precision::F32 {
+            let half = bytes_per_pixel(Precision::F16, medium.chromatic());
+            hint.push_str(&format!("use precision f16 ({half} bytes per pixel) or "));
+        } else {
+            hint.push_str("use ");
+        }
+        hint.push_str("a smaller image");
         crate::memory::check_fits(
             &format!("a {w}x{h} render"),
             needed,
@@ -146,6 +141,12 @@ impl Renderer {
             &hint,
         )
     }
+}
+
+/// Bytes per pixel of one CPU-buffer render: the uploads (RGB32F colour, R32F depth), the
+/// RGBA32F read-back and the pipeline's own textures.
+fn bytes_per_pixel(precision: Precision, chromatic: bool) -> u64 {
+    12 + 4 + 16 + Pipeline::bytes_per_pixel(precision, chromatic)
 }
 
 /// brume's own headless context (EGL, no window) with a [`Renderer`] on it. Every call
