@@ -8,6 +8,7 @@ use std::process::ExitCode;
 fn main() -> ExitCode {
     let args = cli::Cli::parse();
     init_logging(args.verbose);
+    cli::remove_temporaries_on_signals();
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

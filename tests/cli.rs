@@ -504,3 +504,59 @@ fn prep_refuses_a_bad_margin_before_writing() {
     assert_fails_cleanly(&o, &["--margin", "-2"]);
     assert!(!dir.path().join("r.pfm").exists());
 }
+
+/// The hidden `.brume-*.tmp` files in `dir`.
+fn temporaries(dir: &Path) -> Vec<String> {
+    fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|name| name.starts_with(".brume-"))
+        .collect()
+}
+
+/// Ctrl-C (SIGINT) or SIGTERM while outputs are being written removes the temporaries,
+/// leaves the old outputs as they were and exits with 128 + the signal. The test hook
+/// `BRUME_TEST_HOLD_OUTPUTS` makes brume wait with both outputs staged, so the signal
+/// lands exactly there every time.
+#[cfg(unix)]
+#[test]
+fn a_signal_while_writing_leaves_no_temporary() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    for (signal, code) in [("INT", 130), ("TERM", 143)] {
+        let dir = tempfile::tempdir().unwrap();
+        let (_, depth) = small_scene(dir.path());
+        let (out, vis) = (dir.path().join("out.pfm"), dir.path().join("vis.png"));
+        fs::write(&out, b"old range").unwrap();
+        fs::write(&vis, b"old picture").unwrap();
+        let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+        let mut child = Command::new(env!("CARGO_BIN_EXE_brume"))
+            .args(["prep", "--depth-kind", "range", "--depth"])
+            .arg(&depth)
+            .args(["--out", "out.pfm", "--vis", "vis.png"])
+            .current_dir(dir.path())
+            .env("BRUME_TEST_HOLD_OUTPUTS", "60")
+            .stderr(Stdio::piped())
+            .stdout(Stdio::null())
+            .spawn()
+            .expect("run brume");
+        let mut stderr = BufReader::new(child.stderr.take().unwrap());
+        let mut line = String::new();
+        stderr.read_line(&mut line).unwrap();
+        assert!(
+            line.contains("holding 2 staged outputs"),
+            "never reached the writing stage: {line:?}"
+        );
+        assert_eq!(temporaries(dir.path()).len(), 2, "both outputs staged");
+        let kill = Command::new("kill")
+            .args(["-s", signal, &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(kill.success());
+        let status = child.wait().unwrap();
+        assert_eq!(status.code(), Some(code), "SIG{signal}: {status:?}");
+        assert_eq!(temporaries(dir.path()), Vec::<String>::new(), "SIG{signal}");
+        assert_eq!(fs::read(&out).unwrap(), b"old range");
+        assert_eq!(fs::read(&vis).unwrap(), b"old picture");
+    }
+}

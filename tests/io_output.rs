@@ -211,3 +211,43 @@ fn byte_write_leaves_nothing_on_a_bad_directory() {
     assert_eq!(std::fs::read(&good).unwrap(), b"hello");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
+
+#[test]
+fn an_output_set_is_written_all_or_nothing() {
+    use brume::io::output::Outputs;
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("a.csv"), dir.path().join("b.pfm"));
+    std::fs::write(&a, b"old a").unwrap();
+    let range = Grid::filled(3, 2, 1.5f32);
+
+    // A failure while staging the second file leaves the first destination alone and
+    // removes the first temporary.
+    let mut set = Outputs::new();
+    set.stage_bytes(&a, b"new a").unwrap();
+    assert!(set
+        .stage_scalar(&dir.path().join("no/b.pfm"), &range)
+        .is_err());
+    drop(set);
+    assert_eq!(entries(dir.path()), ["a.csv"]);
+    assert_eq!(std::fs::read(&a).unwrap(), b"old a");
+
+    // One file twice, even under another spelling, is refused.
+    let mut set = Outputs::new();
+    set.stage_bytes(&a, b"new a").unwrap();
+    let again = dir.path().join(".").join("a.csv");
+    let err = set.stage_bytes(&again, b"x").unwrap_err().to_string();
+    assert!(err.contains("a.csv"), "{err}");
+    drop(set);
+    assert_eq!(entries(dir.path()), ["a.csv"]);
+
+    // Nothing lands before commit; then everything does.
+    let mut set = Outputs::new();
+    set.stage_bytes(&a, b"new a").unwrap();
+    set.stage_scalar(&b, &range).unwrap();
+    assert_eq!(std::fs::read(&a).unwrap(), b"old a");
+    assert!(!b.exists());
+    set.commit().unwrap();
+    assert_eq!(std::fs::read(&a).unwrap(), b"new a");
+    assert!(matches!(read_pfm(&b).unwrap(), Pfm::Grey(_)));
+    assert_eq!(entries(dir.path()), ["a.csv", "b.pfm"]);
+}

@@ -54,20 +54,32 @@ impl PlotFormat {
 
 /// Draws fig. 6 (RMS error against σref) to `path`.
 pub fn plot_accuracy(report: &AccuracyReport, path: &Path) -> Result<()> {
-    let title = format!(
-        "RMS error vs exact Gaussian, {}x{} ({})",
-        report.width, report.height, report.renderer
-    );
-    render_to(path, &AccuracyFigure { report, title })
+    write_bytes(path, &accuracy_plot_bytes(report, path)?)
 }
 
 /// Draws fig. 7 (time against σref, ±1 std) to `path`.
 pub fn plot_speed(report: &SpeedReport, path: &Path) -> Result<()> {
+    write_bytes(path, &speed_plot_bytes(report, path)?)
+}
+
+/// The file [`plot_accuracy`] would write to `path` (format by its extension), without
+/// writing it: for a caller that writes all its outputs together
+/// ([`crate::io::output::Outputs`]).
+pub fn accuracy_plot_bytes(report: &AccuracyReport, path: &Path) -> Result<Vec<u8>> {
+    let title = format!(
+        "RMS error vs exact Gaussian, {}x{} ({})",
+        report.width, report.height, report.renderer
+    );
+    render_bytes(path, &AccuracyFigure { report, title })
+}
+
+/// The file [`plot_speed`] would write to `path`, without writing it.
+pub fn speed_plot_bytes(report: &SpeedReport, path: &Path) -> Result<Vec<u8>> {
     let title = format!(
         "Time of N+2 passes, {}x{}, median of {} ({}, {})",
         report.width, report.height, report.runs, report.clock, report.renderer
     );
-    render_to(path, &SpeedFigure { report, title })
+    render_bytes(path, &SpeedFigure { report, title })
 }
 
 type DrawResult = std::result::Result<(), String>;
@@ -100,8 +112,8 @@ impl Figure for SpeedFigure<'_> {
     }
 }
 
-/// Draws `figure` on the backend that `path`'s extension asks for and writes the file.
-fn render_to(path: &Path, figure: &impl Figure) -> Result<()> {
+/// Draws `figure` on the backend that `path`'s extension asks for; returns the file.
+fn render_bytes(path: &Path, figure: &impl Figure) -> Result<Vec<u8>> {
     let format = PlotFormat::from_path(path)?;
     register_font()?;
     let failed = |e: String| Error::io(path, std::io::Error::other(format!("plotting: {e}")));
@@ -119,7 +131,7 @@ fn render_to(path: &Path, figure: &impl Figure) -> Result<()> {
             svg.into_bytes()
         }
     };
-    write_bytes(path, &bytes)
+    Ok(bytes)
 }
 
 fn register_font() -> Result<()> {

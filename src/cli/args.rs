@@ -1,5 +1,9 @@
 //! Argument definitions (clap derive). Help texts are the user manual: say units, defaults
 //! and what each value does.
+//!
+//! Every option whose value is not a path takes `allow_hyphen_values`, so that `--seed -1`
+//! or `--airlight -1,0,0` reaches the check that names the option instead of clap's
+//! "unexpected argument '-1'" (a test in `cli` walks every option).
 
 use super::bench::BenchCommand;
 use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
@@ -20,7 +24,12 @@ pub struct Cli {
     /// EGL display to open: surfaceless (Mesa, no window system), device (EGL device,
     /// the headless route on NVIDIA) or default (eglGetDisplay). Default: the first of
     /// these that works, in that order.
-    #[arg(long, global = true, value_name = "PLATFORM")]
+    #[arg(
+        long,
+        global = true,
+        value_name = "PLATFORM",
+        allow_hyphen_values = true
+    )]
     pub egl: Option<Platform>,
 
     /// More log output on stderr (-v info, -vv debug). RUST_LOG overrides.
@@ -68,30 +77,35 @@ pub struct DepthArgs {
 
     /// What the depth values are: depth (along the optical axis), range (distance to the
     /// camera centre) or disparity (px). Default: what the format implies.
-    #[arg(long, value_name = "KIND")]
+    #[arg(long, value_name = "KIND", allow_hyphen_values = true)]
     pub depth_kind: Option<DepthKind>,
 
     /// Depth file format: auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16,
     /// float.
-    #[arg(long, value_name = "FORMAT", default_value = "auto")]
+    #[arg(
+        long,
+        value_name = "FORMAT",
+        allow_hyphen_values = true,
+        default_value = "auto"
+    )]
     pub depth_format: DepthFormat,
 
     /// Units per stored value of a 16-bit PNG (e.g. 0.001 for millimetres to metres).
-    #[arg(long, value_name = "S")]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub depth_scale: Option<f64>,
 
     /// Focal length in px, for disparity to depth and depth to range (Middlebury 2006
     /// default: 3740).
-    #[arg(long, value_name = "PX")]
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub focal: Option<f64>,
 
     /// Stereo baseline in mm, for disparity to depth (Middlebury 2006 default: 160).
-    #[arg(long, value_name = "MM")]
+    #[arg(long, value_name = "MM", allow_hyphen_values = true)]
     pub baseline: Option<f64>,
 
     /// Disparity offset (doffs / dmin) in px added to every disparity (Middlebury 2006
     /// default: 270).
-    #[arg(long, value_name = "PX")]
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub disparity_offset: Option<f64>,
 }
 
@@ -99,11 +113,11 @@ pub struct DepthArgs {
 #[derive(Args, Debug, Clone)]
 pub struct PrepOptionArgs {
     /// Width µ of the horizon margin matted into the sky, in px [default: 8].
-    #[arg(long, value_name = "PX", allow_negative_numbers = true)]
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub margin: Option<f64>,
 
     /// Sky range Smax as a multiple of the largest measured range Rmax, > 1 [default: 1.5].
-    #[arg(long, value_name = "F", allow_negative_numbers = true)]
+    #[arg(long, value_name = "F", allow_hyphen_values = true)]
     pub sky_factor: Option<f64>,
 
     /// Never classify unknown regions as sky (fill every hole).
@@ -112,13 +126,14 @@ pub struct PrepOptionArgs {
 
     /// Smallest area of an unknown region, as a fraction of the image, that can be sky
     /// [default: 0.01].
-    #[arg(long, value_name = "FRACTION")]
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true)]
     pub sky_min_area: Option<f64>,
 
-    /// Seed of the RANSAC hole filling; a given seed always gives the same result
-    /// [default: 0].
-    #[arg(long, value_name = "N")]
-    pub seed: Option<u64>,
+    /// Seed of the RANSAC hole filling, a whole number ≥ 0; a given seed always gives the
+    /// same result [default: 0].
+    // Signed and wide, so that a negative seed reaches the range check that names it.
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub seed: Option<i128>,
 }
 
 /// `brume render`.
@@ -138,49 +153,59 @@ pub struct RenderArgs {
     pub out: Option<PathBuf>,
 
     /// Absorption coefficient κa per unit of normalised range (attenuation only).
-    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KA, allow_negative_numbers = true)]
+    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KA, allow_hyphen_values = true)]
     pub ka: f64,
 
     /// Scattering coefficient κs per unit of normalised range (attenuation and blur).
-    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KS, allow_negative_numbers = true)]
+    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KS, allow_hyphen_values = true)]
     pub ks: f64,
 
     /// Blur factor λ in px: the farthest point is blurred to σmax = σ0 + λ·√κs.
-    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_LAMBDA, allow_negative_numbers = true)]
+    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_LAMBDA, allow_hyphen_values = true)]
     pub lambda: f64,
 
     /// Inner scale σ0 of the input image in px (its own blur).
-    #[arg(long, value_name = "PX", default_value_t = DEFAULT_SIGMA0, allow_negative_numbers = true)]
+    #[arg(long, value_name = "PX", default_value_t = DEFAULT_SIGMA0, allow_hyphen_values = true)]
     pub sigma0: f64,
 
     /// Largest diffusion rate per step, in (0, 0.25]; smaller means more, smaller steps.
-    #[arg(long, value_name = "RHO", default_value_t = DEFAULT_RHO_MAX, allow_negative_numbers = true)]
+    #[arg(long, value_name = "RHO", default_value_t = DEFAULT_RHO_MAX, allow_hyphen_values = true)]
     pub rho_max: f64,
 
     /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: the median sky
     /// colour; with no sky, a neutral grey at the 99th percentile of the luminance.
-    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
     pub airlight: Option<[f32; 3]>,
 
     /// Relative extinction per channel as R,G,B factors (default 1,1,1: grey haze, as
     /// paper 000). E.g. 0.8,1,1.3 makes a bluish veil: blue is attenuated, and replaced by
     /// airlight, most. A tint that is not grey blurs each channel's τ on its own (a second
     /// texture in every pass).
-    #[arg(long, value_name = "R,G,B", value_parser = parse_tint)]
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_tint)]
     pub tint: Option<[f64; 3]>,
 
     /// Diffusion scheme: matched (default; variance-matched, most accurate), invariant
     /// (paper eq. 18, literally; under-blurs) or euler (eq. 13; hundreds of passes).
-    #[arg(long, value_name = "SCHEME", default_value = "matched")]
+    #[arg(
+        long,
+        value_name = "SCHEME",
+        allow_hyphen_values = true,
+        default_value = "matched"
+    )]
     pub scheme: Scheme,
 
     /// Texture precision of the diffusion passes: f32 (RGBA32F) or f16 (RGBA16F).
-    #[arg(long, value_name = "P", default_value = "f32")]
+    #[arg(
+        long,
+        value_name = "P",
+        allow_hyphen_values = true,
+        default_value = "f32"
+    )]
     pub precision: Precision,
 
     /// Blur the whole image to scale S px, with no attenuation and no airlight (an
     /// accuracy check against a Gaussian of std sqrt(S² − σ0²)).
-    #[arg(long, value_name = "S", allow_negative_numbers = true)]
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub uniform_sigma: Option<f64>,
 
     /// Skip pre-processing: unknown range values are taken as the farthest range.

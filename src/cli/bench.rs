@@ -3,10 +3,11 @@
 //! value is an [`Error::invalid`] naming the option, like every other brume error.
 
 use brume::bench::accuracy::{run_accuracy, AccuracyOptions};
-use brume::bench::plot::{plot_accuracy, plot_speed, PlotFormat};
+use brume::bench::plot::{accuracy_plot_bytes, speed_plot_bytes, PlotFormat};
 use brume::bench::report;
 use brume::bench::speed::{self, run_speed, SpeedOptions, Tau};
 use brume::bench::{Configs, Progress};
+use brume::io::output::{self, Outputs};
 use brume::raster::RgbImage;
 use brume::{Error, Precision, Renderer, Result, Scheme};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -27,15 +28,30 @@ pub enum BenchCommand {
 #[derive(clap::Args, Debug, Clone)]
 pub struct CommonArgs {
     /// Target blur scales σref in px, comma-separated; each must be ≥ σ0 = 1 px.
-    #[arg(long, value_delimiter = ',', default_value = "1,2,3,5,8,12,16,20,25")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1,2,3,5,8,12,16,20,25",
+        allow_hyphen_values = true
+    )]
     pub sigmas: Vec<String>,
     /// Diffusion schemes to run, comma-separated: euler (eq. 13), invariant (eq. 18 as
     /// written), matched (variance-matched offsets, the default renderer scheme).
-    #[arg(long, value_delimiter = ',', default_value = "euler,invariant,matched")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "euler,invariant,matched",
+        allow_hyphen_values = true
+    )]
     pub schemes: Vec<String>,
     /// Texture precisions of the diffusion passes, comma-separated: f32 (RGBA32F) and/or
     /// f16 (RGBA16F).
-    #[arg(long, value_delimiter = ',', default_value = "f32,f16")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "f32,f16",
+        allow_hyphen_values = true
+    )]
     pub precisions: Vec<String>,
     /// Also write the table as CSV to this file (header + one row per configuration).
     #[arg(long, value_name = "PATH")]
@@ -68,18 +84,24 @@ pub struct SpeedArgs {
     pub common: CommonArgs,
     /// Image size WIDTHxHEIGHT in px (the content is synthetic: it does not change the
     /// time of a pass).
-    #[arg(long, value_name = "WxH", default_value = "1600x1120")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "1600x1120",
+        allow_hyphen_values = true
+    )]
     pub size: String,
     /// Timed runs per configuration, after one untimed warm-up render.
-    #[arg(long, default_value_t = speed::DEFAULT_RUNS)]
-    pub runs: usize,
+    // Counts are signed here so that a negative one reaches the check naming the option.
+    #[arg(long, default_value_t = speed::DEFAULT_RUNS as i64, allow_hyphen_values = true)]
+    pub runs: i64,
     /// Skip configurations with more than this many passes (N + 2), e.g. 200 to leave
     /// out Euler at large σ (1250 passes at σ = 25); skipped rows say so.
-    #[arg(long, value_name = "P")]
-    pub max_passes: Option<u32>,
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    pub max_passes: Option<i64>,
     /// Transmission: grey (τ = 1, paper 000's pipeline) or rgb (τ = 0.9,0.8,0.6, which
     /// adds a second target to every pass: the cost of a chromatic medium).
-    #[arg(long, value_name = "TAU", default_value = "grey", value_parser = parse_tau)]
+    #[arg(long, value_name = "TAU", default_value = "grey", value_parser = parse_tau, allow_hyphen_values = true)]
     pub tau: Tau,
 }
 
@@ -106,17 +128,21 @@ impl CommonArgs {
         Ok(configs)
     }
 
-    /// Fails before any work if `--plot` has an unknown extension or an output's folder
-    /// does not exist (a benchmark can run for minutes).
-    pub fn check_outputs(&self) -> Result<()> {
+    /// Fails before any work if `--plot` has an unknown extension, an output cannot be
+    /// renamed into place, an output is one of `inputs` or both outputs are one file (a
+    /// benchmark can run for minutes).
+    pub fn check_outputs(&self, inputs: &[PathBuf]) -> Result<()> {
+        let mut outputs = Vec::new();
+        if let Some(csv) = &self.csv {
+            output::check_destination(csv, "--csv")?;
+            outputs.push(("--csv", csv.as_path()));
+        }
         if let Some(plot) = &self.plot {
             PlotFormat::from_path(plot)?;
-            check_folder("--plot", plot)?;
+            output::check_destination(plot, "--plot")?;
+            outputs.push(("--plot", plot.as_path()));
         }
-        if let Some(csv) = &self.csv {
-            check_folder("--csv", csv)?;
-        }
-        Ok(())
+        super::refuse_overlaps(&outputs, inputs)
     }
 }
 
@@ -137,8 +163,11 @@ impl SpeedArgs {
             configs: self.common.configs()?,
             width,
             height,
-            runs: self.runs,
-            max_passes: self.max_passes,
+            runs: count("--runs", self.runs, "at least 1 timed run")?,
+            max_passes: self
+                .max_passes
+                .map(|p| count("--max-passes", p, "a number of passes ≥ 0"))
+                .transpose()?,
             tau: self.tau,
         };
         opts.validate()?;
@@ -158,7 +187,8 @@ pub fn run(
     match cmd {
         BenchCommand::Accuracy(a) => {
             let opts = a.options()?;
-            a.common.check_outputs()?;
+            let inputs: Vec<PathBuf> = a.image.iter().cloned().collect();
+            a.common.check_outputs(&inputs)?;
             let image = match &a.image {
                 Some(path) => load_image(path)?,
                 None => demo()?,
@@ -171,12 +201,12 @@ pub fn run(
                 &report::accuracy_table(&report),
                 || report::accuracy_json(&report),
                 &report::accuracy_csv(&report),
-                |path| plot_accuracy(&report, path),
+                |path| accuracy_plot_bytes(&report, path),
             )
         }
         BenchCommand::Speed(s) => {
             let opts = s.options()?;
-            s.common.check_outputs()?;
+            s.common.check_outputs(&[])?;
             let bar = progress_bar();
             let report = run_speed(renderer, &opts, &|p| advance(&bar, p))?;
             bar.finish_and_clear();
@@ -185,32 +215,37 @@ pub fn run(
                 &report::speed_table(&report),
                 || report::speed_json(&report),
                 &report::speed_csv(&report),
-                |path| plot_speed(&report, path),
+                |path| speed_plot_bytes(&report, path),
             )
         }
     }
 }
 
-/// Prints and writes the outputs that `common` asks for.
+/// Writes the outputs that `common` asks for, all or none, then prints the table (or
+/// the JSON).
 fn emit(
     common: &CommonArgs,
     table: &str,
     json: impl FnOnce() -> Result<String>,
     csv: &str,
-    plot: impl FnOnce(&Path) -> Result<()>,
+    plot: impl FnOnce(&Path) -> Result<Vec<u8>>,
 ) -> Result<()> {
-    if common.json {
-        // stdout holds exactly one JSON object; the human table goes to stderr.
-        eprint!("{table}");
-        println!("{}", json()?);
-    } else {
-        print!("{table}");
-    }
+    let json = if common.json { Some(json()?) } else { None };
+    let mut outputs = Outputs::new();
     if let Some(path) = &common.csv {
-        brume::io::output::write_bytes(path, csv.as_bytes())?;
+        outputs.stage_bytes(path, csv.as_bytes())?;
     }
     if let Some(path) = &common.plot {
-        plot(path)?;
+        outputs.stage_bytes(path, &plot(path)?)?;
+    }
+    super::commit(outputs)?;
+    match json {
+        Some(json) => {
+            // stdout holds exactly one JSON object; the human table goes to stderr.
+            eprint!("{table}");
+            println!("{json}");
+        }
+        None => print!("{table}"),
     }
     Ok(())
 }
@@ -259,6 +294,12 @@ fn expected(option: &str) -> &'static str {
     }
 }
 
+/// A count given on the command line, refused (naming `option`) when negative or too
+/// large for `T`.
+fn count<T: TryFrom<i64>>(option: &str, value: i64, expected: &str) -> Result<T> {
+    T::try_from(value).map_err(|_| Error::invalid(option, value, expected))
+}
+
 /// `WIDTHxHEIGHT` → (width, height), both ≥ 1.
 pub fn parse_size(text: &str) -> Result<(usize, usize)> {
     let bad = || {
@@ -275,25 +316,6 @@ pub fn parse_size(text: &str) -> Result<(usize, usize)> {
         return Err(bad());
     }
     Ok((w, h))
-}
-
-fn check_folder(option: &str, path: &Path) -> Result<()> {
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => return Ok(()),
-    };
-    if dir.is_dir() {
-        Ok(())
-    } else {
-        Err(Error::invalid(
-            option,
-            path.display(),
-            format!(
-                "a file in an existing folder ({} is not one)",
-                dir.display()
-            ),
-        ))
-    }
 }
 
 #[cfg(test)]
@@ -350,7 +372,7 @@ mod tests {
         let BenchCommand::Accuracy(a) = parse(&["accuracy", "--plot", "x.jpg"]) else {
             panic!()
         };
-        let err = name_flags(a.common.check_outputs().unwrap_err()).to_string();
+        let err = name_flags(a.common.check_outputs(&[]).unwrap_err()).to_string();
         assert!(err.contains("--plot"), "{err}");
     }
 

@@ -8,8 +8,11 @@ mod render;
 
 pub use args::{Cli, Command};
 use brume::egl::Platform;
+use brume::io::output::{self, Outputs};
 use brume::{Error, Headless, Result};
 use clap::CommandFactory;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
 
 /// Runs the chosen subcommand.
 pub fn run(cli: Cli) -> Result<()> {
@@ -50,6 +53,71 @@ const FLAG_ALIASES: [(&str, &str); 3] = [
     ("min_area_fraction", "--sky-min-area"),
     ("margin_px", "--margin"),
 ];
+/// Refuses, before any work, an output that is one of the inputs (nothing a user gave us
+/// is overwritten) and two outputs that are one file (neither would survive). `outputs`
+/// pairs each option with its path. Links count: an output through a symbolic or hard
+/// link to an input is that input.
+pub fn refuse_overlaps(outputs: &[(&str, &Path)], inputs: &[PathBuf]) -> Result<()> {
+    for (i, &(option, out)) in outputs.iter().enumerate() {
+        if let Some(input) = inputs.iter().find(|i| output::same_destination(out, i)) {
+            return Err(Error::invalid(
+                option,
+                out.display(),
+                format!("a path other than the input {}", input.display()),
+            ));
+        }
+        let earlier = &outputs[..i];
+        if let Some((other, _)) = earlier
+            .iter()
+            .find(|(_, o)| output::same_destination(o, out))
+        {
+            return Err(Error::invalid(
+                option,
+                out.display(),
+                format!("a file other than the one {other} names"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Renames a command's staged outputs into place, all together.
+///
+/// `BRUME_TEST_HOLD_OUTPUTS=SECONDS` is a hook for the interrupt tests: it announces the
+/// staged files on stderr and waits before renaming, so that a test can signal a process
+/// that is known to hold temporaries.
+fn commit(outputs: Outputs) -> Result<()> {
+    let hold = std::env::var("BRUME_TEST_HOLD_OUTPUTS").ok();
+    if let Some(seconds) = hold.and_then(|s| s.parse::<f64>().ok()) {
+        eprintln!(
+            "brume: holding {} staged outputs",
+            outputs.destinations().count()
+        );
+        std::thread::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 600.0)));
+    }
+    outputs.commit()
+}
+
+/// On SIGINT, SIGTERM or SIGHUP, removes the temporary outputs of this process and exits
+/// with 128 + the signal's number (130 for Ctrl-C), instead of dying with hidden
+/// `.brume-*.tmp` files left in the output folders.
+pub fn remove_temporaries_on_signals() {
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        match signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
+            Ok(mut signals) => {
+                std::thread::spawn(move || {
+                    if let Some(signal) = signals.forever().next() {
+                        eprintln!("brume: interrupted");
+                        output::exit_removing_temporaries(128 + signal);
+                    }
+                });
+            }
+            Err(e) => log::warn!("no clean-up on Ctrl-C: cannot install the handler: {e}"),
+        }
+    }
+}
 
 /// The library names a bad parameter as its field (`rho_max`); on the command line it is
 /// a flag (`--rho-max`). Names that are a flag of `brume` become that flag; others (a
@@ -90,6 +158,7 @@ fn is_flag(flag: &str) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use clap::Parser;
 
     #[test]
     fn library_names_become_flags() {
@@ -111,5 +180,45 @@ mod tests {
             };
             assert_eq!(name, shown);
         }
+    }
+
+    /// Every option whose value is not a path takes a leading hyphen, so that
+    /// `--flag -1` is answered by the check that names the flag.
+    #[test]
+    fn negative_values_reach_their_option() {
+        fn walk(cmd: &clap::Command, path: &mut Vec<String>, checked: &mut usize) {
+            for arg in cmd.get_arguments() {
+                let Some(long) = arg.get_long() else { continue };
+                let takes_value = arg.get_num_args().is_some_and(|n| n.takes_values());
+                let is_path = arg
+                    .get_value_names()
+                    .is_some_and(|names| names.iter().any(|n| n.as_str().contains("PATH")));
+                if !takes_value || is_path || long == "help" || long == "version" {
+                    continue;
+                }
+                *checked += 1;
+                let flag = format!("--{long}");
+                let argv = ["brume"]
+                    .into_iter()
+                    .chain(path.iter().map(String::as_str))
+                    .chain([flag.as_str(), "-1"]);
+                if let Err(e) = Cli::try_parse_from(argv) {
+                    assert!(
+                        e.kind() != clap::error::ErrorKind::UnknownArgument
+                            && e.to_string().contains(&flag),
+                        "{path:?} {flag} -1: {e}"
+                    );
+                }
+            }
+            for sub in cmd.get_subcommands() {
+                path.push(sub.get_name().to_string());
+                walk(sub, path, checked);
+                path.pop();
+            }
+        }
+        let (mut cmd, mut checked) = (Cli::command(), 0);
+        cmd.build(); // sets every argument's number of values
+        walk(&cmd, &mut Vec::new(), &mut checked);
+        assert!(checked >= 25, "only {checked} options checked");
     }
 }

@@ -2,54 +2,56 @@
 
 use super::args::PrepArgs;
 use super::render::{
-    airlight_source_name, depth_inputs, load_depth, prep_options, refuse_overwriting_inputs,
+    airlight_source_name, check_same_size, depth_inputs, load_depth, prep_options,
 };
-use brume::io::{image, output};
+use brume::io::image;
+use brume::io::output::{self, Outputs};
 use brume::prep;
 use brume::Result;
 use serde_json::json;
+use std::path::Path;
 
 pub fn run(args: &PrepArgs) -> Result<()> {
     let opts = prep_options(&args.prep)?;
     output::check_scalar_output(&args.out, "--out")?;
+    let mut outs: Vec<(&str, &Path)> = vec![("--out", &args.out)];
     if let Some(vis) = &args.vis {
-        output::check_image_output(vis, "--vis")?;
+        output::check_png_output(vis, "--vis")?;
+        outs.push(("--vis", vis));
     }
     let mut inputs = depth_inputs(&args.depth);
     inputs.extend(args.image.iter().cloned());
-    refuse_overwriting_inputs(&args.out, &inputs)?;
-    if let Some(vis) = &args.vis {
-        refuse_overwriting_inputs(vis, &inputs)?;
-    }
+    super::refuse_overlaps(&outs, &inputs)?;
+
+    // Everything is read and computed before the first output is staged: a bad input
+    // leaves every output as it was.
     let loaded = load_depth(&args.depth)?;
-    let prepared = prep::prepare(&loaded.range, &opts)?;
-    output::write_scalar(&args.out, &prepared.range)?;
-    if let Some(vis) = &args.vis {
-        let (w, h, rgb) = prep::visualize(&loaded.range, &prepared);
-        output::write_png_rgb8(vis, w, h, &rgb)?;
-    }
-    let airlight = match &args.image {
+    let colour = match &args.image {
         Some(path) => {
             let img = image::load_linear_rgb(path)?;
-            if (img.width(), img.height()) != (loaded.range.width(), loaded.range.height()) {
-                return Err(brume::Error::SizeMismatch {
-                    a: path.display().to_string(),
-                    aw: img.width() as u32,
-                    ah: img.height() as u32,
-                    b: args
-                        .depth
-                        .depth
-                        .as_ref()
-                        .map(|p| p.display().to_string())
-                        .unwrap_or_default(),
-                    bw: loaded.range.width() as u32,
-                    bh: loaded.range.height() as u32,
-                });
-            }
-            Some(prep::estimate_airlight(&img, &prepared))
+            let depth_name = args.depth.depth.as_ref().map(|p| p.display().to_string());
+            check_same_size(
+                &img,
+                &path.display().to_string(),
+                &loaded.range,
+                &depth_name.unwrap_or_default(),
+            )?;
+            Some(img)
         }
         None => None,
     };
+    let prepared = prep::prepare(&loaded.range, &opts)?;
+    let airlight = colour
+        .as_ref()
+        .map(|img| prep::estimate_airlight(img, &prepared));
+    let mut outputs = Outputs::new();
+    outputs.stage_scalar(&args.out, &prepared.range)?;
+    if let Some(vis) = &args.vis {
+        let (w, h, rgb) = prep::visualize(&loaded.range, &prepared);
+        outputs.stage_png_rgb8(vis, w, h, &rgb)?;
+    }
+    super::commit(outputs)?;
+
     let s = &prepared.stats;
     if args.json {
         let mut report = serde_json::to_value(s).expect("statistics serialise");

@@ -4,11 +4,12 @@ use super::args::{DepthArgs, PrepOptionArgs, RenderArgs};
 use brume::blur::Blur;
 use brume::egl::Platform;
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
-use brume::io::{demo, image, output};
+use brume::io::output::{self, Outputs};
+use brume::io::{demo, image};
 use brume::medium::haze::{self, Haze};
 use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
-use brume::raster::RgbImage;
+use brume::raster::{RgbImage, ScalarMap};
 use brume::Rendered;
 use brume::{Error, Result};
 use serde_json::json;
@@ -23,7 +24,6 @@ struct Scene {
     depth: LoadedDepth,
     image_name: String,
     depth_name: String,
-    inputs: Vec<PathBuf>,
 }
 
 /// What pre-processing did, for the report.
@@ -75,9 +75,20 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let haze = haze_from_args(args)?;
     let out = output_path(args)?;
     output::check_image_output(&out, "--out")?;
+    let inputs: Vec<PathBuf> = args
+        .image
+        .iter()
+        .cloned()
+        .chain(depth_inputs(&args.depth))
+        .collect();
+    super::refuse_overlaps(&[("--out", &out)], &inputs)?;
     let scene = load_scene(args)?;
-    refuse_overwriting_inputs(&out, &scene.inputs)?;
-    check_same_size(&scene)?;
+    check_same_size(
+        &scene.image,
+        &scene.image_name,
+        &scene.depth.range,
+        &scene.depth_name,
+    )?;
 
     let prep = preprocess(args, &scene)?;
     let range = prep
@@ -89,7 +100,9 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
 
     let mut renderer = super::open_renderer(egl)?;
     let rendered = renderer.render(&scene.image, &normalised, look.medium(), &look.blur)?;
-    output::write_rgba(&out, &rendered.image)?;
+    let mut outputs = Outputs::new();
+    outputs.stage_rgba(&out, &rendered.image)?;
+    super::commit(outputs)?;
 
     let report = Report {
         scene: &scene,
@@ -171,12 +184,9 @@ fn load_scene(args: &RenderArgs) -> Result<Scene> {
             depth: demo::demo_range()?,
             image_name: "built-in demo image".into(),
             depth_name: "built-in demo disparity".into(),
-            inputs: Vec::new(),
         }),
         (Some(image_path), Some(_)) => {
             let depth = load_depth(&args.depth)?;
-            let mut inputs = vec![image_path.clone()];
-            inputs.extend(depth_inputs(&args.depth));
             Ok(Scene {
                 image: image::load_linear_rgb(image_path)?,
                 depth,
@@ -188,7 +198,6 @@ fn load_scene(args: &RenderArgs) -> Result<Scene> {
                     .expect("checked")
                     .display()
                     .to_string(),
-                inputs,
             })
         }
         (None, Some(_)) => Err(Error::invalid(
@@ -235,31 +244,23 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Refuses an output path that is one of the inputs: nothing a user gave us is
-/// overwritten.
-pub fn refuse_overwriting_inputs(out: &Path, inputs: &[PathBuf]) -> Result<()> {
-    match inputs.iter().find(|input| output::same_file(out, input)) {
-        Some(input) => Err(Error::invalid(
-            "--out",
-            out.display(),
-            format!("a path other than the input {}", input.display()),
-        )),
-        None => Ok(()),
-    }
-}
-
-fn check_same_size(scene: &Scene) -> Result<()> {
-    let (i, d) = (&scene.image, &scene.depth.range);
-    if (i.width(), i.height()) == (d.width(), d.height()) {
+/// Checks that the colour image and the range map have one size; the error names both.
+pub fn check_same_size(
+    image: &RgbImage,
+    image_name: &str,
+    range: &ScalarMap,
+    range_name: &str,
+) -> Result<()> {
+    if (image.width(), image.height()) == (range.width(), range.height()) {
         return Ok(());
     }
     Err(Error::SizeMismatch {
-        a: scene.image_name.clone(),
-        aw: i.width() as u32,
-        ah: i.height() as u32,
-        b: scene.depth_name.clone(),
-        bw: d.width() as u32,
-        bh: d.height() as u32,
+        a: image_name.to_string(),
+        aw: image.width() as u32,
+        ah: image.height() as u32,
+        b: range_name.to_string(),
+        bw: range.width() as u32,
+        bh: range.height() as u32,
     })
 }
 
@@ -276,7 +277,8 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
         opts.sky.min_area_fraction = a;
     }
     if let Some(s) = args.seed {
-        opts.seed = s;
+        opts.seed = u64::try_from(s)
+            .map_err(|_| Error::invalid("seed", s, "a whole number from 0 to 2^64 - 1"))?;
     }
     opts.detect_sky = !args.no_sky;
     opts.validate()?;

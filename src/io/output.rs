@@ -2,13 +2,19 @@
 //! directory that is renamed over the destination only once complete, so a crash or an
 //! error never leaves a partial file and never damages an existing one.
 //!
+//! A command that writes several files stages them all in an [`Outputs`] set and renames
+//! them together once every one is complete: all are written or none is touched. Live
+//! temporaries are known to [`exit_removing_temporaries`], which a program's signal
+//! handler calls so that an interrupt leaves no `.brume-*.tmp` behind.
+//!
 //! This module owns the path checks, that atomic write and the choice of format by
 //! extension; the bytes of each format come from its codec in `io::codec`, next to the
 //! reader of the same format.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard};
 
 use crate::io::codec::{exr, pfm, png};
 use crate::io::image::linear_to_srgb;
@@ -19,6 +25,8 @@ use crate::{Error, Result};
 pub const IMAGE_EXTENSIONS: [&str; 3] = ["png", "pfm", "exr"];
 /// Extensions [`write_scalar`] accepts.
 pub const SCALAR_EXTENSIONS: [&str; 2] = ["pfm", "exr"];
+/// Extensions [`write_png_rgb8`] accepts: it writes PNG bytes, so nothing else.
+pub const PNG_EXTENSIONS: [&str; 1] = ["png"];
 
 /// Checks, before any work is done, that `path` can take an image output: a known
 /// extension and an existing directory. `option` names the flag in the error.
@@ -31,6 +39,11 @@ pub fn check_scalar_output(path: &Path, option: &str) -> Result<()> {
     check_output(path, option, &SCALAR_EXTENSIONS)
 }
 
+/// Like [`check_image_output`] for pictures that are always PNG (visualisations).
+pub fn check_png_output(path: &Path, option: &str) -> Result<()> {
+    check_output(path, option, &PNG_EXTENSIONS)
+}
+
 fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()> {
     if !extensions.contains(&extension_of(path).as_str()) {
         return Err(Error::invalid(
@@ -39,12 +52,25 @@ fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()> {
             format!("a path ending in {}", list_extensions(extensions)),
         ));
     }
+    check_destination(path, option)
+}
+
+/// Checks that `path` can be renamed onto: its directory exists and it is not itself a
+/// directory (a rename onto one fails only after all the work is done).
+pub fn check_destination(path: &Path, option: &str) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::invalid(
+            option,
+            path.display(),
+            "a file path, not a directory",
+        ));
+    }
     match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::invalid(
             option,
             path.display(),
             format!(
-                "a path in an existing directory ({} does not exist)",
+                "a path in an existing directory ({} is not one)",
                 dir.display()
             ),
         )),
@@ -55,7 +81,9 @@ fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()> {
 /// Writes `bytes` to `path` atomically (temporary file, then rename), with the same
 /// permissions as every other output: for text reports, CSV tables and plots.
 pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
-    write_atomically(path, |w| w.write_all(bytes))
+    let mut outputs = Outputs::new();
+    outputs.stage_bytes(path, bytes)?;
+    outputs.commit()
 }
 
 /// `.png, .pfm or .exr`.
@@ -73,53 +101,25 @@ fn list_extensions(extensions: &[&str]) -> String {
 /// `.pfm` float RGB `PF` (linear, little-endian, rows bottom to top),
 /// `.exr` float RGBA (linear, 32-bit).
 pub fn write_rgba(path: &Path, img: &RgbaImage) -> Result<()> {
-    match extension_of(path).as_str() {
-        "png" => {
-            let rgb: Vec<[u8; 3]> = img
-                .as_slice()
-                .iter()
-                .map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
-                .collect();
-            write_png_rgb8(path, img.width(), img.height(), &rgb)
-        }
-        "pfm" => write_atomically(path, |w| pfm::write_rgba(w, img)),
-        "exr" => write_atomically(path, |w| exr::write_rgba(w, img)),
-        _ => check_image_output(path, "out"),
-    }
+    let mut outputs = Outputs::new();
+    outputs.stage_rgba(path, img)?;
+    outputs.commit()
 }
 
 /// Writes a scalar map (range, depth, transmittance) by extension: `.pfm` (`Pf`,
 /// little-endian, rows bottom to top) or `.exr` (one 32-bit channel named `Y`).
 pub fn write_scalar(path: &Path, map: &ScalarMap) -> Result<()> {
-    match extension_of(path).as_str() {
-        "pfm" => write_atomically(path, |w| pfm::write_scalar(w, map)),
-        "exr" => write_atomically(path, |w| exr::write_scalar(w, map)),
-        _ => check_scalar_output(path, "scalar output"),
-    }
+    let mut outputs = Outputs::new();
+    outputs.stage_scalar(path, map)?;
+    outputs.commit()
 }
 
 /// Writes an 8-bit RGB PNG from pixels already encoded (a visualisation), row 0 at the
 /// top. `rgb` must hold `width * height` pixels.
 pub fn write_png_rgb8(path: &Path, width: usize, height: usize, rgb: &[[u8; 3]]) -> Result<()> {
-    if rgb.len() != width * height {
-        return Err(Error::invalid(
-            "pixel count",
-            rgb.len(),
-            format!("{width}*{height} pixels for {}", path.display()),
-        ));
-    }
-    let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
-        (Ok(w), Ok(h)) => (w, h),
-        _ => {
-            return Err(Error::invalid(
-                "PNG size",
-                format!("{width}x{height}"),
-                "at most 2^32-1 per side",
-            ))
-        }
-    };
-    let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
-    write_atomically(path, |out| png::write_rgb8(out, &bytes, w, h))
+    let mut outputs = Outputs::new();
+    outputs.stage_png_rgb8(path, width, height, rgb)?;
+    outputs.commit()
 }
 
 /// True if `a` and `b` name the same existing file (after resolving links and `..`), so
@@ -158,12 +158,192 @@ fn linear_to_srgb8(v: f32) -> u8 {
     (linear_to_srgb(v) * 255.0).round() as u8
 }
 
-/// Runs `write` on a buffered temporary file next to `path`, then renames it to `path`.
-/// On any error the temporary file is removed and `path` is left as it was.
-fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&mut BufWriter<&File>) -> std::io::Result<()>,
-) -> Result<()> {
+/// The output files of one command, written all or nothing: each `stage_*` call writes a
+/// complete temporary file in its destination's directory; [`Outputs::commit`] renames
+/// them all onto their destinations. Dropping the set without committing (an error on
+/// the way, a panic) removes the temporaries and leaves every destination as it was.
+///
+/// ```no_run
+/// # fn main() -> brume::Result<()> {
+/// # let (range, picture) = (brume::raster::Grid::filled(2, 2, 1.0f32), vec![[0u8; 3]; 4]);
+/// use brume::io::output::Outputs;
+/// let mut outputs = Outputs::new();
+/// outputs.stage_scalar("range.pfm".as_ref(), &range)?;
+/// outputs.stage_png_rgb8("range.png".as_ref(), 2, 2, &picture)?;
+/// outputs.commit()?; // both files, or (on any error above) neither
+/// # Ok(())
+/// # }
+/// ```
+#[derive(Default)]
+pub struct Outputs {
+    staged: Vec<Staged>,
+}
+
+/// A complete temporary file (`None` once renamed) and where it goes.
+struct Staged {
+    tmp: Option<tempfile::NamedTempFile>,
+    dest: PathBuf,
+}
+
+impl Outputs {
+    /// An empty set.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// The destinations staged so far, in order.
+    pub fn destinations(&self) -> impl Iterator<Item = &Path> {
+        self.staged.iter().map(|s| s.dest.as_path())
+    }
+
+    /// Stages `bytes` for `path` (reports, CSV tables, plots).
+    pub fn stage_bytes(&mut self, path: &Path, bytes: &[u8]) -> Result<()> {
+        self.stage_with(path, |w| w.write_all(bytes))
+    }
+
+    /// Stages a linear-light RGBA image for `path`, in the format [`write_rgba`] picks.
+    pub fn stage_rgba(&mut self, path: &Path, img: &RgbaImage) -> Result<()> {
+        match extension_of(path).as_str() {
+            "png" => {
+                let rgb: Vec<[u8; 3]> = img
+                    .as_slice()
+                    .iter()
+                    .map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
+                    .collect();
+                self.stage_png_rgb8(path, img.width(), img.height(), &rgb)
+            }
+            "pfm" => self.stage_with(path, |w| pfm::write_rgba(w, img)),
+            "exr" => self.stage_with(path, |w| exr::write_rgba(w, img)),
+            _ => check_image_output(path, "out"),
+        }
+    }
+
+    /// Stages a scalar map for `path`, in the format [`write_scalar`] picks.
+    pub fn stage_scalar(&mut self, path: &Path, map: &ScalarMap) -> Result<()> {
+        match extension_of(path).as_str() {
+            "pfm" => self.stage_with(path, |w| pfm::write_scalar(w, map)),
+            "exr" => self.stage_with(path, |w| exr::write_scalar(w, map)),
+            _ => check_scalar_output(path, "scalar output"),
+        }
+    }
+
+    /// Stages an 8-bit RGB PNG of already encoded pixels, as [`write_png_rgb8`] writes it.
+    pub fn stage_png_rgb8(
+        &mut self,
+        path: &Path,
+        width: usize,
+        height: usize,
+        rgb: &[[u8; 3]],
+    ) -> Result<()> {
+        if rgb.len() != width * height {
+            return Err(Error::invalid(
+                "pixel count",
+                rgb.len(),
+                format!("{width}*{height} pixels for {}", path.display()),
+            ));
+        }
+        let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
+            (Ok(w), Ok(h)) => (w, h),
+            _ => {
+                return Err(Error::invalid(
+                    "PNG size",
+                    format!("{width}x{height}"),
+                    "at most 2^32-1 per side",
+                ))
+            }
+        };
+        let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
+        self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h))
+    }
+
+    /// Runs `write` on a buffered temporary file next to `path` and keeps it for
+    /// [`Outputs::commit`]. A path already staged in this set, or one that is a directory,
+    /// is refused: two outputs of one command never land on one file.
+    pub fn stage_with(
+        &mut self,
+        path: &Path,
+        write: impl FnOnce(&mut BufWriter<&File>) -> std::io::Result<()>,
+    ) -> Result<()> {
+        if let Some(earlier) = self.destinations().find(|d| same_destination(d, path)) {
+            return Err(Error::invalid(
+                "output",
+                path.display(),
+                format!("a file other than the output {}", earlier.display()),
+            ));
+        }
+        if path.is_dir() {
+            return Err(Error::io(
+                path,
+                std::io::Error::other("is a directory, not a file to write"),
+            ));
+        }
+        let tmp = create_temporary(path)?;
+        // Pushed before writing so that an error below drops (removes) it with the set.
+        self.staged.push(Staged {
+            tmp: Some(tmp),
+            dest: path.to_path_buf(),
+        });
+        let staged = self.staged.last().expect("just pushed");
+        let tmp = staged.tmp.as_ref().expect("not yet renamed");
+        {
+            let mut out = BufWriter::new(tmp.as_file());
+            write(&mut out).map_err(|e| Error::io(path, e))?;
+            out.flush().map_err(|e| Error::io(path, e))?;
+        }
+        tmp.as_file().sync_all().map_err(|e| Error::io(path, e))
+    }
+
+    /// Renames every staged file onto its destination. The renames run while the
+    /// temporary registry is locked, so a signal handler using
+    /// [`exit_removing_temporaries`] sees either all of them done or none. After the
+    /// checks of staging, a rename fails only if the directory changed meanwhile; the
+    /// files renamed before it then stay, the others are removed.
+    pub fn commit(mut self) -> Result<()> {
+        let mut live = live_temporaries();
+        let mut result = Ok(());
+        for staged in &mut self.staged {
+            let tmp = staged.tmp.take().expect("each file is renamed once");
+            live.retain(|p| p != tmp.path());
+            if let Err(e) = tmp.persist(&staged.dest) {
+                // Dropping e.file removes the temporary.
+                result = Err(Error::io(&staged.dest, e.error));
+                break;
+            }
+        }
+        // Unlocked before `self` drops the files not renamed: their drop takes the lock.
+        drop(live);
+        result
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if let Some(tmp) = &self.tmp {
+            // Removed under the lock: a signal handler either removes it or never sees it.
+            let mut live = live_temporaries();
+            let _ = std::fs::remove_file(tmp.path());
+            live.retain(|p| p != tmp.path());
+        }
+    }
+}
+
+impl std::fmt::Debug for Outputs {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_list().entries(self.destinations()).finish()
+    }
+}
+
+/// Paths of the temporary files this process has open, for [`exit_removing_temporaries`].
+static LIVE_TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn live_temporaries() -> MutexGuard<'static, Vec<PathBuf>> {
+    // A writer that panicked left the list itself consistent.
+    LIVE_TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Creates an empty temporary next to `path` and registers it, under the registry lock
+/// so that a signal handler never misses a file that exists.
+fn create_temporary(path: &Path) -> Result<tempfile::NamedTempFile> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -177,13 +357,44 @@ fn write_atomically(
         use std::os::unix::fs::PermissionsExt;
         builder.permissions(std::fs::Permissions::from_mode(0o666));
     }
+    let mut live = live_temporaries();
     let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
-    {
-        let mut out = BufWriter::new(tmp.as_file());
-        write(&mut out).map_err(|e| Error::io(path, e))?;
-        out.flush().map_err(|e| Error::io(path, e))?;
+    live.push(tmp.path().to_path_buf());
+    Ok(tmp)
+}
+
+/// Removes every temporary output file this process has open and exits with `code`,
+/// without returning: for a program's SIGINT/SIGTERM handler (the `brume` program
+/// installs one). The registry stays locked until the process is gone, so no writer
+/// creates or renames a temporary after the clean-up.
+pub fn exit_removing_temporaries(code: i32) -> ! {
+    let live = live_temporaries();
+    for path in live.iter() {
+        let _ = std::fs::remove_file(path);
     }
-    tmp.as_file().sync_all().map_err(|e| Error::io(path, e))?;
-    tmp.persist(path).map_err(|e| Error::io(path, e.error))?;
-    Ok(())
+    std::process::exit(code)
+}
+
+/// True if writing to `a` and to `b` would land on one file: the same path once links,
+/// `.` and `..` are resolved (the file need not exist yet, its directory must), or the
+/// same existing file under two names (a hard link).
+pub fn same_destination(a: &Path, b: &Path) -> bool {
+    match (resolve_destination(a), resolve_destination(b)) {
+        (Some(ra), Some(rb)) => ra == rb || same_file(a, b),
+        _ => same_file(a, b),
+    }
+}
+
+/// The absolute, link-free form of `path`, or of its directory joined with its name
+/// when the file does not exist yet.
+fn resolve_destination(path: &Path) -> Option<PathBuf> {
+    if let Ok(p) = path.canonicalize() {
+        return Some(p);
+    }
+    let name = path.file_name()?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    Some(dir.canonicalize().ok()?.join(name))
 }
