@@ -39,11 +39,11 @@ pub fn check_fits(what: &str, needed: u64, available: Option<u64>, hint: &str) -
     }
 }
 
-/// `3.1 GB`, `48 MB`.
+/// `3.07 GB`, `48 MB`.
 pub fn human(bytes: u64) -> String {
     let b = bytes as f64;
     if b >= 1e9 {
-        format!("{:.1} GB", b / 1e9)
+        format!("{:.2} GB", b / 1e9)
     } else {
         format!("{:.0} MB", (b / 1e6).max(1.0))
     }
@@ -125,7 +125,7 @@ mod tests {
         )
         .unwrap_err()
         .to_string();
-        assert!(err.contains("8000x6000") && err.contains("3.2 GB") && err.contains("2.9 GB"));
+        assert!(err.contains("8000x6000") && err.contains("3.20 GB") && err.contains("2.90 GB"));
         assert!(err.contains("f16"), "{err}");
         assert!(check_fits("x", 10, Some(10), "").is_ok());
         assert!(check_fits("x", 10, None, "").is_ok());
