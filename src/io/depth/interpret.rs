@@ -33,24 +33,13 @@ fn resolve_format(
         }
         (f, _) => f,
     };
-    let fits = match format {
-        F::Middlebury2014 => matches!(raw, Raw::Float { from_pfm: true, .. }),
-        F::Middlebury2006 => matches!(raw, Raw::Grey8(_)),
-        F::Kitti | F::Nyu | F::Tum | F::Png16 => matches!(raw, Raw::Grey16(_)),
-        F::Float => matches!(raw, Raw::Float { .. }),
-        F::Auto => unreachable!("Auto resolved above"),
-    };
-    if !fits {
-        let expected = match format {
-            F::Middlebury2014 => "a `Pf` PFM disparity (disp0.pfm)",
-            F::Middlebury2006 => "an 8-bit grey PNG disparity",
-            F::Float => "a float map (.pfm, .exr, .tif, .tiff or .npy)",
-            _ => "a 16-bit grey PNG",
-        };
+    let layout = format.rule().layout;
+    if !layout.fits(raw) {
         return Err(Error::format(
             path,
             format!(
-                "--depth-format {format} expects {expected}, found {}",
+                "--depth-format {format} expects {}, found {}",
+                layout.expected(),
                 raw.describe()
             ),
         ));
@@ -65,20 +54,10 @@ fn resolve_format(
 }
 
 fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<DepthKind> {
-    use DepthFormat as F;
-    use DepthKind as K;
-    let default = match format {
-        F::Middlebury2014 | F::Middlebury2006 => K::Disparity,
-        _ => K::Depth,
-    };
-    let kind = requested.unwrap_or(default);
-    let allowed = match format {
-        F::Middlebury2014 | F::Middlebury2006 => kind == K::Disparity,
-        F::Kitti | F::Nyu | F::Tum => kind != K::Disparity,
-        _ => true,
-    };
-    if !allowed {
-        let expected = if default == K::Disparity {
+    let rule = format.rule();
+    let kind = requested.unwrap_or(rule.default_kind);
+    if !rule.accepts(kind) {
+        let expected = if rule.default_kind == DepthKind::Disparity {
             format!("disparity for --depth-format {format}")
         } else {
             format!("depth or range for --depth-format {format}")

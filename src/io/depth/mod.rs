@@ -11,8 +11,10 @@
 //! The front end is here: the options, the result, and loading a file. Each file format
 //! is decoded by its codec in `io::codec` (`raw` dispatches by extension), each dataset's
 //! convention is in a module of its own (`middlebury`, `png16`), the geometry is in
-//! `io::camera`, and `interpret` settles which convention a file follows. A new dataset
-//! format adds its module, its variant of [`DepthFormat`], and its arms in `interpret`.
+//! `io::camera`, and `interpret` settles which convention a file follows. Every fact that
+//! depends on the format (name, file layout, kinds, a fixed scale) is one row of the table
+//! in `format.rs`: a new dataset format adds its [`DepthFormat`] variant and its row, and
+//! only a conversion no row can describe also adds a module and its arm in `interpret`.
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -21,6 +23,7 @@ use std::str::FromStr;
 use crate::raster::ScalarMap;
 use crate::{Error, Result};
 
+mod format;
 mod interpret;
 mod middlebury;
 mod png16;
@@ -103,41 +106,21 @@ pub enum DepthFormat {
     Float,
 }
 
-impl DepthFormat {
-    const NAMES: &'static str =
-        "one of auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16, float";
-}
-
 impl FromStr for DepthFormat {
     type Err = Error;
 
     fn from_str(s: &str) -> Result<Self> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "auto" => Ok(DepthFormat::Auto),
-            "middlebury2014" => Ok(DepthFormat::Middlebury2014),
-            "middlebury2006" => Ok(DepthFormat::Middlebury2006),
-            "kitti" => Ok(DepthFormat::Kitti),
-            "nyu" => Ok(DepthFormat::Nyu),
-            "tum" => Ok(DepthFormat::Tum),
-            "png16" => Ok(DepthFormat::Png16),
-            "float" => Ok(DepthFormat::Float),
-            _ => Err(Error::invalid("depth_format", s, DepthFormat::NAMES)),
-        }
+        let wanted = s.trim().to_ascii_lowercase();
+        DepthFormat::ALL
+            .into_iter()
+            .find(|f| f.rule().name == wanted)
+            .ok_or_else(|| Error::invalid("depth_format", s, DepthFormat::names()))
     }
 }
 
 impl fmt::Display for DepthFormat {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            DepthFormat::Auto => "auto",
-            DepthFormat::Middlebury2014 => "middlebury2014",
-            DepthFormat::Middlebury2006 => "middlebury2006",
-            DepthFormat::Kitti => "kitti",
-            DepthFormat::Nyu => "nyu",
-            DepthFormat::Tum => "tum",
-            DepthFormat::Png16 => "png16",
-            DepthFormat::Float => "float",
-        })
+        f.write_str(self.rule().name)
     }
 }
 

@@ -1,6 +1,6 @@
 //! 16-bit PNG depth conventions: KITTI, NYU Depth v2 and TUM RGB-D each fix the metres
-//! per unit, and `--depth-format png16` takes it from `--depth-scale`. A new dataset of
-//! this kind adds its scale here.
+//! per unit (their rows in `format.rs`), and `--depth-format png16` takes it from
+//! `--depth-scale`.
 
 use super::{positive_option, DepthFormat, DepthOptions};
 use crate::{Error, Result};
@@ -12,13 +12,12 @@ pub(super) fn scale(
     opts: &DepthOptions,
     notes: &mut Vec<String>,
 ) -> Result<f64> {
-    let scale = match format {
-        DepthFormat::Kitti => 1.0 / 256.0,
-        DepthFormat::Nyu => 1.0 / 1000.0,
-        DepthFormat::Tum => 1.0 / 5000.0,
-        _ => given_scale(opts)?,
+    let fixed = format.rule().fixed_scale;
+    let scale = match fixed {
+        Some(scale) => scale,
+        None => given_scale(opts)?,
     };
-    if format != DepthFormat::Png16 && opts.scale.is_some() {
+    if fixed.is_some() && opts.scale.is_some() {
         notes.push(format!("--depth-scale ignored: {format} has a fixed scale"));
     }
     Ok(scale)
