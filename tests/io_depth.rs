@@ -3,8 +3,8 @@
 use std::path::{Path, PathBuf};
 
 use brume::io::depth::{
-    load_range, parse_calib, parse_pfm, read_pfm, DepthFormat, DepthKind, DepthOptions,
-    LoadedDepth, Pfm,
+    load_range, load_range_from_bytes, parse_calib, parse_pfm, read_pfm, DepthFormat, DepthKind,
+    DepthOptions, LoadedDepth, Pfm,
 };
 use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
@@ -258,6 +258,44 @@ fn middlebury2014_end_to_end() {
     assert!(close(*r.get(0, 1), expect(0.0, 1.0, 90.0)));
     assert!(close(*r.get(3, 1), expect(3.0, 1.0, 30.0)));
     assert!(r.get(0, 0) > r.get(0, 1), "bigger disparity is nearer");
+}
+
+#[test]
+fn bytes_in_memory_load_as_the_files_do() {
+    let dir = middlebury2014_dir(2, 1, &[5.0, 7.0]);
+    let (pfm, calib) = (dir.path().join("disp0.pfm"), dir.path().join("calib.txt"));
+    let from_file = load_range(&pfm, &DepthOptions::default()).unwrap();
+    let bytes = std::fs::read(&pfm).unwrap();
+    let text = std::fs::read_to_string(&calib).unwrap();
+    let from_bytes = load_range_from_bytes(
+        &bytes,
+        &pfm,
+        &DepthOptions::default(),
+        Some((&calib, &text)),
+    )
+    .unwrap();
+    assert_eq!(from_bytes, from_file);
+    // Without its calib.txt the same disparity is refused as Middlebury 2014, as on disk.
+    let alone = load_range_from_bytes(&bytes, &pfm, &opts(DepthFormat::Middlebury2014), None);
+    expect_format_error(alone, "calib");
+    // An ignored calibration is noted, not parsed.
+    let png = save_png8(dir.path(), "d.png", 1, 1, &[9]);
+    let with_calib = DepthOptions {
+        calib: Some(calib.clone()),
+        ..DepthOptions::default()
+    };
+    let d = load_range_from_bytes(
+        &std::fs::read(&png).unwrap(),
+        &png,
+        &with_calib,
+        Some((&calib, "not a calib")),
+    )
+    .unwrap();
+    assert_eq!(d, load_range(&png, &with_calib).unwrap());
+    assert!(d
+        .notes
+        .iter()
+        .any(|n| n.contains("--calib") && n.contains("ignored")));
 }
 
 #[test]
