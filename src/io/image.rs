@@ -83,11 +83,37 @@ pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
         u64::from(w),
         u64::from(h),
     )?;
+    if format == ImageFormat::Jpeg {
+        check_jpeg_holds(bytes.len(), w, h, name)?;
+    }
     // The budget `ImageReader::decode` applies, which `into_decoder` leaves to its caller.
     image::Limits::default()
         .reserve(decoder.total_bytes())
         .map_err(cannot)?;
     DynamicImage::from_decoder(decoder).map_err(cannot)
+}
+
+/// Fewest pixels per byte a JPEG can hold, with a margin: every 8x8 block of every scan
+/// costs at least one bit (a DC difference; progressive AC scans can skip blocks in runs),
+/// so 512 pixels a byte at most, halved for safety.
+const JPEG_MAX_PIXELS_PER_BYTE: u64 = 1024;
+
+/// Refuses a JPEG too short for the size it claims. The decoder fills what the scan data
+/// does not cover instead of failing, so a 1 kB file claiming 10280x10280 took 10 s and
+/// 1.9 GB to decode into a grey picture.
+fn check_jpeg_holds(len: usize, w: u32, h: u32, name: &str) -> Result<()> {
+    let pixels = u64::from(w) * u64::from(h);
+    let needed = pixels / JPEG_MAX_PIXELS_PER_BYTE;
+    if (len as u64) < needed {
+        return Err(Error::format(
+            name,
+            format!(
+                "JPEG header claims {w}x{h} pixels, which need at least {needed} bytes, but the \
+                 file has {len}; it is truncated or corrupt"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Walks the JPEG marker segments from SOI and the entropy-coded data after each SOS, and

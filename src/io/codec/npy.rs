@@ -79,14 +79,19 @@ pub(crate) fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
     })
 }
 
-/// Checks what `npyz` trusts in a header: it allocates the header's stated length before
-/// reading it, and multiplies the shape's dimensions without checking for overflow (a
-/// debug build panics, a release build wraps to a small count). Headers this cannot make
-/// sense of are left to `npyz` to report.
+/// Longest .npy header text accepted: numpy's own `max_header_size` default, for the
+/// same reason (parsing a long Python literal is slow).
+const MAX_HEADER: usize = 10_000;
+
+/// Checks a header before `npyz` sees it. `npyz` allocates the header's stated length
+/// before reading it, multiplies the shape's dimensions without checking for overflow (a
+/// debug build panics, a release build wraps to a small count), and parses the header with
+/// a Python-literal parser that takes exponential time on nested or unclosed brackets (16
+/// `{` took longer than the fuzzer's 10 s). So the header must be the plain dictionary
+/// numpy writes for an array, read here in linear time, and its shape within `io::limits`.
 fn check_header(bytes: &[u8], path: &Path) -> Result<()> {
-    use py_literal::Value;
     if !bytes.starts_with(b"\x93NUMPY") || bytes.len() < 8 {
-        return Ok(());
+        return Ok(()); // npyz names what is wrong
     }
     // Version 1 gives the header length in 2 bytes, later versions in 4.
     let (text_at, len): (usize, _) = match bytes[6] {
@@ -106,7 +111,15 @@ fn check_header(bytes: &[u8], path: &Path) -> Result<()> {
     let Some(len) = len else {
         return Ok(());
     };
-    let Some(text) = bytes.get(text_at..text_at.saturating_add(len)) else {
+    if len > MAX_HEADER {
+        return Err(Error::format(
+            path,
+            format!(
+                ".npy header claims {len} bytes; at most {MAX_HEADER} are accepted, as by numpy"
+            ),
+        ));
+    }
+    let Some(text) = bytes.get(text_at..text_at + len) else {
         return Err(Error::format(
             path,
             format!(
@@ -115,39 +128,140 @@ fn check_header(bytes: &[u8], path: &Path) -> Result<()> {
             ),
         ));
     };
-    // Parsed as npyz parses it, so that both read the same shape.
-    let text = text.strip_suffix(b"\n").unwrap_or(text);
-    let Some(Value::Dict(entries)) = std::str::from_utf8(text)
-        .ok()
-        .and_then(|t| t.parse::<Value>().ok())
-    else {
-        return Ok(());
-    };
-    let dims = |v: &Value| -> Option<Vec<u64>> {
-        match v {
-            Value::Tuple(d) | Value::List(d) => d
+    let shape = PlainHeader { text, pos: 0 }.shape().ok_or_else(|| {
+        Error::format(
+            path,
+            format!(
+                ".npy header `{}` is not the dictionary numpy writes for a plain array; expected \
+                 {{'descr': '<f4', 'fortran_order': False, 'shape': (height, width), }}",
+                String::from_utf8_lossy(&text[..text.len().min(120)]).trim_end()
+            ),
+        )
+    })?;
+    // Any other shape is refused here too: npyz would multiply its dimensions first.
+    match shape[..] {
+        [h, w] | [h, w, 1] => check_size(path, "NPY", w, h),
+        _ => Err(Error::format(
+            path,
+            format!("array shape is {shape:?}; expected (height, width)"),
+        )),
+    }
+}
+
+/// A linear-time reader of the header numpy writes for a plain (not structured) dtype: a
+/// dictionary of quoted keys whose values are quoted strings, `True`, `False`, or tuples or
+/// lists of integers. Anything else is refused before the slow Python-literal parser sees
+/// it; a plain float array never needs more.
+struct PlainHeader<'a> {
+    text: &'a [u8],
+    pos: usize,
+}
+
+impl<'a> PlainHeader<'a> {
+    /// The last `shape` entry (the one npyz keeps), if the whole header is plain.
+    fn shape(mut self) -> Option<Vec<u64>> {
+        let mut shape = None;
+        self.expect(b'{')?;
+        loop {
+            if self.eat(b'}') {
+                break;
+            }
+            let key = self.string()?;
+            self.expect(b':')?;
+            if key == b"shape" {
+                shape = Some(self.integers()?);
+            } else {
+                self.scalar()?;
+            }
+            if !self.eat(b',') {
+                self.expect(b'}')?;
+                break;
+            }
+        }
+        self.skip_space();
+        (self.pos == self.text.len()).then_some(shape).flatten()
+    }
+
+    fn skip_space(&mut self) {
+        while self.text.get(self.pos).is_some_and(u8::is_ascii_whitespace) {
+            self.pos += 1;
+        }
+    }
+
+    fn eat(&mut self, c: u8) -> bool {
+        self.skip_space();
+        let found = self.text.get(self.pos) == Some(&c);
+        self.pos += usize::from(found);
+        found
+    }
+
+    fn expect(&mut self, c: u8) -> Option<()> {
+        self.eat(c).then_some(())
+    }
+
+    /// A quoted string without escapes.
+    fn string(&mut self) -> Option<&'a [u8]> {
+        self.skip_space();
+        let quote = *self
+            .text
+            .get(self.pos)
+            .filter(|&&q| q == b'\'' || q == b'"')?;
+        let start = self.pos + 1;
+        let text = self.text;
+        let len = text[start..]
+            .iter()
+            .position(|&c| c == quote || c == b'\\')?;
+        if text[start + len] != quote {
+            return None;
+        }
+        self.pos = start + len + 1;
+        Some(&text[start..start + len])
+    }
+
+    /// A quoted string, `True` or `False`.
+    fn scalar(&mut self) -> Option<()> {
+        self.skip_space();
+        for word in [&b"True"[..], b"False"] {
+            if self.text[self.pos..].starts_with(word) {
+                self.pos += word.len();
+                return Some(());
+            }
+        }
+        self.string().map(|_| ())
+    }
+
+    /// `(a, b, ...)` or `[a, b, ...]` of non-negative integers, trailing comma allowed.
+    fn integers(&mut self) -> Option<Vec<u64>> {
+        let close = if self.eat(b'(') {
+            b')'
+        } else {
+            self.expect(b'[')?;
+            b']'
+        };
+        let mut v = Vec::new();
+        loop {
+            if self.eat(close) {
+                return Some(v);
+            }
+            self.skip_space();
+            let digits = self.text[self.pos..]
                 .iter()
-                .map(|n| match n {
-                    Value::Integer(n) => n.to_string().parse::<u64>().ok(),
-                    _ => None,
-                })
-                .collect(),
-            _ => None,
-        }
-    };
-    for (key, value) in &entries {
-        if key.as_string().map(String::as_str) != Some("shape") {
-            continue;
-        }
-        match dims(value).as_deref() {
-            Some(&[h, w]) | Some(&[h, w, 1]) => check_size(path, "NPY", w, h)?,
-            _ => {
-                return Err(Error::format(
-                    path,
-                    format!("array shape is {value}; expected (height, width)"),
-                ))
+                .take_while(|c| c.is_ascii_digit())
+                .count();
+            // More than 20 digits cannot be a u64; refused without parsing them.
+            if digits == 0 || digits > 20 {
+                return None;
+            }
+            let n = std::str::from_utf8(&self.text[self.pos..self.pos + digits])
+                .ok()?
+                .parse()
+                .ok()?;
+            v.push(n);
+            self.pos += digits;
+            if !self.eat(b',') {
+                self.expect(close)?;
+                return Some(v);
             }
         }
     }
-    Ok(())
 }
