@@ -10,6 +10,8 @@ use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
 use brume::Error;
 
+mod common;
+
 /// Expects an error without printing a (large) map if there is none.
 fn expect_err<T>(r: brume::Result<T>) -> Error {
     match r {
@@ -561,23 +563,6 @@ fn tiff_float_map() {
     expect_format_error(load_range(&ints, &DepthOptions::default()), "floats");
 }
 
-/// A version-1.0 .npy file written by hand, as numpy does.
-fn npy_bytes(descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8> {
-    let mut header = format!(
-        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
-        if fortran { "True" } else { "False" }
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut b = b"\x93NUMPY\x01\x00".to_vec();
-    b.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    b.extend_from_slice(header.as_bytes());
-    b.extend_from_slice(data);
-    b
-}
-
 #[test]
 fn npy_float32_and_float64() {
     let dir = tempfile::tempdir().unwrap();
@@ -585,7 +570,7 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "a.npy",
-        &npy_bytes("<f4", "(2, 3)", false, &f32s),
+        &common::npy_bytes("<f4", "(2, 3)", false, &f32s),
     );
     check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
     let f64s: Vec<u8> = FLOATS
@@ -595,7 +580,7 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "b.npy",
-        &npy_bytes("<f8", "(2, 3)", false, &f64s),
+        &common::npy_bytes("<f8", "(2, 3)", false, &f64s),
     );
     check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
     // Fortran order: column-major storage of the same 2x3 array.
@@ -606,14 +591,14 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "c.npy",
-        &npy_bytes(">f4", "(2, 3)", true, &cols),
+        &common::npy_bytes(">f4", "(2, 3)", true, &cols),
     );
     check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
 
     let p = write(
         dir.path(),
         "i.npy",
-        &npy_bytes("<i4", "(1, 1)", false, &[0, 0, 0, 1]),
+        &common::npy_bytes("<i4", "(1, 1)", false, &[0, 0, 0, 1]),
     );
     expect_format_error(
         load_range(&p, &DepthOptions::default()),
@@ -622,10 +607,14 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "t.npy",
-        &npy_bytes("<f4", "(2, 3)", false, &f32s[..10]),
+        &common::npy_bytes("<f4", "(2, 3)", false, &f32s[..10]),
     );
     expect_format_error(load_range(&p, &DepthOptions::default()), "t.npy");
-    let p = write(dir.path(), "s.npy", &npy_bytes("<f4", "(6,)", false, &f32s));
+    let p = write(
+        dir.path(),
+        "s.npy",
+        &common::npy_bytes("<f4", "(6,)", false, &f32s),
+    );
     expect_format_error(load_range(&p, &DepthOptions::default()), "(height, width)");
 }
 

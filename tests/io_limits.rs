@@ -9,6 +9,8 @@ use brume::io::image::load_linear_rgb;
 use brume::io::limits::{MAX_PIXELS, MAX_SIDE};
 use brume::Error;
 
+mod common;
+
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let p = dir.join(name);
     std::fs::write(&p, bytes).unwrap();
@@ -104,23 +106,6 @@ fn exr_header_claiming_100000_squared_is_refused_before_decoding() {
     assert!(msg.contains("short.exr"), "{msg}");
 }
 
-/// A .npy header (version 1.0) with `shape` and a few data bytes.
-fn npy_bytes(shape: &str, fortran: bool, data: &[u8]) -> Vec<u8> {
-    let mut header = format!(
-        "{{'descr': '<f4', 'fortran_order': {}, 'shape': {shape}, }}",
-        if fortran { "True" } else { "False" }
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut b = b"\x93NUMPY\x01\x00".to_vec();
-    b.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    b.extend_from_slice(header.as_bytes());
-    b.extend_from_slice(data);
-    b
-}
-
 #[test]
 fn npy_shape_whose_product_wraps_is_refused_in_either_order() {
     let dir = tempfile::tempdir().unwrap();
@@ -128,7 +113,7 @@ fn npy_shape_whose_product_wraps_is_refused_in_either_order() {
         let p = write(
             dir.path(),
             "wrap.npy",
-            &npy_bytes("(4294967296, 4294967296)", fortran, &[0; 8]),
+            &common::npy_bytes("<f4", "(4294967296, 4294967296)", fortran, &[0; 8]),
         );
         expect_limit_error(
             load_range(&p, &float_opts()),
@@ -140,7 +125,7 @@ fn npy_shape_whose_product_wraps_is_refused_in_either_order() {
     let p = write(
         dir.path(),
         "wide.npy",
-        &npy_bytes("(1, 20000)", false, &[0; 8]),
+        &common::npy_bytes("<f4", "(1, 20000)", false, &[0; 8]),
     );
     expect_limit_error(
         load_range(&p, &float_opts()),
