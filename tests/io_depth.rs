@@ -3,12 +3,14 @@
 use std::path::{Path, PathBuf};
 
 use brume::io::depth::{
-    load_range, parse_calib, parse_pfm, read_pfm, DepthFormat, DepthKind, DepthOptions,
-    LoadedDepth, Pfm,
+    load_range, load_range_from_bytes, parse_calib, parse_pfm, read_pfm, DepthFormat, DepthKind,
+    DepthOptions, LoadedDepth, Pfm,
 };
 use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
 use brume::Error;
+
+mod common;
 
 /// Expects an error without printing a (large) map if there is none.
 fn expect_err<T>(r: brume::Result<T>) -> Error {
@@ -258,6 +260,44 @@ fn middlebury2014_end_to_end() {
     assert!(close(*r.get(0, 1), expect(0.0, 1.0, 90.0)));
     assert!(close(*r.get(3, 1), expect(3.0, 1.0, 30.0)));
     assert!(r.get(0, 0) > r.get(0, 1), "bigger disparity is nearer");
+}
+
+#[test]
+fn bytes_in_memory_load_as_the_files_do() {
+    let dir = middlebury2014_dir(2, 1, &[5.0, 7.0]);
+    let (pfm, calib) = (dir.path().join("disp0.pfm"), dir.path().join("calib.txt"));
+    let from_file = load_range(&pfm, &DepthOptions::default()).unwrap();
+    let bytes = std::fs::read(&pfm).unwrap();
+    let text = std::fs::read_to_string(&calib).unwrap();
+    let from_bytes = load_range_from_bytes(
+        &bytes,
+        &pfm,
+        &DepthOptions::default(),
+        Some((&calib, &text)),
+    )
+    .unwrap();
+    assert_eq!(from_bytes, from_file);
+    // Without its calib.txt the same disparity is refused as Middlebury 2014, as on disk.
+    let alone = load_range_from_bytes(&bytes, &pfm, &opts(DepthFormat::Middlebury2014), None);
+    expect_format_error(alone, "calib");
+    // An ignored calibration is noted, not parsed.
+    let png = save_png8(dir.path(), "d.png", 1, 1, &[9]);
+    let with_calib = DepthOptions {
+        calib: Some(calib.clone()),
+        ..DepthOptions::default()
+    };
+    let d = load_range_from_bytes(
+        &std::fs::read(&png).unwrap(),
+        &png,
+        &with_calib,
+        Some((&calib, "not a calib")),
+    )
+    .unwrap();
+    assert_eq!(d, load_range(&png, &with_calib).unwrap());
+    assert!(d
+        .notes
+        .iter()
+        .any(|n| n.contains("--calib") && n.contains("ignored")));
 }
 
 #[test]
@@ -523,23 +563,6 @@ fn tiff_float_map() {
     expect_format_error(load_range(&ints, &DepthOptions::default()), "floats");
 }
 
-/// A version-1.0 .npy file written by hand, as numpy does.
-fn npy_bytes(descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8> {
-    let mut header = format!(
-        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
-        if fortran { "True" } else { "False" }
-    );
-    while (10 + header.len() + 1) % 64 != 0 {
-        header.push(' ');
-    }
-    header.push('\n');
-    let mut b = b"\x93NUMPY\x01\x00".to_vec();
-    b.extend_from_slice(&(header.len() as u16).to_le_bytes());
-    b.extend_from_slice(header.as_bytes());
-    b.extend_from_slice(data);
-    b
-}
-
 #[test]
 fn npy_float32_and_float64() {
     let dir = tempfile::tempdir().unwrap();
@@ -547,7 +570,7 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "a.npy",
-        &npy_bytes("<f4", "(2, 3)", false, &f32s),
+        &common::npy_bytes("<f4", "(2, 3)", false, &f32s),
     );
     check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
     let f64s: Vec<u8> = FLOATS
@@ -557,7 +580,7 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "b.npy",
-        &npy_bytes("<f8", "(2, 3)", false, &f64s),
+        &common::npy_bytes("<f8", "(2, 3)", false, &f64s),
     );
     check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
     // Fortran order: column-major storage of the same 2x3 array.
@@ -568,14 +591,14 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "c.npy",
-        &npy_bytes(">f4", "(2, 3)", true, &cols),
+        &common::npy_bytes(">f4", "(2, 3)", true, &cols),
     );
     check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
 
     let p = write(
         dir.path(),
         "i.npy",
-        &npy_bytes("<i4", "(1, 1)", false, &[0, 0, 0, 1]),
+        &common::npy_bytes("<i4", "(1, 1)", false, &[0, 0, 0, 1]),
     );
     expect_format_error(
         load_range(&p, &DepthOptions::default()),
@@ -584,10 +607,14 @@ fn npy_float32_and_float64() {
     let p = write(
         dir.path(),
         "t.npy",
-        &npy_bytes("<f4", "(2, 3)", false, &f32s[..10]),
+        &common::npy_bytes("<f4", "(2, 3)", false, &f32s[..10]),
     );
     expect_format_error(load_range(&p, &DepthOptions::default()), "t.npy");
-    let p = write(dir.path(), "s.npy", &npy_bytes("<f4", "(6,)", false, &f32s));
+    let p = write(
+        dir.path(),
+        "s.npy",
+        &common::npy_bytes("<f4", "(6,)", false, &f32s),
+    );
     expect_format_error(load_range(&p, &DepthOptions::default()), "(height, width)");
 }
 

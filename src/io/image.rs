@@ -6,8 +6,9 @@
 
 use std::path::Path;
 
-use image::{DynamicImage, ImageFormat, ImageReader};
+use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 
+use crate::io::limits::check_size;
 use crate::raster::RgbImage;
 use crate::{Error, Result};
 
@@ -32,7 +33,7 @@ pub fn linear_to_srgb(v: f32) -> f32 {
 }
 
 /// Loads a PNG or JPEG (8- or 16-bit, grey or RGB, alpha dropped) and converts it from
-/// sRGB to linear light. Errors name the file.
+/// sRGB to linear light. Errors name the file; sizes beyond `io::limits` are refused.
 pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     decode_linear_rgb(&bytes, &path.display().to_string())
@@ -67,12 +68,52 @@ pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
             "JPEG data ends before its end-of-image marker; the file is truncated",
         ));
     }
-    reader.decode().map_err(|e| {
+    let cannot = |e: image::ImageError| {
         Error::format(
             name,
             format!("cannot decode as {format:?}: {e}; the file may be truncated or corrupt"),
         )
-    })
+    };
+    // The size is checked from the header, before the pixel buffer is allocated.
+    let decoder = reader.into_decoder().map_err(cannot)?;
+    let (w, h) = decoder.dimensions();
+    check_size(
+        Path::new(name),
+        &format!("{format:?}"),
+        u64::from(w),
+        u64::from(h),
+    )?;
+    if format == ImageFormat::Jpeg {
+        check_jpeg_holds(bytes.len(), w, h, name)?;
+    }
+    // The budget `ImageReader::decode` applies, which `into_decoder` leaves to its caller.
+    image::Limits::default()
+        .reserve(decoder.total_bytes())
+        .map_err(cannot)?;
+    DynamicImage::from_decoder(decoder).map_err(cannot)
+}
+
+/// Fewest pixels per byte a JPEG can hold, with a margin: every 8x8 block of every scan
+/// costs at least one bit (a DC difference; progressive AC scans can skip blocks in runs),
+/// so 512 pixels a byte at most, halved for safety.
+const JPEG_MAX_PIXELS_PER_BYTE: u64 = 1024;
+
+/// Refuses a JPEG too short for the size it claims. The decoder fills what the scan data
+/// does not cover instead of failing, so a 1 kB file claiming 10280x10280 took 10 s and
+/// 1.9 GB to decode into a grey picture.
+fn check_jpeg_holds(len: usize, w: u32, h: u32, name: &str) -> Result<()> {
+    let pixels = u64::from(w) * u64::from(h);
+    let needed = pixels / JPEG_MAX_PIXELS_PER_BYTE;
+    if (len as u64) < needed {
+        return Err(Error::format(
+            name,
+            format!(
+                "JPEG header claims {w}x{h} pixels, which need at least {needed} bytes, but the \
+                 file has {len}; it is truncated or corrupt"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Walks the JPEG marker segments from SOI and the entropy-coded data after each SOS, and

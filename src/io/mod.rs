@@ -3,11 +3,13 @@
 //! atomically (temporary file, then rename).
 //!
 //! Each file format's reader and writer sit together in [`codec`]; [`depth`] turns depth
-//! files into range maps by dataset convention, with the geometry in [`camera`].
+//! files into range maps by dataset convention, with the geometry in [`camera`]. Every
+//! reader refuses images beyond the size [`limits`] sets, before allocating for them.
 
 pub mod camera;
 pub mod codec;
 pub mod demo;
 pub mod depth;
 pub mod image;
+pub mod limits;
 pub mod output;

@@ -110,3 +110,20 @@ pub fn save_png(path: &str, w: usize, h: usize, px: &[[u8; 3]]) {
     let buf: Vec<u8> = px.iter().flatten().copied().collect();
     image::save_buffer(path, &buf, w as u32, h as u32, image::ColorType::Rgb8).expect("save png");
 }
+
+/// A version-1.0 .npy file written by hand, as numpy does.
+pub fn npy_bytes(descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8> {
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    while (10 + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut b = b"\x93NUMPY\x01\x00".to_vec();
+    b.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    b.extend_from_slice(header.as_bytes());
+    b.extend_from_slice(data);
+    b
+}

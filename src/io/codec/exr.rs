@@ -1,11 +1,12 @@
 //! OpenEXR through the `exr` crate: one float channel read as a scalar map (depth files
-//! from renderers), and 32-bit float RGBA images or one-channel `Y` maps written with
+//! from renderers, the header checked against `io::limits` before any pixel is decoded), and 32-bit float RGBA images or one-channel `Y` maps written with
 //! lossless compression so that outputs round-trip exactly.
 
 use std::fs::File;
 use std::io::{BufWriter, Cursor};
 use std::path::Path;
 
+use crate::io::limits::check_size;
 use crate::raster::{Grid, RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
@@ -17,17 +18,20 @@ pub fn read_exr_scalar(path: &Path) -> Result<ScalarMap> {
 }
 
 pub(crate) fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
-    use exr::prelude::{read, FlatSamples, ReadChannels, ReadLayers};
-    let image = read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .all_channels()
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| Error::format(path, format!("cannot read as OpenEXR: {e}")))?;
-    let layer = image.layer_data;
-    let channels = &layer.channel_data.list;
+    use exr::prelude::{read, ReadChannels, ReadLayers, ReadSpecificChannel};
+    let bad = |e: exr::error::Error| Error::format(path, format!("cannot read as OpenEXR: {e}"));
+    // The decoder allocates for the size its header claims before reading any pixel, so
+    // the header is read and checked on its own first.
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(bad)?;
+    for header in meta.headers.iter() {
+        check_header(header, bytes.len(), path)?;
+    }
+    // Like the decoder's `first_valid_layer` when every channel is read: the first layer.
+    let header = meta
+        .headers
+        .first()
+        .ok_or_else(|| Error::format(path, "EXR file has no layer; expected one"))?;
+    let channels = &header.channels.list;
     let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
     let chosen = ["Z", "Y", "R", "depth"]
         .iter()
@@ -42,23 +46,74 @@ pub(crate) fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
                 ),
             )
         })?;
-    let (w, h) = (layer.size.width(), layer.size.height());
-    let data: Vec<f32> = match &channels[chosen].sample_data {
-        FlatSamples::F16(v) => v.iter().map(|x| x.to_f32()).collect(),
-        FlatSamples::F32(v) => v.clone(),
-        FlatSamples::U32(v) => v.iter().map(|&x| x as f32).collect(),
-    };
-    if data.len() != w * h {
+    let (w, h) = (header.layer_size.width(), header.layer_size.height());
+    let sampling = channels[chosen].sampling;
+    if (sampling.x(), sampling.y()) != (1, 1) {
         return Err(Error::format(
             path,
             format!(
-                "EXR channel {} is subsampled ({} samples for {w}x{h} pixels); expected full resolution",
+                "EXR channel {} is subsampled ({}x{} pixels per sample for {w}x{h} pixels); expected full resolution",
                 names[chosen],
-                data.len()
+                sampling.x(),
+                sampling.y()
             ),
         ));
     }
-    Ok(Grid::from_vec(w, h, data))
+    // Only the chosen channel is decoded: the others could hold many times its size.
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .specific_channels()
+        .required(names[chosen].as_str())
+        .collect_pixels(
+            |size, _| vec![f32::NAN; size.area()],
+            move |data: &mut Vec<f32>, pos, (v,): (f32,)| data[pos.y() * w + pos.x()] = v,
+        )
+        .first_valid_layer()
+        .all_attributes()
+        .from_buffered(Cursor::new(bytes))
+        .map_err(bad)?;
+    let layer = image.layer_data;
+    let size = layer.size;
+    if (size.width(), size.height()) != (w, h) {
+        return Err(Error::format(
+            path,
+            format!(
+                "EXR layer read is {}x{} but its header says {w}x{h}",
+                size.width(),
+                size.height()
+            ),
+        ));
+    }
+    Ok(Grid::from_vec(w, h, layer.channel_data.pixels))
+}
+
+/// Refuses a layer whose claimed size is beyond `io::limits`, or which the file is too
+/// short to hold: every chunk takes an 8-byte offset and an 8-byte chunk header at least,
+/// and uncompressed pixels take their full size.
+fn check_header(header: &exr::meta::header::Header, file_len: usize, path: &Path) -> Result<()> {
+    let size = header.layer_size;
+    check_size(path, "EXR", size.width() as u64, size.height() as u64)?;
+    let chunks = header.chunk_count as u64;
+    let mut needed = chunks.saturating_mul(16);
+    if header.compression == exr::compression::Compression::Uncompressed {
+        let pixels = (size.width() * size.height()) as u64;
+        needed =
+            needed.saturating_add(pixels.saturating_mul(header.channels.bytes_per_pixel as u64));
+    }
+    if needed > file_len as u64 {
+        return Err(Error::format(
+            path,
+            format!(
+                "EXR header claims {}x{} pixels in {chunks} chunks ({:?}), which need at least \
+                 {needed} bytes, but the file has {file_len}; it is truncated or corrupt",
+                size.width(),
+                size.height(),
+                header.compression
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Writes an RGBA image as four 32-bit channels `R`, `G`, `B`, `A`.

@@ -5,6 +5,7 @@
 use std::io::Write;
 use std::path::Path;
 
+use crate::io::limits::check_size;
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
@@ -24,7 +25,7 @@ pub fn read_pfm(path: &Path) -> Result<Pfm> {
 }
 
 /// Parses PFM bytes; `path` names the file in errors. The header is `Pf` or `PF`, width,
-/// height and scale separated by whitespace, then one whitespace byte, then rows of
+/// height (within `io::limits`) and scale separated by whitespace, then one whitespace byte, then rows of
 /// 32-bit floats from the BOTTOM row to the top, little-endian if scale < 0.
 pub fn parse_pfm(bytes: &[u8], path: &Path) -> Result<Pfm> {
     let mut header = HeaderTokens { bytes, pos: 0 };
@@ -44,6 +45,7 @@ pub fn parse_pfm(bytes: &[u8], path: &Path) -> Result<Pfm> {
     };
     let width = header.positive_int(path, "width")?;
     let height = header.positive_int(path, "height")?;
+    check_size(path, "PFM", width as u64, height as u64)?;
     let scale_text = header.next(path, "the scale")?;
     let scale = match scale_text.parse::<f64>() {
         Ok(s) if s.is_finite() && s != 0.0 => s,

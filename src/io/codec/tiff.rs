@@ -4,10 +4,11 @@
 use std::io::Cursor;
 use std::path::Path;
 
+use crate::io::limits::check_size;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
-/// Reads a one-channel 32- or 64-bit float TIFF.
+/// Reads a one-channel 32- or 64-bit float TIFF no larger than `io::limits` allows.
 pub fn read_tiff_scalar(path: &Path) -> Result<ScalarMap> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     parse_tiff_scalar(&bytes, path)
@@ -18,6 +19,7 @@ pub(crate) fn parse_tiff_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> 
     let bad = |e: tiff::TiffError| Error::format(path, format!("cannot read as TIFF: {e}"));
     let mut decoder = Decoder::new(Cursor::new(bytes)).map_err(bad)?;
     let (w, h) = decoder.dimensions().map_err(bad)?;
+    check_size(path, "TIFF", u64::from(w), u64::from(h))?;
     let colour = decoder.colortype().map_err(bad)?;
     if !matches!(colour, tiff::ColorType::Gray(_)) {
         return Err(Error::format(

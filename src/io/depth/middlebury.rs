@@ -194,36 +194,49 @@ fn parse_matrix(value: &str, key: &str, path: &Path) -> Result<[[f64; 3]; 3]> {
     Ok(m)
 }
 
-/// The `calib.txt` to use for a Middlebury 2014 `.pfm`: `--calib`, or else one beside the
-/// file; none for other formats (noting an ignored `--calib`).
-pub(super) fn find_calib(
-    path: &Path,
+/// Whether a file with extension `ext` read with `opts` may be a Middlebury 2014 disparity,
+/// the only kind that uses a `calib.txt`.
+fn wants_calib(ext: &str, opts: &DepthOptions) -> bool {
+    matches!(opts.format, DepthFormat::Auto | DepthFormat::Middlebury2014) && ext == "pfm"
+}
+
+/// The `calib.txt` to read for `path`: `--calib`, or else one beside the file; none for
+/// formats that do not use one (an ignored `--calib` is not read, so it need not exist).
+pub(super) fn calib_file(path: &Path, ext: &str, opts: &DepthOptions) -> Option<PathBuf> {
+    if !wants_calib(ext, opts) {
+        return None;
+    }
+    if let Some(given) = &opts.calib {
+        return Some(given.clone());
+    }
+    Some(path.with_file_name("calib.txt")).filter(|beside| beside.is_file())
+}
+
+/// Parses the `calib.txt` found by [`calib_file`] (its path and text) if this format uses
+/// one, noting where it came from, or that `--calib` was ignored.
+pub(super) fn take_calib(
     ext: &str,
     opts: &DepthOptions,
+    calib: Option<(&Path, &str)>,
     notes: &mut Vec<String>,
 ) -> Result<Option<(Calib, PathBuf)>> {
-    let wants_calib =
-        matches!(opts.format, DepthFormat::Auto | DepthFormat::Middlebury2014) && ext == "pfm";
-    if let Some(given) = &opts.calib {
-        if !wants_calib {
+    if !wants_calib(ext, opts) {
+        if let Some(given) = opts.calib.as_deref().or(calib.map(|c| c.0)) {
             notes.push(format!(
                 "--calib {} ignored: only Middlebury 2014 .pfm disparities use it",
                 given.display()
             ));
-            return Ok(None);
         }
-        return Ok(Some((parse_calib(given)?, given.clone())));
-    }
-    if !wants_calib {
         return Ok(None);
     }
-    let beside = path.with_file_name("calib.txt");
-    if !beside.is_file() {
+    let Some((calib_path, text)) = calib else {
         return Ok(None);
+    };
+    let parsed = parse_calib_str(text, calib_path)?;
+    if opts.calib.as_deref() != Some(calib_path) {
+        notes.push(format!("calibration read from {}", calib_path.display()));
     }
-    let calib = parse_calib(&beside)?;
-    notes.push(format!("calibration read from {}", beside.display()));
-    Ok(Some((calib, beside)))
+    Ok(Some((parsed, calib_path.to_path_buf())))
 }
 
 /// Range in metres from a Middlebury 2014 disparity map: focal, baseline, disparity

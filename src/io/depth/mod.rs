@@ -198,11 +198,38 @@ fn finite_option(value: f64, name: &str) -> Result<f64> {
 /// pixels. See [`DepthFormat`] for the layouts and [`DepthOptions`] for the knobs.
 pub fn load_range(path: &Path, opts: &DepthOptions) -> Result<LoadedDepth> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let calib = match middlebury::calib_file(path, &extension_of(path), opts) {
+        Some(calib_path) => {
+            let text =
+                std::fs::read_to_string(&calib_path).map_err(|e| Error::io(&calib_path, e))?;
+            Some((calib_path, text))
+        }
+        None => None,
+    };
+    load_range_from_bytes(
+        &bytes,
+        path,
+        opts,
+        calib.as_ref().map(|(p, t)| (p.as_path(), t.as_str())),
+    )
+}
+
+/// [`load_range`] on bytes already in memory, which `load_range` itself calls once it has
+/// read the files. `name` stands for the file: its extension picks the codec and errors
+/// name it. Nothing is read from disk: a Middlebury 2014 `calib.txt` is passed as `calib`
+/// (its path, for messages, and its text), where `load_range` would have found it through
+/// [`DepthOptions::calib`] or beside the file.
+pub fn load_range_from_bytes(
+    bytes: &[u8],
+    name: &Path,
+    opts: &DepthOptions,
+    calib: Option<(&Path, &str)>,
+) -> Result<LoadedDepth> {
     let mut notes = Vec::new();
-    let ext = extension_of(path);
-    let calib = middlebury::find_calib(path, &ext, opts, &mut notes)?;
-    let raw = decode_raw(&bytes, path, &ext)?;
-    interpret(raw, path, opts, calib, notes, 1.0)
+    let ext = extension_of(name);
+    let calib = middlebury::take_calib(&ext, opts, calib, &mut notes)?;
+    let raw = decode_raw(bytes, name, &ext)?;
+    interpret(raw, name, opts, calib, notes, 1.0)
 }
 
 /// Decodes embedded depth bytes as if read from a file with extension `ext`. `pixel_scale`

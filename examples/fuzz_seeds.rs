@@ -1,0 +1,387 @@
+//! Writes the seed corpora of the fuzz targets in `fuzz/` (one folder per target):
+//!
+//! ```text
+//! cargo run --example fuzz_seeds -- [OUT_DIR]
+//! ```
+//!
+//! `OUT_DIR` defaults to `fuzz/seeds`. Every seed is a small valid file (a few pixels, a
+//! crop of the Aloe disparity in `tests/data/aloe`) in each layout and encoding the
+//! loaders accept, so that the fuzzer starts from inputs that reach deep into each
+//! decoder instead of having to find a magic number first. The `depth_png` and
+//! `load_range` seeds start with the option bytes that `fuzz/src/lib.rs` decodes.
+
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+type Res<T> = Result<T, Box<dyn std::error::Error>>;
+
+fn main() -> Res<()> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = std::env::args_os()
+        .nth(1)
+        .map(PathBuf::from)
+        .unwrap_or_else(|| root.join("fuzz/seeds"));
+    let aloe = image::open(root.join("tests/data/aloe/disparity.png"))?.to_luma8();
+    let (cx, cy) = (aloe.width() / 2, aloe.height() / 2);
+    let crop: Vec<u8> = image::imageops::crop_imm(&aloe, cx, cy, 12, 9)
+        .to_image()
+        .into_raw();
+    let crop16: Vec<u16> = crop.iter().map(|&d| u16::from(d) * 40).collect();
+    let floats: Vec<f32> = crop.iter().map(|&d| f32::from(d) / 4.0).collect();
+    let small = [1.5f32, 0.0, f32::NAN, 2.0, 3.25, f32::INFINITY];
+
+    let mut seeds = Seeds::new(&out);
+    seeds.put("pfm", "grey_le.pfm", pfm("Pf", 12, 9, &floats, true, "\n"));
+    seeds.put("pfm", "grey_be.pfm", pfm("Pf", 3, 2, &small, false, "\n"));
+    seeds.put("pfm", "rgb.pfm", pfm("PF", 2, 1, &small, true, "\n"));
+    seeds.put("pfm", "crlf.pfm", pfm("Pf", 3, 2, &small, true, "\r\n"));
+
+    let calib = calib_txt(12, 9);
+    seeds.put("calib", "calib.txt", calib.clone().into_bytes());
+    seeds.put(
+        "calib",
+        "calib_dy.txt",
+        format!("{calib}dyavg=0.5\ndymax=2\nunknown=1\n").into_bytes(),
+    );
+
+    let png8 = png(&crop, 12, 9, image::ExtendedColorType::L8)?;
+    let png16 = png(&be16(&crop16), 12, 9, image::ExtendedColorType::L16)?;
+    let png_la = png(
+        &[9, 255, 0, 0, 30, 255],
+        3,
+        1,
+        image::ExtendedColorType::La8,
+    )?;
+    let with = |a: u8, b: u8, file: &[u8]| [&[a, b][..], file].concat();
+    // Option bytes: format in bits 0-2 of the first (0 auto, 2 middlebury2006, 3 kitti,
+    // 4 nyu, 5 tum, 6 png16), kind in bits 3-4, flags for scale, focal and baseline in
+    // bits 5-7; see `options` in fuzz/src/lib.rs.
+    seeds.put("depth_png", "auto8.bin", with(0, 0, &png8));
+    seeds.put("depth_png", "m2006_given.bin", with(2 | 0xC0, 1, &png8));
+    seeds.put("depth_png", "kitti.bin", with(3, 0, &png16));
+    seeds.put("depth_png", "nyu_range.bin", with(4 | 2 << 3, 0, &png16));
+    seeds.put("depth_png", "tum_focal.bin", with(5 | 0x40, 0, &png16));
+    seeds.put("depth_png", "png16.bin", with(6 | 0x20, 2, &png16));
+    seeds.put(
+        "depth_png",
+        "png16_disp.bin",
+        with(6 | 3 << 3 | 0xE0, 3, &png16),
+    );
+    seeds.put("depth_png", "grey_alpha.bin", with(2, 0, &png_la));
+
+    use exr::prelude::{Compression, FlatSamples};
+    let f16s = FlatSamples::F16(small.iter().map(|&v| half::f16::from_f32(v)).collect());
+    let u32s = FlatSamples::U32(vec![1, 0, 7, 9, 2, 4]);
+    let z = || FlatSamples::F32(small.to_vec());
+    let exrs = [
+        (
+            "z_plain.exr",
+            vec![("Z", z())],
+            Compression::Uncompressed,
+            false,
+        ),
+        (
+            "y_zip.exr",
+            vec![("Y", f16s.clone())],
+            Compression::ZIP16,
+            false,
+        ),
+        (
+            "gz_rle.exr",
+            vec![("G", f16s), ("Z", z())],
+            Compression::RLE,
+            false,
+        ),
+        ("r_piz.exr", vec![("R", z())], Compression::PIZ, false),
+        (
+            "depth_u32.exr",
+            vec![("depth", u32s)],
+            Compression::ZIP1,
+            false,
+        ),
+        (
+            "z_tiled.exr",
+            vec![("Z", z())],
+            Compression::Uncompressed,
+            true,
+        ),
+    ];
+    for (name, channels, compression, tiled) in exrs {
+        seeds.put("exr", name, exr(channels, compression, tiled)?);
+    }
+
+    use tiff::encoder::{colortype, compression as tc};
+    let f64s: Vec<f64> = small.iter().map(|&v| f64::from(v)).collect();
+    let tiffs = [
+        (
+            "f32.tif",
+            tiff(|e| e.write_image::<colortype::Gray32Float>(12, 9, &floats))?,
+        ),
+        (
+            "f64.tif",
+            tiff(|e| e.write_image::<colortype::Gray64Float>(3, 2, &f64s))?,
+        ),
+        (
+            "f32_lzw.tif",
+            tiff(|e| {
+                e.write_image_with_compression::<colortype::Gray32Float, _>(12, 9, tc::Lzw, &floats)
+            })?,
+        ),
+        (
+            "f32_deflate.tif",
+            tiff(|e| {
+                e.write_image_with_compression::<colortype::Gray32Float, _>(
+                    3,
+                    2,
+                    tc::Deflate::default(),
+                    &small,
+                )
+            })?,
+        ),
+        (
+            "u16.tif",
+            tiff(|e| e.write_image::<colortype::Gray16>(3, 1, &[1, 2, 3]))?,
+        ),
+    ];
+    for (name, bytes) in tiffs {
+        seeds.put("tiff", name, bytes);
+    }
+
+    let le32: Vec<u8> = small.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let be32: Vec<u8> = small.iter().flat_map(|v| v.to_be_bytes()).collect();
+    let le64: Vec<u8> = small
+        .iter()
+        .flat_map(|v| f64::from(*v).to_le_bytes())
+        .collect();
+    seeds.put("npy", "f4.npy", npy(1, "<f4", "(2, 3)", false, &le32));
+    seeds.put(
+        "npy",
+        "f8_fortran.npy",
+        npy(1, "<f8", "(3, 2)", true, &le64),
+    );
+    seeds.put(
+        "npy",
+        "be_hw1.npy",
+        npy(1, ">f4", "(2, 3, 1)", false, &be32),
+    );
+    seeds.put("npy", "v2.npy", npy(2, "<f4", "(3, 2)", false, &le32));
+    seeds.put(
+        "npy",
+        "int.npy",
+        npy(1, "<i4", "(1, 2)", false, &[1, 0, 0, 0, 2, 0, 0, 0]),
+    );
+
+    let rgb: Vec<u8> = (0..4 * 4 * 3).map(|i| (i * 37 % 256) as u8).collect();
+    let rgba16: Vec<u8> = (0..2 * 2 * 4 * 2).map(|i| (i * 53 % 256) as u8).collect();
+    let mut jpeg = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 80).encode(
+        &rgb,
+        4,
+        4,
+        image::ExtendedColorType::Rgb8,
+    )?;
+    seeds.put(
+        "colour_image",
+        "rgb8.png",
+        png(&rgb, 4, 4, image::ExtendedColorType::Rgb8)?,
+    );
+    seeds.put(
+        "colour_image",
+        "rgba16.png",
+        png(&rgba16, 2, 2, image::ExtendedColorType::Rgba16)?,
+    );
+    seeds.put("colour_image", "grey8.png", png8.clone());
+    seeds.put("colour_image", "rgb.jpg", jpeg.clone());
+
+    // load_range: extension index (0 png, 1 pfm, 2 exr, 3 tif, 4 tiff, 5 npy, 6 jpg, 7 txt)
+    // with bit 3 set when a calib.txt follows, two option bytes, then the calib's length
+    // and text if any, then the file.
+    let load = |head: u8, a: u8, b: u8, calib: Option<&str>, file: &[u8]| {
+        let mut v = vec![head, a, b];
+        if let Some(text) = calib {
+            v.extend_from_slice(&(text.len() as u16).to_le_bytes());
+            v.extend_from_slice(text.as_bytes());
+        }
+        v.extend_from_slice(file);
+        v
+    };
+    let disp = pfm("Pf", 12, 9, &floats, true, "\n");
+    seeds.put(
+        "load_range",
+        "m2014.bin",
+        load(1 | 8, 0, 0, Some(&calib), &disp),
+    );
+    seeds.put(
+        "load_range",
+        "m2014_forced.bin",
+        load(1 | 8, 1, 0, Some(&calib), &disp),
+    );
+    seeds.put(
+        "load_range",
+        "pfm_disp.bin",
+        load(1, 3 << 3 | 0xC0, 1, None, &disp),
+    );
+    seeds.put("load_range", "png8.bin", load(0, 0, 0, None, &png8));
+    seeds.put("load_range", "png16_kitti.bin", load(0, 3, 0, None, &png16));
+    seeds.put(
+        "load_range",
+        "exr.bin",
+        load(
+            2,
+            0x40,
+            0,
+            None,
+            &exr(vec![("Z", z())], Compression::ZIP1, false)?,
+        ),
+    );
+    seeds.put(
+        "load_range",
+        "npy.bin",
+        load(5, 2 << 3, 0, None, &npy(1, "<f4", "(2, 3)", false, &le32)),
+    );
+    seeds.put("load_range", "jpg.bin", load(6, 0, 0, None, &jpeg));
+    seeds.finish()
+}
+
+/// Writes seeds, one folder per fuzz target, and counts them.
+struct Seeds {
+    out: PathBuf,
+    written: Vec<(String, usize)>,
+    error: Option<std::io::Error>,
+}
+
+impl Seeds {
+    fn new(out: &Path) -> Self {
+        Seeds {
+            out: out.to_path_buf(),
+            written: Vec::new(),
+            error: None,
+        }
+    }
+
+    fn put(&mut self, target: &str, name: &str, bytes: Vec<u8>) {
+        let dir = self.out.join(target);
+        let result =
+            std::fs::create_dir_all(&dir).and_then(|()| std::fs::write(dir.join(name), &bytes));
+        match result {
+            Ok(()) => self.written.push((format!("{target}/{name}"), bytes.len())),
+            Err(e) => self.error = self.error.take().or(Some(e)),
+        }
+    }
+
+    fn finish(self) -> Res<()> {
+        if let Some(e) = self.error {
+            return Err(e.into());
+        }
+        let total: usize = self.written.iter().map(|w| w.1).sum();
+        for (name, len) in &self.written {
+            println!("{len:6} {name}");
+        }
+        println!(
+            "{} seeds, {total} bytes, in {}",
+            self.written.len(),
+            self.out.display()
+        );
+        Ok(())
+    }
+}
+
+fn pfm(magic: &str, w: usize, h: usize, values: &[f32], little: bool, eol: &str) -> Vec<u8> {
+    let scale = if little { "-1.0" } else { "1.0" };
+    let mut b = format!("{magic}{eol}{w} {h}{eol}{scale}{eol}").into_bytes();
+    let channels = if magic == "PF" { 3 } else { 1 };
+    // Rows bottom to top; values repeat when a colour file needs more than given.
+    for i in 0..w * h * channels {
+        let v = values[i % values.len()];
+        b.extend_from_slice(&if little {
+            v.to_le_bytes()
+        } else {
+            v.to_be_bytes()
+        });
+    }
+    b
+}
+
+fn calib_txt(w: usize, h: usize) -> String {
+    format!(
+        "cam0=[1000 0 5.5; 0 1000 4; 0 0 1]\ncam1=[1000 0 15.5; 0 1000 4; 0 0 1]\n\
+         doffs=10\nbaseline=200\nwidth={w}\nheight={h}\nndisp=100\nisint=0\nvmin=1\nvmax=90\n"
+    )
+}
+
+/// 16-bit samples in the byte order `image::save_buffer` and the PNG encoder take.
+fn be16(v: &[u16]) -> Vec<u8> {
+    v.iter().flat_map(|x| x.to_ne_bytes()).collect()
+}
+
+fn png(bytes: &[u8], w: u32, h: u32, colour: image::ExtendedColorType) -> Res<Vec<u8>> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut out).write_image(bytes, w, h, colour)?;
+    Ok(out)
+}
+
+fn exr(
+    channels: Vec<(&str, exr::prelude::FlatSamples)>,
+    compression: exr::prelude::Compression,
+    tiled: bool,
+) -> Res<Vec<u8>> {
+    use exr::prelude::*;
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = channels
+        .into_iter()
+        .map(|(name, data)| AnyChannel::new(name, data))
+        .collect();
+    let blocks = if tiled {
+        Blocks::Tiles(Vec2(2, 2))
+    } else {
+        Blocks::ScanLines
+    };
+    let encoding = Encoding {
+        compression,
+        blocks,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new(
+        (3, 2),
+        LayerAttributes::default(),
+        encoding,
+        AnyChannels::sort(list),
+    );
+    let mut out = Vec::new();
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(Cursor::new(&mut out))?;
+    Ok(out)
+}
+
+type TiffEncoder<'a> = tiff::encoder::TiffEncoder<&'a mut Cursor<Vec<u8>>>;
+
+/// The bytes of a TIFF that `write` encodes.
+fn tiff(write: impl FnOnce(&mut TiffEncoder) -> tiff::TiffResult<()>) -> Res<Vec<u8>> {
+    let mut buf = Cursor::new(Vec::new());
+    write(&mut tiff::encoder::TiffEncoder::new(&mut buf)?)?;
+    Ok(buf.into_inner())
+}
+
+/// A .npy file as numpy writes it: header padded to a multiple of 64 bytes.
+fn npy(version: u8, descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8> {
+    let mut header = format!(
+        "{{'descr': '{descr}', 'fortran_order': {}, 'shape': {shape}, }}",
+        if fortran { "True" } else { "False" }
+    );
+    let preamble = if version == 1 { 10 } else { 12 };
+    while (preamble + header.len() + 1) % 64 != 0 {
+        header.push(' ');
+    }
+    header.push('\n');
+    let mut b = b"\x93NUMPY".to_vec();
+    b.extend_from_slice(&[version, 0]);
+    if version == 1 {
+        b.extend_from_slice(&(header.len() as u16).to_le_bytes());
+    } else {
+        b.extend_from_slice(&(header.len() as u32).to_le_bytes());
+    }
+    b.extend_from_slice(header.as_bytes());
+    b.extend_from_slice(data);
+    b
+}

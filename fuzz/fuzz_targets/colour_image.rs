@@ -1,0 +1,8 @@
+//! Colour photographs (PNG, JPEG) decoded to linear light.
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let _ = brume::io::image::decode_linear_rgb(data, "c.png");
+});

@@ -1,0 +1,121 @@
+//! Inputs the fuzzers in `fuzz/` found crashing a loader, kept as files in
+//! `tests/data/fuzz/` and replayed on stable Rust: each must now give its expected result
+//! without a panic or an abort. Also checks that the fuzzers' seeds in `fuzz/seeds/` are
+//! files the loaders accept, so that fuzzing starts from inputs that reach deep into each
+//! decoder.
+
+use std::path::{Path, PathBuf};
+
+use brume::io::depth::{load_range, DepthOptions};
+use brume::io::image::load_linear_rgb;
+
+fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn files(dir: &str) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = std::fs::read_dir(root().join(dir))
+        .unwrap_or_else(|e| panic!("{dir}: {e}"))
+        .map(|e| e.unwrap().path())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn seeds_of_the_single_format_fuzzers_load() {
+    let mut checked = 0;
+    for target in ["pfm", "exr", "tiff", "npy"] {
+        for path in files(&format!("fuzz/seeds/{target}")) {
+            let name = path.file_name().unwrap().to_string_lossy();
+            // Kept on purpose to reach the refusals: colour PFM, integer TIFF and .npy.
+            if ["rgb.pfm", "u16.tif", "int.npy"].contains(&name.as_ref()) {
+                assert!(
+                    load_range(&path, &DepthOptions::default()).is_err(),
+                    "{name}"
+                );
+                continue;
+            }
+            let loaded = load_range(&path, &DepthOptions::default());
+            assert!(loaded.is_ok(), "{}: {:?}", path.display(), loaded.err());
+            checked += 1;
+        }
+    }
+    for path in files("fuzz/seeds/colour_image") {
+        assert!(load_linear_rgb(&path).is_ok(), "{}", path.display());
+        checked += 1;
+    }
+    assert!(checked >= 15, "only {checked} seeds");
+}
+
+fn fuzz_file(name: &str) -> PathBuf {
+    root().join("tests/data/fuzz").join(name)
+}
+
+/// Runs `load` and says how long it took, for inputs that used to run for seconds.
+fn timed<T>(load: impl FnOnce() -> T) -> (T, std::time::Duration) {
+    let start = std::time::Instant::now();
+    let out = load();
+    (out, start.elapsed())
+}
+
+fn expect_err_with(r: brume::Result<impl Sized>, needle: &str) {
+    match r {
+        Ok(_) => panic!("expected an error mentioning `{needle}`"),
+        Err(e) => assert!(
+            e.to_string().contains(needle),
+            "`{e}` should mention `{needle}`"
+        ),
+    }
+}
+
+// npy fuzzer, 43 527 runs in: a header of 16 `{` and stray quotes made the Python-literal
+// parser that npyz uses (and that the first shape check borrowed) backtrack for longer
+// than the 10 s timeout; each further `{` triples the time.
+#[test]
+fn npy_header_of_nested_braces_is_refused_at_once() {
+    let path = fuzz_file("npy-nested-braces-timeout.npy");
+    let (r, took) = timed(|| load_range(&path, &DepthOptions::default()));
+    expect_err_with(r, "not the dictionary numpy writes");
+    assert!(took.as_secs_f64() < 1.0, "took {took:?}");
+    // The file says version 1.48, which npyz refuses before parsing; as 1.0 it would
+    // reach npyz's parser.
+    let mut bytes = std::fs::read(&path).unwrap();
+    bytes[7] = 0;
+    let dir = tempfile::tempdir().unwrap();
+    let v10 = dir.path().join("v10.npy");
+    std::fs::write(&v10, bytes).unwrap();
+    let (r, took) = timed(|| load_range(&v10, &DepthOptions::default()));
+    expect_err_with(r, "not the dictionary numpy writes");
+    assert!(took.as_secs_f64() < 1.0, "took {took:?}");
+}
+
+// npy fuzzer, second run, 7.3 million runs in: shape (2, 3, 13332233333333333333), a
+// 3-D shape the first check let through for npyz to refuse, overflowed npyz's product of
+// the dimensions (a panic with overflow checks on).
+#[test]
+fn npy_three_dimensional_shape_that_overflows_is_refused() {
+    let path = fuzz_file("npy-3d-shape-overflow.npy");
+    expect_err_with(
+        load_range(&path, &DepthOptions::default()),
+        "expected (height, width)",
+    );
+}
+
+// colour_image fuzzer, about 2 million runs in: a 1192-byte JPEG claiming 10280x10280
+// decoded for 10 s into 1.9 GB of grey. Now beyond MAX_PIXELS; at 8192x8192, within it,
+// the file is refused as too short for its size.
+#[test]
+fn tiny_jpeg_claiming_a_huge_size_is_refused_before_decoding() {
+    let path = fuzz_file("jpeg-10280x10280-slow.jpg");
+    let (r, took) = timed(|| load_linear_rgb(&path));
+    expect_err_with(r, "10280x10280");
+    assert!(took.as_secs_f64() < 1.0, "took {took:?}");
+
+    let mut bytes = std::fs::read(&path).unwrap();
+    let sof = bytes.windows(2).position(|w| w == [0xFF, 0xC0]).unwrap();
+    bytes[sof + 5..sof + 9].copy_from_slice(&[0x20, 0, 0x20, 0]); // 8192 high, 8192 wide
+    let (r, took) = timed(|| brume::io::image::decode_linear_rgb(&bytes, "8192.jpg"));
+    expect_err_with(r, "8192x8192 pixels, which need at least 65536 bytes");
+    assert!(took.as_secs_f64() < 1.0, "took {took:?}");
+}

@@ -1,0 +1,208 @@
+//! Hostile headers: every reader refuses a size beyond `io::limits` before allocating for
+//! it, with an error naming the file, the size claimed and the limit, instead of aborting
+//! on a failed allocation or panicking on a size that wrapped around.
+
+use std::path::{Path, PathBuf};
+
+use brume::io::depth::{load_range, DepthFormat, DepthOptions};
+use brume::io::image::load_linear_rgb;
+use brume::io::limits::{MAX_PIXELS, MAX_SIDE};
+use brume::Error;
+
+mod common;
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// Asserts a format error that names the file, the claimed size and `limit`.
+fn expect_limit_error(r: brume::Result<impl Sized>, file: &str, size: &str, limit: usize) {
+    let err = match r {
+        Ok(_) => panic!("{file}: expected an error for a {size} image"),
+        Err(e) => e,
+    };
+    let msg = err.to_string();
+    assert!(
+        matches!(err, Error::Format { .. }),
+        "not a Format error: {msg}"
+    );
+    for needle in [file, size, &limit.to_string()] {
+        assert!(msg.contains(needle), "`{msg}` should mention `{needle}`");
+    }
+}
+
+fn float_opts() -> DepthOptions {
+    DepthOptions {
+        format: DepthFormat::Float,
+        ..DepthOptions::default()
+    }
+}
+
+/// A 1x1 uncompressed one-channel EXR whose data window is then rewritten to claim
+/// `w` x `h` pixels: a few hundred bytes, like a hostile file.
+fn exr_claiming(w: i32, h: i32) -> Vec<u8> {
+    use exr::prelude::*;
+    let mut bytes = Vec::new();
+    let layer = Layer::new(
+        (1, 1),
+        LayerAttributes::default(),
+        Encoding::UNCOMPRESSED,
+        AnyChannels::sort(SmallVec::from_vec(vec![AnyChannel::new(
+            "Z",
+            FlatSamples::F32(vec![1.0]),
+        )])),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(std::io::Cursor::new(&mut bytes))
+        .unwrap();
+    for name in [&b"dataWindow\0box2i\0"[..], &b"displayWindow\0box2i\0"[..]] {
+        let at = bytes
+            .windows(name.len())
+            .position(|win| win == name)
+            .expect("the writer names its windows")
+            + name.len()
+            + 4; // attribute size
+        let bounds = [0, 0, w - 1, h - 1];
+        for (i, v) in bounds.iter().enumerate() {
+            bytes[at + 4 * i..at + 4 * i + 4].copy_from_slice(&v.to_le_bytes());
+        }
+    }
+    // Uncompressed scan lines come one per chunk; a consistent count gets the header past
+    // the decoder's own checks.
+    let name = b"chunkCount\0int\0";
+    if let Some(at) = bytes.windows(name.len()).position(|win| win == name) {
+        let at = at + name.len() + 4;
+        bytes[at..at + 4].copy_from_slice(&h.to_le_bytes());
+    }
+    bytes
+}
+
+#[test]
+fn exr_header_claiming_100000_squared_is_refused_before_decoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = exr_claiming(100_000, 100_000);
+    assert!(bytes.len() < 1000, "{} bytes", bytes.len());
+    let p = write(dir.path(), "huge.exr", &bytes);
+    expect_limit_error(
+        load_range(&p, &float_opts()),
+        "huge.exr",
+        "100000x100000",
+        MAX_SIDE,
+    );
+    // Within the side limit but beyond the pixel count.
+    let p = write(dir.path(), "many.exr", &exr_claiming(16384, 16384));
+    expect_limit_error(
+        load_range(&p, &float_opts()),
+        "many.exr",
+        "16384x16384",
+        MAX_PIXELS,
+    );
+    // A plausible size the file is far too short for.
+    let p = write(dir.path(), "short.exr", &exr_claiming(8000, 8000));
+    let msg = load_range(&p, &float_opts()).unwrap_err().to_string();
+    assert!(msg.contains("short.exr"), "{msg}");
+}
+
+#[test]
+fn npy_shape_whose_product_wraps_is_refused_in_either_order() {
+    let dir = tempfile::tempdir().unwrap();
+    for fortran in [false, true] {
+        let p = write(
+            dir.path(),
+            "wrap.npy",
+            &common::npy_bytes("<f4", "(4294967296, 4294967296)", fortran, &[0; 8]),
+        );
+        expect_limit_error(
+            load_range(&p, &float_opts()),
+            "wrap.npy",
+            "4294967296x4294967296",
+            MAX_SIDE,
+        );
+    }
+    let p = write(
+        dir.path(),
+        "wide.npy",
+        &common::npy_bytes("<f4", "(1, 20000)", false, &[0; 8]),
+    );
+    expect_limit_error(
+        load_range(&p, &float_opts()),
+        "wide.npy",
+        "20000x1",
+        MAX_SIDE,
+    );
+}
+
+#[test]
+fn pfm_header_beyond_the_limit_is_refused_before_its_data_is_checked() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "wide.pfm", b"Pf\n20000 1\n-1\n\0\0\0\0");
+    expect_limit_error(
+        load_range(&p, &float_opts()),
+        "wide.pfm",
+        "20000x1",
+        MAX_SIDE,
+    );
+    let p = write(dir.path(), "many.pfm", b"PF\n16384 16384\n-1\n");
+    expect_limit_error(
+        brume::io::depth::read_pfm(&p),
+        "many.pfm",
+        "16384x16384",
+        MAX_PIXELS,
+    );
+}
+
+#[test]
+fn tiff_beyond_the_limit_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("wide.tif");
+    let mut enc = tiff::encoder::TiffEncoder::new(std::fs::File::create(&p).unwrap()).unwrap();
+    enc.write_image::<tiff::encoder::colortype::Gray32Float>(20000, 1, &vec![1.0; 20000])
+        .unwrap();
+    expect_limit_error(
+        load_range(&p, &float_opts()),
+        "wide.tif",
+        "20000x1",
+        MAX_SIDE,
+    );
+}
+
+#[test]
+fn png_depth_and_colour_beyond_the_limit_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("wide.png");
+    image::save_buffer(&p, &vec![1; 20000], 20000, 1, image::ExtendedColorType::L8).unwrap();
+    expect_limit_error(
+        load_range(&p, &DepthOptions::default()),
+        "wide.png",
+        "20000x1",
+        MAX_SIDE,
+    );
+    let p = dir.path().join("tall.png");
+    image::save_buffer(
+        &p,
+        &vec![1; 3 * 20000],
+        1,
+        20000,
+        image::ExtendedColorType::Rgb8,
+    )
+    .unwrap();
+    expect_limit_error(load_linear_rgb(&p), "tall.png", "1x20000", MAX_SIDE);
+}
+
+#[test]
+fn images_at_the_side_limit_still_load() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(
+        dir.path(),
+        "edge.pfm",
+        &[&b"Pf\n16384 1\n-1\n"[..], &vec![0; 4 * 16384]].concat(),
+    );
+    let mut bytes = std::fs::read(&p).unwrap();
+    bytes[15..19].copy_from_slice(&2.0f32.to_le_bytes());
+    std::fs::write(&p, bytes).unwrap();
+    let d = load_range(&p, &float_opts()).unwrap();
+    assert_eq!((d.range.width(), d.range.height()), (MAX_SIDE, 1));
+}
