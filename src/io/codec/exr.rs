@@ -1,6 +1,7 @@
 //! OpenEXR through the `exr` crate: one float channel read as a scalar map (depth files
-//! from renderers, the header checked against `io::limits` before any pixel is decoded), and 32-bit float RGBA images or one-channel `Y` maps written with
-//! lossless compression so that outputs round-trip exactly.
+//! from renderers; the header is checked against `io::limits` before any pixel is
+//! decoded), and 32-bit float RGBA images or one-channel `Y` maps written with lossless
+//! compression so that outputs round-trip exactly.
 
 use std::fs::File;
 use std::io::{BufWriter, Cursor};
