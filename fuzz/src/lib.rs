@@ -10,16 +10,6 @@ use brume::io::depth::{load_range_from_bytes, DepthFormat, DepthKind, DepthOptio
 /// Bytes of options at the front of a `depth_png` or `load_range` input.
 pub const OPTION_BYTES: usize = 2;
 
-const FORMATS: [DepthFormat; 8] = [
-    DepthFormat::Auto,
-    DepthFormat::Middlebury2014,
-    DepthFormat::Middlebury2006,
-    DepthFormat::Kitti,
-    DepthFormat::Nyu,
-    DepthFormat::Tum,
-    DepthFormat::Png16,
-    DepthFormat::Float,
-];
 const KINDS: [Option<DepthKind>; 4] = [
     None,
     Some(DepthKind::Depth),
@@ -39,7 +29,7 @@ const OFFSETS: [f64; 2] = [270.0, -1000.0];
 pub fn options(a: u8, b: u8) -> DepthOptions {
     let pick = |on: bool, v: f64| on.then_some(v);
     DepthOptions {
-        format: FORMATS[usize::from(a & 7)],
+        format: DepthFormat::ALL[usize::from(a & 7)],
         kind: KINDS[usize::from((a >> 3) & 3)],
         calib: None,
         scale: pick(a & 0x20 != 0, SCALES[usize::from((b >> 1) & 3)]),
