@@ -5,6 +5,7 @@
 
 use crate::error::{Error, Result};
 use crate::gpu::texture::TexelFormat;
+use crate::medium::Medium;
 use crate::schedule::{Schedule, Scheme};
 use std::fmt;
 use std::str::FromStr;
@@ -118,6 +119,16 @@ impl Blur {
             precision,
             ..Blur::default()
         }
+    }
+
+    /// Checks `medium` and plans the schedule that reaches the largest σ it asks for: what
+    /// the GPU pipeline and the CPU reference both run.
+    pub fn schedule_for(&self, medium: &dyn Medium) -> Result<Schedule> {
+        medium.validate()?;
+        self.schedule(
+            medium.sigma_max(self.sigma0),
+            &format!("blur scale of {}", medium.name()),
+        )
     }
 
     /// The N-step schedule that takes σ0 to `sigma_max`, the largest scale a medium asks

@@ -437,11 +437,9 @@ impl Pipeline {
 
     /// Checks the frame, plans its schedule, compiles what it needs and sizes the targets.
     fn prepare(&mut self, input: &Input, medium: &dyn Medium, blur: &Blur) -> Result<Schedule> {
-        medium.validate()?;
+        let schedule = blur.schedule_for(medium)?;
         self.caps.require_precision(blur.precision)?;
         self.caps.require_size("input", input.width, input.height)?;
-        let sigma_max = medium.sigma_max(blur.sigma0);
-        let schedule = blur.schedule(sigma_max, &format!("blur scale of {}", medium.name()))?;
         let chromatic = medium.chromatic();
         let keys = [
             medium_key(medium, blur.precision, &schedule, chromatic),

@@ -25,11 +25,7 @@ pub fn render(
     medium: &dyn Medium,
     blur: &Blur,
 ) -> Result<RgbaImage> {
-    medium.validate()?;
-    let schedule = blur.schedule(
-        medium.sigma_max(blur.sigma0),
-        &format!("blur scale of {}", medium.name()),
-    )?;
+    let schedule = blur.schedule_for(medium)?;
     let samples = sample(depth, medium, blur.sigma0);
     let rates = samples.map(|s| schedule.rate(s.sigma));
     let mut f = premultiply(image, &samples);
