@@ -535,7 +535,7 @@ impl Pipeline {
                 gl,
                 p,
                 "u_schedule",
-                Uniform::Vec2([schedule.sigma_max as f32, inverse_steps as f32]),
+                UniformValue::Vec2([schedule.sigma_max as f32, inverse_steps as f32]),
             );
             self.set_medium_uniforms(p, medium, input, schedule.sigma0);
             draw_fullscreen(gl);
@@ -562,8 +562,8 @@ impl Pipeline {
                 set_int(gl, d, "u_f", UNIT_MAIN as i32);
                 set_int(gl, d, "u_rate", UNIT_DEPTH as i32);
                 set_int(gl, d, "u_tau_gb", UNIT_SECOND as i32);
-                set_value(gl, d, "u_law", Uniform::Vec2([scale, coefficient]));
-                set_value(gl, d, "u_texel", Uniform::Vec2(texel));
+                set_value(gl, d, "u_law", UniformValue::Vec2([scale, coefficient]));
+                set_value(gl, d, "u_texel", UniformValue::Vec2(texel));
                 draw_fullscreen(gl);
             })?;
             current = dst;
@@ -585,7 +585,7 @@ impl Pipeline {
             set_int(gl, c, "u_f", UNIT_MAIN as i32);
             set_int(gl, c, "u_depth", UNIT_DEPTH as i32);
             set_int(gl, c, "u_tau_gb", UNIT_SECOND as i32);
-            set_value(gl, c, "u_origin", Uniform::IVec2(origin));
+            set_value(gl, c, "u_origin", UniformValue::IVec2(origin));
             set_int(
                 gl,
                 c,
@@ -739,18 +739,14 @@ impl Pipeline {
 
     fn set_medium_uniforms(&self, p: &Program, medium: &dyn Medium, input: &Input, sigma0: f64) {
         let gl = &self.gl;
-        set_value(gl, p, "brume_sigma0", Uniform::Float(sigma0 as f32));
+        set_value(gl, p, "brume_sigma0", UniformValue::Float(sigma0 as f32));
         set_value(
             gl,
             p,
             "brume_size",
-            Uniform::IVec2([input.width as i32, input.height as i32]),
+            UniformValue::IVec2([input.width as i32, input.height as i32]),
         );
         for (name, value) in medium.uniforms() {
-            let value = match value {
-                UniformValue::Float(v) => Uniform::Float(v),
-                UniformValue::Vec3(v) => Uniform::Vec3(v),
-            };
             set_value(gl, p, name, value);
         }
     }
@@ -819,16 +815,8 @@ impl Drop for Pipeline {
     }
 }
 
-/// A uniform value of the pipeline's own passes.
-enum Uniform {
-    Float(f32),
-    Vec2([f32; 2]),
-    Vec3([f32; 3]),
-    IVec2([i32; 2]),
-}
-
 /// Sets a uniform of the bound program `p` if the program uses it.
-fn set_value(gl: &glow::Context, p: &Program, name: &str, value: Uniform) {
+fn set_value(gl: &glow::Context, p: &Program, name: &str, value: UniformValue) {
     let Some(location) = p.optional_uniform(name) else {
         return;
     };
@@ -836,10 +824,10 @@ fn set_value(gl: &glow::Context, p: &Program, name: &str, value: Uniform) {
     // SAFETY: a uniform of the bound program, with the type the shader declares.
     unsafe {
         match value {
-            Uniform::Float(v) => gl.uniform_1_f32(location, v),
-            Uniform::Vec2([a, b]) => gl.uniform_2_f32(location, a, b),
-            Uniform::Vec3([a, b, c]) => gl.uniform_3_f32(location, a, b, c),
-            Uniform::IVec2([a, b]) => gl.uniform_2_i32(location, a, b),
+            UniformValue::Float(v) => gl.uniform_1_f32(location, v),
+            UniformValue::Vec2([a, b]) => gl.uniform_2_f32(location, a, b),
+            UniformValue::Vec3([a, b, c]) => gl.uniform_3_f32(location, a, b, c),
+            UniformValue::IVec2([a, b]) => gl.uniform_2_i32(location, a, b),
         }
     }
 }

@@ -82,13 +82,17 @@ pub struct Pixel {
     pub sigma0: f64,
 }
 
-/// A uniform value a medium's shader takes.
+/// A uniform value a shader takes (a medium's, or the pipeline's own).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum UniformValue {
     /// `float`.
     Float(f32),
+    /// `vec2`.
+    Vec2([f32; 2]),
     /// `vec3`.
     Vec3([f32; 3]),
+    /// `ivec2`.
+    IVec2([i32; 2]),
 }
 
 /// A fog model: per pixel a transmission, an in-scattered light and a blur scale, on the
