@@ -3,7 +3,7 @@
 //! ([`crate::medium`]) and knows nothing else of it; [`crate::schedule`] turns the
 //! settings and the medium's largest σ into the N steps.
 
-use crate::error::{Error, Result};
+use crate::error::{check_positive, Error, Result};
 use crate::gpu::texture::TexelFormat;
 use crate::medium::Medium;
 use crate::schedule::{Schedule, Scheme};
@@ -135,9 +135,7 @@ impl Blur {
     /// for; a medium asking for less than σ0, or for more than [`Blur::max_steps`] steps,
     /// is an error naming `what` (or `rho_max`, when a small ρmax is the cause).
     pub fn schedule(&self, sigma_max: f64, what: &str) -> Result<Schedule> {
-        if !(self.sigma0.is_finite() && self.sigma0 > 0.0) {
-            return Err(Error::invalid("sigma0", self.sigma0, "a finite number > 0"));
-        }
+        check_positive("sigma0", self.sigma0)?;
         if !(sigma_max.is_finite() && sigma_max >= self.sigma0) {
             return Err(Error::invalid(
                 what,

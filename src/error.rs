@@ -147,6 +147,24 @@ impl Error {
     }
 }
 
+/// Accepts a finite `value` > 0, or names the parameter.
+pub fn check_positive(name: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, value, "a finite number > 0"))
+    }
+}
+
+/// Accepts a finite `value` ≥ 0, or names the parameter.
+pub fn check_non_negative(name: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, value, "a finite number ≥ 0"))
+    }
+}
+
 /// A decimal that scientific notation says much shorter (`1e308` prints as 309 digits,
 /// `1e-9` as `0.000000001`) in scientific notation; anything else as it is.
 fn compact_number(text: String) -> String {

@@ -45,7 +45,7 @@
 //! (e^(2ρ) − 1)/(2ρ) would cancel catastrophically in f32) and the matched branch chosen
 //! when the shader is compiled; `tests/` compare the two through the whole pipeline.
 
-use crate::error::{Error, Result};
+use crate::error::{check_positive, Error, Result};
 use std::fmt;
 use std::str::FromStr;
 
@@ -161,8 +161,8 @@ impl Schedule {
     /// Plans the N steps that take σ0 to `sigma_max` under `scheme` with rates ≤ `rho_max`
     /// (paper 000, eq. 13 and eq. 18).
     pub fn new(scheme: Scheme, sigma0: f64, sigma_max: f64, rho_max: f64) -> Result<Self> {
-        check_positive_finite("sigma0", sigma0)?;
-        check_positive_finite("sigma_max", sigma_max)?;
+        check_positive("sigma0", sigma0)?;
+        check_positive("sigma_max", sigma_max)?;
         if !(rho_max > 0.0 && rho_max <= 0.25) {
             return Err(Error::invalid(
                 "rho_max",
@@ -238,14 +238,6 @@ pub fn bilinear_moment(h: f64) -> f64 {
 pub fn offset_for_moment(m: f64) -> f64 {
     let i = m.sqrt().floor();
     i + (m - i * i) / (2.0 * i + 1.0)
-}
-
-fn check_positive_finite(name: &str, value: f64) -> Result<()> {
-    if value.is_finite() && value > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(name, value, "a finite number > 0"))
-    }
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@
 //! With the default `[1, 1, 1]` the medium is grey and the images are paper 000's.
 
 use super::{Medium, MediumSample, Pixel, UniformValue};
-use crate::error::{Error, Result};
+use crate::error::{check_non_negative, check_positive, Error, Result};
 use crate::raster::ScalarMap;
 
 /// Default absorption coefficient κa (normalised units).
@@ -122,9 +122,9 @@ impl Medium for Haze {
     }
 
     fn validate(&self) -> Result<()> {
-        non_negative("ka", self.ka)?;
-        non_negative("ks", self.ks)?;
-        non_negative("lambda", self.lambda)?;
+        check_non_negative("ka", self.ka)?;
+        check_non_negative("ks", self.ks)?;
+        check_non_negative("lambda", self.lambda)?;
         check_airlight(self.airlight)?;
         if !self.tint.iter().all(|t| t.is_finite() && *t > 0.0) {
             return Err(Error::invalid(
@@ -133,7 +133,7 @@ impl Medium for Haze {
                 "three finite factors > 0, e.g. 0.8,1,1.3",
             ));
         }
-        positive("range_unit", self.range_unit)
+        check_positive("range_unit", self.range_unit)
     }
 }
 
@@ -162,24 +162,6 @@ pub fn normalise_range(range: &ScalarMap) -> Result<(ScalarMap, f32)> {
         }
     });
     Ok((normalised, r_max))
-}
-
-/// Accepts a finite value ≥ 0, or names the parameter.
-pub fn non_negative(name: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(name, v, "a finite number ≥ 0"))
-    }
-}
-
-/// Accepts a finite value > 0, or names the parameter.
-pub fn positive(name: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::invalid(name, v, "a finite number > 0"))
-    }
 }
 
 fn check_airlight(b: [f32; 3]) -> Result<()> {
