@@ -14,6 +14,7 @@
 
 pub mod bench;
 pub mod blur;
+pub mod camera;
 pub mod caps;
 pub mod egl;
 pub mod error;
