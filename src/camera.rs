@@ -67,21 +67,21 @@ impl Camera {
                 "three finite numbers",
             ));
         }
-        if !(self.yaw_deg.is_finite()) {
+        if !self.yaw_deg.is_finite() {
             return Err(Error::invalid(
                 "yaw",
                 self.yaw_deg,
                 "a finite angle (degrees)",
             ));
         }
-        if !(self.pitch_deg.abs() < 90.0) {
+        if !(self.pitch_deg.is_finite() && self.pitch_deg.abs() < 90.0) {
             return Err(Error::invalid(
                 "pitch",
                 self.pitch_deg,
                 "an angle strictly between −90 and 90 degrees",
             ));
         }
-        if !(self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
+        if !(self.fov_y_deg.is_finite() && self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
             return Err(Error::invalid(
                 "fov",
                 self.fov_y_deg,
