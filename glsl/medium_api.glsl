@@ -10,3 +10,20 @@ struct MediumSample {
 
 uniform float brume_sigma0; // inner scale σ0 of the input (px)
 uniform ivec2 brume_size;   // image size (px)
+
+// A medium with a camera (Medium::camera in Rust) reads a depth buffer: these are set from
+// the camera for each frame (src/camera.rs), and zero otherwise.
+in vec3 brume_ray;                  // eye-to-fragment vector (world), 1 along the view axis
+uniform vec2 brume_depth_constants; // (A, B): eye depth = A / (d + B) for window depth d
+uniform vec3 brume_eye;             // the camera's position (world)
+
+// Linear eye depth of window depth d: one addition and one division (paper 003).
+float brume_eye_depth(float d) {
+    return brume_depth_constants.x / (d + brume_depth_constants.y);
+}
+
+// The blur scale from a scattering optical depth `ds` accumulated over a normalised
+// distance `r` (blur_from_optical_depth in src/medium/mod.rs: keep the two identical).
+float brume_blur_scale(float lambda, float r, float ds) {
+    return brume_sigma0 + lambda * clamp(r, 0.0, 1.0) * sqrt(max(ds, 0.0));
+}

@@ -77,7 +77,7 @@ pub enum Filter {
     Linear,
 }
 
-/// An owned 2D texture with clamp-to-edge wrapping.
+/// An owned 2D texture, clamped to its edges unless [`Texture::set_repeat`] says otherwise.
 pub struct Texture {
     gl: Arc<glow::Context>,
     raw: glow::Texture,
@@ -156,6 +156,19 @@ impl Texture {
                 &format!("creating a {width}x{height} {format:?} texture"),
             )?;
             Ok(tex)
+        }
+    }
+
+    /// Makes the texture tile (`REPEAT` in s and t) instead of clamping to its edges.
+    pub fn set_repeat(&self) {
+        // SAFETY: parameters of an owned texture on the current context.
+        unsafe {
+            self.gl.bind_texture(glow::TEXTURE_2D, Some(self.raw));
+            for param in [glow::TEXTURE_WRAP_S, glow::TEXTURE_WRAP_T] {
+                self.gl
+                    .tex_parameter_i32(glow::TEXTURE_2D, param, glow::REPEAT as i32);
+            }
+            self.gl.bind_texture(glow::TEXTURE_2D, None);
         }
     }
 

@@ -43,11 +43,14 @@
 //! never writes a texture of its own.
 
 pub mod haze;
+pub mod lookup;
 pub mod uniform;
 
 pub use haze::Haze;
+pub use lookup::{Lookup, Wrap};
 pub use uniform::UniformBlur;
 
+use crate::camera::Camera;
 use crate::error::Result;
 
 /// GLSL declarations every medium's shader sees before its own source: the
@@ -93,6 +96,8 @@ pub enum UniformValue {
     Vec3([f32; 3]),
     /// `ivec2`.
     IVec2([i32; 2]),
+    /// `mat3`, column-major.
+    Mat3([f32; 9]),
 }
 
 /// A fog model: per pixel a transmission, an in-scattered light and a blur scale, on the
@@ -121,6 +126,33 @@ pub trait Medium {
 
     /// Rejects out-of-domain parameters, naming the parameter (`ka`, `airlight` …).
     fn validate(&self) -> Result<()>;
+
+    /// The camera of a rendered frame, for a medium that reads a depth buffer (window
+    /// depth in [0, 1]) rather than a range map. The pipeline then sets the shader's
+    /// `brume_ray`, `brume_depth_constants` and `brume_eye` for each frame (see
+    /// [`crate::camera`]); `None` (the default) leaves them zero.
+    fn camera(&self) -> Option<Camera> {
+        None
+    }
+
+    /// Lookup textures the GLSL samples, by their `sampler2D` uniform's name (at most
+    /// [`MAX_LOOKUPS`]). The default is none.
+    fn lookups(&self) -> Vec<(&'static str, Lookup)> {
+        Vec::new()
+    }
+}
+
+/// The most lookup textures one medium may use.
+pub const MAX_LOOKUPS: usize = 4;
+
+/// σ = σ0 + λ·r·√Ds: the blur scale of a medium known by its **scattering optical depth**
+/// `ds` = ∫κs dt along the ray rather than by κs(t), over a distance `r` in the medium's
+/// normalised unit (clamped to [0, 1]). It is the general law of the module docs with the
+/// scattering spread evenly along the ray (S = Ds·r²), so a homogeneous medium
+/// (Ds = κs·r) gets paper 000's eq. 7 back: σ = σ0 + λ·√κs·r^(3/2). The GLSL twin is
+/// `brume_blur_scale` in `glsl/medium_api.glsl`.
+pub fn blur_from_optical_depth(sigma0: f64, lambda: f64, r: f64, ds: f64) -> f64 {
+    sigma0 + lambda * r.clamp(0.0, 1.0) * ds.max(0.0).sqrt()
 }
 
 /// σ = σ0 + λ·√S: the blur scale for a spread moment `spread` (see the module docs).
@@ -158,6 +190,16 @@ mod tests {
             let general = blur_scale(sigma0, lambda, s);
             let eq7 = sigma0 + f64::powf(r, 1.5) * (sigma_max - sigma0);
             assert!((general - eq7).abs() < 1e-12, "R = {r}: {general} vs {eq7}");
+        }
+    }
+
+    #[test]
+    fn optical_depth_law_is_eq7_for_a_homogeneous_medium() {
+        let (sigma0, lambda, ks) = (1.0, 8.0, 0.75);
+        for r in [0.0, 0.2, 0.5, 1.0] {
+            let law = blur_from_optical_depth(sigma0, lambda, r, ks * r);
+            let eq7 = blur_scale(sigma0, lambda, spread_moment(r, 64, |_| ks));
+            assert!((law - eq7).abs() < 1e-12, "r = {r}: {law} vs {eq7}");
         }
     }
 

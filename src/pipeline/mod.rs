@@ -58,22 +58,23 @@ use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::program::Program;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, Rejected};
-use crate::medium::{Medium, UniformValue, MEDIUM_API_GLSL};
+use crate::medium::{Lookup, Medium, UniformValue, Wrap, MAX_LOOKUPS, MEDIUM_API_GLSL};
 use crate::schedule::{Schedule, Scheme};
 use glow::HasContext;
 use std::collections::HashMap;
 use std::sync::Arc;
 
-const PRELUDE_GLSL: &str = include_str!("../glsl/prelude.glsl");
-const MEDIUM_FRAG: &str = include_str!("../glsl/medium.frag");
-const DIFFUSE_FRAG: &str = include_str!("../glsl/diffuse.frag");
-const COMPOSITE_FRAG: &str = include_str!("../glsl/composite.frag");
+const PRELUDE_GLSL: &str = include_str!("../../glsl/prelude.glsl");
+const MEDIUM_FRAG: &str = include_str!("../../glsl/medium.frag");
+const DIFFUSE_FRAG: &str = include_str!("../../glsl/diffuse.frag");
+const COMPOSITE_FRAG: &str = include_str!("../../glsl/composite.frag");
 
-/// Texture units: the pipeline binds these three and no others.
+/// Texture units: the pipeline binds these, then a medium's lookups from `UNIT_LOOKUP`.
 const UNIT_MAIN: u32 = 0;
 const UNIT_DEPTH: u32 = 1;
 const UNIT_SECOND: u32 = 2;
-const UNITS_USED: u32 = 3;
+const UNIT_LOOKUP: u32 = 3;
+const UNITS_USED: u32 = UNIT_LOOKUP + MAX_LOOKUPS as u32;
 
 /// Capabilities disabled for the passes (see the module docs).
 const DISABLED: [u32; 8] = [
@@ -275,6 +276,8 @@ pub struct Pipeline {
     // Field order is drop order; `gl` last, as the objects above need it.
     programs: HashMap<ProgramKey, Program>,
     targets: Option<Targets>,
+    /// The lookups of the last medium rendered, uploaded, by [`Lookup::id`].
+    lookups: HashMap<u64, Texture>,
     vao: glow::VertexArray,
     caps: Capabilities,
     version_line: &'static str,
@@ -307,6 +310,7 @@ impl Pipeline {
         let mut pipeline = Pipeline {
             programs: HashMap::new(),
             targets: None,
+            lookups: HashMap::new(),
             vao,
             caps,
             version_line,
@@ -456,6 +460,7 @@ impl Pipeline {
             self.program(key, Some(medium))?;
         }
         self.check_medium_uniforms(medium, keys[0], keys[2])?;
+        self.upload_lookups(medium)?;
         let fits = self
             .targets
             .as_ref()
@@ -675,10 +680,11 @@ impl Pipeline {
             format!("{pass} with glsl/medium/{}.glsl", m.name())
         };
         let optional = |extra: &[&'static str]| {
-            let mut list: Vec<&'static str> = vec!["brume_sigma0", "brume_size"];
+            let mut list: Vec<&'static str> = MEDIUM_API_UNIFORMS.to_vec();
             list.extend_from_slice(extra);
             if let Some(m) = medium {
                 list.extend(m.uniforms().into_iter().map(|(name, _)| name));
+                list.extend(m.lookups().into_iter().map(|(name, _)| name));
             }
             list
         };
@@ -737,6 +743,8 @@ impl Pipeline {
         Ok(())
     }
 
+    /// Sets the medium's uniforms, the pipeline's `brume_*` ones and the camera's, and
+    /// binds the medium's lookups, for the bound program `p`.
     fn set_medium_uniforms(&self, p: &Program, medium: &dyn Medium, input: &Input, sigma0: f64) {
         let gl = &self.gl;
         set_value(gl, p, "brume_sigma0", UniformValue::Float(sigma0 as f32));
@@ -746,9 +754,39 @@ impl Pipeline {
             "brume_size",
             UniformValue::IVec2([input.width as i32, input.height as i32]),
         );
+        for (name, value) in camera_uniforms(medium, input.width, input.height) {
+            set_value(gl, p, name, value);
+        }
         for (name, value) in medium.uniforms() {
             set_value(gl, p, name, value);
         }
+        for (unit, (name, lookup)) in (UNIT_LOOKUP..).zip(medium.lookups()) {
+            if let Some(texture) = self.lookups.get(&lookup.id()) {
+                texture.bind(unit);
+                set_int(gl, p, name, unit as i32);
+            }
+        }
+    }
+
+    /// Uploads the medium's lookups not yet on the GPU, and frees those of earlier media.
+    fn upload_lookups(&mut self, medium: &dyn Medium) -> Result<()> {
+        let lookups = medium.lookups();
+        if lookups.len() > MAX_LOOKUPS {
+            return Err(Error::Gl(format!(
+                "glsl/medium/{}.glsl: {} lookup textures, at most {MAX_LOOKUPS}",
+                medium.name(),
+                lookups.len()
+            )));
+        }
+        self.lookups
+            .retain(|id, _| lookups.iter().any(|(_, l)| l.id() == *id));
+        for (_, lookup) in lookups {
+            if !self.lookups.contains_key(&lookup.id()) {
+                let texture = upload_lookup(&self.gl, &lookup)?;
+                self.lookups.insert(lookup.id(), texture);
+            }
+        }
+        Ok(())
     }
 
     fn use_program(&self, p: &Program) {
@@ -815,6 +853,61 @@ impl Drop for Pipeline {
     }
 }
 
+/// The uniforms of `glsl/medium_api.glsl` and `glsl/fullscreen.vert` that the pipeline
+/// sets for every medium pass (unused ones are optimised out).
+const MEDIUM_API_UNIFORMS: [&str; 5] = [
+    "brume_sigma0",
+    "brume_size",
+    "brume_corner_rays",
+    "brume_depth_constants",
+    "brume_eye",
+];
+
+/// The camera's per-frame constants (see [`crate::camera`]); zero without a camera.
+fn camera_uniforms(
+    medium: &dyn Medium,
+    width: usize,
+    height: usize,
+) -> [(&'static str, UniformValue); 3] {
+    let (rays, constants, eye) = match medium.camera() {
+        Some(camera) => {
+            let corners = camera.corner_rays(width as f64 / height as f64);
+            let mut rays = [0f32; 9];
+            for (i, ray) in corners.iter().enumerate() {
+                rays[3 * i..3 * i + 3].copy_from_slice(&ray.as_vec3().to_array());
+            }
+            let [a, b] = camera.depth_constants();
+            (
+                rays,
+                [a as f32, b as f32],
+                camera.position.map(|v| v as f32),
+            )
+        }
+        None => ([0.0; 9], [0.0; 2], [0.0; 3]),
+    };
+    [
+        ("brume_corner_rays", UniformValue::Mat3(rays)),
+        ("brume_depth_constants", UniformValue::Vec2(constants)),
+        ("brume_eye", UniformValue::Vec3(eye)),
+    ]
+}
+
+/// A lookup as an `R32F` bilinear texture with its wrap mode.
+fn upload_lookup(gl: &Arc<glow::Context>, lookup: &Lookup) -> Result<Texture> {
+    let texture = Texture::new(
+        gl,
+        lookup.width(),
+        lookup.height(),
+        TexelFormat::R32F,
+        Filter::Linear,
+        Some(lookup.values()),
+    )?;
+    if lookup.wrap() == Wrap::Repeat {
+        texture.set_repeat();
+    }
+    Ok(texture)
+}
+
 /// Sets a uniform of the bound program `p` if the program uses it.
 fn set_value(gl: &glow::Context, p: &Program, name: &str, value: UniformValue) {
     let Some(location) = p.optional_uniform(name) else {
@@ -828,6 +921,7 @@ fn set_value(gl: &glow::Context, p: &Program, name: &str, value: UniformValue) {
             UniformValue::Vec2([a, b]) => gl.uniform_2_f32(location, a, b),
             UniformValue::Vec3([a, b, c]) => gl.uniform_3_f32(location, a, b, c),
             UniformValue::IVec2([a, b]) => gl.uniform_2_i32(location, a, b),
+            UniformValue::Mat3(m) => gl.uniform_matrix_3_f32_slice(location, false, &m),
         }
     }
 }
