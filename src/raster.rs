@@ -85,6 +85,15 @@ impl<T> Grid<T> {
         &mut self.data[y * self.width + x]
     }
 
+    /// Reverses the order of the rows, in place.
+    pub fn flip_rows(&mut self) {
+        let (w, h) = (self.width, self.height);
+        for y in 0..h / 2 {
+            let (top, bottom) = self.data.split_at_mut((h - 1 - y) * w);
+            top[y * w..(y + 1) * w].swap_with_slice(&mut bottom[..w]);
+        }
+    }
+
     /// All pixels, row-major.
     pub fn as_slice(&self) -> &[T] {
         &self.data
@@ -119,5 +128,20 @@ impl<T> Grid<T> {
             "crop outside grid"
         );
         Grid::from_fn(w, h, |x, y| self.get(x0 + x, y0 + y).clone())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn flip_rows_reverses_rows_of_odd_and_even_heights() {
+        for h in [1, 2, 3, 4] {
+            let mut g = Grid::from_fn(2, h, |x, y| 10 * y + x);
+            g.flip_rows();
+            let expected = Grid::from_fn(2, h, |x, y| 10 * (h - 1 - y) + x);
+            assert_eq!(g.as_slice(), expected.as_slice(), "height {h}");
+        }
     }
 }

@@ -33,13 +33,14 @@ pub fn render(
     Ok(to_f32(&composite(&f, &samples)))
 }
 
-/// The medium at every pixel of `depth`.
+/// The medium at every pixel of `depth` (top row first, as [`crate::Renderer`] takes it:
+/// buffer row `y` is GL row `height − 1 − y`).
 pub fn sample(depth: &ScalarMap, medium: &dyn Medium, sigma0: f64) -> Grid<MediumSample> {
     let (width, height) = (depth.width(), depth.height());
     Grid::from_fn(width, height, |x, y| {
         medium.sample(Pixel {
             x,
-            y,
+            y: height - 1 - y,
             width,
             height,
             depth: f64::from(*depth.get(x, y)),

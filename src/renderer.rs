@@ -84,23 +84,14 @@ impl Renderer {
         // SAFETY: a pixel-unpack buffer bound by someone else would turn the uploads below
         // into offsets into it.
         unsafe { gl.bind_buffer(glow::PIXEL_UNPACK_BUFFER, None) };
-        // Uploaded from the caller's buffers as they are: no staging copies.
-        let colour = Texture::new(
-            &gl,
-            w,
-            h,
-            TexelFormat::Rgb32F,
-            Filter::Nearest,
-            Some(image.as_slice().as_flattened()),
-        )?;
-        let depth = Texture::new(
-            &gl,
-            w,
-            h,
-            TexelFormat::R32F,
-            Filter::Nearest,
-            Some(depth.as_slice()),
-        )?;
+        // Buffers hold the image's top row first, GL textures the bottom row first: the rows
+        // are uploaded upside down (row by row from the caller's buffers, no staging copy),
+        // so that a medium with a camera sees the sky at the top.
+        let colour = Texture::new(&gl, w, h, TexelFormat::Rgb32F, Filter::Nearest, None)?;
+        colour.upload_flipped(image.as_slice().as_flattened());
+        let depth_texture = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
+        depth_texture.upload_flipped(depth.as_slice());
+        let depth = depth_texture;
         let input = Input {
             colour: colour.raw(),
             colour_encoding: Encoding::Linear,
@@ -109,8 +100,10 @@ impl Renderer {
             height: h,
         };
         let (frame, pixels) = self.pipeline.render_and_read(&input, medium, blur)?;
+        let mut image = Grid::from_vec(w, h, pixels);
+        image.flip_rows();
         Ok(Rendered {
-            image: Grid::from_vec(w, h, pixels),
+            image,
             schedule: frame.schedule,
             times: frame.times,
         })

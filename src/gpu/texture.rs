@@ -159,6 +159,33 @@ impl Texture {
         }
     }
 
+    /// Fills the texture from `data` (f32, `format.channels()` per texel) whose first row
+    /// is the texture's last: an image stored top row first becomes a GL texture stored
+    /// bottom row first. One upload per row, no staging copy.
+    pub fn upload_flipped(&self, data: &[f32]) {
+        let row = self.width * self.format.channels();
+        assert_eq!(data.len(), row * self.height, "texture data size");
+        // SAFETY: each upload writes one row of `row` f32 values, inside the texture.
+        unsafe {
+            self.gl.bind_texture(glow::TEXTURE_2D, Some(self.raw));
+            self.gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
+            for (i, values) in data.chunks_exact(row).enumerate() {
+                self.gl.tex_sub_image_2d(
+                    glow::TEXTURE_2D,
+                    0,
+                    0,
+                    (self.height - 1 - i) as i32,
+                    self.width as i32,
+                    1,
+                    self.format.client_format(),
+                    glow::FLOAT,
+                    glow::PixelUnpackData::Slice(Some(f32_bytes(values))),
+                );
+            }
+            self.gl.bind_texture(glow::TEXTURE_2D, None);
+        }
+    }
+
     /// Makes the texture tile (`REPEAT` in s and t) instead of clamping to its edges.
     pub fn set_repeat(&self) {
         // SAFETY: parameters of an owned texture on the current context.

@@ -73,7 +73,8 @@ pub struct MediumSample {
 pub struct Pixel {
     /// Column, 0 at the first texel of a row.
     pub x: usize,
-    /// Row, 0 at the first row of the texture (GL's bottom row, the image's top row).
+    /// Row, 0 at the first row of the texture: the bottom of the image, as GL stores it
+    /// ([`crate::Renderer`] uploads buffers stored top row first upside down).
     pub y: usize,
     /// Image width (px).
     pub width: usize,
