@@ -32,6 +32,6 @@ pub mod schedule;
 pub use blur::{Blur, Precision};
 pub use error::{Error, Result};
 pub use medium::{Haze, Medium, UniformBlur};
-pub use pipeline::{Encoding, Frame, Input, Output, Pipeline};
+pub use pipeline::{Encoding, FogBlur, Frame, GaussBlur, Input, Output, Pipeline};
 pub use renderer::{Headless, Rendered, Renderer};
 pub use schedule::Scheme;

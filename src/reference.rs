@@ -6,6 +6,7 @@
 use crate::blur::Blur;
 use crate::error::Result;
 use crate::medium::{Medium, MediumSample, Pixel};
+use crate::pipeline::{FogBlur, GAUSS_WEIGHTS};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::schedule::Schedule;
 
@@ -31,6 +32,90 @@ pub fn render(
     let mut f = premultiply(image, &samples);
     diffuse(&mut f, &rates, &schedule);
     Ok(to_f32(&composite(&f, &samples)))
+}
+
+/// Engine fog on the CPU (see [`crate::pipeline::FogBlur`]): no blur, paper 001's
+/// Gaussian in the fog's pass or in a second pass, or the diffusion blur ([`render`]).
+/// The blur weight's distance is rebuilt by the camera's inverse matrices (paper 002,
+/// eq. 22-23), not by the GPU's rays, so that the comparison tests both.
+pub fn fog(
+    image: &RgbImage,
+    depth: &ScalarMap,
+    medium: &dyn Medium,
+    blur: &FogBlur,
+) -> Result<RgbaImage> {
+    let gauss = match blur {
+        FogBlur::Diffusion(b) => return render(image, depth, medium, b),
+        FogBlur::None => None,
+        FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => Some(*g),
+    };
+    let samples = sample(depth, medium, 1.0);
+    let weights = match (gauss, medium.camera()) {
+        (Some(g), Some(camera)) => {
+            let (w, h) = (depth.width(), depth.height());
+            Grid::from_fn(w, h, |x, y| {
+                let d = f64::from(*depth.get(x, y));
+                let p = camera.world_position_by_inverse(x, h - 1 - y, w, h, d);
+                let tau = samples.get(x, y).transmission;
+                let density = 1.0 - (tau[0] + tau[1] + tau[2]) / 3.0;
+                g.weight(density, (p - camera.eye()).length())
+            })
+        }
+        (Some(_), None) => {
+            return Err(crate::Error::invalid(
+                "blur",
+                blur.name(),
+                "a medium with a camera for the Gaussian blur",
+            ))
+        }
+        _ => Grid::filled(depth.width(), depth.height(), 0.0),
+    };
+    let fog_over = |c: &Rgba64| {
+        Grid::from_fn(c.width(), c.height(), |x, y| {
+            let (m, e) = (samples.get(x, y), c.get(x, y));
+            let mut out = [0.0, 0.0, 0.0, 1.0];
+            for ch in 0..3 {
+                let t = m.transmission[ch];
+                out[ch] = t * e[ch] + (1.0 - t) * m.inscatter[ch];
+            }
+            out
+        })
+    };
+    let mix_blurred = |c: &Rgba64| {
+        let blurred = gauss5(c);
+        Grid::from_fn(c.width(), c.height(), |x, y| {
+            let b = *weights.get(x, y);
+            <[f64; 4]>::lerp(*c.get(x, y), *blurred.get(x, y), b)
+        })
+    };
+    let colour = rgba64_from_rgb(image);
+    let out = match blur {
+        FogBlur::GaussSingle(_) => fog_over(&mix_blurred(&colour)),
+        FogBlur::GaussSeparate(_) => mix_blurred(&fog_over(&colour)),
+        _ => fog_over(&colour),
+    };
+    Ok(to_f32(&out))
+}
+
+/// Paper 001's 5 x 5 Gaussian (σ = 1 px, normalised), edges clamped.
+pub fn gauss5(img: &Rgba64) -> Rgba64 {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    Grid::from_fn(img.width(), img.height(), |x, y| {
+        let mut acc = [0.0; 4];
+        for j in -2i64..=2 {
+            for i in -2i64..=2 {
+                let wt = GAUSS_WEIGHTS[i.unsigned_abs() as usize]
+                    * GAUSS_WEIGHTS[j.unsigned_abs() as usize];
+                let sx = (x as i64 + i).clamp(0, w - 1) as usize;
+                let sy = (y as i64 + j).clamp(0, h - 1) as usize;
+                let p = img.get(sx, sy);
+                for c in 0..4 {
+                    acc[c] += wt * p[c];
+                }
+            }
+        }
+        acc
+    })
 }
 
 /// The medium at every pixel of `depth` (top row first, as [`crate::Renderer`] takes it:

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::{Clock, PassTimes};
 use crate::medium::Medium;
-use crate::pipeline::{Encoding, Input, Pipeline};
+use crate::pipeline::{Encoding, FogBlur, Frame, Input, Pipeline};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::schedule::Schedule;
 use glow::HasContext;
@@ -66,6 +66,33 @@ impl Renderer {
         medium: &dyn Medium,
         blur: &Blur,
     ) -> Result<Rendered> {
+        self.check_frame(image, depth, medium)?;
+        self.check_memory(image.width(), image.height(), medium, blur)?;
+        self.with_textures(image, depth, |pipeline, input| {
+            pipeline.render_and_read(input, medium, blur)
+        })
+    }
+
+    /// Renders `image` fogged by `medium` (a medium with a camera reads a depth buffer's
+    /// window depth from `depth`) and blurred as `blur` says: paper 001's Gaussian modes,
+    /// no blur, or the diffusion blur (see [`FogBlur`]).
+    pub fn render_fog(
+        &mut self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+    ) -> Result<Rendered> {
+        self.check_frame(image, depth, medium)?;
+        if let FogBlur::Diffusion(b) = blur {
+            self.check_memory(image.width(), image.height(), medium, b)?;
+        }
+        self.with_textures(image, depth, |pipeline, input| {
+            pipeline.fog_and_read(input, medium, blur)
+        })
+    }
+
+    fn check_frame(&self, image: &RgbImage, depth: &ScalarMap, medium: &dyn Medium) -> Result<()> {
         let (w, h) = (image.width(), image.height());
         self.caps().require_size("image", w, h)?;
         if (w, h) != (depth.width(), depth.height()) {
@@ -78,8 +105,17 @@ impl Renderer {
                 bh: depth.height() as u32,
             });
         }
-        medium.validate()?;
-        self.check_memory(w, h, medium, blur)?;
+        medium.validate()
+    }
+
+    /// Uploads the buffers, runs `render` on them and reads the result back.
+    fn with_textures(
+        &mut self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+        render: impl FnOnce(&mut Pipeline, &Input) -> Result<(Frame, Vec<[f32; 4]>)>,
+    ) -> Result<Rendered> {
+        let (w, h) = (image.width(), image.height());
         let gl = Arc::clone(self.pipeline.gl());
         // SAFETY: a pixel-unpack buffer bound by someone else would turn the uploads below
         // into offsets into it.
@@ -91,15 +127,14 @@ impl Renderer {
         colour.upload_flipped(image.as_slice().as_flattened());
         let depth_texture = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
         depth_texture.upload_flipped(depth.as_slice());
-        let depth = depth_texture;
         let input = Input {
             colour: colour.raw(),
             colour_encoding: Encoding::Linear,
-            depth: depth.raw(),
+            depth: depth_texture.raw(),
             width: w,
             height: h,
         };
-        let (frame, pixels) = self.pipeline.render_and_read(&input, medium, blur)?;
+        let (frame, pixels) = render(&mut self.pipeline, &input)?;
         let mut image = Grid::from_vec(w, h, pixels);
         image.flip_rows();
         Ok(Rendered {
@@ -178,6 +213,17 @@ impl Headless {
         blur: &Blur,
     ) -> Result<Rendered> {
         self.renderer()?.render(image, depth, medium, blur)
+    }
+
+    /// [`Renderer::render_fog`] on this context.
+    pub fn render_fog(
+        &mut self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+    ) -> Result<Rendered> {
+        self.renderer()?.render_fog(image, depth, medium, blur)
     }
 
     /// The driver's capabilities, with the EGL facts.

@@ -51,6 +51,11 @@
 //!   disabled. Anything else (blend functions, clear colour, pixel store, buffers) is left
 //!   as it was. The host sets again whatever it needs, as with egui_glow's painter.
 
+mod engine;
+
+use engine::{EngineKey, EngineTargets};
+pub use engine::{FogBlur, GaussBlur, GAUSS_WEIGHTS};
+
 use crate::blur::{Blur, Precision};
 use crate::caps::Capabilities;
 use crate::error::{Error, Result};
@@ -164,6 +169,8 @@ enum ProgramKey {
         medium: &'static str,
         chromatic: bool,
     },
+    /// An engine pass (see [`engine`]) of a medium.
+    Engine(&'static str, EngineKey),
 }
 
 /// The diffusion textures, kept between frames of the same size, precision and kind of τ.
@@ -278,6 +285,7 @@ pub struct Pipeline {
     targets: Option<Targets>,
     /// The lookups of the last medium rendered, uploaded, by [`Lookup::id`].
     lookups: HashMap<u64, Texture>,
+    engine_targets: Option<EngineTargets>,
     vao: glow::VertexArray,
     caps: Capabilities,
     version_line: &'static str,
@@ -311,6 +319,7 @@ impl Pipeline {
             programs: HashMap::new(),
             targets: None,
             lookups: HashMap::new(),
+            engine_targets: None,
             vao,
             caps,
             version_line,
@@ -719,6 +728,21 @@ impl Pipeline {
                 &["u_f"],
                 &optional(&["u_depth", "u_tau_gb", "u_origin", "u_output_srgb"]),
             ),
+            ProgramKey::Engine(_, key) => {
+                let (file, source, pairs) = key.source();
+                let gauss = if key.needs_gauss() {
+                    engine::GAUSS5
+                } else {
+                    ""
+                };
+                Program::new(
+                    &self.gl,
+                    &defines(&pairs),
+                    (&names(file), &with_medium(&format!("{gauss}\n{source}"))),
+                    &[],
+                    &optional(&engine::ENGINE_UNIFORMS),
+                )
+            }
         }
     }
 

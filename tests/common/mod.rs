@@ -127,3 +127,33 @@ pub fn npy_bytes(descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8
     b.extend_from_slice(data);
     b
 }
+
+/// The window-depth buffer a GL renderer would write for a simple world seen by `camera`
+/// (top row first, as the renderer takes buffers): the ground plane y = 0, a wall of
+/// height 6 at z = −40 for |x| < 8, a pillar at (−3, −12), and sky (depth 1) elsewhere.
+pub fn synthetic_depth_buffer(camera: &brume::camera::Camera, w: usize, h: usize) -> ScalarMap {
+    use glam::DVec3;
+    let eye = camera.eye();
+    Grid::from_fn(w, h, |x, row| {
+        let dir = camera.pixel_ray(x, h - 1 - row, w, h);
+        let mut t_hit = f64::INFINITY;
+        let mut consider = |t: f64, ok: &dyn Fn(DVec3) -> bool| {
+            if t > 0.0 && t < t_hit && ok(eye + dir * t) {
+                t_hit = t;
+            }
+        };
+        if dir.y != 0.0 {
+            consider(-eye.y / dir.y, &|_| true);
+        }
+        if dir.z != 0.0 {
+            consider((-40.0 - eye.z) / dir.z, &|p| p.x.abs() < 8.0 && p.y < 6.0);
+            consider((-12.0 - eye.z) / dir.z, &|p| {
+                (p.x + 3.0).abs() < 0.5 && p.y < 4.0
+            });
+        }
+        match camera.project_depth(eye + dir * t_hit) {
+            Some((d, _)) if t_hit.is_finite() && d < 1.0 => d as f32,
+            _ => 1.0,
+        }
+    })
+}

@@ -1,0 +1,572 @@
+//! Engine-style fog on the same pipeline: what papers 001 and 003 do to a frame an engine
+//! has just rendered, for any medium, beside brume's diffusion blur.
+//!
+//! [`FogBlur`] picks how the fog is blurred:
+//!
+//! - `None`: one pass, `out = τ·C + (1 − τ)·L∞` (papers 001 and 003, no blur).
+//! - `GaussSingle`: paper 001's single pass: the **fog-free** colour blurred by its 5 x 5
+//!   Gaussian (σ = 1 px, table 1) and mixed with the sharp colour by the blur weight b,
+//!   then fogged, in the same pass.
+//! - `GaussSeparate`: paper 001's separate passes: the fog first (into a float target,
+//!   b in alpha), then the **fogged** image blurred by the same kernel and mixed by b.
+//! - `Diffusion`: brume's diffusion blur to the medium's σ (N + 2 passes, see the parent
+//!   module), which grows with the fog's scattering optical depth.
+//!
+//! The blur weight of the Gaussian modes (paper 001 gives its parameters, not its formula:
+//! "distance, falloff or maximum blur value … when the density is higher, the blurring
+//! value of the scene is also increased"):
+//!
+//! ```text
+//! b = min(maximum, density · (l / distance)^falloff),   density = 1 − mean(τ)
+//! ```
+//!
+//! with l the Euclidean distance to the fragment, so the Gaussian modes need a medium with
+//! a camera. [`Pipeline::blend_fog`] is paper 003's way: one pass drawn over the host's
+//! framebuffer, which already holds the scene, blended by fixed-function GL.
+
+use super::{
+    bind_texture, draw_fullscreen, set_int, set_value, Destination, Encoding, Frame, Input, Output,
+    Pipeline, ProgramKey, UNIT_DEPTH, UNIT_MAIN,
+};
+use crate::blur::{Blur, Precision};
+use crate::error::{check_positive, Error, Result};
+use crate::gpu::framebuffer::Framebuffer;
+use crate::gpu::texture::{Filter, Texture};
+use crate::gpu::timer::{Clock, PassTimer, PassTimes};
+use crate::medium::{Medium, UniformValue};
+use crate::schedule::{Schedule, Scheme};
+use glow::HasContext;
+use std::sync::Arc;
+
+const FOG_FRAG: &str = include_str!("../../glsl/fog.frag");
+const GAUSS_BLUR_FRAG: &str = include_str!("../../glsl/gauss_blur.frag");
+const FOG_BLEND_FRAG: &str = include_str!("../../glsl/fog_blend.frag");
+const GAUSS5_GLSL: &str = include_str!("../../glsl/gauss5.glsl");
+
+/// Paper 001's 1D Gaussian weights (σ = 1 px) at offsets 0, 1, 2, normalised to sum 1
+/// over −2..2 (the same numbers as `glsl/gauss5.glsl`).
+pub const GAUSS_WEIGHTS: [f64; 3] = [0.40261995, 0.24420134, 0.05448868];
+
+/// The Gaussian blur's parameters (paper 001, sec. 3.4; see the module docs for b).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GaussBlur {
+    /// Distance (world units) at which the weight reaches the fog's density (> 0).
+    pub distance: f64,
+    /// Exponent of the distance (≥ 0).
+    pub falloff: f64,
+    /// Largest weight, in [0, 1].
+    pub maximum: f64,
+    /// Precision of the intermediate target of the separate mode, and of the read-back.
+    pub precision: Precision,
+}
+
+impl Default for GaussBlur {
+    /// Weight = the fog's density at 100 units, growing linearly with distance, at most 1.
+    fn default() -> Self {
+        GaussBlur {
+            distance: 100.0,
+            falloff: 1.0,
+            maximum: 1.0,
+            precision: Precision::F32,
+        }
+    }
+}
+
+impl GaussBlur {
+    /// Rejects out-of-domain parameters by name.
+    pub fn validate(&self) -> Result<()> {
+        check_positive("blur_distance", self.distance)?;
+        if !(self.falloff.is_finite() && self.falloff >= 0.0) {
+            return Err(Error::invalid("blur_falloff", self.falloff, "a number ≥ 0"));
+        }
+        if !(0.0..=1.0).contains(&self.maximum) {
+            return Err(Error::invalid(
+                "blur_max",
+                self.maximum,
+                "a weight in [0, 1]",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The weight b of the blurred image at distance `l` for a fog of `density` (the
+    /// GLSL's `blur_weight`).
+    pub fn weight(&self, density: f64, l: f64) -> f64 {
+        (density * (l.max(0.0) / self.distance).powf(self.falloff)).min(self.maximum)
+    }
+
+    fn uniform(&self) -> UniformValue {
+        UniformValue::Vec3([
+            self.distance as f32,
+            self.falloff as f32,
+            self.maximum as f32,
+        ])
+    }
+}
+
+/// How engine fog is blurred (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FogBlur {
+    /// Fog only, one pass.
+    None,
+    /// Paper 001: the fog-free image blurred in the fog's pass.
+    GaussSingle(GaussBlur),
+    /// Paper 001: the fogged image blurred in a second pass.
+    GaussSeparate(GaussBlur),
+    /// brume's diffusion blur to the medium's σ.
+    Diffusion(Blur),
+}
+
+impl FogBlur {
+    /// `none`, `gauss-single`, `gauss-separate` or `diffusion`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            FogBlur::None => "none",
+            FogBlur::GaussSingle(_) => "gauss-single",
+            FogBlur::GaussSeparate(_) => "gauss-separate",
+            FogBlur::Diffusion(_) => "diffusion",
+        }
+    }
+
+    /// The names of the passes a render runs, in order, for `steps` diffusion steps.
+    pub fn pass_names(&self, steps: u32) -> Vec<String> {
+        match self {
+            FogBlur::None => vec!["fog".into()],
+            FogBlur::GaussSingle(_) => vec!["fog+blur".into()],
+            FogBlur::GaussSeparate(_) => vec!["fog".into(), "blur".into()],
+            FogBlur::Diffusion(_) => std::iter::once("medium".to_string())
+                .chain((1..=steps).map(|k| format!("diffuse {k}")))
+                .chain(std::iter::once("composite".to_string()))
+                .collect(),
+        }
+    }
+}
+
+/// The float targets of the engine passes: the separate mode's intermediate, and the
+/// read-back target of [`crate::Renderer`]; kept between frames of the same size.
+pub(super) struct EngineTargets {
+    width: usize,
+    height: usize,
+    precision: Precision,
+    textures: [Texture; 2],
+    framebuffers: [Framebuffer; 2],
+}
+
+impl EngineTargets {
+    fn new(gl: &Arc<glow::Context>, w: usize, h: usize, precision: Precision) -> Result<Self> {
+        let texture = || Texture::new(gl, w, h, precision.colour_format(), Filter::Nearest, None);
+        let textures = [texture()?, texture()?];
+        let framebuffers = [
+            Framebuffer::over(gl, &[&textures[0]], "the fog's intermediate target")?,
+            Framebuffer::over(gl, &[&textures[1]], "the fog's read-back target")?,
+        ];
+        Ok(EngineTargets {
+            width: w,
+            height: h,
+            precision,
+            textures,
+            framebuffers,
+        })
+    }
+}
+
+/// The program keys of the engine passes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum EngineKey {
+    /// `fog.frag`.
+    Fog {
+        gauss_single: bool,
+        write_weight: bool,
+    },
+    /// `gauss_blur.frag`.
+    GaussBlur,
+    /// `fog_blend.frag`.
+    Blend,
+}
+
+impl EngineKey {
+    /// The file and its `#define`s.
+    pub(super) fn source(self) -> (&'static str, &'static str, Vec<(&'static str, bool)>) {
+        match self {
+            EngineKey::Fog {
+                gauss_single,
+                write_weight,
+            } => (
+                "fog.frag",
+                FOG_FRAG,
+                vec![
+                    ("GAUSS_SINGLE", gauss_single),
+                    ("WRITE_BLUR_WEIGHT", write_weight),
+                ],
+            ),
+            EngineKey::GaussBlur => ("gauss_blur.frag", GAUSS_BLUR_FRAG, vec![]),
+            EngineKey::Blend => ("fog_blend.frag", FOG_BLEND_FRAG, vec![]),
+        }
+    }
+
+    /// Whether `gauss5.glsl` goes before the pass.
+    pub(super) fn needs_gauss(self) -> bool {
+        self != EngineKey::Blend
+    }
+}
+
+/// The GLSL of `gauss5.glsl`, for the pipeline's shader assembly.
+pub(super) const GAUSS5: &str = GAUSS5_GLSL;
+
+/// The uniforms of the engine passes besides the medium's.
+pub(super) const ENGINE_UNIFORMS: [&str; 8] = [
+    "u_colour",
+    "u_depth",
+    "u_colour_srgb",
+    "u_origin",
+    "u_output_srgb",
+    "u_gauss",
+    "u_f",
+    "brume_size",
+];
+
+impl Pipeline {
+    /// Fogs `input` with `medium` and blurs it as `blur` says (module docs), into
+    /// `output`. The diffusion mode is [`Pipeline::render`]. The GL state changed and left
+    /// is the same as a render's (see the parent module).
+    pub fn fog(
+        &mut self,
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+        output: &Output,
+    ) -> Result<Frame> {
+        if let FogBlur::Diffusion(b) = blur {
+            return self.render(input, medium, b, output);
+        }
+        self.prepare_engine(input, medium, blur, &engine_keys(blur))?;
+        let result = self.with_output(input, output, |pipeline, destination| {
+            pipeline.run_engine(input, medium, blur, destination)
+        });
+        self.leave_state();
+        Ok(Frame {
+            schedule: no_diffusion(),
+            times: result?,
+        })
+    }
+
+    /// [`Pipeline::fog`] into brume's float target, read back (RGBA, texel row 0 first).
+    pub(crate) fn fog_and_read(
+        &mut self,
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+    ) -> Result<(Frame, Vec<[f32; 4]>)> {
+        if let FogBlur::Diffusion(b) = blur {
+            return self.render_and_read(input, medium, b);
+        }
+        self.prepare_engine(input, medium, blur, &engine_keys(blur))?;
+        let result = self
+            .run_engine(input, medium, blur, &Destination::Internal)
+            .and_then(|times| Ok((times, self.engine_targets()?.framebuffers[1].read_rgba()?)));
+        self.leave_state();
+        let (times, pixels) = result?;
+        Ok((
+            Frame {
+                schedule: no_diffusion(),
+                times,
+            },
+            pixels,
+        ))
+    }
+
+    /// Paper 003's post-process: draws the fog of a **grey** `medium` over the host's
+    /// framebuffer (which holds the scene) with fixed-function blending,
+    /// `C = τ·C + (1 − τ)·L∞`, reading only the depth texture. The destination must hold
+    /// linear light (a float or `SRGB8_ALPHA8` target): GL blends the values it stores.
+    /// Besides a render's state changes, this sets the blend function
+    /// (`SRC_ALPHA, ONE_MINUS_SRC_ALPHA` for colour, `ZERO, ONE` for alpha) and the blend
+    /// equation (`FUNC_ADD`), and leaves `BLEND` disabled.
+    pub fn blend_fog(
+        &mut self,
+        depth: glow::Texture,
+        width: usize,
+        height: usize,
+        medium: &dyn Medium,
+        output: &Output,
+    ) -> Result<Frame> {
+        if medium.chromatic() {
+            return Err(Error::invalid(
+                "medium",
+                medium.name(),
+                "a grey medium for blending (one alpha cannot attenuate three channels \
+                 differently); use Pipeline::fog",
+            ));
+        }
+        let input = Input {
+            colour: depth,
+            colour_encoding: Encoding::Linear,
+            depth,
+            width,
+            height,
+        };
+        self.prepare_engine(&input, medium, &FogBlur::None, &[EngineKey::Blend])?;
+        let result = self.with_output(&input, output, |pipeline, destination| {
+            pipeline.run_blend(&input, medium, destination)
+        });
+        // SAFETY: a capability switch on the current context.
+        unsafe { self.gl.disable(glow::BLEND) };
+        self.leave_state();
+        Ok(Frame {
+            schedule: no_diffusion(),
+            times: result?,
+        })
+    }
+
+    /// Runs `run` with the destination `output` names.
+    fn with_output(
+        &mut self,
+        input: &Input,
+        output: &Output,
+        run: impl FnOnce(&Self, &Destination) -> Result<PassTimes>,
+    ) -> Result<PassTimes> {
+        match *output {
+            Output::Framebuffer {
+                framebuffer,
+                x,
+                y,
+                encoding,
+            } => run(
+                self,
+                &Destination::Host {
+                    framebuffer,
+                    x,
+                    y,
+                    encoding,
+                },
+            ),
+            Output::Texture { texture, encoding } => {
+                let fb = Framebuffer::new(
+                    &self.gl,
+                    &[texture],
+                    input.width,
+                    input.height,
+                    "the output texture",
+                )?;
+                run(self, &Destination::HostTexture(&fb, encoding))
+            }
+        }
+    }
+
+    /// Checks the frame, compiles the passes `keys` and sizes the targets.
+    fn prepare_engine(
+        &mut self,
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+        keys: &[EngineKey],
+    ) -> Result<()> {
+        medium.validate()?;
+        self.caps.require_size("input", input.width, input.height)?;
+        let gauss = match blur {
+            FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => {
+                g.validate()?;
+                if medium.camera().is_none() {
+                    return Err(Error::invalid(
+                        "blur",
+                        blur.name(),
+                        format!(
+                            "a medium with a camera (the Gaussian blur's weight grows with \
+                             distance; {} has no camera): use none or diffusion",
+                            medium.name()
+                        ),
+                    ));
+                }
+                Some(g)
+            }
+            _ => None,
+        };
+        let precision = gauss.map_or(Precision::F32, |g| g.precision);
+        self.caps.require_precision(precision)?;
+        for &key in keys {
+            self.program(ProgramKey::Engine(medium.name(), key), Some(medium))?;
+        }
+        self.upload_lookups(medium)?;
+        let fits = self.engine_targets.as_ref().is_some_and(|t| {
+            (t.width, t.height, t.precision) == (input.width, input.height, precision)
+        });
+        if !fits {
+            self.engine_targets = None;
+            self.engine_targets = Some(EngineTargets::new(
+                &self.gl,
+                input.width,
+                input.height,
+                precision,
+            )?);
+        }
+        Ok(())
+    }
+
+    fn engine_targets(&self) -> Result<&EngineTargets> {
+        self.engine_targets
+            .as_ref()
+            .ok_or_else(|| Error::Gl("internal: fog targets not allocated".into()))
+    }
+
+    /// The one or two passes of a Gaussian or no-blur fog.
+    fn run_engine(
+        &self,
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+        destination: &Destination,
+    ) -> Result<PassTimes> {
+        self.timed(|pipeline, timer| {
+            let targets = pipeline.engine_targets()?;
+            let gauss = match blur {
+                FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => *g,
+                _ => GaussBlur::default(),
+            };
+            let separate = matches!(blur, FogBlur::GaussSeparate(_));
+            let fog_key = EngineKey::Fog {
+                gauss_single: matches!(blur, FogBlur::GaussSingle(_)),
+                write_weight: separate,
+            };
+            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), fog_key))?;
+            timer.pass(|| {
+                let (origin, encoding) = if separate {
+                    targets.framebuffers[0].bind_for_drawing();
+                    ([0, 0], Encoding::Linear)
+                } else {
+                    pipeline.bind_destination(destination, input, &targets.framebuffers[1])
+                };
+                pipeline.use_program(p);
+                bind_texture(&pipeline.gl, UNIT_MAIN, Some(input.colour));
+                bind_texture(&pipeline.gl, UNIT_DEPTH, Some(input.depth));
+                pipeline.set_engine_uniforms(p, medium, input, origin, encoding, gauss);
+                draw_fullscreen(&pipeline.gl);
+            })?;
+            if separate {
+                let b =
+                    pipeline.compiled(ProgramKey::Engine(medium.name(), EngineKey::GaussBlur))?;
+                timer.pass(|| {
+                    let (origin, encoding) =
+                        pipeline.bind_destination(destination, input, &targets.framebuffers[1]);
+                    pipeline.use_program(b);
+                    targets.textures[0].bind(UNIT_MAIN);
+                    set_int(&pipeline.gl, b, "u_f", UNIT_MAIN as i32);
+                    pipeline.set_engine_uniforms(b, medium, input, origin, encoding, gauss);
+                    draw_fullscreen(&pipeline.gl);
+                })?;
+            }
+            Ok(())
+        })
+    }
+
+    /// Paper 003's blended pass.
+    fn run_blend(
+        &self,
+        input: &Input,
+        medium: &dyn Medium,
+        destination: &Destination,
+    ) -> Result<PassTimes> {
+        self.timed(|pipeline, timer| {
+            let gl = &pipeline.gl;
+            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), EngineKey::Blend))?;
+            let internal = &pipeline.engine_targets()?.framebuffers[1];
+            timer.pass(|| {
+                let (origin, encoding) = pipeline.bind_destination(destination, input, internal);
+                pipeline.use_program(p);
+                bind_texture(gl, UNIT_DEPTH, Some(input.depth));
+                pipeline.set_engine_uniforms(
+                    p,
+                    medium,
+                    input,
+                    origin,
+                    encoding,
+                    GaussBlur::default(),
+                );
+                // SAFETY: blend state on the current context (documented in blend_fog).
+                unsafe {
+                    gl.enable(glow::BLEND);
+                    gl.blend_equation(glow::FUNC_ADD);
+                    gl.blend_func_separate(
+                        glow::SRC_ALPHA,
+                        glow::ONE_MINUS_SRC_ALPHA,
+                        glow::ZERO,
+                        glow::ONE,
+                    );
+                }
+                draw_fullscreen(gl);
+            })
+        })
+    }
+
+    /// Runs `passes` timed by the preferred clock, again by the wall clock if the GPU
+    /// timer's figures are rejected.
+    fn timed(&self, passes: impl Fn(&Self, &mut PassTimer) -> Result<()>) -> Result<PassTimes> {
+        let mut clock = self.preferred_clock();
+        loop {
+            self.enter_state();
+            let mut timer = PassTimer::start(&self.gl, clock);
+            passes(self, &mut timer)?;
+            crate::gpu::check_gl(&self.gl, "running the fog passes")?;
+            match timer.finish()? {
+                Ok(times) => return Ok(times),
+                Err(rejected) => {
+                    log::warn!(
+                        "GPU timer figures rejected ({rejected:?}); timing again by wall clock"
+                    );
+                    clock = Clock::Wall;
+                }
+            }
+        }
+    }
+
+    fn set_engine_uniforms(
+        &self,
+        p: &crate::gpu::program::Program,
+        medium: &dyn Medium,
+        input: &Input,
+        origin: [i32; 2],
+        encoding: Encoding,
+        gauss: GaussBlur,
+    ) {
+        let gl = &self.gl;
+        set_int(gl, p, "u_colour", UNIT_MAIN as i32);
+        set_int(gl, p, "u_depth", UNIT_DEPTH as i32);
+        set_int(
+            gl,
+            p,
+            "u_colour_srgb",
+            i32::from(input.colour_encoding == Encoding::Srgb),
+        );
+        set_value(gl, p, "u_origin", UniformValue::IVec2(origin));
+        set_int(
+            gl,
+            p,
+            "u_output_srgb",
+            i32::from(encoding == Encoding::Srgb),
+        );
+        set_value(gl, p, "u_gauss", gauss.uniform());
+        // σ0 does not matter without diffusion; 1 px keeps media's σ finite.
+        self.set_medium_uniforms(p, medium, input, 1.0);
+    }
+}
+
+/// The passes of a fog blurred by `blur` (not diffusion).
+fn engine_keys(blur: &FogBlur) -> Vec<EngineKey> {
+    match blur {
+        FogBlur::GaussSeparate(_) => vec![
+            EngineKey::Fog {
+                gauss_single: false,
+                write_weight: true,
+            },
+            EngineKey::GaussBlur,
+        ],
+        _ => vec![EngineKey::Fog {
+            gauss_single: matches!(blur, FogBlur::GaussSingle(_)),
+            write_weight: false,
+        }],
+    }
+}
+
+/// The schedule of a render without diffusion: zero steps.
+fn no_diffusion() -> Schedule {
+    Schedule::new(Scheme::Matched, 1.0, 1.0, 0.25).expect("a valid empty schedule")
+}
