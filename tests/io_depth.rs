@@ -714,3 +714,83 @@ fn kind_and_format_parse_and_print() {
     let err = "far".parse::<DepthKind>().unwrap_err().to_string();
     assert!(err.contains("far") && err.contains("disparity"), "{err}");
 }
+
+/// A rendered frame's z-buffer (top row first) of the ground plane y = 0 seen by a level
+/// camera 2 units up, with the analytic range of every pixel (NaN where the ray misses).
+fn ground_zbuffer(camera: &brume::camera::Camera, w: usize, h: usize) -> (ScalarMap, Vec<f64>) {
+    let mut ranges = Vec::new();
+    let d = Grid::from_fn(w, h, |x, row| {
+        let ray = camera.pixel_ray(x, h - 1 - row, w, h);
+        let t = -camera.position[1] / ray.y;
+        let hit = (t > 0.0)
+            .then(|| camera.project_depth(camera.eye() + ray * t))
+            .flatten()
+            .filter(|(d, _)| *d < 1.0);
+        ranges.push(hit.map_or(f64::NAN, |(_, r)| r));
+        hit.map_or(1.0, |(d, _)| d as f32)
+    });
+    (d, ranges)
+}
+
+#[test]
+fn zbuffer_becomes_range_with_near_far_and_fov() {
+    let camera = brume::camera::Camera {
+        position: [0.0, 2.0, 0.0],
+        pitch_deg: -8.0,
+        fov_y_deg: 50.0,
+        near: 0.5,
+        far: 300.0,
+        ..Default::default()
+    };
+    let (w, h) = (20, 16);
+    let (zbuffer, expected) = ground_zbuffer(&camera, w, h);
+    let dir = tempfile::tempdir().unwrap();
+    let pfm = dir.path().join("depth.pfm");
+    write_scalar(&pfm, &zbuffer).unwrap();
+    // Pitched down 8° the camera sees the ground in the lower rows only.
+    let with_camera = DepthOptions {
+        kind: Some(DepthKind::ZBuffer),
+        near: Some(camera.near),
+        far: Some(camera.far),
+        fov: Some(camera.fov_y_deg),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&pfm, &with_camera).unwrap();
+    assert_eq!(d.kind, DepthKind::ZBuffer);
+    let mut checked = 0;
+    for (got, want) in d.range.as_slice().iter().zip(&expected) {
+        if want.is_nan() {
+            assert!(got.is_nan());
+        } else {
+            // f32 window depth: one ulp near d = 1 is a relative 2e-4 at 300 units here.
+            assert!((f64::from(*got) - want).abs() <= 1e-3 * want, "{got} vs {want}");
+            checked += 1;
+        }
+    }
+    assert!(checked > w * h / 4, "{checked} ground pixels");
+    assert!(d.unknown_pixels > 0, "the sky is unknown");
+
+    // A 16-bit PNG holds d·65535.
+    let raw: Vec<u16> = zbuffer
+        .as_slice()
+        .iter()
+        .map(|d| (f64::from(*d) * 65535.0).round() as u16)
+        .collect();
+    let png = save_png16(dir.path(), "depth.png", w as u32, h as u32, &raw);
+    let d16 = load_range(&png, &with_camera).unwrap();
+    let near_pixel = expected.iter().rposition(|r| !r.is_nan()).unwrap();
+    let got = f64::from(d16.range.as_slice()[near_pixel]);
+    assert!((got - expected[near_pixel]).abs() < 0.01 * expected[near_pixel]);
+
+    let without_far = DepthOptions {
+        far: None,
+        ..with_camera.clone()
+    };
+    let err = expect_err(load_range(&pfm, &without_far)).to_string();
+    assert!(err.contains("far") && err.contains("zbuffer"), "{err}");
+    let kitti = DepthOptions {
+        format: DepthFormat::Kitti,
+        ..with_camera
+    };
+    assert!(expect_err(load_range(&png, &kitti)).to_string().contains("zbuffer"));
+}

@@ -36,6 +36,7 @@ pub fn options(a: u8, b: u8) -> DepthOptions {
         focal: pick(a & 0x40 != 0, FOCALS[usize::from((b >> 3) & 3)]),
         baseline: pick(a & 0x80 != 0, BASELINES[usize::from((b >> 5) & 3)]),
         disparity_offset: pick(b & 1 != 0, OFFSETS[usize::from(b >> 7)]),
+        ..DepthOptions::default()
     }
 }
 

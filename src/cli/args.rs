@@ -76,7 +76,8 @@ pub struct DepthArgs {
     pub calib: Option<PathBuf>,
 
     /// What the depth values are: depth (along the optical axis), range (distance to the
-    /// camera centre) or disparity (px). Default: what the format implies.
+    /// camera centre), disparity (px), or zbuffer (a rendered frame's OpenGL window depth
+    /// in [0, 1], with --near, --far and --fov). Default: what the format implies.
     #[arg(long, value_name = "KIND", allow_hyphen_values = true)]
     pub depth_kind: Option<DepthKind>,
 
@@ -107,6 +108,20 @@ pub struct DepthArgs {
     /// default: 270).
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub disparity_offset: Option<f64>,
+
+    /// Near clipping plane of the projection that wrote a z-buffer (--depth-kind zbuffer),
+    /// in the scene's units.
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub near: Option<f64>,
+
+    /// Far clipping plane of the projection that wrote a z-buffer.
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub far: Option<f64>,
+
+    /// Vertical field of view in degrees: of a z-buffer's projection, or of a depth map
+    /// (instead of --focal) to turn depth into range.
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub fov: Option<f64>,
 }
 
 /// Options of the range pre-processing (paper 000, sec. 4.1).

@@ -256,6 +256,9 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
         focal: args.focal,
         baseline: args.baseline,
         disparity_offset: args.disparity_offset,
+        near: args.near,
+        far: args.far,
+        fov: args.fov,
     };
     let loaded = depth::load_range(path, &opts)?;
     for note in &loaded.notes {

@@ -49,11 +49,11 @@ impl Layout {
 /// Which kinds of values a format may hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Kinds {
-    /// Depth, range or disparity (`--depth-kind` says).
+    /// Depth, range, disparity or a z-buffer (`--depth-kind` says).
     Any,
     /// Disparity only (the Middlebury sets).
     Disparity,
-    /// Depth or range, never disparity (the RGB-D sets).
+    /// Depth or range, never disparity or a z-buffer (the RGB-D sets).
     DepthOrRange,
 }
 
@@ -78,7 +78,7 @@ impl FormatRule {
         match self.kinds {
             Kinds::Any => true,
             Kinds::Disparity => kind == DepthKind::Disparity,
-            Kinds::DepthOrRange => kind != DepthKind::Disparity,
+            Kinds::DepthOrRange => matches!(kind, DepthKind::Depth | DepthKind::Range),
         }
     }
 }

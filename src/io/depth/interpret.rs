@@ -8,6 +8,7 @@ use super::middlebury::{self, Calib};
 use super::png16;
 use super::raw::Raw;
 use super::{finite_option, positive_option, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
+use crate::camera::Camera;
 use crate::io::camera::{to_range, Intrinsics, Stereo};
 use crate::{Error, Result};
 
@@ -23,7 +24,11 @@ fn resolve_format(
         (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
         (F::Auto, Raw::Float { .. }) => F::Float,
         (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
-        (F::Auto, Raw::Grey16(_)) if opts.scale.is_some() => F::Png16,
+        (F::Auto, Raw::Grey16(_))
+            if opts.scale.is_some() || opts.kind == Some(DepthKind::ZBuffer) =>
+        {
+            F::Png16
+        }
         (F::Auto, Raw::Grey16(_)) => {
             return Err(Error::format(
                 path,
@@ -114,6 +119,17 @@ pub(super) fn interpret(
             let (range, k) = middlebury::range_2006(&disp, opts, pixel_scale, &mut notes)?;
             (range, metres, Some(k))
         }
+        (_, Raw::Grey16(raw)) if kind == DepthKind::ZBuffer => {
+            let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
+            let scale = opts.scale.unwrap_or(1.0 / f64::from(u16::MAX));
+            let range = to_range(&raw, |v| depth(f64::from(v) * scale), Some(&k));
+            (range, "file units".to_string(), Some(k))
+        }
+        (_, Raw::Float { map, .. }) if kind == DepthKind::ZBuffer => {
+            let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
+            let range = to_range(&map, |v| depth(f64::from(v)), Some(&k));
+            (range, "file units".to_string(), Some(k))
+        }
         (DepthFormat::Png16, Raw::Grey16(raw)) if kind == DepthKind::Disparity => {
             let scale = png16::given_scale(opts)?;
             let stereo = Stereo::from_options(opts, format)?;
@@ -163,7 +179,48 @@ pub(super) fn interpret(
     })
 }
 
-/// Intrinsics for a depth map without calibration: only if `--focal` is given.
+/// A z-buffer's conversion: window depth → eye depth by the near and far planes (one
+/// addition and one division, [`Camera::eye_depth`]), unknown at and beyond the far plane,
+/// and the intrinsics of its vertical field of view.
+fn zbuffer(
+    opts: &DepthOptions,
+    width: usize,
+    height: usize,
+    notes: &mut Vec<String>,
+) -> Result<(impl Fn(f64) -> Option<f64>, Intrinsics)> {
+    let needs = |name: &str, what: &str| {
+        Error::invalid(
+            name,
+            "nothing",
+            format!("{what}: --depth-kind zbuffer needs --near, --far and --fov"),
+        )
+    };
+    let camera = Camera {
+        near: opts.near.ok_or_else(|| needs("near", "the near plane"))?,
+        far: opts.far.ok_or_else(|| needs("far", "the far plane"))?,
+        fov_y_deg: opts
+            .fov
+            .ok_or_else(|| needs("fov", "the vertical field of view (degrees)"))?,
+        ..Camera::default()
+    };
+    camera.validate()?;
+    notes.push(format!(
+        "z-buffer of a perspective projection, near {} far {}, vertical field of view {}°; \
+         window depth 1 (nothing drawn) is unknown",
+        camera.near, camera.far, camera.fov_y_deg
+    ));
+    let k = Intrinsics::centred(focal_from_fov(camera.fov_y_deg, height), width, height);
+    let depth =
+        move |d: f64| (d.is_finite() && (0.0..1.0).contains(&d)).then(|| camera.eye_depth(d));
+    Ok((depth, k))
+}
+
+/// The focal length in pixels of a vertical field of view over `height` pixels.
+fn focal_from_fov(fov_deg: f64, height: usize) -> f64 {
+    height as f64 / 2.0 / (fov_deg.to_radians() / 2.0).tan()
+}
+
+/// Intrinsics for a depth map without calibration: only if `--focal` or `--fov` is given.
 fn depth_intrinsics(
     kind: DepthKind,
     opts: &DepthOptions,
@@ -171,7 +228,20 @@ fn depth_intrinsics(
     height: usize,
     notes: &mut Vec<String>,
 ) -> Result<Option<Intrinsics>> {
-    match (kind, opts.focal) {
+    let from_fov = match opts.fov {
+        Some(fov) if opts.focal.is_none() => {
+            if !(fov.is_finite() && fov > 0.0 && fov < 180.0) {
+                return Err(Error::invalid(
+                    "fov",
+                    fov,
+                    "a vertical field of view strictly between 0 and 180 degrees",
+                ));
+            }
+            Some(focal_from_fov(fov, height))
+        }
+        _ => None,
+    };
+    match (kind, opts.focal.or(from_fov)) {
         (DepthKind::Range, Some(_)) => {
             notes.push("--focal ignored: the map already holds range".to_string());
             Ok(None)

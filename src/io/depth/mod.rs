@@ -55,10 +55,15 @@ pub enum DepthKind {
     Range,
     /// Stereo disparity in pixels; depth = focal * baseline / (disparity + offset).
     Disparity,
+    /// A rendered frame's depth buffer: OpenGL window depth d ∈ [0, 1] of a perspective
+    /// projection (a 16-bit PNG holds d·65535), turned into eye depth by the near and far
+    /// planes and into range by the vertical field of view ([`crate::camera`]). d = 1
+    /// (the far plane: nothing drawn, sky) is unknown.
+    ZBuffer,
 }
 
 impl DepthKind {
-    const NAMES: &'static str = "depth, range or disparity";
+    const NAMES: &'static str = "depth, range, disparity or zbuffer";
 }
 
 impl FromStr for DepthKind {
@@ -69,6 +74,7 @@ impl FromStr for DepthKind {
             "depth" => Ok(DepthKind::Depth),
             "range" => Ok(DepthKind::Range),
             "disparity" => Ok(DepthKind::Disparity),
+            "zbuffer" => Ok(DepthKind::ZBuffer),
             _ => Err(Error::invalid("depth_kind", s, DepthKind::NAMES)),
         }
     }
@@ -80,6 +86,7 @@ impl fmt::Display for DepthKind {
             DepthKind::Depth => "depth",
             DepthKind::Range => "range",
             DepthKind::Disparity => "disparity",
+            DepthKind::ZBuffer => "zbuffer",
         })
     }
 }
@@ -141,6 +148,13 @@ pub struct DepthOptions {
     pub baseline: Option<f64>,
     /// Added to disparity before dividing (Middlebury `doffs`/`dmin`), in pixels.
     pub disparity_offset: Option<f64>,
+    /// Near clipping plane of a z-buffer's projection (file units, e.g. metres).
+    pub near: Option<f64>,
+    /// Far clipping plane of a z-buffer's projection.
+    pub far: Option<f64>,
+    /// Vertical field of view in degrees: the focal length of a z-buffer, or of a depth
+    /// map when `focal` is not given.
+    pub fov: Option<f64>,
 }
 
 impl Default for DepthOptions {
@@ -153,6 +167,9 @@ impl Default for DepthOptions {
             focal: None,
             baseline: None,
             disparity_offset: None,
+            near: None,
+            far: None,
+            fov: None,
         }
     }
 }
