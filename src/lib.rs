@@ -27,6 +27,7 @@ pub mod prep;
 pub mod raster;
 pub mod reference;
 pub mod renderer;
+pub(crate) mod rng;
 pub mod schedule;
 
 pub use blur::{Blur, Precision};

@@ -763,7 +763,10 @@ fn zbuffer_becomes_range_with_near_far_and_fov() {
             assert!(got.is_nan());
         } else {
             // f32 window depth: one ulp near d = 1 is a relative 2e-4 at 300 units here.
-            assert!((f64::from(*got) - want).abs() <= 1e-3 * want, "{got} vs {want}");
+            assert!(
+                (f64::from(*got) - want).abs() <= 1e-3 * want,
+                "{got} vs {want}"
+            );
             checked += 1;
         }
     }
@@ -792,5 +795,7 @@ fn zbuffer_becomes_range_with_near_far_and_fov() {
         format: DepthFormat::Kitti,
         ..with_camera
     };
-    assert!(expect_err(load_range(&png, &kitti)).to_string().contains("zbuffer"));
+    assert!(expect_err(load_range(&png, &kitti))
+        .to_string()
+        .contains("zbuffer"));
 }

@@ -2,7 +2,7 @@
 //!
 //! See the module docs of [`crate::prep`] for the method and its justification.
 
-use super::rng::SplitMix64;
+use crate::rng::SplitMix64;
 use crate::{Error, Result};
 
 /// Boundaries longer than this are scored on an evenly strided subset of this many edges.

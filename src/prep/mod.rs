@@ -70,7 +70,7 @@ mod components;
 pub mod edt;
 mod fill;
 mod margin;
-mod rng;
+
 mod sky;
 pub mod synthetic;
 mod vis;
@@ -333,7 +333,7 @@ fn fill_holes(
     let mut filler = fill::HoleFiller::default();
     for (c, _) in comps.list.iter().zip(is_sky).filter(|(_, &s)| !s) {
         let pixels = comps.pixels_of(c);
-        let mut rng = rng::SplitMix64::for_stream(opts.seed, pixels[0] as u64);
+        let mut rng = crate::rng::SplitMix64::for_stream(opts.seed, pixels[0] as u64);
         filler.fill(work, w, h, pixels, opts.ransac_samples, &mut rng)?;
         pixels.iter().for_each(|&p| filled[p as usize] = true);
         stats.holes += 1;

@@ -1,7 +1,7 @@
 //! A synthetic outdoor range map, for tests and benchmarks of [`crate::prep`].
 
-use super::rng::SplitMix64;
 use crate::raster::ScalarMap;
+use crate::rng::SplitMix64;
 
 /// Camera height above the ground plane, metres.
 const CAMERA_HEIGHT: f64 = 1.6;

@@ -1,6 +1,6 @@
 //! A tiny deterministic random number generator (SplitMix64, Steele, Lea and Flood 2014).
 //!
-//! Pre-processing must give bit-identical output for the same seed on every platform and
+//! Pre-processing, scenes and noise must give bit-identical output for the same seed on every platform and
 //! every build, so it uses this fixed, dependency-free generator instead of a crate whose
 //! stream could change between versions.
 
