@@ -10,6 +10,8 @@
 //! - [`Renderer`] wraps the pipeline with CPU buffers, and [`Headless`] adds brume's own
 //!   EGL context (no window, no display) for the CLI, benchmarks and tests.
 //! - [`reference`](mod@reference) runs the same arithmetic on the CPU in f64.
+//! - [`scene::SceneRenderer`] draws a procedural outdoor scene (colour, depth buffer and
+//!   [`camera::Camera`]): a real rendered frame for the engine fogs to work on.
 #![warn(missing_docs)]
 
 pub mod bench;
@@ -28,6 +30,7 @@ pub mod raster;
 pub mod reference;
 pub mod renderer;
 pub(crate) mod rng;
+pub mod scene;
 pub mod schedule;
 
 pub use blur::{Blur, Precision};

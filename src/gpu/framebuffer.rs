@@ -26,6 +26,19 @@ impl Framebuffer {
         height: usize,
         what: &str,
     ) -> Result<Self> {
+        Self::with_depth(gl, textures, None, width, height, what)
+    }
+
+    /// The same with a depth texture (`DEPTH_COMPONENT*`, same size) on
+    /// `DEPTH_ATTACHMENT`, for passes that draw geometry with the depth test.
+    pub fn with_depth(
+        gl: &Arc<glow::Context>,
+        textures: &[glow::Texture],
+        depth: Option<glow::Texture>,
+        width: usize,
+        height: usize,
+        what: &str,
+    ) -> Result<Self> {
         // SAFETY: framebuffer creation on the current context; the framebuffer is owned by
         // the returned value (deleted in Drop, also on the error path below).
         unsafe {
@@ -49,6 +62,15 @@ impl Framebuffer {
                     0,
                 );
                 buffers.push(attachment);
+            }
+            if let Some(depth) = depth {
+                gl.framebuffer_texture_2d(
+                    glow::FRAMEBUFFER,
+                    glow::DEPTH_ATTACHMENT,
+                    glow::TEXTURE_2D,
+                    Some(depth),
+                    0,
+                );
             }
             gl.draw_buffers(&buffers);
             let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);

@@ -34,11 +34,31 @@ impl Program {
         uniforms: &[&'static str],
         optional: &[&'static str],
     ) -> Result<Self> {
+        Self::with_vertex(
+            gl,
+            (header, FULLSCREEN_VERT),
+            (header, fragment),
+            uniforms,
+            optional,
+        )
+    }
+
+    /// The same with a vertex shader of its own: each stage is `(header, (file name,
+    /// source))`, the header put before the source (the stages may differ in `#define`s
+    /// or shared code). Errors name the failing file, or the fragment file for a link
+    /// error.
+    pub fn with_vertex(
+        gl: &Arc<glow::Context>,
+        (vertex_header, vertex): (&str, (&str, &str)),
+        (header, fragment): (&str, (&str, &str)),
+        uniforms: &[&'static str],
+        optional: &[&'static str],
+    ) -> Result<Self> {
         // SAFETY: standard shader/program creation on the current context; every object
         // created here is deleted on the error paths or owned by the returned Program.
         unsafe {
             let raw = gl.create_program().map_err(Error::Gl)?;
-            let vert = compile(gl, header, glow::VERTEX_SHADER, FULLSCREEN_VERT);
+            let vert = compile(gl, vertex_header, glow::VERTEX_SHADER, vertex);
             let frag = compile(gl, header, glow::FRAGMENT_SHADER, fragment);
             let (vert, frag) = match (vert, frag) {
                 (Ok(v), Ok(f)) => (v, f),

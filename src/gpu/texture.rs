@@ -23,6 +23,9 @@ pub enum TexelFormat {
     Rg16F,
     /// Three 32-bit float channels (sampled only: RGB32F is not colour-renderable).
     Rgb32F,
+    /// 32-bit float depth (`DEPTH_COMPONENT32F`), a depth attachment; created with
+    /// `TEXTURE_COMPARE_MODE` `NONE` so that shaders read the depth with `texelFetch`.
+    Depth32F,
 }
 
 impl TexelFormat {
@@ -35,6 +38,7 @@ impl TexelFormat {
             TexelFormat::Rg32F => glow::RG32F,
             TexelFormat::Rg16F => glow::RG16F,
             TexelFormat::Rgb32F => glow::RGB32F,
+            TexelFormat::Depth32F => glow::DEPTH_COMPONENT32F,
         }
     }
 
@@ -45,6 +49,7 @@ impl TexelFormat {
             TexelFormat::R32F | TexelFormat::R16F => glow::RED,
             TexelFormat::Rg32F | TexelFormat::Rg16F => glow::RG,
             TexelFormat::Rgb32F => glow::RGB,
+            TexelFormat::Depth32F => glow::DEPTH_COMPONENT,
         }
     }
 
@@ -61,7 +66,7 @@ impl TexelFormat {
     pub fn channels(self) -> usize {
         match self {
             TexelFormat::Rgba32F | TexelFormat::Rgba16F => 4,
-            TexelFormat::R32F | TexelFormat::R16F => 1,
+            TexelFormat::R32F | TexelFormat::R16F | TexelFormat::Depth32F => 1,
             TexelFormat::Rg32F | TexelFormat::Rg16F => 2,
             TexelFormat::Rgb32F => 3,
         }
@@ -120,6 +125,13 @@ impl Texture {
                 (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE as i32),
             ] {
                 gl.tex_parameter_i32(glow::TEXTURE_2D, param, value);
+            }
+            if format == TexelFormat::Depth32F {
+                gl.tex_parameter_i32(
+                    glow::TEXTURE_2D,
+                    glow::TEXTURE_COMPARE_MODE,
+                    glow::NONE as i32,
+                );
             }
             gl.tex_storage_2d(
                 glow::TEXTURE_2D,

@@ -34,6 +34,7 @@ use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{Filter, Texture};
 use crate::gpu::timer::{Clock, PassTimer, PassTimes};
 use crate::medium::{Medium, UniformValue};
+use crate::raster::{Grid, RgbaImage};
 use crate::schedule::{Schedule, Scheme};
 use glow::HasContext;
 use std::sync::Arc;
@@ -273,6 +274,20 @@ impl Pipeline {
             },
             pixels,
         ))
+    }
+
+    /// [`Pipeline::fog`] into brume's own float target, read back as an image whose top
+    /// row is the frame's top (GL's last row): what a tool that writes files wants.
+    pub fn fog_to_image(
+        &mut self,
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+    ) -> Result<(Frame, RgbaImage)> {
+        let (frame, pixels) = self.fog_and_read(input, medium, blur)?;
+        let mut image = Grid::from_vec(input.width, input.height, pixels);
+        image.flip_rows();
+        Ok((frame, image))
     }
 
     /// Paper 003's post-process: draws the fog of a **grey** `medium` over the host's
