@@ -43,10 +43,12 @@
 //! never writes a texture of its own.
 
 pub mod haze;
+pub mod layered;
 pub mod lookup;
 pub mod uniform;
 
 pub use haze::Haze;
+pub use layered::{HeightProfile, LayeredFog};
 pub use lookup::{Lookup, Wrap};
 pub use uniform::UniformBlur;
 

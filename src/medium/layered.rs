@@ -1,0 +1,972 @@
+//! Paper 003's layered fog: a fog whose density δ depends on height only, integrated in
+//! closed form along the segment from the camera to each fragment of a rendered frame.
+//!
+//! **Model** (paper 003, eq. 6-9). The fog factor is f = e^(−F) with F = ∫ δ dt along the
+//! camera-to-fragment segment. With δ a function of the height y alone,
+//!
+//! ```text
+//! F = (l / Δy)·∫_{y_cam}^{y_frag} δ(y) dy = l·δ̄,   Δy = y_frag − y_cam,
+//! ```
+//!
+//! with l the Euclidean length of the segment and δ̄ the mean density over the heights it
+//! spans. The blend C = f·C_frag + (1 − f)·C_fog is brume's τ·E + (1 − τ)·L∞ with τ = f
+//! (grey) and L∞ the fog colour. l is the Euclidean distance, not the eye depth, so turning
+//! the camera about its centre leaves the fog on a fixed point unchanged (paper 003,
+//! fig. 1).
+//!
+//! **The fragment's position** comes from the frame's depth buffer: the medium reads the
+//! window depth d ∈ [0, 1] (clamped there) and the camera ([`LayeredFog::camera`]). The
+//! shader rebuilds it the fast way, eye + ray·A/(d + B) (paper 003, sec. 2.1); the CPU
+//! reference by the inverse matrices (paper 002, eq. 22-23), so that comparing the two
+//! also tests the fast path. A sky pixel (d = 1) lies on the far plane: its fog is that of
+//! the segment to the far plane.
+//!
+//! **The mean density without cancellation.** The textbook form
+//! (Iδ(y1) − Iδ(y0)) / Δy, with Iδ an antiderivative ([`HeightProfile::antiderivative`]),
+//! is 0/0 for a horizontal ray and loses all of f32's digits long before: every row near
+//! the horizon would be noise. Each profile's mean is written instead as a product of
+//! well-conditioned factors, exact for any Δy:
+//!
+//! - exponential, δ(y) = ρ·e^(−(y − base)/H): δ̄ = δ(ȳ)·sinh(h)/h with ȳ the mid-height and
+//!   h = |Δy|/(2H); for h ≥ 1, δ̄ = δ(y_low)·(1 − e^(−2h))/(2h), which cannot overflow;
+//! - sine band: the overlap [a, b] of the segment's heights with the band, a fraction
+//!   w = (b − a)/|Δy| of the segment, has the mean δ(ā)·sin(h)/h, h = π(b − a)/(2T), where
+//!   ā is its mid-height (cos a − cos b written as a product of sines);
+//! - linear ramp: δ is piecewise linear, and the mean of a linear piece is its value at
+//!   the piece's mid-height: no series at all.
+//!
+//! sinh(h)/h and sin(h)/h are summed as their Taylor series through h¹² below h = 1
+//! (truncation < 1e-12) and by the library functions from h = 1 (a few ulps: at h ≥ 1
+//! there is nothing left to cancel), so both branches are accurate to f32's last digits
+//! at the switch and the switch leaves no seam. `glsl/medium/layered.glsl` evaluates the
+//! same formulas in the same order.
+//!
+//! **The blur** follows [`blur_from_optical_depth`]: σ = σ0 + λ·r·√Ds with
+//! r = l / [`LayeredFog::range_unit`] and the scattering optical depth
+//! Ds = albedo·min(δ̄·min(l, range_unit), [`MAX_BLUR_OPTICAL_DEPTH`]). The optical depth is
+//! the one the segment gathers over its first `range_unit` of length at its mean density,
+//! because the law's r stops at 1 (a homogeneous medium then gets paper 000's eq. 7, like
+//! [`crate::medium::Haze`]); and it stops at [`MAX_BLUR_OPTICAL_DEPTH`], where nothing of
+//! the scene is left to blur. Both caps make [`Medium::sigma_max`] a true bound without
+//! knowing the image: σ ≤ σ0 + λ·√(albedo·min(sup δ·range_unit, MAX_BLUR_OPTICAL_DEPTH)).
+
+use super::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
+use crate::camera::Camera;
+use crate::error::{check_non_negative, check_positive, Error, Result};
+use glam::DVec3;
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+/// Default fog colour (linear RGB): the whitish grey of water-droplet fog.
+pub const DEFAULT_COLOUR: [f32; 3] = [0.8, 0.8, 0.8];
+/// Default single-scattering albedo: water droplets absorb almost nothing of visible
+/// light (their albedo is above 0.99), so the whole extinction scatters.
+pub const DEFAULT_ALBEDO: f64 = 1.0;
+/// Default blur factor λ (px), paper 000's.
+pub const DEFAULT_LAMBDA: f64 = super::haze::DEFAULT_LAMBDA;
+
+/// The largest extinction optical depth the blur law takes: τ = e^(−10) ≈ 4.5e-5 is less
+/// than a sixth of the smallest step of an 8-bit sRGB output, so beyond it nothing of the scene
+/// is left to blur, while the depth itself may grow without bound (the exponential
+/// profile below its base height). Caps σ (see the module docs).
+pub const MAX_BLUR_OPTICAL_DEPTH: f64 = 10.0;
+
+/// Below this value of h (the half-width of a height interval in units of the profile's
+/// length scale) the means are summed as series; from it, by the library functions.
+const SERIES_LIMIT: f64 = 1.0;
+
+/// The largest exponent of the exponential profile: δ ≤ e^80·ρ keeps f32 finite (e^88
+/// overflows), and a segment that dense is opaque long before.
+const EXPONENT_CAP: f64 = 80.0;
+
+/// Fog density δ(y) (per world unit) as a function of height y (world units, y up).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HeightProfile {
+    /// δ(y) = density·e^(−(y − base)/scale_height): fog thinning with height, as a city's
+    /// or a valley's (paper 003, fig. 3). The exponent is capped at 80 so that the
+    /// density stays finite far below `base`.
+    Exponential {
+        /// δ at `base` (per world unit, ≥ 0).
+        density: f64,
+        /// The height where δ = `density` (world units).
+        base: f64,
+        /// H: the rise over which δ falls by e (world units, > 0).
+        scale_height: f64,
+    },
+    /// δ(y) = density·sin(π(y − base)/thickness) for base ≤ y ≤ base + thickness, 0
+    /// outside: a band of mist just above water (paper 003, fig. 4), densest mid-band.
+    SineBand {
+        /// δ at the middle of the band (per world unit, ≥ 0).
+        density: f64,
+        /// The bottom of the band: the water level (world units).
+        base: f64,
+        /// The band's thickness T (world units, > 0).
+        thickness: f64,
+    },
+    /// δ(y) = density for y ≤ floor, density·(top − y)/(top − floor) between, 0 above
+    /// top: dry-ice fog indoors, densest on the floor (paper 003, fig. 5). Below `floor`
+    /// it stays at `density` (fog pools in a pit) rather than dropping to 0, so that δ is
+    /// continuous and a ray along the floor has one answer.
+    LinearRamp {
+        /// δ at and below `floor` (per world unit, ≥ 0).
+        density: f64,
+        /// The height where the ramp starts to thin (world units).
+        floor: f64,
+        /// The height where δ reaches 0 (world units, > floor).
+        top: f64,
+    },
+}
+
+impl HeightProfile {
+    /// Default exponential profile: 0.01 /m at the ground (y = 0), scale height 20 m. From
+    /// an eye at 1.7 m, τ ≈ 0.4 at 100 m and 2e-4 on the ground 900 m away; a
+    /// ray rising 30° to the far plane at 1 km keeps τ ≈ 0.7.
+    pub const EXPONENTIAL: HeightProfile = HeightProfile::Exponential {
+        density: 0.01,
+        base: 0.0,
+        scale_height: 20.0,
+    };
+
+    /// Default sea mist: a 5 m band above water at y = 0, 0.01 /m mid-band. An eye at
+    /// 1.7 m is inside it (δ ≈ 0.0088 /m: τ ≈ 0.4 at 100 m); anything above 5 m stands
+    /// out of the mist.
+    pub const SINE_BAND: HeightProfile = HeightProfile::SineBand {
+        density: 0.01,
+        base: 0.0,
+        thickness: 5.0,
+    };
+
+    /// Default dry-ice fog: 1 /m on the floor (y = 0), thinning to nothing at knee height
+    /// (1 m). From an eye at 1.7 m the floor 3 m away keeps τ ≈ 0.36 and the far floor
+    /// vanishes, while whatever stands above 1 m stays clear.
+    pub const LINEAR_RAMP: HeightProfile = HeightProfile::LinearRamp {
+        density: 1.0,
+        floor: 0.0,
+        top: 1.0,
+    };
+
+    /// δ(y) (per world unit).
+    pub fn density(&self, y: f64) -> f64 {
+        mean_density(self, y, 0.0)
+    }
+
+    /// An antiderivative Iδ(y) of δ, continuous in y: the textbook F = l·(Iδ(y1) −
+    /// Iδ(y0))/Δy. It cancels catastrophically for close limits, which
+    /// [`HeightProfile::mean_density`] does not; kept as a cross-check.
+    pub fn antiderivative(&self, y: f64) -> f64 {
+        match *self {
+            HeightProfile::Exponential {
+                density,
+                base,
+                scale_height,
+            } => -density * scale_height * (-(y - base) / scale_height).min(EXPONENT_CAP).exp(),
+            HeightProfile::SineBand {
+                density,
+                base,
+                thickness,
+            } => {
+                let u = (y.max(base).min(base + thickness) - base) / thickness;
+                density * thickness / PI * (1.0 - (PI * u).cos())
+            }
+            HeightProfile::LinearRamp {
+                density,
+                floor,
+                top,
+            } => {
+                let below = y.min(floor) - floor;
+                // max/min rather than clamp: no panic on a profile not yet validated.
+                let s = y.max(floor).min(top) - floor;
+                density * (below + s - s * s / (2.0 * (top - floor)))
+            }
+        }
+    }
+
+    /// The mean of δ over the heights from `y0` to `y1` (either order); δ(y0) when they
+    /// are equal. Accurate for any y1 − y0, 0 included (module docs).
+    pub fn mean_density(&self, y0: f64, y1: f64) -> f64 {
+        mean_density(self, y0, y1 - y0)
+    }
+
+    /// The optical depth F = ∫ δ dt along the segment from `from` to `to` (eq. 7-8).
+    pub fn optical_depth(&self, from: DVec3, to: DVec3) -> f64 {
+        (to - from).length() * mean_density(self, from.y, to.y - from.y)
+    }
+
+    /// The supremum of δ over all heights: ∞ for the exponential (it grows without bound
+    /// below `base`, up to the exponent cap).
+    pub fn max_density(&self) -> f64 {
+        match *self {
+            HeightProfile::Exponential { .. } => f64::INFINITY,
+            HeightProfile::SineBand { density, .. } | HeightProfile::LinearRamp { density, .. } => {
+                density
+            }
+        }
+    }
+
+    /// Rejects out-of-domain parameters, naming the parameter.
+    pub fn validate(&self) -> Result<()> {
+        let finite = |name: &str, v: f64| {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err(Error::invalid(name, v, "a finite height (world units)"))
+            }
+        };
+        match *self {
+            HeightProfile::Exponential {
+                density,
+                base,
+                scale_height,
+            } => {
+                check_non_negative("density", density)?;
+                finite("base", base)?;
+                check_positive("scale_height", scale_height)
+            }
+            HeightProfile::SineBand {
+                density,
+                base,
+                thickness,
+            } => {
+                check_non_negative("density", density)?;
+                finite("base", base)?;
+                check_positive("thickness", thickness)?;
+                finite("top of the band (base + thickness)", base + thickness)
+            }
+            HeightProfile::LinearRamp {
+                density,
+                floor,
+                top,
+            } => {
+                check_non_negative("density", density)?;
+                finite("floor", floor)?;
+                if top.is_finite() && top > floor {
+                    Ok(())
+                } else {
+                    Err(Error::invalid(
+                        "top",
+                        top,
+                        format!("a finite height above floor ({floor})"),
+                    ))
+                }
+            }
+        }
+    }
+
+    /// The shader's `u_profile` selector and `u_layer` parameters.
+    fn uniform_values(&self) -> (f32, [f32; 3]) {
+        let (selector, params) = match *self {
+            HeightProfile::Exponential {
+                density,
+                base,
+                scale_height,
+            } => (0.0, [density, base, scale_height]),
+            HeightProfile::SineBand {
+                density,
+                base,
+                thickness,
+            } => (1.0, [density, base, thickness]),
+            HeightProfile::LinearRamp {
+                density,
+                floor,
+                top,
+            } => (2.0, [density, floor, top]),
+        };
+        (selector, params.map(|v| v as f32))
+    }
+}
+
+impl Default for HeightProfile {
+    /// [`HeightProfile::EXPONENTIAL`].
+    fn default() -> Self {
+        HeightProfile::EXPONENTIAL
+    }
+}
+
+/// Paper 003's layered fog as a medium of a rendered frame (module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LayeredFog {
+    /// The camera the frame was rendered with: the depth buffer is read through it.
+    pub camera: Camera,
+    /// The fog density as a function of height.
+    pub profile: HeightProfile,
+    /// The fog colour C_fog (linear RGB, each ≥ 0): the in-scattered light.
+    pub colour: [f32; 3],
+    /// The fraction of the extinction that scatters, in [0, 1]: only scattering blurs.
+    pub albedo: f64,
+    /// Blur factor λ ≥ 0 (px): σ = σ0 + λ·r·√Ds (module docs); 0 turns the blur off.
+    pub lambda: f64,
+    /// The distance (world units, > 0) that counts as normalised range 1 in the blur law;
+    /// [`LayeredFog::new`] takes the camera's far plane.
+    pub range_unit: f64,
+}
+
+impl LayeredFog {
+    /// `profile` seen through `camera`, with the default colour, albedo and λ, and the
+    /// far plane as the range unit.
+    pub fn new(camera: Camera, profile: HeightProfile) -> Self {
+        LayeredFog {
+            camera,
+            profile,
+            colour: DEFAULT_COLOUR,
+            albedo: DEFAULT_ALBEDO,
+            lambda: DEFAULT_LAMBDA,
+            range_unit: camera.far,
+        }
+    }
+
+    /// The medium along the segment from the eye to the world point `p`: what a pixel
+    /// that sees `p` gets, whatever the camera's orientation.
+    pub fn sample_point(&self, p: DVec3, sigma0: f64) -> MediumSample {
+        let eye = self.camera.eye();
+        let length = (p - eye).length();
+        let mean = mean_density(&self.profile, eye.y, p.y - eye.y);
+        let optical_depth = length * mean;
+        let blur_depth =
+            self.albedo * (mean * length.min(self.range_unit)).min(MAX_BLUR_OPTICAL_DEPTH);
+        let tau = (-optical_depth).exp();
+        MediumSample {
+            transmission: [tau; 3],
+            inscatter: self.colour.map(f64::from),
+            sigma: blur_from_optical_depth(
+                sigma0,
+                self.lambda,
+                length / self.range_unit,
+                blur_depth,
+            ),
+        }
+    }
+}
+
+impl Default for LayeredFog {
+    /// The default exponential fog through the default camera.
+    fn default() -> Self {
+        LayeredFog::new(Camera::default(), HeightProfile::default())
+    }
+}
+
+impl Medium for LayeredFog {
+    fn name(&self) -> &'static str {
+        "layered"
+    }
+
+    fn glsl(&self) -> &'static str {
+        include_str!("../../glsl/medium/layered.glsl")
+    }
+
+    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
+        let (selector, layer) = self.profile.uniform_values();
+        vec![
+            ("u_profile", UniformValue::Float(selector)),
+            ("u_layer", UniformValue::Vec3(layer)),
+            ("u_fog_colour", UniformValue::Vec3(self.colour)),
+            ("u_albedo", UniformValue::Float(self.albedo as f32)),
+            ("u_lambda", UniformValue::Float(self.lambda as f32)),
+            ("u_range_unit", UniformValue::Float(self.range_unit as f32)),
+        ]
+    }
+
+    fn chromatic(&self) -> bool {
+        false
+    }
+
+    fn sigma_max(&self, sigma0: f64) -> f64 {
+        let depth = (self.profile.max_density() * self.range_unit).min(MAX_BLUR_OPTICAL_DEPTH);
+        blur_from_optical_depth(sigma0, self.lambda, 1.0, self.albedo * depth)
+    }
+
+    fn sample(&self, p: Pixel) -> MediumSample {
+        let d = p.depth.clamp(0.0, 1.0);
+        let point = self
+            .camera
+            .world_position_by_inverse(p.x, p.y, p.width, p.height, d);
+        self.sample_point(point, p.sigma0)
+    }
+
+    fn validate(&self) -> Result<()> {
+        self.camera.validate()?;
+        self.profile.validate()?;
+        if !self.colour.iter().all(|c| c.is_finite() && *c >= 0.0) {
+            let [r, g, b] = self.colour;
+            return Err(Error::invalid(
+                "colour",
+                format!("{r},{g},{b}"),
+                "three finite linear values ≥ 0, e.g. 0.8,0.8,0.8",
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.albedo) {
+            return Err(Error::invalid(
+                "albedo",
+                self.albedo,
+                "a fraction in [0, 1]",
+            ));
+        }
+        check_non_negative("lambda", self.lambda)?;
+        check_positive("range_unit", self.range_unit)
+    }
+
+    fn camera(&self) -> Option<Camera> {
+        Some(self.camera)
+    }
+}
+
+/// The arithmetic of the density formulas, so that one body serves the f64 reference and,
+/// in the tests, an f32 twin of the shader.
+trait Real:
+    Copy
+    + PartialOrd
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    fn of(v: f64) -> Self;
+    fn exp(self) -> Self;
+    fn sin(self) -> Self;
+    fn abs(self) -> Self;
+    fn min(self, other: Self) -> Self;
+    fn max(self, other: Self) -> Self;
+}
+
+macro_rules! real {
+    ($t:ty) => {
+        impl Real for $t {
+            fn of(v: f64) -> Self {
+                v as $t
+            }
+            fn exp(self) -> Self {
+                <$t>::exp(self)
+            }
+            fn sin(self) -> Self {
+                <$t>::sin(self)
+            }
+            fn abs(self) -> Self {
+                <$t>::abs(self)
+            }
+            fn min(self, other: Self) -> Self {
+                <$t>::min(self, other)
+            }
+            fn max(self, other: Self) -> Self {
+                <$t>::max(self, other)
+            }
+        }
+    };
+}
+
+real!(f32);
+real!(f64);
+
+/// GLSL's clamp (no panic when the bounds cross).
+fn clamp<T: Real>(x: T, low: T, high: T) -> T {
+    x.max(low).min(high)
+}
+
+/// sinh(h)/h for 0 ≤ h < 1, through h¹²: the next term is below 7.7e-13.
+fn sinhc_series<T: Real>(h: T) -> T {
+    let t = h * h;
+    let one = T::of(1.0);
+    let mut s = one + t / T::of(156.0);
+    for k in [110.0, 72.0, 42.0, 20.0, 6.0] {
+        s = one + t / T::of(k) * s;
+    }
+    s
+}
+
+/// sin(h)/h for 0 ≤ h < 1, through h¹².
+fn sinc_series<T: Real>(h: T) -> T {
+    let t = h * h;
+    let one = T::of(1.0);
+    let mut s = one - t / T::of(156.0);
+    for k in [110.0, 72.0, 42.0, 20.0, 6.0] {
+        s = one - t / T::of(k) * s;
+    }
+    s
+}
+
+/// The mean of δ over the heights from `y0` to `y0 + dy` (δ(y0) for dy = 0), in the
+/// arithmetic of `T`: the formulas of the module docs, in the shader's order.
+fn mean_density<T: Real>(profile: &HeightProfile, y0: T, dy: T) -> T {
+    let (zero, half, one) = (T::of(0.0), T::of(0.5), T::of(1.0));
+    let limit = T::of(SERIES_LIMIT);
+    match *profile {
+        HeightProfile::Exponential {
+            density,
+            base,
+            scale_height,
+        } => {
+            let (rho, base, scale) = (T::of(density), T::of(base), T::of(scale_height));
+            let cap = T::of(EXPONENT_CAP);
+            let h = (dy * half).abs() / scale;
+            if h < limit {
+                let mid = y0 + dy * half;
+                rho * (-(mid - base) / scale).min(cap).exp() * sinhc_series(h)
+            } else {
+                let low = y0 + dy.min(zero);
+                let d = h + h;
+                rho * (-(low - base) / scale).min(cap).exp() * ((one - (-d).exp()) / d)
+            }
+        }
+        HeightProfile::SineBand {
+            density,
+            base,
+            thickness,
+        } => {
+            let (rho, base, thickness) = (T::of(density), T::of(base), T::of(thickness));
+            let y1 = y0 + dy;
+            let (low, high) = (y0.min(y1), y0.max(y1));
+            let top = base + thickness;
+            let (a, b) = (clamp(low, base, top), clamp(high, base, top));
+            // The phase of the overlap's mid-height, folded to [0, 1/2] so that sin is
+            // taken near 0 at both edges: δ vanishes there to f32's last digit.
+            let u = ((a + b) * half - base) / thickness;
+            let u = u.min(one - u);
+            let h = T::of(FRAC_PI_2) * (b - a) / thickness;
+            let sinc = if h < limit {
+                sinc_series(h)
+            } else {
+                h.sin() / h
+            };
+            let inside = if high > low {
+                (b - a) / (high - low)
+            } else if low >= base && low <= top {
+                one
+            } else {
+                zero
+            };
+            rho * (T::of(PI) * u).sin() * sinc * inside
+        }
+        HeightProfile::LinearRamp {
+            density,
+            floor,
+            top,
+        } => {
+            let (rho, floor, top) = (T::of(density), T::of(floor), T::of(top));
+            let y1 = y0 + dy;
+            let (low, high) = (y0.min(y1), y0.max(y1));
+            if high > low {
+                let below = high.min(floor) - low.min(floor);
+                let (a, b) = (clamp(low, floor, top), clamp(high, floor, top));
+                let ramp = (b - a) * ((top - (a + b) * half) / (top - floor));
+                rho * ((below + ramp) / (high - low))
+            } else {
+                rho * clamp((top - low) / (top - floor), zero, one)
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 5-point Gauss-Legendre nodes and weights on [−1, 1].
+    const GAUSS5: [(f64, f64); 5] = [
+        (0.0, 0.568_888_888_888_888_9),
+        (-0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+        (0.538_469_310_105_683_1, 0.478_628_670_499_366_5),
+        (-0.906_179_845_938_664, 0.236_926_885_056_189_1),
+        (0.906_179_845_938_664, 0.236_926_885_056_189_1),
+    ];
+
+    /// The heights where a profile's δ has a kink.
+    fn kinks(profile: &HeightProfile) -> Vec<f64> {
+        match *profile {
+            HeightProfile::Exponential { .. } => vec![],
+            HeightProfile::SineBand {
+                base, thickness, ..
+            } => vec![base, base + thickness],
+            HeightProfile::LinearRamp { floor, top, .. } => vec![floor, top],
+        }
+    }
+
+    /// F = ∫ δ(y(t)) dt over the segment by composite 5-point Gauss-Legendre (200 panels
+    /// per smooth piece), split where the segment crosses a kink of δ: the oracle.
+    fn quadrature(profile: &HeightProfile, from: DVec3, to: DVec3) -> f64 {
+        let length = (to - from).length();
+        let dy = to.y - from.y;
+        let mut cuts = vec![0.0, 1.0];
+        if dy != 0.0 {
+            for k in kinks(profile) {
+                let s = (k - from.y) / dy;
+                if s > 0.0 && s < 1.0 {
+                    cuts.push(s);
+                }
+            }
+        }
+        cuts.sort_by(f64::total_cmp);
+        let delta = |s: f64| profile.density(from.y + s * dy);
+        let panels = 200;
+        let mut sum = 0.0;
+        for piece in cuts.windows(2) {
+            let w = (piece[1] - piece[0]) / panels as f64;
+            for i in 0..panels {
+                let centre = piece[0] + (i as f64 + 0.5) * w;
+                for (x, weight) in GAUSS5 {
+                    sum += weight * 0.5 * w * delta(centre + 0.5 * w * x);
+                }
+            }
+        }
+        sum * length
+    }
+
+    fn profiles() -> [HeightProfile; 3] {
+        [
+            HeightProfile::EXPONENTIAL,
+            HeightProfile::SINE_BAND,
+            HeightProfile::LINEAR_RAMP,
+        ]
+    }
+
+    /// Eye heights and end heights that start and end below, inside, at the edges of and
+    /// above each layer (and of the exponential's base), up or down.
+    fn heights() -> Vec<f64> {
+        vec![
+            -7.5, -1.0, 0.0, 0.3, 0.5, 1.0, 1.7, 2.5, 4.99, 5.0, 6.0, 20.0, 45.0, 150.0,
+        ]
+    }
+
+    /// The profile's `density` parameter: the scale of its δ.
+    fn peak(profile: &HeightProfile) -> f64 {
+        match *profile {
+            HeightProfile::Exponential { density, .. }
+            | HeightProfile::SineBand { density, .. }
+            | HeightProfile::LinearRamp { density, .. } => density,
+        }
+    }
+
+    fn relative_error(a: f64, b: f64) -> f64 {
+        if a == b {
+            0.0
+        } else {
+            (a - b).abs() / b.abs().max(a.abs())
+        }
+    }
+
+    #[test]
+    fn optical_depth_matches_quadrature_on_many_segments() {
+        let mut worst: f64 = 0.0;
+        for profile in profiles() {
+            for &y0 in &heights() {
+                for &y1 in &heights() {
+                    for run in [0.0, 3.0, 40.0, 700.0] {
+                        if run == 0.0 && y0 == y1 {
+                            continue;
+                        }
+                        let from = DVec3::new(1.0, y0, 2.0);
+                        let to = DVec3::new(1.0 + 0.6 * run, y1, 2.0 - 0.8 * run);
+                        let analytic = profile.optical_depth(from, to);
+                        let oracle = quadrature(&profile, from, to);
+                        let e = relative_error(analytic, oracle);
+                        worst = worst.max(e);
+                        assert!(
+                            e <= 1e-5 || (analytic - oracle).abs() < 1e-300,
+                            "{profile:?} {from} -> {to}: {analytic} vs {oracle}"
+                        );
+                    }
+                }
+            }
+        }
+        eprintln!("worst relative error against quadrature: {worst:.2e}");
+    }
+
+    #[test]
+    fn nearly_horizontal_and_horizontal_segments_match_quadrature() {
+        let mut worst: f64 = 0.0;
+        for profile in profiles() {
+            // Heights on the edges of the layers as well as inside and outside.
+            for y0 in [-1.0, 0.0, 0.4, 1.0, 1.7, 2.5, 5.0, 30.0] {
+                for length in [3.0f64, 85.0, 900.0] {
+                    for slope in [0.0, 1e-9, -1e-9, 1e-6, -1e-6, 1e-3, -1e-3] {
+                        let dy = slope * length;
+                        let run = (length * length - dy * dy).sqrt();
+                        let from = DVec3::new(0.0, y0, 0.0);
+                        let to = DVec3::new(0.0, y0 + dy, -run);
+                        let analytic = profile.optical_depth(from, to);
+                        let oracle = quadrature(&profile, from, to);
+                        assert!(analytic.is_finite(), "{profile:?} {from} -> {to}");
+                        let e = relative_error(analytic, oracle);
+                        worst = worst.max(e);
+                        assert!(
+                            e <= 1e-5,
+                            "{profile:?} y0 {y0} slope {slope} l {length}: {analytic} vs {oracle}"
+                        );
+                    }
+                }
+            }
+        }
+        eprintln!("worst relative error, near-horizontal: {worst:.2e}");
+    }
+
+    #[test]
+    fn horizontal_ray_is_the_density_times_the_length() {
+        for profile in profiles() {
+            for y in heights() {
+                let from = DVec3::new(0.0, y, 0.0);
+                let to = DVec3::new(30.0, y, -40.0);
+                let f = profile.optical_depth(from, to);
+                assert_eq!(f, 50.0 * profile.density(y), "{profile:?} at {y}");
+            }
+        }
+    }
+
+    #[test]
+    fn mean_density_agrees_with_the_antiderivative_for_distant_limits() {
+        for profile in profiles() {
+            for &y0 in &heights() {
+                for &y1 in &heights() {
+                    if (y1 - y0).abs() < 0.5 {
+                        continue;
+                    }
+                    let textbook =
+                        (profile.antiderivative(y1) - profile.antiderivative(y0)) / (y1 - y0);
+                    let mean = profile.mean_density(y0, y1);
+                    assert!(
+                        (mean - textbook).abs() <= 1e-12 * peak(&profile),
+                        "{profile:?} {y0}..{y1}: {mean} vs {textbook}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// The Δy at which a profile's mean switches from the series to the library
+    /// functions, for a segment starting at `y0`.
+    fn switch_dy(profile: &HeightProfile) -> f64 {
+        match *profile {
+            HeightProfile::Exponential { scale_height, .. } => 2.0 * scale_height * SERIES_LIMIT,
+            HeightProfile::SineBand { thickness, .. } => thickness / FRAC_PI_2 * SERIES_LIMIT,
+            HeightProfile::LinearRamp { .. } => unreachable!("no switch"),
+        }
+    }
+
+    #[test]
+    fn no_seam_at_the_series_switch_in_f64_or_f32() {
+        let exponential = HeightProfile::EXPONENTIAL;
+        let band = HeightProfile::SINE_BAND;
+        // (profile, y0): the band's segment starts at its base so that the whole Δy
+        // overlaps the band.
+        for (profile, y0) in [
+            (exponential, 1.7),
+            (exponential, -3.0),
+            (exponential, 60.0),
+            (band, 0.0),
+        ] {
+            let s = switch_dy(&profile);
+            for sign in [1.0, -1.0] {
+                let y = if sign < 0.0 && profile == band {
+                    y0 + s
+                } else {
+                    y0
+                };
+                for (below, above) in [(1.0 - 1e-12, 1.0 + 1e-12), (1.0 - 1e-7, 1.0)] {
+                    let a = mean_density(&profile, y, sign * s * below);
+                    let b = mean_density(&profile, y, sign * s * above);
+                    assert!(
+                        relative_error(a, b) <= 1e-6,
+                        "{profile:?} y0 {y}: {a} | {b}"
+                    );
+                }
+                // The f32 twin of the shader on both sides, against f64: both branches
+                // keep f32's accuracy at the switch.
+                for factor in [0.999, 0.99999, 1.0, 1.00001, 1.001] {
+                    let dy = sign * s * factor;
+                    let single = f64::from(mean_density(&profile, y as f32, dy as f32));
+                    // The f64 mean at the heights f32 actually holds.
+                    let exact = mean_density(&profile, f64::from(y as f32), f64::from(dy as f32));
+                    let e = relative_error(single, exact);
+                    assert!(e <= 1e-6, "{profile:?} y0 {y} dy {dy}: f32 off by {e:.1e}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn f32_twin_is_accurate_near_the_horizon() {
+        // What the shader does for rows at the horizon: Δy from 0 to a few ulps of y0.
+        for profile in profiles() {
+            for y0 in [0.0f32, 0.5, 1.0, 1.7, 5.0] {
+                for dy in [0.0f32, 1e-12, -1e-12, 1e-7, -1e-7, 1e-4, -1e-4, 0.05, -0.05] {
+                    let single = f64::from(mean_density(&profile, y0, dy));
+                    let exact = mean_density(&profile, f64::from(y0), f64::from(dy));
+                    let scale = peak(&profile);
+                    assert!(
+                        single.is_finite() && (single - exact).abs() <= 1e-6 * scale,
+                        "{profile:?} y0 {y0} dy {dy}: {single} vs {exact}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fog_of_a_fixed_point_does_not_depend_on_the_view() {
+        let point = DVec3::new(40.0, 3.0, -250.0);
+        let fog = LayeredFog::default();
+        let reference = fog.sample_point(point, 1.0);
+        for (yaw, pitch) in [(-20.0, 0.0), (10.0, -8.0), (35.0, 12.0)] {
+            let mut turned = fog;
+            turned.camera.yaw_deg = yaw;
+            turned.camera.pitch_deg = pitch;
+            assert_eq!(turned.sample_point(point, 1.0), reference);
+        }
+    }
+
+    #[test]
+    fn cpu_sample_rebuilds_the_pixel_position() {
+        let camera = Camera {
+            position: [2.0, 1.7, 5.0],
+            yaw_deg: 12.0,
+            pitch_deg: -4.0,
+            near: 1.0,
+            ..Camera::default()
+        };
+        let fog = LayeredFog::new(camera, HeightProfile::SINE_BAND);
+        let (w, h) = (32, 24);
+        for (x, y, z) in [(3, 4, 12.0), (30, 20, 300.0), (16, 11, 999.0)] {
+            let d = camera.window_depth(z);
+            let p = camera.world_position(x, y, w, h, d);
+            let expected = fog.sample_point(p, 1.0);
+            let got = fog.sample(Pixel {
+                x,
+                y,
+                width: w,
+                height: h,
+                depth: d,
+                sigma0: 1.0,
+            });
+            assert!(relative_error(got.transmission[0], expected.transmission[0]) < 1e-9);
+            assert!(relative_error(got.sigma, expected.sigma) < 1e-9);
+        }
+        // A sky pixel is on the far plane.
+        let sky = fog.sample(Pixel {
+            x: 16,
+            y: 23,
+            width: w,
+            height: h,
+            depth: 1.0,
+            sigma0: 1.0,
+        });
+        let far = camera.world_position(16, 23, w, h, 1.0);
+        assert!((far - camera.eye()).dot(camera.forward()) - camera.far < 1e-6);
+        assert!(relative_error(sky.sigma, fog.sample_point(far, 1.0).sigma) < 1e-9);
+    }
+
+    #[test]
+    fn sigma_max_bounds_every_pixel() {
+        for profile in profiles() {
+            let camera = Camera {
+                pitch_deg: -30.0,
+                ..Camera::default()
+            };
+            for range_unit in [50.0, 1000.0] {
+                let fog = LayeredFog {
+                    range_unit,
+                    ..LayeredFog::new(camera, profile)
+                };
+                let bound = fog.sigma_max(1.0);
+                let (w, h) = (24, 16);
+                for y in 0..h {
+                    for x in 0..w {
+                        for d in [0.0, 0.9, 0.999, 0.9999, 1.0] {
+                            let s = fog.sample(Pixel {
+                                x,
+                                y,
+                                width: w,
+                                height: h,
+                                depth: d,
+                                sigma0: 1.0,
+                            });
+                            assert!(s.sigma >= 1.0 && s.sigma <= bound + 1e-12);
+                        }
+                    }
+                }
+            }
+        }
+        // Band and ramp: the bound follows the density while it is below the cap.
+        let thin = LayeredFog {
+            profile: HeightProfile::SineBand {
+                density: 1e-3,
+                base: 0.0,
+                thickness: 5.0,
+            },
+            range_unit: 100.0,
+            ..LayeredFog::default()
+        };
+        let expected = 1.0 + thin.lambda * (1e-3f64 * 100.0).sqrt();
+        assert!((thin.sigma_max(1.0) - expected).abs() < 1e-12);
+    }
+
+    #[test]
+    fn bad_parameters_are_refused_by_name() {
+        let bad = |fog: LayeredFog| fog.validate().unwrap_err().to_string();
+        let with = |profile| LayeredFog::new(Camera::default(), profile);
+        assert!(bad(with(HeightProfile::Exponential {
+            density: -1.0,
+            base: 0.0,
+            scale_height: 20.0
+        }))
+        .contains("density"));
+        assert!(bad(with(HeightProfile::Exponential {
+            density: 0.01,
+            base: f64::NAN,
+            scale_height: 20.0
+        }))
+        .contains("base"));
+        assert!(bad(with(HeightProfile::Exponential {
+            density: 0.01,
+            base: 0.0,
+            scale_height: 0.0
+        }))
+        .contains("scale_height"));
+        assert!(bad(with(HeightProfile::SineBand {
+            density: 0.01,
+            base: 0.0,
+            thickness: -1.0
+        }))
+        .contains("thickness"));
+        assert!(bad(with(HeightProfile::LinearRamp {
+            density: 1.0,
+            floor: 1.0,
+            top: 1.0
+        }))
+        .contains("top"));
+        let fog = LayeredFog::default();
+        assert!(bad(LayeredFog { albedo: 1.5, ..fog }).contains("albedo"));
+        assert!(bad(LayeredFog {
+            lambda: -1.0,
+            ..fog
+        })
+        .contains("lambda"));
+        assert!(bad(LayeredFog {
+            range_unit: 0.0,
+            ..fog
+        })
+        .contains("range_unit"));
+        assert!(bad(LayeredFog {
+            colour: [0.5, f32::NAN, 0.5],
+            ..fog
+        })
+        .contains("colour"));
+        let camera = Camera {
+            near: 0.0,
+            ..Camera::default()
+        };
+        assert!(bad(LayeredFog { camera, ..fog }).contains("near"));
+        for profile in profiles() {
+            assert!(with(profile).validate().is_ok());
+        }
+    }
+
+    #[test]
+    fn defaults_show_fog_at_the_scene_scale() {
+        // Eye at 1.7 m, objects from 3 to 900 m: near objects clear, far ones fogged.
+        let eye = DVec3::new(0.0, 1.7, 0.0);
+        for profile in profiles() {
+            let tau = |p: DVec3| (-profile.optical_depth(eye, p)).exp();
+            let near_ground = tau(DVec3::new(0.0, 0.0, -3.0));
+            let far_ground = tau(DVec3::new(0.0, 0.0, -900.0));
+            assert!(near_ground > 0.3, "{profile:?}: {near_ground}");
+            assert!(far_ground < 0.05, "{profile:?}: {far_ground}");
+        }
+    }
+}
