@@ -14,12 +14,13 @@ uniform ivec2 brume_size;   // image size (px)
 // A medium with a camera (Medium::camera in Rust) reads a depth buffer: these are set from
 // the camera for each frame (src/camera.rs), and zero otherwise.
 in vec3 brume_ray;                  // eye-to-fragment vector (world), 1 along the view axis
-uniform vec2 brume_depth_constants; // (A, B): eye depth = A / (d + B) for window depth d
+uniform vec2 brume_depth_constants; // (A, c): eye depth = A / ((d − 1) − c), window depth d
 uniform vec3 brume_eye;             // the camera's position (world)
 
-// Linear eye depth of window depth d: one addition and one division (paper 003).
+// Linear eye depth of window depth d: paper 003's A / (d + B) with B = −1 − c, split so
+// that f32 keeps the digits of c near the far plane (Camera::shader_depth_constants).
 float brume_eye_depth(float d) {
-    return brume_depth_constants.x / (d + brume_depth_constants.y);
+    return brume_depth_constants.x / ((d - 1.0) - brume_depth_constants.y);
 }
 
 // The blur scale from a scattering optical depth `ds` accumulated over a normalised

@@ -8,7 +8,8 @@
 //! - **Linear eye depth** from a window depth d ∈ [0, 1] (OpenGL's default depth range,
 //!   a standard perspective projection) with one addition and one division:
 //!   `z = A / (d + B)`, with `A = −n·f/(f − n)` and `B = −f/(f − n)` computed once on the
-//!   CPU ([`Camera::depth_constants`]).
+//!   CPU ([`Camera::depth_constants`]). The shaders split B as `(d − 1) − c` for f32's sake
+//!   ([`Camera::shader_depth_constants`]).
 //! - **Eye-to-fragment rays**: the world-space vector from the camera through a pixel,
 //!   scaled so that its component along the view axis is 1 ([`Camera::ray_at_ndc`]). Given
 //!   at the corners of the full-screen primitive, the hardware interpolates it per
@@ -143,6 +144,15 @@ impl Camera {
         [-n * f / (f - n), -f / (f - n)]
     }
 
+    /// `(A, c)` for the shaders: eye depth = `A / ((d − 1) − c)` with `c = n/(f − n)`.
+    /// The same as `A / (d + B)` (B = −1 − c), but in f32 `B` would round away the digits
+    /// of `c` that matter near the far plane (d + B is then a few n/f): `d − 1` is exact
+    /// for d ≥ ½ and `c` keeps its own precision. Still one division per fragment.
+    pub fn shader_depth_constants(&self) -> [f64; 2] {
+        let (n, f) = (self.near, self.far);
+        [-n * f / (f - n), n / (f - n)]
+    }
+
     /// Eye depth of window depth `d` by [`Camera::depth_constants`].
     pub fn eye_depth(&self, d: f64) -> f64 {
         let [a, b] = self.depth_constants();
@@ -254,6 +264,11 @@ mod tests {
         let camera = tilted();
         assert!((camera.eye_depth(0.0) - camera.near).abs() < 1e-12);
         assert!((camera.eye_depth(1.0) - camera.far).abs() < 1e-9);
+        let [a, c] = camera.shader_depth_constants();
+        for d in [0.0, 0.5, 0.99, 0.999_99] {
+            let split = a / ((d - 1.0) - c);
+            assert!((split - camera.eye_depth(d)).abs() < 1e-9 * split);
+        }
         for z in [0.3, 1.0, 25.0, 399.0] {
             assert!((camera.eye_depth(camera.window_depth(z)) - z).abs() < 1e-9 * z);
         }

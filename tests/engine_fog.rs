@@ -4,10 +4,11 @@
 //! through a camera: its GLSL rebuilds distance from the depth buffer by the pipeline's
 //! rays and depth constants, its CPU side by the inverse matrices.
 //!
-//! Tolerance: 2e-5 for the one- and two-pass modes. The largest f32 error is the eye
-//! depth A/(d + B) near the far plane: d + B cancels to a few 1e-3, so one ulp of d
-//! (6e-8) is a relative error of about 2e-5 in distance, and τ = e^(−k·l) moves by
-//! k·l·2e-5 ≤ 1e-5 here (k·l ≤ 0.5); the rest is a few f32 ulps.
+//! Tolerance: 2e-5 for the one- and two-pass modes. The eye depth is good to 3·2^-24
+//! relative (tests/layered_fog.rs derives it), but one f32 ulp of the stored window depth
+//! d near the far plane (6e-8, where d + B is a few 1e-3) is a relative 2e-5 of distance,
+//! which the CPU sees too but evaluates in f64; τ = e^(−k·l) then moves by at most
+//! k·l·2e-5 ≤ 1e-5 here (k·l ≤ 0.5), and the rest is a few f32 ulps.
 mod common;
 
 use brume::camera::Camera;

@@ -1,17 +1,21 @@
 //! Paper 003's layered fog on the GPU against the f64 CPU reference, on depth buffers
 //! synthesised from an analytic scene (a ground plane, boxes, a far wall and sky).
 //!
-//! The shader rebuilds each fragment from the interpolated ray and A/(d + B) in f32
-//! (paper 003), the reference by the inverse matrices in f64 (paper 002), so the
-//! comparison tests the fast reconstruction too. Its error budget has two parts:
+//! The shader rebuilds each fragment from the interpolated ray and the eye depth
+//! A/((d − 1) − c) in f32 (paper 003's A/(d + B), split for f32), the reference by the
+//! inverse matrices in f64 (paper 002), so the comparison tests the fast reconstruction
+//! too. Its error budget has two parts:
 //!
-//! - **Eye depth.** B = −f/(f − n) is rounded to f32 (half an ulp of 1, 2^-24) and
-//!   d + B is A/z, so the eye depth, hence l and F, is off by a relative
-//!   ε_z = 2^-24·|B|·z/|A| = 2^-24·z/near (largest at the far plane); τ = e^(−F) then moves by
-//!   F·e^(−F)·ε_z ≤ e^(−1)·ε_z. With the division and the f32 exponentials, twice that
-//!   is the per-pixel budget of τ, hence of the image (colours and fog colour in [0, 1])
-//!   without blur. With blur, σ − σ0 ∝ r·√Ds is off by 1.5·ε_z relative, the log-law
-//!   rate by Δσ/σ/N per step, and N steps move a pixel by at most 4·Δσ/σ ≤ 6·ε_z.
+//! - **Eye depth.** d − 1 is exact, c = n/(f − n) is rounded to f32 (2^-24 relative) and
+//!   so is the difference, whose size is at least c: the denominator is off by at most
+//!   2·2^-24 relative, and the division adds 2^-24, so the eye depth, hence l and F, is
+//!   off by a relative ε_z = 3·2^-24 at any distance. τ = e^(−F) then moves by
+//!   F·e^(−F)·ε_z ≤ e^(−1)·ε_z. With the f32 exponentials, twice that is the per-pixel
+//!   budget of τ, hence of the image (colours and fog colour in [0, 1]) without blur. With
+//!   blur, σ − σ0 ∝ r·√Ds is off by 1.5·ε_z relative, the log-law rate by Δσ/σ/N per
+//!   step, and N steps move a pixel by at most 4·Δσ/σ ≤ 6·ε_z. Each pass also rounds
+//!   its output (tests/gpu_vs_cpu.rs's per-pass budget), and a test that compares with an
+//!   exact point rather than the stored depth adds the rounding of d to f32.
 //! - **Ray direction.** The interpolated ray's rise is off by about an ulp of the corner
 //!   rays (≈ 1), 2^-23, so the fragment's height is off by z·2^-23. A mean over the
 //!   segment's heights moves by at most half the steepest slope of δ per unit of rise, so
@@ -29,23 +33,25 @@ use glam::DVec3;
 /// The f32 pipeline's own budget per pass (tests/gpu_vs_cpu.rs).
 const F32_PER_PASS: f64 = 4e-7;
 
-/// ε_z, the relative error of the shader's eye depth z (module docs):
-/// 2^-24·|B|·z/|A| = 2^-24·z/near.
-fn depth_error(camera: &Camera, z: f64) -> f64 {
-    f64::powi(2.0, -24) * z / camera.near
+/// ε_z, the relative error of the shader's eye depth (module docs): 3·2^-24 at any z.
+const DEPTH_ERROR: f64 = 3.0 / 16_777_216.0;
+
+/// The budget of τ for the f32 reconstruction of the eye depth (module docs).
+fn reconstruction_budget() -> f64 {
+    2.0 * (-1f64).exp() * DEPTH_ERROR
 }
 
-/// The budget of τ for the f32 reconstruction of eye depth `z` (module docs).
-fn reconstruction_budget(camera: &Camera, z: f64) -> f64 {
-    2.0 * (-1f64).exp() * depth_error(camera, z)
+/// The budget of τ for rounding the window depth of an exact point to f32 (the rotation
+/// test compares with the exact point): half an ulp of d < 1, 2^-25, moves the eye depth
+/// by a relative 2^-25·(f − n)·z/(n·f) < 2^-25·z/near.
+fn stored_depth_budget(camera: &Camera, z: f64) -> f64 {
+    (-1f64).exp() * f64::powi(2.0, -25) * z / camera.near
 }
 
 /// The budget of a whole frame that is also blurred (module docs).
 fn blurred_budget(camera: &Camera, steps: u32) -> f64 {
     let far = camera.far;
-    reconstruction_budget(camera, far)
-        + 6.0 * depth_error(camera, far)
-        + F32_PER_PASS * f64::from(steps + 2)
+    reconstruction_budget() + 6.0 * DEPTH_ERROR + F32_PER_PASS * f64::from(steps + 2)
 }
 
 /// The budget of τ for the ray's direction at a pixel whose segment has length `l` and
@@ -212,9 +218,8 @@ fn assert_unblurred_within_pixel_budgets(
                     sigma0: 1.0,
                 })
                 .transmission[0];
-            let budget = reconstruction_budget(camera, z)
-                + ray_budget(&fog.profile, tau, l, z)
-                + 2.0 * F32_PER_PASS;
+            let budget =
+                reconstruction_budget() + ray_budget(&fog.profile, tau, l, z) + 2.0 * F32_PER_PASS;
             let (p, q) = (gpu.image.get(x, y), cpu.get(x, y));
             for c in 0..3 {
                 let e = (f64::from(p[c]) - f64::from(q[c])).abs();
@@ -352,8 +357,10 @@ fn turning_the_camera_leaves_the_fog_of_a_fixed_point_unchanged() {
             let tau = 1.0 - f64::from(out.image.get(pixel.0, h - 1 - pixel.1)[0]);
             // The stored depth is d rounded to f32: one more reconstruction error.
             let z = camera.eye_depth(d);
-            let tol = 2.0 * reconstruction_budget(&camera, z)
-                + ray_budget(&profile, expected, (point - camera.eye()).length(), z);
+            let tol = reconstruction_budget()
+                + stored_depth_budget(&camera, z)
+                + ray_budget(&profile, expected, (point - camera.eye()).length(), z)
+                + F32_PER_PASS;
             eprintln!(
                 "{profile:?} pixel {pixel:?}: eye depth {:.2}, GPU τ − τ {:.1e} (tolerance {tol:.1e})",
                 z,
@@ -449,8 +456,9 @@ fn horizontal_rays_along_a_layer_boundary_have_no_nan() {
             let z = camera.eye_depth(d);
             let p = camera.world_position(x, h - 1 - middle, w, h, d);
             let l = (p - camera.eye()).length();
-            let tol =
-                reconstruction_budget(&camera, z) + ray_budget(&profile, cpu.transmission[0], l, z);
+            let tol = reconstruction_budget()
+                + ray_budget(&profile, cpu.transmission[0], l, z)
+                + F32_PER_PASS;
             assert!(
                 (f64::from(v) - cpu.transmission[0]).abs() <= tol,
                 "{profile:?} x {x}: GPU τ {v} vs CPU {}",

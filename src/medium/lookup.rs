@@ -110,7 +110,8 @@ mod tests {
         assert!((lookup.sample(0.5, 0.5) - 0.5).abs() < 1e-12);
         // Half-way between the last texel and the first (wrapped).
         assert!((lookup.sample(1.0, 0.5) - 0.5).abs() < 1e-12);
-        assert!((lookup.sample(-0.75, 0.5) - 1.0).abs() < 1e-12);
+        // u = −0.25 is u = 0.75 one tile to the left: texel 1.
+        assert!((lookup.sample(-0.25, 0.5) - 1.0).abs() < 1e-12);
         let clamped = Lookup::new(2, 1, vec![0.0, 1.0], Wrap::ClampToEdge).unwrap();
         assert_eq!(clamped.sample(1.0, 0.5), 1.0);
         assert_ne!(lookup.id(), clamped.id());

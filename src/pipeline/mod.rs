@@ -900,7 +900,7 @@ fn camera_uniforms(
             for (i, ray) in corners.iter().enumerate() {
                 rays[3 * i..3 * i + 3].copy_from_slice(&ray.as_vec3().to_array());
             }
-            let [a, b] = camera.depth_constants();
+            let [a, b] = camera.shader_depth_constants();
             (
                 rays,
                 [a as f32, b as f32],
