@@ -44,6 +44,7 @@
 
 pub mod haze;
 pub mod lookup;
+pub mod noise;
 pub mod uniform;
 
 pub use haze::Haze;

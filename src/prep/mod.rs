@@ -70,7 +70,7 @@ mod components;
 pub mod edt;
 mod fill;
 mod margin;
-mod rng;
+pub(crate) mod rng;
 mod sky;
 pub mod synthetic;
 mod vis;
