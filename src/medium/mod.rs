@@ -42,11 +42,14 @@
 //! per-pixel diffusion rate) and into the last (which adds (1 − τ_blurred)·L∞), so a medium
 //! never writes a texture of its own.
 
+pub mod distance;
 pub mod haze;
 pub mod layered;
 pub mod lookup;
+pub mod noise;
 pub mod uniform;
 
+pub use distance::{DistanceFog, FogNoise};
 pub use haze::Haze;
 pub use layered::{HeightProfile, LayeredFog};
 pub use lookup::{Lookup, Wrap};

@@ -70,7 +70,6 @@ mod components;
 pub mod edt;
 mod fill;
 mod margin;
-
 mod sky;
 pub mod synthetic;
 mod vis;

@@ -1,0 +1,862 @@
+//! Paper 001's distance fog (Gawron and Boryczka 2018, sec. 3.1-3.3 and Listing 1) as a
+//! brume medium: a fog density that grows with the distance from the camera, varied by a
+//! tiling noise texture that drifts with time, and a fog colour brightened toward a
+//! directional light. The paper's own blur (a fixed 5x5 Gaussian, sec. 3.4) is replaced by
+//! brume's diffusion blur, driven by the optical depth of the fog.
+//!
+//! The medium reads a **depth buffer**: the `depth` of each pixel is the window depth
+//! d ∈ [0, 1] of a standard OpenGL perspective projection with the [`Camera`] of the
+//! frame, d = 1 being the far plane (the sky: nothing was drawn there), whose distance is
+//! `far·|ray|`. Values outside [0, 1] are clamped. The world position is rebuilt from d and
+//! the camera (paper 001 eq. 1; see [`crate::camera`]): on the GPU by the eye-to-fragment
+//! ray times the linear eye depth (`brume_eye_depth`, precise to a few f32 ulps at any
+//! distance, which the noise needs: see [`Camera::shader_depth_constants`]), on the CPU
+//! reference by the inverse matrices.
+//!
+//! # The model, and where it departs from the paper
+//!
+//! With `p` the eye-to-point vector and `l = |p|` (eq. 1, Euclidean: fog on a sphere about
+//! the camera, the paper's fig. 2):
+//!
+//! ```text
+//! dist     = max((l − start_distance) / distance, 0)^exponent                (eq. 2)
+//! noise    = NoiseTex((P.x + speed.x·time) / size, (P.z + speed.z·time) / size)  (Listing 1)
+//! factor   = low + (high − low)·noise       (eq. 9; 1 without a noise texture, eq. 3)
+//! F        = clamp(dist·factor, 0, max_density)                              (Listing 1)
+//! scatter  = saturate(p̂ · L)^scatter_exponent · saturate((l − scatter_start) / l)
+//! C_fog'   = colour + scatter_colour·scatter                                  (eq. 8)
+//! C        = lerp(C_scene, C_fog', F)                                         (eq. 4)
+//! ```
+//!
+//! where P is the world position and L the unit vector toward the light. The equations
+//! and the listing disagree in places; this module follows:
+//!
+//! - **Start distance (eq. 2 vs Listing 1).** Eq. 2 subtracts `StartDistance`, the
+//!   listing adds an `Offset`; the equation is followed (a positive start pushes the fog
+//!   away). The base is clamped at 0 before the power: inside the start distance there is
+//!   no fog, rather than the NaN of a negative number to a fractional power.
+//! - **The cap (eq. 3/10 vs Listing 1).** Eq. 3 writes `max(dist, FogDensity)` but calls
+//!   FogDensity "the max value of fog density"; with `max` the fog would never be thinner
+//!   than it, however close. The listing's `clamp(0, MaxDensity, density)` (HLSL argument
+//!   order `clamp(x, min, max)`, so literally `min(max(0, MaxDensity), density)`) is
+//!   `min(density, MaxDensity)` for the non-negative values here: the listing is
+//!   followed, `F = clamp(dist·factor, 0, max_density)`.
+//! - **Noise (eq. 9-10 and Listing 1).** The listing multiplies the density by
+//!   `lerp(Low, Max, noise)`, the noise read at `(WorldPos + NoiseSpeed·Time)/NoiseSize`
+//!   through `.xy`. Unreal's z is up, so `.xy` is the horizontal plane; brume's world is
+//!   y-up, so the noise is read at the (x, z) components, and `speed[1]` (vertical) has
+//!   no effect, as the listing's `NoiseSpeed.z` has none. The noise's red channel is used
+//!   (`.x`). Without a noise texture the factor is 1 (eq. 3); with one it is about
+//!   `(low + high)/2` on average (the generated noise has mean ½), so switching the noise
+//!   off thickens the fog by about 1/0.15 ≈ 6.7 at the defaults.
+//! - **Scattering start (eq. 5 and Listing 1).** Eq. 5 adds the scalar `ScatterStartDist`
+//!   to the vector `WorldPos − CameraPos`; HLSL broadcasts it, adding it to every world
+//!   component, which tilts near points' directions toward the world diagonal (1, 1, 1):
+//!   a result that depends on the world's axes, not on the view. Pushing the point
+//!   `ScatterStartDist` further along its own ray, the other literal reading, leaves its
+//!   direction unchanged and the parameter without effect. brume reads it as Unreal's
+//!   exponential height fog reads its "directional inscattering start distance", which
+//!   the paper's parameters mirror (its fig. 5 compares with that fog): only the part of
+//!   the path beyond `scatter_start` scatters toward the light, a fraction
+//!   `saturate((l − scatter_start)/l)` of it. Near surfaces keep the plain fog colour,
+//!   the sky gets the full glow.
+//! - **Direction (eq. 6-7).** `p̂` is the direction of the pixel's ray, `saturate` (the
+//!   listing) and `max(0, ·)` (eq. 7) agree for a unit vector.
+//!
+//! # As a brume medium
+//!
+//! Per pixel: transmission τ = 1 − F (grey), in-scattered light L∞ = C_fog' (so the
+//! composite τ·E + (1 − τ)·L∞ is eq. 4 exactly when nothing is blurred), and the blur
+//! scale σ = σ0 + λ·r·√Ds from the optical depth of that transmission, Ds = −ln(1 − F),
+//! all of it treated as scattering (the paper has no absorption: its fog only veils), over
+//! the normalised distance r = l/range_unit ([`super::blur_from_optical_depth`]). The
+//! paper ties its blur to the fog density; this is that tie with brume's blur law.
+//!
+//! # Units and defaults
+//!
+//! Listing 1's example values are in Unreal units (centimetres), and its density is
+//! multiplied by the noise factor (0.12..0.18). Read as metres, the listing's
+//! `Distance = 1000` gives a mean density of 0.006 at 3 m and 0.14 at 900 m: barely any
+//! fog in a metre-scale scene. Converted to metres (`Distance = 10 m`) the fog reaches
+//! the 0.5 cap by 90 m and everything beyond is one flat veil. brume's defaults are in
+//! metres for a camera at eye height looking over 3-900 m: [`DEFAULT_DISTANCE`] = 100 m,
+//! so that with the noise's mean factor 0.15 the density grows over the whole range
+//! (0.02 at 3 m, 0.15 at 100 m, 0.27 at 300 m) and reaches the cap near the far plane,
+//! 1000 m. Lengths of the listing are converted from centimetres (scatter start 10 m,
+//! noise tile 100 m, noise speed (2, 0.25) m/s); exponents, densities and colours are the
+//! listing's.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use glam::DVec3;
+
+use super::lookup::{Lookup, Wrap};
+use super::noise::{self, TilingNoise};
+use super::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
+use crate::camera::Camera;
+use crate::error::{check_non_negative, check_positive, Error, Result};
+
+/// The paper's `StartDistance` (Listing 1: 0).
+pub const DEFAULT_START_DISTANCE: f64 = 0.0;
+/// Blend distance (m). Listing 1 has 1000 Unreal units (10 m); see the module docs.
+pub const DEFAULT_DISTANCE: f64 = 100.0;
+/// Falloff exponent (Listing 1: 0.55).
+pub const DEFAULT_EXPONENT: f64 = 0.55;
+/// The density cap (Listing 1's `MaxDensity`: 0.5).
+pub const DEFAULT_MAX_DENSITY: f64 = 0.5;
+/// Fog colour, linear RGB (Listing 1's `FogColor`).
+pub const DEFAULT_COLOUR: [f32; 3] = [0.45, 0.64, 1.0];
+/// Toward the light: ahead of the default camera (which looks along −z), a little to its
+/// right and above the horizon, so that the default view shows the glow. Listing 1 gives
+/// no light.
+pub const DEFAULT_LIGHT_DIRECTION: [f64; 3] = [0.3, 0.2, -1.0];
+/// Scattering start distance (m). Listing 1: 1000 Unreal units = 10 m.
+pub const DEFAULT_SCATTER_START: f64 = 10.0;
+/// Scattering falloff exponent (Listing 1: 4).
+pub const DEFAULT_SCATTER_EXPONENT: f64 = 4.0;
+/// Scattering colour, linear RGB (Listing 1's `ScatterColor`).
+pub const DEFAULT_SCATTER_COLOUR: [f32; 3] = [1.0, 0.65, 0.28];
+/// Diffusion blur factor λ (px), as [`crate::medium::haze::DEFAULT_LAMBDA`].
+pub const DEFAULT_LAMBDA: f64 = 8.0;
+/// The distance (m) that counts as 1 in the blur law: the default camera's far plane.
+pub const DEFAULT_RANGE_UNIT: f64 = 1000.0;
+/// Noise drift (m/s, world x, y, z). Listing 1: (200, 25, 0) Unreal units/s, z up, so
+/// (2, 0.25) m/s horizontally: on brume's x and z; y (vertical) has no effect.
+pub const DEFAULT_NOISE_SPEED: [f64; 3] = [2.0, 0.0, 0.25];
+/// World size of one noise tile (m). Listing 1: 10000 Unreal units = 100 m.
+pub const DEFAULT_NOISE_SIZE: f64 = 100.0;
+/// Density factor where the noise is 0 (Listing 1's `LowNoiseDensity`).
+pub const DEFAULT_NOISE_LOW: f64 = 0.12;
+/// Density factor where the noise is 1 (Listing 1's `MaxNoiseDensity`).
+pub const DEFAULT_NOISE_HIGH: f64 = 0.18;
+
+/// The noise that varies the fog's density (paper 001, sec. 3.3, eq. 9-10).
+#[derive(Clone, Debug)]
+pub struct FogNoise {
+    /// The noise texture, values in [0, 1]; it must tile ([`Wrap::Repeat`]): the world is
+    /// larger than one tile.
+    pub lookup: Lookup,
+    /// Drift of the noise (world units per unit of [`DistanceFog::time`]); only x and z
+    /// count (the texture covers the horizontal plane).
+    pub speed: [f64; 3],
+    /// World units per noise tile (> 0).
+    pub size: f64,
+    /// Density factor where the noise is 0 (≥ 0).
+    pub low: f64,
+    /// Density factor where the noise is 1 (≥ 0).
+    pub high: f64,
+}
+
+impl Default for FogNoise {
+    /// [`TilingNoise::default`] (256 px, seed 0), generated once per process and shared,
+    /// so that the GPU uploads it once, with Listing 1's parameters in metres.
+    fn default() -> Self {
+        static DEFAULT: OnceLock<Lookup> = OnceLock::new();
+        let lookup = DEFAULT
+            .get_or_init(|| {
+                TilingNoise::default()
+                    .lookup()
+                    .expect("the default noise recipe is valid")
+            })
+            .clone();
+        FogNoise::with_lookup(lookup)
+    }
+}
+
+impl FogNoise {
+    /// `lookup` with the default drift, tile size and density factors.
+    pub fn with_lookup(lookup: Lookup) -> Self {
+        FogNoise {
+            lookup,
+            speed: DEFAULT_NOISE_SPEED,
+            size: DEFAULT_NOISE_SIZE,
+            low: DEFAULT_NOISE_LOW,
+            high: DEFAULT_NOISE_HIGH,
+        }
+    }
+
+    /// A generated tiling noise ([`TilingNoise::new`]: periodic Perlin fBm) of `size_px`
+    /// texels per side from `seed`, with the default parameters.
+    pub fn generate(size_px: usize, seed: u64) -> Result<Self> {
+        Ok(FogNoise::with_lookup(
+            TilingNoise::new(size_px, seed).lookup()?,
+        ))
+    }
+
+    /// A noise texture from a grey or RGB PNG of 8 or 16 bits (see [`noise::load_png`]),
+    /// tiling, with the default parameters.
+    pub fn from_png(path: &Path) -> Result<Self> {
+        let (w, h, values) = noise::load_png(path)?;
+        let lookup = Lookup::new(w, h, values, Wrap::Repeat)
+            .map_err(|e| Error::format(path, format!("not usable as a noise texture: {e}")))?;
+        Ok(FogNoise::with_lookup(lookup))
+    }
+
+    /// The texture coordinates of world position `world` at `time` (Listing 1's
+    /// `(WorldPosition + NoiseSpeed·Time)/NoiseSize`, horizontal components).
+    pub fn coordinates(&self, world: DVec3, time: f64) -> (f64, f64) {
+        (
+            (world.x + self.speed[0] * time) / self.size,
+            (world.z + self.speed[2] * time) / self.size,
+        )
+    }
+
+    /// The density factor at `world` and `time`: `lerp(low, high, noise)` (eq. 9).
+    pub fn factor(&self, world: DVec3, time: f64) -> f64 {
+        let (u, v) = self.coordinates(world, time);
+        let n = self.lookup.sample(u, v);
+        self.low + (self.high - self.low) * n
+    }
+
+    fn validate(&self) -> Result<()> {
+        if !self.speed.iter().all(|v| v.is_finite()) {
+            let [x, y, z] = self.speed;
+            return Err(Error::invalid(
+                "noise speed",
+                format!("{x},{y},{z}"),
+                "three finite numbers (world units per unit of time)",
+            ));
+        }
+        check_positive("noise size", self.size)?;
+        check_non_negative("noise low", self.low)?;
+        check_non_negative("noise high", self.high)?;
+        if self.lookup.wrap() != Wrap::Repeat {
+            return Err(Error::invalid(
+                "noise lookup",
+                "clamped to its edges",
+                "a tiling lookup (Wrap::Repeat)",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Paper 001's distance fog with scattering toward a light and drifting noise (see the
+/// module docs for the formulas and the units).
+#[derive(Clone, Debug)]
+pub struct DistanceFog {
+    /// The camera of the frame whose depth buffer is read.
+    pub camera: Camera,
+    /// Distance from the camera where the fog starts (world units).
+    pub start_distance: f64,
+    /// Blend distance (> 0): the distance beyond the start where `dist` reaches 1.
+    pub distance: f64,
+    /// Falloff exponent of the distance ramp (> 0).
+    pub exponent: f64,
+    /// The largest fog density F, in [0, 1) (paper: `FogDensity`, "the max value of fog
+    /// density"; Listing 1: `MaxDensity`). 1 would be opaque fog, of infinite optical depth.
+    pub max_density: f64,
+    /// Fog colour, linear RGB.
+    pub colour: [f32; 3],
+    /// Toward the light (world; normalised on use, non-zero).
+    pub light_direction: [f64; 3],
+    /// Distance beyond which the fog scatters the light's colour (world units, ≥ 0).
+    pub scatter_start: f64,
+    /// Falloff exponent of the scattering lobe (> 0).
+    pub scatter_exponent: f64,
+    /// Scattering colour, linear RGB, added to the fog colour toward the light.
+    pub scatter_colour: [f32; 3],
+    /// The density noise, or `None` for a uniform fog (eq. 3).
+    pub noise: Option<FogNoise>,
+    /// Time (in the unit of the noise speed): moves the noise.
+    pub time: f64,
+    /// Diffusion blur factor λ ≥ 0 (px): σ = σ0 + λ·r·√(−ln(1 − F)).
+    pub lambda: f64,
+    /// The distance that counts as 1 in the blur law (> 0, world units).
+    pub range_unit: f64,
+}
+
+impl Default for DistanceFog {
+    fn default() -> Self {
+        DistanceFog {
+            camera: Camera::default(),
+            start_distance: DEFAULT_START_DISTANCE,
+            distance: DEFAULT_DISTANCE,
+            exponent: DEFAULT_EXPONENT,
+            max_density: DEFAULT_MAX_DENSITY,
+            colour: DEFAULT_COLOUR,
+            light_direction: DEFAULT_LIGHT_DIRECTION,
+            scatter_start: DEFAULT_SCATTER_START,
+            scatter_exponent: DEFAULT_SCATTER_EXPONENT,
+            scatter_colour: DEFAULT_SCATTER_COLOUR,
+            noise: Some(FogNoise::default()),
+            time: 0.0,
+            lambda: DEFAULT_LAMBDA,
+            range_unit: DEFAULT_RANGE_UNIT,
+        }
+    }
+}
+
+/// The fog at one point, before it meets the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FogPoint {
+    /// Density F in [0, max_density] (eq. 10 with Listing 1's cap).
+    pub density: f64,
+    /// Fog colour brightened toward the light, C_fog' (eq. 8).
+    pub colour: [f64; 3],
+    /// Distance from the eye (world units).
+    pub distance: f64,
+}
+
+impl DistanceFog {
+    /// The unit vector toward the light.
+    pub fn light(&self) -> DVec3 {
+        DVec3::from_array(self.light_direction).normalize()
+    }
+
+    /// `dist` of eq. 2 at distance `l` from the eye.
+    pub fn distance_ramp(&self, l: f64) -> f64 {
+        ((l - self.start_distance) / self.distance)
+            .max(0.0)
+            .powf(self.exponent)
+    }
+
+    /// The fog at world position `world` (eq. 1-10, module docs).
+    pub fn at(&self, world: DVec3) -> FogPoint {
+        let to = world - self.camera.eye();
+        let l = to.length();
+        let factor = self
+            .noise
+            .as_ref()
+            .map_or(1.0, |n| n.factor(world, self.time));
+        let density = (self.distance_ramp(l) * factor).clamp(0.0, self.max_density);
+        let towards = to.normalize_or_zero().dot(self.light()).clamp(0.0, 1.0);
+        let beyond = if l > 0.0 {
+            ((l - self.scatter_start) / l).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let scatter = towards.powf(self.scatter_exponent) * beyond;
+        let colour = std::array::from_fn(|c| {
+            f64::from(self.colour[c]) + f64::from(self.scatter_colour[c]) * scatter
+        });
+        FogPoint {
+            density,
+            colour,
+            distance: l,
+        }
+    }
+
+    /// The optical depth of a fog of density `f`: −ln(1 − F).
+    fn optical_depth(f: f64) -> f64 {
+        -(-f).ln_1p()
+    }
+}
+
+/// A 1x1 tiling texture bound under the noise sampler when there is no noise: the program
+/// is compiled once per medium name with the sampler's name among its uniforms, so the
+/// name must always be there; the shader never reads it (`u_noise_on` = 0).
+fn placeholder_noise() -> Lookup {
+    static PLACEHOLDER: OnceLock<Lookup> = OnceLock::new();
+    PLACEHOLDER
+        .get_or_init(|| Lookup::new(1, 1, vec![0.5], Wrap::Repeat).expect("a 1x1 table"))
+        .clone()
+}
+
+/// The name of the noise sampler in `glsl/medium/distance.glsl`.
+const NOISE_SAMPLER: &str = "u_noise";
+
+impl Medium for DistanceFog {
+    fn name(&self) -> &'static str {
+        "distance"
+    }
+
+    fn glsl(&self) -> &'static str {
+        include_str!("../../glsl/medium/distance.glsl")
+    }
+
+    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
+        let f = |v: f64| v as f32;
+        // The noise's origin, eye and drift together, is reduced to one tile in f64 here:
+        // the shader adds only the eye-to-point offset, so that neither a far-off camera
+        // nor a long time costs f32 precision in the texture coordinates.
+        let (noise_on, origin, scale, range) = match &self.noise {
+            Some(n) => {
+                let (u, v) = n.coordinates(self.camera.eye(), self.time);
+                (
+                    1.0,
+                    [f(u.rem_euclid(1.0)), f(v.rem_euclid(1.0))],
+                    f(1.0 / n.size),
+                    [f(n.low), f(n.high)],
+                )
+            }
+            None => (0.0, [0.0; 2], 0.0, [1.0; 2]),
+        };
+        vec![
+            (
+                "u_fog_shape",
+                UniformValue::Vec3([
+                    f(self.start_distance),
+                    f(1.0 / self.distance),
+                    f(self.exponent),
+                ]),
+            ),
+            ("u_max_density", UniformValue::Float(f(self.max_density))),
+            ("u_fog_colour", UniformValue::Vec3(self.colour)),
+            (
+                "u_light",
+                UniformValue::Vec3(self.light().as_vec3().to_array()),
+            ),
+            (
+                "u_scatter",
+                UniformValue::Vec2([f(self.scatter_start), f(self.scatter_exponent)]),
+            ),
+            ("u_scatter_colour", UniformValue::Vec3(self.scatter_colour)),
+            ("u_noise_on", UniformValue::Float(noise_on)),
+            ("u_noise_origin", UniformValue::Vec2(origin)),
+            ("u_noise_scale", UniformValue::Float(scale)),
+            ("u_noise_range", UniformValue::Vec2(range)),
+            (
+                "u_blur",
+                UniformValue::Vec2([f(self.lambda), f(1.0 / self.range_unit)]),
+            ),
+        ]
+    }
+
+    fn chromatic(&self) -> bool {
+        false
+    }
+
+    fn sigma_max(&self, sigma0: f64) -> f64 {
+        blur_from_optical_depth(
+            sigma0,
+            self.lambda,
+            1.0,
+            Self::optical_depth(self.max_density),
+        )
+    }
+
+    fn sample(&self, p: Pixel) -> MediumSample {
+        let d = p.depth.clamp(0.0, 1.0);
+        let world = self
+            .camera
+            .world_position_by_inverse(p.x, p.y, p.width, p.height, d);
+        let fog = self.at(world);
+        let tau = 1.0 - fog.density;
+        MediumSample {
+            transmission: [tau; 3],
+            inscatter: fog.colour,
+            sigma: blur_from_optical_depth(
+                p.sigma0,
+                self.lambda,
+                fog.distance / self.range_unit,
+                Self::optical_depth(fog.density),
+            ),
+        }
+    }
+
+    fn validate(&self) -> Result<()> {
+        self.camera.validate()?;
+        if !self.start_distance.is_finite() {
+            return Err(Error::invalid(
+                "start_distance",
+                self.start_distance,
+                "a finite distance",
+            ));
+        }
+        check_positive("distance", self.distance)?;
+        check_positive("exponent", self.exponent)?;
+        if !(self.max_density.is_finite() && (0.0..1.0).contains(&self.max_density)) {
+            return Err(Error::invalid(
+                "max_density",
+                self.max_density,
+                "a density in [0, 1) (1 is opaque fog: infinite optical depth and blur)",
+            ));
+        }
+        check_colour("colour", self.colour)?;
+        let light = DVec3::from_array(self.light_direction);
+        if !(light.is_finite() && light.length() > 0.0) {
+            let [x, y, z] = self.light_direction;
+            return Err(Error::invalid(
+                "light_direction",
+                format!("{x},{y},{z}"),
+                "a finite, non-zero vector toward the light",
+            ));
+        }
+        check_non_negative("scatter_start", self.scatter_start)?;
+        check_positive("scatter_exponent", self.scatter_exponent)?;
+        check_colour("scatter_colour", self.scatter_colour)?;
+        if let Some(n) = &self.noise {
+            n.validate()?;
+        }
+        if !self.time.is_finite() {
+            return Err(Error::invalid("time", self.time, "a finite time"));
+        }
+        check_non_negative("lambda", self.lambda)?;
+        check_positive("range_unit", self.range_unit)
+    }
+
+    fn camera(&self) -> Option<Camera> {
+        Some(self.camera)
+    }
+
+    fn lookups(&self) -> Vec<(&'static str, Lookup)> {
+        let lookup = match &self.noise {
+            Some(n) => n.lookup.clone(),
+            None => placeholder_noise(),
+        };
+        vec![(NOISE_SAMPLER, lookup)]
+    }
+}
+
+fn check_colour(name: &str, c: [f32; 3]) -> Result<()> {
+    if c.iter().all(|v| v.is_finite() && *v >= 0.0) {
+        Ok(())
+    } else {
+        Err(Error::invalid(
+            name,
+            format!("{},{},{}", c[0], c[1], c[2]),
+            "three finite linear values ≥ 0",
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The point `l` metres from the default eye along its view axis (−z).
+    fn ahead(l: f64) -> DVec3 {
+        Camera::default().eye() + DVec3::new(0.0, 0.0, -l)
+    }
+
+    fn pixel(x: usize, y: usize, depth: f64) -> Pixel {
+        Pixel {
+            x,
+            y,
+            width: 64,
+            height: 48,
+            depth,
+            sigma0: 1.0,
+        }
+    }
+
+    #[test]
+    fn defaults_fog_a_metre_scale_scene_visibly_and_gradually() {
+        // Camera at 1.7 m, objects 3-900 m away: with any noise value the density lies
+        // between ramp·low and ramp·high.
+        let fog = DistanceFog::default();
+        let bounds = |l: f64| {
+            let ramp = fog.distance_ramp(l);
+            (ramp * DEFAULT_NOISE_LOW, ramp * DEFAULT_NOISE_HIGH)
+        };
+        assert!(bounds(3.0).0 > 0.01, "{:?}", bounds(3.0));
+        assert!(bounds(300.0).1 < fog.max_density, "{:?}", bounds(300.0));
+        assert!(bounds(900.0).0 > 0.35, "{:?}", bounds(900.0));
+        let mut last = 0.0;
+        for l in [3.0, 10.0, 30.0, 100.0, 300.0, 900.0] {
+            let f = fog.at(ahead(l)).density;
+            let (lo, hi) = bounds(l);
+            assert!(
+                f >= lo - 1e-12 && f <= hi.min(fog.max_density) + 1e-12,
+                "{l} m: {f}"
+            );
+            assert!(f > last, "{l} m: {f} after {last}");
+            last = f;
+        }
+        // Listing 1's numbers read as metres (they are centimetres) barely fog the same
+        // scene: the reason the defaults differ.
+        let literal = DistanceFog {
+            distance: 1000.0,
+            ..DistanceFog::default()
+        };
+        assert!(literal.distance_ramp(900.0) * DEFAULT_NOISE_HIGH < 0.18);
+        assert!(literal.distance_ramp(3.0) * DEFAULT_NOISE_HIGH < 0.01);
+    }
+
+    #[test]
+    fn no_fog_inside_the_start_distance_and_the_cap_holds() {
+        let fog = DistanceFog {
+            start_distance: 50.0,
+            noise: None,
+            ..DistanceFog::default()
+        };
+        for l in [0.0, 1.0, 49.9] {
+            let f = fog.at(ahead(l)).density;
+            assert_eq!(f, 0.0, "{l} m");
+        }
+        assert!(fog.at(ahead(60.0)).density > 0.0);
+        // Without noise the factor is 1 (eq. 3): 100 m past the start, dist = 1, capped.
+        assert_eq!(fog.at(ahead(150.0)).density, fog.max_density);
+        let thin = DistanceFog {
+            noise: None,
+            distance: 1e6,
+            ..DistanceFog::default()
+        };
+        let l: f64 = 250.0;
+        let want = (l / 1e6).powf(DEFAULT_EXPONENT);
+        assert!((thin.at(ahead(l)).density - want).abs() < 1e-15);
+    }
+
+    #[test]
+    fn scattering_brightens_the_fog_toward_the_light_beyond_its_start() {
+        let fog = DistanceFog {
+            light_direction: [0.0, 0.0, -2.0],
+            noise: None,
+            ..DistanceFog::default()
+        };
+        let colour = DEFAULT_COLOUR.map(f64::from);
+        let glow = |p: FogPoint| -> [f64; 3] { std::array::from_fn(|c| p.colour[c] - colour[c]) };
+        // Straight at the light, 1000 m: scatter = 1·(1 − 10/1000).
+        let toward = glow(fog.at(ahead(1000.0)));
+        for c in 0..3 {
+            let want = f64::from(DEFAULT_SCATTER_COLOUR[c]) * 0.99;
+            assert!((toward[c] - want).abs() < 1e-12, "{toward:?}");
+        }
+        // Closer than the scatter start: the plain fog colour.
+        assert_eq!(glow(fog.at(ahead(5.0))), [0.0; 3]);
+        // Behind the camera's light direction: nothing.
+        let behind = Camera::default().eye() + DVec3::new(0.0, 0.0, 500.0);
+        assert_eq!(glow(fog.at(behind)), [0.0; 3]);
+        // 60° off the light: cos⁴ = 1/16 of the colour (times the path fraction).
+        let off = Camera::default().eye()
+            + 500.0 * DVec3::new(60f64.to_radians().sin(), 0.0, -60f64.to_radians().cos());
+        let g = glow(fog.at(off))[0];
+        assert!((g - 0.0625 * (1.0 - 10.0 / 500.0)).abs() < 1e-12, "{g}");
+    }
+
+    #[test]
+    fn noise_varies_the_density_and_time_moves_it() {
+        let fog = DistanceFog::default();
+        let points: Vec<DVec3> = (0..40)
+            .map(|i| ahead(60.0) + DVec3::new(7.3 * f64::from(i), 0.0, 0.0))
+            .collect();
+        let densities =
+            |f: &DistanceFog| -> Vec<f64> { points.iter().map(|&p| f.at(p).density).collect() };
+        let now = densities(&fog);
+        let spread = now.iter().cloned().fold(f64::MIN, f64::max)
+            - now.iter().cloned().fold(f64::MAX, f64::min);
+        let ramp = fog.distance_ramp(60.0);
+        assert!(
+            spread > 0.01 * ramp,
+            "noise barely varies the fog: {spread}"
+        );
+        // The same time, the same fog; another time, another fog.
+        assert_eq!(densities(&fog.clone()), now);
+        let later = DistanceFog {
+            time: 7.0,
+            ..fog.clone()
+        };
+        let moved = densities(&later);
+        assert!(moved.iter().zip(&now).any(|(a, b)| (a - b).abs() > 1e-3));
+        // Eq. 9-10's shift: at time t the fog at P is the fog at time 0 at P + speed·t
+        // (horizontally; P's distance to the eye is kept by moving the eye too).
+        let noise = fog.noise.as_ref().unwrap();
+        for &p in &points {
+            let shift = DVec3::new(noise.speed[0] * 7.0, 0.0, noise.speed[2] * 7.0);
+            let a = noise.factor(p, 7.0);
+            let b = noise.factor(p + shift, 0.0);
+            assert!((a - b).abs() < 1e-12);
+        }
+        // Without noise, time changes nothing.
+        let plain = DistanceFog {
+            noise: None,
+            ..fog.clone()
+        };
+        let plain_later = DistanceFog {
+            time: 7.0,
+            ..plain.clone()
+        };
+        assert_eq!(densities(&plain), densities(&plain_later));
+    }
+
+    #[test]
+    fn noise_origin_is_reduced_to_one_tile() {
+        // A long time and a far camera: the shader gets the origin modulo one tile.
+        let fog = DistanceFog {
+            time: 123_456.75,
+            camera: Camera {
+                position: [5_000.25, 1.7, -12_000.5],
+                ..Camera::default()
+            },
+            ..DistanceFog::default()
+        };
+        let noise = fog.noise.as_ref().unwrap();
+        let (u, v) = noise.coordinates(fog.camera.eye(), fog.time);
+        let origin = fog
+            .uniforms()
+            .into_iter()
+            .find(|(name, _)| *name == "u_noise_origin")
+            .unwrap()
+            .1;
+        let UniformValue::Vec2([ou, ov]) = origin else {
+            panic!("{origin:?}");
+        };
+        assert!((0.0..1.0).contains(&ou) && (0.0..1.0).contains(&ov));
+        assert!((f64::from(ou) - u.rem_euclid(1.0)).abs() < 1e-6);
+        assert!((f64::from(ov) - v.rem_euclid(1.0)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn medium_sample_is_the_paper_blend_and_the_sky_is_the_far_plane() {
+        let fog = DistanceFog::default();
+        let (x, y) = (40, 30);
+        let sky = fog.sample(pixel(x, y, 1.0));
+        let ray = fog.camera.pixel_ray(x, y, 64, 48);
+        let far = fog.camera.far * ray.length();
+        let world = fog.camera.eye() + ray * fog.camera.far;
+        let point = fog.at(world);
+        assert!((point.distance - far).abs() < 1e-9 * far);
+        assert!((sky.transmission[0] - (1.0 - point.density)).abs() < 1e-9);
+        assert_eq!(sky.transmission[0], sky.transmission[2]);
+        for c in 0..3 {
+            assert!((sky.inscatter[c] - point.colour[c]).abs() < 1e-9);
+        }
+        // τ·E + (1 − τ)·C_fog' is eq. 4's lerp(E, C_fog', F).
+        let e = 0.3;
+        let tau = sky.transmission[0];
+        let lerp = e + (sky.inscatter[0] - e) * point.density;
+        assert!((tau * e + (1.0 - tau) * sky.inscatter[0] - lerp).abs() < 1e-12);
+        // Depth beyond [0, 1] is the far plane or the near plane, never a NaN.
+        assert_eq!(fog.sample(pixel(x, y, 1.5)), sky);
+        let below = fog.sample(pixel(x, y, -0.5));
+        assert_eq!(below, fog.sample(pixel(x, y, 0.0)));
+    }
+
+    #[test]
+    fn sigma_max_bounds_every_pixel() {
+        let fog = DistanceFog {
+            max_density: 0.8,
+            noise: None,
+            ..DistanceFog::default()
+        };
+        let bound = fog.sigma_max(1.0);
+        let expected = 1.0 + DEFAULT_LAMBDA * f64::sqrt(-f64::ln(0.2));
+        assert!((bound - expected).abs() < 1e-12);
+        let mut largest: f64 = 0.0;
+        for depth in [0.0, 0.5, 0.99, 0.9999, 1.0] {
+            for (x, y) in [(0, 0), (63, 47), (32, 24)] {
+                largest = largest.max(fog.sample(pixel(x, y, depth)).sigma);
+            }
+        }
+        assert!(largest <= bound + 1e-12, "{largest} > {bound}");
+        // The sky, beyond range_unit, with the density capped, reaches it.
+        assert!(largest > bound - 1e-9, "{largest} vs {bound}");
+    }
+
+    #[test]
+    fn the_noise_sampler_is_always_listed() {
+        let with = DistanceFog::default();
+        let without = DistanceFog {
+            noise: None,
+            ..DistanceFog::default()
+        };
+        let names = |f: &DistanceFog| f.lookups().into_iter().map(|(n, _)| n).collect::<Vec<_>>();
+        assert_eq!(names(&with), vec![NOISE_SAMPLER]);
+        assert_eq!(names(&without), vec![NOISE_SAMPLER]);
+        let uniform_names =
+            |f: &DistanceFog| f.uniforms().into_iter().map(|(n, _)| n).collect::<Vec<_>>();
+        assert_eq!(uniform_names(&with), uniform_names(&without));
+        // The default noise is generated once and shared (one upload).
+        assert_eq!(
+            with.lookups()[0].1.id(),
+            DistanceFog::default().lookups()[0].1.id()
+        );
+    }
+
+    #[test]
+    fn bad_parameters_are_refused_by_name() {
+        let bad = |f: DistanceFog| f.validate().unwrap_err().to_string();
+        let d = DistanceFog::default;
+        assert!(DistanceFog::default().validate().is_ok());
+        assert!(bad(DistanceFog {
+            distance: 0.0,
+            ..d()
+        })
+        .contains("distance"));
+        assert!(bad(DistanceFog {
+            exponent: -1.0,
+            ..d()
+        })
+        .contains("exponent"));
+        assert!(bad(DistanceFog {
+            max_density: 1.0,
+            ..d()
+        })
+        .contains("max_density"));
+        assert!(bad(DistanceFog {
+            start_distance: f64::NAN,
+            ..d()
+        })
+        .contains("start_distance"));
+        assert!(bad(DistanceFog {
+            colour: [0.1, -1.0, 0.0],
+            ..d()
+        })
+        .contains("colour"));
+        assert!(bad(DistanceFog {
+            light_direction: [0.0; 3],
+            ..d()
+        })
+        .contains("light_direction"));
+        assert!(bad(DistanceFog {
+            scatter_start: -1.0,
+            ..d()
+        })
+        .contains("scatter_start"));
+        assert!(bad(DistanceFog {
+            scatter_exponent: 0.0,
+            ..d()
+        })
+        .contains("scatter_exponent"));
+        assert!(bad(DistanceFog {
+            scatter_colour: [f32::NAN; 3],
+            ..d()
+        })
+        .contains("scatter_colour"));
+        assert!(bad(DistanceFog {
+            time: f64::INFINITY,
+            ..d()
+        })
+        .contains("time"));
+        assert!(bad(DistanceFog {
+            lambda: -1.0,
+            ..d()
+        })
+        .contains("lambda"));
+        assert!(bad(DistanceFog {
+            range_unit: 0.0,
+            ..d()
+        })
+        .contains("range_unit"));
+        let camera = Camera {
+            near: 0.0,
+            ..Camera::default()
+        };
+        assert!(bad(DistanceFog { camera, ..d() }).contains("near"));
+        let noise = |f: fn(&mut FogNoise)| {
+            let mut n = FogNoise::default();
+            f(&mut n);
+            DistanceFog {
+                noise: Some(n),
+                ..d()
+            }
+        };
+        assert!(bad(noise(|n| n.size = 0.0)).contains("noise size"));
+        assert!(bad(noise(|n| n.low = -0.1)).contains("noise low"));
+        assert!(bad(noise(|n| n.high = f64::NAN)).contains("noise high"));
+        assert!(bad(noise(|n| n.speed[2] = f64::INFINITY)).contains("noise speed"));
+        assert!(bad(noise(|n| {
+            n.lookup = Lookup::new(1, 1, vec![0.5], Wrap::ClampToEdge).unwrap()
+        }))
+        .contains("noise lookup"));
+    }
+
+    #[test]
+    fn png_noise_becomes_a_tiling_lookup() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("noise.png");
+        image::GrayImage::from_raw(2, 2, vec![0, 85, 170, 255])
+            .unwrap()
+            .save(&path)
+            .unwrap();
+        let noise = FogNoise::from_png(&path).unwrap();
+        assert_eq!(noise.lookup.wrap(), Wrap::Repeat);
+        assert_eq!(
+            noise.lookup.values(),
+            &[0.0, 85.0 / 255.0, 170.0 / 255.0, 1.0]
+        );
+        assert_eq!(noise.size, DEFAULT_NOISE_SIZE);
+    }
+}
