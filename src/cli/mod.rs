@@ -5,6 +5,7 @@ mod bench;
 mod info;
 mod prep;
 mod render;
+mod scene;
 
 pub use args::{Cli, Command};
 use brume::egl::Platform;
@@ -18,6 +19,7 @@ use std::time::Duration;
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(a) => render::run(&a, cli.egl),
+        Command::Scene(a) => scene::run(&a, cli.egl),
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Prep(a) => prep::run(&a),
         Command::Bench(cmd) => {

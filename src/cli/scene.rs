@@ -1,0 +1,406 @@
+//! `brume scene`: render brume's procedural 3D scene into a colour and a depth texture,
+//! fog it as an engine would (papers 001 and 003) on the same GL context, and write the
+//! frame (or a numbered sequence), the raw depth buffer and the fog-free frame.
+
+use super::args::{BlurKind, FogKind, ProfileKind, SceneArgs};
+use super::bench::parse_size;
+use brume::camera::Camera;
+use brume::egl::Platform;
+use brume::io::output::{self, Outputs};
+use brume::medium::{DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium};
+use brume::raster::{Grid, RgbaImage};
+use brume::scene::SceneRenderer;
+use brume::{Blur, Encoding, Error, FogBlur, GaussBlur, Input, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::json;
+use std::path::{Path, PathBuf};
+
+/// What one frame of the sequence did.
+struct FrameReport {
+    time: f64,
+    out: PathBuf,
+    pass_names: Vec<String>,
+    pass_ms: Vec<f64>,
+    total_ms: f64,
+    clock: &'static str,
+}
+
+pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
+    let (width, height) = parse_size(&args.size)?;
+    let camera = camera_from_args(args);
+    camera.validate()?;
+    check_sequence(args)?;
+    let outs = frame_paths(&args.out, args.frames);
+    check_outputs(args, &outs)?;
+    let blur = fog_blur_from_args(args)?;
+    if args.fog == FogKind::None && args.blur != BlurKind::None {
+        log::warn!("--fog none: nothing to blur, --blur ignored");
+    }
+
+    let mut headless = super::open_renderer(egl)?;
+    let renderer_name = headless.caps().renderer.clone();
+    let renderer = headless.renderer()?;
+    let gl = std::sync::Arc::clone(renderer.pipeline().gl());
+    let mut scene = SceneRenderer::new(gl)?;
+    let sun = scene.scene().sun_direction;
+
+    let progress = progress_bar(args.frames);
+    let mut reports = Vec::new();
+    for (k, out) in outs.iter().enumerate() {
+        let time = args.time + k as f64 / args.fps;
+        let medium = medium_from_args(args, camera, time, sun)?;
+        let frame = scene.render(&camera, width, height, time)?;
+        let input = Input {
+            colour: frame.colour,
+            colour_encoding: Encoding::Linear,
+            depth: frame.depth,
+            width,
+            height,
+        };
+        let mut outputs = Outputs::new();
+        let report = match &medium {
+            Some(m) => {
+                let (done, image) = renderer
+                    .pipeline()
+                    .fog_to_image(&input, m.as_ref(), &blur)?;
+                outputs.stage_rgba(out, &image)?;
+                FrameReport {
+                    time,
+                    out: out.clone(),
+                    pass_names: blur.pass_names(done.schedule.steps),
+                    pass_ms: done.times.pass_ms.clone(),
+                    total_ms: done.times.total_ms,
+                    clock: done.times.clock.name(),
+                }
+            }
+            None => {
+                outputs.stage_rgba(out, &top_first_rgba(&frame.read_colour()?))?;
+                FrameReport {
+                    time,
+                    out: out.clone(),
+                    pass_names: vec![],
+                    pass_ms: vec![],
+                    total_ms: 0.0,
+                    clock: "none",
+                }
+            }
+        };
+        // The depth and the fog-free frame go with the first frame of a sequence.
+        if k == 0 {
+            if let Some(path) = &args.clear_out {
+                outputs.stage_rgba(path, &top_first_rgba(&frame.read_colour()?))?;
+            }
+            if let Some(path) = &args.depth_out {
+                let mut depth = frame.read_depth()?;
+                depth.flip_rows();
+                outputs.stage_scalar(path, &depth)?;
+            }
+        }
+        super::commit(outputs)?;
+        reports.push(report);
+        progress.inc(1);
+    }
+    progress.finish_and_clear();
+
+    if args.json {
+        println!(
+            "{}",
+            report_json(args, &camera, &blur, &renderer_name, &reports)
+        );
+    } else {
+        print_summary(args, &blur, &renderer_name, &reports);
+    }
+    Ok(())
+}
+
+fn camera_from_args(args: &SceneArgs) -> Camera {
+    Camera {
+        position: args.position,
+        yaw_deg: args.yaw,
+        pitch_deg: args.pitch,
+        fov_y_deg: args.fov,
+        near: args.near,
+        far: args.far,
+    }
+}
+
+fn check_sequence(args: &SceneArgs) -> Result<()> {
+    if args.frames == 0 {
+        return Err(Error::invalid("--frames", 0, "at least 1 frame"));
+    }
+    if !(args.fps.is_finite() && args.fps > 0.0) {
+        return Err(Error::invalid("--fps", args.fps, "a frame rate > 0"));
+    }
+    if !args.time.is_finite() {
+        return Err(Error::invalid(
+            "--time",
+            args.time,
+            "a finite time in seconds",
+        ));
+    }
+    Ok(())
+}
+
+/// `out` itself for one frame; `NAME_0001.EXT` … for a sequence.
+fn frame_paths(out: &Path, frames: u32) -> Vec<PathBuf> {
+    if frames == 1 {
+        return vec![out.to_path_buf()];
+    }
+    let stem = out
+        .file_stem()
+        .map_or("frame".into(), |s| s.to_string_lossy());
+    let ext = out
+        .extension()
+        .map_or("png".into(), |e| e.to_string_lossy());
+    (1..=frames)
+        .map(|k| out.with_file_name(format!("{stem}_{k:04}.{ext}")))
+        .collect()
+}
+
+fn check_outputs(args: &SceneArgs, outs: &[PathBuf]) -> Result<()> {
+    let mut all: Vec<(&str, &Path)> = outs.iter().map(|p| ("--out", p.as_path())).collect();
+    for out in outs {
+        output::check_image_output(out, "--out")?;
+    }
+    if let Some(p) = &args.clear_out {
+        output::check_image_output(p, "--clear-out")?;
+        all.push(("--clear-out", p));
+    }
+    if let Some(p) = &args.depth_out {
+        output::check_scalar_output(p, "--depth-out")?;
+        all.push(("--depth-out", p));
+    }
+    let inputs: Vec<PathBuf> = match args.distance.noise.as_str() {
+        "generated" | "none" => vec![],
+        path => vec![PathBuf::from(path)],
+    };
+    super::refuse_overlaps(&all, &inputs)
+}
+
+fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
+    let b = &args.blur_options;
+    let gauss = GaussBlur {
+        distance: b.blur_distance,
+        falloff: b.blur_falloff,
+        maximum: b.blur_max,
+        precision: b.precision,
+    };
+    let blur = match args.blur {
+        BlurKind::None => FogBlur::None,
+        BlurKind::GaussSingle => FogBlur::GaussSingle(gauss),
+        BlurKind::GaussSeparate => FogBlur::GaussSeparate(gauss),
+        BlurKind::Diffusion => FogBlur::Diffusion(Blur {
+            scheme: b.scheme,
+            sigma0: b.sigma0,
+            rho_max: b.rho_max,
+            precision: b.precision,
+            ..Blur::default()
+        }),
+    };
+    // The diffusion blur's options are checked when its schedule is planned.
+    if let FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) = &blur {
+        g.validate()?;
+    }
+    Ok(blur)
+}
+
+/// The medium the options describe at `time` (`None` for `--fog none`).
+fn medium_from_args(
+    args: &SceneArgs,
+    camera: Camera,
+    time: f64,
+    sun: [f64; 3],
+) -> Result<Option<Box<dyn Medium>>> {
+    let lambda = args.blur_options.lambda;
+    let medium: Box<dyn Medium> = match args.fog {
+        FogKind::None => return Ok(None),
+        FogKind::Layered => {
+            let l = &args.layered;
+            let mut fog = LayeredFog::new(camera, profile_from_args(l.profile, l));
+            fog.colour = args.fog_colour.unwrap_or(fog.colour);
+            fog.albedo = l.albedo.unwrap_or(fog.albedo);
+            fog.lambda = lambda.unwrap_or(fog.lambda);
+            Box::new(fog)
+        }
+        FogKind::Distance => {
+            let d = &args.distance;
+            let defaults = DistanceFog::default();
+            Box::new(DistanceFog {
+                camera,
+                start_distance: d.fog_start.unwrap_or(defaults.start_distance),
+                distance: d.fog_distance.unwrap_or(defaults.distance),
+                exponent: d.fog_exponent.unwrap_or(defaults.exponent),
+                max_density: d.max_density.unwrap_or(defaults.max_density),
+                colour: args.fog_colour.unwrap_or(defaults.colour),
+                light_direction: d.light_dir.unwrap_or(sun),
+                scatter_start: d.scatter_start.unwrap_or(defaults.scatter_start),
+                scatter_exponent: d.scatter_exponent.unwrap_or(defaults.scatter_exponent),
+                scatter_colour: d.scatter_colour.unwrap_or(defaults.scatter_colour),
+                noise: noise_from_args(d)?,
+                time,
+                lambda: lambda.unwrap_or(defaults.lambda),
+                range_unit: camera.far,
+            })
+        }
+    };
+    medium.validate()?;
+    Ok(Some(medium))
+}
+
+/// The chosen profile: its preset (src/medium/layered.rs) with the options given.
+fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> HeightProfile {
+    let preset = match kind {
+        ProfileKind::Exponential => HeightProfile::EXPONENTIAL,
+        ProfileKind::Band => HeightProfile::SINE_BAND,
+        ProfileKind::Ramp => HeightProfile::LINEAR_RAMP,
+    };
+    let or = |given: Option<f64>, default: f64| given.unwrap_or(default);
+    match preset {
+        HeightProfile::Exponential {
+            density,
+            base,
+            scale_height,
+        } => HeightProfile::Exponential {
+            density: or(l.density, density),
+            base: or(l.base, base),
+            scale_height: or(l.scale_height, scale_height),
+        },
+        HeightProfile::SineBand {
+            density,
+            base,
+            thickness,
+        } => HeightProfile::SineBand {
+            density: or(l.density, density),
+            base: or(l.base, base),
+            thickness: or(l.thickness, thickness),
+        },
+        HeightProfile::LinearRamp {
+            density,
+            floor,
+            top,
+        } => HeightProfile::LinearRamp {
+            density: or(l.density, density),
+            floor: or(l.base, floor),
+            top: or(l.top, top),
+        },
+    }
+}
+
+fn noise_from_args(d: &super::args::DistanceArgs) -> Result<Option<FogNoise>> {
+    let mut noise = match d.noise.as_str() {
+        "none" => return Ok(None),
+        "generated" if d.noise_seed == 0 => FogNoise::default(),
+        "generated" => FogNoise::generate(256, d.noise_seed)?,
+        path => FogNoise::from_png(Path::new(path))?,
+    };
+    noise.size = d.noise_size.unwrap_or(noise.size);
+    noise.speed = d.noise_speed.unwrap_or(noise.speed);
+    noise.low = d.noise_low.unwrap_or(noise.low);
+    noise.high = d.noise_high.unwrap_or(noise.high);
+    Ok(Some(noise))
+}
+
+/// A frame read back from GL (bottom row first) as an RGBA image whose top row is first.
+fn top_first_rgba(rgb: &brume::raster::RgbImage) -> RgbaImage {
+    let mut image: RgbaImage = Grid::from_fn(rgb.width(), rgb.height(), |x, y| {
+        let [r, g, b] = *rgb.get(x, y);
+        [r, g, b, 1.0]
+    });
+    image.flip_rows();
+    image
+}
+
+fn progress_bar(frames: u32) -> ProgressBar {
+    if frames <= 1 {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(u64::from(frames));
+    if let Ok(style) = ProgressStyle::with_template("{bar:40} {pos}/{len} frames, {eta} left") {
+        bar.set_style(style);
+    }
+    bar
+}
+
+fn fog_name(fog: FogKind) -> &'static str {
+    match fog {
+        FogKind::Distance => "distance",
+        FogKind::Layered => "layered",
+        FogKind::None => "none",
+    }
+}
+
+fn report_json(
+    args: &SceneArgs,
+    camera: &Camera,
+    blur: &FogBlur,
+    renderer: &str,
+    reports: &[FrameReport],
+) -> serde_json::Value {
+    let frames: Vec<serde_json::Value> = reports
+        .iter()
+        .map(|r| {
+            let passes: Vec<serde_json::Value> = r
+                .pass_names
+                .iter()
+                .zip(&r.pass_ms)
+                .map(|(name, ms)| json!({ "pass": name, "ms": ms }))
+                .collect();
+            json!({
+                "time": r.time,
+                "out": r.out.display().to_string(),
+                "total_ms": r.total_ms,
+                "clock": r.clock,
+                "passes": passes,
+            })
+        })
+        .collect();
+    json!({
+        "size": args.size,
+        "fog": fog_name(args.fog),
+        "blur": blur.name(),
+        "camera": {
+            "position": camera.position,
+            "yaw": camera.yaw_deg,
+            "pitch": camera.pitch_deg,
+            "fov": camera.fov_y_deg,
+            "near": camera.near,
+            "far": camera.far,
+        },
+        "renderer": renderer,
+        "depth_out": args.depth_out.as_ref().map(|p| p.display().to_string()),
+        "clear_out": args.clear_out.as_ref().map(|p| p.display().to_string()),
+        "frames": frames,
+    })
+}
+
+fn print_summary(args: &SceneArgs, blur: &FogBlur, renderer: &str, reports: &[FrameReport]) {
+    for r in reports {
+        let passes: Vec<String> = r
+            .pass_names
+            .iter()
+            .zip(&r.pass_ms)
+            .map(|(name, ms)| format!("{name} {ms:.2}"))
+            .collect();
+        let summary = if passes.len() > 4 {
+            format!("{} passes", passes.len())
+        } else {
+            passes.join(", ")
+        };
+        println!(
+            "wrote {} ({} fog, blur {}, {:.1} ms by {} on {renderer}: {summary})",
+            r.out.display(),
+            fog_name(args.fog),
+            blur.name(),
+            r.total_ms,
+            r.clock,
+        );
+    }
+    for (option, path) in [
+        ("depth buffer", &args.depth_out),
+        ("fog-free frame", &args.clear_out),
+    ] {
+        if let Some(p) = path {
+            println!("wrote {option} {}", p.display());
+        }
+    }
+}
