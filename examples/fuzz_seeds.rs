@@ -192,6 +192,29 @@ fn main() -> Res<()> {
     );
     seeds.put("colour_image", "grey8.png", png8.clone());
     seeds.put("colour_image", "rgb.jpg", jpeg.clone());
+    // Renderers' linear float frames: flat R, G, B beside a depth Z; Blender's multilayer
+    // names in half floats; a colour PFM.
+    let hdr = [0.25f32, 3.5, 0.0, 1.0, 64.0, 0.5];
+    let halves = || FlatSamples::F16(hdr.iter().map(|&v| half::f16::from_f32(v)).collect());
+    let f32s = || FlatSamples::F32(hdr.to_vec());
+    let rgbz = vec![("R", f32s()), ("G", f32s()), ("B", f32s()), ("Z", z())];
+    let blender = vec![
+        ("ViewLayer.Combined.R", halves()),
+        ("ViewLayer.Combined.G", halves()),
+        ("ViewLayer.Combined.B", halves()),
+        ("ViewLayer.Combined.A", halves()),
+        ("ViewLayer.Depth.Z", z()),
+        ("ViewLayer.Mist.Z", halves()),
+    ];
+    seeds.put(
+        "colour_image",
+        "rgbz.exr",
+        exr(rgbz, Compression::ZIP16, false)?,
+    );
+    let blender = exr(blender, Compression::ZIP16, false)?;
+    seeds.put("colour_image", "blender.exr", blender.clone());
+    seeds.put("exr", "blender.exr", blender);
+    seeds.put("colour_image", "rgb.pfm", pfm("PF", 3, 2, &hdr, true, "\n"));
 
     // load_range: extension index (0 png, 1 pfm, 2 exr, 3 tif, 4 tiff, 5 npy, 6 jpg, 7 txt)
     // with bit 3 set when a calib.txt follows, two option bytes, then the calib's length

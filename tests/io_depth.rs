@@ -542,8 +542,150 @@ fn exr_float_map_picks_the_depth_channel() {
     Image::from_layer(layer).write().to_file(&bad).unwrap();
     expect_format_error(
         load_range(&bad, &DepthOptions::default()),
-        "Z, Y, R or depth",
+        "expected a depth channel",
     );
+}
+
+/// The channel the depth loader reads from a 3x2 EXR whose channel `i` holds `i + 1`
+/// everywhere (parts in order, then channels in the order given), or the error.
+fn chosen_channel(parts: Vec<(Option<&str>, Vec<&str>)>) -> brume::Result<f32> {
+    let mut value = 0.0;
+    let parts = parts
+        .into_iter()
+        .map(|(name, channels)| {
+            let channels = channels
+                .into_iter()
+                .map(|c| {
+                    value += 1.0;
+                    (c, common::f32s(&[value; 6]))
+                })
+                .collect();
+            (name, channels)
+        })
+        .collect();
+    let bytes = common::exr_bytes(3, 2, parts);
+    let d = load_range_from_bytes(&bytes, Path::new("d.exr"), &opts(DepthFormat::Float), None)?;
+    Ok(*d.range.get(2, 1))
+}
+
+#[test]
+fn exr_depth_channels_as_engines_and_tools_name_them() {
+    let flat = |channels: &[&'static str]| vec![(None, channels.to_vec())];
+    let blender = [
+        "ViewLayer.Combined.R",
+        "ViewLayer.Combined.G",
+        "ViewLayer.Combined.B",
+        "ViewLayer.Combined.A",
+        "ViewLayer.Depth.Z",
+        "ViewLayer.Mist.Z",
+        "ViewLayer.Normal.X",
+        "ViewLayer.Normal.Y",
+        "ViewLayer.Normal.Z",
+    ];
+    // (channels, the 1-based index of the one that must be read)
+    let cases: [(&[&str], f32); 9] = [
+        (&["R", "G", "B", "A", "Z"], 5.0),
+        (&blender, 5.0),
+        (&["R", "G", "B", "depth.Z"], 4.0), // Nuke
+        (&["Depth.Z", "R", "G", "B"], 1.0),
+        // A Z in a depth layer before one in another layer, both before a flat Y.
+        (&["Y", "camera.Z", "depth.Z"], 3.0),
+        (&["Y", "camera.Z"], 2.0),
+        // A depth channel before the red of a colour image.
+        (&["R", "G", "B", "depth"], 4.0),
+        (&["R", "G", "B", "Depth"], 4.0),
+        (&["distance"], 1.0),
+    ];
+    for (channels, want) in cases {
+        assert_eq!(
+            chosen_channel(flat(channels)).unwrap(),
+            want,
+            "{channels:?}"
+        );
+    }
+    // Neither a vector's Z or Y (normals, positions) nor Blender's mist factor is depth.
+    for channels in [
+        &[
+            "ViewLayer.Mist.Z",
+            "ViewLayer.Normal.X",
+            "ViewLayer.Normal.Y",
+            "ViewLayer.Normal.Z",
+        ][..],
+        &["X", "Y", "Z"],
+    ] {
+        let err = expect_err(chosen_channel(flat(channels)));
+        assert!(
+            err.to_string().contains("expected a depth channel"),
+            "{err}"
+        );
+    }
+    // Multi-part: the part's name is the layer. The decoder alone would read the first
+    // part with a `Z`.
+    let parts = vec![
+        (Some("beauty"), vec!["B", "G", "R", "Z"]),
+        (Some("ViewLayer.Depth"), vec!["Z"]),
+    ];
+    assert_eq!(chosen_channel(parts).unwrap(), 5.0);
+}
+
+#[test]
+fn one_exr_holds_the_colour_and_the_depth() {
+    // What Blender and engine capture tools write: `render --image f.exr --depth f.exr`.
+    let dir = tempfile::tempdir().unwrap();
+    let z = [2.0f32, 3.0, 4.0, 5.0, 6.0, 1e10];
+    let colour = [0.25f32, 2.5, 0.0, 1.0, 0.5, 40.0];
+    let files = [
+        (
+            "flat.exr",
+            vec![
+                ("R", colour),
+                ("G", colour),
+                ("B", colour),
+                ("A", [1.0; 6]),
+                ("Z", z),
+            ],
+        ),
+        (
+            "blender.exr",
+            vec![
+                ("ViewLayer.Combined.R", colour),
+                ("ViewLayer.Combined.G", colour),
+                ("ViewLayer.Combined.B", colour),
+                ("ViewLayer.Combined.A", [1.0; 6]),
+                ("ViewLayer.Depth.Z", z),
+            ],
+        ),
+    ];
+    for (name, channels) in files {
+        let channels = channels
+            .into_iter()
+            .map(|(c, v)| (c, common::f32s(&v)))
+            .collect();
+        let path = write(
+            dir.path(),
+            name,
+            &common::exr_bytes(3, 2, vec![(None, channels)]),
+        );
+        let image = brume::io::image::load_linear_rgb(&path).unwrap();
+        let depth = load_range(&path, &DepthOptions::default()).unwrap();
+        assert_eq!(
+            (depth.format, depth.kind),
+            (DepthFormat::Float, DepthKind::Depth)
+        );
+        for i in 0..6 {
+            let (x, y) = (i % 3, i / 3);
+            assert_eq!(*image.get(x, y), [colour[i]; 3], "{name} {i}");
+            assert_eq!(*depth.range.get(x, y), z[i], "{name} {i}");
+        }
+        // Planar depth with a field of view becomes range: longer off the axis.
+        let with_fov = DepthOptions {
+            kind: Some(DepthKind::Depth),
+            fov: Some(60.0),
+            ..DepthOptions::default()
+        };
+        let range = load_range(&path, &with_fov).unwrap().range;
+        assert!(*range.get(0, 0) > z[0], "{name}");
+    }
 }
 
 #[test]

@@ -1,9 +1,15 @@
-//! Colour image loading: sRGB curves, PNG/JPEG decoding, errors on bad files.
+//! Colour image loading: sRGB curves, PNG/JPEG decoding, the linear float images of
+//! renderers and engines (OpenEXR with flat or layered channel names, colour PFM), errors
+//! on bad files.
 
 use std::path::Path;
 
 use brume::io::image::{decode_linear_rgb, linear_to_srgb, load_linear_rgb, srgb_to_linear};
+use brume::raster::RgbImage;
 use brume::Error;
+
+mod common;
+use common::{exr_bytes, f16s, f32s};
 
 #[test]
 fn srgb_known_values() {
@@ -139,4 +145,248 @@ fn missing_file_is_an_io_error() {
     let err = expect_err(load_linear_rgb(Path::new("/nonexistent/brume.png")));
     assert!(matches!(err, Error::Io { .. }));
     assert!(err.to_string().contains("/nonexistent/brume.png"));
+}
+
+/// A 3x2 frame's red, green and blue planes (top row first): HDR values above 1 included,
+/// all exact in half floats too.
+const RED: [f32; 6] = [0.0, 0.25, 1.0, 3.5, 1000.0, 0.125];
+const GREEN: [f32; 6] = [0.5, 0.75, 2.0, 0.0, 8.0, 0.0625];
+const BLUE: [f32; 6] = [1.5, 0.0, 0.5, 16.0, 0.25, 64.0];
+
+fn write(dir: &Path, name: &str, bytes: &[u8]) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, bytes).unwrap();
+    p
+}
+
+/// Asserts a 3x2 image holding exactly `RED`, `GREEN`, `BLUE`.
+fn assert_planes(img: &RgbImage) {
+    assert_eq!((img.width(), img.height()), (3, 2));
+    for i in 0..6 {
+        assert_eq!(
+            *img.get(i % 3, i / 3),
+            [RED[i], GREEN[i], BLUE[i]],
+            "pixel {i}"
+        );
+    }
+}
+
+#[test]
+fn exr_rgb_is_linear_with_hdr_kept_and_alpha_and_depth_ignored() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = exr_bytes(
+        3,
+        2,
+        vec![(
+            None,
+            vec![
+                ("R", f32s(&RED)),
+                ("G", f32s(&GREEN)),
+                ("B", f32s(&BLUE)),
+                ("A", f32s(&[0.5; 6])),
+                ("Z", f32s(&[7.0; 6])),
+            ],
+        )],
+    );
+    let p = write(dir.path(), "frame.exr", &bytes);
+    assert_planes(&load_linear_rgb(&p).unwrap());
+    // The content decides, not the name.
+    assert_planes(&decode_linear_rgb(&bytes, "frame.png").unwrap());
+}
+
+#[test]
+fn blender_multilayer_exr_gives_the_combined_pass() {
+    // Blender's names; `AO` sorts before `Combined` and `Vector` (motion, stored as RGBA)
+    // after it, so neither "first layer" nor "last layer" would do.
+    let ones = [1.0; 6];
+    let bytes = exr_bytes(
+        3,
+        2,
+        vec![(
+            Some("ignored in a single-part file"),
+            vec![
+                ("ViewLayer.AO.R", f16s(&ones)),
+                ("ViewLayer.AO.G", f16s(&ones)),
+                ("ViewLayer.AO.B", f16s(&ones)),
+                ("ViewLayer.Combined.R", f16s(&RED)),
+                ("ViewLayer.Combined.G", f16s(&GREEN)),
+                ("ViewLayer.Combined.B", f16s(&BLUE)),
+                ("ViewLayer.Combined.A", f16s(&ones)),
+                ("ViewLayer.Depth.Z", f32s(&[4.0; 6])),
+                ("ViewLayer.Vector.R", f16s(&ones)),
+                ("ViewLayer.Vector.G", f16s(&ones)),
+                ("ViewLayer.Vector.B", f16s(&ones)),
+                ("ViewLayer.Vector.A", f16s(&ones)),
+            ],
+        )],
+    );
+    assert_planes(&decode_linear_rgb(&bytes, "blender.exr").unwrap());
+
+    // Without a Combined pass, the first layer with R, G and B.
+    let bytes = exr_bytes(
+        3,
+        2,
+        vec![(
+            None,
+            vec![
+                ("beauty.R", f32s(&RED)),
+                ("beauty.G", f32s(&GREEN)),
+                ("beauty.B", f32s(&BLUE)),
+                ("normals.R", f32s(&ones)),
+                ("normals.G", f32s(&ones)),
+                ("normals.B", f32s(&ones)),
+                ("zz.R", f32s(&ones)),
+            ],
+        )],
+    );
+    assert_planes(&decode_linear_rgb(&bytes, "layers.exr").unwrap());
+}
+
+#[test]
+fn multi_part_exr_reads_the_part_chosen() {
+    // Both parts have channels R, G and B: the decoder alone would take the first.
+    let nines = [9.0; 6];
+    let bytes = exr_bytes(
+        3,
+        2,
+        vec![
+            (
+                Some("ViewLayer.AO"),
+                vec![
+                    ("R", f32s(&nines)),
+                    ("G", f32s(&nines)),
+                    ("B", f32s(&nines)),
+                ],
+            ),
+            (
+                Some("ViewLayer.Combined"),
+                vec![("B", f32s(&BLUE)), ("G", f32s(&GREEN)), ("R", f32s(&RED))],
+            ),
+        ],
+    );
+    assert_planes(&decode_linear_rgb(&bytes, "parts.exr").unwrap());
+}
+
+#[test]
+fn grey_y_exr_is_replicated_and_depth_only_exr_is_refused() {
+    let bytes = exr_bytes(3, 2, vec![(None, vec![("Y", f32s(&RED))])]);
+    let img = decode_linear_rgb(&bytes, "grey.exr").unwrap();
+    for (i, red) in RED.into_iter().enumerate() {
+        assert_eq!(*img.get(i % 3, i / 3), [red; 3]);
+    }
+    // A depth map given as the colour image: refused, not shown as grey.
+    for (file, channel) in [("z.exr", "Z"), ("blender-z.exr", "ViewLayer.Depth.Z")] {
+        let bytes = exr_bytes(3, 2, vec![(None, vec![(channel, f32s(&[2.0; 6]))])]);
+        let msg = expect_err(decode_linear_rgb(&bytes, file)).to_string();
+        for needle in [file, channel, "R, G and B", "no colour"] {
+            assert!(msg.contains(needle), "`{msg}` should mention `{needle}`");
+        }
+    }
+    // Luminance-chroma: the chroma is not silently dropped.
+    let bytes = exr_bytes(
+        3,
+        2,
+        vec![(
+            None,
+            vec![("Y", f32s(&RED)), ("RY", f32s(&RED)), ("BY", f32s(&RED))],
+        )],
+    );
+    let msg = expect_err(decode_linear_rgb(&bytes, "yc.exr")).to_string();
+    assert!(msg.contains("luminance-chroma"), "{msg}");
+}
+
+#[test]
+fn colour_pfm_is_linear_and_bottom_row_first() {
+    // Rows bottom to top, little-endian (negative scale); the same image big-endian.
+    for (little, scale) in [(true, "-1.0"), (false, "1.0")] {
+        let mut bytes = format!("PF\n3 2\n{scale}\n").into_bytes();
+        for y in [1, 0] {
+            for x in 0..3 {
+                let i = y * 3 + x;
+                for v in [RED[i], GREEN[i], BLUE[i]] {
+                    bytes.extend(if little {
+                        v.to_le_bytes()
+                    } else {
+                        v.to_be_bytes()
+                    });
+                }
+            }
+        }
+        assert_planes(&decode_linear_rgb(&bytes, "frame.pfm").unwrap());
+    }
+    let grey = [&b"Pf\n1 1\n-1\n"[..], &1.0f32.to_le_bytes()].concat();
+    let msg = expect_err(decode_linear_rgb(&grey, "disp0.pfm")).to_string();
+    assert!(msg.contains("disp0.pfm") && msg.contains("`PF`"), "{msg}");
+}
+
+#[test]
+fn nan_is_refused_at_its_pixel_and_negatives_become_zero() {
+    let mut red = RED;
+    red[4] = f32::NAN; // pixel (1, 1)
+    let mut blue = BLUE;
+    blue[5] = f32::INFINITY;
+    let bytes = exr_bytes(
+        3,
+        2,
+        vec![(
+            None,
+            vec![("R", f32s(&red)), ("G", f32s(&GREEN)), ("B", f32s(&blue))],
+        )],
+    );
+    let err = expect_err(decode_linear_rgb(&bytes, "nan.exr"));
+    assert!(matches!(err, Error::Format { .. }));
+    let msg = err.to_string();
+    for needle in ["nan.exr", "(1, 1)", "channel R", "2 value(s)"] {
+        assert!(msg.contains(needle), "`{msg}` should mention `{needle}`");
+    }
+
+    let mut green = GREEN;
+    green[0] = -0.5;
+    let bytes = exr_bytes(
+        3,
+        2,
+        vec![(
+            None,
+            vec![("R", f32s(&RED)), ("G", f32s(&green)), ("B", f32s(&BLUE))],
+        )],
+    );
+    let img = decode_linear_rgb(&bytes, "negative.exr").unwrap();
+    assert_eq!(*img.get(0, 0), [RED[0], 0.0, BLUE[0]]);
+    assert_eq!(*img.get(2, 1), [RED[5], GREEN[5], BLUE[5]]);
+}
+
+#[test]
+fn truncated_or_corrupt_float_images_are_format_errors_naming_the_file() {
+    let channels = |v: &[f32]| vec![(None, vec![("R", f32s(v)), ("G", f32s(v)), ("B", f32s(v))])];
+    let values: Vec<f32> = (0..64 * 48).map(|i| (i % 97) as f32 * 0.37).collect();
+    let exr = exr_bytes(64, 48, channels(&values));
+    assert!(decode_linear_rgb(&exr, "whole.exr").is_ok());
+    for cut in [5, 40, exr.len() / 3, exr.len() / 2, exr.len() - 1] {
+        assert_format_error_naming(
+            expect_err(decode_linear_rgb(&exr[..cut], "cut.exr")),
+            "cut.exr",
+        );
+    }
+    // ZIP streams overwritten with garbage, the header and offsets left intact.
+    let mut corrupt = exr.clone();
+    let from = corrupt.len() / 2;
+    for (i, b) in corrupt[from..].iter_mut().enumerate() {
+        *b = (i * 31 % 251) as u8;
+    }
+    assert_format_error_naming(
+        expect_err(decode_linear_rgb(&corrupt, "bad.exr")),
+        "bad.exr",
+    );
+
+    let pfm = [&b"PF\n2 2\n-1\n"[..], &[0u8; 4 * 3 * 3]].concat();
+    assert_format_error_naming(expect_err(decode_linear_rgb(&pfm, "cut.pfm")), "cut.pfm");
+    assert_format_error_naming(
+        expect_err(decode_linear_rgb(b"PF", "magic.pfm")),
+        "magic.pfm",
+    );
+    // Unknown data lists what is read.
+    let msg = expect_err(decode_linear_rgb(b"GIF89a....", "x.gif")).to_string();
+    for needle in ["x.gif", "PNG", "JPEG", "OpenEXR", "PFM"] {
+        assert!(msg.contains(needle), "`{msg}` should mention `{needle}`");
+    }
 }

@@ -107,6 +107,25 @@ fn exr_header_claiming_100000_squared_is_refused_before_decoding() {
 }
 
 #[test]
+fn colour_exr_and_pfm_headers_beyond_the_limit_are_refused_before_decoding() {
+    // Every part's header is checked before the channels are even looked at.
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "huge.exr", &exr_claiming(100_000, 100_000));
+    expect_limit_error(load_linear_rgb(&p), "huge.exr", "100000x100000", MAX_SIDE);
+    let p = write(dir.path(), "many.exr", &exr_claiming(16384, 16384));
+    expect_limit_error(load_linear_rgb(&p), "many.exr", "16384x16384", MAX_PIXELS);
+    let msg = load_linear_rgb(&write(dir.path(), "short.exr", &exr_claiming(8000, 8000)))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        msg.contains("short.exr") && msg.contains("truncated"),
+        "{msg}"
+    );
+    let p = write(dir.path(), "many.pfm", b"PF\n16384 16384\n-1\n");
+    expect_limit_error(load_linear_rgb(&p), "many.pfm", "16384x16384", MAX_PIXELS);
+}
+
+#[test]
 fn npy_shape_whose_product_wraps_is_refused_in_either_order() {
     let dir = tempfile::tempdir().unwrap();
     for fortran in [false, true] {

@@ -1,13 +1,28 @@
-//! Colour images: PNG or JPEG in sRGB, decoded to linear light.
+//! Colour images, as linear light: PNG or JPEG in sRGB, decoded by the sRGB curve; and the
+//! float images renderers, engines and 3D tools write, OpenEXR and colour PFM, whose
+//! values are linear already and are taken as they are (values above 1 included).
+//!
+//! The format is told by the file's first bytes (its magic number), not by its name, as
+//! for PNG and JPEG before: the file name is only used in messages.
 //!
 //! Embedded ICC profiles, PNG `gAMA` chunks and EXIF orientation are ignored: inputs are
 //! taken as sRGB and as stored, so that the colour image stays aligned with a depth map
-//! that knows nothing of the orientation tag.
+//! that knows nothing of the orientation tag. An EXR's chromaticities are ignored too:
+//! its primaries are taken to be the output's.
+//!
+//! Float values: above 1 (HDR) they are kept; a NaN or infinite value is refused, naming
+//! the first pixel holding one (the fog's blur would spread it over its whole footprint);
+//! a negative value (the ringing of a sharp reconstruction filter, a denoiser's
+//! undershoot: no light is negative) is clamped to 0, with a warning in the log. Alpha is
+//! dropped without un-premultiplying: EXR colour is premultiplied by convention, so a
+//! transparent background reads as black.
 
 use std::path::Path;
 
 use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 
+use crate::io::codec::exr::parse_exr_rgb;
+use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::limits::check_size;
 use crate::raster::RgbImage;
 use crate::{Error, Result};
@@ -32,23 +47,105 @@ pub fn linear_to_srgb(v: f32) -> f32 {
     }
 }
 
-/// Loads a PNG or JPEG (8- or 16-bit, grey or RGB, alpha dropped) and converts it from
-/// sRGB to linear light. Errors name the file; sizes beyond `io::limits` are refused.
+/// The formats [`load_linear_rgb`] reads, for messages.
+const COLOUR_FORMATS: &str =
+    "a PNG or JPEG (sRGB), an OpenEXR (.exr, linear) or a colour PFM (`PF`, linear) file";
+
+/// Loads a colour image as linear light: a PNG or JPEG (8- or 16-bit, grey or RGB, alpha
+/// dropped) converted from sRGB, or an OpenEXR or colour PFM taken as linear (see the
+/// module docs for the EXR channels read and for NaN and negative values). Errors name the
+/// file; sizes beyond `io::limits` are refused before the pixels are allocated.
 pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     decode_linear_rgb(&bytes, &path.display().to_string())
 }
 
 /// Same as [`load_linear_rgb`] for bytes already in memory (an embedded asset); `name`
-/// stands for the file in error messages.
+/// stands for the file in error messages. The format is told by the first bytes.
+///
+/// From an OpenEXR file, the `R`, `G`, `B` channels are read: the flat ones, else those
+/// of the first layer with `Combined` in its name (Blender multilayer:
+/// `ViewLayer.Combined.R`), else those of the first layer that has all three; failing
+/// that, a lone `Y` channel as grey. Which channels were used is logged. A file holding
+/// only depth is refused, with a hint to give it as the depth map.
 pub fn decode_linear_rgb(bytes: &[u8], name: &str) -> Result<RgbImage> {
-    let decoded = decode_any(bytes, name)?;
+    let path = Path::new(name);
+    if bytes.starts_with(&EXR_MAGIC) {
+        let exr = parse_exr_rgb(bytes, path)?;
+        log::info!("{name}: linear colour from EXR channels {}", exr.source);
+        return linear_float(exr.image, name);
+    }
+    if is_pfm(bytes) {
+        return match parse_pfm(bytes, path)? {
+            Pfm::Rgb(image) => linear_float(image, name),
+            // One unnamed channel is, in practice, a disparity or depth map (Middlebury's
+            // disp0.pfm), unlike an EXR's `Y`, which names luminance.
+            Pfm::Grey(_) => Err(Error::format(
+                path,
+                "PFM is `Pf` (one channel, usually depth or disparity); a colour PFM is `PF` \
+                 (3 channels)",
+            )),
+        };
+    }
+    let decoded = decode_image(bytes, name, COLOUR_FORMATS)?;
     Ok(to_linear_rgb(&decoded))
+}
+
+/// The first four bytes of every OpenEXR file.
+const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+
+/// Whether the bytes start like a PFM: `PF` or `Pf`, then whitespace (or nothing, so that
+/// a file cut after its magic gets the PFM reader's message).
+fn is_pfm(bytes: &[u8]) -> bool {
+    (bytes.starts_with(b"PF") || bytes.starts_with(b"Pf"))
+        && bytes.get(2).map_or(true, |b| b.is_ascii_whitespace())
+}
+
+/// Checks a float image's values as the module docs say: refuses the first NaN or
+/// infinite value, with its pixel, and clamps negative values to 0, with a warning.
+fn linear_float(mut image: RgbImage, name: &str) -> Result<RgbImage> {
+    let width = image.width();
+    let values = image.as_slice().iter().flatten();
+    if let Some(i) = values.clone().position(|v| !v.is_finite()) {
+        let (pixel, channel) = (i / 3, i % 3);
+        let value = image.as_slice()[pixel][channel];
+        let count = values.filter(|v| !v.is_finite()).count();
+        return Err(Error::format(
+            name,
+            format!(
+                "colour value {value} at pixel ({}, {}) (x, y from the top left), channel {}; \
+                 {count} value(s) are NaN or infinite in all, and brume needs finite colour: \
+                 fix them in the renderer or compositor",
+                pixel % width,
+                pixel / width,
+                ["R", "G", "B"][channel]
+            ),
+        ));
+    }
+    let mut negative = 0usize;
+    let mut lowest = 0.0f32;
+    for v in image.as_mut_slice().iter_mut().flatten() {
+        if *v < 0.0 {
+            negative += 1;
+            lowest = lowest.min(*v);
+            *v = 0.0;
+        }
+    }
+    if negative > 0 {
+        log::warn!("{name}: {negative} negative colour value(s), down to {lowest}, set to 0");
+    }
+    Ok(image)
 }
 
 /// Decodes PNG or JPEG bytes without any colour conversion; shared with the depth loaders
 /// so that 8- and 16-bit PNG depth maps keep their raw values.
 pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
+    decode_image(bytes, name, "a PNG or JPEG file")
+}
+
+/// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
+/// is none of them.
+fn decode_image(bytes: &[u8], name: &str, expected: &str) -> Result<DynamicImage> {
     let reader = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::io(name, e))?;
@@ -56,11 +153,18 @@ pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
         return Err(Error::format(
             name,
             format!(
-                "unrecognised image data (starts with {}); expected a PNG or JPEG file",
+                "unrecognised image data (starts with {}); expected {expected}",
                 hex_prefix(bytes)
             ),
         ));
     };
+    if !matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
+        // Recognised by its magic number, but no decoder is built in for it.
+        return Err(Error::format(
+            name,
+            format!("this is a {format:?} image, which is not read; expected {expected}"),
+        ));
+    }
     if format == ImageFormat::Jpeg && !jpeg_reaches_end_marker(bytes) {
         // The JPEG decoder pads a truncated scan with grey instead of failing.
         return Err(Error::format(

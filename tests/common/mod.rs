@@ -157,3 +157,50 @@ pub fn synthetic_depth_buffer(camera: &brume::camera::Camera, w: usize, h: usize
         }
     })
 }
+
+/// One part of an OpenEXR file for [`exr_bytes`]: its name (`None`: unnamed) and its
+/// channels, each a name and samples with the top row first.
+pub type ExrPart<'a> = (Option<&'a str>, Vec<(&'a str, exr::prelude::FlatSamples)>);
+
+/// The bytes of a `w` x `h` OpenEXR file of ZIP-compressed scan lines: one part per entry of
+/// `parts` (a multi-part file when there are several), as renderers and engines write
+/// them.
+pub fn exr_bytes(w: usize, h: usize, parts: Vec<ExrPart>) -> Vec<u8> {
+    use exr::prelude::*;
+    let layers: Vec<Layer<AnyChannels<FlatSamples>>> = parts
+        .into_iter()
+        .map(|(name, channels)| {
+            let attributes = match name {
+                Some(name) => LayerAttributes::named(name),
+                None => LayerAttributes::default(),
+            };
+            let list = channels
+                .into_iter()
+                .map(|(name, samples)| AnyChannel::new(name, samples))
+                .collect();
+            Layer::new(
+                (w, h),
+                attributes,
+                Encoding::SMALL_LOSSLESS,
+                AnyChannels::sort(list),
+            )
+        })
+        .collect();
+    let bounds = IntegerBounds::new((0, 0), (w, h));
+    let mut bytes = Vec::new();
+    Image::from_layers(ImageAttributes::new(bounds), layers)
+        .write()
+        .to_buffered(std::io::Cursor::new(&mut bytes))
+        .unwrap();
+    bytes
+}
+
+/// Float samples for [`exr_bytes`].
+pub fn f32s(values: &[f32]) -> exr::prelude::FlatSamples {
+    exr::prelude::FlatSamples::F32(values.to_vec())
+}
+
+/// Half-float samples for [`exr_bytes`] (Blender's default for EXR output).
+pub fn f16s(values: &[f32]) -> exr::prelude::FlatSamples {
+    exr::prelude::FlatSamples::F16(values.iter().map(|&v| half::f16::from_f32(v)).collect())
+}

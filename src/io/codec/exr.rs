@@ -1,81 +1,409 @@
-//! OpenEXR through the `exr` crate: one float channel read as a scalar map (depth files
-//! from renderers; the header is checked against `io::limits` before any pixel is
-//! decoded), and 32-bit float RGBA images or one-channel `Y` maps written with lossless
-//! compression so that outputs round-trip exactly.
+//! OpenEXR through the `exr` crate: a scalar map (depth) or a colour image read from the
+//! channels renderers and engines name them, in any part of a multi-part file, with every
+//! header checked against `io::limits` before any pixel is decoded; and 32-bit float RGBA
+//! images or one-channel `Y` maps written with lossless compression so that outputs
+//! round-trip exactly.
+//!
+//! Channel names: OpenEXR has no layer field, so tools put the layer in the name, joined by
+//! dots: `R` is a flat channel, `depth.Z` (Nuke) the `Z` of layer `depth`, and
+//! `ViewLayer.Depth.Z` or `ViewLayer.Combined.R` (Blender multilayer) a pass of a view
+//! layer. Here a channel's *layer* is everything before its last dot, and in a multi-part
+//! file the part's name is put in front, as if the channel were named `part.channel`.
 
+use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufWriter, Cursor};
 use std::path::Path;
 
+use exr::image::read::image::ReadLayers;
+use exr::image::read::layers::{ReadChannels, ReadFirstValidLayer};
+use exr::image::{Layer, SpecificChannels};
+use exr::math::Vec2;
+use exr::meta::attribute::{ChannelList, Text};
+use exr::meta::header::Header;
+use exr::prelude::ReadSpecificChannel;
+
 use crate::io::limits::check_size;
-use crate::raster::{Grid, RgbaImage, ScalarMap};
+use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
-/// Reads a one-channel float map from an OpenEXR file: the first channel named `Z`, `Y`,
-/// `R` or `depth` (in that order of preference), or the only channel.
+/// Reads a one-channel float map from an OpenEXR file; the channel is chosen by
+/// [`DEPTH_CHANNEL_ORDER`].
 pub fn read_exr_scalar(path: &Path) -> Result<ScalarMap> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
     parse_exr_scalar(&bytes, path)
 }
 
-pub(crate) fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
-    use exr::prelude::{read, ReadChannels, ReadLayers, ReadSpecificChannel};
-    let bad = |e: exr::error::Error| Error::format(path, format!("cannot read as OpenEXR: {e}"));
-    // The decoder allocates for the size its header claims before reading any pixel, so
-    // the header is read and checked on its own first.
-    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false).map_err(bad)?;
+/// The order in which a depth (or any scalar) map's channel is chosen, first match wins;
+/// within one rule, the first channel in the file (channels are sorted by name, parts come
+/// in file order).
+///
+/// 1. `Z`, a flat channel.
+/// 2. `Z` of a layer with `Depth` (any case) in its path: `depth.Z` (Nuke), `Depth.Z`,
+///    `ViewLayer.Depth.Z` (Blender).
+/// 3. `Z` of any other layer, `<layer>.Z`.
+/// 4. `depth` or `Depth`, a flat channel.
+/// 5. `Y`, a flat channel (what brume writes for a scalar map).
+/// 6. `R`, a flat channel (a grey map stored in red).
+/// 7. The only channel of the file.
+///
+/// A `Z` (or flat `Y`) is never taken from a layer that also has an `X` channel (a
+/// vector: normals, positions, motion), nor a `Z` from a layer with `Mist` in its path
+/// (Blender stores its mist pass as a `Z` channel too, but it holds a 0-1 fog factor, not
+/// a distance). `depth` comes before `Y` and `R` so that a file holding colour and a
+/// `depth` channel gives its depth, not its red.
+pub const DEPTH_CHANNEL_ORDER: &str = "Z; <layer>.Z with Depth in the layer's name \
+     (depth.Z, ViewLayer.Depth.Z); any other <layer>.Z except vectors (beside an X) and Mist; \
+     depth or Depth; Y; R; the only channel";
+
+/// A channel of a flat (not deep) part of a file, as the choice rules see it.
+struct Channel<'m> {
+    /// Index of the part holding it.
+    part: usize,
+    /// That part's header.
+    header: &'m Header,
+    /// Its name inside the part, as stored.
+    text: &'m Text,
+    /// Its name with the part's in front in a multi-part file (`part.name`).
+    full: String,
+}
+
+impl Channel<'_> {
+    /// Everything before the last dot: `ViewLayer.Depth` for `ViewLayer.Depth.Z`, empty
+    /// for a flat channel.
+    fn layer(&self) -> &str {
+        self.full.rsplit_once('.').map_or("", |(layer, _)| layer)
+    }
+
+    /// The name after the last dot: `Z` for `ViewLayer.Depth.Z`.
+    fn leaf(&self) -> &str {
+        self.full
+            .rsplit_once('.')
+            .map_or(&self.full, |(_, leaf)| leaf)
+    }
+
+    /// Whether a component of the layer's path is `name` (case ignored).
+    fn layer_has(&self, name: &str) -> bool {
+        self.layer()
+            .split('.')
+            .any(|part| part.eq_ignore_ascii_case(name))
+    }
+}
+
+/// Every channel of a file's flat parts (parts in file order, channels in the order of
+/// each part's list: sorted by name, as the format requires), indexed by part, layer and
+/// name so that finding a channel's siblings stays linear in a header listing thousands.
+struct Channels<'m> {
+    all: Vec<Channel<'m>>,
+    index: HashMap<(usize, String, String), usize>,
+}
+
+impl<'m> Channels<'m> {
+    fn new(meta: &'m exr::meta::MetaData) -> Self {
+        let multi_part = meta.headers.len() > 1;
+        let all: Vec<Channel> = meta
+            .headers
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| !h.deep)
+            .flat_map(|(part, header)| {
+                let name = header
+                    .own_attributes
+                    .layer_name
+                    .as_ref()
+                    .filter(|_| multi_part);
+                header.channels.list.iter().map(move |c| Channel {
+                    part,
+                    header,
+                    text: &c.name,
+                    full: match name {
+                        Some(name) => format!("{name}.{}", c.name),
+                        None => c.name.to_string(),
+                    },
+                })
+            })
+            .collect();
+        let mut index = HashMap::with_capacity(all.len());
+        for (i, c) in all.iter().enumerate() {
+            // A malformed file may repeat a name: the rules see its first channel.
+            index
+                .entry((c.part, c.layer().to_string(), c.leaf().to_string()))
+                .or_insert(i);
+        }
+        Channels { all, index }
+    }
+
+    /// The channel named `leaf` in `c`'s layer and part.
+    fn sibling(&self, c: &Channel, leaf: &str) -> Option<&Channel<'m>> {
+        let key = (c.part, c.layer().to_string(), leaf.to_string());
+        self.index.get(&key).map(|&i| &self.all[i])
+    }
+
+    /// The first channel that `rule` accepts.
+    fn first(&self, rule: impl Fn(&Channel) -> bool) -> Option<&Channel<'m>> {
+        self.all.iter().find(|c| rule(c))
+    }
+
+    /// The channel [`DEPTH_CHANNEL_ORDER`] picks, if any.
+    fn depth(&self) -> Option<&Channel<'m>> {
+        let z =
+            |c: &Channel| c.leaf() == "Z" && !c.layer_has("Mist") && self.sibling(c, "X").is_none();
+        let flat = |c: &Channel, names: &[&str]| names.contains(&c.full.as_str());
+        let rules: [&dyn Fn(&Channel) -> bool; 6] = [
+            &|c| z(c) && c.layer().is_empty(),
+            &|c| z(c) && c.layer_has("depth"),
+            &|c| z(c),
+            &|c| flat(c, &["depth", "Depth"]),
+            &|c| flat(c, &["Y"]) && self.sibling(c, "X").is_none(),
+            &|c| flat(c, &["R"]),
+        ];
+        rules
+            .iter()
+            .find_map(|rule| self.first(rule))
+            .or(if self.all.len() == 1 {
+                self.all.first()
+            } else {
+                None
+            })
+    }
+
+    /// The `R`, `G` and `B` of one layer: flat first, then the first layer with
+    /// `Combined` in its path, then the first layer that has all three.
+    fn rgb(&self) -> Option<[&Channel<'m>; 3]> {
+        let triple = |r: &Channel| -> Option<[&Channel<'m>; 3]> {
+            if r.leaf() != "R" {
+                return None;
+            }
+            let r = self.sibling(r, "R")?;
+            Some([r, self.sibling(r, "G")?, self.sibling(r, "B")?])
+        };
+        let rules: [&dyn Fn(&Channel) -> bool; 3] = [
+            &|c| c.layer().is_empty(),
+            &|c| c.layer_has("Combined"),
+            &|_| true,
+        ];
+        rules
+            .iter()
+            .find_map(|rule| self.all.iter().filter(|c| rule(c)).find_map(triple))
+    }
+
+    /// The names for a message, the first few only: a hostile header can list thousands.
+    fn list(&self) -> String {
+        const SHOWN: usize = 12;
+        let mut names: Vec<&str> = self
+            .all
+            .iter()
+            .take(SHOWN)
+            .map(|c| c.full.as_str())
+            .collect();
+        let more = format!("… {} more", self.all.len().saturating_sub(SHOWN));
+        if self.all.len() > SHOWN {
+            names.push(&more);
+        }
+        format!("[{}]", names.join(", "))
+    }
+}
+
+/// Reads the headers and checks every part against `io::limits` and the file's length.
+/// The decoder allocates for the size its header claims before reading any pixel, so the
+/// header is read and checked on its own first.
+fn checked_meta(bytes: &[u8], path: &Path) -> Result<exr::meta::MetaData> {
+    let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
+        .map_err(|e| cannot_read(path, e))?;
     for header in meta.headers.iter() {
         check_header(header, bytes.len(), path)?;
     }
-    // Like the decoder's `first_valid_layer` when every channel is read: the first layer.
-    let header = meta
-        .headers
-        .first()
-        .ok_or_else(|| Error::format(path, "EXR file has no layer; expected one"))?;
-    let channels = &header.channels.list;
-    let names: Vec<String> = channels.iter().map(|c| c.name.to_string()).collect();
-    let chosen = ["Z", "Y", "R", "depth"]
-        .iter()
-        .find_map(|want| names.iter().position(|n| n == want))
-        .or(if names.len() == 1 { Some(0) } else { None })
-        .ok_or_else(|| {
-            Error::format(
-                path,
-                format!(
-                    "EXR channels are [{}]; expected one named Z, Y, R or depth, or a single channel",
-                    names.join(", ")
-                ),
-            )
-        })?;
-    let (w, h) = (header.layer_size.width(), header.layer_size.height());
-    let sampling = channels[chosen].sampling;
-    if (sampling.x(), sampling.y()) != (1, 1) {
-        return Err(Error::format(
+    if meta.headers.is_empty() {
+        return Err(Error::format(path, "EXR file has no part; expected one"));
+    }
+    Ok(meta)
+}
+
+fn cannot_read(path: &Path, e: exr::error::Error) -> Error {
+    Error::format(
+        path,
+        format!("cannot read as OpenEXR: {e}; the file may be truncated or corrupt"),
+    )
+}
+
+pub(crate) fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
+    let meta = checked_meta(bytes, path)?;
+    let channels = Channels::new(&meta);
+    let chosen = channels.depth().ok_or_else(|| {
+        Error::format(
             path,
             format!(
-                "EXR channel {} is subsampled ({}x{} pixels per sample for {w}x{h} pixels); expected full resolution",
-                names[chosen],
-                sampling.x(),
-                sampling.y()
+                "EXR channels are {}; expected a depth channel, in order of preference: {}",
+                channels.list(),
+                DEPTH_CHANNEL_ORDER
             ),
-        ));
+        )
+    })?;
+    if chosen.full != "Z" {
+        log::info!("{}: depth from EXR channel {}", path.display(), chosen.full);
     }
+    full_resolution(chosen, path)?;
+    let (w, h) = (
+        chosen.header.layer_size.width(),
+        chosen.header.layer_size.height(),
+    );
     // Only the chosen channel is decoded: the others could hold many times its size.
-    let image = read()
+    let read = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
         .specific_channels()
-        .required(names[chosen].as_str())
+        .required(chosen.text.clone())
         .collect_pixels(
             |size, _| vec![f32::NAN; size.area()],
             move |data: &mut Vec<f32>, pos, (v,): (f32,)| data[pos.y() * w + pos.x()] = v,
-        )
+        );
+    let pixels = read_part(read, bytes, chosen.header, path)?;
+    Ok(Grid::from_vec(w, h, pixels))
+}
+
+/// A colour image read from an EXR file, and where in the file it was found.
+pub(crate) struct ExrColour {
+    /// The pixels, linear as stored, row 0 at the top.
+    pub image: RgbImage,
+    /// Which channels they came from, for the log: `R, G, B`,
+    /// `ViewLayer.Combined.R, .G, .B` or `Y (grey)`.
+    pub source: String,
+}
+
+/// What [`parse_exr_rgb`] reads, for messages.
+const EXR_COLOUR_CHANNELS: &str = "R, G and B (flat, or a layer's <layer>.R, \
+     <layer>.G, <layer>.B such as ViewLayer.Combined.R), or a single Y channel (grey)";
+
+/// Reads a colour image from an OpenEXR file, values as stored (linear), alpha and every
+/// other channel ignored: the `R`, `G`, `B` of one layer, the flat ones first, then the
+/// first layer with `Combined` in its path (Blender's beauty pass), then the first layer
+/// that has all three; failing that, a flat `Y` (luminance) as grey, unless it is a
+/// vector's (beside an `X`).
+pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
+    let meta = checked_meta(bytes, path)?;
+    let channels = Channels::new(&meta);
+    if let Some([r, g, b]) = channels.rgb() {
+        for c in [r, g, b] {
+            full_resolution(c, path)?;
+        }
+        let (w, h) = (r.header.layer_size.width(), r.header.layer_size.height());
+        // Only the three channels are decoded: a multilayer file holds many more.
+        let read = exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .specific_channels()
+            .required(r.text.clone())
+            .required(g.text.clone())
+            .required(b.text.clone())
+            .collect_pixels(
+                |size, _| vec![[f32::NAN; 3]; size.area()],
+                move |data: &mut Vec<[f32; 3]>, pos, (r, g, b): (f32, f32, f32)| {
+                    data[pos.y() * w + pos.x()] = [r, g, b];
+                },
+            );
+        let pixels = read_part(read, bytes, r.header, path)?;
+        let source = match r.layer() {
+            "" => "R, G, B".to_string(),
+            layer => format!("{layer}.R, .G, .B"),
+        };
+        return Ok(ExrColour {
+            image: Grid::from_vec(w, h, pixels),
+            source,
+        });
+    }
+    // Luminance-chroma images keep their colour in subsampled RY and BY channels; their Y
+    // alone would silently lose it.
+    let chroma = channels
+        .first(|c| matches!(c.full.as_str(), "RY" | "BY"))
+        .is_some();
+    let grey = channels.first(|c| c.full == "Y" && channels.sibling(c, "X").is_none());
+    if let Some(y) = grey.filter(|_| !chroma) {
+        full_resolution(y, path)?;
+        let (w, h) = (y.header.layer_size.width(), y.header.layer_size.height());
+        let read = exr::prelude::read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .specific_channels()
+            .required(y.text.clone())
+            .collect_pixels(
+                |size, _| vec![[f32::NAN; 3]; size.area()],
+                move |data: &mut Vec<[f32; 3]>, pos, (v,): (f32,)| {
+                    data[pos.y() * w + pos.x()] = [v; 3];
+                },
+            );
+        let pixels = read_part(read, bytes, y.header, path)?;
+        return Ok(ExrColour {
+            image: Grid::from_vec(w, h, pixels),
+            source: "Y (grey)".to_string(),
+        });
+    }
+    // The depth rules take a lone channel of any name: point at depth only when named so.
+    let depth = channels
+        .depth()
+        .filter(|c| c.leaf() == "Z" || c.full.eq_ignore_ascii_case("depth"));
+    let hint = match (chroma, depth) {
+        (true, _) => "; luminance-chroma (Y, RY, BY) images are not read: save it as RGB".into(),
+        (false, Some(depth)) => format!(
+            "; it has depth ({}) but no colour: give it as the depth map, with a colour image",
+            depth.full
+        ),
+        (false, None) => String::new(),
+    };
+    Err(Error::format(
+        path,
+        format!(
+            "EXR channels are {}; expected colour channels {EXR_COLOUR_CHANNELS}{hint}",
+            channels.list()
+        ),
+    ))
+}
+
+/// Refuses a subsampled channel: only full-resolution ones line up with the pixels.
+fn full_resolution(c: &Channel, path: &Path) -> Result<()> {
+    let description = c
+        .header
+        .channels
+        .list
+        .iter()
+        .find(|d| &d.name == c.text)
+        .expect("the channel comes from this header");
+    let (sx, sy) = (description.sampling.x(), description.sampling.y());
+    if (sx, sy) != (1, 1) {
+        let (w, h) = (c.header.layer_size.width(), c.header.layer_size.height());
+        return Err(Error::format(
+            path,
+            format!(
+                "EXR channel {} is subsampled ({sx}x{sy} pixels per sample for {w}x{h} pixels); expected full resolution",
+                c.full
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Decodes the pixels that `read` collects from the one part `header` describes (the
+/// decoder's own choice, the first part that has the channels, could be another), and
+/// checks that the decoder saw the size the header claims.
+fn read_part<C, T, D>(read: C, bytes: &[u8], header: &Header, path: &Path) -> Result<Vec<T>>
+where
+    for<'s> C: ReadChannels<'s>,
+    for<'s> ReadFirstValidLayer<OnlyPart<C>>:
+        ReadLayers<'s, Layers = Layer<SpecificChannels<Vec<T>, D>>>,
+{
+    let only = OnlyPart {
+        read,
+        name: header.own_attributes.layer_name.clone(),
+        channels: header.channels.clone(),
+        size: header.layer_size,
+        position: header.own_attributes.layer_position,
+    };
+    let image = only
         .first_valid_layer()
         .all_attributes()
         .from_buffered(Cursor::new(bytes))
-        .map_err(bad)?;
-    let layer = image.layer_data;
-    let size = layer.size;
+        .map_err(|e| cannot_read(path, e))?;
+    let size = image.layer_data.size;
+    let (w, h) = (header.layer_size.width(), header.layer_size.height());
     if (size.width(), size.height()) != (w, h) {
         return Err(Error::format(
             path,
@@ -86,7 +414,35 @@ pub(crate) fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
             ),
         ));
     }
-    Ok(Grid::from_vec(w, h, layer.channel_data.pixels))
+    Ok(image.layer_data.channel_data.pixels)
+}
+
+/// A channel reader that accepts only one part, so that the decoder's "first layer with
+/// these channels" is the part chosen here. Parts are told apart by what differs between
+/// them (the whole header could hold a NaN attribute, unequal to itself); the format
+/// requires each part of a multi-part file to have a name of its own.
+struct OnlyPart<C> {
+    read: C,
+    name: Option<Text>,
+    channels: ChannelList,
+    size: Vec2<usize>,
+    position: Vec2<i32>,
+}
+
+impl<'s, C: ReadChannels<'s>> ReadChannels<'s> for OnlyPart<C> {
+    type Reader = C::Reader;
+
+    fn create_channels_reader(&'s self, header: &Header) -> exr::error::Result<C::Reader> {
+        let same = header.own_attributes.layer_name == self.name
+            && header.channels == self.channels
+            && header.layer_size == self.size
+            && header.own_attributes.layer_position == self.position;
+        if same {
+            self.read.create_channels_reader(header)
+        } else {
+            Err(exr::error::Error::Invalid("not the part chosen".into()))
+        }
+    }
 }
 
 /// Refuses a layer whose claimed size is beyond `io::limits`, or which the file is too
