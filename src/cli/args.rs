@@ -157,8 +157,9 @@ pub struct PrepOptionArgs {
 /// `brume render`.
 #[derive(Args, Debug)]
 pub struct RenderArgs {
-    /// Colour image (PNG or JPEG, 8- or 16-bit sRGB). Without --image and --depth the
-    /// built-in demo scene is rendered.
+    /// Colour image: PNG or JPEG (8- or 16-bit sRGB), or OpenEXR or PFM (linear float, as
+    /// renderers and engines write). Without --image and --depth the built-in demo scene
+    /// is rendered.
     #[arg(long, value_name = "PATH", requires = "depth")]
     pub image: Option<PathBuf>,
 
