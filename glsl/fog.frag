@@ -3,15 +3,14 @@
 // with τ and L∞ from the medium. GAUSS_SINGLE blurs the fog-free colour first, in the
 // same pass (paper 001, "single pass"): C ← mix(C, gauss5(C), b). WRITE_BLUR_WEIGHT writes
 // the fogged colour with b in alpha to a float target instead, for gauss_blur.frag
-// (paper 001, "separate passes").
+// (paper 001, "separate passes"). COLOUR_SRGB decodes an 8-bit sRGB colour texture,
+// OUTPUT_SRGB encodes for an 8-bit destination without an sRGB format.
 // Assembled by src/pipeline/engine.rs: #version, #defines, prelude.glsl, medium_api.glsl,
 // the medium's glsl/medium/*.glsl, gauss5.glsl, then this file.
 
 uniform sampler2D u_colour; // the host's colour texture
 uniform sampler2D u_depth;  // the host's depth texture (.r)
-uniform int u_colour_srgb;  // 1: the colour texture holds sRGB-encoded values
 uniform ivec2 u_origin;     // corner of the output rectangle in the destination (px)
-uniform int u_output_srgb;  // 1: encode to sRGB (an 8-bit destination without sRGB format)
 
 out vec4 o_colour;
 
@@ -19,7 +18,7 @@ void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - u_origin;
     float depth = texelFetch(u_depth, p, 0).r;
     MediumSample m = medium_sample(p, depth);
-    bool srgb = u_colour_srgb != 0;
+    const bool srgb = COLOUR_SRGB != 0;
     vec3 c = fetch_colour(u_colour, p, srgb);
 #if GAUSS_SINGLE
     c = mix(c, gauss5(u_colour, p, srgb), blur_weight(m, depth));
@@ -28,6 +27,9 @@ void main() {
 #if WRITE_BLUR_WEIGHT
     o_colour = vec4(fogged, blur_weight(m, depth));
 #else
-    o_colour = vec4(u_output_srgb != 0 ? linear_to_srgb(fogged) : fogged, 1.0);
+#if OUTPUT_SRGB
+    fogged = linear_to_srgb(fogged);
+#endif
+    o_colour = vec4(fogged, 1.0);
 #endif
 }

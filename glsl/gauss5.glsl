@@ -2,8 +2,8 @@
 // integer offsets, g(x)·g(y) with g(x) = e^(−x²/2)/√(2π), and sum to 0.9818: a blurred
 // pixel would lose 1.8 % of its light, so brume divides g by its sum 0.990866 (the 2D
 // weights by 0.981815). GAUSS_WEIGHTS in src/pipeline/engine.rs holds the same numbers.
-// Texels beyond the image repeat the edge (as CLAMP_TO_EDGE). `SRGB_FETCH` decodes 8-bit
-// sRGB colour when the caller says the texture holds it. Included by fog.frag and
+// Texels beyond the image repeat the edge (as CLAMP_TO_EDGE). `srgb` decodes 8-bit sRGB
+// colour; callers pass a constant, so that the decode is compiled in or out. Included by fog.frag and
 // gauss_blur.frag after the prelude.
 
 const float GAUSS_1D[3] = float[3](0.40261995, 0.24420134, 0.05448868); // g / Σg

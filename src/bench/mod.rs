@@ -5,6 +5,8 @@
 //!   actually reached is measured from an impulse response.
 //! - [`speed`] (fig. 7): the same configurations timed at one image size, median and
 //!   standard deviation of several runs after a warm-up.
+//! - [`fog`]: the engine fogs of papers 001 and 003 on brume's procedural scene, each
+//!   blur mode, median of several runs after a warm-up.
 //!
 //! [`report`] prints tables and writes CSV/JSON and [`plot`] draws the two figures; the
 //! command-line arguments and progress bars belong to the `brume` program (`src/cli`).
@@ -26,6 +28,7 @@
 //!   `--runs` renders after a warm-up, with the clock that produced it (see [`speed`]).
 
 pub mod accuracy;
+pub mod fog;
 pub mod plot;
 pub mod report;
 pub mod speed;

@@ -3,6 +3,7 @@
 //! value is an [`Error::invalid`] naming the option, like every other brume error.
 
 use brume::bench::accuracy::{run_accuracy, AccuracyOptions};
+use brume::bench::fog::{fog_table, run_fog_bench, FogBenchOptions};
 use brume::bench::plot::{accuracy_plot_bytes, speed_plot_bytes, PlotFormat};
 use brume::bench::report;
 use brume::bench::speed::{self, run_speed, SpeedOptions, Tau};
@@ -22,6 +23,28 @@ pub enum BenchCommand {
     /// Fig. 7: time of the N + 2 passes for each σref, scheme and precision (median and
     /// standard deviation of several runs after a warm-up).
     Speed(SpeedArgs),
+    /// Papers 001 and 003: the engine fogs on brume's scene (distance fog with noise and
+    /// scattering, layered fog) with each blur, median of several runs after a warm-up.
+    Fog(FogArgs),
+}
+
+/// `brume bench fog`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct FogArgs {
+    /// Frame size WIDTHxHEIGHT in px.
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "1920x1080",
+        allow_hyphen_values = true
+    )]
+    pub size: String,
+    /// Timed runs per configuration, after two untimed warm-up renders.
+    #[arg(long, default_value_t = brume::bench::fog::DEFAULT_RUNS as i64, allow_hyphen_values = true)]
+    pub runs: i64,
+    /// Print one JSON object on stdout instead of the table (the table goes to stderr).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Options shared by both experiments.
@@ -203,6 +226,33 @@ pub fn run(
                 &report::accuracy_csv(&report),
                 |path| accuracy_plot_bytes(&report, path),
             )
+        }
+        BenchCommand::Fog(f) => {
+            let (width, height) = parse_size(&f.size)?;
+            let opts = FogBenchOptions {
+                width,
+                height,
+                runs: count("--runs", f.runs, "at least 1 timed run")?,
+                ..FogBenchOptions::default()
+            };
+            let bar = progress_bar();
+            let report = run_fog_bench(renderer, &opts, &|done, total, what| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+                bar.set_message(what.to_string());
+            })?;
+            bar.finish_and_clear();
+            let table = fog_table(&report);
+            if f.json {
+                eprint!("{table}");
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(&report).map_err(|e| Error::Gl(e.to_string()))?
+                );
+            } else {
+                print!("{table}");
+            }
+            Ok(())
         }
         BenchCommand::Speed(s) => {
             let opts = s.options()?;

@@ -178,9 +178,11 @@ pub(super) enum EngineKey {
     Fog {
         gauss_single: bool,
         write_weight: bool,
+        srgb_in: bool,
+        srgb_out: bool,
     },
     /// `gauss_blur.frag`.
-    GaussBlur,
+    GaussBlur { srgb_out: bool },
     /// `fog_blend.frag`.
     Blend,
 }
@@ -192,15 +194,23 @@ impl EngineKey {
             EngineKey::Fog {
                 gauss_single,
                 write_weight,
+                srgb_in,
+                srgb_out,
             } => (
                 "fog.frag",
                 FOG_FRAG,
                 vec![
                     ("GAUSS_SINGLE", gauss_single),
                     ("WRITE_BLUR_WEIGHT", write_weight),
+                    ("COLOUR_SRGB", srgb_in),
+                    ("OUTPUT_SRGB", srgb_out),
                 ],
             ),
-            EngineKey::GaussBlur => ("gauss_blur.frag", GAUSS_BLUR_FRAG, vec![]),
+            EngineKey::GaussBlur { srgb_out } => (
+                "gauss_blur.frag",
+                GAUSS_BLUR_FRAG,
+                vec![("COLOUR_SRGB", false), ("OUTPUT_SRGB", srgb_out)],
+            ),
             EngineKey::Blend => ("fog_blend.frag", FOG_BLEND_FRAG, vec![]),
         }
     }
@@ -215,12 +225,10 @@ impl EngineKey {
 pub(super) const GAUSS5: &str = GAUSS5_GLSL;
 
 /// The uniforms of the engine passes besides the medium's.
-pub(super) const ENGINE_UNIFORMS: [&str; 8] = [
+pub(super) const ENGINE_UNIFORMS: [&str; 6] = [
     "u_colour",
     "u_depth",
-    "u_colour_srgb",
     "u_origin",
-    "u_output_srgb",
     "u_gauss",
     "u_f",
     "brume_size",
@@ -240,9 +248,10 @@ impl Pipeline {
         if let FogBlur::Diffusion(b) = blur {
             return self.render(input, medium, b, output);
         }
-        self.prepare_engine(input, medium, blur, &engine_keys(blur))?;
+        let keys = engine_keys(blur, input.colour_encoding, output_encoding(output));
+        self.prepare_engine(input, medium, blur, &keys)?;
         let result = self.with_output(input, output, |pipeline, destination| {
-            pipeline.run_engine(input, medium, blur, destination)
+            pipeline.run_engine(input, medium, blur, &keys, destination)
         });
         self.leave_state();
         Ok(Frame {
@@ -261,9 +270,10 @@ impl Pipeline {
         if let FogBlur::Diffusion(b) = blur {
             return self.render_and_read(input, medium, b);
         }
-        self.prepare_engine(input, medium, blur, &engine_keys(blur))?;
+        let keys = engine_keys(blur, input.colour_encoding, Encoding::Linear);
+        self.prepare_engine(input, medium, blur, &keys)?;
         let result = self
-            .run_engine(input, medium, blur, &Destination::Internal)
+            .run_engine(input, medium, blur, &keys, &Destination::Internal)
             .and_then(|times| Ok((times, self.engine_targets()?.framebuffers[1].read_rgba()?)));
         self.leave_state();
         let (times, pixels) = result?;
@@ -423,12 +433,13 @@ impl Pipeline {
             .ok_or_else(|| Error::Gl("internal: fog targets not allocated".into()))
     }
 
-    /// The one or two passes of a Gaussian or no-blur fog.
+    /// The one or two passes (`keys`, from [`engine_keys`]) of a Gaussian or no-blur fog.
     fn run_engine(
         &self,
         input: &Input,
         medium: &dyn Medium,
         blur: &FogBlur,
+        keys: &[EngineKey],
         destination: &Destination,
     ) -> Result<PassTimes> {
         self.timed(|pipeline, timer| {
@@ -437,35 +448,33 @@ impl Pipeline {
                 FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => *g,
                 _ => GaussBlur::default(),
             };
-            let separate = matches!(blur, FogBlur::GaussSeparate(_));
-            let fog_key = EngineKey::Fog {
-                gauss_single: matches!(blur, FogBlur::GaussSingle(_)),
-                write_weight: separate,
-            };
-            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), fog_key))?;
+            let separate = keys.len() == 2;
+            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), keys[0]))?;
             timer.pass(|| {
-                let (origin, encoding) = if separate {
+                // The encoding is compiled into the program (engine_keys).
+                let origin = if separate {
                     targets.framebuffers[0].bind_for_drawing();
-                    ([0, 0], Encoding::Linear)
+                    [0, 0]
                 } else {
-                    pipeline.bind_destination(destination, input, &targets.framebuffers[1])
+                    pipeline
+                        .bind_destination(destination, input, &targets.framebuffers[1])
+                        .0
                 };
                 pipeline.use_program(p);
                 bind_texture(&pipeline.gl, UNIT_MAIN, Some(input.colour));
                 bind_texture(&pipeline.gl, UNIT_DEPTH, Some(input.depth));
-                pipeline.set_engine_uniforms(p, medium, input, origin, encoding, gauss);
+                pipeline.set_engine_uniforms(p, medium, input, origin, gauss);
                 draw_fullscreen(&pipeline.gl);
             })?;
-            if separate {
-                let b =
-                    pipeline.compiled(ProgramKey::Engine(medium.name(), EngineKey::GaussBlur))?;
+            if let Some(&blur_key) = keys.get(1) {
+                let b = pipeline.compiled(ProgramKey::Engine(medium.name(), blur_key))?;
                 timer.pass(|| {
-                    let (origin, encoding) =
+                    let (origin, _) =
                         pipeline.bind_destination(destination, input, &targets.framebuffers[1]);
                     pipeline.use_program(b);
                     targets.textures[0].bind(UNIT_MAIN);
                     set_int(&pipeline.gl, b, "u_f", UNIT_MAIN as i32);
-                    pipeline.set_engine_uniforms(b, medium, input, origin, encoding, gauss);
+                    pipeline.set_engine_uniforms(b, medium, input, origin, gauss);
                     draw_fullscreen(&pipeline.gl);
                 })?;
             }
@@ -485,17 +494,10 @@ impl Pipeline {
             let p = pipeline.compiled(ProgramKey::Engine(medium.name(), EngineKey::Blend))?;
             let internal = &pipeline.engine_targets()?.framebuffers[1];
             timer.pass(|| {
-                let (origin, encoding) = pipeline.bind_destination(destination, input, internal);
+                let (origin, _) = pipeline.bind_destination(destination, input, internal);
                 pipeline.use_program(p);
                 bind_texture(gl, UNIT_DEPTH, Some(input.depth));
-                pipeline.set_engine_uniforms(
-                    p,
-                    medium,
-                    input,
-                    origin,
-                    encoding,
-                    GaussBlur::default(),
-                );
+                pipeline.set_engine_uniforms(p, medium, input, origin, GaussBlur::default());
                 // SAFETY: blend state on the current context (documented in blend_fog).
                 unsafe {
                     gl.enable(glow::BLEND);
@@ -539,45 +541,47 @@ impl Pipeline {
         medium: &dyn Medium,
         input: &Input,
         origin: [i32; 2],
-        encoding: Encoding,
         gauss: GaussBlur,
     ) {
         let gl = &self.gl;
         set_int(gl, p, "u_colour", UNIT_MAIN as i32);
         set_int(gl, p, "u_depth", UNIT_DEPTH as i32);
-        set_int(
-            gl,
-            p,
-            "u_colour_srgb",
-            i32::from(input.colour_encoding == Encoding::Srgb),
-        );
         set_value(gl, p, "u_origin", UniformValue::IVec2(origin));
-        set_int(
-            gl,
-            p,
-            "u_output_srgb",
-            i32::from(encoding == Encoding::Srgb),
-        );
         set_value(gl, p, "u_gauss", gauss.uniform());
         // σ0 does not matter without diffusion; 1 px keeps media's σ finite.
         self.set_medium_uniforms(p, medium, input, 1.0);
     }
 }
 
-/// The passes of a fog blurred by `blur` (not diffusion).
-fn engine_keys(blur: &FogBlur) -> Vec<EngineKey> {
+/// The passes of a fog blurred by `blur` (not diffusion), compiled for the colour's and
+/// the destination's encodings: the sRGB conversions are compile-time switches because a
+/// run-time choice costs every pixel both ways on a software rasteriser (three `pow` per
+/// tap of the Gaussian).
+fn engine_keys(blur: &FogBlur, colour: Encoding, destination: Encoding) -> Vec<EngineKey> {
+    let (srgb_in, srgb_out) = (colour == Encoding::Srgb, destination == Encoding::Srgb);
     match blur {
         FogBlur::GaussSeparate(_) => vec![
             EngineKey::Fog {
                 gauss_single: false,
                 write_weight: true,
+                srgb_in,
+                srgb_out: false,
             },
-            EngineKey::GaussBlur,
+            EngineKey::GaussBlur { srgb_out },
         ],
         _ => vec![EngineKey::Fog {
             gauss_single: matches!(blur, FogBlur::GaussSingle(_)),
             write_weight: false,
+            srgb_in,
+            srgb_out,
         }],
+    }
+}
+
+/// The encoding an output asks for.
+fn output_encoding(output: &Output) -> Encoding {
+    match *output {
+        Output::Framebuffer { encoding, .. } | Output::Texture { encoding, .. } => encoding,
     }
 }
 

@@ -1,0 +1,285 @@
+//! The engine fogs' speed (papers 001 and 003): brume's procedural scene rendered once at
+//! the benchmark's size into a colour and a depth texture, then each fog configuration
+//! rendered into a float texture (no read-back) `runs` times after `warm_up` untimed
+//! renders, which absorb the driver's shader compilation (llvmpipe compiles a shader
+//! variant at its first draw). The figure is the median of the runs' summed pass times,
+//! with the clock that produced them; each pass's median is kept too.
+//!
+//! Paper 001 reports 0.20 ms (fog) and 0.44 ms (fog and 5 x 5 blur in one pass) at
+//! 1920 x 1080 on a GTX 970; paper 003 0.4-2.1 ms at 512²-1024² on a GeForce 6800.
+
+use crate::blur::Blur;
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::gpu::texture::{Filter, TexelFormat, Texture};
+use crate::medium::{DistanceFog, LayeredFog, Medium};
+use crate::pipeline::{Encoding, FogBlur, GaussBlur, Input, Output};
+use crate::renderer::Renderer;
+use crate::scene::SceneRenderer;
+use std::sync::Arc;
+
+/// Timed runs per configuration by default (the "median of 5").
+pub const DEFAULT_RUNS: usize = 5;
+/// Untimed renders before the timed ones.
+pub const DEFAULT_WARM_UP: usize = 2;
+
+/// What to measure.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FogBenchOptions {
+    /// Frame width (px).
+    pub width: usize,
+    /// Frame height (px).
+    pub height: usize,
+    /// Timed runs per configuration (≥ 1).
+    pub runs: usize,
+    /// Untimed renders first.
+    pub warm_up: usize,
+}
+
+impl Default for FogBenchOptions {
+    fn default() -> Self {
+        FogBenchOptions {
+            width: 1920,
+            height: 1080,
+            runs: DEFAULT_RUNS,
+            warm_up: DEFAULT_WARM_UP,
+        }
+    }
+}
+
+/// One configuration's figures.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FogBenchRow {
+    /// The fog and its features, e.g. `distance + noise + scatter`.
+    pub fog: &'static str,
+    /// `none`, `gauss-single`, `gauss-separate`, `diffusion` or `blend` (paper 003's
+    /// fixed-function blending over the host's frame).
+    pub blur: &'static str,
+    /// Median of the runs' totals (ms).
+    pub median_ms: f64,
+    /// Every run's total (ms), in order.
+    pub runs_ms: Vec<f64>,
+    /// Pass names, in order.
+    pub passes: Vec<String>,
+    /// Median time of each pass (ms).
+    pub pass_median_ms: Vec<f64>,
+    /// `gpu-timer` or `wall`.
+    pub clock: &'static str,
+}
+
+/// The whole benchmark.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct FogBenchReport {
+    /// `GL_RENDERER`.
+    pub renderer: String,
+    /// Frame width (px).
+    pub width: usize,
+    /// Frame height (px).
+    pub height: usize,
+    /// Timed runs per configuration.
+    pub runs: usize,
+    /// Time to render the scene itself once, warm (ms, wall clock with `glFinish`).
+    pub scene_ms: f64,
+    /// One row per configuration.
+    pub rows: Vec<FogBenchRow>,
+}
+
+/// How a configuration is drawn.
+enum Mode {
+    Fog(FogBlur),
+    Blend,
+}
+
+/// Runs every configuration (module docs). `progress` is told each configuration's name
+/// before it runs.
+pub fn run_fog_bench(
+    renderer: &mut Renderer,
+    opts: &FogBenchOptions,
+    progress: &dyn Fn(usize, usize, &str),
+) -> Result<FogBenchReport> {
+    if opts.runs == 0 {
+        return Err(Error::invalid("runs", 0, "at least 1 timed run"));
+    }
+    let (w, h) = (opts.width, opts.height);
+    renderer.caps().require_size("frame", w, h)?;
+    let renderer_name = renderer.caps().renderer.clone();
+    let pipeline = renderer.pipeline();
+    let gl = Arc::clone(pipeline.gl());
+    let camera = Camera::default();
+    let mut scene = SceneRenderer::new(Arc::clone(&gl))?;
+    scene.render(&camera, w, h, 0.0)?;
+    let started = std::time::Instant::now();
+    let frame = scene.render(&camera, w, h, 0.0)?;
+    // SAFETY: waiting for the scene's draws on the current context, to time them.
+    unsafe { glow::HasContext::finish(&*gl) };
+    let scene_ms = started.elapsed().as_secs_f64() * 1e3;
+    let input = Input {
+        colour: frame.colour,
+        colour_encoding: Encoding::Linear,
+        depth: frame.depth,
+        width: w,
+        height: h,
+    };
+    let target = Texture::new(&gl, w, h, TexelFormat::Rgba16F, Filter::Nearest, None)?;
+    let output = Output::Texture {
+        texture: target.raw(),
+        encoding: Encoding::Linear,
+    };
+
+    let distance = DistanceFog {
+        camera,
+        ..DistanceFog::default()
+    };
+    let layered = LayeredFog::new(camera, Default::default());
+    let gauss = GaussBlur::default();
+    let diffusion = Blur::default();
+    let configs: Vec<(&'static str, &dyn Medium, Mode)> = vec![
+        (
+            "distance + noise + scatter",
+            &distance,
+            Mode::Fog(FogBlur::None),
+        ),
+        (
+            "distance + noise + scatter",
+            &distance,
+            Mode::Fog(FogBlur::GaussSingle(gauss)),
+        ),
+        (
+            "distance + noise + scatter",
+            &distance,
+            Mode::Fog(FogBlur::GaussSeparate(gauss)),
+        ),
+        (
+            "distance + noise + scatter",
+            &distance,
+            Mode::Fog(FogBlur::Diffusion(diffusion)),
+        ),
+        ("layered (exponential)", &layered, Mode::Fog(FogBlur::None)),
+        ("layered (exponential)", &layered, Mode::Blend),
+        (
+            "layered (exponential)",
+            &layered,
+            Mode::Fog(FogBlur::Diffusion(diffusion)),
+        ),
+    ];
+    let mut rows = Vec::new();
+    for (i, (fog, medium, mode)) in configs.iter().enumerate() {
+        let blur = match mode {
+            Mode::Fog(b) => b.name(),
+            Mode::Blend => "blend",
+        };
+        progress(i, configs.len(), &format!("{fog}, {blur}"));
+        let mut times = Vec::new();
+        let mut passes = Vec::new();
+        for run in 0..opts.warm_up + opts.runs {
+            let frame = match mode {
+                Mode::Fog(b) => {
+                    let f = pipeline.fog(&input, *medium, b, &output)?;
+                    passes = b.pass_names(f.schedule.steps);
+                    f
+                }
+                Mode::Blend => {
+                    passes = vec!["fog (blended)".into()];
+                    pipeline.blend_fog(input.depth, w, h, *medium, &output)?
+                }
+            };
+            if run >= opts.warm_up {
+                times.push(frame.times);
+            }
+        }
+        rows.push(row(fog, blur, passes, &times));
+    }
+    Ok(FogBenchReport {
+        renderer: renderer_name,
+        width: w,
+        height: h,
+        runs: opts.runs,
+        scene_ms,
+        rows,
+    })
+}
+
+fn row(
+    fog: &'static str,
+    blur: &'static str,
+    passes: Vec<String>,
+    times: &[crate::gpu::timer::PassTimes],
+) -> FogBenchRow {
+    let runs_ms: Vec<f64> = times.iter().map(|t| t.total_ms).collect();
+    let pass_median_ms = (0..passes.len())
+        .map(|p| {
+            median(
+                times
+                    .iter()
+                    .filter_map(|t| t.pass_ms.get(p).copied())
+                    .collect(),
+            )
+        })
+        .collect();
+    // A run timed again by the wall clock after a rejected GPU batch says so.
+    let clock = if times
+        .iter()
+        .all(|t| t.clock == crate::gpu::timer::Clock::GpuTimer)
+    {
+        "gpu-timer"
+    } else {
+        "wall"
+    };
+    FogBenchRow {
+        fog,
+        blur,
+        median_ms: median(runs_ms.clone()),
+        runs_ms,
+        passes,
+        pass_median_ms,
+        clock,
+    }
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        (v[n / 2 - 1] + v[n / 2]) / 2.0
+    }
+}
+
+/// The report as a text table.
+pub fn fog_table(report: &FogBenchReport) -> String {
+    let mut out = format!(
+        "engine fog at {}x{} on {}, median of {} runs (scene itself: {:.1} ms)\n",
+        report.width, report.height, report.renderer, report.runs, report.scene_ms
+    );
+    out.push_str(&format!(
+        "{:<28} {:<15} {:>10} {:>7}  {}\n",
+        "fog", "blur", "median ms", "passes", "clock"
+    ));
+    for r in &report.rows {
+        out.push_str(&format!(
+            "{:<28} {:<15} {:>10.2} {:>7}  {}\n",
+            r.fog,
+            r.blur,
+            r.median_ms,
+            r.passes.len(),
+            r.clock
+        ));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!(median(vec![]).is_nan());
+    }
+}
