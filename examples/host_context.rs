@@ -3,6 +3,13 @@
 //! its framebuffer. Then it reads the frame back, compares it with brume's f64 CPU
 //! reference, and checks that its own objects are still there and unchanged.
 //!
+//! Then the host acts as an engine (papers 001 and 003): it draws a 3D frame on its
+//! context (with brume's procedural scene as its renderer: a colour texture, a depth
+//! texture and a camera), copies the colour into its framebuffer and has brume blend
+//! paper 003's layered fog over it from the depth buffer alone; and fogs the same frame
+//! with paper 001's distance fog and 5 x 5 blur into a texture. Both are checked against
+//! the CPU reference.
+//!
 //! ```sh
 //! cargo run --example host_context
 //! ```
@@ -141,7 +148,121 @@ fn run() -> Result<bool, String> {
             gl.delete_texture(t);
         }
     }
-    Ok(error.max_abs <= tolerance && alive && untouched)
+    let engine_ok = engine_frame(&gl)?;
+    Ok(error.max_abs <= tolerance && alive && untouched && engine_ok)
+}
+
+/// The host as an engine: a rendered frame fogged from its depth buffer and camera.
+fn engine_frame(gl: &Arc<glow::Context>) -> Result<bool, String> {
+    use brume::camera::Camera;
+    use brume::medium::{DistanceFog, LayeredFog};
+    use brume::scene::SceneRenderer;
+    use brume::{FogBlur, GaussBlur};
+    let err = |e: brume::Error| e.to_string();
+    let camera = Camera {
+        pitch_deg: -4.0,
+        ..Camera::default()
+    };
+    let mut scene = SceneRenderer::new(Arc::clone(gl)).map_err(err)?;
+    let frame = scene.render(&camera, WIDTH, HEIGHT, 0.0).map_err(err)?;
+    // The CPU reference takes buffers top row first; GL's rows are bottom first.
+    let mut colour = frame.read_colour().map_err(err)?;
+    let mut depth = frame.read_depth().map_err(err)?;
+    colour.flip_rows();
+    depth.flip_rows();
+    let mut pipeline = Pipeline::new(Arc::clone(gl)).map_err(err)?;
+
+    // Paper 003: the frame is in the host's framebuffer; brume draws one blended pass.
+    // SAFETY: the host's own texture, framebuffer and a blit of the scene's colour into it.
+    let (target, fbo) = unsafe {
+        let target = float_texture(gl, glow::RGBA32F, glow::RGBA, None)?;
+        let fbo = gl.create_framebuffer()?;
+        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+        gl.framebuffer_texture_2d(
+            glow::FRAMEBUFFER,
+            glow::COLOR_ATTACHMENT0,
+            glow::TEXTURE_2D,
+            Some(target),
+            0,
+        );
+        let read = gl.create_framebuffer()?;
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(read));
+        gl.framebuffer_texture_2d(
+            glow::READ_FRAMEBUFFER,
+            glow::COLOR_ATTACHMENT0,
+            glow::TEXTURE_2D,
+            Some(frame.colour),
+            0,
+        );
+        let (w, h) = (WIDTH as i32, HEIGHT as i32);
+        gl.blit_framebuffer(
+            0,
+            0,
+            w,
+            h,
+            0,
+            0,
+            w,
+            h,
+            glow::COLOR_BUFFER_BIT,
+            glow::NEAREST,
+        );
+        gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        gl.delete_framebuffer(read);
+        (target, fbo)
+    };
+    let layered = LayeredFog::new(camera, Default::default());
+    let output = Output::Framebuffer {
+        framebuffer: Some(fbo),
+        x: 0,
+        y: 0,
+        encoding: Encoding::Linear,
+    };
+    pipeline
+        .blend_fog(frame.depth, WIDTH, HEIGHT, &layered, &output)
+        .map_err(err)?;
+    // SAFETY: reading the host's framebuffer.
+    let mut blended = unsafe { read_rgba(gl, fbo) }?;
+    blended.flip_rows();
+    let expected = reference::fog(&colour, &depth, &layered, &FogBlur::None).map_err(err)?;
+    let blend_error = reference::rgb_error(&blended, &expected, 0).max_abs;
+
+    // Paper 001: distance fog and the 5 x 5 blur of the fog-free frame, one pass.
+    let distance = DistanceFog {
+        camera,
+        noise: None,
+        ..DistanceFog::default()
+    };
+    let blur = FogBlur::GaussSingle(GaussBlur::default());
+    let input = Input {
+        colour: frame.colour,
+        colour_encoding: Encoding::Linear,
+        depth: frame.depth,
+        width: WIDTH,
+        height: HEIGHT,
+    };
+    let (_, fogged) = pipeline
+        .fog_to_image(&input, &distance, &blur)
+        .map_err(err)?;
+    let expected = reference::fog(&colour, &depth, &distance, &blur).map_err(err)?;
+    let fog_error = reference::rgb_error(&fogged, &expected, 0).max_abs;
+
+    // Tolerance as tests/engine_fog.rs: f32 distance from the depth buffer near the far
+    // plane, a few ulps of the pass, on colours up to about 1.
+    let tolerance = 2e-5;
+    println!(
+        "engine frame: layered fog blended over the host's frame, largest difference \
+         {blend_error:.3e}; distance fog + 5x5 blur {fog_error:.3e} (tolerance {tolerance:.0e})"
+    );
+    drop(pipeline);
+    drop(scene);
+    // SAFETY: the host deletes its own objects.
+    unsafe {
+        gl.delete_framebuffer(fbo);
+        gl.delete_texture(target);
+    }
+    Ok(blend_error <= tolerance && fog_error <= tolerance)
 }
 
 /// A colour test card: smooth ramps with sharp bars, in linear light.
