@@ -418,9 +418,9 @@ pub struct SceneArgs {
     #[arg(long, value_enum, default_value = "distance")]
     pub fog: FogKind,
 
-    /// How the fog blurs the scene.
-    #[arg(long, value_enum, default_value = "diffusion")]
-    pub blur: BlurKind,
+    /// How the fog blurs the scene [default: diffusion].
+    #[arg(long, value_enum)]
+    pub blur: Option<BlurKind>,
 
     /// Time in seconds: moves the distance fog's noise and the water's waves.
     #[arg(

@@ -33,7 +33,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
     let outs = frame_paths(&args.out, args.frames);
     check_outputs(args, &outs)?;
     let blur = fog_blur_from_args(args)?;
-    if args.fog == FogKind::None && args.blur != BlurKind::None {
+    if args.fog == FogKind::None && args.blur.is_some_and(|b| b != BlurKind::None) {
         log::warn!("--fog none: nothing to blur, --blur ignored");
     }
 
@@ -185,7 +185,7 @@ fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
         maximum: b.blur_max,
         precision: b.precision,
     };
-    let blur = match args.blur {
+    let blur = match args.blur.unwrap_or(BlurKind::Diffusion) {
         BlurKind::None => FogBlur::None,
         BlurKind::GaussSingle => FogBlur::GaussSingle(gauss),
         BlurKind::GaussSeparate => FogBlur::GaussSeparate(gauss),
