@@ -3,7 +3,7 @@
 //   ρ(σ)             the pixel's diffusion rate (eq. 13 for euler, eq. 18 otherwise; the
 //                    same as Schedule::rate in src/schedule.rs)
 //   (τ_g, τ_b)       a chromatic medium's other two transmissions (CHROMATIC only)
-// Assembled by src/pipeline.rs as: #version, #defines (CHROMATIC, RATE_LAW_LOG, RATE_HALF),
+// Assembled by src/pipeline/mod.rs as: #version, #defines (CHROMATIC, RATE_LAW_LOG, RATE_HALF),
 // prelude.glsl, medium_api.glsl, the medium's glsl/medium/*.glsl, then this file.
 
 uniform sampler2D u_colour; // the host's colour texture

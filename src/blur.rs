@@ -10,7 +10,7 @@ use crate::schedule::{Schedule, Scheme};
 use std::fmt;
 use std::str::FromStr;
 
-/// Default inner scale σ0 (px): reproduces the paper's step counts (GUIDE.md).
+/// Default inner scale σ0 (px): reproduces the paper's step counts (13 invariant, 1248 Euler at 25 px).
 pub const DEFAULT_SIGMA0: f64 = 1.0;
 /// Default maximum rate ρmax: the stability limit of the 4-neighbour update.
 pub const DEFAULT_RHO_MAX: f64 = 0.25;

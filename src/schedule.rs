@@ -21,7 +21,7 @@
 //! the second moment of a bilinear fetch at distance h: m(i + f) = (i + f)² + f(1 − f) =
 //! i² + (2i + 1)f for integer i and f ∈ [0, 1) (bilinear interpolation spreads the sample
 //! over two texels). The literal invariant scheme takes h_k = σk, so the variance grows by
-//! (1 + 2ρ) per step instead of e^(2ρ) and the result under-blurs (see GUIDE.md). The
+//! (1 + 2ρ) per step instead of e^(2ρ) and the result under-blurs (see `bilinear_moment`). The
 //! matched schedule keeps the paper's N and ρ(x) but picks h_k(x) so that step k adds
 //! exactly σk+1² − σk² with σk = σ0·e^(kρ): after N steps the variance is σ(x)² − σ0² +
 //! σ0² = σ(x)², bilinear spread included. m is piecewise linear and increasing, so m⁻¹
@@ -246,7 +246,7 @@ mod tests {
 
     #[test]
     fn paper_step_counts() {
-        // GUIDE.md: σ0 = 1, ρmax = 1/4, σmax = 25 → 13 invariant steps, 1248 Euler steps.
+        // The paper: σ0 = 1, ρmax = 1/4, σmax = 25 → 13 invariant steps, "more than 900" Euler.
         let inv = Schedule::new(Scheme::Invariant, 1.0, 25.0, 0.25).unwrap();
         let eul = Schedule::new(Scheme::Euler, 1.0, 25.0, 0.25).unwrap();
         assert_eq!(inv.steps, 13);

@@ -1,6 +1,6 @@
 //! `brume bench speed` on a tiny image: skipping by `--max-passes`, the report's shape,
 //! and the whole `run` entry point with its files. Timed figures are never asserted
-//! (GUIDE.md): only that they exist and are positive.
+//! (benchmarks measure speed, tests do not): only that they exist and are positive.
 mod common;
 
 use brume::bench::speed::Tau;

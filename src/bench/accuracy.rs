@@ -1,5 +1,5 @@
-//! The accuracy experiment of paper 000, sec. 5.2 (fig. 6), with the scale check that
-//! GUIDE.md asks for.
+//! The accuracy experiment of paper 000, sec. 5.2 (fig. 6), with a check of the scale
+//! each scheme actually reaches.
 //!
 //! For each σref, scheme and precision:
 //!

@@ -1,7 +1,7 @@
 //! Per-pass timing: `GL_TIME_ELAPSED` queries where `GL_EXT_disjoint_timer_query` exists,
 //! else `glFinish` + a monotonic clock. Every figure says which clock produced it.
 //!
-//! Driver facts this module works around (GUIDE.md): llvmpipe's first TIME_ELAPSED query
+//! Driver facts this module works around (measured on Mesa 22.3): llvmpipe's first TIME_ELAPSED query
 //! on a fresh context returns nonsense (about the system uptime), so [`warm_up`] spends
 //! one; a disjoint event (`GPU_DISJOINT_EXT`) invalidates a batch of queries; and some
 //! mobile drivers return values that cannot be right, so a batch whose sum exceeds the
