@@ -5,7 +5,7 @@ mod common;
 
 use brume::egl::GlContext;
 use brume::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
-use brume::{reference, Blur, Encoding, Haze, Input, Output, Pipeline};
+use brume::{reference, Blur, Encoding, FogBlur, Haze, Input, Output, Pipeline};
 use common::*;
 use glow::HasContext;
 use std::sync::Arc;
@@ -293,19 +293,27 @@ fn srgb_8_bit_textures_in_and_out() {
         texture: target8,
         encoding: Encoding::Srgb,
     };
+    // The diffusion pipeline, then the engine pass (which compiles its conversions in).
     pipeline.render(&input, &haze, &blur, &output).unwrap();
     // SAFETY: reading the host's framebuffer over its texture.
-    let got = unsafe { read_bytes(&gl, fbo, w, h) };
-    let expected = host.expected(&haze, &blur);
-    let mut worst = 0.0f64;
-    for (i, p) in expected.as_slice().iter().enumerate() {
-        for c in 0..3 {
-            let want = srgb_encode(f64::from(p[c])) * 255.0;
-            worst = worst.max((f64::from(got[4 * i + c]) - want).abs());
+    let diffused = unsafe { read_bytes(&gl, fbo, w, h) };
+    pipeline
+        .fog(&input, &haze, &FogBlur::None, &output)
+        .unwrap();
+    // SAFETY: as above.
+    let fogged = unsafe { read_bytes(&gl, fbo, w, h) };
+    let sharp = reference::fog(&host.image, &host.range, &haze, &FogBlur::None).unwrap();
+    for (got, expected) in [(diffused, host.expected(&haze, &blur)), (fogged, sharp)] {
+        let mut worst = 0.0f64;
+        for (i, p) in expected.as_slice().iter().enumerate() {
+            for c in 0..3 {
+                let want = srgb_encode(f64::from(p[c])) * 255.0;
+                worst = worst.max((f64::from(got[4 * i + c]) - want).abs());
+            }
         }
+        // One step of rounding, plus the decode of the 8-bit input in f32 on the GPU.
+        assert!(worst <= 1.0, "largest difference {worst} steps of 255");
     }
-    // One step of rounding, plus the decode of the 8-bit input in f32 on the GPU.
-    assert!(worst <= 1.0, "largest difference {worst} steps of 255");
 }
 
 /// What a render leaves (the pipeline's documented contract), and host state it must not
