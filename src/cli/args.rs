@@ -361,7 +361,12 @@ pub struct SceneArgs {
     pub clear_out: Option<PathBuf>,
 
     /// Frame size in pixels.
-    #[arg(long, value_name = "WxH", default_value = "960x540")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "960x540",
+        allow_hyphen_values = true
+    )]
     pub size: String,
 
     /// Eye position X,Y,Z in metres (y up).
@@ -417,8 +422,14 @@ pub struct SceneArgs {
     #[arg(long, value_enum, default_value = "distance")]
     pub fog: FogKind,
 
-    /// How the fog blurs the scene.
-    #[arg(long, value_enum, default_value = "diffusion")]
+    /// How the fog blurs the scene [default: diffusion; none with --fog none].
+    #[arg(
+        long,
+        value_enum,
+        default_value = "diffusion",
+        default_value_if("fog", "none", "none"),
+        hide_default_value = true
+    )]
     pub blur: BlurKind,
 
     /// Time in seconds: moves the distance fog's noise and the water's waves.
@@ -431,7 +442,12 @@ pub struct SceneArgs {
     pub time: f64,
 
     /// Number of frames of an animated sequence (numbered outputs), from --time on.
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1,
+        allow_hyphen_values = true
+    )]
     pub frames: u32,
 
     /// Frames per second of the sequence.
@@ -538,7 +554,12 @@ pub struct DistanceArgs {
     pub noise: String,
 
     /// Seed of the generated noise.
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 0,
+        allow_hyphen_values = true
+    )]
     pub noise_seed: u64,
 
     /// Metres per noise tile [100].
