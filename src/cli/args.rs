@@ -362,7 +362,12 @@ pub struct SceneArgs {
     pub clear_out: Option<PathBuf>,
 
     /// Frame size in pixels.
-    #[arg(long, value_name = "WxH", default_value = "960x540")]
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "960x540",
+        allow_hyphen_values = true
+    )]
     pub size: String,
 
     /// Eye position X,Y,Z in metres (y up).
@@ -415,12 +420,24 @@ pub struct SceneArgs {
     pub far: f64,
 
     /// The fog model.
-    #[arg(long, value_enum, default_value = "distance")]
+    #[arg(
+        long,
+        value_enum,
+        default_value = "distance",
+        allow_hyphen_values = true
+    )]
     pub fog: FogKind,
 
-    /// How the fog blurs the scene [default: diffusion].
-    #[arg(long, value_enum)]
-    pub blur: Option<BlurKind>,
+    /// How the fog blurs the scene [default: diffusion; none with --fog none].
+    #[arg(
+        long,
+        value_enum,
+        default_value = "diffusion",
+        default_value_if("fog", "none", "none"),
+        hide_default_value = true,
+        allow_hyphen_values = true
+    )]
+    pub blur: BlurKind,
 
     /// Time in seconds: moves the distance fog's noise and the water's waves.
     #[arg(
@@ -432,7 +449,12 @@ pub struct SceneArgs {
     pub time: f64,
 
     /// Number of frames of an animated sequence (numbered outputs), from --time on.
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1,
+        allow_hyphen_values = true
+    )]
     pub frames: u32,
 
     /// Frames per second of the sequence.
@@ -466,7 +488,12 @@ pub struct SceneArgs {
 #[derive(Args, Debug)]
 pub struct LayeredArgs {
     /// Height profile of the density.
-    #[arg(long, value_enum, default_value = "exponential")]
+    #[arg(
+        long,
+        value_enum,
+        default_value = "exponential",
+        allow_hyphen_values = true
+    )]
     pub profile: ProfileKind,
 
     /// Extinction at the base of the layer, per metre [exponential 0.01, band 0.01, ramp 1].
@@ -539,7 +566,12 @@ pub struct DistanceArgs {
     pub noise: String,
 
     /// Seed of the generated noise.
-    #[arg(long, value_name = "N", default_value_t = 0)]
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 0,
+        allow_hyphen_values = true
+    )]
     pub noise_seed: u64,
 
     /// Metres per noise tile [100].

@@ -33,7 +33,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
     let outs = frame_paths(&args.out, args.frames);
     check_outputs(args, &outs)?;
     let blur = fog_blur_from_args(args)?;
-    if args.fog == FogKind::None && args.blur.is_some_and(|b| b != BlurKind::None) {
+    if args.fog == FogKind::None && args.blur != BlurKind::None {
         log::warn!("--fog none: nothing to blur, --blur ignored");
     }
 
@@ -185,7 +185,7 @@ fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
         maximum: b.blur_max,
         precision: b.precision,
     };
-    let blur = match args.blur.unwrap_or(BlurKind::Diffusion) {
+    let blur = match args.blur {
         BlurKind::None => FogBlur::None,
         BlurKind::GaussSingle => FogBlur::GaussSingle(gauss),
         BlurKind::GaussSeparate => FogBlur::GaussSeparate(gauss),
@@ -197,10 +197,9 @@ fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
             ..Blur::default()
         }),
     };
-    // The diffusion blur's options are checked when its schedule is planned.
-    if let FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) = &blur {
-        g.validate()?;
-    }
+    // A bad value is refused whatever the mode, not ignored because another blur was
+    // chosen. The diffusion blur's options are checked when its schedule is planned.
+    gauss.validate()?;
     Ok(blur)
 }
 
@@ -243,8 +242,37 @@ fn medium_from_args(
             })
         }
     };
-    medium.validate()?;
+    medium.validate().map_err(distance_flags)?;
     Ok(Some(medium))
+}
+
+/// The distance fog names its fields (`distance`, `noise size`); the flags that set them
+/// are named differently (`--fog-distance`, `--noise-size`).
+fn distance_flags(e: Error) -> Error {
+    const FLAGS: [(&str, &str); 7] = [
+        ("start_distance", "--fog-start"),
+        ("distance", "--fog-distance"),
+        ("exponent", "--fog-exponent"),
+        ("light_direction", "--light-dir"),
+        ("noise size", "--noise-size"),
+        ("noise low", "--noise-low"),
+        ("noise high", "--noise-high"),
+    ];
+    match e {
+        Error::InvalidParameter {
+            name,
+            value,
+            expected,
+        } => Error::InvalidParameter {
+            name: FLAGS
+                .iter()
+                .find(|(field, _)| *field == name)
+                .map_or(name, |(_, flag)| flag.to_string()),
+            value,
+            expected,
+        },
+        other => other,
+    }
 }
 
 /// The chosen profile: its preset (src/medium/layered.rs) with the options given.
@@ -291,7 +319,13 @@ fn noise_from_args(d: &super::args::DistanceArgs) -> Result<Option<FogNoise>> {
         "none" => return Ok(None),
         "generated" if d.noise_seed == 0 => FogNoise::default(),
         "generated" => FogNoise::generate(256, d.noise_seed)?,
-        path => FogNoise::from_png(Path::new(path))?,
+        // A missing file names the option too (format errors already say "noise texture").
+        path => FogNoise::from_png(Path::new(path)).map_err(|e| match e {
+            Error::Io { path, source } => {
+                Error::format(path, format!("cannot read the --noise texture: {source}"))
+            }
+            other => other,
+        })?,
     };
     noise.size = d.noise_size.unwrap_or(noise.size);
     noise.speed = d.noise_speed.unwrap_or(noise.speed);
