@@ -14,6 +14,25 @@ vec3 fetch_colour(sampler2D image, ivec2 p, bool srgb) {
 }
 
 vec3 gauss5(sampler2D image, ivec2 p, bool srgb) {
+#if GAUSS_BILINEAR
+    // The kernel is separable, and each side pair (g1 at 1, g2 at 2) is one bilinear
+    // fetch of weight g1 + g2 at 1 + g2/(g1 + g2): 9 fetches instead of 25 (a quarter
+    // less time on llvmpipe). The pipeline binds a LINEAR, CLAMP_TO_EDGE sampler object
+    // for this pass, and chooses this path only for a filterable, linear colour texture.
+    const float SIDE = GAUSS_1D[1] + GAUSS_1D[2];
+    const float AT = 1.0 + GAUSS_1D[2] / SIDE;
+    vec2 texel = 1.0 / vec2(brume_size);
+    vec2 uv = (vec2(p) + 0.5) * texel;
+    vec3 sum = vec3(0.0);
+    for (int j = -1; j <= 1; ++j) {
+        for (int i = -1; i <= 1; ++i) {
+            float w = (i == 0 ? GAUSS_1D[0] : SIDE) * (j == 0 ? GAUSS_1D[0] : SIDE);
+            vec2 at = uv + vec2(float(i), float(j)) * (AT * texel);
+            sum += w * textureLod(image, at, 0.0).rgb;
+        }
+    }
+    return sum;
+#else
     vec3 sum = vec3(0.0);
     for (int j = -2; j <= 2; ++j) {
         for (int i = -2; i <= 2; ++i) {
@@ -22,6 +41,7 @@ vec3 gauss5(sampler2D image, ivec2 p, bool srgb) {
         }
     }
     return sum;
+#endif
 }
 
 // How much of the blurred image a pixel takes (paper 001, sec. 3.4: the blur grows with

@@ -180,9 +180,10 @@ pub(super) enum EngineKey {
         write_weight: bool,
         srgb_in: bool,
         srgb_out: bool,
+        bilinear: bool,
     },
     /// `gauss_blur.frag`.
-    GaussBlur { srgb_out: bool },
+    GaussBlur { srgb_out: bool, bilinear: bool },
     /// `fog_blend.frag`.
     Blend,
 }
@@ -196,6 +197,7 @@ impl EngineKey {
                 write_weight,
                 srgb_in,
                 srgb_out,
+                bilinear,
             } => (
                 "fog.frag",
                 FOG_FRAG,
@@ -204,12 +206,17 @@ impl EngineKey {
                     ("WRITE_BLUR_WEIGHT", write_weight),
                     ("COLOUR_SRGB", srgb_in),
                     ("OUTPUT_SRGB", srgb_out),
+                    ("GAUSS_BILINEAR", bilinear),
                 ],
             ),
-            EngineKey::GaussBlur { srgb_out } => (
+            EngineKey::GaussBlur { srgb_out, bilinear } => (
                 "gauss_blur.frag",
                 GAUSS_BLUR_FRAG,
-                vec![("COLOUR_SRGB", false), ("OUTPUT_SRGB", srgb_out)],
+                vec![
+                    ("COLOUR_SRGB", false),
+                    ("OUTPUT_SRGB", srgb_out),
+                    ("GAUSS_BILINEAR", bilinear),
+                ],
             ),
             EngineKey::Blend => ("fog_blend.frag", FOG_BLEND_FRAG, vec![]),
         }
@@ -218,6 +225,19 @@ impl EngineKey {
     /// Whether `gauss5.glsl` goes before the pass.
     pub(super) fn needs_gauss(self) -> bool {
         self != EngineKey::Blend
+    }
+
+    /// Whether the pass samples its image through the pipeline's bilinear sampler.
+    fn bilinear(self) -> bool {
+        match self {
+            EngineKey::Fog {
+                gauss_single,
+                bilinear,
+                ..
+            } => gauss_single && bilinear,
+            EngineKey::GaussBlur { bilinear, .. } => bilinear,
+            EngineKey::Blend => false,
+        }
     }
 }
 
@@ -248,7 +268,7 @@ impl Pipeline {
         if let FogBlur::Diffusion(b) = blur {
             return self.render(input, medium, b, output);
         }
-        let keys = engine_keys(blur, input.colour_encoding, output_encoding(output));
+        let keys = self.engine_keys(blur, input.colour_encoding, output_encoding(output));
         self.prepare_engine(input, medium, blur, &keys)?;
         let result = self.with_output(input, output, |pipeline, destination| {
             pipeline.run_engine(input, medium, blur, &keys, destination)
@@ -270,7 +290,7 @@ impl Pipeline {
         if let FogBlur::Diffusion(b) = blur {
             return self.render_and_read(input, medium, b);
         }
-        let keys = engine_keys(blur, input.colour_encoding, Encoding::Linear);
+        let keys = self.engine_keys(blur, input.colour_encoding, Encoding::Linear);
         self.prepare_engine(input, medium, blur, &keys)?;
         let result = self
             .run_engine(input, medium, blur, &keys, &Destination::Internal)
@@ -462,6 +482,7 @@ impl Pipeline {
                 };
                 pipeline.use_program(p);
                 bind_texture(&pipeline.gl, UNIT_MAIN, Some(input.colour));
+                pipeline.bind_gauss_sampler(keys[0]);
                 bind_texture(&pipeline.gl, UNIT_DEPTH, Some(input.depth));
                 pipeline.set_engine_uniforms(p, medium, input, origin, gauss);
                 draw_fullscreen(&pipeline.gl);
@@ -473,6 +494,7 @@ impl Pipeline {
                         pipeline.bind_destination(destination, input, &targets.framebuffers[1]);
                     pipeline.use_program(b);
                     targets.textures[0].bind(UNIT_MAIN);
+                    pipeline.bind_gauss_sampler(blur_key);
                     set_int(&pipeline.gl, b, "u_f", UNIT_MAIN as i32);
                     pipeline.set_engine_uniforms(b, medium, input, origin, gauss);
                     draw_fullscreen(&pipeline.gl);
@@ -535,6 +557,54 @@ impl Pipeline {
         }
     }
 
+    /// The passes of a fog blurred by `blur` (not diffusion), compiled for the colour's
+    /// and the destination's encodings: the sRGB conversions are compile-time switches
+    /// because a run-time choice costs every pixel both ways on a software rasteriser
+    /// (three `pow` per tap of the Gaussian). The Gaussian reads its image by bilinear
+    /// fetches where the image is surely filterable and linear: a host's colour when the
+    /// driver filters float textures (a host's RGBA32F could not be filtered otherwise;
+    /// brume cannot ask a GLES 3.0 driver a texture's format) and is not sRGB-encoded
+    /// RGBA8; brume's own intermediate when it is RGBA16F or float filtering exists.
+    fn engine_keys(
+        &self,
+        blur: &FogBlur,
+        colour: Encoding,
+        destination: Encoding,
+    ) -> Vec<EngineKey> {
+        let (srgb_in, srgb_out) = (colour == Encoding::Srgb, destination == Encoding::Srgb);
+        let float_linear = self.caps.texture_float_linear;
+        match blur {
+            FogBlur::GaussSeparate(g) => vec![
+                EngineKey::Fog {
+                    gauss_single: false,
+                    write_weight: true,
+                    srgb_in,
+                    srgb_out: false,
+                    bilinear: false,
+                },
+                EngineKey::GaussBlur {
+                    srgb_out,
+                    bilinear: float_linear || g.precision == crate::blur::Precision::F16,
+                },
+            ],
+            _ => vec![EngineKey::Fog {
+                gauss_single: matches!(blur, FogBlur::GaussSingle(_)),
+                write_weight: false,
+                srgb_in,
+                srgb_out,
+                bilinear: float_linear && !srgb_in,
+            }],
+        }
+    }
+
+    /// Binds the bilinear sampler on the image unit for a pass that wants it.
+    fn bind_gauss_sampler(&self, key: EngineKey) {
+        if key.bilinear() {
+            // SAFETY: the pipeline's own sampler object on the current context.
+            unsafe { self.gl.bind_sampler(UNIT_MAIN, Some(self.linear_sampler)) };
+        }
+    }
+
     fn set_engine_uniforms(
         &self,
         p: &crate::gpu::program::Program,
@@ -550,31 +620,6 @@ impl Pipeline {
         set_value(gl, p, "u_gauss", gauss.uniform());
         // σ0 does not matter without diffusion; 1 px keeps media's σ finite.
         self.set_medium_uniforms(p, medium, input, 1.0);
-    }
-}
-
-/// The passes of a fog blurred by `blur` (not diffusion), compiled for the colour's and
-/// the destination's encodings: the sRGB conversions are compile-time switches because a
-/// run-time choice costs every pixel both ways on a software rasteriser (three `pow` per
-/// tap of the Gaussian).
-fn engine_keys(blur: &FogBlur, colour: Encoding, destination: Encoding) -> Vec<EngineKey> {
-    let (srgb_in, srgb_out) = (colour == Encoding::Srgb, destination == Encoding::Srgb);
-    match blur {
-        FogBlur::GaussSeparate(_) => vec![
-            EngineKey::Fog {
-                gauss_single: false,
-                write_weight: true,
-                srgb_in,
-                srgb_out: false,
-            },
-            EngineKey::GaussBlur { srgb_out },
-        ],
-        _ => vec![EngineKey::Fog {
-            gauss_single: matches!(blur, FogBlur::GaussSingle(_)),
-            write_weight: false,
-            srgb_in,
-            srgb_out,
-        }],
     }
 }
 

@@ -286,6 +286,9 @@ pub struct Pipeline {
     /// The lookups of the last medium rendered, uploaded, by [`Lookup::id`].
     lookups: HashMap<u64, Texture>,
     engine_targets: Option<EngineTargets>,
+    /// LINEAR, CLAMP_TO_EDGE: the Gaussian's bilinear taps, whatever the texture's own
+    /// filter.
+    linear_sampler: glow::Sampler,
     vao: glow::VertexArray,
     caps: Capabilities,
     version_line: &'static str,
@@ -315,11 +318,21 @@ impl Pipeline {
         // SAFETY: an empty VAO is required to draw in GLES 3; owned and deleted in Drop.
         let vao = unsafe { gl.create_vertex_array().map_err(Error::Gl)? };
         crate::gpu::object_created();
+        let linear_sampler = match linear_sampler(&gl) {
+            Ok(s) => s,
+            Err(e) => {
+                // SAFETY: the VAO made just above, on the current context.
+                unsafe { gl.delete_vertex_array(vao) };
+                crate::gpu::object_deleted();
+                return Err(e);
+            }
+        };
         let mut pipeline = Pipeline {
             programs: HashMap::new(),
             targets: None,
             lookups: HashMap::new(),
             engine_targets: None,
+            linear_sampler,
             vao,
             caps,
             version_line,
@@ -844,6 +857,7 @@ impl Pipeline {
             gl.bind_vertex_array(None);
             for unit in 0..UNITS_USED {
                 bind_texture(gl, unit, None);
+                gl.bind_sampler(unit, None);
             }
             gl.active_texture(glow::TEXTURE0);
         }
@@ -871,9 +885,32 @@ impl Pipeline {
 
 impl Drop for Pipeline {
     fn drop(&mut self) {
-        // SAFETY: the VAO belongs to this pipeline, on the host's context (module docs).
-        unsafe { self.gl.delete_vertex_array(self.vao) };
+        // SAFETY: the VAO and the sampler belong to this pipeline, on the host's context
+        // (module docs).
+        unsafe {
+            self.gl.delete_vertex_array(self.vao);
+            self.gl.delete_sampler(self.linear_sampler);
+        }
         crate::gpu::object_deleted();
+        crate::gpu::object_deleted();
+    }
+}
+
+/// A sampler object with bilinear filtering and clamped edges, counted as a GL object.
+fn linear_sampler(gl: &glow::Context) -> Result<glow::Sampler> {
+    // SAFETY: sampler creation and parameters on the current context.
+    unsafe {
+        let sampler = gl.create_sampler().map_err(Error::Gl)?;
+        for (param, value) in [
+            (glow::TEXTURE_MIN_FILTER, glow::LINEAR),
+            (glow::TEXTURE_MAG_FILTER, glow::LINEAR),
+            (glow::TEXTURE_WRAP_S, glow::CLAMP_TO_EDGE),
+            (glow::TEXTURE_WRAP_T, glow::CLAMP_TO_EDGE),
+        ] {
+            gl.sampler_parameter_i32(sampler, param, value as i32);
+        }
+        crate::gpu::object_created();
+        Ok(sampler)
     }
 }
 
