@@ -38,6 +38,12 @@
 //! 3. A test renders it on the GPU and compares with the CPU reference
 //!    (`tests/gpu_vs_cpu.rs` shows how).
 //!
+//! A medium that reads a rendered frame's depth buffer returns its camera from
+//! [`Medium::camera`]; its GLSL then has `brume_ray` and `brume_eye_depth` (see
+//! `glsl/medium_api.glsl`), and its CPU side rebuilds positions by
+//! [`Camera::world_position_by_inverse`] (`layered.rs`, `distance.rs`). A medium that
+//! samples a table (a noise, a precomputed integral) returns it from [`Medium::lookups`].
+//!
 //! The pipeline compiles the medium's GLSL into the first pass (which writes τ·E, τ and the
 //! per-pixel diffusion rate) and into the last (which adds (1 − τ_blurred)·L∞), so a medium
 //! never writes a texture of its own.

@@ -13,6 +13,11 @@
 //!
 //! The CPU computes per-frame constants only (N, the offset law, the medium's uniforms).
 //!
+//! [`Pipeline::fog`] and [`Pipeline::blend_fog`] run the engine passes of papers 001 and
+//! 003 instead (one or two passes, see [`engine`]). A medium with a camera
+//! ([`Medium::camera`]) gets the eye-to-fragment ray from the vertex shader and the depth
+//! constants as uniforms ([`crate::camera`]).
+//!
 //! **An RGB τ through the blur.** The paper blurs one τ, in the alpha of the
 //! pre-multiplied colour. brume keeps τ_r there; a chromatic medium adds a second target
 //! pair (RG, the same precision) holding (τ_g, τ_b), written by multiple render targets
@@ -42,11 +47,12 @@
 //!   [`Output::Texture`] draws into level 0 of a host texture of a colour-renderable
 //!   format. Row 0 of the input lands on row y of the destination: brume does not flip.
 //! - **State changed and left.** A render binds its own framebuffers, program, vertex
-//!   array, and textures on units 0-2 (with no sampler objects); it disables `BLEND`,
+//!   array, and textures on units 0-2 and a medium's lookups from unit 3 (with no
+//!   sampler objects, except its own bilinear one for paper 001's Gaussian); it disables `BLEND`,
 //!   `DEPTH_TEST`, `STENCIL_TEST`, `SCISSOR_TEST`, `CULL_FACE`, `RASTERIZER_DISCARD`,
 //!   `SAMPLE_ALPHA_TO_COVERAGE` and `SAMPLE_COVERAGE`, and sets the colour mask to all
 //!   channels. On return the framebuffer binding (draw and read) is 0, no program and no
-//!   vertex array are bound, units 0-2 have no texture and no sampler, the active unit is
+//!   vertex array are bound, units 0-6 have no texture and no sampler, the active unit is
 //!   `TEXTURE0`, the viewport is the output rectangle, and the capabilities above stay
 //!   disabled. Anything else (blend functions, clear colour, pixel store, buffers) is left
 //!   as it was. The host sets again whatever it needs, as with egui_glow's painter.
