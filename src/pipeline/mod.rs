@@ -14,7 +14,7 @@
 //! The CPU computes per-frame constants only (N, the offset law, the medium's uniforms).
 //!
 //! [`Pipeline::fog`] and [`Pipeline::blend_fog`] run the engine passes of papers 001 and
-//! 003 instead (one or two passes, see [`engine`]). A medium with a camera
+//! 003 instead (one or two passes; [`FogBlur`] describes them). A medium with a camera
 //! ([`Medium::camera`]) gets the eye-to-fragment ray from the vertex shader and the depth
 //! constants as uniforms ([`crate::camera`]).
 //!
