@@ -24,6 +24,7 @@ pub mod gpu;
 pub mod io;
 pub mod medium;
 pub mod memory;
+pub mod metrics;
 pub mod pipeline;
 pub mod prep;
 pub mod raster;

@@ -45,6 +45,8 @@ pub struct Cli {
 pub enum Command {
     /// Render haze into an image (no input: the built-in demo scene).
     Render(RenderArgs),
+    /// Compare two images: SSIM and HSV-histogram correlation (paper 002, sec. 7.2.3).
+    Compare(CompareArgs),
     /// Render brume's procedural 3D scene and fog it as an engine would (papers 001, 003):
     /// distance or layered fog, blurred by paper 001's Gaussian or brume's diffusion.
     Scene(SceneArgs),
@@ -650,4 +652,21 @@ pub struct SceneBlurArgs {
         allow_hyphen_values = true
     )]
     pub blur_max: f64,
+}
+
+/// `brume compare`.
+#[derive(Args, Debug)]
+pub struct CompareArgs {
+    /// One image (PNG/JPEG sRGB, or EXR/PFM linear).
+    #[arg(value_name = "A")]
+    pub a: PathBuf,
+
+    /// The other, of the same size.
+    #[arg(value_name = "B")]
+    pub b: PathBuf,
+
+    /// Print one JSON object on stdout (ssim, ssim_rgb, hsv_correlation,
+    /// hsv_correlation_hsv).
+    #[arg(long)]
+    pub json: bool,
 }

@@ -2,6 +2,7 @@
 
 mod args;
 mod bench;
+mod compare;
 mod info;
 mod prep;
 mod render;
@@ -20,6 +21,7 @@ pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
         Command::Render(a) => render::run(&a, cli.egl),
         Command::Scene(a) => scene::run(&a, cli.egl),
+        Command::Compare(a) => compare::run(&a),
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Prep(a) => prep::run(&a),
         Command::Bench(cmd) => {
