@@ -560,3 +560,27 @@ fn a_signal_while_writing_leaves_no_temporary() {
         assert_eq!(fs::read(&vis).unwrap(), b"old picture");
     }
 }
+
+#[test]
+fn compare_reports_ssim_and_histogram_correlation() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, _) = small_scene(dir.path());
+    let darker = dir.path().join("darker.png");
+    write_rgba(
+        &darker,
+        &Grid::from_fn(24, 16, |x, y| [x as f32 / 48.0, y as f32 / 32.0, 0.25, 1.0]),
+    )
+    .unwrap();
+    let same = brume(dir.path(), &["compare", "im.png", "im.png", "--json"]);
+    assert!(same.status.success(), "{}", stderr(&same));
+    let v: Value = serde_json::from_slice(&same.stdout).unwrap();
+    assert_eq!(v["ssim"].as_f64(), Some(1.0));
+    assert_eq!(v["hsv_correlation"].as_f64(), Some(1.0));
+    let other = brume(dir.path(), &["compare", "im.png", "darker.png", "--json"]);
+    let v: Value = serde_json::from_slice(&other.stdout).unwrap();
+    assert!(v["ssim"].as_f64().unwrap() < 0.99, "{v}");
+    assert!(v["hsv_correlation"].as_f64().unwrap() < 0.99, "{v}");
+    assert!(image.exists());
+    let missing = brume(dir.path(), &["compare", "im.png", "nope.png"]);
+    assert_fails_cleanly(&missing, &["nope.png"]);
+}
