@@ -14,6 +14,7 @@
 //!   [`camera::Camera`]): a real rendered frame for the engine fogs to work on.
 #![warn(missing_docs)]
 
+pub mod atmosphere;
 pub mod bench;
 pub mod blur;
 pub mod camera;
