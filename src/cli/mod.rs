@@ -6,6 +6,7 @@ mod info;
 mod prep;
 mod render;
 mod scene;
+mod sky;
 
 pub use args::{Cli, Command};
 use brume::egl::Platform;
@@ -22,6 +23,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scene(a) => scene::run(&a, cli.egl),
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Prep(a) => prep::run(&a),
+        Command::Sky(a) => sky::run_sky(&a),
+        Command::Turbidity(a) => sky::run_turbidity(&a),
+        // CPU only: no GL context to open.
+        Command::Bench(bench::BenchCommand::Turbidity(a)) => bench::run_turbidity(&a),
         Command::Bench(cmd) => {
             let mut headless = open_renderer(cli.egl)?;
             bench::run(
