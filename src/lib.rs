@@ -12,6 +12,8 @@
 //! - [`reference`](mod@reference) runs the same arithmetic on the CPU in f64.
 //! - [`scene::SceneRenderer`] draws a procedural outdoor scene (colour, depth buffer and
 //!   [`camera::Camera`]): a real rendered frame for the engine fogs to work on.
+//! - [`sky`] renders Preetham clear skies through a fisheye and estimates the turbidity
+//!   of a fisheye sky photograph (paper 002), on the CPU.
 #![warn(missing_docs)]
 
 pub mod atmosphere;
@@ -34,6 +36,7 @@ pub mod renderer;
 pub(crate) mod rng;
 pub mod scene;
 pub mod schedule;
+pub mod sky;
 
 pub use blur::{Blur, Precision};
 pub use error::{Error, Result};

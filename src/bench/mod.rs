@@ -7,6 +7,8 @@
 //!   standard deviation of several runs after a warm-up.
 //! - [`fog`]: the engine fogs of papers 001 and 003 on brume's procedural scene, each
 //!   blur mode, median of several runs after a warm-up.
+//! - [`turbidity`]: paper 002's Table 1, the turbidity estimator on Preetham sky images
+//!   (CPU only), clear and with synthetic clouds.
 //!
 //! [`report`] prints tables and writes CSV/JSON and [`plot`] draws the two figures; the
 //! command-line arguments and progress bars belong to the `brume` program (`src/cli`).
@@ -32,6 +34,7 @@ pub mod fog;
 pub mod plot;
 pub mod report;
 pub mod speed;
+pub mod turbidity;
 
 pub use accuracy::{run_accuracy, AccuracyOptions, AccuracyReport, AccuracyRow};
 pub use speed::{run_speed, SpeedOptions, SpeedReport, SpeedRow};

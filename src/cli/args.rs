@@ -54,9 +54,14 @@ pub enum Command {
     Info(InfoArgs),
     /// Pre-process a range map (fill holes, find the sky, matte the horizon) and write it.
     Prep(PrepArgs),
-    /// Reproduce paper 000's accuracy (fig. 6) and speed (fig. 7) experiments.
+    /// Reproduce paper 000's accuracy (fig. 6) and speed (fig. 7) experiments, and
+    /// paper 002's turbidity estimation (Table 1).
     #[command(subcommand)]
     Bench(BenchCommand),
+    /// Render a Preetham clear sky (paper 002, sec. 3.2) as a fisheye image.
+    Sky(super::sky::SkyArgs),
+    /// Estimate the atmospheric turbidity of a fisheye sky image (paper 002, sec. 3.4).
+    Turbidity(super::sky::TurbidityArgs),
 }
 
 /// `brume info`.

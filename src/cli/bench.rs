@@ -7,6 +7,7 @@ use brume::bench::fog::{fog_table, run_fog_bench, FogBenchOptions};
 use brume::bench::plot::{accuracy_plot_bytes, speed_plot_bytes, PlotFormat};
 use brume::bench::report;
 use brume::bench::speed::{self, run_speed, SpeedOptions, Tau};
+use brume::bench::turbidity::{run_turbidity_bench, turbidity_table, TurbidityBenchOptions};
 use brume::bench::{Configs, Progress};
 use brume::io::output::{self, Outputs};
 use brume::raster::RgbImage;
@@ -26,6 +27,144 @@ pub enum BenchCommand {
     /// Papers 001 and 003: the engine fogs on brume's scene (distance fog with noise and
     /// scattering, layered fog) with each blur, median of several runs after a warm-up.
     Fog(FogArgs),
+    /// Paper 002's Table 1: the turbidity estimator on Preetham sky images (T = 2..9,
+    /// 100 estimations of N = 100 points each), clear and with synthetic clouds; CPU only.
+    Turbidity(TurbidityBenchArgs),
+}
+
+/// `brume bench turbidity`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct TurbidityBenchArgs {
+    /// Side of the sky images in px.
+    #[arg(
+        long,
+        value_name = "PX",
+        default_value_t = 500,
+        allow_hyphen_values = true
+    )]
+    pub size: i64,
+    /// Turbidities of the sky models, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "2,3,4,5,6,7,8,9",
+        allow_hyphen_values = true
+    )]
+    pub turbidities: Vec<String>,
+    /// Estimations per image.
+    #[arg(
+        long,
+        value_name = "K",
+        default_value_t = 100,
+        allow_hyphen_values = true
+    )]
+    pub estimations: i64,
+    /// Random sample points per estimation.
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 100,
+        allow_hyphen_values = true
+    )]
+    pub samples: i64,
+    /// Cloud cover of the second pass, a fraction of the sky in [0, 0.9] (0: clear only).
+    #[arg(
+        long,
+        value_name = "F",
+        default_value_t = 0.2,
+        allow_hyphen_values = true
+    )]
+    pub clouds: f64,
+    /// Seed of the sampling and the clouds, a whole number ≥ 0.
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 0,
+        allow_hyphen_values = true
+    )]
+    pub seed: i128,
+    /// Quantise the sky images to 8-bit sRGB first, as a PNG written by `brume sky`
+    /// (the paper's Fig. 7 images are 8-bit) and read back would be.
+    #[arg(long)]
+    pub eight_bit: bool,
+    /// Fit the level of the ratios with T (`brume turbidity --fit-level`).
+    #[arg(long)]
+    pub fit_level: bool,
+    /// Print one JSON object on stdout instead of the table (the table goes to stderr).
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl TurbidityBenchArgs {
+    /// The library options these arguments stand for.
+    pub fn options(&self) -> Result<TurbidityBenchOptions> {
+        let opts = TurbidityBenchOptions {
+            size: count("--size", self.size, "an image side ≥ 16 px")?,
+            turbidities: parse_list("--turbidities", &self.turbidities, |t| {
+                t.parse::<f64>().ok()
+            })?,
+            estimations: count("--estimations", self.estimations, "at least 1 estimation")?,
+            samples: count("--samples", self.samples, "at least 5 sample points")?,
+            cloud_cover: self.clouds,
+            seed: u64::try_from(self.seed).map_err(|_| {
+                Error::invalid("--seed", self.seed, "a whole number from 0 to 2^64 - 1")
+            })?,
+            eight_bit: self.eight_bit,
+            fit_level: self.fit_level,
+            ..TurbidityBenchOptions::default()
+        };
+        if opts.samples < 5 {
+            return Err(Error::invalid(
+                "--samples",
+                opts.samples,
+                "at least 5 sample points",
+            ));
+        }
+        opts.validate().map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            } => Error::InvalidParameter {
+                name: match name.as_str() {
+                    "cloud_cover" => "--clouds".into(),
+                    "turbidity" => "--turbidities".into(),
+                    _ => name,
+                },
+                value,
+                expected,
+            },
+            e => e,
+        })?;
+        Ok(opts)
+    }
+}
+
+/// Runs `brume bench turbidity`: the experiment, then the table (or JSON) on stdout.
+pub fn run_turbidity(args: &TurbidityBenchArgs) -> Result<()> {
+    let opts = args.options()?;
+    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
+    let style =
+        ProgressStyle::with_template("{bar:40} {pos}/{len} images  {elapsed_precise}  {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style);
+    let report = run_turbidity_bench(&opts, &|done, total, what| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+        bar.set_message(what.to_string());
+    })?;
+    bar.finish_and_clear();
+    let table = turbidity_table(&report);
+    if args.json {
+        eprint!("{table}");
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&report).map_err(|e| Error::Gl(e.to_string()))?
+        );
+    } else {
+        print!("{table}");
+    }
+    Ok(())
 }
 
 /// `brume bench fog`.
@@ -254,6 +393,7 @@ pub fn run(
             }
             Ok(())
         }
+        BenchCommand::Turbidity(t) => run_turbidity(t),
         BenchCommand::Speed(s) => {
             let opts = s.options()?;
             s.common.check_outputs(&[])?;
@@ -424,6 +564,23 @@ mod tests {
         };
         let err = name_flags(a.common.check_outputs(&[]).unwrap_err()).to_string();
         assert!(err.contains("--plot"), "{err}");
+    }
+
+    #[test]
+    fn turbidity_defaults_are_table_1() {
+        let BenchCommand::Turbidity(t) = parse(&["turbidity"]) else {
+            panic!("not turbidity")
+        };
+        let o = t.options().unwrap();
+        assert_eq!((o.size, o.estimations, o.samples), (500, 100, 100));
+        assert_eq!(o.turbidities, (2..=9).map(f64::from).collect::<Vec<_>>());
+        assert_eq!((o.sun_zenith_deg, o.sun_azimuth_deg), (58.4, -179.4));
+        assert_eq!(o.cloud_cover, 0.2);
+        let BenchCommand::Turbidity(t) = parse(&["turbidity", "--turbidities", "2,x"]) else {
+            panic!()
+        };
+        let err = name_flags(t.options().unwrap_err()).to_string();
+        assert!(err.contains("--turbidities"), "{err}");
     }
 
     #[test]

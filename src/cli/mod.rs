@@ -7,6 +7,7 @@ mod info;
 mod prep;
 mod render;
 mod scene;
+mod sky;
 
 pub use args::{Cli, Command};
 use brume::egl::Platform;
@@ -24,6 +25,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(a) => compare::run(&a),
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Prep(a) => prep::run(&a),
+        Command::Sky(a) => sky::run_sky(&a),
+        Command::Turbidity(a) => sky::run_turbidity(&a),
+        // CPU only: no GL context to open.
+        Command::Bench(bench::BenchCommand::Turbidity(a)) => bench::run_turbidity(&a),
         Command::Bench(cmd) => {
             let mut headless = open_renderer(cli.egl)?;
             bench::run(
