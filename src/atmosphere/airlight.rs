@@ -9,10 +9,17 @@ pub const ZETA_MAX_ZENITH_RAD: f64 = 89.9 * std::f64::consts::PI / 180.0;
 /// The smallest turbidity ζ evaluates: lower turbidities are taken as this one.
 pub const ZETA_MIN_TURBIDITY: f64 = 1.7;
 
-/// Preetham's gradation 1 + A·e^(B/cos θ) with A = 0.178T − 1.463, B = −0.355T + 0.427.
+/// (A, B) of Preetham's gradation 1 + A·e^(B/cos θ) at turbidity T: A = 0.178T − 1.463,
+/// B = −0.355T + 0.427 ([`zeta`] clamps T first).
+pub fn gradation_coefficients(turbidity: f64) -> [f64; 2] {
+    [0.178 * turbidity - 1.463, -0.355 * turbidity + 0.427]
+}
+
+/// Preetham's gradation 1 + A·e^(B/cos θ), θ clamped to [0, [`ZETA_MAX_ZENITH_RAD`]].
 fn gradation(turbidity: f64, zenith_rad: f64) -> f64 {
     let cos = zenith_rad.clamp(0.0, ZETA_MAX_ZENITH_RAD).cos();
-    1.0 + (0.178 * turbidity - 1.463) * ((-0.355 * turbidity + 0.427) / cos).exp()
+    let [a, b] = gradation_coefficients(turbidity);
+    1.0 + a * (b / cos).exp()
 }
 
 /// ζ(T, θ, θ′) (eq. 13): the sky's intensity at zenith angle `zenith_rad` over that at

@@ -48,6 +48,7 @@
 //! per-pixel diffusion rate) and into the last (which adds (1 − τ_blurred)·L∞), so a medium
 //! never writes a texture of its own.
 
+pub mod aerial;
 pub mod distance;
 pub mod haze;
 pub mod layered;
@@ -55,6 +56,7 @@ pub mod lookup;
 pub mod noise;
 pub mod uniform;
 
+pub use aerial::AerialPerspective;
 pub use distance::{DistanceFog, FogNoise};
 pub use haze::Haze;
 pub use layered::{HeightProfile, LayeredFog};
@@ -106,6 +108,8 @@ pub enum UniformValue {
     Vec2([f32; 2]),
     /// `vec3`.
     Vec3([f32; 3]),
+    /// `vec4`.
+    Vec4([f32; 4]),
     /// `ivec2`.
     IVec2([i32; 2]),
     /// `mat3`, column-major.

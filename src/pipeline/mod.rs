@@ -987,6 +987,7 @@ fn set_value(gl: &glow::Context, p: &Program, name: &str, value: UniformValue) {
             UniformValue::Float(v) => gl.uniform_1_f32(location, v),
             UniformValue::Vec2([a, b]) => gl.uniform_2_f32(location, a, b),
             UniformValue::Vec3([a, b, c]) => gl.uniform_3_f32(location, a, b, c),
+            UniformValue::Vec4([a, b, c, d]) => gl.uniform_4_f32(location, a, b, c, d),
             UniformValue::IVec2([a, b]) => gl.uniform_2_i32(location, a, b),
             UniformValue::Mat3(m) => gl.uniform_matrix_3_f32_slice(location, false, &m),
         }

@@ -1,0 +1,32 @@
+// Paper 002's aerial perspective (src/medium/aerial.rs): per channel attenuation Γ_c(T, s)
+// (eq. 11) read from a table over distance, the airlight of the view direction
+// I∞(θ')·ζ(T, θ, θ') (eq. 12-13), θ the pixel's zenith angle from the camera's ray, and
+// the blur from the scattering optical depth −ln Γ̄ (all of it scatters), capped at 10.
+uniform sampler2D u_gamma;   // rows Γ_r, Γ_g, Γ_b over the table coordinate (R32F)
+uniform vec4 u_gamma_coord;  // (1/scale (1/m), 1/log span, largest distance (m), samples)
+uniform float u_metres;      // metres per unit of the range texture
+uniform vec3 u_horizon;      // I∞(θ'), linear RGB
+uniform vec3 u_gradation;    // (A, B, 1/(1 + A·e^(B/cos θ'))) of eq. 13
+uniform vec2 u_aerial_blur;  // (λ, 1 / the distance (m) that counts as 1 in the blur law)
+
+const float AERIAL_MIN_COS = 0.0017453283; // cos(89.9°): eq. 13 diverges at the horizon
+const float AERIAL_MAX_DEPTH = 10.0;       // τ = e^(−10): nothing left to blur
+
+MediumSample medium_sample(ivec2 pixel, float depth) {
+    float s = max(depth, 0.0) * u_metres;
+    float x = log(1.0 + min(s, u_gamma_coord.z) * u_gamma_coord.x) * u_gamma_coord.y;
+    float n = u_gamma_coord.w;
+    float u = (0.5 + x * (n - 1.0)) / n;
+    vec3 gamma = vec3(textureLod(u_gamma, vec2(u, 0.5 / 3.0), 0.0).r,
+                      textureLod(u_gamma, vec2(u, 1.5 / 3.0), 0.0).r,
+                      textureLod(u_gamma, vec2(u, 2.5 / 3.0), 0.0).r);
+    float cos_theta = clamp(normalize(brume_ray).y, AERIAL_MIN_COS, 1.0);
+    float zeta = (1.0 + u_gradation.x * exp(u_gradation.y / cos_theta)) * u_gradation.z;
+    float mean = (gamma.r + gamma.g + gamma.b) / 3.0;
+    float ds = min(-log(max(mean, 1e-30)), AERIAL_MAX_DEPTH);
+    MediumSample m;
+    m.transmission = gamma;
+    m.inscatter = u_horizon * zeta;
+    m.sigma = brume_blur_scale(u_aerial_blur.x, s * u_aerial_blur.y, ds);
+    return m;
+}
