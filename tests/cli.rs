@@ -584,3 +584,103 @@ fn compare_reports_ssim_and_histogram_correlation() {
     let missing = brume(dir.path(), &["compare", "im.png", "nope.png"]);
     assert_fails_cleanly(&missing, &["nope.png"]);
 }
+
+/// `brume render --medium aerial`: a rendered frame's z-buffer as range in metres, the
+/// turbidity given or estimated from a sky `brume sky` drew, and retargeting.
+#[test]
+fn aerial_perspective_renders_from_a_turbidity_a_sky_or_a_source_turbidity() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene = brume(
+        d,
+        &[
+            "scene",
+            "--fog",
+            "none",
+            "--size",
+            "48x32",
+            "--out",
+            "c.png",
+            "--depth-out",
+            "z.pfm",
+        ],
+    );
+    assert!(scene.status.success(), "{}", stderr(&scene));
+    let sky = brume(
+        d,
+        &[
+            "sky",
+            "--turbidity",
+            "4",
+            "--sun-zenith",
+            "40",
+            "--sun-azimuth",
+            "20",
+            "--size",
+            "160",
+            "--out",
+            "sky.exr",
+        ],
+    );
+    assert!(sky.status.success(), "{}", stderr(&sky));
+    let base = [
+        "render",
+        "--image",
+        "c.png",
+        "--depth",
+        "z.pfm",
+        "--depth-kind",
+        "zbuffer",
+        "--near",
+        "0.1",
+        "--far",
+        "1000",
+        "--fov",
+        "60",
+        "--medium",
+        "aerial",
+        "--metres-per-unit",
+        "20",
+        "--json",
+    ];
+    let run = |extra: &[&str]| {
+        let args: Vec<&str> = base.iter().chain(extra).copied().collect();
+        let o = brume(d, &args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        serde_json::from_slice::<Value>(&o.stdout).unwrap()
+    };
+    let given = run(&["--turbidity", "3", "--out", "t3.png"]);
+    assert_eq!(given["turbidity"].as_f64(), Some(3.0));
+    assert_eq!(given["turbidity_source"], "given");
+    assert!(given["diffusion_passes"].as_u64().unwrap() > 0);
+    let estimated = run(&["--sky", "sky.exr", "--blur", "none", "--out", "sky.png"]);
+    let t = estimated["turbidity"].as_f64().unwrap();
+    assert!((t - 4.0).abs() < 0.05, "estimated {t}");
+    assert_eq!(estimated["diffusion_passes"].as_u64(), Some(0));
+    let retargeted = run(&[
+        "--from-turbidity",
+        "3",
+        "--turbidity",
+        "6",
+        "--out",
+        "t6.png",
+    ]);
+    assert_eq!(retargeted["from_turbidity"].as_f64(), Some(3.0));
+    for out in ["t3.png", "sky.png", "t6.png"] {
+        assert!(d.join(out).exists(), "{out}");
+    }
+    let missing: Vec<&str> = base.iter().copied().chain(["--out", "x.png"]).collect();
+    assert_fails_cleanly(&brume(d, &missing), &["--turbidity"]);
+    let both: Vec<&str> = base
+        .iter()
+        .copied()
+        .chain(["--turbidity", "3", "--sky", "sky.exr", "--out", "x.png"])
+        .collect();
+    assert_fails_cleanly(&brume(d, &both), &["--sky"]);
+    let low: Vec<&str> = base
+        .iter()
+        .copied()
+        .chain(["--turbidity", "0.5", "--out", "x.png"])
+        .collect();
+    assert_fails_cleanly(&brume(d, &low), &["0.5"]);
+}

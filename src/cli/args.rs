@@ -234,6 +234,76 @@ pub struct RenderArgs {
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub uniform_sigma: Option<f64>,
 
+    /// The medium: haze (paper 000, normalised range) or aerial (paper 002: aerial
+    /// perspective from the turbidity, range in metres, see --turbidity).
+    #[arg(long, value_enum, default_value = "haze", allow_hyphen_values = true)]
+    pub medium: MediumKind,
+
+    /// Aerial: the atmosphere's turbidity T in [1, 20] (2 very clear, 3 clear, 6 hazy).
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub turbidity: Option<f64>,
+
+    /// Aerial: estimate the turbidity from this fisheye sky photo instead (see `brume
+    /// turbidity`; the sun is found from its saturated disc).
+    #[arg(long, value_name = "PATH")]
+    pub sky: Option<PathBuf>,
+
+    /// Aerial: re-render a photo taken at this turbidity at --turbidity (retargeting):
+    /// the haze-free radiance is recovered with this turbidity's attenuation first.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub from_turbidity: Option<f64>,
+
+    /// Aerial: the observer's altitude above sea level, metres.
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub altitude: f64,
+
+    /// Aerial: metres per unit of the range map (1 for metric depth formats).
+    #[arg(
+        long,
+        value_name = "M",
+        default_value_t = 1.0,
+        allow_hyphen_values = true
+    )]
+    pub metres_per_unit: f64,
+
+    /// Aerial: the camera's pitch in degrees (with --fov, each pixel's zenith angle).
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_hyphen_values = true
+    )]
+    pub pitch: f64,
+
+    /// Aerial: zenith angle (degrees) of the sky where the airlight is measured (the
+    /// horizon region).
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 85.0,
+        allow_hyphen_values = true
+    )]
+    pub horizon_zenith: f64,
+
+    /// Aerial: the camera's spectral sensitivity, CSV `lambda_nm,r,g,b` [default: CIE 1931
+    /// observer to linear sRGB].
+    #[arg(long, value_name = "PATH")]
+    pub sensitivity: Option<PathBuf>,
+
+    /// Aerial: blur by diffusion from the scattering optical depth (λ = --lambda) or none.
+    #[arg(
+        long,
+        value_enum,
+        default_value = "diffusion",
+        allow_hyphen_values = true
+    )]
+    pub blur: AerialBlur,
+
     /// Skip pre-processing: unknown range values are taken as the farthest range.
     #[arg(long)]
     pub no_prep: bool,
@@ -674,4 +744,22 @@ pub struct CompareArgs {
     /// hsv_correlation_hsv).
     #[arg(long)]
     pub json: bool,
+}
+
+/// The medium of `brume render`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MediumKind {
+    /// Paper 000's haze.
+    Haze,
+    /// Paper 002's aerial perspective from turbidity.
+    Aerial,
+}
+
+/// The blur of the aerial medium.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AerialBlur {
+    /// Diffusion to the scale the scattering optical depth gives.
+    Diffusion,
+    /// No blur.
+    None,
 }

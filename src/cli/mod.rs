@@ -1,5 +1,6 @@
 //! Command-line interface: argument definitions and the glue from arguments to the library.
 
+mod aerial;
 mod args;
 mod bench;
 mod compare;

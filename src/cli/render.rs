@@ -1,6 +1,7 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
-use super::args::{DepthArgs, PrepOptionArgs, RenderArgs};
+use super::aerial::{aerial_look, dehaze};
+use super::args::{DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
 use brume::blur::Blur;
 use brume::egl::Platform;
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
@@ -95,6 +96,9 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         .prepared
         .as_ref()
         .map_or(&scene.depth.range, |p| &p.range);
+    if args.medium == MediumKind::Aerial {
+        return run_aerial(args, egl, &scene, &prep, range, &out);
+    }
     let (normalised, r_max) = haze::normalise_range(range)?;
     let look = look_from_args(args, &haze, prep.airlight);
 
@@ -478,4 +482,87 @@ fn print_timings(rendered: &Rendered) {
         t.total_ms,
         t.clock.name()
     );
+}
+
+/// `--medium aerial`: paper 002's aerial perspective on the range in metres (module
+/// `aerial`), the horizon's light from the sky found (or `--airlight`).
+fn run_aerial(
+    args: &RenderArgs,
+    egl: Option<Platform>,
+    scene: &Scene,
+    prep: &PrepReport,
+    range: &ScalarMap,
+    out: &Path,
+) -> Result<()> {
+    let max_range = range
+        .as_slice()
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold(0f32, f32::max);
+    if max_range <= 0.0 {
+        return Err(Error::NoValidDepth {
+            path: PathBuf::from(&scene.depth_name),
+        });
+    }
+    // Unknown range (only with --no-prep) is taken as the sky is by pre-processing.
+    let range = range.map(|&v| {
+        if v.is_finite() && v > 0.0 {
+            v
+        } else {
+            1.5 * max_range
+        }
+    });
+    let look = aerial_look(args, 1.5 * f64::from(max_range), prep.airlight)?;
+    let image = match look.from_turbidity {
+        Some(from) => dehaze(&scene.image, &range, &look.medium, from, args)?,
+        None => scene.image.clone(),
+    };
+    let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
+    let mut renderer = super::open_renderer(egl)?;
+    let rendered = renderer.render(&image, &range, &look.medium, &blur)?;
+    let mut outputs = Outputs::new();
+    outputs.stage_rgba(out, &rendered.image)?;
+    super::commit(outputs)?;
+    let m = &look.medium;
+    let t = &rendered.times;
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "width": image.width(),
+                "height": image.height(),
+                "medium": "aerial",
+                "turbidity": m.table.turbidity(),
+                "turbidity_source": look.turbidity_source,
+                "from_turbidity": look.from_turbidity,
+                "altitude": m.table.altitude_m(),
+                "metres_per_unit": m.metres_per_unit,
+                "pitch": m.camera.pitch_deg,
+                "fov": m.camera.fov_y_deg,
+                "horizon_light": m.horizon_light,
+                "horizon_light_source": prep.airlight_source,
+                "horizon_zenith": m.reference_zenith.to_degrees(),
+                "max_range": max_range,
+                "diffusion_passes": rendered.schedule.steps,
+                "sigma_max": m.sigma_max(blur.sigma0),
+                "renderer": renderer.caps().renderer,
+                "clock": t.clock,
+                "total_ms": t.total_ms,
+                "pass_ms": t.pass_ms,
+                "out": out.display().to_string(),
+            })
+        );
+    } else {
+        println!(
+            "wrote {} (aerial perspective, T = {:.2} ({}), {} diffusion passes + 2, {:.1} ms by {})",
+            out.display(),
+            m.table.turbidity(),
+            look.turbidity_source,
+            rendered.schedule.steps,
+            t.total_ms,
+            t.clock.name()
+        );
+    }
+    Ok(())
 }
