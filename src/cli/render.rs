@@ -520,7 +520,12 @@ fn run_aerial(
     };
     let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
     let mut renderer = super::open_renderer(egl)?;
-    let rendered = renderer.render(&image, &range, &look.medium, &blur)?;
+    // Without blur, the fog's one pass does what the medium pass and the composite would.
+    let rendered = if look.medium.lambda == 0.0 {
+        renderer.render_fog(&image, &range, &look.medium, &brume::FogBlur::None)?
+    } else {
+        renderer.render(&image, &range, &look.medium, &blur)?
+    };
     let mut outputs = Outputs::new();
     outputs.stage_rgba(out, &rendered.image)?;
     super::commit(outputs)?;
