@@ -652,6 +652,8 @@ fn aerial_perspective_renders_from_a_turbidity_a_sky_or_a_source_turbidity() {
     let given = run(&["--turbidity", "3", "--out", "t3.png"]);
     assert_eq!(given["turbidity"].as_f64(), Some(3.0));
     assert_eq!(given["turbidity_source"], "given");
+    assert_eq!(given["horizon_light_source"], "horizon");
+    assert!(given["horizon_zenith"].as_f64().unwrap() > 80.0, "{given}");
     assert!(given["diffusion_passes"].as_u64().unwrap() > 0);
     let estimated = run(&["--sky", "sky.exr", "--blur", "none", "--out", "sky.png"]);
     let t = estimated["turbidity"].as_f64().unwrap();

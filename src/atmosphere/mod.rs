@@ -42,7 +42,10 @@ pub mod attenuation;
 pub mod scattering;
 pub mod spectral;
 
+pub mod horizon;
+
 pub use airlight::{gradation_coefficients, zeta, ZETA_MAX_ZENITH_RAD, ZETA_MIN_TURBIDITY};
 pub use attenuation::{Aerial, AttenuationTable};
+pub use horizon::{horizon_light, HorizonLight};
 pub use scattering::WeatherCondition;
 pub use spectral::{Channel, Illuminant, Sensitivity};

@@ -50,9 +50,24 @@ fn turbidity(args: &RenderArgs) -> Result<(f64, &'static str)> {
     }
 }
 
+/// The camera whose rays give each pixel's zenith angle: `--pitch` and `--fov`.
+pub fn aerial_camera(args: &RenderArgs) -> Camera {
+    Camera {
+        pitch_deg: args.pitch,
+        fov_y_deg: args.depth.fov.unwrap_or(DEFAULT_FOV_DEG),
+        ..Camera::default()
+    }
+}
+
 /// The aerial medium for a photo whose range (in `--metres-per-unit`) reaches
-/// `max_range`, with the horizon's light `horizon`.
-pub fn aerial_look(args: &RenderArgs, max_range: f64, horizon: [f32; 3]) -> Result<AerialLook> {
+/// `max_range`, with the horizon's light `horizon` at zenith angle `horizon_zenith`
+/// (radians; `None`: `--horizon-zenith`).
+pub fn aerial_look(
+    args: &RenderArgs,
+    max_range: f64,
+    horizon: [f32; 3],
+    horizon_zenith: Option<f64>,
+) -> Result<AerialLook> {
     let (t, source) = turbidity(args)?;
     let sensitivity = match &args.sensitivity {
         Some(path) => Sensitivity::from_csv(path)?,
@@ -68,18 +83,14 @@ pub fn aerial_look(args: &RenderArgs, max_range: f64, horizon: [f32; 3]) -> Resu
     }
     let s_max = (max_range * metres).max(1.0);
     let table = AttenuationTable::new(&sensitivity, t, args.altitude, s_max)?;
-    let camera = Camera {
-        pitch_deg: args.pitch,
-        fov_y_deg: args.depth.fov.unwrap_or(DEFAULT_FOV_DEG),
-        ..Camera::default()
-    };
+    let camera = aerial_camera(args);
     let medium = AerialPerspective {
         metres_per_unit: metres,
         lambda: match args.blur {
             AerialBlur::None => 0.0,
             AerialBlur::Diffusion => args.lambda,
         },
-        reference_zenith: args.horizon_zenith.to_radians(),
+        reference_zenith: horizon_zenith.unwrap_or(args.horizon_zenith.to_radians()),
         ..AerialPerspective::new(Arc::new(table), camera, horizon)
     };
     medium.validate()?;

@@ -280,8 +280,9 @@ pub struct RenderArgs {
     )]
     pub pitch: f64,
 
-    /// Aerial: zenith angle (degrees) of the sky where the airlight is measured (the
-    /// horizon region).
+    /// Aerial: zenith angle (degrees) where --airlight (or, with no sky found, the
+    /// estimated airlight) is taken to be measured; with a sky, I∞ and its zenith angle
+    /// come from the brightest sky of the horizon region.
     #[arg(
         long,
         value_name = "DEG",

@@ -1,7 +1,8 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
-use super::aerial::{aerial_look, dehaze};
+use super::aerial::{aerial_camera, aerial_look, dehaze};
 use super::args::{DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
+use brume::atmosphere::horizon_light;
 use brume::blur::Blur;
 use brume::egl::Platform;
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
@@ -513,7 +514,17 @@ fn run_aerial(
             1.5 * max_range
         }
     });
-    let look = aerial_look(args, 1.5 * f64::from(max_range), prep.airlight)?;
+    // I∞(θ') from the brightest sky of the horizon region (paper 002, sec. 4), unless
+    // --airlight says otherwise or no sky was found.
+    let horizon = match (&args.airlight, &prep.prepared) {
+        (None, Some(p)) => horizon_light(&scene.image, &p.sky, &aerial_camera(args)),
+        _ => None,
+    };
+    let (light, zenith, light_source) = match horizon {
+        Some(h) => (h.rgb, Some(h.zenith), "horizon"),
+        None => (prep.airlight, None, prep.airlight_source),
+    };
+    let look = aerial_look(args, 1.5 * f64::from(max_range), light, zenith)?;
     let image = match look.from_turbidity {
         Some(from) => dehaze(&scene.image, &range, &look.medium, from, args)?,
         None => scene.image.clone(),
@@ -546,7 +557,7 @@ fn run_aerial(
                 "pitch": m.camera.pitch_deg,
                 "fov": m.camera.fov_y_deg,
                 "horizon_light": m.horizon_light,
-                "horizon_light_source": prep.airlight_source,
+                "horizon_light_source": light_source,
                 "horizon_zenith": m.reference_zenith.to_degrees(),
                 "max_range": max_range,
                 "diffusion_passes": rendered.schedule.steps,
