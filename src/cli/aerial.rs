@@ -50,13 +50,29 @@ fn turbidity(args: &RenderArgs) -> Result<(f64, &'static str)> {
     }
 }
 
-/// The camera whose rays give each pixel's zenith angle: `--pitch` and `--fov`.
-pub fn aerial_camera(args: &RenderArgs) -> Camera {
+/// The camera whose rays give each pixel's zenith angle: `--pitch` (or `--horizon-row`)
+/// and `--fov`, for an image `height` rows tall.
+pub fn aerial_camera(args: &RenderArgs, height: usize) -> Camera {
+    let fov_y_deg = args.depth.fov.unwrap_or(DEFAULT_FOV_DEG);
+    let pitch_deg = match args.horizon_row {
+        Some(row) => pitch_for_horizon_row(row, height, fov_y_deg),
+        None => args.pitch,
+    };
     Camera {
-        pitch_deg: args.pitch,
-        fov_y_deg: args.depth.fov.unwrap_or(DEFAULT_FOV_DEG),
+        pitch_deg,
+        fov_y_deg,
         ..Camera::default()
     }
+}
+
+/// The pitch (degrees) that puts the horizon on row `row` (0 at the top, centres at
+/// integers) of a `height`-row image with vertical field of view `fov_y_deg`: the ray
+/// through the row, fwd + ndc·tan(fov/2)·up, is level when tan(pitch) = −ndc·tan(fov/2).
+pub fn pitch_for_horizon_row(row: f64, height: usize, fov_y_deg: f64) -> f64 {
+    let ndc = 1.0 - 2.0 * (row + 0.5) / height as f64;
+    (-ndc * (fov_y_deg.to_radians() / 2.0).tan())
+        .atan()
+        .to_degrees()
 }
 
 /// The aerial medium for a photo whose range (in `--metres-per-unit`) reaches
@@ -64,6 +80,7 @@ pub fn aerial_camera(args: &RenderArgs) -> Camera {
 /// (radians; `None`: `--horizon-zenith`).
 pub fn aerial_look(
     args: &RenderArgs,
+    height: usize,
     max_range: f64,
     horizon: [f32; 3],
     horizon_zenith: Option<f64>,
@@ -83,7 +100,12 @@ pub fn aerial_look(
     }
     let s_max = (max_range * metres).max(1.0);
     let table = AttenuationTable::new(&sensitivity, t, args.altitude, s_max)?;
-    let camera = aerial_camera(args);
+    if let Some(row) = args.horizon_row {
+        if !row.is_finite() {
+            return Err(Error::invalid("--horizon-row", row, "an image row"));
+        }
+    }
+    let camera = aerial_camera(args, height);
     let medium = AerialPerspective {
         metres_per_unit: metres,
         lambda: match args.blur {
@@ -144,4 +166,27 @@ pub fn dehaze(
             ((f64::from(e[c]) - m.inscatter[c] * (1.0 - g)) / g).max(0.0) as f32
         })
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_horizon_row_gives_the_pitch_that_levels_its_ray() {
+        let (h, fov) = (480, 50.0);
+        for row in [0.0, 100.0, 239.5, 400.0, 479.0] {
+            let pitch = pitch_for_horizon_row(row, h, fov);
+            let camera = Camera {
+                pitch_deg: pitch,
+                fov_y_deg: fov,
+                ..Camera::default()
+            };
+            // The ray through the row's centre (GL row h − 1 − row) is level.
+            let ndc = 1.0 - 2.0 * (row + 0.5) / h as f64;
+            let ray = camera.ray_at_ndc(0.0, ndc, 1.0);
+            assert!(ray.y.abs() < 1e-12, "row {row}: {ray}");
+        }
+        assert_eq!(pitch_for_horizon_row(239.5, 480, 50.0), 0.0);
+    }
 }

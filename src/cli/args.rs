@@ -280,6 +280,16 @@ pub struct RenderArgs {
     )]
     pub pitch: f64,
 
+    /// Aerial: the image row (0 at the top) where the horizon is, instead of --pitch: the
+    /// pitch that puts the horizon there with --fov.
+    #[arg(
+        long,
+        value_name = "ROW",
+        allow_hyphen_values = true,
+        conflicts_with = "pitch"
+    )]
+    pub horizon_row: Option<f64>,
+
     /// Aerial: zenith angle (degrees) where --airlight (or, with no sky found, the
     /// estimated airlight) is taken to be measured; with a sky, I∞ and its zenith angle
     /// come from the brightest sky of the horizon region.

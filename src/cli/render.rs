@@ -517,14 +517,24 @@ fn run_aerial(
     // I∞(θ') from the brightest sky of the horizon region (paper 002, sec. 4), unless
     // --airlight says otherwise or no sky was found.
     let horizon = match (&args.airlight, &prep.prepared) {
-        (None, Some(p)) => horizon_light(&scene.image, &p.sky, &aerial_camera(args)),
+        (None, Some(p)) => horizon_light(
+            &scene.image,
+            &p.sky,
+            &aerial_camera(args, scene.image.height()),
+        ),
         _ => None,
     };
     let (light, zenith, light_source) = match horizon {
         Some(h) => (h.rgb, Some(h.zenith), "horizon"),
         None => (prep.airlight, None, prep.airlight_source),
     };
-    let look = aerial_look(args, 1.5 * f64::from(max_range), light, zenith)?;
+    let look = aerial_look(
+        args,
+        scene.image.height(),
+        1.5 * f64::from(max_range),
+        light,
+        zenith,
+    )?;
     let image = match look.from_turbidity {
         Some(from) => dehaze(&scene.image, &range, &look.medium, from, args)?,
         None => scene.image.clone(),
