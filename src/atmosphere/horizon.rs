@@ -16,7 +16,7 @@ pub const BRIGHTEST_FRACTION: f64 = 0.1;
 pub struct HorizonLight {
     /// The median colour of the brightest horizon-region sky pixels, linear RGB.
     pub rgb: [f32; 3],
-    /// Their mean zenith angle θ' (radians).
+    /// Their mean zenith angle θ' (radians), at most [`super::ZETA_MAX_ZENITH_RAD`].
     pub zenith: f64,
     /// How many pixels it came from.
     pub pixels: usize,
@@ -57,7 +57,10 @@ pub fn horizon_light(image: &RgbImage, sky: &Grid<bool>, camera: &Camera) -> Opt
         v.sort_by(f32::total_cmp);
         v[v.len() / 2]
     });
-    let zenith = brightest.iter().map(|&(_, t)| t).sum::<f64>() / keep as f64;
+    // Sky seen below the level line (from a hill, or with a wrong pitch) counts as the
+    // horizon, as eq. 13's ζ clamps it.
+    let zenith = (brightest.iter().map(|&(_, t)| t).sum::<f64>() / keep as f64)
+        .min(super::ZETA_MAX_ZENITH_RAD);
     Some(HorizonLight {
         rgb,
         zenith,
