@@ -683,6 +683,15 @@ fn aerial_perspective_renders_from_a_turbidity_a_sky_or_a_source_turbidity() {
     ]);
     let pitch = row["pitch"].as_f64().unwrap();
     assert!((pitch + 11.2253).abs() < 1e-3, "{row}");
+    // The sky photo is an input: never overwritten.
+    let onto_sky: Vec<&str> = base
+        .iter()
+        .copied()
+        .chain(["--sky", "sky.exr", "--out", "sky.exr"])
+        .collect();
+    let before = std::fs::read(d.join("sky.exr")).unwrap();
+    assert_fails_cleanly(&brume(d, &onto_sky), &["--out", "sky.exr"]);
+    assert_eq!(std::fs::read(d.join("sky.exr")).unwrap(), before);
     let missing: Vec<&str> = base.iter().copied().chain(["--out", "x.png"]).collect();
     assert_fails_cleanly(&brume(d, &missing), &["--turbidity"]);
     let both: Vec<&str> = base

@@ -82,6 +82,8 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         .iter()
         .cloned()
         .chain(depth_inputs(&args.depth))
+        .chain(args.sky.iter().cloned())
+        .chain(args.sensitivity.iter().cloned())
         .collect();
     super::refuse_overlaps(&[("--out", &out)], &inputs)?;
     let scene = load_scene(args)?;
