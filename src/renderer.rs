@@ -66,11 +66,7 @@ impl Renderer {
         medium: &dyn Medium,
         blur: &Blur,
     ) -> Result<Rendered> {
-        self.check_frame(image, depth, medium)?;
-        self.check_memory(image.width(), image.height(), medium, blur)?;
-        self.with_textures(image, depth, |pipeline, input| {
-            pipeline.render_and_read(input, medium, blur)
-        })
+        self.render_fog(image, depth, medium, &FogBlur::Diffusion(*blur))
     }
 
     /// Renders `image` fogged by `medium` (a medium with a camera reads a depth buffer's

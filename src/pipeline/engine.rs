@@ -32,7 +32,7 @@ use crate::blur::{Blur, Precision};
 use crate::error::{check_positive, Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{Filter, Texture};
-use crate::gpu::timer::{Clock, PassTimer, PassTimes};
+use crate::gpu::timer::PassTimes;
 use crate::medium::{Medium, UniformValue};
 use crate::raster::{Grid, RgbaImage};
 use crate::schedule::{Schedule, Scheme};
@@ -363,41 +363,6 @@ impl Pipeline {
         })
     }
 
-    /// Runs `run` with the destination `output` names.
-    fn with_output(
-        &mut self,
-        input: &Input,
-        output: &Output,
-        run: impl FnOnce(&Self, &Destination) -> Result<PassTimes>,
-    ) -> Result<PassTimes> {
-        match *output {
-            Output::Framebuffer {
-                framebuffer,
-                x,
-                y,
-                encoding,
-            } => run(
-                self,
-                &Destination::Host {
-                    framebuffer,
-                    x,
-                    y,
-                    encoding,
-                },
-            ),
-            Output::Texture { texture, encoding } => {
-                let fb = Framebuffer::new(
-                    &self.gl,
-                    &[texture],
-                    input.width,
-                    input.height,
-                    "the output texture",
-                )?;
-                run(self, &Destination::HostTexture(&fb, encoding))
-            }
-        }
-    }
-
     /// Checks the frame, compiles the passes `keys` and sizes the targets.
     fn prepare_engine(
         &mut self,
@@ -462,7 +427,7 @@ impl Pipeline {
         keys: &[EngineKey],
         destination: &Destination,
     ) -> Result<PassTimes> {
-        self.timed(|pipeline, timer| {
+        self.timed("running the fog passes", |pipeline, timer| {
             let targets = pipeline.engine_targets()?;
             let gauss = match blur {
                 FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => *g,
@@ -502,6 +467,7 @@ impl Pipeline {
             }
             Ok(())
         })
+        .map(|(times, ())| times)
     }
 
     /// Paper 003's blended pass.
@@ -511,7 +477,7 @@ impl Pipeline {
         medium: &dyn Medium,
         destination: &Destination,
     ) -> Result<PassTimes> {
-        self.timed(|pipeline, timer| {
+        self.timed("running the fog passes", |pipeline, timer| {
             let gl = &pipeline.gl;
             let p = pipeline.compiled(ProgramKey::Engine(medium.name(), EngineKey::Blend))?;
             let internal = &pipeline.engine_targets()?.framebuffers[1];
@@ -534,27 +500,7 @@ impl Pipeline {
                 draw_fullscreen(gl);
             })
         })
-    }
-
-    /// Runs `passes` timed by the preferred clock, again by the wall clock if the GPU
-    /// timer's figures are rejected.
-    fn timed(&self, passes: impl Fn(&Self, &mut PassTimer) -> Result<()>) -> Result<PassTimes> {
-        let mut clock = self.preferred_clock();
-        loop {
-            self.enter_state();
-            let mut timer = PassTimer::start(&self.gl, clock);
-            passes(self, &mut timer)?;
-            crate::gpu::check_gl(&self.gl, "running the fog passes")?;
-            match timer.finish()? {
-                Ok(times) => return Ok(times),
-                Err(rejected) => {
-                    log::warn!(
-                        "GPU timer figures rejected ({rejected:?}); timing again by wall clock"
-                    );
-                    clock = Clock::Wall;
-                }
-            }
-        }
+        .map(|(times, ())| times)
     }
 
     /// The passes of a fog blurred by `blur` (not diffusion), compiled for the colour's

@@ -68,7 +68,7 @@ use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::program::Program;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
-use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, Rejected};
+use crate::gpu::timer::{self, Clock, PassTimer, PassTimes};
 use crate::medium::{Lookup, Medium, UniformValue, Wrap, MAX_LOOKUPS, MEDIUM_API_GLSL};
 use crate::schedule::{Schedule, Scheme};
 use glow::HasContext;
@@ -407,43 +407,13 @@ impl Pipeline {
         output: &Output,
     ) -> Result<Frame> {
         let schedule = self.prepare(input, medium, blur)?;
-        let result = match *output {
-            Output::Framebuffer {
-                framebuffer,
-                x,
-                y,
-                encoding,
-            } => self.run(
-                input,
-                medium,
-                &schedule,
-                &Destination::Host {
-                    framebuffer,
-                    x,
-                    y,
-                    encoding,
-                },
-            ),
-            Output::Texture { texture, encoding } => {
-                let fb = Framebuffer::new(
-                    &self.gl,
-                    &[texture],
-                    input.width,
-                    input.height,
-                    "the output texture",
-                )?;
-                self.run(
-                    input,
-                    medium,
-                    &schedule,
-                    &Destination::HostTexture(&fb, encoding),
-                )
-            }
-        };
+        let result = self.with_output(input, output, |pipeline, destination| {
+            Ok(pipeline.run(input, medium, &schedule, destination)?.0)
+        });
         self.leave_state();
         Ok(Frame {
             schedule,
-            times: result?.0,
+            times: result?,
         })
     }
 
@@ -515,11 +485,27 @@ impl Pipeline {
         schedule: &Schedule,
         destination: &Destination,
     ) -> Result<(PassTimes, usize)> {
+        self.timed("running the passes", |pipeline, timer| {
+            pipeline.run_passes(input, medium, schedule, destination, timer)
+        })
+    }
+
+    /// Runs `passes` (which return the index of the target holding an internal result, or
+    /// nothing) timed by the preferred clock, again by the wall clock if the GPU timer's
+    /// figures are rejected. `what` names the passes in a GL error.
+    fn timed<T>(
+        &self,
+        what: &str,
+        passes: impl Fn(&Self, &mut PassTimer) -> Result<T>,
+    ) -> Result<(PassTimes, T)> {
         let mut clock = self.preferred_clock();
         loop {
-            let (out, outcome) = self.run_passes(input, medium, schedule, destination, clock)?;
-            match outcome {
-                Ok(times) => return Ok((times, out)),
+            self.enter_state();
+            let mut timer = PassTimer::start(&self.gl, clock);
+            let result = passes(self, &mut timer)?;
+            crate::gpu::check_gl(&self.gl, what)?;
+            match timer.finish()? {
+                Ok(times) => return Ok((times, result)),
                 Err(rejected) => {
                     log::warn!(
                         "GPU timer figures rejected ({rejected:?}); timing again by wall clock"
@@ -530,20 +516,54 @@ impl Pipeline {
         }
     }
 
-    /// The N + 2 passes, timed with `clock`.
+    /// Runs `run` with the destination `output` names.
+    fn with_output(
+        &mut self,
+        input: &Input,
+        output: &Output,
+        run: impl FnOnce(&Self, &Destination) -> Result<PassTimes>,
+    ) -> Result<PassTimes> {
+        match *output {
+            Output::Framebuffer {
+                framebuffer,
+                x,
+                y,
+                encoding,
+            } => run(
+                self,
+                &Destination::Host {
+                    framebuffer,
+                    x,
+                    y,
+                    encoding,
+                },
+            ),
+            Output::Texture { texture, encoding } => {
+                let fb = Framebuffer::new(
+                    &self.gl,
+                    &[texture],
+                    input.width,
+                    input.height,
+                    "the output texture",
+                )?;
+                run(self, &Destination::HostTexture(&fb, encoding))
+            }
+        }
+    }
+
+    /// The N + 2 passes, timed by `timer`; returns the ping-pong target that is free for
+    /// an internal result.
     fn run_passes(
         &self,
         input: &Input,
         medium: &dyn Medium,
         schedule: &Schedule,
         destination: &Destination,
-        clock: Clock,
-    ) -> Result<(usize, std::result::Result<PassTimes, Rejected>)> {
+        timer: &mut PassTimer,
+    ) -> Result<usize> {
         let gl = &self.gl;
         let targets = self.targets()?;
         let chromatic = targets.tau_gb.is_some();
-        self.enter_state();
-        let mut timer = PassTimer::start(gl, clock);
 
         let p = self.compiled(medium_key(medium, targets.precision, schedule, chromatic))?;
         timer.pass(|| {
@@ -628,8 +648,7 @@ impl Pipeline {
             self.set_medium_uniforms(c, medium, input, schedule.sigma0);
             draw_fullscreen(gl);
         })?;
-        crate::gpu::check_gl(gl, "running the passes")?;
-        Ok((free, timer.finish()?))
+        Ok(free)
     }
 
     /// Binds the composite's destination and sets its viewport; returns the output
