@@ -143,28 +143,12 @@ impl TurbidityBenchArgs {
 /// Runs `brume bench turbidity`: the experiment, then the table (or JSON) on stdout.
 pub fn run_turbidity(args: &TurbidityBenchArgs) -> Result<()> {
     let opts = args.options()?;
-    let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
-    let style =
-        ProgressStyle::with_template("{bar:40} {pos}/{len} images  {elapsed_precise}  {msg}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar());
-    bar.set_style(style);
+    let bar = progress_bar("images");
     let report = run_turbidity_bench(&opts, &|done, total, what| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-        bar.set_message(what.to_string());
+        advance_count(&bar, done, total, what)
     })?;
     bar.finish_and_clear();
-    let table = turbidity_table(&report);
-    if args.json {
-        eprint!("{table}");
-        println!(
-            "{}",
-            serde_json::to_string_pretty(&report).map_err(|e| Error::Gl(e.to_string()))?
-        );
-    } else {
-        print!("{table}");
-    }
-    Ok(())
+    print_report(args.json, &turbidity_table(&report), &report)
 }
 
 /// `brume bench fog`.
@@ -355,7 +339,7 @@ pub fn run(
                 Some(path) => load_image(path)?,
                 None => demo()?,
             };
-            let bar = progress_bar();
+            let bar = progress_bar("passes");
             let report = run_accuracy(renderer, &image, &opts, &|p| advance(&bar, p))?;
             bar.finish_and_clear();
             emit(
@@ -374,30 +358,18 @@ pub fn run(
                 runs: count("--runs", f.runs, "at least 1 timed run")?,
                 ..FogBenchOptions::default()
             };
-            let bar = progress_bar();
+            let bar = progress_bar("configurations");
             let report = run_fog_bench(renderer, &opts, &|done, total, what| {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-                bar.set_message(what.to_string());
+                advance_count(&bar, done, total, what)
             })?;
             bar.finish_and_clear();
-            let table = fog_table(&report);
-            if f.json {
-                eprint!("{table}");
-                println!(
-                    "{}",
-                    serde_json::to_string_pretty(&report).map_err(|e| Error::Gl(e.to_string()))?
-                );
-            } else {
-                print!("{table}");
-            }
-            Ok(())
+            print_report(f.json, &fog_table(&report), &report)
         }
         BenchCommand::Turbidity(t) => run_turbidity(t),
         BenchCommand::Speed(s) => {
             let opts = s.options()?;
             s.common.check_outputs(&[])?;
-            let bar = progress_bar();
+            let bar = progress_bar("passes");
             let report = run_speed(renderer, &opts, &|p| advance(&bar, p))?;
             bar.finish_and_clear();
             emit(
@@ -442,14 +414,44 @@ fn emit(
 
 /// A bar on stderr; indicatif draws nothing when stderr is not a terminal, so logs and
 /// pipes stay clean.
-fn progress_bar() -> ProgressBar {
+fn progress_bar(unit: &str) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
-    let style = ProgressStyle::with_template(
-        "{bar:40} {pos}/{len} passes  {elapsed_precise} (eta {eta})  {msg}",
-    )
-    .unwrap_or_else(|_| ProgressStyle::default_bar());
+    let template =
+        format!("{{bar:40}} {{pos}}/{{len}} {unit}  {{elapsed_precise}} (eta {{eta}})  {{msg}}");
+    let style =
+        ProgressStyle::with_template(&template).unwrap_or_else(|_| ProgressStyle::default_bar());
     bar.set_style(style);
     bar
+}
+
+/// [`advance`] for a benchmark that counts whole items (images, configurations).
+fn advance_count(bar: &ProgressBar, done: usize, total: usize, what: &str) {
+    advance(
+        bar,
+        Progress {
+            done: done as u64,
+            total: total as u64,
+            what,
+        },
+    );
+}
+
+/// Prints a benchmark's table on stdout, or its JSON there and the table on stderr.
+fn print_report(json: bool, table: &str, report: &impl serde::Serialize) -> Result<()> {
+    if !json {
+        print!("{table}");
+        return Ok(());
+    }
+    let text = serde_json::to_string_pretty(report).map_err(|e| {
+        Error::invalid(
+            "report",
+            "(not serialisable)",
+            format!("serialisable data: {e}"),
+        )
+    })?;
+    eprint!("{table}");
+    println!("{text}");
+    Ok(())
 }
 
 fn advance(bar: &ProgressBar, p: Progress) {
