@@ -58,16 +58,7 @@ fn run() -> Result<bool, String> {
         let colour = float_texture(&gl, glow::RGBA32F, glow::RGBA, Some(&rgba))?;
         let depth = float_texture(&gl, glow::R32F, glow::RED, Some(range.as_slice()))?;
         let target = float_texture(&gl, glow::RGBA32F, glow::RGBA, None)?;
-        let fbo = gl.create_framebuffer()?;
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        gl.framebuffer_texture_2d(
-            glow::FRAMEBUFFER,
-            glow::COLOR_ATTACHMENT0,
-            glow::TEXTURE_2D,
-            Some(target),
-            0,
-        );
-        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        let fbo = framebuffer_over(&gl, target)?;
         (colour, depth, target, fbo)
     };
 
@@ -119,16 +110,7 @@ fn run() -> Result<bool, String> {
     // SAFETY: queries and a read-back of the host's own texture on its context.
     let (alive, colour_after) = unsafe {
         let alive = [colour, depth, target].iter().all(|&t| gl.is_texture(t));
-        let probe = gl.create_framebuffer()?;
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(probe));
-        gl.framebuffer_texture_2d(
-            glow::FRAMEBUFFER,
-            glow::COLOR_ATTACHMENT0,
-            glow::TEXTURE_2D,
-            Some(colour),
-            0,
-        );
-        gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+        let probe = framebuffer_over(&gl, colour)?;
         let pixels = read_rgba(&gl, probe)?;
         gl.delete_framebuffer(probe);
         (alive, pixels)
@@ -176,24 +158,10 @@ fn engine_frame(gl: &Arc<glow::Context>) -> Result<bool, String> {
     // SAFETY: the host's own texture, framebuffer and a blit of the scene's colour into it.
     let (target, fbo) = unsafe {
         let target = float_texture(gl, glow::RGBA32F, glow::RGBA, None)?;
-        let fbo = gl.create_framebuffer()?;
-        gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
-        gl.framebuffer_texture_2d(
-            glow::FRAMEBUFFER,
-            glow::COLOR_ATTACHMENT0,
-            glow::TEXTURE_2D,
-            Some(target),
-            0,
-        );
-        let read = gl.create_framebuffer()?;
+        let fbo = framebuffer_over(gl, target)?;
+        let read = framebuffer_over(gl, frame.colour)?;
+        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(fbo));
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(read));
-        gl.framebuffer_texture_2d(
-            glow::READ_FRAMEBUFFER,
-            glow::COLOR_ATTACHMENT0,
-            glow::TEXTURE_2D,
-            Some(frame.colour),
-            0,
-        );
         let (w, h) = (WIDTH as i32, HEIGHT as i32);
         gl.blit_framebuffer(
             0,
@@ -391,6 +359,24 @@ unsafe fn float_texture(
     }
     gl.bind_texture(glow::TEXTURE_2D, None);
     Ok(t)
+}
+
+/// A framebuffer with `texture` as its colour attachment 0 (left unbound).
+unsafe fn framebuffer_over(
+    gl: &glow::Context,
+    texture: glow::Texture,
+) -> Result<glow::Framebuffer, String> {
+    let fbo = gl.create_framebuffer()?;
+    gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
+    gl.framebuffer_texture_2d(
+        glow::FRAMEBUFFER,
+        glow::COLOR_ATTACHMENT0,
+        glow::TEXTURE_2D,
+        Some(texture),
+        0,
+    );
+    gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+    Ok(fbo)
 }
 
 /// Reads attachment 0 of `fbo` as RGBA f32.

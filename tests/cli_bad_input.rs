@@ -5,11 +5,12 @@
 //! reach inputs through symbolic links.
 #![cfg(unix)]
 
+mod common;
+
 use brume::io::output::{write_rgba, write_scalar};
 use brume::raster::Grid;
-use std::collections::BTreeMap;
+use common::snapshot;
 use std::fs;
-use std::path::Path;
 use std::process::Command;
 use std::sync::Mutex;
 
@@ -97,30 +98,6 @@ fn fixtures() -> tempfile::TempDir {
     fs::hard_link(p("im.png"), p("hard.png")).unwrap();
     fs::hard_link(p("table.csv"), p("table-hard.svg")).unwrap();
     dir
-}
-
-/// Every entry under `dir`: file bytes, link targets, folders.
-fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut all = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for entry in fs::read_dir(&d).unwrap() {
-            let path = entry.unwrap().path();
-            let name = path.strip_prefix(dir).unwrap().display().to_string();
-            let meta = fs::symlink_metadata(&path).unwrap();
-            let content = if meta.file_type().is_symlink() {
-                let target = fs::read_link(&path).unwrap();
-                format!("-> {}", target.display()).into_bytes()
-            } else if meta.is_dir() {
-                stack.push(path);
-                b"(folder)".to_vec()
-            } else {
-                fs::read(&path).unwrap()
-            };
-            all.insert(name, content);
-        }
-    }
-    all
 }
 
 /// Runs every case in a fresh fixture directory and reports all the failures at once.

@@ -6,11 +6,13 @@
 //! Frames are 64x40 (a few tenths of a second each on llvmpipe). Colour and depth are read
 //! from PFM, whose floats are the renderer's own (no 8-bit rounding).
 
+mod common;
+
 use brume::io::codec::exr::read_exr_scalar;
 use brume::io::codec::pfm::{read_pfm, Pfm};
 use brume::raster::{RgbImage, ScalarMap};
+use common::snapshot;
 use serde_json::Value;
-use std::collections::BTreeMap;
 use std::fs;
 use std::path::Path;
 use std::process::{Command, Output};
@@ -542,23 +544,6 @@ fn sequences_are_numbered_and_the_noise_drifts() {
         assert_eq!(dry_moved, 0, "--noise none: dry pixels changed with time");
         assert!(moved.contains(&true), "--noise none: the water stood still");
     }
-}
-
-/// Every entry of `dir` with its bytes.
-fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    fs::read_dir(dir)
-        .unwrap()
-        .map(|e| {
-            let path = e.unwrap().path();
-            let name = path.file_name().unwrap().to_string_lossy().into_owned();
-            let bytes = if path.is_dir() {
-                b"(folder)".to_vec()
-            } else {
-                fs::read(&path).unwrap()
-            };
-            (name, bytes)
-        })
-        .collect()
 }
 
 /// What every pre-existing output holds before a case runs.

@@ -5,6 +5,9 @@
 
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::Headless;
+use std::collections::BTreeMap;
+use std::fs;
+use std::path::Path;
 use std::sync::{Mutex, MutexGuard};
 
 static GL_LOCK: Mutex<()> = Mutex::new(());
@@ -203,4 +206,28 @@ pub fn f32s(values: &[f32]) -> exr::prelude::FlatSamples {
 /// Half-float samples for [`exr_bytes`] (Blender's default for EXR output).
 pub fn f16s(values: &[f32]) -> exr::prelude::FlatSamples {
     exr::prelude::FlatSamples::F16(values.iter().map(|&v| half::f16::from_f32(v)).collect())
+}
+
+/// Every entry under `dir`: file bytes, link targets, folders.
+pub fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut all = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.strip_prefix(dir).unwrap().display().to_string();
+            let meta = fs::symlink_metadata(&path).unwrap();
+            let content = if meta.file_type().is_symlink() {
+                let target = fs::read_link(&path).unwrap();
+                format!("-> {}", target.display()).into_bytes()
+            } else if meta.is_dir() {
+                stack.push(path);
+                b"(folder)".to_vec()
+            } else {
+                fs::read(&path).unwrap()
+            };
+            all.insert(name, content);
+        }
+    }
+    all
 }
