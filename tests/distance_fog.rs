@@ -42,6 +42,7 @@ use brume::camera::Camera;
 use brume::medium::{DistanceFog, FogNoise, Medium};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::{reference, Blur, Headless};
+use common::ray_enters_box;
 use glam::DVec3;
 
 const W: usize = 64;
@@ -76,24 +77,6 @@ fn boxes(ground: f64) -> [Cuboid; 3] {
             colour: [0.9, 0.35, 0.1],
         },
     ]
-}
-
-/// Slab test: the ray parameter where `o + t·r` enters the box, if it does (t > 0).
-fn hit_box(o: DVec3, r: DVec3, b: &Cuboid) -> Option<f64> {
-    let (mut near, mut far) = (0.0f64, f64::INFINITY);
-    for axis in 0..3 {
-        let (lo, hi) = ((b.min - o)[axis], (b.max - o)[axis]);
-        if r[axis] == 0.0 {
-            if lo > 0.0 || hi < 0.0 {
-                return None;
-            }
-            continue;
-        }
-        let (t0, t1) = (lo / r[axis], hi / r[axis]);
-        near = near.max(t0.min(t1));
-        far = far.min(t0.max(t1));
-    }
-    (near <= far && near > 0.0).then_some(near)
 }
 
 /// The colour and window-depth buffers of the scene seen by `camera` (row 0 at the top,
@@ -131,7 +114,7 @@ fn scene(camera: &Camera) -> (RgbImage, ScalarMap) {
                 );
             }
             for b in &cuboids {
-                if let Some(t) = hit_box(DVec3::ZERO, ray, b) {
+                if let Some(t) = ray_enters_box(DVec3::ZERO, ray, b.min, b.max) {
                     consider(t, b.colour);
                 }
             }

@@ -101,21 +101,10 @@ fn scene() -> Vec<Aabb> {
 fn hit(boxes: &[Aabb], eye: DVec3, dir: DVec3) -> Option<f64> {
     let mut best = (dir.y < 0.0).then(|| -eye.y / dir.y);
     for b in boxes {
-        let (mut t0, mut t1) = (0.0f64, f64::INFINITY);
-        for axis in 0..3 {
-            let (o, d) = (eye[axis], dir[axis]);
-            if d == 0.0 {
-                if o < b.min[axis] || o > b.max[axis] {
-                    t1 = -1.0;
-                }
-                continue;
+        if let Some(t0) = ray_enters_box(eye, dir, b.min, b.max) {
+            if !matches!(best, Some(t) if t <= t0) {
+                best = Some(t0);
             }
-            let (a, c) = ((b.min[axis] - o) / d, (b.max[axis] - o) / d);
-            t0 = t0.max(a.min(c));
-            t1 = t1.min(a.max(c));
-        }
-        if t0 <= t1 && t0 > 0.0 && !matches!(best, Some(t) if t <= t0) {
-            best = Some(t0);
         }
     }
     best

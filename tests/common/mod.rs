@@ -231,3 +231,27 @@ pub fn snapshot(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     }
     all
 }
+
+/// Slab test: the ray parameter where `o + t·r` enters the axis-aligned box [min, max],
+/// if it does (t > 0).
+pub fn ray_enters_box(
+    o: glam::DVec3,
+    r: glam::DVec3,
+    min: glam::DVec3,
+    max: glam::DVec3,
+) -> Option<f64> {
+    let (mut near, mut far) = (0.0f64, f64::INFINITY);
+    for axis in 0..3 {
+        let (lo, hi) = ((min - o)[axis], (max - o)[axis]);
+        if r[axis] == 0.0 {
+            if lo > 0.0 || hi < 0.0 {
+                return None;
+            }
+            continue;
+        }
+        let (t0, t1) = (lo / r[axis], hi / r[axis]);
+        near = near.max(t0.min(t1));
+        far = far.min(t0.max(t1));
+    }
+    (near <= far && near > 0.0).then_some(near)
+}
