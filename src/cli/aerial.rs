@@ -20,6 +20,8 @@ pub struct AerialLook {
     pub medium: AerialPerspective,
     pub turbidity_source: &'static str,
     pub from_turbidity: Option<f64>,
+    /// The camera's sensitivity, read once for the target's and the source's tables.
+    pub sensitivity: Sensitivity,
 }
 
 /// The turbidity: `--turbidity`, or estimated from `--sky`.
@@ -120,6 +122,7 @@ pub fn aerial_look(
         medium,
         turbidity_source: source,
         from_turbidity: args.from_turbidity,
+        sensitivity,
     })
 }
 
@@ -132,18 +135,14 @@ pub const DEFAULT_FOV_DEG: f64 = 60.0;
 pub fn dehaze(
     image: &RgbImage,
     range: &ScalarMap,
-    target: &AerialPerspective,
+    look: &AerialLook,
     from: f64,
-    args: &RenderArgs,
 ) -> Result<RgbImage> {
-    let sensitivity = match &args.sensitivity {
-        Some(path) => Sensitivity::from_csv(path)?,
-        None => Sensitivity::cie_srgb(),
-    };
+    let target = &look.medium;
     let table = AttenuationTable::new(
-        &sensitivity,
+        &look.sensitivity,
         from,
-        args.altitude,
+        target.table.altitude_m(),
         target.table.max_distance_m(),
     )?;
     let source = AerialPerspective {

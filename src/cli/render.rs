@@ -538,7 +538,7 @@ fn run_aerial(
         zenith,
     )?;
     let image = match look.from_turbidity {
-        Some(from) => dehaze(&scene.image, &range, &look.medium, from, args)?,
+        Some(from) => dehaze(&scene.image, &range, &look, from)?,
         None => scene.image.clone(),
     };
     let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
