@@ -58,9 +58,11 @@
 //!   as it was. The host sets again whatever it needs, as with egui_glow's painter.
 
 mod engine;
+mod external;
 
 use engine::{EngineKey, EngineTargets};
 pub use engine::{FogBlur, GaussBlur, GAUSS_WEIGHTS};
+pub use external::{ExternalColour, IDENTITY};
 
 use crate::blur::{Blur, Precision};
 use crate::caps::Capabilities;
