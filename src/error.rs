@@ -111,6 +111,16 @@ pub enum Error {
         /// What to do instead.
         hint: String,
     },
+    /// A window could not be opened or drawn to (`brume view`).
+    #[error("window: {what}: {detail}; {hint}")]
+    Window {
+        /// The step that failed.
+        what: String,
+        /// What the windowing or GL library said.
+        detail: String,
+        /// What to do about it.
+        hint: String,
+    },
     /// Range pre-processing (hole filling, sky, horizon margin) cannot proceed.
     #[error("pre-processing: {0}")]
     Prep(String),

@@ -95,7 +95,7 @@ fn scene(camera: &Camera) -> (RgbImage, ScalarMap) {
             let ray = camera.pixel_ray(x, gl_row, W, H);
             let mut best: Option<(f64, [f32; 3])> = None;
             let mut consider = |t: f64, c: [f32; 3]| {
-                if t < camera.far && best.map_or(true, |(b, _)| t < b) {
+                if t < camera.far && best.is_none_or(|(b, _)| t < b) {
                     best = Some((t, c));
                 }
             };

@@ -238,7 +238,7 @@ fn airlight_without_sky_is_neutral_at_the_bright_end() {
             return [50.0, 50.0, 50.0];
         }
         known += 1;
-        if i % 97 == 0 {
+        if i.is_multiple_of(97) {
             nan += 1;
             [f32::NAN, 0.5, 0.5]
         } else if i % 211 == 5 {

@@ -203,7 +203,7 @@ pub fn run_turbidity_bench(
             let e = estimator.run()?;
             let ms = start.elapsed().as_secs_f64() * 1e3 / e.repeats as f64;
             let paper = PAPER_TABLE_1.iter().find(|p| p.0 == t).map(|p| [p.1, p.2]);
-            let pass = (e.turbidity - t).abs() <= MAX_BIAS && paper.map_or(true, |p| e.std <= p[1]);
+            let pass = (e.turbidity - t).abs() <= MAX_BIAS && paper.is_none_or(|p| e.std <= p[1]);
             let values = e.estimates.iter().map(|s| s.turbidity);
             rows.push(TurbidityBenchRow {
                 turbidity: t,

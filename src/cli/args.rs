@@ -52,6 +52,10 @@ pub enum Command {
     Scene(SceneArgs),
     /// Show the EGL platform, GL driver and the capabilities brume uses.
     Info(InfoArgs),
+    /// A window that re-renders the fog as its parameters move: the demo, a photo with
+    /// depth (`view render …`) or brume's 3D scene (`view scene …`).
+    #[cfg(all(feature = "viewer", not(target_os = "android")))]
+    View(ViewArgs),
     /// Pre-process a range map (fill holes, find the sky, matte the horizon) and write it.
     Prep(PrepArgs),
     /// Reproduce paper 000's accuracy (fig. 6) and speed (fig. 7) experiments, and
@@ -65,7 +69,7 @@ pub enum Command {
 }
 
 /// `brume info`.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct InfoArgs {
     /// Print one JSON object on stdout instead of text.
     #[arg(long)]
@@ -162,7 +166,7 @@ pub struct PrepOptionArgs {
 }
 
 /// `brume render`.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
     /// Colour image: PNG or JPEG (8- or 16-bit sRGB), or OpenEXR or PFM (linear float, as
     /// renderers and engines write). Without --image and --depth the built-in demo scene
@@ -333,7 +337,7 @@ pub struct RenderArgs {
 }
 
 /// `brume prep`.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct PrepArgs {
     #[command(flatten)]
     pub depth: DepthArgs,
@@ -433,7 +437,7 @@ pub enum ProfileKind {
 }
 
 /// `brume scene`.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
     /// Output: the fogged frame, .png (8-bit sRGB), .pfm or .exr (linear). With --frames
     /// N > 1, numbered files NAME_0001.png … are written instead.
@@ -573,7 +577,7 @@ pub struct SceneArgs {
 }
 
 /// Options of the layered fog (paper 003); defaults from the chosen profile.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct LayeredArgs {
     /// Height profile of the density.
     #[arg(
@@ -610,7 +614,7 @@ pub struct LayeredArgs {
 }
 
 /// Options of the distance fog (paper 001); defaults are its Listing 1 in metres.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct DistanceArgs {
     /// Distance where the fog starts, metres (eq. 2's StartDistance) [0].
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
@@ -680,7 +684,7 @@ pub struct DistanceArgs {
 }
 
 /// Options of the blur of `brume scene`.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct SceneBlurArgs {
     /// Diffusion: blur factor λ in px, σ = σ0 + λ·r·√(scattering optical depth) [8].
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]
@@ -741,7 +745,7 @@ pub struct SceneBlurArgs {
 }
 
 /// `brume compare`.
-#[derive(Args, Debug)]
+#[derive(Args, Clone, Debug)]
 pub struct CompareArgs {
     /// One image (PNG/JPEG sRGB, or EXR/PFM linear).
     #[arg(value_name = "A")]
@@ -773,4 +777,74 @@ pub enum AerialBlur {
     Diffusion,
     /// No blur.
     None,
+}
+
+/// `brume view`.
+#[derive(Args, Clone, Debug)]
+#[command(
+    after_help = "Keys: S saves the frame as PNG, E as EXR (next to --save, numbered, \
+never overwriting), R resets the parameters, Q or Escape quits.\n\n\
+Examples:\n  brume view\n  brume view render --image photo.png --depth depth.png --ka 0.5\n  \
+brume view scene --fog layered\n  brume view --frames 10 --screenshot shot.png --stats stats.json"
+)]
+pub struct ViewArgs {
+    /// Render N frames, save --screenshot and --stats, and exit (N >= 1). Without it the
+    /// window stays until closed.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    pub frames: Option<u32>,
+
+    /// With --frames: the window's contents after the last frame, as PNG.
+    #[arg(long, value_name = "PATH", requires = "frames")]
+    pub screenshot: Option<PathBuf>,
+
+    /// With --frames: per-frame GPU and wall-clock times, the image's place in the
+    /// screenshot and the GL objects created after the first frame, as JSON.
+    #[arg(long, value_name = "PATH", requires = "frames")]
+    pub stats: Option<PathBuf>,
+
+    /// Image scale: fit (to the window) or a factor of physical pixels per image pixel.
+    #[arg(long, value_name = "fit|F", default_value = "fit", value_parser = parse_zoom)]
+    pub zoom: Zoom,
+
+    /// First window size in logical pixels [default: the panel and the image].
+    #[arg(long, value_name = "WxH")]
+    pub window: Option<String>,
+
+    /// Where S and E save the frame (the extension is theirs).
+    #[arg(long, value_name = "PATH", default_value = "brume-view.png")]
+    pub save: PathBuf,
+
+    /// What to show [default: the demo, as `brume render` renders it].
+    #[command(subcommand)]
+    pub source: Option<ViewSource>,
+}
+
+/// What `brume view` shows.
+#[derive(clap::Subcommand, Clone, Debug)]
+pub enum ViewSource {
+    /// A photo with depth, or the demo, with `brume render`'s options (--out is ignored).
+    Render(RenderArgs),
+    /// brume's 3D scene, with `brume scene`'s options (--out, --frames are ignored).
+    Scene(SceneArgs),
+}
+
+/// How big the viewer shows the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Zoom {
+    /// As large as the window allows.
+    Fit,
+    /// Physical pixels per image pixel.
+    Factor(f32),
+}
+
+fn parse_zoom(s: &str) -> Result<Zoom, String> {
+    if s == "fit" {
+        return Ok(Zoom::Fit);
+    }
+    match s.parse::<f32>() {
+        Ok(f) if f.is_finite() && (0.05..=16.0).contains(&f) => Ok(Zoom::Factor(f)),
+        _ => Err(format!(
+            "expected `fit` or a factor in [0.05, 16], got `{s}`"
+        )),
+    }
 }

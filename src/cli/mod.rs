@@ -9,6 +9,8 @@ mod prep;
 mod render;
 mod scene;
 mod sky;
+#[cfg(all(feature = "viewer", not(target_os = "android")))]
+mod view;
 
 pub use args::{Cli, Command};
 use brume::egl::Platform;
@@ -25,6 +27,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scene(a) => scene::run(&a, cli.egl),
         Command::Compare(a) => compare::run(&a),
         Command::Info(a) => info::run(&a, cli.egl),
+        #[cfg(all(feature = "viewer", not(target_os = "android")))]
+        Command::View(a) => view::run(a),
         Command::Prep(a) => prep::run(&a),
         Command::Sky(a) => sky::run_sky(&a),
         Command::Turbidity(a) => sky::run_turbidity(&a),

@@ -1,6 +1,6 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
-use super::aerial::{aerial_camera, aerial_look, dehaze};
+use super::aerial::{aerial_camera, aerial_look, dehaze, AerialLook};
 use super::args::{DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
 use brume::atmosphere::horizon_light;
 use brume::blur::Blur;
@@ -12,8 +12,8 @@ use brume::medium::haze::{self, Haze};
 use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
 use brume::raster::{RgbImage, ScalarMap};
-use brume::Rendered;
 use brume::{Error, Result};
+use brume::{FogBlur, Rendered};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -21,29 +21,29 @@ use std::time::Instant;
 const DEMO_OUT: &str = "brume-demo.png";
 
 /// The inputs of one render and where they came from.
-struct Scene {
-    image: RgbImage,
-    depth: LoadedDepth,
-    image_name: String,
-    depth_name: String,
+pub struct Scene {
+    pub image: RgbImage,
+    pub depth: LoadedDepth,
+    pub image_name: String,
+    pub depth_name: String,
 }
 
 /// What pre-processing did, for the report.
-struct PrepReport {
-    prepared: Option<Prepared>,
-    airlight: [f32; 3],
-    airlight_source: &'static str,
+pub struct PrepReport {
+    pub prepared: Option<Prepared>,
+    pub airlight: [f32; 3],
+    pub airlight_source: &'static str,
 }
 
 /// What is rendered: the medium (paper 000's haze, or a uniform blur) and the blur.
-struct Look {
-    haze: Haze,
-    uniform: Option<UniformBlur>,
-    blur: Blur,
+pub struct Look {
+    pub haze: Haze,
+    pub uniform: Option<UniformBlur>,
+    pub blur: Blur,
 }
 
 impl Look {
-    fn medium(&self) -> &dyn Medium {
+    pub fn medium(&self) -> &dyn Medium {
         match &self.uniform {
             Some(u) => u,
             None => &self.haze,
@@ -68,7 +68,7 @@ impl Look {
         }
     }
 
-    fn sigma_max(&self) -> f64 {
+    pub fn sigma_max(&self) -> f64 {
         self.medium().sigma_max(self.blur.sigma0)
     }
 }
@@ -140,7 +140,7 @@ struct Report<'a> {
     out: &'a Path,
 }
 
-fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
+pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
     let haze = Haze {
         ka: args.ka,
         ks: args.ks,
@@ -184,7 +184,7 @@ fn output_path(args: &RenderArgs) -> Result<PathBuf> {
     }
 }
 
-fn load_scene(args: &RenderArgs) -> Result<Scene> {
+pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     match (&args.image, &args.depth.depth) {
         (None, None) => Ok(Scene {
             image: demo::demo_image()?,
@@ -324,7 +324,7 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
     Ok(opts)
 }
 
-fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
+pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     let given = args.airlight.map(|b| (b, "given"));
     // A uniform blur ignores range and airlight: nothing to pre-process.
     if args.no_prep || args.uniform_sigma.is_some() {
@@ -369,7 +369,7 @@ pub fn airlight_source_name(source: AirlightSource) -> &'static str {
     }
 }
 
-fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Look {
+pub fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Look {
     Look {
         haze: Haze { airlight, ..*haze },
         uniform: args.uniform_sigma.map(UniformBlur::new),
@@ -487,16 +487,40 @@ fn print_timings(rendered: &Rendered) {
     );
 }
 
+/// The aerial render's inputs, as `brume render` and `brume view` use them.
+pub struct AerialJob {
+    /// The photo (retargeted with `--from-turbidity`).
+    pub image: RgbImage,
+    /// Range in `--metres-per-unit`, unknown samples taken as the sky.
+    pub range: ScalarMap,
+    pub look: AerialLook,
+    /// The largest known range.
+    pub max_range: f32,
+    /// Where the horizon's light came from, for the report.
+    pub light_source: &'static str,
+    /// The diffusion blur, when the medium blurs.
+    pub blur: Blur,
+}
+
+impl AerialJob {
+    /// No blur: the fog's one pass does what the medium pass and the composite would.
+    pub fn fog_blur(&self) -> FogBlur {
+        if self.look.medium.lambda == 0.0 {
+            FogBlur::None
+        } else {
+            FogBlur::Diffusion(self.blur)
+        }
+    }
+}
+
 /// `--medium aerial`: paper 002's aerial perspective on the range in metres (module
 /// `aerial`), the horizon's light from the sky found (or `--airlight`).
-fn run_aerial(
+pub fn aerial_job(
     args: &RenderArgs,
-    egl: Option<Platform>,
     scene: &Scene,
     prep: &PrepReport,
     range: &ScalarMap,
-    out: &Path,
-) -> Result<()> {
+) -> Result<AerialJob> {
     let max_range = range
         .as_slice()
         .iter()
@@ -542,13 +566,35 @@ fn run_aerial(
         None => scene.image.clone(),
     };
     let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
+    Ok(AerialJob {
+        image,
+        range,
+        look,
+        max_range,
+        light_source,
+        blur,
+    })
+}
+
+fn run_aerial(
+    args: &RenderArgs,
+    egl: Option<Platform>,
+    scene: &Scene,
+    prep: &PrepReport,
+    range: &ScalarMap,
+    out: &Path,
+) -> Result<()> {
+    let job = aerial_job(args, scene, prep, range)?;
+    let AerialJob {
+        image,
+        range,
+        look,
+        max_range,
+        light_source,
+        blur,
+    } = &job;
     let mut renderer = super::open_renderer(egl)?;
-    // Without blur, the fog's one pass does what the medium pass and the composite would.
-    let rendered = if look.medium.lambda == 0.0 {
-        renderer.render_fog(&image, &range, &look.medium, &brume::FogBlur::None)?
-    } else {
-        renderer.render(&image, &range, &look.medium, &blur)?
-    };
+    let rendered = renderer.render_fog(image, range, &look.medium, &job.fog_blur())?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(out, &rendered.image)?;
     super::commit(outputs)?;

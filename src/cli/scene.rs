@@ -62,7 +62,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
             Some(m) => {
                 let (done, image) = renderer
                     .pipeline()
-                    .fog_to_image(&input, m.as_ref(), &blur)?;
+                    .fog_to_image(&input, m.medium(), &blur)?;
                 outputs.stage_rgba(out, &image)?;
                 FrameReport {
                     time,
@@ -113,7 +113,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
     Ok(())
 }
 
-fn camera_from_args(args: &SceneArgs) -> Camera {
+pub fn camera_from_args(args: &SceneArgs) -> Camera {
     Camera {
         position: args.position,
         yaw_deg: args.yaw,
@@ -124,7 +124,7 @@ fn camera_from_args(args: &SceneArgs) -> Camera {
     }
 }
 
-fn check_sequence(args: &SceneArgs) -> Result<()> {
+pub fn check_sequence(args: &SceneArgs) -> Result<()> {
     if args.frames == 0 {
         return Err(Error::invalid("--frames", 0, "at least 1 frame"));
     }
@@ -177,7 +177,18 @@ fn check_outputs(args: &SceneArgs, outs: &[PathBuf]) -> Result<()> {
     super::refuse_overlaps(&all, &inputs)
 }
 
-fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
+pub fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
+    let (gauss, diffusion) = blurs_from_args(args)?;
+    Ok(match args.blur {
+        BlurKind::None => FogBlur::None,
+        BlurKind::GaussSingle => FogBlur::GaussSingle(gauss),
+        BlurKind::GaussSeparate => FogBlur::GaussSeparate(gauss),
+        BlurKind::Diffusion => FogBlur::Diffusion(diffusion),
+    })
+}
+
+/// The Gaussian and the diffusion blur the options describe, whichever `--blur` chose.
+pub fn blurs_from_args(args: &SceneArgs) -> Result<(GaussBlur, Blur)> {
     let b = &args.blur_options;
     let gauss = GaussBlur {
         distance: b.blur_distance,
@@ -185,33 +196,58 @@ fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
         maximum: b.blur_max,
         precision: b.precision,
     };
-    let blur = match args.blur {
-        BlurKind::None => FogBlur::None,
-        BlurKind::GaussSingle => FogBlur::GaussSingle(gauss),
-        BlurKind::GaussSeparate => FogBlur::GaussSeparate(gauss),
-        BlurKind::Diffusion => FogBlur::Diffusion(Blur {
-            scheme: b.scheme,
-            sigma0: b.sigma0,
-            rho_max: b.rho_max,
-            precision: b.precision,
-            ..Blur::default()
-        }),
-    };
     // A bad value is refused whatever the mode, not ignored because another blur was
     // chosen. The diffusion blur's options are checked when its schedule is planned.
     gauss.validate()?;
-    Ok(blur)
+    let diffusion = Blur {
+        scheme: b.scheme,
+        sigma0: b.sigma0,
+        rho_max: b.rho_max,
+        precision: b.precision,
+        ..Blur::default()
+    };
+    Ok((gauss, diffusion))
+}
+
+/// The fog of a scene frame, kept concrete so that the viewer can edit it and move its time.
+pub enum SceneMedium {
+    /// Paper 003's layered fog.
+    Layered(LayeredFog),
+    /// Paper 001's distance fog.
+    Distance(DistanceFog),
+}
+
+impl SceneMedium {
+    /// The medium to render.
+    pub fn medium(&self) -> &dyn Medium {
+        match self {
+            SceneMedium::Layered(f) => f,
+            SceneMedium::Distance(f) => f,
+        }
+    }
+
+    /// Moves the fog to `time` (the distance fog's noise drifts; the layered fog is still).
+    pub fn set_time(&mut self, time: f64) {
+        if let SceneMedium::Distance(f) = self {
+            f.time = time;
+        }
+    }
+
+    /// Checks the parameters, naming the flags that set them.
+    pub fn validate(&self) -> Result<()> {
+        self.medium().validate().map_err(distance_flags)
+    }
 }
 
 /// The medium the options describe at `time` (`None` for `--fog none`).
-fn medium_from_args(
+pub fn medium_from_args(
     args: &SceneArgs,
     camera: Camera,
     time: f64,
     sun: [f64; 3],
-) -> Result<Option<Box<dyn Medium>>> {
+) -> Result<Option<SceneMedium>> {
     let lambda = args.blur_options.lambda;
-    let medium: Box<dyn Medium> = match args.fog {
+    let medium = match args.fog {
         FogKind::None => return Ok(None),
         FogKind::Layered => {
             let l = &args.layered;
@@ -219,12 +255,12 @@ fn medium_from_args(
             fog.colour = args.fog_colour.unwrap_or(fog.colour);
             fog.albedo = l.albedo.unwrap_or(fog.albedo);
             fog.lambda = lambda.unwrap_or(fog.lambda);
-            Box::new(fog)
+            SceneMedium::Layered(fog)
         }
         FogKind::Distance => {
             let d = &args.distance;
             let defaults = DistanceFog::default();
-            Box::new(DistanceFog {
+            SceneMedium::Distance(DistanceFog {
                 camera,
                 start_distance: d.fog_start.unwrap_or(defaults.start_distance),
                 distance: d.fog_distance.unwrap_or(defaults.distance),
@@ -242,7 +278,7 @@ fn medium_from_args(
             })
         }
     };
-    medium.validate().map_err(distance_flags)?;
+    medium.validate()?;
     Ok(Some(medium))
 }
 

@@ -85,6 +85,41 @@ impl Framebuffer {
         }
     }
 
+    /// Points colour attachment 0 at `texture` (`width x height`) instead of what it had:
+    /// one framebuffer serves a host's output textures frame after frame, with no GL object
+    /// created per frame. `what` names it in errors.
+    pub fn attach(
+        &mut self,
+        texture: Option<glow::Texture>,
+        width: usize,
+        height: usize,
+        what: &str,
+    ) -> Result<()> {
+        // SAFETY: re-attaches a texture to the framebuffer this value owns.
+        let status = unsafe {
+            self.gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
+            self.gl.framebuffer_texture_2d(
+                glow::FRAMEBUFFER,
+                glow::COLOR_ATTACHMENT0,
+                glow::TEXTURE_2D,
+                texture,
+                0,
+            );
+            let status = self.gl.check_framebuffer_status(glow::FRAMEBUFFER);
+            self.gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            status
+        };
+        self.width = width;
+        self.height = height;
+        if texture.is_some() && status != glow::FRAMEBUFFER_COMPLETE {
+            return Err(Error::Gl(format!(
+                "the framebuffer for {what} is incomplete (status 0x{status:04X}): the \
+                 driver cannot render to its texture format"
+            )));
+        }
+        Ok(())
+    }
+
     /// A framebuffer over brume's own `textures`.
     pub fn over(gl: &Arc<glow::Context>, textures: &[&Texture], what: &str) -> Result<Self> {
         let first = textures.first().expect("at least one attachment");

@@ -14,14 +14,24 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// over every context of the process: what a leak test watches.
 static LIVE_OBJECTS: AtomicUsize = AtomicUsize::new(0);
 
+/// GL objects brume has created since the process started, deleted or not: a frame loop
+/// that reuses its textures and targets leaves it unchanged from one frame to the next.
+static CREATED_OBJECTS: AtomicUsize = AtomicUsize::new(0);
+
 /// The number of GL objects brume has created and not yet deleted, in this process.
 pub fn live_objects() -> usize {
     LIVE_OBJECTS.load(Ordering::Relaxed)
 }
 
+/// The number of GL objects brume has created in this process, deleted or not.
+pub fn objects_created() -> usize {
+    CREATED_OBJECTS.load(Ordering::Relaxed)
+}
+
 /// Counts an object an owner has just taken.
 pub(crate) fn object_created() {
     LIVE_OBJECTS.fetch_add(1, Ordering::Relaxed);
+    CREATED_OBJECTS.fetch_add(1, Ordering::Relaxed);
 }
 
 /// Counts an object its owner has just deleted.

@@ -26,6 +26,9 @@ pub enum TexelFormat {
     /// 32-bit float depth (`DEPTH_COMPONENT32F`), a depth attachment; created with
     /// `TEXTURE_COMPARE_MODE` `NONE` so that shaders read the depth with `texelFetch`.
     Depth32F,
+    /// RGBA 8-bit unsigned normalised: a display target, filled by rendering only (no
+    /// upload from f32).
+    Rgba8,
 }
 
 impl TexelFormat {
@@ -39,13 +42,14 @@ impl TexelFormat {
             TexelFormat::Rg16F => glow::RG16F,
             TexelFormat::Rgb32F => glow::RGB32F,
             TexelFormat::Depth32F => glow::DEPTH_COMPONENT32F,
+            TexelFormat::Rgba8 => glow::RGBA8,
         }
     }
 
     /// The client format of data uploaded as f32.
     fn client_format(self) -> u32 {
         match self {
-            TexelFormat::Rgba32F | TexelFormat::Rgba16F => glow::RGBA,
+            TexelFormat::Rgba32F | TexelFormat::Rgba16F | TexelFormat::Rgba8 => glow::RGBA,
             TexelFormat::R32F | TexelFormat::R16F => glow::RED,
             TexelFormat::Rg32F | TexelFormat::Rg16F => glow::RG,
             TexelFormat::Rgb32F => glow::RGB,
@@ -56,16 +60,17 @@ impl TexelFormat {
     /// Bytes per texel.
     pub fn bytes_per_texel(self) -> usize {
         let channel = match self {
+            TexelFormat::Rgba8 => 1,
             TexelFormat::Rgba16F | TexelFormat::R16F | TexelFormat::Rg16F => 2,
             _ => 4,
         };
         channel * self.channels()
     }
 
-    /// Float channels per texel.
+    /// Channels per texel.
     pub fn channels(self) -> usize {
         match self {
-            TexelFormat::Rgba32F | TexelFormat::Rgba16F => 4,
+            TexelFormat::Rgba32F | TexelFormat::Rgba16F | TexelFormat::Rgba8 => 4,
             TexelFormat::R32F | TexelFormat::R16F | TexelFormat::Depth32F => 1,
             TexelFormat::Rg32F | TexelFormat::Rg16F => 2,
             TexelFormat::Rgb32F => 3,
@@ -102,6 +107,13 @@ impl Texture {
         filter: Filter,
         data: Option<&[f32]>,
     ) -> Result<Self> {
+        if format == TexelFormat::Rgba8 && data.is_some() {
+            return Err(Error::invalid(
+                "texture data",
+                "f32 values",
+                "none: an RGBA8 texture is filled by rendering",
+            ));
+        }
         if let Some(d) = data {
             assert_eq!(
                 d.len(),

@@ -9,6 +9,7 @@
 
 use crate::error::{Error, Result};
 use glow::HasContext;
+use std::cell::RefCell;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -83,9 +84,53 @@ pub fn warm_up(gl: &glow::Context, draw: impl FnOnce()) -> Result<()> {
     super::check_gl(gl, "warming up the timer query")
 }
 
-/// Times a sequence of passes with one clock.
-pub struct PassTimer {
+/// TIME_ELAPSED query objects kept for the next batch, so that a frame loop creates none
+/// after its first frame. Deletes them when dropped.
+pub struct QueryPool {
     gl: Arc<glow::Context>,
+    free: RefCell<Vec<glow::Query>>,
+}
+
+impl QueryPool {
+    /// An empty pool on `gl`.
+    pub fn new(gl: &Arc<glow::Context>) -> Self {
+        QueryPool {
+            gl: Arc::clone(gl),
+            free: RefCell::new(Vec::new()),
+        }
+    }
+
+    /// A query from the pool, or a new one.
+    fn take(&self) -> Result<glow::Query> {
+        if let Some(q) = self.free.borrow_mut().pop() {
+            return Ok(q);
+        }
+        // SAFETY: query creation on the current context; owned by the pool once given back.
+        let q = unsafe { self.gl.create_query().map_err(Error::Gl)? };
+        super::object_created();
+        Ok(q)
+    }
+
+    /// Returns queries whose results have been read (or that will not be).
+    fn give_back(&self, queries: impl IntoIterator<Item = glow::Query>) {
+        self.free.borrow_mut().extend(queries);
+    }
+}
+
+impl Drop for QueryPool {
+    fn drop(&mut self) {
+        for q in self.free.get_mut().drain(..) {
+            // SAFETY: queries this pool created, on the context it holds.
+            unsafe { self.gl.delete_query(q) };
+            super::object_deleted();
+        }
+    }
+}
+
+/// Times a sequence of passes with one clock.
+pub struct PassTimer<'a> {
+    gl: Arc<glow::Context>,
+    pool: &'a QueryPool,
     clock: Clock,
     queries: Vec<glow::Query>,
     wall_ms: Vec<f64>,
@@ -93,10 +138,10 @@ pub struct PassTimer {
     batch_start: Instant,
 }
 
-impl PassTimer {
-    /// Starts timing. With the wall clock, waits for earlier GL work first so that it is
-    /// not charged to the first pass.
-    pub fn start(gl: &Arc<glow::Context>, clock: Clock) -> Self {
+impl<'a> PassTimer<'a> {
+    /// Starts timing, with queries from `pool`. With the wall clock, waits for earlier GL
+    /// work first so that it is not charged to the first pass.
+    pub fn start(gl: &Arc<glow::Context>, clock: Clock, pool: &'a QueryPool) -> Self {
         // SAFETY: glFinish and a state query on the current context.
         unsafe {
             match clock {
@@ -110,6 +155,7 @@ impl PassTimer {
         let now = Instant::now();
         PassTimer {
             gl: Arc::clone(gl),
+            pool,
             clock,
             queries: Vec::new(),
             wall_ms: Vec::new(),
@@ -122,12 +168,11 @@ impl PassTimer {
     pub fn pass(&mut self, draw: impl FnOnce()) -> Result<()> {
         match self.clock {
             Clock::GpuTimer => {
-                // SAFETY: a query object owned by this timer (deleted in Drop) brackets
-                // the draw; no other TIME_ELAPSED query is active.
+                let q = self.pool.take()?;
+                self.queries.push(q);
+                // SAFETY: a query object held by this timer (back to the pool in Drop)
+                // brackets the draw; no other TIME_ELAPSED query is active.
                 unsafe {
-                    let q = self.gl.create_query().map_err(Error::Gl)?;
-                    super::object_created();
-                    self.queries.push(q);
                     self.gl.begin_query(glow::TIME_ELAPSED, q);
                     draw();
                     self.gl.end_query(glow::TIME_ELAPSED);
@@ -182,13 +227,11 @@ impl PassTimer {
     }
 }
 
-impl Drop for PassTimer {
+impl Drop for PassTimer<'_> {
     fn drop(&mut self) {
-        for &q in &self.queries {
-            // SAFETY: queries created by this timer on the context it holds.
-            unsafe { self.gl.delete_query(q) };
-            super::object_deleted();
-        }
+        // A query whose result was not read is ended: reusing it is allowed, and begin
+        // discards the old result.
+        self.pool.give_back(self.queries.drain(..));
     }
 }
 

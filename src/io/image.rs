@@ -98,7 +98,7 @@ const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 /// a file cut after its magic gets the PFM reader's message).
 fn is_pfm(bytes: &[u8]) -> bool {
     (bytes.starts_with(b"PF") || bytes.starts_with(b"Pf"))
-        && bytes.get(2).map_or(true, |b| b.is_ascii_whitespace())
+        && bytes.get(2).is_none_or(|b| b.is_ascii_whitespace())
 }
 
 /// Checks a float image's values as the module docs say: refuses the first NaN or

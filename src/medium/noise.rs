@@ -115,7 +115,7 @@ impl TilingNoise {
             return Err(Error::invalid("noise period", 0, "at least 1 lattice cell"));
         }
         let limit = (TABLE as u64).min(self.size_px as u64);
-        if self.octaves == 0 || self.finest_period().map_or(true, |p| p > limit) {
+        if self.octaves == 0 || self.finest_period().is_none_or(|p| p > limit) {
             return Err(Error::invalid(
                 "noise octaves",
                 self.octaves,

@@ -70,7 +70,7 @@ use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::program::Program;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
-use crate::gpu::timer::{self, Clock, PassTimer, PassTimes};
+use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, QueryPool};
 use crate::medium::{Lookup, Medium, UniformValue, Wrap, MAX_LOOKUPS, MEDIUM_API_GLSL};
 use crate::schedule::{Schedule, Scheme};
 use glow::HasContext;
@@ -294,6 +294,11 @@ pub struct Pipeline {
     /// The lookups of the last medium rendered, uploaded, by [`Lookup::id`].
     lookups: HashMap<u64, Texture>,
     engine_targets: Option<EngineTargets>,
+    /// The framebuffer over the host's output texture ([`Output::Texture`]), re-attached
+    /// each frame.
+    host_target: Option<Framebuffer>,
+    /// Timer queries, reused from frame to frame.
+    queries: QueryPool,
     /// LINEAR, CLAMP_TO_EDGE: the Gaussian's bilinear taps, whatever the texture's own
     /// filter.
     linear_sampler: glow::Sampler,
@@ -340,6 +345,8 @@ impl Pipeline {
             targets: None,
             lookups: HashMap::new(),
             engine_targets: None,
+            host_target: None,
+            queries: QueryPool::new(&gl),
             linear_sampler,
             vao,
             caps,
@@ -503,7 +510,7 @@ impl Pipeline {
         let mut clock = self.preferred_clock();
         loop {
             self.enter_state();
-            let mut timer = PassTimer::start(&self.gl, clock);
+            let mut timer = PassTimer::start(&self.gl, clock, &self.queries);
             let result = passes(self, &mut timer)?;
             crate::gpu::check_gl(&self.gl, what)?;
             match timer.finish()? {
@@ -541,14 +548,24 @@ impl Pipeline {
                 },
             ),
             Output::Texture { texture, encoding } => {
-                let fb = Framebuffer::new(
-                    &self.gl,
-                    &[texture],
-                    input.width,
-                    input.height,
-                    "the output texture",
-                )?;
-                run(self, &Destination::HostTexture(&fb, encoding))
+                let what = "the output texture";
+                let (w, h) = (input.width, input.height);
+                let mut fb = match self.host_target.take() {
+                    Some(mut fb) => {
+                        let attached = fb.attach(Some(texture), w, h, what);
+                        self.host_target = Some(fb);
+                        attached?;
+                        self.host_target.take().expect("put back just above")
+                    }
+                    None => Framebuffer::new(&self.gl, &[texture], w, h, what)?,
+                };
+                let result = run(self, &Destination::HostTexture(&fb, encoding));
+                // Detached so that brume holds no reference to the host's texture.
+                let detached = fb.attach(None, w, h, what);
+                self.host_target = Some(fb);
+                let times = result?;
+                detached?;
+                Ok(times)
             }
         }
     }

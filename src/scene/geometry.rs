@@ -284,7 +284,7 @@ impl Scene {
         }
         for (i, object) in self.objects.iter().enumerate() {
             if let Some(t) = object.intersect(origin, dir) {
-                if best.map_or(true, |(b, _)| t < b) {
+                if best.is_none_or(|(b, _)| t < b) {
                     best = Some((t, Surface::Object(i)));
                 }
             }

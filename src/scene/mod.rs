@@ -389,10 +389,10 @@ impl SceneRenderer {
         if !time.is_finite() {
             return Err(Error::invalid("time", time, "a finite time in seconds"));
         }
-        if !self
+        if self
             .targets
             .as_ref()
-            .is_some_and(|t| (t.width, t.height) == (width, height))
+            .is_none_or(|t| (t.width, t.height) != (width, height))
         {
             self.targets = None;
             self.targets = Some(Targets::new(&self.gl, &self.caps, width, height)?);
