@@ -1,10 +1,11 @@
-//! Depth loaders: PFM, calib.txt, Middlebury 2014/2006, 16-bit PNG formats, float maps.
+//! Depth loaders: PFM, calib.txt, Middlebury 2014/2006, 16-bit PNG formats (the datasets',
+//! Android DEPTH16 and ARCore), float maps; the phone formats also through the CLI.
 
 use std::path::{Path, PathBuf};
 
 use brume::io::depth::{
     load_range, load_range_from_bytes, parse_calib, parse_pfm, read_pfm, DepthFormat, DepthKind,
-    DepthOptions, LoadedDepth, Pfm,
+    DepthOptions, LoadedDepth, Pfm, DEPTH16_DEFAULT_MIN_CONFIDENCE,
 };
 use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
@@ -843,14 +844,22 @@ fn kind_and_format_parse_and_print() {
     for k in [DepthKind::Depth, DepthKind::Range, DepthKind::Disparity] {
         assert_eq!(k.to_string().parse::<DepthKind>().unwrap(), k);
     }
-    let names = "auto middlebury2014 middlebury2006 kitti nyu tum png16 float";
+    let names =
+        "auto middlebury2014 middlebury2006 kitti nyu tum png16 float android-depth16 arcore";
     for name in names.split(' ') {
         assert_eq!(name.parse::<DepthFormat>().unwrap().to_string(), name);
     }
     assert_eq!("KITTI".parse::<DepthFormat>().unwrap(), DepthFormat::Kitti);
+    assert_eq!(
+        " Android-Depth16".parse::<DepthFormat>().unwrap(),
+        DepthFormat::AndroidDepth16
+    );
     let err = "lidar".parse::<DepthFormat>().unwrap_err().to_string();
     assert!(
-        err.contains("lidar") && err.contains("middlebury2014"),
+        err.contains("lidar")
+            && err.contains("middlebury2014")
+            && err.contains("android-depth16")
+            && err.contains("arcore"),
         "{err}"
     );
     let err = "far".parse::<DepthKind>().unwrap_err().to_string();
@@ -940,4 +949,512 @@ fn zbuffer_becomes_range_with_near_far_and_fov() {
     assert!(expect_err(load_range(&png, &kitti))
         .to_string()
         .contains("zbuffer"));
+}
+
+// ---------------------------------------------------------------- phone depth
+
+/// A DEPTH16 sample: `mm` in the low 13 bits, the confidence `code` in the high 3.
+fn depth16(mm: u16, code: u16) -> u16 {
+    assert!(
+        mm <= 0x1FFF && code <= 7,
+        "not a DEPTH16 sample: {mm} mm, code {code}"
+    );
+    code << 13 | mm
+}
+
+/// A 4x3 DEPTH16 map with every confidence code, and its range in metres at the default
+/// threshold 0.5 (codes 0 and 5 to 7 kept), NaN where unknown.
+fn depth16_samples() -> (Vec<u16>, Vec<f64>) {
+    let unknown = f64::NAN;
+    let cases = [
+        (depth16(8191, 0), 8.191),   // the largest range, 100 %
+        (depth16(1000, 7), 1.0),     // 6/7
+        (depth16(2000, 5), 2.0),     // 4/7: just above 0.5
+        (depth16(3000, 4), unknown), // 3/7: just below
+        (depth16(1500, 1), unknown), // code 1 is 0 %, not 1/7
+        (depth16(0, 0), unknown),    // no range, however confident
+        (depth16(0, 7), unknown),
+        (depth16(2500, 2), unknown), // 1/7
+        (depth16(4000, 0), 4.0),
+        (depth16(5000, 6), 5.0),     // 5/7
+        (depth16(1234, 3), unknown), // 2/7
+        (depth16(7000, 0), 7.0),
+    ];
+    cases.into_iter().unzip()
+}
+
+/// `d` holds `expected` (metres, NaN unknown) pixel by pixel, and counts its unknowns.
+fn assert_range(d: &LoadedDepth, expected: &[f64]) {
+    assert_eq!(d.range.len(), expected.len());
+    for (i, (got, want)) in d.range.as_slice().iter().zip(expected).enumerate() {
+        if want.is_nan() {
+            assert!(got.is_nan(), "pixel {i}: {got} m, expected unknown");
+        } else {
+            assert!(close(*got, *want), "pixel {i}: {got} m, expected {want}");
+        }
+    }
+    let unknown = expected.iter().filter(|v| v.is_nan()).count();
+    assert_eq!(d.unknown_pixels, unknown);
+}
+
+fn depth16_with(min_confidence: f64) -> DepthOptions {
+    DepthOptions {
+        min_confidence: Some(min_confidence),
+        ..opts(DepthFormat::AndroidDepth16)
+    }
+}
+
+/// Range of depth `z` at pixel (x, y) of a `w` x `h` map with vertical field of view
+/// `fov_deg` and the principal point at the centre, computed here from scratch.
+fn stretched(z: f64, x: usize, y: usize, w: usize, h: usize, fov_deg: f64) -> f64 {
+    let f = h as f64 / 2.0 / (fov_deg.to_radians() / 2.0).tan();
+    let u = (x as f64 - (w as f64 - 1.0) / 2.0) / f;
+    let v = (y as f64 - (h as f64 - 1.0) / 2.0) / f;
+    z * (1.0 + u * u + v * v).sqrt()
+}
+
+#[test]
+fn android_depth16_splits_range_and_confidence() {
+    let dir = tempfile::tempdir().unwrap();
+    let (samples, expected) = depth16_samples();
+    let p = save_png16(dir.path(), "depth16.png", 4, 3, &samples);
+    let d = load_range(&p, &opts(DepthFormat::AndroidDepth16)).unwrap();
+    assert_eq!(
+        (d.format, d.kind, d.units.as_str()),
+        (DepthFormat::AndroidDepth16, DepthKind::Range, "m")
+    );
+    assert!(d.intrinsics.is_none(), "range needs no field of view");
+    assert_range(&d, &expected);
+    // 10 samples have a range; codes 1 to 4 (4 of them) are below 0.5.
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n.contains("4 of 10") && n.contains("--min-confidence 0.5")),
+        "{:?}",
+        d.notes
+    );
+    // The default is documented as 0.5, and is what no option gives.
+    assert_eq!(DEPTH16_DEFAULT_MIN_CONFIDENCE, 0.5);
+    let explicit = load_range(&p, &depth16_with(0.5)).unwrap();
+    assert_range(&explicit, &expected);
+    assert_eq!(explicit.notes, d.notes);
+}
+
+#[test]
+fn android_depth16_high_bits_are_confidence_and_arcore_has_none() {
+    let dir = tempfile::tempdir().unwrap();
+    // 0xFFFF is 8191 mm at code 7; 0x1FFF 8191 mm at code 0; 0xA064 100 mm at code 5.
+    let p = save_png16(dir.path(), "bits.png", 3, 1, &[0xFFFF, 0x1FFF, 0xA064]);
+    let d = load_range(&p, &opts(DepthFormat::AndroidDepth16)).unwrap();
+    assert_range(&d, &[8.191, 8.191, 0.1]);
+    // The same file read as ARCore: all 16 bits are millimetres.
+    let d = load_range(&p, &opts(DepthFormat::Arcore)).unwrap();
+    assert_range(&d, &[65.535, 8.191, 41.06]);
+}
+
+#[test]
+fn android_depth16_confidence_threshold_edges() {
+    let dir = tempfile::tempdir().unwrap();
+    let (samples, _) = depth16_samples();
+    let p = save_png16(dir.path(), "depth16.png", 4, 3, &samples);
+    let at = |c: f64| load_range(&p, &depth16_with(c)).unwrap();
+    // 0 keeps every sample with a range, code 1 (0 %) included; only range 0 is unknown.
+    let all = at(0.0);
+    assert_eq!(all.unknown_pixels, 2);
+    assert!(close(*all.range.get(0, 1), 1.5));
+    assert!(
+        !all.notes.iter().any(|n| n.contains("below")),
+        "{:?}",
+        all.notes
+    );
+    // Exactly 4/7 keeps code 5 (4/7); a hair above does not.
+    assert!(close(*at(4.0 / 7.0).range.get(2, 0), 2.0));
+    assert!(at(4.0 / 7.0 + 1e-9).range.get(2, 0).is_nan());
+    // 1/7 keeps code 2 (1/7) but not code 1 (0 %).
+    let low = at(1.0 / 7.0);
+    assert!(close(*low.range.get(3, 1), 2.5));
+    assert!(low.range.get(0, 1).is_nan());
+    // 1 keeps code 0 (100 %) only: 8191, 4000 and 7000 mm.
+    let mut only_code_0 = vec![f64::NAN; 12];
+    (only_code_0[0], only_code_0[8], only_code_0[11]) = (8.191, 4.0, 7.0);
+    assert_range(&at(1.0), &only_code_0);
+}
+
+#[test]
+fn min_confidence_outside_zero_to_one_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let (samples, _) = depth16_samples();
+    let p = save_png16(dir.path(), "depth16.png", 4, 3, &samples);
+    for bad in [-0.1, 1.5, f64::NAN, f64::INFINITY] {
+        let err = expect_err(load_range(&p, &depth16_with(bad)));
+        let msg = err.to_string();
+        assert!(matches!(err, Error::InvalidParameter { .. }), "{msg}");
+        assert!(
+            msg.contains(&format!("invalid min_confidence = {bad}")) && msg.contains("0 to 1"),
+            "{msg}"
+        );
+    }
+    // A format without confidence ignores the option, and says so; a bad value is still
+    // refused.
+    let kitti = DepthOptions {
+        min_confidence: Some(0.9),
+        ..opts(DepthFormat::Kitti)
+    };
+    let d = load_range(&p, &kitti).unwrap();
+    assert!(d
+        .notes
+        .iter()
+        .any(|n| n.contains("--min-confidence ignored") && n.contains("kitti")));
+    let kitti = DepthOptions {
+        min_confidence: Some(2.0),
+        ..kitti
+    };
+    assert!(expect_err(load_range(&p, &kitti))
+        .to_string()
+        .contains("min_confidence = 2"));
+}
+
+#[test]
+fn android_depth16_with_nothing_confident_enough_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let unsure = [depth16(1000, 1), depth16(2000, 3), depth16(3000, 4), 0];
+    let p = save_png16(dir.path(), "unsure.png", 2, 2, &unsure);
+    let msg = expect_format_error(
+        load_range(&p, &opts(DepthFormat::AndroidDepth16)),
+        "--min-confidence 0.5",
+    );
+    assert!(
+        msg.contains("unsure.png") && msg.contains("all 3") && msg.contains("highest is 0.429"),
+        "{msg}"
+    );
+    // Below the best confidence (3/7) the file loads.
+    let d = load_range(&p, &depth16_with(0.4)).unwrap();
+    assert_range(&d, &[f64::NAN, f64::NAN, 3.0, f64::NAN]);
+    // No range anywhere, whatever the confidence bits, is the error every format gives.
+    let p = save_png16(dir.path(), "empty.png", 2, 1, &[0, 0xE000]);
+    let err = expect_err(load_range(&p, &opts(DepthFormat::AndroidDepth16)));
+    assert!(matches!(err, Error::NoValidDepth { .. }), "{err}");
+    assert!(err.to_string().contains("empty.png"), "{err}");
+    // To ARCore 0xE000 is 57.344 m; only 0 is unknown.
+    let d = load_range(&p, &opts(DepthFormat::Arcore)).unwrap();
+    assert_range(&d, &[f64::NAN, 57.344]);
+    let p = save_png16(dir.path(), "zeros.png", 2, 1, &[0, 0]);
+    let err = expect_err(load_range(&p, &opts(DepthFormat::Arcore)));
+    assert!(matches!(err, Error::NoValidDepth { .. }), "{err}");
+}
+
+#[test]
+fn phone_formats_refuse_what_is_not_a_16_bit_grey_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let png8 = save_png8(dir.path(), "d8.png", 2, 1, &[10, 20]);
+    let png16 = save_png16(dir.path(), "d16.png", 2, 1, &[1000, 2000]);
+    let rgb16 = dir.path().join("rgb16.png");
+    let bytes: Vec<u8> = [1000u16; 6].iter().flat_map(|v| v.to_ne_bytes()).collect();
+    image::save_buffer(&rgb16, &bytes, 2, 1, image::ExtendedColorType::Rgb16).unwrap();
+    let pfm = write(
+        dir.path(),
+        "d.pfm",
+        &pfm_bytes("Pf", 2, 1, "-1", &[1.0, 2.0], true),
+    );
+    let jpg = write(dir.path(), "d.jpg", b"\xff\xd8\xff\xe0");
+    for format in [DepthFormat::AndroidDepth16, DepthFormat::Arcore] {
+        let msg = expect_format_error(load_range(&png8, &opts(format)), "d8.png");
+        let expected = format!("--depth-format {format} expects a 16-bit grey PNG");
+        assert!(
+            msg.contains(&expected) && msg.contains("found an 8-bit PNG"),
+            "{msg}"
+        );
+        let msg = expect_format_error(load_range(&rgb16, &opts(format)), "rgb16.png");
+        assert!(
+            msg.contains("Rgb16") && msg.contains("one grey channel"),
+            "{msg}"
+        );
+        let msg = expect_format_error(load_range(&pfm, &opts(format)), "d.pfm");
+        assert!(msg.contains("found a float PFM"), "{msg}");
+        expect_format_error(load_range(&jpg, &opts(format)), "JPEG is lossy");
+        // What the values are: depth or range only.
+        for kind in [DepthKind::ZBuffer, DepthKind::Disparity] {
+            let o = DepthOptions {
+                kind: Some(kind),
+                ..opts(format)
+            };
+            let msg = expect_err(load_range(&png16, &o)).to_string();
+            assert!(
+                msg.contains("depth_kind") && msg.contains(&format!("--depth-format {format}")),
+                "{msg}"
+            );
+        }
+    }
+}
+
+#[test]
+fn android_depth16_of_a_z_depth_device_with_a_field_of_view() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (5, 3);
+    let p = save_png16(
+        dir.path(),
+        "z.png",
+        w as u32,
+        h as u32,
+        &[depth16(2000, 0); 15],
+    );
+    let o = DepthOptions {
+        kind: Some(DepthKind::Depth),
+        fov: Some(90.0),
+        ..opts(DepthFormat::AndroidDepth16)
+    };
+    let d = load_range(&p, &o).unwrap();
+    assert_eq!(d.kind, DepthKind::Depth);
+    assert!(d.intrinsics.is_some());
+    for y in 0..h {
+        for x in 0..w {
+            let want = stretched(2.0, x, y, w, h, 90.0);
+            assert!(close(*d.range.get(x, y), want), "({x}, {y})");
+        }
+    }
+    assert!(
+        *d.range.get(0, 0) > 2.5,
+        "the corner's ray is longer than the depth"
+    );
+}
+
+#[test]
+fn arcore_is_millimetres_along_the_optical_axis() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (5, 3);
+    let mut z = vec![2500u16; w * h];
+    z[0] = 0; // unknown
+    z[1] = 0xE000 | 1000; // 58.344 m: ARCore's top bits are depth, not confidence
+    z[w * h - 1] = u16::MAX; // 65.535 m, the farthest ARCore can say
+    let p = save_png16(dir.path(), "arcore.png", w as u32, h as u32, &z);
+    let metres: Vec<f64> = z
+        .iter()
+        .map(|&v| {
+            if v == 0 {
+                f64::NAN
+            } else {
+                f64::from(v) / 1000.0
+            }
+        })
+        .collect();
+
+    // Without a field of view the depth is used as range, and the notes say so.
+    let d = load_range(&p, &opts(DepthFormat::Arcore)).unwrap();
+    assert_eq!(
+        (d.format, d.kind, d.units.as_str()),
+        (DepthFormat::Arcore, DepthKind::Depth, "m")
+    );
+    assert!(d.intrinsics.is_none());
+    assert!(d
+        .notes
+        .iter()
+        .any(|n| n == "no intrinsics: depth used as range"));
+    assert_range(&d, &metres);
+
+    // With --fov each pixel's depth is stretched along its ray.
+    let with_fov = DepthOptions {
+        fov: Some(60.0),
+        ..opts(DepthFormat::Arcore)
+    };
+    let d = load_range(&p, &with_fov).unwrap();
+    let k = d.intrinsics.unwrap();
+    assert!(close(k.fx as f32, 1.5 / (30.0f64).to_radians().tan()));
+    assert_eq!((k.cx, k.cy), (2.0, 1.0));
+    let ranges: Vec<f64> = metres
+        .iter()
+        .enumerate()
+        .map(|(i, z)| stretched(*z, i % w, i / w, w, h, 60.0))
+        .collect();
+    assert_range(&d, &ranges);
+    assert!(
+        close(*d.range.get(2, 1), 2.5),
+        "the centre's range is its depth"
+    );
+
+    // A bad field of view is named; --depth-kind range takes the values as they are.
+    let bad_fov = DepthOptions {
+        fov: Some(180.0),
+        ..with_fov.clone()
+    };
+    let err = expect_err(load_range(&p, &bad_fov)).to_string();
+    assert!(err.contains("invalid fov = 180"), "{err}");
+    let as_range = DepthOptions {
+        kind: Some(DepthKind::Range),
+        ..with_fov
+    };
+    let d = load_range(&p, &as_range).unwrap();
+    assert_range(&d, &metres);
+    assert!(d.intrinsics.is_none());
+}
+
+// ---------------------------------------------------------------- phone depth, CLI
+
+/// Runs the `brume` binary in `dir`.
+fn brume(dir: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run brume")
+}
+
+fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &std::process::Output) -> serde_json::Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
+}
+
+fn notes(v: &serde_json::Value) -> Vec<String> {
+    v["depth_notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|n| n.as_str().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn android_depth16_through_brume_prep() {
+    let dir = tempfile::tempdir().unwrap();
+    let (samples, expected) = depth16_samples();
+    save_png16(dir.path(), "d16.png", 4, 3, &samples);
+    let prep = |extra: &[&str]| {
+        let mut args = vec![
+            "prep",
+            "--depth",
+            "d16.png",
+            "--depth-format",
+            "android-depth16",
+        ];
+        args.extend_from_slice(&["--no-sky", "--out", "range.pfm", "--json"]);
+        args.extend_from_slice(extra);
+        json(&brume(dir.path(), &args))
+    };
+    let v = prep(&[]);
+    assert_eq!(v["depth_format"], "android-depth16", "{v}");
+    assert_eq!(v["depth_kind"], "range", "{v}");
+    assert_eq!(v["unknown_pixels"], 6, "{v}");
+    assert!(notes(&v).iter().any(|n| n.contains("4 of 10")), "{v}");
+    // The written range map keeps every known value; pre-processing fills the unknown.
+    let range = grey(read_pfm(&dir.path().join("range.pfm")).unwrap());
+    for (i, (got, want)) in range.as_slice().iter().zip(&expected).enumerate() {
+        if want.is_nan() {
+            assert!(got.is_finite(), "pixel {i} was not filled: {got}");
+        } else {
+            assert!(close(*got, *want), "pixel {i}: {got} m, expected {want}");
+        }
+    }
+    // --min-confidence 1 keeps the three 100 % samples only.
+    let v = prep(&["--min-confidence", "1"]);
+    assert_eq!(v["unknown_pixels"], 9, "{v}");
+}
+
+#[test]
+fn phone_depth_renders_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (24, 16);
+    let image = dir.path().join("im.png");
+    let colour = Grid::from_fn(w, h, |x, y| {
+        [x as f32 / w as f32, y as f32 / h as f32, 0.5, 1.0]
+    });
+    brume::io::output::write_rgba(&image, &colour).unwrap();
+    // Range grows to the right; the confidence code cycles, so some samples are unknown.
+    let samples: Vec<u16> = (0..w * h)
+        .map(|i| depth16(1000 + 200 * (i % w) as u16, (i % 8) as u16))
+        .collect();
+    save_png16(dir.path(), "d16.png", w as u32, h as u32, &samples);
+    let arcore: Vec<u16> = (0..w * h).map(|i| 1500 + 300 * (i / w) as u16).collect();
+    save_png16(dir.path(), "arcore.png", w as u32, h as u32, &arcore);
+
+    let _gl = common::gl_lock();
+    let depth16_args = [
+        "--depth-format",
+        "android-depth16",
+        "--min-confidence",
+        "0.3",
+    ];
+    let mut args = vec!["render", "--image", "im.png", "--depth", "d16.png"];
+    args.extend_from_slice(&depth16_args);
+    args.extend_from_slice(&["--out", "fog.png", "--json"]);
+    let v = json(&brume(dir.path(), &args));
+    assert_eq!(v["depth_format"], "android-depth16", "{v}");
+    assert_eq!(v["depth_kind"], "range", "{v}");
+    // Codes 1 to 3 (0 to 2/7) are below 0.3: 3 of every 8 samples.
+    assert!(notes(&v).iter().any(|n| n.contains("144 of 384")), "{v}");
+    let fog = image::open(dir.path().join("fog.png")).unwrap();
+    assert_eq!((fog.width(), fog.height()), (w as u32, h as u32));
+
+    let args = [
+        "render",
+        "--image",
+        "im.png",
+        "--depth",
+        "arcore.png",
+        "--depth-format",
+        "arcore",
+        "--fov",
+        "60",
+        "--out",
+        "fog-arcore.png",
+        "--json",
+    ];
+    let v = json(&brume(dir.path(), &args));
+    assert_eq!(v["depth_format"], "arcore", "{v}");
+    assert_eq!(v["depth_kind"], "depth", "{v}");
+    assert!(
+        notes(&v).iter().any(|n| n.contains("principal point")),
+        "{v}"
+    );
+    assert!(dir.path().join("fog-arcore.png").is_file());
+}
+
+#[test]
+fn phone_depth_errors_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let (samples, _) = depth16_samples();
+    save_png16(dir.path(), "d16.png", 4, 3, &samples);
+    save_png8(dir.path(), "d8.png", 4, 3, &[7; 12]);
+    let prep = |depth: &str, extra: &[&str]| {
+        let mut args = vec!["prep", "--depth", depth, "--out", "r.pfm"];
+        args.extend_from_slice(extra);
+        brume(dir.path(), &args)
+    };
+    for value in ["1.5", "-0.25"] {
+        let o = prep(
+            "d16.png",
+            &[
+                "--depth-format",
+                "android-depth16",
+                "--min-confidence",
+                value,
+            ],
+        );
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains(&format!("invalid --min-confidence = {value}")) && err.contains("0 to 1"),
+            "{err}"
+        );
+    }
+    let o = prep("d8.png", &["--depth-format", "android-depth16"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("d8.png") && err.contains("expects a 16-bit grey PNG, found an 8-bit PNG"),
+        "{err}"
+    );
+    let o = prep("d16.png", &["--depth-format", "depth16"]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("android-depth16") && err.contains("arcore"),
+        "{err}"
+    );
+    assert!(
+        !dir.path().join("r.pfm").exists(),
+        "no output after an error"
+    );
 }

@@ -80,8 +80,8 @@ pub struct InfoArgs {
 #[derive(Args, Debug, Clone)]
 pub struct DepthArgs {
     /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (with --calib), 8-bit
-    /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM or --depth-scale),
-    /// float EXR/TIFF/PFM, or .npy.
+    /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM, Android DEPTH16,
+    /// ARCore or --depth-scale), float EXR/TIFF/PFM, or .npy.
     #[arg(long, value_name = "PATH")]
     pub depth: Option<PathBuf>,
 
@@ -96,7 +96,9 @@ pub struct DepthArgs {
     pub depth_kind: Option<DepthKind>,
 
     /// Depth file format: auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16,
-    /// float.
+    /// float, android-depth16 (Camera2 DEPTH16 as a 16-bit PNG: low 13 bits range in mm,
+    /// high 3 bits confidence, read as range), arcore (ARCore 16-bit depth PNG: mm along
+    /// the optical axis, becomes range with --fov or --focal).
     #[arg(
         long,
         value_name = "FORMAT",
@@ -136,6 +138,12 @@ pub struct DepthArgs {
     /// (instead of --focal) to turn depth into range.
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub fov: Option<f64>,
+
+    /// --depth-format android-depth16: samples whose DEPTH16 confidence is below this
+    /// are unknown, from 0 (keep every measured sample) to 1 (only code 0, 100 %); code
+    /// c ≥ 1 means (c − 1)/7 [default: 0.5].
+    #[arg(long, value_name = "C", allow_hyphen_values = true)]
+    pub min_confidence: Option<f64>,
 }
 
 /// Options of the range pre-processing (paper 000, sec. 4.1).

@@ -266,6 +266,7 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
         near: args.near,
         far: args.far,
         fov: args.fov,
+        min_confidence: args.min_confidence,
     };
     let loaded = depth::load_range(path, &opts)?;
     for note in &loaded.notes {

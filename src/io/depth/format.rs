@@ -85,7 +85,7 @@ impl FormatRule {
 
 impl DepthFormat {
     /// Every format, in the order `--help` and errors list them.
-    pub const ALL: [DepthFormat; 8] = [
+    pub const ALL: [DepthFormat; 10] = [
         DepthFormat::Auto,
         DepthFormat::Middlebury2014,
         DepthFormat::Middlebury2006,
@@ -94,11 +94,13 @@ impl DepthFormat {
         DepthFormat::Tum,
         DepthFormat::Png16,
         DepthFormat::Float,
+        DepthFormat::AndroidDepth16,
+        DepthFormat::Arcore,
     ];
 
     /// What brume knows of this format (the module docs).
     pub(super) fn rule(self) -> FormatRule {
-        use DepthKind::{Depth, Disparity};
+        use DepthKind::{Depth, Disparity, Range};
         let row = |name, layout, default_kind, kinds, fixed_scale| FormatRule {
             name,
             layout,
@@ -145,6 +147,21 @@ impl DepthFormat {
             ),
             DepthFormat::Png16 => row("png16", Layout::Grey16, Depth, Kinds::Any, None),
             DepthFormat::Float => row("float", Layout::Float, Depth, Kinds::Any, None),
+            // The samples also carry a confidence: the `android` module unpacks them.
+            DepthFormat::AndroidDepth16 => row(
+                "android-depth16",
+                Layout::Grey16,
+                Range,
+                Kinds::DepthOrRange,
+                Some(1.0 / 1000.0),
+            ),
+            DepthFormat::Arcore => row(
+                "arcore",
+                Layout::Grey16,
+                Depth,
+                Kinds::DepthOrRange,
+                Some(1.0 / 1000.0),
+            ),
         }
     }
 
@@ -176,6 +193,8 @@ mod tests {
         assert_eq!(scale(DepthFormat::Kitti), 1.0 / 256.0);
         assert_eq!(scale(DepthFormat::Nyu), 1e-3);
         assert_eq!(scale(DepthFormat::Tum), 1.0 / 5000.0);
+        assert_eq!(scale(DepthFormat::AndroidDepth16), 1e-3);
+        assert_eq!(scale(DepthFormat::Arcore), 1e-3);
         assert!(DepthFormat::Png16.rule().fixed_scale.is_none());
     }
 }

@@ -5,8 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use super::middlebury::{self, Calib};
-use super::png16;
 use super::raw::Raw;
+use super::{android, png16};
 use super::{finite_option, positive_option, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
 use crate::camera::Camera;
 use crate::io::camera::{to_range, Intrinsics, Stereo};
@@ -106,6 +106,7 @@ pub(super) fn interpret(
 ) -> Result<LoadedDepth> {
     let format = resolve_format(opts.format, &raw, calib.is_some(), opts, path)?;
     let kind = resolve_kind(format, opts.kind)?;
+    let min_confidence = android::min_confidence(format, opts, &mut notes)?;
     let (width, height) = raw.size();
     let metres = "m".to_string();
     let (range, units, intrinsics) = match (format, raw) {
@@ -141,6 +142,13 @@ pub(super) fn interpret(
                     .flatten()
             };
             (to_range(&raw, depth, Some(&k)), metres, Some(k))
+        }
+        (DepthFormat::AndroidDepth16, Raw::Grey16(raw)) => {
+            android::check_confidence(&raw, min_confidence, path, &mut notes)?;
+            let scale = png16::scale(format, opts, &mut notes)?;
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let depth = |v: u16| android::metres(v, min_confidence, scale);
+            (to_range(&raw, depth, k.as_ref()), metres, k)
         }
         (_, Raw::Grey16(raw)) => {
             let scale = png16::scale(format, opts, &mut notes)?;

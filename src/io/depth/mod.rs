@@ -10,11 +10,12 @@
 //!
 //! The front end is here: the options, the result, and loading a file. Each file format
 //! is decoded by its codec in `io::codec` (`raw` dispatches by extension), each dataset's
-//! convention is in a module of its own (`middlebury`, `png16`), the geometry is in
-//! `io::camera`, and `interpret` settles which convention a file follows. Every fact that
-//! depends on the format (name, file layout, kinds, a fixed scale) is one row of the table
-//! in `format.rs`: a new dataset format adds its [`DepthFormat`] variant and its row, and
-//! only a conversion no row can describe also adds a module and its arm in `interpret`.
+//! convention is in a module of its own (`middlebury`, `png16`, `android`), the geometry
+//! is in `io::camera`, and `interpret` settles which convention a file follows. Every fact
+//! that depends on the format (name, file layout, kinds, a fixed scale) is one row of the
+//! table in `format.rs`: a new dataset format adds its [`DepthFormat`] variant and its row
+//! (ARCore is only a row), and only a conversion no row can describe also adds a module
+//! and its arm in `interpret` (Android DEPTH16's confidence bits).
 
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -23,6 +24,7 @@ use std::str::FromStr;
 use crate::raster::ScalarMap;
 use crate::{Error, Result};
 
+mod android;
 mod format;
 mod interpret;
 mod middlebury;
@@ -41,6 +43,7 @@ pub use crate::io::codec::tiff::read_tiff_scalar;
 
 pub use crate::io::camera::Intrinsics;
 
+pub use android::DEPTH16_DEFAULT_MIN_CONFIDENCE;
 pub use middlebury::{
     parse_calib, parse_calib_str, Calib, MIDDLEBURY2006_BASELINE_MM,
     MIDDLEBURY2006_DISPARITY_OFFSET_PX, MIDDLEBURY2006_FOCAL_PX,
@@ -111,6 +114,14 @@ pub enum DepthFormat {
     /// Float map (`.exr`, float `.tif`, `.npy`, `.pfm` without calibration); NaN, infinite
     /// or non-positive values are unknown.
     Float,
+    /// Android Camera2 `ImageFormat.DEPTH16` saved as a 16-bit grey PNG: the low 13 bits
+    /// are the range in millimetres, the high 3 bits a confidence code; range `0` and
+    /// samples below [`DepthOptions::min_confidence`] are unknown. Read as range (see
+    /// the `android` module for what the documentation says and does not say).
+    AndroidDepth16,
+    /// ARCore Depth API (`acquireDepthImage16Bits`) saved as a 16-bit grey PNG: all 16
+    /// bits are millimetres along the camera's principal axis (z-depth), `0` unknown.
+    Arcore,
 }
 
 impl FromStr for DepthFormat {
@@ -155,6 +166,10 @@ pub struct DepthOptions {
     /// Vertical field of view in degrees: the focal length of a z-buffer, or of a depth
     /// map when `focal` is not given.
     pub fov: Option<f64>,
+    /// Lowest confidence, in [0, 1], of an `android-depth16` sample that is kept; less
+    /// confident samples are unknown. `None` takes
+    /// [`DEPTH16_DEFAULT_MIN_CONFIDENCE`].
+    pub min_confidence: Option<f64>,
 }
 
 impl Default for DepthOptions {
@@ -170,6 +185,7 @@ impl Default for DepthOptions {
             near: None,
             far: None,
             fov: None,
+            min_confidence: None,
         }
     }
 }
