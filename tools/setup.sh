@@ -1,10 +1,12 @@
 #!/usr/bin/env bash
 # Installs what brume needs at run time and in CI, if it is missing: Mesa's EGL and
-# OpenGL ES (llvmpipe works headless, no GPU or display needed) and the rustfmt/clippy
+# OpenGL ES (llvmpipe works headless, no GPU or display needed), the X client libraries
+# `brume view` loads at run time and Xvfb for its window tests, and the rustfmt/clippy
 # components. Safe to run again: it installs nothing that is already there.
 set -euo pipefail
 
-packages=(libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri)
+packages=(libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri
+    libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xvfb xauth)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -23,7 +25,7 @@ if ((${#missing[@]})); then
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
-    echo "setup: Mesa EGL/GLES present (${packages[*]})"
+    echo "setup: Mesa EGL/GLES, X libraries and Xvfb present"
 fi
 
 for component in rustfmt clippy; do
