@@ -121,6 +121,16 @@ pub enum Error {
         /// What to do about it.
         hint: String,
     },
+    /// Some frames of a batch failed; the others were written.
+    #[error("{frames} frames and {outputs} outputs failed (the others were written); each failure is in {}", log.display())]
+    BatchFailures {
+        /// Frames that could not be loaded or rendered.
+        frames: usize,
+        /// Outputs that could not be written.
+        outputs: usize,
+        /// The run's log.
+        log: PathBuf,
+    },
     /// Range pre-processing (hole filling, sky, horizon margin) cannot proceed.
     #[error("pre-processing: {0}")]
     Prep(String),

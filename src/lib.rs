@@ -21,6 +21,7 @@ pub mod bench;
 pub mod blur;
 pub mod camera;
 pub mod caps;
+pub mod dataset;
 pub mod egl;
 pub mod error;
 pub mod gpu;

@@ -2,6 +2,7 @@
 
 mod aerial;
 mod args;
+mod batch;
 mod bench;
 mod compare;
 mod info;
@@ -27,6 +28,10 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scene(a) => scene::run(&a, cli.egl),
         Command::Compare(a) => compare::run(&a),
         Command::Info(a) => info::run(&a, cli.egl),
+        Command::Batch(a) => {
+            let mut headless = open_renderer(cli.egl)?;
+            batch::run(&a, headless.renderer()?)
+        }
         #[cfg(all(feature = "viewer", not(target_os = "android")))]
         Command::View(a) => view::run(a),
         Command::Prep(a) => prep::run(&a),

@@ -60,7 +60,7 @@ impl Look {
     }
 
     /// The airlight as the render applies it (black for a uniform blur).
-    fn airlight(&self) -> [f32; 3] {
+    pub fn airlight(&self) -> [f32; 3] {
         if self.uniform.is_some() {
             [0.0; 3]
         } else {
@@ -74,7 +74,7 @@ impl Look {
 }
 
 pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
-    let haze = haze_from_args(args)?;
+    haze_from_args(args)?;
     let out = output_path(args)?;
     output::check_image_output(&out, "--out")?;
     let inputs: Vec<PathBuf> = args
@@ -102,8 +102,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     if args.medium == MediumKind::Aerial {
         return run_aerial(args, egl, &scene, &prep, range, &out);
     }
-    let (normalised, r_max) = haze::normalise_range(range)?;
-    let look = look_from_args(args, &haze, prep.airlight);
+    let (normalised, r_max, look) = haze_inputs(args, &scene, &prep)?;
 
     let mut renderer = super::open_renderer(egl)?;
     let rendered = renderer.render(&scene.image, &normalised, look.medium(), &look.blur)?;
@@ -170,6 +169,34 @@ pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
         }
     }
     Ok(haze)
+}
+
+/// The range the haze reads (normalised by its largest value, returned too) and the
+/// look, as `brume render` renders them.
+pub fn haze_inputs(
+    args: &RenderArgs,
+    scene: &Scene,
+    prep: &PrepReport,
+) -> Result<(ScalarMap, f32, Look)> {
+    let range = prep
+        .prepared
+        .as_ref()
+        .map_or(&scene.depth.range, |p| &p.range);
+    let (normalised, r_max) = haze::normalise_range(range)?;
+    let haze = haze_from_args(args)?;
+    Ok((
+        normalised,
+        r_max,
+        look_from_args(args, &haze, prep.airlight),
+    ))
+}
+
+/// `brume render`'s options with nothing given: the built-in demo and the default haze.
+pub fn default_args() -> RenderArgs {
+    use clap::{Args, FromArgMatches};
+    let matches =
+        RenderArgs::augment_args(clap::Command::new("render")).get_matches_from(["render"]);
+    RenderArgs::from_arg_matches(&matches).expect("the defaults parse")
 }
 
 fn output_path(args: &RenderArgs) -> Result<PathBuf> {

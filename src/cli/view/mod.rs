@@ -11,12 +11,11 @@ mod source;
 mod ui;
 mod window;
 
-use super::args::{RenderArgs, ViewArgs, ViewSource, Zoom};
+use super::args::{ViewArgs, ViewSource, Zoom};
 use super::bench::parse_size;
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
 use brume::io::output::Outputs;
 use brume::{Error, Pipeline, Result};
-use clap::{Args, FromArgMatches};
 use glow::HasContext;
 use serde_json::json;
 use source::{FrameTimes, Photo, SceneView, Source};
@@ -218,7 +217,7 @@ impl Viewer {
                 (Source::Photo(Box::new(Photo::load(a, &gl)?)), 0.0, 24.0)
             }
             None => (
-                Source::Photo(Box::new(Photo::load(&default_render_args(), &gl)?)),
+                Source::Photo(Box::new(Photo::load(&super::render::default_args(), &gl)?)),
                 0.0,
                 24.0,
             ),
@@ -636,11 +635,4 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     }
     v.sort_by(f64::total_cmp);
     Some(v[v.len() / 2])
-}
-
-/// `brume render`'s options with nothing given: the built-in demo and default haze.
-fn default_render_args() -> RenderArgs {
-    let command = RenderArgs::augment_args(clap::Command::new("render"));
-    let matches = command.get_matches_from(["render"]);
-    RenderArgs::from_arg_matches(&matches).expect("the defaults parse")
 }
