@@ -1,5 +1,5 @@
-//! 2D textures owned by brume: float images uploaded from the CPU and the float render
-//! targets of the passes. The host's textures are never wrapped in this type (brume must
+//! 2D textures owned by brume: float images uploaded from the CPU, the float render
+//! targets of the passes and the `SRGB8_ALPHA8` copy of an imported camera frame. The host's textures are never wrapped in this type (brume must
 //! not delete them); they are used by their raw `glow::Texture` handle.
 
 use crate::error::{Error, Result};
@@ -23,6 +23,9 @@ pub enum TexelFormat {
     Rg16F,
     /// Three 32-bit float channels (sampled only: RGB32F is not colour-renderable).
     Rgb32F,
+    /// 8-bit sRGB-encoded RGB with linear alpha (`SRGB8_ALPHA8`): GL encodes on write and
+    /// decodes on read, so shaders see linear values. Rendered to, never uploaded from f32.
+    Srgb8Alpha8,
     /// 32-bit float depth (`DEPTH_COMPONENT32F`), a depth attachment; created with
     /// `TEXTURE_COMPARE_MODE` `NONE` so that shaders read the depth with `texelFetch`.
     Depth32F,
@@ -38,6 +41,7 @@ impl TexelFormat {
             TexelFormat::Rg32F => glow::RG32F,
             TexelFormat::Rg16F => glow::RG16F,
             TexelFormat::Rgb32F => glow::RGB32F,
+            TexelFormat::Srgb8Alpha8 => glow::SRGB8_ALPHA8,
             TexelFormat::Depth32F => glow::DEPTH_COMPONENT32F,
         }
     }
@@ -45,7 +49,7 @@ impl TexelFormat {
     /// The client format of data uploaded as f32.
     fn client_format(self) -> u32 {
         match self {
-            TexelFormat::Rgba32F | TexelFormat::Rgba16F => glow::RGBA,
+            TexelFormat::Rgba32F | TexelFormat::Rgba16F | TexelFormat::Srgb8Alpha8 => glow::RGBA,
             TexelFormat::R32F | TexelFormat::R16F => glow::RED,
             TexelFormat::Rg32F | TexelFormat::Rg16F => glow::RG,
             TexelFormat::Rgb32F => glow::RGB,
@@ -56,16 +60,17 @@ impl TexelFormat {
     /// Bytes per texel.
     pub fn bytes_per_texel(self) -> usize {
         let channel = match self {
+            TexelFormat::Srgb8Alpha8 => 1,
             TexelFormat::Rgba16F | TexelFormat::R16F | TexelFormat::Rg16F => 2,
             _ => 4,
         };
         channel * self.channels()
     }
 
-    /// Float channels per texel.
+    /// Channels per texel.
     pub fn channels(self) -> usize {
         match self {
-            TexelFormat::Rgba32F | TexelFormat::Rgba16F => 4,
+            TexelFormat::Rgba32F | TexelFormat::Rgba16F | TexelFormat::Srgb8Alpha8 => 4,
             TexelFormat::R32F | TexelFormat::R16F | TexelFormat::Depth32F => 1,
             TexelFormat::Rg32F | TexelFormat::Rg16F => 2,
             TexelFormat::Rgb32F => 3,
@@ -103,6 +108,10 @@ impl Texture {
         data: Option<&[f32]>,
     ) -> Result<Self> {
         if let Some(d) = data {
+            assert!(
+                format != TexelFormat::Srgb8Alpha8,
+                "f32 data cannot be uploaded to an 8-bit texture"
+            );
             assert_eq!(
                 d.len(),
                 width * height * format.channels(),
@@ -175,6 +184,10 @@ impl Texture {
     /// is the texture's last: an image stored top row first becomes a GL texture stored
     /// bottom row first. One upload per row, no staging copy.
     pub fn upload_flipped(&self, data: &[f32]) {
+        assert!(
+            self.format != TexelFormat::Srgb8Alpha8,
+            "f32 data cannot be uploaded to an 8-bit texture"
+        );
         let row = self.width * self.format.channels();
         assert_eq!(data.len(), row * self.height, "texture data size");
         // SAFETY: each upload writes one row of `row` f32 values, inside the texture.
