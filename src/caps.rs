@@ -56,6 +56,12 @@ pub struct Capabilities {
     pub texture_float_linear: bool,
     /// `GL_EXT_disjoint_timer_query`: GL_TIME_ELAPSED queries.
     pub disjoint_timer_query: bool,
+    /// `GL_OES_EGL_image_external_essl3`: GLSL ES 3 shaders can sample
+    /// `samplerExternalOES` (camera frames, [`crate::pipeline::ExternalColour`]).
+    pub egl_image_external_essl3: bool,
+    /// `GL_OES_EGL_image_external`: external images exist, but without the `_essl3`
+    /// extension only GLSL ES 1.00 shaders may sample them, which brume's are not.
+    pub egl_image_external: bool,
     /// `GL_MAX_TEXTURE_SIZE`.
     pub max_texture_size: u32,
 }
@@ -87,6 +93,8 @@ impl Capabilities {
             color_buffer_half_float: has("GL_EXT_color_buffer_half_float"),
             texture_float_linear: has("GL_OES_texture_float_linear"),
             disjoint_timer_query: has("GL_EXT_disjoint_timer_query"),
+            egl_image_external_essl3: has("GL_OES_EGL_image_external_essl3"),
+            egl_image_external: has("GL_OES_EGL_image_external"),
             max_texture_size,
         }
     }
@@ -119,6 +127,29 @@ impl Capabilities {
             }
         }
         Ok(())
+    }
+
+    /// Checks that external images (`GL_TEXTURE_EXTERNAL_OES`) can be sampled by brume's
+    /// GLSL ES 3 shaders: [`crate::Pipeline::import_external`] needs it.
+    pub fn require_external_images(&self) -> Result<()> {
+        if self.egl_image_external_essl3 {
+            return Ok(());
+        }
+        let found = if self.egl_image_external {
+            "the driver has GL_OES_EGL_image_external, which lets only GLSL ES 1.00 \
+             shaders sample external images, and brume's shaders are GLSL ES 3"
+        } else {
+            "the driver cannot sample GL_TEXTURE_EXTERNAL_OES images at all"
+        };
+        Err(self.missing(
+            "GL_OES_EGL_image_external_essl3",
+            &format!(
+                "{found}; upload the frame as a GL_TEXTURE_2D instead (glTexSubImage2D from \
+                 the frame's CPU buffer, or its EGLImage bound to GL_TEXTURE_2D where the \
+                 driver allows that) and give that texture to Pipeline::render as \
+                 Input::colour"
+            ),
+        ))
     }
 
     /// Whether the renderer runs on the CPU (llvmpipe, softpipe, SwiftShader): its
@@ -157,6 +188,47 @@ impl Capabilities {
             capability: capability.to_string(),
             renderer: self.renderer.clone(),
             hint: hint.to_string(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// llvmpipe's capabilities with the external-image extensions as given.
+    fn caps(essl3: bool, essl1: bool) -> Capabilities {
+        Capabilities {
+            egl: None,
+            vendor: "Mesa".into(),
+            renderer: "llvmpipe".into(),
+            version: "OpenGL ES 3.2 Mesa".into(),
+            shading_language_version: "OpenGL ES GLSL ES 3.20".into(),
+            gles_version: (3, 2),
+            color_buffer_float: true,
+            color_buffer_half_float: true,
+            texture_float_linear: true,
+            disjoint_timer_query: true,
+            egl_image_external_essl3: essl3,
+            egl_image_external: essl1,
+            max_texture_size: 16384,
+        }
+    }
+
+    #[test]
+    fn missing_external_images_are_a_typed_error_that_says_what_to_do() {
+        assert!(caps(true, true).require_external_images().is_ok());
+        for essl1 in [false, true] {
+            let error = caps(false, essl1).require_external_images().unwrap_err();
+            let Error::MissingCapability { capability, .. } = &error else {
+                panic!("not a missing capability: {error:?}");
+            };
+            assert_eq!(capability, "GL_OES_EGL_image_external_essl3");
+            let text = error.to_string();
+            assert!(text.contains("llvmpipe"), "{text}");
+            assert!(text.contains("GL_TEXTURE_2D"), "{text}");
+            assert!(text.contains("Input::colour"), "{text}");
+            assert_eq!(text.contains("GLSL ES 1.00"), essl1, "{text}");
         }
     }
 }

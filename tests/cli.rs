@@ -196,6 +196,8 @@ fn info_reports_the_driver() {
         "color_buffer_half_float",
         "texture_float_linear",
         "disjoint_timer_query",
+        "egl_image_external_essl3",
+        "egl_image_external",
     ] {
         assert!(v[key].is_boolean(), "{key}");
     }

@@ -43,6 +43,11 @@ fn print_text(c: &Capabilities) {
         "EXT_disjoint_timer_query     {}",
         yes(c.disjoint_timer_query)
     );
+    println!(
+        "OES_EGL_image_external_essl3 {}",
+        yes(c.egl_image_external_essl3)
+    );
+    println!("OES_EGL_image_external       {}", yes(c.egl_image_external));
     let f32_ok = c.require_precision(brume::Precision::F32).is_ok();
     let f16_ok = c.require_precision(brume::Precision::F16).is_ok();
     println!(

@@ -1,5 +1,5 @@
-//! 2D textures owned by brume: float images uploaded from the CPU and the float render
-//! targets of the passes. The host's textures are never wrapped in this type (brume must
+//! 2D textures owned by brume: float images uploaded from the CPU, the float render
+//! targets of the passes and the `SRGB8_ALPHA8` copy of an imported camera frame. The host's textures are never wrapped in this type (brume must
 //! not delete them); they are used by their raw `glow::Texture` handle.
 
 use crate::error::{Error, Result};
@@ -23,6 +23,9 @@ pub enum TexelFormat {
     Rg16F,
     /// Three 32-bit float channels (sampled only: RGB32F is not colour-renderable).
     Rgb32F,
+    /// 8-bit sRGB-encoded RGB with linear alpha (`SRGB8_ALPHA8`): GL encodes on write and
+    /// decodes on read, so shaders see linear values. Rendered to, never uploaded from f32.
+    Srgb8Alpha8,
     /// 32-bit float depth (`DEPTH_COMPONENT32F`), a depth attachment; created with
     /// `TEXTURE_COMPARE_MODE` `NONE` so that shaders read the depth with `texelFetch`.
     Depth32F,
@@ -41,6 +44,7 @@ impl TexelFormat {
             TexelFormat::Rg32F => glow::RG32F,
             TexelFormat::Rg16F => glow::RG16F,
             TexelFormat::Rgb32F => glow::RGB32F,
+            TexelFormat::Srgb8Alpha8 => glow::SRGB8_ALPHA8,
             TexelFormat::Depth32F => glow::DEPTH_COMPONENT32F,
             TexelFormat::Rgba8 => glow::RGBA8,
         }
@@ -49,7 +53,10 @@ impl TexelFormat {
     /// The client format of data uploaded as f32.
     fn client_format(self) -> u32 {
         match self {
-            TexelFormat::Rgba32F | TexelFormat::Rgba16F | TexelFormat::Rgba8 => glow::RGBA,
+            TexelFormat::Rgba32F
+            | TexelFormat::Rgba16F
+            | TexelFormat::Rgba8
+            | TexelFormat::Srgb8Alpha8 => glow::RGBA,
             TexelFormat::R32F | TexelFormat::R16F => glow::RED,
             TexelFormat::Rg32F | TexelFormat::Rg16F => glow::RG,
             TexelFormat::Rgb32F => glow::RGB,
@@ -60,7 +67,7 @@ impl TexelFormat {
     /// Bytes per texel.
     pub fn bytes_per_texel(self) -> usize {
         let channel = match self {
-            TexelFormat::Rgba8 => 1,
+            TexelFormat::Rgba8 | TexelFormat::Srgb8Alpha8 => 1,
             TexelFormat::Rgba16F | TexelFormat::R16F | TexelFormat::Rg16F => 2,
             _ => 4,
         };
@@ -70,7 +77,10 @@ impl TexelFormat {
     /// Channels per texel.
     pub fn channels(self) -> usize {
         match self {
-            TexelFormat::Rgba32F | TexelFormat::Rgba16F | TexelFormat::Rgba8 => 4,
+            TexelFormat::Rgba32F
+            | TexelFormat::Rgba16F
+            | TexelFormat::Rgba8
+            | TexelFormat::Srgb8Alpha8 => 4,
             TexelFormat::R32F | TexelFormat::R16F | TexelFormat::Depth32F => 1,
             TexelFormat::Rg32F | TexelFormat::Rg16F => 2,
             TexelFormat::Rgb32F => 3,
@@ -107,11 +117,11 @@ impl Texture {
         filter: Filter,
         data: Option<&[f32]>,
     ) -> Result<Self> {
-        if format == TexelFormat::Rgba8 && data.is_some() {
+        if matches!(format, TexelFormat::Rgba8 | TexelFormat::Srgb8Alpha8) && data.is_some() {
             return Err(Error::invalid(
                 "texture data",
                 "f32 values",
-                "none: an RGBA8 texture is filled by rendering",
+                "none: an 8-bit texture is filled by rendering",
             ));
         }
         if let Some(d) = data {
@@ -187,6 +197,10 @@ impl Texture {
     /// is the texture's last: an image stored top row first becomes a GL texture stored
     /// bottom row first. One upload per row, no staging copy.
     pub fn upload_flipped(&self, data: &[f32]) {
+        assert!(
+            !matches!(self.format, TexelFormat::Rgba8 | TexelFormat::Srgb8Alpha8),
+            "f32 data cannot be uploaded to an 8-bit texture"
+        );
         let row = self.width * self.format.channels();
         assert_eq!(data.len(), row * self.height, "texture data size");
         // SAFETY: each upload writes one row of `row` f32 values, inside the texture.

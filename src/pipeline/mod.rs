@@ -42,6 +42,10 @@
 //!   `DEPTH_COMPONENT*` with `TEXTURE_COMPARE_MODE` off …) are read with `texelFetch` at
 //!   level 0, so they must be complete (a `MIN_FILTER` that needs no mipmaps, or a full
 //!   chain). brume never deletes or modifies them.
+//! - **Camera frames.** An image the host can bind only to `GL_TEXTURE_EXTERNAL_OES` (an
+//!   Android `SurfaceTexture`, an `AHardwareBuffer`) goes through
+//!   [`Pipeline::import_external`] first, which copies it into a texture the pipeline
+//!   owns (see [`ExternalColour`]); that copy is the input's colour.
 //! - **Out.** [`Output::Framebuffer`] draws the `width x height` result with its lower-left
 //!   corner at (x, y) of a host framebuffer (`None`: the default framebuffer, a window);
 //!   [`Output::Texture`] draws into level 0 of a host texture of a colour-renderable
@@ -56,13 +60,15 @@
 //!   `TEXTURE0`, the viewport is the output rectangle, and the capabilities above stay
 //!   disabled. Anything else (blend functions, clear colour, pixel store, buffers) is left
 //!   as it was. The host sets again whatever it needs, as with egui_glow's painter.
+//!   [`Pipeline::import_external`] leaves the same state (the viewport on its copy) and
+//!   unit 0's `GL_TEXTURE_EXTERNAL_OES` target empty.
 
 mod engine;
 mod external;
 
 use engine::{EngineKey, EngineTargets};
 pub use engine::{FogBlur, GaussBlur, GAUSS_WEIGHTS};
-pub use external::{ExternalColour, IDENTITY};
+pub use external::{ExternalColour, IDENTITY, TEXTURE_BINDING_EXTERNAL_OES, TEXTURE_EXTERNAL_OES};
 
 use crate::blur::{Blur, Precision};
 use crate::caps::Capabilities;
@@ -179,6 +185,8 @@ enum ProgramKey {
     },
     /// An engine pass (see [`engine`]) of a medium.
     Engine(&'static str, EngineKey),
+    /// The import of an external image (see [`external`]).
+    ExternalImport,
 }
 
 /// The diffusion textures, kept between frames of the same size, precision and kind of τ.
@@ -299,6 +307,8 @@ pub struct Pipeline {
     host_target: Option<Framebuffer>,
     /// Timer queries, reused from frame to frame.
     queries: QueryPool,
+    /// The copy of the last external image imported ([`Pipeline::import_external`]).
+    imported: Option<external::ImportTarget>,
     /// LINEAR, CLAMP_TO_EDGE: the Gaussian's bilinear taps, whatever the texture's own
     /// filter.
     linear_sampler: glow::Sampler,
@@ -347,6 +357,7 @@ impl Pipeline {
             engine_targets: None,
             host_target: None,
             queries: QueryPool::new(&gl),
+            imported: None,
             linear_sampler,
             vao,
             caps,
@@ -800,6 +811,7 @@ impl Pipeline {
                     &optional(&engine::ENGINE_UNIFORMS),
                 )
             }
+            ProgramKey::ExternalImport => external::compile(&self.gl, self.version_line),
         }
     }
 
