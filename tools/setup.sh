@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs what brume needs at run time and in CI, if it is missing: Mesa's EGL and
-# OpenGL ES (llvmpipe works headless, no GPU or display needed) and the rustfmt/clippy
-# components. Safe to run again: it installs nothing that is already there.
+# OpenGL ES (llvmpipe works headless, no GPU or display needed), the rustfmt/clippy
+# components and the aarch64-linux-android target (for the Android app's check). Safe to
+# run again: it installs nothing that is already there.
 set -euo pipefail
 
 packages=(libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri)
@@ -24,6 +25,13 @@ if ((${#missing[@]})); then
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
     echo "setup: Mesa EGL/GLES present (${packages[*]})"
+fi
+
+# The Android app's target: CI checks the workspace for it (no NDK needed to check).
+android_target=aarch64-linux-android
+if ! rustup target list --installed | grep -qx "$android_target"; then
+    echo "setup: adding the $android_target target"
+    rustup target add "$android_target"
 fi
 
 for component in rustfmt clippy; do
