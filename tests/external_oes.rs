@@ -681,6 +681,15 @@ fn bad_sizes_and_transforms_are_refused_by_name() {
         objects,
         "a refused import allocates nothing"
     );
+    // A GL_TEXTURE_2D where an external texture belongs: GL refuses the binding, and the
+    // import says so instead of copying garbage.
+    let not_external = ExternalColour {
+        texture: frame.source,
+        ..frame.colour(IDENTITY)
+    };
+    let e = pipeline.import_external(&not_external).unwrap_err();
+    assert!(matches!(e, Error::Gl(_)), "{e:?}");
+    assert!(e.to_string().contains("importing an external image"), "{e}");
     drop(pipeline);
     frame.delete(&host);
 }

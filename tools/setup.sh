@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Installs what brume needs at run time and in CI, if it is missing: Mesa's EGL and
 # OpenGL ES (llvmpipe works headless, no GPU or display needed), the X client libraries
-# `brume view` loads at run time and Xvfb for its window tests, and the rustfmt/clippy
-# components. Safe to run again: it installs nothing that is already there.
+# `brume view` loads at run time and Xvfb for its window tests, the rustfmt/clippy
+# components and the aarch64-linux-android target (for the Android app's check). Safe to
+# run again: it installs nothing that is already there.
 set -euo pipefail
 
 packages=(libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri
@@ -26,6 +27,13 @@ if ((${#missing[@]})); then
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
     echo "setup: Mesa EGL/GLES, X libraries and Xvfb present"
+fi
+
+# The Android app's target: CI checks the workspace for it (no NDK needed to check).
+android_target=aarch64-linux-android
+if ! rustup target list --installed | grep -qx "$android_target"; then
+    echo "setup: adding the $android_target target"
+    rustup target add "$android_target"
 fi
 
 for component in rustfmt clippy; do

@@ -1,0 +1,725 @@
+//! The camera through the NDK's Camera2 API (`libcamera2ndk`, no Java): the back camera
+//! streams into an `AImageReader` of GPU-sampled `AHardwareBuffer`s (`PRIVATE` format,
+//! what a `SurfaceTexture` would get); each new buffer becomes an EGLImage bound to
+//! `GL_TEXTURE_EXTERNAL_OES` and is copied by `Pipeline::import_external` with the
+//! transform that turns the sensor's image upright ([`Orientation`]). Where the same
+//! camera also lists `DEPTH16` outputs (a time-of-flight phone), a second reader
+//! streams them and [`crate::depth16::unpack`] makes the range texture, registered to
+//! the colour by the same orientation; elsewhere the range is a plane receding to the top
+//! of the frame (the floor ahead), so the haze still grows with "distance".
+//!
+//! **Lifetimes.** A camera buffer must not go back to the camera while the GPU reads it:
+//! the last image is held until the next one is acquired, and brume's render returns only
+//! after its passes ran (it waits for its timer queries, or `glFinish`es with the wall
+//! clock), the import before them included. The EGLImage is destroyed right after the
+//! texture is bound to it (the texture keeps the buffer). GL objects (the external
+//! texture, the range texture) are made once; only EGLImages, which are not GL objects,
+//! are made per frame.
+
+use crate::depth16::{self, Depth16, Depth16Error, Unpack};
+use crate::orientation::Orientation;
+use crate::streams;
+use brume::gpu::texture::{Filter, TexelFormat, Texture};
+use brume::pipeline::{ExternalColour, TEXTURE_EXTERNAL_OES};
+use brume::{Encoding, Input, Pipeline};
+use glow::HasContext;
+use khronos_egl as egl;
+use ndk::hardware_buffer::{HardwareBuffer, HardwareBufferUsage};
+use ndk::media::image_reader::{AcquireResult, Image, ImageFormat, ImageReader};
+use ndk::native_window::NativeWindow;
+use ndk_sys as ffi;
+use std::ffi::{c_void, CStr, CString};
+use std::fmt;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+// ndk-sys declares the Camera2 functions but links only libandroid; they live in
+// libcamera2ndk (API 24+).
+#[link(name = "camera2ndk")]
+extern "C" {}
+
+/// Buffers in flight per reader: one held for the GPU, one being acquired, one filling.
+const MAX_IMAGES: i32 = 3;
+/// `EGL_NATIVE_BUFFER_ANDROID`: an EGLImage's source is an Android native buffer.
+const EGL_NATIVE_BUFFER_ANDROID: egl::Enum = 0x3140;
+/// `EGL_IMAGE_PRESERVED_KHR`.
+const EGL_IMAGE_PRESERVED_KHR: egl::Int = 0x30D2;
+
+/// Why the camera could not be used.
+#[derive(Debug)]
+pub enum CameraError {
+    /// A Camera2 call failed with a `camera_status_t`.
+    Camera {
+        /// The NDK function.
+        call: &'static str,
+        /// Its status.
+        status: i32,
+    },
+    /// An image-reader call failed.
+    Media(ndk::media_error::MediaError),
+    /// No camera, or none that streams to the GPU.
+    NoCamera(String),
+    /// An EGL function or extension the import needs is missing or failed.
+    Egl(String),
+    /// brume refused the frame (no external-image support, a size, a GL error).
+    Brume(brume::Error),
+    /// A `DEPTH16` plane that cannot hold its rows.
+    Depth(Depth16Error),
+    /// The camera service closed the device (another app took it, or an error).
+    Lost,
+}
+
+impl fmt::Display for CameraError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            CameraError::Camera { call, status } => write!(f, "{call} failed (status {status})"),
+            CameraError::Media(e) => write!(f, "image reader: {e}"),
+            CameraError::NoCamera(why) => write!(f, "no usable camera: {why}"),
+            CameraError::Egl(why) => write!(f, "EGL: {why}"),
+            CameraError::Brume(e) => write!(f, "brume: {e}"),
+            CameraError::Depth(e) => write!(f, "{e}"),
+            CameraError::Lost => write!(f, "the camera was disconnected or failed"),
+        }
+    }
+}
+
+impl std::error::Error for CameraError {}
+
+impl From<ndk::media_error::MediaError> for CameraError {
+    fn from(e: ndk::media_error::MediaError) -> Self {
+        CameraError::Media(e)
+    }
+}
+
+impl From<brume::Error> for CameraError {
+    fn from(e: brume::Error) -> Self {
+        CameraError::Brume(e)
+    }
+}
+
+/// Turns a `camera_status_t` into a result naming the call.
+fn check(call: &'static str, status: ffi::camera_status_t) -> Result<(), CameraError> {
+    if status == ffi::camera_status_t::ACAMERA_OK {
+        Ok(())
+    } else {
+        Err(CameraError::Camera {
+            call,
+            status: status.0,
+        })
+    }
+}
+
+/// What the app needs to know of one camera.
+struct Choice {
+    id: CString,
+    orientation: Orientation,
+    colour_sizes: Vec<(usize, usize)>,
+    depth_sizes: Vec<(usize, usize)>,
+}
+
+/// The Camera2 objects of one running capture session, freed in reverse order.
+struct Session {
+    manager: *mut ffi::ACameraManager,
+    device: *mut ffi::ACameraDevice,
+    container: *mut ffi::ACaptureSessionOutputContainer,
+    outputs: Vec<*mut ffi::ACaptureSessionOutput>,
+    targets: Vec<*mut ffi::ACameraOutputTarget>,
+    request: *mut ffi::ACaptureRequest,
+    session: *mut ffi::ACameraCaptureSession,
+    /// The readers' windows, held while the session draws into them.
+    windows: Vec<NativeWindow>,
+    // Boxed: the camera service keeps pointers to them.
+    device_callbacks: Box<ffi::ACameraDevice_StateCallbacks>,
+    session_callbacks: Box<ffi::ACameraCaptureSession_stateCallbacks>,
+    lost: Box<AtomicBool>,
+}
+
+impl Drop for Session {
+    fn drop(&mut self) {
+        // SAFETY: every pointer was made by the matching create call and is freed once,
+        // session first, as the NDK's samples do; null ones were never made.
+        unsafe {
+            if !self.session.is_null() {
+                ffi::ACameraCaptureSession_stopRepeating(self.session);
+                ffi::ACameraCaptureSession_close(self.session);
+            }
+            if !self.request.is_null() {
+                ffi::ACaptureRequest_free(self.request);
+            }
+            for &target in &self.targets {
+                ffi::ACameraOutputTarget_free(target);
+            }
+            if !self.container.is_null() {
+                ffi::ACaptureSessionOutputContainer_free(self.container);
+            }
+            for &output in &self.outputs {
+                ffi::ACaptureSessionOutput_free(output);
+            }
+            if !self.device.is_null() {
+                ffi::ACameraDevice_close(self.device);
+            }
+            ffi::ACameraManager_delete(self.manager);
+        }
+        let _ = (&self.device_callbacks, &self.session_callbacks);
+    }
+}
+
+unsafe extern "C" fn device_lost(context: *mut c_void, _device: *mut ffi::ACameraDevice) {
+    log::warn!("camera disconnected");
+    // SAFETY: the context is the session's boxed flag, alive while the device is open.
+    unsafe { (*context.cast::<AtomicBool>()).store(true, Ordering::Relaxed) };
+}
+
+unsafe extern "C" fn device_error(
+    context: *mut c_void,
+    _device: *mut ffi::ACameraDevice,
+    error: std::os::raw::c_int,
+) {
+    log::error!("camera device error {error}");
+    // SAFETY: as in device_lost.
+    unsafe { (*context.cast::<AtomicBool>()).store(true, Ordering::Relaxed) };
+}
+
+unsafe extern "C" fn session_state(
+    _context: *mut c_void,
+    _session: *mut ffi::ACameraCaptureSession,
+) {
+}
+
+/// `eglGetNativeClientBufferANDROID`.
+type GetClientBuffer = unsafe extern "C" fn(*const ffi::AHardwareBuffer) -> *mut c_void;
+/// `eglCreateImageKHR` (display, context, target, buffer, attributes).
+type CreateImage = unsafe extern "C" fn(
+    *mut c_void,
+    *mut c_void,
+    egl::Enum,
+    *mut c_void,
+    *const egl::Int,
+) -> *mut c_void;
+/// `eglDestroyImageKHR`.
+type DestroyImage = unsafe extern "C" fn(*mut c_void, *mut c_void) -> egl::Boolean;
+/// `glEGLImageTargetTexture2DOES`.
+type ImageTargetTexture = unsafe extern "C" fn(u32, *mut c_void);
+
+/// The EGL entry points that turn an `AHardwareBuffer` into an external texture.
+struct EglImages {
+    display: egl::Display,
+    get_client_buffer: GetClientBuffer,
+    create: CreateImage,
+    destroy: DestroyImage,
+    target_texture: ImageTargetTexture,
+}
+
+impl EglImages {
+    fn load(egl: &crate::window::Egl, display: egl::Display) -> Result<Self, CameraError> {
+        let find = |name: &str, extension: &str| {
+            egl.get_proc_address(name)
+                .ok_or_else(|| CameraError::Egl(format!("{name} is missing ({extension})")))
+        };
+        let get = find(
+            "eglGetNativeClientBufferANDROID",
+            "EGL_ANDROID_get_native_client_buffer, API 26",
+        )?;
+        let create = find("eglCreateImageKHR", "EGL_KHR_image_base")?;
+        let destroy = find("eglDestroyImageKHR", "EGL_KHR_image_base")?;
+        let target = find("glEGLImageTargetTexture2DOES", "GL_OES_EGL_image")?;
+        // SAFETY: each pointer is the named function, whose C signature the type spells.
+        unsafe {
+            Ok(EglImages {
+                display,
+                get_client_buffer: std::mem::transmute::<extern "system" fn(), GetClientBuffer>(
+                    get,
+                ),
+                create: std::mem::transmute::<extern "system" fn(), CreateImage>(create),
+                destroy: std::mem::transmute::<extern "system" fn(), DestroyImage>(destroy),
+                target_texture: std::mem::transmute::<extern "system" fn(), ImageTargetTexture>(
+                    target,
+                ),
+            })
+        }
+    }
+
+    /// Binds `buffer` to `texture` on `GL_TEXTURE_EXTERNAL_OES` through a short-lived
+    /// EGLImage (the texture keeps the buffer after the image is destroyed).
+    fn bind(
+        &self,
+        gl: &glow::Context,
+        buffer: &HardwareBuffer,
+        texture: glow::Texture,
+    ) -> Result<(), CameraError> {
+        let attributes = [EGL_IMAGE_PRESERVED_KHR, egl::TRUE as egl::Int, egl::NONE];
+        // SAFETY: the buffer is alive (its AImage is held); the EGLImage is made, bound to
+        // a texture of the current context and destroyed here.
+        unsafe {
+            let client = (self.get_client_buffer)(buffer.as_ptr());
+            if client.is_null() {
+                return Err(CameraError::Egl(
+                    "eglGetNativeClientBufferANDROID gave no buffer".into(),
+                ));
+            }
+            let image = (self.create)(
+                self.display.as_ptr(),
+                std::ptr::null_mut(), // EGL_NO_CONTEXT, as native buffers require
+                EGL_NATIVE_BUFFER_ANDROID,
+                client,
+                attributes.as_ptr(),
+            );
+            if image.is_null() {
+                return Err(CameraError::Egl(
+                    "eglCreateImageKHR failed for a camera buffer".into(),
+                ));
+            }
+            gl.bind_texture(TEXTURE_EXTERNAL_OES, Some(texture));
+            (self.target_texture)(TEXTURE_EXTERNAL_OES, image);
+            gl.bind_texture(TEXTURE_EXTERNAL_OES, None);
+            (self.destroy)(self.display.as_ptr(), image);
+        }
+        match unsafe { gl.get_error() } {
+            glow::NO_ERROR => Ok(()),
+            code => Err(CameraError::Egl(format!(
+                "glEGLImageTargetTexture2DOES: GL error 0x{code:04X}"
+            ))),
+        }
+    }
+}
+
+/// The camera feeding brume: its session, readers and textures.
+pub struct Camera {
+    // Field order is drop order: the session stops before its readers go, and the held
+    // image goes back before its reader (an image must not outlive its reader).
+    session: Session,
+    /// The colour image the last import read, held until the next one arrives.
+    held: Option<Image>,
+    colour: ImageReader,
+    depth: Option<ImageReader>,
+    images: EglImages,
+    gl: Arc<glow::Context>,
+    /// The host's (this app's) external texture, bound to each new buffer.
+    external: glow::Texture,
+    /// The pipeline's copy of the last frame (`None` before the first).
+    copy: Option<glow::Texture>,
+    range: Texture,
+    range_values: Vec<f32>,
+    orientation: Orientation,
+    /// The colour stream's size as the sensor gives it.
+    buffer_size: (usize, usize),
+    unpack: Unpack,
+}
+
+impl Camera {
+    /// Opens the back camera (one with depth if there is one) with a colour stream whose
+    /// upright size fits in `fit` (the window), and starts streaming.
+    pub fn open(
+        gl: &Arc<glow::Context>,
+        egl: (&crate::window::Egl, egl::Display),
+        fit: (usize, usize),
+    ) -> Result<Camera, CameraError> {
+        let images = EglImages::load(egl.0, egl.1)?;
+        // SAFETY: creating the manager; owned by the session from here.
+        let manager = unsafe { ffi::ACameraManager_create() };
+        if manager.is_null() {
+            return Err(CameraError::NoCamera("ACameraManager_create failed".into()));
+        }
+        let mut session = Session {
+            manager,
+            device: std::ptr::null_mut(),
+            container: std::ptr::null_mut(),
+            outputs: Vec::new(),
+            targets: Vec::new(),
+            request: std::ptr::null_mut(),
+            session: std::ptr::null_mut(),
+            windows: Vec::new(),
+            device_callbacks: Box::new(ffi::ACameraDevice_StateCallbacks {
+                context: std::ptr::null_mut(),
+                onDisconnected: Some(device_lost),
+                onError: Some(device_error),
+            }),
+            session_callbacks: Box::new(ffi::ACameraCaptureSession_stateCallbacks {
+                context: std::ptr::null_mut(),
+                onClosed: Some(session_state),
+                onReady: Some(session_state),
+                onActive: Some(session_state),
+            }),
+            lost: Box::new(AtomicBool::new(false)),
+        };
+        session.device_callbacks.context = std::ptr::addr_of!(*session.lost).cast_mut().cast();
+        let choice = choose_camera(manager)?;
+        let buffer_size = streams::largest_fitting(&choice.colour_sizes, choice.orientation, fit)
+            .ok_or_else(|| {
+            CameraError::NoCamera("the camera lists no PRIVATE output".into())
+        })?;
+        let colour = ImageReader::new_with_usage(
+            buffer_size.0 as i32,
+            buffer_size.1 as i32,
+            ImageFormat::PRIVATE,
+            HardwareBufferUsage::GPU_SAMPLED_IMAGE,
+            MAX_IMAGES,
+        )?;
+        let depth = match streams::largest(&choice.depth_sizes) {
+            Some((w, h)) => Some(ImageReader::new(
+                w as i32,
+                h as i32,
+                ImageFormat::DEPTH16,
+                MAX_IMAGES,
+            )?),
+            None => None,
+        };
+        let mut windows = vec![colour.window()?];
+        if let Some(reader) = &depth {
+            windows.push(reader.window()?);
+        }
+        start(&mut session, &choice.id, windows)?;
+        let upright = choice.orientation.upright_size(buffer_size);
+        log::info!(
+            "camera {:?}: {}x{} colour (upright {}x{}), {}",
+            choice.id,
+            buffer_size.0,
+            buffer_size.1,
+            upright.0,
+            upright.1,
+            match streams::largest(&choice.depth_sizes) {
+                Some((w, h)) => format!("DEPTH16 {w}x{h}"),
+                None => "no depth stream: a receding plane as range".into(),
+            }
+        );
+        // SAFETY: one texture of the current context, deleted in Drop.
+        let external = unsafe { gl.create_texture() }.map_err(CameraError::Egl)?;
+        let range = Texture::new(
+            gl,
+            upright.0,
+            upright.1,
+            TexelFormat::R32F,
+            Filter::Nearest,
+            None,
+        )?;
+        let mut camera = Camera {
+            session,
+            colour,
+            depth,
+            held: None,
+            images,
+            gl: Arc::clone(gl),
+            external,
+            copy: None,
+            range,
+            range_values: Vec::new(),
+            orientation: choice.orientation,
+            buffer_size,
+            unpack: Unpack::default(),
+        };
+        if camera.depth.is_none() {
+            camera.fill_plane();
+        }
+        Ok(camera)
+    }
+
+    /// The range texture's far end: the depth stream's unknown range (m), or 1 for the
+    /// normalised plane.
+    pub fn range_unit(&self) -> f64 {
+        if self.depth.is_some() {
+            f64::from(self.unpack.far_m)
+        } else {
+            1.0
+        }
+    }
+
+    /// The input of the latest frame: the newest colour buffer imported (or the last one
+    /// again when none arrived), the newest depth unpacked. `None` until the first
+    /// colour frame.
+    pub fn input(&mut self, pipeline: &mut Pipeline) -> Result<Option<Input>, CameraError> {
+        if self.session.lost.load(Ordering::Relaxed) {
+            return Err(CameraError::Lost);
+        }
+        if let AcquireResult::Image(image) = self.colour.acquire_latest_image()? {
+            // The previous image's render has finished (module docs): release it.
+            self.held = None;
+            self.import(&image, pipeline)?;
+            self.held = Some(image);
+        }
+        self.update_depth()?;
+        let (width, height) = self.orientation.upright_size(self.buffer_size);
+        Ok(self.copy.map(|colour| Input {
+            colour,
+            colour_encoding: Encoding::Linear,
+            depth: self.range.raw(),
+            width,
+            height,
+        }))
+    }
+
+    fn import(&mut self, image: &Image, pipeline: &mut Pipeline) -> Result<(), CameraError> {
+        let buffer = image.hardware_buffer()?;
+        self.images.bind(&self.gl, &buffer, self.external)?;
+        let (width, height) = self.orientation.upright_size(self.buffer_size);
+        let copy = pipeline.import_external(&ExternalColour {
+            texture: self.external,
+            width,
+            height,
+            transform: self.orientation.transform(),
+        })?;
+        self.copy = Some(copy);
+        Ok(())
+    }
+
+    /// Unpacks the newest depth image, if one came, into the range texture.
+    fn update_depth(&mut self) -> Result<(), CameraError> {
+        let Some(reader) = &self.depth else {
+            return Ok(());
+        };
+        let AcquireResult::Image(image) = reader.acquire_latest_image()? else {
+            return Ok(());
+        };
+        let plane = Depth16 {
+            data: image.plane_data(0)?,
+            width: image.width()? as usize,
+            height: image.height()? as usize,
+            row_stride: image.plane_row_stride(0)? as usize,
+        };
+        let size = (self.range.width(), self.range.height());
+        depth16::unpack(
+            &plane,
+            self.orientation,
+            size,
+            self.unpack,
+            &mut self.range_values,
+        )
+        .map_err(CameraError::Depth)?;
+        self.upload_range();
+        Ok(())
+    }
+
+    /// Without a depth stream: normalised range from 0.1 at the bottom to 1 at the top,
+    /// the floor ahead of a phone held upright.
+    fn fill_plane(&mut self) {
+        let (width, height) = (self.range.width(), self.range.height());
+        self.range_values.clear();
+        for y in 0..height {
+            let r = 0.1 + 0.9 * (y as f32 + 0.5) / height as f32;
+            self.range_values.extend(std::iter::repeat(r).take(width));
+        }
+        self.upload_range();
+    }
+
+    fn upload_range(&self) {
+        let values = &self.range_values;
+        // SAFETY: `values` holds width x height f32, GL's row order (depth16::unpack and
+        // fill_plane write exactly that), uploaded into the owned R32F texture.
+        unsafe {
+            let bytes = std::slice::from_raw_parts(values.as_ptr().cast::<u8>(), values.len() * 4);
+            self.gl
+                .bind_texture(glow::TEXTURE_2D, Some(self.range.raw()));
+            self.gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
+            self.gl.tex_sub_image_2d(
+                glow::TEXTURE_2D,
+                0,
+                0,
+                0,
+                self.range.width() as i32,
+                self.range.height() as i32,
+                glow::RED,
+                glow::FLOAT,
+                glow::PixelUnpackData::Slice(Some(bytes)),
+            );
+            self.gl.bind_texture(glow::TEXTURE_2D, None);
+        }
+    }
+}
+
+impl Drop for Camera {
+    fn drop(&mut self) {
+        // SAFETY: the app's own texture, on its context (current for the app's life).
+        unsafe { self.gl.delete_texture(self.external) };
+    }
+}
+
+/// The back camera with a `DEPTH16` output if there is one, else the first back camera,
+/// else the first camera.
+fn choose_camera(manager: *mut ffi::ACameraManager) -> Result<Choice, CameraError> {
+    let mut list: *mut ffi::ACameraIdList = std::ptr::null_mut();
+    // SAFETY: the list is freed below; its ids are copied before.
+    let ids: Vec<CString> = unsafe {
+        check(
+            "ACameraManager_getCameraIdList",
+            ffi::ACameraManager_getCameraIdList(manager, &mut list),
+        )?;
+        let ids = std::slice::from_raw_parts((*list).cameraIds, (*list).numCameras.max(0) as usize)
+            .iter()
+            .map(|&id| CStr::from_ptr(id).to_owned())
+            .collect();
+        ffi::ACameraManager_deleteCameraIdList(list);
+        ids
+    };
+    let mut candidates = Vec::new();
+    for id in ids {
+        match describe(manager, id) {
+            Ok(c) => candidates.push(c),
+            Err(e) => log::warn!("camera skipped: {e}"),
+        }
+    }
+    let rank = |c: &(Choice, bool)| match (c.1, !c.0.depth_sizes.is_empty()) {
+        (true, true) => 0,
+        (true, false) => 1,
+        _ => 2,
+    };
+    candidates.sort_by_key(rank);
+    candidates
+        .into_iter()
+        .map(|(choice, _)| choice)
+        .find(|c| !c.colour_sizes.is_empty())
+        .ok_or_else(|| CameraError::NoCamera("no camera streams PRIVATE buffers".into()))
+}
+
+/// A camera's orientation and stream sizes, and whether it faces back.
+fn describe(manager: *mut ffi::ACameraManager, id: CString) -> Result<(Choice, bool), CameraError> {
+    let mut metadata: *mut ffi::ACameraMetadata = std::ptr::null_mut();
+    // SAFETY: the metadata is freed below; entries are copied out before.
+    unsafe {
+        check(
+            "ACameraManager_getCameraCharacteristics",
+            ffi::ACameraManager_getCameraCharacteristics(manager, id.as_ptr(), &mut metadata),
+        )?;
+        let facing = entry_u8(metadata, ffi::acamera_metadata_tag::ACAMERA_LENS_FACING);
+        let back = facing.first().map(|&f| u32::from(f))
+            == Some(ffi::acamera_metadata_enum_acamera_lens_facing::ACAMERA_LENS_FACING_BACK.0);
+        let degrees = entry_i32(
+            metadata,
+            ffi::acamera_metadata_tag::ACAMERA_SENSOR_ORIENTATION,
+        );
+        let capabilities = entry_u8(
+            metadata,
+            ffi::acamera_metadata_tag::ACAMERA_REQUEST_AVAILABLE_CAPABILITIES,
+        );
+        let depth_output = ffi::acamera_metadata_enum_acamera_request_available_capabilities::ACAMERA_REQUEST_AVAILABLE_CAPABILITIES_DEPTH_OUTPUT.0;
+        let has_depth = capabilities.iter().any(|&c| u32::from(c) == depth_output);
+        let colour = entry_i32(
+            metadata,
+            ffi::acamera_metadata_tag::ACAMERA_SCALER_AVAILABLE_STREAM_CONFIGURATIONS,
+        );
+        let depth = if has_depth {
+            entry_i32(
+                metadata,
+                ffi::acamera_metadata_tag::ACAMERA_DEPTH_AVAILABLE_DEPTH_STREAM_CONFIGURATIONS,
+            )
+        } else {
+            Vec::new()
+        };
+        ffi::ACameraMetadata_free(metadata);
+        Ok((
+            Choice {
+                orientation: Orientation::from_sensor_degrees(
+                    degrees.first().copied().unwrap_or(0),
+                ),
+                colour_sizes: streams::output_sizes(
+                    &colour,
+                    ffi::AIMAGE_FORMATS::AIMAGE_FORMAT_PRIVATE.0 as i32,
+                ),
+                depth_sizes: streams::output_sizes(
+                    &depth,
+                    ffi::AIMAGE_FORMATS::AIMAGE_FORMAT_DEPTH16.0 as i32,
+                ),
+                id,
+            },
+            back,
+        ))
+    }
+}
+
+/// An `i32` entry of a camera's characteristics (empty when absent).
+unsafe fn entry_i32(
+    metadata: *const ffi::ACameraMetadata,
+    tag: ffi::acamera_metadata_tag,
+) -> Vec<i32> {
+    let mut entry = std::mem::zeroed::<ffi::ACameraMetadata_const_entry>();
+    if ffi::ACameraMetadata_getConstEntry(metadata, tag.0, &mut entry)
+        != ffi::camera_status_t::ACAMERA_OK
+    {
+        return Vec::new();
+    }
+    std::slice::from_raw_parts(entry.data.i32_, entry.count as usize).to_vec()
+}
+
+/// A `u8` (enum) entry of a camera's characteristics (empty when absent).
+unsafe fn entry_u8(
+    metadata: *const ffi::ACameraMetadata,
+    tag: ffi::acamera_metadata_tag,
+) -> Vec<u8> {
+    let mut entry = std::mem::zeroed::<ffi::ACameraMetadata_const_entry>();
+    if ffi::ACameraMetadata_getConstEntry(metadata, tag.0, &mut entry)
+        != ffi::camera_status_t::ACAMERA_OK
+    {
+        return Vec::new();
+    }
+    std::slice::from_raw_parts(entry.data.u8_, entry.count as usize).to_vec()
+}
+
+/// Opens camera `id` and starts a repeating preview request into `windows` (the
+/// readers'), filling `session` as it goes so that a failure frees what was made.
+fn start(session: &mut Session, id: &CStr, windows: Vec<NativeWindow>) -> Result<(), CameraError> {
+    // SAFETY: Camera2 calls in their documented order; every object made is recorded in
+    // `session` at once, whose Drop frees it; the windows are held by the session.
+    unsafe {
+        check(
+            "ACameraManager_openCamera",
+            ffi::ACameraManager_openCamera(
+                session.manager,
+                id.as_ptr(),
+                &mut *session.device_callbacks,
+                &mut session.device,
+            ),
+        )?;
+        check(
+            "ACaptureSessionOutputContainer_create",
+            ffi::ACaptureSessionOutputContainer_create(&mut session.container),
+        )?;
+        check(
+            "ACameraDevice_createCaptureRequest",
+            ffi::ACameraDevice_createCaptureRequest(
+                session.device,
+                ffi::ACameraDevice_request_template::TEMPLATE_PREVIEW,
+                &mut session.request,
+            ),
+        )?;
+        session.windows = windows;
+        for window in &session.windows {
+            let mut output = std::ptr::null_mut();
+            check(
+                "ACaptureSessionOutput_create",
+                ffi::ACaptureSessionOutput_create(window.ptr().as_ptr(), &mut output),
+            )?;
+            session.outputs.push(output);
+            check(
+                "ACaptureSessionOutputContainer_add",
+                ffi::ACaptureSessionOutputContainer_add(session.container, output),
+            )?;
+            let mut target = std::ptr::null_mut();
+            check(
+                "ACameraOutputTarget_create",
+                ffi::ACameraOutputTarget_create(window.ptr().as_ptr(), &mut target),
+            )?;
+            session.targets.push(target);
+            check(
+                "ACaptureRequest_addTarget",
+                ffi::ACaptureRequest_addTarget(session.request, target),
+            )?;
+        }
+        check(
+            "ACameraDevice_createCaptureSession",
+            ffi::ACameraDevice_createCaptureSession(
+                session.device,
+                session.container,
+                &*session.session_callbacks,
+                &mut session.session,
+            ),
+        )?;
+        check(
+            "ACameraCaptureSession_setRepeatingRequest",
+            ffi::ACameraCaptureSession_setRepeatingRequest(
+                session.session,
+                std::ptr::null_mut(),
+                1,
+                &mut session.request,
+                std::ptr::null_mut(),
+            ),
+        )
+    }
+}
