@@ -4,7 +4,8 @@
 //! - [`Pipeline`] runs on the host's GL context: the host's colour and depth textures in,
 //!   the host's framebuffer or texture out (see [`pipeline`] for the contract).
 //! - A [`medium::Medium`] is a fog model: per pixel a transmission τ (RGB), in-scattered
-//!   light L∞ and a blur scale σ. [`medium::Haze`] is paper 000's.
+//!   light L∞ and a blur scale σ. [`medium::Haze`] is paper 000's, in normalised range
+//!   or, through [`medium::PhysicalFog`], with β in m⁻¹ on range in metres.
 //! - The diffusion blur ([`Blur`], [`schedule`]) takes σ from any medium and knows nothing
 //!   else of it.
 //! - [`Renderer`] wraps the pipeline with CPU buffers, and [`Headless`] adds brume's own
@@ -41,7 +42,7 @@ pub mod sky;
 
 pub use blur::{Blur, Precision};
 pub use error::{Error, Result};
-pub use medium::{Haze, Medium, UniformBlur};
+pub use medium::{Haze, Medium, PhysicalFog, UniformBlur};
 pub use pipeline::{Encoding, FogBlur, Frame, GaussBlur, Input, Output, Pipeline};
 pub use renderer::{Headless, Rendered, Renderer};
 pub use schedule::Scheme;

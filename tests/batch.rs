@@ -22,24 +22,77 @@ fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
-/// A manifest dataset of `n` frames (the demo's Aloe under different names, in two
-/// folders) under `dir/data`.
-fn manifest_dataset(dir: &Path, n: usize) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo");
-    let data = dir.join("data");
-    let mut csv = String::from("image,depth\n");
+/// Cityscapes' camera file of the test frames: metric range of 95-465 m from the demo's
+/// disparities (43-211 px).
+const CAMERA_JSON: &str = r#"{"extrinsic": {"baseline": 0.2, "pitch": 0.0, "roll": 0.0, "x": 1.7, "y": 0.0, "yaw": 0.0, "z": 1.2},
+ "intrinsic": {"fx": 100000.0, "fy": 100000.0, "u0": 320.5, "v0": 277.5}}"#;
+
+/// Writes the demo's Aloe as a Cityscapes frame `name` of `city` under `root`, in
+/// Cityscapes' layout: leftImg8bit/, disparity/ (16-bit, p = 256·d + 1) and camera/.
+fn cityscapes_frame(root: &Path, city: &str, name: &str) {
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo");
+    let folder = |kind: &str| {
+        let d = root.join(kind).join("train").join(city);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    };
+    image::open(demo.join("aloe-left-half.jpg"))
+        .unwrap()
+        .to_rgb8()
+        .save(folder("leftImg8bit").join(format!("{name}_leftImg8bit.png")))
+        .unwrap();
+    let disparity = image::open(demo.join("aloe-disparity-half.png"))
+        .unwrap()
+        .to_luma8();
+    let packed = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(
+        disparity.width(),
+        disparity.height(),
+        |x, y| {
+            let d = disparity.get_pixel(x, y)[0];
+            image::Luma([if d == 0 { 0 } else { 256 * u16::from(d) + 1 }])
+        },
+    );
+    packed
+        .save(folder("disparity").join(format!("{name}_disparity.png")))
+        .unwrap();
+    std::fs::write(
+        folder("camera").join(format!("{name}_camera.json")),
+        CAMERA_JSON,
+    )
+    .unwrap();
+}
+
+/// A Cityscapes dataset of `n` frames in two cities under `dir/cityscapes`.
+fn cityscapes_dataset(dir: &Path, n: usize) -> PathBuf {
+    let root = dir.join("cityscapes");
     for k in 0..n {
-        let folder = if k % 2 == 0 { "city_a" } else { "city_b" };
-        std::fs::create_dir_all(data.join(folder)).unwrap();
-        let image = format!("{folder}/frame{k}.jpg");
-        let depth = format!("{folder}/frame{k}_disparity.png");
-        std::fs::copy(root.join("aloe-left-half.jpg"), data.join(&image)).unwrap();
-        std::fs::copy(root.join("aloe-disparity-half.png"), data.join(&depth)).unwrap();
-        csv.push_str(&format!("{image},{depth}\n"));
+        let city = if k % 2 == 0 { "aachen" } else { "bremen" };
+        cityscapes_frame(&root, city, &format!("{city}_{k:06}_000019"));
     }
-    let manifest = data.join("frames.csv");
-    std::fs::write(&manifest, csv).unwrap();
-    manifest
+    root
+}
+
+/// A manifest over the frames of a Cityscapes dataset (`image,depth,camera`).
+fn manifest_of(root: &Path) -> PathBuf {
+    let mut csv = String::from("image,depth,camera\n");
+    for city in ["aachen", "bremen"] {
+        let Ok(entries) = std::fs::read_dir(root.join("leftImg8bit/train").join(city)) else {
+            continue;
+        };
+        let mut names: Vec<String> = entries
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        for f in names {
+            let name = f.trim_end_matches("_leftImg8bit.png");
+            csv.push_str(&format!(
+                "leftImg8bit/train/{city}/{f},disparity/train/{city}/{name}_disparity.png,camera/train/{city}/{name}_camera.json\n"
+            ));
+        }
+    }
+    let path = root.join("frames.csv");
+    std::fs::write(&path, csv).unwrap();
+    path
 }
 
 /// The images under `dir` (relative path → bytes).
@@ -53,17 +106,9 @@ fn outputs(dir: &Path) -> BTreeMap<String, Vec<u8>> {
 #[test]
 fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
     let dir = tempfile::tempdir().unwrap();
-    manifest_dataset(dir.path(), 2);
+    cityscapes_dataset(dir.path(), 2);
     let run = |extra: &[&str]| {
-        let mut args = vec![
-            "batch",
-            "--manifest",
-            "data/frames.csv",
-            "--out",
-            "out",
-            "--beta",
-            "0.01,0.02",
-        ];
+        let mut args = vec!["batch", "cityscapes", "--out", "out", "--beta", "0.01,0.02"];
         args.extend_from_slice(extra);
         brume(dir.path(), &args)
     };
@@ -74,14 +119,14 @@ fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
     assert_eq!(
         names,
         [
-            "city_a/frame0_foggy_beta_0.01.png",
-            "city_a/frame0_foggy_beta_0.02.png",
-            "city_a/frame0_transmittance_beta_0.01.png",
-            "city_a/frame0_transmittance_beta_0.02.png",
-            "city_b/frame1_foggy_beta_0.01.png",
-            "city_b/frame1_foggy_beta_0.02.png",
-            "city_b/frame1_transmittance_beta_0.01.png",
-            "city_b/frame1_transmittance_beta_0.02.png",
+            "leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit_foggy_beta_0.01.png",
+            "leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit_foggy_beta_0.02.png",
+            "leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit_transmittance_beta_0.01.png",
+            "leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit_transmittance_beta_0.02.png",
+            "leftImg8bit/train/bremen/bremen_000001_000019_leftImg8bit_foggy_beta_0.01.png",
+            "leftImg8bit/train/bremen/bremen_000001_000019_leftImg8bit_foggy_beta_0.02.png",
+            "leftImg8bit/train/bremen/bremen_000001_000019_leftImg8bit_transmittance_beta_0.01.png",
+            "leftImg8bit/train/bremen/bremen_000001_000019_leftImg8bit_transmittance_beta_0.02.png",
         ]
     );
     // One log line per output, with its parameters and timings.
@@ -106,7 +151,12 @@ fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
     assert_eq!(outputs(&dir.path().join("out")), written);
 
     // A lost output is written again, and only it.
-    std::fs::remove_file(dir.path().join("out/city_b/frame1_foggy_beta_0.02.png")).unwrap();
+    std::fs::remove_file(
+        dir.path().join(
+            "out/leftImg8bit/train/bremen/bremen_000001_000019_leftImg8bit_foggy_beta_0.02.png",
+        ),
+    )
+    .unwrap();
     let resumed = run(&["--transmittance"]);
     assert!(resumed.status.success(), "{}", stderr(&resumed));
     assert!(String::from_utf8_lossy(&resumed.stdout).contains("wrote 1 outputs"));
@@ -120,7 +170,8 @@ fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
 #[test]
 fn shards_split_the_frames_with_no_overlap() {
     let dir = tempfile::tempdir().unwrap();
-    manifest_dataset(dir.path(), 6);
+    let manifest = manifest_of(&cityscapes_dataset(dir.path(), 6));
+    let manifest = manifest.to_str().unwrap();
     let mut seen = BTreeMap::new();
     for k in 1..=3 {
         let out = format!("out{k}");
@@ -130,7 +181,7 @@ fn shards_split_the_frames_with_no_overlap() {
             &[
                 "batch",
                 "--manifest",
-                "data/frames.csv",
+                manifest,
                 "--out",
                 &out,
                 "--beta",
@@ -153,82 +204,58 @@ fn shards_split_the_frames_with_no_overlap() {
 #[test]
 fn a_bad_frame_is_reported_and_skipped_and_the_run_fails() {
     let dir = tempfile::tempdir().unwrap();
-    let manifest = manifest_dataset(dir.path(), 2);
-    std::fs::write(
-        dir.path().join("data/city_a/frame0_disparity.png"),
-        b"not a png",
-    )
-    .unwrap();
+    let root = cityscapes_dataset(dir.path(), 3);
+    let bad = "disparity/train/aachen/aachen_000000_000019_disparity.png";
+    std::fs::write(root.join(bad), b"not a png").unwrap();
+    // A frame without its camera file.
+    std::fs::remove_file(root.join("camera/train/bremen/bremen_000001_000019_camera.json"))
+        .unwrap();
     let run = brume(
         dir.path(),
-        &[
-            "batch",
-            "--manifest",
-            manifest.to_str().unwrap(),
-            "--out",
-            "out",
-            "--beta",
-            "0.01",
-        ],
+        &["batch", "cityscapes", "--out", "out", "--beta", "0.01"],
     );
     assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
     let err = stderr(&run);
-    assert!(err.contains("frame0_disparity.png"), "{err}");
+    assert!(err.contains("aachen_000000_000019_disparity.png"), "{err}");
+    assert!(
+        err.contains("bremen_000001_000019") && err.contains("camera"),
+        "{err}"
+    );
     assert!(!err.contains("panicked"), "{err}");
     let names: Vec<String> = outputs(&dir.path().join("out")).into_keys().collect();
-    assert_eq!(names, ["city_b/frame1_foggy_beta_0.01.png"]);
-    let log = std::fs::read_to_string(dir.path().join("out/brume-batch-1-of-1.jsonl")).unwrap();
-    assert!(
-        log.contains("\"status\":\"failed\"") && log.contains("frame0"),
-        "{log}"
+    assert_eq!(
+        names,
+        ["leftImg8bit/train/aachen/aachen_000002_000019_leftImg8bit_foggy_beta_0.01.png"]
     );
+    let log = std::fs::read_to_string(dir.path().join("out/brume-batch-1-of-1.jsonl")).unwrap();
+    assert_eq!(log.matches("\"status\":\"failed\"").count(), 2, "{log}");
 }
 
 #[test]
 fn bad_batch_options_are_refused_before_any_work() {
     let dir = tempfile::tempdir().unwrap();
-    manifest_dataset(dir.path(), 1);
+    cityscapes_dataset(dir.path(), 1);
     for (args, expect) in [
         (
-            &[
-                "batch",
-                "--manifest",
-                "data/frames.csv",
-                "--out",
-                "o",
-                "--beta",
-                "-0.01",
-            ][..],
+            &["batch", "cityscapes", "--out", "o", "--beta", "-0.01"][..],
             "--beta",
         ),
         (
-            &[
-                "batch",
-                "--manifest",
-                "data/frames.csv",
-                "--out",
-                "o",
-                "--beta",
-                "0.01,x",
-            ][..],
+            &["batch", "cityscapes", "--out", "o", "--beta", "0.01,x"][..],
             "--beta",
         ),
         (
-            &[
-                "batch",
-                "--manifest",
-                "data/frames.csv",
-                "--out",
-                "o",
-                "--shard",
-                "4/3",
-            ][..],
+            &["batch", "cityscapes", "--out", "o", "--shard", "4/3"][..],
             "--shard",
+        ),
+        (
+            &["batch", "cityscapes", "--out", "o", "--albedo", "2"][..],
+            "albedo",
         ),
         (&["batch", "--out", "o"][..], "no frames"),
         (&["batch", "nowhere", "--out", "o"][..], "nowhere"),
         (
-            &["batch", "--manifest", "data/missing.csv", "--out", "o"][..],
+            &["batch", "--manifest", "missing.csv", "--out", "o"][..],
             "missing.csv",
         ),
     ] {
@@ -240,5 +267,59 @@ fn bad_batch_options_are_refused_before_any_work() {
             !dir.path().join("o").exists(),
             "{args:?} created the output folder"
         );
+    }
+}
+
+#[test]
+fn each_output_is_what_render_writes_with_the_same_beta() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 1);
+    let run = brume(
+        dir.path(),
+        &[
+            "batch",
+            "cityscapes",
+            "--out",
+            "out",
+            "--beta",
+            "0.005,0.02",
+        ],
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let frame = "train/aachen/aachen_000000_000019";
+    let image = root.join(format!("leftImg8bit/{frame}_leftImg8bit.png"));
+    let depth = root.join(format!("disparity/{frame}_disparity.png"));
+    let mut previous: Option<Vec<u8>> = None;
+    for beta in ["0.005", "0.02"] {
+        let out = format!("render-{beta}.png");
+        let render = brume(
+            dir.path(),
+            &[
+                "render",
+                "--image",
+                image.to_str().unwrap(),
+                "--depth",
+                depth.to_str().unwrap(),
+                "--beta",
+                beta,
+                "--out",
+                &out,
+            ],
+        );
+        assert!(render.status.success(), "{}", stderr(&render));
+        let batch = std::fs::read(dir.path().join(format!(
+            "out/leftImg8bit/{frame}_leftImg8bit_foggy_beta_{beta}.png"
+        )))
+        .unwrap();
+        assert!(
+            batch == std::fs::read(dir.path().join(&out)).unwrap(),
+            "β {beta}: batch and render differ"
+        );
+        // β matters: denser fog is another image.
+        assert!(
+            previous.as_ref() != Some(&batch),
+            "β {beta} gave the image of the β before"
+        );
+        previous = Some(batch);
     }
 }

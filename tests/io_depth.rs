@@ -1,11 +1,13 @@
 //! Depth loaders: PFM, calib.txt, Middlebury 2014/2006, 16-bit PNG formats (the datasets',
-//! Android DEPTH16 and ARCore), float maps; the phone formats also through the CLI.
+//! Android DEPTH16, ARCore and Cityscapes with its camera file), float maps; the phone
+//! formats and Cityscapes also through the CLI; which loads are metric.
 
 use std::path::{Path, PathBuf};
 
 use brume::io::depth::{
-    load_range, load_range_from_bytes, parse_calib, parse_pfm, read_pfm, DepthFormat, DepthKind,
-    DepthOptions, LoadedDepth, Pfm, DEPTH16_DEFAULT_MIN_CONFIDENCE,
+    load_cityscapes, load_cityscapes_from_bytes, load_range, load_range_from_bytes, parse_calib,
+    parse_camera_str, parse_pfm, read_pfm, DepthFormat, DepthKind, DepthOptions, LoadedDepth, Pfm,
+    DEPTH16_DEFAULT_MIN_CONFIDENCE,
 };
 use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
@@ -1457,4 +1459,349 @@ fn phone_depth_errors_from_the_command_line() {
         !dir.path().join("r.pfm").exists(),
         "no output after an error"
     );
+}
+
+// ---------------------------------------------------------------- Cityscapes
+
+/// A Cityscapes camera file with the dataset's keys (pitch, roll, … are not used) and a
+/// camera chosen so that the rays of a 6x4 map leave the axis noticeably: baseline 0.5 m,
+/// fx 20, fy 25, principal point (3.5, 1.25).
+fn cityscapes_camera(baseline: &str, fx: &str) -> String {
+    format!(
+        r#"{{
+    "extrinsic": {{"baseline": {baseline}, "pitch": 0.038, "roll": 0.0, "x": 1.7,
+                   "y": 0.1, "yaw": -0.0195, "z": 1.18}},
+    "intrinsic": {{"fx": {fx}, "fy": 25.0, "u0": 3.5, "v0": 1.25}}
+}}"#
+    )
+}
+
+/// Stored values of a 6x4 Cityscapes disparity: p = 1 + 256·d. Most pixels d = 2 px;
+/// (0, 0) d = 1, (2, 1) d = 0.5, (5, 3) d = 4; (1, 0) p = 0 (invalid) and (3, 0) p = 1
+/// (d = 0: no depth).
+fn cityscapes_disparity() -> Vec<u16> {
+    let mut p = vec![513u16; 24];
+    p[0] = 257;
+    p[1] = 0;
+    p[3] = 1;
+    p[6 + 2] = 129;
+    p[3 * 6 + 5] = 1025;
+    p
+}
+
+/// Writes `{dir}/{name}_disparity.png` and, if `camera_dir` is given,
+/// `{camera_dir}/{name}_camera.json`; returns the disparity's path.
+fn cityscapes_files(dir: &Path, name: &str, camera_dir: Option<&Path>) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let disparity = save_png16(
+        dir,
+        &format!("{name}_disparity.png"),
+        6,
+        4,
+        &cityscapes_disparity(),
+    );
+    if let Some(c) = camera_dir {
+        std::fs::create_dir_all(c).unwrap();
+        write(
+            c,
+            &format!("{name}_camera.json"),
+            cityscapes_camera("0.5", "20").as_bytes(),
+        );
+    }
+    disparity
+}
+
+/// The known ranges of [`cityscapes_disparity`], worked by hand: Z = baseline·fx/d, then
+/// R = Z·sqrt(1 + ((x − u0)/fx)² + ((y − v0)/fy)²).
+fn assert_cityscapes_range(d: &LoadedDepth) {
+    // (0, 0): Z = 0.5·20/1 = 10 m; u = −3.5/20, v = −1.25/25: R = 10·sqrt(1.033125).
+    // (2, 1): Z = 0.5·20/0.5 = 20 m; u = −1.5/20, v = −0.25/25: R = 20·sqrt(1.005725).
+    // (5, 3): Z = 0.5·20/4 = 2.5 m; u = 1.5/20, v = 1.75/25: R = 2.5·sqrt(1.010525).
+    for (x, y, want) in [
+        (0, 0, 10.164_275_675_128_06),
+        (2, 1, 20.057_168_294_652_165),
+        (5, 3, 2.513_121_813_601_561),
+    ] {
+        let got = *d.range.get(x, y);
+        assert!(close(got, want), "({x}, {y}): {got} m, expected {want}");
+    }
+    // Every d = 2 px pixel is at Z = 5 m along its own ray.
+    let (x, y) = (4, 2);
+    let stretch = (1.0f64 + (0.5f64 / 20.0).powi(2) + (0.75f64 / 25.0).powi(2)).sqrt();
+    assert!(close(*d.range.get(x, y), 5.0 * stretch));
+    assert!(d.range.get(1, 0).is_nan(), "p = 0 is invalid");
+    assert!(d.range.get(3, 0).is_nan(), "p = 1 is d = 0: no depth");
+    assert_eq!(d.unknown_pixels, 2);
+    assert_eq!(
+        (d.format, d.kind, d.units.as_str(), d.metric),
+        (DepthFormat::Cityscapes, DepthKind::Disparity, "m", true)
+    );
+    let k = d.intrinsics.unwrap();
+    assert_eq!((k.fx, k.fy, k.cx, k.cy), (20.0, 25.0, 3.5, 1.25));
+}
+
+/// The same load, NaN for NaN (`==` on the maps would fail on their unknown pixels).
+fn assert_same_load(a: &LoadedDepth, b: &LoadedDepth) {
+    let bits =
+        |d: &LoadedDepth| -> Vec<u32> { d.range.as_slice().iter().map(|v| v.to_bits()).collect() };
+    assert_eq!(bits(a), bits(b));
+    assert_eq!(
+        (a.format, a.kind, a.metric, &a.notes, a.intrinsics),
+        (b.format, b.kind, b.metric, &b.notes, b.intrinsics)
+    );
+}
+
+#[test]
+fn cityscapes_disparity_and_camera_give_range_in_metres() {
+    let dir = tempfile::tempdir().unwrap();
+    let cameras = dir.path().join("elsewhere");
+    let p = cityscapes_files(dir.path(), "f", Some(&cameras));
+    let camera = cameras.join("f_camera.json");
+    let given = DepthOptions {
+        camera: Some(camera.clone()),
+        ..opts(DepthFormat::Cityscapes)
+    };
+    let d = load_range(&p, &given).unwrap();
+    assert_cityscapes_range(&d);
+    assert!(
+        d.notes.iter().any(|n| n.contains("stored value 1")),
+        "{:?}",
+        d.notes
+    );
+    // `auto` takes a 16-bit PNG with a camera file given for Cityscapes.
+    let auto = DepthOptions {
+        camera: Some(camera.clone()),
+        ..DepthOptions::default()
+    };
+    assert_same_load(&load_range(&p, &auto).unwrap(), &d);
+    // The library's own entry points load the same.
+    assert_same_load(&load_cityscapes(&p, Some(&camera)).unwrap(), &d);
+    let bytes = std::fs::read(&p).unwrap();
+    let text = std::fs::read_to_string(&camera).unwrap();
+    let from_bytes = load_cityscapes_from_bytes(&bytes, &p, (&camera, &text)).unwrap();
+    assert_same_load(&from_bytes, &d);
+    // Without the camera, bytes alone cannot be Cityscapes.
+    let err = expect_err(load_range_from_bytes(
+        &bytes,
+        &p,
+        &opts(DepthFormat::Cityscapes),
+        None,
+    ));
+    assert!(err.to_string().contains("--camera"), "{err}");
+}
+
+#[test]
+fn cityscapes_camera_is_found_beside_and_in_the_dataset_layout() {
+    let dir = tempfile::tempdir().unwrap();
+    // Beside the disparity, `auto`: found, used, and said so.
+    let beside = dir.path().join("flat");
+    let p = cityscapes_files(&beside, "a", Some(&beside));
+    let d = load_range(&p, &DepthOptions::default()).unwrap();
+    assert_cityscapes_range(&d);
+    let camera = beside.join("a_camera.json");
+    let note = format!("camera read from {}", camera.display());
+    assert!(d.notes.contains(&note), "{:?}", d.notes);
+    assert_same_load(&load_cityscapes(&p, None).unwrap(), &d);
+
+    // The dataset's layout: disparity/{split}/{city}/ and camera/{split}/{city}/.
+    let root = dir.path().join("cityscapes");
+    let p = cityscapes_files(
+        &root.join("disparity/train/aachen"),
+        "aachen_000000_000019",
+        Some(&root.join("camera/train/aachen")),
+    );
+    let d = load_range(&p, &opts(DepthFormat::Cityscapes)).unwrap();
+    assert_cityscapes_range(&d);
+    let camera = root.join("camera/train/aachen/aachen_000000_000019_camera.json");
+    let note = format!("camera read from {}", camera.display());
+    assert!(d.notes.contains(&note), "{:?}", d.notes);
+
+    // Neither: the error names both places and the option.
+    let lonely = dir.path().join("disparity/val/bonn");
+    let p = cityscapes_files(&lonely, "b", None);
+    let msg = expect_format_error(load_range(&p, &opts(DepthFormat::Cityscapes)), "--camera");
+    for tried in [
+        lonely.join("b_camera.json"),
+        dir.path().join("camera/val/bonn/b_camera.json"),
+    ] {
+        assert!(msg.contains(&tried.display().to_string()), "{msg}");
+    }
+    // `auto` with no camera found falls back to the 16-bit PNG message, which names the
+    // format.
+    expect_format_error(load_range(&p, &DepthOptions::default()), "cityscapes");
+}
+
+#[test]
+fn cityscapes_camera_errors_name_the_file_the_key_and_the_value() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = cityscapes_files(dir.path(), "c", None);
+    let load = |json: &str| {
+        let camera = write(dir.path(), "camera.json", json.as_bytes());
+        let o = DepthOptions {
+            camera: Some(camera),
+            ..opts(DepthFormat::Cityscapes)
+        };
+        load_range(&p, &o)
+    };
+    let cases = [
+        ("{\"extrinsic\": ", vec!["camera.json", "not JSON", "baseline"]),
+        (
+            "{\"extrinsic\": {\"baseline\": 0.2}, \"intrinsic\": {\"fx\": 2262.52, \"u0\": 1, \"v0\": 2}}",
+            vec!["camera.json", "missing intrinsic.fy"],
+        ),
+        (
+            "{\"extrinsic\": {\"baseline\": \"wide\"}, \"intrinsic\": {}}",
+            vec!["extrinsic.baseline = \"wide\"", "a number"],
+        ),
+        (
+            &cityscapes_camera("0", "20"),
+            vec!["extrinsic.baseline = 0", "baseline in metres, > 0"],
+        ),
+        (
+            &cityscapes_camera("0.5", "-20"),
+            vec!["intrinsic.fx = -20", "focal length in pixels, > 0"],
+        ),
+    ];
+    for (json, needles) in cases {
+        let msg = expect_format_error(load(json), needles[0]);
+        for n in needles {
+            assert!(msg.contains(n), "`{msg}` should mention `{n}`");
+        }
+    }
+    // A camera file that cannot be read names itself.
+    let missing = DepthOptions {
+        camera: Some(dir.path().join("nope.json")),
+        ..opts(DepthFormat::Cityscapes)
+    };
+    assert!(expect_err(load_range(&p, &missing))
+        .to_string()
+        .contains("nope.json"));
+    // Not a 16-bit grey PNG; not disparity.
+    let good = write(
+        dir.path(),
+        "good.json",
+        cityscapes_camera("0.5", "20").as_bytes(),
+    );
+    let with_camera = DepthOptions {
+        camera: Some(good),
+        ..opts(DepthFormat::Cityscapes)
+    };
+    let p8 = save_png8(dir.path(), "d8_disparity.png", 6, 4, &[9; 24]);
+    expect_format_error(
+        load_range(&p8, &with_camera),
+        "--depth-format cityscapes expects a 16-bit grey PNG, found an 8-bit PNG",
+    );
+    let as_depth = DepthOptions {
+        kind: Some(DepthKind::Depth),
+        ..with_camera
+    };
+    let err = expect_err(load_range(&p, &as_depth)).to_string();
+    assert!(
+        err.contains("invalid depth_kind = depth") && err.contains("cityscapes"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_real_cityscapes_camera_file_parses() {
+    let text = r#"{
+    "extrinsic": {
+        "baseline": 0.209313,
+        "pitch": 0.038,
+        "roll": 0.0,
+        "x": 1.7,
+        "y": 0.1,
+        "yaw": -0.0195,
+        "z": 1.18
+    },
+    "intrinsic": {
+        "fx": 2262.52,
+        "fy": 2265.3017905988554,
+        "u0": 1096.98,
+        "v0": 513.137
+    }
+}"#;
+    let c = parse_camera_str(text, Path::new("aachen_000000_000019_camera.json")).unwrap();
+    assert_eq!(c.baseline_m, 0.209313);
+    let k = c.intrinsics;
+    assert_eq!(
+        (k.fx, k.fy, k.cx, k.cy),
+        (2262.52, 2265.3017905988554, 1096.98, 513.137)
+    );
+    // A disparity of 47.36 px is about 10 m.
+    assert!((c.depth_m(47.36).unwrap() - 10.0).abs() < 0.01);
+    assert_eq!(c.depth_m(0.0), None);
+}
+
+#[test]
+fn metric_says_whether_the_metres_can_be_trusted() {
+    let dir = tempfile::tempdir().unwrap();
+    let p16 = save_png16(dir.path(), "k.png", 2, 1, &[2560, 5120]);
+    assert!(load_range(&p16, &opts(DepthFormat::Kitti)).unwrap().metric);
+    let scaled = DepthOptions {
+        scale: Some(0.01),
+        ..opts(DepthFormat::Png16)
+    };
+    assert!(load_range(&p16, &scaled).unwrap().metric);
+    let float = dir.path().join("r.pfm");
+    write_scalar(&float, &Grid::from_fn(2, 1, |x, _| 1.0 + x as f32)).unwrap();
+    let d = load_range(&float, &DepthOptions::default()).unwrap();
+    assert_eq!((d.units.as_str(), d.metric), ("file units", false));
+    // Middlebury 2006: metres only when its geometry is given in full.
+    let p8 = save_png8(dir.path(), "d.png", 2, 1, &[40, 80]);
+    let d = load_range(&p8, &DepthOptions::default()).unwrap();
+    assert_eq!((d.units.as_str(), d.metric), ("m", false));
+    let full = DepthOptions {
+        focal: Some(3740.0),
+        baseline: Some(160.0),
+        disparity_offset: Some(270.0),
+        ..DepthOptions::default()
+    };
+    assert!(load_range(&p8, &full).unwrap().metric);
+    assert!(!brume::io::demo::demo_range().unwrap().metric);
+}
+
+#[test]
+fn cityscapes_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("cs");
+    cityscapes_files(
+        &root.join("disparity/train/ulm"),
+        "ulm_1",
+        Some(&root.join("camera/train/ulm")),
+    );
+    let colour = Grid::from_fn(6, 4, |x, y| [x as f32 / 6.0, y as f32 / 4.0, 0.5, 1.0]);
+    brume::io::output::write_rgba(&dir.path().join("im.png"), &colour).unwrap();
+    let depth = "cs/disparity/train/ulm/ulm_1_disparity.png";
+    let _gl = common::gl_lock();
+    let args = [
+        "render", "--image", "im.png", "--depth", depth, "--out", "fog.png", "--json",
+    ];
+    let v = json(&brume(dir.path(), &args));
+    assert_eq!(v["depth_format"], "cityscapes", "{v}");
+    assert_eq!(v["depth_kind"], "disparity", "{v}");
+    assert!(
+        notes(&v)
+            .iter()
+            .any(|n| n.starts_with("camera read from") && n.contains("ulm_1_camera.json")),
+        "{v}"
+    );
+    assert!(dir.path().join("fog.png").is_file());
+
+    // No camera anywhere: both places and --camera named, nothing written.
+    std::fs::remove_file(root.join("camera/train/ulm/ulm_1_camera.json")).unwrap();
+    let mut args = args.to_vec();
+    args[6] = "fog2.png";
+    args.extend(["--depth-format", "cityscapes"]);
+    let o = brume(dir.path(), &args);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with("brume: error: ")
+            && err.contains("disparity/train/ulm/ulm_1_camera.json")
+            && err.contains("camera/train/ulm/ulm_1_camera.json")
+            && err.contains("--camera"),
+        "{err}"
+    );
+    assert!(!dir.path().join("fog2.png").exists());
 }

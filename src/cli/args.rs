@@ -84,13 +84,20 @@ pub struct InfoArgs {
 pub struct DepthArgs {
     /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (with --calib), 8-bit
     /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM, Android DEPTH16,
-    /// ARCore or --depth-scale), float EXR/TIFF/PFM, or .npy.
+    /// ARCore, Cityscapes disparity with --camera, or --depth-scale), float EXR/TIFF/PFM,
+    /// or .npy.
     #[arg(long, value_name = "PATH")]
     pub depth: Option<PathBuf>,
 
     /// Middlebury calib.txt with the intrinsics, baseline and doffs of the depth map.
     #[arg(long, value_name = "PATH")]
     pub calib: Option<PathBuf>,
+
+    /// Cityscapes NAME_camera.json (baseline in metres, intrinsics fx, fy, u0, v0) of a
+    /// NAME_disparity.png. Default: NAME_camera.json beside the disparity, or in the
+    /// dataset's layout (camera/SPLIT/CITY/ for disparity/SPLIT/CITY/).
+    #[arg(long, value_name = "PATH")]
+    pub camera: Option<PathBuf>,
 
     /// What the depth values are: depth (along the optical axis), range (distance to the
     /// camera centre), disparity (px), or zbuffer (a rendered frame's OpenGL window depth
@@ -101,7 +108,9 @@ pub struct DepthArgs {
     /// Depth file format: auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16,
     /// float, android-depth16 (Camera2 DEPTH16 as a 16-bit PNG: low 13 bits range in mm,
     /// high 3 bits confidence, read as range), arcore (ARCore 16-bit depth PNG: mm along
-    /// the optical axis, becomes range with --fov or --focal).
+    /// the optical axis, becomes range with --fov or --focal), cityscapes (16-bit
+    /// disparity PNG, p > 0 is (p − 1)/256 px, with its camera file: see --camera; auto
+    /// picks it for a 16-bit PNG whose camera file is given or found).
     #[arg(
         long,
         value_name = "FORMAT",
@@ -193,7 +202,8 @@ pub struct RenderArgs {
     #[arg(long, short, value_name = "PATH")]
     pub out: Option<PathBuf>,
 
-    /// Absorption coefficient κa per unit of normalised range (attenuation only).
+    /// Absorption coefficient κa per unit of normalised range (attenuation only): the
+    /// frame's largest range counts as 1. For fog in metres see --beta.
     #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KA, allow_hyphen_values = true)]
     pub ka: f64,
 
@@ -201,7 +211,39 @@ pub struct RenderArgs {
     #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KS, allow_hyphen_values = true)]
     pub ks: f64,
 
-    /// Blur factor λ in px: the farthest point is blurred to σmax = σ0 + λ·√κs.
+    /// Extinction β in m⁻¹, instead of --ka/--ks: fog in physical units on range in
+    /// metres, not normalised, so the same β is the same fog in every frame (Foggy
+    /// Cityscapes: 0.005, 0.01, 0.02). τ = exp(−β·R); blur σ = σ0 +
+    /// λ·√(a·ln 20)·min(β·R/ln 20, 1)^(3/2), a = --albedo. Needs metric range:
+    /// middlebury2014 with calib.txt, cityscapes with its camera file, kitti, nyu, tum,
+    /// android-depth16, arcore, png16 with --depth-scale, or a disparity with --focal and
+    /// --baseline.
+    #[arg(
+        long,
+        value_name = "PER_M",
+        allow_hyphen_values = true,
+        conflicts_with_all = ["ka", "ks", "visibility"]
+    )]
+    pub beta: Option<f64>,
+
+    /// Meteorological visibility V in metres, instead of --beta: β = ln 20/V ≈ 2.996/V
+    /// (τ falls to 5 % at V). Foggy Cityscapes: 600, 300, 150.
+    #[arg(
+        long,
+        value_name = "M",
+        allow_hyphen_values = true,
+        conflicts_with_all = ["ka", "ks"]
+    )]
+    pub visibility: Option<f64>,
+
+    /// With --beta or --visibility: single-scattering albedo a in [0, 1]; βs = a·β
+    /// scatters (veils and blurs), βa = (1 − a)·β only absorbs [default: 1, pure
+    /// scattering, as Foggy Cityscapes].
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    pub albedo: Option<f64>,
+
+    /// Blur factor λ in px: the farthest point is blurred to σmax = σ0 + λ·√κs (with
+    /// --beta: σ0 + λ·√(a·ln 20), reached at the visibility).
     #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_LAMBDA, allow_hyphen_values = true)]
     pub lambda: f64,
 
@@ -801,7 +843,7 @@ brume view scene --fog layered\n  brume view --frames 10 --screenshot shot.png -
 pub struct ViewArgs {
     /// Render N frames, save --screenshot and --stats, and exit (N >= 1). Without it the
     /// window stays until closed.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, value_name = "N", allow_hyphen_values = true, value_parser = clap::value_parser!(u32).range(1..))]
     pub frames: Option<u32>,
 
     /// With --frames: the window's contents after the last frame, as PNG.
@@ -814,11 +856,11 @@ pub struct ViewArgs {
     pub stats: Option<PathBuf>,
 
     /// Image scale: fit (to the window) or a factor of physical pixels per image pixel.
-    #[arg(long, value_name = "fit|F", default_value = "fit", value_parser = parse_zoom)]
+    #[arg(long, value_name = "fit|F", default_value = "fit", allow_hyphen_values = true, value_parser = parse_zoom)]
     pub zoom: Zoom,
 
     /// First window size in logical pixels [default: the panel and the image].
-    #[arg(long, value_name = "WxH")]
+    #[arg(long, value_name = "WxH", allow_hyphen_values = true)]
     pub window: Option<String>,
 
     /// Where S and E save the frame (the extension is theirs).
@@ -905,6 +947,10 @@ pub struct BatchArgs {
     /// ({name}_transmittance_beta_{β}.png).
     #[arg(long)]
     pub transmittance: bool,
+
+    /// Single-scattering albedo a: scattering a·β, absorption (1 − a)·β [default: 1].
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    pub albedo: Option<f64>,
 
     /// Blur factor λ in px (as `brume render --lambda`).
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]

@@ -55,6 +55,7 @@ pub fn run(args: &BatchArgs, renderer: &mut Renderer) -> Result<()> {
         None => Shard::ALL,
     };
     let betas = parse_betas(&args.beta)?;
+    let template = args.render_template(betas[0])?;
     let (items, mut failures) = collect_items(args)?;
     let total = items.len() + failures.len();
     let items: Vec<Item> = items.into_iter().filter(|i| shard.contains(i)).collect();
@@ -89,7 +90,6 @@ pub fn run(args: &BatchArgs, renderer: &mut Renderer) -> Result<()> {
         .map_err(|e| Error::io(&log_path, e))?;
     let progress = progress_bar(outputs as u64);
     let started = Instant::now();
-    let template = args.render_template()?;
     let (load_tx, load_rx) = sync_channel::<std::result::Result<Loaded, Failed>>(1);
     let (encode_tx, encode_rx) = sync_channel::<Encode>(2);
     let (written_tx, written_rx) = std::sync::mpsc::channel::<Written>();
@@ -486,9 +486,11 @@ impl Stats {
 
 impl BatchArgs {
     /// `brume render`'s options for every frame: the defaults, with the batch's blur,
-    /// airlight and pre-processing.
-    fn render_template(&self) -> Result<RenderArgs> {
+    /// airlight and pre-processing, and physical fog (`beta`, the first β: loading a frame
+    /// then checks that its range is in metres).
+    fn render_template(&self, beta: f64) -> Result<RenderArgs> {
         let mut args = render_cmd::default_args();
+        apply_beta(&mut args, beta);
         if let Some(l) = self.lambda {
             args.lambda = l;
         }
@@ -499,6 +501,7 @@ impl BatchArgs {
             args.precision = p;
         }
         args.airlight = self.airlight;
+        args.albedo = self.albedo;
         args.no_prep = self.no_prep;
         args.prep = self.prep.clone();
         render_cmd::haze_from_args(&args)?;
@@ -507,11 +510,14 @@ impl BatchArgs {
 }
 
 /// The frame's camera file and sky mask, as `--camera` and `--sky-mask`.
-fn apply_companions(_args: &mut RenderArgs, _item: &Item) {
-    // PENDING: wired once --camera (cityscapes) and --sky-mask land.
+fn apply_companions(args: &mut RenderArgs, item: &Item) {
+    if item.camera.is_some() {
+        args.depth.camera = item.camera.clone();
+    }
 }
 
 /// The fog at extinction `beta` (1/m), as `--beta`.
-fn apply_beta(_args: &mut RenderArgs, _beta: f64) {
-    // PENDING: wired once --beta lands.
+fn apply_beta(args: &mut RenderArgs, beta: f64) {
+    args.beta = Some(beta);
+    args.visibility = None;
 }

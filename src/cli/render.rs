@@ -9,6 +9,7 @@ use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::output::{self, Outputs};
 use brume::io::{demo, image};
 use brume::medium::haze::{self, Haze};
+use brume::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
 use brume::raster::{RgbImage, ScalarMap};
@@ -102,10 +103,12 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     if args.medium == MediumKind::Aerial {
         return run_aerial(args, egl, &scene, &prep, range, &out);
     }
-    let (normalised, r_max, look) = haze_inputs(args, &scene, &prep)?;
+    let fog = physical_from_args(args)?;
+    let (medium_range, range_divisor, look) = haze_inputs(args, &scene, &prep)?;
+    let transmittance = transmittance_range(&look, &medium_range, &scene.depth.range);
 
     let mut renderer = super::open_renderer(egl)?;
-    let rendered = renderer.render(&scene.image, &normalised, look.medium(), &look.blur)?;
+    let rendered = renderer.render(&scene.image, &medium_range, look.medium(), &look.blur)?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(&out, &rendered.image)?;
     super::commit(outputs)?;
@@ -114,12 +117,14 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         scene: &scene,
         prep: &prep,
         look: &look,
+        fog: fog.as_ref(),
+        transmittance,
         rendered: &rendered,
         renderer: &renderer.caps().renderer,
         out: &out,
     };
     if args.json {
-        println!("{}", report.json(args, r_max));
+        println!("{}", report.json(args, range_divisor));
     } else {
         report.print_summary();
         if args.timings {
@@ -134,11 +139,17 @@ struct Report<'a> {
     scene: &'a Scene,
     prep: &'a PrepReport,
     look: &'a Look,
+    /// The fog in physical units, when --beta or --visibility gave it.
+    fog: Option<&'a PhysicalFog>,
+    /// The least and the largest τ over the pixels of known range (none for a uniform blur).
+    transmittance: Option<[f64; 2]>,
     rendered: &'a Rendered,
     renderer: &'a str,
     out: &'a Path,
 }
 
+/// The haze of `args`: paper 000's in normalised range (--ka, --ks), or with --beta or
+/// --visibility the same medium on range in metres ([`PhysicalFog::haze`]).
 pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
     let haze = Haze {
         ka: args.ka,
@@ -149,6 +160,10 @@ pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
         range_unit: 1.0,
     };
     haze.validate()?;
+    let haze = match physical_from_args(args)? {
+        Some(fog) => fog.haze(&haze),
+        None => haze,
+    };
     if !(args.sigma0.is_finite() && args.sigma0 > 0.0) {
         return Err(Error::invalid("sigma0", args.sigma0, "a finite number > 0"));
     }
@@ -171,22 +186,23 @@ pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
     Ok(haze)
 }
 
-/// The range the haze reads (normalised by its largest value, returned too) and the
+/// The range the haze reads (see [`haze_range`]), the range that counts as 1, and the
 /// look, as `brume render` renders them.
 pub fn haze_inputs(
     args: &RenderArgs,
     scene: &Scene,
     prep: &PrepReport,
-) -> Result<(ScalarMap, f32, Look)> {
+) -> Result<(ScalarMap, f64, Look)> {
     let range = prep
         .prepared
         .as_ref()
         .map_or(&scene.depth.range, |p| &p.range);
-    let (normalised, r_max) = haze::normalise_range(range)?;
     let haze = haze_from_args(args)?;
+    let fog = physical_from_args(args)?;
+    let (medium_range, range_divisor) = haze_range(fog.as_ref(), &haze, range)?;
     Ok((
-        normalised,
-        r_max,
+        medium_range,
+        range_divisor,
         look_from_args(args, &haze, prep.airlight),
     ))
 }
@@ -197,6 +213,128 @@ pub fn default_args() -> RenderArgs {
     let matches =
         RenderArgs::augment_args(clap::Command::new("render")).get_matches_from(["render"]);
     RenderArgs::from_arg_matches(&matches).expect("the defaults parse")
+}
+
+/// The fog of --beta or --visibility (with --albedo), or `None` for normalised κ. Refused
+/// where it would be ignored: --albedo alone, the aerial medium, a uniform blur.
+pub fn physical_from_args(args: &RenderArgs) -> Result<Option<PhysicalFog>> {
+    let albedo = args.albedo.unwrap_or(DEFAULT_ALBEDO);
+    let (fog, flag, value) = match (args.beta, args.visibility) {
+        (Some(beta), _) => (PhysicalFog::new(beta, albedo)?, "beta", beta),
+        (None, Some(v)) => (PhysicalFog::from_visibility(v, albedo)?, "visibility", v),
+        (None, None) => {
+            return match args.albedo {
+                // --ka and --ks are absorption and scattering already.
+                Some(a) => Err(Error::invalid(
+                    "albedo",
+                    a,
+                    "--beta or --visibility with it (with --ka/--ks, κa and κs already \
+                     split the extinction)",
+                )),
+                None => Ok(None),
+            };
+        }
+    };
+    if args.medium == MediumKind::Aerial {
+        return Err(Error::invalid(
+            flag,
+            value,
+            "--medium haze (the aerial medium's extinction comes from --turbidity)",
+        ));
+    }
+    if args.uniform_sigma.is_some() {
+        return Err(Error::invalid(
+            flag,
+            value,
+            "no --uniform-sigma with it (a uniform blur has no fog)",
+        ));
+    }
+    Ok(Some(fog))
+}
+
+/// Refuses physical fog on a range that is not in trustworthy metres
+/// ([`LoadedDepth::metric`]), naming the depth, how it was read and what would do.
+fn check_metric(args: &RenderArgs, scene: &Scene) -> Result<()> {
+    let given = match (args.beta, args.visibility) {
+        (Some(b), _) => ("beta", b),
+        (None, Some(v)) => ("visibility", v),
+        (None, None) => return Ok(()),
+    };
+    let depth = &scene.depth;
+    if depth.metric {
+        return Ok(());
+    }
+    if args.depth.depth.is_none() {
+        return Err(Error::invalid(
+            given.0,
+            given.1,
+            "range in metres, but the built-in demo's is not (middlebury2006 with \
+             approximate geometry, stretched): give --image and --depth with a metric depth \
+             (--calib, --camera, or a metric --depth-format), or use --ka/--ks",
+        ));
+    }
+    let why = if depth.units != "m" {
+        format!("in {}", depth.units)
+    } else {
+        "with approximate default geometry (give --focal, --baseline and \
+         --disparity-offset)"
+            .to_string()
+    };
+    Err(Error::invalid(
+        given.0,
+        given.1,
+        format!(
+            "range in metres, but {} was read as {} {} {why}: give its calibration \
+             (--calib calib.txt, --camera NAME_camera.json), a metric --depth-format \
+             (cityscapes, kitti, nyu, tum, android-depth16, arcore) or --depth-scale in \
+             metres per unit; or use --ka/--ks (normalised range)",
+            scene.depth_name, depth.format, depth.kind
+        ),
+    ))
+}
+
+/// The range texture of the haze and the range that counts as 1 (`range_divisor`):
+/// normalised by its largest value (paper 000), or kept in metres for physical fog, whose
+/// unit is the visibility.
+pub fn haze_range(
+    fog: Option<&PhysicalFog>,
+    haze: &Haze,
+    range: &ScalarMap,
+) -> Result<(ScalarMap, f64)> {
+    match fog {
+        Some(_) => {
+            let (metres, _) = physical::metric_range(range)?;
+            Ok((metres, haze.range_unit))
+        }
+        None => {
+            let (normalised, r_max) = haze::normalise_range(range)?;
+            Ok((normalised, f64::from(r_max)))
+        }
+    }
+}
+
+/// The least and the largest τ (over channels) of the haze at the pixels whose range
+/// was measured (`measured` known), as the medium computes it from its range texture;
+/// `None` for a uniform blur.
+fn transmittance_range(
+    look: &Look,
+    medium_range: &ScalarMap,
+    measured: &ScalarMap,
+) -> Option<[f64; 2]> {
+    if look.uniform.is_some() {
+        return None;
+    }
+    let haze = &look.haze;
+    medium_range
+        .as_slice()
+        .iter()
+        .zip(measured.as_slice())
+        .filter(|(_, m)| m.is_finite() && **m > 0.0)
+        .flat_map(|(r, _)| haze.transmission(f64::from(*r) / haze.range_unit))
+        .fold(None, |acc: Option<[f64; 2]>, t| match acc {
+            None => Some([t, t]),
+            Some([lo, hi]) => Some([lo.min(t), hi.max(t)]),
+        })
 }
 
 fn output_path(args: &RenderArgs) -> Result<PathBuf> {
@@ -213,16 +351,20 @@ fn output_path(args: &RenderArgs) -> Result<PathBuf> {
 
 pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     match (&args.image, &args.depth.depth) {
-        (None, None) => Ok(Scene {
-            image: demo::demo_image()?,
-            depth: demo::demo_range()?,
-            image_name: "built-in demo image".into(),
-            depth_name: "built-in demo disparity".into(),
-        }),
+        (None, None) => {
+            let scene = Scene {
+                image: demo::demo_image()?,
+                depth: demo::demo_range()?,
+                image_name: "built-in demo image".into(),
+                depth_name: "built-in demo disparity".into(),
+            };
+            check_metric(args, &scene)?;
+            Ok(scene)
+        }
         (Some(image_path), Some(_)) => {
             check_memory_before_loading(image_path)?;
             let depth = load_depth(&args.depth)?;
-            Ok(Scene {
+            let scene = Scene {
                 image: image::load_linear_rgb(image_path)?,
                 depth,
                 image_name: image_path.display().to_string(),
@@ -233,7 +375,9 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
                     .expect("checked")
                     .display()
                     .to_string(),
-            })
+            };
+            check_metric(args, &scene)?;
+            Ok(scene)
         }
         (None, Some(_)) => Err(Error::invalid(
             "--image",
@@ -286,6 +430,7 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
         format: args.depth_format,
         kind: args.depth_kind,
         calib: args.calib.clone(),
+        camera: args.camera.clone(),
         scale: args.depth_scale,
         focal: args.focal,
         baseline: args.baseline,
@@ -307,6 +452,7 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
     args.depth
         .iter()
         .chain(args.calib.iter())
+        .chain(args.camera.iter())
         .cloned()
         .collect()
 }
@@ -412,11 +558,13 @@ pub fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Loo
 }
 
 impl Report<'_> {
-    fn json(&self, args: &RenderArgs, r_max: f32) -> serde_json::Value {
+    fn json(&self, args: &RenderArgs, range_divisor: f64) -> serde_json::Value {
         let Report {
             scene,
             prep,
             look,
+            fog,
+            transmittance,
             rendered,
             renderer,
             out,
@@ -445,7 +593,12 @@ impl Report<'_> {
             "uniform_sigma": args.uniform_sigma,
             "extinction": look.extinction(),
             "tint": look.haze.tint,
-            "range_divisor": r_max,
+            "range_divisor": range_divisor,
+            "beta": fog.map(|f| f.beta),
+            "visibility_m": fog.map(PhysicalFog::visibility_m),
+            "albedo": fog.map(|f| f.albedo),
+            "transmittance_min": transmittance.map(|t| t[0]),
+            "transmittance_max": transmittance.map(|t| t[1]),
             "airlight": look.airlight(),
             "airlight_source": prep.airlight_source,
             "prep": prep_json,
@@ -457,6 +610,8 @@ impl Report<'_> {
             scene,
             prep,
             look,
+            fog,
+            transmittance,
             rendered,
             renderer,
             out,
@@ -479,6 +634,17 @@ impl Report<'_> {
             look.sigma_max(),
             look.extinction()
         );
+        if let Some(f) = fog {
+            println!(
+                "fog β {} m⁻¹ (visibility {:.1} m, albedo {})",
+                f.beta,
+                f.visibility_m(),
+                f.albedo
+            );
+        }
+        if let Some([lo, hi]) = transmittance {
+            println!("τ from {lo:.4} to {hi:.4} over the pixels of known range");
+        }
         println!(
             "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
             out.display(),

@@ -227,6 +227,7 @@ impl SceneMedium {
     }
 
     /// Moves the fog to `time` (the distance fog's noise drifts; the layered fog is still).
+    #[cfg(all(feature = "viewer", not(target_os = "android")))]
     pub fn set_time(&mut self, time: f64) {
         if let SceneMedium::Distance(f) = self {
             f.time = time;

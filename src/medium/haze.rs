@@ -7,6 +7,8 @@
 //! pre-processing the largest value is the sky range Smax (> Rmax), so the sky sits at
 //! R = 1 and gets σmax, and the farthest scene point gets slightly less. The depth texture
 //! may hold the range in any unit: [`Haze::range_unit`] is the range that counts as 1.
+//! Fog given physically (β in m⁻¹ on range in metres, no normalisation) is this medium
+//! with the visibility as that unit: see [`super::physical`].
 //!
 //! **Chromatic haze.** [`Haze::tint`] scales the extinction per channel (e.g.
 //! `[0.8, 1.0, 1.3]` for a bluish veil, blue light scattered most): τ_c = exp(−κ·tint_c·R).
@@ -141,6 +143,19 @@ impl Medium for Haze {
 /// values (NaN, ±inf, ≤ 0) are treated as far (R = 1): pre-processing (`prep`) fills
 /// them properly. Returns the map and the divisor.
 pub fn normalise_range(range: &ScalarMap) -> Result<(ScalarMap, f32)> {
+    let r_max = largest_range(range)?;
+    let normalised = range.map(|&v| {
+        if v.is_finite() && v > 0.0 {
+            v / r_max
+        } else {
+            1.0
+        }
+    });
+    Ok((normalised, r_max))
+}
+
+/// The largest known (finite, > 0) value of a range map; an error when there is none.
+pub fn largest_range(range: &ScalarMap) -> Result<f32> {
     let r_max = range
         .as_slice()
         .iter()
@@ -154,14 +169,7 @@ pub fn normalise_range(range: &ScalarMap) -> Result<(ScalarMap, f32)> {
             "at least one known range value",
         ));
     }
-    let normalised = range.map(|&v| {
-        if v.is_finite() && v > 0.0 {
-            v / r_max
-        } else {
-            1.0
-        }
-    });
-    Ok((normalised, r_max))
+    Ok(r_max)
 }
 
 fn check_airlight(b: [f32; 3]) -> Result<()> {

@@ -54,6 +54,7 @@ pub mod haze;
 pub mod layered;
 pub mod lookup;
 pub mod noise;
+pub mod physical;
 pub mod uniform;
 
 pub use aerial::AerialPerspective;
@@ -61,6 +62,7 @@ pub use distance::{DistanceFog, FogNoise};
 pub use haze::Haze;
 pub use layered::{HeightProfile, LayeredFog};
 pub use lookup::{Lookup, Wrap};
+pub use physical::PhysicalFog;
 pub use uniform::UniformBlur;
 
 use crate::camera::Camera;

@@ -12,7 +12,7 @@ use super::super::scene::{self as scene_cmd, SceneMedium};
 use brume::atmosphere::AttenuationTable;
 use brume::camera::Camera;
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
-use brume::medium::haze::{self, Haze};
+use brume::medium::haze::Haze;
 use brume::medium::{HeightProfile, Medium, UniformBlur};
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::scene::SceneRenderer;
@@ -192,15 +192,13 @@ impl Photo {
             let look = aerial_look(&job);
             (job.image, job.range, look)
         } else {
-            let (normalised, _) = haze::normalise_range(range)?;
-            let haze = render_cmd::haze_from_args(args)?;
-            let look = render_cmd::look_from_args(args, &haze, prep.airlight);
+            let (medium_range, _, look) = render_cmd::haze_inputs(args, &scene, &prep)?;
             let look = PhotoLook::Haze {
                 haze: look.haze,
                 uniform: look.uniform,
                 blur: look.blur,
             };
-            (scene.image, normalised, look)
+            (scene.image, medium_range, look)
         };
         let (colour, depth) = upload(gl, &image, &depth)?;
         Ok(Photo {

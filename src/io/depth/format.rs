@@ -85,7 +85,7 @@ impl FormatRule {
 
 impl DepthFormat {
     /// Every format, in the order `--help` and errors list them.
-    pub const ALL: [DepthFormat; 10] = [
+    pub const ALL: [DepthFormat; 11] = [
         DepthFormat::Auto,
         DepthFormat::Middlebury2014,
         DepthFormat::Middlebury2006,
@@ -96,6 +96,7 @@ impl DepthFormat {
         DepthFormat::Float,
         DepthFormat::AndroidDepth16,
         DepthFormat::Arcore,
+        DepthFormat::Cityscapes,
     ];
 
     /// What brume knows of this format (the module docs).
@@ -161,6 +162,14 @@ impl DepthFormat {
                 Depth,
                 Kinds::DepthOrRange,
                 Some(1.0 / 1000.0),
+            ),
+            // Disparity (p − 1)/256 px with a camera file: the `cityscapes` module.
+            DepthFormat::Cityscapes => row(
+                "cityscapes",
+                Layout::Grey16,
+                Disparity,
+                Kinds::Disparity,
+                None,
             ),
         }
     }

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::cityscapes::{self, CityscapesCamera};
 use super::middlebury::{self, Calib};
 use super::raw::Raw;
 use super::{android, png16};
@@ -12,18 +13,30 @@ use crate::camera::Camera;
 use crate::io::camera::{to_range, Intrinsics, Stereo};
 use crate::{Error, Result};
 
+/// The camera files that came with a depth map, parsed, with their paths.
+#[derive(Default)]
+pub(super) struct SideFiles {
+    /// A Middlebury 2014 `calib.txt`.
+    pub calib: Option<(Calib, PathBuf)>,
+    /// A Cityscapes `{name}_camera.json`.
+    pub camera: Option<(CityscapesCamera, PathBuf)>,
+}
+
 fn resolve_format(
     requested: DepthFormat,
     raw: &Raw,
-    has_calib: bool,
+    side: &SideFiles,
     opts: &DepthOptions,
     path: &Path,
 ) -> Result<DepthFormat> {
     use DepthFormat as F;
+    let (has_calib, has_camera) = (side.calib.is_some(), side.camera.is_some());
     let format = match (requested, raw) {
         (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
         (F::Auto, Raw::Float { .. }) => F::Float,
         (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
+        // A camera file was given, or found for a `*_disparity.png`.
+        (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
         (F::Auto, Raw::Grey16(_))
             if opts.scale.is_some() || opts.kind == Some(DepthKind::ZBuffer) =>
         {
@@ -33,7 +46,8 @@ fn resolve_format(
             return Err(Error::format(
                 path,
                 "16-bit PNG depth has no standard scale: pass --depth-format kitti|nyu|tum, \
-                 or --depth-scale with the metres per unit",
+                 or --depth-scale with the metres per unit (a Cityscapes disparity: \
+                 --depth-format cityscapes with --camera)",
             ))
         }
         (f, _) => f,
@@ -53,6 +67,13 @@ fn resolve_format(
         return Err(Error::format(
             path,
             "Middlebury 2014 disparity needs its calib.txt: none next to the file; pass --calib",
+        ));
+    }
+    if format == F::Cityscapes && !has_camera {
+        return Err(Error::format(
+            path,
+            "a Cityscapes disparity needs its camera file ({name}_camera.json): pass --camera \
+             (in the library, load_cityscapes_from_bytes)",
         ));
     }
     Ok(format)
@@ -100,12 +121,19 @@ pub(super) fn interpret(
     raw: Raw,
     path: &Path,
     opts: &DepthOptions,
-    calib: Option<(Calib, PathBuf)>,
+    side: SideFiles,
     mut notes: Vec<String>,
     pixel_scale: f64,
 ) -> Result<LoadedDepth> {
-    let format = resolve_format(opts.format, &raw, calib.is_some(), opts, path)?;
+    let format = resolve_format(opts.format, &raw, &side, opts, path)?;
     let kind = resolve_kind(format, opts.kind)?;
+    let SideFiles { calib, camera } = side;
+    if let (Some((_, camera_path)), false) = (&camera, format == DepthFormat::Cityscapes) {
+        notes.push(format!(
+            "camera file {} ignored: the file was read as {format}",
+            camera_path.display()
+        ));
+    }
     let min_confidence = android::min_confidence(format, opts, &mut notes)?;
     let (width, height) = raw.size();
     let metres = "m".to_string();
@@ -115,6 +143,11 @@ pub(super) fn interpret(
             let (range, k) =
                 middlebury::range_2014(&map, path, &calib, &calib_path, opts, &mut notes)?;
             (range, metres, Some(k))
+        }
+        (DepthFormat::Cityscapes, Raw::Grey16(disp)) => {
+            let (camera, _) = camera.expect("checked by resolve_format");
+            let range = cityscapes::range(&disp, &camera, opts, &mut notes);
+            (range, metres, Some(camera.intrinsics))
         }
         (DepthFormat::Middlebury2006, Raw::Grey8(disp)) => {
             let (range, k) = middlebury::range_2006(&disp, opts, pixel_scale, &mut notes)?;
@@ -176,15 +209,26 @@ pub(super) fn interpret(
             path: path.to_path_buf(),
         });
     }
+    let metric = is_metric(format, &units, opts);
     Ok(LoadedDepth {
         range,
         format,
         kind,
+        metric,
         units,
         intrinsics,
         notes,
         unknown_pixels,
     })
+}
+
+/// Whether a range in `units` read as `format` is in trustworthy metres
+/// ([`LoadedDepth::metric`]): every conversion that yields metres does, except Middlebury
+/// 2006 with any of its approximate default geometry.
+fn is_metric(format: DepthFormat, units: &str, opts: &DepthOptions) -> bool {
+    let guessed_geometry = format == DepthFormat::Middlebury2006
+        && (opts.focal.is_none() || opts.baseline.is_none() || opts.disparity_offset.is_none());
+    units == "m" && !guessed_geometry
 }
 
 /// A z-buffer's conversion: window depth → eye depth by the near and far planes (one

@@ -11,7 +11,9 @@
 //! The front end is here: the options, the result, and loading a file. Each file format
 //! is decoded by its codec in `io::codec` (`raw` dispatches by extension), each dataset's
 //! convention is in a module of its own (`middlebury`, `png16`, `android`), the geometry
-//! is in `io::camera`, and `interpret` settles which convention a file follows. Every fact
+//! is in `io::camera`, and `interpret` settles which convention a file follows. Two
+//! formats come with a side file giving the camera: Middlebury 2014's `calib.txt` and
+//! Cityscapes' `{name}_camera.json` (`cityscapes`). Every fact
 //! that depends on the format (name, file layout, kinds, a fixed scale) is one row of the
 //! table in `format.rs`: a new dataset format adds its [`DepthFormat`] variant and its row
 //! (ARCore is only a row), and only a conversion no row can describe also adds a module
@@ -25,13 +27,14 @@ use crate::raster::ScalarMap;
 use crate::{Error, Result};
 
 mod android;
+mod cityscapes;
 mod format;
 mod interpret;
 mod middlebury;
 mod png16;
 mod raw;
 
-use interpret::interpret;
+use interpret::{interpret, SideFiles};
 use raw::decode_raw;
 
 // The file readers live with their writers in `io::codec`; they stay reachable here, where
@@ -44,6 +47,10 @@ pub use crate::io::codec::tiff::read_tiff_scalar;
 pub use crate::io::camera::Intrinsics;
 
 pub use android::DEPTH16_DEFAULT_MIN_CONFIDENCE;
+pub use cityscapes::{
+    camera_candidates, disparity_px as cityscapes_disparity_px, parse_camera, parse_camera_str,
+    CityscapesCamera,
+};
 pub use middlebury::{
     parse_calib, parse_calib_str, Calib, MIDDLEBURY2006_BASELINE_MM,
     MIDDLEBURY2006_DISPARITY_OFFSET_PX, MIDDLEBURY2006_FOCAL_PX,
@@ -122,6 +129,11 @@ pub enum DepthFormat {
     /// ARCore Depth API (`acquireDepthImage16Bits`) saved as a 16-bit grey PNG: all 16
     /// bits are millimetres along the camera's principal axis (z-depth), `0` unknown.
     Arcore,
+    /// Cityscapes `{name}_disparity.png`: 16-bit grey, p > 0 is the disparity
+    /// (p − 1)/256 px, `0` invalid, with the baseline and intrinsics of its
+    /// `{name}_camera.json` ([`DepthOptions::camera`], or found beside the file or in the
+    /// dataset's `camera/` folder): Z = baseline·fx/d metres, then range.
+    Cityscapes,
 }
 
 impl FromStr for DepthFormat {
@@ -151,6 +163,9 @@ pub struct DepthOptions {
     pub kind: Option<DepthKind>,
     /// Middlebury 2014 `calib.txt`; `None` looks for `calib.txt` next to a `.pfm`.
     pub calib: Option<PathBuf>,
+    /// Cityscapes `{name}_camera.json`; `None` looks for it beside a `*_disparity.png` and
+    /// in the dataset's layout (see [`camera_candidates`]).
+    pub camera: Option<PathBuf>,
     /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity).
     pub scale: Option<f64>,
     /// Focal length in pixels.
@@ -178,6 +193,7 @@ impl Default for DepthOptions {
             format: DepthFormat::Auto,
             kind: None,
             calib: None,
+            camera: None,
             scale: None,
             focal: None,
             baseline: None,
@@ -201,6 +217,14 @@ pub struct LoadedDepth {
     pub kind: DepthKind,
     /// Units of `range`: `m`, or `file units` for float maps of depth or range.
     pub units: String,
+    /// Whether `range` is in metres that can be trusted: the scale comes from a
+    /// calibration (Middlebury 2014 `calib.txt`, a Cityscapes camera file), from a
+    /// dataset's fixed scale (KITTI, NYU, TUM, Android DEPTH16, ARCore), or from geometry
+    /// the caller gave in full (`--depth-scale`; `--focal` and `--baseline` for a
+    /// disparity). False for maps in file units (float maps, z-buffers) and for
+    /// Middlebury 2006 read with any of its approximate default focal, baseline or offset
+    /// (the built-in demo among them). Physical fog (β in m⁻¹) needs it.
+    pub metric: bool,
     /// Intrinsics used to turn depth into range, if any.
     pub intrinsics: Option<Intrinsics>,
     /// Remarks for the user: assumptions made, options ignored.
@@ -231,38 +255,85 @@ fn finite_option(value: f64, name: &str) -> Result<f64> {
 /// pixels. See [`DepthFormat`] for the layouts and [`DepthOptions`] for the knobs.
 pub fn load_range(path: &Path, opts: &DepthOptions) -> Result<LoadedDepth> {
     let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let calib = match middlebury::calib_file(path, &extension_of(path), opts) {
-        Some(calib_path) => {
-            let text =
-                std::fs::read_to_string(&calib_path).map_err(|e| Error::io(&calib_path, e))?;
-            Some((calib_path, text))
+    let ext = extension_of(path);
+    let calib = read_side_file(middlebury::calib_file(path, &ext, opts))?;
+    let camera = read_side_file(cityscapes::camera_file(path, &ext, opts)?)?;
+    load_with_side_files(&bytes, path, opts, side(&calib), side(&camera))
+}
+
+/// A side file read by [`read_side_file`], borrowed as the loaders take it.
+fn side(file: &Option<(PathBuf, String)>) -> Option<(&Path, &str)> {
+    file.as_ref().map(|(p, t)| (p.as_path(), t.as_str()))
+}
+
+/// The path and text of a side file (a calib.txt, a camera file) when there is one.
+fn read_side_file(path: Option<PathBuf>) -> Result<Option<(PathBuf, String)>> {
+    match path {
+        Some(p) => {
+            let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
+            Ok(Some((p, text)))
         }
-        None => None,
-    };
-    load_range_from_bytes(
-        &bytes,
-        path,
-        opts,
-        calib.as_ref().map(|(p, t)| (p.as_path(), t.as_str())),
-    )
+        None => Ok(None),
+    }
 }
 
 /// [`load_range`] on bytes already in memory, which `load_range` itself calls once it has
 /// read the files. `name` stands for the file: its extension picks the codec and errors
 /// name it. Nothing is read from disk: a Middlebury 2014 `calib.txt` is passed as `calib`
 /// (its path, for messages, and its text), where `load_range` would have found it through
-/// [`DepthOptions::calib`] or beside the file.
+/// [`DepthOptions::calib`] or beside the file. (A Cityscapes disparity's camera file goes
+/// to [`load_cityscapes_from_bytes`].)
 pub fn load_range_from_bytes(
     bytes: &[u8],
     name: &Path,
     opts: &DepthOptions,
     calib: Option<(&Path, &str)>,
 ) -> Result<LoadedDepth> {
+    load_with_side_files(bytes, name, opts, calib, None)
+}
+
+/// Loads a Cityscapes `{name}_disparity.png` as range in metres ([`LoadedDepth::metric`]),
+/// with its camera file: `camera`, or else the first of [`camera_candidates`] that exists
+/// (an error names them all when none does).
+pub fn load_cityscapes(disparity: &Path, camera: Option<&Path>) -> Result<LoadedDepth> {
+    let opts = DepthOptions {
+        format: DepthFormat::Cityscapes,
+        camera: camera.map(Path::to_path_buf),
+        ..DepthOptions::default()
+    };
+    load_range(disparity, &opts)
+}
+
+/// [`load_cityscapes`] on bytes already in memory: the disparity PNG's bytes (`name`
+/// stands for the file in messages) and the camera file's path and text.
+pub fn load_cityscapes_from_bytes(
+    disparity: &[u8],
+    name: &Path,
+    camera: (&Path, &str),
+) -> Result<LoadedDepth> {
+    let opts = DepthOptions {
+        format: DepthFormat::Cityscapes,
+        camera: Some(camera.0.to_path_buf()),
+        ..DepthOptions::default()
+    };
+    load_with_side_files(disparity, name, &opts, None, Some(camera))
+}
+
+/// The loaders' common path: the side files are parsed if the format uses them (or noted
+/// as ignored), then the file is decoded and interpreted.
+fn load_with_side_files(
+    bytes: &[u8],
+    name: &Path,
+    opts: &DepthOptions,
+    calib: Option<(&Path, &str)>,
+    camera: Option<(&Path, &str)>,
+) -> Result<LoadedDepth> {
     let mut notes = Vec::new();
     let ext = extension_of(name);
     let calib = middlebury::take_calib(&ext, opts, calib, &mut notes)?;
+    let camera = cityscapes::take_camera(name, &ext, opts, camera, &mut notes)?;
     let raw = decode_raw(bytes, name, &ext)?;
-    interpret(raw, name, opts, calib, notes, 1.0)
+    interpret(raw, name, opts, SideFiles { calib, camera }, notes, 1.0)
 }
 
 /// Decodes embedded depth bytes as if read from a file with extension `ext`. `pixel_scale`
@@ -276,7 +347,14 @@ pub(crate) fn range_from_bytes(
     pixel_scale: f64,
 ) -> Result<LoadedDepth> {
     let raw = decode_raw(bytes, name, ext)?;
-    interpret(raw, name, opts, None, Vec::new(), pixel_scale)
+    interpret(
+        raw,
+        name,
+        opts,
+        SideFiles::default(),
+        Vec::new(),
+        pixel_scale,
+    )
 }
 
 fn extension_of(path: &Path) -> String {

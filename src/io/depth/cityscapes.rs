@@ -1,0 +1,266 @@
+//! Cityscapes: `{name}_disparity.png` with its `{name}_camera.json`.
+//!
+//! What the dataset's README says: the disparity maps are 16-bit grey PNGs in which a
+//! pixel value p > 0 stands for the disparity d = (p − 1)/256 px and p = 0 is invalid; the
+//! camera file gives the stereo baseline in metres (`extrinsic.baseline`) and the left
+//! camera's intrinsics in pixels (`intrinsic.fx`, `fy`, `u0`, `v0`), so that the depth is
+//! Z = baseline·fx/d metres. brume then stretches depth to range along each pixel's ray
+//! with those intrinsics ([`crate::io::camera`]). A disparity d ≤ 0 (p = 1) gives no
+//! depth and is unknown, like p = 0.
+//!
+//! The camera file is found, when not given, beside the disparity (`{name}_camera.json`)
+//! or in the dataset's own layout, where the `disparity` folder of
+//! `disparity/{split}/{city}/{name}_disparity.png` becomes `camera`.
+
+use std::path::{Component, Path, PathBuf};
+
+use serde_json::Value;
+
+use super::{DepthFormat, DepthOptions};
+use crate::io::camera::{to_range, Intrinsics};
+use crate::raster::{Grid, ScalarMap};
+use crate::{Error, Result};
+
+/// The suffix of a Cityscapes disparity file's name.
+const DISPARITY_SUFFIX: &str = "_disparity";
+/// The suffix of a Cityscapes camera file's name.
+const CAMERA_SUFFIX: &str = "_camera.json";
+/// The shape of a camera file, for messages.
+const EXPECTED: &str = "a Cityscapes camera file {\"extrinsic\": {\"baseline\": METRES, …}, \
+                        \"intrinsic\": {\"fx\": PX, \"fy\": PX, \"u0\": PX, \"v0\": PX}}";
+
+/// What brume reads from a Cityscapes `{name}_camera.json`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CityscapesCamera {
+    /// Stereo baseline in metres (`extrinsic.baseline`), > 0.
+    pub baseline_m: f64,
+    /// The left camera's intrinsics in pixels (`intrinsic.fx`, `fy`, `u0`, `v0`).
+    pub intrinsics: Intrinsics,
+}
+
+impl CityscapesCamera {
+    /// Depth in metres of disparity `d` px: baseline·fx/d, `None` for d ≤ 0.
+    pub fn depth_m(&self, d: f64) -> Option<f64> {
+        (d > 0.0).then(|| self.baseline_m * self.intrinsics.fx / d)
+    }
+}
+
+/// The disparity in pixels of a stored value: (p − 1)/256; `None` for p = 0 (invalid) and
+/// p = 1 (d = 0, no depth).
+pub fn disparity_px(p: u16) -> Option<f64> {
+    (p > 1).then(|| (f64::from(p) - 1.0) / 256.0)
+}
+
+/// Reads and checks a Cityscapes camera file.
+pub fn parse_camera(path: &Path) -> Result<CityscapesCamera> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_camera_str(&text, path)
+}
+
+/// Parses the text of a Cityscapes camera file; `path` names it in errors. Keys brume does
+/// not use (pitch, roll, the position …) are ignored.
+pub fn parse_camera_str(text: &str, path: &Path) -> Result<CityscapesCamera> {
+    let json: Value = serde_json::from_str(text)
+        .map_err(|e| Error::format(path, format!("not JSON ({e}): expected {EXPECTED}")))?;
+    let baseline_m = positive(&json, path, "extrinsic", "baseline", "a baseline in metres")?;
+    let fx = positive(&json, path, "intrinsic", "fx", "a focal length in pixels")?;
+    let fy = positive(&json, path, "intrinsic", "fy", "a focal length in pixels")?;
+    let cx = number(&json, path, "intrinsic", "u0")?;
+    let cy = number(&json, path, "intrinsic", "v0")?;
+    Ok(CityscapesCamera {
+        baseline_m,
+        intrinsics: Intrinsics { fx, fy, cx, cy },
+    })
+}
+
+/// `json[group][key]` as a finite number; the error names the key, the value found and
+/// the file's expected shape.
+fn number(json: &Value, path: &Path, group: &str, key: &str) -> Result<f64> {
+    let Some(value) = json.get(group).and_then(|g| g.get(key)) else {
+        return Err(Error::format(
+            path,
+            format!("missing {group}.{key}: expected {EXPECTED}"),
+        ));
+    };
+    value
+        .as_f64()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| Error::format(path, format!("{group}.{key} = {value}: expected a number")))
+}
+
+/// [`number`], which must also be > 0.
+fn positive(json: &Value, path: &Path, group: &str, key: &str, what: &str) -> Result<f64> {
+    let v = number(json, path, group, key)?;
+    if v > 0.0 {
+        Ok(v)
+    } else {
+        Err(Error::format(
+            path,
+            format!("{group}.{key} = {v}: expected {what}, > 0"),
+        ))
+    }
+}
+
+/// Where the camera file of disparity `path` may be, in the order they are tried: beside
+/// it (`X_camera.json` for `X_disparity.png`), then in the Cityscapes layout (the last
+/// folder called `disparity` on its path replaced by `camera`), when there is one.
+pub fn camera_candidates(path: &Path) -> Vec<PathBuf> {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = format!(
+        "{}{CAMERA_SUFFIX}",
+        stem.strip_suffix(DISPARITY_SUFFIX).unwrap_or(&stem)
+    );
+    let mut candidates = vec![path.with_file_name(&name)];
+    if let Some(folder) = path.parent().and_then(camera_folder) {
+        candidates.push(folder.join(&name));
+    }
+    candidates
+}
+
+/// `folder` with its last component called `disparity` replaced by `camera`, if any.
+fn camera_folder(folder: &Path) -> Option<PathBuf> {
+    let parts: Vec<Component> = folder.components().collect();
+    let last = parts.iter().rposition(|c| c.as_os_str() == "disparity")?;
+    let mut out = PathBuf::new();
+    for (i, part) in parts.iter().enumerate() {
+        if i == last {
+            out.push("camera");
+        } else {
+            out.push(part.as_os_str());
+        }
+    }
+    Some(out)
+}
+
+/// Whether a file read with `opts` may be a Cityscapes disparity whose camera file is
+/// looked for: `--depth-format cityscapes`, or `auto` for a `*_disparity.png` (a plain
+/// 16-bit PNG beside some JSON file is not taken for one).
+fn wants_camera(path: &Path, ext: &str, opts: &DepthOptions) -> bool {
+    let named = path
+        .file_stem()
+        .is_some_and(|s| s.to_string_lossy().ends_with(DISPARITY_SUFFIX));
+    ext == "png"
+        && match opts.format {
+            DepthFormat::Cityscapes => true,
+            DepthFormat::Auto => named || opts.camera.is_some(),
+            _ => false,
+        }
+}
+
+/// The camera file to read for `path`: [`DepthOptions::camera`], or else the first of
+/// [`camera_candidates`] that exists. `Ok(None)` when this format uses none;
+/// `--depth-format cityscapes` with none found is an error naming every path tried.
+pub(super) fn camera_file(path: &Path, ext: &str, opts: &DepthOptions) -> Result<Option<PathBuf>> {
+    if !wants_camera(path, ext, opts) {
+        return Ok(None);
+    }
+    if let Some(given) = &opts.camera {
+        return Ok(Some(given.clone()));
+    }
+    let candidates = camera_candidates(path);
+    if let Some(found) = candidates.iter().find(|c| c.is_file()) {
+        return Ok(Some(found.clone()));
+    }
+    if opts.format != DepthFormat::Cityscapes {
+        return Ok(None);
+    }
+    let tried: Vec<String> = candidates.iter().map(|c| c.display().to_string()).collect();
+    Err(Error::format(
+        path,
+        format!(
+            "a Cityscapes disparity needs its camera file: none at {}; pass it with --camera",
+            tried.join(" or ")
+        ),
+    ))
+}
+
+/// Parses the camera file found by [`camera_file`] (its path and text) if this format uses
+/// one, noting where it came from when it was found rather than given, or that `--camera`
+/// was ignored.
+pub(super) fn take_camera(
+    path: &Path,
+    ext: &str,
+    opts: &DepthOptions,
+    camera: Option<(&Path, &str)>,
+    notes: &mut Vec<String>,
+) -> Result<Option<(CityscapesCamera, PathBuf)>> {
+    if !wants_camera(path, ext, opts) {
+        if let Some(given) = opts.camera.as_deref().or(camera.map(|c| c.0)) {
+            notes.push(format!(
+                "--camera {} ignored: only Cityscapes disparity PNGs use it",
+                given.display()
+            ));
+        }
+        return Ok(None);
+    }
+    let Some((camera_path, text)) = camera else {
+        return Ok(None);
+    };
+    let parsed = parse_camera_str(text, camera_path)?;
+    if opts.camera.as_deref() != Some(camera_path) {
+        notes.push(format!("camera read from {}", camera_path.display()));
+    }
+    Ok(Some((parsed, camera_path.to_path_buf())))
+}
+
+/// Range in metres from Cityscapes disparity samples and their camera (module docs).
+pub(super) fn range(
+    raw: &Grid<u16>,
+    camera: &CityscapesCamera,
+    opts: &DepthOptions,
+    notes: &mut Vec<String>,
+) -> ScalarMap {
+    if opts.focal.is_some()
+        || opts.baseline.is_some()
+        || opts.disparity_offset.is_some()
+        || opts.scale.is_some()
+        || opts.fov.is_some()
+    {
+        notes.push(
+            "--focal, --baseline, --disparity-offset, --depth-scale and --fov ignored: the \
+             Cityscapes camera file gives the geometry"
+                .to_string(),
+        );
+    }
+    let flat = raw.as_slice().iter().filter(|&&p| p == 1).count();
+    if flat > 0 {
+        notes.push(format!(
+            "{flat} disparities of 0 (stored value 1) give no depth: taken as unknown"
+        ));
+    }
+    let depth = |p: u16| disparity_px(p).and_then(|d| camera.depth_m(d));
+    to_range(raw, depth, Some(&camera.intrinsics))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stored_values_are_disparity_plus_one_times_256() {
+        assert_eq!(disparity_px(0), None);
+        assert_eq!(disparity_px(1), None);
+        assert_eq!(disparity_px(257), Some(1.0));
+        assert_eq!(disparity_px(65535), Some(65534.0 / 256.0));
+    }
+
+    #[test]
+    fn candidates_are_beside_then_in_the_dataset_layout() {
+        let p = Path::new("data/disparity/train/aachen/aachen_000000_000019_disparity.png");
+        assert_eq!(
+            camera_candidates(p),
+            [
+                PathBuf::from("data/disparity/train/aachen/aachen_000000_000019_camera.json"),
+                PathBuf::from("data/camera/train/aachen/aachen_000000_000019_camera.json"),
+            ]
+        );
+        // No `disparity` folder: only beside; a name without the suffix keeps its stem.
+        assert_eq!(
+            camera_candidates(Path::new("x/frame.png")),
+            [PathBuf::from("x/frame_camera.json")]
+        );
+    }
+}

@@ -1,0 +1,483 @@
+//! `brume render --beta/--visibility/--albedo`: fog in physical units on range in metres
+//! (here from Cityscapes disparities and camera files the tests write), end to end:
+//! τ = exp(−β·R) at pixels of known range, --beta and --visibility render the same bytes,
+//! a far outlier no longer changes the fog of the rest, the JSON report, and bad values
+//! refused with a clear message and nothing written.
+
+use brume::io::output::{write_rgba, write_scalar};
+use brume::raster::{Grid, RgbImage};
+use serde_json::Value;
+use std::path::Path;
+use std::process::{Command, Output};
+
+mod common;
+
+/// ln 20: β·V at the visibility.
+const LN_20: f64 = 2.995_732_273_553_991;
+
+fn brume(dir: &Path, args: &[&str]) -> Output {
+    let _gl = common::gl_lock();
+    Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run brume")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn json(o: &Output) -> Value {
+    assert!(o.status.success(), "{}", stderr(o));
+    serde_json::from_slice(&o.stdout).expect("one JSON object on stdout")
+}
+
+fn number(v: &Value, key: &str) -> f64 {
+    v[key]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{key} is not a number in {v}"))
+}
+
+/// A Cityscapes camera: baseline in metres, square pixels of focal `f`, principal point.
+struct Camera {
+    baseline: f64,
+    f: f64,
+    u0: f64,
+    v0: f64,
+}
+
+impl Camera {
+    /// Range in metres of stored disparity value `p` at pixel (x, y), by hand:
+    /// d = (p − 1)/256, Z = baseline·f/d, R = Z·sqrt(1 + ((x − u0)/f)² + ((y − v0)/f)²).
+    fn range(&self, p: u16, x: usize, y: usize) -> f64 {
+        let d = (f64::from(p) - 1.0) / 256.0;
+        let z = self.baseline * self.f / d;
+        let (u, v) = ((x as f64 - self.u0) / self.f, (y as f64 - self.v0) / self.f);
+        z * (1.0 + u * u + v * v).sqrt()
+    }
+
+    fn json(&self) -> String {
+        format!(
+            r#"{{"extrinsic": {{"baseline": {}}}, "intrinsic": {{"fx": {f}, "fy": {f}, "u0": {}, "v0": {}}}}}"#,
+            self.baseline,
+            self.u0,
+            self.v0,
+            f = self.f
+        )
+    }
+}
+
+/// Writes `scene_disparity.png` (16-bit, `p(x, y)`) and `scene_camera.json` beside it, for
+/// `brume` to find; returns the stored values, row 0 first.
+fn cityscapes(
+    dir: &Path,
+    w: usize,
+    h: usize,
+    camera: &Camera,
+    p: impl Fn(usize, usize) -> u16,
+) -> Grid<u16> {
+    let values = Grid::from_fn(w, h, p);
+    let png = image::ImageBuffer::<image::Luma<u16>, _>::from_raw(
+        w as u32,
+        h as u32,
+        values.as_slice().to_vec(),
+    )
+    .unwrap();
+    png.save(dir.join("scene_disparity.png")).unwrap();
+    std::fs::write(dir.join("scene_camera.json"), camera.json()).unwrap();
+    values
+}
+
+/// A colour image with structure for the blur to act on.
+fn colour(dir: &Path, name: &str, w: usize, h: usize) {
+    let img = Grid::from_fn(w, h, |x, y| {
+        let check = ((x / 3 + y / 3) % 2) as f32;
+        [
+            0.2 + 0.6 * check,
+            x as f32 / w as f32,
+            y as f32 / h as f32,
+            1.0,
+        ]
+    });
+    write_rgba(&dir.join(name), &img).unwrap();
+}
+
+fn render(dir: &Path, image: &str, extra: &[&str]) -> Output {
+    let mut args = vec!["render", "--image", image, "--depth", "scene_disparity.png"];
+    args.extend_from_slice(extra);
+    brume(dir, &args)
+}
+
+fn load(path: &Path) -> RgbImage {
+    brume::io::image::load_linear_rgb(path).unwrap()
+}
+
+/// On a white image with a black airlight and no blur the output is τ itself: every
+/// pixel must be exp(−β·R) with R worked out by hand from the disparity and the camera.
+/// A normalised κ (τ = exp(−κ·R/Rmax)) or a range left along the optical axis fails.
+#[test]
+fn tau_is_exp_minus_beta_r_at_every_pixel_of_known_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 8);
+    // Wide rays: the stretch to range reaches 1.5 % at the corners.
+    let camera = Camera {
+        baseline: 0.5,
+        f: 40.0,
+        u0: 7.5,
+        v0: 3.5,
+    };
+    // d = (26 + 13·i)/256 px for pixel i: Z from 197 m down to 3.1 m.
+    let p = cityscapes(dir.path(), w, h, &camera, |x, y| {
+        1 + 26 + 13 * (x + w * y) as u16
+    });
+    let white = Grid::filled(w, h, [1.0f32, 1.0, 1.0, 1.0]);
+    write_rgba(&dir.path().join("white.pfm"), &white).unwrap();
+    let beta = 0.02;
+    let v = json(&render(
+        dir.path(),
+        "white.pfm",
+        &[
+            "--beta",
+            "0.02",
+            "--airlight",
+            "0,0,0",
+            "--lambda",
+            "0",
+            "--out",
+            "tau.pfm",
+            "--json",
+        ],
+    ));
+    let out = load(&dir.path().join("tau.pfm"));
+    let (mut r_min, mut r_max) = (f64::INFINITY, 0f64);
+    for y in 0..h {
+        for x in 0..w {
+            let r = camera.range(*p.get(x, y), x, y);
+            (r_min, r_max) = (r_min.min(r), r_max.max(r));
+            let want = (-beta * r).exp();
+            for got in out.get(x, y) {
+                // f32 range and exp on the GPU: 2e-6 absolute on τ ≤ 1.
+                assert!(
+                    (f64::from(*got) - want).abs() < 2e-6,
+                    "({x}, {y}): τ = {got}, expected exp(−{beta}·{r:.3}) = {want}"
+                );
+            }
+        }
+    }
+    assert!(r_max > 190.0 && r_min < 3.2, "{r_min}..{r_max}");
+    // The report: the fog, its visibility, and τ's range over the pixels, 1e-6 (f32).
+    assert_eq!(number(&v, "beta"), beta, "{v}");
+    assert!(
+        (number(&v, "visibility_m") - LN_20 / beta).abs() < 1e-9,
+        "{v}"
+    );
+    assert_eq!(number(&v, "albedo"), 1.0, "{v}");
+    assert!(
+        (number(&v, "range_divisor") - LN_20 / beta).abs() < 1e-9,
+        "{v}"
+    );
+    let t_min = number(&v, "transmittance_min");
+    let t_max = number(&v, "transmittance_max");
+    assert!((t_min - (-beta * r_max).exp()).abs() < 1e-6, "{v}");
+    assert!((t_max - (-beta * r_min).exp()).abs() < 1e-6, "{v}");
+    assert_eq!(v["depth_format"], "cityscapes", "{v}");
+    // λ = 0: nothing blurs beyond σ0.
+    assert_eq!(number(&v, "sigma_max"), number(&v, "sigma0"), "{v}");
+}
+
+/// --json: σmax follows the law σ0 + λ·√(a·ln 20) whatever β; --albedo moves the blur, not
+/// τ; without physical fog the new fields are null.
+#[test]
+fn json_reports_the_fog_and_the_blur_law() {
+    let dir = tempfile::tempdir().unwrap();
+    let camera = Camera {
+        baseline: 0.209313,
+        f: 2262.52,
+        u0: 5.5,
+        v0: 3.5,
+    };
+    cityscapes(dir.path(), 12, 8, &camera, |x, _| 1 + 256 * (10 + x as u16));
+    colour(dir.path(), "im.png", 12, 8);
+    let run = |extra: &[&str]| {
+        let mut args = vec!["--out", "fog.png", "--json", "--lambda", "6"];
+        args.extend_from_slice(extra);
+        json(&render(dir.path(), "im.png", &args))
+    };
+    for beta in ["0.005", "0.01", "0.02"] {
+        let v = run(&["--beta", beta, "--albedo", "0.5"]);
+        assert_eq!(number(&v, "albedo"), 0.5, "{v}");
+        let want = 1.0 + 6.0 * (0.5 * LN_20).sqrt();
+        assert!((number(&v, "sigma_max") - want).abs() < 1e-12, "{v}");
+        // τ is exp(−β·R) whatever the albedo: over 10..21 px of disparity, 22.6..47.4 m.
+        let b: f64 = beta.parse().unwrap();
+        let t_max = number(&v, "transmittance_max");
+        let nearest = (0..8)
+            .map(|y| camera.range(1 + 256 * 21, 11, y))
+            .fold(f64::INFINITY, f64::min);
+        assert!((t_max - (-b * nearest).exp()).abs() < 1e-6, "{v}");
+    }
+    let v = run(&["--visibility", "300"]);
+    assert!((number(&v, "beta") - LN_20 / 300.0).abs() < 1e-15, "{v}");
+    assert!((number(&v, "visibility_m") - 300.0).abs() < 1e-9, "{v}");
+    let v = run(&[]);
+    for key in ["beta", "visibility_m", "albedo"] {
+        assert!(v[key].is_null(), "{key} in {v}");
+    }
+    assert!(number(&v, "transmittance_min") < number(&v, "transmittance_max"));
+}
+
+/// The same fog named two ways renders the same bytes.
+#[test]
+fn beta_and_visibility_render_the_same_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let camera = Camera {
+        baseline: 0.209313,
+        f: 2262.52,
+        u0: 15.5,
+        v0: 11.5,
+    };
+    cityscapes(dir.path(), 32, 24, &camera, |x, y| {
+        1 + 256 * (4 + ((x + 2 * y) % 16) as u16)
+    });
+    colour(dir.path(), "im.png", 32, 24);
+    let visibility = format!("{}", LN_20 / 0.01);
+    for (out, flags) in [
+        ("beta.png", ["--beta", "0.01"]),
+        ("visibility.png", ["--visibility", visibility.as_str()]),
+    ] {
+        let o = render(
+            dir.path(),
+            "im.png",
+            &[&flags[..], &["--out", out]].concat(),
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let a = std::fs::read(dir.path().join("beta.png")).unwrap();
+    let b = std::fs::read(dir.path().join("visibility.png")).unwrap();
+    assert!(a == b, "--beta 0.01 and --visibility {visibility} differ");
+    // And it is fog: a denser one renders something else.
+    let o = render(
+        dir.path(),
+        "im.png",
+        &["--beta", "0.04", "--out", "dense.png"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(std::fs::read(dir.path().join("dense.png")).unwrap() != a);
+}
+
+/// The point of physical units: one bogus far pixel (Cityscapes' disparity 1/256 px,
+/// 121 km) leaves the fog of every other pixel as it was under --beta, where with
+/// normalised κ it thins the fog of the whole frame.
+#[test]
+fn a_far_outlier_does_not_change_the_fog_of_the_rest() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40, 30);
+    let camera = Camera {
+        baseline: 0.209313,
+        f: 2262.52,
+        u0: 19.5,
+        v0: 14.5,
+    };
+    let outlier = (20, 15);
+    // d from 6 to 42 px: 79 m down to 11 m.
+    let scene = |x: usize, y: usize| 1 + 256 * (6 + 4 * ((x + y) % 10) as u16);
+    colour(dir.path(), "im.png", w, h);
+    let mut renders = Vec::new();
+    for with_outlier in [false, true] {
+        cityscapes(dir.path(), w, h, &camera, |x, y| {
+            if with_outlier && (x, y) == outlier {
+                2
+            } else {
+                scene(x, y)
+            }
+        });
+        for (name, fog) in [("beta", &["--beta", "0.02"][..]), ("kappa", &[][..])] {
+            let out = format!("{name}-{with_outlier}.pfm");
+            let mut args = fog.to_vec();
+            args.extend(["--airlight", "0.7,0.75,0.8", "--out", out.as_str()]);
+            let o = render(dir.path(), "im.png", &args);
+            assert!(o.status.success(), "{}", stderr(&o));
+            renders.push(load(&dir.path().join(out)));
+        }
+    }
+    let (beta, kappa, beta_out, kappa_out) = (&renders[0], &renders[1], &renders[2], &renders[3]);
+    // Largest change of a pixel at least `gap` px (Chebyshev) from the outlier.
+    let change = |a: &RgbImage, b: &RgbImage, gap: usize| {
+        let mut worst = 0f32;
+        for y in 0..h {
+            for x in 0..w {
+                if x.abs_diff(outlier.0).max(y.abs_diff(outlier.1)) < gap {
+                    continue;
+                }
+                for c in 0..3 {
+                    worst = worst.max((a.get(x, y)[c] - b.get(x, y)[c]).abs());
+                }
+            }
+        }
+        worst
+    };
+    // Under --beta only the blur carries the outlier's colour to its neighbours, about as
+    // far as its σmax (1 + 8·√ln 20 = 14.8 px, the scale at which the outlier itself is
+    // blurred, falling off fast in the neighbours' smaller σ): measured 0.047 at 1 px,
+    // 2e-4 at 8 px, 3.5e-6 from 10 px on (f32 noise of the diffusion).
+    let physical = change(beta, beta_out, 10);
+    assert!(
+        physical < 1e-5,
+        "--beta: the outlier moved far pixels by {physical}"
+    );
+    assert!(change(beta, beta_out, 1) < 0.1);
+    // With normalised κ the same outlier thins the fog everywhere (measured 0.44).
+    let normalised = change(kappa, kappa_out, 10);
+    assert!(
+        normalised > 0.2,
+        "normalised κ moved far pixels by only {normalised}"
+    );
+}
+
+/// Bad values, and physical fog on a range that is not in metres: one clear line, the
+/// right exit code, nothing written.
+#[test]
+fn bad_physical_values_are_refused_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    let camera = Camera {
+        baseline: 0.209313,
+        f: 2262.52,
+        u0: 3.5,
+        v0: 2.5,
+    };
+    cityscapes(dir.path(), 8, 6, &camera, |x, _| 1 + 256 * (10 + x as u16));
+    colour(dir.path(), "im.png", 8, 6);
+    write_scalar(&dir.path().join("range.pfm"), &Grid::filled(8, 6, 5.0)).unwrap();
+    let fails = |args: &[&str], code: i32, needles: &[&str]| {
+        let o = brume(dir.path(), args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        for n in needles {
+            assert!(
+                err.contains(n),
+                "{args:?}: stderr should mention {n:?}: {err}"
+            );
+        }
+        assert!(!dir.path().join("o.png").exists(), "{args:?} wrote");
+        assert!(
+            !dir.path().join("brume-demo.png").exists(),
+            "{args:?} wrote"
+        );
+    };
+    let cs = [
+        "render",
+        "--image",
+        "im.png",
+        "--depth",
+        "scene_disparity.png",
+        "--out",
+        "o.png",
+    ];
+    let with = |extra: &[&'static str]| [&cs[..], extra].concat();
+    fails(
+        &with(&["--beta", "-0.01"]),
+        1,
+        &["brume: error: invalid --beta = -0.01", "> 0 in m⁻¹"],
+    );
+    fails(&with(&["--beta", "0"]), 1, &["invalid --beta = 0"]);
+    fails(
+        &with(&["--visibility", "-300"]),
+        1,
+        &["invalid --visibility = -300", "metres"],
+    );
+    fails(
+        &with(&["--beta", "0.01", "--albedo", "1.5"]),
+        1,
+        &["invalid --albedo = 1.5", "from 0"],
+    );
+    fails(
+        &with(&["--albedo", "0.5"]),
+        1,
+        &["invalid --albedo = 0.5", "--beta or --visibility"],
+    );
+    fails(
+        &with(&["--beta", "0.01", "--medium", "aerial", "--fov", "40"]),
+        1,
+        &["invalid --beta = 0.01", "--medium haze"],
+    );
+    fails(
+        &with(&["--beta", "0.01", "--uniform-sigma", "3"]),
+        1,
+        &["invalid --beta", "--uniform-sigma"],
+    );
+    // Two ways of giving the extinction at once: clap's usage error, exit 2.
+    fails(
+        &with(&["--beta", "0.01", "--visibility", "300"]),
+        2,
+        &["--beta", "--visibility", "cannot be used with"],
+    );
+    fails(
+        &with(&["--visibility", "300", "--ks", "1"]),
+        2,
+        &["--visibility", "--ks"],
+    );
+    fails(
+        &with(&["--ka", "0.1", "--beta", "0.01"]),
+        2,
+        &["--ka", "--beta"],
+    );
+    // A range in file units, and the demo's approximate geometry, are not metres.
+    fails(
+        &[
+            "render",
+            "--image",
+            "im.png",
+            "--depth",
+            "range.pfm",
+            "--depth-kind",
+            "range",
+            "--beta",
+            "0.01",
+            "--out",
+            "o.png",
+        ],
+        1,
+        &[
+            "invalid --beta = 0.01",
+            "range.pfm",
+            "float",
+            "file units",
+            "--camera",
+            "--calib",
+        ],
+    );
+    // Middlebury 2006 is metres only with its geometry given in full.
+    image::GrayImage::from_pixel(8, 6, image::Luma([60u8]))
+        .save(dir.path().join("disp.png"))
+        .unwrap();
+    let mb = [
+        "render", "--image", "im.png", "--depth", "disp.png", "--beta", "0.01", "--out",
+    ];
+    fails(
+        &[&mb[..], &["o.png"]].concat(),
+        1,
+        &["disp.png", "middlebury2006", "approximate", "--focal"],
+    );
+    let geometry = [
+        "--focal",
+        "3740",
+        "--baseline",
+        "160",
+        "--disparity-offset",
+        "270",
+    ];
+    let o = brume(dir.path(), &[&mb[..], &["mb.png"], &geometry[..]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    fails(
+        &["render", "--visibility", "300"],
+        1,
+        &[
+            "invalid --visibility = 300",
+            "built-in demo",
+            "middlebury2006",
+            "--depth",
+        ],
+    );
+}
