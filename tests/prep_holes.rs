@@ -2,7 +2,7 @@
 
 mod common;
 
-use brume::prep::{prepare, PrepOptions, SkyRules};
+use brume::prep::{prepare, ImageSkyRules, PrepOptions, SkyRules};
 use brume::raster::{Grid, ScalarMap};
 use brume::Error;
 use common::*;
@@ -225,6 +225,39 @@ fn bad_options_are_invalid_parameters() {
             sky: SkyRules {
                 min_bbox_fill: f64::NAN,
                 ..SkyRules::default()
+            },
+            ..d()
+        },
+        PrepOptions {
+            far_outlier_factor: 0.5,
+            ..d()
+        },
+        PrepOptions {
+            far_outlier_factor: f64::INFINITY,
+            ..d()
+        },
+        PrepOptions {
+            far_patch_fraction: 2.0,
+            ..d()
+        },
+        PrepOptions {
+            image_sky: ImageSkyRules {
+                max_step: f64::NAN,
+                ..ImageSkyRules::default()
+            },
+            ..d()
+        },
+        PrepOptions {
+            image_sky: ImageSkyRules {
+                bridge_px: 1000,
+                ..ImageSkyRules::default()
+            },
+            ..d()
+        },
+        PrepOptions {
+            image_sky: ImageSkyRules {
+                seed_rows: -0.1,
+                ..ImageSkyRules::default()
             },
             ..d()
         },

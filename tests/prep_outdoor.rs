@@ -4,8 +4,8 @@ mod common;
 
 use brume::prep::edt::squared_edt;
 use brume::prep::{
-    estimate_airlight, prepare, synthetic::outdoor_scene, visualize, AirlightSource, PrepOptions,
-    Prepared,
+    estimate_airlight, prepare, prepare_guided, synthetic::outdoor_scene, visualize,
+    AirlightSource, Guides, PrepOptions, Prepared, SkyMethod,
 };
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use common::*;
@@ -186,6 +186,41 @@ fn airlight_from_sky_is_the_sky_colour() {
     let a = estimate_airlight(&colours(&map, &p), &p);
     assert_eq!(a.source, AirlightSource::Sky);
     assert_eq!(a.pixels, p.stats.sky_pixels);
+    for (c, want) in a.rgb.iter().zip([0.55, 0.62, 0.75]) {
+        assert!((c - want).abs() < 0.012, "{:?}", a.rgb);
+    }
+}
+
+/// With its colour image, the sky the range rules found stays sky (the image-guided
+/// detector only adds), and what it adds are the isolated "leaf" values above the tree
+/// line that the sky encloses (their colour is the scene's, but their range is not backed
+/// up by any neighbour): nothing of the scene below the horizon.
+#[test]
+fn the_image_keeps_the_sky_the_range_found() {
+    let (map, p) = scene();
+    let image = colours(&map, &p);
+    let guides = Guides {
+        image: Some(&image),
+        sky_mask: None,
+    };
+    let g = prepare_guided(&map, guides, &PrepOptions::default()).unwrap();
+    assert_eq!(g.stats.sky_method, SkyMethod::DepthAndImage);
+    let (depth_sky, sky) = (p.sky.as_slice(), g.sky.as_slice());
+    assert!(
+        (0..W * H).all(|i| !depth_sky[i] || sky[i]),
+        "depth sky kept"
+    );
+    let added: Vec<usize> = (0..W * H).filter(|&i| sky[i] && !depth_sky[i]).collect();
+    assert!(added.len() < W * H / 200, "{} added", added.len());
+    for &i in &added {
+        assert!(map.as_slice()[i].is_finite(), "pixel {i} was a hole");
+        let (x, y) = (i % W, i / W);
+        let near_sky = (y.saturating_sub(1)..=(y + 1).min(H - 1))
+            .flat_map(|v| (x.saturating_sub(1)..=(x + 1).min(W - 1)).map(move |u| v * W + u))
+            .any(|j| depth_sky[j]);
+        assert!(near_sky, "added pixel ({x}, {y}) away from the sky");
+    }
+    let a = estimate_airlight(&image, &g);
     for (c, want) in a.rgb.iter().zip([0.55, 0.62, 0.75]) {
         assert!((c - want).abs() < 0.012, "{:?}", a.rgb);
     }

@@ -9,6 +9,7 @@ use super::bench::BenchCommand;
 use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::egl::Platform;
 use brume::io::depth::{DepthFormat, DepthKind};
+use brume::io::mask::SkyMaskFormat;
 use brume::medium::haze;
 use brume::{Precision, Scheme};
 use clap::{Args, Parser, Subcommand};
@@ -183,6 +184,29 @@ pub struct PrepOptionArgs {
     // Signed and wide, so that a negative seed reaches the range check that names it.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub seed: Option<i128>,
+
+    /// Sky mask PNG from semantic segmentation, the depth map's size: it is the sky,
+    /// instead of detection (known range under it is replaced too).
+    #[arg(long, value_name = "PATH.png", conflicts_with = "no_sky")]
+    pub sky_mask: Option<PathBuf>,
+
+    /// How --sky-mask encodes the sky: binary (non-zero = sky), cityscapes-labelids
+    /// (Cityscapes label id 23) or cityscapes-trainids (train id 10) [default: from the
+    /// name: *_labelIds.png → cityscapes-labelids, *_labelTrainIds.png →
+    /// cityscapes-trainids, else binary].
+    #[arg(
+        long,
+        value_name = "FORMAT",
+        requires = "sky_mask",
+        allow_hyphen_values = true
+    )]
+    pub sky_mask_format: Option<SkyMaskFormat>,
+
+    /// Far outliers: known range above K × the 99th percentile of the range outside the
+    /// sky, in a patch under 0.05 % of the image, is taken as unknown before the farthest
+    /// range sets the scale; K ≥ 1, or 0 to keep every value [default: 2].
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub far_outlier_factor: Option<f64>,
 }
 
 /// `brume render`.
@@ -395,7 +419,8 @@ pub struct PrepArgs {
     #[command(flatten)]
     pub depth: DepthArgs,
 
-    /// Colour image, for the airlight estimate (optional).
+    /// Colour image (optional): the sky is then found from the image and the range
+    /// together, and the airlight estimated from it.
     #[arg(long, value_name = "PATH")]
     pub image: Option<PathBuf>,
 

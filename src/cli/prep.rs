@@ -1,13 +1,15 @@
 //! `brume prep`: pre-process a range map on its own and show what happened.
 
-use super::args::PrepArgs;
+use super::args::{PrepArgs, PrepOptionArgs};
 use super::render::{
     airlight_source_name, check_same_size, depth_inputs, load_depth, prep_options,
 };
 use brume::io::image;
+use brume::io::mask::{self, SkyMaskFormat};
 use brume::io::output::{self, Outputs};
-use brume::prep;
-use brume::Result;
+use brume::prep::{self, Guides, PrepOptions, Prepared};
+use brume::raster::{RgbImage, ScalarMap};
+use brume::{Error, Result};
 use serde_json::json;
 use std::path::Path;
 
@@ -21,26 +23,38 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     }
     let mut inputs = depth_inputs(&args.depth);
     inputs.extend(args.image.iter().cloned());
+    inputs.extend(args.prep.sky_mask.iter().cloned());
     super::refuse_overlaps(&outs, &inputs)?;
 
     // Everything is read and computed before the first output is staged: a bad input
     // leaves every output as it was.
     let loaded = load_depth(&args.depth)?;
+    let depth_name = args
+        .depth
+        .depth
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_default();
     let colour = match &args.image {
         Some(path) => {
             let img = image::load_linear_rgb(path)?;
-            let depth_name = args.depth.depth.as_ref().map(|p| p.display().to_string());
             check_same_size(
                 &img,
                 &path.display().to_string(),
                 &loaded.range,
-                &depth_name.unwrap_or_default(),
+                &depth_name,
             )?;
             Some(img)
         }
         None => None,
     };
-    let prepared = prep::prepare(&loaded.range, &opts)?;
+    let (prepared, mask_format) = prepare_inputs(
+        &args.prep,
+        &opts,
+        &loaded.range,
+        &depth_name,
+        colour.as_ref(),
+    )?;
     let airlight = colour
         .as_ref()
         .map(|img| prep::estimate_airlight(img, &prepared));
@@ -63,6 +77,8 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             "depth_notes": loaded.notes, "unknown_pixels": loaded.unknown_pixels,
             "airlight": airlight.as_ref().map(|a| a.rgb),
             "airlight_source": airlight.as_ref().map(|a| airlight_source_name(a.source)),
+            "sky_mask": args.prep.sky_mask.as_ref().map(|p| p.display().to_string()),
+            "sky_mask_format": mask_format.map(|f| f.name()),
         });
         if let (Some(map), serde_json::Value::Object(more)) = (report.as_object_mut(), extra) {
             map.extend(more);
@@ -79,6 +95,16 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.margin_pixels,
             s.r_max,
             s.s_max.map_or("-".to_string(), |v| format!("{v:.4}"))
+        );
+        println!(
+            "sky from {}; {} far outliers removed{}, {} px of matcher noise by the sky; \
+             {} known px in the sky replaced",
+            sky_method_name(s.sky_method),
+            s.far_outliers,
+            s.far_cut
+                .map_or(String::new(), |c| format!(" (cut {c:.4})")),
+            s.sky_noise,
+            s.sky_known_pixels
         );
         println!(
             "CPU time: fill {:.1} ms, sky {:.1} ms, margin {:.1} ms, total {:.1} ms",
@@ -99,4 +125,55 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The `sky_method` of the JSON report, in words.
+fn sky_method_name(m: prep::SkyMethod) -> &'static str {
+    match m {
+        prep::SkyMethod::Off => "nowhere (--no-sky)",
+        prep::SkyMethod::Depth => "the range alone",
+        prep::SkyMethod::DepthAndImage => "the range and the image",
+        prep::SkyMethod::Mask => "--sky-mask",
+    }
+}
+
+/// Pre-processes `range` (named `range_name` in messages) with the colour image, if any,
+/// and the `--sky-mask` of `args`, if any (which must have the range's size). Returns the
+/// result and the mask's format.
+pub fn prepare_inputs(
+    args: &PrepOptionArgs,
+    opts: &PrepOptions,
+    range: &ScalarMap,
+    range_name: &str,
+    image: Option<&RgbImage>,
+) -> Result<(Prepared, Option<SkyMaskFormat>)> {
+    let loaded = match &args.sky_mask {
+        Some(path) => {
+            let (m, format) = mask::load_sky_mask(path, args.sky_mask_format)?;
+            if (m.width(), m.height()) != (range.width(), range.height()) {
+                return Err(Error::SizeMismatch {
+                    a: path.display().to_string(),
+                    aw: m.width() as u32,
+                    ah: m.height() as u32,
+                    b: range_name.to_string(),
+                    bw: range.width() as u32,
+                    bh: range.height() as u32,
+                });
+            }
+            let sky = m.as_slice().iter().filter(|&&s| s).count();
+            log::info!(
+                "{}: {format} sky mask, {sky} sky pixels ({:.1} %)",
+                path.display(),
+                100.0 * sky as f64 / m.len().max(1) as f64
+            );
+            Some((m, format))
+        }
+        None => None,
+    };
+    let guides = Guides {
+        image,
+        sky_mask: loaded.as_ref().map(|(m, _)| m),
+    };
+    let prepared = prep::prepare_guided(range, guides, opts)?;
+    Ok((prepared, loaded.map(|(_, f)| f)))
 }

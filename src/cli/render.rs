@@ -84,6 +84,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         .cloned()
         .chain(depth_inputs(&args.depth))
         .chain(args.sky.iter().cloned())
+        .chain(args.prep.sky_mask.iter().cloned())
         .chain(args.sensitivity.iter().cloned())
         .collect();
     super::refuse_overlaps(&[("--out", &out)], &inputs)?;
@@ -489,6 +490,9 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
     if let Some(a) = args.sky_min_area {
         opts.sky.min_area_fraction = a;
     }
+    if let Some(k) = args.far_outlier_factor {
+        opts.far_outlier_factor = k;
+    }
     if let Some(s) = args.seed {
         opts.seed = u64::try_from(s)
             .map_err(|_| Error::invalid("seed", s, "a whole number from 0 to 2^64 - 1"))?;
@@ -511,7 +515,13 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     }
     let opts = prep_options(&args.prep)?;
     let started = Instant::now();
-    let prepared = prep::prepare(&scene.depth.range, &opts)?;
+    let (prepared, _) = super::prep::prepare_inputs(
+        &args.prep,
+        &opts,
+        &scene.depth.range,
+        &scene.depth_name,
+        Some(&scene.image),
+    )?;
     log::info!(
         "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
         prepared.stats.holes,

@@ -12,4 +12,5 @@ pub mod demo;
 pub mod depth;
 pub mod image;
 pub mod limits;
+pub mod mask;
 pub mod output;

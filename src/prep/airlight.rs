@@ -10,7 +10,7 @@ const NEUTRAL_PERCENTILE: f64 = 0.99;
 
 /// Rec. 709 luminance weights of linear RGB. They sum to 1, so the grey `[y, y, y]` has
 /// luminance `y`.
-const REC709_LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
+pub(crate) const REC709_LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
 /// Which pixels an [`AirlightEstimate`] comes from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

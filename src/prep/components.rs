@@ -25,6 +25,12 @@ impl Component {
     pub fn bbox_area(&self) -> usize {
         (self.bbox[2] - self.bbox[0] + 1) * (self.bbox[3] - self.bbox[1] + 1)
     }
+
+    /// Whether it has a pixel in the bottom row of an image `height` rows high. Never for a
+    /// one-row image, whose only row is the top one too.
+    pub fn reaches_bottom(&self, height: usize) -> bool {
+        height > 1 && self.bbox[3] + 1 == height
+    }
 }
 
 /// All components of unknown pixels of one map.
@@ -50,23 +56,51 @@ pub(crate) fn label_unknown(work: &mut [f32], width: usize, height: usize) -> Co
     let mut out = Components::default();
     for seed in 0..work.len() {
         if work[seed].is_nan() {
-            let comp = flood(work, width, height, seed, &mut out.pixels);
+            let comp = flood(width, height, seed, &mut out.pixels, |q| {
+                let take = work[q].is_nan();
+                if take {
+                    work[q] = f32::INFINITY;
+                }
+                take
+            });
             out.list.push(comp);
         }
     }
     out
 }
 
-/// Breadth-first flood fill from `seed`, appending the pixels to `pixels`.
+/// Labels the 4-connected components of the pixels where `mask` is true (same layout and
+/// order as [`label_unknown`]), with a visited bitmap instead of overwriting the input.
+pub(crate) fn label_mask(mask: &[bool], width: usize, height: usize) -> Components {
+    assert_eq!(mask.len(), width * height);
+    let mut seen = vec![false; mask.len()];
+    let mut out = Components::default();
+    for seed in 0..mask.len() {
+        if mask[seed] && !seen[seed] {
+            let comp = flood(width, height, seed, &mut out.pixels, |q| {
+                let take = mask[q] && !seen[q];
+                seen[q] |= take;
+                take
+            });
+            out.list.push(comp);
+        }
+    }
+    out
+}
+
+/// Breadth-first flood fill from `seed`, appending the pixels to `pixels`. `take(q)` says
+/// whether pixel `q` joins the component, and marks it visited when it does; it is asked
+/// once for the seed, which must join.
 fn flood(
-    work: &mut [f32],
     width: usize,
     height: usize,
     seed: usize,
     pixels: &mut Vec<u32>,
+    mut take: impl FnMut(usize) -> bool,
 ) -> Component {
     let start = pixels.len();
-    work[seed] = f32::INFINITY;
+    let joined = take(seed);
+    debug_assert!(joined, "the seed of a flood fill must join it");
     pixels.push(seed as u32);
     let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
     let mut top_pixels = 0;
@@ -78,8 +112,7 @@ fn flood(
         (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
         top_pixels += usize::from(y == 0);
         for q in neighbours4(p, x, y, width, height).into_iter().flatten() {
-            if work[q].is_nan() {
-                work[q] = f32::INFINITY;
+            if take(q) {
                 pixels.push(q as u32);
             }
         }
@@ -130,5 +163,20 @@ mod tests {
         assert_eq!(c.list[1].len, 2);
         assert_eq!(c.list[1].bbox, [3, 1, 3, 2]);
         assert!(m.iter().all(|v| !v.is_nan()));
+    }
+
+    #[test]
+    fn mask_components_match_unknown_components() {
+        #[rustfmt::skip]
+        let mask = vec![
+            true, true, false, false,
+            false, true, false, true,
+            false, false, false, true,
+        ];
+        let c = label_mask(&mask, 4, 3);
+        assert_eq!(c.list.len(), 2);
+        assert_eq!((c.list[0].len, c.list[0].top_pixels), (3, 2));
+        assert_eq!(c.list[1].bbox, [3, 1, 3, 2]);
+        assert_eq!(c.pixels_of(&c.list[1]), &[7, 11]);
     }
 }

@@ -1,7 +1,21 @@
-//! Sky detection: which components of unknown pixels are sky.
+//! Sky from the range alone (the depth rules): which components of unknown pixels are sky.
 
-use super::components::{Component, Components};
+use super::components::{label_mask, Component, Components};
 use super::SkyRules;
+
+/// The sky mask under the depth rules: every pixel of the components of unknown (NaN)
+/// pixels of `work` that [`select_sky`] keeps.
+pub(crate) fn depth_sky(work: &[f32], rules: &SkyRules, width: usize, height: usize) -> Vec<bool> {
+    let unknown: Vec<bool> = work.iter().map(|v| v.is_nan()).collect();
+    let comps = label_mask(&unknown, width, height);
+    let mut sky = vec![false; work.len()];
+    for i in select_sky(&comps, rules, width, height) {
+        for &p in comps.pixels_of(&comps.list[i]) {
+            sky[p as usize] = true;
+        }
+    }
+    sky
+}
 
 /// Indices (into `comps.list`) of the components that are sky under `rules`, largest first.
 pub(crate) fn select_sky(
@@ -28,12 +42,11 @@ pub(crate) fn is_sky_candidate(
 ) -> bool {
     let area = (width * height) as f64;
     let touches_top = c.top_pixels > 0;
-    let reaches_bottom = c.bbox[3] + 1 == height;
     (!rules.must_touch_top || touches_top)
         && c.len as f64 >= rules.min_area_fraction * area
         && c.top_pixels as f64 >= rules.min_top_fraction * width as f64
         && c.len as f64 >= rules.min_bbox_fill * c.bbox_area() as f64
-        && !(rules.reject_bottom && reaches_bottom && height > 1)
+        && !(rules.reject_bottom && c.reaches_bottom(height))
 }
 
 #[cfg(test)]

@@ -8,7 +8,8 @@ const RED: [u8; 3] = [255, 0, 0];
 /// Draws `before` (above) and `after` (below) as one 8-bit RGB picture of `width x
 /// 2 height`, returned as `(width, height, pixels)` row-major, top row first. Range is
 /// grey, near dark and far light, on one scale for both panels from the nearest known
-/// value (black) to the largest output value (white, which is `Smax` when there is sky).
+/// value (black) to the largest output value (white, which is `Smax` when there is sky;
+/// input values above it, far outliers, are white too).
 /// Unknown pixels of `before` are red; in `after` the holes show their filled values and
 /// the sky is white, tapering to grey through the horizon margin.
 ///
@@ -30,7 +31,15 @@ pub fn visualize(before: &ScalarMap, after: &Prepared) -> (usize, usize, Vec<[u8
             .filter(|v| v.is_finite())
     };
     let lo = finite().copied().fold(f32::INFINITY, f32::min);
-    let hi = finite().copied().fold(f32::NEG_INFINITY, f32::max);
+    // The top of the scale is the output's: a far outlier of the input (removed by
+    // `prepare`) would otherwise turn every other value black; it shows white.
+    let hi = after
+        .range
+        .as_slice()
+        .iter()
+        .filter(|v| v.is_finite())
+        .copied()
+        .fold(f32::NEG_INFINITY, f32::max);
     let grey = |v: f32| {
         let t = if lo > 0.0 && hi > lo {
             (v / lo).ln() / (hi / lo).ln()

@@ -1,0 +1,241 @@
+//! Sky masks from semantic segmentation, for [`crate::prep::prepare_guided`].
+//!
+//! Three encodings, all lossless PNG (a JPEG's ringing would turn label values into
+//! others):
+//!
+//! - **binary**: any PNG (grey or colour, 8 or 16 bits); a pixel is sky when one of its
+//!   colour channels is not zero (alpha is ignored);
+//! - **cityscapes-labelids**: a Cityscapes `*_gtFine_labelIds.png` (one 8-bit grey channel
+//!   of label ids), sky is label id 23;
+//! - **cityscapes-trainids**: a `*_labelTrainIds.png` (the train ids most segmentation
+//!   networks output), sky is train id 10.
+//!
+//! [`SkyMaskFormat::from_file_name`] picks the format from the Cityscapes file names.
+
+use std::fmt;
+use std::path::Path;
+use std::str::FromStr;
+
+use image::DynamicImage;
+
+use crate::raster::Grid;
+use crate::{Error, Result};
+
+/// The Cityscapes label id of the sky (`labelIds` PNGs).
+pub const CITYSCAPES_SKY_LABEL_ID: u16 = 23;
+/// The Cityscapes train id of the sky (`labelTrainIds` PNGs).
+pub const CITYSCAPES_SKY_TRAIN_ID: u16 = 10;
+
+/// The first 8 bytes of every PNG file.
+const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+
+/// How a sky mask file encodes the sky.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SkyMaskFormat {
+    /// Non-zero = sky.
+    Binary,
+    /// Cityscapes label ids: 23 = sky.
+    CityscapesLabelIds,
+    /// Cityscapes train ids: 10 = sky.
+    CityscapesTrainIds,
+}
+
+impl SkyMaskFormat {
+    /// Every format, in the order of the help text.
+    pub const ALL: [SkyMaskFormat; 3] = [
+        SkyMaskFormat::Binary,
+        SkyMaskFormat::CityscapesLabelIds,
+        SkyMaskFormat::CityscapesTrainIds,
+    ];
+
+    /// The format a file name announces: `*_labelIds.png` (Cityscapes' `gtFine` and
+    /// `gtCoarse` ground truth) is [`CityscapesLabelIds`](Self::CityscapesLabelIds),
+    /// `*_labelTrainIds.png` is [`CityscapesTrainIds`](Self::CityscapesTrainIds), anything
+    /// else [`Binary`](Self::Binary).
+    pub fn from_file_name(path: &Path) -> Self {
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        if name.ends_with("_labelids.png") {
+            SkyMaskFormat::CityscapesLabelIds
+        } else if name.ends_with("_labeltrainids.png") {
+            SkyMaskFormat::CityscapesTrainIds
+        } else {
+            SkyMaskFormat::Binary
+        }
+    }
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            SkyMaskFormat::Binary => "binary",
+            SkyMaskFormat::CityscapesLabelIds => "cityscapes-labelids",
+            SkyMaskFormat::CityscapesTrainIds => "cityscapes-trainids",
+        }
+    }
+
+    /// The sky's value in a label format; `None` for binary.
+    fn sky_label(self) -> Option<u16> {
+        match self {
+            SkyMaskFormat::Binary => None,
+            SkyMaskFormat::CityscapesLabelIds => Some(CITYSCAPES_SKY_LABEL_ID),
+            SkyMaskFormat::CityscapesTrainIds => Some(CITYSCAPES_SKY_TRAIN_ID),
+        }
+    }
+}
+
+impl fmt::Display for SkyMaskFormat {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for SkyMaskFormat {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        SkyMaskFormat::ALL
+            .into_iter()
+            .find(|f| f.name() == s)
+            .ok_or_else(|| {
+                let names: Vec<&str> = SkyMaskFormat::ALL.iter().map(|f| f.name()).collect();
+                format!(
+                    "'{s}' is not a sky mask format; expected {}",
+                    names.join(", ")
+                )
+            })
+    }
+}
+
+/// Loads a sky mask (true = sky) from a PNG in `format`, or, for `None`, in the format its
+/// name announces ([`SkyMaskFormat::from_file_name`]). Returns the mask and the format
+/// used. Errors name the file: not a PNG, undecodable, or (label formats) not one grey
+/// channel.
+pub fn load_sky_mask(
+    path: &Path,
+    format: Option<SkyMaskFormat>,
+) -> Result<(Grid<bool>, SkyMaskFormat)> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let format = format.unwrap_or_else(|| SkyMaskFormat::from_file_name(path));
+    let mask = decode_sky_mask(&bytes, &path.display().to_string(), format)?;
+    Ok((mask, format))
+}
+
+/// [`load_sky_mask`] on bytes in memory; `name` stands for the file in messages.
+pub fn decode_sky_mask(bytes: &[u8], name: &str, format: SkyMaskFormat) -> Result<Grid<bool>> {
+    if !bytes.starts_with(&PNG_SIGNATURE) {
+        return Err(Error::format(
+            name,
+            "a sky mask is read from a PNG file (lossless: a JPEG's compression would change \
+             label values)",
+        ));
+    }
+    let img = super::image::decode_any(bytes, name)?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let mask = match format.sky_label() {
+        None => binary_mask(&img, name),
+        Some(label) => label_values(&img, name, format)?
+            .iter()
+            .map(|&v| v == label)
+            .collect(),
+    };
+    Ok(Grid::from_vec(w, h, mask))
+}
+
+/// Non-zero colour = sky. Warns when the file holds more than two values, as a label
+/// image given as binary would make nearly everything sky.
+fn binary_mask(img: &DynamicImage, name: &str) -> Vec<bool> {
+    let rgb = img.to_rgb16();
+    let mut values = std::collections::BTreeSet::new();
+    let mask = rgb
+        .pixels()
+        .map(|p| {
+            if values.len() <= 2 {
+                values.insert(p.0);
+            }
+            p.0.iter().any(|&c| c != 0)
+        })
+        .collect();
+    if values.len() > 2 {
+        log::warn!(
+            "{name}: a binary sky mask with more than two values (every non-zero pixel is sky); \
+             for a Cityscapes label PNG give --sky-mask-format cityscapes-labelids or \
+             cityscapes-trainids"
+        );
+    }
+    mask
+}
+
+/// The label of every pixel of a one-channel (grey, 8- or 16-bit) PNG.
+fn label_values(img: &DynamicImage, name: &str, format: SkyMaskFormat) -> Result<Vec<u16>> {
+    match img {
+        DynamicImage::ImageLuma8(g) => Ok(g.as_raw().iter().map(|&v| u16::from(v)).collect()),
+        DynamicImage::ImageLuma16(g) => Ok(g.as_raw().clone()),
+        other => Err(Error::format(
+            name,
+            format!(
+                "a {format} sky mask is one grey channel of label ids, but this PNG is {:?} \
+                 (a Cityscapes *_color.png? give the *_labelIds.png, or a binary mask with \
+                 --sky-mask-format binary)",
+                other.color()
+            ),
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn png(img: DynamicImage) -> Vec<u8> {
+        let mut out = std::io::Cursor::new(Vec::new());
+        img.write_to(&mut out, image::ImageFormat::Png).unwrap();
+        out.into_inner()
+    }
+
+    #[test]
+    fn formats_from_names_and_text() {
+        let f = |n: &str| SkyMaskFormat::from_file_name(Path::new(n));
+        assert_eq!(
+            f("aachen_000000_000019_gtFine_labelIds.png"),
+            SkyMaskFormat::CityscapesLabelIds
+        );
+        assert_eq!(
+            f("x_gtFine_labelTrainIds.png"),
+            SkyMaskFormat::CityscapesTrainIds
+        );
+        assert_eq!(f("x_gtFine_color.png"), SkyMaskFormat::Binary);
+        assert_eq!(f("sky.png"), SkyMaskFormat::Binary);
+        for format in SkyMaskFormat::ALL {
+            assert_eq!(format.name().parse::<SkyMaskFormat>(), Ok(format));
+        }
+        assert!("labelids".parse::<SkyMaskFormat>().is_err());
+    }
+
+    #[test]
+    fn labels_and_binary_values() {
+        let labels = image::GrayImage::from_raw(3, 1, vec![23, 10, 0]).unwrap();
+        let bytes = png(DynamicImage::ImageLuma8(labels));
+        let get = |f| decode_sky_mask(&bytes, "m.png", f).unwrap().into_vec();
+        assert_eq!(get(SkyMaskFormat::CityscapesLabelIds), [true, false, false]);
+        assert_eq!(get(SkyMaskFormat::CityscapesTrainIds), [false, true, false]);
+        assert_eq!(get(SkyMaskFormat::Binary), [true, true, false]);
+    }
+
+    #[test]
+    fn colour_labels_and_jpeg_are_refused() {
+        let rgb = image::RgbImage::from_raw(1, 1, vec![70, 130, 180]).unwrap();
+        let bytes = png(DynamicImage::ImageRgb8(rgb));
+        let err = decode_sky_mask(&bytes, "c.png", SkyMaskFormat::CityscapesLabelIds);
+        assert!(matches!(err, Err(Error::Format { .. })), "{err:?}");
+        assert_eq!(
+            decode_sky_mask(&bytes, "c.png", SkyMaskFormat::Binary)
+                .unwrap()
+                .into_vec(),
+            [true]
+        );
+        let err = decode_sky_mask(b"\xff\xd8\xff\xe0", "m.jpg", SkyMaskFormat::Binary);
+        assert!(matches!(err, Err(Error::Format { .. })), "{err:?}");
+    }
+}

@@ -1,0 +1,126 @@
+//! Far outliers: isolated values in the far tail of the range, which a scanner or a stereo
+//! matcher produces where it has nothing to match (the sky, glass, a dark sky-line) and
+//! which, left in, would set the frame's scale `Rmax` on their own.
+//!
+//! The tail is cut robustly: `cut = factor x P99`, the 99th percentile (nearest rank) of
+//! the values considered, so up to 1 % of bogus values cannot move it. A value above the
+//! cut is kept only when it is *supported*: its 8-connected patch of values above the cut
+//! has at least `min_patch` pixels. A real far surface (a distant hillside, a tower) is a
+//! patch; a bogus value is a speck or a small blob.
+
+/// Nearest-rank percentile of the values that set the cut.
+const PERCENTILE: f64 = 0.99;
+
+/// `factor x` the 99th percentile of the finite values of `work` at the pixels where
+/// `include` is true; `None` when `factor` is 0 (the rule is off), when no such value is
+/// finite, or when the percentile is not positive (no meaningful "far" then).
+pub(crate) fn far_cut(work: &[f32], include: impl Fn(usize) -> bool, factor: f64) -> Option<f32> {
+    if factor == 0.0 {
+        return None;
+    }
+    let mut known: Vec<f32> = (0..work.len())
+        .filter(|&i| include(i) && work[i].is_finite())
+        .map(|i| work[i])
+        .collect();
+    if known.is_empty() {
+        return None;
+    }
+    let rank = ((known.len() as f64 * PERCENTILE).ceil() as usize).clamp(1, known.len());
+    let p99 = *known.select_nth_unstable_by(rank - 1, f32::total_cmp).1;
+    (p99 > 0.0).then(|| (factor * f64::from(p99)).min(f64::from(f32::MAX)) as f32)
+}
+
+/// Makes unknown (NaN) every known pixel of `work` outside `sky` whose value exceeds `cut`
+/// and whose 8-connected patch of such pixels has fewer than `min_patch` pixels. Returns
+/// how many were removed.
+pub(crate) fn remove_far(
+    work: &mut [f32],
+    sky: &[bool],
+    width: usize,
+    height: usize,
+    cut: f32,
+    min_patch: usize,
+) -> usize {
+    let beyond = |work: &[f32], i: usize| !sky[i] && work[i].is_finite() && work[i] > cut;
+    let mut seen = vec![false; work.len()];
+    let mut patch = Vec::new();
+    let mut removed = 0;
+    for seed in 0..work.len() {
+        if seen[seed] || !beyond(work, seed) {
+            continue;
+        }
+        patch.clear();
+        patch.push(seed);
+        seen[seed] = true;
+        let mut head = 0;
+        while head < patch.len() {
+            let p = patch[head];
+            head += 1;
+            for q in neighbours8(p, width, height).into_iter().flatten() {
+                if !seen[q] && beyond(work, q) {
+                    seen[q] = true;
+                    patch.push(q);
+                }
+            }
+        }
+        if patch.len() < min_patch {
+            patch.iter().for_each(|&p| work[p] = f32::NAN);
+            removed += patch.len();
+        }
+    }
+    removed
+}
+
+/// The in-image 8-neighbours of pixel `p`.
+#[inline]
+pub(crate) fn neighbours8(p: usize, width: usize, height: usize) -> [Option<usize>; 8] {
+    let (x, y) = (p % width, p / width);
+    let (l, r, u, d) = (x > 0, x + 1 < width, y > 0, y + 1 < height);
+    [
+        (u && l).then(|| p - width - 1),
+        u.then(|| p - width),
+        (u && r).then(|| p - width + 1),
+        l.then(|| p - 1),
+        r.then(|| p + 1),
+        (d && l).then(|| p + width - 1),
+        d.then(|| p + width),
+        (d && r).then(|| p + width + 1),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn specks_go_patches_stay() {
+        let (w, h) = (20, 10);
+        let mut m = vec![10.0f32; w * h];
+        m[3 * w + 3] = 1e5; // a speck
+        m[7 * w + 10] = 500.0; // a diagonal pair: one 8-connected patch of 2
+        m[8 * w + 11] = 600.0;
+        for y in 0..5 {
+            for x in 14..20 {
+                m[y * w + x] = 300.0; // a 30-px far surface
+            }
+        }
+        let cut = far_cut(&m, |_| true, 2.0).unwrap();
+        // 33 of 200 values are far: the 99th percentile is among them.
+        assert!(cut >= 600.0, "{cut}");
+        let cut = 20.0;
+        let sky = vec![false; w * h];
+        let removed = remove_far(&mut m, &sky, w, h, cut, 16);
+        assert_eq!(removed, 3);
+        assert!(m[3 * w + 3].is_nan() && m[7 * w + 10].is_nan() && m[8 * w + 11].is_nan());
+        assert_eq!(m.iter().filter(|v| **v == 300.0).count(), 30);
+    }
+
+    #[test]
+    fn off_empty_or_non_positive_gives_no_cut() {
+        assert_eq!(far_cut(&[1.0, 2.0], |_| true, 0.0), None);
+        assert_eq!(far_cut(&[f32::NAN], |_| true, 2.0), None);
+        assert_eq!(far_cut(&[-1.0, 0.0], |_| true, 2.0), None);
+        assert_eq!(far_cut(&[1.0, 2.0], |i| i == 0, 2.0), Some(2.0));
+        assert_eq!(far_cut(&[f32::MAX], |_| true, 3.0), Some(f32::MAX));
+    }
+}

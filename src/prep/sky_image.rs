@@ -1,0 +1,465 @@
+//! Sky from the colour image and the range together: the image-guided detector.
+//!
+//! Its rules, and why, are in the module docs of [`crate::prep`] (step 2); the thresholds
+//! are [`ImageSkyRules`]. In short: per-pixel evidence (luminance, 3 x 3 texture, a range
+//! class), seeds in the top rows, breadth-first growth over smooth, bright, blue-or-grey
+//! pixels in small colour steps (jumping thin occluders), edge refinement, regions that
+//! are large enough and do not reach the bottom row, then the gaps in the sky.
+
+use super::components::{label_mask, neighbours4};
+use super::outliers::neighbours8;
+use super::ImageSkyRules;
+use crate::raster::RgbImage;
+
+/// Relative tolerance within which two neighbouring ranges agree.
+const AGREE: f32 = 0.05;
+/// Edge refinement rounds: the radius of the texture window plus one.
+const REFINE_ROUNDS: usize = 2;
+/// The sky may be this much darker than the seeds' median luminance.
+const SEED_DIMMING: f32 = 0.5;
+
+/// What the range says about one pixel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum RangeClass {
+    /// No value.
+    Unknown,
+    /// A value its neighbours do not back up: noise.
+    Unsupported,
+    /// A value above the far-outlier cut.
+    Far,
+    /// A measured, backed-up value: not sky.
+    Confident,
+}
+
+/// The range class of every pixel of `work` (NaN = unknown); `far_cut` as from
+/// [`super::outliers::far_cut`].
+pub(crate) fn range_classes(
+    work: &[f32],
+    width: usize,
+    height: usize,
+    far_cut: Option<f32>,
+) -> Vec<RangeClass> {
+    (0..work.len())
+        .map(|p| {
+            let r = work[p];
+            if !r.is_finite() {
+                return RangeClass::Unknown;
+            }
+            if far_cut.is_some_and(|c| r > c) {
+                return RangeClass::Far;
+            }
+            let (mut known, mut agree) = (0, 0);
+            for q in neighbours8(p, width, height).into_iter().flatten() {
+                let v = work[q];
+                if v.is_finite() {
+                    known += 1;
+                    agree += usize::from((v - r).abs() <= AGREE * r.abs());
+                }
+            }
+            if agree >= 2 && 2 * agree >= known {
+                RangeClass::Confident
+            } else {
+                RangeClass::Unsupported
+            }
+        })
+        .collect()
+}
+
+/// The per-pixel evidence of the detector.
+struct Evidence<'a> {
+    colour: &'a [[f32; 3]],
+    lum: Vec<f32>,
+    texture: Vec<f32>,
+    range: &'a [RangeClass],
+    /// Luminance floor of the sky.
+    floor: f32,
+    /// Smallest luminance a relative step is measured against.
+    eps: f32,
+    rules: &'a ImageSkyRules,
+}
+
+impl Evidence<'_> {
+    /// Bright enough and blue or grey.
+    fn looks_like_sky(&self, p: usize) -> bool {
+        let c = self.colour[p];
+        self.lum[p] >= self.floor
+            && self.range[p] != RangeClass::Confident
+            && f64::from(c[2]) >= self.rules.min_blue_ratio * f64::from(c[0].max(c[1]))
+    }
+
+    /// Looks like sky, is smooth, and its range does not say otherwise.
+    fn admissible(&self, p: usize) -> bool {
+        self.looks_like_sky(p) && f64::from(self.texture[p]) <= self.rules.max_texture
+    }
+
+    /// The colours of `p` and `q` differ by at most `max_step`, relative.
+    fn step_ok(&self, p: usize, q: usize) -> bool {
+        f64::from(relative_step(self.colour, &self.lum, p, q, self.eps)) <= self.rules.max_step
+    }
+}
+
+/// Largest channel difference of `p` and `q` over the brighter one's luminance (at least
+/// `eps`); NaN for non-finite colours, so that every test on it fails.
+fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize, eps: f32) -> f32 {
+    let (a, b) = (colour[p], colour[q]);
+    let d = (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max);
+    let d = if a.iter().chain(&b).all(|v| v.is_finite()) {
+        d
+    } else {
+        f32::NAN
+    };
+    d / lum[p].max(lum[q]).max(eps)
+}
+
+/// Rec. 709 luminance of every pixel, clamped at 0 (NaN stays NaN).
+fn luminance(colour: &[[f32; 3]]) -> Vec<f32> {
+    let w = super::airlight::REC709_LUMA;
+    colour
+        .iter()
+        .map(|c| (w[0] * c[0] + w[1] * c[1] + w[2] * c[2]).max(0.0))
+        .collect()
+}
+
+/// The 3 x 3 mean (clipped at the borders) of each pixel's largest relative step to a
+/// 4-neighbour.
+fn texture(colour: &[[f32; 3]], lum: &[f32], width: usize, height: usize, eps: f32) -> Vec<f32> {
+    let step: Vec<f32> = (0..colour.len())
+        .map(|p| {
+            neighbours4(p, p % width, p / width, width, height)
+                .into_iter()
+                .flatten()
+                .map(|q| relative_step(colour, lum, p, q, eps))
+                .fold(0.0f32, |m, s| if s.is_nan() { s } else { m.max(s) })
+        })
+        .collect();
+    box3(&step, width, height)
+}
+
+/// Mean over the 3 x 3 window clipped to the image, by two 1D passes.
+fn box3(v: &[f32], width: usize, height: usize) -> Vec<f32> {
+    let mut rows = vec![0.0f32; v.len()];
+    for y in 0..height {
+        for x in 0..width {
+            let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
+            let s: f32 = (x0..=x1).map(|i| v[y * width + i]).sum();
+            rows[y * width + x] = s / (x1 - x0 + 1) as f32;
+        }
+    }
+    let mut out = vec![0.0f32; v.len()];
+    for y in 0..height {
+        let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
+        for x in 0..width {
+            let s: f32 = (y0..=y1).map(|j| rows[j * width + x]).sum();
+            out[y * width + x] = s / (y1 - y0 + 1) as f32;
+        }
+    }
+    out
+}
+
+/// Median of the finite values (upper median); `None` without any.
+fn median(values: impl Iterator<Item = f32>) -> Option<f32> {
+    let mut v: Vec<f32> = values.filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return None;
+    }
+    let mid = v.len() / 2;
+    Some(*v.select_nth_unstable_by(mid, f32::total_cmp).1)
+}
+
+/// What the image-guided detector found.
+pub(crate) struct ImageSky {
+    /// The sky mask.
+    pub sky: Vec<bool>,
+    /// Known pixels outside the sky that look like sky and whose range is unsupported:
+    /// matcher noise in slivers of sky the growth could not enter (between a wire and a
+    /// roof, between leaves). Far values are left to the far-outlier rule. Empty when no
+    /// sky was found.
+    pub noise: Vec<usize>,
+}
+
+/// The sky from the image, the range classes and the depth rules' sky (see the module
+/// docs of `prep`). `image`, `range` and `depth_sky` are `width x height`.
+pub(crate) fn image_sky(
+    image: &RgbImage,
+    range: &[RangeClass],
+    depth_sky: &[bool],
+    rules: &ImageSkyRules,
+    min_area_fraction: f64,
+) -> ImageSky {
+    let (width, height) = (image.width(), image.height());
+    let colour = image.as_slice();
+    let lum = luminance(colour);
+    let depth_only = || ImageSky {
+        sky: depth_sky.to_vec(),
+        noise: Vec::new(),
+    };
+    // The floor is set by the scene (the pixels of confident range), not by the whole
+    // image: in a frame mostly of sky the image's median is the sky's own, and the darker
+    // half of it (the zenith) would fall below.
+    let scene = (0..lum.len()).filter(|&p| range[p] == RangeClass::Confident);
+    let Some(lum_median) = median(scene.map(|p| lum[p])).or_else(|| median(lum.iter().copied()))
+    else {
+        return depth_only();
+    };
+    let eps = (0.01 * lum_median).max(1e-6);
+    let mut ev = Evidence {
+        colour,
+        texture: texture(colour, &lum, width, height, eps),
+        lum,
+        range,
+        floor: (rules.min_brightness * f64::from(lum_median)) as f32,
+        eps,
+        rules,
+    };
+    let seeds = seeds(&ev, depth_sky, width, height);
+    let Some(seed_lum) = median(seeds.iter().map(|&p| ev.lum[p])) else {
+        return depth_only();
+    };
+    ev.floor = ev.floor.max(SEED_DIMMING * seed_lum);
+    let mut sky = grow_regions(&ev, &seeds, width, height, min_area_fraction);
+    sky.iter_mut().zip(depth_sky).for_each(|(s, &d)| *s |= d);
+    fill_gaps(&ev, &mut sky, width, height);
+    let noise = if sky.iter().any(|&s| s) {
+        (0..sky.len())
+            .filter(|&p| !sky[p] && range[p] == RangeClass::Unsupported && ev.looks_like_sky(p))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    ImageSky { sky, noise }
+}
+
+/// Admissible pixels of the top rows, and the depth rules' sky where it looks like sky.
+fn seeds(ev: &Evidence, depth_sky: &[bool], width: usize, height: usize) -> Vec<usize> {
+    let rows = ((ev.rules.seed_rows * height as f64).ceil() as usize).clamp(1, height);
+    (0..width * height)
+        .filter(|&p| {
+            (p < rows * width && ev.admissible(p)) || (depth_sky[p] && ev.looks_like_sky(p))
+        })
+        .collect()
+}
+
+/// Grows one region from every seed not yet reached (see the module docs) and returns the
+/// union of the regions that are large enough and do not reach the bottom row.
+fn grow_regions(
+    ev: &Evidence,
+    seeds: &[usize],
+    width: usize,
+    height: usize,
+    min_area_fraction: f64,
+) -> Vec<bool> {
+    let min_area = min_area_fraction * (width * height) as f64;
+    let mut reached = vec![false; width * height];
+    let mut sky = vec![false; width * height];
+    let mut region = Vec::new();
+    for &seed in seeds {
+        if reached[seed] {
+            continue;
+        }
+        region.clear();
+        region.push(seed);
+        reached[seed] = true;
+        grow(ev, &mut reached, &mut region, width, height);
+        refine(ev, &mut reached, &mut region, width, height);
+        let bottom = height > 1 && region.iter().any(|&p| p / width == height - 1);
+        if region.len() as f64 >= min_area && !bottom {
+            region.iter().for_each(|&p| sky[p] = true);
+        }
+    }
+    sky
+}
+
+/// The 4 directions as (dx, dy).
+const DIRS: [(isize, isize); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
+
+/// The pixel `k` steps from `p` in direction `d`, if in the image.
+#[inline]
+fn offset(p: usize, d: (isize, isize), k: usize, width: usize, height: usize) -> Option<usize> {
+    let x = (p % width) as isize + d.0 * k as isize;
+    let y = (p / width) as isize + d.1 * k as isize;
+    (x >= 0 && y >= 0 && (x as usize) < width && (y as usize) < height)
+        .then(|| y as usize * width + x as usize)
+}
+
+/// Breadth-first growth of `region` (its seeds already in it and `reached`), with jumps
+/// over thin occluders.
+fn grow(ev: &Evidence, reached: &mut [bool], region: &mut Vec<usize>, width: usize, height: usize) {
+    let mut head = 0;
+    while head < region.len() {
+        let p = region[head];
+        head += 1;
+        for d in DIRS {
+            for k in 1..=ev.rules.bridge_px + 1 {
+                let Some(q) = offset(p, d, k, width, height) else {
+                    break;
+                };
+                if reached[q] {
+                    break;
+                }
+                if ev.admissible(q) && ev.step_ok(p, q) {
+                    reached[q] = true;
+                    region.push(q);
+                    break;
+                }
+            }
+        }
+    }
+}
+
+/// Edge refinement: [`REFINE_ROUNDS`] rounds adding the 4-neighbours of the region that
+/// look like sky and pass the step test, without the texture test.
+fn refine(
+    ev: &Evidence,
+    reached: &mut [bool],
+    region: &mut Vec<usize>,
+    width: usize,
+    height: usize,
+) {
+    let mut from = 0;
+    for _ in 0..REFINE_ROUNDS {
+        let to = region.len();
+        for i in from..to {
+            let p = region[i];
+            for q in neighbours4(p, p % width, p / width, width, height)
+                .into_iter()
+                .flatten()
+            {
+                if !reached[q] && ev.looks_like_sky(q) && ev.step_ok(p, q) {
+                    reached[q] = true;
+                    region.push(q);
+                }
+            }
+        }
+        from = to;
+    }
+}
+
+/// Turns the gaps of `sky` into sky (see the module docs).
+fn fill_gaps(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) {
+    if !sky.iter().any(|&s| s) {
+        return;
+    }
+    let not_sky: Vec<bool> = sky.iter().map(|s| !s).collect();
+    let comps = label_mask(&not_sky, width, height);
+    let max_gap = ev.rules.max_gap_fraction * (width * height) as f64;
+    for c in &comps.list {
+        if c.reaches_bottom(height) {
+            continue;
+        }
+        let pixels = comps.pixels_of(c);
+        let confident = pixels
+            .iter()
+            .any(|&p| ev.range[p as usize] == RangeClass::Confident);
+        if confident {
+            continue;
+        }
+        let bright = pixels
+            .iter()
+            .filter(|&&p| ev.lum[p as usize] >= ev.floor)
+            .count();
+        if c.len as f64 <= max_gap || 2 * bright >= c.len {
+            pixels.iter().for_each(|&p| sky[p as usize] = true);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::raster::Grid;
+
+    #[test]
+    fn range_classes_tell_noise_from_surfaces() {
+        let n = f32::NAN;
+        #[rustfmt::skip]
+        let m = vec![
+            10.0, 10.1, 10.2, n,
+            10.0, 10.1, 500.0, n,
+            10.0, 10.1, 10.2, 77.0,
+        ];
+        let c = range_classes(&m, 4, 3, Some(100.0));
+        assert_eq!(c[0], RangeClass::Confident);
+        assert_eq!(c[3], RangeClass::Unknown);
+        assert_eq!(c[6], RangeClass::Far);
+        assert_eq!(c[11], RangeClass::Unsupported, "no neighbour agrees");
+    }
+
+    /// 80 % of the frame is sky, darker at the zenith than its median: still all sky.
+    #[test]
+    fn a_frame_mostly_of_sky_keeps_its_dark_zenith() {
+        let (w, h) = (40, 50);
+        let image = Grid::from_fn(w, h, |_, y| {
+            if y < 40 {
+                let t = y as f32 / 40.0;
+                [0.2 + 0.4 * t, 0.3 + 0.4 * t, 0.6 + 0.3 * t]
+            } else {
+                [0.15, 0.1, 0.05]
+            }
+        });
+        let range: Vec<f32> = (0..w * h)
+            .map(|p| if p / w < 40 { f32::NAN } else { 10.0 })
+            .collect();
+        let classes = range_classes(&range, w, h, None);
+        let found = image_sky(
+            &image,
+            &classes,
+            &vec![false; w * h],
+            &ImageSkyRules::default(),
+            0.01,
+        );
+        for (p, &s) in found.sky.iter().enumerate() {
+            assert_eq!(s, p / w < 40, "pixel ({}, {})", p % w, p / w);
+        }
+    }
+
+    #[test]
+    fn box3_is_a_clipped_mean() {
+        let v: Vec<f32> = (0..6).map(|i| i as f32).collect();
+        let b = box3(&v, 3, 2);
+        assert_eq!(b[0], (0.0 + 1.0 + 3.0 + 4.0) / 4.0);
+        assert_eq!(b[1], (0.0 + 1.0 + 2.0 + 3.0 + 4.0 + 5.0) / 6.0);
+    }
+
+    /// A sky over a textured ground; an unknown band on the left through both; a one-pixel
+    /// dark wire across the sky.
+    #[test]
+    fn sky_crosses_a_wire_and_stops_at_the_band_scene() {
+        let (w, h) = (60, 40);
+        let image = Grid::from_fn(w, h, |x, y| {
+            if y == 8 {
+                [0.05, 0.05, 0.05]
+            } else if y < 20 {
+                let t = y as f32 / 20.0;
+                [0.4 + 0.1 * t, 0.5 + 0.1 * t, 0.8 + 0.05 * t]
+            } else {
+                let k = ((x * 7 + y * 13) % 5) as f32 / 5.0;
+                [0.2 + 0.2 * k, 0.15 + 0.1 * k, 0.1]
+            }
+        });
+        let range: Vec<f32> = (0..w * h)
+            .map(|p| {
+                let (x, y) = (p % w, p / w);
+                if x < 8 || y < 20 {
+                    f32::NAN
+                } else {
+                    50.0 - y as f32
+                }
+            })
+            .collect();
+        let classes = range_classes(&range, w, h, None);
+        let sky = image_sky(
+            &image,
+            &classes,
+            &vec![false; w * h],
+            &ImageSkyRules::default(),
+            0.01,
+        )
+        .sky;
+        // The wire itself is a long dark gap: not sky here (`prepare` then finds it a
+        // hole with nothing but sky round it, and makes it sky).
+        for (p, &s) in sky.iter().enumerate() {
+            let y = p / w;
+            assert_eq!(s, y < 20 && y != 8, "pixel ({}, {y})", p % w);
+        }
+    }
+}
