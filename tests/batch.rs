@@ -323,3 +323,34 @@ fn each_output_is_what_render_writes_with_the_same_beta() {
         previous = Some(batch);
     }
 }
+
+#[test]
+fn a_gtfine_label_image_gives_the_sky() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 1);
+    // Cityscapes' labelIds: 23 is sky. The top 60 rows of the frame.
+    let gt = root.join("gtFine/train/aachen");
+    std::fs::create_dir_all(&gt).unwrap();
+    let (w, h) = image::image_dimensions(
+        root.join("leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit.png"),
+    )
+    .unwrap();
+    image::GrayImage::from_fn(w, h, |_, y| image::Luma([if y < 60 { 23 } else { 7 }]))
+        .save(gt.join("aachen_000000_000019_gtFine_labelIds.png"))
+        .unwrap();
+    let run = brume(
+        dir.path(),
+        &["batch", "cityscapes", "--out", "out", "--beta", "0.01"],
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let log = std::fs::read_to_string(dir.path().join("out/brume-batch-1-of-1.jsonl")).unwrap();
+    let record: serde_json::Value = serde_json::from_str(log.lines().next().unwrap()).unwrap();
+    assert!(
+        record["sky_mask"]
+            .as_str()
+            .unwrap()
+            .ends_with("_gtFine_labelIds.png"),
+        "{record}"
+    );
+    assert_eq!(record["airlight_source"], "sky", "{record}");
+}

@@ -946,11 +946,11 @@ pub struct BatchArgs {
 
     /// A CSV manifest: header image,depth[,camera][,calib][,sky_mask], one frame per row,
     /// paths relative to the manifest.
-    #[arg(long, value_name = "CSV")]
+    #[arg(long, value_name = "CSV", allow_hyphen_values = true)]
     pub manifest: Option<PathBuf>,
 
     /// Output folder (created); the input tree is mirrored under it.
-    #[arg(long, short, value_name = "DIR")]
+    #[arg(long, short, value_name = "DIR", allow_hyphen_values = true)]
     pub out: PathBuf,
 
     /// Extinction coefficients β in 1/m, comma-separated: one output per frame and β
@@ -965,7 +965,7 @@ pub struct BatchArgs {
 
     /// Take shard K of N (1 ≤ K ≤ N): a deterministic share of the frames, by a hash of
     /// their names, so that N jobs split a dataset with no coordination.
-    #[arg(long, value_name = "K/N")]
+    #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
     pub shard: Option<String>,
 
     /// Also write each output's transmittance τ as an 8-bit grey PNG

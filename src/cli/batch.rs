@@ -514,6 +514,9 @@ fn apply_companions(args: &mut RenderArgs, item: &Item) {
     if item.camera.is_some() {
         args.depth.camera = item.camera.clone();
     }
+    if item.sky_mask.is_some() && !args.no_prep && !args.prep.no_sky {
+        args.prep.sky_mask = item.sky_mask.clone();
+    }
 }
 
 /// The fog at extinction `beta` (1/m), as `--beta`.
