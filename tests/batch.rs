@@ -5,22 +5,10 @@
 
 mod common;
 
+use common::{brume, stderr};
+
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn brume(dir: &Path, args: &[&str]) -> Output {
-    let _gl = common::gl_lock();
-    Command::new(env!("CARGO_BIN_EXE_brume"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("brume runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
 
 /// Cityscapes' camera file of the test frames: metric range of 95-465 m from the demo's
 /// disparities (43-211 px).

@@ -8,25 +8,14 @@ use brume::io::output::{write_rgba, write_scalar};
 use brume::raster::{Grid, RgbImage};
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
+use std::process::Output;
 
 mod common;
 
+use common::{brume, stderr};
+
 /// ln 20: β·V at the visibility.
 const LN_20: f64 = 2.995_732_273_553_991;
-
-fn brume(dir: &Path, args: &[&str]) -> Output {
-    let _gl = common::gl_lock();
-    Command::new(env!("CARGO_BIN_EXE_brume"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run brume")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
 
 fn json(o: &Output) -> Value {
     assert!(o.status.success(), "{}", stderr(o));

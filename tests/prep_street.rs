@@ -5,6 +5,8 @@
 
 mod common;
 
+use common::brume;
+
 use brume::io::output::{write_rgba, write_scalar};
 use brume::prep::synthetic::{street_scene, StreetScene};
 use brume::prep::{
@@ -15,7 +17,6 @@ use brume::raster::Grid;
 use common::*;
 use serde_json::Value;
 use std::path::Path;
-use std::process::{Command, Output};
 
 const W: usize = 512;
 const H: usize = 256;
@@ -304,15 +305,6 @@ fn odd_inputs_never_panic() {
 }
 
 // --- The command line -------------------------------------------------------------------
-
-fn brume(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_brume"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("RUST_LOG")
-        .output()
-        .expect("run brume")
-}
 
 /// Writes the frame as `image.png` (8-bit sRGB) and `range.pfm`.
 fn write_frame(dir: &Path, s: &StreetScene) {

@@ -6,6 +6,8 @@
 
 mod common;
 
+use common::brume;
+
 use image::RgbImage;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -38,15 +40,6 @@ fn brume_in_window(dir: &Path, args: &[&str]) -> Output {
         .env_remove("WAYLAND_DISPLAY")
         .output()
         .expect("xvfb-run runs")
-}
-
-fn brume(dir: &Path, args: &[&str]) -> Output {
-    let _gl = common::gl_lock();
-    Command::new(env!("CARGO_BIN_EXE_brume"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("brume runs")
 }
 
 fn assert_ok(what: &str, out: &Output) {

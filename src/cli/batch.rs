@@ -232,12 +232,6 @@ fn load_frame(template: &RenderArgs, item: &Item) -> Result<Loaded> {
     let args = frame_args(template, item);
     let t = Instant::now();
     let scene = render_cmd::load_scene(&args)?;
-    render_cmd::check_same_size(
-        &scene.image,
-        &scene.image_name,
-        &scene.depth.range,
-        &scene.depth_name,
-    )?;
     let decode_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
     let prep = render_cmd::preprocess(&args, &scene)?;

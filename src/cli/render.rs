@@ -89,12 +89,6 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         .collect();
     super::refuse_overlaps(&[("--out", &out)], &inputs)?;
     let scene = load_scene(args)?;
-    check_same_size(
-        &scene.image,
-        &scene.image_name,
-        &scene.depth.range,
-        &scene.depth_name,
-    )?;
 
     let prep = preprocess(args, &scene)?;
     let range = prep
@@ -350,6 +344,8 @@ fn output_path(args: &RenderArgs) -> Result<PathBuf> {
     }
 }
 
+/// The photo and its range (or the demo), checked to be of one size and, for physical
+/// fog, in metres.
 pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     match (&args.image, &args.depth.depth) {
         (None, None) => {
@@ -377,6 +373,12 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
                     .display()
                     .to_string(),
             };
+            check_same_size(
+                &scene.image,
+                &scene.image_name,
+                &scene.depth.range,
+                &scene.depth_name,
+            )?;
             check_metric(args, &scene)?;
             Ok(scene)
         }

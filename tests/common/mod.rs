@@ -24,6 +24,22 @@ pub fn gl_lock() -> MutexGuard<'static, ()> {
     GL_LOCK.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// Runs the `brume` program with `args` in `dir`, one GL user at a time.
+pub fn brume(dir: &Path, args: &[&str]) -> std::process::Output {
+    let _gl = gl_lock();
+    std::process::Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run brume")
+}
+
+/// A program's stderr as text.
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
 /// A new headless context and renderer; a missing EGL fails the test.
 pub fn headless() -> Headless {
     Headless::new(None).unwrap_or_else(|e| panic!("cannot open a GL context: {e}"))

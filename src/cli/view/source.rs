@@ -176,12 +176,6 @@ impl Photo {
     pub fn load(args: &RenderArgs, gl: &Arc<glow::Context>) -> Result<Self> {
         render_cmd::haze_from_args(args)?;
         let scene = render_cmd::load_scene(args)?;
-        render_cmd::check_same_size(
-            &scene.image,
-            &scene.image_name,
-            &scene.depth.range,
-            &scene.depth_name,
-        )?;
         let prep = render_cmd::preprocess(args, &scene)?;
         let range = prep
             .prepared
