@@ -281,7 +281,12 @@ fn a_far_outlier_does_not_change_the_fog_of_the_rest() {
                 scene(x, y)
             }
         });
-        for (name, fog) in [("beta", &["--beta", "0.02"][..]), ("kappa", &[][..])] {
+        let fogs = [
+            ("beta", &["--beta", "0.02", "--far-outlier-factor", "0"][..]),
+            ("kappa", &["--far-outlier-factor", "0"][..]),
+            ("kappa-cut", &[][..]),
+        ];
+        for (name, fog) in fogs {
             let out = format!("{name}-{with_outlier}.pfm");
             let mut args = fog.to_vec();
             args.extend(["--airlight", "0.7,0.75,0.8", "--out", out.as_str()]);
@@ -290,7 +295,9 @@ fn a_far_outlier_does_not_change_the_fog_of_the_rest() {
             renders.push(load(&dir.path().join(out)));
         }
     }
-    let (beta, kappa, beta_out, kappa_out) = (&renders[0], &renders[1], &renders[2], &renders[3]);
+    let [beta, kappa, kappa_cut, beta_out, kappa_out, kappa_cut_out] = &renders[..] else {
+        unreachable!("six renders");
+    };
     // Largest change of a pixel at least `gap` px (Chebyshev) from the outlier.
     let change = |a: &RgbImage, b: &RgbImage, gap: usize| {
         let mut worst = 0f32;
@@ -316,12 +323,16 @@ fn a_far_outlier_does_not_change_the_fog_of_the_rest() {
         "--beta: the outlier moved far pixels by {physical}"
     );
     assert!(change(beta, beta_out, 1) < 0.1);
-    // With normalised κ the same outlier thins the fog everywhere (measured 0.44).
+    // With normalised κ and pre-processing's far-outlier rule off, the same outlier sets
+    // the frame's scale and thins the fog everywhere (measured 0.44) ...
     let normalised = change(kappa, kappa_out, 10);
     assert!(
         normalised > 0.2,
         "normalised κ moved far pixels by only {normalised}"
     );
+    // ... and with the rule on (the default), the outlier is taken as unknown first.
+    let cut = change(kappa_cut, kappa_cut_out, 10);
+    assert!(cut < 1e-5, "the far-outlier rule left a change of {cut}");
 }
 
 /// Bad values, and physical fog on a range that is not in metres: one clear line, the
