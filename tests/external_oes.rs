@@ -201,33 +201,7 @@ struct ExternalFrame {
 impl ExternalFrame {
     fn new(host: &Host) -> ExternalFrame {
         let gl = &host.gl;
-        // SAFETY: texture creation on the host's current context; the pattern has
-        // W * H * 4 bytes.
-        let source = unsafe {
-            let t = gl.create_texture().expect("a texture");
-            gl.bind_texture(glow::TEXTURE_2D, Some(t));
-            for (param, value) in [
-                (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
-                (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
-            ] {
-                gl.tex_parameter_i32(glow::TEXTURE_2D, param, value as i32);
-            }
-            gl.tex_storage_2d(glow::TEXTURE_2D, 1, glow::RGBA8, W as i32, H as i32);
-            gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 1);
-            gl.tex_sub_image_2d(
-                glow::TEXTURE_2D,
-                0,
-                0,
-                0,
-                W as i32,
-                H as i32,
-                glow::RGBA,
-                glow::UNSIGNED_BYTE,
-                glow::PixelUnpackData::Slice(Some(&pattern_bytes())),
-            );
-            gl.bind_texture(glow::TEXTURE_2D, None);
-            t
-        };
+        let source = pattern_texture(gl, glow::RGBA8);
         // SAFETY: the buffer of an EGL_GL_TEXTURE_2D image is the texture's name.
         let buffer = unsafe { egl::ClientBuffer::from_ptr(source.0.get() as usize as *mut c_void) };
         let image = host
@@ -448,13 +422,20 @@ fn decode_error(clear: &Rendered) -> (f64, f64) {
     (absolute, steps)
 }
 
-/// The pattern in a plain `SRGB8_ALPHA8` 2D texture (GL decodes it, as it does the copy).
-fn srgb8_texture(gl: &glow::Context) -> glow::Texture {
+/// The pattern in a 2D texture of 8-bit RGBA `format`: `RGBA8` for the external image's
+/// source, or `SRGB8_ALPHA8`, which GL decodes as it does the copy.
+fn pattern_texture(gl: &glow::Context, format: u32) -> glow::Texture {
     // SAFETY: texture creation and upload of W * H * 4 bytes on the current context.
     unsafe {
         let t = gl.create_texture().expect("a texture");
         gl.bind_texture(glow::TEXTURE_2D, Some(t));
-        gl.tex_storage_2d(glow::TEXTURE_2D, 1, glow::SRGB8_ALPHA8, W as i32, H as i32);
+        for (param, value) in [
+            (glow::TEXTURE_MIN_FILTER, glow::NEAREST),
+            (glow::TEXTURE_MAG_FILTER, glow::NEAREST),
+        ] {
+            gl.tex_parameter_i32(glow::TEXTURE_2D, param, value as i32);
+        }
+        gl.tex_storage_2d(glow::TEXTURE_2D, 1, format, W as i32, H as i32);
         gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 1);
         gl.tex_sub_image_2d(
             glow::TEXTURE_2D,
@@ -563,7 +544,7 @@ fn an_external_image_is_imported_texel_for_texel_and_renders_like_the_plain_text
     let copy = pipeline
         .import_external(&frame.colour(IDENTITY))
         .expect("an import");
-    let srgb_plain = srgb8_texture(&gl);
+    let srgb_plain = pattern_texture(&gl, glow::SRGB8_ALPHA8);
     let copied = (copy, Encoding::Linear);
     let plain_srgb8 = (srgb_plain, Encoding::Linear);
     let plain_rgba8 = (frame.source, Encoding::Srgb);

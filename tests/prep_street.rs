@@ -321,7 +321,8 @@ fn write_labels(path: &Path, w: usize, h: usize, label: impl Fn(usize, usize) ->
     image::save_buffer(path, &px, w as u32, h as u32, image::ColorType::L8).unwrap();
 }
 
-fn prep_json(dir: &Path, extra: &[&str]) -> Value {
+/// `brume prep` on the frame `write_frame` wrote, with `extra` options.
+fn prep(dir: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
         "prep",
         "--depth",
@@ -332,10 +333,13 @@ fn prep_json(dir: &Path, extra: &[&str]) -> Value {
         "image.png",
         "--out",
         "out.pfm",
-        "--json",
     ];
     args.extend_from_slice(extra);
-    let o = brume(dir, &args);
+    brume(dir, &args)
+}
+
+fn prep_json(dir: &Path, extra: &[&str]) -> Value {
+    let o = prep(dir, &[extra, &["--json"]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     serde_json::from_slice(&o.stdout).unwrap()
 }
@@ -449,21 +453,7 @@ fn cli_sky_mask_errors_name_the_problem() {
     let s = frame();
     write_frame(dir.path(), &s);
     write_labels(&dir.path().join("small.png"), 100, 50, |_, _| 255);
-    let run = |extra: &[&str]| {
-        let mut args = vec![
-            "prep",
-            "--depth",
-            "range.pfm",
-            "--depth-kind",
-            "range",
-            "--image",
-            "image.png",
-            "--out",
-            "out.pfm",
-        ];
-        args.extend_from_slice(extra);
-        brume(dir.path(), &args)
-    };
+    let run = |extra: &[&str]| prep(dir.path(), extra);
     let o = run(&["--sky-mask", "small.png"]);
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(!o.status.success());
