@@ -23,6 +23,8 @@ struct Loaded {
     args: RenderArgs,
     scene: Scene,
     prep: PrepReport,
+    /// The range texture's values (metres), shared by every β.
+    range: ScalarMap,
     decode_ms: f64,
     prep_ms: f64,
 }
@@ -235,12 +237,15 @@ fn load_frame(template: &RenderArgs, item: &Item) -> Result<Loaded> {
     let decode_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
     let prep = render_cmd::preprocess(&args, &scene)?;
+    // Range in metres, the same for every β: made once, here, off the GPU's thread.
+    let (range, _, _) = render_cmd::haze_inputs(&args, &scene, &prep)?;
     let prep_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Loaded {
         item: item.clone(),
         args,
         scene,
         prep,
+        range,
         decode_ms,
         prep_ms,
     })
@@ -312,13 +317,15 @@ fn render_beta(
     let t = Instant::now();
     let mut fog_args = frame.args.clone();
     apply_beta(&mut fog_args, beta);
-    let (range, _, look) = render_cmd::haze_inputs(&fog_args, &frame.scene, &frame.prep)?;
-    let rendered = renderer.render(&frame.scene.image, &range, look.medium(), &look.blur)?;
+    let haze = render_cmd::haze_from_args(&fog_args)?;
+    let look = render_cmd::look_from_args(&fog_args, &haze, frame.prep.airlight);
+    let range = &frame.range;
+    let rendered = renderer.render(&frame.scene.image, range, look.medium(), &look.blur)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     let item = &frame.item;
     let path = item.foggy_output(&args.out, beta);
     let transmittance = args.transmittance.then(|| {
-        let t = transmittance_rgb8(&range, |r| look.haze.transmission(r)[1]);
+        let t = transmittance_rgb8(range, |r| look.haze.transmission(r)[1]);
         (
             item.transmittance_output(&args.out, beta),
             t,

@@ -463,10 +463,7 @@ impl Viewer {
     fn stats_json(&mut self, args: &ViewArgs) -> serde_json::Value {
         let size = self.window.window.inner_size();
         let (w, h) = self.source.size();
-        // The first frame compiles the programs; the figures are of the frames after it.
-        let steady: Vec<&FrameStat> = self.stats.iter().skip(1).collect();
-        let gpu = median(steady.iter().map(|s| s.gpu_ms).collect());
-        let wall = median(steady.iter().map(|s| s.wall_ms).collect());
+        let (gpu, wall) = self.steady_medians();
         json!({
             "renderer": self.renderer,
             "source": self.source.describe(),
@@ -486,10 +483,18 @@ impl Viewer {
         })
     }
 
+    /// Median GPU and wall-clock times (ms) of the frames after the first, which compiles
+    /// the programs.
+    fn steady_medians(&self) -> (Option<f64>, Option<f64>) {
+        let steady = &self.stats[self.stats.len().min(1)..];
+        (
+            median(steady.iter().map(|s| s.gpu_ms).collect()),
+            median(steady.iter().map(|s| s.wall_ms).collect()),
+        )
+    }
+
     fn print_summary(&self) {
-        let steady: Vec<&FrameStat> = self.stats.iter().skip(1).collect();
-        let gpu = median(steady.iter().map(|s| s.gpu_ms).collect());
-        let wall = median(steady.iter().map(|s| s.wall_ms).collect());
+        let (gpu, wall) = self.steady_medians();
         let (w, h) = self.source.size();
         println!(
             "{} frames of {w}x{h} on {}: median {} ms GPU, {} ms per frame ({} fps) after the first",

@@ -340,6 +340,8 @@ pub struct SceneView {
     blur: BlurKind,
     gauss: GaussBlur,
     diffusion: Blur,
+    /// The medium of `--fog none`: τ = 1, no blur.
+    clear: UniformBlur,
     animate: bool,
 }
 
@@ -365,6 +367,7 @@ impl SceneView {
             blur: args.blur,
             gauss,
             diffusion,
+            clear: UniformBlur::new(1.0),
             animate: true,
         })
     }
@@ -395,11 +398,14 @@ impl SceneView {
         }
     }
 
-    /// The fog in use at `time`, with the viewer's camera.
-    fn medium_at(&mut self, time: f64) -> Option<&dyn Medium> {
+    /// The fog in use at `time`, with the viewer's camera, and its blur. Without fog: a
+    /// medium that leaves the frame as it is (τ = 1) through the fog pass, which also
+    /// encodes it for the display target.
+    fn medium_at(&mut self, time: f64) -> (&dyn Medium, FogBlur) {
         let camera = self.camera;
+        let blur = self.fog_blur();
         let m = match self.fog {
-            FogKind::None => return None,
+            FogKind::None => return (&self.clear, FogBlur::None),
             FogKind::Distance => &mut self.distance,
             FogKind::Layered => &mut self.layered,
         };
@@ -408,7 +414,7 @@ impl SceneView {
             SceneMedium::Distance(f) => f.camera = camera,
             SceneMedium::Layered(f) => f.camera = camera,
         }
-        Some(m.medium())
+        (m.medium(), blur)
     }
 
     fn draw(&mut self, time: f64) -> Result<Input> {
@@ -431,28 +437,15 @@ impl SceneView {
         time: f64,
     ) -> Result<FrameTimes> {
         let input = self.draw(time)?;
-        let blur = self.fog_blur();
-        let Some(medium) = self.medium_at(time) else {
-            // No fog: the frame through the fog pass of a medium that leaves it as it is
-            // (τ = 1), which also encodes it for the display target.
-            let clear = brume::medium::UniformBlur::new(1.0);
-            let frame = pipeline.fog(&input, &clear, &FogBlur::None, output)?;
-            return Ok(times(&frame, FogBlur::None.pass_names(0)));
-        };
+        let (medium, blur) = self.medium_at(time);
         let frame = pipeline.fog(&input, medium, &blur, output)?;
         Ok(times(&frame, blur.pass_names(frame.schedule.steps)))
     }
 
     fn render_to_image(&mut self, pipeline: &mut Pipeline, time: f64) -> Result<RgbaImage> {
         let input = self.draw(time)?;
-        let blur = self.fog_blur();
-        match self.medium_at(time) {
-            Some(medium) => Ok(pipeline.fog_to_image(&input, medium, &blur)?.1),
-            None => {
-                let clear = brume::medium::UniformBlur::new(1.0);
-                Ok(pipeline.fog_to_image(&input, &clear, &FogBlur::None)?.1)
-            }
-        }
+        let (medium, blur) = self.medium_at(time);
+        Ok(pipeline.fog_to_image(&input, medium, &blur)?.1)
     }
 
     fn controls(&mut self, ui: &mut Ui) -> bool {
