@@ -75,12 +75,7 @@ impl Framebuffer {
             gl.draw_buffers(&buffers);
             let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
             gl.bind_framebuffer(glow::FRAMEBUFFER, None);
-            if status != glow::FRAMEBUFFER_COMPLETE {
-                return Err(Error::Gl(format!(
-                    "the framebuffer for {what} is incomplete (status 0x{status:04X}): the \
-                     driver cannot render to its texture format"
-                )));
-            }
+            check_complete(status, what)?;
             Ok(framebuffer)
         }
     }
@@ -111,13 +106,10 @@ impl Framebuffer {
         };
         self.width = width;
         self.height = height;
-        if texture.is_some() && status != glow::FRAMEBUFFER_COMPLETE {
-            return Err(Error::Gl(format!(
-                "the framebuffer for {what} is incomplete (status 0x{status:04X}): the \
-                 driver cannot render to its texture format"
-            )));
+        match texture {
+            Some(_) => check_complete(status, what),
+            None => Ok(()),
         }
-        Ok(())
     }
 
     /// A framebuffer over brume's own `textures`.
@@ -174,4 +166,15 @@ impl Drop for Framebuffer {
         unsafe { self.gl.delete_framebuffer(self.fbo) };
         super::object_deleted();
     }
+}
+
+/// The error of a framebuffer whose `glCheckFramebufferStatus` is not complete.
+fn check_complete(status: u32, what: &str) -> Result<()> {
+    if status == glow::FRAMEBUFFER_COMPLETE {
+        return Ok(());
+    }
+    Err(Error::Gl(format!(
+        "the framebuffer for {what} is incomplete (status 0x{status:04X}): the driver \
+         cannot render to its texture format"
+    )))
 }
