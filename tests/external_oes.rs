@@ -6,8 +6,9 @@
 //! the plain texture.
 //!
 //! The host opens its own context with khronos-egl (brume's `GlContext` does not expose
-//! its display, which `eglCreateImage` needs). Under `CI=true` a missing extension fails
-//! the test (brume's rule: CI must prove the path); elsewhere it is skipped with a note.
+//! its display, which `eglCreateImage` needs). A missing extension fails the test, never
+//! skips it (brume's rule: a missing capability is a failure); Mesa's llvmpipe through EGL
+//! surfaceless has every one of them.
 mod common;
 
 use brume::pipeline::{ExternalColour, IDENTITY, TEXTURE_BINDING_EXTERNAL_OES};
@@ -136,8 +137,9 @@ impl Host {
         self.gl.supported_extensions().contains(name)
     }
 
-    /// Whether the driver has everything this test needs; prints what it found.
-    fn has_external_images(&self) -> bool {
+    /// Fails the test, naming what is missing, unless the driver has every extension
+    /// these tests need; prints what it found.
+    fn require_external_images(&self) {
         let found = [
             (
                 "GL_OES_EGL_image_external_essl3",
@@ -165,7 +167,19 @@ impl Host {
             .filter(|(name, present)| needed.contains(name) && !present)
             .map(|(name, _)| *name)
             .collect();
-        available(&missing)
+        assert!(
+            missing.is_empty(),
+            "the driver ({}) lacks {}: external images cannot be tested (a missing \
+             capability is a failure, not a skip; Mesa's llvmpipe through EGL surfaceless has \
+             them: run tools/setup.sh)",
+            self.gl_renderer(),
+            missing.join(", ")
+        );
+    }
+
+    fn gl_renderer(&self) -> String {
+        // SAFETY: a string query on the host's context, current since `open`.
+        unsafe { self.gl.get_parameter_string(glow::RENDERER) }
     }
 }
 
@@ -174,20 +188,6 @@ impl Drop for Host {
         let _ = self.egl.make_current(self.display, None, None, None);
         let _ = self.egl.destroy_context(self.display, self.context);
     }
-}
-
-/// True when nothing is missing. A missing capability fails the test under `CI=true`
-/// and skips it elsewhere.
-fn available(missing: &[&str]) -> bool {
-    if missing.is_empty() {
-        return true;
-    }
-    let what = missing.join(", ");
-    if std::env::var("CI").is_ok_and(|v| v == "true") {
-        panic!("the driver lacks {what}: in CI a missing capability is a failure, not a skip");
-    }
-    eprintln!("skipped: the driver lacks {what}");
-    false
 }
 
 /// An RGBA8 `GL_TEXTURE_2D` holding the pattern, an EGLImage of it, and that image bound
@@ -503,9 +503,7 @@ fn assert_state_left(gl: &glow::Context) {
 fn an_external_image_is_imported_texel_for_texel_and_renders_like_the_plain_texture() {
     let _lock = common::gl_lock();
     let host = Host::open();
-    if !host.has_external_images() {
-        return;
-    }
+    host.require_external_images();
     let gl = Arc::clone(&host.gl);
     let frame = ExternalFrame::new(&host);
     let depth = range_texture(&gl);
@@ -629,9 +627,7 @@ fn an_external_image_is_imported_texel_for_texel_and_renders_like_the_plain_text
 fn bad_sizes_and_transforms_are_refused_by_name() {
     let _lock = common::gl_lock();
     let host = Host::open();
-    if !host.has_external_images() {
-        return;
-    }
+    host.require_external_images();
     let frame = ExternalFrame::new(&host);
     let mut pipeline = Pipeline::new(Arc::clone(&host.gl)).expect("a pipeline");
     let max = pipeline.caps().max_texture_size as usize;
