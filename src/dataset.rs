@@ -76,13 +76,17 @@ impl Shard {
     /// The whole of the work.
     pub const ALL: Shard = Shard { index: 1, count: 1 };
 
-    /// Parses `K/N` with 1 ≤ K ≤ N.
+    /// Parses `K/N` with 1 ≤ K ≤ N, or `slurm` for [`Shard::from_slurm`] with the
+    /// process's environment.
     pub fn parse(text: &str) -> Result<Self> {
+        if text.trim() == "slurm" {
+            return Self::from_slurm(|name| std::env::var(name).ok());
+        }
         let bad = || {
             Error::invalid(
                 "--shard",
                 text,
-                "K/N with 1 ≤ K ≤ N (e.g. 3/8; Slurm: $((SLURM_ARRAY_TASK_ID+1))/$SLURM_ARRAY_TASK_COUNT)",
+                "K/N with 1 ≤ K ≤ N (e.g. 3/8), or slurm in a task of a Slurm job array",
             )
         };
         let (k, n) = text.split_once('/').ok_or_else(bad)?;
@@ -96,9 +100,66 @@ impl Shard {
     /// Whether `item` belongs to this shard. By a hash of the item's key, not its place in
     /// a list: every shard decides alone, and adding frames to a dataset moves no other
     /// frame to another shard.
+    ///
+    /// The hash is FNV-1a mixed by SplitMix64's finaliser: raw FNV-1a's low bits follow the
+    /// last bytes of the key, so consecutive frame names fell into every other shard
+    /// (8 frames over 4 shards: 0/4/0/4). Shard membership changed with the mixing.
     pub fn contains(&self, item: &Item) -> bool {
-        fnv1a(item.key().as_bytes()) % u64::from(self.count) == u64::from(self.index - 1)
+        let hash = splitmix64_finish(fnv1a(item.key().as_bytes()));
+        hash % u64::from(self.count) == u64::from(self.index - 1)
     }
+
+    /// This task's shard of a Slurm job array, from the variables Slurm sets in each task:
+    /// `SLURM_ARRAY_TASK_ID`, `_MIN`, `_STEP` (default 1) and `_COUNT`. Any array works
+    /// (`--array=0-15`, `1-16`, `0-30:2`): the task's place in it is the shard.
+    pub fn from_slurm(var: impl Fn(&str) -> Option<String>) -> Result<Self> {
+        let number = |name: &str| -> Result<Option<u64>> {
+            match var(name) {
+                None => Ok(None),
+                Some(text) => text.trim().parse::<u64>().map(Some).map_err(|_| {
+                    Error::invalid(
+                        "--shard slurm",
+                        format!("{name}={text}"),
+                        "a whole number, as Slurm sets it in each task of a job array",
+                    )
+                }),
+            }
+        };
+        let missing = || {
+            Error::invalid(
+                "--shard slurm",
+                "(SLURM_ARRAY_TASK_ID, _MIN or _COUNT unset)",
+                "a task of a Slurm job array (sbatch --array=...)",
+            )
+        };
+        let id = number("SLURM_ARRAY_TASK_ID")?.ok_or_else(missing)?;
+        let min = number("SLURM_ARRAY_TASK_MIN")?.ok_or_else(missing)?;
+        let count = number("SLURM_ARRAY_TASK_COUNT")?.ok_or_else(missing)?;
+        let step = number("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1).max(1);
+        let place = id
+            .checked_sub(min)
+            .filter(|d| d % step == 0)
+            .map(|d| d / step + 1);
+        match (place, u32::try_from(count)) {
+            (Some(index), Ok(count)) if index <= u64::from(count) => Ok(Shard {
+                index: index as u32,
+                count,
+            }),
+            _ => Err(Error::invalid(
+                "--shard slurm",
+                format!("task {id} of an array from {min} by {step}, {count} tasks"),
+                "an array of evenly spaced task ids (`--array=1-16` or `0-30:2`, not a \
+                 list): use --shard K/N",
+            )),
+        }
+    }
+}
+
+/// SplitMix64's output function: every input bit moves every output bit.
+fn splitmix64_finish(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
 }
 
 /// FNV-1a, 64 bits: stable across platforms and releases (std's hasher is not).
@@ -215,9 +276,21 @@ fn swap_component(path: &Path, from: &str, to: &str) -> Option<PathBuf> {
 /// The frames of a CSV manifest: a header naming the columns `image` and `depth`
 /// (required) and `camera`, `calib`, `sky_mask` (optional; empty cells allowed), then one
 /// row per frame. Relative paths are relative to the manifest's folder; outputs mirror
-/// the images' folders relative to it.
+/// the images' folders relative to it. See [`parse_manifest`].
 pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_manifest(&text, path)
+}
+
+/// [`read_manifest`] on the text of a manifest; `path` is the manifest's path, which names
+/// it in errors and whose folder relative paths are resolved against. Blank lines and
+/// lines starting with `#` are skipped, and a leading byte-order mark (as spreadsheets
+/// write) is ignored. Errors: no header, an unknown or repeated column, no `image` or
+/// `depth` column, a header and no rows, a row with another number of cells than the
+/// header, an empty image or depth cell. Every item returned has a non-empty image and
+/// depth path.
+pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let base = path.parent().unwrap_or(Path::new("."));
     let mut lines = text
         .lines()
@@ -230,13 +303,19 @@ pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
     })?;
     let columns: Vec<String> = header.split(',').map(|c| c.trim().to_lowercase()).collect();
     let column = |name: &str| columns.iter().position(|c| c == name);
-    for c in &columns {
+    for (i, c) in columns.iter().enumerate() {
         if !["image", "depth", "camera", "calib", "sky_mask"].contains(&c.as_str()) {
             return Err(Error::Format {
                 path: path.to_path_buf(),
                 detail: format!(
                     "unknown column `{c}`: expected image, depth, camera, calib, sky_mask"
                 ),
+            });
+        }
+        if columns[..i].contains(c) {
+            return Err(Error::Format {
+                path: path.to_path_buf(),
+                detail: format!("the header `{header}` names the column `{c}` twice"),
             });
         }
     }
@@ -288,6 +367,15 @@ pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
             sky_mask: cell(column("sky_mask")),
             out_dir,
             stem,
+        });
+    }
+    if items.is_empty() {
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            detail: format!(
+                "the manifest has a header but no rows: expected one row per frame after \
+                 `{header}`"
+            ),
         });
     }
     Ok(items)
@@ -347,6 +435,96 @@ mod tests {
         }
     }
 
+    /// Consecutive frame names, a few at a time, spread over the shards as a uniform
+    /// random assignment would: with raw FNV-1a, 8 consecutive frames over 4 shards left
+    /// 2 shards empty every time (0/4/0/4).
+    #[test]
+    fn small_sets_spread_like_random_ones() {
+        let (frames, shards, sets) = (8usize, 4u32, 200usize);
+        let mut empty = 0usize;
+        for set in 0..sets {
+            let mut counts = vec![0usize; shards as usize];
+            for f in 0..frames {
+                let it = item(
+                    "leftImg8bit/val/frankfurt",
+                    &format!("frankfurt_{:06}_{:06}_leftImg8bit", set, 19 + f),
+                );
+                let k = (1..=shards)
+                    .find(|&k| {
+                        Shard {
+                            index: k,
+                            count: shards,
+                        }
+                        .contains(&it)
+                    })
+                    .unwrap();
+                counts[k as usize - 1] += 1;
+            }
+            empty += counts.iter().filter(|&&c| c == 0).count();
+        }
+        // Uniform: P(a shard gets none of 8) = (3/4)^8 = 0.100, so 0.40 empty shards per
+        // set, 80 over 200 sets (σ ≈ 8.5); raw FNV-1a gave 400.
+        let expected = sets as f64 * f64::from(shards) * 0.75f64.powi(frames as i32);
+        assert!(
+            (empty as f64 - expected).abs() < 40.0,
+            "{empty} empty shards over {sets} sets, a uniform hash gives about {expected:.0}"
+        );
+    }
+
+    #[test]
+    fn slurm_arrays_give_every_task_its_shard() {
+        let env = |id: &str, min: &str, step: Option<&str>, count: &str| {
+            let vars: Vec<(String, String)> = [
+                ("SLURM_ARRAY_TASK_ID", Some(id)),
+                ("SLURM_ARRAY_TASK_MIN", Some(min)),
+                ("SLURM_ARRAY_TASK_STEP", step),
+                ("SLURM_ARRAY_TASK_COUNT", Some(count)),
+            ]
+            .into_iter()
+            .filter_map(|(k, v)| v.map(|v| (k.to_string(), v.to_string())))
+            .collect();
+            Shard::from_slurm(move |name| {
+                vars.iter().find(|(k, _)| k == name).map(|(_, v)| v.clone())
+            })
+        };
+        // --array=1-16: task 1 is shard 1 (the README's old `ID + 1` skipped it).
+        assert_eq!(
+            env("1", "1", None, "16").unwrap(),
+            Shard {
+                index: 1,
+                count: 16
+            }
+        );
+        assert_eq!(
+            env("16", "1", None, "16").unwrap(),
+            Shard {
+                index: 16,
+                count: 16
+            }
+        );
+        assert_eq!(
+            env("0", "0", Some("1"), "4").unwrap(),
+            Shard { index: 1, count: 4 }
+        );
+        assert_eq!(
+            env("30", "0", Some("2"), "16").unwrap(),
+            Shard {
+                index: 16,
+                count: 16
+            }
+        );
+        for bad in [
+            env("3", "0", Some("2"), "16"),
+            env("40", "1", None, "16"),
+            env("x", "1", None, "16"),
+        ] {
+            let e = bad.unwrap_err().to_string();
+            assert!(e.contains("--shard slurm"), "{e}");
+        }
+        let unset = Shard::from_slurm(|_| None).unwrap_err().to_string();
+        assert!(unset.contains("SLURM_ARRAY_TASK_ID"), "{unset}");
+    }
+
     #[test]
     fn shard_syntax() {
         assert_eq!(Shard::parse("3/8").unwrap(), Shard { index: 3, count: 8 });
@@ -370,6 +548,75 @@ mod tests {
         );
         assert_eq!(beta_label(0.005), "0.005");
         assert_eq!(beta_label(0.01), "0.01");
+    }
+
+    #[test]
+    fn manifests_are_parsed_against_their_folder() {
+        let path = Path::new("/data/set/frames.csv");
+        let text = "\u{feff}# frames\nImage, depth ,sky_mask\n\n\
+                    left/a.png,depth/a.png,\n/abs/b.jpg,d/b.pfm,masks/b.png\n";
+        let items = parse_manifest(text, path).unwrap();
+        assert_eq!(items.len(), 2);
+        assert_eq!(items[0].image, Path::new("/data/set/left/a.png"));
+        assert_eq!(items[0].depth, Path::new("/data/set/depth/a.png"));
+        assert_eq!(
+            (items[0].sky_mask.as_ref(), items[0].camera.as_ref()),
+            (None, None)
+        );
+        assert_eq!(items[0].out_dir, Path::new("left"));
+        assert_eq!(items[0].stem, "a");
+        assert_eq!(items[1].image, Path::new("/abs/b.jpg"));
+        assert_eq!(items[1].out_dir, Path::new(""));
+        assert_eq!(
+            items[1].sky_mask.as_deref(),
+            Some(Path::new("/data/set/masks/b.png"))
+        );
+    }
+
+    #[test]
+    fn manifest_errors_name_the_file() {
+        let path = Path::new("/data/frames.csv");
+        let err = |text: &str| parse_manifest(text, path).unwrap_err().to_string();
+        for (text, needle) in [
+            ("", "empty manifest"),
+            ("# only a comment\n\n", "empty manifest"),
+            (
+                "image,depth\n",
+                "has a header but no rows: expected one row per frame",
+            ),
+            (
+                "image,depth\n# a comment\n  \n",
+                "has a header but no rows: expected one row per frame",
+            ),
+            ("image,depth,colour\na,b,c\n", "unknown column `colour`"),
+            ("image,depth,image\na,b,c\n", "the column `image` twice"),
+            ("image,camera\na,b\n", "lacks the column `image` or `depth`"),
+            ("image,depth\na,b,c\n", "line 2: 3 cells, expected 2"),
+            (
+                "image,depth\na, \n",
+                "line 2: the image or depth cell is empty",
+            ),
+        ] {
+            let e = err(text);
+            assert!(
+                e.starts_with("/data/frames.csv: ") && e.contains(needle),
+                "{text:?}: `{e}` should name the file and say `{needle}`"
+            );
+        }
+    }
+
+    #[test]
+    fn read_manifest_reads_the_file_and_names_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("m.csv");
+        std::fs::write(&path, "image,depth\ni.png,d.png\n").unwrap();
+        let items = read_manifest(&path).unwrap();
+        assert_eq!(items[0].depth, dir.path().join("d.png"));
+        std::fs::write(&path, "image,depth\n").unwrap();
+        let e = read_manifest(&path).unwrap_err().to_string();
+        assert!(e.contains("m.csv") && e.contains("no rows"), "{e}");
+        let e = read_manifest(&dir.path().join("none.csv")).unwrap_err();
+        assert!(e.to_string().contains("none.csv"), "{e}");
     }
 
     #[test]

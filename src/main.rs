@@ -1,5 +1,6 @@
 //! `brume`: add physically based haze to RGBD images on OpenGL ES 3.2 through EGL.
 
+#[macro_use]
 mod cli;
 
 use clap::Parser;
@@ -12,7 +13,7 @@ fn main() -> ExitCode {
     match cli::run(args) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("brume: error: {}", cli::name_flags(e));
+            errln!("brume: error: {}", cli::name_flags(e));
             ExitCode::FAILURE
         }
     }

@@ -53,10 +53,14 @@ pub fn compare(a: &RgbImage, a_name: &str, b: &RgbImage, b_name: &str) -> Result
     }
     let side = 2 * WINDOW_RADIUS + 1;
     if a.width() < side || a.height() < side {
-        return Err(Error::invalid(
-            "image",
-            format!("{}x{}", a.width(), a.height()),
-            format!("at least {side}x{side} px (SSIM's window)"),
+        return Err(Error::format(
+            std::path::Path::new(a_name),
+            format!(
+                "is {}x{} px; SSIM compares {side}x{side} windows, so both images need at \
+                 least that",
+                a.width(),
+                a.height()
+            ),
         ));
     }
     let encoded =

@@ -135,7 +135,11 @@ fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
     // A second run finds everything complete: it writes nothing and changes nothing.
     let again = run(&["--transmittance"]);
     assert!(again.status.success(), "{}", stderr(&again));
-    assert!(String::from_utf8_lossy(&again.stdout).contains("wrote 0 outputs"));
+    let summary = String::from_utf8_lossy(&again.stdout).into_owned();
+    assert!(
+        summary.contains("wrote 0 outputs") && summary.contains("skipped 4 already written"),
+        "{summary}"
+    );
     assert_eq!(outputs(&dir.path().join("out")), written);
 
     // A lost output is written again, and only it.
@@ -341,4 +345,163 @@ fn a_gtfine_label_image_gives_the_sky() {
         "{record}"
     );
     assert_eq!(record["airlight_source"], "sky", "{record}");
+}
+
+/// The transmittance maps hold τ = exp(−βR) of each pixel's range in metres, computed here
+/// from the disparity file and the camera file alone: range = fx·B/d·|ray| with d = (p −
+/// 1)/256 (they were black: the range in metres was read as normalised range).
+#[test]
+fn transmittance_maps_are_exp_of_minus_beta_times_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 1);
+    let beta = 0.005;
+    let run = brume(
+        dir.path(),
+        &[
+            "batch",
+            "cityscapes",
+            "--out",
+            "out",
+            "--beta",
+            "0.005",
+            "--transmittance",
+            "--no-prep",
+        ],
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let name = "aachen_000000_000019";
+    let disparity = image::open(root.join(format!("disparity/train/aachen/{name}_disparity.png")))
+        .unwrap()
+        .to_luma16();
+    let tau = image::open(dir.path().join(format!(
+        "out/leftImg8bit/train/aachen/{name}_leftImg8bit_transmittance_beta_0.005.png"
+    )))
+    .unwrap()
+    .to_luma8();
+    assert_eq!(tau.dimensions(), disparity.dimensions());
+    let camera: serde_json::Value = serde_json::from_str(CAMERA_JSON).unwrap();
+    let (fx, fy) = (
+        camera["intrinsic"]["fx"].as_f64().unwrap(),
+        camera["intrinsic"]["fy"].as_f64().unwrap(),
+    );
+    let (u0, v0) = (
+        camera["intrinsic"]["u0"].as_f64().unwrap(),
+        camera["intrinsic"]["v0"].as_f64().unwrap(),
+    );
+    let baseline = camera["extrinsic"]["baseline"].as_f64().unwrap();
+    let (mut checked, mut worst, mut sum) = (0usize, 0i32, 0.0f64);
+    for (x, y, p) in disparity.enumerate_pixels() {
+        if p[0] == 0 {
+            continue; // unknown disparity
+        }
+        let d = (f64::from(p[0]) - 1.0) / 256.0;
+        let (rx, ry) = ((f64::from(x) - u0) / fx, (f64::from(y) - v0) / fy);
+        let range = fx * baseline / d * (1.0 + rx * rx + ry * ry).sqrt();
+        let expected = (255.0 * (-beta * range).exp()).round() as i32;
+        let got = i32::from(tau.get_pixel(x, y)[0]);
+        worst = worst.max((got - expected).abs());
+        sum += f64::from(got);
+        checked += 1;
+    }
+    assert!(checked > 100_000, "{checked} pixels of known disparity");
+    assert!(worst <= 1, "τ off by {worst} code values of 255");
+    // Not black: the demo's range of 95-465 m at β = 0.005 gives τ from 0.62 to 0.10.
+    assert!(
+        sum / checked as f64 > 40.0,
+        "mean τ {}",
+        sum / checked as f64 / 255.0
+    );
+}
+
+/// This machine's name as brume writes it into its temporaries' names.
+fn host() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .unwrap_or_default()
+        .trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
+        .collect::<String>()
+}
+
+/// A batch killed with SIGKILL (no clean-up runs) has logged every output it finished,
+/// each as soon as it was in place; the resumed run removes the temporaries the killed
+/// one left, leaves those a live process elsewhere may still be writing, writes the rest
+/// and says what it skipped; a closed stdout does not stop it.
+#[cfg(unix)]
+#[test]
+fn a_killed_batch_has_logged_its_outputs_and_a_resumed_one_cleans_up() {
+    use std::io::{BufRead, BufReader};
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    cityscapes_dataset(dir.path(), 2);
+    let args = ["batch", "cityscapes", "--out", "out", "--beta", "0.01"];
+    let log_path = dir.path().join("out/brume-batch-1-of-1.jsonl");
+    {
+        let _gl = common::gl_lock();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_brume"))
+            .args(args)
+            .current_dir(dir.path())
+            // Each output waits 3 s staged: the kill lands in the second's wait.
+            .env("BRUME_TEST_HOLD_OUTPUTS", "3")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut err = BufReader::new(child.stderr.take().unwrap());
+        let mut holds = 0;
+        let mut line = String::new();
+        while holds < 2 {
+            line.clear();
+            assert!(err.read_line(&mut line).unwrap() > 0, "brume ended early");
+            holds += usize::from(line.contains("holding 1 staged outputs"));
+        }
+        // The second output is staged: the first is in place and must be in the log.
+        let log = std::fs::read_to_string(&log_path).unwrap();
+        assert_eq!(log.lines().count(), 1, "{log}");
+        assert!(
+            log.contains("aachen_000000_000019") && log.contains("\"ok\""),
+            "{log}"
+        );
+        child.kill().unwrap(); // SIGKILL
+        child.wait().unwrap();
+    }
+    let folder = dir.path().join("out/leftImg8bit/train/bremen");
+    let temporaries = |d: &Path| -> Vec<String> {
+        std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".brume-"))
+            .collect()
+    };
+    let left = temporaries(&folder);
+    assert_eq!(left.len(), 1, "SIGKILL leaves the staged output: {left:?}");
+    assert!(
+        left[0].starts_with(&format!(".brume-{}-", host())),
+        "{left:?}"
+    );
+    // One that a process on another machine sharing the folder may be writing now.
+    let elsewhere = ".brume-othermachine.example-12345-AbCdEf.tmp";
+    std::fs::write(folder.join(elsewhere), b"live elsewhere").unwrap();
+
+    let resumed = {
+        let _gl = common::gl_lock();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_brume"))
+            .args(args)
+            .current_dir(dir.path())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        drop(child.stdout.take()); // a reader that went away: `brume batch | head -c 0`
+        child.wait_with_output().unwrap()
+    };
+    let err = stderr(&resumed);
+    assert_eq!(resumed.status.code(), Some(0), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.contains("removed 1 temporary files"), "{err}");
+    assert_eq!(temporaries(&folder), [elsewhere]);
+    let names: Vec<String> = outputs(&dir.path().join("out")).into_keys().collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+    let log = std::fs::read_to_string(&log_path).unwrap();
+    assert_eq!(log.matches("\"ok\"").count(), 2, "{log}");
 }

@@ -563,6 +563,89 @@ fn a_signal_while_writing_leaves_no_temporary() {
     }
 }
 
+/// A sequence is all or nothing like every other output set: its frames are staged
+/// together and an interrupt before they are renamed leaves none of them.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_sequence_leaves_no_frame() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args([
+            "scene", "--size", "32x24", "--frames", "3", "--out", "f.png",
+        ])
+        .current_dir(dir.path())
+        .env("BRUME_TEST_HOLD_OUTPUTS", "60")
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("run brume");
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    assert!(line.contains("holding 3 staged outputs"), "{line:?}");
+    assert_eq!(temporaries(dir.path()).len(), 3, "every frame staged");
+    let kill = Command::new("kill")
+        .args(["-s", "TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    assert_eq!(child.wait().unwrap().code(), Some(143));
+    let left: Vec<_> = fs::read_dir(dir.path()).unwrap().collect();
+    assert!(left.is_empty(), "{left:?}");
+}
+
+/// A reader that goes away (`brume … --json | head -c 0`) ends no command with a panic:
+/// the work is done, the outputs are written and the exit status is 0.
+#[cfg(unix)]
+#[test]
+fn a_closed_stdout_is_no_crash() {
+    use std::process::Stdio;
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let (image, depth) = (image.to_str().unwrap(), depth.to_str().unwrap());
+    let sky = "sky --turbidity 3 --sun-zenith 40 --sun-azimuth 20 --size 64 --out sky.exr";
+    let render = format!("render --image {image} --depth {depth} --depth-kind range --out r.png");
+    let cases = [
+        (format!("{render} --json"), Some("r.png")),
+        (render.clone(), Some("r.png")),
+        (format!("{sky} --json"), Some("sky.exr")),
+        (
+            "turbidity sky.exr --sun-zenith 40 --sun-azimuth 20 --json".into(),
+            None,
+        ),
+        (format!("compare {image} {image}"), None),
+        (
+            "scene --size 32x24 --frames 2 --out s.png --json".into(),
+            Some("s_0002.png"),
+        ),
+        ("info".into(), None),
+    ];
+    for (args, output) in cases {
+        if let Some(out) = output {
+            let _ = fs::remove_file(dir.path().join(out));
+        }
+        let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+        let mut child = Command::new(env!("CARGO_BIN_EXE_brume"))
+            .args(args.split_whitespace())
+            .current_dir(dir.path())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run brume");
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(0), "{args}: {err}");
+        assert!(!err.contains("panicked"), "{args}: {err}");
+        if let Some(out) = output {
+            assert!(dir.path().join(out).is_file(), "{args}: no {out}");
+        }
+    }
+}
+
 #[test]
 fn compare_reports_ssim_and_histogram_correlation() {
     let dir = tempfile::tempdir().unwrap();

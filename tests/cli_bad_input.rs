@@ -90,6 +90,7 @@ fn fixtures() -> tempfile::TempDir {
     ] {
         fs::write(p(out), PRECIOUS).unwrap();
     }
+    round_two_fixtures(dir.path());
     fs::create_dir(p("adir.png")).unwrap();
     fs::create_dir(p("sub")).unwrap();
     fs::write(p("afile"), b"a file, not a folder").unwrap();
@@ -413,5 +414,280 @@ fn info_refuses_bad_options() {
         case("info --egl nowhere", "", 2, "--egl"),
         case("info extra", "", 2, "extra"),
         case("frobnicate", "", 2, "frobnicate"),
+    ]);
+}
+
+/// Cityscapes' camera file of the fixture frame.
+const CAMERA_JSON: &str = r#"{"extrinsic": {"baseline": 0.2}, "intrinsic": {"fx": 2000.0, "fy": 2000.0, "u0": 12.0, "v0": 8.0}}"#;
+
+/// The inputs of the second hostile-input sweep: a one-frame Cityscapes dataset `cs/`,
+/// manifests whose rows climb out of `--out` or land on one output, an output folder
+/// `bout/` with a link out of it, a sky mask that is all sky and an image too small for
+/// SSIM.
+fn round_two_fixtures(dir: &std::path::Path) {
+    let p = |name: &str| dir.join(name);
+    let frame = "x_000000_000019";
+    for (kind, file) in [
+        ("leftImg8bit", format!("{frame}_leftImg8bit.png")),
+        ("disparity", format!("{frame}_disparity.png")),
+        ("camera", format!("{frame}_camera.json")),
+    ] {
+        let folder = p(&format!("cs/{kind}/train/x"));
+        fs::create_dir_all(&folder).unwrap();
+        let path = folder.join(file);
+        match kind {
+            "leftImg8bit" => {
+                image::RgbImage::from_fn(24, 16, |x, y| {
+                    image::Rgb([x as u8 * 9, y as u8 * 12, 90])
+                })
+                .save(path)
+                .unwrap();
+            }
+            "disparity" => image::ImageBuffer::<image::Luma<u16>, _>::from_fn(24, 16, |x, _| {
+                image::Luma([2000 + 40 * x as u16])
+            })
+            .save(path)
+            .unwrap(),
+            _ => fs::write(path, CAMERA_JSON).unwrap(),
+        }
+    }
+    fs::create_dir_all(p("man")).unwrap();
+    let manifest = |name: &str, rows: &[&str]| {
+        let text = std::iter::once("image,depth").chain(rows.iter().copied());
+        fs::write(p(name), text.collect::<Vec<_>>().join("\n") + "\n").unwrap();
+    };
+    manifest("man/climb.csv", &["../im.png,../d16.png"]);
+    manifest("man/climb2.csv", &["sub/../../im.png,../d16.png"]);
+    manifest("twice.csv", &["im.png,d16.png", "im.png,d16.png"]);
+    manifest("pngjpg.csv", &["im.png,d16.png", "im.jpg,d16.png"]);
+    manifest("header.csv", &[]);
+    fs::create_dir_all(p("bout")).unwrap();
+    std::os::unix::fs::symlink("../man", p("bout/leftImg8bit")).unwrap();
+    image::GrayImage::from_pixel(24, 16, image::Luma([255]))
+        .save(p("allsky.png"))
+        .unwrap();
+    image::RgbImage::from_pixel(8, 8, image::Rgb([90, 40, 10]))
+        .save(p("tiny.png"))
+        .unwrap();
+}
+
+/// Issue 18, data loss: `view`'s outputs are checked like every other command's before a
+/// window is asked for (so with or without a display): not an input, also through a
+/// link, the extension its format.
+#[test]
+fn view_never_writes_over_an_input() {
+    let photo = "render --image im.png --depth range.pfm --depth-kind range";
+    let v = |args: &str, mentions: &str| case("view --frames 1", args, 1, mentions);
+    run_matrix(&[
+        v(
+            &format!("--screenshot im.png {photo}"),
+            "--screenshot im.png",
+        ),
+        v(
+            &format!("--screenshot link.png {photo}"),
+            "--screenshot link.png im.png",
+        ),
+        v(
+            &format!("--screenshot hard.png {photo}"),
+            "--screenshot hard.png",
+        ),
+        v(
+            &format!("--stats range.pfm {photo}"),
+            "--stats range.pfm .json",
+        ),
+        v("--screenshot shot.jpg", "--screenshot shot.jpg .png"),
+        v("--screenshot adir.png", "--screenshot adir.png"),
+        v("--stats nodir/s.json", "--stats nodir"),
+        v("--window 100000x100000", "--window 8192"),
+        v("--window 0x0", "--window"),
+        case("view --frames 100000", "", 1, "--frames 10000"),
+        v("render --ka -1", "--ka"),
+        v("scene --size 100000x2", "--size"),
+    ]);
+}
+
+/// Issue 18, escapes and collisions: every output of a batch lies under `--out` and is
+/// one frame's, proven before anything (even `--out`) is made.
+#[test]
+fn batch_outputs_stay_under_out_and_apart() {
+    let b = |args: &str, mentions: &str| case("batch --out bo", args, 1, mentions);
+    run_matrix(&[
+        b("--manifest man/climb.csv", "im.png climbs"),
+        b("--manifest man/climb2.csv", "im.png climbs"),
+        b("--manifest twice.csv", "im.png twice"),
+        b("--manifest pngjpg.csv", "im.jpg im.png"),
+        b("--manifest header.csv", "header.csv"),
+        b("cs cs", "x_000000_000019_leftImg8bit.png twice"),
+        case("batch --out bout", "cs", 1, "--out bout man"),
+        case("batch --out afile", "cs", 1, "--out afile"),
+    ]);
+}
+
+/// Issue 18, validation: a batch checks every option before it makes `--out` or its log,
+/// and names the flag, not the library's field.
+#[test]
+fn batch_checks_every_option_first() {
+    let b = |args: &str, mentions: &str| case("batch cs --out bo", args, 1, mentions);
+    run_matrix(&[
+        b("--sky-factor 1", "--sky-factor"),
+        b("--margin -1", "--margin"),
+        b("--seed -1", "--seed"),
+        b("--far-outlier-factor 0.5", "--far-outlier-factor"),
+        b("--scheme euler --lambda 1000", "--lambda"),
+        b("--sky-mask nope.png", "--sky-mask nope.png"),
+        b("--sky-mask small.png", "--sky-mask small.png 20x16 24x16"),
+        b("--beta 1e-300", "--beta 1e-300"),
+        b("--beta 0.01,nan", "--beta nan"),
+        b("--no-prep --margin 3", "--margin --no-prep"),
+        b("--shard 0/4", "--shard"),
+        b("--shard slurm", "--shard SLURM_ARRAY_TASK_ID"),
+    ]);
+}
+
+/// Issue 18, caps: every size and count has an upper bound, said up front.
+#[test]
+fn sizes_and_counts_are_capped() {
+    let sky = "sky --turbidity 3 --sun-zenith 30 --sun-azimuth 0 --out out.png";
+    run_matrix(&[
+        case(sky, "--size 20000", 1, "--size 16384"),
+        case("bench turbidity", "--size 100000", 1, "--size 2048"),
+        case(
+            "bench turbidity",
+            "--estimations 1000000000000",
+            1,
+            "--estimations 10000",
+        ),
+        case(
+            "bench turbidity",
+            "--samples 1000000",
+            1,
+            "--samples 100000",
+        ),
+        case(
+            "bench turbidity",
+            "--estimations 10000 --samples 1000",
+            1,
+            "--estimations sample",
+        ),
+        case("bench fog", "--runs 1000000", 1, "--runs 1000"),
+        case("bench speed", "--runs 5000", 1, "--runs 1000"),
+        case("bench speed", "--size 100000x100000", 1, "--size"),
+        case(
+            "turbidity im.png",
+            "--repeats 1000000000000",
+            1,
+            "--repeats 10000",
+        ),
+        case("turbidity im.png", "--samples 1000000", 1, "--samples"),
+        case(
+            "turbidity im.png",
+            "--repeats 10000 --samples 10000",
+            1,
+            "--repeats sample",
+        ),
+        case(
+            "scene --out out.png",
+            "--frames 100000",
+            1,
+            "--frames 10000",
+        ),
+        case("scene --out out.png", "--size 20000x10", 1, "--size"),
+    ]);
+}
+
+/// Issue 18, memory: a size inside the documented range that the memory left cannot hold
+/// is refused before the allocation (it used to abort), for `sky` and `scene` as for
+/// `render`.
+#[test]
+fn sizes_that_do_not_fit_in_memory_are_refused() {
+    let dir = fixtures();
+    let before = snapshot(dir.path());
+    let bin = env!("CARGO_BIN_EXE_brume");
+    for args in [
+        "sky --turbidity 3 --sun-zenith 30 --sun-azimuth 0 --size 16384 --out big.png",
+        "scene --size 8192x8192 --out big.png",
+    ] {
+        let o = {
+            let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+            Command::new("sh")
+                .arg("-c")
+                .arg(format!("ulimit -v 2000000; exec {bin} {args}"))
+                .current_dir(dir.path())
+                .output()
+                .unwrap()
+        };
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args}: {err}");
+        assert!(
+            err.starts_with("brume: error: out of memory: --size") && err.contains("can be had"),
+            "{args}: {err}"
+        );
+        assert_eq!(snapshot(dir.path()), before, "{args}");
+    }
+}
+
+/// Issue 18: options of the other medium, aerial values out of range or named after
+/// another command's flag, aerial perspective on a range with no metric scale or no field
+/// of view, options that cannot take effect.
+#[test]
+fn render_refuses_options_that_cannot_take_effect() {
+    let r =
+        |args: &str, mentions: &str| case(RENDER, &format!("--out out.png {args}"), 1, mentions);
+    let aerial = "--medium aerial --turbidity 3 --metres-per-unit 1 --fov 40";
+    run_matrix(&[
+        r(
+            "--sky nope.png --turbidity 99 --metres-per-unit -5",
+            "--turbidity --medium aerial",
+        ),
+        r("--pitch 3", "--pitch --medium aerial"),
+        r("--horizon-zenith 80", "--horizon-zenith --medium aerial"),
+        r(&format!("{aerial} --ks 2"), "--ks --medium haze"),
+        r(&format!("{aerial} --tint 1,1,2"), "--tint --medium haze"),
+        r(
+            &format!("{aerial} --uniform-sigma 3"),
+            "--uniform-sigma --medium haze",
+        ),
+        r(
+            "--medium aerial --turbidity 1000 --metres-per-unit 1 --fov 40",
+            "--turbidity 1000 [1, 20]",
+        ),
+        r(
+            &format!("{aerial} --from-turbidity 1000"),
+            "--from-turbidity 1000",
+        ),
+        r(&format!("{aerial} --from-turbidity 0"), "--from-turbidity"),
+        r(
+            &format!("{aerial} --horizon-zenith 200"),
+            "--horizon-zenith 200",
+        ),
+        r(&format!("{aerial} --horizon-zenith -5"), "--horizon-zenith"),
+        r(
+            &format!("{aerial} --horizon-zenith NaN"),
+            "--horizon-zenith NaN",
+        ),
+        r(&format!("{aerial} --altitude -1e9"), "--altitude"),
+        r(&format!("{aerial} --pitch 90"), "--pitch 90"),
+        r(&format!("{aerial} --horizon-row 1e9"), "--horizon-row 1e9"),
+        r(
+            "--medium aerial --turbidity 3 --fov 40",
+            "--metres-per-unit range.pfm",
+        ),
+        r("--medium aerial --turbidity 3 --metres-per-unit 1", "--fov"),
+        r("--near 1 --far 10", "--near zbuffer"),
+        r("--no-prep --sky-mask allsky.png", "--sky-mask --no-prep"),
+        r("--sky-mask allsky.png", "--sky-mask allsky.png sky"),
+        case(
+            RENDER,
+            "--out out.png --fov 40 --focal 500",
+            2,
+            "--fov --focal",
+        ),
+        case("compare tiny.png tiny.png", "", 1, "tiny.png 8x8 11x11"),
+        case(
+            "prep --depth range.pfm --depth-kind range --out r.pfm",
+            "--near 1",
+            1,
+            "--near",
+        ),
     ]);
 }

@@ -5,6 +5,7 @@
 use super::args::{AerialBlur, RenderArgs};
 use brume::atmosphere::{AttenuationTable, Sensitivity};
 use brume::camera::Camera;
+use brume::io::camera::Intrinsics;
 use brume::io::image::load_linear_rgb;
 use brume::medium::{AerialPerspective, Medium, Pixel};
 use brume::raster::{Grid, RgbImage, ScalarMap};
@@ -52,19 +53,138 @@ fn turbidity(args: &RenderArgs) -> Result<(f64, &'static str)> {
     }
 }
 
-/// The camera whose rays give each pixel's zenith angle: `--pitch` (or `--horizon-row`)
-/// and `--fov`, for an image `height` rows tall.
-pub fn aerial_camera(args: &RenderArgs, height: usize) -> Camera {
-    let fov_y_deg = args.depth.fov.unwrap_or(DEFAULT_FOV_DEG);
-    let pitch_deg = match args.horizon_row {
-        Some(row) => pitch_for_horizon_row(row, height, fov_y_deg),
-        None => args.pitch,
+/// The camera whose rays give each pixel's zenith angle, for an image `height` rows
+/// tall: the vertical field of view from `--fov`, else from the depth's focal length
+/// (`intrinsics`, e.g. a Cityscapes camera file) or `--focal`; the pitch from `--pitch`
+/// or `--horizon-row`. With no field of view to be had it is an error: a guess would tilt
+/// every pixel's zenith angle.
+pub fn aerial_camera(
+    args: &RenderArgs,
+    height: usize,
+    intrinsics: Option<&Intrinsics>,
+) -> Result<Camera> {
+    let focal = intrinsics.map(|i| i.fy).or(args.depth.focal);
+    let fov_y_deg = match (args.depth.fov, focal) {
+        (Some(fov), _) => fov,
+        (None, Some(f)) if f.is_finite() && f > 0.0 => {
+            (2.0 * (height as f64 / (2.0 * f)).atan()).to_degrees()
+        }
+        _ => {
+            return Err(Error::invalid(
+                "--fov",
+                "(missing)",
+                "the camera's vertical field of view in degrees for --medium aerial (or \
+                 --focal in px, or a depth whose calibration gives it): each pixel's zenith \
+                 angle depends on it",
+            ))
+        }
     };
-    Camera {
+    let pitch_deg = match args.horizon_row {
+        Some(row) => {
+            let pitch = pitch_for_horizon_row(row, height, fov_y_deg);
+            if pitch.is_nan() || pitch.abs() > MAX_PITCH_DEG {
+                return Err(Error::invalid(
+                    "--horizon-row",
+                    row,
+                    format!(
+                        "a row that puts the camera's pitch within ±{MAX_PITCH_DEG}° with this \
+                         {height}-row image and a {fov_y_deg:.1}° field of view (it gives \
+                         {pitch:.5}°; the horizon may lie a little outside the image)"
+                    ),
+                ));
+            }
+            pitch
+        }
+        None => args.pitch.unwrap_or(0.0),
+    };
+    let camera = Camera {
         pitch_deg,
         fov_y_deg,
         ..Camera::default()
+    };
+    camera.validate().map_err(|e| match e {
+        Error::InvalidParameter {
+            name,
+            value,
+            expected,
+        } if name == "fov" && args.depth.fov.is_none() => Error::invalid(
+            "--focal",
+            focal.unwrap_or(f64::NAN),
+            format!("a focal length giving a valid field of view: {value} is not {expected}"),
+        ),
+        e => e,
+    })?;
+    Ok(camera)
+}
+
+/// Largest camera pitch, degrees, however it is given: beyond it the image holds no
+/// horizon to speak of and a row number barely moves the pitch.
+pub const MAX_PITCH_DEG: f64 = 85.0;
+/// Where `--horizon-zenith` puts the airlight by default, degrees.
+pub const DEFAULT_HORIZON_ZENITH_DEG: f64 = 85.0;
+/// `--altitude`'s range, metres: the Dead Sea's shore to above any airliner.
+pub const ALTITUDE_RANGE_M: (f64, f64) = (-500.0, 20_000.0);
+/// The turbidities the model is fitted for (Preetham et al.'s range), for `--turbidity`
+/// and `--from-turbidity`.
+pub const TURBIDITY_RANGE: (f64, f64) = (1.0, 20.0);
+
+/// Checks the aerial options' values before any file is read, naming each flag as given:
+/// the library would name its own fields, some of which are other commands' flags.
+pub fn check_aerial_options(args: &RenderArgs) -> Result<()> {
+    let (t_lo, t_hi) = TURBIDITY_RANGE;
+    for (flag, value) in [
+        ("--turbidity", args.turbidity),
+        ("--from-turbidity", args.from_turbidity),
+    ] {
+        if let Some(t) = value.filter(|t| !(t_lo..=t_hi).contains(t)) {
+            return Err(Error::invalid(
+                flag,
+                t,
+                format!("a turbidity in [{t_lo}, {t_hi}]"),
+            ));
+        }
     }
+    let (a_lo, a_hi) = ALTITUDE_RANGE_M;
+    let checks: [(&str, Option<f64>, bool, String); 5] = [
+        (
+            "--horizon-zenith",
+            args.horizon_zenith,
+            args.horizon_zenith
+                .is_some_and(|z| (0.0..=90.0).contains(&z)),
+            "a zenith angle in [0, 90] degrees (90 is the horizon)".into(),
+        ),
+        (
+            "--altitude",
+            args.altitude,
+            args.altitude.is_some_and(|a| (a_lo..=a_hi).contains(&a)),
+            format!("an altitude above sea level in [{a_lo}, {a_hi}] m"),
+        ),
+        (
+            "--metres-per-unit",
+            args.metres_per_unit,
+            args.metres_per_unit
+                .is_some_and(|m| m.is_finite() && m > 0.0),
+            "metres per unit of range, > 0".into(),
+        ),
+        (
+            "--pitch",
+            args.pitch,
+            args.pitch.is_some_and(|p| p.abs() <= MAX_PITCH_DEG),
+            format!("a pitch in [-{MAX_PITCH_DEG}, {MAX_PITCH_DEG}] degrees"),
+        ),
+        (
+            "--horizon-row",
+            args.horizon_row,
+            args.horizon_row.is_some_and(f64::is_finite),
+            "an image row, 0 at the top".into(),
+        ),
+    ];
+    for (flag, value, ok, expected) in checks {
+        if let Some(v) = value.filter(|_| !ok) {
+            return Err(Error::invalid(flag, v, expected));
+        }
+    }
+    Ok(())
 }
 
 /// The pitch (degrees) that puts the horizon on row `row` (0 at the top, centres at
@@ -82,7 +202,7 @@ pub fn pitch_for_horizon_row(row: f64, height: usize, fov_y_deg: f64) -> f64 {
 /// (radians; `None`: `--horizon-zenith`).
 pub fn aerial_look(
     args: &RenderArgs,
-    height: usize,
+    camera: Camera,
     max_range: f64,
     horizon: [f32; 3],
     horizon_zenith: Option<f64>,
@@ -92,29 +212,21 @@ pub fn aerial_look(
         Some(path) => Sensitivity::from_csv(path)?,
         None => Sensitivity::cie_srgb(),
     };
-    let metres = args.metres_per_unit;
-    if !(metres.is_finite() && metres > 0.0) {
-        return Err(Error::invalid(
-            "--metres-per-unit",
-            metres,
-            "metres per unit of range, > 0",
-        ));
-    }
+    check_aerial_options(args)?;
+    let metres = args.metres_per_unit.unwrap_or(1.0);
     let s_max = (max_range * metres).max(1.0);
-    let table = AttenuationTable::new(&sensitivity, t, args.altitude, s_max)?;
-    if let Some(row) = args.horizon_row {
-        if !row.is_finite() {
-            return Err(Error::invalid("--horizon-row", row, "an image row"));
-        }
-    }
-    let camera = aerial_camera(args, height);
+    let table = AttenuationTable::new(&sensitivity, t, args.altitude.unwrap_or(0.0), s_max)?;
     let medium = AerialPerspective {
         metres_per_unit: metres,
-        lambda: match args.blur {
+        lambda: match args.blur.unwrap_or(AerialBlur::Diffusion) {
             AerialBlur::None => 0.0,
             AerialBlur::Diffusion => args.lambda,
         },
-        reference_zenith: horizon_zenith.unwrap_or(args.horizon_zenith.to_radians()),
+        reference_zenith: horizon_zenith.unwrap_or(
+            args.horizon_zenith
+                .unwrap_or(DEFAULT_HORIZON_ZENITH_DEG)
+                .to_radians(),
+        ),
         ..AerialPerspective::new(Arc::new(table), camera, horizon)
     };
     medium.validate()?;
@@ -125,9 +237,6 @@ pub fn aerial_look(
         sensitivity,
     })
 }
-
-/// The vertical field of view assumed when `--fov` is not given (degrees).
-pub const DEFAULT_FOV_DEG: f64 = 60.0;
 
 /// Retargeting (eq. 25-26): the haze-free radiance of a photo taken at turbidity
 /// `from`, I⁰ = (I − I∞_s(1 − Γ_s))/Γ_s with the source's Γ and airlight, clamped at 0.

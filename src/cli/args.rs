@@ -149,7 +149,12 @@ pub struct DepthArgs {
 
     /// Vertical field of view in degrees: of a z-buffer's projection, or of a depth map
     /// (instead of --focal) to turn depth into range.
-    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        conflicts_with = "focal"
+    )]
     pub fov: Option<f64>,
 
     /// --depth-format android-depth16: samples whose DEPTH16 confidence is below this
@@ -227,13 +232,14 @@ pub struct RenderArgs {
     pub out: Option<PathBuf>,
 
     /// Absorption coefficient κa per unit of normalised range (attenuation only): the
-    /// frame's largest range counts as 1. For fog in metres see --beta.
-    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KA, allow_hyphen_values = true)]
-    pub ka: f64,
+    /// frame's largest range counts as 1. For fog in metres see --beta [default: 0.25].
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub ka: Option<f64>,
 
-    /// Scattering coefficient κs per unit of normalised range (attenuation and blur).
-    #[arg(long, value_name = "K", default_value_t = haze::DEFAULT_KS, allow_hyphen_values = true)]
-    pub ks: f64,
+    /// Scattering coefficient κs per unit of normalised range (attenuation and blur)
+    /// [default: 0.75].
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub ks: Option<f64>,
 
     /// Extinction β in m⁻¹, instead of --ka/--ks: fog in physical units on range in
     /// metres, not normalised, so the same β is the same fog in every frame (Foggy
@@ -321,6 +327,8 @@ pub struct RenderArgs {
     pub medium: MediumKind,
 
     /// Aerial: the atmosphere's turbidity T in [1, 20] (2 very clear, 3 clear, 6 hazy).
+    /// The options marked "Aerial" are refused with --medium haze, which does not read
+    /// them.
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub turbidity: Option<f64>,
 
@@ -334,32 +342,21 @@ pub struct RenderArgs {
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub from_turbidity: Option<f64>,
 
-    /// Aerial: the observer's altitude above sea level, metres.
-    #[arg(
-        long,
-        value_name = "M",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    pub altitude: f64,
+    /// Aerial: the observer's altitude above sea level, metres, in [-500, 20000]
+    /// [default: 0].
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub altitude: Option<f64>,
 
-    /// Aerial: metres per unit of the range map (1 for metric depth formats).
-    #[arg(
-        long,
-        value_name = "M",
-        default_value_t = 1.0,
-        allow_hyphen_values = true
-    )]
-    pub metres_per_unit: f64,
+    /// Aerial: metres per unit of the range map: needed for a range that is not in
+    /// metres (float maps, z-buffers, disparities without a calibration) [default: 1 for
+    /// metric depth formats].
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub metres_per_unit: Option<f64>,
 
-    /// Aerial: the camera's pitch in degrees (with --fov, each pixel's zenith angle).
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 0.0,
-        allow_hyphen_values = true
-    )]
-    pub pitch: f64,
+    /// Aerial: the camera's pitch in degrees, in (-90, 90) (with the field of view, each
+    /// pixel's zenith angle) [default: 0].
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub pitch: Option<f64>,
 
     /// Aerial: the image row (0 at the top) where the horizon is, instead of --pitch: the
     /// pitch that puts the horizon there with --fov.
@@ -371,30 +368,21 @@ pub struct RenderArgs {
     )]
     pub horizon_row: Option<f64>,
 
-    /// Aerial: zenith angle (degrees) where --airlight (or, with no sky found, the
-    /// estimated airlight) is taken to be measured; with a sky, I∞ and its zenith angle
-    /// come from the brightest sky of the horizon region.
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 85.0,
-        allow_hyphen_values = true
-    )]
-    pub horizon_zenith: f64,
+    /// Aerial: zenith angle (degrees, in [0, 90]) where --airlight (or, with no sky
+    /// found, the estimated airlight) is taken to be measured; with a sky, I∞ and its
+    /// zenith angle come from the brightest sky of the horizon region [default: 85].
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub horizon_zenith: Option<f64>,
 
     /// Aerial: the camera's spectral sensitivity, CSV `lambda_nm,r,g,b` [default: CIE 1931
     /// observer to linear sRGB].
     #[arg(long, value_name = "PATH")]
     pub sensitivity: Option<PathBuf>,
 
-    /// Aerial: blur by diffusion from the scattering optical depth (λ = --lambda) or none.
-    #[arg(
-        long,
-        value_enum,
-        default_value = "diffusion",
-        allow_hyphen_values = true
-    )]
-    pub blur: AerialBlur,
+    /// Aerial: blur by diffusion from the scattering optical depth (λ = --lambda) or none
+    /// [default: diffusion].
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub blur: Option<AerialBlur>,
 
     /// Skip pre-processing: unknown range values are taken as the farthest range.
     #[arg(long)]

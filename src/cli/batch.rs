@@ -12,8 +12,9 @@ use brume::raster::ScalarMap;
 use brume::{Error, Renderer, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
+use std::collections::HashMap;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::{Component, Path, PathBuf};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::time::Instant;
 
@@ -43,25 +44,46 @@ struct Encode {
     record: serde_json::Value,
 }
 
-/// What the writer did with an output.
-struct Written {
-    record: serde_json::Value,
-    encode_ms: f64,
-    error: Option<Error>,
+/// Everything a run needs, checked before anything is created: the options, the frames of
+/// this shard with the β values still to write, and the outputs proven to lie under
+/// `--out`, one file each.
+pub struct Plan {
+    shard: Shard,
+    template: RenderArgs,
+    /// Frames of this shard with the β values whose outputs are missing.
+    pending: Vec<(Item, Vec<f64>)>,
+    /// Frames of this shard that could not be assembled (no disparity, no camera).
+    failures: Vec<Failed>,
+    /// Frames found in all shards.
+    total: usize,
+    /// Outputs of this shard already complete, skipped.
+    skipped: usize,
 }
 
-/// Runs the batch on `renderer`.
-pub fn run(args: &BatchArgs, renderer: &mut Renderer) -> Result<()> {
+/// Checks every option and every frame's outputs before any file or folder is made: a bad
+/// value names its flag, a manifest row whose outputs would leave `--out` or land on
+/// another frame's is refused, and nothing has been written when it fails.
+pub fn plan(args: &BatchArgs) -> Result<Plan> {
     let shard = match &args.shard {
         Some(s) => Shard::parse(s)?,
         None => Shard::ALL,
     };
     let betas = parse_betas(&args.beta)?;
     let template = args.render_template(betas[0])?;
+    if args.out.exists() && !args.out.is_dir() {
+        return Err(Error::invalid(
+            "--out",
+            args.out.display(),
+            "a folder for the outputs (this is a file)",
+        ));
+    }
     let (items, mut failures) = collect_items(args)?;
+    check_sky_mask_size(args, &items)?;
+    check_destinations(args, &items, &betas)?;
     let total = items.len() + failures.len();
     let items: Vec<Item> = items.into_iter().filter(|i| shard.contains(i)).collect();
     failures.retain(|f| shard.contains(&f.item));
+    let mut skipped = 0;
     let pending: Vec<(Item, Vec<f64>)> = items
         .into_iter()
         .filter_map(|item| {
@@ -70,82 +92,221 @@ pub fn run(args: &BatchArgs, renderer: &mut Renderer) -> Result<()> {
                 .copied()
                 .filter(|&b| !outputs_complete(args, &item, b))
                 .collect();
+            skipped += betas.len() - todo.len();
             (!todo.is_empty()).then_some((item, todo))
         })
         .collect();
+    Ok(Plan {
+        shard,
+        template,
+        pending,
+        failures,
+        total,
+        skipped,
+    })
+}
+
+/// Runs the batch `plan` made from `args` on `renderer`.
+pub fn run(args: &BatchArgs, plan: Plan, renderer: &mut Renderer) -> Result<()> {
+    let Plan {
+        shard,
+        template,
+        pending,
+        failures,
+        total,
+        skipped,
+    } = plan;
     let outputs: usize = pending.iter().map(|(_, b)| b.len()).sum();
     log::info!(
-        "{total} frames found, {} in shard {}/{}; {outputs} outputs to write",
+        "{total} frames found, {} in shard {}/{}; {outputs} outputs to write, {skipped} \
+         already written",
         pending.len() + failures.len(),
         shard.index,
         shard.count
     );
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
+    let stale = brume::io::output::remove_stale_temporaries(&args.out)?;
+    if stale > 0 {
+        errln!(
+            "brume: removed {stale} temporary files left under {} by an interrupted run",
+            args.out.display()
+        );
+    }
     let log_path = args.out.join(format!(
         "brume-batch-{}-of-{}.jsonl",
         shard.index, shard.count
     ));
-    let mut log_file = std::fs::OpenOptions::new()
+    let log_file = std::fs::OpenOptions::new()
         .create(true)
         .append(true)
         .open(&log_path)
         .map_err(|e| Error::io(&log_path, e))?;
-    let progress = progress_bar(outputs as u64);
+    let mut log = Log {
+        file: log_file,
+        path: log_path,
+        progress: progress_bar(outputs as u64),
+        summary: Summary {
+            skipped,
+            ..Summary::default()
+        },
+    };
+    for f in &failures {
+        log.frame_failed(f, 0)?;
+    }
     let started = Instant::now();
     let (load_tx, load_rx) = sync_channel::<std::result::Result<Loaded, Failed>>(1);
-    let (encode_tx, encode_rx) = sync_channel::<Encode>(2);
-    let (written_tx, written_rx) = std::sync::mpsc::channel::<Written>();
+    let (event_tx, event_rx) = sync_channel::<Event>(2);
     let frames: Vec<Item> = pending.iter().map(|(i, _)| i.clone()).collect();
     let mut stats = Stats::default();
-    std::thread::scope(|s| -> Result<()> {
+    let log = std::thread::scope(|s| -> Result<Log> {
         s.spawn(|| load_frames(&template, frames, load_tx));
-        s.spawn(|| write_outputs(encode_rx, written_tx));
-        let result = render_frames(
-            args,
-            renderer,
-            &pending,
-            load_rx,
-            &encode_tx,
-            &mut failures,
-            &mut stats,
-        );
-        drop(encode_tx);
-        for w in written_rx {
-            stats.encode_ms += w.encode_ms;
-            progress.inc(1);
-            match w.error {
-                None => {
-                    stats.written += 1;
-                    writeln!(log_file, "{}", w.record).map_err(|e| Error::io(&log_path, e))?;
-                }
-                Some(e) => {
-                    let mut record = w.record;
-                    record["status"] = json!("failed");
-                    record["error"] = json!(e.to_string());
-                    eprintln!("brume: error: {e}");
-                    writeln!(log_file, "{record}").map_err(|e| Error::io(&log_path, e))?;
-                    stats.failed_outputs += 1;
-                }
+        let writer = s.spawn(move || write_outputs(event_rx, log));
+        render_frames(args, renderer, &pending, load_rx, &event_tx, &mut stats);
+        drop(event_tx);
+        writer.join().expect("the writer thread does not panic")
+    })?;
+    log.progress.finish_and_clear();
+    let summary = &log.summary;
+    stats.print(summary, started.elapsed().as_secs_f64(), &log.path);
+    if summary.failed_frames > 0 || summary.failed_outputs > 0 {
+        return Err(Error::BatchFailures {
+            frames: summary.failed_frames,
+            outputs: summary.failed_outputs,
+            log: log.path.clone(),
+        });
+    }
+    Ok(())
+}
+
+/// A batch's `--sky-mask` (one mask for every frame) has each frame's size: refused up
+/// front, from the files' headers, rather than frame by frame.
+fn check_sky_mask_size(args: &BatchArgs, items: &[Item]) -> Result<()> {
+    let Some(mask) = &args.prep.sky_mask else {
+        return Ok(());
+    };
+    let size = |path: &Path| {
+        ::image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| Error::io(path, e))?
+            .into_dimensions()
+            .map_err(|e| Error::format(path, format!("cannot read its size: {e}")))
+    };
+    let (mw, mh) = size(mask).map_err(|e| match e {
+        Error::Io { .. } | Error::Format { .. } => Error::invalid(
+            "--sky-mask",
+            mask.display(),
+            format!("a readable PNG sky mask ({e})"),
+        ),
+        e => e,
+    })?;
+    for item in items.iter().filter(|i| i.sky_mask.is_none()) {
+        let (w, h) = size(&item.image)?;
+        if (w, h) != (mw, mh) {
+            return Err(Error::invalid(
+                "--sky-mask",
+                format!("{} ({mw}x{mh})", mask.display()),
+                format!(
+                    "a mask of each frame's size: {} is {w}x{h}",
+                    item.image.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Proves that every output of every frame lies under `--out` (after `..` and links are
+/// resolved) and that no two frames write one file (`X.png` and `X.jpg` in one folder, a
+/// row given twice, a folder given twice), before any work.
+fn check_destinations(args: &BatchArgs, items: &[Item], betas: &[f64]) -> Result<()> {
+    let mut owners: HashMap<PathBuf, &Path> = HashMap::new();
+    for item in items {
+        let out_dir = contained_dir(&item.out_dir).ok_or_else(|| {
+            Error::invalid(
+                "inputs",
+                item.image.display(),
+                format!(
+                    "a frame whose outputs stay under --out: its folder `{}` climbs out",
+                    item.out_dir.display()
+                ),
+            )
+        })?;
+        check_no_link_out(&args.out, &out_dir, item)?;
+        let normalised = Item {
+            out_dir,
+            ..item.clone()
+        };
+        let here = Path::new("");
+        for &beta in betas {
+            let paths = std::iter::once(normalised.foggy_output(here, beta)).chain(
+                args.transmittance
+                    .then(|| normalised.transmittance_output(here, beta)),
+            );
+            for path in paths {
+                let Some(other) = owners.insert(path.clone(), &item.image) else {
+                    continue;
+                };
+                let expected = if other == item.image {
+                    "each frame once: it is given twice (a repeated manifest row, or one \
+                     folder twice)"
+                        .to_string()
+                } else {
+                    format!(
+                        "frames with outputs of their own: {} also writes {}",
+                        other.display(),
+                        args.out.join(&path).display()
+                    )
+                };
+                return Err(Error::invalid("inputs", item.image.display(), expected));
             }
         }
-        result
-    })?;
-    progress.finish_and_clear();
-    for f in &failures {
-        eprintln!(
-            "brume: error: skipped {}: {}",
-            f.item.image.display(),
-            f.error
-        );
-        report_failure(&mut log_file, &f.item, &f.error)?;
     }
-    stats.print(started.elapsed().as_secs_f64(), &log_path);
-    if !failures.is_empty() || stats.failed_outputs > 0 {
-        return Err(Error::BatchFailures {
-            frames: failures.len(),
-            outputs: stats.failed_outputs,
-            log: log_path,
-        });
+    Ok(())
+}
+
+/// `dir` with `.` and `x/..` removed, if it stays inside the folder it is relative to
+/// (no `..` above it, no root, no drive).
+fn contained_dir(dir: &Path) -> Option<PathBuf> {
+    let mut parts: Vec<&std::ffi::OsStr> = Vec::new();
+    for c in dir.components() {
+        match c {
+            Component::Normal(p) => parts.push(p),
+            Component::CurDir => {}
+            Component::ParentDir => {
+                parts.pop()?;
+            }
+            Component::RootDir | Component::Prefix(_) => return None,
+        }
+    }
+    Some(parts.iter().collect())
+}
+
+/// Refuses an output folder that exists under `out` through a symbolic link to a place
+/// outside `out`: the outputs would be written there.
+fn check_no_link_out(out: &Path, out_dir: &Path, item: &Item) -> Result<()> {
+    let Ok(root) = out.canonicalize() else {
+        return Ok(()); // --out does not exist yet: neither does anything under it
+    };
+    let mut dir = out.to_path_buf();
+    for part in out_dir.components() {
+        dir.push(part);
+        match dir.canonicalize() {
+            Ok(real) if !real.starts_with(&root) => {
+                return Err(Error::invalid(
+                    "--out",
+                    out.display(),
+                    format!(
+                        "a folder whose sub-folders stay inside it: {} (the outputs of {}) \
+                         leads to {}",
+                        dir.display(),
+                        item.image.display(),
+                        real.display()
+                    ),
+                ))
+            }
+            Ok(_) => {}
+            Err(_) => break, // made by the run, inside --out
+        }
     }
     Ok(())
 }
@@ -263,47 +424,57 @@ fn frame_args(template: &RenderArgs, item: &Item) -> RenderArgs {
     args
 }
 
-/// The GPU loop: every β of every frame, in the order the loader delivers them.
+/// The GPU loop: every β of every frame, in the order the loader delivers them; outputs
+/// and failures go to the writer thread as they come.
 fn render_frames(
     args: &BatchArgs,
     renderer: &mut Renderer,
     pending: &[(Item, Vec<f64>)],
     rx: Receiver<std::result::Result<Loaded, Failed>>,
-    encode: &SyncSender<Encode>,
-    failures: &mut Vec<Failed>,
+    events: &SyncSender<Event>,
     stats: &mut Stats,
-) -> Result<()> {
+) {
     for ((_, betas), loaded) in pending.iter().zip(rx) {
         let loaded = match loaded {
             Ok(l) => l,
-            Err(f) => {
-                failures.push(f);
+            Err(failed) => {
+                let event = Event::FrameFailed {
+                    failed,
+                    outputs: betas.len(),
+                };
+                if events.send(event).is_err() {
+                    return;
+                }
                 continue;
             }
         };
         stats.frames += 1;
         stats.decode_ms += loaded.decode_ms;
         stats.prep_ms += loaded.prep_ms;
-        for &beta in betas {
-            match render_beta(args, renderer, &loaded, beta) {
+        for (k, &beta) in betas.iter().enumerate() {
+            let event = match render_beta(args, renderer, &loaded, beta) {
                 Ok((job, gpu_ms, render_ms)) => {
                     stats.gpu_ms += gpu_ms;
                     stats.render_ms += render_ms;
-                    if encode.send(job).is_err() {
-                        return Ok(());
-                    }
+                    Event::Output(job)
                 }
-                Err(error) => {
-                    failures.push(Failed {
+                Err(error) => Event::FrameFailed {
+                    failed: Failed {
                         item: loaded.item.clone(),
                         error,
-                    });
-                    break;
-                }
+                    },
+                    outputs: betas.len() - k,
+                },
+            };
+            let failed = matches!(event, Event::FrameFailed { .. });
+            if events.send(event).is_err() {
+                return;
+            }
+            if failed {
+                break;
             }
         }
     }
-    Ok(())
 }
 
 /// Renders one β of a loaded frame; returns the output to write, the GPU time and the
@@ -325,7 +496,9 @@ fn render_beta(
     let item = &frame.item;
     let path = item.foggy_output(&args.out, beta);
     let transmittance = args.transmittance.then(|| {
-        let t = transmittance_rgb8(range, |r| look.haze.transmission(r)[1]);
+        // The range texture is in metres; the medium's unit is haze.range_unit.
+        let unit = look.haze.range_unit;
+        let t = transmittance_rgb8(range, |r| look.haze.transmission(r / unit)[1]);
         (
             item.transmittance_output(&args.out, beta),
             t,
@@ -382,17 +555,29 @@ fn transmittance_rgb8(range: &ScalarMap, tau: impl Fn(f64) -> f64) -> Vec<[u8; 3
         .collect()
 }
 
-/// The writer thread: encodes and writes each output atomically.
-fn write_outputs(rx: Receiver<Encode>, tx: std::sync::mpsc::Sender<Written>) {
-    for job in rx {
-        let t = Instant::now();
-        let result = write_one(&job);
-        let _ = tx.send(Written {
-            record: job.record,
-            encode_ms: t.elapsed().as_secs_f64() * 1e3,
-            error: result.err(),
-        });
+/// What the GPU loop hands the writer thread.
+enum Event {
+    /// An output to encode and write.
+    Output(Encode),
+    /// A frame that failed, with the number of its outputs that will not be written.
+    FrameFailed { failed: Failed, outputs: usize },
+}
+
+/// The writer thread: encodes and writes each output atomically, and logs it as soon as
+/// it is in place.
+fn write_outputs(rx: Receiver<Event>, mut log: Log) -> Result<Log> {
+    for event in rx {
+        match event {
+            Event::Output(job) => {
+                let t = Instant::now();
+                let result = write_one(&job);
+                log.summary.encode_ms += t.elapsed().as_secs_f64() * 1e3;
+                log.output(job.record, result)?;
+            }
+            Event::FrameFailed { failed, outputs } => log.frame_failed(&failed, outputs)?,
+        }
     }
+    Ok(log)
 }
 
 fn write_one(job: &Encode) -> Result<()> {
@@ -407,16 +592,72 @@ fn write_one(job: &Encode) -> Result<()> {
     super::commit(outputs)
 }
 
-fn report_failure(log: &mut std::fs::File, item: &Item, error: &Error) -> Result<()> {
-    let record = json!({
-        "status": "failed",
-        "image": item.image.display().to_string(),
-        "error": error.to_string(),
-    });
-    writeln!(log, "{record}").map_err(|e| Error::io(item.image.clone(), e))
+/// The run's JSON-lines log, its progress bar and its counts: one line per output, written
+/// (in one `write`, on a file opened for appending, so that shards sharing nothing but the
+/// folder never interleave) as soon as the output is in place or has failed.
+struct Log {
+    file: std::fs::File,
+    path: PathBuf,
+    progress: ProgressBar,
+    summary: Summary,
 }
 
-/// `--beta 0.005,0.01,0.02`: finite, > 0, no repeats.
+/// What became of this shard's outputs.
+#[derive(Default)]
+struct Summary {
+    written: usize,
+    skipped: usize,
+    failed_outputs: usize,
+    failed_frames: usize,
+    encode_ms: f64,
+}
+
+impl Log {
+    fn output(&mut self, mut record: serde_json::Value, result: Result<()>) -> Result<()> {
+        match result {
+            Ok(()) => self.summary.written += 1,
+            Err(e) => {
+                record["status"] = json!("failed");
+                record["error"] = json!(e.to_string());
+                self.progress.suspend(|| errln!("brume: error: {e}"));
+                self.summary.failed_outputs += 1;
+            }
+        }
+        self.progress.inc(1);
+        self.append(&record)
+    }
+
+    /// A frame that could not be loaded or rendered; `outputs` of it are not written.
+    fn frame_failed(&mut self, failed: &Failed, outputs: usize) -> Result<()> {
+        let (item, error) = (&failed.item, &failed.error);
+        self.progress.suspend(|| {
+            errln!("brume: error: skipped {}: {error}", item.image.display());
+        });
+        self.summary.failed_frames += 1;
+        self.progress.inc(outputs as u64);
+        self.append(&json!({
+            "status": "failed",
+            "image": item.image.display().to_string(),
+            "error": error.to_string(),
+        }))
+    }
+
+    fn append(&mut self, record: &serde_json::Value) -> Result<()> {
+        let line = format!("{record}\n");
+        self.file
+            .write_all(line.as_bytes())
+            .and_then(|()| self.file.flush())
+            .map_err(|e| Error::io(&self.path, e))
+    }
+}
+
+/// The thinnest fog a batch renders, m⁻¹: visibility 3,000 km, no fog a camera can see
+/// (and β names the output files: 1e-300 would be a 300-digit name).
+const MIN_BETA: f64 = 1e-6;
+/// The densest, m⁻¹: visibility 0.3 m.
+const MAX_BETA: f64 = 10.0;
+
+/// `--beta 0.005,0.01,0.02`: each in [`MIN_BETA`, `MAX_BETA`], no repeats.
 fn parse_betas(text: &str) -> Result<Vec<f64>> {
     let mut betas = Vec::new();
     for part in text.split(',') {
@@ -427,11 +668,14 @@ fn parse_betas(text: &str) -> Result<Vec<f64>> {
                 "extinction coefficients in 1/m, e.g. 0.005,0.01,0.02",
             )
         })?;
-        if !(beta.is_finite() && beta > 0.0) {
+        if !(MIN_BETA..=MAX_BETA).contains(&beta) {
             return Err(Error::invalid(
                 "--beta",
                 part,
-                "an extinction coefficient > 0 (1/m)",
+                format!(
+                    "an extinction coefficient from {MIN_BETA} to {MAX_BETA} per metre \
+                     (visibility from 300 m to 0.3 m)"
+                ),
             ));
         }
         if betas.contains(&beta) {
@@ -455,33 +699,40 @@ fn progress_bar(outputs: u64) -> ProgressBar {
 #[derive(Default)]
 struct Stats {
     frames: usize,
-    written: usize,
-    failed_outputs: usize,
     decode_ms: f64,
     prep_ms: f64,
     gpu_ms: f64,
     render_ms: f64,
-    encode_ms: f64,
 }
 
 impl Stats {
-    fn print(&self, wall_s: f64, log: &Path) {
-        let n = self.written.max(1) as f64;
-        println!(
-            "wrote {} outputs of {} frames in {:.1} s: {:.2} s per output (wall); per output: \
-             decode {:.0} ms, pre-processing {:.0} ms, render {:.0} ms (GPU {:.0} ms), encode {:.0} ms; \
-             log {}",
-            self.written,
-            self.frames,
-            wall_s,
-            wall_s / n,
-            self.decode_ms / n,
-            self.prep_ms / n,
-            self.render_ms / n,
-            self.gpu_ms / n,
-            self.encode_ms / n,
-            log.display()
+    fn print(&self, summary: &Summary, wall_s: f64, log: &Path) {
+        let Summary {
+            written,
+            skipped,
+            failed_outputs,
+            failed_frames,
+            encode_ms,
+        } = *summary;
+        let n = written.max(1) as f64;
+        let mut line = format!(
+            "wrote {written} outputs of {} frames in {wall_s:.1} s, skipped {skipped} already \
+             written, failed {failed_outputs} outputs and {failed_frames} frames",
+            self.frames
         );
+        if written > 0 {
+            line += &format!(
+                "; {:.2} s per output (wall); per output: decode {:.0} ms, pre-processing \
+                 {:.0} ms, render {:.0} ms (GPU {:.0} ms), encode {:.0} ms",
+                wall_s / n,
+                self.decode_ms / n,
+                self.prep_ms / n,
+                self.render_ms / n,
+                self.gpu_ms / n,
+                encode_ms / n,
+            );
+        }
+        outln!("{line}; log {}", log.display());
     }
 }
 
@@ -505,7 +756,26 @@ impl BatchArgs {
         args.albedo = self.albedo;
         args.no_prep = self.no_prep;
         args.prep = self.prep.clone();
-        render_cmd::haze_from_args(&args)?;
+        render_cmd::check_options(&args)?;
+        let haze = render_cmd::haze_from_args(&args)?;
+        render_cmd::prep_options(&args.prep)?;
+        if let Some(mask) = &args.prep.sky_mask {
+            if !mask.is_file() {
+                return Err(Error::invalid(
+                    "--sky-mask",
+                    mask.display(),
+                    "an existing PNG sky mask",
+                ));
+            }
+        }
+        // The blur's steps do not depend on β (σmax is reached at the visibility).
+        let look = render_cmd::look_from_args(&args, &haze, [1.0; 3]);
+        look.blur.schedule_for(look.medium()).map_err(|e| match e {
+            Error::InvalidParameter { name, expected, .. } if name != "rho_max" => {
+                Error::invalid("--lambda", args.lambda, expected)
+            }
+            e => e,
+        })?;
         Ok(args)
     }
 }

@@ -2,6 +2,7 @@
 //! an open renderer. Lists and sizes are taken as text and checked here, so that a bad
 //! value is an [`Error::invalid`] naming the option, like every other brume error.
 
+use super::limits::{self, MAX_ESTIMATIONS, MAX_RUNS, MAX_SAMPLES, MAX_TURBIDITY_BENCH_SIDE};
 use brume::bench::accuracy::{run_accuracy, AccuracyOptions};
 use brume::bench::fog::{fog_table, run_fog_bench, FogBenchOptions};
 use brume::bench::plot::{accuracy_plot_bytes, speed_plot_bytes, PlotFormat};
@@ -31,6 +32,9 @@ pub enum BenchCommand {
     /// 100 estimations of N = 100 points each), clear and with synthetic clouds; CPU only.
     Turbidity(TurbidityBenchArgs),
 }
+
+/// Bytes per pixel of a `bench turbidity` sky held in memory (measured, README).
+const TURBIDITY_BENCH_BYTES_PER_PIXEL: u64 = 48;
 
 /// `brume bench turbidity`.
 #[derive(clap::Args, Debug, Clone)]
@@ -99,12 +103,18 @@ impl TurbidityBenchArgs {
     /// The library options these arguments stand for.
     pub fn options(&self) -> Result<TurbidityBenchOptions> {
         let opts = TurbidityBenchOptions {
-            size: count("--size", self.size, "an image side ≥ 16 px")?,
+            size: limits::count("--size", self.size, 16, MAX_TURBIDITY_BENCH_SIDE, "px")?,
             turbidities: parse_list("--turbidities", &self.turbidities, |t| {
                 t.parse::<f64>().ok()
             })?,
-            estimations: count("--estimations", self.estimations, "at least 1 estimation")?,
-            samples: count("--samples", self.samples, "at least 5 sample points")?,
+            estimations: limits::count(
+                "--estimations",
+                self.estimations,
+                1,
+                MAX_ESTIMATIONS,
+                "estimations",
+            )?,
+            samples: limits::count("--samples", self.samples, 5, MAX_SAMPLES, "sample points")?,
             cloud_cover: self.clouds,
             seed: u64::try_from(self.seed).map_err(|_| {
                 Error::invalid("--seed", self.seed, "a whole number from 0 to 2^64 - 1")
@@ -113,13 +123,18 @@ impl TurbidityBenchArgs {
             fit_level: self.fit_level,
             ..TurbidityBenchOptions::default()
         };
-        if opts.samples < 5 {
-            return Err(Error::invalid(
-                "--samples",
-                opts.samples,
-                "at least 5 sample points",
-            ));
-        }
+        limits::check_sample_points(
+            "--estimations/--samples/--turbidities",
+            opts.estimations,
+            opts.samples,
+            opts.turbidities.len(),
+        )?;
+        limits::check_memory(
+            "--size",
+            opts.size,
+            opts.size,
+            TURBIDITY_BENCH_BYTES_PER_PIXEL,
+        )?;
         opts.validate().map_err(|e| match e {
             Error::InvalidParameter {
                 name,
@@ -304,12 +319,12 @@ impl AccuracyArgs {
 impl SpeedArgs {
     /// The library options these arguments stand for.
     pub fn options(&self) -> Result<SpeedOptions> {
-        let (width, height) = parse_size(&self.size)?;
+        let (width, height) = limits::parse_image_size("--size", &self.size)?;
         let opts = SpeedOptions {
             configs: self.common.configs()?,
             width,
             height,
-            runs: count("--runs", self.runs, "at least 1 timed run")?,
+            runs: limits::count("--runs", self.runs, 1, MAX_RUNS, "timed runs")?,
             max_passes: self
                 .max_passes
                 .map(|p| count("--max-passes", p, "a number of passes ≥ 0"))
@@ -351,11 +366,11 @@ pub fn run(
             )
         }
         BenchCommand::Fog(f) => {
-            let (width, height) = parse_size(&f.size)?;
+            let (width, height) = limits::parse_image_size("--size", &f.size)?;
             let opts = FogBenchOptions {
                 width,
                 height,
-                runs: count("--runs", f.runs, "at least 1 timed run")?,
+                runs: limits::count("--runs", f.runs, 1, MAX_RUNS, "timed runs")?,
                 ..FogBenchOptions::default()
             };
             let bar = progress_bar("configurations");
@@ -404,10 +419,10 @@ fn emit(
     match json {
         Some(json) => {
             // stdout holds exactly one JSON object; the human table goes to stderr.
-            eprint!("{table}");
-            println!("{json}");
+            err!("{table}");
+            outln!("{json}");
         }
-        None => print!("{table}"),
+        None => out!("{table}"),
     }
     Ok(())
 }
@@ -439,7 +454,7 @@ fn advance_count(bar: &ProgressBar, done: usize, total: usize, what: &str) {
 /// Prints a benchmark's table on stdout, or its JSON there and the table on stderr.
 fn print_report(json: bool, table: &str, report: &impl serde::Serialize) -> Result<()> {
     if !json {
-        print!("{table}");
+        out!("{table}");
         return Ok(());
     }
     let text = serde_json::to_string_pretty(report).map_err(|e| {
@@ -449,8 +464,8 @@ fn print_report(json: bool, table: &str, report: &impl serde::Serialize) -> Resu
             format!("serialisable data: {e}"),
         )
     })?;
-    eprint!("{table}");
-    println!("{text}");
+    err!("{table}");
+    outln!("{text}");
     Ok(())
 }
 
@@ -490,24 +505,6 @@ fn expected(option: &str) -> &'static str {
 /// large for `T`.
 fn count<T: TryFrom<i64>>(option: &str, value: i64, expected: &str) -> Result<T> {
     T::try_from(value).map_err(|_| Error::invalid(option, value, expected))
-}
-
-/// `WIDTHxHEIGHT` → (width, height), both ≥ 1.
-pub fn parse_size(text: &str) -> Result<(usize, usize)> {
-    let bad = || {
-        Error::invalid(
-            "--size",
-            text,
-            "WIDTHxHEIGHT in px, both ≥ 1, e.g. 1600x1120",
-        )
-    };
-    let (w, h) = text.trim().split_once(['x', 'X']).ok_or_else(bad)?;
-    let w: usize = w.trim().parse().map_err(|_| bad())?;
-    let h: usize = h.trim().parse().map_err(|_| bad())?;
-    if w == 0 || h == 0 {
-        return Err(bad());
-    }
-    Ok((w, h))
 }
 
 #[cfg(test)]
@@ -587,9 +584,10 @@ mod tests {
 
     #[test]
     fn sizes_parse() {
-        assert_eq!(parse_size("400x280").unwrap(), (400, 280));
-        assert_eq!(parse_size(" 16X8 ").unwrap(), (16, 8));
-        assert!(parse_size("400").is_err());
-        assert!(parse_size("-1x3").is_err());
+        let parse = |t| limits::parse_image_size("--size", t);
+        assert_eq!(parse("400x280").unwrap(), (400, 280));
+        assert_eq!(parse(" 16X8 ").unwrap(), (16, 8));
+        assert!(parse("400").is_err());
+        assert!(parse("-1x3").is_err());
     }
 }

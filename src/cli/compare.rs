@@ -13,7 +13,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let (a_name, b_name) = (args.a.display().to_string(), args.b.display().to_string());
     let s = compare(&a, &a_name, &b, &b_name)?;
     if args.json {
-        println!(
+        outln!(
             "{}",
             json!({
                 "a": a_name,
@@ -27,7 +27,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
             })
         );
     } else {
-        println!(
+        outln!(
             "SSIM {:.4} (R {:.4}, G {:.4}, B {:.4}); HSV histogram correlation {:.4} \
              (H {:.4}, S {:.4}, V {:.4})",
             s.ssim,

@@ -9,7 +9,7 @@ pub fn run(args: &InfoArgs, egl: Option<Platform>) -> Result<()> {
     let renderer = super::open_renderer(egl)?;
     let caps = renderer.caps();
     if args.json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string_pretty(caps).expect("capabilities serialise")
         );
@@ -22,40 +22,40 @@ pub fn run(args: &InfoArgs, egl: Option<Platform>) -> Result<()> {
 fn print_text(c: &Capabilities) {
     let yes = |b: bool| if b { "yes" } else { "no" };
     if let Some(egl) = &c.egl {
-        println!("EGL platform       {}", egl.platform);
-        println!("EGL vendor         {} (EGL {})", egl.vendor, egl.version);
+        outln!("EGL platform       {}", egl.platform);
+        outln!("EGL vendor         {} (EGL {})", egl.vendor, egl.version);
     }
-    println!("GL vendor          {}", c.vendor);
-    println!("GL renderer        {}", c.renderer);
-    println!("GL version         {}", c.version);
-    println!("GLSL version       {}", c.shading_language_version);
-    println!("max texture size   {}", c.max_texture_size);
-    println!("EXT_color_buffer_float       {}", yes(c.color_buffer_float));
-    println!(
+    outln!("GL vendor          {}", c.vendor);
+    outln!("GL renderer        {}", c.renderer);
+    outln!("GL version         {}", c.version);
+    outln!("GLSL version       {}", c.shading_language_version);
+    outln!("max texture size   {}", c.max_texture_size);
+    outln!("EXT_color_buffer_float       {}", yes(c.color_buffer_float));
+    outln!(
         "EXT_color_buffer_half_float  {}",
         yes(c.color_buffer_half_float)
     );
-    println!(
+    outln!(
         "OES_texture_float_linear     {}",
         yes(c.texture_float_linear)
     );
-    println!(
+    outln!(
         "EXT_disjoint_timer_query     {}",
         yes(c.disjoint_timer_query)
     );
-    println!(
+    outln!(
         "OES_EGL_image_external_essl3 {}",
         yes(c.egl_image_external_essl3)
     );
-    println!("OES_EGL_image_external       {}", yes(c.egl_image_external));
+    outln!("OES_EGL_image_external       {}", yes(c.egl_image_external));
     let f32_ok = c.require_precision(brume::Precision::F32).is_ok();
     let f16_ok = c.require_precision(brume::Precision::F16).is_ok();
-    println!(
+    outln!(
         "precisions usable  f32: {}, f16: {}",
         yes(f32_ok),
         yes(f16_ok)
     );
-    println!(
+    outln!(
         "timing clock       {}",
         if c.disjoint_timer_query {
             "gpu-timer (GL_TIME_ELAPSED)"

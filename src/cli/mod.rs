@@ -1,11 +1,32 @@
 //! Command-line interface: argument definitions and the glue from arguments to the library.
 
+/// `outln!` for the program's reports: a closed stdout (`brume … | head -c 0`) ends
+/// nothing and panics nowhere; the rest of the work, and its outputs, go on as if the
+/// reader had kept reading, as `cat` into a closed pipe would not, but the outputs matter
+/// more than the report.
+macro_rules! outln {
+    ($($t:tt)*) => { $crate::cli::write_stream($crate::cli::Stream::Out, format_args!("{}\n", format_args!($($t)*))) };
+}
+/// `print!` with [`outln!`]'s tolerance of a closed stdout.
+macro_rules! out {
+    ($($t:tt)*) => { $crate::cli::write_stream($crate::cli::Stream::Out, format_args!($($t)*)) };
+}
+/// `errln!` that does not panic when stderr is a closed pipe.
+macro_rules! errln {
+    ($($t:tt)*) => { $crate::cli::write_stream($crate::cli::Stream::Err, format_args!("{}\n", format_args!($($t)*))) };
+}
+/// `err!` with [`errln!`]'s tolerance.
+macro_rules! err {
+    ($($t:tt)*) => { $crate::cli::write_stream($crate::cli::Stream::Err, format_args!($($t)*)) };
+}
+
 mod aerial;
 mod args;
 mod batch;
 mod bench;
 mod compare;
 mod info;
+mod limits;
 mod prep;
 mod render;
 mod scene;
@@ -29,8 +50,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(a) => compare::run(&a),
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Batch(a) => {
+            let plan = batch::plan(&a)?;
             let mut headless = open_renderer(cli.egl)?;
-            batch::run(&a, headless.renderer()?)
+            batch::run(&a, plan, headless.renderer()?)
         }
         #[cfg(all(feature = "viewer", not(target_os = "android")))]
         Command::View(a) => view::run(a),
@@ -47,6 +69,37 @@ pub fn run(cli: Cli) -> Result<()> {
                 &brume::io::demo::demo_image,
                 &|p| brume::io::image::load_linear_rgb(p),
             )
+        }
+    }
+}
+
+/// One of the program's standard streams.
+#[derive(Clone, Copy)]
+pub enum Stream {
+    /// stdout: reports, JSON.
+    Out,
+    /// stderr: errors, warnings, tables beside a JSON report.
+    Err,
+}
+
+/// Writes to stdout or stderr, ignoring a reader that went away (EPIPE): what was to be
+/// printed is lost, nothing else is. Other write errors (a full disk behind a
+/// redirection) are said once on stderr.
+pub fn write_stream(stream: Stream, text: std::fmt::Arguments) {
+    use std::io::Write;
+    let result = match stream {
+        Stream::Out => std::io::stdout().lock().write_fmt(text),
+        Stream::Err => std::io::stderr().lock().write_fmt(text),
+    };
+    if let Err(e) = result {
+        static SAID: std::sync::Once = std::sync::Once::new();
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            SAID.call_once(|| {
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "brume: warning: cannot write the report: {e}"
+                );
+            });
         }
     }
 }
@@ -108,7 +161,7 @@ pub fn refuse_overlaps(outputs: &[(&str, &Path)], inputs: &[PathBuf]) -> Result<
 fn commit(outputs: Outputs) -> Result<()> {
     let hold = std::env::var("BRUME_TEST_HOLD_OUTPUTS").ok();
     if let Some(seconds) = hold.and_then(|s| s.parse::<f64>().ok()) {
-        eprintln!(
+        errln!(
             "brume: holding {} staged outputs",
             outputs.destinations().count()
         );
@@ -128,7 +181,7 @@ pub fn remove_temporaries_on_signals() {
             Ok(mut signals) => {
                 std::thread::spawn(move || {
                     if let Some(signal) = signals.forever().next() {
-                        eprintln!("brume: interrupted");
+                        errln!("brume: interrupted");
                         output::exit_removing_temporaries(128 + signal);
                     }
                 });

@@ -15,6 +15,7 @@ use std::path::Path;
 
 pub fn run(args: &PrepArgs) -> Result<()> {
     let opts = prep_options(&args.prep)?;
+    super::render::check_depth_options(&args.depth)?;
     output::check_scalar_output(&args.out, "--out")?;
     let mut outs: Vec<(&str, &Path)> = vec![("--out", &args.out)];
     if let Some(vis) = &args.vis {
@@ -83,9 +84,9 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         if let (Some(map), serde_json::Value::Object(more)) = (report.as_object_mut(), extra) {
             map.extend(more);
         }
-        println!("{report}");
+        outln!("{report}");
     } else {
-        println!(
+        outln!(
             "{} unknown px: {} holes ({} px) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
             loaded.unknown_pixels,
             s.holes,
@@ -96,7 +97,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.r_max,
             s.s_max.map_or("-".to_string(), |v| format!("{v:.4}"))
         );
-        println!(
+        outln!(
             "sky from {}; {} far outliers removed{}, {} px of matcher noise by the sky; \
              {} known px in the sky replaced",
             sky_method_name(s.sky_method),
@@ -106,12 +107,15 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.sky_noise,
             s.sky_known_pixels
         );
-        println!(
+        outln!(
             "CPU time: fill {:.1} ms, sky {:.1} ms, margin {:.1} ms, total {:.1} ms",
-            s.fill_ms, s.sky_ms, s.margin_ms, s.total_ms
+            s.fill_ms,
+            s.sky_ms,
+            s.margin_ms,
+            s.total_ms
         );
         if let Some(a) = &airlight {
-            println!(
+            outln!(
                 "airlight {:.3},{:.3},{:.3} (from {})",
                 a.rgb[0],
                 a.rgb[1],
@@ -119,9 +123,9 @@ pub fn run(args: &PrepArgs) -> Result<()> {
                 airlight_source_name(a.source)
             );
         }
-        println!("wrote {}", args.out.display());
+        outln!("wrote {}", args.out.display());
         if let Some(vis) = &args.vis {
-            println!("wrote {}", vis.display());
+            outln!("wrote {}", vis.display());
         }
     }
     Ok(())
@@ -166,6 +170,16 @@ pub fn prepare_inputs(
                 path.display(),
                 100.0 * sky as f64 / m.len().max(1) as f64
             );
+            if sky == m.len() {
+                return Err(Error::invalid(
+                    "--sky-mask",
+                    path.display(),
+                    format!(
+                        "a mask with ground in it: every pixel is sky as read ({format}); is it \
+                         inverted, or of another --sky-mask-format?"
+                    ),
+                ));
+            }
             Some((m, format))
         }
         None => None,

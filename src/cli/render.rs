@@ -74,20 +74,113 @@ impl Look {
     }
 }
 
-pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
+/// Checks `args` before any file is read: the medium's values and options that cannot
+/// take effect together.
+pub fn check_options(args: &RenderArgs) -> Result<()> {
     haze_from_args(args)?;
+    check_medium_options(args)?;
+    super::aerial::check_aerial_options(args)?;
+    check_depth_options(&args.depth)?;
+    if args.no_prep {
+        refuse_prep_options(&args.prep)?;
+    }
+    Ok(())
+}
+
+/// An option that cannot take effect is an error, not a silent no-op: the options of the
+/// other medium (`--turbidity` on haze, `--tint` on aerial, …).
+fn check_medium_options(args: &RenderArgs) -> Result<()> {
+    let text = |v: Option<f64>| v.map(|v| v.to_string());
+    let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let aerial_only = [
+        ("--turbidity", text(args.turbidity)),
+        ("--sky", path(&args.sky)),
+        ("--from-turbidity", text(args.from_turbidity)),
+        ("--altitude", text(args.altitude)),
+        ("--metres-per-unit", text(args.metres_per_unit)),
+        ("--pitch", text(args.pitch)),
+        ("--horizon-row", text(args.horizon_row)),
+        ("--horizon-zenith", text(args.horizon_zenith)),
+        ("--sensitivity", path(&args.sensitivity)),
+        ("--blur", args.blur.map(|b| format!("{b:?}").to_lowercase())),
+    ];
+    let haze_only = [
+        ("--ka", text(args.ka)),
+        ("--ks", text(args.ks)),
+        (
+            "--tint",
+            args.tint.map(|t| format!("{},{},{}", t[0], t[1], t[2])),
+        ),
+        ("--uniform-sigma", text(args.uniform_sigma)),
+    ];
+    let (others, wanted, this) = match args.medium {
+        MediumKind::Haze => (&aerial_only[..], "aerial", "haze"),
+        MediumKind::Aerial => (&haze_only[..], "haze", "aerial"),
+    };
+    refuse_given(
+        others,
+        &format!("--medium {wanted} with it: the {this} medium of this render does not read it"),
+    )
+}
+
+/// Refuses the first option of `options` (flag, value if given) that was given.
+fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -> Result<()> {
+    match options
+        .iter()
+        .find_map(|(flag, v)| v.as_ref().map(|v| (*flag, v)))
+    {
+        Some((flag, value)) => Err(Error::invalid(flag, value, expected)),
+        None => Ok(()),
+    }
+}
+
+/// Depth options that only some inputs read, refused where none of them can.
+pub fn check_depth_options(depth: &DepthArgs) -> Result<()> {
+    let zbuffer = depth.depth_kind == Some(depth::DepthKind::ZBuffer);
+    let planes = [
+        (
+            "--near",
+            depth.near.filter(|_| !zbuffer).map(|v| v.to_string()),
+        ),
+        (
+            "--far",
+            depth.far.filter(|_| !zbuffer).map(|v| v.to_string()),
+        ),
+    ];
+    refuse_given(
+        &planes,
+        "--depth-kind zbuffer with it: only a z-buffer's projection has clipping planes",
+    )
+}
+
+/// With `--no-prep` nothing reads the pre-processing options: each one given is an error.
+pub fn refuse_prep_options(prep: &PrepOptionArgs) -> Result<()> {
+    let given = [
+        ("--margin", prep.margin.map(|v| v.to_string())),
+        ("--sky-factor", prep.sky_factor.map(|v| v.to_string())),
+        ("--no-sky", prep.no_sky.then(|| "given".to_string())),
+        ("--sky-min-area", prep.sky_min_area.map(|v| v.to_string())),
+        ("--seed", prep.seed.map(|v| v.to_string())),
+        (
+            "--sky-mask",
+            prep.sky_mask.as_ref().map(|p| p.display().to_string()),
+        ),
+        (
+            "--far-outlier-factor",
+            prep.far_outlier_factor.map(|v| v.to_string()),
+        ),
+    ];
+    refuse_given(
+        &given,
+        "no --no-prep with it: pre-processing is what reads it",
+    )
+}
+
+pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
+    check_options(args)?;
     let out = output_path(args)?;
     output::check_image_output(&out, "--out")?;
-    let inputs: Vec<PathBuf> = args
-        .image
-        .iter()
-        .cloned()
-        .chain(depth_inputs(&args.depth))
-        .chain(args.sky.iter().cloned())
-        .chain(args.prep.sky_mask.iter().cloned())
-        .chain(args.sensitivity.iter().cloned())
-        .collect();
-    super::refuse_overlaps(&[("--out", &out)], &inputs)?;
+    super::refuse_overlaps(&[("--out", &out)], &input_paths(args))?;
     let scene = load_scene(args)?;
 
     let prep = preprocess(args, &scene)?;
@@ -119,7 +212,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         out: &out,
     };
     if args.json {
-        println!("{}", report.json(args, range_divisor));
+        outln!("{}", report.json(args, range_divisor));
     } else {
         report.print_summary();
         if args.timings {
@@ -145,10 +238,22 @@ struct Report<'a> {
 
 /// The haze of `args`: paper 000's in normalised range (--ka, --ks), or with --beta or
 /// --visibility the same medium on range in metres ([`PhysicalFog::haze`]).
+/// Every file `args` reads: none of them may be an output.
+pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
+    args.image
+        .iter()
+        .cloned()
+        .chain(depth_inputs(&args.depth))
+        .chain(args.sky.iter().cloned())
+        .chain(args.prep.sky_mask.iter().cloned())
+        .chain(args.sensitivity.iter().cloned())
+        .collect()
+}
+
 pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
     let haze = Haze {
-        ka: args.ka,
-        ks: args.ks,
+        ka: args.ka.unwrap_or(haze::DEFAULT_KA),
+        ks: args.ks.unwrap_or(haze::DEFAULT_KS),
         lambda: args.lambda,
         airlight: args.airlight.unwrap_or(haze::DEFAULT_AIRLIGHT),
         tint: args.tint.unwrap_or([1.0; 3]),
@@ -250,12 +355,24 @@ pub fn physical_from_args(args: &RenderArgs) -> Result<Option<PhysicalFog>> {
 /// Refuses physical fog on a range that is not in trustworthy metres
 /// ([`LoadedDepth::metric`]), naming the depth, how it was read and what would do.
 fn check_metric(args: &RenderArgs, scene: &Scene) -> Result<()> {
+    let depth = &scene.depth;
+    if args.medium == MediumKind::Aerial && !depth.metric && args.metres_per_unit.is_none() {
+        return Err(Error::invalid(
+            "--metres-per-unit",
+            "(missing)",
+            format!(
+                "the scale of {}'s range for --medium aerial, which is in metres: it was read \
+                 as {} {} in {}, not trustworthy metres (give --metres-per-unit, or a \
+                 metric depth: --calib, --camera, a metric --depth-format)",
+                scene.depth_name, depth.format, depth.kind, depth.units
+            ),
+        ));
+    }
     let given = match (args.beta, args.visibility) {
         (Some(b), _) => ("beta", b),
         (None, Some(v)) => ("visibility", v),
         (None, None) => return Ok(()),
     };
-    let depth = &scene.depth;
     if depth.metric {
         return Ok(());
     }
@@ -445,7 +562,12 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
     };
     let loaded = depth::load_range(path, &opts)?;
     for note in &loaded.notes {
-        log::info!("{}: {note}", path.display());
+        // An option given and not used is said where the user looks, not only in --json.
+        if note.contains("ignored") {
+            log::warn!("{}: {note}", path.display());
+        } else {
+            log::info!("{}: {note}", path.display());
+        }
     }
     Ok(loaded)
 }
@@ -631,13 +753,16 @@ impl Report<'_> {
         let t = &rendered.times;
         if let Some(p) = &prep.prepared {
             let s = &p.stats;
-            println!(
+            outln!(
                 "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
-                s.holes, s.hole_pixels, s.sky_pixels, s.total_ms
+                s.holes,
+                s.hole_pixels,
+                s.sky_pixels,
+                s.total_ms
             );
         }
         let b = look.airlight();
-        println!(
+        outln!(
             "airlight {:.3},{:.3},{:.3} ({}), σmax {:.2} px, κ {:.3}",
             b[0],
             b[1],
@@ -647,7 +772,7 @@ impl Report<'_> {
             look.extinction()
         );
         if let Some(f) = fog {
-            println!(
+            outln!(
                 "fog β {} m⁻¹ (visibility {:.1} m, albedo {})",
                 f.beta,
                 f.visibility_m(),
@@ -655,9 +780,9 @@ impl Report<'_> {
             );
         }
         if let Some([lo, hi]) = transmittance {
-            println!("τ from {lo:.4} to {hi:.4} over the pixels of known range");
+            outln!("τ from {lo:.4} to {hi:.4} over the pixels of known range");
         }
-        println!(
+        outln!(
             "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
             out.display(),
             scene.image.width(),
@@ -675,16 +800,16 @@ impl Report<'_> {
 fn print_timings(rendered: &Rendered) {
     let t = &rendered.times;
     let n = t.pass_ms.len();
-    println!("{:>6}  {:<12} {:>10}", "pass", "shader", "ms");
+    outln!("{:>6}  {:<12} {:>10}", "pass", "shader", "ms");
     for (i, ms) in t.pass_ms.iter().enumerate() {
         let name = match i {
             0 => "medium",
             _ if i + 1 == n => "composite",
             _ => "diffuse",
         };
-        println!("{:>6}  {:<12} {:>10.3}", i + 1, name, ms);
+        outln!("{:>6}  {:<12} {:>10.3}", i + 1, name, ms);
     }
-    println!(
+    outln!(
         "{:>6}  {:<12} {:>10.3}  ({})",
         "total",
         "",
@@ -748,25 +873,16 @@ pub fn aerial_job(
     });
     // I∞(θ') from the brightest sky of the horizon region (paper 002, sec. 4), unless
     // --airlight says otherwise or no sky was found.
+    let camera = aerial_camera(args, scene.image.height(), scene.depth.intrinsics.as_ref())?;
     let horizon = match (&args.airlight, &prep.prepared) {
-        (None, Some(p)) => horizon_light(
-            &scene.image,
-            &p.sky,
-            &aerial_camera(args, scene.image.height()),
-        ),
+        (None, Some(p)) => horizon_light(&scene.image, &p.sky, &camera),
         _ => None,
     };
     let (light, zenith, light_source) = match horizon {
         Some(h) => (h.rgb, Some(h.zenith), "horizon"),
         None => (prep.airlight, None, prep.airlight_source),
     };
-    let look = aerial_look(
-        args,
-        scene.image.height(),
-        1.5 * f64::from(max_range),
-        light,
-        zenith,
-    )?;
+    let look = aerial_look(args, camera, 1.5 * f64::from(max_range), light, zenith)?;
     let image = match look.from_turbidity {
         Some(from) => dehaze(&scene.image, &range, &look, from)?,
         None => scene.image.clone(),
@@ -807,7 +923,7 @@ fn run_aerial(
     let m = &look.medium;
     let t = &rendered.times;
     if args.json {
-        println!(
+        outln!(
             "{}",
             json!({
                 "width": image.width(),
@@ -834,7 +950,7 @@ fn run_aerial(
             })
         );
     } else {
-        println!(
+        outln!(
             "wrote {} (aerial perspective, T = {:.2} ({}), {} diffusion passes + 2, {:.1} ms by {})",
             out.display(),
             m.table.turbidity(),

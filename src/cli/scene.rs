@@ -3,7 +3,7 @@
 //! frame (or a numbered sequence), the raw depth buffer and the fog-free frame.
 
 use super::args::{BlurKind, FogKind, ProfileKind, SceneArgs};
-use super::bench::parse_size;
+use super::limits::{self, MAX_FRAMES};
 use brume::camera::Camera;
 use brume::egl::Platform;
 use brume::io::output::{self, Outputs};
@@ -25,8 +25,13 @@ struct FrameReport {
     clock: &'static str,
 }
 
+/// Bytes per pixel a scene render holds in system memory on a software renderer: the
+/// scene's and the fog's textures and the read-back (measured, README's limits table).
+pub const SCENE_BYTES_PER_PIXEL: u64 = 96;
+
 pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
-    let (width, height) = parse_size(&args.size)?;
+    let (width, height) = limits::parse_image_size("--size", &args.size)?;
+    limits::check_memory("--size", width, height, SCENE_BYTES_PER_PIXEL)?;
     let camera = camera_from_args(args);
     camera.validate()?;
     check_sequence(args)?;
@@ -46,6 +51,9 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
 
     let progress = progress_bar(args.frames);
     let mut reports = Vec::new();
+    // One set for the whole sequence: a failure or an interrupt at any frame leaves none
+    // of the frames, as every other command leaves none of its outputs.
+    let mut outputs = Outputs::new();
     for (k, out) in outs.iter().enumerate() {
         let time = args.time + k as f64 / args.fps;
         let medium = medium_from_args(args, camera, time, sun)?;
@@ -57,7 +65,6 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
             width,
             height,
         };
-        let mut outputs = Outputs::new();
         let report = match &medium {
             Some(m) => {
                 let (done, image) = renderer
@@ -96,14 +103,14 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
                 outputs.stage_scalar(path, &depth)?;
             }
         }
-        super::commit(outputs)?;
         reports.push(report);
         progress.inc(1);
     }
     progress.finish_and_clear();
+    super::commit(outputs)?;
 
     if args.json {
-        println!(
+        outln!(
             "{}",
             report_json(args, &camera, &blur, &renderer_name, &reports)
         );
@@ -125,8 +132,12 @@ pub fn camera_from_args(args: &SceneArgs) -> Camera {
 }
 
 pub fn check_sequence(args: &SceneArgs) -> Result<()> {
-    if args.frames == 0 {
-        return Err(Error::invalid("--frames", 0, "at least 1 frame"));
+    if !(1..=MAX_FRAMES).contains(&args.frames) {
+        return Err(Error::invalid(
+            "--frames",
+            args.frames,
+            format!("a number of frames from 1 to {MAX_FRAMES}"),
+        ));
     }
     if !(args.fps.is_finite() && args.fps > 0.0) {
         return Err(Error::invalid("--fps", args.fps, "a frame rate > 0"));
@@ -157,6 +168,14 @@ fn frame_paths(out: &Path, frames: u32) -> Vec<PathBuf> {
         .collect()
 }
 
+/// The files `args` reads: the noise texture, if one is given.
+pub fn input_paths(args: &SceneArgs) -> Vec<PathBuf> {
+    match args.distance.noise.as_str() {
+        "generated" | "none" => vec![],
+        path => vec![PathBuf::from(path)],
+    }
+}
+
 fn check_outputs(args: &SceneArgs, outs: &[PathBuf]) -> Result<()> {
     let mut all: Vec<(&str, &Path)> = outs.iter().map(|p| ("--out", p.as_path())).collect();
     for out in outs {
@@ -170,11 +189,7 @@ fn check_outputs(args: &SceneArgs, outs: &[PathBuf]) -> Result<()> {
         output::check_scalar_output(p, "--depth-out")?;
         all.push(("--depth-out", p));
     }
-    let inputs: Vec<PathBuf> = match args.distance.noise.as_str() {
-        "generated" | "none" => vec![],
-        path => vec![PathBuf::from(path)],
-    };
-    super::refuse_overlaps(&all, &inputs)
+    super::refuse_overlaps(&all, &input_paths(args))
 }
 
 pub fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
@@ -457,7 +472,7 @@ fn print_summary(args: &SceneArgs, blur: &FogBlur, renderer: &str, reports: &[Fr
         } else {
             passes.join(", ")
         };
-        println!(
+        outln!(
             "wrote {} ({} fog, blur {}, {:.1} ms by {} on {renderer}: {summary})",
             r.out.display(),
             fog_name(args.fog),
@@ -471,7 +486,7 @@ fn print_summary(args: &SceneArgs, blur: &FogBlur, renderer: &str, reports: &[Fr
         ("fog-free frame", &args.clear_out),
     ] {
         if let Some(p) = path {
-            println!("wrote {option} {}", p.display());
+            outln!("wrote {option} {}", p.display());
         }
     }
 }

@@ -1,6 +1,7 @@
 //! `brume sky` (a Preetham sky through a fisheye, to a file) and `brume turbidity` (the
 //! turbidity of a fisheye sky image, paper 002 sec. 3.4). CPU only: no GL context.
 
+use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
 use brume::io::image::load_linear_rgb;
 use brume::io::output::{self, Outputs};
 use brume::raster::Grid;
@@ -14,6 +15,9 @@ use std::path::{Path, PathBuf};
 
 /// The largest image side `brume sky` renders, px.
 const MAX_SIZE: i64 = 16384;
+/// Bytes per pixel `brume sky` holds: the linear RGB sky, its RGBA copy for the writer and
+/// the encoded output (measured, README's limits table).
+const SKY_BYTES_PER_PIXEL: u64 = 56;
 
 /// The fisheye convention, shared by `brume sky` and `brume turbidity`.
 #[derive(Args, Debug, Clone)]
@@ -214,6 +218,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
         .ok_or_else(|| {
             Error::invalid("--size", args.size, format!("a side in 1..={MAX_SIZE} px"))
         })?;
+    limits::check_memory("--size", size, size, SKY_BYTES_PER_PIXEL)?;
     let (zenith, azimuth) = (args.sun_zenith.to_radians(), args.sun_azimuth.to_radians());
     let model = PreethamSky::new(args.turbidity, zenith, azimuth)?;
     let disc = match args.sun_disc {
@@ -304,9 +309,9 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             "sun_disc_pixels": disc_pixels,
             "clouds": clouds,
         });
-        println!("{report}");
+        outln!("{report}");
     } else {
-        println!(
+        outln!(
             "{}: {size}x{size} {} fisheye, T = {}, sun at θs = {}°, φs = {}°; zenith {:.4} \
              kcd/m², x = {xz:.4}, y = {yz:.4}{}",
             args.out.display(),
@@ -332,7 +337,7 @@ pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
     let name = args.image.display().to_string();
     let e = sky::estimate_turbidity(&image, &name, &opts)?;
     if args.json {
-        println!(
+        outln!(
             "{}",
             report_json(&e, &args.image, image.width(), image.height())
         );
@@ -344,12 +349,6 @@ pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
 
 fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
     let deg = |v: Option<f64>| v.map(f64::to_radians);
-    let count = |option: &str, v: i64, min: i64| {
-        usize::try_from(v)
-            .ok()
-            .filter(|&n| n as i64 >= min)
-            .ok_or_else(|| Error::invalid(option, v, format!("a whole number ≥ {min}")))
-    };
     let sun = match (deg(args.sun_zenith), deg(args.sun_azimuth)) {
         (Some(z), Some(a)) => Some([z, a]),
         _ => None,
@@ -362,8 +361,8 @@ fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
         fisheye: args.fisheye.fisheye()?,
         sun,
         reference,
-        samples: count("--samples", args.samples, 5)?,
-        repeats: count("--repeats", args.repeats, 1)?,
+        samples: limits::count("--samples", args.samples, 5, MAX_SAMPLES, "sample points")?,
+        repeats: limits::count("--repeats", args.repeats, 1, MAX_ESTIMATIONS, "estimations")?,
         seed: seed("--seed", args.seed)?,
         horizon_margin: args.horizon_margin.to_radians(),
         sun_exclusion: args.sun_exclusion.to_radians(),
@@ -371,6 +370,7 @@ fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
         fit_level: args.fit_level,
         ..TurbidityOptions::default()
     };
+    limits::check_sample_points("--repeats/--samples", opts.repeats, opts.samples, 1)?;
     opts.validate()?;
     Ok(opts)
 }
@@ -408,7 +408,7 @@ fn report_json(e: &TurbidityEstimate, path: &Path, width: usize, height: usize) 
 }
 
 fn print_report(e: &TurbidityEstimate, path: &Path) {
-    println!(
+    outln!(
         "{}: turbidity T = {:.4} ± {:.4} ({} of {} estimations of N = {} points; fit std {:.4})",
         path.display(),
         e.turbidity,
@@ -422,7 +422,7 @@ fn print_report(e: &TurbidityEstimate, path: &Path) {
         SunSource::Given => "given".to_string(),
         SunSource::Detected { pixels } => format!("found from {pixels} saturated pixels"),
     };
-    println!(
+    outln!(
         "  sun θs = {:.2}°, φs = {:.2}° ({source}); {:.1} inliers of {} on average; {} \
          usable pixels; reference replaced in {} estimations; {:.2} ms per estimation",
         e.sun_zenith.to_degrees(),

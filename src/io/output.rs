@@ -44,7 +44,9 @@ pub fn check_png_output(path: &Path, option: &str) -> Result<()> {
     check_output(path, option, &PNG_EXTENSIONS)
 }
 
-fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()> {
+/// Checks, before any work is done, that `path` ends in one of `extensions` (lower case,
+/// without the dot) and can be renamed onto; `option` names the flag in the error.
+pub fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()> {
     if !extensions.contains(&extension_of(path).as_str()) {
         return Err(Error::invalid(
             option,
@@ -348,8 +350,9 @@ fn create_temporary(path: &Path) -> Result<tempfile::NamedTempFile> {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    let prefix = temporary_prefix();
     let mut builder = tempfile::Builder::new();
-    builder.prefix(".brume-").suffix(".tmp");
+    builder.prefix(&prefix).suffix(TEMPORARY_SUFFIX);
     #[cfg(unix)]
     {
         // NamedTempFile defaults to 0600; an output image should be readable like any
@@ -361,6 +364,103 @@ fn create_temporary(path: &Path) -> Result<tempfile::NamedTempFile> {
     let tmp = builder.tempfile_in(dir).map_err(|e| Error::io(path, e))?;
     live.push(tmp.path().to_path_buf());
     Ok(tmp)
+}
+
+/// The start of every temporary output's name.
+pub const TEMPORARY_PREFIX: &str = ".brume-";
+/// The end of every temporary output's name.
+pub const TEMPORARY_SUFFIX: &str = ".tmp";
+/// A temporary not modified for this long belongs to no live writer: a writer keeps one
+/// for the encoding of one output (seconds), so after an hour it was left by a process
+/// that was killed, on this machine or another that shares the folder.
+pub const STALE_TEMPORARY_AGE: std::time::Duration = std::time::Duration::from_secs(3600);
+
+/// `.brume-{host}-{pid}-`: who made a temporary, so that a later run can tell one left by
+/// a killed process (SIGKILL runs no clean-up) from one a live process is still writing.
+fn temporary_prefix() -> String {
+    format!("{TEMPORARY_PREFIX}{}-{}-", this_host(), std::process::id())
+}
+
+/// This machine's name, as a temporary's name carries it: letters, digits and dots.
+fn this_host() -> String {
+    let name = std::fs::read_to_string("/proc/sys/kernel/hostname").unwrap_or_default();
+    let name: String = name
+        .trim()
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || *c == '.')
+        .collect();
+    if name.is_empty() {
+        "host".into()
+    } else {
+        name
+    }
+}
+
+/// Whether the temporary named `name` (a file name of [`temporary_prefix`]'s form) was
+/// left by a process that is gone: one of this machine whose process no longer runs, or
+/// any that has not changed for [`STALE_TEMPORARY_AGE`]. `age` is the time since it was
+/// last modified.
+pub fn is_stale_temporary(name: &str, age: std::time::Duration) -> bool {
+    let Some(body) = name
+        .strip_prefix(TEMPORARY_PREFIX)
+        .and_then(|n| n.strip_suffix(TEMPORARY_SUFFIX))
+    else {
+        return false;
+    };
+    if age >= STALE_TEMPORARY_AGE {
+        return true;
+    }
+    // `{host}-{pid}-{random}`; an older brume's `{random}` alone is left to the age rule.
+    let mut parts = body.rsplitn(3, '-');
+    let (_random, pid, host) = (parts.next(), parts.next(), parts.next());
+    match (host, pid.and_then(|p| p.parse::<u32>().ok())) {
+        (Some(host), Some(pid)) if host == this_host() => !process_runs(pid),
+        _ => false,
+    }
+}
+
+fn process_runs(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return true;
+    }
+    if cfg!(target_os = "linux") {
+        Path::new("/proc").join(pid.to_string()).exists()
+    } else {
+        true // unknown: leave it to the age rule
+    }
+}
+
+/// Removes, under `dir` and its sub-folders, the temporary outputs that killed brume
+/// processes left (see [`is_stale_temporary`]); returns how many. Links are not followed.
+pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
+    let mut removed = 0;
+    let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
+    for entry in entries {
+        let entry = entry.map_err(|e| Error::io(dir, e))?;
+        let path = entry.path();
+        let kind = entry.file_type().map_err(|e| Error::io(&path, e))?;
+        if kind.is_dir() {
+            removed += remove_stale_temporaries(&path)?;
+            continue;
+        }
+        if !kind.is_file() {
+            continue;
+        }
+        let age = entry
+            .metadata()
+            .and_then(|m| m.modified())
+            .ok()
+            .and_then(|t| t.elapsed().ok())
+            .unwrap_or_default();
+        if is_stale_temporary(&entry.file_name().to_string_lossy(), age) {
+            match std::fs::remove_file(&path) {
+                Ok(()) => removed += 1,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+                Err(e) => return Err(Error::io(&path, e)),
+            }
+        }
+    }
+    Ok(removed)
 }
 
 /// Removes every temporary output file this process has open and exits with `code`,
@@ -397,4 +497,29 @@ fn resolve_destination(path: &Path) -> Option<PathBuf> {
         _ => Path::new("."),
     };
     Some(dir.canonicalize().ok()?.join(name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    #[test]
+    fn stale_temporaries_are_told_from_live_ones() {
+        let host = this_host();
+        let fresh = Duration::from_secs(1);
+        let ours = format!("{}abc123.tmp", temporary_prefix());
+        assert!(!is_stale_temporary(&ours, fresh), "this process is alive");
+        // No process has pid 2^31 - 2 (Linux's pid_max is at most 2^22).
+        let dead = format!(".brume-{host}-2147483646-abc123.tmp");
+        assert!(is_stale_temporary(&dead, fresh));
+        let elsewhere = ".brume-otherhost.example-2147483646-abc123.tmp";
+        assert!(!is_stale_temporary(elsewhere, fresh), "may be live there");
+        assert!(is_stale_temporary(elsewhere, STALE_TEMPORARY_AGE));
+        assert!(!is_stale_temporary(".brume-Ab3xYz.tmp", fresh));
+        assert!(is_stale_temporary(".brume-Ab3xYz.tmp", STALE_TEMPORARY_AGE));
+        for other in ["photo.png", ".brume-x.png", "brume-a-1-b.tmp"] {
+            assert!(!is_stale_temporary(other, STALE_TEMPORARY_AGE), "{other}");
+        }
+    }
 }

@@ -12,9 +12,9 @@ mod ui;
 mod window;
 
 use super::args::{ViewArgs, ViewSource, Zoom};
-use super::bench::parse_size;
+use super::limits::{self, MAX_FRAMES, MAX_WINDOW_SIDE};
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
-use brume::io::output::Outputs;
+use brume::io::output::{self, Outputs};
 use brume::{Error, Pipeline, Result};
 use glow::HasContext;
 use serde_json::json;
@@ -37,6 +37,7 @@ const PANEL_HEIGHT: f64 = 720.0;
 
 /// Opens the window and runs until it is closed (or `--frames` are done).
 pub fn run(args: ViewArgs) -> Result<()> {
+    check_args(&args)?;
     if !window::display_named() {
         return Err(no_display("DISPLAY and WAYLAND_DISPLAY are unset"));
     }
@@ -53,6 +54,49 @@ pub fn run(args: ViewArgs) -> Result<()> {
         Some(e) => Err(e),
         None => Ok(()),
     }
+}
+
+/// Checks every option before a window is asked for, so that a bad value is named even
+/// with no display, and nothing is rendered for outputs that cannot be written: the
+/// outputs' formats (PNG screenshot, JSON figures), that they are not inputs nor one file,
+/// the window's size and the source's options.
+fn check_args(args: &ViewArgs) -> Result<()> {
+    if let Some(frames) = args.frames {
+        if frames > MAX_FRAMES {
+            return Err(Error::invalid(
+                "--frames",
+                frames,
+                format!("a number of frames from 1 to {MAX_FRAMES}"),
+            ));
+        }
+    }
+    if let Some(window) = &args.window {
+        limits::parse_size("--window", window, MAX_WINDOW_SIDE)?;
+    }
+    let mut outputs: Vec<(&str, &Path)> = Vec::new();
+    if let Some(path) = &args.screenshot {
+        output::check_png_output(path, "--screenshot")?;
+        outputs.push(("--screenshot", path));
+    }
+    if let Some(path) = &args.stats {
+        output::check_output(path, "--stats", &["json"])?;
+        outputs.push(("--stats", path));
+    }
+    let inputs = match &args.source {
+        Some(ViewSource::Render(a)) => {
+            super::render::check_options(a)?;
+            super::render::input_paths(a)
+        }
+        Some(ViewSource::Scene(a)) => {
+            let (w, h) = limits::parse_image_size("--size", &a.size)?;
+            limits::check_memory("--size", w, h, super::scene::SCENE_BYTES_PER_PIXEL)?;
+            super::scene::camera_from_args(a).validate()?;
+            super::scene::fog_blur_from_args(a)?;
+            super::scene::input_paths(a)
+        }
+        None => Vec::new(),
+    };
+    super::refuse_overlaps(&outputs, &inputs)
 }
 
 fn no_display(detail: &str) -> Error {
@@ -199,7 +243,7 @@ impl Viewer {
     fn open(event_loop: &ActiveEventLoop, args: &ViewArgs) -> Result<Self> {
         let size = match &args.window {
             Some(s) => {
-                let (w, h) = parse_size(s)?;
+                let (w, h) = limits::parse_size("--window", s, MAX_WINDOW_SIDE)?;
                 LogicalSize::new(w as f64, h as f64)
             }
             None => LogicalSize::new(PANEL_WIDTH as f64 + 960.0, PANEL_HEIGHT),
@@ -496,7 +540,7 @@ impl Viewer {
     fn print_summary(&self) {
         let (gpu, wall) = self.steady_medians();
         let (w, h) = self.source.size();
-        println!(
+        outln!(
             "{} frames of {w}x{h} on {}: median {} ms GPU, {} ms per frame ({} fps) after the first",
             self.frames_done,
             self.renderer,

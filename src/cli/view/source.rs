@@ -6,7 +6,7 @@
 //! so that the window shows what the command writes; the controls then edit the medium.
 
 use super::super::args::{BlurKind, FogKind, MediumKind, RenderArgs, SceneArgs};
-use super::super::bench::parse_size;
+use super::super::limits;
 use super::super::render::{self as render_cmd, AerialJob};
 use super::super::scene::{self as scene_cmd, SceneMedium};
 use brume::atmosphere::AttenuationTable;
@@ -348,7 +348,7 @@ pub struct SceneView {
 impl SceneView {
     /// The scene `brume scene ARGS` would render, on `gl`.
     pub fn new(args: &SceneArgs, gl: &Arc<glow::Context>) -> Result<Self> {
-        let (width, height) = parse_size(&args.size)?;
+        let (width, height) = limits::parse_image_size("--size", &args.size)?;
         let camera = scene_cmd::camera_from_args(args);
         camera.validate()?;
         let renderer = SceneRenderer::new(Arc::clone(gl))?;

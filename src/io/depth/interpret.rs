@@ -295,7 +295,13 @@ fn depth_intrinsics(
     };
     match (kind, opts.focal.or(from_fov)) {
         (DepthKind::Range, Some(_)) => {
-            notes.push("--focal ignored: the map already holds range".to_string());
+            // --fov may still serve the camera (aerial perspective): only --focal, which
+            // has no other use here, is ignored.
+            notes.push(if opts.focal.is_some() {
+                "--focal ignored: the map already holds range".to_string()
+            } else {
+                "the map already holds range: --fov not needed to convert it".to_string()
+            });
             Ok(None)
         }
         (DepthKind::Range, None) => Ok(None),
