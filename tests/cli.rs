@@ -563,6 +563,68 @@ fn a_signal_while_writing_leaves_no_temporary() {
     }
 }
 
+/// An option the depth's format does not read is said on stderr, not only in `--json`:
+/// the render goes on.
+#[test]
+fn ignored_depth_options_are_said_on_stderr() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, _) = small_scene(dir.path());
+    image::GrayImage::from_fn(24, 16, |x, _| image::Luma([10 + x as u8]))
+        .save(dir.path().join("d8.png"))
+        .unwrap();
+    image::ImageBuffer::<image::Luma<u16>, _>::from_fn(24, 16, |x, _| {
+        image::Luma([1000 + x as u16])
+    })
+    .save(dir.path().join("d16.png"))
+    .unwrap();
+    fs::write(dir.path().join("cam.json"), r#"{"extrinsic": {"baseline": 0.2}, "intrinsic": {"fx": 2000, "fy": 2000, "u0": 12, "v0": 8}}"#).unwrap();
+    fs::write(
+        dir.path().join("calib.txt"),
+        "cam0=[1000 0 12; 0 1000 8; 0 0 1]\n",
+    )
+    .unwrap();
+    for (depth, extra, said) in [
+        ("d8.png", &["--camera", "cam.json"][..], "cam.json ignored"),
+        (
+            "d16.png",
+            &["--depth-format", "kitti", "--camera", "cam.json"][..],
+            "cam.json ignored",
+        ),
+        (
+            "d16.png",
+            &[
+                "--depth-format",
+                "cityscapes",
+                "--camera",
+                "cam.json",
+                "--calib",
+                "calib.txt",
+            ][..],
+            "--calib calib.txt ignored",
+        ),
+        (
+            "d16.png",
+            &["--depth-format", "arcore", "--depth-scale", "0.01"][..],
+            "--depth-scale ignored",
+        ),
+        (
+            "d16.png",
+            &["--depth-format", "arcore", "--min-confidence", "0.5"][..],
+            "--min-confidence ignored",
+        ),
+    ] {
+        let mut args = vec!["--out", "o.png"];
+        args.extend_from_slice(extra);
+        let o = render_files(dir.path(), &image, &dir.path().join(depth), &args);
+        let err = stderr(&o);
+        assert!(o.status.success(), "{extra:?}: {err}");
+        assert!(
+            err.contains("WARN") && err.contains(said),
+            "{extra:?}: {err}"
+        );
+    }
+}
+
 /// A sequence is all or nothing like every other output set: its frames are staged
 /// together and an interrupt before they are renamed leaves none of them.
 #[cfg(unix)]

@@ -469,6 +469,17 @@ fn round_two_fixtures(dir: &std::path::Path) {
     image::RgbImage::from_pixel(8, 8, image::Rgb([90, 40, 10]))
         .save(p("tiny.png"))
         .unwrap();
+    for (name, key, value) in [
+        (
+            "cam_baseline.json",
+            "\"baseline\": 0.2",
+            "\"baseline\": 1e300",
+        ),
+        ("cam_fx.json", "\"fx\": 2000.0", "\"fx\": 1e-300"),
+        ("cam_u0.json", "\"u0\": 12.0", "\"u0\": 1e12"),
+    ] {
+        fs::write(p(name), CAMERA_JSON.replace(key, value)).unwrap();
+    }
 }
 
 /// Issue 18, data loss: `view`'s outputs are checked like every other command's before a
@@ -689,5 +700,22 @@ fn render_refuses_options_that_cannot_take_effect() {
             1,
             "--near",
         ),
+    ]);
+}
+
+/// Issue 18: a camera file with an absurd value is refused naming the file and the key
+/// (it used to pass, and fail later as "no valid range value", naming neither).
+#[test]
+fn absurd_camera_files_are_named() {
+    let r = "render --image im.png --depth d16.png --depth-format cityscapes --out out.png";
+    run_matrix(&[
+        case(
+            r,
+            "--camera cam_baseline.json",
+            1,
+            "cam_baseline.json baseline 1e300",
+        ),
+        case(r, "--camera cam_fx.json", 1, "cam_fx.json fx"),
+        case(r, "--camera cam_u0.json", 1, "cam_u0.json u0"),
     ]);
 }
