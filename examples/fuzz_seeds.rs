@@ -8,7 +8,9 @@
 //! crop of the Aloe disparity in `tests/data/aloe`) in each layout and encoding the
 //! loaders accept, so that the fuzzer starts from inputs that reach deep into each
 //! decoder instead of having to find a magic number first. The `depth_png` and
-//! `load_range` seeds start with the option bytes that `fuzz/src/lib.rs` decodes.
+//! `load_range` seeds start with the option bytes that `fuzz/src/lib.rs` decodes; the
+//! `sky_mask` seeds with one byte that picks the mask format. The `camera` and `manifest`
+//! seeds are plain Cityscapes camera files and `brume batch` CSV manifests.
 
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
@@ -263,8 +265,143 @@ fn main() -> Res<()> {
         load(5, 2 << 3, 0, None, &npy(1, "<f4", "(2, 3)", false, &le32)),
     );
     seeds.put("load_range", "jpg.bin", load(6, 0, 0, None, &jpeg));
+
+    // Cityscapes camera files: the dataset's own (every key), the keys brume reads alone,
+    // the limits of each accepted range, and numbers in exponent form.
+    let camera = |b: &str, fx: &str, fy: &str, u0: &str, v0: &str| {
+        format!(
+            "{{\"extrinsic\": {{\"baseline\": {b}}}, \
+             \"intrinsic\": {{\"fx\": {fx}, \"fy\": {fy}, \"u0\": {u0}, \"v0\": {v0}}}}}\n"
+        )
+        .into_bytes()
+    };
+    seeds.put("camera", "aachen_camera.json", CITYSCAPES_CAMERA.into());
+    seeds.put(
+        "camera",
+        "minimal.json",
+        camera("0.5", "20", "25.0", "3.5", "1.25"),
+    );
+    seeds.put(
+        "camera",
+        "limits_low.json",
+        camera("0.001", "1", "1", "-16384", "-16384"),
+    );
+    seeds.put(
+        "camera",
+        "limits_high.json",
+        camera("1000", "1e6", "1E+6", "32768", "32768.0"),
+    );
+    seeds.put(
+        "camera",
+        "exponents.json",
+        camera(
+            "2.09313e-1",
+            "2.26252E3",
+            "22.653e2",
+            "1096.98",
+            "5.13137e+2",
+        ),
+    );
+
+    // CSV manifests of `brume batch`: Cityscapes' triplets, every column with empty
+    // cells, comments, blank lines and CRLF; a spreadsheet's byte-order mark and capitals.
+    let manifests: [(&str, &str); 4] = [
+        (
+            "cityscapes.csv",
+            "image,depth,camera\n\
+             leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit.png,\
+             disparity/train/aachen/aachen_000000_000019_disparity.png,\
+             camera/train/aachen/aachen_000000_000019_camera.json\n\
+             leftImg8bit/val/bonn/b_leftImg8bit.png,disparity/val/bonn/b_disparity.png,\
+             camera/val/bonn/b_camera.json\n",
+        ),
+        (
+            "all_columns.csv",
+            "# frames to fog\r\nimage, depth, camera, calib, sky_mask\r\n\r\n\
+             a/im0.png, a/disp0.pfm, , a/calib.txt, masks/a.png\r\n\
+             # skipped\r\n/abs/b.jpg,/abs/b.exr,,,\r\n",
+        ),
+        (
+            "bom_capitals.csv",
+            "\u{feff}Depth,IMAGE,Sky_Mask\nd/1.png,i/1.png,m/1_gtFine_labelIds.png\n",
+        ),
+        (
+            "middlebury.csv",
+            "image,depth,calib\nAloe/im0.png,Aloe/disp0.pfm,Aloe/calib.txt\n\
+             Bike/im0.png,Bike/disp0.pfm,Bike/calib.txt\n",
+        ),
+    ];
+    for (name, text) in manifests {
+        seeds.put("manifest", name, text.into());
+    }
+
+    // Sky masks: the first byte picks the format (0 binary, 1 Cityscapes labelIds,
+    // 2 trainIds), the rest is the PNG.
+    let mask = |format: u8, png: &[u8]| [&[format][..], png].concat();
+    let binary: Vec<u8> = (0..12).map(|i| if i < 5 { 255 } else { 0 }).collect();
+    let label_ids: Vec<u8> = [23, 23, 23, 7, 11, 21, 26, 24, 0, 1, 23, 7].into();
+    let train_ids: Vec<u8> = [10, 10, 10, 0, 2, 8, 13, 11, 255, 255, 10, 0].into();
+    let labels16: Vec<u16> = label_ids.iter().map(|&v| u16::from(v)).collect();
+    let grey = image::ExtendedColorType::L8;
+    seeds.put(
+        "sky_mask",
+        "binary.bin",
+        mask(0, &png(&binary, 4, 3, grey)?),
+    );
+    seeds.put(
+        "sky_mask",
+        "labelids.bin",
+        mask(1, &png(&label_ids, 4, 3, grey)?),
+    );
+    seeds.put(
+        "sky_mask",
+        "trainids.bin",
+        mask(2, &png(&train_ids, 4, 3, grey)?),
+    );
+    seeds.put(
+        "sky_mask",
+        "labelids16.bin",
+        mask(
+            1,
+            &png(&be16(&labels16), 4, 3, image::ExtendedColorType::L16)?,
+        ),
+    );
+    seeds.put("sky_mask", "grey_alpha.bin", mask(0, &png_la));
+    // Cityscapes' colours (sky is 70, 130, 180), as a binary mask would be given by mistake.
+    let colours = [70, 130, 180, 128, 64, 128, 0, 0, 0, 70, 130, 180];
+    seeds.put(
+        "sky_mask",
+        "colour.bin",
+        mask(0, &png(&colours, 2, 2, image::ExtendedColorType::Rgb8)?),
+    );
+    let palette = [[0, 0, 0], [70, 130, 180], [128, 64, 128]];
+    seeds.put(
+        "sky_mask",
+        "palette.bin",
+        mask(0, &palette_png(4, 2, &palette, &[1, 1, 1, 2, 0, 2, 1, 0])),
+    );
     seeds.finish()
 }
+
+/// A Cityscapes camera file as the dataset ships it (`aachen_000000_000019_camera.json`).
+const CITYSCAPES_CAMERA: &str = r#"{
+    "extrinsic": {
+        "baseline": 0.209313,
+        "pitch": 0.038,
+        "roll": 0.0,
+        "x": 1.7,
+        "y": 0.1,
+        "yaw": -0.0195,
+        "z": 1.18
+    },
+    "intrinsic": {
+        "fx": 2262.52,
+        "fy": 2265.3017905988554,
+        "u0": 1096.98,
+        "v0": 513.137
+    }
+}
+"#;
 
 /// Writes seeds, one folder per fuzz target, and counts them.
 struct Seeds {
@@ -342,6 +479,60 @@ fn png(bytes: &[u8], w: u32, h: u32, colour: image::ExtendedColorType) -> Res<Ve
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out).write_image(bytes, w, h, colour)?;
     Ok(out)
+}
+
+/// An 8-bit palette PNG (colour type 3), which the image crate's encoder does not write:
+/// chunks by hand, the pixels in one stored (uncompressed) deflate block.
+fn palette_png(w: u32, h: u32, palette: &[[u8; 3]], indices: &[u8]) -> Vec<u8> {
+    fn chunk(out: &mut Vec<u8>, kind: &[u8; 4], data: &[u8]) {
+        out.extend_from_slice(&(data.len() as u32).to_be_bytes());
+        let start = out.len();
+        out.extend_from_slice(kind);
+        out.extend_from_slice(data);
+        let crc = crc32(&out[start..]);
+        out.extend_from_slice(&crc.to_be_bytes());
+    }
+    let mut raw = Vec::new();
+    for row in indices.chunks(w as usize) {
+        raw.push(0); // filter: none
+        raw.extend_from_slice(row);
+    }
+    let mut zlib = vec![0x78, 0x01, 1];
+    zlib.extend_from_slice(&(raw.len() as u16).to_le_bytes());
+    zlib.extend_from_slice(&(!(raw.len() as u16)).to_le_bytes());
+    zlib.extend_from_slice(&raw);
+    let (mut a, mut b) = (1u32, 0u32);
+    for &x in &raw {
+        a = (a + u32::from(x)) % 65521;
+        b = (b + a) % 65521;
+    }
+    zlib.extend_from_slice(&(b << 16 | a).to_be_bytes());
+    let mut ihdr = Vec::new();
+    ihdr.extend_from_slice(&w.to_be_bytes());
+    ihdr.extend_from_slice(&h.to_be_bytes());
+    ihdr.extend_from_slice(&[8, 3, 0, 0, 0]);
+    let mut out = b"\x89PNG\r\n\x1a\n".to_vec();
+    chunk(&mut out, b"IHDR", &ihdr);
+    chunk(&mut out, b"PLTE", palette.as_flattened());
+    chunk(&mut out, b"IDAT", &zlib);
+    chunk(&mut out, b"IEND", &[]);
+    out
+}
+
+/// The CRC-32 of PNG chunks (ISO 3309), bit by bit.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &byte in bytes {
+        crc ^= u32::from(byte);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                crc >> 1 ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
 }
 
 fn exr(

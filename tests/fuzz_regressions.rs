@@ -48,6 +48,41 @@ fn seeds_of_the_single_format_fuzzers_load() {
     assert!(checked >= 15, "only {checked} seeds");
 }
 
+#[test]
+fn seeds_of_the_camera_manifest_and_sky_mask_fuzzers_load() {
+    use brume::io::mask::{decode_sky_mask, SkyMaskFormat};
+
+    let cameras = files("fuzz/seeds/camera");
+    for path in &cameras {
+        let parsed = brume::io::depth::parse_camera(path);
+        assert!(parsed.is_ok(), "{}: {:?}", path.display(), parsed.err());
+    }
+    let manifests = files("fuzz/seeds/manifest");
+    for path in &manifests {
+        let items = brume::dataset::read_manifest(path);
+        assert!(
+            items.as_ref().is_ok_and(|v| !v.is_empty()),
+            "{}: {:?}",
+            path.display(),
+            items.err()
+        );
+    }
+    // Byte 0 picks the format, as in fuzz/fuzz_targets/sky_mask.rs; the rest is the PNG.
+    let masks = files("fuzz/seeds/sky_mask");
+    for path in &masks {
+        let bytes = std::fs::read(path).unwrap();
+        let format = SkyMaskFormat::ALL[usize::from(bytes[0]) % SkyMaskFormat::ALL.len()];
+        let name = path.display().to_string();
+        let mask = decode_sky_mask(&bytes[1..], &name, format);
+        assert!(mask.is_ok(), "{name} as {format}: {:?}", mask.err());
+        let mask = mask.unwrap();
+        assert!(mask.as_slice().iter().any(|&sky| sky), "{name}: no sky");
+        assert!(!mask.as_slice().iter().all(|&sky| sky), "{name}: all sky");
+    }
+    let counts = [cameras.len(), manifests.len(), masks.len()];
+    assert!(counts.iter().all(|&n| n >= 4), "seeds: {counts:?}");
+}
+
 fn fuzz_file(name: &str) -> PathBuf {
     root().join("tests/data/fuzz").join(name)
 }
@@ -118,4 +153,30 @@ fn tiny_jpeg_claiming_a_huge_size_is_refused_before_decoding() {
     let (r, took) = timed(|| brume::io::image::decode_linear_rgb(&bytes, "8192.jpg"));
     expect_err_with(r, "8192x8192 pixels, which need at least 65536 bytes");
     assert!(took.as_secs_f64() < 1.0, "took {took:?}");
+}
+
+// sky_mask fuzzer, 1.27 million runs in: a palette PNG whose PLTE chunk is 521 bytes, not
+// a multiple of 3, made png 0.18.1 panic building its colour table (slice index out of
+// range; image-rs/image-png#694). Every PNG reader goes through the same decoder, so the
+// colour image and depth loaders refused it with the same panic.
+#[test]
+fn png_palette_of_partial_entries_is_refused() {
+    use brume::io::mask::{decode_sky_mask, SkyMaskFormat};
+
+    let bytes = std::fs::read(fuzz_file("sky-mask-plte-521-bytes.bin")).unwrap();
+    // Byte 0 picks the format (0: binary), the rest is the PNG.
+    assert_eq!(bytes[0], 0);
+    let png = &bytes[1..];
+    let needle = "PNG palette (PLTE chunk) of 521 bytes";
+    expect_err_with(decode_sky_mask(png, "m.png", SkyMaskFormat::Binary), needle);
+    expect_err_with(brume::io::image::decode_linear_rgb(png, "c.png"), needle);
+    expect_err_with(
+        brume::io::depth::load_range_from_bytes(
+            png,
+            Path::new("d.png"),
+            &DepthOptions::default(),
+            None,
+        ),
+        needle,
+    );
 }

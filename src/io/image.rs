@@ -172,6 +172,9 @@ fn decode_image(bytes: &[u8], name: &str, expected: &str) -> Result<DynamicImage
             "JPEG data ends before its end-of-image marker; the file is truncated",
         ));
     }
+    if format == ImageFormat::Png {
+        check_png_palette(bytes, name)?;
+    }
     let cannot = |e: image::ImageError| {
         Error::format(
             name,
@@ -196,6 +199,41 @@ fn decode_image(bytes: &[u8], name: &str, expected: &str) -> Result<DynamicImage
         .map_err(cannot)?;
     DynamicImage::from_decoder(decoder).map_err(cannot)
 }
+
+/// Refuses a PNG whose palette (`PLTE` chunk) is not whole RGB entries of 3 bytes, as the
+/// PNG specification requires: the png crate (0.18.1) accepts any length from 3 to 768
+/// bytes and then panics building its colour table from one that is not a multiple of 3
+/// (image-rs/image-png#694; found by the `sky_mask` fuzzer). The chunks are walked by
+/// their lengths from the signature; one that runs past the end stops the walk, and the
+/// decoder reports the truncation.
+fn check_png_palette(b: &[u8], name: &str) -> Result<()> {
+    let mut i = PNG_SIGNATURE_LEN;
+    while let Some(head) = b.get(i..).and_then(|rest| rest.get(..8)) {
+        let len = u32::from_be_bytes([head[0], head[1], head[2], head[3]]) as usize;
+        let kind = &head[4..8];
+        if kind == b"PLTE" && !len.is_multiple_of(3) {
+            return Err(Error::format(
+                name,
+                format!(
+                    "PNG palette (PLTE chunk) of {len} bytes, not whole RGB entries of 3 \
+                     bytes; the file is corrupt"
+                ),
+            ));
+        }
+        if kind == b"IEND" {
+            break;
+        }
+        // Length, type, data and CRC.
+        match i.checked_add(len).and_then(|j| j.checked_add(12)) {
+            Some(next) => i = next,
+            None => break,
+        }
+    }
+    Ok(())
+}
+
+/// The length of the signature that starts every PNG file.
+const PNG_SIGNATURE_LEN: usize = 8;
 
 /// Fewest pixels per byte a JPEG can hold, with a margin: every 8x8 block of every scan
 /// costs at least one bit (a DC difference; progressive AC scans can skip blocks in runs),
@@ -308,5 +346,57 @@ fn to_linear_rgb(img: &DynamicImage) -> RgbImage {
             .map(|p| p.0.map(srgb_to_linear))
             .collect();
         RgbImage::from_vec(w, h, data)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An 8-bit palette PNG of 2x1 pixels (indices 0, 1) whose PLTE chunk holds `palette`,
+    /// CRCs left at 0 (the palette check reads only lengths and types).
+    fn palette_png(palette: &[u8]) -> Vec<u8> {
+        let mut b = b"\x89PNG\r\n\x1a\n".to_vec();
+        let mut chunk = |kind: &[u8; 4], data: &[u8]| {
+            b.extend_from_slice(&(data.len() as u32).to_be_bytes());
+            b.extend_from_slice(kind);
+            b.extend_from_slice(data);
+            b.extend_from_slice(&[0; 4]);
+        };
+        chunk(b"IHDR", &[0, 0, 0, 2, 0, 0, 0, 1, 8, 3, 0, 0, 0]);
+        chunk(b"PLTE", palette);
+        chunk(
+            b"IDAT",
+            &[0x78, 0x01, 1, 3, 0, 0xfc, 0xff, 0, 0, 1, 0, 4, 0, 2],
+        );
+        chunk(b"IEND", &[]);
+        b
+    }
+
+    #[test]
+    fn a_palette_of_partial_entries_is_refused_before_decoding() {
+        for len in [4, 5, 521, 767] {
+            let png = palette_png(&vec![7; len]);
+            let e = check_png_palette(&png, "m.png").unwrap_err().to_string();
+            assert!(
+                e.starts_with("m.png: ") && e.contains(&format!("PLTE chunk) of {len} bytes")),
+                "{e}"
+            );
+            // The whole decoder refuses it too, where png 0.18.1 alone panics.
+            let e = decode_any(&png, "m.png").unwrap_err().to_string();
+            assert!(e.contains("PLTE"), "{e}");
+        }
+        for len in [3, 6, 768] {
+            assert!(check_png_palette(&palette_png(&vec![7; len]), "m.png").is_ok());
+        }
+        // Truncated files, and lengths that would overflow the walk, are left to the
+        // decoder.
+        let png = palette_png(&[1, 2, 3, 4]);
+        for end in 0..png.len() {
+            let _ = check_png_palette(&png[..end], "m.png");
+        }
+        let mut huge = palette_png(&[1, 2, 3]);
+        huge[8..12].copy_from_slice(&u32::MAX.to_be_bytes());
+        assert!(check_png_palette(&huge, "m.png").is_ok());
     }
 }

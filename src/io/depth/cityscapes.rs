@@ -18,6 +18,7 @@ use serde_json::Value;
 
 use super::{DepthFormat, DepthOptions};
 use crate::io::camera::{to_range, Intrinsics};
+use crate::io::limits::MAX_SIDE;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
@@ -29,12 +30,30 @@ const CAMERA_SUFFIX: &str = "_camera.json";
 const EXPECTED: &str = "a Cityscapes camera file {\"extrinsic\": {\"baseline\": METRES, …}, \
                         \"intrinsic\": {\"fx\": PX, \"fy\": PX, \"u0\": PX, \"v0\": PX}}";
 
-/// What brume reads from a Cityscapes `{name}_camera.json`.
+/// The stereo baselines accepted, in metres (`extrinsic.baseline`): 1 mm (a phone's
+/// dual camera is about 10 mm) to 1 km. Cityscapes' rig has 0.21 m, KITTI's 0.54 m.
+pub const BASELINE_RANGE_M: (f64, f64) = (1e-3, 1e3);
+
+/// The focal lengths accepted, in pixels (`intrinsic.fx`, `fy`): 1 px to 10⁶ px (a field
+/// of view under 1° across the widest image brume reads, 16384 px). Cityscapes has about
+/// 2262 px.
+pub const FOCAL_RANGE_PX: (f64, f64) = (1.0, 1e6);
+
+/// The principal points accepted, in pixels (`intrinsic.u0`, `v0`): within one largest
+/// image ([`MAX_SIDE`] pixels) of the largest image, −16384 to 32768. A crop's principal
+/// point may lie outside it; 10¹² is no camera's.
+pub const PRINCIPAL_POINT_RANGE_PX: (f64, f64) = (-(MAX_SIDE as f64), 2.0 * MAX_SIDE as f64);
+
+/// What brume reads from a Cityscapes `{name}_camera.json`. [`parse_camera_str`] accepts
+/// only values within [`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`] and
+/// [`PRINCIPAL_POINT_RANGE_PX`], so that depth baseline·fx/d and the ray stretch stay
+/// finite and meaningful for every disparity a PNG can store.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CityscapesCamera {
-    /// Stereo baseline in metres (`extrinsic.baseline`), > 0.
+    /// Stereo baseline in metres (`extrinsic.baseline`), within [`BASELINE_RANGE_M`].
     pub baseline_m: f64,
-    /// The left camera's intrinsics in pixels (`intrinsic.fx`, `fy`, `u0`, `v0`).
+    /// The left camera's intrinsics in pixels (`intrinsic.fx`, `fy` within
+    /// [`FOCAL_RANGE_PX`]; `u0`, `v0` within [`PRINCIPAL_POINT_RANGE_PX`]).
     pub intrinsics: Intrinsics,
 }
 
@@ -58,15 +77,24 @@ pub fn parse_camera(path: &Path) -> Result<CityscapesCamera> {
 }
 
 /// Parses the text of a Cityscapes camera file; `path` names it in errors. Keys brume does
-/// not use (pitch, roll, the position …) are ignored.
+/// not use (pitch, roll, the position …) are ignored. A value outside its range
+/// ([`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`], [`PRINCIPAL_POINT_RANGE_PX`]) is an error
+/// naming the file, the key, the value and the range.
 pub fn parse_camera_str(text: &str, path: &Path) -> Result<CityscapesCamera> {
     let json: Value = serde_json::from_str(text)
         .map_err(|e| Error::format(path, format!("not JSON ({e}): expected {EXPECTED}")))?;
-    let baseline_m = positive(&json, path, "extrinsic", "baseline", "a baseline in metres")?;
-    let fx = positive(&json, path, "intrinsic", "fx", "a focal length in pixels")?;
-    let fy = positive(&json, path, "intrinsic", "fy", "a focal length in pixels")?;
-    let cx = number(&json, path, "intrinsic", "u0")?;
-    let cy = number(&json, path, "intrinsic", "v0")?;
+    let baseline = ("a baseline in metres", "m", BASELINE_RANGE_M);
+    let focal = ("a focal length in pixels", "px", FOCAL_RANGE_PX);
+    let centre = (
+        "a principal point in pixels",
+        "px",
+        PRINCIPAL_POINT_RANGE_PX,
+    );
+    let baseline_m = within(&json, path, "extrinsic", "baseline", baseline)?;
+    let fx = within(&json, path, "intrinsic", "fx", focal)?;
+    let fy = within(&json, path, "intrinsic", "fy", focal)?;
+    let cx = within(&json, path, "intrinsic", "u0", centre)?;
+    let cy = within(&json, path, "intrinsic", "v0", centre)?;
     Ok(CityscapesCamera {
         baseline_m,
         intrinsics: Intrinsics { fx, fy, cx, cy },
@@ -88,16 +116,36 @@ fn number(json: &Value, path: &Path, group: &str, key: &str) -> Result<f64> {
         .ok_or_else(|| Error::format(path, format!("{group}.{key} = {value}: expected a number")))
 }
 
-/// [`number`], which must also be > 0.
-fn positive(json: &Value, path: &Path, group: &str, key: &str, what: &str) -> Result<f64> {
+/// [`number`], which must also lie in `range` (inclusive); `what` says what it is and
+/// its unit, for the message. A value ≤ 0 where the range is positive says `> 0`.
+fn within(
+    json: &Value,
+    path: &Path,
+    group: &str,
+    key: &str,
+    (what, unit, (lo, hi)): (&str, &str, (f64, f64)),
+) -> Result<f64> {
     let v = number(json, path, group, key)?;
-    if v > 0.0 {
-        Ok(v)
+    if (lo..=hi).contains(&v) {
+        return Ok(v);
+    }
+    let positive = if lo > 0.0 && v <= 0.0 { ", > 0" } else { "" };
+    Err(Error::format(
+        path,
+        format!(
+            "{group}.{key} = {}: expected {what}{positive}, from {lo} to {hi} {unit}",
+            short(v)
+        ),
+    ))
+}
+
+/// `v` as written in a message: 1e300 and 1e-300 in scientific notation rather than as 300
+/// digits.
+fn short(v: f64) -> String {
+    if v != 0.0 && !(1e-4..1e7).contains(&v.abs()) {
+        format!("{v:e}")
     } else {
-        Err(Error::format(
-            path,
-            format!("{group}.{key} = {v}: expected {what}, > 0"),
-        ))
+        v.to_string()
     }
 }
 
@@ -245,6 +293,68 @@ mod tests {
         assert_eq!(disparity_px(1), None);
         assert_eq!(disparity_px(257), Some(1.0));
         assert_eq!(disparity_px(65535), Some(65534.0 / 256.0));
+    }
+
+    /// A camera file with these values for baseline, fx, fy, u0 and v0.
+    fn camera_json(b: &str, fx: &str, fy: &str, u0: &str, v0: &str) -> String {
+        format!(
+            r#"{{"extrinsic": {{"baseline": {b}}},
+                "intrinsic": {{"fx": {fx}, "fy": {fy}, "u0": {u0}, "v0": {v0}}}}}"#
+        )
+    }
+
+    #[test]
+    fn absurd_camera_values_are_refused_naming_the_file_the_key_and_the_range() {
+        let path = Path::new("data/aachen_1_camera.json");
+        let ok = parse_camera_str(
+            &camera_json("0.209", "2262.5", "2265.3", "1097", "513"),
+            path,
+        );
+        assert_eq!(ok.unwrap().baseline_m, 0.209);
+        // The limits themselves are accepted.
+        let edges = camera_json("0.001", "1", "1e6", "-16384", "32768");
+        assert!(parse_camera_str(&edges, path).is_ok());
+        let edges = camera_json("1000", "1e6", "1", "32768", "-16384");
+        assert!(parse_camera_str(&edges, path).is_ok());
+        let cases = [
+            (
+                camera_json("1e300", "2262", "2262", "1", "1"),
+                "extrinsic.baseline = 1e300: expected a baseline in metres, from 0.001 to 1000 m",
+            ),
+            (
+                camera_json("1e-300", "2262", "2262", "1", "1"),
+                "extrinsic.baseline = 1e-300: expected a baseline in metres, from 0.001 to 1000 m",
+            ),
+            (
+                camera_json("0.2", "1e300", "2262", "1", "1"),
+                "intrinsic.fx = 1e300: expected a focal length in pixels, from 1 to 1000000 px",
+            ),
+            (
+                camera_json("0.2", "2262", "1e-300", "1", "1"),
+                "intrinsic.fy = 1e-300: expected a focal length in pixels, from 1 to 1000000 px",
+            ),
+            (
+                camera_json("0.2", "2262", "2262", "1e12", "1"),
+                "intrinsic.u0 = 1e12: expected a principal point in pixels, from -16384 to \
+                 32768 px",
+            ),
+            (
+                camera_json("0.2", "2262", "2262", "1", "-20000.5"),
+                "intrinsic.v0 = -20000.5: expected a principal point in pixels, from -16384 to \
+                 32768 px",
+            ),
+            (
+                camera_json("-0.2", "2262", "2262", "1", "1"),
+                "extrinsic.baseline = -0.2: expected a baseline in metres, > 0, from 0.001",
+            ),
+        ];
+        for (json, needle) in cases {
+            let e = parse_camera_str(&json, path).unwrap_err().to_string();
+            assert!(
+                e.starts_with("data/aachen_1_camera.json: ") && e.contains(needle),
+                "`{e}` should name the file and say `{needle}`"
+            );
+        }
     }
 
     #[test]

@@ -49,7 +49,9 @@ pub use crate::io::camera::Intrinsics;
 pub use android::DEPTH16_DEFAULT_MIN_CONFIDENCE;
 pub use cityscapes::{
     camera_candidates, disparity_px as cityscapes_disparity_px, parse_camera, parse_camera_str,
-    CityscapesCamera,
+    CityscapesCamera, BASELINE_RANGE_M as CITYSCAPES_BASELINE_RANGE_M,
+    FOCAL_RANGE_PX as CITYSCAPES_FOCAL_RANGE_PX,
+    PRINCIPAL_POINT_RANGE_PX as CITYSCAPES_PRINCIPAL_POINT_RANGE_PX,
 };
 pub use middlebury::{
     parse_calib, parse_calib_str, Calib, MIDDLEBURY2006_BASELINE_MM,
