@@ -73,6 +73,7 @@ fn street(args: &[usize]) {
     let guides = Guides {
         image: Some(&s.image),
         sky_mask: None,
+        ego_mask: None,
     };
     let mut times = Vec::new();
     let mut last = None;

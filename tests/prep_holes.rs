@@ -76,7 +76,14 @@ fn border_and_tiny_holes() {
     assert_all_finite(&p.range);
     assert_known_unchanged(&map, &p.range);
     assert_eq!(p.stats.sky_components, 0);
-    assert_eq!(p.stats.holes, 6);
+    // The five pixels on the border and the run of four on the left edge continue the
+    // plane along their row (border bands); (5, 5) is a hole.
+    assert_eq!(
+        (p.stats.holes, p.stats.border_filled),
+        (1, 8),
+        "{:?}",
+        p.stats
+    );
     for (i, v) in map.as_slice().iter().enumerate() {
         if v.is_nan() {
             let (x, y) = (i % w, i / w);
@@ -84,7 +91,15 @@ fn border_and_tiny_holes() {
             // Corner pixels have only 2 boundary edges: a constant (error <= one slope
             // step, 0.15); the others get the plane.
             let corner = (x == 0 || x == w - 1) && (y == 0 || y == h - 1);
-            let tol = if corner { 0.16 } else { 1e-3 };
+            // The left run is continued linearly in disparity, this map is linear in
+            // range: 0.1 % off one pixel out.
+            let tol = if corner {
+                0.16
+            } else if x == 0 {
+                0.02
+            } else {
+                1e-3
+            };
             assert!(
                 (got - plane(x, y)).abs() < tol,
                 "({x},{y}) {got} vs {}",

@@ -13,10 +13,56 @@ use common::*;
 const W: usize = 400;
 const H: usize = 280;
 
+/// Paper 000's pre-processing alone (sec. 4.1): the local-outlier rule and the border
+/// bands of issue 19 off, so that every known value is kept and every unknown one is sky
+/// or a hole.
+fn paper_options() -> PrepOptions {
+    PrepOptions {
+        local_outlier_factor: 0.0,
+        border_band_fraction: 0.0,
+        ..PrepOptions::default()
+    }
+}
+
 fn scene() -> (ScalarMap, Prepared) {
     let map = outdoor_scene(W, H, 3);
-    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    let p = prepare(&map, &paper_options()).unwrap();
     (map, p)
+}
+
+/// With the default rules, the known values that change are exactly the local outliers
+/// the rule counts (4 here), each of them refilled; the border bands fill only unknown
+/// pixels.
+#[test]
+fn default_rules_change_only_the_local_outliers() {
+    let map = outdoor_scene(W, H, 3);
+    let p = prepare(&map, &PrepOptions::default()).unwrap();
+    let changed: Vec<usize> = map
+        .as_slice()
+        .iter()
+        .zip(p.range.as_slice())
+        .enumerate()
+        .filter(|(_, (b, a))| b.is_finite() && b.to_bits() != a.to_bits())
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(changed.len(), p.stats.local_outliers, "{:?}", p.stats);
+    assert!(
+        changed.len() < map.len() / 10_000,
+        "{} changed",
+        changed.len()
+    );
+    let marks: Vec<(bool, bool)> = changed
+        .iter()
+        .map(|&i| (p.filled.as_slice()[i], p.sky.as_slice()[i]))
+        .collect();
+    assert!(marks.iter().all(|(f, s)| *f || *s), "{marks:?}");
+    let unknown = map.as_slice().iter().filter(|v| v.is_nan()).count();
+    assert_eq!(
+        p.stats.sky_pixels + p.stats.hole_pixels + p.stats.border_filled,
+        unknown + p.stats.local_outliers,
+        "{:?}",
+        p.stats
+    );
 }
 
 #[test]
@@ -202,6 +248,7 @@ fn the_image_keeps_the_sky_the_range_found() {
     let guides = Guides {
         image: Some(&image),
         sky_mask: None,
+        ego_mask: None,
     };
     let g = prepare_guided(&map, guides, &PrepOptions::default()).unwrap();
     assert_eq!(g.stats.sky_method, SkyMethod::DepthAndImage);

@@ -29,6 +29,7 @@ fn guided(s: &StreetScene) -> Prepared {
     let guides = Guides {
         image: Some(&s.image),
         sky_mask: None,
+        ego_mask: None,
     };
     prepare_guided(&s.range, guides, &PrepOptions::default()).unwrap()
 }
@@ -204,14 +205,17 @@ fn far_outliers_do_not_set_the_scale() {
         changed.len()
     );
     assert!(changed.iter().all(|&i| p.filled.as_slice()[i]));
-    // With the rule off, the 100 km value is the scale.
+    // With the rules off, the 100 km value is the scale (the local-outlier rule alone
+    // removes it too: a speck far above its surroundings).
     let off = PrepOptions {
         far_outlier_factor: 0.0,
+        local_outlier_factor: 0.0,
         ..PrepOptions::default()
     };
     let guides = Guides {
         image: Some(&s.image),
         sky_mask: None,
+        ego_mask: None,
     };
     let p = prepare_guided(&s.range, guides, &off).unwrap();
     assert_eq!(p.stats.r_max, 1.0e5);
@@ -225,6 +229,7 @@ fn a_sky_mask_is_the_sky() {
     let guides = Guides {
         image: Some(&s.image),
         sky_mask: Some(&s.sky),
+        ego_mask: None,
     };
     let p = prepare_guided(&s.range, guides, &PrepOptions::default()).unwrap();
     assert_eq!(p.stats.sky_method, SkyMethod::Mask);
@@ -237,6 +242,7 @@ fn a_sky_mask_is_the_sky() {
     let bad = Guides {
         image: None,
         sky_mask: Some(&small),
+        ego_mask: None,
     };
     let e = prepare_guided(&s.range, bad, &PrepOptions::default()).unwrap_err();
     assert!(
@@ -253,6 +259,7 @@ fn aloe_with_its_image_has_no_sky() {
     let guides = Guides {
         image: Some(&image),
         sky_mask: None,
+        ego_mask: None,
     };
     let p = prepare_guided(&map, guides, &PrepOptions::default()).unwrap();
     assert_eq!(
@@ -272,6 +279,7 @@ fn odd_inputs_never_panic() {
         let guides = Guides {
             image: Some(image),
             sky_mask: None,
+            ego_mask: None,
         };
         prepare_guided(range, guides, &opts)
     };
@@ -422,8 +430,8 @@ fn cli_sky_mask_binary_and_cityscapes_labels() {
             "noise under the mask"
         );
     }
-    // The label file read as binary is all sky (every label is non-zero): nothing is
-    // left to set the scale, which is said, not a panic.
+    // The label file read as binary is all sky (every label is non-zero), which is said,
+    // not a panic.
     let o = brume(
         dir.path(),
         &[
@@ -442,7 +450,7 @@ fn cli_sky_mask_binary_and_cityscapes_labels() {
     );
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
-        !o.status.success() && err.contains("outside the sky"),
+        !o.status.success() && err.contains("every pixel is sky"),
         "{err}"
     );
 }
@@ -495,6 +503,80 @@ fn cli_sky_mask_errors_name_the_problem() {
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(
         !o.status.success() && err.contains("--far-outlier-factor"),
+        "{err}"
+    );
+}
+
+/// `--local-outliers`: stereo mismatches far above their surroundings but below the far
+/// cut are removed and refilled (on by default), the rule can be off, and a bad factor is
+/// refused by its flag's name.
+#[test]
+fn cli_local_outliers() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut s = frame();
+    let planted = s.plant_mismatches(12, 60.0..170.0, 3);
+    write_frame(dir.path(), &s);
+    let v = prep_json(dir.path(), &[]);
+    assert_eq!(
+        v["local_outliers"].as_u64().unwrap(),
+        planted.len() as u64,
+        "{v}"
+    );
+    let v = prep_json(dir.path(), &["--local-outliers", "0"]);
+    assert_eq!(v["local_outliers"], 0, "{v}");
+    let o = prep(dir.path(), &["--local-outliers", "0.5"]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(
+        !o.status.success() && err.contains("--local-outliers"),
+        "{err}"
+    );
+}
+
+/// `--ego-mask`: a Cityscapes labelIds file (label 1 = ego vehicle, 23 = sky) gives the
+/// hood range 0; train ids are refused.
+#[test]
+fn cli_ego_mask_from_cityscapes_labels() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = frame();
+    write_frame(dir.path(), &s);
+    let hood = |x: usize, y: usize| y >= H - 20 && (W / 4..3 * W / 4).contains(&x);
+    let labels = "f_000019_gtFine_labelIds.png";
+    write_labels(&dir.path().join(labels), W, H, |x, y| {
+        if hood(x, y) {
+            1
+        } else if *s.sky.get(x, y) {
+            23
+        } else {
+            7
+        }
+    });
+    let v = prep_json(dir.path(), &["--ego-mask", labels]);
+    let n = (0..W * H).filter(|&i| hood(i % W, i / W)).count();
+    assert_eq!(v["ego_pixels"].as_u64().unwrap(), n as u64, "{v}");
+    assert_eq!(v["sky_method"], "depth-and-image", "{v}");
+    let out = match brume::io::codec::pfm::read_pfm(&dir.path().join("out.pfm")).unwrap() {
+        brume::io::codec::pfm::Pfm::Grey(m) => m,
+        other => panic!("{other:?}"),
+    };
+    for y in 0..H {
+        for x in 0..W {
+            let r = *out.get(x, y);
+            assert_eq!(r == 0.0, hood(x, y), "({x}, {y}): {r}");
+        }
+    }
+    // The same file as the sky mask and the ego mask at once.
+    let v = prep_json(dir.path(), &["--ego-mask", labels, "--sky-mask", labels]);
+    assert_eq!(
+        (v["sky_method"].as_str(), v["ego_pixels"].as_u64()),
+        (Some("mask"), Some(n as u64)),
+        "{v}"
+    );
+    let trainids = "f_000019_gtFine_labelTrainIds.png";
+    write_labels(&dir.path().join(trainids), W, H, |_, _| 0);
+    let o = prep(dir.path(), &["--ego-mask", trainids]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(
+        !o.status.success() && err.contains(trainids) && err.contains("labelIds"),
         "{err}"
     );
 }

@@ -25,6 +25,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     let mut inputs = depth_inputs(&args.depth);
     inputs.extend(args.image.iter().cloned());
     inputs.extend(args.prep.sky_mask.iter().cloned());
+    inputs.extend(args.prep.ego_mask.iter().cloned());
     super::refuse_overlaps(&outs, &inputs)?;
 
     // Everything is read and computed before the first output is staged: a bad input
@@ -80,6 +81,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             "airlight_source": airlight.as_ref().map(|a| airlight_source_name(a.source)),
             "sky_mask": args.prep.sky_mask.as_ref().map(|p| p.display().to_string()),
             "sky_mask_format": mask_format.map(|f| f.name()),
+            "ego_mask": args.prep.ego_mask.as_ref().map(|p| p.display().to_string()),
         });
         if let (Some(map), serde_json::Value::Object(more)) = (report.as_object_mut(), extra) {
             map.extend(more);
@@ -98,14 +100,21 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.s_max.map_or("-".to_string(), |v| format!("{v:.4}"))
         );
         outln!(
-            "sky from {}; {} far outliers removed{}, {} px of matcher noise by the sky; \
-             {} known px in the sky replaced",
+            "sky from {}; {} far outliers removed{}, {} local outliers, {} px of matcher noise \
+             by the sky; {} known px in the sky replaced",
             sky_method_name(s.sky_method),
             s.far_outliers,
             s.far_cut
                 .map_or(String::new(), |c| format!(" (cut {c:.4})")),
+            s.local_outliers,
             s.sky_noise,
             s.sky_known_pixels
+        );
+        outln!(
+            "border bands: {} px continued, {} px sky; ego vehicle {} px (range 0)",
+            s.border_filled,
+            s.border_sky,
+            s.ego_pixels
         );
         outln!(
             "CPU time: fill {:.1} ms, sky {:.1} ms, margin {:.1} ms, total {:.1} ms",
@@ -142,8 +151,8 @@ fn sky_method_name(m: prep::SkyMethod) -> &'static str {
 }
 
 /// Pre-processes `range` (named `range_name` in messages) with the colour image, if any,
-/// and the `--sky-mask` of `args`, if any (which must have the range's size). Returns the
-/// result and the mask's format.
+/// and the `--sky-mask` and `--ego-mask` of `args`, if any (which must have the range's
+/// size). Returns the result and the sky mask's format.
 pub fn prepare_inputs(
     args: &PrepOptionArgs,
     opts: &PrepOptions,
@@ -184,9 +193,43 @@ pub fn prepare_inputs(
         }
         None => None,
     };
+    let ego = match &args.ego_mask {
+        Some(path) => {
+            let (m, format) = mask::load_ego_mask(path, None)?;
+            if (m.width(), m.height()) != (range.width(), range.height()) {
+                return Err(Error::SizeMismatch {
+                    a: path.display().to_string(),
+                    aw: m.width() as u32,
+                    ah: m.height() as u32,
+                    b: range_name.to_string(),
+                    bw: range.width() as u32,
+                    bh: range.height() as u32,
+                });
+            }
+            let n = m.as_slice().iter().filter(|&&e| e).count();
+            log::info!(
+                "{}: {format} ego-vehicle mask, {n} pixels ({:.1} %)",
+                path.display(),
+                100.0 * n as f64 / m.len().max(1) as f64
+            );
+            if n == m.len() {
+                return Err(Error::invalid(
+                    "--ego-mask",
+                    path.display(),
+                    format!(
+                        "a mask with the scene in it: every pixel is the ego vehicle as read \
+                         ({format}); is it inverted, or a label image not named *_labelIds.png?"
+                    ),
+                ));
+            }
+            Some(m)
+        }
+        None => None,
+    };
     let guides = Guides {
         image,
         sky_mask: loaded.as_ref().map(|(m, _)| m),
+        ego_mask: ego.as_ref(),
     };
     let prepared = prep::prepare_guided(range, guides, opts)?;
     Ok((prepared, loaded.map(|(_, f)| f)))

@@ -11,6 +11,11 @@
 //!   networks output), sky is train id 10.
 //!
 //! [`SkyMaskFormat::from_file_name`] picks the format from the Cityscapes file names.
+//!
+//! Ego-vehicle masks ([`load_ego_mask`], `--ego-mask`) are read the same way: binary
+//! (non-zero = the car's own hood) or Cityscapes label ids (label 1, "ego vehicle"; the
+//! same `*_gtFine_labelIds.png` as the sky). Train ids do not name the ego vehicle (it is
+//! 255, "ignore", with other labels), so they are refused.
 
 use std::fmt;
 use std::path::Path;
@@ -25,6 +30,8 @@ use crate::{Error, Result};
 pub const CITYSCAPES_SKY_LABEL_ID: u16 = 23;
 /// The Cityscapes train id of the sky (`labelTrainIds` PNGs).
 pub const CITYSCAPES_SKY_TRAIN_ID: u16 = 10;
+/// The Cityscapes label id of the ego vehicle (`labelIds` PNGs).
+pub const CITYSCAPES_EGO_VEHICLE_LABEL_ID: u16 = 1;
 
 /// The first 8 bytes of every PNG file.
 const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
@@ -124,16 +131,56 @@ pub fn load_sky_mask(
 
 /// [`load_sky_mask`] on bytes in memory; `name` stands for the file in messages.
 pub fn decode_sky_mask(bytes: &[u8], name: &str, format: SkyMaskFormat) -> Result<Grid<bool>> {
+    decode_label(bytes, name, format, format.sky_label())
+}
+
+/// Loads an ego-vehicle mask (true = the ego vehicle) from a PNG in `format`, or, for
+/// `None`, in the format its name announces ([`SkyMaskFormat::from_file_name`]): binary
+/// (non-zero) or Cityscapes label ids (label 1). Returns the mask and the format used.
+/// Errors as [`load_sky_mask`], and for train ids, which do not name the ego vehicle.
+pub fn load_ego_mask(
+    path: &Path,
+    format: Option<SkyMaskFormat>,
+) -> Result<(Grid<bool>, SkyMaskFormat)> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let format = format.unwrap_or_else(|| SkyMaskFormat::from_file_name(path));
+    let mask = decode_ego_mask(&bytes, &path.display().to_string(), format)?;
+    Ok((mask, format))
+}
+
+/// [`load_ego_mask`] on bytes in memory; `name` stands for the file in messages.
+pub fn decode_ego_mask(bytes: &[u8], name: &str, format: SkyMaskFormat) -> Result<Grid<bool>> {
+    let label = match format {
+        SkyMaskFormat::Binary => None,
+        SkyMaskFormat::CityscapesLabelIds => Some(CITYSCAPES_EGO_VEHICLE_LABEL_ID),
+        SkyMaskFormat::CityscapesTrainIds => {
+            return Err(Error::format(
+                name,
+                "Cityscapes train ids do not name the ego vehicle (it is 255, 'ignore', like \
+                 other labels): give the *_gtFine_labelIds.png (label 1) or a binary mask",
+            ))
+        }
+    };
+    decode_label(bytes, name, format, label)
+}
+
+/// The pixels of a PNG mask equal to `label` (label formats) or not zero (`None`).
+fn decode_label(
+    bytes: &[u8],
+    name: &str,
+    format: SkyMaskFormat,
+    label: Option<u16>,
+) -> Result<Grid<bool>> {
     if !bytes.starts_with(&PNG_SIGNATURE) {
         return Err(Error::format(
             name,
-            "a sky mask is read from a PNG file (lossless: a JPEG's compression would change \
+            "a mask is read from a PNG file (lossless: a JPEG's compression would change \
              label values)",
         ));
     }
     let img = super::image::decode_any(bytes, name)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
-    let mask = match format.sky_label() {
+    let mask = match label {
         None => binary_mask(&img, name),
         Some(label) => label_values(&img, name, format)?
             .iter()
@@ -175,7 +222,7 @@ fn label_values(img: &DynamicImage, name: &str, format: SkyMaskFormat) -> Result
         other => Err(Error::format(
             name,
             format!(
-                "a {format} sky mask is one grey channel of label ids, but this PNG is {:?} \
+                "a {format} mask is one grey channel of label ids, but this PNG is {:?} \
                  (a Cityscapes *_color.png? give the *_labelIds.png, or a binary mask with \
                  --sky-mask-format binary)",
                 other.color()
@@ -221,6 +268,18 @@ mod tests {
         assert_eq!(get(SkyMaskFormat::CityscapesLabelIds), [true, false, false]);
         assert_eq!(get(SkyMaskFormat::CityscapesTrainIds), [false, true, false]);
         assert_eq!(get(SkyMaskFormat::Binary), [true, true, false]);
+        let labels = image::GrayImage::from_raw(3, 1, vec![1, 23, 0]).unwrap();
+        let bytes = png(DynamicImage::ImageLuma8(labels));
+        let ego = |f| decode_ego_mask(&bytes, "m.png", f).map(|m| m.into_vec());
+        assert_eq!(
+            ego(SkyMaskFormat::CityscapesLabelIds).unwrap(),
+            [true, false, false]
+        );
+        assert_eq!(ego(SkyMaskFormat::Binary).unwrap(), [true, true, false]);
+        let err = ego(SkyMaskFormat::CityscapesTrainIds)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("labelIds"), "{err}");
     }
 
     #[test]

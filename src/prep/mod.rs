@@ -3,8 +3,9 @@
 //!
 //! [`prepare`] (range alone) and [`prepare_guided`] (range with the colour image and/or a
 //! sky mask) turn a range map with unknown pixels (any non-finite value, normally NaN)
-//! into a map that is finite everywhere. **Every known value that is not sky, not a far
-//! outlier and not matcher noise next to the sky (steps 2 and 3) is kept bit for bit.**
+//! into a map that is finite everywhere. **Every known value that is not sky, not a far or
+//! local outlier, not matcher noise next to the sky (steps 2 and 3) and not under the
+//! ego-vehicle mask is kept bit for bit.**
 //!
 //! 1. **Components.** The 4-connected components of unknown pixels are labelled in linear
 //!    time (one raster scan, breadth-first flood fill, no label image).
@@ -68,7 +69,17 @@
 //!    become unknown ([`PrepStats::far_outliers`]). A distant hillside is a patch; a
 //!    speck of 100 km on the street is an outlier, and would otherwise be `Rmax`, the
 //!    scale of the whole frame.
-//! 4. **Holes** (the components of unknown pixels outside the sky, far outliers included)
+//!
+//!    **Local outliers** ([`PrepOptions::local_outlier_factor`], see `local.rs`): small
+//!    patches whose disparity `1/R` differs by more than a factor (default 3) from the
+//!    medians of every neighbourhood round them, stereo mismatches below the far cut,
+//!    become unknown too ([`PrepStats::local_outliers`]); long structures (poles) stay.
+//! 4. **Border bands** ([`PrepOptions::border_band_fraction`], see `border.rs`) are filled
+//!    first, line by line from each border: a run of unknown pixels continues the surface
+//!    it meets, linearly in disparity, or is sky when it runs down from the top border
+//!    into the sky ([`PrepStats::border_filled`], [`PrepStats::border_sky`]).
+//!
+//!    **Holes** (the components of unknown pixels outside the sky, far outliers included)
 //!    are filled by RANSAC (Fischler and Bolles 1981), as
 //!    in the paper, "by sampling from the available values on each hole boundary" and
 //!    keeping "the value that minimizes a robust function of the gradient across the
@@ -92,7 +103,12 @@
 //!    surface is filled with the surface, not a step. The fill is finally clamped to the
 //!    range of the boundary values, so extrapolation can never create a spike. Sky pixels
 //!    are not boundary values; a hole with no known pixel round it (sky all round: a wire,
-//!    outliers in the sky) has nothing to be filled from and is sky.
+//!    outliers in the sky) has nothing to be filled from and is sky (the ego vehicle, when
+//!    only it and no sky is round it).
+//!
+//!    **The ego vehicle** ([`Guides::ego_mask`]): its pixels are unknown and black to the
+//!    sky detector, then neither data nor holes, and finally get range 0 (never fogged;
+//!    [`PrepStats::ego_pixels`]).
 //! 5. **Horizon margin.** The exact Euclidean distance transform of the scene mask
 //!    (separable lower-envelope method of Felzenszwalb and Huttenlocher, exact and linear
 //!    like Maurer et al. 2003; see [`edt`]) is thresholded at `µ` ([`PrepOptions::margin_px`],
@@ -121,13 +137,17 @@
 //! 1024 street frame it takes about 80 % of the whole 0.2-0.4 s.
 
 mod airlight;
+mod border;
 mod components;
 pub mod edt;
 mod fill;
+mod local;
 mod margin;
 mod outliers;
 mod sky;
 mod sky_image;
+#[cfg(test)]
+mod street_tests;
 pub mod synthetic;
 mod vis;
 
@@ -224,6 +244,9 @@ const MAX_SKY_RANGE_FACTOR: f64 = 1000.0;
 const MAX_BRIDGE_PX: usize = 64;
 /// Smallest far patch that is kept, whatever [`PrepOptions::far_patch_fraction`] says.
 const MIN_FAR_PATCH: usize = 16;
+/// Smallest span of a local-outlier patch, whatever [`PrepOptions::local_outlier_span`]
+/// says.
+const MIN_LOCAL_SPAN: usize = 4;
 
 /// Options of [`prepare`]. The defaults are those documented on each field.
 #[derive(Clone, Debug, PartialEq)]
@@ -253,6 +276,20 @@ pub struct PrepOptions {
     /// A far value is supported when its 8-connected patch of values above the cut covers
     /// at least this fraction of the image (and at least 16 pixels); default 0.0005.
     pub far_patch_fraction: f64,
+    /// Local outliers (step 3b): a known range whose disparity `1/R` differs by more than
+    /// this factor (a ratio, either way) from the median of its neighbourhood, in a patch
+    /// at most [`local_outlier_span`](Self::local_outlier_span) across, becomes unknown.
+    /// Default 3; 0 turns the rule off; otherwise finite and > 1.
+    pub local_outlier_factor: f64,
+    /// Longest side of a local-outlier patch, as a fraction of the image's longer side
+    /// (at least 4 px); also the half-size of the neighbourhood. In [0, 1], default 0.025
+    /// (51 px on a 2048 x 1024 frame).
+    pub local_outlier_span: f64,
+    /// Border bands (step 4a): runs of unknown pixels from a border inward, at most this
+    /// fraction of the line long, continue the surface they meet (or are sky, when they
+    /// meet the sky) instead of being filled as holes. In [0, 1], default 0.15; 0 turns
+    /// it off.
+    pub border_band_fraction: f64,
 }
 
 impl Default for PrepOptions {
@@ -268,6 +305,9 @@ impl Default for PrepOptions {
             detect_sky: true,
             far_outlier_factor: 2.0,
             far_patch_fraction: 0.0005,
+            local_outlier_factor: 3.0,
+            local_outlier_span: 0.025,
+            border_band_fraction: 0.15,
         }
     }
 }
@@ -308,7 +348,18 @@ impl PrepOptions {
                  the known range above which isolated values are outliers",
             ));
         }
-        check_fraction("far_patch_fraction", self.far_patch_fraction)
+        check_fraction("far_patch_fraction", self.far_patch_fraction)?;
+        let f = self.local_outlier_factor;
+        if !(f == 0.0 || (f > 1.0 && f.is_finite())) {
+            return Err(Error::invalid(
+                "local_outlier_factor",
+                f,
+                "0 (off) or a finite number > 1: the ratio between a patch's range and its \
+                 neighbourhood's above which the patch is an outlier",
+            ));
+        }
+        check_fraction("local_outlier_span", self.local_outlier_span)?;
+        check_fraction("border_band_fraction", self.border_band_fraction)
     }
 
     fn validate_image_sky(&self) -> Result<()> {
@@ -386,6 +437,16 @@ pub struct PrepStats {
     pub sky_method: SkyMethod,
     /// Number of known values removed as far outliers (then filled, or sky).
     pub far_outliers: usize,
+    /// Number of known values removed as local outliers (patches whose range disagrees
+    /// with their neighbourhood; then filled, or sky).
+    pub local_outliers: usize,
+    /// Number of unknown pixels of border bands filled by continuing the surface they
+    /// meet.
+    pub border_filled: usize,
+    /// Number of unknown pixels of border bands made sky (they meet the sky).
+    pub border_sky: usize,
+    /// Number of pixels under the ego-vehicle mask (range 0: never fogged).
+    pub ego_pixels: usize,
     /// Number of known values removed as matcher noise in slivers of sky (image-guided
     /// detection only: outside the sky found, looking like sky, below the far cut and not
     /// backed up by their neighbours; then filled, or sky).
@@ -429,6 +490,10 @@ pub struct Guides<'a> {
     pub image: Option<&'a RgbImage>,
     /// A sky mask (true = sky), e.g. from semantic segmentation: replaces sky detection.
     pub sky_mask: Option<&'a Grid<bool>>,
+    /// An ego-vehicle mask (true = the car's own hood, e.g. Cityscapes label 1): its
+    /// pixels get range 0, so no fog covers them, and their range (a stereo matcher's
+    /// guess on a reflecting hood) is never used, not as sky, not to fill a hole.
+    pub ego_mask: Option<&'a Grid<bool>>,
 }
 
 /// Fills holes, detects sky and builds the horizon margin from the range alone (see the
@@ -461,14 +526,44 @@ pub fn prepare_guided(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> 
         )));
     }
     let mut stats = PrepStats::default();
+    // The ego vehicle's range is never data: unknown while the sky is looked for (and
+    // black in the image, so that a hood reflecting the sky is not grown into), then
+    // neither known nor unknown (+inf, like the sky while holes are filled), 0 at the end.
+    let mut ego: Vec<bool> = guides
+        .ego_mask
+        .map(|m| m.as_slice().to_vec())
+        .unwrap_or_default();
+    let masked_image;
+    let mut guides = guides;
+    if !ego.is_empty() {
+        ego.iter()
+            .zip(work.iter_mut())
+            .filter(|(&e, _)| e)
+            .for_each(|(_, v)| *v = f32::NAN);
+        if let Some(image) = guides.image {
+            masked_image = Grid::from_fn(w, h, |x, y| {
+                if ego[y * w + x] {
+                    [0.0; 3]
+                } else {
+                    *image.get(x, y)
+                }
+            });
+            guides.image = Some(&masked_image);
+        }
+    }
     let found = find_sky(&work, w, h, guides, opts);
     let mut sky = found.sky;
     stats.sky_method = found.method;
     stats.sky_noise = found.noise.len();
     found.noise.iter().for_each(|&p| work[p] = f32::NAN);
+    for (p, _) in ego.iter().enumerate().filter(|(_, &e)| e) {
+        sky[p] = false;
+        work[p] = f32::INFINITY;
+    }
     let t1 = Instant::now();
 
     remove_far_outliers(&mut work, &sky, w, h, opts, &mut stats);
+    remove_local_outliers(&mut work, &sky, w, h, opts, &mut stats);
     stats.r_max = max_known_outside(&work, &sky).ok_or_else(|| {
         Error::Prep(format!(
             "no valid range value outside the sky: all {} pixels ({w}x{h}) are sky or unknown",
@@ -476,7 +571,28 @@ pub fn prepare_guided(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> 
         ))
     })?;
     let mut filled = vec![false; w * h];
-    fill_holes(&mut work, &mut filled, &mut sky, w, h, opts, &mut stats)?;
+    if opts.border_band_fraction > 0.0 {
+        let r_min = min_known_outside(&work, &sky).unwrap_or(stats.r_max);
+        let b = border::fill_borders(
+            &mut work,
+            &mut sky,
+            &mut filled,
+            (w, h),
+            opts.border_band_fraction,
+            (r_min, stats.r_max),
+        );
+        (stats.border_filled, stats.border_sky) = (b.filled, b.sky);
+    }
+    let mut holes = Holes {
+        filled: &mut filled,
+        sky: &mut sky,
+        ego: &mut ego,
+    };
+    fill_holes(&mut work, &mut holes, w, h, opts, &mut stats)?;
+    for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {
+        *v = 0.0;
+    }
+    stats.ego_pixels = ego.iter().filter(|&&e| e).count();
     let t2 = Instant::now();
 
     let sky_bbox = assign_sky(&mut work, &sky, w, h, opts, &mut stats)?;
@@ -518,6 +634,9 @@ fn check_guide_sizes(range: &ScalarMap, guides: &Guides) -> Result<()> {
         guides
             .sky_mask
             .map(|m| ("the sky mask", m.width(), m.height())),
+        guides
+            .ego_mask
+            .map(|m| ("the ego-vehicle mask", m.width(), m.height())),
     ];
     for (name, gw, gh) in sizes.into_iter().flatten() {
         if (gw, gh) != (w, h) {
@@ -595,6 +714,31 @@ fn remove_far_outliers(
     }
 }
 
+/// Removes the local outliers among the known pixels outside the sky (see [`local`]).
+fn remove_local_outliers(
+    work: &mut [f32],
+    sky: &[bool],
+    w: usize,
+    h: usize,
+    opts: &PrepOptions,
+    stats: &mut PrepStats,
+) {
+    if opts.local_outlier_factor == 0.0 {
+        return;
+    }
+    let span = ((opts.local_outlier_span * w.max(h) as f64).round() as usize).max(MIN_LOCAL_SPAN);
+    stats.local_outliers = local::remove_local(work, sky, w, h, opts.local_outlier_factor, span);
+}
+
+/// The smallest finite value outside the sky.
+fn min_known_outside(work: &[f32], sky: &[bool]) -> Option<f32> {
+    work.iter()
+        .zip(sky)
+        .filter(|(v, &s)| !s && v.is_finite())
+        .map(|(&v, _)| v)
+        .reduce(f32::min)
+}
+
 /// The largest finite value outside the sky.
 fn max_known_outside(work: &[f32], sky: &[bool]) -> Option<f32> {
     work.iter()
@@ -604,13 +748,20 @@ fn max_known_outside(work: &[f32], sky: &[bool]) -> Option<f32> {
         .reduce(f32::max)
 }
 
+/// The masks [`fill_holes`] reads and extends. `ego` is empty without an ego mask.
+struct Holes<'m> {
+    filled: &'m mut [bool],
+    sky: &'m mut [bool],
+    ego: &'m mut [bool],
+}
+
 /// Fills every component of unknown pixels outside the sky and marks it in `filled`. A
 /// component with no known pixel round it (sky all round: a bird, a wire, outliers in the
-/// sky) has nothing to be filled from and is sky.
+/// sky) has nothing to be filled from and is sky; with the ego vehicle round it (and no
+/// sky), it is the ego vehicle.
 fn fill_holes(
     work: &mut [f32],
-    filled: &mut [bool],
-    sky: &mut [bool],
+    m: &mut Holes,
     w: usize,
     h: usize,
     opts: &PrepOptions,
@@ -618,7 +769,7 @@ fn fill_holes(
 ) -> Result<()> {
     // Sky pixels are not boundary values: +inf is neither NaN (a hole) nor finite (data).
     work.iter_mut()
-        .zip(sky.iter())
+        .zip(m.sky.iter())
         .filter(|(_, &s)| s)
         .for_each(|(v, _)| *v = f32::INFINITY);
     let comps = components::label_unknown(work, w, h);
@@ -626,12 +777,27 @@ fn fill_holes(
     for c in &comps.list {
         let pixels = comps.pixels_of(c);
         if !has_known_neighbour(work, w, h, pixels) {
-            pixels.iter().for_each(|&p| sky[p as usize] = true);
+            let touches = |mask: &[bool]| {
+                !mask.is_empty()
+                    && pixels.iter().any(|&p| {
+                        let p = p as usize;
+                        components::neighbours4(p, p % w, p / w, w, h)
+                            .into_iter()
+                            .flatten()
+                            .any(|q| mask[q])
+                    })
+            };
+            let into: &mut [bool] = if touches(m.ego) && !touches(m.sky) {
+                m.ego
+            } else {
+                m.sky
+            };
+            pixels.iter().for_each(|&p| into[p as usize] = true);
             continue;
         }
         let mut rng = crate::rng::SplitMix64::for_stream(opts.seed, pixels[0] as u64);
         filler.fill(work, w, h, pixels, opts.ransac_samples, &mut rng)?;
-        pixels.iter().for_each(|&p| filled[p as usize] = true);
+        pixels.iter().for_each(|&p| m.filled[p as usize] = true);
         stats.holes += 1;
         stats.hole_pixels += pixels.len();
     }

@@ -254,6 +254,68 @@ pub struct StreetScene {
     pub scene_max: f32,
     /// The pixels (linear indices, outside the sky) given bogus far values.
     pub outliers: Vec<usize>,
+    /// The true range of the scene, without noise, everywhere a ray hits it (the left
+    /// band and the holes included); NaN in the sky and on the wire.
+    pub truth: ScalarMap,
+}
+
+impl StreetScene {
+    /// Plants `count` stereo mismatches: compact blotches (radius 1.5 to 3.5 px, scaled
+    /// with the width from 512 px) of far values drawn from `far` (metres), on near
+    /// surfaces (true range under 15 m) outside the left band, as a matcher gives them on
+    /// a van or the road 5-10 m away (200-550 m on a Cityscapes frame). Deterministic for
+    /// `seed`; returns the pixels changed.
+    pub fn plant_mismatches(
+        &mut self,
+        count: usize,
+        far: std::ops::Range<f64>,
+        seed: u64,
+    ) -> Vec<usize> {
+        let (w, h) = (self.range.width(), self.range.height());
+        let mut rng = SplitMix64::new(seed);
+        let k = w as f64 / 512.0;
+        let mut out = Vec::new();
+        let mut placed = 0;
+        for _ in 0..100_000 {
+            if placed == count {
+                break;
+            }
+            let (cx, cy) = (
+                rng.range(self.band_width as f64 + 8.0 * k, w as f64 - 8.0 * k),
+                rng.range(0.0, h as f64 - 4.0 * k),
+            );
+            let c = (cy as usize) * w + cx as usize;
+            let (truth, range) = (self.truth.as_slice(), &mut self.range);
+            let near =
+                |range: &ScalarMap, p: usize| truth[p] < 15.0 && range.as_slice()[p].is_finite();
+            if !near(range, c) {
+                continue;
+            }
+            let rad = rng.range(1.5, 3.5) * k;
+            let v = rng.range(far.start, far.end);
+            for y in (cy - rad).max(0.0) as usize..((cy + rad) as usize + 1).min(h) {
+                for x in (cx - rad).max(0.0) as usize..((cx + rad) as usize + 1).min(w) {
+                    let p = y * w + x;
+                    let inside = (x as f64 - cx).powi(2) + (y as f64 - cy).powi(2) <= rad * rad;
+                    if inside && near(range, p) && !out.contains(&p) {
+                        range.as_mut_slice()[p] = (v * (1.0 + 0.01 * rng.range(-1.0, 1.0))) as f32;
+                        out.push(p);
+                    }
+                }
+            }
+            placed += 1;
+        }
+        out
+    }
+
+    /// Blanks the top `rows` rows as rectification leaves them: no range and a black
+    /// image.
+    pub fn blank_top_rows(&mut self, rows: usize) {
+        let w = self.range.width();
+        let n = (rows * w).min(self.range.len());
+        self.range.as_mut_slice()[..n].fill(f32::NAN);
+        self.image.as_mut_slice()[..n].fill([0.0; 3]);
+    }
 }
 
 /// A deterministic street frame of `width x height` pixels (both at least 64), the same
@@ -285,6 +347,7 @@ pub fn street_scene(width: usize, height: usize, seed: u64) -> StreetScene {
     let street = Street::generate(&mut rng);
     let n = width * height;
     let (mut image, mut range, mut sky) = (vec![[0.0f32; 3]; n], vec![f32::NAN; n], vec![false; n]);
+    let mut truth = vec![f32::NAN; n];
     let mut scene_max = 0.0f64;
     for p in 0..n {
         let (x, y) = (p % width, p / width);
@@ -294,6 +357,7 @@ pub fn street_scene(width: usize, height: usize, seed: u64) -> StreetScene {
             Some((t, surface)) => {
                 let r = t * (d[0] * d[0] + d[1] * d[1] + 1.0).sqrt();
                 scene_max = scene_max.max(r);
+                truth[p] = r as f32;
                 range[p] = (r * (1.0 + 0.005 * rng.range(-1.0, 1.0))) as f32;
                 image[p] = surface.colour(grain);
             }
@@ -305,6 +369,11 @@ pub fn street_scene(width: usize, height: usize, seed: u64) -> StreetScene {
     }
     let band_width = (0.07 * width as f64).round() as usize;
     draw_wire(&mut image, &mut range, &mut sky, width, height);
+    for (t, r) in truth.iter_mut().zip(&range) {
+        if r.is_nan() {
+            *t = f32::NAN; // the wire
+        }
+    }
     for y in 0..height {
         range[y * width..y * width + band_width].fill(f32::NAN);
     }
@@ -318,6 +387,7 @@ pub fn street_scene(width: usize, height: usize, seed: u64) -> StreetScene {
         band_width,
         scene_max: scene_max as f32,
         outliers,
+        truth: Grid::from_vec(width, height, truth),
     }
 }
 
