@@ -7,11 +7,13 @@ use crate::blur::{Blur, Precision};
 use crate::caps::{Capabilities, EglInfo};
 use crate::egl::{GlContext, Platform};
 use crate::error::{Error, Result};
+use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::{Clock, PassTimes};
 use crate::medium::Medium;
-use crate::pipeline::{Encoding, FogBlur, Frame, Input, Pipeline};
+use crate::pipeline::{Encoding, FogBlur, Frame, Input, Pipeline, RefineInput};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
+use crate::refine::Refine;
 use crate::schedule::Schedule;
 use glow::HasContext;
 use std::mem::ManuallyDrop;
@@ -86,6 +88,74 @@ impl Renderer {
         self.with_textures(image, depth, |pipeline, input| {
             pipeline.fog_and_read(input, medium, blur)
         })
+    }
+
+    /// Refines `range` (> 0 everywhere, of the image's size or smaller by one factor) with
+    /// `image` (linear RGB) as guide, on the GPU ([`crate::refine`]): the refined range at
+    /// the image's size, row 0 at the top as given, and the passes' times.
+    pub fn refine(
+        &mut self,
+        image: &RgbImage,
+        range: &ScalarMap,
+        opts: &Refine,
+    ) -> Result<(ScalarMap, PassTimes)> {
+        opts.grid(
+            (image.width(), image.height()),
+            (range.width(), range.height()),
+        )?;
+        self.on_range_textures(image, range, |pipeline, input| {
+            pipeline.refine_range(input, opts)
+        })
+    }
+
+    /// Upsamples `range` (> 0 everywhere, smaller than `image` by one factor) to the
+    /// image's size by joint bilateral upsampling on the GPU
+    /// ([`crate::refine::joint_bilateral_upsample_reference`]), row 0 at the top.
+    pub fn upsample(
+        &mut self,
+        image: &RgbImage,
+        range: &ScalarMap,
+        sigma_colour: f64,
+    ) -> Result<(ScalarMap, PassTimes)> {
+        self.on_range_textures(image, range, |pipeline, input| {
+            pipeline.upsample_range(input, sigma_colour)
+        })
+    }
+
+    /// Uploads the image and the range, runs `pass` on them and reads its R32F range back.
+    fn on_range_textures(
+        &mut self,
+        image: &RgbImage,
+        range: &ScalarMap,
+        pass: impl FnOnce(&mut Pipeline, &RefineInput) -> Result<(Texture, PassTimes)>,
+    ) -> Result<(ScalarMap, PassTimes)> {
+        let (w, h) = (image.width(), image.height());
+        self.caps().require_size("image", w, h)?;
+        crate::refine::check_positive(range)?;
+        let gl = Arc::clone(self.pipeline.gl());
+        // SAFETY: a pixel-unpack buffer bound by someone else would turn the uploads below
+        // into offsets into it.
+        unsafe { gl.bind_buffer(glow::PIXEL_UNPACK_BUFFER, None) };
+        let colour = Texture::new(&gl, w, h, TexelFormat::Rgb32F, Filter::Nearest, None)?;
+        colour.upload_flipped(image.as_slice().as_flattened());
+        let (rw, rh) = (range.width(), range.height());
+        let range_texture = Texture::new(&gl, rw, rh, TexelFormat::R32F, Filter::Nearest, None)?;
+        range_texture.upload_flipped(range.as_slice());
+        let input = RefineInput {
+            colour: colour.raw(),
+            colour_encoding: Encoding::Linear,
+            width: w,
+            height: h,
+            range: range_texture.raw(),
+            range_width: rw,
+            range_height: rh,
+        };
+        let (refined, times) = pass(&mut self.pipeline, &input)?;
+        let framebuffer = Framebuffer::over(&gl, &[&refined], "the refined range")?;
+        let texels = framebuffer.read_rgba()?;
+        let mut out = Grid::from_vec(w, h, texels.iter().map(|t| t[0]).collect());
+        out.flip_rows();
+        Ok((out, times))
     }
 
     fn check_frame(&self, image: &RgbImage, depth: &ScalarMap, medium: &dyn Medium) -> Result<()> {

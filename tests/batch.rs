@@ -366,6 +366,8 @@ fn transmittance_maps_are_exp_of_minus_beta_times_range() {
             "0.005",
             "--transmittance",
             "--no-prep",
+            "--refine",
+            "none",
         ],
     );
     assert!(run.status.success(), "{}", stderr(&run));

@@ -32,6 +32,7 @@
 pub mod accuracy;
 pub mod fog;
 pub mod plot;
+pub mod refine;
 pub mod report;
 pub mod speed;
 pub mod turbidity;

@@ -212,6 +212,20 @@ pub struct PrepOptionArgs {
     /// range sets the scale; K ≥ 1, or 0 to keep every value [default: 2].
     #[arg(long, value_name = "K", allow_hyphen_values = true)]
     pub far_outlier_factor: Option<f64>,
+
+    /// Local outliers: a patch of known range whose disparity (1/range) differs by more
+    /// than F times from the median of its neighbourhood, at most 2.5 % of the image's
+    /// longer side across (stereo mismatches: 200-550 m on a van 7 m away), is taken as
+    /// unknown and filled from the surface round it; F > 1, or 0 to keep every value
+    /// [default: 3].
+    #[arg(long, value_name = "F", allow_hyphen_values = true)]
+    pub local_outliers: Option<f64>,
+
+    /// Ego-vehicle mask PNG, the depth map's size: binary (non-zero = the car's own hood)
+    /// or, named *_labelIds.png, Cityscapes label ids (label 1 = ego vehicle). Its pixels
+    /// get range 0 (never fogged) and their range is not used.
+    #[arg(long, value_name = "PATH.png")]
+    pub ego_mask: Option<PathBuf>,
 }
 
 /// `brume render`.
@@ -387,6 +401,27 @@ pub struct RenderArgs {
     /// Skip pre-processing: unknown range values are taken as the farthest range.
     #[arg(long)]
     pub no_prep: bool,
+
+    /// Image-guided refinement of the range, on the GPU: guided (He et al.'s guided
+    /// filter of log range, the image's luminance as guide: the range's edges follow the
+    /// image's, its noise is smoothed where the image is flat) or none [default: guided
+    /// for stereo-matched and phone depth: cityscapes, android-depth16, arcore; none for
+    /// ground truth (Middlebury, KITTI, NYU, TUM), float maps and z-buffers]. A depth map
+    /// smaller than the image (same aspect ratio, 1-16x smaller) is always upsampled by
+    /// the guided filter.
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub refine: Option<RefineMode>,
+
+    /// Window radius r of the guided refinement, px at the image's size [default: 20, as
+    /// Foggy Cityscapes at 2048 x 1024].
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
+    pub refine_radius: Option<f64>,
+
+    /// Regularisation ε of the guided refinement, a variance of the sRGB-encoded
+    /// luminance in (0, 1]: edges of less contrast than about √ε are smoothed across
+    /// [default: 0.001].
+    #[arg(long, value_name = "EPS", allow_hyphen_values = true)]
+    pub refine_eps: Option<f64>,
 
     #[command(flatten)]
     pub prep: PrepOptionArgs,
@@ -836,6 +871,15 @@ pub enum MediumKind {
     Aerial,
 }
 
+/// `--refine`: whether the range is refined with the image as guide.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RefineMode {
+    /// No refinement (a smaller depth map is still upsampled, guided).
+    None,
+    /// The guided filter.
+    Guided,
+}
+
 /// The blur of the aerial medium.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AerialBlur {
@@ -980,6 +1024,19 @@ pub struct BatchArgs {
     /// Airlight as linear R,G,B [default: from the sky found, per frame].
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
     pub airlight: Option<[f32; 3]>,
+
+    /// Image-guided refinement of the range, as `brume render --refine` [default: guided
+    /// for Cityscapes disparity and phone depth].
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub refine: Option<RefineMode>,
+
+    /// Window radius of the guided refinement, px [default: 20].
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
+    pub refine_radius: Option<f64>,
+
+    /// Regularisation ε of the guided refinement [default: 0.001].
+    #[arg(long, value_name = "EPS", allow_hyphen_values = true)]
+    pub refine_eps: Option<f64>,
 
     /// Skip hole filling and sky detection.
     #[arg(long)]

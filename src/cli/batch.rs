@@ -24,8 +24,6 @@ struct Loaded {
     args: RenderArgs,
     scene: Scene,
     prep: PrepReport,
-    /// The range texture's values (metres), shared by every β.
-    range: ScalarMap,
     decode_ms: f64,
     prep_ms: f64,
 }
@@ -398,15 +396,12 @@ fn load_frame(template: &RenderArgs, item: &Item) -> Result<Loaded> {
     let decode_ms = t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
     let prep = render_cmd::preprocess(&args, &scene)?;
-    // Range in metres, the same for every β: made once, here, off the GPU's thread.
-    let (range, _, _) = render_cmd::haze_inputs(&args, &scene, &prep)?;
     let prep_ms = t.elapsed().as_secs_f64() * 1e3;
     Ok(Loaded {
         item: item.clone(),
         args,
         scene,
         prep,
-        range,
         decode_ms,
         prep_ms,
     })
@@ -451,8 +446,22 @@ fn render_frames(
         stats.frames += 1;
         stats.decode_ms += loaded.decode_ms;
         stats.prep_ms += loaded.prep_ms;
+        // Refined once, and the range in metres made once, for every β of the frame.
+        let frame = match refine_frame(renderer, loaded, stats) {
+            Ok(f) => f,
+            Err(failed) => {
+                let event = Event::FrameFailed {
+                    failed: *failed,
+                    outputs: betas.len(),
+                };
+                if events.send(event).is_err() {
+                    return;
+                }
+                continue;
+            }
+        };
         for (k, &beta) in betas.iter().enumerate() {
-            let event = match render_beta(args, renderer, &loaded, beta) {
+            let event = match render_beta(args, renderer, &frame, beta) {
                 Ok((job, gpu_ms, render_ms)) => {
                     stats.gpu_ms += gpu_ms;
                     stats.render_ms += render_ms;
@@ -460,7 +469,7 @@ fn render_frames(
                 }
                 Err(error) => Event::FrameFailed {
                     failed: Failed {
-                        item: loaded.item.clone(),
+                        item: frame.loaded.item.clone(),
                         error,
                     },
                     outputs: betas.len() - k,
@@ -477,20 +486,50 @@ fn render_frames(
     }
 }
 
+/// A loaded frame with its range refined (on the GPU) and in the medium's metres.
+struct Refined {
+    loaded: Loaded,
+    /// The range texture's values (metres), shared by every β.
+    range: ScalarMap,
+}
+
+/// Refines a loaded frame's range with its image ([`render_cmd::refine_scene`]) and makes
+/// the range every β renders from.
+fn refine_frame(
+    renderer: &mut Renderer,
+    mut loaded: Loaded,
+    stats: &mut Stats,
+) -> std::result::Result<Refined, Box<Failed>> {
+    let t = Instant::now();
+    let Loaded {
+        args, scene, prep, ..
+    } = &mut loaded;
+    let result = render_cmd::refine_scene(args, scene, prep, renderer)
+        .and_then(|_| render_cmd::haze_inputs(args, scene, prep));
+    stats.refine_ms += t.elapsed().as_secs_f64() * 1e3;
+    match result {
+        Ok((range, _, _)) => Ok(Refined { loaded, range }),
+        Err(error) => Err(Box::new(Failed {
+            item: loaded.item,
+            error,
+        })),
+    }
+}
+
 /// Renders one β of a loaded frame; returns the output to write, the GPU time and the
 /// render's wall time (uploads, passes, read-back).
 fn render_beta(
     args: &BatchArgs,
     renderer: &mut Renderer,
-    frame: &Loaded,
+    refined: &Refined,
     beta: f64,
 ) -> Result<(Encode, f64, f64)> {
+    let (frame, range) = (&refined.loaded, &refined.range);
     let t = Instant::now();
     let mut fog_args = frame.args.clone();
     apply_beta(&mut fog_args, beta);
     let haze = render_cmd::haze_from_args(&fog_args)?;
     let look = render_cmd::look_from_args(&fog_args, &haze, frame.prep.airlight);
-    let range = &frame.range;
     let rendered = renderer.render(&frame.scene.image, range, look.medium(), &look.blur)?;
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     let item = &frame.item;
@@ -701,6 +740,8 @@ struct Stats {
     frames: usize,
     decode_ms: f64,
     prep_ms: f64,
+    /// Refinement and the range in metres, once per frame on the GPU's thread.
+    refine_ms: f64,
     gpu_ms: f64,
     render_ms: f64,
 }
@@ -723,10 +764,11 @@ impl Stats {
         if written > 0 {
             line += &format!(
                 "; {:.2} s per output (wall); per output: decode {:.0} ms, pre-processing \
-                 {:.0} ms, render {:.0} ms (GPU {:.0} ms), encode {:.0} ms",
+                 {:.0} ms, refinement {:.0} ms, render {:.0} ms (GPU {:.0} ms), encode {:.0} ms",
                 wall_s / n,
                 self.decode_ms / n,
                 self.prep_ms / n,
+                self.refine_ms / n,
                 self.render_ms / n,
                 self.gpu_ms / n,
                 encode_ms / n,
@@ -756,6 +798,9 @@ impl BatchArgs {
         args.albedo = self.albedo;
         args.no_prep = self.no_prep;
         args.prep = self.prep.clone();
+        args.refine = self.refine;
+        args.refine_radius = self.refine_radius;
+        args.refine_eps = self.refine_eps;
         render_cmd::check_options(&args)?;
         let haze = render_cmd::haze_from_args(&args)?;
         render_cmd::prep_options(&args.prep)?;
@@ -780,13 +825,22 @@ impl BatchArgs {
     }
 }
 
-/// The frame's camera file and sky mask, as `--camera` and `--sky-mask`.
+/// The frame's camera file and sky mask, as `--camera` and `--sky-mask` (and a labelIds
+/// sky mask as `--ego-mask` too).
 fn apply_companions(args: &mut RenderArgs, item: &Item) {
     if item.camera.is_some() {
         args.depth.camera = item.camera.clone();
     }
     if item.sky_mask.is_some() && !args.no_prep && !args.prep.no_sky {
         args.prep.sky_mask = item.sky_mask.clone();
+    }
+    // A Cityscapes labelIds file names the ego vehicle too (label 1).
+    let labels = item.sky_mask.as_ref().filter(|p| {
+        brume::io::mask::SkyMaskFormat::from_file_name(p)
+            == brume::io::mask::SkyMaskFormat::CityscapesLabelIds
+    });
+    if labels.is_some() && !args.no_prep && args.prep.ego_mask.is_none() {
+        args.prep.ego_mask = labels.cloned();
     }
 }
 

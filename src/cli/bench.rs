@@ -6,6 +6,7 @@ use super::limits::{self, MAX_ESTIMATIONS, MAX_RUNS, MAX_SAMPLES, MAX_TURBIDITY_
 use brume::bench::accuracy::{run_accuracy, AccuracyOptions};
 use brume::bench::fog::{fog_table, run_fog_bench, FogBenchOptions};
 use brume::bench::plot::{accuracy_plot_bytes, speed_plot_bytes, PlotFormat};
+use brume::bench::refine::{refine_table, run_refine_bench};
 use brume::bench::report;
 use brume::bench::speed::{self, run_speed, SpeedOptions, Tau};
 use brume::bench::turbidity::{run_turbidity_bench, turbidity_table, TurbidityBenchOptions};
@@ -31,6 +32,28 @@ pub enum BenchCommand {
     /// Paper 002's Table 1: the turbidity estimator on Preetham sky images (T = 2..9,
     /// 100 estimations of N = 100 points each), clear and with synthetic clouds; CPU only.
     Turbidity(TurbidityBenchArgs),
+    /// Issue 19: the image-guided refinement of real depth: the guided filter at the image's
+    /// size and joint bilateral upsampling of a range 4 and 8 times smaller.
+    Refine(RefineBenchArgs),
+}
+
+/// `brume bench refine`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct RefineBenchArgs {
+    /// Image size WIDTHxHEIGHT in px.
+    #[arg(
+        long,
+        value_name = "WxH",
+        default_value = "2048x1024",
+        allow_hyphen_values = true
+    )]
+    pub size: String,
+    /// Timed runs per configuration, after one untimed run.
+    #[arg(long, default_value_t = 5, allow_hyphen_values = true)]
+    pub runs: i64,
+    /// Print one JSON object on stdout instead of the table (the table goes to stderr).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Bytes per pixel of a `bench turbidity` sky held in memory (measured, README).
@@ -381,6 +404,12 @@ pub fn run(
             print_report(f.json, &fog_table(&report), &report)
         }
         BenchCommand::Turbidity(t) => run_turbidity(t),
+        BenchCommand::Refine(r) => {
+            let (width, height) = limits::parse_image_size("--size", &r.size)?;
+            let runs = limits::count("--runs", r.runs, 1, MAX_RUNS, "timed runs")?;
+            let report = run_refine_bench(renderer, width, height, runs)?;
+            print_report(r.json, &refine_table(&report), &report)
+        }
         BenchCommand::Speed(s) => {
             let opts = s.options()?;
             s.common.check_outputs(&[])?;

@@ -120,7 +120,8 @@ fn open_renderer(egl: Option<Platform>) -> Result<Headless> {
 }
 
 /// Library fields whose flag is not the field's name with dashes.
-const FLAG_ALIASES: [(&str, &str); 3] = [
+const FLAG_ALIASES: [(&str, &str); 4] = [
+    ("local_outlier_factor", "--local-outliers"),
     ("sky_range_factor", "--sky-factor"),
     ("min_area_fraction", "--sky-min-area"),
     ("margin_px", "--margin"),

@@ -1,11 +1,11 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
 use super::aerial::{aerial_camera, aerial_look, dehaze, AerialLook};
-use super::args::{DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
+use super::args::{DepthArgs, MediumKind, PrepOptionArgs, RefineMode, RenderArgs};
 use brume::atmosphere::horizon_light;
 use brume::blur::Blur;
 use brume::egl::Platform;
-use brume::io::depth::{self, DepthOptions, LoadedDepth};
+use brume::io::depth::{self, DepthFormat, DepthOptions, LoadedDepth};
 use brume::io::output::{self, Outputs};
 use brume::io::{demo, image};
 use brume::medium::haze::{self, Haze};
@@ -13,7 +13,7 @@ use brume::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
 use brume::raster::{RgbImage, ScalarMap};
-use brume::{Error, Result};
+use brume::{Error, Headless, Refine, Result};
 use brume::{FogBlur, Rendered};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -169,6 +169,14 @@ pub fn refuse_prep_options(prep: &PrepOptionArgs) -> Result<()> {
             "--far-outlier-factor",
             prep.far_outlier_factor.map(|v| v.to_string()),
         ),
+        (
+            "--local-outliers",
+            prep.local_outliers.map(|v| v.to_string()),
+        ),
+        (
+            "--ego-mask",
+            prep.ego_mask.as_ref().map(|p| p.display().to_string()),
+        ),
     ];
     refuse_given(
         &given,
@@ -181,21 +189,24 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let out = output_path(args)?;
     output::check_image_output(&out, "--out")?;
     super::refuse_overlaps(&[("--out", &out)], &input_paths(args))?;
-    let scene = load_scene(args)?;
+    let mut scene = load_scene(args)?;
 
-    let prep = preprocess(args, &scene)?;
+    let mut prep = preprocess(args, &scene)?;
+    let mut headless = super::open_renderer(egl)?;
+    let depth_size = [scene.depth.range.width(), scene.depth.range.height()];
+    let refined = refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
     let range = prep
         .prepared
         .as_ref()
         .map_or(&scene.depth.range, |p| &p.range);
     if args.medium == MediumKind::Aerial {
-        return run_aerial(args, egl, &scene, &prep, range, &out);
+        return run_aerial(args, &mut headless, &scene, &prep, range, &out);
     }
     let fog = physical_from_args(args)?;
     let (medium_range, range_divisor, look) = haze_inputs(args, &scene, &prep)?;
     let transmittance = transmittance_range(&look, &medium_range, &scene.depth.range);
 
-    let mut renderer = super::open_renderer(egl)?;
+    let renderer = &mut headless;
     let rendered = renderer.render(&scene.image, &medium_range, look.medium(), &look.blur)?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(&out, &rendered.image)?;
@@ -212,7 +223,13 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         out: &out,
     };
     if args.json {
-        outln!("{}", report.json(args, range_divisor));
+        let mut json = report.json(args, range_divisor);
+        json["refine"] = json!({
+            "depth_size": depth_size,
+            "upsampled": refined.upsample,
+            "guided": refined.guided.map(|r| json!({"radius_px": r.radius_px, "epsilon": r.epsilon})),
+        });
+        outln!("{json}");
     } else {
         report.print_summary();
         if args.timings {
@@ -246,6 +263,7 @@ pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
         .chain(depth_inputs(&args.depth))
         .chain(args.sky.iter().cloned())
         .chain(args.prep.sky_mask.iter().cloned())
+        .chain(args.prep.ego_mask.iter().cloned())
         .chain(args.sensitivity.iter().cloned())
         .collect()
 }
@@ -490,12 +508,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
                     .display()
                     .to_string(),
             };
-            check_same_size(
-                &scene.image,
-                &scene.image_name,
-                &scene.depth.range,
-                &scene.depth_name,
-            )?;
+            check_depth_fits(&scene)?;
             check_metric(args, &scene)?;
             Ok(scene)
         }
@@ -583,6 +596,27 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
 }
 
 /// Checks that the colour image and the range map have one size; the error names both.
+/// The depth map has the image's size, or is smaller by one factor on both sides (it is
+/// then upsampled, guided by the image).
+fn check_depth_fits(scene: &Scene) -> Result<()> {
+    let (image, range) = (&scene.image, &scene.depth.range);
+    let sizes = (
+        (image.width(), image.height()),
+        (range.width(), range.height()),
+    );
+    brume::refine::check_depth_size(sizes.0, sizes.1).map_err(|e| match e {
+        Error::InvalidParameter { expected, .. } => Error::invalid(
+            "--depth",
+            format!("{} ({}x{})", scene.depth_name, sizes.1 .0, sizes.1 .1),
+            format!(
+                "a depth map for the image {} ({}x{}): {expected}",
+                scene.image_name, sizes.0 .0, sizes.0 .1
+            ),
+        ),
+        e => e,
+    })
+}
+
 pub fn check_same_size(
     image: &RgbImage,
     image_name: &str,
@@ -617,6 +651,9 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
     if let Some(k) = args.far_outlier_factor {
         opts.far_outlier_factor = k;
     }
+    if let Some(f) = args.local_outliers {
+        opts.local_outlier_factor = f;
+    }
     if let Some(s) = args.seed {
         opts.seed = u64::try_from(s)
             .map_err(|_| Error::invalid("seed", s, "a whole number from 0 to 2^64 - 1"))?;
@@ -639,13 +676,16 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     }
     let opts = prep_options(&args.prep)?;
     let started = Instant::now();
-    let (prepared, _) = super::prep::prepare_inputs(
-        &args.prep,
-        &opts,
-        &scene.depth.range,
-        &scene.depth_name,
-        Some(&scene.image),
-    )?;
+    let depth = &scene.depth.range;
+    let small;
+    let image = if (depth.width(), depth.height()) == (scene.image.width(), scene.image.height()) {
+        &scene.image
+    } else {
+        small = brume::refine::image_at_depth_size(&scene.image, depth.width(), depth.height());
+        &small
+    };
+    let (prepared, _) =
+        super::prep::prepare_inputs(&args.prep, &opts, depth, &scene.depth_name, Some(image))?;
     log::info!(
         "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
         prepared.stats.holes,
@@ -656,8 +696,7 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     let (airlight, source) = match given {
         Some(g) => g,
         None => {
-            let AirlightEstimate { rgb, source, .. } =
-                prep::estimate_airlight(&scene.image, &prepared);
+            let AirlightEstimate { rgb, source, .. } = prep::estimate_airlight(image, &prepared);
             (rgb, airlight_source_name(source))
         }
     };
@@ -670,6 +709,151 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
 
 /// How the airlight estimate was made, for reports (`airlight_source` in `--json`): `sky`
 /// (median sky colour) or `neutral` (no sky: a grey at the scene's bright end).
+/// What refinement a scene gets.
+#[derive(Clone, Copy, Debug)]
+pub struct RefinePlan {
+    /// The depth map is smaller than the image: joint bilateral upsampling first.
+    pub upsample: bool,
+    /// The guided filter at the image's size, if on.
+    pub guided: Option<Refine>,
+}
+
+/// The refinement `args` ask for: `--refine`, else the guided filter for stereo-matched and
+/// phone depth; a depth map smaller than the image is always upsampled, guided by it.
+pub fn refine_plan(args: &RenderArgs, scene: &Scene) -> Result<RefinePlan> {
+    let opts = Refine {
+        radius_px: args
+            .refine_radius
+            .unwrap_or(brume::refine::DEFAULT_RADIUS_PX),
+        epsilon: args.refine_eps.unwrap_or(brume::refine::DEFAULT_EPSILON),
+        ..Refine::default()
+    };
+    opts.validate()?;
+    let (image, range) = (&scene.image, &scene.depth.range);
+    let noisy = matches!(
+        scene.depth.format,
+        DepthFormat::Cityscapes | DepthFormat::AndroidDepth16 | DepthFormat::Arcore
+    );
+    let guided = match args.refine {
+        Some(RefineMode::Guided) => true,
+        Some(RefineMode::None) => false,
+        None => noisy && args.uniform_sigma.is_none(),
+    };
+    Ok(RefinePlan {
+        upsample: (range.width(), range.height()) != (image.width(), image.height()),
+        guided: guided.then_some(opts),
+    })
+}
+
+/// How a refinement runs: the GPU's passes, or their CPU reference.
+pub trait Refiner {
+    /// [`brume::Renderer::upsample`].
+    fn upsample(&mut self, image: &RgbImage, range: &ScalarMap) -> Result<ScalarMap>;
+    /// [`brume::Renderer::refine`].
+    fn refine(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap>;
+}
+
+impl Refiner for brume::Renderer {
+    fn upsample(&mut self, image: &RgbImage, range: &ScalarMap) -> Result<ScalarMap> {
+        let sigma = brume::refine::DEFAULT_UPSAMPLE_SIGMA_COLOUR;
+        Ok(brume::Renderer::upsample(self, image, range, sigma)?.0)
+    }
+    fn refine(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap> {
+        Ok(brume::Renderer::refine(self, image, range, opts)?.0)
+    }
+}
+
+/// The CPU references of the GPU passes (the same results within 1e-4).
+pub struct CpuRefiner;
+
+impl Refiner for CpuRefiner {
+    fn upsample(&mut self, image: &RgbImage, range: &ScalarMap) -> Result<ScalarMap> {
+        let sigma = brume::refine::DEFAULT_UPSAMPLE_SIGMA_COLOUR;
+        brume::refine::joint_bilateral_upsample_reference(image, range, sigma)
+    }
+    fn refine(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap> {
+        brume::refine::guided_range_reference(image, range, opts)
+    }
+}
+
+/// Refines the scene's range with its image, in place (see [`refine_plan`]): the prepared
+/// range (or, with --no-prep, the loaded one) is upsampled to the image's size and/or
+/// guided-filtered, and the masks and measured range that go with it are brought to that
+/// size. Returns the plan that ran.
+pub fn refine_scene(
+    args: &RenderArgs,
+    scene: &mut Scene,
+    prep: &mut PrepReport,
+    refiner: &mut dyn Refiner,
+) -> Result<RefinePlan> {
+    let plan = refine_plan(args, scene)?;
+    if !plan.upsample && plan.guided.is_none() {
+        return Ok(plan);
+    }
+    let (w, h) = (scene.image.width(), scene.image.height());
+    let started = Instant::now();
+    let mut run = |range: &ScalarMap| -> Result<ScalarMap> {
+        // The ego vehicle's range 0 (never fogged) is not a range to filter: the filter
+        // reads log range. It is kept out (at the nearest range) and put back after.
+        let ego = range.map(|&v| v == 0.0);
+        let nearest = range
+            .as_slice()
+            .iter()
+            .copied()
+            .filter(|&v| v > 0.0)
+            .fold(f32::INFINITY, f32::min);
+        let positive = range.map(|&v| if v == 0.0 { nearest } else { v });
+        let mut range = if plan.upsample {
+            refiner.upsample(&scene.image, &positive)?
+        } else {
+            positive
+        };
+        if let Some(opts) = &plan.guided {
+            range = refiner.refine(&scene.image, &range, opts)?;
+        }
+        let ego = brume::refine::nearest_to_image_size(&ego, w, h);
+        for (v, _) in range
+            .as_mut_slice()
+            .iter_mut()
+            .zip(ego.as_slice())
+            .filter(|(_, &e)| e)
+        {
+            *v = 0.0;
+        }
+        Ok(range)
+    };
+    match &mut prep.prepared {
+        Some(p) => {
+            p.range = run(&p.range)?;
+            p.sky = brume::refine::nearest_to_image_size(&p.sky, w, h);
+            p.filled = brume::refine::nearest_to_image_size(&p.filled, w, h);
+            scene.depth.range = brume::refine::nearest_to_image_size(&scene.depth.range, w, h);
+        }
+        None => {
+            brume::refine::check_positive(&scene.depth.range).map_err(|_| {
+                Error::invalid(
+                    "--no-prep",
+                    "given",
+                    "pre-processing with --refine guided or a depth map smaller than the \
+                     image: refinement reads a range known at every pixel, which \
+                     pre-processing fills (or give --refine none)",
+                )
+            })?;
+            scene.depth.range = run(&scene.depth.range)?;
+        }
+    }
+    log::info!(
+        "range {}{} in {:.1} ms",
+        if plan.upsample { "upsampled, " } else { "" },
+        match plan.guided {
+            Some(o) => format!("refined (r = {} px, ε = {})", o.radius_px, o.epsilon),
+            None => "not refined".into(),
+        },
+        started.elapsed().as_secs_f64() * 1e3
+    );
+    Ok(plan)
+}
+
 pub fn airlight_source_name(source: AirlightSource) -> &'static str {
     match source {
         AirlightSource::Sky => "sky",
@@ -900,7 +1084,7 @@ pub fn aerial_job(
 
 fn run_aerial(
     args: &RenderArgs,
-    egl: Option<Platform>,
+    renderer: &mut Headless,
     scene: &Scene,
     prep: &PrepReport,
     range: &ScalarMap,
@@ -915,7 +1099,6 @@ fn run_aerial(
         light_source,
         blur,
     } = &job;
-    let mut renderer = super::open_renderer(egl)?;
     let rendered = renderer.render_fog(image, range, &look.medium, &job.fog_blur())?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(out, &rendered.image)?;

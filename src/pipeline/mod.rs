@@ -65,10 +65,12 @@
 
 mod engine;
 mod external;
+mod refine;
 
 use engine::{EngineKey, EngineTargets};
 pub use engine::{FogBlur, GaussBlur, GAUSS_WEIGHTS};
 pub use external::{ExternalColour, IDENTITY, TEXTURE_BINDING_EXTERNAL_OES, TEXTURE_EXTERNAL_OES};
+pub use refine::RefineInput;
 
 use crate::blur::{Blur, Precision};
 use crate::caps::Capabilities;
@@ -187,6 +189,8 @@ enum ProgramKey {
     Engine(&'static str, EngineKey),
     /// The import of an external image (see [`external`]).
     ExternalImport,
+    /// A pass of the image-guided refinement (see [`refine`]).
+    Refine(refine::RefinePass),
 }
 
 /// The diffusion textures, kept between frames of the same size, precision and kind of τ.
@@ -812,6 +816,9 @@ impl Pipeline {
                 )
             }
             ProgramKey::ExternalImport => external::compile(&self.gl, self.version_line),
+            ProgramKey::Refine(pass) => {
+                refine::compile(&self.gl, self.version_line, PRELUDE_GLSL, pass)
+            }
         }
     }
 

@@ -175,8 +175,11 @@ impl Photo {
     /// The photo `brume render ARGS` would render, uploaded to `gl`.
     pub fn load(args: &RenderArgs, gl: &Arc<glow::Context>) -> Result<Self> {
         render_cmd::haze_from_args(args)?;
-        let scene = render_cmd::load_scene(args)?;
-        let prep = render_cmd::preprocess(args, &scene)?;
+        let mut scene = render_cmd::load_scene(args)?;
+        let mut prep = render_cmd::preprocess(args, &scene)?;
+        // Once, at load: the CPU reference of the GPU refinement (the same result within
+        // 2e-5, tests/refine.rs) keeps the viewer's pipeline to the fog.
+        render_cmd::refine_scene(args, &mut scene, &mut prep, &mut render_cmd::CpuRefiner)?;
         let range = prep
             .prepared
             .as_ref()

@@ -1,0 +1,48 @@
+// Joint bilateral upsampling, pass 2 of 2, at full resolution: the log range of the 6 x 6
+// cells around the pixel, each weighted by its distance (a Gaussian of one cell) and by
+// how far its colour is from the pixel's (a Gaussian of u_sigma_colour in sRGB-encoded
+// values): a pixel takes the range of the nearby cells that look like it, so an edge of
+// the image is an edge of the range even where the coarse cells straddle it.
+
+uniform sampler2D u_colour;
+uniform sampler2D u_cells;        // (r, g, b, log range) per cell
+uniform ivec2 u_low_size;
+uniform vec2 u_scale;             // cells per full-resolution pixel (x, y)
+uniform bool u_colour_srgb;
+uniform float u_sigma_colour;
+
+out vec4 o_range;
+
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    vec3 c = texelFetch(u_colour, p, 0).rgb;
+    vec3 colour = u_colour_srgb ? clamp(c, 0.0, 1.0) : linear_to_srgb(c);
+    vec2 centre = (vec2(p) + 0.5) * u_scale - 0.5;
+    ivec2 base = ivec2(floor(centre));
+    float inv_colour = 1.0 / (2.0 * u_sigma_colour * u_sigma_colour);
+    float sum = 0.0;
+    float weight = 0.0;
+    float nearest = 0.0;
+    float nearest_d2 = 1e30;
+    for (int j = -2; j <= 3; ++j) {
+        for (int i = -2; i <= 3; ++i) {
+            ivec2 q = base + ivec2(i, j);
+            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, u_low_size))) {
+                continue;
+            }
+            vec4 cell = texelFetch(u_cells, q, 0);
+            vec2 d = vec2(q) - centre;
+            vec3 dc = colour - cell.rgb;
+            float w = exp(-0.5 * dot(d, d) - dot(dc, dc) * inv_colour);
+            sum += w * cell.a;
+            weight += w;
+            if (dot(d, d) < nearest_d2) {
+                nearest_d2 = dot(d, d);
+                nearest = cell.a;
+            }
+        }
+    }
+    // A colour unlike every cell around (all weights underflow): the nearest cell's.
+    float log_range = weight > 1e-30 ? sum / weight : nearest;
+    o_range = vec4(exp(log_range), 0.0, 0.0, 1.0);
+}

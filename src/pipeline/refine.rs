@@ -1,0 +1,363 @@
+//! Image-guided refinement of a range texture on the GPU (see [`crate::refine`] for the
+//! filter and why it works on log range): seven fragment passes over brume's own
+//! textures, from the host's colour texture and a range texture of the image's size or
+//! smaller, into a new R32F range texture of the image's size.
+//!
+//! **State.** A refinement changes and leaves the state a render does (see the parent
+//! module). Its textures are made for the call and freed with it but the output, which the
+//! caller owns.
+
+use super::{
+    bind_texture, draw_fullscreen, set_int, set_value, Encoding, Pipeline, ProgramKey, UNIT_DEPTH,
+    UNIT_MAIN,
+};
+use crate::error::Result;
+use crate::gpu::framebuffer::Framebuffer;
+use crate::gpu::program::Program;
+use crate::gpu::texture::{Filter, TexelFormat, Texture};
+use crate::gpu::timer::PassTimes;
+use crate::medium::UniformValue;
+use crate::refine::Refine;
+use std::sync::Arc;
+
+/// The passes' files, in `glsl/refine/`.
+pub(super) const PACK_FRAG: &str = include_str!("../../glsl/refine/pack.frag");
+pub(super) const BOX_FRAG: &str = include_str!("../../glsl/refine/box.frag");
+pub(super) const COEFFICIENTS_FRAG: &str = include_str!("../../glsl/refine/coefficients.frag");
+pub(super) const APPLY_FRAG: &str = include_str!("../../glsl/refine/apply.frag");
+pub(super) const CELLS_FRAG: &str = include_str!("../../glsl/refine/cells.frag");
+pub(super) const UPSAMPLE_FRAG: &str = include_str!("../../glsl/refine/upsample.frag");
+
+/// The four programs of the refinement.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum RefinePass {
+    Pack,
+    Box,
+    Coefficients,
+    Apply,
+    Cells,
+    Upsample,
+}
+
+impl RefinePass {
+    /// The file name, the source and the uniforms of the pass.
+    pub(super) fn source(self) -> (&'static str, &'static str, &'static [&'static str]) {
+        match self {
+            RefinePass::Pack => (
+                "refine/pack.frag",
+                PACK_FRAG,
+                &[
+                    "u_colour",
+                    "u_range",
+                    "u_colour_size",
+                    "u_cell",
+                    "u_colour_srgb",
+                    "u_range_full",
+                ],
+            ),
+            RefinePass::Box => (
+                "refine/box.frag",
+                BOX_FRAG,
+                &["u_source", "u_size", "u_step", "u_radius"],
+            ),
+            RefinePass::Coefficients => (
+                "refine/coefficients.frag",
+                COEFFICIENTS_FRAG,
+                &["u_means", "u_epsilon"],
+            ),
+            RefinePass::Cells => (
+                "refine/cells.frag",
+                CELLS_FRAG,
+                &[
+                    "u_colour",
+                    "u_range",
+                    "u_colour_size",
+                    "u_cell",
+                    "u_colour_srgb",
+                ],
+            ),
+            RefinePass::Upsample => (
+                "refine/upsample.frag",
+                UPSAMPLE_FRAG,
+                &[
+                    "u_colour",
+                    "u_cells",
+                    "u_low_size",
+                    "u_scale",
+                    "u_colour_srgb",
+                    "u_sigma_colour",
+                ],
+            ),
+            RefinePass::Apply => (
+                "refine/apply.frag",
+                APPLY_FRAG,
+                &[
+                    "u_colour",
+                    "u_coefficients",
+                    "u_low_size",
+                    "u_scale",
+                    "u_colour_srgb",
+                ],
+            ),
+        }
+    }
+}
+
+/// What to refine: the host's textures, read with `texelFetch` at level 0.
+#[derive(Clone, Copy, Debug)]
+pub struct RefineInput {
+    /// Colour, RGB, of the image's size.
+    pub colour: glow::Texture,
+    /// How the colour's values are encoded.
+    pub colour_encoding: Encoding,
+    /// The image's size.
+    pub width: usize,
+    /// The image's size.
+    pub height: usize,
+    /// Range (> 0 everywhere) in `.r`, of the image's size or smaller by one factor
+    /// ([`crate::refine::check_depth_size`]).
+    pub range: glow::Texture,
+    /// The range texture's size.
+    pub range_width: usize,
+    /// The range texture's size.
+    pub range_height: usize,
+}
+
+/// The low grid's ping-pong pair and the framebuffers over them.
+struct LowTargets {
+    framebuffers: [Framebuffer; 2],
+    textures: [Texture; 2],
+}
+
+impl LowTargets {
+    fn new(gl: &Arc<glow::Context>, width: usize, height: usize) -> Result<Self> {
+        let make = || {
+            Texture::new(
+                gl,
+                width,
+                height,
+                TexelFormat::Rgba32F,
+                Filter::Nearest,
+                None,
+            )
+        };
+        let textures = [make()?, make()?];
+        let framebuffers = [
+            Framebuffer::over(gl, &[&textures[0]], "the refinement's low grid")?,
+            Framebuffer::over(gl, &[&textures[1]], "the refinement's low grid")?,
+        ];
+        Ok(LowTargets {
+            framebuffers,
+            textures,
+        })
+    }
+}
+
+impl Pipeline {
+    /// Refines `input.range` with `input.colour` as guide and returns the refined range,
+    /// an R32F texture of the image's size that the caller owns, with the passes' times
+    /// (seven passes). Upsamples a range smaller than the image on the way.
+    ///
+    /// Errors: [`crate::Error::InvalidParameter`] for bad options or sizes,
+    /// [`crate::Error::TooLarge`] above `GL_MAX_TEXTURE_SIZE`, GL errors naming the pass.
+    pub fn refine_range(
+        &mut self,
+        input: &RefineInput,
+        opts: &Refine,
+    ) -> Result<(Texture, PassTimes)> {
+        let grid = opts.grid(
+            (input.width, input.height),
+            (input.range_width, input.range_height),
+        )?;
+        self.caps.require_size("image", input.width, input.height)?;
+        for pass in [
+            RefinePass::Pack,
+            RefinePass::Box,
+            RefinePass::Coefficients,
+            RefinePass::Apply,
+        ] {
+            self.program(ProgramKey::Refine(pass), None)?;
+        }
+        let gl = Arc::clone(&self.gl);
+        let low = LowTargets::new(&gl, grid.width, grid.height)?;
+        let output = Texture::new(
+            &gl,
+            input.width,
+            input.height,
+            TexelFormat::R32F,
+            Filter::Nearest,
+            None,
+        )?;
+        let output_fb = Framebuffer::over(&gl, &[&output], "the refined range")?;
+        let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
+        let low_size = [grid.width as i32, grid.height as i32];
+        let result = self.timed("refining the range", |pipeline, timer| {
+            let program = |pass| pipeline.compiled(ProgramKey::Refine(pass));
+            let (pack, boxes, coefficients, apply) = (
+                program(RefinePass::Pack)?,
+                program(RefinePass::Box)?,
+                program(RefinePass::Coefficients)?,
+                program(RefinePass::Apply)?,
+            );
+            timer.pass(|| {
+                low.framebuffers[0].bind_for_drawing();
+                pipeline.use_program(pack);
+                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
+                bind_texture(&gl, UNIT_DEPTH, Some(input.range));
+                set_int(&gl, pack, "u_colour", UNIT_MAIN as i32);
+                set_int(&gl, pack, "u_range", UNIT_DEPTH as i32);
+                let size = [input.width as i32, input.height as i32];
+                set_value(&gl, pack, "u_colour_size", UniformValue::IVec2(size));
+                let cell = grid.cell.map(|c| c as f32);
+                set_value(&gl, pack, "u_cell", UniformValue::Vec2(cell));
+                set_int(&gl, pack, "u_colour_srgb", srgb);
+                set_int(&gl, pack, "u_range_full", i32::from(grid.range_full));
+                draw_fullscreen(&gl);
+            })?;
+            let box_mean = |timer: &mut crate::gpu::timer::PassTimer<'_>| -> Result<()> {
+                for (from, step) in [(0usize, [1, 0]), (1usize, [0, 1])] {
+                    timer.pass(|| {
+                        low.framebuffers[1 - from].bind_for_drawing();
+                        pipeline.use_program(boxes);
+                        low.textures[from].bind(UNIT_MAIN);
+                        set_int(&gl, boxes, "u_source", UNIT_MAIN as i32);
+                        set_value(&gl, boxes, "u_size", UniformValue::IVec2(low_size));
+                        set_value(&gl, boxes, "u_step", UniformValue::IVec2(step));
+                        set_int(&gl, boxes, "u_radius", grid.radius as i32);
+                        draw_fullscreen(&gl);
+                    })?;
+                }
+                Ok(())
+            };
+            box_mean(timer)?;
+            timer.pass(|| {
+                low.framebuffers[1].bind_for_drawing();
+                pipeline.use_program(coefficients);
+                low.textures[0].bind(UNIT_MAIN);
+                set_int(&gl, coefficients, "u_means", UNIT_MAIN as i32);
+                let epsilon = UniformValue::Float(opts.epsilon as f32);
+                set_value(&gl, coefficients, "u_epsilon", epsilon);
+                draw_fullscreen(&gl);
+            })?;
+            // The coefficients are in texture 1; the box passes read texture 0 first.
+            timer.pass(|| {
+                low.framebuffers[0].bind_for_drawing();
+                pipeline.use_program(boxes);
+                low.textures[1].bind(UNIT_MAIN);
+                set_int(&gl, boxes, "u_source", UNIT_MAIN as i32);
+                set_value(&gl, boxes, "u_size", UniformValue::IVec2(low_size));
+                set_value(&gl, boxes, "u_step", UniformValue::IVec2([1, 0]));
+                set_int(&gl, boxes, "u_radius", grid.radius as i32);
+                draw_fullscreen(&gl);
+            })?;
+            timer.pass(|| {
+                low.framebuffers[1].bind_for_drawing();
+                pipeline.use_program(boxes);
+                low.textures[0].bind(UNIT_MAIN);
+                set_value(&gl, boxes, "u_step", UniformValue::IVec2([0, 1]));
+                draw_fullscreen(&gl);
+            })?;
+            timer.pass(|| {
+                output_fb.bind_for_drawing();
+                pipeline.use_program(apply);
+                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
+                low.textures[1].bind(UNIT_DEPTH);
+                set_int(&gl, apply, "u_colour", UNIT_MAIN as i32);
+                set_int(&gl, apply, "u_coefficients", UNIT_DEPTH as i32);
+                set_value(&gl, apply, "u_low_size", UniformValue::IVec2(low_size));
+                let scale = grid.cell.map(|c| (1.0 / c) as f32);
+                set_value(&gl, apply, "u_scale", UniformValue::Vec2(scale));
+                set_int(&gl, apply, "u_colour_srgb", srgb);
+                draw_fullscreen(&gl);
+            })?;
+            Ok(())
+        });
+        self.leave_state();
+        let (times, ()) = result?;
+        drop(output_fb);
+        Ok((output, times))
+    }
+}
+
+impl Pipeline {
+    /// Upsamples `input.range`, smaller than the image by one factor
+    /// ([`crate::refine::check_depth_size`]), to the image's size by joint bilateral
+    /// upsampling guided by `input.colour` (`sigma_colour` in sRGB-encoded values; see
+    /// [`crate::refine::joint_bilateral_upsample_reference`]), in two passes. Returns an
+    /// R32F texture of the image's size that the caller owns, with the passes' times.
+    pub fn upsample_range(
+        &mut self,
+        input: &RefineInput,
+        sigma_colour: f64,
+    ) -> Result<(Texture, PassTimes)> {
+        let (w, h) = (input.width, input.height);
+        let (lw, lh) = (input.range_width, input.range_height);
+        crate::refine::check_depth_size((w, h), (lw, lh))?;
+        if !(sigma_colour.is_finite() && sigma_colour > 0.0) {
+            return Err(crate::Error::invalid(
+                "sigma_colour",
+                sigma_colour,
+                "a colour σ > 0 (sRGB-encoded values)",
+            ));
+        }
+        self.caps.require_size("image", w, h)?;
+        self.program(ProgramKey::Refine(RefinePass::Cells), None)?;
+        self.program(ProgramKey::Refine(RefinePass::Upsample), None)?;
+        let gl = Arc::clone(&self.gl);
+        let low = LowTargets::new(&gl, lw, lh)?;
+        let output = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
+        let output_fb = Framebuffer::over(&gl, &[&output], "the upsampled range")?;
+        let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
+        let cell = [w as f32 / lw as f32, h as f32 / lh as f32];
+        let result = self.timed("upsampling the range", |pipeline, timer| {
+            let cells = pipeline.compiled(ProgramKey::Refine(RefinePass::Cells))?;
+            let upsample = pipeline.compiled(ProgramKey::Refine(RefinePass::Upsample))?;
+            timer.pass(|| {
+                low.framebuffers[0].bind_for_drawing();
+                pipeline.use_program(cells);
+                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
+                bind_texture(&gl, UNIT_DEPTH, Some(input.range));
+                set_int(&gl, cells, "u_colour", UNIT_MAIN as i32);
+                set_int(&gl, cells, "u_range", UNIT_DEPTH as i32);
+                let size = [w as i32, h as i32];
+                set_value(&gl, cells, "u_colour_size", UniformValue::IVec2(size));
+                set_value(&gl, cells, "u_cell", UniformValue::Vec2(cell));
+                set_int(&gl, cells, "u_colour_srgb", srgb);
+                draw_fullscreen(&gl);
+            })?;
+            timer.pass(|| {
+                output_fb.bind_for_drawing();
+                pipeline.use_program(upsample);
+                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
+                low.textures[0].bind(UNIT_DEPTH);
+                set_int(&gl, upsample, "u_colour", UNIT_MAIN as i32);
+                set_int(&gl, upsample, "u_cells", UNIT_DEPTH as i32);
+                let low_size = [lw as i32, lh as i32];
+                set_value(&gl, upsample, "u_low_size", UniformValue::IVec2(low_size));
+                let scale = cell.map(|c| 1.0 / c);
+                set_value(&gl, upsample, "u_scale", UniformValue::Vec2(scale));
+                set_int(&gl, upsample, "u_colour_srgb", srgb);
+                let sigma = UniformValue::Float(sigma_colour as f32);
+                set_value(&gl, upsample, "u_sigma_colour", sigma);
+                draw_fullscreen(&gl);
+            })?;
+            Ok(())
+        });
+        self.leave_state();
+        let (times, ()) = result?;
+        drop(output_fb);
+        Ok((output, times))
+    }
+}
+
+/// Compiles one pass of the refinement: the prelude, then its file.
+pub(super) fn compile(
+    gl: &Arc<glow::Context>,
+    version_line: &str,
+    prelude: &str,
+    pass: RefinePass,
+) -> Result<Program> {
+    let (file, source, uniforms) = pass.source();
+    let header = format!("{version_line}\n{prelude}");
+    Program::new(gl, &header, (file, source), uniforms, &[])
+}
