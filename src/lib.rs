@@ -22,6 +22,7 @@ pub mod bench;
 pub mod blur;
 pub mod camera;
 pub mod caps;
+pub mod compat;
 pub mod dataset;
 pub mod egl;
 pub mod error;

@@ -500,3 +500,110 @@ fn bad_physical_values_are_refused_before_writing() {
         ],
     );
 }
+
+/// `--compat foggy-cityscapes`: every output code value is Foggy Cityscapes' blend of the
+/// input's code values, R·t + L·(1 − t) with t = exp(−βR) and R worked out by hand from
+/// the disparity and the camera, within 1 of 255 (the output's rounding).
+#[test]
+fn foggy_cityscapes_blends_code_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (12, 8);
+    let camera = Camera {
+        baseline: 0.209313,
+        f: 2262.52,
+        u0: 5.5,
+        v0: 3.5,
+    };
+    let p = cityscapes(dir.path(), w, h, &camera, |x, y| {
+        1 + 256 * (10 + (x + y) as u16)
+    });
+    colour(dir.path(), "im.png", w, h);
+    let o = render(
+        dir.path(),
+        "im.png",
+        &[
+            "--beta",
+            "0.02",
+            "--compat",
+            "foggy-cityscapes",
+            "--airlight",
+            "1,0.5,0.25",
+            "--out",
+            "fc.png",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let input = image::open(dir.path().join("im.png")).unwrap().to_rgb8();
+    let output = image::open(dir.path().join("fc.png")).unwrap().to_rgb8();
+    let airlight = [1.0f32, 0.5, 0.25].map(brume::io::image::linear_to_srgb);
+    let mut worst = 0i32;
+    for y in 0..h {
+        for x in 0..w {
+            let t = (-0.02 * camera.range(*p.get(x, y), x, y)).exp() as f32;
+            for (c, l) in airlight.iter().enumerate() {
+                let r = f32::from(input.get_pixel(x as u32, y as u32)[c]) / 255.0;
+                let want = (255.0 * (r * t + l * (1.0 - t))).round() as i32;
+                let got = i32::from(output.get_pixel(x as u32, y as u32)[c]);
+                worst = worst.max((got - want).abs());
+            }
+        }
+    }
+    assert!(worst <= 1, "off by {worst} code values");
+}
+
+/// `--transmittance-map`: a white image under black air with no blur comes out as the
+/// map's τ itself, code / 255 (a 0 as half a step), at every pixel.
+#[test]
+fn a_transmittance_map_is_applied_as_given() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 8);
+    let white = Grid::filled(w, h, [1.0f32, 1.0, 1.0, 1.0]);
+    write_rgba(&dir.path().join("white.pfm"), &white).unwrap();
+    let codes = |x: usize, y: usize| ((x * 17 + y * 31) % 256) as u8;
+    image::GrayImage::from_fn(w as u32, h as u32, |x, y| {
+        image::Luma([codes(x as usize, y as usize)])
+    })
+    .save(dir.path().join("tau.png"))
+    .unwrap();
+    let o = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            "white.pfm",
+            "--transmittance-map",
+            "tau.png",
+            "--airlight",
+            "0,0,0",
+            "--lambda",
+            "0",
+            "--out",
+            "out.pfm",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = load(&dir.path().join("out.pfm"));
+    for y in 0..h {
+        for x in 0..w {
+            let want = (f32::from(codes(x, y)) / 255.0).max(0.5 / 255.0);
+            for got in out.get(x, y) {
+                // exp(ln τ) in f32 on the GPU: a few ulps.
+                assert!((got - want).abs() < 2e-6, "({x}, {y}): {got} vs {want}");
+            }
+        }
+    }
+    // A map with --depth, or with --beta, is a malformed command line.
+    for extra in [["--depth", "tau.png"], ["--beta", "0.01"]] {
+        let mut args = vec![
+            "render",
+            "--image",
+            "white.pfm",
+            "--transmittance-map",
+            "tau.png",
+        ];
+        args.extend_from_slice(&extra);
+        args.extend_from_slice(&["--out", "x.png"]);
+        let o = brume(dir.path(), &args);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", stderr(&o));
+    }
+}

@@ -45,7 +45,7 @@ pub struct Cli {
 #[derive(Subcommand, Debug)]
 pub enum Command {
     /// Render haze into an image (no input: the built-in demo scene).
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Compare two images: SSIM and HSV-histogram correlation (paper 002, sec. 7.2.3).
     Compare(CompareArgs),
     /// Render brume's procedural 3D scene and fog it as an engine would (papers 001, 003):
@@ -230,12 +230,34 @@ pub struct PrepOptionArgs {
 
 /// `brume render`.
 #[derive(Args, Clone, Debug)]
+#[command(group(clap::ArgGroup::new("depth_source").args(["depth", "transmittance_map"])))]
 pub struct RenderArgs {
     /// Colour image: PNG or JPEG (8- or 16-bit sRGB), or OpenEXR or PFM (linear float, as
     /// renderers and engines write). Without --image and --depth the built-in demo scene
     /// is rendered.
-    #[arg(long, value_name = "PATH", requires = "depth")]
+    #[arg(long, value_name = "PATH", requires = "depth_source")]
     pub image: Option<PathBuf>,
+
+    /// A transmittance map to apply instead of computing τ from a depth map: an 8- or
+    /// 16-bit grey PNG of the image's size, such as Foggy Cityscapes'
+    /// {name}_leftImg8bit_transmittance_beta_{β}.png. Rendered with brume's airlight and
+    /// diffusion blur (the blur from the optical depth −ln τ; --lambda 0 for none), or
+    /// with --compat foggy-cityscapes.
+    #[arg(
+        long,
+        value_name = "PATH.png",
+        requires = "image",
+        conflicts_with_all = ["depth", "beta", "visibility", "ka", "ks", "medium"]
+    )]
+    pub transmittance_map: Option<PathBuf>,
+
+    /// Whose conventions: brume (the default: the blend in linear light, the diffusion
+    /// blur, the airlight from the sky found) or foggy-cityscapes (Sakaridis et al. 2018:
+    /// the blend in sRGB code values, no blur, the airlight by the dark-channel rule), for
+    /// data comparable with Foggy Cityscapes. foggy-cityscapes needs --beta or
+    /// --visibility (or --transmittance-map).
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub compat: Option<Compat>,
 
     #[command(flatten)]
     pub depth: DepthArgs,
@@ -404,11 +426,11 @@ pub struct RenderArgs {
 
     /// Image-guided refinement of the range, on the GPU: guided (He et al.'s guided
     /// filter of log range, the image's luminance as guide: the range's edges follow the
-    /// image's, its noise is smoothed where the image is flat) or none [default: guided
-    /// for stereo-matched and phone depth: cityscapes, android-depth16, arcore; none for
-    /// ground truth (Middlebury, KITTI, NYU, TUM), float maps and z-buffers]. A depth map
-    /// smaller than the image (same aspect ratio, 1-16x smaller) is always upsampled by
-    /// the guided filter.
+    /// image's, its noise is smoothed where the image is flat) or none [default: none;
+    /// measured on stereo-matched disparity it repairs the sky and the matcher's blunders
+    /// but blurs correct depth: see the README]. A depth map smaller than the image (same
+    /// aspect ratio, 1-16x smaller) is always upsampled, by joint bilateral upsampling
+    /// guided by the image.
     #[arg(long, value_enum, allow_hyphen_values = true)]
     pub refine: Option<RefineMode>,
 
@@ -871,6 +893,16 @@ pub enum MediumKind {
     Aerial,
 }
 
+/// `--compat`: whose conventions a render follows.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compat {
+    /// brume's: the blend in linear light, the diffusion blur, the sky's airlight.
+    Brume,
+    /// Foggy Cityscapes': the blend in sRGB code values, no blur, the dark-channel
+    /// airlight.
+    FoggyCityscapes,
+}
+
 /// `--refine`: whether the range is refined with the image as guide.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RefineMode {
@@ -933,9 +965,9 @@ pub struct ViewArgs {
 #[derive(clap::Subcommand, Clone, Debug)]
 pub enum ViewSource {
     /// A photo with depth, or the demo, with `brume render`'s options (--out is ignored).
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// brume's 3D scene, with `brume scene`'s options (--out, --frames are ignored).
-    Scene(SceneArgs),
+    Scene(Box<SceneArgs>),
 }
 
 /// How big the viewer shows the image.
@@ -1025,8 +1057,12 @@ pub struct BatchArgs {
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
     pub airlight: Option<[f32; 3]>,
 
-    /// Image-guided refinement of the range, as `brume render --refine` [default: guided
-    /// for Cityscapes disparity and phone depth].
+    /// Whose conventions, as `brume render --compat`: brume or foggy-cityscapes (the
+    /// blend in sRGB code values, no blur, the dark-channel airlight) [default: brume].
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub compat: Option<Compat>,
+
+    /// Image-guided refinement of the range, as `brume render --refine` [default: none].
     #[arg(long, value_enum, allow_hyphen_values = true)]
     pub refine: Option<RefineMode>,
 

@@ -4,7 +4,7 @@
 //! a run that stops leaves only complete files, and the next run skips them. `--shard K/N`
 //! takes a deterministic share of the frames, for array jobs.
 
-use super::args::{BatchArgs, RenderArgs};
+use super::args::{BatchArgs, Compat, RenderArgs};
 use super::render::{self as render_cmd, PrepReport, Scene};
 use brume::dataset::{self, Item, Shard};
 use brume::io::output::Outputs;
@@ -530,7 +530,15 @@ fn render_beta(
     apply_beta(&mut fog_args, beta);
     let haze = render_cmd::haze_from_args(&fog_args)?;
     let look = render_cmd::look_from_args(&fog_args, &haze, frame.prep.airlight);
-    let rendered = renderer.render(&frame.scene.image, range, look.medium(), &look.blur)?;
+    // Foggy Cityscapes' conventions: the blend on the CPU, no passes.
+    let (image, passes, gpu_ms) = if fog_args.compat == Some(Compat::FoggyCityscapes) {
+        let (image, _, _) =
+            render_cmd::foggy_cityscapes_image(&fog_args, &frame.scene.image, range, beta)?;
+        (image, 0, 0.0)
+    } else {
+        let r = renderer.render(&frame.scene.image, range, look.medium(), &look.blur)?;
+        (r.image, r.schedule.steps, r.times.total_ms)
+    };
     let render_ms = t.elapsed().as_secs_f64() * 1e3;
     let item = &frame.item;
     let path = item.foggy_output(&args.out, beta);
@@ -554,25 +562,25 @@ fn render_beta(
         "output": path.display().to_string(),
         "beta": beta,
         "visibility_m": -(0.05f64.ln()) / beta,
-        "width": rendered.image.width(),
-        "height": rendered.image.height(),
+        "width": image.width(),
+        "height": image.height(),
         "sigma_max": look.sigma_max(),
-        "diffusion_passes": rendered.schedule.steps,
+        "diffusion_passes": passes,
         "airlight": look.airlight(),
         "airlight_source": frame.prep.airlight_source,
         "decode_ms": frame.decode_ms,
         "prep_ms": frame.prep_ms,
-        "gpu_ms": rendered.times.total_ms,
+        "gpu_ms": gpu_ms,
         "render_ms": render_ms,
     });
     Ok((
         Encode {
             path,
-            image: rendered.image,
+            image,
             transmittance,
             record,
         },
-        rendered.times.total_ms,
+        gpu_ms,
         render_ms,
     ))
 }
@@ -798,6 +806,7 @@ impl BatchArgs {
         args.albedo = self.albedo;
         args.no_prep = self.no_prep;
         args.prep = self.prep.clone();
+        args.compat = self.compat;
         args.refine = self.refine;
         args.refine_radius = self.refine_radius;
         args.refine_eps = self.refine_eps;

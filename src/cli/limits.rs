@@ -25,6 +25,7 @@ pub const MAX_SAMPLE_POINTS: u64 = 10_000_000;
 pub const MAX_TURBIDITY_BENCH_SIDE: usize = 2048;
 /// Side of `view --window`, logical px: X11 sizes are 16-bit and a window larger than any
 /// screen has no use; the screenshot read back from it stays under 256 MB.
+#[cfg(all(feature = "viewer", not(target_os = "android")))]
 pub const MAX_WINDOW_SIDE: usize = 8192;
 
 /// A count given on the command line, in `min..=max`, naming `option` and the unit.

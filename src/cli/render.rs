@@ -1,7 +1,7 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
 use super::aerial::{aerial_camera, aerial_look, dehaze, AerialLook};
-use super::args::{DepthArgs, MediumKind, PrepOptionArgs, RefineMode, RenderArgs};
+use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RefineMode, RenderArgs};
 use brume::atmosphere::horizon_light;
 use brume::blur::Blur;
 use brume::egl::Platform;
@@ -12,7 +12,7 @@ use brume::medium::haze::{self, Haze};
 use brume::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
-use brume::raster::{RgbImage, ScalarMap};
+use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::{Error, Headless, Refine, Result};
 use brume::{FogBlur, Rendered};
 use serde_json::json;
@@ -83,6 +83,18 @@ pub fn check_options(args: &RenderArgs) -> Result<()> {
     check_depth_options(&args.depth)?;
     if args.no_prep {
         refuse_prep_options(&args.prep)?;
+    }
+    if args.compat == Some(Compat::FoggyCityscapes) {
+        let physical =
+            args.beta.is_some() || args.visibility.is_some() || args.transmittance_map.is_some();
+        if !physical || args.medium == MediumKind::Aerial {
+            return Err(Error::invalid(
+                "--compat",
+                "foggy-cityscapes",
+                "--beta, --visibility or --transmittance-map with it (Foggy Cityscapes' fog \
+                 is τ = exp(−βR) on the haze medium)",
+            ));
+        }
     }
     Ok(())
 }
@@ -186,6 +198,14 @@ pub fn refuse_prep_options(prep: &PrepOptionArgs) -> Result<()> {
 
 pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     check_options(args)?;
+    let from_map;
+    let args = match args.transmittance_map {
+        Some(_) => {
+            from_map = transmittance_map_args(args);
+            &from_map
+        }
+        None => args,
+    };
     let out = output_path(args)?;
     output::check_image_output(&out, "--out")?;
     super::refuse_overlaps(&[("--out", &out)], &input_paths(args))?;
@@ -195,6 +215,12 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let mut headless = super::open_renderer(egl)?;
     let depth_size = [scene.depth.range.width(), scene.depth.range.height()];
     let refined = refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
+    if args.transmittance_map.is_some() {
+        // The map's τ as given: pre-processing found the sky for the airlight only.
+        if let Some(p) = &mut prep.prepared {
+            p.range = scene.depth.range.clone();
+        }
+    }
     let range = prep
         .prepared
         .as_ref()
@@ -203,6 +229,10 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         return run_aerial(args, &mut headless, &scene, &prep, range, &out);
     }
     let fog = physical_from_args(args)?;
+    if args.compat == Some(Compat::FoggyCityscapes) {
+        let fog = fog.expect("checked: --compat foggy-cityscapes has physical fog");
+        return run_foggy_cityscapes(args, &scene, range, &fog, &out);
+    }
     let (medium_range, range_divisor, look) = haze_inputs(args, &scene, &prep)?;
     let transmittance = transmittance_range(&look, &medium_range, &scene.depth.range);
 
@@ -265,6 +295,7 @@ pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
         .chain(args.prep.sky_mask.iter().cloned())
         .chain(args.prep.ego_mask.iter().cloned())
         .chain(args.sensitivity.iter().cloned())
+        .chain(args.transmittance_map.iter().cloned())
         .collect()
 }
 
@@ -482,6 +513,9 @@ fn output_path(args: &RenderArgs) -> Result<PathBuf> {
 /// The photo and its range (or the demo), checked to be of one size and, for physical
 /// fog, in metres.
 pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
+    if let (Some(image_path), Some(map)) = (&args.image, &args.transmittance_map) {
+        return load_transmittance_scene(image_path, map);
+    }
     match (&args.image, &args.depth.depth) {
         (None, None) => {
             let scene = Scene {
@@ -596,6 +630,46 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
 }
 
 /// Checks that the colour image and the range map have one size; the error names both.
+/// The photo and a given transmittance map, read as its optical depth −ln τ: a range in
+/// "metres" for a fog of β = 1 m⁻¹ (see [`transmittance_map_args`]).
+fn load_transmittance_scene(image_path: &Path, map: &Path) -> Result<Scene> {
+    check_memory_before_loading(image_path)?;
+    let depth = brume::compat::load_optical_depth(map)?;
+    let image = image::load_linear_rgb(image_path)?;
+    check_same_size(
+        &image,
+        &image_path.display().to_string(),
+        &depth,
+        &map.display().to_string(),
+    )?;
+    Ok(Scene {
+        image,
+        depth: LoadedDepth {
+            range: depth,
+            format: DepthFormat::Float,
+            kind: depth::DepthKind::Range,
+            units: "optical depth".into(),
+            metric: true,
+            intrinsics: None,
+            notes: vec!["transmittance map: its optical depth −ln τ, fogged at β = 1".into()],
+            unknown_pixels: 0,
+        },
+        image_name: image_path.display().to_string(),
+        depth_name: map.display().to_string(),
+    })
+}
+
+/// `args` for a render from a transmittance map: physical fog at β = 1 on the optical
+/// depth (so τ is the map's and the blur follows βR = −ln τ, as it would from the range),
+/// no refinement (the map is what it is) and no pre-processing of the optical depth (the
+/// sky is still found for the airlight, from the image).
+pub fn transmittance_map_args(args: &RenderArgs) -> RenderArgs {
+    let mut args = args.clone();
+    args.beta = Some(1.0);
+    args.refine = Some(RefineMode::None);
+    args
+}
+
 /// The depth map has the image's size, or is smaller by one factor on both sides (it is
 /// then upsampled, guided by the image).
 fn check_depth_fits(scene: &Scene) -> Result<()> {
@@ -718,8 +792,8 @@ pub struct RefinePlan {
     pub guided: Option<Refine>,
 }
 
-/// The refinement `args` ask for: `--refine`, else the guided filter for stereo-matched and
-/// phone depth; a depth map smaller than the image is always upsampled, guided by it.
+/// The refinement `args` ask for: the guided filter with `--refine guided`; a depth map
+/// smaller than the image is always upsampled, guided by it.
 pub fn refine_plan(args: &RenderArgs, scene: &Scene) -> Result<RefinePlan> {
     let opts = Refine {
         radius_px: args
@@ -730,15 +804,10 @@ pub fn refine_plan(args: &RenderArgs, scene: &Scene) -> Result<RefinePlan> {
     };
     opts.validate()?;
     let (image, range) = (&scene.image, &scene.depth.range);
-    let noisy = matches!(
-        scene.depth.format,
-        DepthFormat::Cityscapes | DepthFormat::AndroidDepth16 | DepthFormat::Arcore
-    );
-    let guided = match args.refine {
-        Some(RefineMode::Guided) => true,
-        Some(RefineMode::None) => false,
-        None => noisy && args.uniform_sigma.is_none(),
-    };
+    // Off unless asked for: on SGBM disparity of brume's scene with a known truth
+    // (tools/stereo_refine_eval.py) it repairs the sky and the matcher's blunders but
+    // blurs the pixels the matcher got right (README, "Real depth").
+    let guided = args.refine == Some(RefineMode::Guided);
     Ok(RefinePlan {
         upsample: (range.width(), range.height()) != (image.width(), image.height()),
         guided: guided.then_some(opts),
@@ -763,9 +832,12 @@ impl Refiner for brume::Renderer {
     }
 }
 
-/// The CPU references of the GPU passes (the same results within 1e-4).
+/// The CPU references of the GPU passes (the same results within 1e-4), for the viewer,
+/// whose pipeline is the fog's alone.
+#[cfg(all(feature = "viewer", not(target_os = "android")))]
 pub struct CpuRefiner;
 
+#[cfg(all(feature = "viewer", not(target_os = "android")))]
 impl Refiner for CpuRefiner {
     fn upsample(&mut self, image: &RgbImage, range: &ScalarMap) -> Result<ScalarMap> {
         let sigma = brume::refine::DEFAULT_UPSAMPLE_SIGMA_COLOUR;
@@ -1080,6 +1152,70 @@ pub fn aerial_job(
         light_source,
         blur,
     })
+}
+
+/// Foggy Cityscapes' fog of `image` at `beta` from `range` (metres): the image (linear,
+/// alpha 1), the airlight in code values and where it came from.
+pub fn foggy_cityscapes_image(
+    args: &RenderArgs,
+    image: &RgbImage,
+    range: &ScalarMap,
+    beta: f64,
+) -> Result<(RgbaImage, [f32; 3], &'static str)> {
+    let (metres, _) = physical::metric_range(range)?;
+    let tau = metres.map(|&r| {
+        if r.is_finite() {
+            (-beta * f64::from(r)).exp() as f32
+        } else {
+            0.0
+        }
+    });
+    let (airlight, source) = match args.airlight {
+        Some(l) => (l.map(brume::io::image::linear_to_srgb), "given"),
+        None => (brume::compat::dark_channel_airlight(image), "dark-channel"),
+    };
+    let fogged = brume::compat::blend_in_code_values(image, &tau, airlight);
+    Ok((fogged.map(|p| [p[0], p[1], p[2], 1.0]), airlight, source))
+}
+
+/// `--compat foggy-cityscapes`: Foggy Cityscapes' blend in sRGB code values of the image
+/// and the dark-channel airlight (or `--airlight`, linear, encoded) by τ = exp(−βR) of the
+/// (refined) range in metres, no blur ([`brume::compat`]).
+fn run_foggy_cityscapes(
+    args: &RenderArgs,
+    scene: &Scene,
+    range: &ScalarMap,
+    fog: &PhysicalFog,
+    out: &Path,
+) -> Result<()> {
+    let (rgba, airlight, source) = foggy_cityscapes_image(args, &scene.image, range, fog.beta)?;
+    let mut outputs = Outputs::new();
+    outputs.stage_rgba(out, &rgba)?;
+    super::commit(outputs)?;
+    let report = json!({
+        "out": out.display().to_string(),
+        "compat": "foggy-cityscapes",
+        "beta": fog.beta,
+        "visibility_m": fog.visibility_m(),
+        "airlight_srgb": airlight,
+        "airlight_source": source,
+        "width": scene.image.width(),
+        "height": scene.image.height(),
+    });
+    if args.json {
+        outln!("{report}");
+    } else {
+        outln!(
+            "wrote {} (Foggy Cityscapes' conventions: β = {} m⁻¹, blend in sRGB code values, \
+             airlight {:.3},{:.3},{:.3} ({source}), no blur)",
+            out.display(),
+            fog.beta,
+            airlight[0],
+            airlight[1],
+            airlight[2]
+        );
+    }
+    Ok(())
 }
 
 fn run_aerial(
