@@ -179,6 +179,17 @@ pub fn check_depth_size(image: (usize, usize), range: (usize, usize)) -> Result<
 /// that pre-processing and the airlight estimate see the image the depth map was
 /// measured against).
 pub fn image_at_depth_size(image: &RgbImage, width: usize, height: usize) -> RgbImage {
+    cell_means(image, width, height, f64::from).map(|m| m.map(|v| v as f32))
+}
+
+/// The mean over each cell of a `width` x `height` grid over `image` of `value` of each
+/// channel, the cells the refinement's.
+fn cell_means(
+    image: &RgbImage,
+    width: usize,
+    height: usize,
+    value: impl Fn(f32) -> f64,
+) -> Grid<[f64; 3]> {
     let (w, h) = (image.width(), image.height());
     let cell = [w as f64 / width as f64, h as f64 / height as f64];
     Grid::from_fn(width, height, |i, j| {
@@ -188,12 +199,12 @@ pub fn image_at_depth_size(image: &RgbImage, width: usize, height: usize) -> Rgb
         for y in y0..y1 {
             for x in x0..x1 {
                 for (s, v) in sum.iter_mut().zip(image.get(x, y)) {
-                    *s += f64::from(*v);
+                    *s += value(*v);
                 }
             }
         }
         let n = ((x1 - x0) * (y1 - y0)) as f64;
-        sum.map(|s| (s / n) as f32)
+        sum.map(|s| s / n)
     })
 }
 
@@ -348,21 +359,8 @@ pub fn joint_bilateral_upsample_reference(
 /// The mean sRGB-encoded colour of each cell of a `width` x `height` grid over `image`
 /// (what `cells.frag` packs).
 fn image_at_depth_size_srgb(image: &RgbImage, width: usize, height: usize) -> Grid<[f64; 3]> {
-    let (w, h) = (image.width(), image.height());
-    let cell = [w as f64 / width as f64, h as f64 / height as f64];
-    Grid::from_fn(width, height, |i, j| {
-        let (x0, x1) = cell_span(i, cell[0], w);
-        let (y0, y1) = cell_span(j, cell[1], h);
-        let mut sum = [0f64; 3];
-        for y in y0..y1 {
-            for x in x0..x1 {
-                for (s, v) in sum.iter_mut().zip(image.get(x, y)) {
-                    *s += f64::from(linear_to_srgb(v.clamp(0.0, 1.0)));
-                }
-            }
-        }
-        let n = ((x1 - x0) * (y1 - y0)) as f64;
-        sum.map(|s| s / n)
+    cell_means(image, width, height, |v| {
+        f64::from(linear_to_srgb(v.clamp(0.0, 1.0)))
     })
 }
 

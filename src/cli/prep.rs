@@ -8,7 +8,7 @@ use brume::io::image;
 use brume::io::mask::{self, SkyMaskFormat};
 use brume::io::output::{self, Outputs};
 use brume::prep::{self, Guides, PrepOptions, Prepared};
-use brume::raster::{RgbImage, ScalarMap};
+use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::{Error, Result};
 use serde_json::json;
 use std::path::Path;
@@ -150,6 +150,37 @@ fn sky_method_name(m: prep::SkyMethod) -> &'static str {
     }
 }
 
+/// Checks a mask read for `flag` (`path`, a `what`) against the range it goes with: the
+/// range's size, and not every pixel set (`all_set` says what that means); logs its count.
+fn check_mask(
+    (flag, path, what): (&str, &Path, &str),
+    mask: &Grid<bool>,
+    range: &ScalarMap,
+    range_name: &str,
+    all_set: &str,
+) -> Result<()> {
+    if (mask.width(), mask.height()) != (range.width(), range.height()) {
+        return Err(Error::SizeMismatch {
+            a: path.display().to_string(),
+            aw: mask.width() as u32,
+            ah: mask.height() as u32,
+            b: range_name.to_string(),
+            bw: range.width() as u32,
+            bh: range.height() as u32,
+        });
+    }
+    let set = mask.as_slice().iter().filter(|&&s| s).count();
+    log::info!(
+        "{}: {what}, {set} pixels ({:.1} %)",
+        path.display(),
+        100.0 * set as f64 / mask.len().max(1) as f64
+    );
+    if set == mask.len() {
+        return Err(Error::invalid(flag, path.display(), all_set));
+    }
+    Ok(())
+}
+
 /// Pre-processes `range` (named `range_name` in messages) with the colour image, if any,
 /// and the `--sky-mask` and `--ego-mask` of `args`, if any (which must have the range's
 /// size). Returns the result and the sky mask's format.
@@ -163,32 +194,16 @@ pub fn prepare_inputs(
     let loaded = match &args.sky_mask {
         Some(path) => {
             let (m, format) = mask::load_sky_mask(path, args.sky_mask_format)?;
-            if (m.width(), m.height()) != (range.width(), range.height()) {
-                return Err(Error::SizeMismatch {
-                    a: path.display().to_string(),
-                    aw: m.width() as u32,
-                    ah: m.height() as u32,
-                    b: range_name.to_string(),
-                    bw: range.width() as u32,
-                    bh: range.height() as u32,
-                });
-            }
-            let sky = m.as_slice().iter().filter(|&&s| s).count();
-            log::info!(
-                "{}: {format} sky mask, {sky} sky pixels ({:.1} %)",
-                path.display(),
-                100.0 * sky as f64 / m.len().max(1) as f64
-            );
-            if sky == m.len() {
-                return Err(Error::invalid(
-                    "--sky-mask",
-                    path.display(),
-                    format!(
-                        "a mask with ground in it: every pixel is sky as read ({format}); is it \
-                         inverted, or of another --sky-mask-format?"
-                    ),
-                ));
-            }
+            check_mask(
+                ("--sky-mask", path, "sky mask"),
+                &m,
+                range,
+                range_name,
+                &format!(
+                    "a mask with ground in it: every pixel is sky as read ({format}); is it \
+                     inverted, or of another --sky-mask-format?"
+                ),
+            )?;
             Some((m, format))
         }
         None => None,
@@ -196,32 +211,16 @@ pub fn prepare_inputs(
     let ego = match &args.ego_mask {
         Some(path) => {
             let (m, format) = mask::load_ego_mask(path, None)?;
-            if (m.width(), m.height()) != (range.width(), range.height()) {
-                return Err(Error::SizeMismatch {
-                    a: path.display().to_string(),
-                    aw: m.width() as u32,
-                    ah: m.height() as u32,
-                    b: range_name.to_string(),
-                    bw: range.width() as u32,
-                    bh: range.height() as u32,
-                });
-            }
-            let n = m.as_slice().iter().filter(|&&e| e).count();
-            log::info!(
-                "{}: {format} ego-vehicle mask, {n} pixels ({:.1} %)",
-                path.display(),
-                100.0 * n as f64 / m.len().max(1) as f64
-            );
-            if n == m.len() {
-                return Err(Error::invalid(
-                    "--ego-mask",
-                    path.display(),
-                    format!(
-                        "a mask with the scene in it: every pixel is the ego vehicle as read \
-                         ({format}); is it inverted, or a label image not named *_labelIds.png?"
-                    ),
-                ));
-            }
+            check_mask(
+                ("--ego-mask", path, "ego-vehicle mask"),
+                &m,
+                range,
+                range_name,
+                &format!(
+                    "a mask with the scene in it: every pixel is the ego vehicle as read \
+                     ({format}); is it inverted, or a label image not named *_labelIds.png?"
+                ),
+            )?;
             Some(m)
         }
         None => None,

@@ -214,22 +214,25 @@ impl Pipeline {
                 set_int(&gl, pack, "u_range_full", i32::from(grid.range_full));
                 draw_fullscreen(&gl);
             })?;
-            let box_mean = |timer: &mut crate::gpu::timer::PassTimer<'_>| -> Result<()> {
-                for (from, step) in [(0usize, [1, 0]), (1usize, [0, 1])] {
-                    timer.pass(|| {
-                        low.framebuffers[1 - from].bind_for_drawing();
-                        pipeline.use_program(boxes);
-                        low.textures[from].bind(UNIT_MAIN);
-                        set_int(&gl, boxes, "u_source", UNIT_MAIN as i32);
-                        set_value(&gl, boxes, "u_size", UniformValue::IVec2(low_size));
-                        set_value(&gl, boxes, "u_step", UniformValue::IVec2(step));
-                        set_int(&gl, boxes, "u_radius", grid.radius as i32);
-                        draw_fullscreen(&gl);
-                    })?;
-                }
-                Ok(())
+            // One line of a box mean, from texture `from` into the other one.
+            let box_pass = |timer: &mut crate::gpu::timer::PassTimer<'_>,
+                            from: usize,
+                            step: [i32; 2]|
+             -> Result<()> {
+                timer.pass(|| {
+                    low.framebuffers[1 - from].bind_for_drawing();
+                    pipeline.use_program(boxes);
+                    low.textures[from].bind(UNIT_MAIN);
+                    set_int(&gl, boxes, "u_source", UNIT_MAIN as i32);
+                    set_value(&gl, boxes, "u_size", UniformValue::IVec2(low_size));
+                    set_value(&gl, boxes, "u_step", UniformValue::IVec2(step));
+                    set_int(&gl, boxes, "u_radius", grid.radius as i32);
+                    draw_fullscreen(&gl);
+                })
             };
-            box_mean(timer)?;
+            // The moments: 0 → 1 → 0.
+            box_pass(timer, 0, [1, 0])?;
+            box_pass(timer, 1, [0, 1])?;
             timer.pass(|| {
                 low.framebuffers[1].bind_for_drawing();
                 pipeline.use_program(coefficients);
@@ -239,24 +242,9 @@ impl Pipeline {
                 set_value(&gl, coefficients, "u_epsilon", epsilon);
                 draw_fullscreen(&gl);
             })?;
-            // The coefficients are in texture 1; the box passes read texture 0 first.
-            timer.pass(|| {
-                low.framebuffers[0].bind_for_drawing();
-                pipeline.use_program(boxes);
-                low.textures[1].bind(UNIT_MAIN);
-                set_int(&gl, boxes, "u_source", UNIT_MAIN as i32);
-                set_value(&gl, boxes, "u_size", UniformValue::IVec2(low_size));
-                set_value(&gl, boxes, "u_step", UniformValue::IVec2([1, 0]));
-                set_int(&gl, boxes, "u_radius", grid.radius as i32);
-                draw_fullscreen(&gl);
-            })?;
-            timer.pass(|| {
-                low.framebuffers[1].bind_for_drawing();
-                pipeline.use_program(boxes);
-                low.textures[0].bind(UNIT_MAIN);
-                set_value(&gl, boxes, "u_step", UniformValue::IVec2([0, 1]));
-                draw_fullscreen(&gl);
-            })?;
+            // The coefficients: 1 → 0 → 1, where the last pass reads them.
+            box_pass(timer, 1, [1, 0])?;
+            box_pass(timer, 0, [0, 1])?;
             timer.pass(|| {
                 output_fb.bind_for_drawing();
                 pipeline.use_program(apply);
