@@ -122,6 +122,8 @@ def main():
     ap.add_argument("--refine-radius", default=None, help="passed to brume render [its default]")
     ap.add_argument("--refine-eps", default=None, help="passed to brume render [its default]")
     ap.add_argument("--block-size", type=int, default=5)
+    ap.add_argument("--right", action="store_true",
+                    help="give brume the right view (--right): its left-right check")
     ap.add_argument("--edge-px", type=int, default=5)
     ap.add_argument("--docs", default=None)
     a = ap.parse_args()
@@ -222,16 +224,18 @@ def main():
                  "--depth-format", "cityscapes", "--camera",
                  o(depth.replace("_disparity.png", "_camera.json")),
                  "--beta", str(a.beta), "--lambda", "0", "--airlight", A,
-                 "--refine", refine, "--out", p] + refine_opts)
+                 "--refine", refine, "--out", p] + refine_opts + right_opts)
             outs.append(read_pfm(p)[..., 1])
             os.remove(p)
         t = 1.0 - (outs[1] - outs[0])
         return t
 
+    right_opts = ["--right", o("right.png")] if a.right else []
     conds = [("truth disparity, refine none", "truth_disparity.png", "none", "truth_none"),
              ("truth disparity, refine guided", "truth_disparity.png", "guided", "truth_guided"),
              ("SGBM, refine none", "sgbm_disparity.png", "none", "sgbm_none"),
-             ("SGBM, refine guided (default)", "sgbm_disparity.png", "guided", "sgbm_guided")]
+             ("SGBM, refine guided", "sgbm_disparity.png", "guided", "sgbm_guided"),
+             ("SGBM, refine unreliable", "sgbm_disparity.png", "unreliable", "sgbm_unreliable")]
     results = {"setup": {"size": [W, H], "fov_deg": a.fov, "focal_px": F,
                          "baseline_m": a.baseline, "beta": a.beta, "position": pos,
                          "yaw": a.yaw, "pitch": a.pitch, "near": a.near, "far": a.far,
@@ -260,7 +264,7 @@ def main():
         run([B, "render", "--image", o("left.png"), "--depth", o(depth),
              "--depth-format", "cityscapes", "--camera",
              o(depth.replace("_disparity.png", "_camera.json")), "--beta", str(a.beta),
-             "--refine", refine, "--out", o(out)] + refine_opts)
+             "--refine", refine, "--out", o(out)] + refine_opts + right_opts)
     sheet = [cv2.imread(o(f)) for f, _, _ in fogs]
     cv2.imwrite(o("fog_side_by_side.png"), np.hstack(sheet))
     if a.docs:
@@ -286,7 +290,7 @@ def main():
               disp_stats["bad3_fraction_valid_surfaces"]))
     print("|tau - tau_true|, mean / 95th percentile, per region (pixels):")
     labels = list(results["tau_abs_error"])
-    short = ["truth/none", "truth/guided", "SGBM/none", "SGBM/guided"]
+    short = ["truth/none", "truth/guided", "SGBM/none", "SGBM/guided", "SGBM/unreliable"]
     print(f"{'region':42s}" + "".join(f"{c:>18s}" for c in short))
     for m in masks:
         cells = "".join("{:>9.4f} /{:>7.4f}".format(*results["tau_abs_error"][lb][m][:2])

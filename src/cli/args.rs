@@ -434,6 +434,14 @@ pub struct RenderArgs {
     #[arg(long, value_enum, allow_hyphen_values = true)]
     pub refine: Option<RefineMode>,
 
+    /// The right image of a stereo pair whose left disparity is --depth (Cityscapes
+    /// format): pixels whose colour differs from their match in it by more than 12/255
+    /// (Foggy Cityscapes' left-right photoconsistency) are unreliable, taken as unknown
+    /// and filled from their reliable neighbours (not found automatically: measured on
+    /// rendered stereo it also flags correct pixels, see the README).
+    #[arg(long, value_name = "PATH")]
+    pub right: Option<PathBuf>,
+
     /// Window radius r of the guided refinement, px at the image's size [default: 20, as
     /// Foggy Cityscapes at 2048 x 1024].
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]
@@ -908,8 +916,12 @@ pub enum Compat {
 pub enum RefineMode {
     /// No refinement (a smaller depth map is still upsampled, guided).
     None,
-    /// The guided filter.
+    /// The guided filter, everywhere.
     Guided,
+    /// The guided filter where the range is unreliable only: where pre-processing filled
+    /// it (holes, outliers, left-right mismatches with --right, border bands); elsewhere
+    /// the range is kept as measured.
+    Unreliable,
 }
 
 /// The blur of the aerial medium.

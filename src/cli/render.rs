@@ -12,7 +12,7 @@ use brume::medium::haze::{self, Haze};
 use brume::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
-use brume::raster::{RgbImage, RgbaImage, ScalarMap};
+use brume::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use brume::{Error, Headless, Refine, Result};
 use brume::{FogBlur, Rendered};
 use serde_json::json;
@@ -296,6 +296,7 @@ pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
         .chain(args.prep.ego_mask.iter().cloned())
         .chain(args.sensitivity.iter().cloned())
         .chain(args.transmittance_map.iter().cloned())
+        .chain(args.right.iter().cloned())
         .collect()
 }
 
@@ -544,6 +545,8 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             };
             check_depth_fits(&scene)?;
             check_metric(args, &scene)?;
+            let mut scene = scene;
+            drop_left_right_mismatches(args, &mut scene)?;
             Ok(scene)
         }
         (None, Some(_)) => Err(Error::invalid(
@@ -630,6 +633,72 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
 }
 
 /// Checks that the colour image and the range map have one size; the error names both.
+/// With a right image (`--right`), takes the disparities that fail the left-right
+/// photoconsistency check as unknown ([`brume::prep::stereo`]), for pre-processing to fill
+/// from reliable neighbours. Only when asked for: on brume's scene matched by StereoSGBM it
+/// flagged correct pixels too and made τ worse (README, "Real depth").
+fn drop_left_right_mismatches(args: &RenderArgs, scene: &mut Scene) -> Result<()> {
+    let Some(right) = args.right.clone() else {
+        return Ok(());
+    };
+    if scene.depth.format != DepthFormat::Cityscapes {
+        return Err(Error::invalid(
+            "--right",
+            right.display(),
+            "a Cityscapes disparity as --depth with it (the left-right check reads the \
+             disparity in pixels)",
+        ));
+    }
+    let depth_path = args.depth.depth.as_ref().expect("a depth was loaded");
+    let raw = ::image::open(depth_path)
+        .map_err(|e| Error::format(depth_path, format!("{e}")))?
+        .to_luma16();
+    let disparity = Grid::from_vec(
+        raw.width() as usize,
+        raw.height() as usize,
+        raw.pixels()
+            .map(|p| brume::io::depth::cityscapes_disparity_px(p[0]).map_or(f32::NAN, |d| d as f32))
+            .collect(),
+    );
+    let right_image = image::load_linear_rgb(&right)?;
+    let bad = brume::prep::stereo::inconsistent_pixels(
+        &scene.image,
+        &right_image,
+        &disparity,
+        brume::prep::stereo::DEFAULT_THRESHOLD,
+    )
+    .map_err(|e| match e {
+        Error::SizeMismatch { .. } => Error::invalid(
+            "--right",
+            right.display(),
+            format!(
+                "a right image of the left image's size, {}x{}",
+                scene.image.width(),
+                scene.image.height()
+            ),
+        ),
+        e => e,
+    })?;
+    let mut dropped = 0;
+    for (v, _) in scene
+        .depth
+        .range
+        .as_mut_slice()
+        .iter_mut()
+        .zip(bad.as_slice())
+        .filter(|(v, &b)| b && v.is_finite())
+    {
+        *v = f32::NAN;
+        dropped += 1;
+    }
+    scene.depth.unknown_pixels += dropped;
+    scene.depth.notes.push(format!(
+        "{dropped} px failed the left-right check against {} (> 12/255) and are unknown",
+        right.display()
+    ));
+    Ok(())
+}
+
 /// The photo and a given transmittance map, read as its optical depth −ln τ: a range in
 /// "metres" for a fog of β = 1 m⁻¹ (see [`transmittance_map_args`]).
 fn load_transmittance_scene(image_path: &Path, map: &Path) -> Result<Scene> {
@@ -790,6 +859,9 @@ pub struct RefinePlan {
     pub upsample: bool,
     /// The guided filter at the image's size, if on.
     pub guided: Option<Refine>,
+    /// The guided filter's range only where pre-processing filled the range
+    /// (`--refine unreliable`); elsewhere the range as measured.
+    pub only_unreliable: bool,
 }
 
 /// The refinement `args` ask for: the guided filter with `--refine guided`; a depth map
@@ -807,10 +879,14 @@ pub fn refine_plan(args: &RenderArgs, scene: &Scene) -> Result<RefinePlan> {
     // Off unless asked for: on SGBM disparity of brume's scene with a known truth
     // (tools/stereo_refine_eval.py) it repairs the sky and the matcher's blunders but
     // blurs the pixels the matcher got right (README, "Real depth").
-    let guided = args.refine == Some(RefineMode::Guided);
+    let guided = matches!(
+        args.refine,
+        Some(RefineMode::Guided | RefineMode::Unreliable)
+    );
     Ok(RefinePlan {
         upsample: (range.width(), range.height()) != (image.width(), image.height()),
         guided: guided.then_some(opts),
+        only_unreliable: args.refine == Some(RefineMode::Unreliable),
     })
 }
 
@@ -864,7 +940,8 @@ pub fn refine_scene(
     }
     let (w, h) = (scene.image.width(), scene.image.height());
     let started = Instant::now();
-    let mut run = |range: &ScalarMap| -> Result<ScalarMap> {
+    // `filled`: where pre-processing filled the range, on the range's grid.
+    let mut run = |range: &ScalarMap, filled: Option<&Grid<bool>>| -> Result<ScalarMap> {
         // The ego vehicle's range 0 (never fogged) is not a range to filter: the filter
         // reads log range. It is kept out (at the nearest range) and put back after.
         let ego = range.map(|&v| v == 0.0);
@@ -881,7 +958,16 @@ pub fn refine_scene(
             positive
         };
         if let Some(opts) = &plan.guided {
-            range = refiner.refine(&scene.image, &range, opts)?;
+            let refined = refiner.refine(&scene.image, &range, opts)?;
+            range = match filled.filter(|_| plan.only_unreliable) {
+                Some(filled) => {
+                    let filled = brume::refine::nearest_to_image_size(filled, w, h);
+                    Grid::from_fn(w, h, |x, y| {
+                        *if *filled.get(x, y) { &refined } else { &range }.get(x, y)
+                    })
+                }
+                None => refined,
+            };
         }
         let ego = brume::refine::nearest_to_image_size(&ego, w, h);
         for (v, _) in range
@@ -896,7 +982,7 @@ pub fn refine_scene(
     };
     match &mut prep.prepared {
         Some(p) => {
-            p.range = run(&p.range)?;
+            p.range = run(&p.range, Some(&p.filled))?;
             p.sky = brume::refine::nearest_to_image_size(&p.sky, w, h);
             p.filled = brume::refine::nearest_to_image_size(&p.filled, w, h);
             scene.depth.range = brume::refine::nearest_to_image_size(&scene.depth.range, w, h);
@@ -911,7 +997,7 @@ pub fn refine_scene(
                      pre-processing fills (or give --refine none)",
                 )
             })?;
-            scene.depth.range = run(&scene.depth.range)?;
+            scene.depth.range = run(&scene.depth.range, None)?;
         }
     }
     log::info!(

@@ -146,6 +146,7 @@ mod margin;
 mod outliers;
 mod sky;
 mod sky_image;
+pub mod stereo;
 #[cfg(test)]
 mod street_tests;
 pub mod synthetic;
