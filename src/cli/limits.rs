@@ -42,6 +42,18 @@ pub fn count(option: &str, value: i64, min: usize, max: usize, unit: &str) -> Re
         })
 }
 
+/// `--frames`: from 1 to [`MAX_FRAMES`].
+pub fn check_frames(frames: u32) -> Result<()> {
+    if !(1..=MAX_FRAMES).contains(&frames) {
+        return Err(Error::invalid(
+            "--frames",
+            frames,
+            format!("a number of frames from 1 to {MAX_FRAMES}"),
+        ));
+    }
+    Ok(())
+}
+
 /// `WIDTHxHEIGHT` for `option`: both ≥ 1, at most `max_side` and, together, at most
 /// [`MAX_PIXELS`] (the largest image brume reads).
 pub fn parse_size(option: &str, text: &str, max_side: usize) -> Result<(usize, usize)> {

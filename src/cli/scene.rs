@@ -3,7 +3,7 @@
 //! frame (or a numbered sequence), the raw depth buffer and the fog-free frame.
 
 use super::args::{BlurKind, FogKind, ProfileKind, SceneArgs};
-use super::limits::{self, MAX_FRAMES};
+use super::limits;
 use brume::camera::Camera;
 use brume::egl::Platform;
 use brume::io::output::{self, Outputs};
@@ -132,13 +132,7 @@ pub fn camera_from_args(args: &SceneArgs) -> Camera {
 }
 
 pub fn check_sequence(args: &SceneArgs) -> Result<()> {
-    if !(1..=MAX_FRAMES).contains(&args.frames) {
-        return Err(Error::invalid(
-            "--frames",
-            args.frames,
-            format!("a number of frames from 1 to {MAX_FRAMES}"),
-        ));
-    }
+    limits::check_frames(args.frames)?;
     if !(args.fps.is_finite() && args.fps > 0.0) {
         return Err(Error::invalid("--fps", args.fps, "a frame rate > 0"));
     }

@@ -12,7 +12,7 @@ mod ui;
 mod window;
 
 use super::args::{ViewArgs, ViewSource, Zoom};
-use super::limits::{self, MAX_FRAMES, MAX_WINDOW_SIDE};
+use super::limits::{self, MAX_WINDOW_SIDE};
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
 use brume::io::output::{self, Outputs};
 use brume::{Error, Pipeline, Result};
@@ -62,13 +62,7 @@ pub fn run(args: ViewArgs) -> Result<()> {
 /// the window's size and the source's options.
 fn check_args(args: &ViewArgs) -> Result<()> {
     if let Some(frames) = args.frames {
-        if frames > MAX_FRAMES {
-            return Err(Error::invalid(
-                "--frames",
-                frames,
-                format!("a number of frames from 1 to {MAX_FRAMES}"),
-            ));
-        }
+        limits::check_frames(frames)?;
     }
     if let Some(window) = &args.window {
         limits::parse_size("--window", window, MAX_WINDOW_SIDE)?;
