@@ -27,7 +27,9 @@
 //!      image tells sky from scene, the range only vetoes. Per pixel: luminance `Y` (Rec.
 //!      709, linear); *texture*, the 3 x 3 mean of the largest relative colour step to a
 //!      4-neighbour; a *range class*: unknown, unsupported (fewer than 2, or fewer than
-//!      half, of its known 8-neighbours agree within 5 %: matcher noise), far (above the
+//!      half, of its known 8-neighbours agree within 5 %, and it does not lie between its
+//!      two neighbours on two of the four lines through it, as a surface seen at a
+//!      grazing angle does: matcher noise), far (above the
 //!      far-outlier cut of step 3, taken over all known values) or confident (the rest).
 //!      A pixel *looks like sky* when `Y` is at least the brightness floor, it is blue or
 //!      grey (`B >= 0.7 max(R, G)`) and its range is not confident; it is *admissible*
