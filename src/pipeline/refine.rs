@@ -180,18 +180,9 @@ impl Pipeline {
         }
         let gl = Arc::clone(&self.gl);
         let low = LowTargets::new(&gl, grid.width, grid.height)?;
-        let output = Texture::new(
-            &gl,
-            input.width,
-            input.height,
-            TexelFormat::R32F,
-            Filter::Nearest,
-            None,
-        )?;
-        let output_fb = Framebuffer::over(&gl, &[&output], "the refined range")?;
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let low_size = [grid.width as i32, grid.height as i32];
-        let result = self.timed("refining the range", |pipeline, timer| {
+        self.passes_into_range(input, "refining the range", |pipeline, timer, output_fb| {
             let program = |pass| pipeline.compiled(ProgramKey::Refine(pass));
             let (pack, boxes, coefficients, apply) = (
                 program(RefinePass::Pack)?,
@@ -259,11 +250,7 @@ impl Pipeline {
                 draw_fullscreen(&gl);
             })?;
             Ok(())
-        });
-        self.leave_state();
-        let (times, ()) = result?;
-        drop(output_fb);
-        Ok((output, times))
+        })
     }
 }
 
@@ -293,47 +280,68 @@ impl Pipeline {
         self.program(ProgramKey::Refine(RefinePass::Upsample), None)?;
         let gl = Arc::clone(&self.gl);
         let low = LowTargets::new(&gl, lw, lh)?;
-        let output = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
-        let output_fb = Framebuffer::over(&gl, &[&output], "the upsampled range")?;
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let cell = [w as f32 / lw as f32, h as f32 / lh as f32];
-        let result = self.timed("upsampling the range", |pipeline, timer| {
-            let cells = pipeline.compiled(ProgramKey::Refine(RefinePass::Cells))?;
-            let upsample = pipeline.compiled(ProgramKey::Refine(RefinePass::Upsample))?;
-            timer.pass(|| {
-                low.framebuffers[0].bind_for_drawing();
-                pipeline.use_program(cells);
-                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
-                bind_texture(&gl, UNIT_DEPTH, Some(input.range));
-                set_int(&gl, cells, "u_colour", UNIT_MAIN as i32);
-                set_int(&gl, cells, "u_range", UNIT_DEPTH as i32);
-                let size = [w as i32, h as i32];
-                set_value(&gl, cells, "u_colour_size", UniformValue::IVec2(size));
-                set_value(&gl, cells, "u_cell", UniformValue::Vec2(cell));
-                set_int(&gl, cells, "u_colour_srgb", srgb);
-                draw_fullscreen(&gl);
-            })?;
-            timer.pass(|| {
-                output_fb.bind_for_drawing();
-                pipeline.use_program(upsample);
-                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
-                low.textures[0].bind(UNIT_DEPTH);
-                set_int(&gl, upsample, "u_colour", UNIT_MAIN as i32);
-                set_int(&gl, upsample, "u_cells", UNIT_DEPTH as i32);
-                let low_size = [lw as i32, lh as i32];
-                set_value(&gl, upsample, "u_low_size", UniformValue::IVec2(low_size));
-                let scale = cell.map(|c| 1.0 / c);
-                set_value(&gl, upsample, "u_scale", UniformValue::Vec2(scale));
-                set_int(&gl, upsample, "u_colour_srgb", srgb);
-                let sigma = UniformValue::Float(sigma_colour as f32);
-                set_value(&gl, upsample, "u_sigma_colour", sigma);
-                draw_fullscreen(&gl);
-            })?;
-            Ok(())
+        self.passes_into_range(
+            input,
+            "upsampling the range",
+            |pipeline, timer, output_fb| {
+                let cells = pipeline.compiled(ProgramKey::Refine(RefinePass::Cells))?;
+                let upsample = pipeline.compiled(ProgramKey::Refine(RefinePass::Upsample))?;
+                timer.pass(|| {
+                    low.framebuffers[0].bind_for_drawing();
+                    pipeline.use_program(cells);
+                    bind_texture(&gl, UNIT_MAIN, Some(input.colour));
+                    bind_texture(&gl, UNIT_DEPTH, Some(input.range));
+                    set_int(&gl, cells, "u_colour", UNIT_MAIN as i32);
+                    set_int(&gl, cells, "u_range", UNIT_DEPTH as i32);
+                    let size = [w as i32, h as i32];
+                    set_value(&gl, cells, "u_colour_size", UniformValue::IVec2(size));
+                    set_value(&gl, cells, "u_cell", UniformValue::Vec2(cell));
+                    set_int(&gl, cells, "u_colour_srgb", srgb);
+                    draw_fullscreen(&gl);
+                })?;
+                timer.pass(|| {
+                    output_fb.bind_for_drawing();
+                    pipeline.use_program(upsample);
+                    bind_texture(&gl, UNIT_MAIN, Some(input.colour));
+                    low.textures[0].bind(UNIT_DEPTH);
+                    set_int(&gl, upsample, "u_colour", UNIT_MAIN as i32);
+                    set_int(&gl, upsample, "u_cells", UNIT_DEPTH as i32);
+                    let low_size = [lw as i32, lh as i32];
+                    set_value(&gl, upsample, "u_low_size", UniformValue::IVec2(low_size));
+                    let scale = cell.map(|c| 1.0 / c);
+                    set_value(&gl, upsample, "u_scale", UniformValue::Vec2(scale));
+                    set_int(&gl, upsample, "u_colour_srgb", srgb);
+                    let sigma = UniformValue::Float(sigma_colour as f32);
+                    set_value(&gl, upsample, "u_sigma_colour", sigma);
+                    draw_fullscreen(&gl);
+                })?;
+                Ok(())
+            },
+        )
+    }
+}
+
+impl Pipeline {
+    /// Runs `passes` (timed, in the passes' GL state), the last of which draws into the
+    /// framebuffer it is given: over a new R32F texture of the image's size, which is
+    /// returned with the passes' times. `what` names the passes in a GL error.
+    fn passes_into_range(
+        &self,
+        input: &RefineInput,
+        what: &str,
+        passes: impl Fn(&Self, &mut crate::gpu::timer::PassTimer<'_>, &Framebuffer) -> Result<()>,
+    ) -> Result<(Texture, PassTimes)> {
+        let (w, h) = (input.width, input.height);
+        let output = Texture::new(&self.gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
+        let framebuffer = Framebuffer::over(&self.gl, &[&output], "the refined range")?;
+        let result = self.timed(what, |pipeline, timer| {
+            passes(pipeline, timer, &framebuffer)
         });
         self.leave_state();
         let (times, ()) = result?;
-        drop(output_fb);
+        drop(framebuffer);
         Ok((output, times))
     }
 }
