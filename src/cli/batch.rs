@@ -493,7 +493,7 @@ struct Refined {
     range: ScalarMap,
 }
 
-/// Refines a loaded frame's range with its image ([`render_cmd::refine_scene`]) and makes
+/// Refines a loaded frame's range with its image ([`super::refine::refine_scene`]) and makes
 /// the range every β renders from.
 fn refine_frame(
     renderer: &mut Renderer,
@@ -504,7 +504,7 @@ fn refine_frame(
     let Loaded {
         args, scene, prep, ..
     } = &mut loaded;
-    let result = render_cmd::refine_scene(args, scene, prep, renderer)
+    let result = super::refine::refine_scene(args, scene, prep, renderer)
         .and_then(|_| render_cmd::haze_inputs(args, scene, prep));
     stats.refine_ms += t.elapsed().as_secs_f64() * 1e3;
     match result {
@@ -533,7 +533,7 @@ fn render_beta(
     // Foggy Cityscapes' conventions: the blend on the CPU, no passes.
     let (image, passes, gpu_ms) = if fog_args.compat == Some(Compat::FoggyCityscapes) {
         let (image, _, _) =
-            render_cmd::foggy_cityscapes_image(&fog_args, &frame.scene.image, range, beta)?;
+            super::compat::foggy_cityscapes_image(&fog_args, &frame.scene.image, range, beta)?;
         (image, 0, 0.0)
     } else {
         let r = renderer.render(&frame.scene.image, range, look.medium(), &look.blur)?;
@@ -810,7 +810,7 @@ impl BatchArgs {
         args.refine = self.refine;
         args.refine_radius = self.refine_radius;
         args.refine_eps = self.refine_eps;
-        render_cmd::check_options(&args)?;
+        super::options::check_options(&args)?;
         let haze = render_cmd::haze_from_args(&args)?;
         render_cmd::prep_options(&args.prep)?;
         if let Some(mask) = &args.prep.sky_mask {

@@ -1,19 +1,19 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
 use super::aerial::{aerial_camera, aerial_look, dehaze, AerialLook};
-use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RefineMode, RenderArgs};
+use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
 use brume::atmosphere::horizon_light;
 use brume::blur::Blur;
 use brume::egl::Platform;
-use brume::io::depth::{self, DepthFormat, DepthOptions, LoadedDepth};
+use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::output::{self, Outputs};
 use brume::io::{demo, image};
 use brume::medium::haze::{self, Haze};
 use brume::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
 use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
-use brume::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
-use brume::{Error, Headless, Refine, Result};
+use brume::raster::{RgbImage, ScalarMap};
+use brume::{Error, Headless, Result};
 use brume::{FogBlur, Rendered};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -74,134 +74,12 @@ impl Look {
     }
 }
 
-/// Checks `args` before any file is read: the medium's values and options that cannot
-/// take effect together.
-pub fn check_options(args: &RenderArgs) -> Result<()> {
-    haze_from_args(args)?;
-    check_medium_options(args)?;
-    super::aerial::check_aerial_options(args)?;
-    check_depth_options(&args.depth)?;
-    if args.no_prep {
-        refuse_prep_options(&args.prep)?;
-    }
-    if args.compat == Some(Compat::FoggyCityscapes) {
-        let physical =
-            args.beta.is_some() || args.visibility.is_some() || args.transmittance_map.is_some();
-        if !physical || args.medium == MediumKind::Aerial {
-            return Err(Error::invalid(
-                "--compat",
-                "foggy-cityscapes",
-                "--beta, --visibility or --transmittance-map with it (Foggy Cityscapes' fog \
-                 is τ = exp(−βR) on the haze medium)",
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// An option that cannot take effect is an error, not a silent no-op: the options of the
-/// other medium (`--turbidity` on haze, `--tint` on aerial, …).
-fn check_medium_options(args: &RenderArgs) -> Result<()> {
-    let text = |v: Option<f64>| v.map(|v| v.to_string());
-    let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
-    let aerial_only = [
-        ("--turbidity", text(args.turbidity)),
-        ("--sky", path(&args.sky)),
-        ("--from-turbidity", text(args.from_turbidity)),
-        ("--altitude", text(args.altitude)),
-        ("--metres-per-unit", text(args.metres_per_unit)),
-        ("--pitch", text(args.pitch)),
-        ("--horizon-row", text(args.horizon_row)),
-        ("--horizon-zenith", text(args.horizon_zenith)),
-        ("--sensitivity", path(&args.sensitivity)),
-        ("--blur", args.blur.map(|b| format!("{b:?}").to_lowercase())),
-    ];
-    let haze_only = [
-        ("--ka", text(args.ka)),
-        ("--ks", text(args.ks)),
-        (
-            "--tint",
-            args.tint.map(|t| format!("{},{},{}", t[0], t[1], t[2])),
-        ),
-        ("--uniform-sigma", text(args.uniform_sigma)),
-    ];
-    let (others, wanted, this) = match args.medium {
-        MediumKind::Haze => (&aerial_only[..], "aerial", "haze"),
-        MediumKind::Aerial => (&haze_only[..], "haze", "aerial"),
-    };
-    refuse_given(
-        others,
-        &format!("--medium {wanted} with it: the {this} medium of this render does not read it"),
-    )
-}
-
-/// Refuses the first option of `options` (flag, value if given) that was given.
-fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -> Result<()> {
-    match options
-        .iter()
-        .find_map(|(flag, v)| v.as_ref().map(|v| (*flag, v)))
-    {
-        Some((flag, value)) => Err(Error::invalid(flag, value, expected)),
-        None => Ok(()),
-    }
-}
-
-/// Depth options that only some inputs read, refused where none of them can.
-pub fn check_depth_options(depth: &DepthArgs) -> Result<()> {
-    let zbuffer = depth.depth_kind == Some(depth::DepthKind::ZBuffer);
-    let planes = [
-        (
-            "--near",
-            depth.near.filter(|_| !zbuffer).map(|v| v.to_string()),
-        ),
-        (
-            "--far",
-            depth.far.filter(|_| !zbuffer).map(|v| v.to_string()),
-        ),
-    ];
-    refuse_given(
-        &planes,
-        "--depth-kind zbuffer with it: only a z-buffer's projection has clipping planes",
-    )
-}
-
-/// With `--no-prep` nothing reads the pre-processing options: each one given is an error.
-pub fn refuse_prep_options(prep: &PrepOptionArgs) -> Result<()> {
-    let given = [
-        ("--margin", prep.margin.map(|v| v.to_string())),
-        ("--sky-factor", prep.sky_factor.map(|v| v.to_string())),
-        ("--no-sky", prep.no_sky.then(|| "given".to_string())),
-        ("--sky-min-area", prep.sky_min_area.map(|v| v.to_string())),
-        ("--seed", prep.seed.map(|v| v.to_string())),
-        (
-            "--sky-mask",
-            prep.sky_mask.as_ref().map(|p| p.display().to_string()),
-        ),
-        (
-            "--far-outlier-factor",
-            prep.far_outlier_factor.map(|v| v.to_string()),
-        ),
-        (
-            "--local-outliers",
-            prep.local_outliers.map(|v| v.to_string()),
-        ),
-        (
-            "--ego-mask",
-            prep.ego_mask.as_ref().map(|p| p.display().to_string()),
-        ),
-    ];
-    refuse_given(
-        &given,
-        "no --no-prep with it: pre-processing is what reads it",
-    )
-}
-
 pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
-    check_options(args)?;
+    super::options::check_options(args)?;
     let from_map;
     let args = match args.transmittance_map {
         Some(_) => {
-            from_map = transmittance_map_args(args);
+            from_map = super::compat::transmittance_map_args(args);
             &from_map
         }
         None => args,
@@ -214,7 +92,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let mut prep = preprocess(args, &scene)?;
     let mut headless = super::open_renderer(egl)?;
     let depth_size = [scene.depth.range.width(), scene.depth.range.height()];
-    let refined = refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
+    let refined = super::refine::refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
     if args.transmittance_map.is_some() {
         // The map's τ as given: pre-processing found the sky for the airlight only.
         if let Some(p) = &mut prep.prepared {
@@ -231,7 +109,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let fog = physical_from_args(args)?;
     if args.compat == Some(Compat::FoggyCityscapes) {
         let fog = fog.expect("checked: --compat foggy-cityscapes has physical fog");
-        return run_foggy_cityscapes(args, &scene, range, &fog, &out);
+        return super::compat::run_foggy_cityscapes(args, &scene, range, &fog, &out);
     }
     let (medium_range, range_divisor, look) = haze_inputs(args, &scene, &prep)?;
     let transmittance = transmittance_range(&look, &medium_range, &scene.depth.range);
@@ -283,8 +161,6 @@ struct Report<'a> {
     out: &'a Path,
 }
 
-/// The haze of `args`: paper 000's in normalised range (--ka, --ks), or with --beta or
-/// --visibility the same medium on range in metres ([`PhysicalFog::haze`]).
 /// Every file `args` reads: none of them may be an output.
 pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
     args.image
@@ -300,6 +176,8 @@ pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
         .collect()
 }
 
+/// The haze of `args`: paper 000's in normalised range (--ka, --ks), or with --beta or
+/// --visibility the same medium on range in metres ([`PhysicalFog::haze`]).
 pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
     let haze = Haze {
         ka: args.ka.unwrap_or(haze::DEFAULT_KA),
@@ -515,7 +393,7 @@ fn output_path(args: &RenderArgs) -> Result<PathBuf> {
 /// fog, in metres.
 pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     if let (Some(image_path), Some(map)) = (&args.image, &args.transmittance_map) {
-        return load_transmittance_scene(image_path, map);
+        return super::compat::load_transmittance_scene(image_path, map);
     }
     match (&args.image, &args.depth.depth) {
         (None, None) => {
@@ -546,7 +424,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             check_depth_fits(&scene)?;
             check_metric(args, &scene)?;
             let mut scene = scene;
-            drop_left_right_mismatches(args, &mut scene)?;
+            super::refine::drop_left_right_mismatches(args, &mut scene)?;
             Ok(scene)
         }
         (None, Some(_)) => Err(Error::invalid(
@@ -571,7 +449,7 @@ const CPU_BYTES_PER_PIXEL: u64 = 64;
 
 /// Refuses, from the image's header alone, an image whose render cannot fit in the memory
 /// left, before decoding it (a header that cannot be read is left to the loader to report).
-fn check_memory_before_loading(image_path: &Path) -> Result<()> {
+pub fn check_memory_before_loading(image_path: &Path) -> Result<()> {
     let dims = ::image::ImageReader::open(image_path)
         .ok()
         .and_then(|r| r.with_guessed_format().ok())
@@ -632,113 +510,6 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
         .collect()
 }
 
-/// Checks that the colour image and the range map have one size; the error names both.
-/// With a right image (`--right`), takes the disparities that fail the left-right
-/// photoconsistency check as unknown ([`brume::prep::stereo`]), for pre-processing to fill
-/// from reliable neighbours. Only when asked for: on brume's scene matched by StereoSGBM it
-/// flagged correct pixels too and made τ worse (README, "Real depth").
-fn drop_left_right_mismatches(args: &RenderArgs, scene: &mut Scene) -> Result<()> {
-    let Some(right) = args.right.clone() else {
-        return Ok(());
-    };
-    if scene.depth.format != DepthFormat::Cityscapes {
-        return Err(Error::invalid(
-            "--right",
-            right.display(),
-            "a Cityscapes disparity as --depth with it (the left-right check reads the \
-             disparity in pixels)",
-        ));
-    }
-    let depth_path = args.depth.depth.as_ref().expect("a depth was loaded");
-    let raw = ::image::open(depth_path)
-        .map_err(|e| Error::format(depth_path, format!("{e}")))?
-        .to_luma16();
-    let disparity = Grid::from_vec(
-        raw.width() as usize,
-        raw.height() as usize,
-        raw.pixels()
-            .map(|p| brume::io::depth::cityscapes_disparity_px(p[0]).map_or(f32::NAN, |d| d as f32))
-            .collect(),
-    );
-    let right_image = image::load_linear_rgb(&right)?;
-    let bad = brume::prep::stereo::inconsistent_pixels(
-        &scene.image,
-        &right_image,
-        &disparity,
-        brume::prep::stereo::DEFAULT_THRESHOLD,
-    )
-    .map_err(|e| match e {
-        Error::SizeMismatch { .. } => Error::invalid(
-            "--right",
-            right.display(),
-            format!(
-                "a right image of the left image's size, {}x{}",
-                scene.image.width(),
-                scene.image.height()
-            ),
-        ),
-        e => e,
-    })?;
-    let mut dropped = 0;
-    for (v, _) in scene
-        .depth
-        .range
-        .as_mut_slice()
-        .iter_mut()
-        .zip(bad.as_slice())
-        .filter(|(v, &b)| b && v.is_finite())
-    {
-        *v = f32::NAN;
-        dropped += 1;
-    }
-    scene.depth.unknown_pixels += dropped;
-    scene.depth.notes.push(format!(
-        "{dropped} px failed the left-right check against {} (> 12/255) and are unknown",
-        right.display()
-    ));
-    Ok(())
-}
-
-/// The photo and a given transmittance map, read as its optical depth −ln τ: a range in
-/// "metres" for a fog of β = 1 m⁻¹ (see [`transmittance_map_args`]).
-fn load_transmittance_scene(image_path: &Path, map: &Path) -> Result<Scene> {
-    check_memory_before_loading(image_path)?;
-    let depth = brume::compat::load_optical_depth(map)?;
-    let image = image::load_linear_rgb(image_path)?;
-    check_same_size(
-        &image,
-        &image_path.display().to_string(),
-        &depth,
-        &map.display().to_string(),
-    )?;
-    Ok(Scene {
-        image,
-        depth: LoadedDepth {
-            range: depth,
-            format: DepthFormat::Float,
-            kind: depth::DepthKind::Range,
-            units: "optical depth".into(),
-            metric: true,
-            intrinsics: None,
-            notes: vec!["transmittance map: its optical depth −ln τ, fogged at β = 1".into()],
-            unknown_pixels: 0,
-        },
-        image_name: image_path.display().to_string(),
-        depth_name: map.display().to_string(),
-    })
-}
-
-/// `args` for a render from a transmittance map: physical fog at β = 1 on the optical
-/// depth (so τ is the map's and the blur follows βR = −ln τ, as it would from the range),
-/// no refinement (the map is what it is) and no pre-processing of the optical depth (the
-/// sky is still found for the airlight, from the image).
-pub fn transmittance_map_args(args: &RenderArgs) -> RenderArgs {
-    let mut args = args.clone();
-    args.beta = Some(1.0);
-    args.refine = Some(RefineMode::None);
-    args
-}
-
 /// The depth map has the image's size, or is smaller by one factor on both sides (it is
 /// then upsampled, guided by the image).
 fn check_depth_fits(scene: &Scene) -> Result<()> {
@@ -760,6 +531,7 @@ fn check_depth_fits(scene: &Scene) -> Result<()> {
     })
 }
 
+/// Checks that the colour image and the range map have one size; the error names both.
 pub fn check_same_size(
     image: &RgbImage,
     image_name: &str,
@@ -852,166 +624,6 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
 
 /// How the airlight estimate was made, for reports (`airlight_source` in `--json`): `sky`
 /// (median sky colour) or `neutral` (no sky: a grey at the scene's bright end).
-/// What refinement a scene gets.
-#[derive(Clone, Copy, Debug)]
-pub struct RefinePlan {
-    /// The depth map is smaller than the image: joint bilateral upsampling first.
-    pub upsample: bool,
-    /// The guided filter at the image's size, if on.
-    pub guided: Option<Refine>,
-    /// The guided filter's range only where pre-processing filled the range
-    /// (`--refine unreliable`); elsewhere the range as measured.
-    pub only_unreliable: bool,
-}
-
-/// The refinement `args` ask for: the guided filter with `--refine guided`; a depth map
-/// smaller than the image is always upsampled, guided by it.
-pub fn refine_plan(args: &RenderArgs, scene: &Scene) -> Result<RefinePlan> {
-    let opts = Refine {
-        radius_px: args
-            .refine_radius
-            .unwrap_or(brume::refine::DEFAULT_RADIUS_PX),
-        epsilon: args.refine_eps.unwrap_or(brume::refine::DEFAULT_EPSILON),
-        ..Refine::default()
-    };
-    opts.validate()?;
-    let (image, range) = (&scene.image, &scene.depth.range);
-    // Off unless asked for: on SGBM disparity of brume's scene with a known truth
-    // (tools/stereo_refine_eval.py) it repairs the sky and the matcher's blunders but
-    // blurs the pixels the matcher got right (README, "Real depth").
-    let guided = matches!(
-        args.refine,
-        Some(RefineMode::Guided | RefineMode::Unreliable)
-    );
-    Ok(RefinePlan {
-        upsample: (range.width(), range.height()) != (image.width(), image.height()),
-        guided: guided.then_some(opts),
-        only_unreliable: args.refine == Some(RefineMode::Unreliable),
-    })
-}
-
-/// How a refinement runs: the GPU's passes, or their CPU reference.
-pub trait Refiner {
-    /// [`brume::Renderer::upsample`].
-    fn upsample(&mut self, image: &RgbImage, range: &ScalarMap) -> Result<ScalarMap>;
-    /// [`brume::Renderer::refine`].
-    fn refine(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap>;
-}
-
-impl Refiner for brume::Renderer {
-    fn upsample(&mut self, image: &RgbImage, range: &ScalarMap) -> Result<ScalarMap> {
-        let sigma = brume::refine::DEFAULT_UPSAMPLE_SIGMA_COLOUR;
-        Ok(brume::Renderer::upsample(self, image, range, sigma)?.0)
-    }
-    fn refine(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap> {
-        Ok(brume::Renderer::refine(self, image, range, opts)?.0)
-    }
-}
-
-/// The CPU references of the GPU passes (the same results within 1e-4), for the viewer,
-/// whose pipeline is the fog's alone.
-#[cfg(all(feature = "viewer", not(target_os = "android")))]
-pub struct CpuRefiner;
-
-#[cfg(all(feature = "viewer", not(target_os = "android")))]
-impl Refiner for CpuRefiner {
-    fn upsample(&mut self, image: &RgbImage, range: &ScalarMap) -> Result<ScalarMap> {
-        let sigma = brume::refine::DEFAULT_UPSAMPLE_SIGMA_COLOUR;
-        brume::refine::joint_bilateral_upsample_reference(image, range, sigma)
-    }
-    fn refine(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap> {
-        brume::refine::guided_range_reference(image, range, opts)
-    }
-}
-
-/// Refines the scene's range with its image, in place (see [`refine_plan`]): the prepared
-/// range (or, with --no-prep, the loaded one) is upsampled to the image's size and/or
-/// guided-filtered, and the masks and measured range that go with it are brought to that
-/// size. Returns the plan that ran.
-pub fn refine_scene(
-    args: &RenderArgs,
-    scene: &mut Scene,
-    prep: &mut PrepReport,
-    refiner: &mut dyn Refiner,
-) -> Result<RefinePlan> {
-    let plan = refine_plan(args, scene)?;
-    if !plan.upsample && plan.guided.is_none() {
-        return Ok(plan);
-    }
-    let (w, h) = (scene.image.width(), scene.image.height());
-    let started = Instant::now();
-    // `filled`: where pre-processing filled the range, on the range's grid.
-    let mut run = |range: &ScalarMap, filled: Option<&Grid<bool>>| -> Result<ScalarMap> {
-        // The ego vehicle's range 0 (never fogged) is not a range to filter: the filter
-        // reads log range. It is kept out (at the nearest range) and put back after.
-        let ego = range.map(|&v| v == 0.0);
-        let nearest = range
-            .as_slice()
-            .iter()
-            .copied()
-            .filter(|&v| v > 0.0)
-            .fold(f32::INFINITY, f32::min);
-        let positive = range.map(|&v| if v == 0.0 { nearest } else { v });
-        let mut range = if plan.upsample {
-            refiner.upsample(&scene.image, &positive)?
-        } else {
-            positive
-        };
-        if let Some(opts) = &plan.guided {
-            let refined = refiner.refine(&scene.image, &range, opts)?;
-            range = match filled.filter(|_| plan.only_unreliable) {
-                Some(filled) => {
-                    let filled = brume::refine::nearest_to_image_size(filled, w, h);
-                    Grid::from_fn(w, h, |x, y| {
-                        *if *filled.get(x, y) { &refined } else { &range }.get(x, y)
-                    })
-                }
-                None => refined,
-            };
-        }
-        let ego = brume::refine::nearest_to_image_size(&ego, w, h);
-        for (v, _) in range
-            .as_mut_slice()
-            .iter_mut()
-            .zip(ego.as_slice())
-            .filter(|(_, &e)| e)
-        {
-            *v = 0.0;
-        }
-        Ok(range)
-    };
-    match &mut prep.prepared {
-        Some(p) => {
-            p.range = run(&p.range, Some(&p.filled))?;
-            p.sky = brume::refine::nearest_to_image_size(&p.sky, w, h);
-            p.filled = brume::refine::nearest_to_image_size(&p.filled, w, h);
-            scene.depth.range = brume::refine::nearest_to_image_size(&scene.depth.range, w, h);
-        }
-        None => {
-            brume::refine::check_positive(&scene.depth.range).map_err(|_| {
-                Error::invalid(
-                    "--no-prep",
-                    "given",
-                    "pre-processing with --refine guided or a depth map smaller than the \
-                     image: refinement reads a range known at every pixel, which \
-                     pre-processing fills (or give --refine none)",
-                )
-            })?;
-            scene.depth.range = run(&scene.depth.range, None)?;
-        }
-    }
-    log::info!(
-        "range {}{} in {:.1} ms",
-        if plan.upsample { "upsampled, " } else { "" },
-        match plan.guided {
-            Some(o) => format!("refined (r = {} px, ε = {})", o.radius_px, o.epsilon),
-            None => "not refined".into(),
-        },
-        started.elapsed().as_secs_f64() * 1e3
-    );
-    Ok(plan)
-}
-
 pub fn airlight_source_name(source: AirlightSource) -> &'static str {
     match source {
         AirlightSource::Sky => "sky",
@@ -1238,70 +850,6 @@ pub fn aerial_job(
         light_source,
         blur,
     })
-}
-
-/// Foggy Cityscapes' fog of `image` at `beta` from `range` (metres): the image (linear,
-/// alpha 1), the airlight in code values and where it came from.
-pub fn foggy_cityscapes_image(
-    args: &RenderArgs,
-    image: &RgbImage,
-    range: &ScalarMap,
-    beta: f64,
-) -> Result<(RgbaImage, [f32; 3], &'static str)> {
-    let (metres, _) = physical::metric_range(range)?;
-    let tau = metres.map(|&r| {
-        if r.is_finite() {
-            (-beta * f64::from(r)).exp() as f32
-        } else {
-            0.0
-        }
-    });
-    let (airlight, source) = match args.airlight {
-        Some(l) => (l.map(brume::io::image::linear_to_srgb), "given"),
-        None => (brume::compat::dark_channel_airlight(image), "dark-channel"),
-    };
-    let fogged = brume::compat::blend_in_code_values(image, &tau, airlight);
-    Ok((fogged.map(|p| [p[0], p[1], p[2], 1.0]), airlight, source))
-}
-
-/// `--compat foggy-cityscapes`: Foggy Cityscapes' blend in sRGB code values of the image
-/// and the dark-channel airlight (or `--airlight`, linear, encoded) by τ = exp(−βR) of the
-/// (refined) range in metres, no blur ([`brume::compat`]).
-fn run_foggy_cityscapes(
-    args: &RenderArgs,
-    scene: &Scene,
-    range: &ScalarMap,
-    fog: &PhysicalFog,
-    out: &Path,
-) -> Result<()> {
-    let (rgba, airlight, source) = foggy_cityscapes_image(args, &scene.image, range, fog.beta)?;
-    let mut outputs = Outputs::new();
-    outputs.stage_rgba(out, &rgba)?;
-    super::commit(outputs)?;
-    let report = json!({
-        "out": out.display().to_string(),
-        "compat": "foggy-cityscapes",
-        "beta": fog.beta,
-        "visibility_m": fog.visibility_m(),
-        "airlight_srgb": airlight,
-        "airlight_source": source,
-        "width": scene.image.width(),
-        "height": scene.image.height(),
-    });
-    if args.json {
-        outln!("{report}");
-    } else {
-        outln!(
-            "wrote {} (Foggy Cityscapes' conventions: β = {} m⁻¹, blend in sRGB code values, \
-             airlight {:.3},{:.3},{:.3} ({source}), no blur)",
-            out.display(),
-            fog.beta,
-            airlight[0],
-            airlight[1],
-            airlight[2]
-        );
-    }
-    Ok(())
 }
 
 fn run_aerial(

@@ -78,7 +78,7 @@ fn check_args(args: &ViewArgs) -> Result<()> {
     }
     let inputs = match &args.source {
         Some(ViewSource::Render(a)) => {
-            super::render::check_options(a)?;
+            super::options::check_options(a)?;
             super::render::input_paths(a)
         }
         Some(ViewSource::Scene(a)) => {

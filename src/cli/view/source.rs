@@ -179,7 +179,12 @@ impl Photo {
         let mut prep = render_cmd::preprocess(args, &scene)?;
         // Once, at load: the CPU reference of the GPU refinement (the same result within
         // 2e-5, tests/refine.rs) keeps the viewer's pipeline to the fog.
-        render_cmd::refine_scene(args, &mut scene, &mut prep, &mut render_cmd::CpuRefiner)?;
+        super::super::refine::refine_scene(
+            args,
+            &mut scene,
+            &mut prep,
+            &mut super::super::refine::CpuRefiner,
+        )?;
         let range = prep
             .prepared
             .as_ref()

@@ -1,0 +1,117 @@
+//! Foggy Cityscapes' conventions on the command line (`--compat foggy-cityscapes`,
+//! `--transmittance-map`); the conventions themselves are `brume::compat`.
+
+use super::args::{RefineMode, RenderArgs};
+use super::render::{check_memory_before_loading, check_same_size, Scene};
+use brume::io::depth::{DepthFormat, DepthKind, LoadedDepth};
+use brume::io::image;
+use brume::io::output::Outputs;
+use brume::medium::physical::{self, PhysicalFog};
+use brume::raster::{RgbImage, RgbaImage, ScalarMap};
+use brume::Result;
+use serde_json::json;
+use std::path::Path;
+
+/// The photo and a given transmittance map, read as its optical depth −ln τ: a range in
+/// "metres" for a fog of β = 1 m⁻¹ (see [`transmittance_map_args`]).
+pub fn load_transmittance_scene(image_path: &Path, map: &Path) -> Result<Scene> {
+    check_memory_before_loading(image_path)?;
+    let depth = brume::compat::load_optical_depth(map)?;
+    let image = image::load_linear_rgb(image_path)?;
+    check_same_size(
+        &image,
+        &image_path.display().to_string(),
+        &depth,
+        &map.display().to_string(),
+    )?;
+    Ok(Scene {
+        image,
+        depth: LoadedDepth {
+            range: depth,
+            format: DepthFormat::Float,
+            kind: DepthKind::Range,
+            units: "optical depth".into(),
+            metric: true,
+            intrinsics: None,
+            notes: vec!["transmittance map: its optical depth −ln τ, fogged at β = 1".into()],
+            unknown_pixels: 0,
+        },
+        image_name: image_path.display().to_string(),
+        depth_name: map.display().to_string(),
+    })
+}
+
+/// `args` for a render from a transmittance map: physical fog at β = 1 on the optical
+/// depth (so τ is the map's and the blur follows βR = −ln τ, as it would from the range),
+/// no refinement (the map is what it is) and no pre-processing of the optical depth (the
+/// sky is still found for the airlight, from the image).
+pub fn transmittance_map_args(args: &RenderArgs) -> RenderArgs {
+    let mut args = args.clone();
+    args.beta = Some(1.0);
+    args.refine = Some(RefineMode::None);
+    args
+}
+
+/// Foggy Cityscapes' fog of `image` at `beta` from `range` (metres): the image (linear,
+/// alpha 1), the airlight in code values and where it came from.
+pub fn foggy_cityscapes_image(
+    args: &RenderArgs,
+    image: &RgbImage,
+    range: &ScalarMap,
+    beta: f64,
+) -> Result<(RgbaImage, [f32; 3], &'static str)> {
+    let (metres, _) = physical::metric_range(range)?;
+    let tau = metres.map(|&r| {
+        if r.is_finite() {
+            (-beta * f64::from(r)).exp() as f32
+        } else {
+            0.0
+        }
+    });
+    let (airlight, source) = match args.airlight {
+        Some(l) => (l.map(brume::io::image::linear_to_srgb), "given"),
+        None => (brume::compat::dark_channel_airlight(image), "dark-channel"),
+    };
+    let fogged = brume::compat::blend_in_code_values(image, &tau, airlight);
+    Ok((fogged.map(|p| [p[0], p[1], p[2], 1.0]), airlight, source))
+}
+
+/// `--compat foggy-cityscapes`: Foggy Cityscapes' blend in sRGB code values of the image
+/// and the dark-channel airlight (or `--airlight`, linear, encoded) by τ = exp(−βR) of the
+/// (refined) range in metres, no blur ([`brume::compat`]).
+pub fn run_foggy_cityscapes(
+    args: &RenderArgs,
+    scene: &Scene,
+    range: &ScalarMap,
+    fog: &PhysicalFog,
+    out: &Path,
+) -> Result<()> {
+    let (rgba, airlight, source) = foggy_cityscapes_image(args, &scene.image, range, fog.beta)?;
+    let mut outputs = Outputs::new();
+    outputs.stage_rgba(out, &rgba)?;
+    super::commit(outputs)?;
+    let report = json!({
+        "out": out.display().to_string(),
+        "compat": "foggy-cityscapes",
+        "beta": fog.beta,
+        "visibility_m": fog.visibility_m(),
+        "airlight_srgb": airlight,
+        "airlight_source": source,
+        "width": scene.image.width(),
+        "height": scene.image.height(),
+    });
+    if args.json {
+        outln!("{report}");
+    } else {
+        outln!(
+            "wrote {} (Foggy Cityscapes' conventions: β = {} m⁻¹, blend in sRGB code values, \
+             airlight {:.3},{:.3},{:.3} ({source}), no blur)",
+            out.display(),
+            fog.beta,
+            airlight[0],
+            airlight[1],
+            airlight[2]
+        );
+    }
+    Ok(())
+}

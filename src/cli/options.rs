@@ -1,0 +1,130 @@
+//! The checks of `brume render`'s options before any file is read (also for `batch` and
+//! `view`, which take render's options): values, and options that cannot take effect.
+
+use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
+use super::render::haze_from_args;
+use brume::io::depth;
+use brume::{Error, Result};
+use std::path::PathBuf;
+
+/// Checks `args` before any file is read: the medium's values and options that cannot
+/// take effect together.
+pub fn check_options(args: &RenderArgs) -> Result<()> {
+    haze_from_args(args)?;
+    check_medium_options(args)?;
+    super::aerial::check_aerial_options(args)?;
+    check_depth_options(&args.depth)?;
+    if args.no_prep {
+        refuse_prep_options(&args.prep)?;
+    }
+    if args.compat == Some(Compat::FoggyCityscapes) {
+        let physical =
+            args.beta.is_some() || args.visibility.is_some() || args.transmittance_map.is_some();
+        if !physical || args.medium == MediumKind::Aerial {
+            return Err(Error::invalid(
+                "--compat",
+                "foggy-cityscapes",
+                "--beta, --visibility or --transmittance-map with it (Foggy Cityscapes' fog \
+                 is τ = exp(−βR) on the haze medium)",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// An option that cannot take effect is an error, not a silent no-op: the options of the
+/// other medium (`--turbidity` on haze, `--tint` on aerial, …).
+fn check_medium_options(args: &RenderArgs) -> Result<()> {
+    let text = |v: Option<f64>| v.map(|v| v.to_string());
+    let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let aerial_only = [
+        ("--turbidity", text(args.turbidity)),
+        ("--sky", path(&args.sky)),
+        ("--from-turbidity", text(args.from_turbidity)),
+        ("--altitude", text(args.altitude)),
+        ("--metres-per-unit", text(args.metres_per_unit)),
+        ("--pitch", text(args.pitch)),
+        ("--horizon-row", text(args.horizon_row)),
+        ("--horizon-zenith", text(args.horizon_zenith)),
+        ("--sensitivity", path(&args.sensitivity)),
+        ("--blur", args.blur.map(|b| format!("{b:?}").to_lowercase())),
+    ];
+    let haze_only = [
+        ("--ka", text(args.ka)),
+        ("--ks", text(args.ks)),
+        (
+            "--tint",
+            args.tint.map(|t| format!("{},{},{}", t[0], t[1], t[2])),
+        ),
+        ("--uniform-sigma", text(args.uniform_sigma)),
+    ];
+    let (others, wanted, this) = match args.medium {
+        MediumKind::Haze => (&aerial_only[..], "aerial", "haze"),
+        MediumKind::Aerial => (&haze_only[..], "haze", "aerial"),
+    };
+    refuse_given(
+        others,
+        &format!("--medium {wanted} with it: the {this} medium of this render does not read it"),
+    )
+}
+
+/// Refuses the first option of `options` (flag, value if given) that was given.
+fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -> Result<()> {
+    match options
+        .iter()
+        .find_map(|(flag, v)| v.as_ref().map(|v| (*flag, v)))
+    {
+        Some((flag, value)) => Err(Error::invalid(flag, value, expected)),
+        None => Ok(()),
+    }
+}
+
+/// Depth options that only some inputs read, refused where none of them can.
+pub fn check_depth_options(depth: &DepthArgs) -> Result<()> {
+    let zbuffer = depth.depth_kind == Some(depth::DepthKind::ZBuffer);
+    let planes = [
+        (
+            "--near",
+            depth.near.filter(|_| !zbuffer).map(|v| v.to_string()),
+        ),
+        (
+            "--far",
+            depth.far.filter(|_| !zbuffer).map(|v| v.to_string()),
+        ),
+    ];
+    refuse_given(
+        &planes,
+        "--depth-kind zbuffer with it: only a z-buffer's projection has clipping planes",
+    )
+}
+
+/// With `--no-prep` nothing reads the pre-processing options: each one given is an error.
+pub fn refuse_prep_options(prep: &PrepOptionArgs) -> Result<()> {
+    let given = [
+        ("--margin", prep.margin.map(|v| v.to_string())),
+        ("--sky-factor", prep.sky_factor.map(|v| v.to_string())),
+        ("--no-sky", prep.no_sky.then(|| "given".to_string())),
+        ("--sky-min-area", prep.sky_min_area.map(|v| v.to_string())),
+        ("--seed", prep.seed.map(|v| v.to_string())),
+        (
+            "--sky-mask",
+            prep.sky_mask.as_ref().map(|p| p.display().to_string()),
+        ),
+        (
+            "--far-outlier-factor",
+            prep.far_outlier_factor.map(|v| v.to_string()),
+        ),
+        (
+            "--local-outliers",
+            prep.local_outliers.map(|v| v.to_string()),
+        ),
+        (
+            "--ego-mask",
+            prep.ego_mask.as_ref().map(|p| p.display().to_string()),
+        ),
+    ];
+    refuse_given(
+        &given,
+        "no --no-prep with it: pre-processing is what reads it",
+    )
+}
