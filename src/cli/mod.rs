@@ -23,6 +23,7 @@ macro_rules! err {
 mod aerial;
 mod args;
 mod batch;
+mod batch_checks;
 mod bench;
 mod compare;
 mod compat;

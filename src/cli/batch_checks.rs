@@ -1,0 +1,142 @@
+//! What `brume batch` proves about a dataset before it makes anything: every frame's
+//! outputs lie under `--out` (after `..` and links) and are that frame's alone, and a
+//! shared `--sky-mask` has every frame's size.
+
+use super::args::BatchArgs;
+use brume::dataset::Item;
+use brume::{Error, Result};
+use std::collections::HashMap;
+use std::path::{Component, Path, PathBuf};
+
+/// A batch's `--sky-mask` (one mask for every frame) has each frame's size: refused up
+/// front, from the files' headers, rather than frame by frame.
+pub fn check_sky_mask_size(args: &BatchArgs, items: &[Item]) -> Result<()> {
+    let Some(mask) = &args.prep.sky_mask else {
+        return Ok(());
+    };
+    let size = |path: &Path| {
+        ::image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| Error::io(path, e))?
+            .into_dimensions()
+            .map_err(|e| Error::format(path, format!("cannot read its size: {e}")))
+    };
+    let (mw, mh) = size(mask).map_err(|e| match e {
+        Error::Io { .. } | Error::Format { .. } => Error::invalid(
+            "--sky-mask",
+            mask.display(),
+            format!("a readable PNG sky mask ({e})"),
+        ),
+        e => e,
+    })?;
+    for item in items.iter().filter(|i| i.sky_mask.is_none()) {
+        let (w, h) = size(&item.image)?;
+        if (w, h) != (mw, mh) {
+            return Err(Error::invalid(
+                "--sky-mask",
+                format!("{} ({mw}x{mh})", mask.display()),
+                format!(
+                    "a mask of each frame's size: {} is {w}x{h}",
+                    item.image.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Proves that every output of every frame lies under `--out` (after `..` and links are
+/// resolved) and that no two frames write one file (`X.png` and `X.jpg` in one folder, a
+/// row given twice, a folder given twice), before any work.
+pub fn check_destinations(args: &BatchArgs, items: &[Item], betas: &[f64]) -> Result<()> {
+    let mut owners: HashMap<PathBuf, &Path> = HashMap::new();
+    for item in items {
+        let out_dir = contained_dir(&item.out_dir).ok_or_else(|| {
+            Error::invalid(
+                "inputs",
+                item.image.display(),
+                format!(
+                    "a frame whose outputs stay under --out: its folder `{}` climbs out",
+                    item.out_dir.display()
+                ),
+            )
+        })?;
+        check_no_link_out(&args.out, &out_dir, item)?;
+        let normalised = Item {
+            out_dir,
+            ..item.clone()
+        };
+        let here = Path::new("");
+        for &beta in betas {
+            let paths = std::iter::once(normalised.foggy_output(here, beta)).chain(
+                args.transmittance
+                    .then(|| normalised.transmittance_output(here, beta)),
+            );
+            for path in paths {
+                let Some(other) = owners.insert(path.clone(), &item.image) else {
+                    continue;
+                };
+                let expected = if other == item.image {
+                    "each frame once: it is given twice (a repeated manifest row, or one \
+                     folder twice)"
+                        .to_string()
+                } else {
+                    format!(
+                        "frames with outputs of their own: {} also writes {}",
+                        other.display(),
+                        args.out.join(&path).display()
+                    )
+                };
+                return Err(Error::invalid("inputs", item.image.display(), expected));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `dir` with `.` and `x/..` removed, if it stays inside the folder it is relative to
+/// (no `..` above it, no root, no drive).
+fn contained_dir(dir: &Path) -> Option<PathBuf> {
+    let mut parts: Vec<&std::ffi::OsStr> = Vec::new();
+    for c in dir.components() {
+        match c {
+            Component::Normal(p) => parts.push(p),
+            Component::CurDir => {}
+            Component::ParentDir => {
+                parts.pop()?;
+            }
+            Component::RootDir | Component::Prefix(_) => return None,
+        }
+    }
+    Some(parts.iter().collect())
+}
+
+/// Refuses an output folder that exists under `out` through a symbolic link to a place
+/// outside `out`: the outputs would be written there.
+fn check_no_link_out(out: &Path, out_dir: &Path, item: &Item) -> Result<()> {
+    let Ok(root) = out.canonicalize() else {
+        return Ok(()); // --out does not exist yet: neither does anything under it
+    };
+    let mut dir = out.to_path_buf();
+    for part in out_dir.components() {
+        dir.push(part);
+        match dir.canonicalize() {
+            Ok(real) if !real.starts_with(&root) => {
+                return Err(Error::invalid(
+                    "--out",
+                    out.display(),
+                    format!(
+                        "a folder whose sub-folders stay inside it: {} (the outputs of {}) \
+                         leads to {}",
+                        dir.display(),
+                        item.image.display(),
+                        real.display()
+                    ),
+                ))
+            }
+            Ok(_) => {}
+            Err(_) => break, // made by the run, inside --out
+        }
+    }
+    Ok(())
+}
