@@ -64,6 +64,8 @@ fn run() -> Result<bool, String> {
 
     // --- brume on the host's context: textures in, framebuffer out. ---
     let mut pipeline = Pipeline::new(Arc::clone(&gl)).map_err(|e| e.to_string())?;
+    // Timing is off by default (no query, no wait); this host wants the figures now.
+    pipeline.set_timing(brume::Timing::Blocking);
     let haze = Haze {
         ka: 0.5,
         ks: 1.5,
@@ -88,11 +90,10 @@ fn run() -> Result<bool, String> {
         .render(&input, &haze, &blur, &output)
         .map_err(|e| e.to_string())?;
     println!(
-        "{} passes on {} in {:.2} ms ({})",
-        frame.times.pass_ms.len(),
+        "{} passes on {}: {}",
+        frame.schedule.steps + 2,
         pipeline.caps().renderer,
-        frame.times.total_ms,
-        frame.times.clock.name()
+        frame.times.describe(2)
     );
 
     // --- The host reads its framebuffer and checks brume against the CPU reference. ---

@@ -31,6 +31,7 @@ pub mod io;
 pub mod medium;
 pub mod memory;
 pub mod metrics;
+pub mod photo;
 pub mod pipeline;
 pub mod prep;
 pub mod raster;
@@ -44,6 +45,7 @@ pub mod sky;
 
 pub use blur::{Blur, Precision};
 pub use error::{Error, Result};
+pub use gpu::timer::{Clock, PassTimes, Timing};
 pub use medium::{Haze, Medium, PhysicalFog, UniformBlur};
 pub use pipeline::{Encoding, FogBlur, Frame, GaussBlur, Input, Output, Pipeline};
 pub use refine::Refine;

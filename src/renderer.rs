@@ -9,7 +9,7 @@ use crate::egl::{GlContext, Platform};
 use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
-use crate::gpu::timer::{Clock, PassTimes};
+use crate::gpu::timer::{Clock, PassTimes, Timing};
 use crate::medium::Medium;
 use crate::pipeline::{Encoding, FogBlur, Frame, Input, Pipeline, RefineInput};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
@@ -26,21 +26,35 @@ pub struct Rendered {
     pub image: RgbaImage,
     /// The schedule that ran.
     pub schedule: Schedule,
-    /// Per-pass times, with the clock that produced them.
+    /// Per-pass times, with the clock that produced them (unavailable when the GPU
+    /// timer's figures were rejected, or with timing off: see [`Renderer::set_timing`]).
     pub times: PassTimes,
 }
 
-/// The pipeline with CPU-buffer input and output, on a context that is current.
+/// The pipeline with CPU-buffer input and output, on a context that is current. Its
+/// timing is [`Timing::Blocking`] unless set otherwise: it waits for the read-back anyway,
+/// and the `brume` program and its benchmarks report each call's times.
 pub struct Renderer {
     pipeline: Pipeline,
 }
 
 impl Renderer {
-    /// Builds the pipeline on `gl`, which must be current on this thread.
+    /// Builds the pipeline on `gl`, which must be current on this thread, with
+    /// [`Timing::Blocking`].
     pub fn new(gl: Arc<glow::Context>) -> Result<Self> {
-        Ok(Renderer {
-            pipeline: Pipeline::new(gl)?,
-        })
+        let mut pipeline = Pipeline::new(gl)?;
+        pipeline.set_timing(Timing::Blocking);
+        Ok(Renderer { pipeline })
+    }
+
+    /// Sets when calls time their passes ([`Pipeline::set_timing`]).
+    pub fn set_timing(&mut self, timing: Timing) {
+        self.pipeline.set_timing(timing);
+    }
+
+    /// When calls time their passes.
+    pub fn timing(&self) -> Timing {
+        self.pipeline.timing()
     }
 
     /// The driver's capabilities, detected once.
@@ -48,7 +62,7 @@ impl Renderer {
         self.pipeline.caps()
     }
 
-    /// The clock renders are timed with.
+    /// The clock [`Timing::Blocking`] times with.
     pub fn preferred_clock(&self) -> Clock {
         self.pipeline.preferred_clock()
     }
@@ -297,9 +311,14 @@ impl Headless {
         self.renderer.caps()
     }
 
-    /// The clock renders are timed with.
+    /// The clock [`Timing::Blocking`] times with.
     pub fn preferred_clock(&self) -> Clock {
         self.renderer.preferred_clock()
+    }
+
+    /// Sets when calls time their passes ([`Renderer::set_timing`]; makes no GL call).
+    pub fn set_timing(&mut self, timing: Timing) {
+        self.renderer.set_timing(timing);
     }
 
     /// The EGL context.

@@ -507,3 +507,37 @@ fn a_killed_batch_has_logged_its_outputs_and_a_resumed_one_cleans_up() {
     let log = std::fs::read_to_string(&log_path).unwrap();
     assert_eq!(log.matches("\"ok\"").count(), 2, "{log}");
 }
+
+/// `brume render` of a Cityscapes frame refines with `repair` unless told otherwise, and
+/// says which mode ran; a Float range gets none by default.
+#[test]
+fn cityscapes_disparity_is_repaired_by_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = dir.path().join("cityscapes");
+    cityscapes_frame(&root, "aachen", "aachen_000000_000019");
+    let image = root.join("leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit.png");
+    let depth = root.join("disparity/train/aachen/aachen_000000_000019_disparity.png");
+    let mode = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--beta",
+            "0.02",
+            "--lambda",
+            "0",
+            "--out",
+            "o.png",
+            "--json",
+        ];
+        args.extend(extra);
+        let o = brume(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        v["refine"]["mode"].as_str().unwrap().to_string()
+    };
+    assert_eq!(mode(&[]), "repair");
+    assert_eq!(mode(&["--refine", "none"]), "none");
+}

@@ -857,3 +857,102 @@ fn aerial_perspective_renders_from_a_turbidity_a_sky_or_a_source_turbidity() {
         .collect();
     assert_fails_cleanly(&brume(d, &low), &["0.5"]);
 }
+
+/// `brume prep --image` accepts a depth map 4x smaller than the image: it is
+/// pre-processed on its own grid, upsampled to the image's size guided by the image and,
+/// with `--refine guided`, filtered by the CPU reference; the GPU's passes (the library's
+/// `refine_prepared` through the renderer) give the same range within 1e-4.
+#[test]
+fn prep_upsamples_and_refines_a_smaller_depth_map_like_the_gpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = brume::io::image::load_linear_rgb(&aloe("left.jpg")).unwrap();
+    let (w, h) = (image.width() / 4 * 4, image.height() / 4 * 4);
+    let image = brume::raster::Grid::from_fn(w, h, |x, y| *image.get(x, y));
+    brume::io::output::write_rgba(
+        &dir.path().join("left.png"),
+        &image.map(|&[r, g, b]| [r, g, b, 1.0]),
+    )
+    .unwrap();
+    let full = brume::io::depth::load_range(&aloe("disparity.png"), &Default::default())
+        .unwrap()
+        .range;
+    let small = brume::raster::Grid::from_fn(w / 4, h / 4, |x, y| *full.get(4 * x + 1, 4 * y + 1));
+    brume::io::output::write_scalar(&dir.path().join("small.pfm"), &small).unwrap();
+
+    let o = brume(
+        dir.path(),
+        &[
+            "prep",
+            "--depth",
+            "small.pfm",
+            "--depth-kind",
+            "range",
+            "--image",
+            "left.png",
+            "--refine",
+            "guided",
+            "--out",
+            "r.pfm",
+            "--json",
+        ],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(w as u64), Some(h as u64))
+    );
+    assert_eq!(v["depth_width"].as_u64(), Some((w / 4) as u64));
+    assert_eq!(
+        (v["upsampled"].as_bool(), v["refine"].as_str()),
+        (Some(true), Some("guided"))
+    );
+    let brume::io::codec::pfm::Pfm::Grey(cli) =
+        brume::io::codec::pfm::read_pfm(&dir.path().join("r.pfm")).unwrap()
+    else {
+        panic!("prep wrote a colour PFM");
+    };
+
+    let mut prepared = brume::prep::prepare_guided(
+        &small,
+        brume::prep::Guides {
+            image: Some(&brume::refine::image_at_depth_size(&image, w / 4, h / 4)),
+            ..Default::default()
+        },
+        &brume::prep::PrepOptions::default(),
+    )
+    .unwrap();
+    let opts = brume::refine::RefineOptions {
+        mode: brume::refine::RefineMode::Guided,
+        ..Default::default()
+    };
+    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let mut headless = brume::Headless::new(None).unwrap();
+    brume::refine::refine_prepared(&image, &mut prepared, &opts, headless.renderer().unwrap())
+        .unwrap();
+    assert_eq!((cli.width(), cli.height()), (w, h));
+    let worst = cli
+        .as_slice()
+        .iter()
+        .zip(prepared.range.as_slice())
+        .map(|(a, b)| ((a - b) / b).abs())
+        .fold(0f32, f32::max);
+    assert!(
+        worst < 1e-4,
+        "CPU (prep) and GPU refinement differ by {worst}"
+    );
+}
+
+#[test]
+fn prep_refuses_refinement_without_an_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = aloe("disparity.png");
+    for flag in [["--refine", "guided"], ["--refine-radius", "5"]] {
+        let mut args = vec!["prep", "--depth", depth.to_str().unwrap()];
+        args.extend(flag);
+        args.extend(["--out", "r.pfm"]);
+        let o = brume(dir.path(), &args);
+        assert_fails_cleanly(&o, &[flag[0], "--image"]);
+        assert!(!dir.path().join("r.pfm").exists());
+    }
+}

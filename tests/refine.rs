@@ -79,6 +79,86 @@ fn gpu_upsampling_matches_the_cpu_reference() {
     }
 }
 
+/// A live app's upsampling (`Pipeline::upsample_range_into`, into one R32F texture kept
+/// between frames): every texel written, the same values as `upsample_range` (the same
+/// passes) and its CPU reference, frame after frame with a new guide and range; a texture
+/// of the wrong size or format is refused.
+#[test]
+fn upsampling_into_a_kept_texture_matches_upsample_range() {
+    use brume::gpu::framebuffer::Framebuffer;
+    use brume::gpu::texture::{Filter, TexelFormat, Texture};
+    use brume::pipeline::RefineInput;
+    use brume::Encoding;
+
+    let (_gl, mut headless) = renderer();
+    let r = headless.renderer().unwrap();
+    let pipeline = r.pipeline();
+    let gl = std::sync::Arc::clone(pipeline.gl());
+    let (w, h, k) = (96usize, 64usize, 4usize);
+    let read = |texture: &Texture| -> ScalarMap {
+        let framebuffer = Framebuffer::over(&gl, &[texture], "a test's range").unwrap();
+        let texels = framebuffer.read_rgba().unwrap();
+        let mut out = Grid::from_vec(w, h, texels.iter().map(|t| t[0]).collect());
+        out.flip_rows();
+        out
+    };
+    // Kept between frames; -1 everywhere first, which no upsampled range is.
+    let kept = Texture::new(
+        &gl,
+        w,
+        h,
+        TexelFormat::R32F,
+        Filter::Nearest,
+        Some(&vec![-1.0; w * h]),
+    )
+    .unwrap();
+    for frame in 0..2u64 {
+        let image = common::noise_image(w, h, 11 + frame);
+        let (_, range) = scene(w, h);
+        let low = Grid::from_fn(w / k, h / k, |x, y| {
+            *range.get(k * x + k / 2, k * y) * (1.0 + 0.1 * frame as f32)
+        });
+        let colour = Texture::new(&gl, w, h, TexelFormat::Rgb32F, Filter::Nearest, None).unwrap();
+        colour.upload_flipped(image.as_slice().as_flattened());
+        let range_texture =
+            Texture::new(&gl, w / k, h / k, TexelFormat::R32F, Filter::Nearest, None).unwrap();
+        range_texture.upload_flipped(low.as_slice());
+        let input = RefineInput {
+            colour: colour.raw(),
+            colour_encoding: Encoding::Linear,
+            width: w,
+            height: h,
+            range: range_texture.raw(),
+            range_width: w / k,
+            range_height: h / k,
+        };
+        let sigma = DEFAULT_UPSAMPLE_SIGMA_COLOUR;
+        let times = pipeline.upsample_range_into(&input, sigma, &kept).unwrap();
+        // Two passes, or none where the pipeline's timing gives no figures.
+        assert!(matches!(times.pass_ms.len(), 0 | 2), "{times:?}");
+        let (fresh, _) = pipeline.upsample_range(&input, sigma).unwrap();
+        let (into, once) = (read(&kept), read(&fresh));
+        assert!(into.as_slice().iter().all(|&v| v > 0.0), "frame {frame}");
+        assert_eq!(worst_relative(&into, &once), 0.0, "frame {frame}");
+        let cpu = joint_bilateral_upsample_reference(&image, &low, sigma).unwrap();
+        let worst = worst_relative(&into, &cpu);
+        // As gpu_upsampling_matches_the_cpu_reference.
+        assert!(
+            worst < 1e-5,
+            "frame {frame}: worst relative difference {worst:e}"
+        );
+
+        let small = Texture::new(&gl, w / 2, h, TexelFormat::R32F, Filter::Nearest, None).unwrap();
+        let rgba = Texture::new(&gl, w, h, TexelFormat::Rgba32F, Filter::Nearest, None).unwrap();
+        for wrong in [&small, &rgba] {
+            let e = pipeline
+                .upsample_range_into(&input, sigma, wrong)
+                .unwrap_err();
+            assert!(e.to_string().contains("R32F"), "{e}");
+        }
+    }
+}
+
 /// Aloe cropped to 640 x 552 (a multiple of 8): the image (linear RGB) and the range,
 /// its holes filled by pre-processing (the truth), with the mask of pixels measured.
 fn aloe_truth() -> (RgbImage, ScalarMap, Vec<bool>) {

@@ -16,7 +16,7 @@ What it does, in one run:
    ``{name}_camera.json`` (baseline in metres, fx = fy = F, u0 = cx, v0 = cy). The TRUE
    disparity ``F·B/z`` (0 for the sky) is written the same way, for reference.
 3. Measures brume's transmittance per pixel for each depth (truth disparity, SGBM disparity)
-   and each ``--refine`` (none, guided = the default for Cityscapes disparity):
+   and each ``--refine`` (none, guided, unreliable, repair = the default for Cityscapes disparity):
    ``brume render --image left.png --depth … --depth-format cityscapes --beta B --lambda 0``
    is run twice, with ``--airlight 0,0,0`` and ``--airlight 1,1,1``, written as linear PFM.
    With λ = 0 nothing is blurred, so ``out = τ·J + (1 − τ)·A`` and
@@ -38,7 +38,8 @@ What it does, in one run:
 
 Outputs (in OUT_DIR): left.png, right.png, left_z.pfm, truth_disparity.png,
 sgbm_disparity.png (+ *_camera.json), tau_*.npy maps (float32), err_*.png (|τ error| × 4, grey),
-fog_truth.png, fog_sgbm_none.png, fog_sgbm_guided.png, fog_side_by_side.png, results.json.
+fog_truth.png, fog_sgbm_none.png, fog_sgbm_guided.png, fog_sgbm_repair.png, fog_side_by_side.png,
+results.json.
 
 Usage (from the repository root, after ``cargo build --release --bin brume``):
 
@@ -47,7 +48,7 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
         [--size 1024x512] [--fov 45] [--baseline 0.5] [--beta 0.02]
         [--position 0,1.7,0] [--yaw 0] [--pitch 0] [--num-disparities 144 per 1024 px of width]
         [--refine-radius PX] [--refine-eps EPS]   (passed to brume render)
-        [--docs DIR]   (also copy the three foggy PNGs there as refine-sgbm-{truth,none,guided}.png)
+        [--docs DIR]   (also copy the four foggy PNGs there as refine-sgbm-{truth,none,guided,repair}.png)
 
 Needs: numpy, opencv-python-headless (``pip install opencv-python-headless numpy``), and the
 brume binary (headless EGL; llvmpipe is fine). Takes about 10 s at 1024x512 and 35 s at 2048x1024 on 2 cores (llvmpipe).
@@ -235,7 +236,9 @@ def main():
              ("truth disparity, refine guided", "truth_disparity.png", "guided", "truth_guided"),
              ("SGBM, refine none", "sgbm_disparity.png", "none", "sgbm_none"),
              ("SGBM, refine guided", "sgbm_disparity.png", "guided", "sgbm_guided"),
-             ("SGBM, refine unreliable", "sgbm_disparity.png", "unreliable", "sgbm_unreliable")]
+             ("SGBM, refine unreliable", "sgbm_disparity.png", "unreliable", "sgbm_unreliable"),
+             ("truth disparity, refine repair", "truth_disparity.png", "repair", "truth_repair"),
+             ("SGBM, refine repair", "sgbm_disparity.png", "repair", "sgbm_repair")]
     results = {"setup": {"size": [W, H], "fov_deg": a.fov, "focal_px": F,
                          "baseline_m": a.baseline, "beta": a.beta, "position": pos,
                          "yaw": a.yaw, "pitch": a.pitch, "near": a.near, "far": a.far,
@@ -259,7 +262,8 @@ def main():
     # 5. Real-looking foggy images.
     fogs = [("fog_truth.png", "truth_disparity.png", "none"),
             ("fog_sgbm_none.png", "sgbm_disparity.png", "none"),
-            ("fog_sgbm_guided.png", "sgbm_disparity.png", "guided")]
+            ("fog_sgbm_guided.png", "sgbm_disparity.png", "guided"),
+            ("fog_sgbm_repair.png", "sgbm_disparity.png", "repair")]
     for out, depth, refine in fogs:
         run([B, "render", "--image", o("left.png"), "--depth", o(depth),
              "--depth-format", "cityscapes", "--camera",
@@ -271,7 +275,8 @@ def main():
         os.makedirs(a.docs, exist_ok=True)
         for src, dst in (("fog_truth.png", "refine-sgbm-truth.png"),
                          ("fog_sgbm_none.png", "refine-sgbm-none.png"),
-                         ("fog_sgbm_guided.png", "refine-sgbm-guided.png")):
+                         ("fog_sgbm_guided.png", "refine-sgbm-guided.png"),
+                         ("fog_sgbm_repair.png", "refine-sgbm-repair.png")):
             shutil.copyfile(o(src), os.path.join(a.docs, dst))
 
     with open(o("results.json"), "w") as fh:
@@ -290,7 +295,8 @@ def main():
               disp_stats["bad3_fraction_valid_surfaces"]))
     print("|tau - tau_true|, mean / 95th percentile, per region (pixels):")
     labels = list(results["tau_abs_error"])
-    short = ["truth/none", "truth/guided", "SGBM/none", "SGBM/guided", "SGBM/unreliable"]
+    short = ["truth/none", "truth/guided", "SGBM/none", "SGBM/guided", "SGBM/unreliable",
+             "truth/repair", "SGBM/repair"]
     print(f"{'region':42s}" + "".join(f"{c:>18s}" for c in short))
     for m in masks:
         cells = "".join("{:>9.4f} /{:>7.4f}".format(*results["tau_abs_error"][lb][m][:2])

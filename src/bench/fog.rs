@@ -5,6 +5,10 @@
 //! variant at its first draw). The figure is the median of the runs' summed pass times,
 //! with the clock that produced them; each pass's median is kept too.
 //!
+//! Then how soon a host's call returns: with timing off ([`Timing::Off`], a host's
+//! default) and blocking, a fence placed right after the call tells whether the GPU was
+//! still drawing when it returned, and when it finished (wall clock from the call).
+//!
 //! Paper 001 reports 0.20 ms (fog) and 0.44 ms (fog and 5 x 5 blur in one pass) at
 //! 1920 x 1080 on a GTX 970; paper 003 0.4-2.1 ms at 512²-1024² on a GeForce 6800.
 
@@ -12,6 +16,7 @@ use crate::blur::Blur;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
+use crate::gpu::timer::Timing;
 use crate::medium::{DistanceFog, LayeredFog, Medium};
 use crate::pipeline::{Encoding, FogBlur, GaussBlur, Input, Output};
 use crate::renderer::Renderer;
@@ -63,7 +68,8 @@ pub struct FogBenchRow {
     pub passes: Vec<String>,
     /// Median time of each pass (ms).
     pub pass_median_ms: Vec<f64>,
-    /// `gpu-timer` or `wall`.
+    /// `gpu-timer` or `wall`; `mixed`, or `n/a` when every run's figures were rejected
+    /// (those runs are left out of the medians).
     pub clock: &'static str,
 }
 
@@ -82,6 +88,28 @@ pub struct FogBenchReport {
     pub scene_ms: f64,
     /// One row per configuration.
     pub rows: Vec<FogBenchRow>,
+    /// How soon a call returns, by timing option.
+    pub returns: Vec<ReturnRow>,
+}
+
+/// How soon a host's call returns with one timing option, and when the GPU is done: a
+/// fence placed right after the call, waited for (medians over the runs, wall clock from
+/// the call, the GPU idle before it).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ReturnRow {
+    /// The configuration.
+    pub what: &'static str,
+    /// `off` or `blocking`.
+    pub timing: &'static str,
+    /// Until the call returned (ms).
+    pub return_ms: f64,
+    /// Until the fence placed at the return signalled (ms).
+    pub done_ms: f64,
+    /// Runs in which the fence had not signalled when the call returned: the GPU was
+    /// still drawing.
+    pub pending_at_return: usize,
+    /// Runs.
+    pub runs: usize,
 }
 
 /// How a configuration is drawn.
@@ -189,6 +217,55 @@ pub fn run_fog_bench(
         }
         rows.push(row(fog, blur, passes, &times));
     }
+    let mut returns = Vec::new();
+    let before = pipeline.timing();
+    for (what, medium, mode) in [
+        (
+            "distance, diffusion",
+            &distance as &dyn Medium,
+            Mode::Fog(FogBlur::Diffusion(diffusion)),
+        ),
+        ("distance, no blur", &distance, Mode::Fog(FogBlur::None)),
+        ("layered, blend", &layered, Mode::Blend),
+    ] {
+        progress(
+            configs.len(),
+            configs.len(),
+            &format!("return time, {what}"),
+        );
+        for timing in [Timing::Off, Timing::Blocking] {
+            pipeline.set_timing(timing);
+            let mut call = || -> Result<()> {
+                match &mode {
+                    Mode::Fog(b) => pipeline.fog(&input, medium, b, &output).map(drop),
+                    Mode::Blend => pipeline
+                        .blend_fog(input.depth, w, h, medium, &output)
+                        .map(drop),
+                }
+            };
+            let (mut returned, mut done, mut pending) = (Vec::new(), Vec::new(), 0);
+            for _ in 0..opts.runs {
+                // SAFETY: glFinish on the current context: the GPU is idle before the call.
+                unsafe { glow::HasContext::finish(&*gl) };
+                let start = std::time::Instant::now();
+                call()?;
+                returned.push(start.elapsed().as_secs_f64() * 1e3);
+                // SAFETY: a fence on the current context, waited for and deleted.
+                let was_pending = unsafe { wait_for_fence(&gl)? };
+                done.push(start.elapsed().as_secs_f64() * 1e3);
+                pending += usize::from(was_pending);
+            }
+            returns.push(ReturnRow {
+                what,
+                timing: timing.name(),
+                return_ms: median(returned),
+                done_ms: median(done),
+                pending_at_return: pending,
+                runs: opts.runs,
+            });
+        }
+    }
+    pipeline.set_timing(before);
     Ok(FogBenchReport {
         renderer: renderer_name,
         width: w,
@@ -196,7 +273,33 @@ pub fn run_fog_bench(
         runs: opts.runs,
         scene_ms,
         rows,
+        returns,
     })
+}
+
+/// Places a fence after the commands issued so far and waits for it; returns whether it
+/// had not signalled yet when placed (the GPU was still working).
+///
+/// # Safety
+/// A context is current on this thread.
+unsafe fn wait_for_fence(gl: &glow::Context) -> Result<bool> {
+    use glow::HasContext;
+    let fence = gl
+        .fence_sync(glow::SYNC_GPU_COMMANDS_COMPLETE, 0)
+        .map_err(Error::Gl)?;
+    let pending = gl.client_wait_sync(fence, 0, 0) == glow::TIMEOUT_EXPIRED;
+    loop {
+        match gl.client_wait_sync(fence, glow::SYNC_FLUSH_COMMANDS_BIT, 100_000_000) {
+            glow::TIMEOUT_EXPIRED => continue,
+            glow::WAIT_FAILED => {
+                gl.delete_sync(fence);
+                return Err(Error::Gl("waiting for a fence: GL_WAIT_FAILED".into()));
+            }
+            _ => break,
+        }
+    }
+    gl.delete_sync(fence);
+    Ok(pending)
 }
 
 fn row(
@@ -205,6 +308,9 @@ fn row(
     passes: Vec<String>,
     times: &[crate::gpu::timer::PassTimes],
 ) -> FogBenchRow {
+    // Runs whose GPU-timer figures were rejected are left out (never run again).
+    let times: Vec<&crate::gpu::timer::PassTimes> =
+        times.iter().filter(|t| t.is_available()).collect();
     let runs_ms: Vec<f64> = times.iter().map(|t| t.total_ms).collect();
     let pass_median_ms = (0..passes.len())
         .map(|p| {
@@ -216,14 +322,10 @@ fn row(
             )
         })
         .collect();
-    // A run timed again by the wall clock after a rejected GPU batch says so.
-    let clock = if times
-        .iter()
-        .all(|t| t.clock == crate::gpu::timer::Clock::GpuTimer)
-    {
-        "gpu-timer"
-    } else {
-        "wall"
+    let clock = match times.first() {
+        Some(first) if times.iter().all(|t| t.clock == first.clock) => first.clock.name(),
+        Some(_) => "mixed",
+        None => "n/a",
     };
     FogBenchRow {
         fog,
@@ -267,6 +369,16 @@ pub fn fog_table(report: &FogBenchReport) -> String {
             r.median_ms,
             r.passes.len(),
             r.clock
+        ));
+    }
+    out.push_str(&format!(
+        "\nhow soon a call returns (fence after it; median ms from the call)\n{:<22} {:<9} {:>10} {:>12} {:>18}\n",
+        "fog", "timing", "returned", "GPU done", "GPU busy at return"
+    ));
+    for r in &report.returns {
+        out.push_str(&format!(
+            "{:<22} {:<9} {:>10.2} {:>12.2} {:>12}/{} runs\n",
+            r.what, r.timing, r.return_ms, r.done_ms, r.pending_at_return, r.runs
         ));
     }
     out

@@ -99,9 +99,12 @@ fn time_runs(
         let t = Instant::now();
         let (_, times) = run()?;
         wall.push(t.elapsed().as_secs_f64() * 1e3);
-        gpu.push(times.total_ms);
-        passes = times.pass_ms.len();
-        clock = times.clock.name();
+        // A run whose GPU-timer figures were rejected is left out of the median.
+        if let Some(ms) = times.total() {
+            gpu.push(ms);
+            passes = times.pass_ms.len();
+            clock = times.clock.name();
+        }
     }
     Ok(RefineBenchRow {
         what: what.to_string(),

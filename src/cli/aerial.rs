@@ -3,14 +3,22 @@
 //! turbidity a photo was taken at (sec. 7.2.3, eq. 25-26).
 
 use super::args::{AerialBlur, RenderArgs};
+use super::render::{look_from_args, PrepReport, Scene};
+use brume::atmosphere::horizon_light;
 use brume::atmosphere::{AttenuationTable, Sensitivity};
+use brume::blur::Blur;
 use brume::camera::Camera;
 use brume::io::camera::Intrinsics;
 use brume::io::image::load_linear_rgb;
+use brume::io::output::Outputs;
+use brume::medium::haze::Haze;
 use brume::medium::{AerialPerspective, Medium, Pixel};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::sky::turbidity::{estimate_turbidity, TurbidityOptions};
 use brume::{Error, Result};
+use brume::{FogBlur, Headless};
+use serde_json::json;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The smallest source Γ retargeting divides by: below it the photo holds airlight only.
@@ -274,6 +282,149 @@ pub fn dehaze(
             ((f64::from(e[c]) - m.inscatter[c] * (1.0 - g)) / g).max(0.0) as f32
         })
     }))
+}
+
+/// The aerial render's inputs, as `brume render` and `brume view` use them.
+pub struct AerialJob {
+    /// The photo (retargeted with `--from-turbidity`).
+    pub image: RgbImage,
+    /// Range in `--metres-per-unit`, unknown samples taken as the sky.
+    pub range: ScalarMap,
+    pub look: AerialLook,
+    /// The largest known range.
+    pub max_range: f32,
+    /// Where the horizon's light came from, for the report.
+    pub light_source: &'static str,
+    /// The diffusion blur, when the medium blurs.
+    pub blur: Blur,
+}
+
+impl AerialJob {
+    /// No blur: the fog's one pass does what the medium pass and the composite would.
+    pub fn fog_blur(&self) -> FogBlur {
+        if self.look.medium.lambda == 0.0 {
+            FogBlur::None
+        } else {
+            FogBlur::Diffusion(self.blur)
+        }
+    }
+}
+
+/// `--medium aerial`: paper 002's aerial perspective on the range in metres (module
+/// `aerial`), the horizon's light from the sky found (or `--airlight`).
+pub fn aerial_job(
+    args: &RenderArgs,
+    scene: &Scene,
+    prep: &PrepReport,
+    range: &ScalarMap,
+) -> Result<AerialJob> {
+    let max_range = range
+        .as_slice()
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold(0f32, f32::max);
+    if max_range <= 0.0 {
+        return Err(Error::NoValidDepth {
+            path: PathBuf::from(&scene.depth_name),
+        });
+    }
+    // Unknown range (only with --no-prep) is taken as the sky is by pre-processing.
+    let range = range.map(|&v| {
+        if v.is_finite() && v > 0.0 {
+            v
+        } else {
+            1.5 * max_range
+        }
+    });
+    // I∞(θ') from the brightest sky of the horizon region (paper 002, sec. 4), unless
+    // --airlight says otherwise or no sky was found.
+    let camera = aerial_camera(args, scene.image.height(), scene.depth.intrinsics.as_ref())?;
+    let horizon = match (&args.airlight, &prep.prepared) {
+        (None, Some(p)) => horizon_light(&scene.image, &p.sky, &camera),
+        _ => None,
+    };
+    let (light, zenith, light_source) = match horizon {
+        Some(h) => (h.rgb, Some(h.zenith), "horizon"),
+        None => (prep.airlight, None, prep.airlight_from.name()),
+    };
+    let look = aerial_look(args, camera, 1.5 * f64::from(max_range), light, zenith)?;
+    let image = match look.from_turbidity {
+        Some(from) => dehaze(&scene.image, &range, &look, from)?,
+        None => scene.image.clone(),
+    };
+    let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
+    Ok(AerialJob {
+        image,
+        range,
+        look,
+        max_range,
+        light_source,
+        blur,
+    })
+}
+
+pub fn run_aerial(
+    args: &RenderArgs,
+    renderer: &mut Headless,
+    scene: &Scene,
+    prep: &PrepReport,
+    range: &ScalarMap,
+    out: &Path,
+) -> Result<()> {
+    let job = aerial_job(args, scene, prep, range)?;
+    let AerialJob {
+        image,
+        range,
+        look,
+        max_range,
+        light_source,
+        blur,
+    } = &job;
+    let rendered = renderer.render_fog(image, range, &look.medium, &job.fog_blur())?;
+    let mut outputs = Outputs::new();
+    outputs.stage_rgba(out, &rendered.image)?;
+    super::commit(outputs)?;
+    let m = &look.medium;
+    let t = &rendered.times;
+    if args.json {
+        outln!(
+            "{}",
+            json!({
+                "width": image.width(),
+                "height": image.height(),
+                "medium": "aerial",
+                "turbidity": m.table.turbidity(),
+                "turbidity_source": look.turbidity_source,
+                "from_turbidity": look.from_turbidity,
+                "altitude": m.table.altitude_m(),
+                "metres_per_unit": m.metres_per_unit,
+                "pitch": m.camera.pitch_deg,
+                "fov": m.camera.fov_y_deg,
+                "horizon_light": m.horizon_light,
+                "horizon_light_source": light_source,
+                "horizon_zenith": m.reference_zenith.to_degrees(),
+                "max_range": max_range,
+                "diffusion_passes": rendered.schedule.steps,
+                "sigma_max": m.sigma_max(blur.sigma0),
+                "renderer": renderer.caps().renderer,
+                "clock": t.clock,
+                "total_ms": t.total_ms,
+                "pass_ms": t.pass_ms,
+                "out": out.display().to_string(),
+            })
+        );
+    } else {
+        outln!(
+            "wrote {} (aerial perspective, T = {:.2} ({}), {} diffusion passes + 2, {})",
+            out.display(),
+            m.table.turbidity(),
+            look.turbidity_source,
+            rendered.schedule.steps,
+            t.describe(1)
+        );
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -329,7 +329,10 @@ fn render_frames(
         for (k, &beta) in betas.iter().enumerate() {
             let event = match render_beta(args, renderer, &frame, beta) {
                 Ok((job, gpu_ms, render_ms)) => {
-                    stats.gpu_ms += gpu_ms;
+                    // NaN (JSON null) where the GPU timer's figures were rejected.
+                    if gpu_ms.is_finite() {
+                        stats.gpu_ms += gpu_ms;
+                    }
                     stats.render_ms += render_ms;
                     Event::Output(job)
                 }
@@ -371,7 +374,7 @@ fn refine_frame(
         args, scene, prep, ..
     } = &mut loaded;
     let result = super::refine::refine_scene(args, scene, prep, renderer)
-        .and_then(|_| render_cmd::haze_inputs(args, scene, prep));
+        .and_then(|_| render_cmd::haze_inputs(args, prep));
     stats.refine_ms += t.elapsed().as_secs_f64() * 1e3;
     match result {
         Ok((range, _, _)) => Ok(Refined { loaded, range }),
@@ -433,7 +436,7 @@ fn render_beta(
         "sigma_max": look.sigma_max(),
         "diffusion_passes": passes,
         "airlight": look.airlight(),
-        "airlight_source": frame.prep.airlight_source,
+        "airlight_source": frame.prep.airlight_from.name(),
         "decode_ms": frame.decode_ms,
         "prep_ms": frame.prep_ms,
         "gpu_ms": gpu_ms,
@@ -673,9 +676,7 @@ impl BatchArgs {
         args.no_prep = self.no_prep;
         args.prep = self.prep.clone();
         args.compat = self.compat;
-        args.refine = self.refine;
-        args.refine_radius = self.refine_radius;
-        args.refine_eps = self.refine_eps;
+        args.refine = self.refine.clone();
         super::options::check_options(&args)?;
         let haze = render_cmd::haze_from_args(&args)?;
         render_cmd::prep_options(&args.prep)?;

@@ -1,13 +1,15 @@
 //! Foggy Cityscapes' conventions on the command line (`--compat foggy-cityscapes`,
 //! `--transmittance-map`); the conventions themselves are `brume::compat`.
 
-use super::args::{RefineMode, RenderArgs};
-use super::render::{check_memory_before_loading, check_same_size, Scene};
+use super::args::RenderArgs;
+use super::render::{check_same_size, Scene};
 use brume::io::depth::{DepthFormat, DepthKind, LoadedDepth};
 use brume::io::image;
 use brume::io::output::Outputs;
 use brume::medium::physical::{self, PhysicalFog};
+use brume::photo::check_memory_before_loading;
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
+use brume::refine::RefineMode;
 use brume::Result;
 use serde_json::json;
 use std::path::Path;
@@ -48,7 +50,7 @@ pub fn load_transmittance_scene(image_path: &Path, map: &Path) -> Result<Scene> 
 pub fn transmittance_map_args(args: &RenderArgs) -> RenderArgs {
     let mut args = args.clone();
     args.beta = Some(1.0);
-    args.refine = Some(RefineMode::None);
+    args.refine.mode = Some(RefineMode::None);
     args
 }
 

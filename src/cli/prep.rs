@@ -1,17 +1,18 @@
 //! `brume prep`: pre-process a range map on its own and show what happened.
 
-use super::args::{PrepArgs, PrepOptionArgs};
-use super::render::{
-    airlight_source_name, check_same_size, depth_inputs, load_depth, prep_options,
-};
+use super::args::{PrepArgs, PrepOptionArgs, RefineArgs};
+use super::render::{depth_inputs, load_depth, prep_options};
 use brume::io::image;
 use brume::io::mask::{self, SkyMaskFormat};
 use brume::io::output::{self, Outputs};
-use brume::prep::{self, Guides, PrepOptions, Prepared};
-use brume::raster::{Grid, RgbImage, ScalarMap};
+use brume::photo::{Photo, PrepareOptions};
+use brume::prep::{self, Guides};
+use brume::raster::{Grid, ScalarMap};
+use brume::refine::{CpuFilter, RefineMode};
 use brume::{Error, Result};
 use serde_json::json;
 use std::path::Path;
+use std::time::Instant;
 
 pub fn run(args: &PrepArgs) -> Result<()> {
     let opts = prep_options(&args.prep)?;
@@ -37,33 +38,51 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         .as_ref()
         .map(|p| p.display().to_string())
         .unwrap_or_default();
-    let colour = match &args.image {
+    let refine = args.refine.options(loaded.format)?;
+    let masks = load_masks(&args.prep, &loaded.range, &depth_name)?;
+    let mask_format = masks.sky_format;
+    let mut refine_ms = 0.0;
+    let (loaded, prepared, airlight, plan) = match &args.image {
         Some(path) => {
-            let img = image::load_linear_rgb(path)?;
-            check_same_size(
-                &img,
-                &path.display().to_string(),
-                &loaded.range,
-                &depth_name,
-            )?;
-            Some(img)
+            let photo = Photo {
+                image: image::load_linear_rgb(path)?,
+                depth: loaded,
+                image_name: path.display().to_string(),
+                depth_name,
+            };
+            photo.check_depth_fits()?;
+            let opts = PrepareOptions {
+                prep: Some(opts),
+                sky_mask: masks.sky,
+                ego_mask: masks.ego,
+                refine,
+                airlight: None,
+            };
+            let mut prepared = brume::photo::preprocess(&photo, &opts)?;
+            let started = Instant::now();
+            let plan = prepared.refine(&photo, &refine, &mut CpuFilter)?;
+            refine_ms = started.elapsed().as_secs_f64() * 1e3;
+            let airlight = (prepared.airlight, prepared.airlight_from.name());
+            let p = prepared.prepared.expect("pre-processing ran");
+            (photo.depth, p, Some(airlight), Some(plan))
         }
-        None => None,
+        None => {
+            refuse_refinement_without_image(&args.refine)?;
+            let guides = Guides {
+                image: None,
+                sky_mask: masks.sky.as_ref(),
+                ego_mask: masks.ego.as_ref(),
+            };
+            let prepared = prep::prepare_guided(&loaded.range, guides, &opts)?;
+            (loaded, prepared, None, None)
+        }
     };
-    let (prepared, mask_format) = prepare_inputs(
-        &args.prep,
-        &opts,
-        &loaded.range,
-        &depth_name,
-        colour.as_ref(),
-    )?;
-    let airlight = colour
-        .as_ref()
-        .map(|img| prep::estimate_airlight(img, &prepared));
+    let (w, h) = (prepared.range.width(), prepared.range.height());
+    let measured = brume::refine::nearest_to_image_size(&loaded.range, w, h);
     let mut outputs = Outputs::new();
     outputs.stage_scalar(&args.out, &prepared.range)?;
     if let Some(vis) = &args.vis {
-        let (w, h, rgb) = prep::visualize(&loaded.range, &prepared);
+        let (w, h, rgb) = prep::visualize(&measured, &prepared);
         outputs.stage_png_rgb8(vis, w, h, &rgb)?;
     }
     super::commit(outputs)?;
@@ -72,13 +91,17 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     if args.json {
         let mut report = serde_json::to_value(s).expect("statistics serialise");
         let extra = json!({
-            "width": loaded.range.width(), "height": loaded.range.height(),
+            "width": w, "height": h,
+            "depth_width": loaded.range.width(), "depth_height": loaded.range.height(),
+            "upsampled": plan.is_some_and(|p| p.upsample),
+            "refine": plan.map(|_| super::refine::mode_name(args.refine.mode.unwrap_or(RefineMode::default_for(loaded.format)))),
+            "refine_ms": refine_ms,
             "out": args.out.display().to_string(),
             "vis": args.vis.as_ref().map(|p| p.display().to_string()),
             "depth_format": loaded.format.to_string(), "depth_kind": loaded.kind.to_string(),
             "depth_notes": loaded.notes, "unknown_pixels": loaded.unknown_pixels,
-            "airlight": airlight.as_ref().map(|a| a.rgb),
-            "airlight_source": airlight.as_ref().map(|a| airlight_source_name(a.source)),
+            "airlight": airlight.map(|a| a.0),
+            "airlight_source": airlight.map(|a| a.1),
             "sky_mask": args.prep.sky_mask.as_ref().map(|p| p.display().to_string()),
             "sky_mask_format": mask_format.map(|f| f.name()),
             "ego_mask": args.prep.ego_mask.as_ref().map(|p| p.display().to_string()),
@@ -123,13 +146,30 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.margin_ms,
             s.total_ms
         );
-        if let Some(a) = &airlight {
+        if let Some(plan) = plan.filter(|p| !p.is_empty()) {
             outln!(
-                "airlight {:.3},{:.3},{:.3} (from {})",
-                a.rgb[0],
-                a.rgb[1],
-                a.rgb[2],
-                airlight_source_name(a.source)
+                "range {}{} at {w}x{h}, {refine_ms:.1} ms CPU",
+                if plan.upsample {
+                    format!(
+                        "upsampled from {}x{}, ",
+                        loaded.range.width(),
+                        loaded.range.height()
+                    )
+                } else {
+                    String::new()
+                },
+                match plan.guided {
+                    Some(o) => format!("refined (r = {} px, ε = {})", o.radius_px, o.epsilon),
+                    None => "not refined".into(),
+                }
+            );
+        }
+        if let Some((rgb, from)) = airlight {
+            outln!(
+                "airlight {:.3},{:.3},{:.3} (from {from})",
+                rgb[0],
+                rgb[1],
+                rgb[2]
             );
         }
         outln!("wrote {}", args.out.display());
@@ -138,6 +178,23 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// `--refine` and its window need the image as guide.
+fn refuse_refinement_without_image(args: &RefineArgs) -> Result<()> {
+    let given = [
+        ("--refine", args.mode.is_some_and(|m| m != RefineMode::None)),
+        ("--refine-radius", args.radius.is_some()),
+        ("--refine-eps", args.eps.is_some()),
+    ];
+    match given.iter().find(|(_, g)| *g) {
+        Some((flag, _)) => Err(Error::invalid(
+            *flag,
+            "given",
+            "--image with it: the refinement is guided by the colour image",
+        )),
+        None => Ok(()),
+    }
 }
 
 /// The `sky_method` of the JSON report, in words.
@@ -181,16 +238,19 @@ fn check_mask(
     Ok(())
 }
 
-/// Pre-processes `range` (named `range_name` in messages) with the colour image, if any,
-/// and the `--sky-mask` and `--ego-mask` of `args`, if any (which must have the range's
-/// size). Returns the result and the sky mask's format.
-pub fn prepare_inputs(
-    args: &PrepOptionArgs,
-    opts: &PrepOptions,
-    range: &ScalarMap,
-    range_name: &str,
-    image: Option<&RgbImage>,
-) -> Result<(Prepared, Option<SkyMaskFormat>)> {
+/// The masks of `--sky-mask` and `--ego-mask`.
+pub struct Masks {
+    /// The sky (true = sky).
+    pub sky: Option<Grid<bool>>,
+    /// How the sky mask was read.
+    pub sky_format: Option<SkyMaskFormat>,
+    /// The ego vehicle (true = the car's hood).
+    pub ego: Option<Grid<bool>>,
+}
+
+/// Loads the `--sky-mask` and `--ego-mask` of `args`, if any, which must have the size of
+/// `range` (named `range_name` in messages) and not be set everywhere.
+pub fn load_masks(args: &PrepOptionArgs, range: &ScalarMap, range_name: &str) -> Result<Masks> {
     let loaded = match &args.sky_mask {
         Some(path) => {
             let (m, format) = mask::load_sky_mask(path, args.sky_mask_format)?;
@@ -225,11 +285,13 @@ pub fn prepare_inputs(
         }
         None => None,
     };
-    let guides = Guides {
-        image,
-        sky_mask: loaded.as_ref().map(|(m, _)| m),
-        ego_mask: ego.as_ref(),
+    let (sky, sky_format) = match loaded {
+        Some((m, f)) => (Some(m), Some(f)),
+        None => (None, None),
     };
-    let prepared = prep::prepare_guided(range, guides, opts)?;
-    Ok((prepared, loaded.map(|(_, f)| f)))
+    Ok(Masks {
+        sky,
+        sky_format,
+        ego,
+    })
 }

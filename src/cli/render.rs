@@ -1,40 +1,29 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
-use super::aerial::{aerial_camera, aerial_look, dehaze, AerialLook};
 use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
-use brume::atmosphere::horizon_light;
 use brume::blur::Blur;
 use brume::egl::Platform;
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::output::{self, Outputs};
 use brume::io::{demo, image};
 use brume::medium::haze::{self, Haze};
-use brume::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
+use brume::medium::physical::{PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
-use brume::prep::{self, AirlightEstimate, AirlightSource, PrepOptions, Prepared};
+use brume::photo::Extinction;
+use brume::prep::PrepOptions;
 use brume::raster::{RgbImage, ScalarMap};
-use brume::{Error, Headless, Result};
-use brume::{FogBlur, Rendered};
+use brume::Rendered;
+use brume::{Error, Result};
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 const DEMO_OUT: &str = "brume-demo.png";
 
-/// The inputs of one render and where they came from.
-pub struct Scene {
-    pub image: RgbImage,
-    pub depth: LoadedDepth,
-    pub image_name: String,
-    pub depth_name: String,
-}
-
-/// What pre-processing did, for the report.
-pub struct PrepReport {
-    pub prepared: Option<Prepared>,
-    pub airlight: [f32; 3],
-    pub airlight_source: &'static str,
-}
+/// The inputs of one render and where they came from (the library's photo).
+pub use brume::photo::Photo as Scene;
+/// What pre-processing and refinement made of the range, and the airlight.
+pub use brume::photo::PreparedPhoto as PrepReport;
 
 /// What is rendered: the medium (paper 000's haze, or a uniform blur) and the blur.
 pub struct Look {
@@ -92,26 +81,22 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let mut prep = preprocess(args, &scene)?;
     let mut headless = super::open_renderer(egl)?;
     let depth_size = [scene.depth.range.width(), scene.depth.range.height()];
+    let refine_mode = super::refine::mode_name(args.refine.options(scene.depth.format)?.mode);
     let refined = super::refine::refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
     if args.transmittance_map.is_some() {
         // The map's τ as given: pre-processing found the sky for the airlight only.
-        if let Some(p) = &mut prep.prepared {
-            p.range = scene.depth.range.clone();
-        }
+        prep.range = scene.depth.range.clone();
     }
-    let range = prep
-        .prepared
-        .as_ref()
-        .map_or(&scene.depth.range, |p| &p.range);
+    let range = &prep.range;
     if args.medium == MediumKind::Aerial {
-        return run_aerial(args, &mut headless, &scene, &prep, range, &out);
+        return super::aerial::run_aerial(args, &mut headless, &scene, &prep, range, &out);
     }
     let fog = physical_from_args(args)?;
     if args.compat == Some(Compat::FoggyCityscapes) {
         let fog = fog.expect("checked: --compat foggy-cityscapes has physical fog");
         return super::compat::run_foggy_cityscapes(args, &scene, range, &fog, &out);
     }
-    let (medium_range, range_divisor, look) = haze_inputs(args, &scene, &prep)?;
+    let (medium_range, range_divisor, look) = haze_inputs(args, &prep)?;
     let transmittance = transmittance_range(&look, &medium_range, &scene.depth.range);
 
     let renderer = &mut headless;
@@ -133,6 +118,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     if args.json {
         let mut json = report.json(args, range_divisor);
         json["refine"] = json!({
+            "mode": refine_mode,
             "depth_size": depth_size,
             "upsampled": refined.upsample,
             "guided": refined.guided.map(|r| json!({"radius_px": r.radius_px, "epsilon": r.epsilon})),
@@ -216,15 +202,8 @@ pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
 
 /// The range the haze reads (see [`haze_range`]), the range that counts as 1, and the
 /// look, as `brume render` renders them.
-pub fn haze_inputs(
-    args: &RenderArgs,
-    scene: &Scene,
-    prep: &PrepReport,
-) -> Result<(ScalarMap, f64, Look)> {
-    let range = prep
-        .prepared
-        .as_ref()
-        .map_or(&scene.depth.range, |p| &p.range);
+pub fn haze_inputs(args: &RenderArgs, prep: &PrepReport) -> Result<(ScalarMap, f64, Look)> {
+    let range = &prep.range;
     let haze = haze_from_args(args)?;
     let fog = physical_from_args(args)?;
     let (medium_range, range_divisor) = haze_range(fog.as_ref(), &haze, range)?;
@@ -341,16 +320,22 @@ pub fn haze_range(
     haze: &Haze,
     range: &ScalarMap,
 ) -> Result<(ScalarMap, f64)> {
-    match fog {
-        Some(_) => {
-            let (metres, _) = physical::metric_range(range)?;
-            Ok((metres, haze.range_unit))
-        }
-        None => {
-            let (normalised, r_max) = haze::normalise_range(range)?;
-            Ok((normalised, f64::from(r_max)))
-        }
-    }
+    let extinction = match fog {
+        Some(f) => Extinction::Physical(*f),
+        None => Extinction::Normalised {
+            ka: haze.ka,
+            ks: haze.ks,
+        },
+    };
+    let (medium_range, r_max) = brume::photo::medium_range(&extinction, range)?;
+    Ok((
+        medium_range,
+        if fog.is_some() {
+            haze.range_unit
+        } else {
+            r_max
+        },
+    ))
 }
 
 /// The least and the largest τ (over channels) of the haze at the pixels whose range
@@ -407,7 +392,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             Ok(scene)
         }
         (Some(image_path), Some(_)) => {
-            check_memory_before_loading(image_path)?;
+            brume::photo::check_memory_before_loading(image_path)?;
             let depth = load_depth(&args.depth)?;
             let scene = Scene {
                 image: image::load_linear_rgb(image_path)?,
@@ -421,7 +406,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
                     .display()
                     .to_string(),
             };
-            check_depth_fits(&scene)?;
+            scene.check_depth_fits()?;
             check_metric(args, &scene)?;
             let mut scene = scene;
             super::refine::drop_left_right_mismatches(args, &mut scene)?;
@@ -438,34 +423,6 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             "a depth, range or disparity map to go with --image",
         )),
     }
-}
-
-/// Bytes per pixel that a render holds in system memory besides the GL textures: the
-/// decoded colour (8-bit, then linear f32), the depth (raw, then range), pre-processing's
-/// maps, the normalised range, the read-back and the encoded output. Measured: a
-/// 4000x3000 render peaks at 1.12-1.18 GB on llvmpipe, 94-98 bytes per pixel, of which the
-/// textures (counted by the renderer's own check) are 36.
-const CPU_BYTES_PER_PIXEL: u64 = 64;
-
-/// Refuses, from the image's header alone, an image whose render cannot fit in the memory
-/// left, before decoding it (a header that cannot be read is left to the loader to report).
-pub fn check_memory_before_loading(image_path: &Path) -> Result<()> {
-    let dims = ::image::ImageReader::open(image_path)
-        .ok()
-        .and_then(|r| r.with_guessed_format().ok())
-        .and_then(|r| r.into_dimensions().ok());
-    let Some((w, h)) = dims else {
-        return Ok(());
-    };
-    brume::memory::check_fits(
-        &format!("rendering {} ({w}x{h})", image_path.display()),
-        CPU_BYTES_PER_PIXEL * u64::from(w) * u64::from(h),
-        brume::memory::available(),
-        &format!(
-            "a render holds about {CPU_BYTES_PER_PIXEL} bytes per pixel in memory besides \
-             its textures: use a smaller image"
-        ),
-    )
 }
 
 /// Loads the depth named by `args` (which must have one) as a range map.
@@ -508,27 +465,6 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
         .chain(args.camera.iter())
         .cloned()
         .collect()
-}
-
-/// The depth map has the image's size, or is smaller by one factor on both sides (it is
-/// then upsampled, guided by the image).
-fn check_depth_fits(scene: &Scene) -> Result<()> {
-    let (image, range) = (&scene.image, &scene.depth.range);
-    let sizes = (
-        (image.width(), image.height()),
-        (range.width(), range.height()),
-    );
-    brume::refine::check_depth_size(sizes.0, sizes.1).map_err(|e| match e {
-        Error::InvalidParameter { expected, .. } => Error::invalid(
-            "--depth",
-            format!("{} ({}x{})", scene.depth_name, sizes.1 .0, sizes.1 .1),
-            format!(
-                "a depth map for the image {} ({}x{}): {expected}",
-                scene.image_name, sizes.0 .0, sizes.0 .1
-            ),
-        ),
-        e => e,
-    })
 }
 
 /// Checks that the colour image and the range map have one size; the error names both.
@@ -578,57 +514,34 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
     Ok(opts)
 }
 
+/// Pre-processes the scene's range as `args` ask ([`brume::photo::preprocess`]): the
+/// masks of `--sky-mask` and `--ego-mask` (checked against the depth map), the
+/// pre-processing options, the airlight policy; nothing with `--no-prep` or a uniform blur
+/// (which ignores range and airlight).
 pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
-    let given = args.airlight.map(|b| (b, "given"));
-    // A uniform blur ignores range and airlight: nothing to pre-process.
+    let mut opts = brume::photo::PrepareOptions {
+        airlight: args.airlight,
+        ..Default::default()
+    };
     if args.no_prep || args.uniform_sigma.is_some() {
-        let (airlight, source) = given.unwrap_or((haze::DEFAULT_AIRLIGHT, "default"));
-        return Ok(PrepReport {
-            prepared: None,
-            airlight,
-            airlight_source: source,
-        });
+        opts.prep = None;
+        return brume::photo::preprocess(scene, &opts);
     }
-    let opts = prep_options(&args.prep)?;
+    opts.prep = Some(prep_options(&args.prep)?);
+    let masks = super::prep::load_masks(&args.prep, &scene.depth.range, &scene.depth_name)?;
+    (opts.sky_mask, opts.ego_mask) = (masks.sky, masks.ego);
     let started = Instant::now();
-    let depth = &scene.depth.range;
-    let small;
-    let image = if (depth.width(), depth.height()) == (scene.image.width(), scene.image.height()) {
-        &scene.image
-    } else {
-        small = brume::refine::image_at_depth_size(&scene.image, depth.width(), depth.height());
-        &small
-    };
-    let (prepared, _) =
-        super::prep::prepare_inputs(&args.prep, &opts, depth, &scene.depth_name, Some(image))?;
-    log::info!(
-        "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
-        prepared.stats.holes,
-        prepared.stats.hole_pixels,
-        prepared.stats.sky_pixels,
-        started.elapsed().as_secs_f64() * 1e3
-    );
-    let (airlight, source) = match given {
-        Some(g) => g,
-        None => {
-            let AirlightEstimate { rgb, source, .. } = prep::estimate_airlight(image, &prepared);
-            (rgb, airlight_source_name(source))
-        }
-    };
-    Ok(PrepReport {
-        prepared: Some(prepared),
-        airlight,
-        airlight_source: source,
-    })
-}
-
-/// How the airlight estimate was made, for reports (`airlight_source` in `--json`): `sky`
-/// (median sky colour) or `neutral` (no sky: a grey at the scene's bright end).
-pub fn airlight_source_name(source: AirlightSource) -> &'static str {
-    match source {
-        AirlightSource::Sky => "sky",
-        AirlightSource::Neutral => "neutral",
+    let prepared = brume::photo::preprocess(scene, &opts)?;
+    if let Some(p) = &prepared.prepared {
+        log::info!(
+            "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
+            p.stats.holes,
+            p.stats.hole_pixels,
+            p.stats.sky_pixels,
+            started.elapsed().as_secs_f64() * 1e3
+        );
     }
+    Ok(prepared)
 }
 
 pub fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Look {
@@ -688,7 +601,7 @@ impl Report<'_> {
             "transmittance_min": transmittance.map(|t| t[0]),
             "transmittance_max": transmittance.map(|t| t[1]),
             "airlight": look.airlight(),
-            "airlight_source": prep.airlight_source,
+            "airlight_source": prep.airlight_from.name(),
             "prep": prep_json,
         })
     }
@@ -721,7 +634,7 @@ impl Report<'_> {
             b[0],
             b[1],
             b[2],
-            prep.airlight_source,
+            prep.airlight_from.name(),
             look.sigma_max(),
             look.extinction()
         );
@@ -737,15 +650,14 @@ impl Report<'_> {
             outln!("τ from {lo:.4} to {hi:.4} over the pixels of known range");
         }
         outln!(
-            "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {:.1} ms by {} on {})",
+            "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {} on {})",
             out.display(),
             scene.image.width(),
             scene.image.height(),
             look.blur.scheme,
             look.blur.precision,
             rendered.schedule.steps,
-            t.total_ms,
-            t.clock.name(),
+            t.describe(1),
             renderer
         );
     }
@@ -753,6 +665,10 @@ impl Report<'_> {
 
 fn print_timings(rendered: &Rendered) {
     let t = &rendered.times;
+    if !t.is_available() {
+        outln!("pass times n/a (the GPU timer's figures were rejected)");
+        return;
+    }
     let n = t.pass_ms.len();
     outln!("{:>6}  {:<12} {:>10}", "pass", "shader", "ms");
     for (i, ms) in t.pass_ms.iter().enumerate() {
@@ -770,148 +686,4 @@ fn print_timings(rendered: &Rendered) {
         t.total_ms,
         t.clock.name()
     );
-}
-
-/// The aerial render's inputs, as `brume render` and `brume view` use them.
-pub struct AerialJob {
-    /// The photo (retargeted with `--from-turbidity`).
-    pub image: RgbImage,
-    /// Range in `--metres-per-unit`, unknown samples taken as the sky.
-    pub range: ScalarMap,
-    pub look: AerialLook,
-    /// The largest known range.
-    pub max_range: f32,
-    /// Where the horizon's light came from, for the report.
-    pub light_source: &'static str,
-    /// The diffusion blur, when the medium blurs.
-    pub blur: Blur,
-}
-
-impl AerialJob {
-    /// No blur: the fog's one pass does what the medium pass and the composite would.
-    pub fn fog_blur(&self) -> FogBlur {
-        if self.look.medium.lambda == 0.0 {
-            FogBlur::None
-        } else {
-            FogBlur::Diffusion(self.blur)
-        }
-    }
-}
-
-/// `--medium aerial`: paper 002's aerial perspective on the range in metres (module
-/// `aerial`), the horizon's light from the sky found (or `--airlight`).
-pub fn aerial_job(
-    args: &RenderArgs,
-    scene: &Scene,
-    prep: &PrepReport,
-    range: &ScalarMap,
-) -> Result<AerialJob> {
-    let max_range = range
-        .as_slice()
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .fold(0f32, f32::max);
-    if max_range <= 0.0 {
-        return Err(Error::NoValidDepth {
-            path: PathBuf::from(&scene.depth_name),
-        });
-    }
-    // Unknown range (only with --no-prep) is taken as the sky is by pre-processing.
-    let range = range.map(|&v| {
-        if v.is_finite() && v > 0.0 {
-            v
-        } else {
-            1.5 * max_range
-        }
-    });
-    // I∞(θ') from the brightest sky of the horizon region (paper 002, sec. 4), unless
-    // --airlight says otherwise or no sky was found.
-    let camera = aerial_camera(args, scene.image.height(), scene.depth.intrinsics.as_ref())?;
-    let horizon = match (&args.airlight, &prep.prepared) {
-        (None, Some(p)) => horizon_light(&scene.image, &p.sky, &camera),
-        _ => None,
-    };
-    let (light, zenith, light_source) = match horizon {
-        Some(h) => (h.rgb, Some(h.zenith), "horizon"),
-        None => (prep.airlight, None, prep.airlight_source),
-    };
-    let look = aerial_look(args, camera, 1.5 * f64::from(max_range), light, zenith)?;
-    let image = match look.from_turbidity {
-        Some(from) => dehaze(&scene.image, &range, &look, from)?,
-        None => scene.image.clone(),
-    };
-    let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
-    Ok(AerialJob {
-        image,
-        range,
-        look,
-        max_range,
-        light_source,
-        blur,
-    })
-}
-
-fn run_aerial(
-    args: &RenderArgs,
-    renderer: &mut Headless,
-    scene: &Scene,
-    prep: &PrepReport,
-    range: &ScalarMap,
-    out: &Path,
-) -> Result<()> {
-    let job = aerial_job(args, scene, prep, range)?;
-    let AerialJob {
-        image,
-        range,
-        look,
-        max_range,
-        light_source,
-        blur,
-    } = &job;
-    let rendered = renderer.render_fog(image, range, &look.medium, &job.fog_blur())?;
-    let mut outputs = Outputs::new();
-    outputs.stage_rgba(out, &rendered.image)?;
-    super::commit(outputs)?;
-    let m = &look.medium;
-    let t = &rendered.times;
-    if args.json {
-        outln!(
-            "{}",
-            json!({
-                "width": image.width(),
-                "height": image.height(),
-                "medium": "aerial",
-                "turbidity": m.table.turbidity(),
-                "turbidity_source": look.turbidity_source,
-                "from_turbidity": look.from_turbidity,
-                "altitude": m.table.altitude_m(),
-                "metres_per_unit": m.metres_per_unit,
-                "pitch": m.camera.pitch_deg,
-                "fov": m.camera.fov_y_deg,
-                "horizon_light": m.horizon_light,
-                "horizon_light_source": light_source,
-                "horizon_zenith": m.reference_zenith.to_degrees(),
-                "max_range": max_range,
-                "diffusion_passes": rendered.schedule.steps,
-                "sigma_max": m.sigma_max(blur.sigma0),
-                "renderer": renderer.caps().renderer,
-                "clock": t.clock,
-                "total_ms": t.total_ms,
-                "pass_ms": t.pass_ms,
-                "out": out.display().to_string(),
-            })
-        );
-    } else {
-        outln!(
-            "wrote {} (aerial perspective, T = {:.2} ({}), {} diffusion passes + 2, {:.1} ms by {})",
-            out.display(),
-            m.table.turbidity(),
-            look.turbidity_source,
-            rendered.schedule.steps,
-            t.total_ms,
-            t.clock.name()
-        );
-    }
-    Ok(())
 }

@@ -466,13 +466,17 @@ fn print_summary(args: &SceneArgs, blur: &FogBlur, renderer: &str, reports: &[Fr
         } else {
             passes.join(", ")
         };
+        let time = if r.total_ms.is_finite() {
+            format!("{:.1} ms by {}", r.total_ms, r.clock)
+        } else {
+            // The GPU timer's figures were rejected.
+            "time n/a".to_string()
+        };
         outln!(
-            "wrote {} ({} fog, blur {}, {:.1} ms by {} on {renderer}: {summary})",
+            "wrote {} ({} fog, blur {}, {time} on {renderer}: {summary})",
             r.out.display(),
             fog_name(args.fog),
             blur.name(),
-            r.total_ms,
-            r.clock,
         );
     }
     for (option, path) in [

@@ -62,6 +62,26 @@
 //!   as it was. The host sets again whatever it needs, as with egui_glow's painter.
 //!   [`Pipeline::import_external`] leaves the same state (the viewport on its copy) and
 //!   unit 0's `GL_TEXTURE_EXTERNAL_OES` target empty.
+//! - **Timing** ([`Pipeline::set_timing`]). [`Timing::Off`], the default: no query, no
+//!   `glFinish`, no wait; a call returns once its commands are issued (the GPU may still
+//!   be drawing), with its times unavailable. [`Timing::Deferred`]: a `GL_TIME_ELAPSED`
+//!   query around each pass (query objects kept between calls, up to
+//!   [`timer::DEFERRED_IN_FLIGHT`] calls in flight), read on a later call only once its
+//!   results are in (never waited for); a call returns the newest earlier call's figures
+//!   not yet returned ([`PassTimes::calls_ago`] says how many calls back), or unavailable
+//!   times. [`Timing::Blocking`]: the call's own figures, waiting for its queries' results
+//!   (or, without `GL_EXT_disjoint_timer_query`, `glFinish` after every pass);
+//!   [`Timing::BlockingWall`] always by `glFinish` and the wall clock. Figures flagged
+//!   disjoint (`GL_GPU_DISJOINT_EXT`) or that cannot be right are reported unavailable:
+//!   passes are never run again (a second `blend_fog` would fog the host's frame twice).
+//!   The first call that begins queries waits once for a 1x1 draw ([`timer::warm_up`]).
+//!   With queries, brume reads `GL_GPU_DISJOINT_EXT`, which clears it for the host too.
+//! - **A host's own query.** If a `GL_TIME_ELAPSED` query is open when a call starts
+//!   (`glGetQueryiv(GL_TIME_ELAPSED, GL_CURRENT_QUERY)` non-zero), brume begins none of its
+//!   own for that call (its times are unavailable, except by the wall clock) and never ends,
+//!   reads or deletes the host's; the host's query then measures brume's passes with its own
+//!   work. Where `glGetQueryiv` cannot be found ([`timer::HostQueryProbe`]) brume begins no
+//!   query at all: deferred times are unavailable, blocking ones by the wall clock.
 
 mod engine;
 mod external;
@@ -78,7 +98,7 @@ use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::program::Program;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
-use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, QueryPool};
+use crate::gpu::timer::{self, Clock, PassTimer, PassTimes, Timekeeper, Timing};
 use crate::medium::{Lookup, Medium, UniformValue, Wrap, MAX_LOOKUPS, MEDIUM_API_GLSL};
 use crate::schedule::{Schedule, Scheme};
 use glow::HasContext;
@@ -163,7 +183,9 @@ pub enum Output {
 pub struct Frame {
     /// The schedule that ran.
     pub schedule: Schedule,
-    /// Per-pass times (N + 2), with the clock that produced them.
+    /// Per-pass times (N + 2 for a render), with the clock that produced them, as
+    /// [`Pipeline::timing`] gives them: this call's, an earlier call's
+    /// ([`PassTimes::calls_ago`]), or unavailable ([`PassTimes::is_available`]).
     pub times: PassTimes,
 }
 
@@ -309,8 +331,12 @@ pub struct Pipeline {
     /// The framebuffer over the host's output texture ([`Output::Texture`]), re-attached
     /// each frame.
     host_target: Option<Framebuffer>,
-    /// Timer queries, reused from frame to frame.
-    queries: QueryPool,
+    /// The timing option, its queries (reused from frame to frame) and the deferred calls
+    /// in flight.
+    timekeeper: Timekeeper,
+    /// A 1x1 target cleared before a software renderer's timed call ([`Pipeline::timed`]),
+    /// made with the first query.
+    timer_anchor: std::cell::OnceCell<(Texture, Framebuffer)>,
     /// The copy of the last external image imported ([`Pipeline::import_external`]).
     imported: Option<external::ImportTarget>,
     /// LINEAR, CLAMP_TO_EDGE: the Gaussian's bilinear taps, whatever the texture's own
@@ -324,8 +350,8 @@ pub struct Pipeline {
 
 impl Pipeline {
     /// Builds the pipeline on the host's context `gl`, which must be current on this
-    /// thread: detects its capabilities once, compiles the diffusion programs and spends
-    /// the first timer query (see [`timer::warm_up`]).
+    /// thread: detects its capabilities once and compiles the diffusion programs. Timing
+    /// is [`Timing::Off`]: see [`Pipeline::set_timing`].
     pub fn new(gl: Arc<glow::Context>) -> Result<Self> {
         let caps = Capabilities::detect(&gl);
         if caps.gles_version.0 < 3 {
@@ -360,8 +386,9 @@ impl Pipeline {
             lookups: HashMap::new(),
             engine_targets: None,
             host_target: None,
-            queries: QueryPool::new(&gl),
+            timekeeper: Timekeeper::new(&gl, caps.disjoint_timer_query),
             imported: None,
+            timer_anchor: std::cell::OnceCell::new(),
             linear_sampler,
             vao,
             caps,
@@ -376,9 +403,6 @@ impl Pipeline {
                 },
                 None,
             )?;
-        }
-        if pipeline.caps.disjoint_timer_query {
-            pipeline.warm_up_timer()?;
         }
         Ok(pipeline)
     }
@@ -411,13 +435,35 @@ impl Pipeline {
         &self.gl
     }
 
-    /// The clock renders are timed with: the GPU timer where the driver has one.
+    /// The clock [`Timing::Blocking`] times with: the GPU timer where the driver has one.
     pub fn preferred_clock(&self) -> Clock {
-        if self.caps.disjoint_timer_query {
-            Clock::GpuTimer
-        } else {
-            Clock::Wall
-        }
+        self.timekeeper.preferred_clock()
+    }
+
+    /// Sets when calls time their passes (module docs, *Timing*): [`Timing::Off`] (the
+    /// default), [`Timing::Deferred`], [`Timing::Blocking`] or [`Timing::BlockingWall`].
+    /// Deferred figures not yet returned are dropped when the option changes. Makes no GL
+    /// call.
+    pub fn set_timing(&mut self, timing: Timing) {
+        self.timekeeper.set_timing(timing);
+    }
+
+    /// When calls time their passes.
+    pub fn timing(&self) -> Timing {
+        self.timekeeper.timing()
+    }
+
+    /// For tests: the next timer figures read are rejected as if the driver had flagged a
+    /// disjoint event (`GL_GPU_DISJOINT_EXT`), as phones' drivers do.
+    #[doc(hidden)]
+    pub fn simulate_disjoint(&self) {
+        self.timekeeper.simulate_disjoint();
+    }
+
+    /// The `GL_TIME_ELAPSED` queries this pipeline has begun (none with
+    /// [`Timing::Off`]): what a host or a test checks.
+    pub fn queries_begun(&self) -> u64 {
+        self.timekeeper.queries_begun()
     }
 
     /// Renders one frame: `input` fogged by `medium` and blurred as `blur` says, into
@@ -500,8 +546,8 @@ impl Pipeline {
         Ok(schedule)
     }
 
-    /// Runs the passes, again by the wall clock if the GPU timer's figures are rejected.
-    /// Returns the times and the index of the ping-pong target holding an internal result.
+    /// Runs the passes, timed as [`Pipeline::timing`] says. Returns the times and the
+    /// index of the ping-pong target holding an internal result.
     fn run(
         &self,
         input: &Input,
@@ -515,29 +561,28 @@ impl Pipeline {
     }
 
     /// Runs `passes` (which return the index of the target holding an internal result, or
-    /// nothing) timed by the preferred clock, again by the wall clock if the GPU timer's
-    /// figures are rejected. `what` names the passes in a GL error.
+    /// nothing) once, timed as [`Pipeline::timing`] says: the figures are this call's, an
+    /// earlier call's ([`Timing::Deferred`]) or unavailable, never a second run's. `what`
+    /// names the passes in a GL error.
     fn timed<T>(
         &self,
         what: &str,
-        passes: impl Fn(&Self, &mut PassTimer) -> Result<T>,
+        passes: impl FnOnce(&Self, &mut PassTimer) -> Result<T>,
     ) -> Result<(PassTimes, T)> {
-        let mut clock = self.preferred_clock();
-        loop {
-            self.enter_state();
-            let mut timer = PassTimer::start(&self.gl, clock, &self.queries);
-            let result = passes(self, &mut timer)?;
-            crate::gpu::check_gl(&self.gl, what)?;
-            match timer.finish()? {
-                Ok(times) => return Ok((times, result)),
-                Err(rejected) => {
-                    log::warn!(
-                        "GPU timer figures rejected ({rejected:?}); timing again by wall clock"
-                    );
-                    clock = Clock::Wall;
-                }
-            }
+        let plan = self.timekeeper.plan();
+        if plan.warm_up {
+            self.warm_up_timer()?;
+            self.timekeeper.warmed_up();
         }
+        self.enter_state();
+        if plan.uses_queries() && self.caps.software() {
+            self.anchor_timer()?;
+        }
+        let mut timer = self.timekeeper.start(plan);
+        let result = passes(self, &mut timer)?;
+        crate::gpu::check_gl(&self.gl, what)?;
+        let times = self.timekeeper.finish(timer)?;
+        Ok((times, result))
     }
 
     /// Runs `run` with the destination `output` names.
@@ -924,6 +969,27 @@ impl Pipeline {
             }
             gl.active_texture(glow::TEXTURE0);
         }
+    }
+
+    /// llvmpipe records the start of a TIME_ELAPSED query in the scene of the framebuffer
+    /// its state last validated; when that framebuffer has since been deleted (a
+    /// texture made and dropped between calls: a host's target, the refinement's
+    /// output), the query's start is never recorded and its figure comes back as about
+    /// the system uptime (rejected, so unavailable). Clearing brume's own 1x1 target
+    /// first gives the query's beginning a live framebuffer. (Measured on Mesa 22.3.)
+    fn anchor_timer(&self) -> Result<()> {
+        if self.timer_anchor.get().is_none() {
+            let gl = &self.gl;
+            let texture = Texture::new(gl, 1, 1, TexelFormat::Rgba16F, Filter::Nearest, None)?;
+            let target = Framebuffer::over(gl, &[&texture], "the timer's anchor")?;
+            let _ = self.timer_anchor.set((texture, target));
+        }
+        let (_, target) = self.timer_anchor.get().expect("set just above");
+        target.bind_for_drawing();
+        // SAFETY: a clear of brume's own 1x1 target (colour mask all on, scissor off:
+        // enter_state), with the host's clear colour, on the current context.
+        unsafe { self.gl.clear(glow::COLOR_BUFFER_BIT) };
+        Ok(())
     }
 
     /// Spends the first timer query on a real 1x1 draw (see [`timer::warm_up`]).

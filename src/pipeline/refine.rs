@@ -1,7 +1,8 @@
 //! Image-guided refinement of a range texture on the GPU (see [`crate::refine`] for the
 //! filter and why it works on log range): seven fragment passes over brume's own
 //! textures, from the host's colour texture and a range texture of the image's size or
-//! smaller, into a new R32F range texture of the image's size.
+//! smaller, into a new R32F range texture of the image's size (or, for the upsampling,
+//! into one the caller keeps: [`Pipeline::upsample_range_into`]).
 //!
 //! **State.** A refinement changes and leaves the state a render does (see the parent
 //! module). Its textures are made for the call and freed with it but the output, which the
@@ -260,30 +261,56 @@ impl Pipeline {
     /// upsampling guided by `input.colour` (`sigma_colour` in sRGB-encoded values; see
     /// [`crate::refine::joint_bilateral_upsample_reference`]), in two passes. Returns an
     /// R32F texture of the image's size that the caller owns, with the passes' times.
+    /// [`Pipeline::upsample_range_into`] writes into a texture the caller keeps instead.
     pub fn upsample_range(
         &mut self,
         input: &RefineInput,
         sigma_colour: f64,
     ) -> Result<(Texture, PassTimes)> {
+        self.check_upsampling(input, sigma_colour)?;
         let (w, h) = (input.width, input.height);
-        let (lw, lh) = (input.range_width, input.range_height);
-        crate::refine::check_depth_size((w, h), (lw, lh))?;
-        if !(sigma_colour.is_finite() && sigma_colour > 0.0) {
+        let output = Texture::new(&self.gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
+        let times = self.upsample_range_into(input, sigma_colour, &output)?;
+        Ok((output, times))
+    }
+
+    /// [`Pipeline::upsample_range`] into `output`, an R32F texture of the image's size
+    /// that the caller made and keeps (a live app upsamples every frame, as the guide
+    /// changes with each, without allocating an image-sized texture each time); every
+    /// texel of `output` is written. Returns the passes' times (two passes). The low
+    /// grid's texture and the framebuffers are made for the call and freed with it.
+    ///
+    /// Errors: as [`Pipeline::upsample_range`], and [`crate::Error::InvalidParameter`]
+    /// when `output` is not R32F or not of the image's size.
+    pub fn upsample_range_into(
+        &mut self,
+        input: &RefineInput,
+        sigma_colour: f64,
+        output: &Texture,
+    ) -> Result<PassTimes> {
+        self.check_upsampling(input, sigma_colour)?;
+        let (w, h) = (input.width, input.height);
+        if output.format() != TexelFormat::R32F || (output.width(), output.height()) != (w, h) {
             return Err(crate::Error::invalid(
-                "sigma_colour",
-                sigma_colour,
-                "a colour σ > 0 (sRGB-encoded values)",
+                "upsampling output",
+                format!(
+                    "a {:?} texture of {}x{}",
+                    output.format(),
+                    output.width(),
+                    output.height()
+                ),
+                format!("an R32F texture of the image's size, {w}x{h}"),
             ));
         }
-        self.caps.require_size("image", w, h)?;
+        let (lw, lh) = (input.range_width, input.range_height);
         self.program(ProgramKey::Refine(RefinePass::Cells), None)?;
         self.program(ProgramKey::Refine(RefinePass::Upsample), None)?;
         let gl = Arc::clone(&self.gl);
         let low = LowTargets::new(&gl, lw, lh)?;
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let cell = [w as f32 / lw as f32, h as f32 / lh as f32];
-        self.passes_into_range(
-            input,
+        self.passes_into(
+            output,
             "upsampling the range",
             |pipeline, timer, output_fb| {
                 let cells = pipeline.compiled(ProgramKey::Refine(RefinePass::Cells))?;
@@ -321,6 +348,20 @@ impl Pipeline {
             },
         )
     }
+
+    /// The upsampling's sizes and σ, before anything is made.
+    fn check_upsampling(&self, input: &RefineInput, sigma_colour: f64) -> Result<()> {
+        let (w, h) = (input.width, input.height);
+        crate::refine::check_depth_size((w, h), (input.range_width, input.range_height))?;
+        if !(sigma_colour.is_finite() && sigma_colour > 0.0) {
+            return Err(crate::Error::invalid(
+                "sigma_colour",
+                sigma_colour,
+                "a colour σ > 0 (sRGB-encoded values)",
+            ));
+        }
+        self.caps.require_size("image", w, h)
+    }
 }
 
 impl Pipeline {
@@ -335,14 +376,26 @@ impl Pipeline {
     ) -> Result<(Texture, PassTimes)> {
         let (w, h) = (input.width, input.height);
         let output = Texture::new(&self.gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
-        let framebuffer = Framebuffer::over(&self.gl, &[&output], "the refined range")?;
+        let times = self.passes_into(&output, what, passes)?;
+        Ok((output, times))
+    }
+
+    /// [`Pipeline::passes_into_range`] into the caller's `output`: the framebuffer over
+    /// it is made for the call and freed with it.
+    fn passes_into(
+        &self,
+        output: &Texture,
+        what: &str,
+        passes: impl Fn(&Self, &mut crate::gpu::timer::PassTimer<'_>, &Framebuffer) -> Result<()>,
+    ) -> Result<PassTimes> {
+        let framebuffer = Framebuffer::over(&self.gl, &[output], "the refined range")?;
         let result = self.timed(what, |pipeline, timer| {
             passes(pipeline, timer, &framebuffer)
         });
         self.leave_state();
         let (times, ()) = result?;
         drop(framebuffer);
-        Ok((output, times))
+        Ok(times)
     }
 }
 

@@ -4,23 +4,33 @@
 //! `GL_TEXTURE_EXTERNAL_OES` and is copied by `Pipeline::import_external` with the
 //! transform that turns the sensor's image upright ([`Orientation`]). Where the same
 //! camera also lists `DEPTH16` outputs (a time-of-flight phone), a second reader
-//! streams them and [`crate::depth16::unpack`] makes the range texture, registered to
-//! the colour by the same orientation; elsewhere the range is a plane receding to the top
-//! of the frame (the floor ahead), so the haze still grows with "distance".
+//! streams them and the range texture is made from them: each depth image is turned
+//! upright by the same orientation and cropped centrally to the colour's aspect ratio
+//! ([`crate::registration`]: an approximation without calibration); when the crop is
+//! smaller than the colour by one factor of 1 to 16 it is unpacked at its own size into a
+//! small R32F texture and, every colour frame (the guide changes with each), upsampled
+//! into the colour-sized range texture by `Pipeline::upsample_range_into` (joint
+//! bilateral upsampling guided by the imported colour copy); otherwise (or when the
+//! upsampling fails on this GPU) it is resampled nearest to the colour's size on the CPU,
+//! and the log says why once. Elsewhere the range is a plane receding to the top of the
+//! frame (the floor ahead), so the haze still grows with "distance".
 //!
 //! **Lifetimes.** A camera buffer must not go back to the camera while the GPU reads it:
 //! the last image is held until the next one is acquired, and brume's render returns only
 //! after its passes ran (it waits for its timer queries, or `glFinish`es with the wall
 //! clock), the import before them included. The EGLImage is destroyed right after the
-//! texture is bound to it (the texture keeps the buffer). GL objects (the external
-//! texture, the range texture) are made once; only EGLImages, which are not GL objects,
-//! are made per frame.
+//! texture is bound to it (the texture keeps the buffer). The app's GL objects (the
+//! external texture, the range texture) are made once, the depth's small texture again
+//! only when its size changes; EGLImages, which are not GL objects, are made per frame,
+//! and the upsampling makes its low grid's texture and two framebuffers per frame.
 
 use crate::depth16::{self, Depth16, Depth16Error, Unpack};
 use crate::orientation::Orientation;
+use crate::registration::{self, Crop, DepthPath};
 use crate::streams;
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
-use brume::pipeline::{ExternalColour, TEXTURE_EXTERNAL_OES};
+use brume::pipeline::{ExternalColour, RefineInput, TEXTURE_EXTERNAL_OES};
+use brume::refine::DEFAULT_UPSAMPLE_SIGMA_COLOUR;
 use brume::{Encoding, Input, Pipeline};
 use glow::HasContext;
 use khronos_egl as egl;
@@ -296,10 +306,18 @@ pub struct Camera {
     gl: Arc<glow::Context>,
     /// The host's (this app's) external texture, bound to each new buffer.
     external: glow::Texture,
-    /// The pipeline's copy of the last frame (`None` before the first).
+    /// The pipeline's copy of the last frame (`None` before the first): `SRGB8_ALPHA8`,
+    /// read as linear values.
     copy: Option<glow::Texture>,
+    /// The range brume reads, R32F at the colour's upright size.
     range: Texture,
     range_values: Vec<f32>,
+    /// The latest depth at its own (cropped, upright) size, R32F, while upsampling.
+    low: Option<Texture>,
+    /// The upright depth size the plan was made for, and the plan.
+    plan: Option<((usize, usize), Crop, DepthPath)>,
+    /// The upsampling failed once (a GPU that cannot render to R32F): nearest from then on.
+    upsample_failed: bool,
     orientation: Orientation,
     /// The colour stream's size as the sensor gives it.
     buffer_size: (usize, usize),
@@ -403,6 +421,9 @@ impl Camera {
             copy: None,
             range,
             range_values: Vec::new(),
+            low: None,
+            plan: None,
+            upsample_failed: false,
             orientation: choice.orientation,
             buffer_size,
             unpack: Unpack::default(),
@@ -430,13 +451,18 @@ impl Camera {
         if self.session.lost.load(Ordering::Relaxed) {
             return Err(CameraError::Lost);
         }
+        let mut new_colour = false;
         if let AcquireResult::Image(image) = self.colour.acquire_latest_image()? {
             // The previous image's render has finished (module docs): release it.
             self.held = None;
             self.import(&image, pipeline)?;
             self.held = Some(image);
+            new_colour = true;
         }
-        self.update_depth()?;
+        let new_depth = self.update_depth()?;
+        if new_colour || new_depth {
+            self.upsample(pipeline);
+        }
         let (width, height) = self.orientation.upright_size(self.buffer_size);
         Ok(self.copy.map(|colour| Input {
             colour,
@@ -461,13 +487,15 @@ impl Camera {
         Ok(())
     }
 
-    /// Unpacks the newest depth image, if one came, into the range texture.
-    fn update_depth(&mut self) -> Result<(), CameraError> {
+    /// Unpacks the newest depth image, if one came: at its cropped size into the small
+    /// texture when it is to be upsampled, else resampled nearest into the range texture.
+    /// Whether one came.
+    fn update_depth(&mut self) -> Result<bool, CameraError> {
         let Some(reader) = &self.depth else {
-            return Ok(());
+            return Ok(false);
         };
         let AcquireResult::Image(image) = reader.acquire_latest_image()? else {
-            return Ok(());
+            return Ok(false);
         };
         let plane = Depth16 {
             data: image.plane_data(0)?,
@@ -475,17 +503,83 @@ impl Camera {
             height: image.height()? as usize,
             row_stride: image.plane_row_stride(0)? as usize,
         };
-        let size = (self.range.width(), self.range.height());
-        depth16::unpack(
-            &plane,
-            self.orientation,
-            size,
-            self.unpack,
-            &mut self.range_values,
-        )
-        .map_err(CameraError::Depth)?;
-        self.upload_range();
-        Ok(())
+        let upright = self.orientation.upright_size((plane.width, plane.height));
+        let colour = (self.range.width(), self.range.height());
+        if self.plan.as_ref().map(|p| p.0) != Some(upright) {
+            let (crop, path) = registration::plan(upright, colour);
+            log_plan(upright, colour, crop, &path);
+            self.plan = Some((upright, crop, path));
+        }
+        let Some((_, crop, path)) = &self.plan else {
+            return Ok(false);
+        };
+        let crop = *crop;
+        let upsampling = matches!(path, DepthPath::Upsample { .. }) && !self.upsample_failed;
+        if upsampling {
+            let size = depth16::unpack_window(
+                &plane,
+                self.orientation,
+                crop,
+                self.unpack,
+                &mut self.range_values,
+            )
+            .map_err(CameraError::Depth)?;
+            if self.low.as_ref().map(|t| (t.width(), t.height())) != Some(size) {
+                self.low = Some(Texture::new(
+                    &self.gl,
+                    size.0,
+                    size.1,
+                    TexelFormat::R32F,
+                    Filter::Nearest,
+                    None,
+                )?);
+            }
+            if let Some(low) = &self.low {
+                upload(&self.gl, low, &self.range_values);
+            }
+        } else {
+            depth16::unpack(
+                &plane,
+                self.orientation,
+                crop,
+                colour,
+                self.unpack,
+                &mut self.range_values,
+            )
+            .map_err(CameraError::Depth)?;
+            upload(&self.gl, &self.range, &self.range_values);
+        }
+        Ok(true)
+    }
+
+    /// Upsamples the small depth into the range texture guided by the latest colour copy
+    /// (joint bilateral upsampling, σ 0.15 in sRGB-encoded values), when both are there.
+    /// A failure is logged once and turns the upsampling off: the next depth image is
+    /// resampled nearest.
+    fn upsample(&mut self, pipeline: &mut Pipeline) {
+        if self.upsample_failed {
+            return;
+        }
+        let (Some(colour), Some(low)) = (self.copy, &self.low) else {
+            return;
+        };
+        let input = RefineInput {
+            colour,
+            // import_external's copy is SRGB8_ALPHA8: GL decodes it, shaders read linear.
+            colour_encoding: Encoding::Linear,
+            width: self.range.width(),
+            height: self.range.height(),
+            range: low.raw(),
+            range_width: low.width(),
+            range_height: low.height(),
+        };
+        if let Err(e) =
+            pipeline.upsample_range_into(&input, DEFAULT_UPSAMPLE_SIGMA_COLOUR, &self.range)
+        {
+            log::warn!("depth: the guided upsampling failed ({e}); nearest resampling from now on");
+            self.upsample_failed = true;
+            self.low = None;
+        }
     }
 
     /// Without a depth stream: normalised range from 0.1 at the bottom to 1 at the top,
@@ -497,31 +591,54 @@ impl Camera {
             let r = 0.1 + 0.9 * (y as f32 + 0.5) / height as f32;
             self.range_values.extend(std::iter::repeat(r).take(width));
         }
-        self.upload_range();
+        upload(&self.gl, &self.range, &self.range_values);
     }
+}
 
-    fn upload_range(&self) {
-        let values = &self.range_values;
-        // SAFETY: `values` holds width x height f32, GL's row order (depth16::unpack and
-        // fill_plane write exactly that), uploaded into the owned R32F texture.
-        unsafe {
-            let bytes = std::slice::from_raw_parts(values.as_ptr().cast::<u8>(), values.len() * 4);
-            self.gl
-                .bind_texture(glow::TEXTURE_2D, Some(self.range.raw()));
-            self.gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
-            self.gl.tex_sub_image_2d(
-                glow::TEXTURE_2D,
-                0,
-                0,
-                0,
-                self.range.width() as i32,
-                self.range.height() as i32,
-                glow::RED,
-                glow::FLOAT,
-                glow::PixelUnpackData::Slice(Some(bytes)),
-            );
-            self.gl.bind_texture(glow::TEXTURE_2D, None);
-        }
+/// Says once per depth size how the depth becomes the range, and why when not upsampled.
+fn log_plan(upright: (usize, usize), colour: (usize, usize), crop: Crop, path: &DepthPath) {
+    let (w, h) = upright;
+    let (cw, ch) = colour;
+    let cropped = if crop.size() == upright {
+        "not cropped".to_string()
+    } else {
+        format!(
+            "cropped to the centred {}x{} (the colour's aspect ratio, assumed the same field)",
+            crop.width, crop.height
+        )
+    };
+    match path {
+        DepthPath::Same => log::info!("depth: {w}x{h} upright, {cropped}: the colour's {cw}x{ch}"),
+        DepthPath::Upsample { factor } => log::info!(
+            "depth: {w}x{h} upright, {cropped}, upsampled {factor:.2}x to {cw}x{ch} guided by the colour"
+        ),
+        DepthPath::Nearest { why } => log::warn!(
+            "depth: {w}x{h} upright, {cropped}, resampled nearest to {cw}x{ch}: no guided upsampling ({why})"
+        ),
+    }
+}
+
+/// Uploads `values` (width x height f32 in GL's row order) into `texture`, R32F.
+fn upload(gl: &glow::Context, texture: &Texture, values: &[f32]) {
+    assert_eq!(values.len(), texture.width() * texture.height());
+    // SAFETY: `values` holds width x height f32, GL's row order (depth16::unpack and
+    // fill_plane write exactly that), uploaded into an owned R32F texture.
+    unsafe {
+        let bytes = std::slice::from_raw_parts(values.as_ptr().cast::<u8>(), values.len() * 4);
+        gl.bind_texture(glow::TEXTURE_2D, Some(texture.raw()));
+        gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
+        gl.tex_sub_image_2d(
+            glow::TEXTURE_2D,
+            0,
+            0,
+            0,
+            texture.width() as i32,
+            texture.height() as i32,
+            glow::RED,
+            glow::FLOAT,
+            glow::PixelUnpackData::Slice(Some(bytes)),
+        );
+        gl.bind_texture(glow::TEXTURE_2D, None);
     }
 }
 

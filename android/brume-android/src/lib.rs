@@ -7,12 +7,14 @@
 //! - The camera comes through the NDK's Camera2 API into an `AImageReader` whose
 //!   `AHardwareBuffer`s are bound, as EGLImages, to `GL_TEXTURE_EXTERNAL_OES` and copied
 //!   by `brume::Pipeline::import_external`; a camera that also streams `DEPTH16` gives
-//!   the range ([`depth16`]), one without gives a plane receding to the top of the frame.
-//! - The per-pass GPU times (`GL_TIME_ELAPSED`) are drawn as a bar and digits by
-//!   `glScissor` + `glClear` ([`overlay`]) and logged to logcat once a second.
+//!   the range ([`depth16`], laid over the colour and upsampled guided by it:
+//!   [`registration`]), one without gives a plane receding to the top of the frame.
+//! - The per-pass GPU times (`GL_TIME_ELAPSED`, `Timing::Deferred`: a frame or more late,
+//!   never waited for) are drawn as a bar and digits by `glScissor` + `glClear`
+//!   ([`overlay`]) and logged to logcat once a second.
 //!
 //! The modules without Android in them ([`controls`], [`depth16`], [`orientation`],
-//! [`overlay`], [`streams`], [`live`]) build and are tested on any host
+//! [`overlay`], [`registration`], [`streams`], [`live`]) build and are tested on any host
 //! (`cargo test -p brume-android`, the frame loop on llvmpipe); the rest builds for
 //! Android only.
 
@@ -21,6 +23,7 @@ pub mod depth16;
 pub mod live;
 pub mod orientation;
 pub mod overlay;
+pub mod registration;
 pub mod streams;
 
 #[cfg(target_os = "android")]

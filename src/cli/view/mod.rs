@@ -244,7 +244,9 @@ impl Viewer {
         };
         let window = ViewerWindow::open(event_loop, "brume view", size, args.frames.is_none())?;
         let gl = std::sync::Arc::clone(&window.gl);
-        let pipeline = Pipeline::new(std::sync::Arc::clone(&gl))?;
+        let mut pipeline = Pipeline::new(std::sync::Arc::clone(&gl))?;
+        // The panel shows each redraw's own pass times.
+        pipeline.set_timing(brume::Timing::Blocking);
         let (source, time0, fps) = match &args.source {
             Some(ViewSource::Scene(a)) => (
                 Source::Scene(Box::new(SceneView::new(a, &gl)?)),
@@ -526,7 +528,14 @@ impl Viewer {
     fn steady_medians(&self) -> (Option<f64>, Option<f64>) {
         let steady = &self.stats[self.stats.len().min(1)..];
         (
-            median(steady.iter().map(|s| s.gpu_ms).collect()),
+            // A frame whose GPU timer figures were rejected has none (NaN).
+            median(
+                steady
+                    .iter()
+                    .map(|s| s.gpu_ms)
+                    .filter(|ms| ms.is_finite())
+                    .collect(),
+            ),
             median(steady.iter().map(|s| s.wall_ms).collect()),
         )
     }
@@ -562,7 +571,11 @@ fn timings_panel(
                 ui.end_row();
             }
             ui.strong("total");
-            ui.strong(format!("{:.2} ms ({})", t.total_ms, t.clock));
+            ui.strong(if t.total_ms.is_finite() {
+                format!("{:.2} ms ({})", t.total_ms, t.clock)
+            } else {
+                "n/a".to_string()
+            });
             ui.end_row();
         });
     }

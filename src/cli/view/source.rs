@@ -5,9 +5,10 @@
 //! medium and blur from the same options, with the same functions, as its command does,
 //! so that the window shows what the command writes; the controls then edit the medium.
 
+use super::super::aerial::{aerial_job, AerialJob};
 use super::super::args::{BlurKind, FogKind, MediumKind, RenderArgs, SceneArgs};
 use super::super::limits;
-use super::super::render::{self as render_cmd, AerialJob};
+use super::super::render as render_cmd;
 use super::super::scene::{self as scene_cmd, SceneMedium};
 use brume::atmosphere::AttenuationTable;
 use brume::camera::Camera;
@@ -183,18 +184,15 @@ impl Photo {
             args,
             &mut scene,
             &mut prep,
-            &mut super::super::refine::CpuRefiner,
+            &mut brume::refine::CpuFilter,
         )?;
-        let range = prep
-            .prepared
-            .as_ref()
-            .map_or(&scene.depth.range, |p| &p.range);
+        let range = &prep.range;
         let (image, depth, look) = if args.medium == MediumKind::Aerial {
-            let job = render_cmd::aerial_job(args, &scene, &prep, range)?;
+            let job = aerial_job(args, &scene, &prep, range)?;
             let look = aerial_look(&job);
             (job.image, job.range, look)
         } else {
-            let (medium_range, _, look) = render_cmd::haze_inputs(args, &scene, &prep)?;
+            let (medium_range, _, look) = render_cmd::haze_inputs(args, &prep)?;
             let look = PhotoLook::Haze {
                 haze: look.haze,
                 uniform: look.uniform,

@@ -32,6 +32,13 @@
 //! [`guided_range_reference`] is the same computation on the CPU in f64, the judge of the
 //! GPU passes (`Pipeline::refine_range`).
 
+mod step;
+
+pub use step::{
+    refine_prepared, refine_range, repair, Combine, CpuFilter, RangeFilter, RefineMode,
+    RefineOptions, RefinePlan, REPAIR_FILLED_WEIGHT, REPAIR_NEARER,
+};
+
 use crate::error::{Error, Result};
 use crate::io::image::linear_to_srgb;
 use crate::raster::{Grid, RgbImage, ScalarMap};

@@ -1,0 +1,85 @@
+//! `brume batch`'s arguments.
+
+use super::*;
+
+/// `brume batch`.
+#[derive(Args, Clone, Debug)]
+#[command(
+    after_help = "Outputs: {out}/{image folder relative to its input folder}/\
+{name}_leftImg8bit_foggy_beta_{β}.png, and a log of every output (JSON lines) \
+{out}/brume-batch-{K}-of-{N}.jsonl.\n\n\
+Examples:\n  brume batch cityscapes/leftImg8bit/val --out foggy --beta 0.005,0.01,0.02\n  \
+brume batch --manifest frames.csv --out foggy --shard 3/8\n  \
+brume batch cityscapes --out foggy --shard $((SLURM_ARRAY_TASK_ID+1))/$SLURM_ARRAY_TASK_COUNT"
+)]
+pub struct BatchArgs {
+    /// Folders searched recursively for Cityscapes frames: {name}_leftImg8bit.png with
+    /// {name}_disparity.png and {name}_camera.json beside it or in Cityscapes' layout
+    /// (disparity/ and camera/ beside leftImg8bit/); gtFine labelIds give the sky.
+    #[arg(value_name = "FOLDER")]
+    pub inputs: Vec<PathBuf>,
+
+    /// A CSV manifest: header image,depth[,camera][,calib][,sky_mask], one frame per row,
+    /// paths relative to the manifest.
+    #[arg(long, value_name = "CSV", allow_hyphen_values = true)]
+    pub manifest: Option<PathBuf>,
+
+    /// Output folder (created); the input tree is mirrored under it.
+    #[arg(long, short, value_name = "DIR", allow_hyphen_values = true)]
+    pub out: PathBuf,
+
+    /// Extinction coefficients β in 1/m, comma-separated: one output per frame and β
+    /// (Foggy Cityscapes: 0.005, 0.01, 0.02, visibility 600, 300, 150 m).
+    #[arg(
+        long,
+        value_name = "B,B,…",
+        default_value = "0.005,0.01,0.02",
+        allow_hyphen_values = true
+    )]
+    pub beta: String,
+
+    /// Take shard K of N (1 ≤ K ≤ N): a deterministic share of the frames, by a hash of
+    /// their names, so that N jobs split a dataset with no coordination.
+    #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
+    pub shard: Option<String>,
+
+    /// Also write each output's transmittance τ as an 8-bit grey PNG
+    /// ({name}_transmittance_beta_{β}.png).
+    #[arg(long)]
+    pub transmittance: bool,
+
+    /// Single-scattering albedo a: scattering a·β, absorption (1 − a)·β [default: 1].
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    pub albedo: Option<f64>,
+
+    /// Blur factor λ in px (as `brume render --lambda`).
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
+    pub lambda: Option<f64>,
+
+    /// Diffusion scheme: matched, invariant or euler.
+    #[arg(long, value_name = "SCHEME", allow_hyphen_values = true)]
+    pub scheme: Option<Scheme>,
+
+    /// Texture precision: f32 or f16.
+    #[arg(long, value_name = "P", allow_hyphen_values = true)]
+    pub precision: Option<Precision>,
+
+    /// Airlight as linear R,G,B [default: from the sky found, per frame].
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
+    pub airlight: Option<[f32; 3]>,
+
+    /// Whose conventions, as `brume render --compat`: brume or foggy-cityscapes (the
+    /// blend in sRGB code values, no blur, the dark-channel airlight) [default: brume].
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub compat: Option<Compat>,
+
+    #[command(flatten)]
+    pub refine: RefineArgs,
+
+    /// Skip hole filling and sky detection.
+    #[arg(long)]
+    pub no_prep: bool,
+
+    #[command(flatten)]
+    pub prep: PrepOptionArgs,
+}

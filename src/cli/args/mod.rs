@@ -1,0 +1,355 @@
+//! Argument definitions (clap derive). Help texts are the user manual: say units, defaults
+//! and what each value does.
+//!
+//! Every option whose value is not a path takes `allow_hyphen_values`, so that `--seed -1`
+//! or `--airlight -1,0,0` reaches the check that names the option instead of clap's
+//! "unexpected argument '-1'" (a test in `cli` walks every option).
+
+use super::bench::BenchCommand;
+use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
+use brume::egl::Platform;
+use brume::io::depth::{DepthFormat, DepthKind};
+use brume::io::mask::SkyMaskFormat;
+use brume::medium::haze;
+use brume::refine::RefineMode;
+use brume::{Precision, Scheme};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+mod batch;
+mod render;
+mod scene;
+#[cfg(all(feature = "viewer", not(target_os = "android")))]
+mod view;
+
+pub use batch::BatchArgs;
+pub use render::{AerialBlur, Compat, MediumKind, RenderArgs};
+pub use scene::{BlurKind, DistanceArgs, FogKind, LayeredArgs, ProfileKind, SceneArgs};
+#[cfg(all(feature = "viewer", not(target_os = "android")))]
+pub use view::{ViewArgs, ViewSource, Zoom};
+
+/// Add physically based haze and fog to RGBD images, on OpenGL ES 3.2 through EGL
+/// (headless: no display needed).
+///
+/// Quick start: `brume render` renders the built-in demo scene to brume-demo.png.
+#[derive(Parser, Debug)]
+#[command(name = "brume", version, propagate_version = true)]
+pub struct Cli {
+    /// EGL display to open: surfaceless (Mesa, no window system), device (EGL device,
+    /// the headless route on NVIDIA) or default (eglGetDisplay). Default: the first of
+    /// these that works, in that order.
+    #[arg(
+        long,
+        global = true,
+        value_name = "PLATFORM",
+        allow_hyphen_values = true
+    )]
+    pub egl: Option<Platform>,
+
+    /// More log output on stderr (-v info, -vv debug). RUST_LOG overrides.
+    #[arg(short, long, global = true, action = clap::ArgAction::Count)]
+    pub verbose: u8,
+
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Render haze into an image (no input: the built-in demo scene).
+    Render(Box<RenderArgs>),
+    /// Compare two images: SSIM and HSV-histogram correlation (paper 002, sec. 7.2.3).
+    Compare(CompareArgs),
+    /// Render brume's procedural 3D scene and fog it as an engine would (papers 001, 003):
+    /// distance or layered fog, blurred by paper 001's Gaussian or brume's diffusion.
+    Scene(SceneArgs),
+    /// Show the EGL platform, GL driver and the capabilities brume uses.
+    Info(InfoArgs),
+    /// A window that re-renders the fog as its parameters move: the demo, a photo with
+    /// depth (`view render …`) or brume's 3D scene (`view scene …`).
+    #[cfg(all(feature = "viewer", not(target_os = "android")))]
+    View(ViewArgs),
+    /// Fog a dataset: Cityscapes frames found under folders, or a CSV manifest, for each
+    /// β; resumable and sharded (Foggy Cityscapes' output names).
+    Batch(BatchArgs),
+    /// Pre-process a range map (fill holes, find the sky, matte the horizon) and write it.
+    Prep(PrepArgs),
+    /// Reproduce paper 000's accuracy (fig. 6) and speed (fig. 7) experiments, and
+    /// paper 002's turbidity estimation (Table 1).
+    #[command(subcommand)]
+    Bench(BenchCommand),
+    /// Render a Preetham clear sky (paper 002, sec. 3.2) as a fisheye image.
+    Sky(super::sky::SkyArgs),
+    /// Estimate the atmospheric turbidity of a fisheye sky image (paper 002, sec. 3.4).
+    Turbidity(super::sky::TurbidityArgs),
+}
+
+/// `brume info`.
+#[derive(Args, Clone, Debug)]
+pub struct InfoArgs {
+    /// Print one JSON object on stdout instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Where the depth comes from and how to read it.
+#[derive(Args, Debug, Clone)]
+pub struct DepthArgs {
+    /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (with --calib), 8-bit
+    /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM, Android DEPTH16,
+    /// ARCore, Cityscapes disparity with --camera, or --depth-scale), float EXR/TIFF/PFM,
+    /// or .npy.
+    #[arg(long, value_name = "PATH")]
+    pub depth: Option<PathBuf>,
+
+    /// Middlebury calib.txt with the intrinsics, baseline and doffs of the depth map.
+    #[arg(long, value_name = "PATH")]
+    pub calib: Option<PathBuf>,
+
+    /// Cityscapes NAME_camera.json (baseline in metres, intrinsics fx, fy, u0, v0) of a
+    /// NAME_disparity.png. Default: NAME_camera.json beside the disparity, or in the
+    /// dataset's layout (camera/SPLIT/CITY/ for disparity/SPLIT/CITY/).
+    #[arg(long, value_name = "PATH")]
+    pub camera: Option<PathBuf>,
+
+    /// What the depth values are: depth (along the optical axis), range (distance to the
+    /// camera centre), disparity (px), or zbuffer (a rendered frame's OpenGL window depth
+    /// in [0, 1], with --near, --far and --fov). Default: what the format implies.
+    #[arg(long, value_name = "KIND", allow_hyphen_values = true)]
+    pub depth_kind: Option<DepthKind>,
+
+    /// Depth file format: auto, middlebury2014, middlebury2006, kitti, nyu, tum, png16,
+    /// float, android-depth16 (Camera2 DEPTH16 as a 16-bit PNG: low 13 bits range in mm,
+    /// high 3 bits confidence, read as range), arcore (ARCore 16-bit depth PNG: mm along
+    /// the optical axis, becomes range with --fov or --focal), cityscapes (16-bit
+    /// disparity PNG, p > 0 is (p − 1)/256 px, with its camera file: see --camera; auto
+    /// picks it for a 16-bit PNG whose camera file is given or found).
+    #[arg(
+        long,
+        value_name = "FORMAT",
+        allow_hyphen_values = true,
+        default_value = "auto"
+    )]
+    pub depth_format: DepthFormat,
+
+    /// Units per stored value of a 16-bit PNG (e.g. 0.001 for millimetres to metres).
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub depth_scale: Option<f64>,
+
+    /// Focal length in px, for disparity to depth and depth to range (Middlebury 2006
+    /// default: 3740).
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
+    pub focal: Option<f64>,
+
+    /// Stereo baseline in mm, for disparity to depth (Middlebury 2006 default: 160).
+    #[arg(long, value_name = "MM", allow_hyphen_values = true)]
+    pub baseline: Option<f64>,
+
+    /// Disparity offset (doffs / dmin) in px added to every disparity (Middlebury 2006
+    /// default: 270).
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
+    pub disparity_offset: Option<f64>,
+
+    /// Near clipping plane of the projection that wrote a z-buffer (--depth-kind zbuffer),
+    /// in the scene's units.
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub near: Option<f64>,
+
+    /// Far clipping plane of the projection that wrote a z-buffer.
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub far: Option<f64>,
+
+    /// Vertical field of view in degrees: of a z-buffer's projection, or of a depth map
+    /// (instead of --focal) to turn depth into range.
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_hyphen_values = true,
+        conflicts_with = "focal"
+    )]
+    pub fov: Option<f64>,
+
+    /// --depth-format android-depth16: samples whose DEPTH16 confidence is below this
+    /// are unknown, from 0 (keep every measured sample) to 1 (only code 0, 100 %); code
+    /// c ≥ 1 means (c − 1)/7 [default: 0.5].
+    #[arg(long, value_name = "C", allow_hyphen_values = true)]
+    pub min_confidence: Option<f64>,
+}
+
+/// Options of the range pre-processing (paper 000, sec. 4.1).
+#[derive(Args, Debug, Clone)]
+pub struct PrepOptionArgs {
+    /// Width µ of the horizon margin matted into the sky, in px [default: 8].
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
+    pub margin: Option<f64>,
+
+    /// Sky range Smax as a multiple of the largest measured range Rmax, > 1 [default: 1.5].
+    #[arg(long, value_name = "F", allow_hyphen_values = true)]
+    pub sky_factor: Option<f64>,
+
+    /// Never classify unknown regions as sky (fill every hole).
+    #[arg(long)]
+    pub no_sky: bool,
+
+    /// Smallest area of an unknown region, as a fraction of the image, that can be sky
+    /// [default: 0.01].
+    #[arg(long, value_name = "FRACTION", allow_hyphen_values = true)]
+    pub sky_min_area: Option<f64>,
+
+    /// Seed of the RANSAC hole filling, a whole number ≥ 0; a given seed always gives the
+    /// same result [default: 0].
+    // Signed and wide, so that a negative seed reaches the range check that names it.
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub seed: Option<i128>,
+
+    /// Sky mask PNG from semantic segmentation, the depth map's size: it is the sky,
+    /// instead of detection (known range under it is replaced too).
+    #[arg(long, value_name = "PATH.png", conflicts_with = "no_sky")]
+    pub sky_mask: Option<PathBuf>,
+
+    /// How --sky-mask encodes the sky: binary (non-zero = sky), cityscapes-labelids
+    /// (Cityscapes label id 23) or cityscapes-trainids (train id 10) [default: from the
+    /// name: *_labelIds.png → cityscapes-labelids, *_labelTrainIds.png →
+    /// cityscapes-trainids, else binary].
+    #[arg(
+        long,
+        value_name = "FORMAT",
+        requires = "sky_mask",
+        allow_hyphen_values = true
+    )]
+    pub sky_mask_format: Option<SkyMaskFormat>,
+
+    /// Far outliers: known range above K × the 99th percentile of the range outside the
+    /// sky, in a patch under 0.05 % of the image, is taken as unknown before the farthest
+    /// range sets the scale; K ≥ 1, or 0 to keep every value [default: 2].
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub far_outlier_factor: Option<f64>,
+
+    /// Local outliers: a patch of known range whose disparity (1/range) differs by more
+    /// than F times from the median of its neighbourhood, at most 2.5 % of the image's
+    /// longer side across (stereo mismatches: 200-550 m on a van 7 m away), is taken as
+    /// unknown and filled from the surface round it; F > 1, or 0 to keep every value
+    /// [default: 3].
+    #[arg(long, value_name = "F", allow_hyphen_values = true)]
+    pub local_outliers: Option<f64>,
+
+    /// Ego-vehicle mask PNG, the depth map's size: binary (non-zero = the car's own hood)
+    /// or, named *_labelIds.png, Cityscapes label ids (label 1 = ego vehicle). Its pixels
+    /// get range 0 (never fogged) and their range is not used.
+    #[arg(long, value_name = "PATH.png")]
+    pub ego_mask: Option<PathBuf>,
+}
+
+/// How the range is refined with the image (`render`, `prep`, `batch`).
+#[derive(Args, Clone, Debug, Default)]
+pub struct RefineArgs {
+    /// Image-guided refinement of the range: repair (the guided range where the measured
+    /// range is far nearer than it, as a stereo matcher's false matches in the sky are,
+    /// half of each where pre-processing filled the range, the measured range elsewhere),
+    /// guided (He et al.'s guided filter of log range everywhere, the image's luminance as
+    /// guide), unreliable (the guided range only where pre-processing filled the range) or
+    /// none [default: repair for Cityscapes disparity, none otherwise: measured on
+    /// stereo-matched disparity, see the README]. On the GPU in render and batch, by its
+    /// CPU reference in prep. A depth map smaller than the image (same aspect ratio, 1-16x
+    /// smaller) is always upsampled, by joint bilateral upsampling guided by the image.
+    #[arg(long = "refine", value_enum, allow_hyphen_values = true)]
+    pub mode: Option<RefineMode>,
+
+    /// Window radius r of the guided refinement, px at the image's size [default: 20, as
+    /// Foggy Cityscapes at 2048 x 1024].
+    #[arg(long = "refine-radius", value_name = "PX", allow_hyphen_values = true)]
+    pub radius: Option<f64>,
+
+    /// Regularisation ε of the guided refinement, a variance of the sRGB-encoded
+    /// luminance in (0, 1]: edges of less contrast than about √ε are smoothed across
+    /// [default: 0.001].
+    #[arg(long = "refine-eps", value_name = "EPS", allow_hyphen_values = true)]
+    pub eps: Option<f64>,
+}
+
+/// `brume prep`.
+#[derive(Args, Clone, Debug)]
+pub struct PrepArgs {
+    #[command(flatten)]
+    pub depth: DepthArgs,
+
+    /// Colour image (optional): the sky is then found from the image and the range
+    /// together, and the airlight estimated from it.
+    #[arg(long, value_name = "PATH")]
+    pub image: Option<PathBuf>,
+
+    /// Output range map: .pfm (float, rows bottom to top) or .exr (float).
+    #[arg(long, short, value_name = "PATH")]
+    pub out: PathBuf,
+
+    /// Also write a picture of the range before and after (near dark, far light, holes
+    /// red), like paper 000's fig. 3.
+    #[arg(long, value_name = "PATH.png")]
+    pub vis: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub prep: PrepOptionArgs,
+
+    #[command(flatten)]
+    pub refine: RefineArgs,
+
+    /// Print one JSON object on stdout.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Parses `R,G,B` into three floats.
+fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let values: Result<Vec<f32>, _> = parts.iter().map(|p| p.parse::<f32>()).collect();
+    match values {
+        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite() && *c >= 0.0) => {
+            Ok([v[0], v[1], v[2]])
+        }
+        _ => Err(format!(
+            "'{s}' is not three finite linear values ≥ 0 separated by commas, e.g. 0.8,0.8,0.8"
+        )),
+    }
+}
+
+/// Parses `R,G,B` into three factors > 0.
+fn parse_tint(s: &str) -> Result<[f64; 3], String> {
+    let values: Result<Vec<f64>, _> = s.split(',').map(|p| p.trim().parse::<f64>()).collect();
+    match values {
+        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite() && *c > 0.0) => {
+            Ok([v[0], v[1], v[2]])
+        }
+        _ => Err(format!(
+            "'{s}' is not three finite factors > 0 separated by commas, e.g. 0.8,1,1.3"
+        )),
+    }
+}
+
+/// Parses `X,Y,Z` into three finite numbers (a position or a direction).
+fn parse_vec3(s: &str) -> Result<[f64; 3], String> {
+    let values: Result<Vec<f64>, _> = s.split(',').map(|p| p.trim().parse::<f64>()).collect();
+    match values {
+        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite()) => Ok([v[0], v[1], v[2]]),
+        _ => Err(format!(
+            "'{s}' is not three finite numbers separated by commas, e.g. 0,1.7,0"
+        )),
+    }
+}
+
+/// `brume compare`.
+#[derive(Args, Clone, Debug)]
+pub struct CompareArgs {
+    /// One image (PNG/JPEG sRGB, or EXR/PFM linear).
+    #[arg(value_name = "A")]
+    pub a: PathBuf,
+
+    /// The other, of the same size.
+    #[arg(value_name = "B")]
+    pub b: PathBuf,
+
+    /// Print one JSON object on stdout (ssim, ssim_rgb, hsv_correlation,
+    /// hsv_correlation_hsv).
+    #[arg(long)]
+    pub json: bool,
+}

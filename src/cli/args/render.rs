@@ -1,0 +1,251 @@
+//! `brume render`'s arguments.
+
+use super::*;
+
+/// `brume render`.
+#[derive(Args, Clone, Debug)]
+#[command(group(clap::ArgGroup::new("depth_source").args(["depth", "transmittance_map"])))]
+pub struct RenderArgs {
+    /// Colour image: PNG or JPEG (8- or 16-bit sRGB), or OpenEXR or PFM (linear float, as
+    /// renderers and engines write). Without --image and --depth the built-in demo scene
+    /// is rendered.
+    #[arg(long, value_name = "PATH", requires = "depth_source")]
+    pub image: Option<PathBuf>,
+
+    /// A transmittance map to apply instead of computing τ from a depth map: an 8- or
+    /// 16-bit grey PNG of the image's size, such as Foggy Cityscapes'
+    /// {name}_leftImg8bit_transmittance_beta_{β}.png. Rendered with brume's airlight and
+    /// diffusion blur (the blur from the optical depth −ln τ; --lambda 0 for none), or
+    /// with --compat foggy-cityscapes.
+    #[arg(
+        long,
+        value_name = "PATH.png",
+        requires = "image",
+        conflicts_with_all = ["depth", "beta", "visibility", "ka", "ks", "medium"]
+    )]
+    pub transmittance_map: Option<PathBuf>,
+
+    /// Whose conventions: brume (the default: the blend in linear light, the diffusion
+    /// blur, the airlight from the sky found) or foggy-cityscapes (Sakaridis et al. 2018:
+    /// the blend in sRGB code values, no blur, the airlight by the dark-channel rule), for
+    /// data comparable with Foggy Cityscapes. foggy-cityscapes needs --beta or
+    /// --visibility (or --transmittance-map).
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub compat: Option<Compat>,
+
+    #[command(flatten)]
+    pub depth: DepthArgs,
+
+    /// Output file: .png (8-bit sRGB), .pfm (float RGB, linear) or .exr (float RGBA,
+    /// linear). Default for the demo: brume-demo.png. Must not be one of the inputs.
+    #[arg(long, short, value_name = "PATH")]
+    pub out: Option<PathBuf>,
+
+    /// Absorption coefficient κa per unit of normalised range (attenuation only): the
+    /// frame's largest range counts as 1. For fog in metres see --beta [default: 0.25].
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub ka: Option<f64>,
+
+    /// Scattering coefficient κs per unit of normalised range (attenuation and blur)
+    /// [default: 0.75].
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub ks: Option<f64>,
+
+    /// Extinction β in m⁻¹, instead of --ka/--ks: fog in physical units on range in
+    /// metres, not normalised, so the same β is the same fog in every frame (Foggy
+    /// Cityscapes: 0.005, 0.01, 0.02). τ = exp(−β·R); blur σ = σ0 +
+    /// λ·√(a·ln 20)·min(β·R/ln 20, 1)^(3/2), a = --albedo. Needs metric range:
+    /// middlebury2014 with calib.txt, cityscapes with its camera file, kitti, nyu, tum,
+    /// android-depth16, arcore, png16 with --depth-scale, or a disparity with --focal and
+    /// --baseline.
+    #[arg(
+        long,
+        value_name = "PER_M",
+        allow_hyphen_values = true,
+        conflicts_with_all = ["ka", "ks", "visibility"]
+    )]
+    pub beta: Option<f64>,
+
+    /// Meteorological visibility V in metres, instead of --beta: β = ln 20/V ≈ 2.996/V
+    /// (τ falls to 5 % at V). Foggy Cityscapes: 600, 300, 150.
+    #[arg(
+        long,
+        value_name = "M",
+        allow_hyphen_values = true,
+        conflicts_with_all = ["ka", "ks"]
+    )]
+    pub visibility: Option<f64>,
+
+    /// With --beta or --visibility: single-scattering albedo a in [0, 1]; βs = a·β
+    /// scatters (veils and blurs), βa = (1 − a)·β only absorbs [default: 1, pure
+    /// scattering, as Foggy Cityscapes].
+    #[arg(long, value_name = "A", allow_hyphen_values = true)]
+    pub albedo: Option<f64>,
+
+    /// Blur factor λ in px: the farthest point is blurred to σmax = σ0 + λ·√κs (with
+    /// --beta: σ0 + λ·√(a·ln 20), reached at the visibility).
+    #[arg(long, value_name = "PX", default_value_t = haze::DEFAULT_LAMBDA, allow_hyphen_values = true)]
+    pub lambda: f64,
+
+    /// Inner scale σ0 of the input image in px (its own blur).
+    #[arg(long, value_name = "PX", default_value_t = DEFAULT_SIGMA0, allow_hyphen_values = true)]
+    pub sigma0: f64,
+
+    /// Largest diffusion rate per step, in (0, 0.25]; smaller means more, smaller steps.
+    #[arg(long, value_name = "RHO", default_value_t = DEFAULT_RHO_MAX, allow_hyphen_values = true)]
+    pub rho_max: f64,
+
+    /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: the median sky
+    /// colour; with no sky, a neutral grey at the 99th percentile of the luminance.
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
+    pub airlight: Option<[f32; 3]>,
+
+    /// Relative extinction per channel as R,G,B factors (default 1,1,1: grey haze, as
+    /// paper 000). E.g. 0.8,1,1.3 makes a bluish veil: blue is attenuated, and replaced by
+    /// airlight, most. A tint that is not grey blurs each channel's τ on its own (a second
+    /// texture in every pass).
+    #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_tint)]
+    pub tint: Option<[f64; 3]>,
+
+    /// Diffusion scheme: matched (default; variance-matched, most accurate), invariant
+    /// (paper eq. 18, literally; under-blurs) or euler (eq. 13; hundreds of passes).
+    #[arg(
+        long,
+        value_name = "SCHEME",
+        allow_hyphen_values = true,
+        default_value = "matched"
+    )]
+    pub scheme: Scheme,
+
+    /// Texture precision of the diffusion passes: f32 (RGBA32F) or f16 (RGBA16F).
+    #[arg(
+        long,
+        value_name = "P",
+        allow_hyphen_values = true,
+        default_value = "f32"
+    )]
+    pub precision: Precision,
+
+    /// Blur the whole image to scale S px, with no attenuation and no airlight (an
+    /// accuracy check against a Gaussian of std sqrt(S² − σ0²)).
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub uniform_sigma: Option<f64>,
+
+    /// The medium: haze (paper 000, normalised range) or aerial (paper 002: aerial
+    /// perspective from the turbidity, range in metres, see --turbidity).
+    #[arg(long, value_enum, default_value = "haze", allow_hyphen_values = true)]
+    pub medium: MediumKind,
+
+    /// Aerial: the atmosphere's turbidity T in [1, 20] (2 very clear, 3 clear, 6 hazy).
+    /// The options marked "Aerial" are refused with --medium haze, which does not read
+    /// them.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub turbidity: Option<f64>,
+
+    /// Aerial: estimate the turbidity from this fisheye sky photo instead (see `brume
+    /// turbidity`; the sun is found from its saturated disc).
+    #[arg(long, value_name = "PATH")]
+    pub sky: Option<PathBuf>,
+
+    /// Aerial: re-render a photo taken at this turbidity at --turbidity (retargeting):
+    /// the haze-free radiance is recovered with this turbidity's attenuation first.
+    #[arg(long, value_name = "T", allow_hyphen_values = true)]
+    pub from_turbidity: Option<f64>,
+
+    /// Aerial: the observer's altitude above sea level, metres, in [-500, 20000]
+    /// [default: 0].
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub altitude: Option<f64>,
+
+    /// Aerial: metres per unit of the range map: needed for a range that is not in
+    /// metres (float maps, z-buffers, disparities without a calibration) [default: 1 for
+    /// metric depth formats].
+    #[arg(long, value_name = "M", allow_hyphen_values = true)]
+    pub metres_per_unit: Option<f64>,
+
+    /// Aerial: the camera's pitch in degrees, in (-90, 90) (with the field of view, each
+    /// pixel's zenith angle) [default: 0].
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub pitch: Option<f64>,
+
+    /// Aerial: the image row (0 at the top) where the horizon is, instead of --pitch: the
+    /// pitch that puts the horizon there with --fov.
+    #[arg(
+        long,
+        value_name = "ROW",
+        allow_hyphen_values = true,
+        conflicts_with = "pitch"
+    )]
+    pub horizon_row: Option<f64>,
+
+    /// Aerial: zenith angle (degrees, in [0, 90]) where --airlight (or, with no sky
+    /// found, the estimated airlight) is taken to be measured; with a sky, I∞ and its
+    /// zenith angle come from the brightest sky of the horizon region [default: 85].
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub horizon_zenith: Option<f64>,
+
+    /// Aerial: the camera's spectral sensitivity, CSV `lambda_nm,r,g,b` [default: CIE 1931
+    /// observer to linear sRGB].
+    #[arg(long, value_name = "PATH")]
+    pub sensitivity: Option<PathBuf>,
+
+    /// Aerial: blur by diffusion from the scattering optical depth (λ = --lambda) or none
+    /// [default: diffusion].
+    #[arg(long, value_enum, allow_hyphen_values = true)]
+    pub blur: Option<AerialBlur>,
+
+    /// Skip pre-processing: unknown range values are taken as the farthest range.
+    #[arg(long)]
+    pub no_prep: bool,
+
+    #[command(flatten)]
+    pub refine: RefineArgs,
+
+    /// The right image of a stereo pair whose left disparity is --depth (Cityscapes
+    /// format): pixels whose colour differs from their match in it by more than 12/255
+    /// (Foggy Cityscapes' left-right photoconsistency) are unreliable, taken as unknown
+    /// and filled from their reliable neighbours (not found automatically: measured on
+    /// rendered stereo it also flags correct pixels, see the README).
+    #[arg(long, value_name = "PATH")]
+    pub right: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub prep: PrepOptionArgs,
+
+    /// Print the time of every pass.
+    #[arg(long)]
+    pub timings: bool,
+
+    /// Print one JSON object on stdout (width, height, scheme, precision,
+    /// diffusion_passes, renderer, clock, total_ms, pass_ms, out, ...).
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The medium of `brume render`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MediumKind {
+    /// Paper 000's haze.
+    Haze,
+    /// Paper 002's aerial perspective from turbidity.
+    Aerial,
+}
+
+/// `--compat`: whose conventions a render follows.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compat {
+    /// brume's: the blend in linear light, the diffusion blur, the sky's airlight.
+    Brume,
+    /// Foggy Cityscapes': the blend in sRGB code values, no blur, the dark-channel
+    /// airlight.
+    FoggyCityscapes,
+}
+
+/// The blur of the aerial medium.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AerialBlur {
+    /// Diffusion to the scale the scattering optical depth gives.
+    Diffusion,
+    /// No blur.
+    None,
+}

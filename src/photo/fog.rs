@@ -1,0 +1,180 @@
+//! The fog of a prepared photo: paper 000's haze in normalised range or, from an
+//! extinction coefficient or a visibility, in metres, with its diffusion blur.
+
+use super::{Photo, PreparedPhoto};
+use crate::blur::Blur;
+use crate::error::{Error, Result};
+use crate::medium::haze::{self, Haze};
+use crate::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
+use crate::medium::Medium;
+use crate::raster::ScalarMap;
+use crate::renderer::{Rendered, Renderer};
+
+/// How dense the haze is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Extinction {
+    /// Paper 000's κa and κs per unit of normalised range (the largest range is 1).
+    Normalised {
+        /// Absorption κa.
+        ka: f64,
+        /// Scattering κs.
+        ks: f64,
+    },
+    /// An extinction coefficient in 1/m (and its albedo) on range in metres.
+    Physical(PhysicalFog),
+}
+
+/// The fog a photo gets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FogOptions {
+    /// How dense.
+    pub extinction: Extinction,
+    /// The blur's strength λ (σ grows with the optical depth; 0 for none).
+    pub lambda: f64,
+    /// Per-channel factors of the extinction (1, 1, 1: grey fog).
+    pub tint: [f64; 3],
+    /// The diffusion blur's scheme, precision and limits.
+    pub blur: Blur,
+}
+
+impl Default for FogOptions {
+    /// Paper 000's defaults: κa 0.25, κs 0.75 on normalised range, λ 8.
+    fn default() -> Self {
+        FogOptions {
+            extinction: Extinction::Normalised {
+                ka: haze::DEFAULT_KA,
+                ks: haze::DEFAULT_KS,
+            },
+            lambda: haze::DEFAULT_LAMBDA,
+            tint: [1.0; 3],
+            blur: Blur::default(),
+        }
+    }
+}
+
+impl FogOptions {
+    /// Fog of extinction `beta` (1/m, albedo 1) on range in metres, the other options
+    /// the defaults.
+    pub fn beta(beta: f64) -> Result<FogOptions> {
+        Ok(FogOptions {
+            extinction: Extinction::Physical(PhysicalFog::new(beta, DEFAULT_ALBEDO)?),
+            ..FogOptions::default()
+        })
+    }
+
+    /// Fog of meteorological visibility `visibility_m` (contrast 5 %; albedo 1).
+    pub fn visibility(visibility_m: f64) -> Result<FogOptions> {
+        Ok(FogOptions {
+            extinction: Extinction::Physical(PhysicalFog::from_visibility(
+                visibility_m,
+                DEFAULT_ALBEDO,
+            )?),
+            ..FogOptions::default()
+        })
+    }
+
+    /// The haze medium with `airlight`, its values checked.
+    pub fn haze(&self, airlight: [f32; 3]) -> Result<Haze> {
+        let (ka, ks) = match self.extinction {
+            Extinction::Normalised { ka, ks } => (ka, ks),
+            Extinction::Physical(_) => (haze::DEFAULT_KA, haze::DEFAULT_KS),
+        };
+        let haze = Haze {
+            ka,
+            ks,
+            lambda: self.lambda,
+            airlight,
+            tint: self.tint,
+            range_unit: 1.0,
+        };
+        haze.validate()?;
+        Ok(match &self.extinction {
+            Extinction::Physical(fog) => fog.haze(&haze),
+            Extinction::Normalised { .. } => haze,
+        })
+    }
+}
+
+/// The range texture the haze reads: `range` normalised by its largest value (paper 000),
+/// returned with it, or kept in metres for physical fog (returned with 1). Unknown values
+/// (NaN, ≤ 0) are taken as the largest.
+pub fn medium_range(extinction: &Extinction, range: &ScalarMap) -> Result<(ScalarMap, f64)> {
+    match extinction {
+        Extinction::Physical(_) => {
+            let (metres, _) = physical::metric_range(range)?;
+            Ok((metres, 1.0))
+        }
+        Extinction::Normalised { .. } => {
+            let (normalised, r_max) = haze::normalise_range(range)?;
+            Ok((normalised, f64::from(r_max)))
+        }
+    }
+}
+
+/// A fogged photo.
+#[derive(Debug)]
+pub struct FoggedPhoto {
+    /// The image, the blur's schedule and the passes' times.
+    pub rendered: Rendered,
+    /// The medium as rendered (its `range_unit` the visibility for physical fog).
+    pub haze: Haze,
+    /// The range that counts as 1 in the medium's units: the largest range (normalised
+    /// extinction) or the visibility in metres (physical fog).
+    pub range_divisor: f64,
+}
+
+/// Fogs `photo` with its `prepared` range (see [`super::prepare`]) on `renderer`.
+///
+/// Errors: [`Error::InvalidParameter`] for bad options, for physical fog on a range not
+/// known to be in metres ([`crate::io::depth::LoadedDepth::metric`]), and for a range not
+/// yet at the image's size (refine first); the renderer's own.
+pub fn fog(
+    renderer: &mut Renderer,
+    photo: &Photo,
+    prepared: &PreparedPhoto,
+    opts: &FogOptions,
+) -> Result<FoggedPhoto> {
+    if let Extinction::Physical(fog) = &opts.extinction {
+        if !photo.depth.metric {
+            return Err(Error::invalid(
+                "beta",
+                fog.beta,
+                format!(
+                    "range in metres, but {} was read as {} {} in {}: give its calibration, \
+                     a metric depth format or a scale in metres per unit, or use \
+                     normalised extinction",
+                    photo.depth_name, photo.depth.format, photo.depth.kind, photo.depth.units
+                ),
+            ));
+        }
+    }
+    let size = (photo.image.width(), photo.image.height());
+    if (prepared.range.width(), prepared.range.height()) != size {
+        return Err(Error::invalid(
+            "range",
+            format!("{}x{}", prepared.range.width(), prepared.range.height()),
+            format!(
+                "the image's size, {}x{}: refine the prepared photo first (it upsamples)",
+                size.0, size.1
+            ),
+        ));
+    }
+    let haze = opts.haze(prepared.airlight)?;
+    let (range, r_max) = medium_range(&opts.extinction, &prepared.range)?;
+    let range_divisor = match opts.extinction {
+        Extinction::Physical(_) => haze.range_unit,
+        Extinction::Normalised { .. } => r_max,
+    };
+    let rendered = renderer.render(&photo.image, &range, &haze, &opts.blur)?;
+    Ok(FoggedPhoto {
+        rendered,
+        haze,
+        range_divisor,
+    })
+}
+
+/// The transmittance τ (green channel) of `haze` at each pixel of `medium_range` (as
+/// [`medium_range`] makes it), row 0 at the top.
+pub fn transmittance_map(haze: &Haze, medium_range: &ScalarMap) -> ScalarMap {
+    medium_range.map(|&r| haze.transmission(f64::from(r) / haze.range_unit)[1] as f32)
+}

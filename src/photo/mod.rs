@@ -1,0 +1,161 @@
+//! Fog for a photograph with depth, as a library: what `brume render`, `prep` and `batch`
+//! do between the files and the pixels, for hosts that are not the command line (the
+//! Python package, a dataset tool, an app).
+//!
+//! ```no_run
+//! use brume::photo::{self, FogOptions, Photo, PrepareOptions};
+//! # fn main() -> brume::Result<()> {
+//! let mut headless = brume::Headless::new(None)?;
+//! let photo = Photo::load("street.png".as_ref(), "street_depth.exr".as_ref(), &Default::default())?;
+//! let prepared = photo::prepare(&photo, &PrepareOptions::for_photo(&photo), headless.renderer()?)?;
+//! let fogged = photo::fog(headless.renderer()?, &photo, &prepared, &FogOptions::beta(0.02)?)?;
+//! brume::io::output::write_rgba("street_fog.png".as_ref(), &fogged.rendered.image)?;
+//! # Ok(()) }
+//! ```
+//!
+//! The steps, each usable alone: [`Photo`] (an image and its range, loaded or given),
+//! [`preprocess`] (holes, sky, the airlight, on the depth map's grid: CPU only, so a
+//! dataset's loader thread can run it), [`PreparedPhoto::refine`] (upsampling and the
+//! guided filter, on the GPU or by the CPU references), [`fog`] (the haze in normalised
+//! or physical units, with the diffusion blur) and [`transmittance_map`].
+
+mod fog;
+mod prepare;
+
+pub use fog::{fog, medium_range, transmittance_map, Extinction, FogOptions, FoggedPhoto};
+pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
+
+use crate::error::{Error, Result};
+use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
+use crate::io::{demo, image};
+use crate::raster::{RgbImage, ScalarMap};
+use std::path::Path;
+
+/// A photograph (linear RGB) and its range, with where they came from.
+#[derive(Clone, Debug)]
+pub struct Photo {
+    /// Linear-light RGB, row 0 at the top.
+    pub image: RgbImage,
+    /// The range map (the image's size or smaller by one factor, see
+    /// [`crate::refine::check_depth_size`]) and how it was read.
+    pub depth: LoadedDepth,
+    /// The image's name in messages (its path).
+    pub image_name: String,
+    /// The depth's name in messages (its path).
+    pub depth_name: String,
+}
+
+/// Bytes per pixel that a render holds in system memory besides the GL textures: the
+/// decoded colour (8-bit, then linear f32), the depth (raw, then range), pre-processing's
+/// maps, the normalised range, the read-back and the encoded output. Measured: a
+/// 4000x3000 render peaks at 1.12-1.18 GB on llvmpipe, 94-98 bytes per pixel, of which the
+/// textures (counted by the renderer's own check) are 36.
+pub const CPU_BYTES_PER_PIXEL: u64 = 64;
+
+impl Photo {
+    /// Loads an image and its depth map (any format [`depth::load_range`] reads), after
+    /// checking from the image's header that the work fits in the memory left.
+    ///
+    /// Errors: the loaders', [`Error::OutOfMemory`], and [`Error::InvalidParameter`] for a
+    /// depth map neither the image's size nor smaller by one factor.
+    pub fn load(image_path: &Path, depth_path: &Path, opts: &DepthOptions) -> Result<Photo> {
+        check_memory_before_loading(image_path)?;
+        let depth = depth::load_range(depth_path, opts)?;
+        let photo = Photo {
+            image: image::load_linear_rgb(image_path)?,
+            depth,
+            image_name: image_path.display().to_string(),
+            depth_name: depth_path.display().to_string(),
+        };
+        photo.check_depth_fits()?;
+        Ok(photo)
+    }
+
+    /// A photo from arrays: `image` linear RGB and `range_m` the distance from the camera
+    /// centre in metres (NaN, ≤ 0 or infinite where unknown), the image's size or smaller
+    /// by one factor.
+    pub fn from_range(image: RgbImage, range_m: ScalarMap) -> Result<Photo> {
+        let unknown_pixels = range_m
+            .as_slice()
+            .iter()
+            .filter(|v| !(v.is_finite() && **v > 0.0))
+            .count();
+        let range = range_m.map(|&v| {
+            if v.is_finite() && v > 0.0 {
+                v
+            } else {
+                f32::NAN
+            }
+        });
+        let photo = Photo {
+            image,
+            depth: LoadedDepth {
+                range,
+                format: DepthFormat::Float,
+                kind: DepthKind::Range,
+                units: "m".into(),
+                metric: true,
+                intrinsics: None,
+                notes: Vec::new(),
+                unknown_pixels,
+            },
+            image_name: "image".into(),
+            depth_name: "range".into(),
+        };
+        photo.check_depth_fits()?;
+        Ok(photo)
+    }
+
+    /// The built-in demo: Middlebury's Aloe at half size, its disparity read with offset 0
+    /// (normalised range, not metres).
+    pub fn demo() -> Result<Photo> {
+        Ok(Photo {
+            image: demo::demo_image()?,
+            depth: demo::demo_range()?,
+            image_name: "built-in demo image".into(),
+            depth_name: "built-in demo disparity".into(),
+        })
+    }
+
+    /// The depth map has the image's size, or is smaller by one factor on both sides (it
+    /// is then upsampled, guided by the image); the error names both.
+    pub fn check_depth_fits(&self) -> Result<()> {
+        let (image, range) = (&self.image, &self.depth.range);
+        let sizes = (
+            (image.width(), image.height()),
+            (range.width(), range.height()),
+        );
+        crate::refine::check_depth_size(sizes.0, sizes.1).map_err(|e| match e {
+            Error::InvalidParameter { expected, .. } => Error::invalid(
+                "--depth",
+                format!("{} ({}x{})", self.depth_name, sizes.1 .0, sizes.1 .1),
+                format!(
+                    "a depth map for the image {} ({}x{}): {expected}",
+                    self.image_name, sizes.0 .0, sizes.0 .1
+                ),
+            ),
+            e => e,
+        })
+    }
+}
+
+/// Refuses, from the image's header alone, an image whose render cannot fit in the memory
+/// left, before decoding it (a header that cannot be read is left to the loader to report).
+pub fn check_memory_before_loading(image_path: &Path) -> Result<()> {
+    let dims = ::image::ImageReader::open(image_path)
+        .ok()
+        .and_then(|r| r.with_guessed_format().ok())
+        .and_then(|r| r.into_dimensions().ok());
+    let Some((w, h)) = dims else {
+        return Ok(());
+    };
+    crate::memory::check_fits(
+        &format!("rendering {} ({w}x{h})", image_path.display()),
+        CPU_BYTES_PER_PIXEL * u64::from(w) * u64::from(h),
+        crate::memory::available(),
+        &format!(
+            "a render holds about {CPU_BYTES_PER_PIXEL} bytes per pixel in memory besides \
+             its textures: use a smaller image"
+        ),
+    )
+}

@@ -1,0 +1,245 @@
+//! The options of pre-processing, with their defaults and checks.
+
+use crate::{Error, Result};
+
+/// Which components of unknown pixels are sky under the depth rules. A component is sky
+/// when it passes every rule; of those, the `max_components` largest are kept. See the
+/// module docs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkyRules {
+    /// Minimum area, as a fraction of the image (default 0.01). Also the minimum area of
+    /// each region the image-guided detector grows.
+    pub min_area_fraction: f64,
+    /// The component must have a pixel in the top row (default true).
+    pub must_touch_top: bool,
+    /// At most this many components are sky, the largest (default 4; 0 disables sky).
+    pub max_components: usize,
+    /// Minimum number of top-row pixels, as a fraction of the width (default 0.1).
+    pub min_top_fraction: f64,
+    /// Minimum area as a fraction of the component's bounding box (default 0.3).
+    pub min_bbox_fill: f64,
+    /// Reject components that reach the bottom row (default true).
+    pub reject_bottom: bool,
+}
+
+impl Default for SkyRules {
+    fn default() -> Self {
+        SkyRules {
+            min_area_fraction: 0.01,
+            must_touch_top: true,
+            max_components: 4,
+            min_top_fraction: 0.1,
+            min_bbox_fill: 0.3,
+            reject_bottom: true,
+        }
+    }
+}
+
+/// Rules of the image-guided sky detector, used when [`super::prepare_guided`] is given the
+/// colour image (see the module docs, step 2, for what each one does).
+#[derive(Clone, Debug, PartialEq)]
+pub struct ImageSkyRules {
+    /// Seeds are looked for in this top fraction of the rows (default 0.05; at least one
+    /// row).
+    pub seed_rows: f64,
+    /// Largest texture of a sky pixel: the 3 x 3 mean of its largest relative colour step
+    /// to a 4-neighbour (default 0.05; a smooth sky with 1 % sensor noise scores about
+    /// 0.02, a textured facade, foliage or tarmac 0.1 and more).
+    pub max_texture: f64,
+    /// Largest relative colour step between two sky pixels grown one from the other
+    /// (default 0.08).
+    pub max_step: f64,
+    /// The sky is at least this bright, relative to the median luminance of the pixels of
+    /// confident range (the scene; the whole image without any). Default 1: a daylight sky
+    /// is rarely darker than the typical surface under it.
+    pub min_brightness: f64,
+    /// Blue or grey: `B >= min_blue_ratio x max(R, G)` in linear light (default 0.7; a
+    /// grey or blue sky is about 0.9 and more, foliage and brick well below 0.5).
+    pub min_blue_ratio: f64,
+    /// The growth jumps occluders up to this many pixels thick, counted with the pixels
+    /// next to them that the texture test refuses (default 6: a 2-px wire).
+    pub bridge_px: usize,
+    /// Gaps in the sky up to this fraction of the image become sky even when dark
+    /// (default 0.002: birds, lamp heads, signs on wires).
+    pub max_gap_fraction: f64,
+}
+
+impl Default for ImageSkyRules {
+    fn default() -> Self {
+        ImageSkyRules {
+            seed_rows: 0.05,
+            max_texture: 0.05,
+            max_step: 0.08,
+            min_brightness: 1.0,
+            min_blue_ratio: 0.7,
+            bridge_px: 6,
+            max_gap_fraction: 0.002,
+        }
+    }
+}
+
+/// Largest accepted [`PrepOptions::margin_px`].
+const MAX_MARGIN_PX: f64 = 65535.0;
+/// Largest accepted [`PrepOptions::sky_range_factor`]: beyond it the whole scene is
+/// squeezed into normalised range below 1/1000, where no haze shows.
+const MAX_SKY_RANGE_FACTOR: f64 = 1000.0;
+/// Largest accepted [`ImageSkyRules::bridge_px`].
+const MAX_BRIDGE_PX: usize = 64;
+/// Smallest far patch that is kept, whatever [`PrepOptions::far_patch_fraction`] says.
+pub(super) const MIN_FAR_PATCH: usize = 16;
+/// Smallest span of a local-outlier patch, whatever [`PrepOptions::local_outlier_span`]
+/// says.
+pub(super) const MIN_LOCAL_SPAN: usize = 4;
+
+/// Options of [`super::prepare`]. The defaults are those documented on each field.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrepOptions {
+    /// Sky detection rules on the range alone.
+    pub sky: SkyRules,
+    /// Sky detection rules on the colour image (when [`super::prepare_guided`] gets one).
+    pub image_sky: ImageSkyRules,
+    /// Width `µ` of the horizon margin in pixels, in [0, 65535] (default 8; 0: no margin).
+    pub margin_px: f64,
+    /// Jacobi sweeps in the margin; `None` (default) means `ceil(2 µ)`.
+    pub jacobi_iterations: Option<usize>,
+    /// `Smax = sky_range_factor x Rmax`; must be in (1, 1000] (default 1.5).
+    pub sky_range_factor: f64,
+    /// RANSAC trials per hole, each one constant and one plane candidate (default 32, >= 1).
+    pub ransac_samples: usize,
+    /// Seed of the RANSAC random streams (default 0).
+    pub seed: u64,
+    /// Look for sky at all (default true); when false, every unknown component is a hole
+    /// (a sky mask given to [`super::prepare_guided`] is still used).
+    pub detect_sky: bool,
+    /// Known values above `far_outlier_factor x` the 99th percentile of the known values
+    /// outside the sky are far outliers unless supported (see `far_patch_fraction`); they
+    /// become unknown before `Rmax` is taken. Default 2; 0 turns the rule off; otherwise at
+    /// least 1.
+    pub far_outlier_factor: f64,
+    /// A far value is supported when its 8-connected patch of values above the cut covers
+    /// at least this fraction of the image (and at least 16 pixels); default 0.0005.
+    pub far_patch_fraction: f64,
+    /// Local outliers (step 3b): a known range whose disparity `1/R` differs by more than
+    /// this factor (a ratio, either way) from the median of its neighbourhood, in a patch
+    /// at most [`local_outlier_span`](Self::local_outlier_span) across, becomes unknown.
+    /// Default 3; 0 turns the rule off; otherwise finite and > 1.
+    pub local_outlier_factor: f64,
+    /// Longest side of a local-outlier patch, as a fraction of the image's longer side
+    /// (at least 4 px); also the half-size of the neighbourhood. In [0, 1], default 0.025
+    /// (51 px on a 2048 x 1024 frame).
+    pub local_outlier_span: f64,
+    /// Border bands (step 4a): runs of unknown pixels from a border inward, at most this
+    /// fraction of the line long, continue the surface they meet (or are sky, when they
+    /// meet the sky) instead of being filled as holes. In [0, 1], default 0.15; 0 turns
+    /// it off.
+    pub border_band_fraction: f64,
+}
+
+impl Default for PrepOptions {
+    fn default() -> Self {
+        PrepOptions {
+            sky: SkyRules::default(),
+            image_sky: ImageSkyRules::default(),
+            margin_px: 8.0,
+            jacobi_iterations: None,
+            sky_range_factor: 1.5,
+            ransac_samples: 32,
+            seed: 0,
+            detect_sky: true,
+            far_outlier_factor: 2.0,
+            far_patch_fraction: 0.0005,
+            local_outlier_factor: 3.0,
+            local_outlier_span: 0.025,
+            border_band_fraction: 0.15,
+        }
+    }
+}
+
+impl PrepOptions {
+    /// Checks every field; an out-of-domain one gives [`Error::InvalidParameter`].
+    pub fn validate(&self) -> Result<()> {
+        check_fraction("min_area_fraction", self.sky.min_area_fraction)?;
+        check_fraction("sky.min_top_fraction", self.sky.min_top_fraction)?;
+        check_fraction("sky.min_bbox_fill", self.sky.min_bbox_fill)?;
+        self.validate_image_sky()?;
+        if !(0.0..=MAX_MARGIN_PX).contains(&self.margin_px) {
+            return Err(Error::invalid(
+                "margin_px",
+                self.margin_px,
+                "a number of pixels in [0, 65535]",
+            ));
+        }
+        if !(self.sky_range_factor > 1.0 && self.sky_range_factor <= MAX_SKY_RANGE_FACTOR) {
+            return Err(Error::invalid(
+                "sky_range_factor",
+                self.sky_range_factor,
+                format!(
+                    "a number in (1, {MAX_SKY_RANGE_FACTOR}]: the sky's range as a multiple of \
+                     the farthest measured range"
+                ),
+            ));
+        }
+        if self.ransac_samples == 0 {
+            return Err(Error::invalid("ransac_samples", 0, "at least 1"));
+        }
+        let f = self.far_outlier_factor;
+        if !(f == 0.0 || (f >= 1.0 && f.is_finite())) {
+            return Err(Error::invalid(
+                "far_outlier_factor",
+                f,
+                "0 (off) or a finite number >= 1: the multiple of the 99th percentile of \
+                 the known range above which isolated values are outliers",
+            ));
+        }
+        check_fraction("far_patch_fraction", self.far_patch_fraction)?;
+        let f = self.local_outlier_factor;
+        if !(f == 0.0 || (f > 1.0 && f.is_finite())) {
+            return Err(Error::invalid(
+                "local_outlier_factor",
+                f,
+                "0 (off) or a finite number > 1: the ratio between a patch's range and its \
+                 neighbourhood's above which the patch is an outlier",
+            ));
+        }
+        check_fraction("local_outlier_span", self.local_outlier_span)?;
+        check_fraction("border_band_fraction", self.border_band_fraction)
+    }
+
+    fn validate_image_sky(&self) -> Result<()> {
+        let r = &self.image_sky;
+        check_fraction("image_sky.seed_rows", r.seed_rows)?;
+        check_fraction("image_sky.max_gap_fraction", r.max_gap_fraction)?;
+        for (name, v) in [
+            ("image_sky.max_texture", r.max_texture),
+            ("image_sky.max_step", r.max_step),
+            ("image_sky.min_brightness", r.min_brightness),
+            ("image_sky.min_blue_ratio", r.min_blue_ratio),
+        ] {
+            if !(v >= 0.0 && v.is_finite()) {
+                return Err(Error::invalid(name, v, "a finite number >= 0"));
+            }
+        }
+        if r.bridge_px > MAX_BRIDGE_PX {
+            return Err(Error::invalid(
+                "image_sky.bridge_px",
+                r.bridge_px,
+                format!("at most {MAX_BRIDGE_PX} pixels"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The number of Jacobi sweeps actually used: the option, or `ceil(2 µ)`.
+    pub fn jacobi_sweeps(&self) -> usize {
+        self.jacobi_iterations
+            .unwrap_or((2.0 * self.margin_px).ceil() as usize)
+    }
+}
+
+fn check_fraction(name: &str, v: f64) -> Result<()> {
+    if (0.0..=1.0).contains(&v) {
+        Ok(())
+    } else {
+        Err(Error::invalid(name, v, "a fraction in [0, 1]"))
+    }
+}

@@ -1,0 +1,428 @@
+//! The refinement step of a photo's range, as `brume render`, `prep`, `batch` and `view`
+//! run it between pre-processing and the fog: a depth map smaller than the image is
+//! upsampled guided by the image, then the guided filter runs if asked for. The GPU's
+//! passes ([`crate::Renderer`]) and their f64 CPU references ([`CpuFilter`]) are
+//! interchangeable behind [`RangeFilter`].
+
+use super::{check_positive, nearest_to_image_size, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR};
+use crate::error::{Error, Result};
+use crate::io::depth::DepthFormat;
+use crate::prep::Prepared;
+use crate::raster::{Grid, RgbImage, ScalarMap};
+
+/// Which refinement a range gets (`--refine`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum RefineMode {
+    /// No refinement (a smaller depth map is still upsampled, guided).
+    #[default]
+    None,
+    /// The guided filter, everywhere.
+    Guided,
+    /// The guided filter where the range is unreliable only: where pre-processing filled
+    /// it (holes, outliers, left-right mismatches, border bands); elsewhere the range is
+    /// kept as measured.
+    Unreliable,
+    /// The guided range where the measured range is much nearer than it, half of each
+    /// where pre-processing filled the range, the measured range elsewhere (see
+    /// [`repair`]): a stereo matcher's false matches in the sky and on textureless far
+    /// surfaces are repaired, the depth it got right is kept. The default for Cityscapes
+    /// disparity.
+    Repair,
+}
+
+impl RefineMode {
+    /// The refinement a depth map of `format` gets unless told otherwise: [`Self::Repair`]
+    /// for stereo-matched disparity (Cityscapes' SGM), measured to make it better in every
+    /// region (README, "Real depth"); none for the rest, whose depth is a sensor's or a
+    /// renderer's, on which it was not measured.
+    pub fn default_for(format: DepthFormat) -> RefineMode {
+        match format {
+            DepthFormat::Cityscapes => RefineMode::Repair,
+            _ => RefineMode::None,
+        }
+    }
+}
+
+/// Where [`RefineMode::Repair`] starts and ends taking the guided range: the guided log
+/// range exceeds the measured one by 1.0 (the measured range 2.7 times nearer) to 1.5
+/// (4.5 times), with a smoothstep between.
+pub const REPAIR_NEARER: [f64; 2] = [1.0, 1.5];
+
+/// The weight of the guided range where pre-processing filled the range, in
+/// [`RefineMode::Repair`]: there the guided and the filled range were measured equally
+/// good, and their mean better than either.
+pub const REPAIR_FILLED_WEIGHT: f64 = 0.5;
+
+/// One pixel of [`RefineMode::Repair`]: the log-range mix of the `measured` (after
+/// pre-processing) and the `guided` range (both > 0). The weight of the guided range is
+/// w = smoothstep over [`REPAIR_NEARER`] of ln guided − ln measured; where the range was
+/// `filled` the measured range's weight 1 − w is multiplied by 1 − [`REPAIR_FILLED_WEIGHT`].
+///
+/// Why one sign: a stereo matcher's disparity of the sky or of a textureless far surface
+/// can err only upward (a disparity below 0 is invalid, and there the true one is near
+/// 0), so its false matches are always too near, often by a factor of 5 to 50 (measured
+/// on StereoSGBM with a known truth, `tools/stereo_refine_eval.py`); where the guided
+/// filter is wrong on correct depth, it mostly pulls a far surface nearer (a tower's face
+/// toward the brighter sky in luminance) or blurs an edge by less than a factor of 2.7,
+/// which the rule leaves alone.
+pub fn repair(measured: f32, guided: f32, filled: bool) -> f32 {
+    let (lm, lg) = (f64::from(measured).ln(), f64::from(guided).ln());
+    let [t0, t1] = REPAIR_NEARER;
+    let x = ((lg - lm - t0) / (t1 - t0)).clamp(0.0, 1.0);
+    let mut weight = x * x * (3.0 - 2.0 * x);
+    if filled {
+        weight = 1.0 - (1.0 - weight) * (1.0 - REPAIR_FILLED_WEIGHT);
+    }
+    ((1.0 - weight) * lm + weight * lg).exp() as f32
+}
+
+/// How a photo's range is refined with its image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefineOptions {
+    /// Whether and where the guided filter runs.
+    pub mode: RefineMode,
+    /// The guided filter's window and regularisation.
+    pub filter: Refine,
+    /// The colour σ of the joint bilateral upsampling of a smaller depth map, in
+    /// sRGB-encoded values.
+    pub upsample_sigma_colour: f64,
+}
+
+impl Default for RefineOptions {
+    /// No guided filter (measured on stereo-matched depth, it blurs what the matcher got
+    /// right: README, "Real depth"); Foggy Cityscapes' window; σ 0.15 for upsampling.
+    fn default() -> Self {
+        RefineOptions {
+            mode: RefineMode::None,
+            filter: Refine::default(),
+            upsample_sigma_colour: DEFAULT_UPSAMPLE_SIGMA_COLOUR,
+        }
+    }
+}
+
+impl RefineOptions {
+    /// Checks the values, naming the field.
+    pub fn validate(&self) -> Result<()> {
+        self.filter.validate()?;
+        if !(self.upsample_sigma_colour.is_finite() && self.upsample_sigma_colour > 0.0) {
+            return Err(Error::invalid(
+                "upsample_sigma_colour",
+                self.upsample_sigma_colour,
+                "a colour σ > 0 (sRGB-encoded values)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// What runs for a range of `range` size under an image of `image` size.
+    pub fn plan(&self, image: (usize, usize), range: (usize, usize)) -> RefinePlan {
+        RefinePlan {
+            upsample: image != range,
+            guided: (self.mode != RefineMode::None).then_some(self.filter),
+            combine: match self.mode {
+                RefineMode::Unreliable => Combine::WhereFilled,
+                RefineMode::Repair => Combine::Repair,
+                RefineMode::None | RefineMode::Guided => Combine::Guided,
+            },
+        }
+    }
+}
+
+/// What a refinement runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefinePlan {
+    /// The depth map is smaller than the image: joint bilateral upsampling first.
+    pub upsample: bool,
+    /// The guided filter at the image's size, if on.
+    pub guided: Option<Refine>,
+    /// How the guided range and the measured one are combined.
+    pub combine: Combine,
+}
+
+/// How [`refine_range`] combines the guided range with the measured one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Combine {
+    /// The guided range everywhere.
+    Guided,
+    /// The guided range where pre-processing filled the range, else the measured one
+    /// ([`RefineMode::Unreliable`]).
+    WhereFilled,
+    /// [`repair`] per pixel ([`RefineMode::Repair`]).
+    Repair,
+}
+
+impl RefinePlan {
+    /// Whether anything runs at all.
+    pub fn is_empty(&self) -> bool {
+        !self.upsample && self.guided.is_none()
+    }
+}
+
+/// How a refinement's passes run: on the GPU ([`crate::Renderer`]) or by their CPU
+/// references ([`CpuFilter`]).
+pub trait RangeFilter {
+    /// Upsamples `range` (> 0, smaller than `image` by one factor) to the image's size
+    /// guided by it ([`super::joint_bilateral_upsample_reference`]).
+    fn upsample(
+        &mut self,
+        image: &RgbImage,
+        range: &ScalarMap,
+        sigma_colour: f64,
+    ) -> Result<ScalarMap>;
+    /// The guided filter of `range` (> 0, of the image's size) with `image` as guide
+    /// ([`super::guided_range_reference`]).
+    fn guided(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap>;
+}
+
+impl RangeFilter for crate::Renderer {
+    fn upsample(
+        &mut self,
+        image: &RgbImage,
+        range: &ScalarMap,
+        sigma_colour: f64,
+    ) -> Result<ScalarMap> {
+        Ok(crate::Renderer::upsample(self, image, range, sigma_colour)?.0)
+    }
+    fn guided(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap> {
+        Ok(crate::Renderer::refine(self, image, range, opts)?.0)
+    }
+}
+
+/// The CPU references of the GPU passes, in f64 (the same results within 1e-4): for a
+/// host without a GL context, `brume prep` and the viewer, whose pipeline is the fog's
+/// alone.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct CpuFilter;
+
+impl RangeFilter for CpuFilter {
+    fn upsample(
+        &mut self,
+        image: &RgbImage,
+        range: &ScalarMap,
+        sigma_colour: f64,
+    ) -> Result<ScalarMap> {
+        super::joint_bilateral_upsample_reference(image, range, sigma_colour)
+    }
+    fn guided(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap> {
+        super::guided_range_reference(image, range, opts)
+    }
+}
+
+/// Refines `range` (finite everywhere; 0 marks the ego vehicle, never fogged) with
+/// `image` (linear RGB) as guide, as `opts` asks: the result has the image's size.
+/// `filled` (on the range's grid) marks where pre-processing filled the range, which
+/// [`RefineMode::Unreliable`] refines alone; without it that mode refines everywhere.
+///
+/// Errors: [`Error::InvalidParameter`] for bad options, a depth size
+/// [`super::check_depth_size`] refuses or a range ≤ 0 or not finite elsewhere; the
+/// filter's own errors.
+pub fn refine_range(
+    image: &RgbImage,
+    range: &ScalarMap,
+    filled: Option<&Grid<bool>>,
+    opts: &RefineOptions,
+    filter: &mut dyn RangeFilter,
+) -> Result<ScalarMap> {
+    opts.validate()?;
+    let (w, h) = (image.width(), image.height());
+    super::check_depth_size((w, h), (range.width(), range.height()))?;
+    let plan = opts.plan((w, h), (range.width(), range.height()));
+    if plan.is_empty() {
+        return Ok(range.clone());
+    }
+    // The ego vehicle's range 0 is not a range to filter (the filter reads log range): it
+    // is kept out at the nearest range and put back after.
+    let ego = range.map(|&v| v == 0.0);
+    let nearest = range
+        .as_slice()
+        .iter()
+        .copied()
+        .filter(|&v| v > 0.0)
+        .fold(f32::INFINITY, f32::min);
+    let positive = range.map(|&v| if v == 0.0 { nearest } else { v });
+    check_positive(&positive)?;
+    let mut out = if plan.upsample {
+        filter.upsample(image, &positive, opts.upsample_sigma_colour)?
+    } else {
+        positive
+    };
+    if let Some(filter_opts) = &plan.guided {
+        let refined = filter.guided(image, &out, filter_opts)?;
+        let filled = filled.map(|f| nearest_to_image_size(f, w, h));
+        let is_filled = |x, y| filled.as_ref().is_some_and(|f| *f.get(x, y));
+        out = match plan.combine {
+            Combine::Guided => refined,
+            Combine::WhereFilled if filled.is_none() => refined,
+            Combine::WhereFilled => Grid::from_fn(w, h, |x, y| {
+                *if is_filled(x, y) { &refined } else { &out }.get(x, y)
+            }),
+            Combine::Repair => Grid::from_fn(w, h, |x, y| {
+                repair(*out.get(x, y), *refined.get(x, y), is_filled(x, y))
+            }),
+        };
+    }
+    let ego = nearest_to_image_size(&ego, w, h);
+    for (v, _) in out
+        .as_mut_slice()
+        .iter_mut()
+        .zip(ego.as_slice())
+        .filter(|(_, &e)| e)
+    {
+        *v = 0.0;
+    }
+    Ok(out)
+}
+
+/// [`refine_range`] on a pre-processed range, in place: its range is refined with what
+/// pre-processing filled as the unreliable pixels, and its sky and filled masks are
+/// brought to the image's size with it. Returns the plan that ran.
+pub fn refine_prepared(
+    image: &RgbImage,
+    prepared: &mut Prepared,
+    opts: &RefineOptions,
+    filter: &mut dyn RangeFilter,
+) -> Result<RefinePlan> {
+    let (w, h) = (image.width(), image.height());
+    let range_size = (prepared.range.width(), prepared.range.height());
+    let plan = opts.plan((w, h), range_size);
+    if plan.is_empty() {
+        return Ok(plan);
+    }
+    prepared.range = refine_range(image, &prepared.range, Some(&prepared.filled), opts, filter)?;
+    prepared.sky = nearest_to_image_size(&prepared.sky, w, h);
+    prepared.filled = nearest_to_image_size(&prepared.filled, w, h);
+    Ok(plan)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Counts the calls, and upsamples by nearest / filters to a constant, so that the
+    /// step's own logic (ego pixels, the unreliable mask, the masks' sizes) is tested
+    /// apart from the filters (tested against their references in `tests/refine.rs`).
+    #[derive(Default)]
+    struct Fake {
+        upsampled: usize,
+        filtered: usize,
+    }
+
+    impl RangeFilter for Fake {
+        fn upsample(&mut self, image: &RgbImage, range: &ScalarMap, _: f64) -> Result<ScalarMap> {
+            self.upsampled += 1;
+            Ok(nearest_to_image_size(range, image.width(), image.height()))
+        }
+        fn guided(&mut self, _: &RgbImage, range: &ScalarMap, _: &Refine) -> Result<ScalarMap> {
+            self.filtered += 1;
+            assert!(
+                range.as_slice().iter().all(|&v| v > 0.0),
+                "log range of ≤ 0"
+            );
+            Ok(range.map(|_| 7.0))
+        }
+    }
+
+    fn image(w: usize, h: usize) -> RgbImage {
+        Grid::from_fn(w, h, |x, _| [x as f32 / w as f32; 3])
+    }
+
+    #[test]
+    fn nothing_runs_by_default_at_the_image_size() {
+        let range = Grid::from_fn(4, 2, |x, _| 1.0 + x as f32);
+        let mut fake = Fake::default();
+        let out = refine_range(
+            &image(4, 2),
+            &range,
+            None,
+            &RefineOptions::default(),
+            &mut fake,
+        )
+        .unwrap();
+        assert_eq!(out, range);
+        assert_eq!((fake.upsampled, fake.filtered), (0, 0));
+    }
+
+    #[test]
+    fn a_smaller_range_is_upsampled_and_the_ego_vehicle_stays_at_zero() {
+        let range = Grid::from_fn(2, 2, |x, y| if (x, y) == (1, 1) { 0.0 } else { 3.0 });
+        let mut fake = Fake::default();
+        let opts = RefineOptions {
+            mode: RefineMode::Guided,
+            ..RefineOptions::default()
+        };
+        let out = refine_range(&image(8, 8), &range, None, &opts, &mut fake).unwrap();
+        assert_eq!((fake.upsampled, fake.filtered), (1, 1));
+        assert_eq!((out.width(), out.height()), (8, 8));
+        assert_eq!(*out.get(6, 6), 0.0, "ego cell");
+        assert_eq!(*out.get(1, 6), 7.0, "filtered elsewhere");
+    }
+
+    #[test]
+    fn unreliable_takes_the_filter_where_filled_alone() {
+        let range = Grid::from_fn(4, 4, |_, _| 2.0);
+        let filled = Grid::from_fn(4, 4, |x, _| x == 0);
+        let opts = RefineOptions {
+            mode: RefineMode::Unreliable,
+            ..RefineOptions::default()
+        };
+        let out = refine_range(
+            &image(4, 4),
+            &range,
+            Some(&filled),
+            &opts,
+            &mut Fake::default(),
+        )
+        .unwrap();
+        assert_eq!(*out.get(0, 2), 7.0);
+        assert_eq!(*out.get(1, 2), 2.0);
+    }
+
+    /// Worked values of the rule, by hand: ln 10 = 2.302585.
+    #[test]
+    fn repair_takes_the_guided_range_where_the_measured_one_is_far_nearer() {
+        let close = |a: f32, b: f64| (f64::from(a) - b).abs() < 1e-4 * b;
+        let e = std::f64::consts::E as f32;
+        // 2 nats nearer: beyond 1.5, all guided.
+        assert!(close(repair(10.0, 10.0 * e * e, false), 10.0 * 7.389056));
+        // 0.5 nats nearer, or farther: all measured.
+        assert!(close(repair(10.0, 10.0 * e.sqrt(), false), 10.0));
+        assert!(close(repair(10.0, 1.0, false), 10.0));
+        // 1.25 nats: half way, smoothstep 0.5: exp(ln 10 + 0.625).
+        assert!(close(repair(10.0, 10.0 * 1.25f32.exp(), false), 18.682460));
+        // Filled: the measured weight halves; 1 nat farther in the guide → exp(ln 10 − 0.5).
+        assert!(close(repair(10.0, 10.0 / e, true), 6.065307));
+        // Filled and half way: w = 1 − 0.5 · 0.5 = 0.75 → exp(ln 10 + 0.9375).
+        assert!(close(repair(10.0, 10.0 * 1.25f32.exp(), true), 25.535894));
+    }
+
+    #[test]
+    fn cityscapes_disparity_is_repaired_by_default_and_nothing_else() {
+        assert_eq!(
+            RefineMode::default_for(DepthFormat::Cityscapes),
+            RefineMode::Repair
+        );
+        for f in [
+            DepthFormat::Middlebury2006,
+            DepthFormat::AndroidDepth16,
+            DepthFormat::Float,
+        ] {
+            assert_eq!(RefineMode::default_for(f), RefineMode::None, "{f:?}");
+        }
+    }
+
+    #[test]
+    fn another_aspect_ratio_is_refused_naming_both_sizes() {
+        let range = Grid::from_fn(4, 3, |_, _| 2.0);
+        let err = refine_range(
+            &image(16, 9),
+            &range,
+            None,
+            &RefineOptions::default(),
+            &mut Fake::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(err.contains("4x3") && err.contains("16x9"), "{err}");
+    }
+}
