@@ -1808,3 +1808,66 @@ fn cityscapes_from_the_command_line() {
     );
     assert!(!dir.path().join("fog2.png").exists());
 }
+
+/// A float map is in file units unless a depth scale says how many metres a unit is: then
+/// it is metric (physical fog accepts it) and its values are scaled; without one, `brume
+/// render --beta` refuses it. τ of a 40 m range with scale 0.5 at β = 0.05 is
+/// exp(−0.05 · 20) = 0.3679.
+#[test]
+fn a_float_map_with_a_depth_scale_is_metres() {
+    let dir = tempfile::tempdir().unwrap();
+    let values: Vec<u8> = [40f32; 6].iter().flat_map(|v| v.to_le_bytes()).collect();
+    let p = write(
+        dir.path(),
+        "r.npy",
+        &common::npy_bytes("<f4", "(2, 3)", false, &values),
+    );
+    let plain = load_range(&p, &DepthOptions::default()).unwrap();
+    assert!(!plain.metric);
+    let scaled = load_range(
+        &p,
+        &DepthOptions {
+            scale: Some(0.5),
+            kind: Some(DepthKind::Range),
+            ..DepthOptions::default()
+        },
+    )
+    .unwrap();
+    assert!(scaled.metric && scaled.units == "m", "{scaled:?}");
+    assert!(scaled.range.as_slice().iter().all(|&v| v == 20.0));
+    common::save_png(
+        dir.path().join("i.png").to_str().unwrap(),
+        3,
+        2,
+        &[[128, 128, 128]; 6],
+    );
+    let args = [
+        "render",
+        "--image",
+        "i.png",
+        "--depth",
+        "r.npy",
+        "--depth-kind",
+        "range",
+        "--beta",
+        "0.05",
+        "--lambda",
+        "0",
+        "--no-prep",
+        "--out",
+        "o.png",
+        "--json",
+    ];
+    let refused = common::brume(dir.path(), &args);
+    assert!(!refused.status.success());
+    assert!(common::stderr(&refused).contains("--depth-scale"));
+    let mut with_scale = args.to_vec();
+    with_scale.extend(["--depth-scale", "0.5"]);
+    let o = common::brume(dir.path(), &with_scale);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let tau = (-0.05f64 * 20.0).exp();
+    for key in ["transmittance_min", "transmittance_max"] {
+        assert!((v[key].as_f64().unwrap() - tau).abs() < 1e-6, "{key}: {v}");
+    }
+}

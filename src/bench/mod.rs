@@ -31,6 +31,7 @@
 
 pub mod accuracy;
 pub mod fog;
+#[cfg(feature = "plots")]
 pub mod plot;
 pub mod refine;
 pub mod report;

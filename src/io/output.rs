@@ -467,6 +467,7 @@ pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
 /// without returning: for a program's SIGINT/SIGTERM handler (the `brume` program
 /// installs one). The registry stays locked until the process is gone, so no writer
 /// creates or renames a temporary after the clean-up.
+#[cfg(feature = "cli")]
 pub fn exit_removing_temporaries(code: i32) -> ! {
     let live = live_temporaries();
     for path in live.iter() {

@@ -127,7 +127,7 @@ impl Photo {
         );
         crate::refine::check_depth_size(sizes.0, sizes.1).map_err(|e| match e {
             Error::InvalidParameter { expected, .. } => Error::invalid(
-                "--depth",
+                "depth",
                 format!("{} ({}x{})", self.depth_name, sizes.1 .0, sizes.1 .1),
                 format!(
                     "a depth map for the image {} ({}x{}): {expected}",

@@ -133,7 +133,8 @@ pub struct DepthArgs {
     )]
     pub depth_format: DepthFormat,
 
-    /// Units per stored value of a 16-bit PNG (e.g. 0.001 for millimetres to metres).
+    /// Metres per stored value of a 16-bit PNG (e.g. 0.001 for millimetres), or of a
+    /// float map (1 for a map already in metres: it then counts as metric, for --beta).
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub depth_scale: Option<f64>,
 

@@ -4,8 +4,15 @@
 //! callers in `io::depth` and `io::image`, and getting the bytes safely onto disk is
 //! `io::output`'s job.
 
+#[cfg(feature = "codecs")]
 pub mod exr;
+#[cfg(feature = "codecs")]
 pub mod npy;
 pub mod pfm;
 pub mod png;
+#[cfg(feature = "codecs")]
 pub mod tiff;
+#[cfg(not(feature = "codecs"))]
+mod without;
+#[cfg(not(feature = "codecs"))]
+pub use without::{exr, npy, tiff};

@@ -198,8 +198,20 @@ pub(super) fn interpret(
         }
         (_, Raw::Float { map, .. }) => {
             let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
-            let range = to_range(&map, |v| Some(f64::from(v)), k.as_ref());
-            (range, "file units".to_string(), k)
+            // With a scale the values are metres once multiplied (1 for a map in metres):
+            // the caller vouches for the unit, as for a 16-bit PNG.
+            match opts.scale {
+                Some(_) => {
+                    let scale = png16::given_scale(opts)?;
+                    notes.push(format!("values x {scale} = metres (depth scale)"));
+                    let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
+                    (range, metres, k)
+                }
+                None => {
+                    let range = to_range(&map, |v| Some(f64::from(v)), k.as_ref());
+                    (range, "file units".to_string(), k)
+                }
+            }
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };

@@ -1,0 +1,551 @@
+//! `brume._brume`: the native part of the Python package `brume` (see `brume/__init__.py`
+//! and the README's "Python" section). Everything here goes through brume's public library
+//! API: `brume::photo` for the fog of a photo with range in metres, `brume::io::depth` for
+//! depth files, `brume::Headless` for the EGL context.
+//!
+//! **Threads.** A [`Renderer`] owns one GL thread, which opens brume's headless EGL context
+//! and keeps it for the renderer's life. Python calls hand it a job and wait for the answer
+//! with the GIL released; calls from several Python threads queue on it (the job queue is
+//! the lock), so the context is only ever current on its own thread.
+
+use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
+use brume::io::image::{linear_to_srgb, srgb_to_linear};
+use brume::photo::{self, FogOptions, Photo, PrepareOptions};
+use brume::raster::{Grid, RgbImage, ScalarMap};
+use brume::refine::RefineMode;
+use brume::Headless;
+use numpy::ndarray::{Array2, Array3};
+use numpy::{
+    IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+use std::sync::{mpsc, Mutex, OnceLock};
+use std::thread;
+
+/// brume's errors as Python's: bad values and files as `ValueError`, files that cannot be
+/// read as `OSError`, memory as `MemoryError`, the GL and EGL as `RuntimeError`; brume's message kept whole (it
+/// names the value and what was expected).
+fn py_err(e: brume::Error) -> PyErr {
+    use brume::Error as E;
+    let message = e.to_string();
+    match e {
+        E::InvalidParameter { .. }
+        | E::SizeMismatch { .. }
+        | E::NoValidDepth { .. }
+        | E::Format { .. }
+        | E::Prep(_)
+        | E::TooLarge { .. } => PyValueError::new_err(message),
+        E::Io { .. } => PyOSError::new_err(message),
+        E::OutOfMemory { .. } => PyMemoryError::new_err(message),
+        _ => PyRuntimeError::new_err(message),
+    }
+}
+
+fn value_error(message: impl Into<String>) -> PyErr {
+    PyValueError::new_err(message.into())
+}
+
+// ---------------------------------------------------------------------------------------
+// The GL thread.
+
+type Job = Box<dyn FnOnce(&mut Headless) + Send>;
+
+/// One EGL context on a thread of its own, fed jobs through a channel.
+struct GlThread {
+    jobs: Mutex<mpsc::Sender<Job>>,
+    renderer_name: String,
+}
+
+impl GlThread {
+    /// Starts the thread and opens the context on it; the context's error if it cannot.
+    fn start() -> PyResult<GlThread> {
+        let (jobs, queue) = mpsc::channel::<Job>();
+        let (ready, opened) = mpsc::channel::<brume::Result<String>>();
+        thread::Builder::new()
+            .name("brume-gl".into())
+            .spawn(move || {
+                let mut headless = match Headless::new(None) {
+                    Ok(h) => h,
+                    Err(e) => {
+                        let _ = ready.send(Err(e));
+                        return;
+                    }
+                };
+                let _ = ready.send(Ok(headless.caps().renderer.clone()));
+                // Ends when the renderer (the last sender) is dropped; the context is
+                // then destroyed on this thread, where it is current.
+                while let Ok(job) = queue.recv() {
+                    // A panic in one job (a bug) fails that call, not the renderer.
+                    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                        job(&mut headless)
+                    }));
+                }
+            })
+            .map_err(|e| PyRuntimeError::new_err(format!("could not start the GL thread: {e}")))?;
+        let renderer_name = opened
+            .recv()
+            .map_err(|_| PyRuntimeError::new_err("the GL thread stopped while opening EGL"))?
+            .map_err(py_err)?;
+        Ok(GlThread {
+            jobs: Mutex::new(jobs),
+            renderer_name,
+        })
+    }
+
+    /// Runs `f` on the GL thread and waits for its result (call with the GIL released).
+    fn run<T: Send + 'static>(
+        &self,
+        f: impl FnOnce(&mut Headless) -> T + Send + 'static,
+    ) -> PyResult<T> {
+        let (answer, result) = mpsc::channel();
+        let job: Job = Box::new(move |h| {
+            let _ = answer.send(f(h));
+        });
+        self.jobs
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the GL thread's queue is poisoned"))?
+            .send(job)
+            .map_err(|_| PyRuntimeError::new_err("the GL thread has stopped"))?;
+        result.recv().map_err(|_| {
+            PyRuntimeError::new_err("the render failed inside brume (a panic on the GL thread)")
+        })
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Arrays in and out.
+
+/// The encoding of an image array, which the output keeps.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pixels {
+    /// uint8 sRGB code values.
+    Srgb8,
+    /// float32 linear RGB.
+    Linear32,
+    /// float64 linear RGB.
+    Linear64,
+}
+
+/// An image copied out of numpy (with the GIL), converted to linear light later (without).
+enum RawImage {
+    Srgb8(Vec<u8>),
+    Linear(Vec<f32>),
+}
+
+struct ImageIn {
+    width: usize,
+    height: usize,
+    pixels: Pixels,
+    raw: RawImage,
+}
+
+fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
+    array
+        .dtype()
+        .str()
+        .map(|s| s.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
+    let untyped = image.cast::<PyUntypedArray>().map_err(|_| {
+        value_error(format!(
+            "image: expected a numpy array HxWx3 (uint8 sRGB or float32 linear RGB), got {}",
+            image
+                .get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_default()
+        ))
+    })?;
+    let shape = untyped.shape().to_vec();
+    if shape.len() != 3 || shape[2] != 3 || shape[0] == 0 || shape[1] == 0 {
+        return Err(value_error(format!(
+            "image: expected shape HxWx3 (RGB, H and W > 0), got {shape:?}"
+        )));
+    }
+    let (height, width) = (shape[0], shape[1]);
+    let dtype = untyped.dtype();
+    let py = image.py();
+    if dtype.is_equiv_to(&numpy::dtype::<u8>(py)) {
+        let a: PyReadonlyArray3<u8> = image.extract()?;
+        let raw = a.as_array().iter().copied().collect();
+        return Ok(ImageIn {
+            width,
+            height,
+            pixels: Pixels::Srgb8,
+            raw: RawImage::Srgb8(raw),
+        });
+    }
+    let (pixels, raw): (Pixels, Vec<f32>) = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
+        let a: PyReadonlyArray3<f32> = image.extract()?;
+        (Pixels::Linear32, a.as_array().iter().copied().collect())
+    } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
+        let a: PyReadonlyArray3<f64> = image.extract()?;
+        (
+            Pixels::Linear64,
+            a.as_array().iter().map(|&v| v as f32).collect(),
+        )
+    } else {
+        return Err(value_error(format!(
+            "image: expected dtype uint8 (sRGB code values) or float32 (linear RGB in [0, 1]), got {}",
+            dtype_name(untyped)
+        )));
+    };
+    if let Some(i) = raw.iter().position(|v| !v.is_finite()) {
+        let (pixel, channel) = (i / 3, i % 3);
+        return Err(value_error(format!(
+            "image: value {} at pixel (x {}, y {}), channel {channel}: expected finite linear RGB in [0, 1]",
+            raw[i],
+            pixel % width,
+            pixel / width
+        )));
+    }
+    Ok(ImageIn {
+        width,
+        height,
+        pixels,
+        raw: RawImage::Linear(raw),
+    })
+}
+
+impl ImageIn {
+    /// Linear RGB, as brume's PNG loader makes it (the exact sRGB curve for 8-bit values;
+    /// negative linear values clamped to 0, as brume does for float files).
+    fn linear(self) -> RgbImage {
+        let data = match self.raw {
+            RawImage::Srgb8(raw) => {
+                let lut: Vec<f32> = (0..=255u8)
+                    .map(|v| srgb_to_linear(f32::from(v) / 255.0))
+                    .collect();
+                raw.chunks_exact(3)
+                    .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]])
+                    .collect()
+            }
+            RawImage::Linear(raw) => raw
+                .chunks_exact(3)
+                .map(|p| [p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)])
+                .collect(),
+        };
+        Grid::from_vec(self.width, self.height, data)
+    }
+}
+
+fn read_range(range: &Bound<'_, PyAny>) -> PyResult<ScalarMap> {
+    let untyped = range.cast::<PyUntypedArray>().map_err(|_| {
+        value_error("range_m: expected a numpy array HxW of ranges in metres (float32)")
+    })?;
+    let shape = untyped.shape().to_vec();
+    if shape.len() != 2 || shape[0] == 0 || shape[1] == 0 {
+        return Err(value_error(format!(
+            "range_m: expected shape HxW (the image's size or smaller by one factor), got {shape:?}"
+        )));
+    }
+    let py = range.py();
+    let dtype = untyped.dtype();
+    let data: Vec<f32> = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
+        let a: PyReadonlyArray2<f32> = range.extract()?;
+        a.as_array().iter().copied().collect()
+    } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
+        let a: PyReadonlyArray2<f64> = range.extract()?;
+        a.as_array().iter().map(|&v| v as f32).collect()
+    } else {
+        return Err(value_error(format!(
+            "range_m: expected dtype float32 or float64 (metres; NaN or <= 0 where unknown), got {}",
+            dtype_name(untyped)
+        )));
+    };
+    Ok(Grid::from_vec(shape[1], shape[0], data))
+}
+
+/// What a fogged frame goes back to Python as.
+enum ImageOut {
+    Srgb8(Array3<u8>),
+    Linear32(Array3<f32>),
+    Linear64(Array3<f64>),
+}
+
+impl ImageOut {
+    /// brume's linear RGBA in the input's encoding: 8-bit sRGB exactly as brume's PNG
+    /// writer rounds it (clamped to [0, 1], NaN as 0), or linear floats as rendered.
+    fn encode(image: &brume::raster::RgbaImage, pixels: Pixels) -> ImageOut {
+        let shape = (image.height(), image.width(), 3);
+        let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
+        match pixels {
+            Pixels::Srgb8 => {
+                let to8 = |v: f32| {
+                    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+                    (linear_to_srgb(v) * 255.0).round() as u8
+                };
+                ImageOut::Srgb8(
+                    Array3::from_shape_vec(shape, rgb.map(to8).collect()).expect("shape"),
+                )
+            }
+            Pixels::Linear32 => {
+                ImageOut::Linear32(Array3::from_shape_vec(shape, rgb.collect()).expect("shape"))
+            }
+            Pixels::Linear64 => ImageOut::Linear64(
+                Array3::from_shape_vec(shape, rgb.map(f64::from).collect()).expect("shape"),
+            ),
+        }
+    }
+
+    fn into_py(self, py: Python<'_>) -> Py<PyAny> {
+        match self {
+            ImageOut::Srgb8(a) => a.into_pyarray(py).into_any().unbind(),
+            ImageOut::Linear32(a) => a.into_pyarray(py).into_any().unbind(),
+            ImageOut::Linear64(a) => a.into_pyarray(py).into_any().unbind(),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Options.
+
+/// `brume.fog`'s keywords, checked, as brume's options.
+struct FogRequest {
+    fog: FogOptions,
+    prepare: PrepareOptions,
+}
+
+fn refine_mode(refine: &Bound<'_, PyAny>) -> PyResult<RefineMode> {
+    if let Ok(b) = refine.extract::<bool>() {
+        return Ok(if b {
+            RefineMode::Repair
+        } else {
+            RefineMode::None
+        });
+    }
+    if let Ok(s) = refine.extract::<String>() {
+        return match s.trim().to_ascii_lowercase().as_str() {
+            "none" => Ok(RefineMode::None),
+            "guided" => Ok(RefineMode::Guided),
+            "unreliable" => Ok(RefineMode::Unreliable),
+            "repair" => Ok(RefineMode::Repair),
+            _ => Err(value_error(format!(
+                "invalid refine = {s:?}: expected True (repair), False (none) or one of 'none', 'guided', 'unreliable', 'repair'"
+            ))),
+        };
+    }
+    Err(value_error(format!(
+        "invalid refine = {}: expected True (repair), False (none) or one of 'none', 'guided', 'unreliable', 'repair'",
+        refine.repr().map(|r| r.to_string()).unwrap_or_default()
+    )))
+}
+
+fn fog_request(
+    beta: Option<f64>,
+    visibility: Option<f64>,
+    airlight: Option<Vec<f64>>,
+    blur: bool,
+    refine: &Bound<'_, PyAny>,
+) -> PyResult<FogRequest> {
+    let mut fog = match (beta, visibility) {
+        (Some(b), None) => FogOptions::beta(b).map_err(py_err)?,
+        (None, Some(v)) => FogOptions::visibility(v).map_err(py_err)?,
+        (Some(b), Some(v)) => {
+            return Err(value_error(format!(
+                "beta = {b} and visibility = {v} both given: expected exactly one, beta (extinction, 1/m) or visibility (metres, V = -ln 0.05 / beta)"
+            )))
+        }
+        (None, None) => {
+            return Err(value_error(
+                "neither beta nor visibility given: expected exactly one, beta (extinction, 1/m, e.g. 0.02) or visibility (metres, e.g. 150)",
+            ))
+        }
+    };
+    if !blur {
+        fog.lambda = 0.0;
+    }
+    let airlight = match airlight {
+        None => None,
+        Some(a) if a.len() == 3 => Some([a[0] as f32, a[1] as f32, a[2] as f32]),
+        Some(a) => {
+            return Err(value_error(format!(
+                "invalid airlight = {a:?}: expected None (estimated from the sky) or three linear RGB values"
+            )))
+        }
+    };
+    let mut prepare = PrepareOptions {
+        airlight,
+        ..PrepareOptions::default()
+    };
+    prepare.refine.mode = refine_mode(refine)?;
+    Ok(FogRequest { fog, prepare })
+}
+
+/// The fog of one frame, on the GL thread: `brume::photo`'s from_range, prepare and fog.
+fn fog_frame(
+    headless: &mut Headless,
+    image: RgbImage,
+    range: ScalarMap,
+    request: &FogRequest,
+) -> brume::Result<brume::raster::RgbaImage> {
+    let photo = Photo::from_range(image, range)?;
+    let prepared = photo::prepare(&photo, &request.prepare, headless.renderer()?)?;
+    let fogged = photo::fog(headless.renderer()?, &photo, &prepared, &request.fog)?;
+    Ok(fogged.rendered.image)
+}
+
+// ---------------------------------------------------------------------------------------
+// The Python classes and functions.
+
+/// Renderer(): one EGL context (brume's headless one) kept for many frames.
+///
+/// Its methods release the GIL while brume works; calls from several threads queue on
+/// the renderer's own GL thread.
+#[pyclass(module = "brume", frozen)]
+struct Renderer {
+    gl: GlThread,
+}
+
+#[pymethods]
+impl Renderer {
+    #[new]
+    fn new(py: Python<'_>) -> PyResult<Self> {
+        let gl = py.detach(GlThread::start)?;
+        Ok(Renderer { gl })
+    }
+
+    /// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
+    /// refine=True) -> ndarray: as brume.fog, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn fog(
+        &self,
+        py: Python<'_>,
+        image: &Bound<'_, PyAny>,
+        range_m: &Bound<'_, PyAny>,
+        beta: Option<f64>,
+        visibility: Option<f64>,
+        airlight: Option<Vec<f64>>,
+        blur: bool,
+        refine: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Py<PyAny>> {
+        let default_refine = pyo3::types::PyBool::new(py, true);
+        let refine = refine.unwrap_or(default_refine.as_any());
+        let request = fog_request(beta, visibility, airlight, blur, refine)?;
+        let image = read_image(image)?;
+        let range = read_range(range_m)?;
+        let pixels = image.pixels;
+        let out = py.detach(|| {
+            let linear = image.linear();
+            let rendered = self
+                .gl
+                .run(move |h| fog_frame(h, linear, range, &request))?
+                .map_err(py_err)?;
+            Ok::<_, PyErr>(ImageOut::encode(&rendered, pixels))
+        })?;
+        Ok(out.into_py(py))
+    }
+
+    /// GL_RENDERER of the context, e.g. 'llvmpipe (LLVM 15.0.6, 256 bits)'.
+    #[getter]
+    fn gl_renderer(&self) -> String {
+        self.gl.renderer_name.clone()
+    }
+
+    fn __repr__(&self) -> String {
+        format!("brume.Renderer({:?})", self.gl.renderer_name)
+    }
+}
+
+/// The renderer `brume.fog` uses, opened on its first call.
+static DEFAULT_RENDERER: OnceLock<Py<Renderer>> = OnceLock::new();
+
+fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
+    if let Some(r) = DEFAULT_RENDERER.get() {
+        return Ok(r);
+    }
+    let renderer = Py::new(py, Renderer::new(py)?)?;
+    // Two threads may race here; the loser's renderer is dropped.
+    Ok(DEFAULT_RENDERER.get_or_init(|| renderer))
+}
+
+/// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
+/// refine=True) -> ndarray
+///
+/// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
+/// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
+/// result has the same dtype and encoding. range_m: HxW metres from the camera centre
+/// (NaN or <= 0 unknown), the image's size or smaller by one factor. Exactly one of beta
+/// (extinction, 1/m) or visibility (m). airlight: None (estimated from the sky) or linear
+/// RGB. blur: False for none (lambda 0). refine: True ('repair'), False ('none') or
+/// 'none' | 'guided' | 'unreliable' | 'repair'.
+#[pyfunction]
+#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None))]
+#[allow(clippy::too_many_arguments)]
+fn fog(
+    py: Python<'_>,
+    image: &Bound<'_, PyAny>,
+    range_m: &Bound<'_, PyAny>,
+    beta: Option<f64>,
+    visibility: Option<f64>,
+    airlight: Option<Vec<f64>>,
+    blur: bool,
+    refine: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Py<PyAny>> {
+    let renderer = default_renderer(py)?.get();
+    renderer.fog(py, image, range_m, beta, visibility, airlight, blur, refine)
+}
+
+/// load_depth(path, camera=None, format=None, *, kind=None, scale=None)
+///     -> (range_m, info)
+///
+/// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown)
+/// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
+/// beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
+/// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore'. kind:
+/// 'depth', 'range', 'disparity' or 'zbuffer' (default: the format's). scale: metres per
+/// unit of a 16-bit PNG. info: format, kind, units, metric (whether the range is in
+/// trustworthy metres, which fog with beta or visibility needs), notes, unknown_pixels.
+#[pyfunction]
+#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None))]
+fn load_depth<'py>(
+    py: Python<'py>,
+    path: PathBuf,
+    camera: Option<PathBuf>,
+    format: Option<&str>,
+    kind: Option<&str>,
+    scale: Option<f64>,
+) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
+    let opts = DepthOptions {
+        format: match format {
+            Some(f) => f.parse::<DepthFormat>().map_err(py_err)?,
+            None => DepthFormat::Auto,
+        },
+        kind: kind
+            .map(|k| k.parse::<DepthKind>())
+            .transpose()
+            .map_err(py_err)?,
+        camera,
+        scale,
+        ..DepthOptions::default()
+    };
+    let loaded = py
+        .detach(|| depth::load_range(&path, &opts))
+        .map_err(py_err)?;
+    let (w, h) = (loaded.range.width(), loaded.range.height());
+    let info = PyDict::new(py);
+    info.set_item("format", loaded.format.to_string())?;
+    info.set_item("kind", loaded.kind.to_string())?;
+    info.set_item("units", loaded.units.clone())?;
+    info.set_item("metric", loaded.metric)?;
+    info.set_item("notes", loaded.notes.clone())?;
+    info.set_item("unknown_pixels", loaded.unknown_pixels)?;
+    let range = Array2::from_shape_vec((h, w), loaded.range.into_vec()).expect("shape");
+    Ok((range.into_pyarray(py).into_any().unbind(), info))
+}
+
+#[pymodule]
+fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Renderer>()?;
+    m.add_function(wrap_pyfunction!(fog, m)?)?;
+    m.add_function(wrap_pyfunction!(load_depth, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

@@ -1,0 +1,235 @@
+"""Tests of the Python package: shapes and dtypes, the physics checked in numpy, the
+errors, the augmentation's seeding, and equality with the `brume render` program."""
+
+import math
+import os
+import shutil
+import subprocess
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import brume
+
+REPO = Path(__file__).resolve().parents[2]
+H, W = 48, 64  # small: llvmpipe on 2 cores
+
+
+def srgb_to_linear(c):
+    c = np.asarray(c, dtype=np.float64)
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def linear_to_srgb(v):
+    v = np.clip(np.asarray(v, dtype=np.float64), 0.0, 1.0)
+    return np.where(v <= 0.0031308, v * 12.92, 1.055 * v ** (1 / 2.4) - 0.055)
+
+
+@pytest.fixture(scope="module")
+def image_u8():
+    rng = np.random.default_rng(7)
+    # A smooth picture with some texture: no sky-like flat bright region.
+    y, x = np.mgrid[0:H, 0:W]
+    base = np.stack([x / W, y / H, 0.5 + 0.3 * np.sin(x / 5.0)], axis=-1)
+    noise = rng.random((H, W, 3)) * 0.2
+    return np.clip((base * 0.7 + noise) * 255, 0, 255).astype(np.uint8)
+
+
+@pytest.fixture(scope="module")
+def range_m():
+    # 5 m at the left to 120 m at the right, a little slope down the rows.
+    y, x = np.mgrid[0:H, 0:W].astype(np.float32)
+    return (5.0 + 115.0 * x / (W - 1) + 0.5 * y).astype(np.float32)
+
+
+def test_shapes_and_dtypes(image_u8, range_m):
+    out = brume.fog(image_u8, range_m, beta=0.02)
+    assert out.shape == image_u8.shape and out.dtype == np.uint8
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    out32 = brume.fog(linear, range_m, beta=0.02)
+    assert out32.shape == image_u8.shape and out32.dtype == np.float32
+    out64 = brume.fog(linear.astype(np.float64), range_m.astype(np.float64), beta=0.02)
+    assert out64.dtype == np.float64
+    np.testing.assert_allclose(out64, out32, atol=1e-6)
+    # A non-contiguous view is read as the array it shows.
+    flipped = np.ascontiguousarray(image_u8[:, ::-1])
+    np.testing.assert_array_equal(
+        brume.fog(image_u8[:, ::-1], range_m, beta=0.02, blur=False, airlight=(0.8, 0.8, 0.8)),
+        brume.fog(flipped, range_m, beta=0.02, blur=False, airlight=(0.8, 0.8, 0.8)),
+    )
+
+
+def test_smaller_range_is_upsampled(image_u8, range_m):
+    out = brume.fog(image_u8, range_m[::2, ::2].copy(), beta=0.02, refine=False)
+    assert out.shape == image_u8.shape
+
+
+def test_beta_and_visibility_agree(image_u8, range_m):
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    beta = 0.013
+    a = brume.fog(linear, range_m, beta=beta)
+    b = brume.fog(linear, range_m, visibility=-math.log(0.05) / beta)
+    np.testing.assert_allclose(a, b, atol=1e-5)
+
+
+def test_koschmieder_computed_in_numpy(image_u8, range_m):
+    """blur=False, given airlight: I = tau J + (1 - tau) A with tau = exp(-beta R)."""
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    airlight = np.array([0.7, 0.75, 0.8])
+    beta = 0.02
+    out = brume.fog(linear, range_m, beta=beta, airlight=airlight, blur=False, refine=False)
+    tau = np.exp(-beta * range_m.astype(np.float64))[..., None]
+    expected = tau * linear + (1.0 - tau) * airlight
+    assert np.abs(out - expected).max() < 1e-4
+
+
+def test_uint8_is_the_float_path_encoded(image_u8, range_m):
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    kw = dict(beta=0.02, airlight=(0.7, 0.75, 0.8), blur=False, refine=False)
+    out8 = brume.fog(image_u8, range_m, **kw)
+    out32 = brume.fog(linear, range_m, **kw)
+    expected = np.round(linear_to_srgb(out32) * 255.0)
+    assert np.abs(out8.astype(np.int32) - expected).max() <= 1
+    # Far pixels move toward the airlight (its sRGB code values 218-231).
+    far = range_m > 100
+    assert out8[far].mean() > image_u8[far].mean()
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(), "neither beta nor visibility"),
+        (dict(beta=0.01, visibility=300.0), "expected exactly one"),
+        (dict(beta=-1.0), "invalid beta"),
+        (dict(beta=float("nan")), "invalid beta"),
+        (dict(visibility=0.0), "invalid visibility"),
+        (dict(beta=0.01, refine="sometimes"), "invalid refine"),
+        (dict(beta=0.01, refine=3), "invalid refine"),
+        (dict(beta=0.01, airlight=(1.0, 1.0)), "invalid airlight"),
+        (dict(beta=0.01, airlight=(-1.0, 1.0, 1.0)), "airlight"),
+    ],
+)
+def test_bad_options(image_u8, range_m, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        brume.fog(image_u8, range_m, **kwargs)
+
+
+def test_bad_arrays(image_u8, range_m):
+    with pytest.raises(ValueError, match="shape HxWx3"):
+        brume.fog(image_u8[..., :2], range_m, beta=0.01)
+    with pytest.raises(ValueError, match="dtype uint8"):
+        brume.fog(image_u8.astype(np.int16), range_m, beta=0.01)
+    with pytest.raises(ValueError, match="numpy array"):
+        brume.fog([[1, 2, 3]], range_m, beta=0.01)
+    with pytest.raises(ValueError, match="shape HxW"):
+        brume.fog(image_u8, range_m[..., None], beta=0.01)
+    with pytest.raises(ValueError, match="dtype float32"):
+        brume.fog(image_u8, range_m.astype(np.int32), beta=0.01)
+    with pytest.raises(ValueError, match="64x10"):
+        brume.fog(image_u8, range_m[:10], beta=0.01)
+    bad = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    bad[3, 5, 1] = np.nan
+    with pytest.raises(ValueError, match=r"x 5, y 3\), channel 1"):
+        brume.fog(bad, range_m, beta=0.01)
+    with pytest.raises(ValueError, match="no valid depth|range"):
+        brume.fog(image_u8, np.full((H, W), np.nan, np.float32), beta=0.01)
+
+
+def test_renderer_reused_from_threads(image_u8, range_m):
+    renderer = brume.Renderer()
+    assert "Renderer" in repr(renderer) and renderer.gl_renderer
+    betas = [0.005, 0.01, 0.02, 0.03]
+    serial = [renderer.fog(image_u8, range_m, beta=b) for b in betas]
+    results = [None] * len(betas)
+
+    def work(i):
+        results[i] = renderer.fog(image_u8, range_m, beta=betas[i])
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(betas))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for s, r in zip(serial, results):
+        np.testing.assert_array_equal(s, r)
+    np.testing.assert_array_equal(serial[2], brume.fog(image_u8, range_m, beta=0.02))
+
+
+def test_random_fog_seeding(image_u8, range_m):
+    a = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=3)
+    b = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=3)
+    outs_a = [a(image=image_u8, depth=range_m) for _ in range(3)]
+    outs_b = [b(image=image_u8, depth=range_m) for _ in range(3)]
+    for x, y in zip(outs_a, outs_b):
+        assert x["beta"] == y["beta"] and 0.005 <= x["beta"] <= 0.03
+        np.testing.assert_array_equal(x["image"], y["image"])
+        assert x["depth"] is range_m
+    assert len({o["beta"] for o in outs_a}) == 3
+    c = brume.augment.RandomFog(seed=4)(image=image_u8, depth=range_m, mask="kept")
+    assert c["beta"] != outs_a[0]["beta"] and c["mask"] == "kept"
+    skipped = brume.augment.RandomFog(seed=3, p=0.0)(image=image_u8, depth=range_m)
+    assert skipped["image"] is image_u8 and skipped["beta"] is None
+    with pytest.raises(ValueError, match="beta_range"):
+        brume.augment.RandomFog(beta_range=(0.03, 0.005))
+
+
+def test_load_depth(tmp_path, range_m):
+    path = tmp_path / "range.npy"
+    np.save(path, range_m)
+    loaded, info = brume.load_depth(path, format="float", kind="range")
+    assert loaded.dtype == np.float32 and loaded.shape == range_m.shape
+    np.testing.assert_array_equal(loaded, range_m)
+    assert info["format"] == "float" and info["kind"] == "range"
+    assert info["metric"] is False and info["unknown_pixels"] == 0
+    assert set(info) == {"format", "kind", "units", "metric", "notes", "unknown_pixels"}
+    with pytest.raises(OSError, match="missing.npy"):
+        brume.load_depth(tmp_path / "missing.npy")
+    with pytest.raises(ValueError, match="depth_format"):
+        brume.load_depth(path, format="jpeg")
+
+
+# --- equality with the `brume render` program ------------------------------------------
+
+
+def brume_bin():
+    given = os.environ.get("BRUME_BIN")
+    if given:
+        return Path(given)
+    # The newer of the two builds: an older one may predate the library this package
+    # was built from.
+    built = [p for p in (REPO / "target/release/brume", REPO / "target/debug/brume") if p.exists()]
+    if built:
+        return max(built, key=lambda p: p.stat().st_mtime)
+    if shutil.which("cargo") is None:
+        pytest.skip("no brume binary (set BRUME_BIN) and no cargo to build it")
+    subprocess.run(
+        ["nice", "cargo", "build", "--release", "--bin", "brume"], cwd=REPO, check=True
+    )
+    return REPO / "target/release/brume"
+
+
+@pytest.mark.parametrize(
+    "blur, refine", [(True, "none"), (False, "none"), (True, "repair"), (True, "guided")]
+)
+def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine):
+    Image = pytest.importorskip("PIL.Image")
+    Image.fromarray(image_u8).save(tmp_path / "image.png")
+    # The range as a float .npy in metres (--depth-scale 1: a metre per unit).
+    np.save(tmp_path / "range.npy", range_m.astype(np.float32))
+    beta = 0.02
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "image.png"),
+        "--depth", str(tmp_path / "range.npy"),
+        "--depth-kind", "range", "--depth-scale", "1",
+        "--beta", str(beta), "--refine", refine,
+        "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    if not blur:
+        cmd += ["--lambda", "0"]
+    subprocess.run(cmd, check=True, capture_output=True)
+    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    ours = brume.fog(image_u8, range_m.astype(np.float32), beta=beta, blur=blur, refine=refine)
+    assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
