@@ -1,5 +1,16 @@
 //! What the GL driver can do, detected once per context and kept: strings, the float
 //! render/filter extensions brume depends on, timer queries and the texture size limit.
+//!
+//! **Desktop OpenGL** (a host's or the viewer's GL 3.3+ core context) is decided here,
+//! once, as wgpu-hal decides its workarounds: desktop GL has no `GL_EXT_*`/`GL_OES_*`
+//! names for what is core there, so float render targets (GL 3.0), float bilinear
+//! filtering (GL 3.0) and the half-float targets are taken from the version; brume's
+//! GLSL ES 3.00 shaders need `GL_ARB_ES3_compatibility` (core in 4.3; Mesa exposes it on
+//! 3.3 core contexts), checked by [`Capabilities::require_es3_shaders`]; external images
+//! do not exist; timer queries are not used (desktop GL has no `GL_GPU_DISJOINT_EXT`:
+//! timing is by `glFinish` and the wall clock); and the passes enable
+//! `GL_FRAMEBUFFER_SRGB` (restored after) so that an `SRGB8_ALPHA8` destination is
+//! encoded on write as GLES always does.
 
 use crate::egl::GlContext;
 use crate::error::{Error, Result};
@@ -46,8 +57,15 @@ pub struct Capabilities {
     pub version: String,
     /// `GL_SHADING_LANGUAGE_VERSION`.
     pub shading_language_version: String,
-    /// GLES major.minor of the context.
+    /// major.minor of the context: its GLES version, or its desktop GL version where
+    /// [`Capabilities::desktop`].
     pub gles_version: (u32, u32),
+    /// A desktop OpenGL context (not GLES): capabilities decided from its version (module
+    /// docs).
+    pub desktop: bool,
+    /// The context compiles brume's GLSL ES 3.00 shaders: always on GLES 3; on desktop GL
+    /// with `GL_ARB_ES3_compatibility` or GL 4.3.
+    pub es3_shaders: bool,
     /// `GL_EXT_color_buffer_float`: RGBA32F (and RGBA16F) are renderable.
     pub color_buffer_float: bool,
     /// `GL_EXT_color_buffer_half_float`: RGBA16F is renderable.
@@ -82,38 +100,81 @@ impl Capabilities {
             )
         };
         let v = gl.version();
+        let version_pair = (v.major, v.minor);
+        let desktop = !v.is_embedded;
+        // Desktop GL 3.0 made float textures renderable and filterable (module docs).
+        let core_float = desktop && version_pair >= (3, 0);
         Capabilities {
             egl: None,
             vendor,
             renderer,
             version,
             shading_language_version: glsl,
-            gles_version: (v.major, v.minor),
-            color_buffer_float: has("GL_EXT_color_buffer_float"),
-            color_buffer_half_float: has("GL_EXT_color_buffer_half_float"),
-            texture_float_linear: has("GL_OES_texture_float_linear"),
-            disjoint_timer_query: has("GL_EXT_disjoint_timer_query"),
-            egl_image_external_essl3: has("GL_OES_EGL_image_external_essl3"),
-            egl_image_external: has("GL_OES_EGL_image_external"),
+            gles_version: version_pair,
+            desktop,
+            es3_shaders: if desktop {
+                version_pair >= (4, 3) || has("GL_ARB_ES3_compatibility")
+            } else {
+                version_pair >= (3, 0)
+            },
+            color_buffer_float: core_float || has("GL_EXT_color_buffer_float"),
+            color_buffer_half_float: core_float || has("GL_EXT_color_buffer_half_float"),
+            texture_float_linear: core_float || has("GL_OES_texture_float_linear"),
+            disjoint_timer_query: !desktop && has("GL_EXT_disjoint_timer_query"),
+            egl_image_external_essl3: !desktop && has("GL_OES_EGL_image_external_essl3"),
+            egl_image_external: !desktop && has("GL_OES_EGL_image_external"),
             max_texture_size,
         }
+    }
+
+    /// Checks that the context is GLES 3 or a desktop GL that compiles GLSL ES 3.00
+    /// (module docs), which every pass is written in.
+    pub fn require_es3_shaders(&self) -> Result<()> {
+        if self.es3_shaders {
+            return Ok(());
+        }
+        if self.desktop {
+            return Err(self.missing(
+                "GL_ARB_ES3_compatibility",
+                &format!(
+                    "the context is desktop {}; brume's shaders are GLSL ES 3.00, which a \
+                     desktop context compiles from OpenGL 4.3 or with \
+                     GL_ARB_ES3_compatibility: make a GLES 3 context (EGL_OPENGL_ES_API) or \
+                     a 4.3 core one",
+                    self.version
+                ),
+            ));
+        }
+        Err(Error::MissingCapability {
+            capability: "OpenGL ES 3.0".into(),
+            renderer: self.renderer.clone(),
+            hint: format!("the context is {}; brume needs GLES 3.x", self.version),
+        })
     }
 
     /// Checks that textures of `precision` can be rendered to and filtered, so that a
     /// missing extension is reported here and not as a GL error later.
     pub fn require_precision(&self, precision: Precision) -> Result<()> {
+        self.require_renderable(precision)?;
+        if precision == Precision::F32 && !self.texture_float_linear {
+            return Err(self.missing(
+                "GL_OES_texture_float_linear",
+                "RGBA32F cannot be sampled bilinearly (common on Mali); use precision f16",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Checks that textures of `precision` can be rendered to (and read back), for
+    /// targets that are never filtered: the engine passes' (many Mali GPUs render RGBA32F
+    /// but do not filter it).
+    pub fn require_renderable(&self, precision: Precision) -> Result<()> {
         match precision {
             Precision::F32 => {
                 if !self.color_buffer_float {
                     return Err(self.missing(
                         "GL_EXT_color_buffer_float",
                         "RGBA32F cannot be rendered to; use precision f16",
-                    ));
-                }
-                if !self.texture_float_linear {
-                    return Err(self.missing(
-                        "GL_OES_texture_float_linear",
-                        "RGBA32F cannot be sampled bilinearly (common on Mali); use precision f16",
                     ));
                 }
             }
@@ -205,6 +266,8 @@ mod tests {
             version: "OpenGL ES 3.2 Mesa".into(),
             shading_language_version: "OpenGL ES GLSL ES 3.20".into(),
             gles_version: (3, 2),
+            desktop: false,
+            es3_shaders: true,
             color_buffer_float: true,
             color_buffer_half_float: true,
             texture_float_linear: true,

@@ -15,7 +15,6 @@ use crate::pipeline::{Encoding, FogBlur, Frame, Input, Pipeline, RefineInput};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::refine::Refine;
 use crate::schedule::Schedule;
-use glow::HasContext;
 use std::mem::ManuallyDrop;
 use std::sync::Arc;
 
@@ -147,9 +146,8 @@ impl Renderer {
         self.caps().require_size("image", w, h)?;
         crate::refine::check_positive(range)?;
         let gl = Arc::clone(self.pipeline.gl());
-        // SAFETY: a pixel-unpack buffer bound by someone else would turn the uploads below
-        // into offsets into it.
-        unsafe { gl.bind_buffer(glow::PIXEL_UNPACK_BUFFER, None) };
+        // The uploads and the read-back set the pixel store and unbind a host's pixel
+        // buffers for themselves, and put them back (crate::gpu::state).
         let colour = Texture::new(&gl, w, h, TexelFormat::Rgb32F, Filter::Nearest, None)?;
         colour.upload_flipped(image.as_slice().as_flattened());
         let (rw, rh) = (range.width(), range.height());
@@ -197,9 +195,8 @@ impl Renderer {
     ) -> Result<Rendered> {
         let (w, h) = (image.width(), image.height());
         let gl = Arc::clone(self.pipeline.gl());
-        // SAFETY: a pixel-unpack buffer bound by someone else would turn the uploads below
-        // into offsets into it.
-        unsafe { gl.bind_buffer(glow::PIXEL_UNPACK_BUFFER, None) };
+        // The uploads and the read-back set the pixel store and unbind a host's pixel
+        // buffers for themselves, and put them back (crate::gpu::state).
         // Buffers hold the image's top row first, GL textures the bottom row first: the rows
         // are uploaded upside down (row by row from the caller's buffers, no staging copy),
         // so that a medium with a camera sees the sky at the top.

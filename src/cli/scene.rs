@@ -321,7 +321,7 @@ fn distance_flags(e: Error) -> Error {
     }
 }
 
-/// The chosen profile: its preset (src/medium/layered.rs) with the options given.
+/// The chosen profile: its preset (src/medium/layered/) with the options given.
 fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> HeightProfile {
     let preset = match kind {
         ProfileKind::Exponential => HeightProfile::EXPONENTIAL,

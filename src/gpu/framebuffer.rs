@@ -2,7 +2,12 @@
 //! attachments (multiple render targets). The attached textures are not owned: they are
 //! brume's own [`super::texture::Texture`]s, or a host's texture that brume renders into
 //! and never deletes.
+//!
+//! Creating or re-attaching a framebuffer and reading one back put the host's
+//! framebuffer bindings, pixel store and `PIXEL_PACK_BUFFER` back after
+//! ([`super::state`]).
 
+use super::state::{FramebufferBindings, PixelStore};
 use super::texture::{f32_bytes_mut, Texture};
 use crate::error::{Error, Result};
 use glow::HasContext;
@@ -50,6 +55,7 @@ impl Framebuffer {
                 width,
                 height,
             };
+            let bound = FramebufferBindings::save(gl);
             gl.bind_framebuffer(glow::FRAMEBUFFER, Some(fbo));
             let mut buffers = Vec::with_capacity(textures.len());
             for (i, &texture) in textures.iter().enumerate() {
@@ -74,7 +80,7 @@ impl Framebuffer {
             }
             gl.draw_buffers(&buffers);
             let status = gl.check_framebuffer_status(glow::FRAMEBUFFER);
-            gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            bound.restore(gl);
             check_complete(status, what)?;
             Ok(framebuffer)
         }
@@ -92,6 +98,7 @@ impl Framebuffer {
     ) -> Result<()> {
         // SAFETY: re-attaches a texture to the framebuffer this value owns.
         let status = unsafe {
+            let bound = FramebufferBindings::save(&self.gl);
             self.gl.bind_framebuffer(glow::FRAMEBUFFER, Some(self.fbo));
             self.gl.framebuffer_texture_2d(
                 glow::FRAMEBUFFER,
@@ -101,7 +108,7 @@ impl Framebuffer {
                 0,
             );
             let status = self.gl.check_framebuffer_status(glow::FRAMEBUFFER);
-            self.gl.bind_framebuffer(glow::FRAMEBUFFER, None);
+            bound.restore(&self.gl);
             status
         };
         self.width = width;
@@ -124,7 +131,8 @@ impl Framebuffer {
         self.fbo
     }
 
-    /// Makes this framebuffer the destination of draws and sets the viewport to cover it.
+    /// Makes this framebuffer the destination of draws and sets the viewport to cover it
+    /// (inside a pass, whose caller restores the host's bindings and viewport).
     pub fn bind_for_drawing(&self) {
         // SAFETY: binding an owned framebuffer on the current context.
         unsafe {
@@ -140,10 +148,11 @@ impl Framebuffer {
         let mut out = vec![[0f32; 4]; w * h];
         // SAFETY: `out` holds w*h RGBA f32 values, which is what RGBA/FLOAT writes.
         unsafe {
+            let bound = FramebufferBindings::save(&self.gl);
+            let store = PixelStore::for_read_back(&self.gl);
             self.gl
                 .bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.fbo));
             self.gl.read_buffer(glow::COLOR_ATTACHMENT0);
-            self.gl.pixel_store_i32(glow::PACK_ALIGNMENT, 4);
             self.gl.read_pixels(
                 0,
                 0,
@@ -153,7 +162,8 @@ impl Framebuffer {
                 glow::FLOAT,
                 glow::PixelPackData::Slice(Some(f32_bytes_mut(out.as_flattened_mut()))),
             );
-            self.gl.bind_framebuffer(glow::READ_FRAMEBUFFER, None);
+            store.restore(&self.gl);
+            bound.restore(&self.gl);
         }
         super::check_gl(&self.gl, "reading back the result")?;
         Ok(out)

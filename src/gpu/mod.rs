@@ -3,6 +3,7 @@
 
 pub mod framebuffer;
 pub mod program;
+pub(crate) mod state;
 pub mod texture;
 pub mod timer;
 

@@ -1,7 +1,14 @@
 //! 2D textures owned by brume: float images uploaded from the CPU, the float render
-//! targets of the passes and the `SRGB8_ALPHA8` copy of an imported camera frame. The host's textures are never wrapped in this type (brume must
-//! not delete them); they are used by their raw `glow::Texture` handle.
+//! targets of the passes and the `SRGB8_ALPHA8` copy of an imported camera frame. The
+//! host's textures are never wrapped in this type (brume must not delete them); they are
+//! used by their raw `glow::Texture` handle.
+//!
+//! Creating, filling and configuring a texture binds it on the **active** unit and puts
+//! that unit's binding back after, and sets the pixel store and `PIXEL_UNPACK_BUFFER`
+//! for the upload and puts the host's values back ([`super::state`]): a host may call
+//! these with any state of its own.
 
+use super::state::{PixelStore, TextureBinding};
 use crate::error::{Error, Result};
 use glow::HasContext;
 use std::sync::Arc;
@@ -139,6 +146,7 @@ impl Texture {
         // width*height*channels f32 values (asserted above).
         unsafe {
             let raw = gl.create_texture().map_err(Error::Gl)?;
+            let bound = TextureBinding::save(gl);
             gl.bind_texture(glow::TEXTURE_2D, Some(raw));
             for (param, value) in [
                 (glow::TEXTURE_MIN_FILTER, filter),
@@ -163,7 +171,7 @@ impl Texture {
                 height as i32,
             );
             if let Some(d) = data {
-                gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
+                let store = PixelStore::for_upload(gl);
                 gl.tex_sub_image_2d(
                     glow::TEXTURE_2D,
                     0,
@@ -175,8 +183,9 @@ impl Texture {
                     glow::FLOAT,
                     glow::PixelUnpackData::Slice(Some(f32_bytes(d))),
                 );
+                store.restore(gl);
             }
-            gl.bind_texture(glow::TEXTURE_2D, None);
+            bound.restore(gl);
             super::object_created();
             let tex = Texture {
                 gl: Arc::clone(gl),
@@ -205,8 +214,9 @@ impl Texture {
         assert_eq!(data.len(), row * self.height, "texture data size");
         // SAFETY: each upload writes one row of `row` f32 values, inside the texture.
         unsafe {
+            let bound = TextureBinding::save(&self.gl);
+            let store = PixelStore::for_upload(&self.gl);
             self.gl.bind_texture(glow::TEXTURE_2D, Some(self.raw));
-            self.gl.pixel_store_i32(glow::UNPACK_ALIGNMENT, 4);
             for (i, values) in data.chunks_exact(row).enumerate() {
                 self.gl.tex_sub_image_2d(
                     glow::TEXTURE_2D,
@@ -220,7 +230,8 @@ impl Texture {
                     glow::PixelUnpackData::Slice(Some(f32_bytes(values))),
                 );
             }
-            self.gl.bind_texture(glow::TEXTURE_2D, None);
+            store.restore(&self.gl);
+            bound.restore(&self.gl);
         }
     }
 
@@ -228,12 +239,13 @@ impl Texture {
     pub fn set_repeat(&self) {
         // SAFETY: parameters of an owned texture on the current context.
         unsafe {
+            let bound = TextureBinding::save(&self.gl);
             self.gl.bind_texture(glow::TEXTURE_2D, Some(self.raw));
             for param in [glow::TEXTURE_WRAP_S, glow::TEXTURE_WRAP_T] {
                 self.gl
                     .tex_parameter_i32(glow::TEXTURE_2D, param, glow::REPEAT as i32);
             }
-            self.gl.bind_texture(glow::TEXTURE_2D, None);
+            bound.restore(&self.gl);
         }
     }
 
@@ -257,7 +269,8 @@ impl Texture {
         self.format
     }
 
-    /// Binds the texture to texture unit `unit`.
+    /// Binds the texture to texture unit `unit` and makes `unit` active (inside a pass,
+    /// whose caller restores the host's units).
     pub fn bind(&self, unit: u32) {
         // SAFETY: binding an owned texture on the current context.
         unsafe {

@@ -41,7 +41,7 @@
 //! A medium that reads a rendered frame's depth buffer returns its camera from
 //! [`Medium::camera`]; its GLSL then has `brume_ray` and `brume_eye_depth` (see
 //! `glsl/medium_api.glsl`), and its CPU side rebuilds positions by
-//! [`Camera::world_position_by_inverse`] (`layered.rs`, `distance.rs`). A medium that
+//! [`Camera::world_position_by_inverse`] (`layered/`, `distance/`). A medium that
 //! samples a table (a noise, a precomputed integral) returns it from [`Medium::lookups`].
 //!
 //! The pipeline compiles the medium's GLSL into the first pass (which writes τ·E, τ and the

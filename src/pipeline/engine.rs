@@ -31,7 +31,7 @@ use super::{
 use crate::blur::{Blur, Precision};
 use crate::error::{check_positive, Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
-use crate::gpu::texture::{Filter, Texture};
+use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::PassTimes;
 use crate::medium::{Medium, UniformValue};
 use crate::raster::{Grid, RgbaImage};
@@ -143,31 +143,106 @@ impl FogBlur {
     }
 }
 
-/// The float targets of the engine passes: the separate mode's intermediate, and the
-/// read-back target of [`crate::Renderer`]; kept between frames of the same size.
+/// One target of the engine passes: a texture and the framebuffer over it.
+pub(super) struct EngineTarget {
+    format: TexelFormat,
+    texture: Texture,
+    framebuffer: Framebuffer,
+}
+
+impl EngineTarget {
+    /// Makes `slot` hold a `w x h` target of `format` (kept when it already does).
+    fn ensure(
+        slot: &mut Option<EngineTarget>,
+        gl: &Arc<glow::Context>,
+        (w, h): (usize, usize),
+        format: TexelFormat,
+        what: &str,
+    ) -> Result<()> {
+        if slot.as_ref().is_some_and(|t| t.fits(w, h, format)) {
+            return Ok(());
+        }
+        *slot = None; // free the old texture before allocating the new one
+        let texture = Texture::new(gl, w, h, format, Filter::Nearest, None)?;
+        let framebuffer = Framebuffer::over(gl, &[&texture], what)?;
+        *slot = Some(EngineTarget {
+            format,
+            texture,
+            framebuffer,
+        });
+        Ok(())
+    }
+
+    fn fits(&self, w: usize, h: usize, format: TexelFormat) -> bool {
+        (self.texture.width(), self.texture.height(), self.format) == (w, h, format)
+    }
+}
+
+/// The targets of the engine passes, each made only when a call reads it and kept
+/// between frames of the same size: the separate Gaussian's intermediate, the read-back
+/// target of [`crate::Renderer`], and the copy of an sRGB-encoded destination that
+/// [`Pipeline::blend_fog`] fogs. `fog(FogBlur::None)` and `blend_fog` into a linear
+/// destination make none.
+#[derive(Default)]
 pub(super) struct EngineTargets {
-    width: usize,
-    height: usize,
-    precision: Precision,
-    textures: [Texture; 2],
-    framebuffers: [Framebuffer; 2],
+    intermediate: Option<EngineTarget>,
+    read_back: Option<EngineTarget>,
+    blend_copy: Option<EngineTarget>,
+}
+
+/// Which engine targets a call needs.
+#[derive(Clone, Copy, Default)]
+struct Needs {
+    intermediate: bool,
+    read_back: bool,
+    blend_copy: bool,
 }
 
 impl EngineTargets {
-    fn new(gl: &Arc<glow::Context>, w: usize, h: usize, precision: Precision) -> Result<Self> {
-        let texture = || Texture::new(gl, w, h, precision.colour_format(), Filter::Nearest, None);
-        let textures = [texture()?, texture()?];
-        let framebuffers = [
-            Framebuffer::over(gl, &[&textures[0]], "the fog's intermediate target")?,
-            Framebuffer::over(gl, &[&textures[1]], "the fog's read-back target")?,
-        ];
-        Ok(EngineTargets {
-            width: w,
-            height: h,
-            precision,
-            textures,
-            framebuffers,
-        })
+    /// Allocates what `needs` asks for at `w x h` and frees targets of another size.
+    fn prepare(
+        &mut self,
+        gl: &Arc<glow::Context>,
+        size: (usize, usize),
+        precision: Precision,
+        needs: Needs,
+    ) -> Result<()> {
+        let colour = precision.colour_format();
+        for (slot, needed, format, what) in [
+            (
+                &mut self.intermediate,
+                needs.intermediate,
+                colour,
+                "the fog's intermediate target",
+            ),
+            (
+                &mut self.read_back,
+                needs.read_back,
+                colour,
+                "the fog's read-back target",
+            ),
+            (
+                &mut self.blend_copy,
+                needs.blend_copy,
+                TexelFormat::Rgba8,
+                "the copy of the sRGB destination",
+            ),
+        ] {
+            if needed {
+                EngineTarget::ensure(slot, gl, size, format, what)?;
+            } else if slot
+                .as_ref()
+                .is_some_and(|t| (t.texture.width(), t.texture.height()) != size)
+            {
+                *slot = None;
+            }
+        }
+        Ok(())
+    }
+
+    fn get<'a>(slot: &'a Option<EngineTarget>, what: &str) -> Result<&'a EngineTarget> {
+        slot.as_ref()
+            .ok_or_else(|| Error::Gl(format!("internal: the fog's {what} not allocated")))
     }
 }
 
@@ -269,11 +344,10 @@ impl Pipeline {
             return self.render(input, medium, b, output);
         }
         let keys = self.engine_keys(blur, input.colour_encoding, output_encoding(output));
-        self.prepare_engine(input, medium, blur, &keys)?;
+        self.prepare_engine(input, medium, blur, &keys, false)?;
         let result = self.with_output(input, output, |pipeline, destination| {
             pipeline.run_engine(input, medium, blur, &keys, destination)
         });
-        self.leave_state();
         Ok(Frame {
             schedule: no_diffusion(),
             times: result?,
@@ -291,11 +365,13 @@ impl Pipeline {
             return self.render_and_read(input, medium, b);
         }
         let keys = self.engine_keys(blur, input.colour_encoding, Encoding::Linear);
-        self.prepare_engine(input, medium, blur, &keys)?;
+        self.prepare_engine(input, medium, blur, &keys, true)?;
         let result = self
             .run_engine(input, medium, blur, &keys, &Destination::Internal)
-            .and_then(|times| Ok((times, self.engine_targets()?.framebuffers[1].read_rgba()?)));
-        self.leave_state();
+            .and_then(|times| {
+                let target = EngineTargets::get(&self.engine_targets.read_back, "read-back")?;
+                Ok((times, target.framebuffer.read_rgba()?))
+            });
         let (times, pixels) = result?;
         Ok((
             Frame {
@@ -321,12 +397,15 @@ impl Pipeline {
     }
 
     /// Paper 003's post-process: draws the fog of a **grey** `medium` over the host's
-    /// framebuffer (which holds the scene) with fixed-function blending,
-    /// `C = τ·C + (1 − τ)·L∞`, reading only the depth texture. The destination must hold
-    /// linear light (a float or `SRGB8_ALPHA8` target): GL blends the values it stores.
-    /// Besides a render's state changes, this sets the blend function
-    /// (`SRC_ALPHA, ONE_MINUS_SRC_ALPHA` for colour, `ZERO, ONE` for alpha) and the blend
-    /// equation (`FUNC_ADD`), and leaves `BLEND` disabled.
+    /// framebuffer (which holds the scene), `C = τ·C + (1 − τ)·L∞`, reading only the
+    /// depth texture. A destination of linear light ([`Encoding::Linear`]: a float or
+    /// `SRGB8_ALPHA8` target) is blended by fixed-function GL in one pass (blend function
+    /// `SRC_ALPHA, ONE_MINUS_SRC_ALPHA` for colour, `ZERO, ONE` for alpha, equation
+    /// `FUNC_ADD`, all restored after). A destination holding sRGB-encoded values
+    /// ([`Encoding::Srgb`]: plain 8-bit) cannot be blended by GL in linear light: its
+    /// output rectangle is copied (`glBlitFramebuffer`) into an RGBA8 texture brume keeps
+    /// between frames, which the fog pass decodes, fogs and encodes back over the
+    /// destination, as [`Pipeline::fog`] does.
     pub fn blend_fog(
         &mut self,
         depth: glow::Texture,
@@ -343,33 +422,70 @@ impl Pipeline {
                  differently); use Pipeline::fog",
             ));
         }
-        let input = Input {
+        let srgb = output_encoding(output) == Encoding::Srgb;
+        let key = if srgb {
+            EngineKey::Fog {
+                gauss_single: false,
+                write_weight: false,
+                srgb_in: true,
+                srgb_out: true,
+                bilinear: false,
+            }
+        } else {
+            EngineKey::Blend
+        };
+        let needs = Needs {
+            blend_copy: srgb,
+            ..Needs::default()
+        };
+        let mut input = Input {
             colour: depth,
             colour_encoding: Encoding::Linear,
             depth,
             width,
             height,
         };
-        self.prepare_engine(&input, medium, &FogBlur::None, &[EngineKey::Blend])?;
+        self.prepare_engine_with(&input, medium, &FogBlur::None, &[key], needs)?;
+        if let Some(copy) = &self.engine_targets.blend_copy {
+            if srgb {
+                input.colour = copy.texture.raw();
+            }
+        }
         let result = self.with_output(&input, output, |pipeline, destination| {
-            pipeline.run_blend(&input, medium, destination)
+            pipeline.run_blend(&input, medium, key, destination)
         });
-        // SAFETY: a capability switch on the current context.
-        unsafe { self.gl.disable(glow::BLEND) };
-        self.leave_state();
         Ok(Frame {
             schedule: no_diffusion(),
             times: result?,
         })
     }
 
-    /// Checks the frame, compiles the passes `keys` and sizes the targets.
+    /// Checks the frame, compiles the passes `keys` and makes the targets they read:
+    /// the intermediate of the separate Gaussian, and the read-back target when
+    /// `read_back`.
     fn prepare_engine(
         &mut self,
         input: &Input,
         medium: &dyn Medium,
         blur: &FogBlur,
         keys: &[EngineKey],
+        read_back: bool,
+    ) -> Result<()> {
+        let needs = Needs {
+            intermediate: keys.len() == 2,
+            read_back,
+            blend_copy: false,
+        };
+        self.prepare_engine_with(input, medium, blur, keys, needs)
+    }
+
+    fn prepare_engine_with(
+        &mut self,
+        input: &Input,
+        medium: &dyn Medium,
+        blur: &FogBlur,
+        keys: &[EngineKey],
+        needs: Needs,
     ) -> Result<()> {
         medium.validate()?;
         self.caps.require_size("input", input.width, input.height)?;
@@ -392,30 +508,27 @@ impl Pipeline {
             _ => None,
         };
         let precision = gauss.map_or(Precision::F32, |g| g.precision);
-        self.caps.require_precision(precision)?;
+        // The engine's float targets are read by texelFetch, or bilinearly only where
+        // the driver filters them (engine_keys): rendering to them is all they need.
+        if needs.intermediate || needs.read_back {
+            self.caps.require_renderable(precision)?;
+        }
         for &key in keys {
             self.program(ProgramKey::Engine(medium.name(), key), Some(medium))?;
         }
         self.upload_lookups(medium)?;
-        let fits = self.engine_targets.as_ref().is_some_and(|t| {
-            (t.width, t.height, t.precision) == (input.width, input.height, precision)
-        });
-        if !fits {
-            self.engine_targets = None;
-            self.engine_targets = Some(EngineTargets::new(
-                &self.gl,
-                input.width,
-                input.height,
-                precision,
-            )?);
-        }
-        Ok(())
+        self.engine_targets
+            .prepare(&self.gl, (input.width, input.height), precision, needs)
     }
 
-    fn engine_targets(&self) -> Result<&EngineTargets> {
-        self.engine_targets
-            .as_ref()
-            .ok_or_else(|| Error::Gl("internal: fog targets not allocated".into()))
+    /// brume's framebuffer for an internal destination, if `destination` is one.
+    fn internal_target(&self, destination: &Destination) -> Result<Option<&Framebuffer>> {
+        match destination {
+            Destination::Internal => Ok(Some(
+                &EngineTargets::get(&self.engine_targets.read_back, "read-back")?.framebuffer,
+            )),
+            _ => Ok(None),
+        }
     }
 
     /// The one or two passes (`keys`, from [`engine_keys`]) of a Gaussian or no-blur fog.
@@ -427,23 +540,28 @@ impl Pipeline {
         keys: &[EngineKey],
         destination: &Destination,
     ) -> Result<PassTimes> {
+        let internal = self.internal_target(destination)?;
+        let intermediate = match keys.len() {
+            2 => Some(EngineTargets::get(
+                &self.engine_targets.intermediate,
+                "intermediate",
+            )?),
+            _ => None,
+        };
         self.timed("running the fog passes", |pipeline, timer| {
-            let targets = pipeline.engine_targets()?;
             let gauss = match blur {
                 FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => *g,
                 _ => GaussBlur::default(),
             };
-            let separate = keys.len() == 2;
             let p = pipeline.compiled(ProgramKey::Engine(medium.name(), keys[0]))?;
             timer.pass(|| {
                 // The encoding is compiled into the program (engine_keys).
-                let origin = if separate {
-                    targets.framebuffers[0].bind_for_drawing();
-                    [0, 0]
-                } else {
-                    pipeline
-                        .bind_destination(destination, input, &targets.framebuffers[1])
-                        .0
+                let origin = match intermediate {
+                    Some(target) => {
+                        target.framebuffer.bind_for_drawing();
+                        [0, 0]
+                    }
+                    None => pipeline.bind_destination(destination, input, internal).0,
                 };
                 pipeline.use_program(p);
                 bind_texture(&pipeline.gl, UNIT_MAIN, Some(input.colour));
@@ -452,13 +570,12 @@ impl Pipeline {
                 pipeline.set_engine_uniforms(p, medium, input, origin, gauss);
                 draw_fullscreen(&pipeline.gl);
             })?;
-            if let Some(&blur_key) = keys.get(1) {
+            if let (Some(&blur_key), Some(target)) = (keys.get(1), intermediate) {
                 let b = pipeline.compiled(ProgramKey::Engine(medium.name(), blur_key))?;
                 timer.pass(|| {
-                    let (origin, _) =
-                        pipeline.bind_destination(destination, input, &targets.framebuffers[1]);
+                    let (origin, _) = pipeline.bind_destination(destination, input, internal);
                     pipeline.use_program(b);
-                    targets.textures[0].bind(UNIT_MAIN);
+                    target.texture.bind(UNIT_MAIN);
                     pipeline.bind_gauss_sampler(blur_key);
                     set_int(&pipeline.gl, b, "u_f", UNIT_MAIN as i32);
                     pipeline.set_engine_uniforms(b, medium, input, origin, gauss);
@@ -470,33 +587,70 @@ impl Pipeline {
         .map(|(times, ())| times)
     }
 
-    /// Paper 003's blended pass.
+    /// Paper 003's pass: blended by GL over a linear destination ([`EngineKey::Blend`]),
+    /// or, over an sRGB-encoded one, the destination's rectangle copied into
+    /// `input.colour` (brume's RGBA8 copy) and fogged from it (`key` the sRGB fog pass).
     fn run_blend(
         &self,
         input: &Input,
         medium: &dyn Medium,
+        key: EngineKey,
         destination: &Destination,
     ) -> Result<PassTimes> {
+        let internal = self.internal_target(destination)?;
+        let copy = match key {
+            EngineKey::Blend => None,
+            _ => Some(EngineTargets::get(
+                &self.engine_targets.blend_copy,
+                "sRGB copy",
+            )?),
+        };
         self.timed("running the fog passes", |pipeline, timer| {
             let gl = &pipeline.gl;
-            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), EngineKey::Blend))?;
-            let internal = &pipeline.engine_targets()?.framebuffers[1];
+            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), key))?;
             timer.pass(|| {
                 let (origin, _) = pipeline.bind_destination(destination, input, internal);
+                let (w, h) = (input.width as i32, input.height as i32);
                 pipeline.use_program(p);
+                if let Some(copy) = copy {
+                    let [x, y] = origin;
+                    // SAFETY: the destination (bound for reading just above) copied into
+                    // brume's own RGBA8 target of the rectangle's size, then the
+                    // destination bound for drawing again; scissor and rasterizer
+                    // discard are off (enter_state).
+                    unsafe {
+                        gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(copy.framebuffer.raw()));
+                        gl.blit_framebuffer(
+                            x,
+                            y,
+                            x + w,
+                            y + h,
+                            0,
+                            0,
+                            w,
+                            h,
+                            glow::COLOR_BUFFER_BIT,
+                            glow::NEAREST,
+                        );
+                    }
+                    pipeline.bind_destination(destination, input, internal);
+                    bind_texture(gl, UNIT_MAIN, Some(input.colour));
+                } else {
+                    // SAFETY: blend state on the current context, restored by the
+                    // caller's guard (documented in blend_fog).
+                    unsafe {
+                        gl.enable(glow::BLEND);
+                        gl.blend_equation(glow::FUNC_ADD);
+                        gl.blend_func_separate(
+                            glow::SRC_ALPHA,
+                            glow::ONE_MINUS_SRC_ALPHA,
+                            glow::ZERO,
+                            glow::ONE,
+                        );
+                    }
+                }
                 bind_texture(gl, UNIT_DEPTH, Some(input.depth));
                 pipeline.set_engine_uniforms(p, medium, input, origin, GaussBlur::default());
-                // SAFETY: blend state on the current context (documented in blend_fog).
-                unsafe {
-                    gl.enable(glow::BLEND);
-                    gl.blend_equation(glow::FUNC_ADD);
-                    gl.blend_func_separate(
-                        glow::SRC_ALPHA,
-                        glow::ONE_MINUS_SRC_ALPHA,
-                        glow::ZERO,
-                        glow::ONE,
-                    );
-                }
                 draw_fullscreen(gl);
             })
         })

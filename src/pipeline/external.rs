@@ -17,11 +17,12 @@
 //! row in memory). A camera's usually flips t (`t' = 1 − t`), so that the copy's row 0 is
 //! the frame's bottom row and a render into the default framebuffer comes out upright.
 //!
-//! **State.** An import changes and leaves the state a render does (see the parent
-//! module), with the viewport on the copy, and it binds the external texture on unit 0's
-//! `GL_TEXTURE_EXTERNAL_OES` target, which it leaves empty.
+//! **State.** An import changes what a render does (see the parent module) and unit 0's
+//! `GL_TEXTURE_EXTERNAL_OES` binding, and puts all of it back as the host left it.
 
-use super::{draw_fullscreen, Pipeline, ProgramKey, PRELUDE_GLSL, UNIT_MAIN};
+use super::programs::{ProgramKey, PRELUDE_GLSL};
+use super::state::HostState;
+use super::{draw_fullscreen, Pipeline, UNIT_MAIN};
 use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::program::{Program, FULLSCREEN_VERT};
@@ -127,15 +128,11 @@ impl Pipeline {
             self.imported = None; // free the old copy before allocating the new one
             self.imported = Some(ImportTarget::new(&self.gl, source.width, source.height)?);
         }
+        // The extension is present (checked above): unit 0's external binding is saved.
+        let saved = HostState::save(&self.gl, self.state_scope(true));
         self.enter_state();
         let result = self.run_import(source);
-        // SAFETY: unbinding unit 0's external target, which the import bound (the
-        // extension is present: checked above).
-        unsafe {
-            self.gl.active_texture(glow::TEXTURE0 + UNIT_MAIN);
-            self.gl.bind_texture(TEXTURE_EXTERNAL_OES, None);
-        }
-        self.leave_state();
+        saved.restore(&self.gl);
         result
     }
 

@@ -392,7 +392,6 @@ impl Pipeline {
         let result = self.timed(what, |pipeline, timer| {
             passes(pipeline, timer, &framebuffer)
         });
-        self.leave_state();
         let (times, ()) = result?;
         drop(framebuffer);
         Ok(times)

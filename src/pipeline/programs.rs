@@ -1,0 +1,189 @@
+//! The pipeline's programs: which passes exist ([`ProgramKey`]), how each is assembled
+//! from the prelude, the medium's GLSL and the pass, and the cache that compiles each once.
+
+use super::engine::{self, EngineKey};
+use super::{external, refine, Pipeline};
+use crate::blur::Precision;
+use crate::error::{Error, Result};
+use crate::gpu::program::Program;
+use crate::medium::{Medium, MEDIUM_API_GLSL};
+use crate::schedule::{Schedule, Scheme};
+
+pub(super) const PRELUDE_GLSL: &str = include_str!("../../glsl/prelude.glsl");
+pub(super) const MEDIUM_FRAG: &str = include_str!("../../glsl/medium.frag");
+pub(super) const DIFFUSE_FRAG: &str = include_str!("../../glsl/diffuse.frag");
+pub(super) const COMPOSITE_FRAG: &str = include_str!("../../glsl/composite.frag");
+
+/// Which program: the medium's two passes are compiled per medium, and every pass per
+/// grey or chromatic τ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) enum ProgramKey {
+    Medium {
+        medium: &'static str,
+        chromatic: bool,
+        log_rate: bool,
+        half_rate: bool,
+    },
+    Diffuse {
+        matched: bool,
+        chromatic: bool,
+    },
+    Composite {
+        medium: &'static str,
+        chromatic: bool,
+    },
+    /// An engine pass (see [`engine`]) of a medium.
+    Engine(&'static str, EngineKey),
+    /// The import of an external image (see [`external`]).
+    ExternalImport,
+    /// A pass of the image-guided refinement (see [`refine`]).
+    Refine(refine::RefinePass),
+}
+
+/// The medium pass's program for this frame.
+pub(super) fn medium_key(
+    medium: &dyn Medium,
+    precision: Precision,
+    schedule: &Schedule,
+    chromatic: bool,
+) -> ProgramKey {
+    ProgramKey::Medium {
+        medium: medium.name(),
+        chromatic,
+        log_rate: schedule.scheme != Scheme::Euler,
+        half_rate: precision == Precision::F16,
+    }
+}
+
+impl Pipeline {
+    pub(super) fn compiled(&self, key: ProgramKey) -> Result<&Program> {
+        self.programs
+            .get(&key)
+            .ok_or_else(|| Error::Gl(format!("internal: program {key:?} not compiled")))
+    }
+
+    /// The program for `key`, compiled on first use (`medium` is needed for the medium
+    /// and composite passes).
+    pub(super) fn program(
+        &mut self,
+        key: ProgramKey,
+        medium: Option<&dyn Medium>,
+    ) -> Result<&Program> {
+        if !self.programs.contains_key(&key) {
+            let program = self.compile(key, medium)?;
+            self.programs.insert(key, program);
+        }
+        self.compiled(key)
+    }
+
+    pub(super) fn compile(&self, key: ProgramKey, medium: Option<&dyn Medium>) -> Result<Program> {
+        let defines = |pairs: &[(&str, bool)]| {
+            let mut header = self.version_line.to_string();
+            for (name, on) in pairs {
+                header.push_str(&format!("\n#define {name} {}", i32::from(*on)));
+            }
+            header.push('\n');
+            header.push_str(PRELUDE_GLSL);
+            header
+        };
+        let with_medium = |pass: &str| {
+            let m = medium.expect("the medium passes need a medium");
+            format!("{MEDIUM_API_GLSL}\n{}\n{pass}", m.glsl())
+        };
+        let names = |pass: &str| {
+            let m = medium.expect("the medium passes need a medium");
+            format!("{pass} with glsl/medium/{}.glsl", m.name())
+        };
+        let optional = |extra: &[&'static str]| {
+            let mut list: Vec<&'static str> = MEDIUM_API_UNIFORMS.to_vec();
+            list.extend_from_slice(extra);
+            if let Some(m) = medium {
+                list.extend(m.uniforms().into_iter().map(|(name, _)| name));
+                list.extend(m.lookups().into_iter().map(|(name, _)| name));
+            }
+            list
+        };
+        match key {
+            ProgramKey::Medium {
+                chromatic,
+                log_rate,
+                half_rate,
+                ..
+            } => Program::new(
+                &self.gl,
+                &defines(&[
+                    ("CHROMATIC", chromatic),
+                    ("RATE_LAW_LOG", log_rate),
+                    ("RATE_HALF", half_rate),
+                ]),
+                (&names("medium.frag"), &with_medium(MEDIUM_FRAG)),
+                &["u_colour"],
+                &optional(&["u_depth", "u_colour_srgb", "u_schedule"]),
+            ),
+            ProgramKey::Diffuse { matched, chromatic } => Program::new(
+                &self.gl,
+                &defines(&[("VARIANCE_MATCHED", matched), ("CHROMATIC", chromatic)]),
+                ("diffuse.frag", DIFFUSE_FRAG),
+                &["u_f", "u_rate", "u_law", "u_texel"],
+                &["u_tau_gb"],
+            ),
+            ProgramKey::Composite { chromatic, .. } => Program::new(
+                &self.gl,
+                &defines(&[("CHROMATIC", chromatic)]),
+                (&names("composite.frag"), &with_medium(COMPOSITE_FRAG)),
+                &["u_f"],
+                &optional(&["u_depth", "u_tau_gb", "u_origin", "u_output_srgb"]),
+            ),
+            ProgramKey::Engine(_, key) => {
+                let (file, source, pairs) = key.source();
+                let gauss = if key.needs_gauss() {
+                    engine::GAUSS5
+                } else {
+                    ""
+                };
+                Program::new(
+                    &self.gl,
+                    &defines(&pairs),
+                    (&names(file), &with_medium(&format!("{gauss}\n{source}"))),
+                    &[],
+                    &optional(&engine::ENGINE_UNIFORMS),
+                )
+            }
+            ProgramKey::ExternalImport => external::compile(&self.gl, self.version_line),
+            ProgramKey::Refine(pass) => {
+                refine::compile(&self.gl, self.version_line, PRELUDE_GLSL, pass)
+            }
+        }
+    }
+
+    /// A medium uniform that neither of its passes uses is misspelled (or dead): say so
+    /// instead of rendering with a default value.
+    pub(super) fn check_medium_uniforms(
+        &self,
+        medium: &dyn Medium,
+        first: ProgramKey,
+        last: ProgramKey,
+    ) -> Result<()> {
+        let (first, last) = (self.compiled(first)?, self.compiled(last)?);
+        for (name, _) in medium.uniforms() {
+            if first.optional_uniform(name).is_none() && last.optional_uniform(name).is_none() {
+                return Err(Error::Gl(format!(
+                    "glsl/medium/{}.glsl: uniform {name} is not used by the shader \
+                     (misspelled, or not declared)",
+                    medium.name()
+                )));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The uniforms of `glsl/medium_api.glsl` and `glsl/fullscreen.vert` that the pipeline
+/// sets for every medium pass (unused ones are optimised out).
+const MEDIUM_API_UNIFORMS: [&str; 5] = [
+    "brume_sigma0",
+    "brume_size",
+    "brume_corner_rays",
+    "brume_depth_constants",
+    "brume_eye",
+];
