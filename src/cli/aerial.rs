@@ -4,32 +4,34 @@
 
 use super::args::{AerialBlur, RenderArgs};
 use super::render::{look_from_args, PrepReport, Scene};
-use brume::atmosphere::horizon_light;
-use brume::atmosphere::{AttenuationTable, Sensitivity};
-use brume::blur::Blur;
+use brume::atmosphere::Sensitivity;
 use brume::camera::Camera;
 use brume::io::camera::Intrinsics;
 use brume::io::image::load_linear_rgb;
 use brume::io::output::Outputs;
 use brume::medium::haze::Haze;
-use brume::medium::{AerialPerspective, Medium, Pixel};
-use brume::raster::{Grid, RgbImage, ScalarMap};
+use brume::medium::{AerialPerspective, Medium};
+use brume::photo::{
+    pitch_for_horizon_row, AerialOptions, AerialPhoto, HorizonFrom, DEFAULT_HORIZON_ZENITH_DEG,
+    MAX_PITCH_DEG,
+};
 use brume::sky::turbidity::{estimate_turbidity, TurbidityOptions};
+use brume::Headless;
 use brume::{Error, Result};
-use brume::{FogBlur, Headless};
 use serde_json::json;
-use std::path::{Path, PathBuf};
-use std::sync::Arc;
-
-/// The smallest source Γ retargeting divides by: below it the photo holds airlight only.
-const MIN_SOURCE_GAMMA: f64 = 1e-3;
+use std::path::Path;
 
 /// What the aerial render used, for the report.
 pub struct AerialLook {
     pub medium: AerialPerspective,
     pub turbidity_source: &'static str,
     pub from_turbidity: Option<f64>,
-    /// The camera's sensitivity, read once for the target's and the source's tables.
+    /// The camera's sensitivity (the viewer rebuilds the tables from it as its controls
+    /// change).
+    #[cfg_attr(
+        not(all(feature = "viewer", not(target_os = "android"))),
+        allow(dead_code)
+    )]
     pub sensitivity: Sensitivity,
 }
 
@@ -125,11 +127,6 @@ pub fn aerial_camera(
     Ok(camera)
 }
 
-/// Largest camera pitch, degrees, however it is given: beyond it the image holds no
-/// horizon to speak of and a row number barely moves the pitch.
-pub const MAX_PITCH_DEG: f64 = 85.0;
-/// Where `--horizon-zenith` puts the airlight by default, degrees.
-pub const DEFAULT_HORIZON_ZENITH_DEG: f64 = 85.0;
 /// `--altitude`'s range, metres: the Dead Sea's shore to above any airliner.
 pub const ALTITUDE_RANGE_M: (f64, f64) = (-500.0, 20_000.0);
 /// The turbidities the model is fitted for (Preetham et al.'s range), for `--turbidity`
@@ -195,172 +192,53 @@ pub fn check_aerial_options(args: &RenderArgs) -> Result<()> {
     Ok(())
 }
 
-/// The pitch (degrees) that puts the horizon on row `row` (0 at the top, centres at
-/// integers) of a `height`-row image with vertical field of view `fov_y_deg`: the ray
-/// through the row, fwd + ndc·tan(fov/2)·up, is level when tan(pitch) = −ndc·tan(fov/2).
-pub fn pitch_for_horizon_row(row: f64, height: usize, fov_y_deg: f64) -> f64 {
-    let ndc = 1.0 - 2.0 * (row + 0.5) / height as f64;
-    (-ndc * (fov_y_deg.to_radians() / 2.0).tan())
-        .atan()
-        .to_degrees()
+/// The aerial render's inputs, as `brume render` and `brume view` use them.
+pub struct AerialJob {
+    /// The image, range, medium and blur the renderer is given.
+    pub photo: AerialPhoto,
+    pub look: AerialLook,
+    /// Where the horizon's light came from, for the report.
+    pub light_source: &'static str,
 }
 
-/// The aerial medium for a photo whose range (in `--metres-per-unit`) reaches
-/// `max_range`, with the horizon's light `horizon` at zenith angle `horizon_zenith`
-/// (radians; `None`: `--horizon-zenith`).
-pub fn aerial_look(
-    args: &RenderArgs,
-    camera: Camera,
-    max_range: f64,
-    horizon: [f32; 3],
-    horizon_zenith: Option<f64>,
-) -> Result<AerialLook> {
-    let (t, source) = turbidity(args)?;
+/// `--medium aerial`: paper 002's aerial perspective on the prepared range in metres
+/// ([`brume::photo::aerial`]), the horizon's light from the sky found (or `--airlight`).
+pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result<AerialJob> {
+    let (turbidity, turbidity_source) = turbidity(args)?;
     let sensitivity = match &args.sensitivity {
         Some(path) => Sensitivity::from_csv(path)?,
         None => Sensitivity::cie_srgb(),
     };
     check_aerial_options(args)?;
-    let metres = args.metres_per_unit.unwrap_or(1.0);
-    let s_max = (max_range * metres).max(1.0);
-    let table = AttenuationTable::new(&sensitivity, t, args.altitude.unwrap_or(0.0), s_max)?;
-    let medium = AerialPerspective {
-        metres_per_unit: metres,
+    let camera = aerial_camera(args, scene.image.height(), scene.depth.intrinsics.as_ref())?;
+    let opts = AerialOptions {
+        from_turbidity: args.from_turbidity,
+        altitude_m: args.altitude.unwrap_or(0.0),
+        metres_per_unit: args.metres_per_unit.unwrap_or(1.0),
+        sensitivity,
         lambda: match args.blur.unwrap_or(AerialBlur::Diffusion) {
             AerialBlur::None => 0.0,
             AerialBlur::Diffusion => args.lambda,
         },
-        reference_zenith: horizon_zenith.unwrap_or(
-            args.horizon_zenith
-                .unwrap_or(DEFAULT_HORIZON_ZENITH_DEG)
-                .to_radians(),
-        ),
-        ..AerialPerspective::new(Arc::new(table), camera, horizon)
+        horizon_zenith_deg: args.horizon_zenith.unwrap_or(DEFAULT_HORIZON_ZENITH_DEG),
+        horizon_light: args.airlight,
+        blur: look_from_args(args, &Haze::default(), prep.airlight).blur,
+        ..AerialOptions::new(turbidity, camera)
     };
-    medium.validate()?;
-    Ok(AerialLook {
-        medium,
-        turbidity_source: source,
-        from_turbidity: args.from_turbidity,
-        sensitivity,
-    })
-}
-
-/// Retargeting (eq. 25-26): the haze-free radiance of a photo taken at turbidity
-/// `from`, I⁰ = (I − I∞_s(1 − Γ_s))/Γ_s with the source's Γ and airlight, clamped at 0.
-/// The target's medium is then applied to it as to any photo.
-pub fn dehaze(
-    image: &RgbImage,
-    range: &ScalarMap,
-    look: &AerialLook,
-    from: f64,
-) -> Result<RgbImage> {
-    let target = &look.medium;
-    let table = AttenuationTable::new(
-        &look.sensitivity,
-        from,
-        target.table.altitude_m(),
-        target.table.max_distance_m(),
-    )?;
-    let source = AerialPerspective {
-        table: Arc::new(table),
-        ..target.clone()
+    let photo = brume::photo::aerial(scene, prep, &opts)?;
+    let light_source = match photo.horizon_from {
+        HorizonFrom::Airlight => prep.airlight_from.name(),
+        from => from.name(),
     };
-    let (w, h) = (image.width(), image.height());
-    Ok(Grid::from_fn(w, h, |x, y| {
-        let m = source.sample(Pixel {
-            x,
-            y: h - 1 - y,
-            width: w,
-            height: h,
-            depth: f64::from(*range.get(x, y)),
-            sigma0: 1.0,
-        });
-        let e = image.get(x, y);
-        std::array::from_fn(|c| {
-            let g = m.transmission[c].max(MIN_SOURCE_GAMMA);
-            ((f64::from(e[c]) - m.inscatter[c] * (1.0 - g)) / g).max(0.0) as f32
-        })
-    }))
-}
-
-/// The aerial render's inputs, as `brume render` and `brume view` use them.
-pub struct AerialJob {
-    /// The photo (retargeted with `--from-turbidity`).
-    pub image: RgbImage,
-    /// Range in `--metres-per-unit`, unknown samples taken as the sky.
-    pub range: ScalarMap,
-    pub look: AerialLook,
-    /// The largest known range.
-    pub max_range: f32,
-    /// Where the horizon's light came from, for the report.
-    pub light_source: &'static str,
-    /// The diffusion blur, when the medium blurs.
-    pub blur: Blur,
-}
-
-impl AerialJob {
-    /// No blur: the fog's one pass does what the medium pass and the composite would.
-    pub fn fog_blur(&self) -> FogBlur {
-        if self.look.medium.lambda == 0.0 {
-            FogBlur::None
-        } else {
-            FogBlur::Diffusion(self.blur)
-        }
-    }
-}
-
-/// `--medium aerial`: paper 002's aerial perspective on the range in metres (module
-/// `aerial`), the horizon's light from the sky found (or `--airlight`).
-pub fn aerial_job(
-    args: &RenderArgs,
-    scene: &Scene,
-    prep: &PrepReport,
-    range: &ScalarMap,
-) -> Result<AerialJob> {
-    let max_range = range
-        .as_slice()
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .fold(0f32, f32::max);
-    if max_range <= 0.0 {
-        return Err(Error::NoValidDepth {
-            path: PathBuf::from(&scene.depth_name),
-        });
-    }
-    // Unknown range (only with --no-prep) is taken as the sky is by pre-processing.
-    let range = range.map(|&v| {
-        if v.is_finite() && v > 0.0 {
-            v
-        } else {
-            1.5 * max_range
-        }
-    });
-    // I∞(θ') from the brightest sky of the horizon region (paper 002, sec. 4), unless
-    // --airlight says otherwise or no sky was found.
-    let camera = aerial_camera(args, scene.image.height(), scene.depth.intrinsics.as_ref())?;
-    let horizon = match (&args.airlight, &prep.prepared) {
-        (None, Some(p)) => horizon_light(&scene.image, &p.sky, &camera),
-        _ => None,
-    };
-    let (light, zenith, light_source) = match horizon {
-        Some(h) => (h.rgb, Some(h.zenith), "horizon"),
-        None => (prep.airlight, None, prep.airlight_from.name()),
-    };
-    let look = aerial_look(args, camera, 1.5 * f64::from(max_range), light, zenith)?;
-    let image = match look.from_turbidity {
-        Some(from) => dehaze(&scene.image, &range, &look, from)?,
-        None => scene.image.clone(),
-    };
-    let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
     Ok(AerialJob {
-        image,
-        range,
-        look,
-        max_range,
+        look: AerialLook {
+            medium: photo.medium.clone(),
+            turbidity_source,
+            from_turbidity: args.from_turbidity,
+            sensitivity: opts.sensitivity,
+        },
         light_source,
-        blur,
+        photo,
     })
 }
 
@@ -369,19 +247,22 @@ pub fn run_aerial(
     renderer: &mut Headless,
     scene: &Scene,
     prep: &PrepReport,
-    range: &ScalarMap,
     out: &Path,
 ) -> Result<()> {
-    let job = aerial_job(args, scene, prep, range)?;
+    let job = aerial_job(args, scene, prep)?;
     let AerialJob {
+        photo,
+        look,
+        light_source,
+    } = &job;
+    let AerialPhoto {
         image,
         range,
-        look,
         max_range,
-        light_source,
         blur,
-    } = &job;
-    let rendered = renderer.render_fog(image, range, &look.medium, &job.fog_blur())?;
+        ..
+    } = photo;
+    let rendered = renderer.render_fog(image, range, &look.medium, &photo.fog_blur())?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(out, &rendered.image)?;
     super::commit(outputs)?;

@@ -679,7 +679,7 @@ impl BatchArgs {
         args.refine = self.refine.clone();
         super::options::check_options(&args)?;
         let haze = render_cmd::haze_from_args(&args)?;
-        render_cmd::prep_options(&args.prep)?;
+        super::inputs::prep_options(&args.prep)?;
         if let Some(mask) = &args.prep.sky_mask {
             if !mask.is_file() {
                 return Err(Error::invalid(

@@ -2,7 +2,8 @@
 //! `--transmittance-map`); the conventions themselves are `brume::compat`.
 
 use super::args::RenderArgs;
-use super::render::{check_same_size, Scene};
+use super::inputs::check_same_size;
+use super::render::Scene;
 use brume::io::depth::{DepthFormat, DepthKind, LoadedDepth};
 use brume::io::image;
 use brume::io::output::Outputs;

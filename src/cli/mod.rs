@@ -28,6 +28,7 @@ mod bench;
 mod compare;
 mod compat;
 mod info;
+mod inputs;
 mod limits;
 mod options;
 mod prep;

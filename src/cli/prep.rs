@@ -1,13 +1,11 @@
 //! `brume prep`: pre-process a range map on its own and show what happened.
 
-use super::args::{PrepArgs, PrepOptionArgs, RefineArgs};
-use super::render::{depth_inputs, load_depth, prep_options};
+use super::args::{PrepArgs, RefineArgs};
+use super::inputs::{depth_inputs, load_depth, load_masks, prep_options};
 use brume::io::image;
-use brume::io::mask::{self, SkyMaskFormat};
 use brume::io::output::{self, Outputs};
 use brume::photo::{Photo, PrepareOptions};
 use brume::prep::{self, Guides};
-use brume::raster::{Grid, ScalarMap};
 use brume::refine::{CpuFilter, RefineMode};
 use brume::{Error, Result};
 use serde_json::json;
@@ -205,93 +203,4 @@ fn sky_method_name(m: prep::SkyMethod) -> &'static str {
         prep::SkyMethod::DepthAndImage => "the range and the image",
         prep::SkyMethod::Mask => "--sky-mask",
     }
-}
-
-/// Checks a mask read for `flag` (`path`, a `what`) against the range it goes with: the
-/// range's size, and not every pixel set (`all_set` says what that means); logs its count.
-fn check_mask(
-    (flag, path, what): (&str, &Path, &str),
-    mask: &Grid<bool>,
-    range: &ScalarMap,
-    range_name: &str,
-    all_set: &str,
-) -> Result<()> {
-    if (mask.width(), mask.height()) != (range.width(), range.height()) {
-        return Err(Error::SizeMismatch {
-            a: path.display().to_string(),
-            aw: mask.width() as u32,
-            ah: mask.height() as u32,
-            b: range_name.to_string(),
-            bw: range.width() as u32,
-            bh: range.height() as u32,
-        });
-    }
-    let set = mask.as_slice().iter().filter(|&&s| s).count();
-    log::info!(
-        "{}: {what}, {set} pixels ({:.1} %)",
-        path.display(),
-        100.0 * set as f64 / mask.len().max(1) as f64
-    );
-    if set == mask.len() {
-        return Err(Error::invalid(flag, path.display(), all_set));
-    }
-    Ok(())
-}
-
-/// The masks of `--sky-mask` and `--ego-mask`.
-pub struct Masks {
-    /// The sky (true = sky).
-    pub sky: Option<Grid<bool>>,
-    /// How the sky mask was read.
-    pub sky_format: Option<SkyMaskFormat>,
-    /// The ego vehicle (true = the car's hood).
-    pub ego: Option<Grid<bool>>,
-}
-
-/// Loads the `--sky-mask` and `--ego-mask` of `args`, if any, which must have the size of
-/// `range` (named `range_name` in messages) and not be set everywhere.
-pub fn load_masks(args: &PrepOptionArgs, range: &ScalarMap, range_name: &str) -> Result<Masks> {
-    let loaded = match &args.sky_mask {
-        Some(path) => {
-            let (m, format) = mask::load_sky_mask(path, args.sky_mask_format)?;
-            check_mask(
-                ("--sky-mask", path, "sky mask"),
-                &m,
-                range,
-                range_name,
-                &format!(
-                    "a mask with ground in it: every pixel is sky as read ({format}); is it \
-                     inverted, or of another --sky-mask-format?"
-                ),
-            )?;
-            Some((m, format))
-        }
-        None => None,
-    };
-    let ego = match &args.ego_mask {
-        Some(path) => {
-            let (m, format) = mask::load_ego_mask(path, None)?;
-            check_mask(
-                ("--ego-mask", path, "ego-vehicle mask"),
-                &m,
-                range,
-                range_name,
-                &format!(
-                    "a mask with the scene in it: every pixel is the ego vehicle as read \
-                     ({format}); is it inverted, or a label image not named *_labelIds.png?"
-                ),
-            )?;
-            Some(m)
-        }
-        None => None,
-    };
-    let (sky, sky_format) = match loaded {
-        Some((m, f)) => (Some(m), Some(f)),
-        None => (None, None),
-    };
-    Ok(Masks {
-        sky,
-        sky_format,
-        ego,
-    })
 }

@@ -1,17 +1,16 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
-use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
+use super::args::{Compat, MediumKind, RenderArgs};
+use super::inputs::{depth_inputs, load_depth, load_masks, prep_options};
 use brume::blur::Blur;
 use brume::egl::Platform;
-use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::output::{self, Outputs};
 use brume::io::{demo, image};
 use brume::medium::haze::{self, Haze};
 use brume::medium::physical::{PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
 use brume::photo::Extinction;
-use brume::prep::PrepOptions;
-use brume::raster::{RgbImage, ScalarMap};
+use brume::raster::ScalarMap;
 use brume::Rendered;
 use brume::{Error, Result};
 use serde_json::json;
@@ -89,7 +88,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     }
     let range = &prep.range;
     if args.medium == MediumKind::Aerial {
-        return super::aerial::run_aerial(args, &mut headless, &scene, &prep, range, &out);
+        return super::aerial::run_aerial(args, &mut headless, &scene, &prep, &out);
     }
     let fog = physical_from_args(args)?;
     if args.compat == Some(Compat::FoggyCityscapes) {
@@ -425,95 +424,6 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     }
 }
 
-/// Loads the depth named by `args` (which must have one) as a range map.
-pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
-    let path = args
-        .depth
-        .as_ref()
-        .ok_or_else(|| Error::invalid("--depth", "(missing)", "a depth, range or disparity map"))?;
-    let opts = DepthOptions {
-        format: args.depth_format,
-        kind: args.depth_kind,
-        calib: args.calib.clone(),
-        camera: args.camera.clone(),
-        scale: args.depth_scale,
-        focal: args.focal,
-        baseline: args.baseline,
-        disparity_offset: args.disparity_offset,
-        near: args.near,
-        far: args.far,
-        fov: args.fov,
-        min_confidence: args.min_confidence,
-    };
-    let loaded = depth::load_range(path, &opts)?;
-    for note in &loaded.notes {
-        // An option given and not used is said where the user looks, not only in --json.
-        if note.contains("ignored") {
-            log::warn!("{}: {note}", path.display());
-        } else {
-            log::info!("{}: {note}", path.display());
-        }
-    }
-    Ok(loaded)
-}
-
-/// The files a depth argument set reads.
-pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
-    args.depth
-        .iter()
-        .chain(args.calib.iter())
-        .chain(args.camera.iter())
-        .cloned()
-        .collect()
-}
-
-/// Checks that the colour image and the range map have one size; the error names both.
-pub fn check_same_size(
-    image: &RgbImage,
-    image_name: &str,
-    range: &ScalarMap,
-    range_name: &str,
-) -> Result<()> {
-    if (image.width(), image.height()) == (range.width(), range.height()) {
-        return Ok(());
-    }
-    Err(Error::SizeMismatch {
-        a: image_name.to_string(),
-        aw: image.width() as u32,
-        ah: image.height() as u32,
-        b: range_name.to_string(),
-        bw: range.width() as u32,
-        bh: range.height() as u32,
-    })
-}
-
-/// Builds the pre-processing options from the command line over the library defaults.
-pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
-    let mut opts = PrepOptions::default();
-    if let Some(m) = args.margin {
-        opts.margin_px = m;
-    }
-    if let Some(f) = args.sky_factor {
-        opts.sky_range_factor = f;
-    }
-    if let Some(a) = args.sky_min_area {
-        opts.sky.min_area_fraction = a;
-    }
-    if let Some(k) = args.far_outlier_factor {
-        opts.far_outlier_factor = k;
-    }
-    if let Some(f) = args.local_outliers {
-        opts.local_outlier_factor = f;
-    }
-    if let Some(s) = args.seed {
-        opts.seed = u64::try_from(s)
-            .map_err(|_| Error::invalid("seed", s, "a whole number from 0 to 2^64 - 1"))?;
-    }
-    opts.detect_sky = !args.no_sky;
-    opts.validate()?;
-    Ok(opts)
-}
-
 /// Pre-processes the scene's range as `args` ask ([`brume::photo::preprocess`]): the
 /// masks of `--sky-mask` and `--ego-mask` (checked against the depth map), the
 /// pre-processing options, the airlight policy; nothing with `--no-prep` or a uniform blur
@@ -528,7 +438,7 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
         return brume::photo::preprocess(scene, &opts);
     }
     opts.prep = Some(prep_options(&args.prep)?);
-    let masks = super::prep::load_masks(&args.prep, &scene.depth.range, &scene.depth_name)?;
+    let masks = load_masks(&args.prep, &scene.depth.range, &scene.depth_name)?;
     (opts.sky_mask, opts.ego_mask) = (masks.sky, masks.ego);
     let started = Instant::now();
     let prepared = brume::photo::preprocess(scene, &opts)?;

@@ -19,9 +19,14 @@
 //! guided filter, on the GPU or by the CPU references), [`fog`] (the haze in normalised
 //! or physical units, with the diffusion blur) and [`transmittance_map`].
 
+mod aerial;
 mod fog;
 mod prepare;
 
+pub use aerial::{
+    aerial, dehaze, pitch_for_horizon_row, AerialOptions, AerialPhoto, HorizonFrom,
+    DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+};
 pub use fog::{fog, medium_range, transmittance_map, Extinction, FogOptions, FoggedPhoto};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
 

@@ -186,11 +186,10 @@ impl Photo {
             &mut prep,
             &mut brume::refine::CpuFilter,
         )?;
-        let range = &prep.range;
         let (image, depth, look) = if args.medium == MediumKind::Aerial {
-            let job = aerial_job(args, &scene, &prep, range)?;
+            let job = aerial_job(args, &scene, &prep)?;
             let look = aerial_look(&job);
-            (job.image, job.range, look)
+            (job.photo.image, job.photo.range, look)
         } else {
             let (medium_range, _, look) = render_cmd::haze_inputs(args, &prep)?;
             let look = PhotoLook::Haze {
@@ -306,7 +305,7 @@ fn aerial_look(job: &AerialJob) -> PhotoLook {
         turbidity: m.table.turbidity(),
         altitude: m.table.altitude_m(),
         max_distance_m: m.table.max_distance_m(),
-        blur: job.blur,
+        blur: job.photo.blur,
     }
 }
 

@@ -1,0 +1,189 @@
+//! What `render`, `prep` and `batch` read from their arguments before any work: the depth
+//! map, the masks of pre-processing and its options, so that the commands share them
+//! without importing one another.
+
+use super::args::{DepthArgs, PrepOptionArgs};
+use brume::io::depth::{self, DepthOptions, LoadedDepth};
+use brume::io::mask::{self, SkyMaskFormat};
+use brume::prep::PrepOptions;
+use brume::raster::{Grid, RgbImage, ScalarMap};
+use brume::{Error, Result};
+use std::path::{Path, PathBuf};
+
+/// Loads the depth named by `args` (which must have one) as a range map.
+pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
+    let path = args
+        .depth
+        .as_ref()
+        .ok_or_else(|| Error::invalid("--depth", "(missing)", "a depth, range or disparity map"))?;
+    let opts = DepthOptions {
+        format: args.depth_format,
+        kind: args.depth_kind,
+        calib: args.calib.clone(),
+        camera: args.camera.clone(),
+        scale: args.depth_scale,
+        focal: args.focal,
+        baseline: args.baseline,
+        disparity_offset: args.disparity_offset,
+        near: args.near,
+        far: args.far,
+        fov: args.fov,
+        min_confidence: args.min_confidence,
+    };
+    let loaded = depth::load_range(path, &opts)?;
+    for note in &loaded.notes {
+        // An option given and not used is said where the user looks, not only in --json.
+        if note.contains("ignored") {
+            log::warn!("{}: {note}", path.display());
+        } else {
+            log::info!("{}: {note}", path.display());
+        }
+    }
+    Ok(loaded)
+}
+
+/// The files a depth argument set reads.
+pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
+    args.depth
+        .iter()
+        .chain(args.calib.iter())
+        .chain(args.camera.iter())
+        .cloned()
+        .collect()
+}
+
+/// Checks that the colour image and the range map have one size; the error names both.
+pub fn check_same_size(
+    image: &RgbImage,
+    image_name: &str,
+    range: &ScalarMap,
+    range_name: &str,
+) -> Result<()> {
+    if (image.width(), image.height()) == (range.width(), range.height()) {
+        return Ok(());
+    }
+    Err(Error::SizeMismatch {
+        a: image_name.to_string(),
+        aw: image.width() as u32,
+        ah: image.height() as u32,
+        b: range_name.to_string(),
+        bw: range.width() as u32,
+        bh: range.height() as u32,
+    })
+}
+
+/// Builds the pre-processing options from the command line over the library defaults.
+pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
+    let mut opts = PrepOptions::default();
+    if let Some(m) = args.margin {
+        opts.margin_px = m;
+    }
+    if let Some(f) = args.sky_factor {
+        opts.sky_range_factor = f;
+    }
+    if let Some(a) = args.sky_min_area {
+        opts.sky.min_area_fraction = a;
+    }
+    if let Some(k) = args.far_outlier_factor {
+        opts.far_outlier_factor = k;
+    }
+    if let Some(f) = args.local_outliers {
+        opts.local_outlier_factor = f;
+    }
+    if let Some(s) = args.seed {
+        opts.seed = u64::try_from(s)
+            .map_err(|_| Error::invalid("seed", s, "a whole number from 0 to 2^64 - 1"))?;
+    }
+    opts.detect_sky = !args.no_sky;
+    opts.validate()?;
+    Ok(opts)
+}
+
+/// Checks a mask read for `flag` (`path`, a `what`) against the range it goes with: the
+/// range's size, and not every pixel set (`all_set` says what that means); logs its count.
+fn check_mask(
+    (flag, path, what): (&str, &Path, &str),
+    mask: &Grid<bool>,
+    range: &ScalarMap,
+    range_name: &str,
+    all_set: &str,
+) -> Result<()> {
+    if (mask.width(), mask.height()) != (range.width(), range.height()) {
+        return Err(Error::SizeMismatch {
+            a: path.display().to_string(),
+            aw: mask.width() as u32,
+            ah: mask.height() as u32,
+            b: range_name.to_string(),
+            bw: range.width() as u32,
+            bh: range.height() as u32,
+        });
+    }
+    let set = mask.as_slice().iter().filter(|&&s| s).count();
+    log::info!(
+        "{}: {what}, {set} pixels ({:.1} %)",
+        path.display(),
+        100.0 * set as f64 / mask.len().max(1) as f64
+    );
+    if set == mask.len() {
+        return Err(Error::invalid(flag, path.display(), all_set));
+    }
+    Ok(())
+}
+
+/// The masks of `--sky-mask` and `--ego-mask`.
+pub struct Masks {
+    /// The sky (true = sky).
+    pub sky: Option<Grid<bool>>,
+    /// How the sky mask was read.
+    pub sky_format: Option<SkyMaskFormat>,
+    /// The ego vehicle (true = the car's hood).
+    pub ego: Option<Grid<bool>>,
+}
+
+/// Loads the `--sky-mask` and `--ego-mask` of `args`, if any, which must have the size of
+/// `range` (named `range_name` in messages) and not be set everywhere.
+pub fn load_masks(args: &PrepOptionArgs, range: &ScalarMap, range_name: &str) -> Result<Masks> {
+    let loaded = match &args.sky_mask {
+        Some(path) => {
+            let (m, format) = mask::load_sky_mask(path, args.sky_mask_format)?;
+            check_mask(
+                ("--sky-mask", path, "sky mask"),
+                &m,
+                range,
+                range_name,
+                &format!(
+                    "a mask with ground in it: every pixel is sky as read ({format}); is it \
+                     inverted, or of another --sky-mask-format?"
+                ),
+            )?;
+            Some((m, format))
+        }
+        None => None,
+    };
+    let ego = match &args.ego_mask {
+        Some(path) => {
+            let (m, format) = mask::load_ego_mask(path, None)?;
+            check_mask(
+                ("--ego-mask", path, "ego-vehicle mask"),
+                &m,
+                range,
+                range_name,
+                &format!(
+                    "a mask with the scene in it: every pixel is the ego vehicle as read \
+                     ({format}); is it inverted, or a label image not named *_labelIds.png?"
+                ),
+            )?;
+            Some(m)
+        }
+        None => None,
+    };
+    let (sky, sky_format) = match loaded {
+        Some((m, f)) => (Some(m), Some(f)),
+        None => (None, None),
+    };
+    Ok(Masks {
+        sky,
+        sky_format,
+        ego,
+    })
+}

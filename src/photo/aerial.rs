@@ -1,0 +1,248 @@
+//! Paper 002's aerial perspective on a prepared photo: the spectral attenuation of a
+//! turbidity along each pixel's ray, the horizon's light from the sky found, and
+//! retargeting from the turbidity the photo was taken at (sec. 7.2.3, eq. 25-26), as
+//! `brume render --medium aerial` and `brume view` run it.
+
+use super::{Photo, PreparedPhoto};
+use crate::atmosphere::{horizon_light, AttenuationTable, Sensitivity};
+use crate::blur::Blur;
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::medium::{haze, AerialPerspective, Medium, Pixel};
+use crate::pipeline::FogBlur;
+use crate::raster::{Grid, RgbImage, ScalarMap};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// The smallest source Γ retargeting divides by: below it the photo holds airlight only.
+const MIN_SOURCE_GAMMA: f64 = 1e-3;
+/// Where the horizon's light is taken to be by default (zenith angle, degrees) when the
+/// sky does not say.
+pub const DEFAULT_HORIZON_ZENITH_DEG: f64 = 85.0;
+/// Largest camera pitch, degrees: beyond it the image holds no horizon to speak of.
+pub const MAX_PITCH_DEG: f64 = 85.0;
+
+/// How a photo gets aerial perspective.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AerialOptions {
+    /// The atmosphere's turbidity T, in [1, 20].
+    pub turbidity: f64,
+    /// The turbidity the photo was taken at: its haze is removed first (retargeting).
+    pub from_turbidity: Option<f64>,
+    /// The camera's altitude above sea level, metres.
+    pub altitude_m: f64,
+    /// Metres per unit of the photo's range (1 for a range in metres).
+    pub metres_per_unit: f64,
+    /// The camera whose rays give each pixel's zenith angle (pitch, vertical field of
+    /// view).
+    pub camera: Camera,
+    /// The camera's spectral sensitivity.
+    pub sensitivity: Sensitivity,
+    /// The blur's strength from the scattering optical depth (0: none).
+    pub lambda: f64,
+    /// The zenith angle of the horizon's light, degrees, when it is not found in the sky.
+    pub horizon_zenith_deg: f64,
+    /// The horizon's light (linear RGB); `None` takes the brightest sky of the horizon
+    /// region found by pre-processing, else the prepared photo's airlight.
+    pub horizon_light: Option<[f32; 3]>,
+    /// The diffusion blur's scheme and limits.
+    pub blur: Blur,
+}
+
+impl AerialOptions {
+    /// Turbidity `turbidity` seen by `camera`, the other options their defaults: sea
+    /// level, range in metres, CIE colour matching to linear sRGB, λ 8, the horizon's
+    /// light from the sky.
+    pub fn new(turbidity: f64, camera: Camera) -> AerialOptions {
+        AerialOptions {
+            turbidity,
+            from_turbidity: None,
+            altitude_m: 0.0,
+            metres_per_unit: 1.0,
+            camera,
+            sensitivity: Sensitivity::cie_srgb(),
+            lambda: haze::DEFAULT_LAMBDA,
+            horizon_zenith_deg: DEFAULT_HORIZON_ZENITH_DEG,
+            horizon_light: None,
+            blur: Blur::default(),
+        }
+    }
+}
+
+/// Where an aerial photo's horizon light came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HorizonFrom {
+    /// The brightest sky of the horizon region (paper 002, sec. 4).
+    Horizon,
+    /// [`AerialOptions::horizon_light`].
+    Given,
+    /// The prepared photo's airlight (no sky found).
+    Airlight,
+}
+
+impl HorizonFrom {
+    /// The name reports use.
+    pub fn name(self) -> &'static str {
+        match self {
+            HorizonFrom::Horizon => "horizon",
+            HorizonFrom::Given => "given",
+            HorizonFrom::Airlight => "airlight",
+        }
+    }
+}
+
+/// A photo ready for aerial perspective: what the renderer is given.
+#[derive(Clone, Debug)]
+pub struct AerialPhoto {
+    /// The photo (its haze removed with [`AerialOptions::from_turbidity`]).
+    pub image: RgbImage,
+    /// The range in [`AerialOptions::metres_per_unit`], unknown samples taken as the sky.
+    pub range: ScalarMap,
+    /// The medium.
+    pub medium: AerialPerspective,
+    /// The largest known range.
+    pub max_range: f32,
+    /// Where the horizon's light came from.
+    pub horizon_from: HorizonFrom,
+    /// The diffusion blur, when the medium blurs.
+    pub blur: Blur,
+}
+
+impl AerialPhoto {
+    /// The fog's blur: none when λ is 0 (one pass does all).
+    pub fn fog_blur(&self) -> FogBlur {
+        if self.medium.lambda == 0.0 {
+            FogBlur::None
+        } else {
+            FogBlur::Diffusion(self.blur)
+        }
+    }
+}
+
+/// The aerial medium for `photo` with its `prepared` range (at the image's size; see
+/// [`super::prepare`]), and the retargeted image. Errors: no known range, bad options.
+pub fn aerial(
+    photo: &Photo,
+    prepared: &PreparedPhoto,
+    opts: &AerialOptions,
+) -> Result<AerialPhoto> {
+    let range = &prepared.range;
+    let max_range = range
+        .as_slice()
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold(0f32, f32::max);
+    if max_range <= 0.0 {
+        return Err(Error::NoValidDepth {
+            path: PathBuf::from(&photo.depth_name),
+        });
+    }
+    // Unknown range (only without pre-processing) is taken as the sky is by it.
+    let range = range.map(|&v| {
+        if v.is_finite() && v > 0.0 {
+            v
+        } else {
+            1.5 * max_range
+        }
+    });
+    let found = match (&opts.horizon_light, &prepared.prepared) {
+        (None, Some(p)) => horizon_light(&photo.image, &p.sky, &opts.camera),
+        _ => None,
+    };
+    let (light, zenith, horizon_from) = match (found, opts.horizon_light) {
+        (Some(h), _) => (h.rgb, h.zenith, HorizonFrom::Horizon),
+        (None, Some(rgb)) => (
+            rgb,
+            opts.horizon_zenith_deg.to_radians(),
+            HorizonFrom::Given,
+        ),
+        (None, None) => (
+            prepared.airlight,
+            opts.horizon_zenith_deg.to_radians(),
+            HorizonFrom::Airlight,
+        ),
+    };
+    let medium = aerial_medium(opts, 1.5 * f64::from(max_range), light, zenith)?;
+    let image = match opts.from_turbidity {
+        Some(from) => dehaze(&photo.image, &range, &medium, &opts.sensitivity, from)?,
+        None => photo.image.clone(),
+    };
+    Ok(AerialPhoto {
+        image,
+        range,
+        medium,
+        max_range,
+        horizon_from,
+        blur: opts.blur,
+    })
+}
+
+/// The medium of `opts` over ranges up to `max_range` (in the photo's units), the
+/// horizon's light `light` at zenith angle `zenith` (radians).
+fn aerial_medium(
+    opts: &AerialOptions,
+    max_range: f64,
+    light: [f32; 3],
+    zenith: f64,
+) -> Result<AerialPerspective> {
+    let s_max = (max_range * opts.metres_per_unit).max(1.0);
+    let table = AttenuationTable::new(&opts.sensitivity, opts.turbidity, opts.altitude_m, s_max)?;
+    let medium = AerialPerspective {
+        metres_per_unit: opts.metres_per_unit,
+        lambda: opts.lambda,
+        reference_zenith: zenith,
+        ..AerialPerspective::new(Arc::new(table), opts.camera, light)
+    };
+    medium.validate()?;
+    Ok(medium)
+}
+
+/// Retargeting (eq. 25-26): the haze-free radiance of a photo taken at turbidity `from`,
+/// I⁰ = (I − I∞_s(1 − Γ_s))/Γ_s with the source's Γ and airlight (the `target` medium's
+/// horizon light and geometry), clamped at 0. The target's medium is then applied to it
+/// as to any photo.
+pub fn dehaze(
+    image: &RgbImage,
+    range: &ScalarMap,
+    target: &AerialPerspective,
+    sensitivity: &Sensitivity,
+    from: f64,
+) -> Result<RgbImage> {
+    let table = AttenuationTable::new(
+        sensitivity,
+        from,
+        target.table.altitude_m(),
+        target.table.max_distance_m(),
+    )?;
+    let source = AerialPerspective {
+        table: Arc::new(table),
+        ..target.clone()
+    };
+    let (w, h) = (image.width(), image.height());
+    Ok(Grid::from_fn(w, h, |x, y| {
+        let m = source.sample(Pixel {
+            x,
+            y: h - 1 - y,
+            width: w,
+            height: h,
+            depth: f64::from(*range.get(x, y)),
+            sigma0: 1.0,
+        });
+        let e = image.get(x, y);
+        std::array::from_fn(|c| {
+            let g = m.transmission[c].max(MIN_SOURCE_GAMMA);
+            ((f64::from(e[c]) - m.inscatter[c] * (1.0 - g)) / g).max(0.0) as f32
+        })
+    }))
+}
+
+/// The pitch (degrees) that puts the horizon on row `row` (0 at the top, centres at
+/// integers) of a `height`-row image with vertical field of view `fov_y_deg`: the ray
+/// through the row, fwd + ndc·tan(fov/2)·up, is level when tan(pitch) = −ndc·tan(fov/2).
+pub fn pitch_for_horizon_row(row: f64, height: usize, fov_y_deg: f64) -> f64 {
+    let ndc = 1.0 - 2.0 * (row + 0.5) / height as f64;
+    (-ndc * (fov_y_deg.to_radians() / 2.0).tan())
+        .atan()
+        .to_degrees()
+}
