@@ -156,10 +156,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
                 } else {
                     String::new()
                 },
-                match plan.guided {
-                    Some(o) => format!("refined (r = {} px, ε = {})", o.radius_px, o.epsilon),
-                    None => "not refined".into(),
-                }
+                super::refine::guided_text(&plan)
             );
         }
         if let Some((rgb, from)) = airlight {

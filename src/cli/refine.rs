@@ -97,6 +97,14 @@ impl RefineArgs {
     }
 }
 
+/// Whether and how the guided filter ran, as reports print it.
+pub fn guided_text(plan: &RefinePlan) -> String {
+    match plan.guided {
+        Some(o) => format!("refined (r = {} px, ε = {})", o.radius_px, o.epsilon),
+        None => "not refined".into(),
+    }
+}
+
 /// `--refine`'s value for `mode`, as reports print it.
 pub fn mode_name(mode: RefineMode) -> String {
     use clap::ValueEnum;
@@ -141,10 +149,7 @@ pub fn refine_scene(
     log::info!(
         "range {}{} in {:.1} ms",
         if plan.upsample { "upsampled, " } else { "" },
-        match plan.guided {
-            Some(o) => format!("refined (r = {} px, ε = {})", o.radius_px, o.epsilon),
-            None => "not refined".into(),
-        },
+        guided_text(&plan),
         started.elapsed().as_secs_f64() * 1e3
     );
     Ok(plan)
