@@ -9,7 +9,7 @@
 //! the lock), so the context is only ever current on its own thread.
 
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
-use brume::io::image::{linear_to_srgb, srgb_to_linear};
+use brume::io::image::{linear_to_srgb8, srgb8_to_linear_table};
 use brume::photo::{self, FogOptions, Photo, PrepareOptions};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::refine::RefineMode;
@@ -219,9 +219,7 @@ impl ImageIn {
     fn linear(self) -> RgbImage {
         let data = match self.raw {
             RawImage::Srgb8(raw) => {
-                let lut: Vec<f32> = (0..=255u8)
-                    .map(|v| srgb_to_linear(f32::from(v) / 255.0))
-                    .collect();
+                let lut = srgb8_to_linear_table();
                 raw.chunks_exact(3)
                     .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]])
                     .collect()
@@ -277,12 +275,9 @@ impl ImageOut {
         let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
         match pixels {
             Pixels::Srgb8 => {
-                let to8 = |v: f32| {
-                    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-                    (linear_to_srgb(v) * 255.0).round() as u8
-                };
                 ImageOut::Srgb8(
-                    Array3::from_shape_vec(shape, rgb.map(to8).collect()).expect("shape"),
+                    Array3::from_shape_vec(shape, rgb.map(linear_to_srgb8).collect())
+                        .expect("shape"),
                 )
             }
             Pixels::Linear32 => {

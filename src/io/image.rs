@@ -37,6 +37,20 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     }
 }
 
+/// The linear value of each 8-bit sRGB code value, by the exact curve: 256 lookups
+/// instead of one `powf` per channel when decoding 8-bit pixels.
+pub fn srgb8_to_linear_table() -> [f32; 256] {
+    std::array::from_fn(|v| srgb_to_linear(v as f32 / 255.0))
+}
+
+/// The 8-bit sRGB code value of a linear value, as brume's PNG writer makes it: clamped
+/// to [0, 1] (NaN as 0, black), encoded, rounded.
+pub fn linear_to_srgb8(v: f32) -> u8 {
+    // NaN would otherwise survive the clamp.
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    (linear_to_srgb(v) * 255.0).round() as u8
+}
+
 /// Linear-light value in `[0, 1]` to sRGB encoding, the exact inverse of
 /// [`srgb_to_linear`] (linear segment below 0.0031308).
 pub fn linear_to_srgb(v: f32) -> f32 {
@@ -329,10 +343,7 @@ fn to_linear_rgb(img: &DynamicImage) -> RgbImage {
             | DynamicImage::ImageRgba8(_)
     );
     if is_8bit {
-        // 256 exact curve values instead of one powf per channel.
-        let lut: Vec<f32> = (0..=255u8)
-            .map(|v| srgb_to_linear(f32::from(v) / 255.0))
-            .collect();
+        let lut = srgb8_to_linear_table();
         let data = img
             .to_rgb8()
             .pixels()

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::io::codec::{exr, pfm, png};
-use crate::io::image::linear_to_srgb;
+use crate::io::image::linear_to_srgb8;
 use crate::raster::{RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
@@ -152,12 +152,6 @@ fn extension_of(path: &Path) -> String {
     path.extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default()
-}
-
-fn linear_to_srgb8(v: f32) -> u8 {
-    // NaN would otherwise survive the clamp; treat it as black.
-    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
-    (linear_to_srgb(v) * 255.0).round() as u8
 }
 
 /// The output files of one command, written all or nothing: each `stage_*` call writes a

@@ -154,6 +154,26 @@ impl LowTargets {
     }
 }
 
+/// The inputs of a refinement's first pass, the same for the guided filter's pack pass
+/// and the upsampling's cells pass: the colour and the range on their units, the colour's
+/// size, the cell (full-resolution pixels per low-grid cell) and the colour's encoding.
+fn bind_cell_inputs(
+    gl: &glow::Context,
+    program: &Program,
+    input: &RefineInput,
+    cell: [f32; 2],
+    srgb: i32,
+) {
+    bind_texture(gl, UNIT_MAIN, Some(input.colour));
+    bind_texture(gl, UNIT_DEPTH, Some(input.range));
+    set_int(gl, program, "u_colour", UNIT_MAIN as i32);
+    set_int(gl, program, "u_range", UNIT_DEPTH as i32);
+    let size = [input.width as i32, input.height as i32];
+    set_value(gl, program, "u_colour_size", UniformValue::IVec2(size));
+    set_value(gl, program, "u_cell", UniformValue::Vec2(cell));
+    set_int(gl, program, "u_colour_srgb", srgb);
+}
+
 impl Pipeline {
     /// Refines `input.range` with `input.colour` as guide and returns the refined range,
     /// an R32F texture of the image's size that the caller owns, with the passes' times
@@ -194,15 +214,8 @@ impl Pipeline {
             timer.pass(|| {
                 low.framebuffers[0].bind_for_drawing();
                 pipeline.use_program(pack);
-                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
-                bind_texture(&gl, UNIT_DEPTH, Some(input.range));
-                set_int(&gl, pack, "u_colour", UNIT_MAIN as i32);
-                set_int(&gl, pack, "u_range", UNIT_DEPTH as i32);
-                let size = [input.width as i32, input.height as i32];
-                set_value(&gl, pack, "u_colour_size", UniformValue::IVec2(size));
                 let cell = grid.cell.map(|c| c as f32);
-                set_value(&gl, pack, "u_cell", UniformValue::Vec2(cell));
-                set_int(&gl, pack, "u_colour_srgb", srgb);
+                bind_cell_inputs(&gl, pack, input, cell, srgb);
                 set_int(&gl, pack, "u_range_full", i32::from(grid.range_full));
                 draw_fullscreen(&gl);
             })?;
@@ -318,14 +331,7 @@ impl Pipeline {
                 timer.pass(|| {
                     low.framebuffers[0].bind_for_drawing();
                     pipeline.use_program(cells);
-                    bind_texture(&gl, UNIT_MAIN, Some(input.colour));
-                    bind_texture(&gl, UNIT_DEPTH, Some(input.range));
-                    set_int(&gl, cells, "u_colour", UNIT_MAIN as i32);
-                    set_int(&gl, cells, "u_range", UNIT_DEPTH as i32);
-                    let size = [w as i32, h as i32];
-                    set_value(&gl, cells, "u_colour_size", UniformValue::IVec2(size));
-                    set_value(&gl, cells, "u_cell", UniformValue::Vec2(cell));
-                    set_int(&gl, cells, "u_colour_srgb", srgb);
+                    bind_cell_inputs(&gl, cells, input, cell, srgb);
                     draw_fullscreen(&gl);
                 })?;
                 timer.pass(|| {
