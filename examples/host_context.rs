@@ -199,7 +199,7 @@ fn engine_frame(gl: &Arc<glow::Context>) -> Result<bool, String> {
 
     // Paper 001: distance fog and the 5 x 5 blur of the fog-free frame, one pass.
     let distance = DistanceFog {
-        camera,
+        camera: camera.into(),
         noise: None,
         ..DistanceFog::default()
     };

@@ -12,15 +12,22 @@ uniform float brume_sigma0; // inner scale σ0 of the input (px)
 uniform ivec2 brume_size;   // image size (px)
 
 // A medium with a camera (Medium::camera in Rust) reads a depth buffer: these are set from
-// the camera for each frame (src/camera.rs), and zero otherwise.
-in vec3 brume_ray;                  // eye-to-fragment vector (world), 1 along the view axis
-uniform vec2 brume_depth_constants; // (A, c): eye depth = A / ((d − 1) − c), window depth d
+// the camera for each frame (src/camera.rs), and zero otherwise. Any perspective
+// projection: standard or reversed-Z, finite or infinite far plane, off-centre, either
+// clip depth convention (MatrixCamera in src/camera.rs).
+in vec3 brume_ray;                  // eye-to-fragment vector (world), eye depth 1
+uniform vec4 brume_depth_constants; // (a, k, c, max): eye depth = a / ((d − k) − c) ≤ max
 uniform vec3 brume_eye;             // the camera's position (world)
 
-// Linear eye depth of window depth d: paper 003's A / (d + B) with B = −1 − c, split so
-// that f32 keeps the digits of c near the far plane (Camera::shader_depth_constants).
+// Linear eye depth of window depth d (DepthModel::eye_depth in src/camera.rs: keep the two
+// identical). k + c is the window depth at infinite distance, split so that f32 keeps the
+// digits of c near the far plane (d − k is exact); a pixel at an infinite far plane, or
+// beyond the sky depth, gets the sky depth `max`.
 float brume_eye_depth(float d) {
-    return brume_depth_constants.x / ((d - 1.0) - brume_depth_constants.y);
+    float den = (clamp(d, 0.0, 1.0) - brume_depth_constants.y) - brume_depth_constants.z;
+    float t = brume_depth_constants.x / (den == 0.0 ? 1.0 : den);
+    return (den == 0.0 || !(t > 0.0)) ? brume_depth_constants.w
+                                      : min(t, brume_depth_constants.w);
 }
 
 // The blur scale from a scattering optical depth `ds` accumulated over a normalised

@@ -97,7 +97,17 @@ pub struct Blur {
     pub precision: Precision,
     /// The most diffusion steps a render may take ([`DEFAULT_MAX_STEPS`]).
     pub max_steps: u32,
+    /// Coarse to fine: once the most blurred pixel has reached this scale (px, at least
+    /// [`MIN_COARSE_FROM`]), run the remaining steps at half resolution and blend the
+    /// result back ([`Schedule::coarse_start`], `src/pipeline/coarse.rs`). Matched scheme,
+    /// grey τ and at least two remaining steps only; `None` (the default): every step at
+    /// full resolution, the paper's pipeline.
+    pub coarse_from: Option<f64>,
 }
+
+/// The smallest [`Blur::coarse_from`] (px): below about 2 px the image still has detail
+/// at the half resolution's Nyquist frequency, which the 2x2 average would alias.
+pub const MIN_COARSE_FROM: f64 = 2.0;
 
 impl Default for Blur {
     fn default() -> Self {
@@ -107,6 +117,7 @@ impl Default for Blur {
             rho_max: DEFAULT_RHO_MAX,
             precision: Precision::default(),
             max_steps: DEFAULT_MAX_STEPS,
+            coarse_from: None,
         }
     }
 }
@@ -129,6 +140,30 @@ impl Blur {
             medium.sigma_max(self.sigma0),
             &format!("blur scale of {}", medium.name()),
         )
+    }
+
+    /// The step from which `schedule` runs at half resolution, if
+    /// [`Blur::coarse_from`] asks for it and the stage applies (see the field); an error
+    /// names `coarse_from` when it is not a finite scale ≥ [`MIN_COARSE_FROM`].
+    pub fn coarse_start(&self, schedule: &Schedule, chromatic: bool) -> Result<Option<u32>> {
+        let Some(from) = self.coarse_from else {
+            return Ok(None);
+        };
+        if !(from.is_finite() && from >= MIN_COARSE_FROM) {
+            return Err(Error::invalid(
+                "coarse_from",
+                from,
+                format!(
+                    "a finite scale ≥ {MIN_COARSE_FROM} px (below it the half resolution \
+                     aliases detail), or none"
+                ),
+            ));
+        }
+        Ok(if chromatic {
+            None
+        } else {
+            schedule.coarse_start(from)
+        })
     }
 
     /// The N-step schedule that takes σ0 to `sigma_max`, the largest scale a medium asks

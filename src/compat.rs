@@ -67,6 +67,32 @@ pub fn blend_in_code_values(image: &RgbImage, tau: &ScalarMap, airlight: [f32; 3
     })
 }
 
+/// Foggy Cityscapes' fog of `image` (linear RGB) at `beta` (1/m) from `metres` (range in
+/// metres, known everywhere): the blend in code values ([`blend_in_code_values`]) with
+/// `airlight` (linear RGB, encoded) or, without one, the dark-channel airlight. Returns
+/// the image (linear, alpha 1), the airlight in code values and where it came from
+/// (`given` or `dark-channel`).
+pub fn foggy_cityscapes(
+    image: &RgbImage,
+    metres: &ScalarMap,
+    beta: f64,
+    airlight: Option<[f32; 3]>,
+) -> (crate::raster::RgbaImage, [f32; 3], &'static str) {
+    let tau = metres.map(|&r| {
+        if r.is_finite() {
+            (-beta * f64::from(r)).exp() as f32
+        } else {
+            0.0
+        }
+    });
+    let (airlight, source) = match airlight {
+        Some(l) => (l.map(linear_to_srgb), "given"),
+        None => (dark_channel_airlight(image), "dark-channel"),
+    };
+    let fogged = blend_in_code_values(image, &tau, airlight);
+    (fogged.map(|p| [p[0], p[1], p[2], 1.0]), airlight, source)
+}
+
 /// The optical depth of τ = 1.
 const MIN_OPTICAL_DEPTH: f32 = 1e-6;
 

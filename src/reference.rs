@@ -53,6 +53,7 @@ pub fn fog(
     let weights = match (gauss, medium.camera()) {
         (Some(g), Some(camera)) => {
             let (w, h) = (depth.width(), depth.height());
+            let camera = camera.for_frame(w, h);
             Grid::from_fn(w, h, |x, y| {
                 let d = f64::from(*depth.get(x, y));
                 let p = camera.world_position_by_inverse(x, h - 1 - y, w, h, d);

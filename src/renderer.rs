@@ -103,6 +103,32 @@ impl Renderer {
         })
     }
 
+    /// [`Renderer::render`] of one frame with each of `media` in turn (a dataset's
+    /// extinctions), the image and the range uploaded once; each result goes to `each`
+    /// (with its index in `media`) as soon as it is read back. Stops at the first error.
+    pub fn render_each(
+        &mut self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+        media: &[&dyn Medium],
+        blur: &Blur,
+        mut each: impl FnMut(usize, Rendered) -> Result<()>,
+    ) -> Result<()> {
+        for medium in media {
+            self.check_frame(image, depth, *medium)?;
+            self.check_memory(image.width(), image.height(), *medium, blur)?;
+        }
+        let blur = FogBlur::Diffusion(*blur);
+        let (w, h) = (image.width(), image.height());
+        let (colour, depth_texture) = self.upload_frame(image, depth)?;
+        let input = self.input_of(&colour, &depth_texture, w, h);
+        for (k, medium) in media.iter().enumerate() {
+            let (frame, pixels) = self.pipeline.fog_and_read(&input, *medium, &blur)?;
+            each(k, rendered_from(frame, pixels, w, h))?;
+        }
+        Ok(())
+    }
+
     /// Refines `range` (> 0 everywhere, of the image's size or smaller by one factor) with
     /// `image` (linear RGB) as guide, on the GPU ([`crate::refine`]): the refined range at
     /// the image's size, row 0 at the top as given, and the passes' times.
@@ -194,6 +220,15 @@ impl Renderer {
         render: impl FnOnce(&mut Pipeline, &Input) -> Result<(Frame, Vec<[f32; 4]>)>,
     ) -> Result<Rendered> {
         let (w, h) = (image.width(), image.height());
+        let (colour, depth_texture) = self.upload_frame(image, depth)?;
+        let input = self.input_of(&colour, &depth_texture, w, h);
+        let (frame, pixels) = render(&mut self.pipeline, &input)?;
+        Ok(rendered_from(frame, pixels, w, h))
+    }
+
+    /// The image (RGB32F) and the depth (R32F) as textures, bottom row first.
+    fn upload_frame(&mut self, image: &RgbImage, depth: &ScalarMap) -> Result<(Texture, Texture)> {
+        let (w, h) = (image.width(), image.height());
         let gl = Arc::clone(self.pipeline.gl());
         // The uploads and the read-back set the pixel store and unbind a host's pixel
         // buffers for themselves, and put them back (crate::gpu::state).
@@ -204,21 +239,18 @@ impl Renderer {
         colour.upload_flipped(image.as_slice().as_flattened());
         let depth_texture = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
         depth_texture.upload_flipped(depth.as_slice());
-        let input = Input {
+        Ok((colour, depth_texture))
+    }
+
+    /// The pipeline's input over uploaded textures.
+    fn input_of(&self, colour: &Texture, depth: &Texture, width: usize, height: usize) -> Input {
+        Input {
             colour: colour.raw(),
             colour_encoding: Encoding::Linear,
-            depth: depth_texture.raw(),
-            width: w,
-            height: h,
-        };
-        let (frame, pixels) = render(&mut self.pipeline, &input)?;
-        let mut image = Grid::from_vec(w, h, pixels);
-        image.flip_rows();
-        Ok(Rendered {
-            image,
-            schedule: frame.schedule,
-            times: frame.times,
-        })
+            depth: depth.raw(),
+            width,
+            height,
+        }
     }
 
     /// On a software renderer, refuses a frame whose textures and read-back would not fit
@@ -245,6 +277,17 @@ impl Renderer {
             crate::memory::available(),
             &hint,
         )
+    }
+}
+
+/// A read-back (bottom row first) as a render's result, top row first.
+fn rendered_from(frame: Frame, pixels: Vec<[f32; 4]>, w: usize, h: usize) -> Rendered {
+    let mut image = Grid::from_vec(w, h, pixels);
+    image.flip_rows();
+    Rendered {
+        image,
+        schedule: frame.schedule,
+        times: frame.times,
     }
 }
 

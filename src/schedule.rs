@@ -227,7 +227,68 @@ impl Schedule {
     pub fn offset(&self, rate: f64, k: u32) -> f64 {
         self.offset_law().offset(rate, k)
     }
+
+    /// The step k0 from which the coarse stage runs the steps at half resolution
+    /// ([`crate::Blur::coarse_from`]): the first step at which the most blurred pixel
+    /// (σ = σmax) has reached `from` px, σk = σ0·e^(k·ρ(σmax)). `None` when the stage would
+    /// not pay (fewer than [`MIN_COARSE_STEPS`] steps left after k0) or cannot be exact in
+    /// its variance (only the matched scheme's offsets keep the variance of a step when
+    /// its offsets are halved: its law inverts the bilinear moment, the others' do not).
+    pub fn coarse_start(&self, from: f64) -> Option<u32> {
+        if self.scheme != Scheme::Matched || self.steps < MIN_COARSE_STEPS {
+            return None;
+        }
+        let top = self.rate(self.sigma_max);
+        let start = ((from / self.sigma0).ln() / top).ceil().max(0.0);
+        // Rounding guard: `from` landing exactly on a step must not move it one later.
+        let start = if (start - 1.0) * top >= (from / self.sigma0).ln() - 1e-12 {
+            start - 1.0
+        } else {
+            start
+        };
+        let start = start.max(0.0) as u32;
+        (self.steps.saturating_sub(start) >= MIN_COARSE_STEPS).then_some(start)
+    }
+
+    /// The weight a(ρ) = exp(−π²/8·(σN² − σk0²)) with which the coarse stage's blend puts
+    /// back the detail the half resolution lost, for a pixel of rate `rate` (see
+    /// `glsl/coarse_blend.frag`): the Gaussian transfer of the variance steps k0..N add,
+    /// σk² = σ0²·e^(2kρ), at a quarter of a cycle per pixel, the centre of the band a 2x2
+    /// average removes.
+    pub fn detail_weight(&self, rate: f64, start: u32) -> f64 {
+        let variance = |k: u32| self.sigma0 * self.sigma0 * (2.0 * f64::from(k) * rate).exp();
+        (-DETAIL_DECAY * (variance(self.steps) - variance(start))).exp()
+    }
 }
+
+impl Schedule {
+    /// The factor on the offset law's scale of the coarse stage's steps from `start`: the
+    /// 2x2 average and the bilinear up-sampling add [`COARSE_RESAMPLING_VARIANCE`] px² to
+    /// whatever the stage blurs, so its steps add that much less (the matched law's
+    /// variance per step is proportional to scale²). Exact for the most blurred pixels,
+    /// whose detail the blend drops; a pixel whose detail comes back (a ≈ 1) is blurred by
+    /// the stage about as much as it asked for (σN² − σk0² small), and one in between by up
+    /// to (1 − a)·1 px² more.
+    pub fn coarse_scale(&self, start: u32) -> f64 {
+        let top = self.rate(self.sigma_max);
+        let variance = |k: u32| self.sigma0 * self.sigma0 * (2.0 * f64::from(k) * top).exp();
+        let added = variance(self.steps) - variance(start);
+        (1.0 - COARSE_RESAMPLING_VARIANCE / added).max(0.0).sqrt()
+    }
+}
+
+/// Variance (full-resolution px² per axis) of the coarse stage's resampling: ¼ for the
+/// 2x2 box average, ¾ for bilinear up-sampling at a quarter and three quarters of a
+/// half-resolution texel (f(1 − f) = 3/16 half texel² = ¾ px²).
+pub const COARSE_RESAMPLING_VARIANCE: f64 = 1.0;
+
+/// The fewest steps the coarse stage must take over to pay for its two passes (a 2x2
+/// average and the blend): each half-resolution step costs a quarter of a full one.
+pub const MIN_COARSE_STEPS: u32 = 2;
+
+/// 2π²·(1/4)²: the exponent per px² of variance of a Gaussian's transfer at a quarter of
+/// a cycle per pixel ([`Schedule::detail_weight`]).
+pub const DETAIL_DECAY: f64 = std::f64::consts::PI * std::f64::consts::PI / 8.0;
 
 /// m(h): the second moment of a bilinear fetch at distance `h` ≥ 0 from the pixel centre.
 pub fn bilinear_moment(h: f64) -> f64 {
@@ -348,6 +409,51 @@ mod tests {
             (worst - next_term).abs() < 0.1 * next_term,
             "{worst} vs {next_term}"
         );
+    }
+
+    #[test]
+    fn coarse_start_is_where_sigma_max_reaches_the_scale() {
+        let s = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25).unwrap();
+        // σk = 25^(k/13): 3.44 px at k = 5, 2.10 at 3, 4.42 at 6.
+        assert_eq!(s.coarse_start(3.0), Some(5));
+        assert_eq!(s.coarse_start(2.0), Some(3));
+        assert_eq!(s.coarse_start(4.0), Some(6));
+        // Landing exactly on a step starts there, not one later.
+        assert_eq!(s.coarse_start(25f64.powf(5.0 / 13.0)), Some(5));
+        // Too few steps left, or a scheme whose offsets do not scale exactly: no stage.
+        assert_eq!(s.coarse_start(20.0), None);
+        for scheme in [Scheme::Euler, Scheme::Invariant] {
+            let other = Schedule::new(scheme, 1.0, 25.0, 0.25).unwrap();
+            assert_eq!(other.coarse_start(3.0), None, "{scheme}");
+        }
+    }
+
+    #[test]
+    fn coarse_scale_takes_the_resampling_variance_off() {
+        let s = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25).unwrap();
+        let start = s.coarse_start(3.0).unwrap();
+        let top = s.rate(25.0);
+        let shrink = s.coarse_scale(start);
+        // The half-resolution steps add shrink² of each step's variance (scale² law):
+        let added: f64 = (start..s.steps)
+            .map(|k| 2.0 * top * bilinear_moment(s.offset(top, k)))
+            .sum();
+        let want = added - COARSE_RESAMPLING_VARIANCE;
+        assert!((shrink * shrink * added - want).abs() < 1e-9 * want);
+    }
+
+    #[test]
+    fn detail_weight_keeps_unblurred_detail_and_drops_blurred() {
+        let s = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25).unwrap();
+        assert_eq!(s.detail_weight(0.0, 5), 1.0);
+        assert!(s.detail_weight(s.rate(25.0), 5) < 1e-100);
+        // Monotone in the rate.
+        let a = s.detail_weight(0.02, 5);
+        let b = s.detail_weight(0.05, 5);
+        assert!(1.0 > a && a > b && b > 0.0, "{a} {b}");
+        // The Gaussian transfer at ¼ cycle per px of the added variance.
+        let added = (26.0f64 * 0.02).exp() - (10.0f64 * 0.02).exp();
+        assert!((a - (-DETAIL_DECAY * added).exp()).abs() < 1e-15);
     }
 
     #[test]

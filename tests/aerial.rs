@@ -7,7 +7,7 @@
 //! ln(1 + s/s0)/Λ and ζ's e^(B/cos θ) in f32: a few ulps of u (1e-7 of 1024 texels, a
 //! 1e-4 texel shift on a slope below 0.05 per texel) and of ζ — 2e-6 in all, plus the
 //! pipeline's own 4e-7 per pass (tests/gpu_vs_cpu.rs).
-mod common;
+use crate::common;
 
 use brume::atmosphere::{AttenuationTable, Channel, Sensitivity};
 use brume::camera::Camera;
@@ -90,4 +90,41 @@ fn distant_ground_turns_blue_in_clear_air_and_grey_in_haze() {
         haze < clear && haze > 1.0,
         "T 8 is greyer: {haze} vs {clear}"
     );
+}
+
+/// The horizon's light by azimuth sector (paper 002 sec. 4) on the GPU against the CPU
+/// reference: the shader's atan/mod placement and bilinear lookup of the gains, for a
+/// camera turned so that the sectors straddle the ±180° seam.
+#[test]
+fn horizon_sectors_match_the_reference() {
+    use brume::medium::aerial::HorizonSectors;
+    let (w, h) = (48, 32);
+    let image = noise_image(w, h, 5);
+    let range = ground_range_km(w, h);
+    let (_lock, mut r) = renderer();
+    for yaw in [0.0f64, 178.0] {
+        let mut medium = aerial(4.0, 0.0);
+        medium.camera.yaw_deg = yaw;
+        let gains = vec![
+            [0.6, 0.7, 0.8],
+            [1.0, 1.0, 1.0],
+            [1.6, 1.4, 1.2],
+            [0.9, 1.1, 1.3],
+        ];
+        let centre = yaw.to_radians();
+        medium.horizon_sectors = HorizonSectors::new(gains, centre, 0.25).unwrap();
+        let blur = Blur::default();
+        let gpu = r.render(&image, &range, &medium, &blur).unwrap();
+        let cpu = reference::render(&image, &range, &medium, &blur).unwrap();
+        let e = reference::rgb_error(&gpu.image, &cpu, 0);
+        // The gains' slope is at most 0.6 per sector: an f32 azimuth (1e-6 rad on 0.25)
+        // moves them by 3e-6 of I∞.
+        let tol = 2.0 * FOG_PASS + F32_PER_PASS * f64::from(gpu.schedule.steps + 2) + 5e-6;
+        eprintln!("yaw {yaw}: max {:.2e} (tolerance {tol:.1e})", e.max_abs);
+        assert!(e.max_abs <= tol, "yaw {yaw}: {e:?}");
+        // And the sectors do show: the left and right edges differ.
+        let row = h / 2;
+        let (l, rt) = (cpu.get(0, row), cpu.get(w - 1, row));
+        assert!((l[0] - rt[0]).abs() > 0.05, "{l:?} {rt:?}");
+    }
 }

@@ -3,7 +3,7 @@
 //! that resume, shards that split the work with no overlap, and a bad frame that is
 //! reported and skipped while the others are written.
 
-mod common;
+use crate::common;
 
 use common::{brume, stderr};
 
@@ -540,4 +540,77 @@ fn cityscapes_disparity_is_repaired_by_default() {
     };
     assert_eq!(mode(&[]), "repair");
     assert_eq!(mode(&["--refine", "none"]), "none");
+}
+
+/// The library's per-frame loop (what `brume batch` runs: one upload, every β) gives, per
+/// β, the image of a render of its own (`photo::fog`), and Foggy Cityscapes' conventions
+/// give the blend in code values computed here by hand.
+#[test]
+fn the_library_frame_loop_fogs_each_beta_as_a_render_of_its_own() {
+    use brume::photo::{self, Conventions, Frame, FrameOptions};
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 1);
+    let item = brume::dataset::find_cityscapes(&root)
+        .unwrap()
+        .remove(0)
+        .unwrap();
+    let (_lock, mut headless) = common::renderer();
+    let betas = [0.005, 0.02];
+    let mut opts = FrameOptions::default();
+    let mut frame = Frame::load(&item, &opts).unwrap();
+    frame.refine(&opts, headless.renderer().unwrap()).unwrap();
+    let mut fogged = Vec::new();
+    frame
+        .fog_each(headless.renderer().unwrap(), &opts, &betas, |beta, f| {
+            fogged.push((beta, f));
+            Ok(())
+        })
+        .unwrap();
+    assert_eq!(fogged.len(), 2);
+    for (beta, f) in &fogged {
+        let fog = opts.fog_at(*beta).unwrap();
+        let alone = photo::fog(
+            headless.renderer().unwrap(),
+            &frame.photo,
+            &frame.prepared,
+            &fog,
+        )
+        .unwrap();
+        assert!(f.passes > 0, "β {beta}: no diffusion passes");
+        assert!(
+            f.image.as_slice() == alone.rendered.image.as_slice(),
+            "β {beta}: the frame loop and a render of its own differ"
+        );
+    }
+    assert!(fogged[0].1.image.as_slice() != fogged[1].1.image.as_slice());
+
+    // Foggy Cityscapes: c' = c·τ + A·(1 − τ) in sRGB code values, τ = exp(−βR).
+    opts.conventions = Conventions::FoggyCityscapes;
+    opts.prepare.airlight = Some([0.5, 0.6, 0.7]);
+    let metres = frame.metres().unwrap().clone();
+    let beta = 0.01;
+    frame
+        .fog_each(headless.renderer().unwrap(), &opts, &[beta], |_, f| {
+            assert_eq!(f.passes, 0);
+            let encode = |v: f32| brume::io::image::linear_to_srgb(v.clamp(0.0, 1.0));
+            for (i, (out, src)) in f
+                .image
+                .as_slice()
+                .iter()
+                .zip(frame.photo.image.as_slice())
+                .enumerate()
+                .step_by(997)
+            {
+                let tau = (-beta * f64::from(metres.as_slice()[i])).exp() as f32;
+                for c in 0..3 {
+                    let want = encode(src[c]) * tau + encode([0.5, 0.6, 0.7][c]) * (1.0 - tau);
+                    assert!(
+                        (encode(out[c]) - want).abs() < 1e-4,
+                        "pixel {i} channel {c}"
+                    );
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
 }

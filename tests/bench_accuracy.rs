@@ -1,6 +1,6 @@
 //! `brume bench accuracy` on a small image: the figures the paper's fig. 6 rests on, and
 //! the report's outputs (JSON, CSV, plots).
-mod common;
+use crate::common;
 
 use brume::bench::accuracy::{AccuracyReport, AccuracyRow};
 use brume::bench::{plot, report, run_accuracy, AccuracyOptions, Configs};
@@ -19,6 +19,7 @@ fn small_report() -> AccuracyReport {
             precisions: vec![Precision::F32],
             ..Configs::default()
         },
+        coarse_from: None,
     };
     let (_lock, mut r) = renderer();
     let calls = std::cell::Cell::new(0u64);

@@ -1,7 +1,7 @@
 //! `brume bench speed` on a tiny image: skipping by `--max-passes`, the report's shape,
 //! and the whole `run` entry point with its files. Timed figures are never asserted
 //! (benchmarks measure speed, tests do not): only that they exist and are positive.
-mod common;
+use crate::common;
 
 use brume::bench::speed::Tau;
 use brume::bench::{run_speed, Configs, SpeedOptions};
@@ -34,6 +34,7 @@ fn max_passes_skips_euler_and_says_so() {
         // Euler at σ = 3 is 16 + 2 passes, the invariant family 5 + 2.
         max_passes: Some(10),
         tau: Tau::Grey,
+        coarse_from: None,
     };
     let (_lock, mut r) = renderer();
     let report = run_speed(r.renderer().unwrap(), &opts, &|_| {}).expect("speed run");
@@ -138,4 +139,35 @@ fn bad_options_fail_before_any_work() {
         assert!(!out.status.success(), "{args:?} succeeded");
         assert!(err.contains(option), "{args:?}: {err}");
     }
+}
+
+/// `--coarse-from` below 2 px (or not finite) is refused before any work, naming the
+/// option; a valid one runs the configuration with the coarse stage.
+#[test]
+fn coarse_from_is_checked_and_runs() {
+    for bad in [1.0, 0.0, -2.0, f64::NAN] {
+        let opts = SpeedOptions {
+            coarse_from: Some(bad),
+            ..SpeedOptions::default()
+        };
+        let err = opts.validate().expect_err("refused").to_string();
+        assert!(err.contains("--coarse-from"), "{bad}: {err}");
+    }
+    let opts = SpeedOptions {
+        configs: Configs {
+            sigmas: vec![12.0],
+            schemes: vec![Scheme::Matched],
+            precisions: vec![Precision::F32],
+            ..Configs::default()
+        },
+        width: 64,
+        height: 48,
+        runs: 1,
+        coarse_from: Some(3.0),
+        ..SpeedOptions::default()
+    };
+    let (_lock, mut r) = renderer();
+    let report = run_speed(r.renderer().unwrap(), &opts, &|_| {}).expect("speed run");
+    assert_eq!(report.rows.len(), 1);
+    assert!(report.rows[0].median_ms.is_some_and(|ms| ms > 0.0));
 }

@@ -5,7 +5,7 @@
 //! reach inputs through symbolic links.
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
 use brume::io::output::{write_rgba, write_scalar};
 use brume::raster::Grid;

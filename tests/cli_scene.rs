@@ -6,7 +6,7 @@
 //! Frames are 64x40 (a few tenths of a second each on llvmpipe). Colour and depth are read
 //! from PFM, whose floats are the renderer's own (no 8-bit rounding).
 
-mod common;
+use crate::common;
 
 use brume::io::codec::exr::read_exr_scalar;
 use brume::io::codec::pfm::{read_pfm, Pfm};
@@ -554,6 +554,17 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     fs::write(dir.path().join("notes.txt"), "not a picture\n").unwrap();
     fs::write(dir.path().join("keep.png"), PRECIOUS).unwrap();
+    // Density tables (`--profile table`), each wrong in one way.
+    let header = "height_m,extinction_per_m\n";
+    for (name, text) in [
+        ("noheader.csv", "0,0.01\n1,0.02\n".to_string()),
+        ("onerow.csv", format!("{header}0,0.01\n")),
+        ("down.csv", format!("{header}0,0.01\n5,0.02\n3,0.01\n")),
+        ("negative.csv", format!("{header}0,0.01\n5,-0.02\n")),
+        ("word.csv", format!("{header}0,0.01\n5,thick\n")),
+    ] {
+        fs::write(dir.path().join(name), text).unwrap();
+    }
     // (arguments after `scene`, exit code, words stderr must contain). `--size 16x10` and
     // `--out o.png` are added unless the case gives its own.
     let cases: &[(&str, i32, &str)] = &[
@@ -616,6 +627,56 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
             "--clear-out s_0002.png",
         ),
         ("--fog layered --density -1", 1, "--density -1"),
+        (
+            "--fog layered --profile table --density-csv noheader.csv",
+            1,
+            "noheader.csv line 1 height_m,extinction_per_m",
+        ),
+        (
+            "--fog layered --profile table --density-csv onerow.csv",
+            1,
+            "onerow.csv 1 data row at least 2",
+        ),
+        (
+            "--fog layered --profile table --density-csv down.csv",
+            1,
+            "down.csv line 4 height_m = 3 increase",
+        ),
+        (
+            "--fog layered --profile table --density-csv negative.csv",
+            1,
+            "negative.csv line 3 -0.02 negative",
+        ),
+        (
+            "--fog layered --profile table --density-csv word.csv",
+            1,
+            "word.csv line 3 `thick`",
+        ),
+        (
+            "--fog layered --profile table --density-csv none.csv",
+            1,
+            "none.csv",
+        ),
+        (
+            "--fog layered --profile table",
+            1,
+            "--profile table --density-csv",
+        ),
+        (
+            "--fog layered --density-csv down.csv",
+            1,
+            "--density-csv down.csv --profile table",
+        ),
+        (
+            "--noise-colour-strength 2",
+            1,
+            "--noise-colour-strength 2 [0, 1]",
+        ),
+        (
+            "--noise-colour-strength -0.5",
+            1,
+            "--noise-colour-strength -0.5",
+        ),
         ("--fog layered --albedo 2", 1, "--albedo 2"),
         ("--fog layered --scale-height 0", 1, "--scale-height 0"),
         (
@@ -692,5 +753,112 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
         failures.len(),
         cases.len(),
         failures.join("\n")
+    );
+}
+
+/// `--profile table --density-csv`: a table sampled every metre from the default
+/// exponential profile renders the exponential's frame (to the sampling's error, Δ²/(8H²)
+/// relative in the optical depth: 3e-4 here), and a table with an inversion layer renders
+/// another frame.
+#[test]
+fn density_table_from_a_csv_renders_the_profile_it_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut csv =
+        String::from("# the default exponential profile, every metre\nheight_m,extinction_per_m\n");
+    for h in 0..=1000 {
+        csv.push_str(&format!("{h},{}\n", 0.01 * f64::exp(-f64::from(h) / 20.0)));
+    }
+    fs::write(dir.path().join("exp.csv"), csv).unwrap();
+    fs::write(
+        dir.path().join("inversion.csv"),
+        "height_m,extinction_per_m\n0,0.001\n20,0.002\n25,0.05\n40,0.05\n60,0.001\n",
+    )
+    .unwrap();
+    let v = scene_json(
+        dir.path(),
+        &[
+            "--fog",
+            "layered",
+            "--profile",
+            "table",
+            "--density-csv",
+            "exp.csv",
+            "--out",
+            "t.pfm",
+        ],
+    );
+    assert_eq!(v["fog"], "layered", "{v}");
+    scene(dir.path(), &["--fog", "layered", "--out", "a.pfm"]);
+    scene(
+        dir.path(),
+        &[
+            "--fog",
+            "layered",
+            "--profile",
+            "table",
+            "--density-csv",
+            "inversion.csv",
+            "--out",
+            "i.pfm",
+        ],
+    );
+    let (t, a, i) = (
+        rgb(&dir.path().join("t.pfm")),
+        rgb(&dir.path().join("a.pfm")),
+        rgb(&dir.path().join("i.pfm")),
+    );
+    let largest = |x: &RgbImage, y: &RgbImage| {
+        x.as_slice()
+            .iter()
+            .zip(y.as_slice())
+            .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    let (same, other) = (largest(&t, &a), largest(&i, &a));
+    assert!(same < 1e-3, "sampled table vs exponential: {same}");
+    assert!(
+        other > 0.02,
+        "the inversion renders the same frame: {other}"
+    );
+}
+
+/// `--noise-colour-strength`: 0 (the default) renders the frame of no option at all, and
+/// a strength changes the colour of the distance fog.
+#[test]
+fn noise_colour_strength_changes_the_fog_colour_only_when_given() {
+    let dir = tempfile::tempdir().unwrap();
+    scene(dir.path(), &["--fog", "distance", "--out", "plain.pfm"]);
+    scene(
+        dir.path(),
+        &[
+            "--fog",
+            "distance",
+            "--noise-colour-strength",
+            "0",
+            "--out",
+            "zero.pfm",
+        ],
+    );
+    scene(
+        dir.path(),
+        &[
+            "--fog",
+            "distance",
+            "--noise-colour-strength",
+            "0.8",
+            "--out",
+            "tint.pfm",
+        ],
+    );
+    let read = |name: &str| fs::read(dir.path().join(name)).unwrap();
+    assert_eq!(
+        read("plain.pfm"),
+        read("zero.pfm"),
+        "strength 0 changed the frame"
+    );
+    assert_ne!(
+        read("plain.pfm"),
+        read("tint.pfm"),
+        "strength 0.8 left the frame alone"
     );
 }

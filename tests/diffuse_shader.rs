@@ -9,7 +9,7 @@
 //! Tolerances follow from the GLSL ES 3.20 precision rules (sec. 4.7.1): `+`, `−`, `*` are
 //! correctly rounded (½ ULP), `/` within 2.5 ULP, `exp(x)` within 3 + 2|x| ULP; an ULP of
 //! an f32 is at most 2⁻²³ of its value.
-mod common;
+use crate::common;
 
 use brume::gpu::framebuffer::Framebuffer;
 use brume::gpu::program::Program;

@@ -36,7 +36,7 @@
 //!   log in [½, 2] has an absolute error of 2⁻²¹) and δ√Ds ≤ min(√δDs, δDs/√Ds); a
 //!   Gaussian blur of values in [0, 1] changes by at most (4/e)·δσ/σ (∫|∂G/∂σ| over the
 //!   plane), which bounds what the scheme, an approximation of it, does too.
-mod common;
+use crate::common;
 
 use brume::camera::Camera;
 use brume::medium::{DistanceFog, FogNoise, Medium};
@@ -145,7 +145,7 @@ fn camera_at(position: [f64; 3]) -> Camera {
 
 fn fog(camera: Camera, noise: Option<FogNoise>, lambda: f64) -> DistanceFog {
     DistanceFog {
-        camera,
+        camera: camera.into(),
         // Toward the light: in view, right of centre and above the horizon.
         light_direction: [0.35, 0.12, -1.0],
         noise,
@@ -195,7 +195,7 @@ fn pixel_bound(
     e: [f32; 3],
     sigma0: f64,
 ) -> PixelBound {
-    let camera = &fog.camera;
+    let camera = fog.camera.look().expect("brume's camera");
     let gl_row = H - 1 - y;
     // The shader's A / ((d − 1) − c) with its f32 constants: d − 1 is exact for d ≥ ½ and
     // rounds by 2⁻²⁴·|d − 1| below; both terms have the same sign.
@@ -213,7 +213,8 @@ fn pixel_bound(
     } else {
         0.0
     };
-    let (k, dk) = match &fog.noise {
+    // The density factor k and the colour factor (tint, 1 + s·(2N − 1)), and their errors.
+    let (k, dk, tint, dtint) = match &fog.noise {
         Some(n) => {
             let texels = n.lookup.width().max(n.lookup.height()) as f64;
             let shift = texels * (dl / n.size + 4.0 * EPS * (1.0 + l / n.size));
@@ -221,9 +222,11 @@ fn pixel_bound(
             (
                 n.factor(world, fog.time),
                 (n.high - n.low).abs() * dn + 4.0 * EPS,
+                n.colour_factor(world, fog.time),
+                2.0 * n.colour_strength * dn + 4.0 * EPS,
             )
         }
-        None => (1.0, 0.0),
+        None => (1.0, 0.0, 1.0, 0.0),
     };
     // F = min(g·k, M): where the reference's g·k clears the cap by more than the error
     // of g·k, both sides are capped and agree exactly.
@@ -238,10 +241,12 @@ fn pixel_bound(
     let dcos = 2.0 / (1u64 << 20) as f64;
     let dpow = fog.scatter_exponent * dcos + 1.0 / (1u64 << 18) as f64;
     let dscatter = dpow + (fog.scatter_start / l) * (dl / l) + 2.0 * EPS;
-    let inscatter = fog
-        .scatter_colour
-        .iter()
-        .map(|&c| f64::from(c) * dscatter + 2.0 * EPS)
+    // L = (C + Cs·scatter)·tint, scatter ≤ 1: δL ≤ Cs·δscatter·(tint + δtint) + (C + Cs)·δtint.
+    let inscatter = (0..3)
+        .map(|c| {
+            let (base, glow) = (f64::from(fog.colour[c]), f64::from(fog.scatter_colour[c]));
+            glow * dscatter * (tint + dtint) + (base + glow) * dtint + 4.0 * EPS
+        })
         .fold(0.0, f64::max);
     let out = (0..3)
         .map(|c| (f64::from(e[c]) - point.colour[c]).abs() * density + (f + density) * inscatter)
@@ -270,7 +275,7 @@ fn pixel_bound(
 /// Renders `fog` over the scene on the GPU and on the CPU, and checks every pixel against
 /// its bound. Returns the GPU image and the largest error.
 fn check(r: &mut Headless, fog: &DistanceFog, what: &str) -> (brume::raster::RgbaImage, f64) {
-    let (image, depth) = scene(&fog.camera);
+    let (image, depth) = scene(fog.camera.look().expect("brume's camera"));
     let blur = Blur::default();
     let gpu = r.render(&image, &depth, fog, &blur).expect("GPU render");
     let cpu = reference::render(&image, &depth, fog, &blur).expect("CPU render");
@@ -494,4 +499,113 @@ fn time_moves_the_noise_on_the_gpu() {
     let p2 = r.render(&image, &depth, &plain, &blur).unwrap().image;
     assert_eq!(p.as_slice(), p2.as_slice());
     assert!(plain.validate().is_ok());
+}
+
+/// The noise of `n` at world (x, z) and `time`, by GL's bilinear filter written out here
+/// (texel centres at (i + ½)/size, wrapping): independent of `Lookup::sample`.
+fn noise_by_hand(n: &FogNoise, world: DVec3, time: f64) -> f64 {
+    let (w, h) = (n.lookup.width() as i64, n.lookup.height() as i64);
+    let u = (world.x + n.speed[0] * time) / n.size * w as f64 - 0.5;
+    let v = (world.z + n.speed[2] * time) / n.size * h as f64 - 0.5;
+    let (i, j) = (u.floor() as i64, v.floor() as i64);
+    let (fu, fv) = (u - u.floor(), v - v.floor());
+    let t = |a: i64, b: i64| n.lookup.values()[(b.rem_euclid(h) * w + a.rem_euclid(w)) as usize];
+    let row = |b: i64| f64::from(t(i, b)) * (1.0 - fu) + f64::from(t(i + 1, b)) * fu;
+    row(j) * (1.0 - fv) + row(j + 1) * fv
+}
+
+/// Paper 001 sec. 3.3: the noise varies the colour too. On the CPU, the in-scattered
+/// colour is (C + Cs·scatter)·(1 + s·(2N − 1)) with N and the scattering computed here
+/// by hand; with s = 0 it is eq. 8's colour exactly; and the GPU matches the reference
+/// within the per-pixel bounds, which include the colour's share of the noise's error.
+#[test]
+fn noise_varies_the_fog_colour_as_the_formula_says() {
+    let camera = camera_at([0.0, 1.7, 0.0]);
+    let strength = 0.6;
+    let tinted = fog(
+        camera,
+        Some(FogNoise {
+            colour_strength: strength,
+            ..noise()
+        }),
+        0.0,
+    );
+    let plain = fog(camera, Some(noise()), 0.0);
+    assert_eq!(
+        plain.noise.as_ref().unwrap().colour_strength,
+        0.0,
+        "default"
+    );
+    let light = DVec3::from_array(tinted.light_direction).normalize();
+    let (mut darkest, mut brightest) = (f64::MAX, f64::MIN);
+    for i in 0..400 {
+        let p = DVec3::new(
+            -200.0 + 1.37 * i as f64,
+            0.4 * (i % 7) as f64,
+            -30.0 - 2.3 * i as f64,
+        );
+        let to = p - camera.eye();
+        let l = to.length();
+        let towards = (to / l).dot(light).clamp(0.0, 1.0);
+        let scatter = towards.powf(tinted.scatter_exponent)
+            * ((l - tinted.scatter_start) / l).clamp(0.0, 1.0);
+        let n = noise_by_hand(tinted.noise.as_ref().unwrap(), p, tinted.time);
+        let tint = 1.0 + strength * (2.0 * n - 1.0);
+        let (a, b) = (tinted.at(p), plain.at(p));
+        for c in 0..3 {
+            let eq8 = f64::from(tinted.colour[c]) + f64::from(tinted.scatter_colour[c]) * scatter;
+            assert!(
+                (b.colour[c] - eq8).abs() <= 1e-12,
+                "s = 0 at {p}: {} vs {eq8}",
+                b.colour[c]
+            );
+            assert!(
+                (a.colour[c] - eq8 * tint).abs() <= 1e-6 * eq8,
+                "s = {strength} at {p}: {} vs {}",
+                a.colour[c],
+                eq8 * tint
+            );
+        }
+        // The density does not depend on the colour's strength.
+        assert_eq!(a.density, b.density);
+        darkest = darkest.min(tint);
+        brightest = brightest.max(tint);
+    }
+    // The noise spans enough of [0, 1] that the colour visibly varies both ways.
+    assert!(
+        darkest < 0.85 && brightest > 1.15,
+        "tint {darkest}..{brightest}"
+    );
+    let (_lock, mut r) = common::renderer();
+    let (image, _) = check(&mut r, &tinted, "noise on the colour, s = 0.6");
+    let (same, _) = check(&mut r, &plain, "noise on the colour, s = 0");
+    assert_ne!(
+        image.as_slice(),
+        same.as_slice(),
+        "the strength changes the frame"
+    );
+    let blurred = DistanceFog {
+        lambda: 6.0,
+        ..tinted.clone()
+    };
+    check(&mut r, &blurred, "noise on the colour, s = 0.6, λ = 6");
+}
+
+#[test]
+fn bad_noise_colour_strength_is_refused_by_name() {
+    for s in [-0.1, 1.5, f64::NAN] {
+        let fog = fog(
+            camera_at([0.0, 1.7, 0.0]),
+            Some(FogNoise {
+                colour_strength: s,
+                ..noise()
+            }),
+            0.0,
+        );
+        let e = fog.validate().unwrap_err().to_string();
+        assert!(
+            e.contains("noise colour strength") && e.contains("[0, 1]"),
+            "{s}: {e}"
+        );
+    }
 }

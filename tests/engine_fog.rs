@@ -9,13 +9,14 @@
 //! d near the far plane (6e-8, where d + B is a few 1e-3) is a relative 2e-5 of distance,
 //! which the CPU sees too but evaluates in f64; τ = e^(−k·l) then moves by at most
 //! k·l·2e-5 ≤ 1e-5 here (k·l ≤ 0.5), and the rest is a few f32 ulps.
-mod common;
+use crate::common;
 
-use brume::camera::Camera;
+use brume::camera::{Camera, FrameCamera};
 use brume::medium::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::{reference, Blur, FogBlur, GaussBlur, Precision, Scheme};
 use common::*;
+use std::borrow::Cow;
 
 const ONE_PASS_TOLERANCE: f64 = 2e-5;
 
@@ -28,12 +29,13 @@ struct CameraFog {
 }
 
 impl Medium for CameraFog {
-    fn name(&self) -> &'static str {
-        "test_camera_fog"
+    fn name(&self) -> Cow<'static, str> {
+        "test_camera_fog".into()
     }
 
-    fn glsl(&self) -> &'static str {
-        r"
+    fn glsl(&self) -> Cow<'static, str> {
+        Cow::Borrowed(
+            r"
         uniform float u_k;
         uniform vec3 u_fog_colour;
         uniform float u_lambda;
@@ -46,16 +48,17 @@ impl Medium for CameraFog {
             m.sigma = brume_blur_scale(u_lambda, l / u_unit, u_k * l);
             return m;
         }
-        "
+        ",
+        )
     }
 
-    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
-        vec![
+    fn uniforms(&self) -> Vec<(Cow<'static, str>, UniformValue)> {
+        brume::medium::static_names(vec![
             ("u_k", UniformValue::Float(self.k as f32)),
             ("u_fog_colour", UniformValue::Vec3(self.colour)),
             ("u_lambda", UniformValue::Float(self.lambda as f32)),
             ("u_unit", UniformValue::Float(self.camera.far as f32)),
-        ]
+        ])
     }
 
     fn chromatic(&self) -> bool {
@@ -84,8 +87,8 @@ impl Medium for CameraFog {
         self.camera.validate()
     }
 
-    fn camera(&self) -> Option<Camera> {
-        Some(self.camera)
+    fn camera(&self) -> Option<FrameCamera> {
+        Some(self.camera.into())
     }
 }
 

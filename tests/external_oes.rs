@@ -9,7 +9,7 @@
 //! its display, which `eglCreateImage` needs). A missing extension fails the test, never
 //! skips it (brume's rule: a missing capability is a failure); Mesa's llvmpipe through EGL
 //! surfaceless has every one of them.
-mod common;
+use crate::common;
 
 use brume::pipeline::{ExternalColour, IDENTITY, TEXTURE_BINDING_EXTERNAL_OES};
 use brume::{Blur, Encoding, Error, Haze, Input, Output, Pipeline};

@@ -1,5 +1,5 @@
 //! Bad inputs to the pipeline give typed errors that name the problem, never a panic.
-mod common;
+use crate::common;
 
 use brume::raster::Grid;
 use brume::{Blur, Error, Haze, UniformBlur};

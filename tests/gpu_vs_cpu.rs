@@ -8,7 +8,7 @@
 //! - f16: one half-float ulp at 1.0 (2^-11 ≈ 4.9e-4) per pass: every pass rounds its
 //!   output to 11 significant bits, and the rate texture is R16F too. Measured: 2e-3
 //!   after 8 steps, 3e-2 after 96 Euler steps (the paper's f16 Euler drift).
-mod common;
+use crate::common;
 
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::reference;

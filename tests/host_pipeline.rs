@@ -1,7 +1,7 @@
 //! The pipeline as a host drives it: the host's own textures in, the host's framebuffer
 //! or texture out, the GL state it leaves, the host state it must not trip over, and
 //! several headless contexts on one thread.
-mod common;
+use crate::common;
 
 use brume::egl::GlContext;
 use brume::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
@@ -545,7 +545,7 @@ fn gl_state_contract() {
     let host = Host::new(w, h);
     let gl = &host.gl;
     let fog = DistanceFog::default();
-    let fog_depth_map = synthetic_depth_buffer(&fog.camera, w, h);
+    let fog_depth_map = synthetic_depth_buffer(&brume::camera::Camera::default(), w, h);
     // SAFETY: host objects and state on the current context.
     let (target, fbo, fog_depth, hostile) = unsafe {
         let target = texture(gl, w, h, glow::RGBA32F, Upload::None);
@@ -702,7 +702,7 @@ fn engine_passes_without_blur_allocate_nothing_and_blend_in_srgb() {
         noise: None,
         ..DistanceFog::default()
     };
-    let depth_map = synthetic_depth_buffer(&fog.camera, w, h);
+    let depth_map = synthetic_depth_buffer(&brume::camera::Camera::default(), w, h);
     let bytes: Vec<u8> = host
         .image
         .as_slice()

@@ -13,7 +13,7 @@ use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
 use brume::Error;
 
-mod common;
+use crate::common;
 
 /// Expects an error without printing a (large) map if there is none.
 fn expect_err<T>(r: brume::Result<T>) -> Error {

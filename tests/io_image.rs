@@ -8,7 +8,7 @@ use brume::io::image::{decode_linear_rgb, linear_to_srgb, load_linear_rgb, srgb_
 use brume::raster::RgbImage;
 use brume::Error;
 
-mod common;
+use crate::common;
 use common::{exr_bytes, f16s, f32s};
 
 #[test]

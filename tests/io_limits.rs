@@ -9,7 +9,7 @@ use brume::io::image::load_linear_rgb;
 use brume::io::limits::{MAX_PIXELS, MAX_SIDE};
 use brume::Error;
 
-mod common;
+use crate::common;
 
 fn write(dir: &Path, name: &str, bytes: &[u8]) -> PathBuf {
     let p = dir.join(name);

@@ -1,7 +1,7 @@
 //! Bounded work and clear limits: values that would cost hours or terabytes are refused up
 //! front, naming the option, the limit and why; memory that runs out is said plainly; a
 //! calib.txt at fault is named as the culprit.
-mod common;
+use crate::common;
 
 use brume::raster::Grid;
 use brume::{gpu, Blur, Haze, Precision, Scheme, UniformBlur};

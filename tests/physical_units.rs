@@ -10,7 +10,7 @@ use serde_json::Value;
 use std::path::Path;
 use std::process::Output;
 
-mod common;
+use crate::common;
 
 use common::{brume, stderr};
 

@@ -1,6 +1,6 @@
 //! The real Middlebury Aloe disparity: indoor, no sky, every hole filled.
 
-mod common;
+use crate::common;
 
 use brume::prep::{prepare, PrepOptions};
 use common::*;

@@ -1,6 +1,6 @@
 //! Hole filling, indoor data (no sky) and bad inputs.
 
-mod common;
+use crate::common;
 
 use brume::prep::{prepare, ImageSkyRules, PrepOptions, SkyRules};
 use brume::raster::{Grid, ScalarMap};

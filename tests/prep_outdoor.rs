@@ -1,6 +1,6 @@
 //! Outdoor synthetic scene: sky, holes, horizon margin, airlight, reproducibility.
 
-mod common;
+use crate::common;
 
 use brume::prep::edt::squared_edt;
 use brume::prep::{

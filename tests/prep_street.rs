@@ -3,7 +3,7 @@
 //! noise in the sky; bogus far values in the scene. The range alone finds no sky there;
 //! the image and the range together must, and `--sky-mask` must override both.
 
-mod common;
+use crate::common;
 
 use common::brume;
 

@@ -4,7 +4,7 @@
 //! bilinear upsampling, on the real Middlebury Aloe (leaves, stems, a pot: edges at every
 //! scale).
 
-mod common;
+use crate::common;
 
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::refine::{

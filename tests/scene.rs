@@ -2,7 +2,7 @@
 //! camera's standard window depth of the geometry (checked against a CPU ray cast of the
 //! same scene), the sky keeps depth 1.0 exactly, the colour is a real, deterministic
 //! picture, and nothing leaks.
-mod common;
+use crate::common;
 
 use brume::camera::Camera;
 use brume::egl::GlContext;

@@ -4,7 +4,7 @@
 //! that are rejected (a disjoint event, as phones' drivers flag) are reported unavailable
 //! without running the passes again — `blend_fog` blends once onto the host's frame.
 //! No test here asserts a duration.
-mod common;
+use crate::common;
 
 use brume::camera::Camera;
 use brume::egl::GlContext;

@@ -4,7 +4,7 @@
 //! cleanly and create no GL object after its first frame. A missing Xvfb is a failure, as
 //! a missing EGL is: these tests prove the window path.
 
-mod common;
+use crate::common;
 
 use common::brume;
 

@@ -8,9 +8,24 @@ uniform float u_metres;      // metres per unit of the range texture
 uniform vec3 u_horizon;      // I∞(θ'), linear RGB
 uniform vec3 u_gradation;    // (A, B, 1/(1 + A·e^(B/cos θ'))) of eq. 13
 uniform vec2 u_aerial_blur;  // (λ, 1 / the distance (m) that counts as 1 in the blur law)
+uniform sampler2D u_horizon_gain; // I∞'s gain by azimuth sector: rows r, g, b (R32F)
+uniform vec3 u_horizon_sectors;   // (centre azimuth (rad), 1 / sector width, sectors)
 
 const float AERIAL_MIN_COS = 0.0017453283; // cos(89.9°): eq. 13 diverges at the horizon
 const float AERIAL_MAX_DEPTH = 10.0;       // τ = e^(−10): nothing left to blur
+const float AERIAL_PI = 3.14159265358979;
+
+// The horizon light's gain toward `ray`: its azimuth (0 along −z, π/2 along +x) placed
+// among the sectors, sector k's centre on texel k, linear between (HorizonSectors::gain).
+vec3 aerial_horizon_gain(vec3 ray) {
+    float d = atan(ray.x, -ray.z) - u_horizon_sectors.x;
+    d = mod(d + AERIAL_PI, 2.0 * AERIAL_PI) - AERIAL_PI;
+    float n = u_horizon_sectors.z;
+    float u = (d * u_horizon_sectors.y + 0.5 * n) / n;
+    return vec3(textureLod(u_horizon_gain, vec2(u, 0.5 / 3.0), 0.0).r,
+                textureLod(u_horizon_gain, vec2(u, 1.5 / 3.0), 0.0).r,
+                textureLod(u_horizon_gain, vec2(u, 2.5 / 3.0), 0.0).r);
+}
 
 MediumSample medium_sample(ivec2 pixel, float depth) {
     float s = max(depth, 0.0) * u_metres;
@@ -26,7 +41,7 @@ MediumSample medium_sample(ivec2 pixel, float depth) {
     float ds = min(-log(max(mean, 1e-30)), AERIAL_MAX_DEPTH);
     MediumSample m;
     m.transmission = gamma;
-    m.inscatter = u_horizon * zeta;
+    m.inscatter = u_horizon * zeta * aerial_horizon_gain(brume_ray);
     m.sigma = brume_blur_scale(u_aerial_blur.x, s * u_aerial_blur.y, ds);
     return m;
 }

@@ -2,7 +2,7 @@
 // identical): τ = e^(−F), F = l·δ̄ with l the Euclidean distance to the fragment and δ̄ the
 // mean of the height profile δ(y) over the heights the segment spans (eq. 6-8), the fog
 // colour in-scattered (eq. 9), and the blur from the scattering optical depth.
-uniform float u_profile;    // 0 exponential, 1 sine band, 2 linear ramp (medium uniforms have no int)
+uniform float u_profile;    // 0 exponential, 1 sine band, 2 linear ramp, 3 table (medium uniforms have no int)
 uniform vec3 u_layer;       // (density, base, scale height) | (density, base, thickness)
                             // | (density, floor, top)
 uniform vec3 u_fog_colour;  // C_fog, linear RGB
@@ -88,6 +88,11 @@ float layered_ramp(float y0, float dy) {
 
 float layered_mean_density(float y0, float dy) {
     int profile = int(u_profile);
+#ifdef LAYERED_TABLE
+    if (profile == 3) {
+        return layered_table_mean(y0, dy); // glsl/medium/layered_table.glsl
+    }
+#endif
     if (profile == 0) {
         return layered_exponential(y0, dy);
     }

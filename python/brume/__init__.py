@@ -7,11 +7,12 @@
     >>> r = brume.Renderer()                                  # one EGL context, many frames
     >>> t = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=0)
     >>> out = t(image=image, depth=range_m)                   # {"image", "depth", "beta"}
+    >>> noisy = brume.fog(image, range_m, beta=0.02, read_noise=0.01, jpeg_quality=80, seed=1)
 
 The native part is ``brume._brume`` (Rust, PyO3); see the repository's README, "Python".
 """
 
-from ._brume import Renderer, __version__, fog, load_depth
+from ._brume import Renderer, __version__, beta_quantile, fog, load_depth
 from . import augment
 
-__all__ = ["Renderer", "fog", "load_depth", "augment", "__version__"]
+__all__ = ["Renderer", "fog", "load_depth", "beta_quantile", "augment", "__version__"]

@@ -15,13 +15,19 @@ from typing import Any, Optional, Sequence, Tuple
 
 import numpy as np
 
-from ._brume import Renderer, fog as _fog
+from ._brume import Renderer, beta_quantile, fog as _fog
 
 
 class RandomFog:
-    """Fog of a random density: β uniform in ``beta_range`` (1/m), drawn from a seeded
+    """Fog of a random density: β uniform in ``beta_range`` (1/m), or drawn from
+    ``beta_dist`` (``"uniform:LOW,HIGH"``, ``"lognormal:MU,SIGMA"`` with ln β normal, or
+    ``"0.02"``, as ``brume batch --beta-dist``), from a seeded
     :class:`numpy.random.Generator`; applied with probability ``p`` (else the image is
     returned as given and ``beta`` is ``None``).
+
+    The camera after the fog, as :func:`brume.fog`'s keywords of the same names (all off
+    by default): ``exposure_stops``, ``shot_noise_gain``, ``read_noise`` (the noise's seed
+    drawn from the generator on each call) and ``jpeg_quality``.
 
     The other keywords go to :func:`brume.fog` as they are: ``airlight`` (None: estimated
     from the sky), ``blur``, ``refine``. ``renderer`` (a :class:`brume.Renderer`) lets
@@ -41,7 +47,14 @@ class RandomFog:
         blur: bool = True,
         refine: Any = True,
         renderer: Optional[Renderer] = None,
+        beta_dist: Optional[str] = None,
+        exposure_stops: float = 0.0,
+        shot_noise_gain: Optional[float] = None,
+        read_noise: Optional[float] = None,
+        jpeg_quality: Optional[int] = None,
     ) -> None:
+        if beta_dist is not None:
+            beta_quantile(beta_dist, 0.5)  # a ValueError that says what is expected
         lo, hi = (float(b) for b in beta_range)
         if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 < lo <= hi):
             raise ValueError(
@@ -55,6 +68,13 @@ class RandomFog:
         self.blur = blur
         self.refine = refine
         self.renderer = renderer
+        self.beta_dist = beta_dist
+        self.capture = dict(
+            exposure_stops=float(exposure_stops),
+            shot_noise_gain=shot_noise_gain,
+            read_noise=read_noise,
+            jpeg_quality=jpeg_quality,
+        )
         self.rng = np.random.default_rng(seed)
 
     def __call__(self, *, image: np.ndarray, depth: np.ndarray, **targets: Any) -> dict:
@@ -63,7 +83,10 @@ class RandomFog:
         # One draw for p and one for beta on every call, so that a seed gives the same
         # sequence of betas whatever p lets through.
         apply = self.rng.random() < self.p
-        beta = float(self.rng.uniform(*self.beta_range))
+        beta = self._draw_beta()
+        noisy = self.capture["shot_noise_gain"] is not None or self.capture["read_noise"] is not None
+        # Drawn only with noise, so that a seed without it gives the betas it always gave.
+        noise_seed = int(self.rng.integers(0, 2**63)) if noisy else 0
         if not apply:
             out.update(image=image, beta=None)
             return out
@@ -75,12 +98,23 @@ class RandomFog:
             airlight=self.airlight,
             blur=self.blur,
             refine=self.refine,
+            seed=noise_seed,
+            **self.capture,
         )
         out["beta"] = beta
         return out
 
     def __repr__(self) -> str:
         return (
-            f"RandomFog(beta_range={self.beta_range}, p={self.p}, airlight={self.airlight}, "
-            f"blur={self.blur}, refine={self.refine!r})"
+            f"RandomFog(beta_range={self.beta_range}, beta_dist={self.beta_dist!r}, p={self.p}, "
+            f"airlight={self.airlight}, blur={self.blur}, refine={self.refine!r}, "
+            f"capture={self.capture})"
         )
+
+    def _draw_beta(self) -> float:
+        if self.beta_dist is None:
+            return float(self.rng.uniform(*self.beta_range))
+        # A uniform p in (0, 1) through the distribution's quantile (brume's own).
+        p = float(self.rng.random())
+        p = min(max(p, 1e-16), 1.0 - 1e-16)
+        return float(beta_quantile(self.beta_dist, p))

@@ -10,7 +10,10 @@
 
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
 use brume::io::image::{linear_to_srgb8, srgb8_to_linear_table};
-use brume::photo::{self, FogOptions, Photo, PrepareOptions};
+use brume::photo::{
+    self, BetaDistribution, CaptureOptions, FogOptions, Photo, PrepareOptions, PreparedPhoto,
+    SensorNoise,
+};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::refine::RefineMode;
 use brume::Headless;
@@ -274,12 +277,9 @@ impl ImageOut {
         let shape = (image.height(), image.width(), 3);
         let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
         match pixels {
-            Pixels::Srgb8 => {
-                ImageOut::Srgb8(
-                    Array3::from_shape_vec(shape, rgb.map(linear_to_srgb8).collect())
-                        .expect("shape"),
-                )
-            }
+            Pixels::Srgb8 => ImageOut::Srgb8(
+                Array3::from_shape_vec(shape, rgb.map(linear_to_srgb8).collect()).expect("shape"),
+            ),
             Pixels::Linear32 => {
                 ImageOut::Linear32(Array3::from_shape_vec(shape, rgb.collect()).expect("shape"))
             }
@@ -305,6 +305,45 @@ impl ImageOut {
 struct FogRequest {
     fog: FogOptions,
     prepare: PrepareOptions,
+    capture: CaptureOptions,
+}
+
+/// The keywords of the capture after the fog, as brume's [`CaptureOptions`], checked.
+fn capture_request(
+    exposure_stops: f64,
+    shot_noise_gain: Option<f64>,
+    read_noise: Option<f64>,
+    jpeg_quality: Option<i64>,
+    seed: u64,
+) -> PyResult<CaptureOptions> {
+    let jpeg_quality = match jpeg_quality {
+        None => None,
+        Some(q) => Some(
+            u8::try_from(q)
+                .ok()
+                .filter(|q| (1..=100).contains(q))
+                .ok_or_else(|| {
+                    value_error(format!(
+                        "invalid jpeg_quality = {q}: expected None or a quality from 1 to 100"
+                    ))
+                })?,
+        ),
+    };
+    let noise = match (shot_noise_gain, read_noise) {
+        (None, None) => None,
+        (gain, read) => Some(SensorNoise {
+            gain: gain.unwrap_or(0.0),
+            read_noise: read.unwrap_or(0.0),
+        }),
+    };
+    let capture = CaptureOptions {
+        exposure_stops,
+        noise,
+        jpeg_quality,
+        seed,
+    };
+    capture.validate().map_err(py_err)?;
+    Ok(capture)
 }
 
 fn refine_mode(refine: &Bound<'_, PyAny>) -> PyResult<RefineMode> {
@@ -338,6 +377,7 @@ fn fog_request(
     airlight: Option<Vec<f64>>,
     blur: bool,
     refine: &Bound<'_, PyAny>,
+    capture: CaptureOptions,
 ) -> PyResult<FogRequest> {
     let mut fog = match (beta, visibility) {
         (Some(b), None) => FogOptions::beta(b).map_err(py_err)?,
@@ -370,20 +410,44 @@ fn fog_request(
         ..PrepareOptions::default()
     };
     prepare.refine.mode = refine_mode(refine)?;
-    Ok(FogRequest { fog, prepare })
+    Ok(FogRequest {
+        fog,
+        prepare,
+        capture,
+    })
 }
 
-/// The fog of one frame, on the GL thread: `brume::photo`'s from_range, prepare and fog.
-fn fog_frame(
+/// The GPU's share of one frame, on the GL thread: the refinement of the pre-processed
+/// range and the fog (`brume::photo`'s refine and fog).
+fn fog_on_gpu(
     headless: &mut Headless,
-    image: RgbImage,
-    range: ScalarMap,
+    photo: &Photo,
+    mut prepared: PreparedPhoto,
     request: &FogRequest,
 ) -> brume::Result<brume::raster::RgbaImage> {
-    let photo = Photo::from_range(image, range)?;
-    let prepared = photo::prepare(&photo, &request.prepare, headless.renderer()?)?;
-    let fogged = photo::fog(headless.renderer()?, &photo, &prepared, &request.fog)?;
+    prepared.refine(photo, &request.prepare.refine, headless.renderer()?)?;
+    let fogged = photo::fog(headless.renderer()?, photo, &prepared, &request.fog)?;
     Ok(fogged.rendered.image)
+}
+
+/// One frame fogged: pre-processing on the calling thread (the GIL released, so that
+/// another Python thread's frame can use the GL thread meanwhile, as `brume batch`
+/// overlaps its loader with the GPU), the refinement and the fog on the GL thread, the
+/// capture on the calling thread again.
+fn fog_frame(
+    gl: &GlThread,
+    image: RgbImage,
+    range: ScalarMap,
+    request: FogRequest,
+) -> PyResult<brume::raster::RgbaImage> {
+    let photo = Photo::from_range(image, range).map_err(py_err)?;
+    let prepared = photo::preprocess(&photo, &request.prepare).map_err(py_err)?;
+    let capture = request.capture;
+    let mut rendered = gl
+        .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
+        .map_err(py_err)?;
+    photo::capture(&mut rendered, &capture).map_err(py_err)?;
+    Ok(rendered)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -391,8 +455,10 @@ fn fog_frame(
 
 /// Renderer(): one EGL context (brume's headless one) kept for many frames.
 ///
-/// Its methods release the GIL while brume works; calls from several threads queue on
-/// the renderer's own GL thread.
+/// Its methods release the GIL while brume works. A frame's pre-processing and capture
+/// run on the calling thread and only its GPU work on the renderer's own GL thread, so
+/// two threads feeding one renderer overlap one frame's CPU work with another's GPU work
+/// (as `brume batch` does).
 #[pyclass(module = "brume", frozen)]
 struct Renderer {
     gl: GlThread,
@@ -407,8 +473,9 @@ impl Renderer {
     }
 
     /// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
-    /// refine=True) -> ndarray: as brume.fog, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None))]
+    /// refine=True, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
+    /// jpeg_quality=None, seed=0) -> ndarray: as brume.fog, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -420,19 +487,27 @@ impl Renderer {
         airlight: Option<Vec<f64>>,
         blur: bool,
         refine: Option<&Bound<'_, PyAny>>,
+        exposure_stops: f64,
+        shot_noise_gain: Option<f64>,
+        read_noise: Option<f64>,
+        jpeg_quality: Option<i64>,
+        seed: u64,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
         let refine = refine.unwrap_or(default_refine.as_any());
-        let request = fog_request(beta, visibility, airlight, blur, refine)?;
+        let capture = capture_request(
+            exposure_stops,
+            shot_noise_gain,
+            read_noise,
+            jpeg_quality,
+            seed,
+        )?;
+        let request = fog_request(beta, visibility, airlight, blur, refine, capture)?;
         let image = read_image(image)?;
         let range = read_range(range_m)?;
         let pixels = image.pixels;
         let out = py.detach(|| {
-            let linear = image.linear();
-            let rendered = self
-                .gl
-                .run(move |h| fog_frame(h, linear, range, &request))?
-                .map_err(py_err)?;
+            let rendered = fog_frame(&self.gl, image.linear(), range, request)?;
             Ok::<_, PyErr>(ImageOut::encode(&rendered, pixels))
         })?;
         Ok(out.into_py(py))
@@ -462,7 +537,8 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 }
 
 /// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
-/// refine=True) -> ndarray
+/// refine=True, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
+/// jpeg_quality=None, seed=0) -> ndarray
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
@@ -471,8 +547,13 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// (extinction, 1/m) or visibility (m). airlight: None (estimated from the sky) or linear
 /// RGB. blur: False for none (lambda 0). refine: True ('repair'), False ('none') or
 /// 'none' | 'guided' | 'unreliable' | 'repair'.
+///
+/// The camera after the fog (all off by default): exposure_stops (the linear image times
+/// 2^stops), shot_noise_gain K (the linear value of one photo-electron: Poisson noise of
+/// variance K·v) and read_noise (Gaussian, standard deviation in linear units), seeded by
+/// seed, then jpeg_quality (1-100, an encode-decode round trip); clipped to [0, 1].
 #[pyfunction]
-#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None))]
+#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
 #[allow(clippy::too_many_arguments)]
 fn fog(
     py: Python<'_>,
@@ -483,9 +564,44 @@ fn fog(
     airlight: Option<Vec<f64>>,
     blur: bool,
     refine: Option<&Bound<'_, PyAny>>,
+    exposure_stops: f64,
+    shot_noise_gain: Option<f64>,
+    read_noise: Option<f64>,
+    jpeg_quality: Option<i64>,
+    seed: u64,
 ) -> PyResult<Py<PyAny>> {
     let renderer = default_renderer(py)?.get();
-    renderer.fog(py, image, range_m, beta, visibility, airlight, blur, refine)
+    renderer.fog(
+        py,
+        image,
+        range_m,
+        beta,
+        visibility,
+        airlight,
+        blur,
+        refine,
+        exposure_stops,
+        shot_noise_gain,
+        read_noise,
+        jpeg_quality,
+        seed,
+    )
+}
+
+/// beta_quantile(dist, p) -> float
+///
+/// The extinction β (1/m) below which a fraction p in (0, 1) of the draws of dist fall:
+/// dist as `brume batch --beta-dist` takes it, '0.02', 'uniform:LOW,HIGH' or
+/// 'lognormal:MU,SIGMA' (ln β normal). A uniform p gives a draw (RandomFog does so).
+#[pyfunction]
+fn beta_quantile(dist: &str, p: f64) -> PyResult<f64> {
+    let dist: BetaDistribution = dist.parse().map_err(py_err)?;
+    if !(p > 0.0 && p < 1.0) {
+        return Err(value_error(format!(
+            "invalid p = {p}: expected a probability strictly between 0 and 1"
+        )));
+    }
+    Ok(dist.quantile(p))
 }
 
 /// load_depth(path, camera=None, format=None, *, kind=None, scale=None)
@@ -541,6 +657,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Renderer>()?;
     m.add_function(wrap_pyfunction!(fog, m)?)?;
     m.add_function(wrap_pyfunction!(load_depth, m)?)?;
+    m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -233,3 +233,81 @@ def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine):
     cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
     ours = brume.fog(image_u8, range_m.astype(np.float32), beta=beta, blur=blur, refine=refine)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
+
+
+def test_capture_noise_has_the_model_variance(image_u8, range_m):
+    # Linear float in and out, no blur: the noisy image minus the plain one has mean 0 and,
+    # pixel by pixel, variance K·v + σ² (v the plain value), averaged here in numpy.
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32) * 0.8
+    opts = dict(beta=0.02, airlight=[0.7, 0.7, 0.7], blur=False, refine=False)
+    plain = brume.fog(linear, range_m, **opts).astype(np.float64)
+    k, sigma = 0.0005, 0.01
+    noisy = brume.fog(linear, range_m, shot_noise_gain=k, read_noise=sigma, seed=5, **opts)
+    d = noisy.astype(np.float64) - plain
+    inside = (plain > 0.05) & (plain < 0.9)  # away from the clipping at 0 and 1
+    d, v = d[inside], plain[inside]
+    expected = float(np.mean(k * v + sigma**2))
+    n = d.size
+    assert abs(d.mean()) < 5 * math.sqrt(expected / n)
+    # The variance's standard error for a near-normal difference: var·sqrt(2/n).
+    assert abs(d.var() - expected) < 5 * expected * math.sqrt(2 / n), (d.var(), expected)
+    again = brume.fog(linear, range_m, shot_noise_gain=k, read_noise=sigma, seed=5, **opts)
+    np.testing.assert_array_equal(noisy, again)
+    other = brume.fog(linear, range_m, shot_noise_gain=k, read_noise=sigma, seed=6, **opts)
+    assert not np.array_equal(noisy, other)
+
+
+def test_capture_exposure_and_jpeg(image_u8, range_m):
+    opts = dict(beta=0.02, airlight=[0.7, 0.7, 0.7], blur=False, refine=False)
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    plain = brume.fog(linear, range_m, **opts)
+    brighter = brume.fog(linear, range_m, exposure_stops=1.0, **opts)
+    np.testing.assert_allclose(brighter, np.minimum(2.0 * plain, 1.0), atol=1e-6)
+    jpeg = brume.fog(image_u8, range_m, jpeg_quality=30, **opts)
+    assert jpeg.shape == image_u8.shape and jpeg.dtype == np.uint8
+    clean = brume.fog(image_u8, range_m, **opts)
+    diff = np.abs(jpeg.astype(int) - clean.astype(int))
+    assert 0 < diff.mean() < 20
+    for kwargs, message in [
+        (dict(jpeg_quality=0), "jpeg_quality"),
+        (dict(jpeg_quality=101), "jpeg_quality"),
+        (dict(shot_noise_gain=-1.0), "shot_noise_gain"),
+        (dict(read_noise=float("nan")), "read_noise"),
+        (dict(exposure_stops=50.0), "exposure_stops"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            brume.fog(image_u8, range_m, **opts, **kwargs)
+
+
+def test_beta_dist_draws_follow_the_lognormal_quantiles(image_u8, range_m):
+    from statistics import NormalDist
+
+    mu, sigma = -4.6, 0.5
+    dist = f"lognormal:{mu},{sigma}"
+    # The quantile against Python's own normal distribution.
+    for p in (0.01, 0.3, 0.5, 0.9, 0.999):
+        expected = math.exp(mu + sigma * NormalDist().inv_cdf(p))
+        assert abs(brume.beta_quantile(dist, p) - expected) < 1e-7 * expected
+    assert brume.beta_quantile("uniform:0.005,0.03", 0.25) == pytest.approx(0.01125)
+    # RandomFog: one draw for p, one for β's quantile, as numpy gives them.
+    t = brume.augment.RandomFog(beta_dist=dist, seed=11, blur=False, refine=False)
+    rng = np.random.default_rng(11)
+    for _ in range(2):
+        rng.random()
+        expected = math.exp(mu + sigma * NormalDist().inv_cdf(rng.random()))
+        out = t(image=image_u8, depth=range_m)
+        assert out["beta"] == pytest.approx(expected, rel=1e-7)
+    with pytest.raises(ValueError, match="beta_dist"):
+        brume.augment.RandomFog(beta_dist="gamma:1,2")
+    with pytest.raises(ValueError, match="beta_dist"):
+        brume.beta_quantile("uniform:0.03,0.005", 0.5)
+
+
+def test_random_fog_with_capture_is_seeded(image_u8, range_m):
+    kw = dict(seed=2, blur=False, refine=False, read_noise=0.02, jpeg_quality=60)
+    a = brume.augment.RandomFog(**kw)(image=image_u8, depth=range_m)
+    b = brume.augment.RandomFog(**kw)(image=image_u8, depth=range_m)
+    np.testing.assert_array_equal(a["image"], b["image"])
+    plain = brume.augment.RandomFog(seed=2, blur=False, refine=False)(image=image_u8, depth=range_m)
+    assert plain["beta"] == a["beta"]
+    assert not np.array_equal(plain["image"], a["image"])

@@ -28,7 +28,7 @@ use crate::error::{Error, Result};
 use crate::medium::Medium;
 use crate::raster::{Grid, RgbImage, RgbaImage};
 use crate::reference;
-use crate::{Precision, Renderer, Scheme};
+use crate::{Blur, Precision, Renderer, Scheme};
 use serde::Serialize;
 
 /// What to measure.
@@ -36,6 +36,8 @@ use serde::Serialize;
 pub struct AccuracyOptions {
     /// σref list, schemes, precisions and σ0.
     pub configs: Configs,
+    /// [`crate::Blur::coarse_from`] of every render (coarse to fine), or none.
+    pub coarse_from: Option<f64>,
 }
 
 /// The largest σref the accuracy experiment takes (px). Its cost grows with σ: the
@@ -50,6 +52,7 @@ impl AccuracyOptions {
     /// [`MAX_ACCURACY_SIGMA`].
     pub fn validate(&self) -> Result<()> {
         self.configs.validate()?;
+        super::speed::check_coarse_from(self.coarse_from)?;
         if let Some(&sigma) = self
             .configs
             .sigmas
@@ -148,6 +151,13 @@ pub fn run_accuracy(
                 what: &label,
             });
             let steps = config.schedule()?.steps;
+            let config = Config {
+                blur: Blur {
+                    coarse_from: opts.coarse_from,
+                    ..config.blur
+                },
+                ..config
+            };
             let row = measure(renderer, image, &expected, &impulse, &config, value_range)?;
             rows.push(AccuracyRow {
                 steps,

@@ -155,7 +155,7 @@ pub fn run_fog_bench(
     };
 
     let distance = DistanceFog {
-        camera,
+        camera: camera.into(),
         ..DistanceFog::default()
     };
     let layered = LayeredFog::new(camera, Default::default());

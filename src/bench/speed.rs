@@ -64,6 +64,29 @@ pub struct SpeedOptions {
     pub max_passes: Option<u32>,
     /// Grey or chromatic transmission.
     pub tau: Tau,
+    /// [`crate::Blur::coarse_from`] of every render (coarse to fine), or none.
+    pub coarse_from: Option<f64>,
+}
+
+/// Rejects a [`crate::Blur::coarse_from`] the pipeline would refuse, before any work.
+pub fn check_coarse_from(coarse_from: Option<f64>) -> Result<()> {
+    let blur = crate::Blur {
+        coarse_from,
+        ..crate::Blur::default()
+    };
+    let schedule = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25)?;
+    blur.coarse_start(&schedule, false)
+        .map(|_| ())
+        .map_err(|_| {
+            Error::invalid(
+                "--coarse-from",
+                coarse_from.unwrap_or(f64::NAN),
+                format!(
+                    "a finite scale ≥ {} px (below it the half resolution aliases detail)",
+                    crate::blur::MIN_COARSE_FROM
+                ),
+            )
+        })
 }
 
 impl Default for SpeedOptions {
@@ -75,6 +98,7 @@ impl Default for SpeedOptions {
             runs: DEFAULT_RUNS,
             max_passes: None,
             tau: Tau::Grey,
+            coarse_from: None,
         }
     }
 }
@@ -83,6 +107,7 @@ impl SpeedOptions {
     /// Rejects empty lists, scales below σ0, a zero size and zero runs.
     pub fn validate(&self) -> Result<()> {
         self.configs.validate()?;
+        check_coarse_from(self.coarse_from)?;
         if self.width == 0 || self.height == 0 {
             return Err(Error::invalid(
                 "size",
@@ -197,11 +222,15 @@ pub fn run_speed(
                     what: &label,
                 });
                 let medium = opts.tau.medium(config);
+                let blur = crate::Blur {
+                    coarse_from: opts.coarse_from,
+                    ..config.blur
+                };
                 let mut samples = Vec::with_capacity(opts.runs);
                 let mut clocks = Vec::with_capacity(opts.runs);
                 // Run 0 is the warm-up: shader caches, target allocation, first query.
                 for run in 0..=opts.runs {
-                    let out = renderer.render(&image, &range, &medium, &config.blur)?;
+                    let out = renderer.render(&image, &range, &medium, &blur)?;
                     if let (true, Some(ms)) = (run > 0, out.times.total()) {
                         samples.push(ms);
                         clocks.push(out.times.clock.name());

@@ -2,20 +2,20 @@
 //! from a turbidity given or estimated from a fisheye sky photo, and retargeting from the
 //! turbidity a photo was taken at (sec. 7.2.3, eq. 25-26).
 
-use super::args::{AerialBlur, RenderArgs};
+use super::args::{AerialBlur, RenderArgs, RetargetKind};
 use super::render::{look_from_args, PrepReport, Scene};
+use super::sun::PlacedSun;
 use brume::atmosphere::Sensitivity;
 use brume::camera::Camera;
 use brume::io::camera::Intrinsics;
-use brume::io::image::load_linear_rgb;
 use brume::io::output::Outputs;
 use brume::medium::haze::Haze;
 use brume::medium::{AerialPerspective, Medium};
 use brume::photo::{
-    pitch_for_horizon_row, AerialOptions, AerialPhoto, HorizonFrom, DEFAULT_HORIZON_ZENITH_DEG,
-    MAX_PITCH_DEG,
+    pitch_for_horizon_row, turbidity_from_sky, AerialOptions, AerialPhoto, HorizonFrom, Retarget,
+    DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
 };
-use brume::sky::turbidity::{estimate_turbidity, TurbidityOptions};
+use brume::sky::horizon_sectors::{DEFAULT_SECTORS, MAX_SECTORS};
 use brume::Headless;
 use brume::{Error, Result};
 use serde_json::json;
@@ -26,6 +26,10 @@ pub struct AerialLook {
     pub medium: AerialPerspective,
     pub turbidity_source: &'static str,
     pub from_turbidity: Option<f64>,
+    /// How the photo was retargeted (with `from_turbidity`).
+    pub retarget: Retarget,
+    /// The sun from place and time.
+    pub sun: Option<PlacedSun>,
     /// The camera's sensitivity (the viewer rebuilds the tables from it as its controls
     /// change).
     #[cfg_attr(
@@ -35,19 +39,13 @@ pub struct AerialLook {
     pub sensitivity: Sensitivity,
 }
 
-/// The turbidity: `--turbidity`, or estimated from `--sky`.
-fn turbidity(args: &RenderArgs) -> Result<(f64, &'static str)> {
+/// The turbidity: `--turbidity`, or estimated from `--sky` (the sun from place and time
+/// when given, else found from its saturated disc).
+fn turbidity(args: &RenderArgs, sun: Option<&PlacedSun>) -> Result<(f64, &'static str)> {
     match (args.turbidity, &args.sky) {
         (Some(t), None) => Ok((t, "given")),
         (None, Some(path)) => {
-            let sky = load_linear_rgb(path)?;
-            let name = path.display().to_string();
-            let estimate = estimate_turbidity(&sky, &name, &TurbidityOptions::default())?;
-            log::info!(
-                "{name}: turbidity {:.3} ± {:.3}",
-                estimate.turbidity,
-                estimate.std
-            );
+            let estimate = turbidity_from_sky(path, sun.map(|s| [s.zenith, s.azimuth]))?;
             Ok((estimate.turbidity, "sky"))
         }
         (Some(_), Some(_)) => Err(Error::invalid(
@@ -127,6 +125,14 @@ pub fn aerial_camera(
     Ok(camera)
 }
 
+/// `--retarget`, the paper's normalised radiance by default.
+fn retarget(args: &RenderArgs) -> Retarget {
+    match args.retarget {
+        Some(RetargetKind::Radiance) => Retarget::Radiance,
+        Some(RetargetKind::Normalised) | None => Retarget::Normalised,
+    }
+}
+
 /// `--altitude`'s range, metres: the Dead Sea's shore to above any airliner.
 pub const ALTITUDE_RANGE_M: (f64, f64) = (-500.0, 20_000.0);
 /// The turbidities the model is fitted for (Preetham et al.'s range), for `--turbidity`
@@ -148,6 +154,24 @@ pub fn check_aerial_options(args: &RenderArgs) -> Result<()> {
                 format!("a turbidity in [{t_lo}, {t_hi}]"),
             ));
         }
+    }
+    if let Some(n) = args
+        .horizon_sectors
+        .filter(|n| !(1..=MAX_SECTORS as i64).contains(n))
+    {
+        return Err(Error::invalid(
+            "--horizon-sectors",
+            n,
+            format!("a number of azimuth sectors in [1, {MAX_SECTORS}]"),
+        ));
+    }
+    if let (Some(r), None) = (args.retarget, args.from_turbidity) {
+        return Err(Error::invalid(
+            "--retarget",
+            format!("{r:?}").to_lowercase(),
+            "--from-turbidity T with it: only a photo taken at a known turbidity is \
+             retargeted",
+        ));
     }
     let (a_lo, a_hi) = ALTITUDE_RANGE_M;
     let checks: [(&str, Option<f64>, bool, String); 5] = [
@@ -204,12 +228,13 @@ pub struct AerialJob {
 /// `--medium aerial`: paper 002's aerial perspective on the prepared range in metres
 /// ([`brume::photo::aerial`]), the horizon's light from the sky found (or `--airlight`).
 pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result<AerialJob> {
-    let (turbidity, turbidity_source) = turbidity(args)?;
+    check_aerial_options(args)?;
+    let sun = args.place.sun(None, args.altitude.unwrap_or(0.0))?;
+    let (turbidity, turbidity_source) = turbidity(args, sun.as_ref())?;
     let sensitivity = match &args.sensitivity {
         Some(path) => Sensitivity::from_csv(path)?,
         None => Sensitivity::cie_srgb(),
     };
-    check_aerial_options(args)?;
     let camera = aerial_camera(args, scene.image.height(), scene.depth.intrinsics.as_ref())?;
     let opts = AerialOptions {
         from_turbidity: args.from_turbidity,
@@ -223,6 +248,9 @@ pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result
         horizon_zenith_deg: args.horizon_zenith.unwrap_or(DEFAULT_HORIZON_ZENITH_DEG),
         horizon_light: args.airlight,
         blur: look_from_args(args, &Haze::default(), prep.airlight).blur,
+        horizon_sectors: args.horizon_sectors.map_or(DEFAULT_SECTORS, |n| n as usize),
+        retarget: retarget(args),
+        sun: sun.map(|s| [s.zenith, s.azimuth - s.heading]),
         ..AerialOptions::new(turbidity, camera)
     };
     let photo = brume::photo::aerial(scene, prep, &opts)?;
@@ -235,6 +263,8 @@ pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result
             medium: photo.medium.clone(),
             turbidity_source,
             from_turbidity: args.from_turbidity,
+            retarget: opts.retarget,
+            sun,
             sensitivity: opts.sensitivity,
         },
         light_source,
@@ -262,7 +292,9 @@ pub fn run_aerial(
         blur,
         ..
     } = photo;
-    let rendered = renderer.render_fog(image, range, &look.medium, &photo.fog_blur())?;
+    let mut rendered = renderer.render_fog(image, range, &look.medium, &photo.fog_blur())?;
+    let capture = super::render::capture_options(&args.capture, args.prep.seed)?;
+    brume::photo::capture(&mut rendered.image, &capture)?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(out, &rendered.image)?;
     super::commit(outputs)?;
@@ -278,6 +310,9 @@ pub fn run_aerial(
                 "turbidity": m.table.turbidity(),
                 "turbidity_source": look.turbidity_source,
                 "from_turbidity": look.from_turbidity,
+                "retarget": look.from_turbidity.map(|_| look.retarget.name()),
+                "sun": look.sun.map(|s| s.json()),
+                "horizon_sectors": m.horizon_sectors.gains(),
                 "altitude": m.table.altitude_m(),
                 "metres_per_unit": m.metres_per_unit,
                 "pitch": m.camera.pitch_deg,

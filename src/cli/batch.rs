@@ -4,11 +4,16 @@
 //! a run that stops leaves only complete files, and the next run skips them. `--shard K/N`
 //! takes a deterministic share of the frames, for array jobs.
 
-use super::args::{BatchArgs, Compat, RenderArgs};
-use super::render::{self as render_cmd, PrepReport, Scene};
+use super::args::{BatchArgs, Compat};
+use brume::blur::Blur;
 use brume::dataset::{self, Item, Shard};
+use brume::io::depth::DepthFormat;
 use brume::io::output::Outputs;
-use brume::raster::ScalarMap;
+use brume::medium::Medium;
+use brume::photo::{
+    capture, transmittance_rgb8, BetaDistribution, CaptureOptions, Conventions, Frame, FrameFog,
+    FrameOptions,
+};
 use brume::{Error, Renderer, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -16,16 +21,6 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::time::Instant;
-
-/// A frame ready for the GPU: loaded and pre-processed, with what that cost.
-struct Loaded {
-    item: Item,
-    args: RenderArgs,
-    scene: Scene,
-    prep: PrepReport,
-    decode_ms: f64,
-    prep_ms: f64,
-}
 
 /// A frame that could not be loaded.
 struct Failed {
@@ -39,6 +34,8 @@ struct Encode {
     image: brume::raster::RgbaImage,
     transmittance: Option<(PathBuf, Vec<[u8; 3]>, usize, usize)>,
     record: serde_json::Value,
+    /// The capture after the fog, seeded for this output (applied on the writer thread).
+    capture: CaptureOptions,
 }
 
 /// Everything a run needs, checked before anything is created: the options, the frames of
@@ -46,7 +43,8 @@ struct Encode {
 /// `--out`, one file each.
 pub struct Plan {
     shard: Shard,
-    template: RenderArgs,
+    /// How every frame is read, prepared and fogged (the library's per-frame loop).
+    options: FrameOptions,
     /// Frames of this shard with the β values whose outputs are missing.
     pending: Vec<(Item, Vec<f64>)>,
     /// Frames of this shard that could not be assembled (no disparity, no camera).
@@ -55,6 +53,8 @@ pub struct Plan {
     total: usize,
     /// Outputs of this shard already complete, skipped.
     skipped: usize,
+    /// The capture after the fog (--exposure-stops, noise, --jpeg-quality).
+    capture: CaptureOptions,
 }
 
 /// Checks every option and every frame's outputs before any file or folder is made: a bad
@@ -66,7 +66,15 @@ pub fn plan(args: &BatchArgs) -> Result<Plan> {
         None => Shard::ALL,
     };
     let betas = parse_betas(&args.beta)?;
-    let template = args.render_template(betas[0])?;
+    let capture = super::render::capture_options(&args.capture, args.prep.seed)?;
+    let seed = capture.seed;
+    // With --beta-dist, the options are checked at the β the draws stay within, and the
+    // destinations at its median (the frames' own β only change the number in the name).
+    let betas = match &args.beta_dist {
+        Some(dist) => drawn_beta_bounds(dist)?,
+        None => betas,
+    };
+    let options = args.frame_options(&betas)?;
     if args.out.exists() && !args.out.is_dir() {
         return Err(Error::invalid(
             "--out",
@@ -76,7 +84,11 @@ pub fn plan(args: &BatchArgs) -> Result<Plan> {
     }
     let (items, mut failures) = collect_items(args)?;
     super::batch_checks::check_sky_mask_size(args, &items)?;
-    super::batch_checks::check_destinations(args, &items, &betas)?;
+    let checked = match &args.beta_dist {
+        Some(dist) => vec![dist.quantile(0.5)],
+        None => betas.clone(),
+    };
+    super::batch_checks::check_destinations(args, &items, &checked)?;
     let total = items.len() + failures.len();
     let items: Vec<Item> = items.into_iter().filter(|i| shard.contains(i)).collect();
     failures.retain(|f| shard.contains(&f.item));
@@ -84,22 +96,27 @@ pub fn plan(args: &BatchArgs) -> Result<Plan> {
     let pending: Vec<(Item, Vec<f64>)> = items
         .into_iter()
         .filter_map(|item| {
-            let todo: Vec<f64> = betas
+            let wanted = match &args.beta_dist {
+                Some(dist) => vec![drawn_beta(dist, seed, &item)],
+                None => betas.clone(),
+            };
+            let todo: Vec<f64> = wanted
                 .iter()
                 .copied()
                 .filter(|&b| !outputs_complete(args, &item, b))
                 .collect();
-            skipped += betas.len() - todo.len();
+            skipped += wanted.len() - todo.len();
             (!todo.is_empty()).then_some((item, todo))
         })
         .collect();
     Ok(Plan {
         shard,
-        template,
+        options,
         pending,
         failures,
         total,
         skipped,
+        capture,
     })
 }
 
@@ -107,11 +124,12 @@ pub fn plan(args: &BatchArgs) -> Result<Plan> {
 pub fn run(args: &BatchArgs, plan: Plan, renderer: &mut Renderer) -> Result<()> {
     let Plan {
         shard,
-        template,
+        options,
         pending,
         failures,
         total,
         skipped,
+        capture,
     } = plan;
     let outputs: usize = pending.iter().map(|(_, b)| b.len()).sum();
     log::info!(
@@ -151,14 +169,20 @@ pub fn run(args: &BatchArgs, plan: Plan, renderer: &mut Renderer) -> Result<()> 
         log.frame_failed(f, 0)?;
     }
     let started = Instant::now();
-    let (load_tx, load_rx) = sync_channel::<std::result::Result<Loaded, Failed>>(1);
+    let (load_tx, load_rx) = sync_channel::<std::result::Result<Frame, Failed>>(1);
     let (event_tx, event_rx) = sync_channel::<Event>(2);
     let frames: Vec<Item> = pending.iter().map(|(i, _)| i.clone()).collect();
     let mut stats = Stats::default();
     let log = std::thread::scope(|s| -> Result<Log> {
-        s.spawn(|| load_frames(&template, frames, load_tx));
+        s.spawn(|| load_frames(&options, frames, load_tx));
         let writer = s.spawn(move || write_outputs(event_rx, log));
-        render_frames(args, renderer, &pending, load_rx, &event_tx, &mut stats);
+        let gpu = Gpu {
+            args,
+            options: &options,
+            events: &event_tx,
+            capture: &capture,
+        };
+        gpu.render_frames(renderer, &pending, load_rx, &mut stats);
         drop(event_tx);
         writer.join().expect("the writer thread does not panic")
     })?;
@@ -240,14 +264,14 @@ fn outputs_complete(args: &BatchArgs, item: &Item, beta: f64) -> bool {
 
 /// The loader thread: decodes and pre-processes each frame in turn, one ahead of the GPU.
 fn load_frames(
-    template: &RenderArgs,
+    options: &FrameOptions,
     frames: Vec<Item>,
-    tx: SyncSender<std::result::Result<Loaded, Failed>>,
+    tx: SyncSender<std::result::Result<Frame, Failed>>,
 ) {
     for item in frames {
-        let loaded = load_frame(template, &item).map_err(|error| Failed {
+        let loaded = Frame::load(&item, options).map_err(|error| Failed {
             item: item.clone(),
-            error,
+            error: super::name_flags(error),
         });
         if tx.send(loaded).is_err() {
             return;
@@ -255,220 +279,143 @@ fn load_frames(
     }
 }
 
-fn load_frame(template: &RenderArgs, item: &Item) -> Result<Loaded> {
-    let args = frame_args(template, item);
-    let t = Instant::now();
-    let scene = render_cmd::load_scene(&args)?;
-    let decode_ms = t.elapsed().as_secs_f64() * 1e3;
-    let t = Instant::now();
-    let prep = render_cmd::preprocess(&args, &scene)?;
-    let prep_ms = t.elapsed().as_secs_f64() * 1e3;
-    Ok(Loaded {
-        item: item.clone(),
-        args,
-        scene,
-        prep,
-        decode_ms,
-        prep_ms,
-    })
+/// The GPU's side of a run: the options, and the channel to the writer thread.
+struct Gpu<'a> {
+    args: &'a BatchArgs,
+    options: &'a FrameOptions,
+    events: &'a SyncSender<Event>,
+    capture: &'a CaptureOptions,
 }
 
-/// `brume render`'s options for one frame: the batch's, with the frame's files.
-fn frame_args(template: &RenderArgs, item: &Item) -> RenderArgs {
-    let mut args = template.clone();
-    args.image = Some(item.image.clone());
-    args.depth.depth = Some(item.depth.clone());
-    if item.calib.is_some() {
-        args.depth.calib = item.calib.clone();
-    }
-    apply_companions(&mut args, item);
-    args
-}
-
-/// The GPU loop: every β of every frame, in the order the loader delivers them; outputs
-/// and failures go to the writer thread as they come.
-fn render_frames(
-    args: &BatchArgs,
-    renderer: &mut Renderer,
-    pending: &[(Item, Vec<f64>)],
-    rx: Receiver<std::result::Result<Loaded, Failed>>,
-    events: &SyncSender<Event>,
-    stats: &mut Stats,
-) {
-    for ((_, betas), loaded) in pending.iter().zip(rx) {
-        let loaded = match loaded {
-            Ok(l) => l,
-            Err(failed) => {
-                let event = Event::FrameFailed {
-                    failed,
-                    outputs: betas.len(),
-                };
-                if events.send(event).is_err() {
-                    return;
+impl Gpu<'_> {
+    /// The GPU loop: every β of every frame, in the order the loader delivers them;
+    /// outputs and failures go to the writer thread as they come.
+    fn render_frames(
+        &self,
+        renderer: &mut Renderer,
+        pending: &[(Item, Vec<f64>)],
+        rx: Receiver<std::result::Result<Frame, Failed>>,
+        stats: &mut Stats,
+    ) {
+        for ((_, betas), loaded) in pending.iter().zip(rx) {
+            let writer_alive = match loaded {
+                Ok(frame) => {
+                    stats.frames += 1;
+                    stats.decode_ms += frame.decode_ms;
+                    stats.prep_ms += frame.prep_ms;
+                    self.render_frame(renderer, frame, betas, stats)
                 }
-                continue;
-            }
-        };
-        stats.frames += 1;
-        stats.decode_ms += loaded.decode_ms;
-        stats.prep_ms += loaded.prep_ms;
-        // Refined once, and the range in metres made once, for every β of the frame.
-        let frame = match refine_frame(renderer, loaded, stats) {
-            Ok(f) => f,
-            Err(failed) => {
-                let event = Event::FrameFailed {
-                    failed: *failed,
-                    outputs: betas.len(),
-                };
-                if events.send(event).is_err() {
-                    return;
-                }
-                continue;
-            }
-        };
-        for (k, &beta) in betas.iter().enumerate() {
-            let event = match render_beta(args, renderer, &frame, beta) {
-                Ok((job, gpu_ms, render_ms)) => {
-                    // NaN (JSON null) where the GPU timer's figures were rejected.
-                    if gpu_ms.is_finite() {
-                        stats.gpu_ms += gpu_ms;
-                    }
-                    stats.render_ms += render_ms;
-                    Event::Output(job)
-                }
-                Err(error) => Event::FrameFailed {
-                    failed: Failed {
-                        item: frame.loaded.item.clone(),
-                        error,
-                    },
-                    outputs: betas.len() - k,
-                },
+                Err(failed) => self.frame_failed(failed, betas.len()),
             };
-            let failed = matches!(event, Event::FrameFailed { .. });
-            if events.send(event).is_err() {
+            if !writer_alive {
                 return;
-            }
-            if failed {
-                break;
             }
         }
     }
-}
 
-/// A loaded frame with its range refined (on the GPU) and in the medium's metres.
-struct Refined {
-    loaded: Loaded,
-    /// The range texture's values (metres), shared by every β.
-    range: ScalarMap,
-}
-
-/// Refines a loaded frame's range with its image ([`super::refine::refine_scene`]) and makes
-/// the range every β renders from.
-fn refine_frame(
-    renderer: &mut Renderer,
-    mut loaded: Loaded,
-    stats: &mut Stats,
-) -> std::result::Result<Refined, Box<Failed>> {
-    let t = Instant::now();
-    let Loaded {
-        args, scene, prep, ..
-    } = &mut loaded;
-    let result = super::refine::refine_scene(args, scene, prep, renderer)
-        .and_then(|_| render_cmd::haze_inputs(args, prep));
-    stats.refine_ms += t.elapsed().as_secs_f64() * 1e3;
-    match result {
-        Ok((range, _, _)) => Ok(Refined { loaded, range }),
-        Err(error) => Err(Box::new(Failed {
-            item: loaded.item,
-            error,
-        })),
+    /// Hands a frame's failure (`outputs` of it not written) to the writer; false when the
+    /// writer is gone.
+    fn frame_failed(&self, failed: Failed, outputs: usize) -> bool {
+        let event = Event::FrameFailed { failed, outputs };
+        self.events.send(event).is_ok()
     }
-}
 
-/// Renders one β of a loaded frame; returns the output to write, the GPU time and the
-/// render's wall time (uploads, passes, read-back).
-fn render_beta(
-    args: &BatchArgs,
-    renderer: &mut Renderer,
-    refined: &Refined,
-    beta: f64,
-) -> Result<(Encode, f64, f64)> {
-    let (frame, range) = (&refined.loaded, &refined.range);
-    let t = Instant::now();
-    let mut fog_args = frame.args.clone();
-    apply_beta(&mut fog_args, beta);
-    let haze = render_cmd::haze_from_args(&fog_args)?;
-    let look = render_cmd::look_from_args(&fog_args, &haze, frame.prep.airlight);
-    // Foggy Cityscapes' conventions: the blend on the CPU, no passes.
-    let (image, passes, gpu_ms) = if fog_args.compat == Some(Compat::FoggyCityscapes) {
-        let (image, _, _) =
-            super::compat::foggy_cityscapes_image(&fog_args, &frame.scene.image, range, beta)?;
-        (image, 0, 0.0)
-    } else {
-        let r = renderer.render(&frame.scene.image, range, look.medium(), &look.blur)?;
-        (r.image, r.schedule.steps, r.times.total_ms)
-    };
-    let render_ms = t.elapsed().as_secs_f64() * 1e3;
-    let item = &frame.item;
-    let path = item.foggy_output(&args.out, beta);
-    let transmittance = args.transmittance.then(|| {
-        // The range texture is in metres; the medium's unit is haze.range_unit.
-        let unit = look.haze.range_unit;
-        let t = transmittance_rgb8(range, |r| look.haze.transmission(r / unit)[1]);
-        (
-            item.transmittance_output(&args.out, beta),
-            t,
-            range.width(),
-            range.height(),
-        )
-    });
-    let record = json!({
-        "status": "ok",
-        "image": item.image.display().to_string(),
-        "depth": item.depth.display().to_string(),
-        "camera": item.camera.as_ref().map(|p| p.display().to_string()),
-        "sky_mask": item.sky_mask.as_ref().map(|p| p.display().to_string()),
-        "output": path.display().to_string(),
-        "beta": beta,
-        "visibility_m": -(0.05f64.ln()) / beta,
-        "width": image.width(),
-        "height": image.height(),
-        "sigma_max": look.sigma_max(),
-        "diffusion_passes": passes,
-        "airlight": look.airlight(),
-        "airlight_source": frame.prep.airlight_from.name(),
-        "decode_ms": frame.decode_ms,
-        "prep_ms": frame.prep_ms,
-        "gpu_ms": gpu_ms,
-        "render_ms": render_ms,
-    });
-    Ok((
+    /// Refines a frame once on the GPU, then renders its β values from one upload, each
+    /// output handed to the writer thread as soon as it is read back. A failure after some
+    /// outputs counts only those not sent. False when the writer is gone.
+    fn render_frame(
+        &self,
+        renderer: &mut Renderer,
+        mut frame: Frame,
+        betas: &[f64],
+        stats: &mut Stats,
+    ) -> bool {
+        let fail = |item: &Item, error| Failed {
+            item: item.clone(),
+            error: super::name_flags(error),
+        };
+        if let Err(e) = frame.refine(self.options, renderer) {
+            return self.frame_failed(fail(&frame.item, e), betas.len());
+        }
+        stats.refine_ms += frame.refine_ms;
+        let (mut sent, mut writer_gone) = (0, false);
+        let mut started = Instant::now();
+        let result = frame.fog_each(renderer, self.options, betas, |beta, fogged| {
+            let render_ms = started.elapsed().as_secs_f64() * 1e3;
+            // NaN (JSON null) where the GPU timer's figures were rejected.
+            if fogged.gpu_ms.is_finite() {
+                stats.gpu_ms += fogged.gpu_ms;
+            }
+            stats.render_ms += render_ms;
+            let job = self.encode(&frame, beta, fogged, render_ms);
+            if self.events.send(Event::Output(job)).is_err() {
+                writer_gone = true;
+                return Err(Error::invalid(
+                    "writer",
+                    "stopped",
+                    "a running writer thread",
+                ));
+            }
+            sent += 1;
+            started = Instant::now();
+            Ok(())
+        });
+        match result {
+            Ok(()) => true,
+            // The writer is gone: the run is ending, nothing more to report.
+            Err(_) if writer_gone => false,
+            Err(error) => self.frame_failed(fail(&frame.item, error), betas.len() - sent),
+        }
+    }
+
+    /// One output of a frame: the image, its transmittance map if asked for, and its log
+    /// record.
+    fn encode(&self, frame: &Frame, beta: f64, fogged: FrameFog, render_ms: f64) -> Encode {
+        let (args, item) = (self.args, &frame.item);
+        let path = item.foggy_output(&args.out, beta);
+        let metres = frame.metres().expect("refined before fog");
+        let transmittance = args.transmittance.then(|| {
+            (
+                item.transmittance_output(&args.out, beta),
+                transmittance_rgb8(&fogged.haze, metres),
+                metres.width(),
+                metres.height(),
+            )
+        });
+        let record = json!({
+            "status": "ok",
+            "image": item.image.display().to_string(),
+            "depth": item.depth.display().to_string(),
+            "camera": item.camera.as_ref().map(|p| p.display().to_string()),
+            "sky_mask": item.sky_mask.as_ref().map(|p| p.display().to_string()),
+            "output": path.display().to_string(),
+            "beta": beta,
+            "beta_dist": args.beta_dist.map(|d| d.to_string()),
+            "visibility_m": -(0.05f64.ln()) / beta,
+            "width": fogged.image.width(),
+            "height": fogged.image.height(),
+            "sigma_max": fogged.sigma_max,
+            "diffusion_passes": fogged.passes,
+            "airlight": fogged.airlight,
+            "airlight_source": fogged.airlight_source,
+            "decode_ms": frame.decode_ms,
+            "prep_ms": frame.prep_ms,
+            "gpu_ms": fogged.gpu_ms,
+            "render_ms": render_ms,
+            "capture": super::render::capture_json(self.capture),
+        });
+        let capture = CaptureOptions {
+            seed: self.capture.seed ^ frame_hash(item) ^ beta.to_bits(),
+            ..*self.capture
+        };
         Encode {
             path,
-            image,
+            image: fogged.image,
             transmittance,
             record,
-        },
-        gpu_ms,
-        render_ms,
-    ))
-}
-
-/// τ as an 8-bit grey image (top row first); unknown range as τ of the sky (0).
-fn transmittance_rgb8(range: &ScalarMap, tau: impl Fn(f64) -> f64) -> Vec<[u8; 3]> {
-    range
-        .as_slice()
-        .iter()
-        .map(|&r| {
-            let t = if r.is_finite() {
-                tau(f64::from(r))
-            } else {
-                0.0
-            };
-            let v = (t.clamp(0.0, 1.0) * 255.0).round() as u8;
-            [v, v, v]
-        })
-        .collect()
+            capture,
+        }
+    }
 }
 
 /// What the GPU loop hands the writer thread.
@@ -484,9 +431,9 @@ enum Event {
 fn write_outputs(rx: Receiver<Event>, mut log: Log) -> Result<Log> {
     for event in rx {
         match event {
-            Event::Output(job) => {
+            Event::Output(mut job) => {
                 let t = Instant::now();
-                let result = write_one(&job);
+                let result = capture(&mut job.image, &job.capture).and_then(|_| write_one(&job));
                 log.summary.encode_ms += t.elapsed().as_secs_f64() * 1e3;
                 log.output(job.record, result)?;
             }
@@ -573,6 +520,40 @@ const MIN_BETA: f64 = 1e-6;
 /// The densest, m⁻¹: visibility 0.3 m.
 const MAX_BETA: f64 = 10.0;
 
+/// The β of `item` drawn from `dist` under `seed`: a function of the frame's name
+/// (folder and stem) alone, rounded to 6 significant digits for its file name.
+fn drawn_beta(dist: &BetaDistribution, seed: u64, item: &Item) -> f64 {
+    let beta = dist.sample(seed, frame_hash(item));
+    format!("{beta:.5e}").parse().unwrap_or(beta)
+}
+
+/// The least and largest β that `dist` draws (its 1e-6 and 1 − 1e-6 quantiles), which
+/// must lie in [`MIN_BETA`, `MAX_BETA`] as --beta's values do.
+fn drawn_beta_bounds(dist: &BetaDistribution) -> Result<Vec<f64>> {
+    let bounds = vec![dist.quantile(1e-6), dist.quantile(1.0 - 1e-6)];
+    if bounds.iter().any(|b| !(MIN_BETA..=MAX_BETA).contains(b)) {
+        return Err(Error::invalid(
+            "--beta-dist",
+            dist,
+            format!(
+                "a distribution whose draws stay from {MIN_BETA} to {MAX_BETA} per metre \
+                 (its 1e-6 and 1 − 1e-6 quantiles are {:.3e} and {:.3e})",
+                bounds[0], bounds[1]
+            ),
+        ));
+    }
+    Ok(bounds)
+}
+
+/// A fixed 64-bit hash (FNV-1a) of a frame's output folder and stem: the same on every
+/// run, platform and shard.
+fn frame_hash(item: &Item) -> u64 {
+    let name = format!("{}/{}", item.out_dir.display(), item.stem);
+    name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
 /// `--beta 0.005,0.01,0.02`: each in [`MIN_BETA`, `MAX_BETA`], no repeats.
 fn parse_betas(text: &str) -> Result<Vec<f64>> {
     let mut betas = Vec::new();
@@ -656,72 +637,64 @@ impl Stats {
 }
 
 impl BatchArgs {
-    /// `brume render`'s options for every frame: the defaults, with the batch's blur,
-    /// airlight and pre-processing, and physical fog (`beta`, the first β: loading a frame
-    /// then checks that its range is in metres).
-    fn render_template(&self, beta: f64) -> Result<RenderArgs> {
-        let mut args = render_cmd::default_args();
-        apply_beta(&mut args, beta);
-        if let Some(l) = self.lambda {
-            args.lambda = l;
+    /// The library's options for every frame: the batch's blur, airlight,
+    /// pre-processing, refinement and conventions, checked (and the blur's schedule, which
+    /// does not depend on β, made once) before any frame is read.
+    fn frame_options(&self, betas: &[f64]) -> Result<FrameOptions> {
+        if self.no_prep {
+            let seed_read = self.capture.reads_seed() || self.beta_dist.is_some();
+            super::options::refuse_prep_options(&self.prep, seed_read)?;
         }
+        let mut opts = FrameOptions::default();
+        let blur = &mut opts.fog.blur;
         if let Some(s) = self.scheme {
-            args.scheme = s;
+            blur.scheme = s;
         }
         if let Some(p) = self.precision {
-            args.precision = p;
+            blur.precision = p;
         }
-        args.airlight = self.airlight;
-        args.albedo = self.albedo;
-        args.no_prep = self.no_prep;
-        args.prep = self.prep.clone();
-        args.compat = self.compat;
-        args.refine = self.refine.clone();
-        super::options::check_options(&args)?;
-        let haze = render_cmd::haze_from_args(&args)?;
-        super::inputs::prep_options(&args.prep)?;
-        if let Some(mask) = &args.prep.sky_mask {
+        if let Some(l) = self.lambda {
+            opts.fog.lambda = l;
+        }
+        if let Some(a) = self.albedo {
+            opts.albedo = a;
+        }
+        opts.prepare.airlight = self.airlight;
+        opts.prepare.prep = match self.no_prep {
+            true => None,
+            false => Some(super::inputs::prep_options(&self.prep)?),
+        };
+        opts.prepare.refine = self.refine.options(DepthFormat::Auto)?;
+        opts.refine_mode = self.refine.mode;
+        opts.sky_mask = self.prep.sky_mask.clone();
+        opts.sky_mask_format = self.prep.sky_mask_format;
+        opts.ego_mask = self.prep.ego_mask.clone();
+        if self.compat == Some(Compat::FoggyCityscapes) {
+            opts.conventions = Conventions::FoggyCityscapes;
+        }
+        for mask in opts.sky_mask.iter().chain(&opts.ego_mask) {
             if !mask.is_file() {
-                return Err(Error::invalid(
-                    "--sky-mask",
-                    mask.display(),
-                    "an existing PNG sky mask",
-                ));
+                let flag = match opts.sky_mask.as_ref() == Some(mask) {
+                    true => "--sky-mask",
+                    false => "--ego-mask",
+                };
+                return Err(Error::invalid(flag, mask.display(), "an existing PNG mask"));
             }
         }
-        // The blur's steps do not depend on β (σmax is reached at the visibility).
-        let look = render_cmd::look_from_args(&args, &haze, [1.0; 3]);
-        look.blur.schedule_for(look.medium()).map_err(|e| match e {
-            Error::InvalidParameter { name, expected, .. } if name != "rho_max" => {
-                Error::invalid("--lambda", args.lambda, expected)
-            }
-            e => e,
-        })?;
-        Ok(args)
+        for &beta in betas {
+            let haze = opts.fog_at(beta)?.haze([1.0; 3])?;
+            check_schedule(&haze, &opts.fog.blur, opts.fog.lambda)?;
+        }
+        Ok(opts)
     }
 }
 
-/// The frame's camera file and sky mask, as `--camera` and `--sky-mask` (and a labelIds
-/// sky mask as `--ego-mask` too).
-fn apply_companions(args: &mut RenderArgs, item: &Item) {
-    if item.camera.is_some() {
-        args.depth.camera = item.camera.clone();
-    }
-    if item.sky_mask.is_some() && !args.no_prep && !args.prep.no_sky {
-        args.prep.sky_mask = item.sky_mask.clone();
-    }
-    // A Cityscapes labelIds file names the ego vehicle too (label 1).
-    let labels = item.sky_mask.as_ref().filter(|p| {
-        brume::io::mask::SkyMaskFormat::from_file_name(p)
-            == brume::io::mask::SkyMaskFormat::CityscapesLabelIds
-    });
-    if labels.is_some() && !args.no_prep && args.prep.ego_mask.is_none() {
-        args.prep.ego_mask = labels.cloned();
-    }
-}
-
-/// The fog at extinction `beta` (1/m), as `--beta`.
-fn apply_beta(args: &mut RenderArgs, beta: f64) {
-    args.beta = Some(beta);
-    args.visibility = None;
+/// The blur's schedule can be made: a λ too large for the pass limit names `--lambda`.
+fn check_schedule(medium: &dyn Medium, blur: &Blur, lambda: f64) -> Result<()> {
+    blur.schedule_for(medium).map(|_| ()).map_err(|e| match e {
+        Error::InvalidParameter { name, expected, .. } if name != "rho_max" => {
+            Error::invalid("--lambda", lambda, expected)
+        }
+        e => e,
+    })
 }

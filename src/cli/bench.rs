@@ -246,6 +246,10 @@ pub struct CommonArgs {
     /// Draw the paper's figure to this file; the extension picks the format (.png or .svg).
     #[arg(long, value_name = "PATH.png|PATH.svg")]
     pub plot: Option<PathBuf>,
+    /// Coarse to fine (matched scheme, grey τ): run the steps at half resolution once the
+    /// blur has reached this scale in px (≥ 2); default: every step at full resolution.
+    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
+    pub coarse_from: Option<f64>,
 }
 
 /// `brume bench accuracy`.
@@ -333,9 +337,12 @@ impl CommonArgs {
 impl AccuracyArgs {
     /// The library options these arguments stand for.
     pub fn options(&self) -> Result<AccuracyOptions> {
-        Ok(AccuracyOptions {
+        let opts = AccuracyOptions {
             configs: self.common.configs()?,
-        })
+            coarse_from: self.common.coarse_from,
+        };
+        opts.validate()?;
+        Ok(opts)
     }
 }
 
@@ -353,6 +360,7 @@ impl SpeedArgs {
                 .map(|p| count("--max-passes", p, "a number of passes ≥ 0"))
                 .transpose()?,
             tau: self.tau,
+            coarse_from: self.common.coarse_from,
         };
         opts.validate()?;
         Ok(opts)

@@ -9,7 +9,7 @@ use brume::io::image;
 use brume::io::output::Outputs;
 use brume::medium::physical::{self, PhysicalFog};
 use brume::photo::check_memory_before_loading;
-use brume::raster::{RgbImage, RgbaImage, ScalarMap};
+use brume::raster::ScalarMap;
 use brume::refine::RefineMode;
 use brume::Result;
 use serde_json::json;
@@ -55,30 +55,6 @@ pub fn transmittance_map_args(args: &RenderArgs) -> RenderArgs {
     args
 }
 
-/// Foggy Cityscapes' fog of `image` at `beta` from `range` (metres): the image (linear,
-/// alpha 1), the airlight in code values and where it came from.
-pub fn foggy_cityscapes_image(
-    args: &RenderArgs,
-    image: &RgbImage,
-    range: &ScalarMap,
-    beta: f64,
-) -> Result<(RgbaImage, [f32; 3], &'static str)> {
-    let (metres, _) = physical::metric_range(range)?;
-    let tau = metres.map(|&r| {
-        if r.is_finite() {
-            (-beta * f64::from(r)).exp() as f32
-        } else {
-            0.0
-        }
-    });
-    let (airlight, source) = match args.airlight {
-        Some(l) => (l.map(brume::io::image::linear_to_srgb), "given"),
-        None => (brume::compat::dark_channel_airlight(image), "dark-channel"),
-    };
-    let fogged = brume::compat::blend_in_code_values(image, &tau, airlight);
-    Ok((fogged.map(|p| [p[0], p[1], p[2], 1.0]), airlight, source))
-}
-
 /// `--compat foggy-cityscapes`: Foggy Cityscapes' blend in sRGB code values of the image
 /// and the dark-channel airlight (or `--airlight`, linear, encoded) by τ = exp(−βR) of the
 /// (refined) range in metres, no blur ([`brume::compat`]).
@@ -89,7 +65,9 @@ pub fn run_foggy_cityscapes(
     fog: &PhysicalFog,
     out: &Path,
 ) -> Result<()> {
-    let (rgba, airlight, source) = foggy_cityscapes_image(args, &scene.image, range, fog.beta)?;
+    let (metres, _) = physical::metric_range(range)?;
+    let (rgba, airlight, source) =
+        brume::compat::foggy_cityscapes(&scene.image, &metres, fog.beta, args.airlight);
     let mut outputs = Outputs::new();
     outputs.stage_rgba(out, &rgba)?;
     super::commit(outputs)?;

@@ -8,7 +8,7 @@ use brume::io::mask::{self, SkyMaskFormat};
 use brume::prep::PrepOptions;
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::{Error, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Loads the depth named by `args` (which must have one) as a range map.
 pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
@@ -99,37 +99,6 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
     Ok(opts)
 }
 
-/// Checks a mask read for `flag` (`path`, a `what`) against the range it goes with: the
-/// range's size, and not every pixel set (`all_set` says what that means); logs its count.
-fn check_mask(
-    (flag, path, what): (&str, &Path, &str),
-    mask: &Grid<bool>,
-    range: &ScalarMap,
-    range_name: &str,
-    all_set: &str,
-) -> Result<()> {
-    if (mask.width(), mask.height()) != (range.width(), range.height()) {
-        return Err(Error::SizeMismatch {
-            a: path.display().to_string(),
-            aw: mask.width() as u32,
-            ah: mask.height() as u32,
-            b: range_name.to_string(),
-            bw: range.width() as u32,
-            bh: range.height() as u32,
-        });
-    }
-    let set = mask.as_slice().iter().filter(|&&s| s).count();
-    log::info!(
-        "{}: {what}, {set} pixels ({:.1} %)",
-        path.display(),
-        100.0 * set as f64 / mask.len().max(1) as f64
-    );
-    if set == mask.len() {
-        return Err(Error::invalid(flag, path.display(), all_set));
-    }
-    Ok(())
-}
-
 /// The masks of `--sky-mask` and `--ego-mask`.
 pub struct Masks {
     /// The sky (true = sky).
@@ -146,15 +115,12 @@ pub fn load_masks(args: &PrepOptionArgs, range: &ScalarMap, range_name: &str) ->
     let loaded = match &args.sky_mask {
         Some(path) => {
             let (m, format) = mask::load_sky_mask(path, args.sky_mask_format)?;
-            check_mask(
+            mask::check_mask(
                 ("--sky-mask", path, "sky mask"),
                 &m,
                 range,
                 range_name,
-                &format!(
-                    "a mask with ground in it: every pixel is sky as read ({format}); is it \
-                     inverted, or of another --sky-mask-format?"
-                ),
+                &mask::all_sky_hint(format),
             )?;
             Some((m, format))
         }
@@ -163,15 +129,12 @@ pub fn load_masks(args: &PrepOptionArgs, range: &ScalarMap, range_name: &str) ->
     let ego = match &args.ego_mask {
         Some(path) => {
             let (m, format) = mask::load_ego_mask(path, None)?;
-            check_mask(
+            mask::check_mask(
                 ("--ego-mask", path, "ego-vehicle mask"),
                 &m,
                 range,
                 range_name,
-                &format!(
-                    "a mask with the scene in it: every pixel is the ego vehicle as read \
-                     ({format}); is it inverted, or a label image not named *_labelIds.png?"
-                ),
+                &mask::all_ego_hint(format),
             )?;
             Some(m)
         }

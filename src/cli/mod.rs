@@ -36,6 +36,7 @@ mod refine;
 mod render;
 mod scene;
 mod sky;
+mod sun;
 #[cfg(all(feature = "viewer", not(target_os = "android")))]
 mod view;
 
@@ -64,6 +65,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Prep(a) => prep::run(&a),
         Command::Sky(a) => sky::run_sky(&a),
         Command::Turbidity(a) => sky::run_turbidity(&a),
+        Command::Sun(a) => sun::run_sun(&a),
         // CPU only: no GL context to open.
         Command::Bench(bench::BenchCommand::Turbidity(a)) => bench::run_turbidity(&a),
         Command::Bench(cmd) => {

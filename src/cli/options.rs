@@ -15,7 +15,7 @@ pub fn check_options(args: &RenderArgs) -> Result<()> {
     super::aerial::check_aerial_options(args)?;
     check_depth_options(&args.depth)?;
     if args.no_prep {
-        refuse_prep_options(&args.prep)?;
+        refuse_prep_options(&args.prep, args.capture.reads_seed())?;
     }
     if args.compat == Some(Compat::FoggyCityscapes) {
         let physical =
@@ -46,6 +46,18 @@ fn check_medium_options(args: &RenderArgs) -> Result<()> {
         ("--pitch", text(args.pitch)),
         ("--horizon-row", text(args.horizon_row)),
         ("--horizon-zenith", text(args.horizon_zenith)),
+        (
+            "--horizon-sectors",
+            args.horizon_sectors.map(|n| n.to_string()),
+        ),
+        (
+            "--retarget",
+            args.retarget.map(|r| format!("{r:?}").to_lowercase()),
+        ),
+        ("--latitude", text(args.place.latitude)),
+        ("--longitude", text(args.place.longitude)),
+        ("--time", args.place.time.clone()),
+        ("--heading", text(args.place.heading)),
         ("--sensitivity", path(&args.sensitivity)),
         ("--blur", args.blur.map(|b| format!("{b:?}").to_lowercase())),
     ];
@@ -99,13 +111,20 @@ pub fn check_depth_options(depth: &DepthArgs) -> Result<()> {
 }
 
 /// With `--no-prep` nothing reads the pre-processing options: each one given is an error.
-pub fn refuse_prep_options(prep: &PrepOptionArgs) -> Result<()> {
+/// `seed_read_elsewhere`: --seed also seeds something else (the capture's noise, β
+/// draws), so it is not refused.
+pub fn refuse_prep_options(prep: &PrepOptionArgs, seed_read_elsewhere: bool) -> Result<()> {
     let given = [
         ("--margin", prep.margin.map(|v| v.to_string())),
         ("--sky-factor", prep.sky_factor.map(|v| v.to_string())),
         ("--no-sky", prep.no_sky.then(|| "given".to_string())),
         ("--sky-min-area", prep.sky_min_area.map(|v| v.to_string())),
-        ("--seed", prep.seed.map(|v| v.to_string())),
+        (
+            "--seed",
+            prep.seed
+                .filter(|_| !seed_read_elsewhere)
+                .map(|v| v.to_string()),
+        ),
         (
             "--sky-mask",
             prep.sky_mask.as_ref().map(|p| p.display().to_string()),

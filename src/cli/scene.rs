@@ -7,7 +7,7 @@ use super::limits;
 use brume::camera::Camera;
 use brume::egl::Platform;
 use brume::io::output::{self, Outputs};
-use brume::medium::{DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium};
+use brume::medium::{DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium};
 use brume::raster::{Grid, RgbaImage};
 use brume::scene::SceneRenderer;
 use brume::{Blur, Encoding, Error, FogBlur, GaussBlur, Input, Result};
@@ -261,7 +261,7 @@ pub fn medium_from_args(
         FogKind::None => return Ok(None),
         FogKind::Layered => {
             let l = &args.layered;
-            let mut fog = LayeredFog::new(camera, profile_from_args(l.profile, l));
+            let mut fog = LayeredFog::new(camera, profile_from_args(l.profile, l)?);
             fog.colour = args.fog_colour.unwrap_or(fog.colour);
             fog.albedo = l.albedo.unwrap_or(fog.albedo);
             fog.lambda = lambda.unwrap_or(fog.lambda);
@@ -271,7 +271,7 @@ pub fn medium_from_args(
             let d = &args.distance;
             let defaults = DistanceFog::default();
             SceneMedium::Distance(DistanceFog {
-                camera,
+                camera: camera.into(),
                 start_distance: d.fog_start.unwrap_or(defaults.start_distance),
                 distance: d.fog_distance.unwrap_or(defaults.distance),
                 exponent: d.fog_exponent.unwrap_or(defaults.exponent),
@@ -295,7 +295,7 @@ pub fn medium_from_args(
 /// The distance fog names its fields (`distance`, `noise size`); the flags that set them
 /// are named differently (`--fog-distance`, `--noise-size`).
 fn distance_flags(e: Error) -> Error {
-    const FLAGS: [(&str, &str); 7] = [
+    const FLAGS: [(&str, &str); 8] = [
         ("start_distance", "--fog-start"),
         ("distance", "--fog-distance"),
         ("exponent", "--fog-exponent"),
@@ -303,6 +303,7 @@ fn distance_flags(e: Error) -> Error {
         ("noise size", "--noise-size"),
         ("noise low", "--noise-low"),
         ("noise high", "--noise-high"),
+        ("noise colour strength", "--noise-colour-strength"),
     ];
     match e {
         Error::InvalidParameter {
@@ -321,15 +322,33 @@ fn distance_flags(e: Error) -> Error {
     }
 }
 
-/// The chosen profile: its preset (src/medium/layered/) with the options given.
-fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> HeightProfile {
-    let preset = match kind {
-        ProfileKind::Exponential => HeightProfile::EXPONENTIAL,
-        ProfileKind::Band => HeightProfile::SINE_BAND,
-        ProfileKind::Ramp => HeightProfile::LINEAR_RAMP,
+/// The chosen profile: its preset (src/medium/layered/) with the options given, or the
+/// table of `--density-csv`.
+fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> Result<HeightProfile> {
+    let preset = match (kind, &l.density_csv) {
+        (ProfileKind::Table, Some(path)) => {
+            return Ok(HeightProfile::Table(DensityTable::from_csv(path)?));
+        }
+        (ProfileKind::Table, None) => {
+            return Err(Error::invalid(
+                "--profile",
+                "table",
+                "a table file too: --density-csv FILE.csv (header height_m,extinction_per_m)",
+            ));
+        }
+        (_, Some(path)) => {
+            return Err(Error::invalid(
+                "--density-csv",
+                path.display(),
+                "--profile table with it (the analytic profiles take no table)",
+            ));
+        }
+        (ProfileKind::Exponential, None) => HeightProfile::EXPONENTIAL,
+        (ProfileKind::Band, None) => HeightProfile::SINE_BAND,
+        (ProfileKind::Ramp, None) => HeightProfile::LINEAR_RAMP,
     };
     let or = |given: Option<f64>, default: f64| given.unwrap_or(default);
-    match preset {
+    Ok(match preset {
         HeightProfile::Exponential {
             density,
             base,
@@ -357,7 +376,8 @@ fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> HeightP
             floor: or(l.base, floor),
             top: or(l.top, top),
         },
-    }
+        table @ HeightProfile::Table(_) => table,
+    })
 }
 
 fn noise_from_args(d: &super::args::DistanceArgs) -> Result<Option<FogNoise>> {
@@ -377,6 +397,7 @@ fn noise_from_args(d: &super::args::DistanceArgs) -> Result<Option<FogNoise>> {
     noise.speed = d.noise_speed.unwrap_or(noise.speed);
     noise.low = d.noise_low.unwrap_or(noise.low);
     noise.high = d.noise_high.unwrap_or(noise.high);
+    noise.colour_strength = d.noise_colour_strength.unwrap_or(noise.colour_strength);
     Ok(Some(noise))
 }
 

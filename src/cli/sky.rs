@@ -2,6 +2,7 @@
 //! turbidity of a fisheye sky image, paper 002 sec. 3.4). CPU only: no GL context.
 
 use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
+use super::sun::{PlaceTimeArgs, PlacedSun};
 use brume::io::image::load_linear_rgb;
 use brume::io::output::{self, Outputs};
 use brume::raster::Grid;
@@ -72,14 +73,17 @@ pub struct SkyArgs {
     #[arg(long, value_name = "T", allow_hyphen_values = true)]
     pub turbidity: f64,
 
-    /// Sun zenith angle θs in degrees, in [0, 90).
+    /// Sun zenith angle θs in degrees, in [0, 90) (or --latitude/--longitude/--time).
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
-    pub sun_zenith: f64,
+    pub sun_zenith: Option<f64>,
 
     /// Sun azimuth φs in degrees, in the fisheye's convention (0 at the top of the image,
     /// clockwise by default).
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
-    pub sun_azimuth: f64,
+    pub sun_azimuth: Option<f64>,
+
+    #[command(flatten)]
+    pub place: PlaceTimeArgs,
 
     /// Image side in pixels (the image is square, the sky on its inscribed circle).
     #[arg(
@@ -198,9 +202,48 @@ pub struct TurbidityArgs {
     #[command(flatten)]
     pub fisheye: FisheyeArgs,
 
+    #[command(flatten)]
+    pub place: PlaceTimeArgs,
+
     /// Print one JSON object on stdout (turbidity, std, fit_std, inliers, sun, ...).
     #[arg(long)]
     pub json: bool,
+}
+
+/// The fisheye and the sun's angles (degrees, the fisheye's convention): the angles
+/// given, or the sun from --latitude/--longitude/--time, its compass azimuth taken in a
+/// fisheye whose top points to --heading (north by default). Errors: both or part of
+/// them given, --heading with --azimuth-offset.
+fn fisheye_and_sun(
+    fisheye: &FisheyeArgs,
+    place: &PlaceTimeArgs,
+    zenith: Option<f64>,
+    azimuth: Option<f64>,
+) -> Result<(Fisheye, [Option<f64>; 2], Option<PlacedSun>)> {
+    let angles = match (zenith, azimuth) {
+        (None, None) => None,
+        (Some(_), None) => Some("--sun-zenith"),
+        _ => Some("--sun-azimuth"),
+    };
+    let mut fish = fisheye.fisheye()?;
+    let Some(placed) = place.sun(angles, 0.0)? else {
+        return Ok((fish, [zenith, azimuth], None));
+    };
+    if fisheye.azimuth_offset != 0.0 && place.heading.is_some() {
+        return Err(Error::invalid(
+            "--heading",
+            place.heading.unwrap_or_default(),
+            "one of --heading (the compass direction at the image's top) or --azimuth-offset",
+        ));
+    }
+    if place.heading.is_some() {
+        fish.azimuth_offset = placed.heading;
+    }
+    let sun = [
+        Some(placed.position.apparent_zenith_deg),
+        Some(placed.position.azimuth_deg),
+    ];
+    Ok((fish, sun, Some(placed)))
 }
 
 /// A seed given on the command line.
@@ -211,7 +254,27 @@ fn seed(option: &str, value: i128) -> Result<u64> {
 
 /// Runs `brume sky`.
 pub fn run_sky(args: &SkyArgs) -> Result<()> {
-    let fisheye = args.fisheye.fisheye()?;
+    let (fisheye, [sun_zenith_deg, sun_azimuth_deg], placed) = fisheye_and_sun(
+        &args.fisheye,
+        &args.place,
+        args.sun_zenith,
+        args.sun_azimuth,
+    )?;
+    let [sun_zenith_deg, sun_azimuth_deg] = match (sun_zenith_deg, sun_azimuth_deg) {
+        (Some(z), Some(a)) => [z, a],
+        (z, _) => {
+            return Err(Error::invalid(
+                if z.is_none() {
+                    "--sun-zenith"
+                } else {
+                    "--sun-azimuth"
+                },
+                "(missing)",
+                "the sun's --sun-zenith and --sun-azimuth in degrees, or \
+                 --latitude/--longitude/--time",
+            ))
+        }
+    };
     let size = usize::try_from(args.size)
         .ok()
         .filter(|&s| (1..=MAX_SIZE as usize).contains(&s))
@@ -219,7 +282,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             Error::invalid("--size", args.size, format!("a side in 1..={MAX_SIZE} px"))
         })?;
     limits::check_memory("--size", size, size, SKY_BYTES_PER_PIXEL)?;
-    let (zenith, azimuth) = (args.sun_zenith.to_radians(), args.sun_azimuth.to_radians());
+    let (zenith, azimuth) = (sun_zenith_deg.to_radians(), sun_azimuth_deg.to_radians());
     let model = PreethamSky::new(args.turbidity, zenith, azimuth)?;
     let disc = match args.sun_disc {
         Some(d) if !(d.is_finite() && (0.0..=45.0).contains(&d)) => {
@@ -295,12 +358,13 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             "out": args.out.display().to_string(),
             "size": size,
             "turbidity": args.turbidity,
-            "sun_zenith_deg": args.sun_zenith,
-            "sun_azimuth_deg": args.sun_azimuth,
+            "sun_zenith_deg": sun_zenith_deg,
+            "sun_azimuth_deg": sun_azimuth_deg,
+            "sun_from_place": placed.map(|p| p.json()),
             "fisheye": {
                 "lens": fisheye.lens.name(),
                 "counter_clockwise": fisheye.counter_clockwise,
-                "azimuth_offset_deg": args.fisheye.azimuth_offset,
+                "azimuth_offset_deg": fisheye.azimuth_offset.to_degrees(),
             },
             "zenith_luminance_kcd_m2": model.zenith_luminance(),
             "zenith_chromaticity": [xz, yz],
@@ -317,8 +381,8 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             args.out.display(),
             fisheye.lens.name(),
             args.turbidity,
-            args.sun_zenith,
-            args.sun_azimuth,
+            sun_zenith_deg,
+            sun_azimuth_deg,
             model.zenith_luminance(),
             match exposure {
                 Some(e) => format!("; PNG exposure ×{e:.4} (brightest sky 2° from the sun → 0.9)"),
@@ -349,7 +413,13 @@ pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
 
 fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
     let deg = |v: Option<f64>| v.map(f64::to_radians);
-    let sun = match (deg(args.sun_zenith), deg(args.sun_azimuth)) {
+    let (fisheye, [zenith, azimuth], _) = fisheye_and_sun(
+        &args.fisheye,
+        &args.place,
+        args.sun_zenith,
+        args.sun_azimuth,
+    )?;
+    let sun = match (deg(zenith), deg(azimuth)) {
         (Some(z), Some(a)) => Some([z, a]),
         _ => None,
     };
@@ -358,7 +428,7 @@ fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
         (z, a) => Some([z.unwrap_or(0.0), a.unwrap_or(0.0)]),
     };
     let opts = TurbidityOptions {
-        fisheye: args.fisheye.fisheye()?,
+        fisheye,
         sun,
         reference,
         samples: limits::count("--samples", args.samples, 5, MAX_SAMPLES, "sample points")?,

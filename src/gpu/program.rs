@@ -18,7 +18,7 @@ pub struct Program {
     gl: Arc<glow::Context>,
     raw: glow::Program,
     name: String,
-    uniforms: HashMap<&'static str, glow::UniformLocation>,
+    uniforms: HashMap<String, glow::UniformLocation>,
 }
 
 impl Program {
@@ -32,7 +32,7 @@ impl Program {
         header: &str,
         fragment: (&str, &str),
         uniforms: &[&'static str],
-        optional: &[&'static str],
+        optional: &[&str],
     ) -> Result<Self> {
         Self::with_vertex(
             gl,
@@ -52,7 +52,7 @@ impl Program {
         (vertex_header, vertex): (&str, (&str, &str)),
         (header, fragment): (&str, (&str, &str)),
         uniforms: &[&'static str],
-        optional: &[&'static str],
+        optional: &[&str],
     ) -> Result<Self> {
         // SAFETY: standard shader/program creation on the current context; every object
         // created here is deleted on the error paths or owned by the returned Program.
@@ -103,11 +103,11 @@ impl Program {
                         fragment.0
                     ))
                 })?;
-                found.insert(u, loc);
+                found.insert(u.to_string(), loc);
             }
             for &u in optional {
                 if let Some(loc) = gl.get_uniform_location(raw, u) {
-                    found.insert(u, loc);
+                    found.insert(u.to_string(), loc);
                 }
             }
             program.uniforms = found;

@@ -129,6 +129,54 @@ pub fn load_sky_mask(
     Ok((mask, format))
 }
 
+/// Checks a mask read from `path` (for the option `name`, a `what`) against the range it
+/// goes with (`range_name` in messages): the range's size, and not every pixel set
+/// (`all_set` says what that means). Logs how many pixels it sets.
+pub fn check_mask(
+    (name, path, what): (&str, &Path, &str),
+    mask: &Grid<bool>,
+    range: &crate::raster::ScalarMap,
+    range_name: &str,
+    all_set: &str,
+) -> Result<()> {
+    if (mask.width(), mask.height()) != (range.width(), range.height()) {
+        return Err(Error::SizeMismatch {
+            a: path.display().to_string(),
+            aw: mask.width() as u32,
+            ah: mask.height() as u32,
+            b: range_name.to_string(),
+            bw: range.width() as u32,
+            bh: range.height() as u32,
+        });
+    }
+    let set = mask.as_slice().iter().filter(|&&s| s).count();
+    log::info!(
+        "{}: {what}, {set} pixels ({:.1} %)",
+        path.display(),
+        100.0 * set as f64 / mask.len().max(1) as f64
+    );
+    if set == mask.len() {
+        return Err(Error::invalid(name, path.display(), all_set));
+    }
+    Ok(())
+}
+
+/// What an all-sky mask of `format` probably is, for [`check_mask`].
+pub fn all_sky_hint(format: SkyMaskFormat) -> String {
+    format!(
+        "a mask with ground in it: every pixel is sky as read ({format}); is it inverted, \
+         or of another --sky-mask-format?"
+    )
+}
+
+/// What an all-ego mask of `format` probably is, for [`check_mask`].
+pub fn all_ego_hint(format: SkyMaskFormat) -> String {
+    format!(
+        "a mask with the scene in it: every pixel is the ego vehicle as read ({format}); is \
+         it inverted, or a label image not named *_labelIds.png?"
+    )
+}
+
 /// [`load_sky_mask`] on bytes in memory; `name` stands for the file in messages.
 pub fn decode_sky_mask(bytes: &[u8], name: &str, format: SkyMaskFormat) -> Result<Grid<bool>> {
     decode_label(bytes, name, format, format.sky_label())

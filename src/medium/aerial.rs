@@ -15,8 +15,13 @@
 //!
 //! The depth texture holds range (distance from the camera centre) in any unit:
 //! [`AerialPerspective::metres_per_unit`] turns it into metres.
+//!
+//! I∞ may vary with azimuth (paper 002, sec. 4: brighter toward the sun):
+//! [`AerialPerspective::horizon_sectors`] holds per-sector gains over `horizon_light`
+//! ([`crate::sky::horizon_sectors`] finds them), interpolated linearly between the
+//! sectors' centres by the ray's azimuth; a single sector of gain 1 by default.
 
-use super::{blur_from_optical_depth, Lookup, Medium, MediumSample, Pixel, UniformValue};
+use super::{blur_from_optical_depth, Lookup, Medium, MediumSample, Pixel, UniformValue, Wrap};
 use crate::atmosphere::{
     gradation_coefficients, zeta, AttenuationTable, Channel, ZETA_MAX_ZENITH_RAD,
     ZETA_MIN_TURBIDITY,
@@ -45,6 +50,103 @@ pub struct AerialPerspective {
     pub lambda: f64,
     /// The distance (m) that counts as 1 in the blur law (> 0).
     pub blur_range_m: f64,
+    /// I∞'s gain by azimuth over `horizon_light` (one sector of 1: none).
+    pub horizon_sectors: HorizonSectors,
+}
+
+/// Per-channel gains of the horizon's light by azimuth: `count` sectors of equal width
+/// centred on an azimuth, linear between the sectors' centres, constant beyond the end
+/// ones. Azimuths as [`crate::sky::horizon_sectors::ray_azimuth`]: 0 along −z, π/2
+/// along +x. The GPU reads the gains from a `count` x 3 lookup (rows r, g, b) with the
+/// same bilinear filter as [`HorizonSectors::gain`].
+#[derive(Clone, Debug)]
+pub struct HorizonSectors {
+    gains: Vec<[f32; 3]>,
+    centre: f64,
+    sector_width: f64,
+    lookup: Lookup,
+}
+
+impl HorizonSectors {
+    /// One sector of gain 1: the horizon's light is the same in every direction.
+    pub fn uniform() -> Self {
+        Self::new(vec![[1.0; 3]], 0.0, std::f64::consts::TAU).expect("a valid table")
+    }
+
+    /// `gains` (linear, ≥ 0) of sectors `sector_width` radians wide, centred on azimuth
+    /// `centre` (radians). Errors: no sector, a gain not finite or negative, a width
+    /// not in (0, 2π].
+    pub fn new(gains: Vec<[f32; 3]>, centre: f64, sector_width: f64) -> Result<Self> {
+        if gains.is_empty()
+            || gains
+                .iter()
+                .flatten()
+                .any(|g| !(g.is_finite() && *g >= 0.0))
+        {
+            return Err(Error::invalid(
+                "horizon_sectors",
+                format!("{gains:?}"),
+                "at least one sector of finite gains ≥ 0",
+            ));
+        }
+        if !(sector_width > 0.0 && sector_width <= std::f64::consts::TAU && centre.is_finite()) {
+            return Err(Error::invalid(
+                "horizon sector width",
+                sector_width,
+                "a width in (0, 2π] radians about a finite centre",
+            ));
+        }
+        let n = gains.len();
+        let values = (0..3)
+            .flat_map(|c| gains.iter().map(move |g| g[c]))
+            .collect();
+        let lookup = Lookup::new(n, 3, values, Wrap::ClampToEdge)?;
+        Ok(HorizonSectors {
+            gains,
+            centre,
+            sector_width,
+            lookup,
+        })
+    }
+
+    /// The sectors' gains, left to right.
+    pub fn gains(&self) -> &[[f32; 3]] {
+        &self.gains
+    }
+
+    /// The azimuth of the middle of the sectors, radians.
+    pub fn centre(&self) -> f64 {
+        self.centre
+    }
+
+    /// Each sector's width, radians.
+    pub fn sector_width(&self) -> f64 {
+        self.sector_width
+    }
+
+    /// The lookup's horizontal coordinate for azimuth `azimuth`: sector k's centre at
+    /// texel k (the shader computes the same).
+    fn coordinate(&self, azimuth: f64) -> f64 {
+        let n = self.gains.len() as f64;
+        let d = (azimuth - self.centre + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+            - std::f64::consts::PI;
+        (d / self.sector_width + n / 2.0) / n
+    }
+
+    /// The gain at azimuth `azimuth` (radians), per channel.
+    pub fn gain(&self, azimuth: f64) -> [f64; 3] {
+        let u = self.coordinate(azimuth);
+        std::array::from_fn(|c| self.lookup.sample(u, (c as f64 + 0.5) / 3.0))
+    }
+
+    /// (centre, 1/width, count) for the shader.
+    fn uniform_value(&self) -> [f32; 3] {
+        [
+            self.centre as f32,
+            (1.0 / self.sector_width) as f32,
+            self.gains.len() as f32,
+        ]
+    }
 }
 
 impl AerialPerspective {
@@ -60,6 +162,7 @@ impl AerialPerspective {
             reference_zenith: 85f64.to_radians(),
             lambda: 0.0,
             blur_range_m,
+            horizon_sectors: HorizonSectors::uniform(),
         }
     }
 
@@ -77,17 +180,17 @@ impl AerialPerspective {
 }
 
 impl Medium for AerialPerspective {
-    fn name(&self) -> &'static str {
-        "aerial"
+    fn name(&self) -> std::borrow::Cow<'static, str> {
+        "aerial".into()
     }
 
-    fn glsl(&self) -> &'static str {
-        include_str!("../../glsl/medium/aerial.glsl")
+    fn glsl(&self) -> std::borrow::Cow<'static, str> {
+        include_str!("../../glsl/medium/aerial.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
+    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let t = &self.table;
-        vec![
+        super::static_names(vec![
             (
                 "u_gamma_coord",
                 UniformValue::Vec4([
@@ -101,10 +204,14 @@ impl Medium for AerialPerspective {
             ("u_horizon", UniformValue::Vec3(self.horizon_light)),
             ("u_gradation", UniformValue::Vec3(self.gradation_uniform())),
             (
+                "u_horizon_sectors",
+                UniformValue::Vec3(self.horizon_sectors.uniform_value()),
+            ),
+            (
                 "u_aerial_blur",
                 UniformValue::Vec2([self.lambda as f32, (1.0 / self.blur_range_m) as f32]),
             ),
-        ]
+        ])
     }
 
     fn chromatic(&self) -> bool {
@@ -124,11 +231,14 @@ impl Medium for AerialPerspective {
             .normalize();
         let theta = ray.y.clamp(-1.0, 1.0).acos();
         let z = zeta(self.table.turbidity(), theta, self.reference_zenith);
+        let gain = self
+            .horizon_sectors
+            .gain(crate::sky::horizon_sectors::ray_azimuth(ray));
         let mean = gamma.iter().sum::<f64>() / 3.0;
         let ds = (-mean.max(1e-30).ln()).min(MAX_BLUR_OPTICAL_DEPTH);
         MediumSample {
             transmission: gamma,
-            inscatter: self.horizon_light.map(|v| f64::from(v) * z),
+            inscatter: std::array::from_fn(|c| f64::from(self.horizon_light[c]) * z * gain[c]),
             sigma: blur_from_optical_depth(p.sigma0, self.lambda, s / self.blur_range_m, ds),
         }
     }
@@ -159,11 +269,14 @@ impl Medium for AerialPerspective {
         self.camera.validate()
     }
 
-    fn camera(&self) -> Option<Camera> {
-        Some(self.camera)
+    fn camera(&self) -> Option<crate::camera::FrameCamera> {
+        Some(self.camera.into())
     }
 
-    fn lookups(&self) -> Vec<(&'static str, Lookup)> {
-        vec![("u_gamma", self.table.lookup().clone())]
+    fn lookups(&self) -> Vec<(std::borrow::Cow<'static, str>, super::Lookup)> {
+        super::static_names(vec![
+            ("u_gamma", self.table.lookup().clone()),
+            ("u_horizon_gain", self.horizon_sectors.lookup.clone()),
+        ])
     }
 }

@@ -81,17 +81,17 @@ impl Haze {
 }
 
 impl Medium for Haze {
-    fn name(&self) -> &'static str {
-        "haze"
+    fn name(&self) -> std::borrow::Cow<'static, str> {
+        "haze".into()
     }
 
-    fn glsl(&self) -> &'static str {
-        include_str!("../../glsl/medium/haze.glsl")
+    fn glsl(&self) -> std::borrow::Cow<'static, str> {
+        include_str!("../../glsl/medium/haze.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
+    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let k = self.extinction_rgb().map(|v| v as f32);
-        vec![
+        super::static_names(vec![
             ("u_extinction", UniformValue::Vec3(k)),
             (
                 "u_range_scale",
@@ -102,7 +102,7 @@ impl Medium for Haze {
                 UniformValue::Float(self.sigma_span() as f32),
             ),
             ("u_airlight", UniformValue::Vec3(self.airlight)),
-        ]
+        ])
     }
 
     fn chromatic(&self) -> bool {

@@ -39,10 +39,20 @@
 //!    (`tests/gpu_vs_cpu.rs` shows how).
 //!
 //! A medium that reads a rendered frame's depth buffer returns its camera from
-//! [`Medium::camera`]; its GLSL then has `brume_ray` and `brume_eye_depth` (see
-//! `glsl/medium_api.glsl`), and its CPU side rebuilds positions by
-//! [`Camera::world_position_by_inverse`] (`layered/`, `distance/`). A medium that
-//! samples a table (a noise, a precomputed integral) returns it from [`Medium::lookups`].
+//! [`Medium::camera`] (brume's [`crate::camera::Camera`], or an engine's view and
+//! projection matrices as they are: [`crate::camera::MatrixCamera`]); its GLSL then has
+//! `brume_ray` and `brume_eye_depth` (see `glsl/medium_api.glsl`), and its CPU side
+//! rebuilds positions by [`crate::camera::MatrixCamera::world_position_by_inverse`]
+//! (`layered/`, `distance/`). A medium that samples a table (a noise, a precomputed
+//! integral) returns it from [`Medium::lookups`].
+//!
+//! # Media defined at run time
+//!
+//! Names, GLSL and uniform names are `Cow<'static, str>`: brume's media borrow their
+//! files, a user's medium (Python, an engine's material editor) owns text it built. The
+//! pipeline keys its programs by the GLSL text itself (a 128-bit hash), so a medium's
+//! name is only for messages, and two media of one name never share a program.
+//! [`UniformValue`] has floats, vectors, a `mat3` and integers (`int`, `ivec2..4`).
 //!
 //! The pipeline compiles the medium's GLSL into the first pass (which writes τ·E, τ and the
 //! per-pixel diffusion rate) and into the last (which adds (1 − τ_blurred)·L∞), so a medium
@@ -60,13 +70,14 @@ pub mod uniform;
 pub use aerial::AerialPerspective;
 pub use distance::{DistanceFog, FogNoise};
 pub use haze::Haze;
-pub use layered::{HeightProfile, LayeredFog};
+pub use layered::{DensityTable, HeightProfile, LayeredFog};
 pub use lookup::{Lookup, Wrap};
 pub use physical::PhysicalFog;
 pub use uniform::UniformBlur;
 
-use crate::camera::Camera;
+use crate::camera::FrameCamera;
 use crate::error::Result;
+use std::borrow::Cow;
 
 /// GLSL declarations every medium's shader sees before its own source: the
 /// [`MediumSample`] struct and the pipeline's uniforms.
@@ -112,8 +123,14 @@ pub enum UniformValue {
     Vec3([f32; 3]),
     /// `vec4`.
     Vec4([f32; 4]),
+    /// `int` (or `bool`: GL sets a bool uniform from an int).
+    Int(i32),
     /// `ivec2`.
     IVec2([i32; 2]),
+    /// `ivec3`.
+    IVec3([i32; 3]),
+    /// `ivec4`.
+    IVec4([i32; 4]),
     /// `mat3`, column-major.
     Mat3([f32; 9]),
 }
@@ -121,14 +138,18 @@ pub enum UniformValue {
 /// A fog model: per pixel a transmission, an in-scattered light and a blur scale, on the
 /// GPU (GLSL) and on the CPU (f64 reference). See the module docs for the contract.
 pub trait Medium {
-    /// A short name: the program cache key and the name in shader error messages.
-    fn name(&self) -> &'static str;
+    /// A short name, for messages (shader errors, a misspelled uniform). Not a key: the
+    /// program cache is keyed by the GLSL itself, so two media of one name with different
+    /// GLSL get their own programs. Need not be static: a medium can be defined at run
+    /// time (a Python or engine user's).
+    fn name(&self) -> Cow<'static, str>;
 
-    /// The GLSL source defining `MediumSample medium_sample(ivec2 pixel, float depth)`.
-    fn glsl(&self) -> &'static str;
+    /// The GLSL source defining `MediumSample medium_sample(ivec2 pixel, float depth)`:
+    /// a file of brume's (`Cow::Borrowed(include_str!(…))`) or text built at run time.
+    fn glsl(&self) -> Cow<'static, str>;
 
     /// The values of the uniforms the GLSL declares, set before each pass that uses it.
-    fn uniforms(&self) -> Vec<(&'static str, UniformValue)>;
+    fn uniforms(&self) -> Vec<(Cow<'static, str>, UniformValue)>;
 
     /// Whether τ can differ between channels. A grey medium's τ travels in the alpha of
     /// the pre-multiplied colour; a chromatic one adds a second target (see
@@ -146,18 +167,29 @@ pub trait Medium {
     fn validate(&self) -> Result<()>;
 
     /// The camera of a rendered frame, for a medium that reads a depth buffer (window
-    /// depth in [0, 1]) rather than a range map. The pipeline then sets the shader's
-    /// `brume_ray`, `brume_depth_constants` and `brume_eye` for each frame (see
+    /// depth in [0, 1]) rather than a range map: brume's [`crate::camera::Camera`] or an
+    /// engine's matrices ([`crate::camera::MatrixCamera`]). The pipeline then sets the
+    /// shader's `brume_ray`, `brume_depth_constants` and `brume_eye` for each frame (see
     /// [`crate::camera`]); `None` (the default) leaves them zero.
-    fn camera(&self) -> Option<Camera> {
+    fn camera(&self) -> Option<FrameCamera> {
         None
     }
 
     /// Lookup textures the GLSL samples, by their `sampler2D` uniform's name (at most
     /// [`MAX_LOOKUPS`]). The default is none.
-    fn lookups(&self) -> Vec<(&'static str, Lookup)> {
+    fn lookups(&self) -> Vec<(Cow<'static, str>, Lookup)> {
         Vec::new()
     }
+}
+
+/// `(name, value)` pairs with static names as the [`Medium`] methods return them.
+pub fn static_names<T>(
+    pairs: impl IntoIterator<Item = (&'static str, T)>,
+) -> Vec<(Cow<'static, str>, T)> {
+    pairs
+        .into_iter()
+        .map(|(name, value)| (Cow::Borrowed(name), value))
+        .collect()
 }
 
 /// The most lookup textures one medium may use.

@@ -29,22 +29,22 @@ impl UniformBlur {
 }
 
 impl Medium for UniformBlur {
-    fn name(&self) -> &'static str {
-        "uniform_blur"
+    fn name(&self) -> std::borrow::Cow<'static, str> {
+        "uniform_blur".into()
     }
 
-    fn glsl(&self) -> &'static str {
-        include_str!("../../glsl/medium/uniform_blur.glsl")
+    fn glsl(&self) -> std::borrow::Cow<'static, str> {
+        include_str!("../../glsl/medium/uniform_blur.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
-        vec![
+    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
+        super::static_names(vec![
             ("u_sigma", UniformValue::Float(self.sigma as f32)),
             (
                 "u_transmission",
                 UniformValue::Vec3(self.transmission.map(|t| t as f32)),
             ),
-        ]
+        ])
     }
 
     fn chromatic(&self) -> bool {

@@ -1,17 +1,27 @@
 //! Paper 002's aerial perspective on a prepared photo: the spectral attenuation of a
-//! turbidity along each pixel's ray, the horizon's light from the sky found, and
-//! retargeting from the turbidity the photo was taken at (sec. 7.2.3, eq. 25-26), as
-//! `brume render --medium aerial` and `brume view` run it.
+//! turbidity along each pixel's ray, the horizon's light from the sky found (per azimuth
+//! sector, sec. 4), and retargeting from the turbidity the photo was taken at (sec.
+//! 7.2.3, eq. 25-26), as `brume render --medium aerial` and `brume view` run it; and the
+//! turbidity of a fisheye sky photo for it ([`turbidity_from_sky`]).
+//!
+//! Retargeting comes in two forms ([`Retarget`]): the paper's eq. 26 keeps the
+//! normalised radiance ρ = I⁰/I∞ (the object term scaled by I∞_t/I∞_s = ζ(T_t)/ζ(T_s)),
+//! the other keeps the radiance I⁰ itself.
 
 use super::{Photo, PreparedPhoto};
 use crate::atmosphere::{horizon_light, AttenuationTable, Sensitivity};
 use crate::blur::Blur;
 use crate::camera::Camera;
 use crate::error::{Error, Result};
+use crate::medium::aerial::HorizonSectors;
 use crate::medium::{haze, AerialPerspective, Medium, Pixel};
 use crate::pipeline::FogBlur;
 use crate::raster::{Grid, RgbImage, ScalarMap};
-use std::path::PathBuf;
+use crate::sky::horizon_sectors::{
+    horizon_light_by_azimuth, sun_gains, SectorGeometry, DEFAULT_SECTORS, MAX_SECTORS,
+};
+use crate::sky::turbidity::{estimate_turbidity, TurbidityEstimate, TurbidityOptions};
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The smallest source Γ retargeting divides by: below it the photo holds airlight only.
@@ -47,6 +57,42 @@ pub struct AerialOptions {
     pub horizon_light: Option<[f32; 3]>,
     /// The diffusion blur's scheme and limits.
     pub blur: Blur,
+    /// Azimuth sectors across the image for the horizon's light found in the sky (1: one
+    /// value for the whole image), in [1, [`MAX_SECTORS`]].
+    pub horizon_sectors: usize,
+    /// How a photo taken at [`AerialOptions::from_turbidity`] is carried to the target.
+    pub retarget: Retarget,
+    /// The sun's zenith angle and its azimuth from the image centre's (radians,
+    /// clockwise: the sun's compass azimuth minus the camera's heading). With no sky
+    /// found, the horizon's light by azimuth then follows the Preetham sky's
+    /// ([`crate::sky::horizon_sectors::sun_gains`]), the light given or estimated being
+    /// the image centre's.
+    pub sun: Option<[f64; 2]>,
+}
+
+/// Retargeting a photo from the turbidity it was taken at, T_s, to T_t (paper 002,
+/// sec. 7.2.3).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Retarget {
+    /// Eq. 25-26 as printed: the normalised radiance ρ = I⁰/I∞ is what stays, so the
+    /// object's radiance follows the sky's: I⁰_t = I⁰_s·I∞_t/I∞_s, and
+    /// Î_t = I_s·(I∞_t Γ_t)/(I∞_s Γ_s) + I∞_t(1 − Γ_t/Γ_s). With brume's I∞(T, θ) =
+    /// I∞(θ′)ζ(T, θ, θ′), I∞_t/I∞_s = ζ(T_t, θ, θ′)/ζ(T_s, θ, θ′).
+    #[default]
+    Normalised,
+    /// The radiance I⁰ stays (the scene's light does not change with the haze):
+    /// I⁰ = (I_s − I∞_s(1 − Γ_s))/Γ_s, then eq. 10 at T_t.
+    Radiance,
+}
+
+impl Retarget {
+    /// The name the command line and reports use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Retarget::Normalised => "normalised",
+            Retarget::Radiance => "radiance",
+        }
+    }
 }
 
 impl AerialOptions {
@@ -65,6 +111,9 @@ impl AerialOptions {
             horizon_zenith_deg: DEFAULT_HORIZON_ZENITH_DEG,
             horizon_light: None,
             blur: Blur::default(),
+            horizon_sectors: DEFAULT_SECTORS,
+            retarget: Retarget::default(),
+            sun: None,
         }
     }
 }
@@ -146,9 +195,34 @@ pub fn aerial(
             1.5 * max_range
         }
     });
+    if !(1..=MAX_SECTORS).contains(&opts.horizon_sectors) {
+        return Err(Error::invalid(
+            "horizon_sectors",
+            opts.horizon_sectors,
+            format!("a number of azimuth sectors in [1, {MAX_SECTORS}]"),
+        ));
+    }
+    // The sky's own turbidity carries a sector's light between zenith angles.
+    let sky_turbidity = opts.from_turbidity.unwrap_or(opts.turbidity);
     let found = match (&opts.horizon_light, &prepared.prepared) {
-        (None, Some(p)) => horizon_light(&photo.image, &p.sky, &opts.camera),
+        (None, Some(p)) if opts.horizon_sectors > 1 => horizon_light_by_azimuth(
+            &photo.image,
+            &p.sky,
+            &opts.camera,
+            opts.horizon_sectors,
+            sky_turbidity,
+        )
+        .map(|h| {
+            let g = h.geometry;
+            let sectors = HorizonSectors::new(h.gains, g.centre, g.sector_width);
+            (h.overall, Some(sectors))
+        }),
+        (None, Some(p)) => horizon_light(&photo.image, &p.sky, &opts.camera).map(|h| (h, None)),
         _ => None,
+    };
+    let (found, sectors) = match found {
+        Some((h, s)) => (Some(h), s.transpose()?),
+        None => (None, None),
     };
     let (light, zenith, horizon_from) = match (found, opts.horizon_light) {
         (Some(h), _) => (h.rgb, h.zenith, HorizonFrom::Horizon),
@@ -163,9 +237,29 @@ pub fn aerial(
             HorizonFrom::Airlight,
         ),
     };
-    let medium = aerial_medium(opts, 1.5 * f64::from(max_range), light, zenith)?;
+    let mut medium = aerial_medium(opts, 1.5 * f64::from(max_range), light, zenith)?;
+    let sectors = match (sectors, opts.sun) {
+        (Some(s), _) => Some(s),
+        (None, Some([sun_zenith, sun_azimuth])) if opts.horizon_sectors > 1 => {
+            let (w, h) = (photo.image.width(), photo.image.height());
+            let g = SectorGeometry::across(&opts.camera, w, h, opts.horizon_sectors);
+            let gains = sun_gains(&g, sky_turbidity, sun_zenith, sun_azimuth, zenith)?;
+            Some(HorizonSectors::new(gains, g.centre, g.sector_width)?)
+        }
+        (None, _) => None,
+    };
+    if let Some(s) = sectors {
+        medium.horizon_sectors = s;
+    }
     let image = match opts.from_turbidity {
-        Some(from) => dehaze(&photo.image, &range, &medium, &opts.sensitivity, from)?,
+        Some(from) => dehaze(
+            &photo.image,
+            &range,
+            &medium,
+            &opts.sensitivity,
+            from,
+            opts.retarget,
+        )?,
         None => photo.image.clone(),
     };
     Ok(AerialPhoto {
@@ -198,16 +292,19 @@ fn aerial_medium(
     Ok(medium)
 }
 
-/// Retargeting (eq. 25-26): the haze-free radiance of a photo taken at turbidity `from`,
-/// I⁰ = (I − I∞_s(1 − Γ_s))/Γ_s with the source's Γ and airlight (the `target` medium's
-/// horizon light and geometry), clamped at 0. The target's medium is then applied to it
-/// as to any photo.
+/// Retargeting (eq. 25-26): the haze-free image of a photo taken at turbidity `from`,
+/// for the `target` medium to be applied to as to any photo. The source's medium is the
+/// target's (its horizon light, sectors and geometry) at turbidity `from`: Γ_s and
+/// I∞_s = I∞(θ′)ζ(T_s, θ, θ′). [`Retarget::Radiance`] gives I⁰ = (I − I∞_s(1 − Γ_s))/Γ_s;
+/// [`Retarget::Normalised`] gives I⁰·I∞_t/I∞_s, so that the target's eq. 10 yields eq.
+/// 26. Clamped at 0; Γ_s below 10⁻³ is taken as 10⁻³.
 pub fn dehaze(
     image: &RgbImage,
     range: &ScalarMap,
     target: &AerialPerspective,
     sensitivity: &Sensitivity,
     from: f64,
+    retarget: Retarget,
 ) -> Result<RgbImage> {
     let table = AttenuationTable::new(
         sensitivity,
@@ -221,20 +318,54 @@ pub fn dehaze(
     };
     let (w, h) = (image.width(), image.height());
     Ok(Grid::from_fn(w, h, |x, y| {
-        let m = source.sample(Pixel {
+        let pixel = Pixel {
             x,
             y: h - 1 - y,
             width: w,
             height: h,
             depth: f64::from(*range.get(x, y)),
             sigma0: 1.0,
-        });
+        };
+        let m = source.sample(pixel);
+        let scale: [f64; 3] = match retarget {
+            Retarget::Radiance => [1.0; 3],
+            Retarget::Normalised => {
+                let t = target.sample(pixel);
+                std::array::from_fn(|c| {
+                    if m.inscatter[c] > 0.0 {
+                        t.inscatter[c] / m.inscatter[c]
+                    } else {
+                        1.0
+                    }
+                })
+            }
+        };
         let e = image.get(x, y);
         std::array::from_fn(|c| {
             let g = m.transmission[c].max(MIN_SOURCE_GAMMA);
-            ((f64::from(e[c]) - m.inscatter[c] * (1.0 - g)) / g).max(0.0) as f32
+            (scale[c] * (f64::from(e[c]) - m.inscatter[c] * (1.0 - g)) / g).max(0.0) as f32
         })
     }))
+}
+
+/// The turbidity of the fisheye sky photo at `path` (paper 002, sec. 3.4): the sun
+/// given as (zenith, azimuth) in radians in the fisheye's convention (azimuth 0 at the
+/// image's top, clockwise; a compass azimuth when north is at the top), or found from
+/// its saturated disc when `None`; the estimator's other options their defaults.
+pub fn turbidity_from_sky(path: &Path, sun: Option<[f64; 2]>) -> Result<TurbidityEstimate> {
+    let sky = crate::io::image::load_linear_rgb(path)?;
+    let name = path.display().to_string();
+    let opts = TurbidityOptions {
+        sun,
+        ..TurbidityOptions::default()
+    };
+    let estimate = estimate_turbidity(&sky, &name, &opts)?;
+    log::info!(
+        "{name}: turbidity {:.3} ± {:.3}",
+        estimate.turbidity,
+        estimate.std
+    );
+    Ok(estimate)
 }
 
 /// The pitch (degrees) that puts the horizon on row `row` (0 at the top, centres at

@@ -135,18 +135,7 @@ pub fn fog(
     opts: &FogOptions,
 ) -> Result<FoggedPhoto> {
     if let Extinction::Physical(fog) = &opts.extinction {
-        if !photo.depth.metric {
-            return Err(Error::invalid(
-                "beta",
-                fog.beta,
-                format!(
-                    "range in metres, but {} was read as {} {} in {}: give its calibration, \
-                     a metric depth format or a scale in metres per unit, or use \
-                     normalised extinction",
-                    photo.depth_name, photo.depth.format, photo.depth.kind, photo.depth.units
-                ),
-            ));
-        }
+        photo.require_metres("beta", fog.beta)?;
     }
     let size = (photo.image.width(), photo.image.height());
     if (prepared.range.width(), prepared.range.height()) != size {

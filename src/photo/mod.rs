@@ -16,18 +16,28 @@
 //! The steps, each usable alone: [`Photo`] (an image and its range, loaded or given),
 //! [`preprocess`] (holes, sky, the airlight, on the depth map's grid: CPU only, so a
 //! dataset's loader thread can run it), [`PreparedPhoto::refine`] (upsampling and the
-//! guided filter, on the GPU or by the CPU references), [`fog`] (the haze in normalised
-//! or physical units, with the diffusion blur) and [`transmittance_map`].
+//! guided filter, on the GPU or by the CPU references), [`insert`] (a rendered object,
+//! depth-tested, before the fog), [`fog`] (the haze in normalised or physical units, with
+//! the diffusion blur), [`transmittance_map`], and [`capture`] (exposure, sensor noise
+//! and JPEG after the fog; [`BetaDistribution`] draws β per frame).
 
 mod aerial;
+pub mod capture;
+mod distribution;
 mod fog;
+mod frames;
+mod insert;
 mod prepare;
 
 pub use aerial::{
-    aerial, dehaze, pitch_for_horizon_row, AerialOptions, AerialPhoto, HorizonFrom,
-    DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+    aerial, dehaze, pitch_for_horizon_row, turbidity_from_sky, AerialOptions, AerialPhoto,
+    HorizonFrom, Retarget, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
 };
+pub use capture::{capture, CaptureOptions, SensorNoise};
+pub use distribution::BetaDistribution;
 pub use fog::{fog, medium_range, transmittance_map, Extinction, FogOptions, FoggedPhoto};
+pub use frames::{transmittance_rgb8, Conventions, Frame, FrameFog, FrameOptions};
+pub use insert::{insert, Insertion, VirtualObject};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
 
 use crate::error::{Error, Result};
@@ -120,6 +130,24 @@ impl Photo {
             image_name: "built-in demo image".into(),
             depth_name: "built-in demo disparity".into(),
         })
+    }
+
+    /// Refuses fog in physical units (the option `name` = `value`) on a range not known
+    /// to be in metres ([`LoadedDepth::metric`]), saying how it was read and what would do.
+    pub fn require_metres(&self, name: &str, value: impl std::fmt::Display) -> Result<()> {
+        if self.depth.metric {
+            return Ok(());
+        }
+        Err(Error::invalid(
+            name,
+            value,
+            format!(
+                "range in metres, but {} was read as {} {} in {}: give its calibration or \
+                 camera file, a metric depth format or a scale in metres per unit, or use \
+                 normalised extinction",
+                self.depth_name, self.depth.format, self.depth.kind, self.depth.units
+            ),
+        ))
     }
 
     /// The depth map has the image's size, or is smaller by one factor on both sides (it

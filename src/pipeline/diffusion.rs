@@ -4,16 +4,17 @@
 use super::programs::{medium_key, ProgramKey};
 use super::uniforms::{bind_texture, set_int, set_value};
 use super::{
-    draw_fullscreen, Destination, Encoding, Input, Pipeline, UNIT_DEPTH, UNIT_MAIN, UNIT_SECOND,
+    draw_fullscreen, Destination, Encoding, Input, Pipeline, UNIT_DEPTH, UNIT_LOOKUP, UNIT_MAIN,
+    UNIT_SECOND,
 };
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gpu::timer::PassTimer;
 use crate::medium::{Medium, UniformValue};
-use crate::schedule::Schedule;
+use crate::schedule::{Schedule, DETAIL_DECAY};
 
 impl Pipeline {
-    /// The N + 2 passes, timed by `timer`; returns the ping-pong target that is free for
-    /// an internal result.
+    /// The N + 2 passes (N + 4 with the coarse stage: its down and blend passes), timed
+    /// by `timer`; returns the ping-pong target that is free for an internal result.
     pub(super) fn run_passes(
         &self,
         input: &Input,
@@ -61,8 +62,9 @@ impl Pipeline {
             chromatic,
         })?;
         let texel = [1.0 / input.width as f32, 1.0 / input.height as f32];
+        let full_steps = self.coarse_start.unwrap_or(schedule.steps);
         let mut current = 0;
-        for k in 0..schedule.steps {
+        for k in 0..full_steps {
             let (src, dst) = (current, 1 - current);
             timer.pass(|| {
                 targets.step[dst].bind_for_drawing();
@@ -72,19 +74,21 @@ impl Pipeline {
                 if let Some(pair) = &targets.tau_gb {
                     pair[src].bind(UNIT_SECOND);
                 }
-                let [scale, coefficient] = law.uniform(k);
                 set_int(gl, d, "u_f", UNIT_MAIN as i32);
                 set_int(gl, d, "u_rate", UNIT_DEPTH as i32);
                 set_int(gl, d, "u_tau_gb", UNIT_SECOND as i32);
-                set_value(gl, d, "u_law", UniformValue::Vec2([scale, coefficient]));
+                set_value(gl, d, "u_law", UniformValue::Vec2(law.uniform(k)));
                 set_value(gl, d, "u_texel", UniformValue::Vec2(texel));
                 draw_fullscreen(gl);
             })?;
             current = dst;
         }
+        if let Some(start) = self.coarse_start {
+            current = self.run_coarse(schedule, start, current, timer)?;
+        }
 
         let c = self.compiled(ProgramKey::Composite {
-            medium: medium.name(),
+            medium: super::programs::MediumId::of(medium),
             chromatic,
         })?;
         let free = 1 - current;
@@ -111,5 +115,99 @@ impl Pipeline {
             draw_fullscreen(gl);
         })?;
         Ok(free)
+    }
+
+    /// The coarse stage (`coarse.rs`) from step `start`, F at `start` in target
+    /// `current`: down, steps `start..N` at half resolution, blend into the other target.
+    /// Returns the target that holds F at step N.
+    fn run_coarse(
+        &self,
+        schedule: &Schedule,
+        start: u32,
+        current: usize,
+        timer: &mut PassTimer,
+    ) -> Result<usize> {
+        let gl = &self.gl;
+        let targets = self.targets()?;
+        let (programs, half) = match (&self.coarse.programs, &self.coarse.targets) {
+            (Some(p), Some(t)) => (p, t),
+            _ => return Err(Error::Gl("internal: coarse stage not prepared".into())),
+        };
+        let full_texel = [1.0 / targets.width as f32, 1.0 / targets.height as f32];
+        let half_texel = half.texel();
+        timer.pass(|| {
+            half.down.bind_for_drawing();
+            self.use_program(&programs.down);
+            targets.f[current].bind(UNIT_MAIN);
+            targets.rate.bind(UNIT_DEPTH);
+            set_int(gl, &programs.down, "u_f", UNIT_MAIN as i32);
+            set_int(gl, &programs.down, "u_rate", UNIT_DEPTH as i32);
+            set_value(
+                gl,
+                &programs.down,
+                "u_texel",
+                UniformValue::Vec2(full_texel),
+            );
+            draw_fullscreen(gl);
+        })?;
+        let law = schedule.offset_law();
+        let d = self.compiled(ProgramKey::Diffuse {
+            matched: law.matched,
+            chromatic: false,
+        })?;
+        let shrink = schedule.coarse_scale(start) as f32;
+        let mut coarse = 0;
+        for k in start..schedule.steps {
+            let (src, dst) = (coarse, 1 - coarse);
+            timer.pass(|| {
+                half.step[dst].bind_for_drawing();
+                self.use_program(d);
+                half.d[src].bind(UNIT_MAIN);
+                half.rate.bind(UNIT_DEPTH);
+                // Offsets in half-resolution texels: the law's scale halves (module docs
+                // of coarse.rs: exact in variance for the matched law), less what the
+                // resampling adds (`Schedule::coarse_scale`).
+                let [scale, coefficient] = law.uniform(k);
+                set_int(gl, d, "u_f", UNIT_MAIN as i32);
+                set_int(gl, d, "u_rate", UNIT_DEPTH as i32);
+                set_value(
+                    gl,
+                    d,
+                    "u_law",
+                    UniformValue::Vec2([0.5 * shrink * scale, coefficient]),
+                );
+                set_value(gl, d, "u_texel", UniformValue::Vec2(half_texel));
+                draw_fullscreen(gl);
+            })?;
+            coarse = dst;
+        }
+        let out = 1 - current;
+        let b = &programs.blend;
+        timer.pass(|| {
+            targets.step[out].bind_for_drawing();
+            self.use_program(b);
+            targets.f[current].bind(UNIT_MAIN);
+            targets.rate.bind(UNIT_DEPTH);
+            half.d[coarse].bind(UNIT_SECOND);
+            half.d0.bind(UNIT_LOOKUP);
+            set_int(gl, b, "u_f", UNIT_MAIN as i32);
+            set_int(gl, b, "u_rate", UNIT_DEPTH as i32);
+            set_int(gl, b, "u_coarse", UNIT_SECOND as i32);
+            set_int(gl, b, "u_coarse0", UNIT_LOOKUP as i32);
+            set_value(gl, b, "u_half_texel", UniformValue::Vec2(half_texel));
+            let decay = DETAIL_DECAY * schedule.sigma0 * schedule.sigma0;
+            set_value(
+                gl,
+                b,
+                "u_detail",
+                UniformValue::Vec3([
+                    decay as f32,
+                    2.0 * schedule.steps as f32,
+                    2.0 * start as f32,
+                ]),
+            );
+            draw_fullscreen(gl);
+        })?;
+        Ok(out)
     }
 }

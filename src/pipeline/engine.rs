@@ -24,6 +24,7 @@
 //! a camera. [`Pipeline::blend_fog`] is paper 003's way: one pass drawn over the host's
 //! framebuffer, which already holds the scene, blended by fixed-function GL.
 
+use super::programs::MediumId;
 use super::{
     bind_texture, draw_fullscreen, set_int, set_value, Destination, Encoding, Frame, Input, Output,
     Pipeline, ProgramKey, UNIT_DEPTH, UNIT_MAIN,
@@ -514,7 +515,7 @@ impl Pipeline {
             self.caps.require_renderable(precision)?;
         }
         for &key in keys {
-            self.program(ProgramKey::Engine(medium.name(), key), Some(medium))?;
+            self.program(ProgramKey::Engine(MediumId::of(medium), key), Some(medium))?;
         }
         self.upload_lookups(medium)?;
         self.engine_targets
@@ -553,7 +554,7 @@ impl Pipeline {
                 FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => *g,
                 _ => GaussBlur::default(),
             };
-            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), keys[0]))?;
+            let p = pipeline.compiled(ProgramKey::Engine(MediumId::of(medium), keys[0]))?;
             timer.pass(|| {
                 // The encoding is compiled into the program (engine_keys).
                 let origin = match intermediate {
@@ -571,7 +572,7 @@ impl Pipeline {
                 draw_fullscreen(&pipeline.gl);
             })?;
             if let (Some(&blur_key), Some(target)) = (keys.get(1), intermediate) {
-                let b = pipeline.compiled(ProgramKey::Engine(medium.name(), blur_key))?;
+                let b = pipeline.compiled(ProgramKey::Engine(MediumId::of(medium), blur_key))?;
                 timer.pass(|| {
                     let (origin, _) = pipeline.bind_destination(destination, input, internal);
                     pipeline.use_program(b);
@@ -607,7 +608,7 @@ impl Pipeline {
         };
         self.timed("running the fog passes", |pipeline, timer| {
             let gl = &pipeline.gl;
-            let p = pipeline.compiled(ProgramKey::Engine(medium.name(), key))?;
+            let p = pipeline.compiled(ProgramKey::Engine(MediumId::of(medium), key))?;
             timer.pass(|| {
                 let (origin, _) = pipeline.bind_destination(destination, input, internal);
                 let (w, h) = (input.width as i32, input.height as i32);

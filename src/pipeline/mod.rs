@@ -8,6 +8,8 @@
 //! 2. **N × diffusion** (`diffuse.frag`, eq. 11-12): each reads one target and writes the
 //!    other, neighbours read by one hardware-bilinear fetch each, the rate bilinear too;
 //!    the offset h_k(x) comes from ρ(x) by the scheme's [`crate::schedule::OffsetLaw`].
+//!    With [`Blur::coarse_from`], the last steps run at half resolution between a 2x2
+//!    average and a blend back (`coarse.rs`: two passes more, a quarter of the pixels).
 //! 3. **Composite** (`composite.frag` + the medium's GLSL): F.rgb + (1 − τ_blurred)·L∞
 //!    into the host's destination, L∞ evaluated by the medium at each pixel.
 //!
@@ -95,6 +97,7 @@
 //!   work. Where `glGetQueryiv` cannot be found ([`timer::HostQueryProbe`]) brume begins no
 //!   query at all: deferred times are unavailable, blocking ones by the wall clock.
 
+mod coarse;
 mod diffusion;
 mod engine;
 mod external;
@@ -213,6 +216,10 @@ pub struct Pipeline {
     // Field order is drop order; `gl` last, as the objects above need it.
     programs: HashMap<ProgramKey, Program>,
     targets: Option<Targets>,
+    /// The coarse-to-fine stage's programs and half-resolution targets, and where this
+    /// frame's schedule starts it ([`Blur::coarse_from`]).
+    coarse: coarse::Coarse,
+    coarse_start: Option<u32>,
     /// The lookups of the last medium rendered, uploaded, by [`Lookup::id`].
     lookups: HashMap<u64, Texture>,
     engine_targets: EngineTargets,
@@ -265,6 +272,8 @@ impl Pipeline {
         let mut pipeline = Pipeline {
             programs: HashMap::new(),
             targets: None,
+            coarse: coarse::Coarse::default(),
+            coarse_start: None,
             lookups: HashMap::new(),
             engine_targets: EngineTargets::default(),
             host_target: None,
@@ -400,7 +409,7 @@ impl Pipeline {
                 chromatic,
             },
             ProgramKey::Composite {
-                medium: medium.name(),
+                medium: programs::MediumId::of(medium),
                 chromatic,
             },
         ];
@@ -422,6 +431,10 @@ impl Pipeline {
                 blur.precision,
                 chromatic,
             )?);
+        }
+        self.coarse_start = blur.coarse_start(&schedule, chromatic)?;
+        if self.coarse_start.is_some() {
+            self.prepare_coarse(input.width, input.height, blur.precision)?;
         }
         Ok(schedule)
     }

@@ -8,18 +8,42 @@ use crate::error::{Error, Result};
 use crate::gpu::program::Program;
 use crate::medium::{Medium, MEDIUM_API_GLSL};
 use crate::schedule::{Schedule, Scheme};
+use std::borrow::Cow;
+use std::collections::hash_map::DefaultHasher;
+use std::hash::{Hash, Hasher};
 
 pub(super) const PRELUDE_GLSL: &str = include_str!("../../glsl/prelude.glsl");
 pub(super) const MEDIUM_FRAG: &str = include_str!("../../glsl/medium.frag");
 pub(super) const DIFFUSE_FRAG: &str = include_str!("../../glsl/diffuse.frag");
 pub(super) const COMPOSITE_FRAG: &str = include_str!("../../glsl/composite.frag");
 
-/// Which program: the medium's two passes are compiled per medium, and every pass per
-/// grey or chromatic τ.
+/// A medium's GLSL identity: a 128-bit hash of its source text. The program cache is
+/// keyed by it, not by [`Medium::name`], so two media of one name with different GLSL
+/// (one defined at run time, say) never share a program, and one medium whose GLSL is
+/// rebuilt identically keeps its program.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(super) struct MediumId(u64, u64);
+
+impl MediumId {
+    /// The identity of `medium`'s GLSL.
+    pub(super) fn of(medium: &dyn Medium) -> Self {
+        let glsl = medium.glsl();
+        let hash = |seed: u64| {
+            let mut h = DefaultHasher::new();
+            seed.hash(&mut h);
+            glsl.hash(&mut h);
+            h.finish()
+        };
+        MediumId(hash(0), hash(1))
+    }
+}
+
+/// Which program: the medium's two passes are compiled per medium GLSL, and every pass
+/// per grey or chromatic τ.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(super) enum ProgramKey {
     Medium {
-        medium: &'static str,
+        medium: MediumId,
         chromatic: bool,
         log_rate: bool,
         half_rate: bool,
@@ -29,11 +53,11 @@ pub(super) enum ProgramKey {
         chromatic: bool,
     },
     Composite {
-        medium: &'static str,
+        medium: MediumId,
         chromatic: bool,
     },
     /// An engine pass (see [`engine`]) of a medium.
-    Engine(&'static str, EngineKey),
+    Engine(MediumId, EngineKey),
     /// The import of an external image (see [`external`]).
     ExternalImport,
     /// A pass of the image-guided refinement (see [`refine`]).
@@ -48,7 +72,7 @@ pub(super) fn medium_key(
     chromatic: bool,
 ) -> ProgramKey {
     ProgramKey::Medium {
-        medium: medium.name(),
+        medium: MediumId::of(medium),
         chromatic,
         log_rate: schedule.scheme != Scheme::Euler,
         half_rate: precision == Precision::F16,
@@ -95,8 +119,11 @@ impl Pipeline {
             format!("{pass} with glsl/medium/{}.glsl", m.name())
         };
         let optional = |extra: &[&'static str]| {
-            let mut list: Vec<&'static str> = MEDIUM_API_UNIFORMS.to_vec();
-            list.extend_from_slice(extra);
+            let mut list: Vec<Cow<'static, str>> = MEDIUM_API_UNIFORMS
+                .iter()
+                .map(|&n| Cow::Borrowed(n))
+                .collect();
+            list.extend(extra.iter().map(|&n| Cow::Borrowed(n)));
             if let Some(m) = medium {
                 list.extend(m.uniforms().into_iter().map(|(name, _)| name));
                 list.extend(m.lookups().into_iter().map(|(name, _)| name));
@@ -118,7 +145,7 @@ impl Pipeline {
                 ]),
                 (&names("medium.frag"), &with_medium(MEDIUM_FRAG)),
                 &["u_colour"],
-                &optional(&["u_depth", "u_colour_srgb", "u_schedule"]),
+                &as_strs(&optional(&["u_depth", "u_colour_srgb", "u_schedule"])),
             ),
             ProgramKey::Diffuse { matched, chromatic } => Program::new(
                 &self.gl,
@@ -132,7 +159,12 @@ impl Pipeline {
                 &defines(&[("CHROMATIC", chromatic)]),
                 (&names("composite.frag"), &with_medium(COMPOSITE_FRAG)),
                 &["u_f"],
-                &optional(&["u_depth", "u_tau_gb", "u_origin", "u_output_srgb"]),
+                &as_strs(&optional(&[
+                    "u_depth",
+                    "u_tau_gb",
+                    "u_origin",
+                    "u_output_srgb",
+                ])),
             ),
             ProgramKey::Engine(_, key) => {
                 let (file, source, pairs) = key.source();
@@ -146,7 +178,7 @@ impl Pipeline {
                     &defines(&pairs),
                     (&names(file), &with_medium(&format!("{gauss}\n{source}"))),
                     &[],
-                    &optional(&engine::ENGINE_UNIFORMS),
+                    &as_strs(&optional(&engine::ENGINE_UNIFORMS)),
                 )
             }
             ProgramKey::ExternalImport => external::compile(&self.gl, self.version_line),
@@ -166,7 +198,7 @@ impl Pipeline {
     ) -> Result<()> {
         let (first, last) = (self.compiled(first)?, self.compiled(last)?);
         for (name, _) in medium.uniforms() {
-            if first.optional_uniform(name).is_none() && last.optional_uniform(name).is_none() {
+            if first.optional_uniform(&name).is_none() && last.optional_uniform(&name).is_none() {
                 return Err(Error::Gl(format!(
                     "glsl/medium/{}.glsl: uniform {name} is not used by the shader \
                      (misspelled, or not declared)",
@@ -176,6 +208,11 @@ impl Pipeline {
         }
         Ok(())
     }
+}
+
+/// Borrowed names, as [`Program::new`] takes them.
+fn as_strs<'a>(names: &'a [Cow<'static, str>]) -> Vec<&'a str> {
+    names.iter().map(|n| n.as_ref()).collect()
 }
 
 /// The uniforms of `glsl/medium_api.glsl` and `glsl/fullscreen.vert` that the pipeline

@@ -31,12 +31,12 @@ impl Pipeline {
             set_value(gl, p, name, value);
         }
         for (name, value) in medium.uniforms() {
-            set_value(gl, p, name, value);
+            set_value(gl, p, &name, value);
         }
         for (unit, (name, lookup)) in (UNIT_LOOKUP..).zip(medium.lookups()) {
             if let Some(texture) = self.lookups.get(&lookup.id()) {
                 texture.bind(unit);
-                set_int(gl, p, name, unit as i32);
+                set_int(gl, p, &name, unit as i32);
             }
         }
     }
@@ -71,23 +71,22 @@ fn camera_uniforms(
 ) -> [(&'static str, UniformValue); 3] {
     let (rays, constants, eye) = match medium.camera() {
         Some(camera) => {
-            let corners = camera.corner_rays(width as f64 / height as f64);
+            let camera = camera.for_frame(width, height);
             let mut rays = [0f32; 9];
-            for (i, ray) in corners.iter().enumerate() {
+            for (i, ray) in camera.corner_rays().iter().enumerate() {
                 rays[3 * i..3 * i + 3].copy_from_slice(&ray.as_vec3().to_array());
             }
-            let [a, b] = camera.shader_depth_constants();
             (
                 rays,
-                [a as f32, b as f32],
-                camera.position.map(|v| v as f32),
+                camera.shader_depth_constants().map(|v| v as f32),
+                camera.eye().as_vec3().to_array(),
             )
         }
-        None => ([0.0; 9], [0.0; 2], [0.0; 3]),
+        None => ([0.0; 9], [0.0; 4], [0.0; 3]),
     };
     [
         ("brume_corner_rays", UniformValue::Mat3(rays)),
-        ("brume_depth_constants", UniformValue::Vec2(constants)),
+        ("brume_depth_constants", UniformValue::Vec4(constants)),
         ("brume_eye", UniformValue::Vec3(eye)),
     ]
 }
@@ -121,7 +120,10 @@ pub(super) fn set_value(gl: &glow::Context, p: &Program, name: &str, value: Unif
             UniformValue::Vec2([a, b]) => gl.uniform_2_f32(location, a, b),
             UniformValue::Vec3([a, b, c]) => gl.uniform_3_f32(location, a, b, c),
             UniformValue::Vec4([a, b, c, d]) => gl.uniform_4_f32(location, a, b, c, d),
+            UniformValue::Int(v) => gl.uniform_1_i32(location, v),
             UniformValue::IVec2([a, b]) => gl.uniform_2_i32(location, a, b),
+            UniformValue::IVec3([a, b, c]) => gl.uniform_3_i32(location, a, b, c),
+            UniformValue::IVec4([a, b, c, d]) => gl.uniform_4_i32(location, a, b, c, d),
             UniformValue::Mat3(m) => gl.uniform_matrix_3_f32_slice(location, false, &m),
         }
     }

@@ -13,6 +13,9 @@
 //! - [`turbidity`]: the estimator of sec. 3.4: random sample points, luminance ratios to a
 //!   reference point against the model's F(θi, γi)/F(θref, γref) (eq. 6, 8), RANSAC
 //!   against clouds, Levenberg-Marquardt refinement of T in [1, 20].
+//! - [`sun_position`]: the sun's zenith and azimuth from time and place (NREL's SPA).
+//! - [`horizon_sectors`]: a photo's horizon light by azimuth sector (sec. 4), or the
+//!   Preetham sky's by the sun's azimuth when the photo shows no sky.
 //!
 //! Angles are in radians throughout the library; the command line takes degrees.
 //!
@@ -24,7 +27,9 @@
 
 pub mod clouds;
 pub mod fisheye;
+pub mod horizon_sectors;
 pub mod preetham;
+pub mod sun_position;
 pub mod turbidity;
 
 pub use fisheye::{Fisheye, Lens};

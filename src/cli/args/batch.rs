@@ -1,6 +1,7 @@
 //! `brume batch`'s arguments.
 
 use super::*;
+use brume::photo::BetaDistribution;
 
 /// `brume batch`.
 #[derive(Args, Clone, Debug)]
@@ -37,6 +38,19 @@ pub struct BatchArgs {
         allow_hyphen_values = true
     )]
     pub beta: String,
+
+    /// Draw one β per frame from a distribution instead of --beta: uniform:LOW,HIGH (1/m),
+    /// lognormal:MU,SIGMA (ln β normal: median e^MU, e.g. lognormal:-4.6,0.5 around
+    /// 0.01), or a fixed β. The draw depends on --seed and the frame's name only (not on
+    /// the order, the shard or the other frames); it is rounded to 6 significant digits,
+    /// names the output like --beta's and is written to the log ("beta").
+    #[arg(
+        long,
+        value_name = "DIST",
+        allow_hyphen_values = true,
+        conflicts_with = "beta"
+    )]
+    pub beta_dist: Option<BetaDistribution>,
 
     /// Take shard K of N (1 ≤ K ≤ N): a deterministic share of the frames, by a hash of
     /// their names, so that N jobs split a dataset with no coordination.
@@ -82,4 +96,7 @@ pub struct BatchArgs {
 
     #[command(flatten)]
     pub prep: PrepOptionArgs,
+
+    #[command(flatten)]
+    pub capture: CaptureArgs,
 }

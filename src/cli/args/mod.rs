@@ -23,7 +23,7 @@ mod scene;
 mod view;
 
 pub use batch::BatchArgs;
-pub use render::{AerialBlur, Compat, MediumKind, RenderArgs};
+pub use render::{AerialBlur, CaptureArgs, Compat, MediumKind, RenderArgs, RetargetKind};
 pub use scene::{BlurKind, DistanceArgs, FogKind, LayeredArgs, ProfileKind, SceneArgs};
 #[cfg(all(feature = "viewer", not(target_os = "android")))]
 pub use view::{ViewArgs, ViewSource, Zoom};
@@ -83,6 +83,8 @@ pub enum Command {
     Sky(super::sky::SkyArgs),
     /// Estimate the atmospheric turbidity of a fisheye sky image (paper 002, sec. 3.4).
     Turbidity(super::sky::TurbidityArgs),
+    /// The sun's zenith and azimuth from place and time (NREL's SPA, paper 002 sec. 3.4).
+    Sun(super::sun::SunArgs),
 }
 
 /// `brume info`.
@@ -198,8 +200,9 @@ pub struct PrepOptionArgs {
     #[arg(long, value_name = "FRACTION", allow_hyphen_values = true)]
     pub sky_min_area: Option<f64>,
 
-    /// Seed of the RANSAC hole filling, a whole number ≥ 0; a given seed always gives the
-    /// same result [default: 0].
+    /// Seed of the RANSAC hole filling, of the capture's noise (--shot-noise-gain,
+    /// --read-noise) and of batch's --beta-dist draws, a whole number ≥ 0; a given seed
+    /// always gives the same result [default: 0].
     // Signed and wide, so that a negative seed reaches the range check that names it.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub seed: Option<i128>,

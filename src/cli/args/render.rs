@@ -184,6 +184,23 @@ pub struct RenderArgs {
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub horizon_zenith: Option<f64>,
 
+    /// Aerial: azimuth sectors across the image for the horizon's light (paper 002 sec.
+    /// 4: fog toward the sun is brighter), in [1, 64]; 1 takes one value for the whole
+    /// image [default: 8].
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub horizon_sectors: Option<i64>,
+
+    /// Aerial, with --from-turbidity: keep the normalised radiance ρ = I⁰/I∞ (eq. 25-26,
+    /// the object's light follows the sky's) or the radiance I⁰ [default: normalised].
+    #[arg(long, value_enum, value_name = "KIND", allow_hyphen_values = true)]
+    pub retarget: Option<RetargetKind>,
+
+    /// Aerial: the sun from place and time (NREL's SPA), for --sky's turbidity (the
+    /// fisheye taken with north at its top) and the horizon's light by azimuth; --heading
+    /// is the compass direction of the image centre.
+    #[command(flatten)]
+    pub place: super::super::sun::PlaceTimeArgs,
+
     /// Aerial: the camera's spectral sensitivity, CSV `lambda_nm,r,g,b` [default: CIE 1931
     /// observer to linear sRGB].
     #[arg(long, value_name = "PATH")]
@@ -211,6 +228,12 @@ pub struct RenderArgs {
 
     #[command(flatten)]
     pub prep: PrepOptionArgs,
+
+    #[command(flatten)]
+    pub insert: InsertArgs,
+
+    #[command(flatten)]
+    pub capture: CaptureArgs,
 
     /// Print the time of every pass.
     #[arg(long)]
@@ -241,6 +264,15 @@ pub enum Compat {
     FoggyCityscapes,
 }
 
+/// `--retarget`: what a photo's retargeting keeps (paper 002, eq. 25-26).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RetargetKind {
+    /// The normalised radiance ρ = I⁰/I∞, as the paper (eq. 26).
+    Normalised,
+    /// The radiance I⁰.
+    Radiance,
+}
+
 /// The blur of the aerial medium.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum AerialBlur {
@@ -248,4 +280,66 @@ pub enum AerialBlur {
     Diffusion,
     /// No blur.
     None,
+}
+
+/// A virtual object composited into the photo before the fog (paper 002, sec. 6-7).
+#[derive(Args, Clone, Debug)]
+pub struct InsertArgs {
+    /// A rendered object to insert before the fog: an OpenEXR of the photo's size, made
+    /// with the photo's camera (e.g. Blender with a transparent film), its colour linear
+    /// and premultiplied by alpha (R, G, B, A, flat or a layer's such as
+    /// ViewLayer.Combined), with a depth channel (Z, ViewLayer.Depth.Z) or --insert-depth.
+    /// It is shown where it is nearer than the photo's range and then fogged with the
+    /// photo, by the same medium.
+    #[arg(long, value_name = "PATH.exr", conflicts_with_all = ["transmittance_map", "compat"])]
+    pub insert: Option<PathBuf>,
+
+    /// The object's depth map, if its EXR has no depth channel: a float .exr, .npy or
+    /// one-channel .pfm of its size, in the photo's range units (metres for metric depth);
+    /// values ≤ 0, infinite or NaN where there is no object.
+    #[arg(long, value_name = "PATH", requires = "insert")]
+    pub insert_depth: Option<PathBuf>,
+
+    /// What the object's depth measures: depth (along the optical axis, as Blender's Z
+    /// pass; turned into range with the photo's intrinsics, --focal or --fov) or range
+    /// (distance to the camera centre) [default: depth].
+    #[arg(
+        long,
+        value_name = "KIND",
+        requires = "insert",
+        allow_hyphen_values = true
+    )]
+    pub insert_depth_kind: Option<DepthKind>,
+}
+
+/// What the camera does after the fog (`brume::photo::capture`): all off by default.
+#[derive(Args, Clone, Debug, Default)]
+pub struct CaptureArgs {
+    /// Capture: exposure change in stops after the fog (the linear image times 2^STOPS),
+    /// in [-20, 20]; the result is clipped to full scale.
+    #[arg(long, value_name = "STOPS", allow_hyphen_values = true)]
+    pub exposure_stops: Option<f64>,
+
+    /// Capture: shot noise, as the linear value K of one photo-electron (1 / full-well
+    /// electrons: 0.00025 is a 4000 e⁻ well). A value v collects Poisson(v/K) electrons:
+    /// noise variance K·v. Seeded by --seed.
+    #[arg(long, value_name = "K", allow_hyphen_values = true)]
+    pub shot_noise_gain: Option<f64>,
+
+    /// Capture: Gaussian read noise's standard deviation, in linear value units (e.g.
+    /// 0.002), added to the shot noise [default with --shot-noise-gain: 0].
+    #[arg(long, value_name = "SIGMA", allow_hyphen_values = true)]
+    pub read_noise: Option<f64>,
+
+    /// Capture: JPEG quality 1-100 of an encode-decode round trip after the noise, so that
+    /// the block artefacts are in the file written (whatever its format).
+    #[arg(long, value_name = "Q", allow_hyphen_values = true)]
+    pub jpeg_quality: Option<i64>,
+}
+
+impl CaptureArgs {
+    /// Whether the capture draws noise, which --seed seeds.
+    pub fn reads_seed(&self) -> bool {
+        self.shot_noise_gain.is_some() || self.read_noise.is_some()
+    }
 }

@@ -35,6 +35,8 @@ pub enum ProfileKind {
     Band,
     /// δ = density below base, falling linearly to 0 at top: dry-ice fog on a floor.
     Ramp,
+    /// Any profile, from --density-csv (height_m,extinction_per_m; linear between rows).
+    Table,
 }
 
 /// `brume scene`.
@@ -212,6 +214,11 @@ pub struct LayeredArgs {
     /// Fraction of the extinction that scatters (drives the blur), in [0, 1] [1].
     #[arg(long, value_name = "A", allow_hyphen_values = true)]
     pub albedo: Option<f64>,
+
+    /// The table of `--profile table`: a CSV with the header `height_m,extinction_per_m`,
+    /// heights increasing, linear between rows and constant beyond the ends.
+    #[arg(long, value_name = "PATH.csv")]
+    pub density_csv: Option<std::path::PathBuf>,
 }
 
 /// Options of the distance fog (paper 001); defaults are its Listing 1 in metres.
@@ -282,6 +289,11 @@ pub struct DistanceArgs {
     /// Density factor where the noise is 1 [0.18].
     #[arg(long, value_name = "K", allow_hyphen_values = true)]
     pub noise_high: Option<f64>,
+
+    /// How much the noise varies the fog colour, in [0, 1]: the colour is scaled by
+    /// 1 + S·(2·noise − 1) (paper 001 sec. 3.3) [0].
+    #[arg(long, value_name = "S", allow_hyphen_values = true)]
+    pub noise_colour_strength: Option<f64>,
 }
 
 /// Options of the blur of `brume scene`.

@@ -416,8 +416,8 @@ impl SceneView {
         };
         m.set_time(time);
         match m {
-            SceneMedium::Distance(f) => f.camera = camera,
-            SceneMedium::Layered(f) => f.camera = camera,
+            SceneMedium::Distance(f) => f.camera = camera.into(),
+            SceneMedium::Layered(f) => f.camera = camera.into(),
         }
         (m.medium(), blur)
     }
@@ -534,6 +534,9 @@ fn distance_controls(ui: &mut Ui, m: &mut SceneMedium) -> bool {
     c |= slider(ui, &mut f.max_density, 0.0..=1.0, "max density");
     c |= slider(ui, &mut f.scatter_start, 0.0..=500.0, "scatter start (m)");
     c |= slider(ui, &mut f.scatter_exponent, 1.0..=64.0, "scatter exponent");
+    if let Some(noise) = &mut f.noise {
+        c |= slider(ui, &mut noise.colour_strength, 0.0..=1.0, "noise on colour");
+    }
     c |= slider(ui, &mut f.lambda, 0.0..=32.0, "λ blur (px)");
     c |= rgb_sliders(ui, "fog colour (linear)", &mut f.colour, 0.0..=1.0);
     c
@@ -572,6 +575,17 @@ fn layered_controls(ui: &mut Ui, m: &mut SceneMedium) -> bool {
             c |= slider(ui, density, 0.0..=0.2, "density (1/m)");
             c |= slider(ui, floor, -20.0..=100.0, "floor (m)");
             c |= slider(ui, top, -10.0..=200.0, "top (m)");
+        }
+        HeightProfile::Table(table) => {
+            // The table comes from --density-csv; its rows are not edited here.
+            let h = table.heights();
+            ui.label(format!(
+                "table: {} rows, {} to {} m, κ ≤ {:.3e} /m",
+                h.len(),
+                h[0],
+                h[h.len() - 1],
+                table.max_density()
+            ));
         }
     }
     c |= slider(ui, &mut f.albedo, 0.0..=1.0, "albedo");

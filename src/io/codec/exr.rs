@@ -517,3 +517,34 @@ fn write_exr<const N: usize>(
         .to_buffered(out)
         .map_err(|e| std::io::Error::other(format!("OpenEXR encoder: {e}")))
 }
+
+/// Reads the first channel (in [`Channels`] order) whose full name (`part.layer.leaf`)
+/// `pick` accepts, with its name; `None` when no channel is accepted. For the channels
+/// beside a colour image: its alpha, its depth (`photo::insert`).
+pub(crate) fn parse_exr_channel(
+    bytes: &[u8],
+    path: &Path,
+    pick: impl Fn(&str) -> bool,
+) -> Result<Option<(String, ScalarMap)>> {
+    let meta = checked_meta(bytes, path)?;
+    let channels = Channels::new(&meta);
+    let Some(chosen) = channels.first(|c| pick(&c.full)) else {
+        return Ok(None);
+    };
+    full_resolution(chosen, path)?;
+    let (w, h) = (
+        chosen.header.layer_size.width(),
+        chosen.header.layer_size.height(),
+    );
+    let read = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .specific_channels()
+        .required(chosen.text.clone())
+        .collect_pixels(
+            |size, _| vec![f32::NAN; size.area()],
+            move |data: &mut Vec<f32>, pos, (v,): (f32,)| data[pos.y() * w + pos.x()] = v,
+        );
+    let pixels = read_part(read, bytes, chosen.header, path)?;
+    Ok(Some((chosen.full.clone(), Grid::from_vec(w, h, pixels))))
+}

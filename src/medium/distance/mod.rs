@@ -5,9 +5,10 @@
 //! brume's diffusion blur, driven by the optical depth of the fog.
 //!
 //! The medium reads a **depth buffer**: the `depth` of each pixel is the window depth
-//! d ∈ [0, 1] of a standard OpenGL perspective projection with the [`Camera`] of the
-//! frame, d = 1 being the far plane (the sky: nothing was drawn there), whose distance is
-//! `far·|ray|`. Values outside [0, 1] are clamped. The world position is rebuilt from d and
+//! d ∈ [0, 1] of the frame's camera ([`Camera`], OpenGL's standard projection, or an
+//! engine's matrices, [`crate::camera::MatrixCamera`]: reversed-Z, infinite far plane),
+//! the far end of the depth range being the far plane (the sky: nothing was drawn there),
+//! whose distance is `far·|ray|` (an infinite projection's sky depth instead). Values outside [0, 1] are clamped. The world position is rebuilt from d and
 //! the camera (paper 001 eq. 1; see [`crate::camera`]): on the GPU by the eye-to-fragment
 //! ray times the linear eye depth (`brume_eye_depth`, precise to a few f32 ulps at any
 //! distance, which the noise needs: see [`Camera::shader_depth_constants`]), on the CPU
@@ -24,7 +25,8 @@
 //! factor   = low + (high − low)·noise       (eq. 9; 1 without a noise texture, eq. 3)
 //! F        = clamp(dist·factor, 0, max_density)                              (Listing 1)
 //! scatter  = saturate(p̂ · L)^scatter_exponent · saturate((l − scatter_start) / l)
-//! C_fog'   = colour + scatter_colour·scatter                                  (eq. 8)
+//! tint     = 1 + colour_strength·(2·noise − 1)   (sec. 3.3; 1 without a noise texture)
+//! C_fog'   = (colour + scatter_colour·scatter)·tint                           (eq. 8)
 //! C        = lerp(C_scene, C_fog', F)                                         (eq. 4)
 //! ```
 //!
@@ -94,7 +96,7 @@ use glam::DVec3;
 use super::lookup::{Lookup, Wrap};
 use super::noise::{self, TilingNoise};
 use super::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
-use crate::camera::Camera;
+use crate::camera::{Camera, FrameCamera};
 use crate::error::{check_non_negative, check_positive, Error, Result};
 
 /// The paper's `StartDistance` (Listing 1: 0).
@@ -130,6 +132,9 @@ pub const DEFAULT_NOISE_SIZE: f64 = 100.0;
 pub const DEFAULT_NOISE_LOW: f64 = 0.12;
 /// Density factor where the noise is 1 (Listing 1's `MaxNoiseDensity`).
 pub const DEFAULT_NOISE_HIGH: f64 = 0.18;
+/// How much the noise varies the in-scattered colour: none, so that a fog without the
+/// option renders as before (see [`FogNoise::colour_factor`]).
+pub const DEFAULT_NOISE_COLOUR_STRENGTH: f64 = 0.0;
 
 /// The noise that varies the fog's density (paper 001, sec. 3.3, eq. 9-10).
 #[derive(Clone, Debug)]
@@ -146,6 +151,11 @@ pub struct FogNoise {
     pub low: f64,
     /// Density factor where the noise is 1 (≥ 0).
     pub high: f64,
+    /// How strongly the same noise varies the in-scattered colour, s in [0, 1]: the fog
+    /// colour C_fog' is multiplied by 1 + s·(2·noise − 1) (paper 001, sec. 3.3: "the
+    /// noise ... is used to manipulate the density and color of fog"; the paper gives no
+    /// formula, see [`FogNoise::colour_factor`]). 0 leaves the colour alone.
+    pub colour_strength: f64,
 }
 
 impl Default for FogNoise {
@@ -173,6 +183,7 @@ impl FogNoise {
             size: DEFAULT_NOISE_SIZE,
             low: DEFAULT_NOISE_LOW,
             high: DEFAULT_NOISE_HIGH,
+            colour_strength: DEFAULT_NOISE_COLOUR_STRENGTH,
         }
     }
 
@@ -209,6 +220,17 @@ impl FogNoise {
         self.low + (self.high - self.low) * n
     }
 
+    /// The factor on the in-scattered colour at `world` and `time`: 1 + s·(2·noise − 1)
+    /// with s = [`FogNoise::colour_strength`], the noise read where the density's is. Where
+    /// the noise is dense the veil is brighter (more droplets scatter more light), where it
+    /// is thin darker, by up to ±s; its mean over a tile is 1 for a noise of mean ½, so
+    /// the fog's average colour is kept. In [0, 2] for s in [0, 1].
+    pub fn colour_factor(&self, world: DVec3, time: f64) -> f64 {
+        let (u, v) = self.coordinates(world, time);
+        let n = self.lookup.sample(u, v);
+        1.0 + self.colour_strength * (2.0 * n - 1.0)
+    }
+
     fn validate(&self) -> Result<()> {
         if !self.speed.iter().all(|v| v.is_finite()) {
             let [x, y, z] = self.speed;
@@ -221,6 +243,13 @@ impl FogNoise {
         check_positive("noise size", self.size)?;
         check_non_negative("noise low", self.low)?;
         check_non_negative("noise high", self.high)?;
+        if !(0.0..=1.0).contains(&self.colour_strength) {
+            return Err(Error::invalid(
+                "noise colour strength",
+                self.colour_strength,
+                "a strength in [0, 1] (0: the noise leaves the fog colour alone)",
+            ));
+        }
         if self.lookup.wrap() != Wrap::Repeat {
             return Err(Error::invalid(
                 "noise lookup",
@@ -236,8 +265,9 @@ impl FogNoise {
 /// module docs for the formulas and the units).
 #[derive(Clone, Debug)]
 pub struct DistanceFog {
-    /// The camera of the frame whose depth buffer is read.
-    pub camera: Camera,
+    /// The camera of the frame whose depth buffer is read (brume's [`Camera`] or an
+    /// engine's [`crate::camera::MatrixCamera`]).
+    pub camera: FrameCamera,
     /// Distance from the camera where the fog starts (world units).
     pub start_distance: f64,
     /// Blend distance (> 0): the distance beyond the start where `dist` reaches 1.
@@ -270,7 +300,7 @@ pub struct DistanceFog {
 impl Default for DistanceFog {
     fn default() -> Self {
         DistanceFog {
-            camera: Camera::default(),
+            camera: Camera::default().into(),
             start_distance: DEFAULT_START_DISTANCE,
             distance: DEFAULT_DISTANCE,
             exponent: DEFAULT_EXPONENT,
@@ -328,8 +358,12 @@ impl DistanceFog {
             0.0
         };
         let scatter = towards.powf(self.scatter_exponent) * beyond;
+        let tint = self
+            .noise
+            .as_ref()
+            .map_or(1.0, |n| n.colour_factor(world, self.time));
         let colour = std::array::from_fn(|c| {
-            f64::from(self.colour[c]) + f64::from(self.scatter_colour[c]) * scatter
+            (f64::from(self.colour[c]) + f64::from(self.scatter_colour[c]) * scatter) * tint
         });
         FogPoint {
             density,
@@ -358,20 +392,20 @@ fn placeholder_noise() -> Lookup {
 const NOISE_SAMPLER: &str = "u_noise";
 
 impl Medium for DistanceFog {
-    fn name(&self) -> &'static str {
-        "distance"
+    fn name(&self) -> std::borrow::Cow<'static, str> {
+        "distance".into()
     }
 
-    fn glsl(&self) -> &'static str {
-        include_str!("../../../glsl/medium/distance.glsl")
+    fn glsl(&self) -> std::borrow::Cow<'static, str> {
+        include_str!("../../../glsl/medium/distance.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
+    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let f = |v: f64| v as f32;
         // The noise's origin, eye and drift together, is reduced to one tile in f64 here:
         // the shader adds only the eye-to-point offset, so that neither a far-off camera
         // nor a long time costs f32 precision in the texture coordinates.
-        let (noise_on, origin, scale, range) = match &self.noise {
+        let (noise_on, origin, scale, range, colour_strength) = match &self.noise {
             Some(n) => {
                 let (u, v) = n.coordinates(self.camera.eye(), self.time);
                 (
@@ -379,11 +413,12 @@ impl Medium for DistanceFog {
                     [f(u.rem_euclid(1.0)), f(v.rem_euclid(1.0))],
                     f(1.0 / n.size),
                     [f(n.low), f(n.high)],
+                    f(n.colour_strength),
                 )
             }
-            None => (0.0, [0.0; 2], 0.0, [1.0; 2]),
+            None => (0.0, [0.0; 2], 0.0, [1.0; 2], 0.0),
         };
-        vec![
+        super::static_names(vec![
             (
                 "u_fog_shape",
                 UniformValue::Vec3([
@@ -407,11 +442,12 @@ impl Medium for DistanceFog {
             ("u_noise_origin", UniformValue::Vec2(origin)),
             ("u_noise_scale", UniformValue::Float(scale)),
             ("u_noise_range", UniformValue::Vec2(range)),
+            ("u_noise_colour", UniformValue::Float(colour_strength)),
             (
                 "u_blur",
                 UniformValue::Vec2([f(self.lambda), f(1.0 / self.range_unit)]),
             ),
-        ]
+        ])
     }
 
     fn chromatic(&self) -> bool {
@@ -431,6 +467,7 @@ impl Medium for DistanceFog {
         let d = p.depth.clamp(0.0, 1.0);
         let world = self
             .camera
+            .for_frame(p.width, p.height)
             .world_position_by_inverse(p.x, p.y, p.width, p.height, d);
         let fog = self.at(world);
         let tau = 1.0 - fog.density;
@@ -487,16 +524,16 @@ impl Medium for DistanceFog {
         check_positive("range_unit", self.range_unit)
     }
 
-    fn camera(&self) -> Option<Camera> {
+    fn camera(&self) -> Option<FrameCamera> {
         Some(self.camera)
     }
 
-    fn lookups(&self) -> Vec<(&'static str, Lookup)> {
+    fn lookups(&self) -> Vec<(std::borrow::Cow<'static, str>, super::Lookup)> {
         let lookup = match &self.noise {
             Some(n) => n.lookup.clone(),
             None => placeholder_noise(),
         };
-        vec![(NOISE_SAMPLER, lookup)]
+        super::static_names(vec![(NOISE_SAMPLER, lookup)])
     }
 }
 

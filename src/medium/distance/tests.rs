@@ -153,7 +153,8 @@ fn noise_origin_is_reduced_to_one_tile() {
         camera: Camera {
             position: [5_000.25, 1.7, -12_000.5],
             ..Camera::default()
-        },
+        }
+        .into(),
         ..DistanceFog::default()
     };
     let noise = fog.noise.as_ref().unwrap();
@@ -177,9 +178,10 @@ fn medium_sample_is_the_paper_blend_and_the_sky_is_the_far_plane() {
     let fog = DistanceFog::default();
     let (x, y) = (40, 30);
     let sky = fog.sample(pixel(x, y, 1.0));
-    let ray = fog.camera.pixel_ray(x, y, 64, 48);
-    let far = fog.camera.far * ray.length();
-    let world = fog.camera.eye() + ray * fog.camera.far;
+    let camera = Camera::default();
+    let ray = camera.pixel_ray(x, y, 64, 48);
+    let far = camera.far * ray.length();
+    let world = camera.eye() + ray * camera.far;
     let point = fog.at(world);
     assert!((point.distance - far).abs() < 1e-9 * far);
     assert!((sky.transmission[0] - (1.0 - point.density)).abs() < 1e-9);
@@ -308,7 +310,11 @@ fn bad_parameters_are_refused_by_name() {
         near: 0.0,
         ..Camera::default()
     };
-    assert!(bad(DistanceFog { camera, ..d() }).contains("near"));
+    assert!(bad(DistanceFog {
+        camera: camera.into(),
+        ..d()
+    })
+    .contains("near"));
     let noise = |f: fn(&mut FogNoise)| {
         let mut n = FogNoise::default();
         f(&mut n);

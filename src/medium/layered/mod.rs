@@ -18,8 +18,9 @@
 //! window depth d ∈ [0, 1] (clamped there) and the camera ([`LayeredFog::camera`]). The
 //! shader rebuilds it the fast way, eye + ray·A/(d + B) (paper 003, sec. 2.1); the CPU
 //! reference by the inverse matrices (paper 002, eq. 22-23), so that comparing the two
-//! also tests the fast path. A sky pixel (d = 1) lies on the far plane: its fog is that of
-//! the segment to the far plane.
+//! also tests the fast path. A sky pixel (the far end of the depth range) lies on the far
+//! plane: its fog is that of the segment to the far plane, or, for an engine's infinite
+//! projection, to its sky depth ([`crate::camera::MatrixCamera::with_sky_depth`]).
 //!
 //! **The mean density without cancellation.** The textbook form
 //! (Iδ(y1) − Iδ(y0)) / Δy, with Iδ an antiderivative ([`HeightProfile::antiderivative`]),
@@ -51,11 +52,16 @@
 //! knowing the image: σ ≤ σ0 + λ·√(albedo·min(sup δ·range_unit, MAX_BLUR_OPTICAL_DEPTH)).
 
 use super::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
-use crate::camera::Camera;
+use crate::camera::{Camera, FrameCamera};
 use crate::error::{check_non_negative, check_positive, Error, Result};
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::ops::{Add, Div, Mul, Neg, Sub};
+
+mod csv;
+mod table;
+pub use csv::HEADER as DENSITY_CSV_HEADER;
+pub use table::DensityTable;
 
 /// Default fog colour (linear RGB): the whitish grey of water-droplet fog.
 pub const DEFAULT_COLOUR: [f32; 3] = [0.8, 0.8, 0.8];
@@ -80,7 +86,7 @@ const SERIES_LIMIT: f64 = 1.0;
 const EXPONENT_CAP: f64 = 80.0;
 
 /// Fog density δ(y) (per world unit) as a function of height y (world units, y up).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum HeightProfile {
     /// δ(y) = density·e^(−(y − base)/scale_height): fog thinning with height, as a city's
     /// or a valley's (paper 003, fig. 3). The exponent is capped at 80 so that the
@@ -115,6 +121,9 @@ pub enum HeightProfile {
         /// The height where δ reaches 0 (world units, > floor).
         top: f64,
     },
+    /// Any profile, as a table of heights and extinctions, linear between rows and
+    /// constant beyond the ends (paper 003, sec. 3.2; see [`DensityTable`]).
+    Table(DensityTable),
 }
 
 impl HeightProfile {
@@ -178,6 +187,7 @@ impl HeightProfile {
                 let s = y.max(floor).min(top) - floor;
                 density * (below + s - s * s / (2.0 * (top - floor)))
             }
+            HeightProfile::Table(ref table) => table.integral(y),
         }
     }
 
@@ -200,6 +210,7 @@ impl HeightProfile {
             HeightProfile::SineBand { density, .. } | HeightProfile::LinearRamp { density, .. } => {
                 density
             }
+            HeightProfile::Table(ref table) => table.max_density(),
         }
     }
 
@@ -249,6 +260,8 @@ impl HeightProfile {
                     ))
                 }
             }
+            // Checked when it was built.
+            HeightProfile::Table(_) => Ok(()),
         }
     }
 
@@ -270,6 +283,7 @@ impl HeightProfile {
                 floor,
                 top,
             } => (2.0, [density, floor, top]),
+            HeightProfile::Table(_) => (3.0, [0.0; 3]),
         };
         (selector, params.map(|v| v as f32))
     }
@@ -283,10 +297,11 @@ impl Default for HeightProfile {
 }
 
 /// Paper 003's layered fog as a medium of a rendered frame (module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct LayeredFog {
-    /// The camera the frame was rendered with: the depth buffer is read through it.
-    pub camera: Camera,
+    /// The camera the frame was rendered with: the depth buffer is read through it
+    /// (brume's [`Camera`] or an engine's [`crate::camera::MatrixCamera`]).
+    pub camera: FrameCamera,
     /// The fog density as a function of height.
     pub profile: HeightProfile,
     /// The fog colour C_fog (linear RGB, each ≥ 0): the in-scattered light.
@@ -302,15 +317,16 @@ pub struct LayeredFog {
 
 impl LayeredFog {
     /// `profile` seen through `camera`, with the default colour, albedo and λ, and the
-    /// far plane as the range unit.
-    pub fn new(camera: Camera, profile: HeightProfile) -> Self {
+    /// far plane (an infinite projection's sky depth) as the range unit.
+    pub fn new(camera: impl Into<FrameCamera>, profile: HeightProfile) -> Self {
+        let camera = camera.into();
         LayeredFog {
             camera,
             profile,
             colour: DEFAULT_COLOUR,
             albedo: DEFAULT_ALBEDO,
             lambda: DEFAULT_LAMBDA,
-            range_unit: camera.far,
+            range_unit: camera.max_depth(),
         }
     }
 
@@ -345,24 +361,28 @@ impl Default for LayeredFog {
 }
 
 impl Medium for LayeredFog {
-    fn name(&self) -> &'static str {
-        "layered"
+    fn name(&self) -> std::borrow::Cow<'static, str> {
+        table::medium_name(&self.profile).into()
     }
 
-    fn glsl(&self) -> &'static str {
-        include_str!("../../../glsl/medium/layered.glsl")
+    fn glsl(&self) -> std::borrow::Cow<'static, str> {
+        table::medium_glsl(&self.profile).into()
     }
 
-    fn uniforms(&self) -> Vec<(&'static str, UniformValue)> {
+    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let (selector, layer) = self.profile.uniform_values();
-        vec![
-            ("u_profile", UniformValue::Float(selector)),
-            ("u_layer", UniformValue::Vec3(layer)),
-            ("u_fog_colour", UniformValue::Vec3(self.colour)),
-            ("u_albedo", UniformValue::Float(self.albedo as f32)),
-            ("u_lambda", UniformValue::Float(self.lambda as f32)),
-            ("u_range_unit", UniformValue::Float(self.range_unit as f32)),
-        ]
+        super::static_names(
+            vec![
+                ("u_profile", UniformValue::Float(selector)),
+                ("u_layer", UniformValue::Vec3(layer)),
+                ("u_fog_colour", UniformValue::Vec3(self.colour)),
+                ("u_albedo", UniformValue::Float(self.albedo as f32)),
+                ("u_lambda", UniformValue::Float(self.lambda as f32)),
+                ("u_range_unit", UniformValue::Float(self.range_unit as f32)),
+            ]
+            .into_iter()
+            .chain(table::profile_uniforms(&self.profile)),
+        )
     }
 
     fn chromatic(&self) -> bool {
@@ -378,6 +398,7 @@ impl Medium for LayeredFog {
         let d = p.depth.clamp(0.0, 1.0);
         let point = self
             .camera
+            .for_frame(p.width, p.height)
             .world_position_by_inverse(p.x, p.y, p.width, p.height, d);
         self.sample_point(point, p.sigma0)
     }
@@ -404,8 +425,12 @@ impl Medium for LayeredFog {
         check_positive("range_unit", self.range_unit)
     }
 
-    fn camera(&self) -> Option<Camera> {
+    fn camera(&self) -> Option<FrameCamera> {
         Some(self.camera)
+    }
+
+    fn lookups(&self) -> Vec<(std::borrow::Cow<'static, str>, super::Lookup)> {
+        super::static_names(table::profile_lookups(&self.profile))
     }
 }
 
@@ -421,6 +446,7 @@ trait Real:
     + Neg<Output = Self>
 {
     fn of(v: f64) -> Self;
+    fn to_f64(self) -> f64;
     fn exp(self) -> Self;
     fn sin(self) -> Self;
     fn abs(self) -> Self;
@@ -433,6 +459,9 @@ macro_rules! real {
         impl Real for $t {
             fn of(v: f64) -> Self {
                 v as $t
+            }
+            fn to_f64(self) -> f64 {
+                self as f64
             }
             fn exp(self) -> Self {
                 <$t>::exp(self)
@@ -552,6 +581,7 @@ fn mean_density<T: Real>(profile: &HeightProfile, y0: T, dy: T) -> T {
                 rho * clamp((top - low) / (top - floor), zero, one)
             }
         }
+        HeightProfile::Table(ref table) => T::of(table.mean_density(y0.to_f64(), dy.to_f64())),
     }
 }
 

@@ -17,6 +17,7 @@ fn kinks(profile: &HeightProfile) -> Vec<f64> {
             base, thickness, ..
         } => vec![base, base + thickness],
         HeightProfile::LinearRamp { floor, top, .. } => vec![floor, top],
+        HeightProfile::Table(ref table) => table.heights().to_vec(),
     }
 }
 
@@ -72,6 +73,7 @@ fn peak(profile: &HeightProfile) -> f64 {
         HeightProfile::Exponential { density, .. }
         | HeightProfile::SineBand { density, .. }
         | HeightProfile::LinearRamp { density, .. } => density,
+        HeightProfile::Table(ref table) => table.max_density(),
     }
 }
 
@@ -176,7 +178,9 @@ fn switch_dy(profile: &HeightProfile) -> f64 {
     match *profile {
         HeightProfile::Exponential { scale_height, .. } => 2.0 * scale_height * SERIES_LIMIT,
         HeightProfile::SineBand { thickness, .. } => thickness / FRAC_PI_2 * SERIES_LIMIT,
-        HeightProfile::LinearRamp { .. } => unreachable!("no switch"),
+        HeightProfile::LinearRamp { .. } | HeightProfile::Table(_) => {
+            unreachable!("no switch")
+        }
     }
 }
 
@@ -187,10 +191,10 @@ fn no_seam_at_the_series_switch_in_f64_or_f32() {
     // (profile, y0): the band's segment starts at its base so that the whole Δy
     // overlaps the band.
     for (profile, y0) in [
-        (exponential, 1.7),
-        (exponential, -3.0),
+        (exponential.clone(), 1.7),
+        (exponential.clone(), -3.0),
         (exponential, 60.0),
-        (band, 0.0),
+        (band.clone(), 0.0),
     ] {
         let s = switch_dy(&profile);
         for sign in [1.0, -1.0] {
@@ -245,9 +249,13 @@ fn fog_of_a_fixed_point_does_not_depend_on_the_view() {
     let fog = LayeredFog::default();
     let reference = fog.sample_point(point, 1.0);
     for (yaw, pitch) in [(-20.0, 0.0), (10.0, -8.0), (35.0, 12.0)] {
-        let mut turned = fog;
-        turned.camera.yaw_deg = yaw;
-        turned.camera.pitch_deg = pitch;
+        let mut turned = fog.clone();
+        turned.camera = Camera {
+            yaw_deg: yaw,
+            pitch_deg: pitch,
+            ..Camera::default()
+        }
+        .into();
         assert_eq!(turned.sample_point(point, 1.0), reference);
     }
 }
@@ -302,7 +310,7 @@ fn sigma_max_bounds_every_pixel() {
         for range_unit in [50.0, 1000.0] {
             let fog = LayeredFog {
                 range_unit,
-                ..LayeredFog::new(camera, profile)
+                ..LayeredFog::new(camera, profile.clone())
             };
             let bound = fog.sigma_max(1.0);
             let (w, h) = (24, 16);
@@ -372,27 +380,35 @@ fn bad_parameters_are_refused_by_name() {
     }))
     .contains("top"));
     let fog = LayeredFog::default();
-    assert!(bad(LayeredFog { albedo: 1.5, ..fog }).contains("albedo"));
+    assert!(bad(LayeredFog {
+        albedo: 1.5,
+        ..fog.clone()
+    })
+    .contains("albedo"));
     assert!(bad(LayeredFog {
         lambda: -1.0,
-        ..fog
+        ..fog.clone()
     })
     .contains("lambda"));
     assert!(bad(LayeredFog {
         range_unit: 0.0,
-        ..fog
+        ..fog.clone()
     })
     .contains("range_unit"));
     assert!(bad(LayeredFog {
         colour: [0.5, f32::NAN, 0.5],
-        ..fog
+        ..fog.clone()
     })
     .contains("colour"));
     let camera = Camera {
         near: 0.0,
         ..Camera::default()
     };
-    assert!(bad(LayeredFog { camera, ..fog }).contains("near"));
+    assert!(bad(LayeredFog {
+        camera: camera.into(),
+        ..fog.clone()
+    })
+    .contains("near"));
     for profile in profiles() {
         assert!(with(profile).validate().is_ok());
     }

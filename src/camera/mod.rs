@@ -17,13 +17,32 @@
 //! - **Distance** is the Euclidean `|ray|·z`, not z: rotating the camera about its centre
 //!   does not change the fog on a fixed point (paper 003, fig. 1).
 //!
+//! - **An engine's camera** ([`MatrixCamera`]): its view and projection matrices as they
+//!   are, with the clip depth convention of its depth buffer ([`ClipDepth`]): reversed-Z,
+//!   infinite far planes, off-centre frusta and roll. Every path above (eye depth, rays,
+//!   positions by the inverse matrices) is computed from the matrices, so brume's own
+//!   [`Camera`] goes through the same code ([`Camera::matrices`]); a medium holds either
+//!   as a [`FrameCamera`].
+//!
+//! **Depth conventions.** brume reads the *window* depth d ∈ [0, 1] the depth buffer
+//! holds, with the default depth range (0..1). How d relates to clip space is the drawing
+//! API's: OpenGL's default maps z_ndc ∈ [−1, 1] to (z_ndc + 1)/2
+//! ([`ClipDepth::MinusOneToOne`]); Direct3D, Vulkan, Metal, wgpu (Bevy), Unreal and GL
+//! with `glClipControl(…, GL_ZERO_TO_ONE)` store z_ndc ∈ [0, 1] itself
+//! ([`ClipDepth::ZeroToOne`]). brume assumes no clip control: it is told. Reversed-Z and
+//! an infinite far plane are read off the projection matrix.
+//!
 //! **Conventions.** World y is up. The camera at yaw 0, pitch 0 looks along −z with +x to
 //! its right; yaw turns it to the right (toward +x), pitch up. Pixel `(x, y)` is texel
 //! `(x, y)` of the frame, row 0 at the bottom as GL stores it; its centre is at window
 //! coordinates `(x + ½, y + ½)`.
 
+mod matrix;
+
+pub use matrix::{ClipDepth, DepthModel, FrameCamera, MatrixCamera, DEFAULT_SKY_DEPTH};
+
 use crate::error::{check_positive, Error, Result};
-use glam::{DMat4, DVec3, DVec4};
+use glam::{DMat4, DVec3};
 
 /// A perspective camera of a rendered frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -147,22 +166,57 @@ impl Camera {
     /// `(A, c)` for the shaders: eye depth = `A / ((d − 1) − c)` with `c = n/(f − n)`.
     /// The same as `A / (d + B)` (B = −1 − c), but in f32 `B` would round away the digits
     /// of `c` that matter near the far plane (d + B is then a few n/f): `d − 1` is exact
-    /// for d ≥ ½ and `c` keeps its own precision. Still one division per fragment.
+    /// for d ≥ ½ and `c` keeps its own precision. Still one division per fragment. The
+    /// general form, for any projection, is [`MatrixCamera::depth_model`].
     pub fn shader_depth_constants(&self) -> [f64; 2] {
         let (n, f) = (self.near, self.far);
         [-n * f / (f - n), n / (f - n)]
     }
 
-    /// Eye depth of window depth `d` by [`Camera::depth_constants`].
+    /// This camera as view and projection matrices for an image of `aspect` = width /
+    /// height, with OpenGL's default clip depth (−1..1): the general camera every
+    /// depth-to-position path below goes through.
+    pub fn matrices(&self, aspect: f64) -> Result<MatrixCamera> {
+        self.validate()?;
+        MatrixCamera::new(
+            self.view_matrix(),
+            self.projection(aspect),
+            ClipDepth::MinusOneToOne,
+        )
+    }
+
+    /// The general camera, or (for a camera [`Camera::validate`] refuses) a camera from
+    /// the default's matrices: the depth paths below must not panic on bad input, and
+    /// every medium validates its camera before it renders.
+    fn general(&self, aspect: f64) -> MatrixCamera {
+        self.matrices(aspect).unwrap_or_else(|_| {
+            Camera::default()
+                .matrices(1.0)
+                .expect("the default camera is valid")
+        })
+    }
+
+    /// The general depth model ([`MatrixCamera::depth_model`]) of this camera's OpenGL
+    /// projection, in closed form: a = −nf/(f − n), k = 1, c = n/(f − n), capped at far.
+    /// No matrix is inverted, so per-pixel callers (depth files) pay one division.
+    pub fn depth_model(&self) -> DepthModel {
+        let [a, c] = self.shader_depth_constants();
+        DepthModel {
+            a,
+            k: 1.0,
+            c,
+            max: self.far,
+        }
+    }
+
+    /// Eye depth of window depth `d` ∈ [0, 1] (clamped there) by the general depth model.
     pub fn eye_depth(&self, d: f64) -> f64 {
-        let [a, b] = self.depth_constants();
-        a / (d + b)
+        self.depth_model().eye_depth(d)
     }
 
     /// The window depth of a point at eye depth `z` (the inverse of [`Camera::eye_depth`]).
     pub fn window_depth(&self, z: f64) -> f64 {
-        let [a, b] = self.depth_constants();
-        a / z - b
+        self.depth_model().window_depth(z)
     }
 
     /// The eye-to-fragment vector through normalised device coordinates (x, y) ∈ [−1, 1]²,
@@ -175,11 +229,7 @@ impl Camera {
     /// The rays at the bottom-left, bottom-right and top-left corners of the image (NDC
     /// (−1, −1), (1, −1), (−1, 1)): what the vertex shader interpolates from.
     pub fn corner_rays(&self, aspect: f64) -> [DVec3; 3] {
-        [
-            self.ray_at_ndc(-1.0, -1.0, aspect),
-            self.ray_at_ndc(1.0, -1.0, aspect),
-            self.ray_at_ndc(-1.0, 1.0, aspect),
-        ]
+        self.general(aspect).corner_rays()
     }
 
     /// The ray through the centre of pixel `(x, y)` of a `width x height` frame.
@@ -204,11 +254,8 @@ impl Camera {
         height: usize,
         d: f64,
     ) -> DVec3 {
-        let aspect = width as f64 / height as f64;
-        let (ndc_x, ndc_y) = pixel_ndc(x, y, width, height);
-        let inverse = (self.projection(aspect) * self.view_matrix()).inverse();
-        let p = inverse * DVec4::new(ndc_x, ndc_y, 2.0 * d - 1.0, 1.0);
-        p.truncate() / p.w
+        self.general(width as f64 / height as f64)
+            .world_position_by_inverse(x, y, width, height, d)
     }
 
     /// Window depth and Euclidean distance of the world point `p` seen through this
@@ -230,6 +277,7 @@ pub fn pixel_ndc(x: usize, y: usize, width: usize, height: usize) -> (f64, f64) 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DVec4;
 
     fn tilted() -> Camera {
         Camera {
@@ -296,6 +344,52 @@ mod tests {
         };
         assert!(spread(&depths) > 1.0, "z should change: {depths:?}");
         assert!(spread(&distances) < 1e-9, "{distances:?}");
+    }
+
+    #[test]
+    fn the_general_camera_of_a_standard_one_has_its_split_constants() {
+        // brume's camera through the matrix path: not reversed, finite, k = 1 and c =
+        // n/(f − n) as the closed form has them, and the rays of the closed form.
+        let camera = tilted();
+        let general = camera.matrices(1.6).unwrap();
+        assert!(!general.reversed() && !general.infinite());
+        let [a, c] = camera.shader_depth_constants();
+        let [ga, gk, gc, max] = general.shader_depth_constants();
+        assert!((ga - a).abs() <= 1e-12 * a.abs(), "{ga} vs {a}");
+        assert_eq!(gk, 1.0);
+        assert!((gc - c).abs() <= 1e-9 * c, "{gc} vs {c}");
+        assert!((max - camera.far).abs() <= 1e-9 * camera.far);
+        assert!((general.near() - camera.near).abs() < 1e-12);
+        for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (0.3, -0.7)] {
+            let (fast, inverse) = (camera.ray_at_ndc(x, y, 1.6), general.ray_at_ndc(x, y));
+            assert!((fast - inverse).length() < 1e-12, "{fast} vs {inverse}");
+        }
+        assert!((general.eye() - camera.eye()).length() < 1e-12);
+        assert!((general.forward() - camera.forward()).length() < 1e-12);
+    }
+
+    #[test]
+    fn depth_beyond_the_sky_depth_is_capped_and_never_negative() {
+        // An infinite standard (GL) projection: d = 1 is infinitely far.
+        let (n, f) = (0.5, 1.0 / (2.0f64).tan());
+        let projection = DMat4::from_cols(
+            DVec4::new(f, 0.0, 0.0, 0.0),
+            DVec4::new(0.0, f, 0.0, 0.0),
+            DVec4::new(0.0, 0.0, -1.0, -1.0),
+            DVec4::new(0.0, 0.0, -2.0 * n, 0.0),
+        );
+        let camera = MatrixCamera::new(DMat4::IDENTITY, projection, ClipDepth::MinusOneToOne)
+            .unwrap()
+            .with_sky_depth(300.0)
+            .unwrap();
+        assert!(camera.infinite() && !camera.reversed());
+        assert_eq!(camera.eye_depth(1.0), 300.0);
+        assert_eq!(camera.eye_depth(2.0), 300.0, "clamped to [0, 1] first");
+        assert!((camera.eye_depth(0.0) - n).abs() < 1e-12);
+        assert!((camera.eye_depth(0.9) - n / 0.1).abs() < 1e-9);
+        let p = camera.world_position_by_inverse(3, 2, 8, 4, 1.0);
+        let t = -p.z;
+        assert!((t - 300.0).abs() < 1e-6, "the sky at the sky depth: {p}");
     }
 
     #[test]
