@@ -230,14 +230,6 @@ pub fn haze_inputs(args: &RenderArgs, prep: &PrepReport) -> Result<(ScalarMap, f
     ))
 }
 
-/// `brume render`'s options with nothing given: the built-in demo and the default haze.
-pub fn default_args() -> RenderArgs {
-    use clap::{Args, FromArgMatches};
-    let matches =
-        RenderArgs::augment_args(clap::Command::new("render")).get_matches_from(["render"]);
-    RenderArgs::from_arg_matches(&matches).expect("the defaults parse")
-}
-
 /// The fog of --beta or --visibility (with --albedo), or `None` for normalised κ. Refused
 /// where it would be ignored: --albedo alone, the aerial medium, a uniform blur.
 pub fn physical_from_args(args: &RenderArgs) -> Result<Option<PhysicalFog>> {

@@ -218,6 +218,7 @@ pub fn insert(
 
 /// Whether an EXR channel's full name is a depth: `Z`, a `Z` in a layer named `Depth`
 /// (Blender's `ViewLayer.Depth.Z`), or `depth`.
+#[cfg(any(feature = "codecs", test))]
 fn is_depth_channel(full: &str) -> bool {
     let (layer, leaf) = full.rsplit_once('.').unwrap_or(("", full));
     let depth_layer = layer.split('.').any(|p| p.eq_ignore_ascii_case("depth"));

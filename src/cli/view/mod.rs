@@ -257,7 +257,7 @@ impl Viewer {
                 (Source::Photo(Box::new(Photo::load(a, &gl)?)), 0.0, 24.0)
             }
             None => (
-                Source::Photo(Box::new(Photo::load(&super::render::default_args(), &gl)?)),
+                Source::Photo(Box::new(Photo::load(&default_render_args(), &gl)?)),
                 0.0,
                 24.0,
             ),
@@ -691,4 +691,13 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     }
     v.sort_by(f64::total_cmp);
     Some(v[v.len() / 2])
+}
+
+/// `brume render`'s options with nothing given (the built-in demo and the default haze):
+/// what the viewer shows when it is given no photo.
+fn default_render_args() -> super::args::RenderArgs {
+    use clap::{Args, FromArgMatches};
+    let command = super::args::RenderArgs::augment_args(clap::Command::new("render"));
+    let matches = command.get_matches_from(["render"]);
+    super::args::RenderArgs::from_arg_matches(&matches).expect("the defaults parse")
 }
