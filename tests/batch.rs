@@ -16,8 +16,9 @@ const CAMERA_JSON: &str = r#"{"extrinsic": {"baseline": 0.2, "pitch": 0.0, "roll
  "intrinsic": {"fx": 100000.0, "fy": 100000.0, "u0": 320.5, "v0": 277.5}}"#;
 
 /// Writes the demo's Aloe as a Cityscapes frame `name` of `city` under `root`, in
-/// Cityscapes' layout: leftImg8bit/, disparity/ (16-bit, p = 256·d + 1) and camera/.
-fn cityscapes_frame(root: &Path, city: &str, name: &str) {
+/// Cityscapes' layout: leftImg8bit/, disparity/ (16-bit, p = 256·d + 1) and camera/
+/// (also the frames of `capture.rs`).
+pub(crate) fn cityscapes_frame(root: &Path, city: &str, name: &str) {
     let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo");
     let folder = |kind: &str| {
         let d = root.join(kind).join("train").join(city);

@@ -501,44 +501,6 @@ fn render_refuses_bad_capture_options_by_flag() {
     }
 }
 
-/// Cityscapes' camera file of the batch test's frames (as tests/batch.rs).
-const CAMERA_JSON: &str = r#"{"extrinsic": {"baseline": 0.2, "pitch": 0.0, "roll": 0.0, "x": 1.7, "y": 0.0, "yaw": 0.0, "z": 1.2},
- "intrinsic": {"fx": 100000.0, "fy": 100000.0, "u0": 320.5, "v0": 277.5}}"#;
-
-/// Writes the demo's Aloe as Cityscapes frame `name` under `root` (as tests/batch.rs).
-fn cityscapes_frame(root: &Path, name: &str) {
-    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo");
-    let folder = |kind: &str| {
-        let d = root.join(kind).join("train").join("aachen");
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    };
-    image::open(demo.join("aloe-left-half.jpg"))
-        .unwrap()
-        .to_rgb8()
-        .save(folder("leftImg8bit").join(format!("{name}_leftImg8bit.png")))
-        .unwrap();
-    let disparity = image::open(demo.join("aloe-disparity-half.png"))
-        .unwrap()
-        .to_luma8();
-    let packed = image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(
-        disparity.width(),
-        disparity.height(),
-        |x, y| {
-            let d = disparity.get_pixel(x, y)[0];
-            image::Luma([if d == 0 { 0 } else { 256 * u16::from(d) + 1 }])
-        },
-    );
-    packed
-        .save(folder("disparity").join(format!("{name}_disparity.png")))
-        .unwrap();
-    std::fs::write(
-        folder("camera").join(format!("{name}_camera.json")),
-        CAMERA_JSON,
-    )
-    .unwrap();
-}
-
 /// The log records of a batch run into `out`.
 fn batch_log(out: &Path) -> Vec<serde_json::Value> {
     let text = std::fs::read_to_string(out.join("brume-batch-1-of-1.jsonl")).unwrap();
@@ -565,7 +527,7 @@ fn batch_draws_one_beta_per_frame_from_the_distribution_and_logs_it() {
     let dir = tempfile::tempdir().unwrap();
     let root = dir.path().join("cityscapes");
     for k in 0..3 {
-        cityscapes_frame(&root, &format!("aachen_{k:06}_000019"));
+        crate::batch::cityscapes_frame(&root, "aachen", &format!("aachen_{k:06}_000019"));
     }
     let run = |out: &str, extra: &[&str]| {
         let mut args = vec!["batch", "cityscapes", "--out", out, "--lambda", "0"];
