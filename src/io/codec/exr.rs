@@ -242,12 +242,17 @@ pub(crate) fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
     if chosen.full != "Z" {
         log::info!("{}: depth from EXR channel {}", path.display(), chosen.full);
     }
+    read_channel(chosen, bytes, path)
+}
+
+/// Decodes `chosen` alone (the other channels could hold many times its size), at full
+/// resolution, as a map row 0 at the top.
+fn read_channel(chosen: &Channel, bytes: &[u8], path: &Path) -> Result<ScalarMap> {
     full_resolution(chosen, path)?;
     let (w, h) = (
         chosen.header.layer_size.width(),
         chosen.header.layer_size.height(),
     );
-    // Only the chosen channel is decoded: the others could hold many times its size.
     let read = exr::prelude::read()
         .no_deep_data()
         .largest_resolution_level()
@@ -531,20 +536,8 @@ pub(crate) fn parse_exr_channel(
     let Some(chosen) = channels.first(|c| pick(&c.full)) else {
         return Ok(None);
     };
-    full_resolution(chosen, path)?;
-    let (w, h) = (
-        chosen.header.layer_size.width(),
-        chosen.header.layer_size.height(),
-    );
-    let read = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .specific_channels()
-        .required(chosen.text.clone())
-        .collect_pixels(
-            |size, _| vec![f32::NAN; size.area()],
-            move |data: &mut Vec<f32>, pos, (v,): (f32,)| data[pos.y() * w + pos.x()] = v,
-        );
-    let pixels = read_part(read, bytes, chosen.header, path)?;
-    Ok(Some((chosen.full.clone(), Grid::from_vec(w, h, pixels))))
+    Ok(Some((
+        chosen.full.clone(),
+        read_channel(chosen, bytes, path)?,
+    )))
 }
