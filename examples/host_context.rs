@@ -79,6 +79,7 @@ fn run() -> Result<bool, String> {
         depth,
         width: WIDTH,
         height: HEIGHT,
+        frame: brume::FrameInputs::default(),
     };
     let output = Output::Framebuffer {
         framebuffer: Some(fbo),
@@ -99,7 +100,8 @@ fn run() -> Result<bool, String> {
     // --- The host reads its framebuffer and checks brume against the CPU reference. ---
     // SAFETY: reading the host's framebuffer into a buffer of the right size.
     let fogged = unsafe { read_rgba(&gl, fbo) }?;
-    let expected = reference::render(&image, &range, &haze, &blur).map_err(|e| e.to_string())?;
+    let expected = reference::render(&image, &range, &haze, &Default::default(), &blur)
+        .map_err(|e| e.to_string())?;
     let error = reference::rgb_error(&fogged, &expected, 0);
     let tolerance = 4e-7 * f64::from(frame.schedule.steps + 2);
     println!(
@@ -137,7 +139,7 @@ fn run() -> Result<bool, String> {
 
 /// The host as an engine: a rendered frame fogged from its depth buffer and camera.
 fn engine_frame(gl: &Arc<glow::Context>) -> Result<bool, String> {
-    use brume::camera::Camera;
+    use brume::camera::{Camera, FrameInputs};
     use brume::medium::{DistanceFog, LayeredFog};
     use brume::scene::SceneRenderer;
     use brume::{FogBlur, GaussBlur};
@@ -181,7 +183,10 @@ fn engine_frame(gl: &Arc<glow::Context>) -> Result<bool, String> {
         gl.delete_framebuffer(read);
         (target, fbo)
     };
-    let layered = LayeredFog::new(camera, Default::default());
+    // One medium value fogs any number of frames: the camera (and the time) come with
+    // each frame.
+    let layered = LayeredFog::for_camera(camera, Default::default());
+    let at = FrameInputs::new(camera, 0.0);
     let output = Output::Framebuffer {
         framebuffer: Some(fbo),
         x: 0,
@@ -189,17 +194,16 @@ fn engine_frame(gl: &Arc<glow::Context>) -> Result<bool, String> {
         encoding: Encoding::Linear,
     };
     pipeline
-        .blend_fog(frame.depth, WIDTH, HEIGHT, &layered, &output)
+        .blend_fog(frame.depth, WIDTH, HEIGHT, &layered, &at, &output)
         .map_err(err)?;
     // SAFETY: reading the host's framebuffer.
     let mut blended = unsafe { read_rgba(gl, fbo) }?;
     blended.flip_rows();
-    let expected = reference::fog(&colour, &depth, &layered, &FogBlur::None).map_err(err)?;
+    let expected = reference::fog(&colour, &depth, &layered, &at, &FogBlur::None).map_err(err)?;
     let blend_error = reference::rgb_error(&blended, &expected, 0).max_abs;
 
     // Paper 001: distance fog and the 5 x 5 blur of the fog-free frame, one pass.
     let distance = DistanceFog {
-        camera: camera.into(),
         noise: None,
         ..DistanceFog::default()
     };
@@ -210,11 +214,12 @@ fn engine_frame(gl: &Arc<glow::Context>) -> Result<bool, String> {
         depth: frame.depth,
         width: WIDTH,
         height: HEIGHT,
+        frame: at,
     };
     let (_, fogged) = pipeline
         .fog_to_image(&input, &distance, &blur)
         .map_err(err)?;
-    let expected = reference::fog(&colour, &depth, &distance, &blur).map_err(err)?;
+    let expected = reference::fog(&colour, &depth, &distance, &at, &blur).map_err(err)?;
     let fog_error = reference::rgb_error(&fogged, &expected, 0).max_abs;
 
     // Tolerance as tests/engine_fog.rs: f32 distance from the depth buffer near the far

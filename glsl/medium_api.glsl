@@ -11,7 +11,7 @@ struct MediumSample {
 uniform float brume_sigma0; // inner scale σ0 of the input (px)
 uniform ivec2 brume_size;   // image size (px)
 
-// A medium with a camera (Medium::camera in Rust) reads a depth buffer: these are set from
+// A medium with a camera (Medium::frame_camera in Rust) reads a depth buffer: set from
 // the camera for each frame (src/camera.rs), and zero otherwise. Any perspective
 // projection: standard or reversed-Z, finite or infinite far plane, off-centre, either
 // clip depth convention (MatrixCamera in src/camera.rs).

@@ -99,11 +99,25 @@ pub struct Blur {
     pub max_steps: u32,
     /// Coarse to fine: once the most blurred pixel has reached this scale (px, at least
     /// [`MIN_COARSE_FROM`]), run the remaining steps at half resolution and blend the
-    /// result back ([`Schedule::coarse_start`], `src/pipeline/coarse.rs`). Matched scheme,
-    /// grey τ and at least two remaining steps only; `None` (the default): every step at
-    /// full resolution, the paper's pipeline.
+    /// result back ([`Schedule::coarse_start`], `src/pipeline/coarse.rs`); once its scale
+    /// has doubled again, at a quarter of the resolution, and so on
+    /// ([`Schedule::coarse_levels`]). Matched scheme, grey τ and at least two remaining
+    /// steps only; `None` (the library's default): every step at full resolution, the
+    /// paper's pipeline. The CLI's and [`crate::photo`]'s default is
+    /// [`DEFAULT_COARSE_FROM`] ([`Blur::photo`]).
     pub coarse_from: Option<f64>,
 }
+
+/// The [`Blur::coarse_from`] that `brume render`, `batch`, `view` and [`crate::photo`] (so
+/// the Python package) use unless told `--coarse-from off` (px). The library's [`Blur::default`] keeps the stage off: it is
+/// the paper's pipeline, which the f64 reference ([`crate::reference`]) computes exactly.
+pub const DEFAULT_COARSE_FROM: f64 = 3.0;
+
+/// The precision of the coarse stage's levels, whatever the render's: each level's blend
+/// subtracts two of its images, and in f16 their rounding took the f16 render past the
+/// accuracy budget at σ ≥ 16 px (`bench accuracy`: +12 % interior RMS at 25 px, against
+/// −36 % in f32 levels); the levels hold a third of the pixels at most.
+pub const COARSE_PRECISION: Precision = Precision::F32;
 
 /// The smallest [`Blur::coarse_from`] (px): below about 2 px the image still has detail
 /// at the half resolution's Nyquist frequency, which the 2x2 average would alias.
@@ -123,6 +137,15 @@ impl Default for Blur {
 }
 
 impl Blur {
+    /// The blur of a photo: the default with the coarse-to-fine stage from
+    /// [`DEFAULT_COARSE_FROM`], as `brume render` and [`crate::photo::FogOptions`] use it.
+    pub fn photo() -> Self {
+        Blur {
+            coarse_from: Some(DEFAULT_COARSE_FROM),
+            ..Blur::default()
+        }
+    }
+
     /// The default blur with another scheme and precision.
     pub fn new(scheme: Scheme, precision: Precision) -> Self {
         Blur {
@@ -166,6 +189,22 @@ impl Blur {
         })
     }
 
+    /// Bytes per full-resolution pixel that the coarse stage's levels may take for a
+    /// medium (0 when [`Blur::coarse_from`] is off or τ is `chromatic`): every level
+    /// ([`crate::schedule::MAX_COARSE_LEVELS`]) holds three colour targets and a rate in
+    /// [`COARSE_PRECISION`] on a quarter of the pixels of the level above, Σ 4^−ℓ < ⅓
+    /// of one such texel per pixel, rounded up. The memory check adds it to the frame's
+    /// own textures (`Renderer`, [`crate::memory`]).
+    pub fn coarse_bytes_per_pixel(&self, chromatic: bool) -> u64 {
+        if self.coarse_from.is_none() || chromatic {
+            return 0;
+        }
+        let texel = |format: TexelFormat| format.bytes_per_texel() as u64;
+        let per_texel =
+            3 * texel(COARSE_PRECISION.colour_format()) + texel(COARSE_PRECISION.rate_format());
+        per_texel.div_ceil(3)
+    }
+
     /// The N-step schedule that takes σ0 to `sigma_max`, the largest scale a medium asks
     /// for; a medium asking for less than σ0, or for more than [`Blur::max_steps`] steps,
     /// is an error naming `what` (or `rho_max`, when a small ρmax is the cause).
@@ -207,5 +246,28 @@ impl Blur {
             ));
         }
         Ok(schedule)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coarse_levels_counted_only_when_they_can_run() {
+        let on = Blur {
+            coarse_from: Some(DEFAULT_COARSE_FROM),
+            ..Blur::default()
+        };
+        // f32 levels: three RGBA32F targets and an R32F rate, 52 bytes, on ⅓ of the pixels.
+        assert_eq!(on.coarse_bytes_per_pixel(false), 18);
+        // The same in f16: the levels stay f32.
+        let half = Blur {
+            precision: Precision::F16,
+            ..on
+        };
+        assert_eq!(half.coarse_bytes_per_pixel(false), 18);
+        assert_eq!(on.coarse_bytes_per_pixel(true), 0);
+        assert_eq!(Blur::default().coarse_bytes_per_pixel(false), 0);
     }
 }

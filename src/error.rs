@@ -134,6 +134,16 @@ pub enum Error {
     /// Range pre-processing (hole filling, sky, horizon margin) cannot proceed.
     #[error("pre-processing: {0}")]
     Prep(String),
+    /// A medium that reads a depth buffer was given a frame without its camera.
+    #[error(
+        "the {medium} medium reads a depth buffer and needs the frame's camera: pass \
+         FrameInputs {{ camera: Some(..), .. }} (brume's Camera or the engine's MatrixCamera) \
+         with the frame"
+    )]
+    MissingCamera {
+        /// The medium's name.
+        medium: String,
+    },
 }
 
 impl Error {

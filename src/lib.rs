@@ -44,6 +44,7 @@ pub mod schedule;
 pub mod sky;
 
 pub use blur::{Blur, Precision};
+pub use camera::FrameInputs;
 pub use error::{Error, Result};
 pub use gpu::timer::{Clock, PassTimes, Timing};
 pub use medium::{Haze, Medium, PhysicalFog, UniformBlur};

@@ -4,6 +4,7 @@
 //! with clamp-to-edge borders to measure how close each scheme comes to a true blur.
 
 use crate::blur::Blur;
+use crate::camera::FrameInputs;
 use crate::error::Result;
 use crate::medium::{Medium, MediumSample, Pixel};
 use crate::pipeline::{FogBlur, GAUSS_WEIGHTS};
@@ -19,15 +20,18 @@ pub type Rgba64 = Grid<[f64; 4]>;
 pub type Field = Grid<[f64; 6]>;
 
 /// The whole render on the CPU: what the GPU pipeline computes, in f64, through the same
-/// seam (the medium per pixel, then the blur, then the composite).
+/// seam (the medium per pixel, then the blur, then the composite), for `frame`'s camera
+/// and time ([`FrameInputs::default`] for a photo).
 pub fn render(
     image: &RgbImage,
     depth: &ScalarMap,
     medium: &dyn Medium,
+    frame: &FrameInputs,
     blur: &Blur,
 ) -> Result<RgbaImage> {
     let schedule = blur.schedule_for(medium)?;
-    let samples = sample(depth, medium, blur.sigma0);
+    medium.validate_frame(frame)?;
+    let samples = sample(depth, medium, frame, blur.sigma0);
     let rates = samples.map(|s| schedule.rate(s.sigma));
     let mut f = premultiply(image, &samples);
     diffuse(&mut f, &rates, &schedule);
@@ -37,20 +41,24 @@ pub fn render(
 /// Engine fog on the CPU (see [`crate::pipeline::FogBlur`]): no blur, paper 001's
 /// Gaussian in the fog's pass or in a second pass, or the diffusion blur ([`render`]).
 /// The blur weight's distance is rebuilt by the camera's inverse matrices (paper 002,
-/// eq. 22-23), not by the GPU's rays, so that the comparison tests both.
+/// eq. 22-23), not by the GPU's rays, so that the comparison tests both. `frame` gives
+/// the camera and the time, as to the pipeline.
 pub fn fog(
     image: &RgbImage,
     depth: &ScalarMap,
     medium: &dyn Medium,
+    frame: &FrameInputs,
     blur: &FogBlur,
 ) -> Result<RgbaImage> {
     let gauss = match blur {
-        FogBlur::Diffusion(b) => return render(image, depth, medium, b),
+        FogBlur::Diffusion(b) => return render(image, depth, medium, frame, b),
         FogBlur::None => None,
         FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => Some(*g),
     };
-    let samples = sample(depth, medium, 1.0);
-    let weights = match (gauss, medium.camera()) {
+    medium.validate()?;
+    medium.validate_frame(frame)?;
+    let samples = sample(depth, medium, frame, 1.0);
+    let weights = match (gauss, medium.frame_camera(frame)) {
         (Some(g), Some(camera)) => {
             let (w, h) = (depth.width(), depth.height());
             let camera = camera.for_frame(w, h);
@@ -119,19 +127,27 @@ pub fn gauss5(img: &Rgba64) -> Rgba64 {
     })
 }
 
-/// The medium at every pixel of `depth` (top row first, as [`crate::Renderer`] takes it:
-/// buffer row `y` is GL row `height − 1 − y`).
-pub fn sample(depth: &ScalarMap, medium: &dyn Medium, sigma0: f64) -> Grid<MediumSample> {
+/// The medium at every pixel of `depth` for `frame` (top row first, as
+/// [`crate::Renderer`] takes it: buffer row `y` is GL row `height − 1 − y`).
+pub fn sample(
+    depth: &ScalarMap,
+    medium: &dyn Medium,
+    frame: &FrameInputs,
+    sigma0: f64,
+) -> Grid<MediumSample> {
     let (width, height) = (depth.width(), depth.height());
     Grid::from_fn(width, height, |x, y| {
-        medium.sample(Pixel {
-            x,
-            y: height - 1 - y,
-            width,
-            height,
-            depth: f64::from(*depth.get(x, y)),
-            sigma0,
-        })
+        medium.sample(
+            Pixel {
+                x,
+                y: height - 1 - y,
+                width,
+                height,
+                depth: f64::from(*depth.get(x, y)),
+                sigma0,
+            },
+            frame,
+        )
     })
 }
 

@@ -4,6 +4,7 @@
 //! benchmarks and the tests.
 
 use crate::blur::{Blur, Precision};
+use crate::camera::FrameInputs;
 use crate::caps::{Capabilities, EglInfo};
 use crate::egl::{GlContext, Platform};
 use crate::error::{Error, Result};
@@ -73,7 +74,8 @@ impl Renderer {
 
     /// Renders `image` (linear RGB) fogged by `medium` from `depth` (what the medium
     /// reads: normalised range for [`crate::medium::Haze`] by default) and blurred as
-    /// `blur` says.
+    /// `blur` says: a photo's render, with no camera and time 0
+    /// ([`FrameInputs::default`]; [`Renderer::render_fog`] takes them).
     pub fn render(
         &mut self,
         image: &RgbImage,
@@ -81,29 +83,32 @@ impl Renderer {
         medium: &dyn Medium,
         blur: &Blur,
     ) -> Result<Rendered> {
-        self.render_fog(image, depth, medium, &FogBlur::Diffusion(*blur))
+        let blur = FogBlur::Diffusion(*blur);
+        self.render_fog(image, depth, medium, &FrameInputs::default(), &blur)
     }
 
-    /// Renders `image` fogged by `medium` (a medium with a camera reads a depth buffer's
-    /// window depth from `depth`) and blurred as `blur` says: paper 001's Gaussian modes,
-    /// no blur, or the diffusion blur (see [`FogBlur`]).
+    /// Renders `image` fogged by `medium` at `frame`'s camera and time (a medium that
+    /// needs a camera reads a depth buffer's window depth from `depth`) and blurred as
+    /// `blur` says: paper 001's Gaussian modes, no blur, or the diffusion blur (see
+    /// [`FogBlur`]). One medium value renders any number of frames.
     pub fn render_fog(
         &mut self,
         image: &RgbImage,
         depth: &ScalarMap,
         medium: &dyn Medium,
+        frame: &FrameInputs,
         blur: &FogBlur,
     ) -> Result<Rendered> {
-        self.check_frame(image, depth, medium)?;
+        self.check_frame(image, depth, medium, frame)?;
         if let FogBlur::Diffusion(b) = blur {
             self.check_memory(image.width(), image.height(), medium, b)?;
         }
-        self.with_textures(image, depth, |pipeline, input| {
+        self.with_textures(image, depth, frame, |pipeline, input| {
             pipeline.fog_and_read(input, medium, blur)
         })
     }
 
-    /// [`Renderer::render`] of one frame with each of `media` in turn (a dataset's
+    /// [`Renderer::render`] of one photo with each of `media` in turn (a dataset's
     /// extinctions), the image and the range uploaded once; each result goes to `each`
     /// (with its index in `media`) as soon as it is read back. Stops at the first error.
     pub fn render_each(
@@ -114,14 +119,15 @@ impl Renderer {
         blur: &Blur,
         mut each: impl FnMut(usize, Rendered) -> Result<()>,
     ) -> Result<()> {
+        let frame = FrameInputs::default();
         for medium in media {
-            self.check_frame(image, depth, *medium)?;
+            self.check_frame(image, depth, *medium, &frame)?;
             self.check_memory(image.width(), image.height(), *medium, blur)?;
         }
         let blur = FogBlur::Diffusion(*blur);
         let (w, h) = (image.width(), image.height());
         let (colour, depth_texture) = self.upload_frame(image, depth)?;
-        let input = self.input_of(&colour, &depth_texture, w, h);
+        let input = self.input_of(&colour, &depth_texture, w, h, frame);
         for (k, medium) in media.iter().enumerate() {
             let (frame, pixels) = self.pipeline.fog_and_read(&input, *medium, &blur)?;
             each(k, rendered_from(frame, pixels, w, h))?;
@@ -196,7 +202,13 @@ impl Renderer {
         Ok((out, times))
     }
 
-    fn check_frame(&self, image: &RgbImage, depth: &ScalarMap, medium: &dyn Medium) -> Result<()> {
+    fn check_frame(
+        &self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+        medium: &dyn Medium,
+        frame: &FrameInputs,
+    ) -> Result<()> {
         let (w, h) = (image.width(), image.height());
         self.caps().require_size("image", w, h)?;
         if (w, h) != (depth.width(), depth.height()) {
@@ -209,7 +221,8 @@ impl Renderer {
                 bh: depth.height() as u32,
             });
         }
-        medium.validate()
+        medium.validate()?;
+        medium.validate_frame(frame)
     }
 
     /// Uploads the buffers, runs `render` on them and reads the result back.
@@ -217,11 +230,12 @@ impl Renderer {
         &mut self,
         image: &RgbImage,
         depth: &ScalarMap,
+        frame: &FrameInputs,
         render: impl FnOnce(&mut Pipeline, &Input) -> Result<(Frame, Vec<[f32; 4]>)>,
     ) -> Result<Rendered> {
         let (w, h) = (image.width(), image.height());
         let (colour, depth_texture) = self.upload_frame(image, depth)?;
-        let input = self.input_of(&colour, &depth_texture, w, h);
+        let input = self.input_of(&colour, &depth_texture, w, h, *frame);
         let (frame, pixels) = render(&mut self.pipeline, &input)?;
         Ok(rendered_from(frame, pixels, w, h))
     }
@@ -242,14 +256,22 @@ impl Renderer {
         Ok((colour, depth_texture))
     }
 
-    /// The pipeline's input over uploaded textures.
-    fn input_of(&self, colour: &Texture, depth: &Texture, width: usize, height: usize) -> Input {
+    /// The pipeline's input over uploaded textures, for `frame`.
+    fn input_of(
+        &self,
+        colour: &Texture,
+        depth: &Texture,
+        width: usize,
+        height: usize,
+        frame: FrameInputs,
+    ) -> Input {
         Input {
             colour: colour.raw(),
             colour_encoding: Encoding::Linear,
             depth: depth.raw(),
             width,
             height,
+            frame,
         }
     }
 
@@ -259,13 +281,14 @@ impl Renderer {
         if !self.caps().software() {
             return Ok(());
         }
-        let per_pixel = bytes_per_pixel(blur.precision, medium.chromatic());
+        let coarse = blur.coarse_bytes_per_pixel(medium.chromatic());
+        let per_pixel = bytes_per_pixel(blur.precision, medium.chromatic()) + coarse;
         let needed = per_pixel * (w as u64) * (h as u64);
         let mut hint = format!(
             "this renderer keeps textures in system memory ({per_pixel} bytes per pixel here); "
         );
         if blur.precision == Precision::F32 {
-            let half = bytes_per_pixel(Precision::F16, medium.chromatic());
+            let half = bytes_per_pixel(Precision::F16, medium.chromatic()) + coarse;
             hint.push_str(&format!("use precision f16 ({half} bytes per pixel) or "));
         } else {
             hint.push_str("use ");
@@ -341,9 +364,11 @@ impl Headless {
         image: &RgbImage,
         depth: &ScalarMap,
         medium: &dyn Medium,
+        frame: &FrameInputs,
         blur: &FogBlur,
     ) -> Result<Rendered> {
-        self.renderer()?.render_fog(image, depth, medium, blur)
+        self.renderer()?
+            .render_fog(image, depth, medium, frame, blur)
     }
 
     /// The driver's capabilities, with the EGL facts.

@@ -256,26 +256,93 @@ impl Schedule {
     /// σk² = σ0²·e^(2kρ), at a quarter of a cycle per pixel, the centre of the band a 2x2
     /// average removes.
     pub fn detail_weight(&self, rate: f64, start: u32) -> f64 {
+        self.level_detail_weight(1, rate, start)
+    }
+
+    /// The weight with which the blend of coarse level `level` (1: half resolution) back
+    /// into the level above puts back the detail that level's 2x2 average removed, for a
+    /// pixel of rate `rate` and a level that started at step `start`: as
+    /// [`Schedule::detail_weight`] at the centre of that band, a quarter of a cycle per
+    /// texel of the finer level, 2^(1−ℓ)/4 cycle per px ([`level_detail_decay`]).
+    pub fn level_detail_weight(&self, level: u32, rate: f64, start: u32) -> f64 {
         let variance = |k: u32| self.sigma0 * self.sigma0 * (2.0 * f64::from(k) * rate).exp();
-        (-DETAIL_DECAY * (variance(self.steps) - variance(start))).exp()
+        (-level_detail_decay(level) * (variance(self.steps) - variance(start))).exp()
     }
 }
 
 impl Schedule {
-    /// The factor on the offset law's scale of the coarse stage's steps from `start`: the
-    /// 2x2 average and the bilinear up-sampling add [`COARSE_RESAMPLING_VARIANCE`] px² to
-    /// whatever the stage blurs, so its steps add that much less (the matched law's
-    /// variance per step is proportional to scale²). Exact for the most blurred pixels,
-    /// whose detail the blend drops; a pixel whose detail comes back (a ≈ 1) is blurred by
-    /// the stage about as much as it asked for (σN² − σk0² small), and one in between by up
-    /// to (1 − a)·1 px² more.
+    /// The factor on the offset law's scale of the coarse stage's first level's steps
+    /// from `start` to N: [`Schedule::level_scale`] of a single half-resolution level.
     pub fn coarse_scale(&self, start: u32) -> f64 {
+        self.level_scale(1, start, self.steps)
+    }
+
+    /// The factor on the offset law's scale of the steps `start..end` that run at coarse
+    /// level `level` (1: half resolution, 2: quarter, …): the level's 2x2 average and its
+    /// bilinear up-sampling add [`level_resampling_variance`] px² to whatever it blurs, so
+    /// its steps add that much less (the matched law's variance per step is proportional
+    /// to scale²). Exact for the most blurred pixels, whose detail the blends drop; a
+    /// pixel whose detail comes back (a ≈ 1) is blurred by the stage about as much as it
+    /// asked for (σN² − σk0² small), and one in between by up to (1 − a) times the
+    /// resampling variance more.
+    pub fn level_scale(&self, level: u32, start: u32, end: u32) -> f64 {
         let top = self.rate(self.sigma_max);
         let variance = |k: u32| self.sigma0 * self.sigma0 * (2.0 * f64::from(k) * top).exp();
-        let added = variance(self.steps) - variance(start);
-        (1.0 - COARSE_RESAMPLING_VARIANCE / added).max(0.0).sqrt()
+        let added = variance(end) - variance(start);
+        if added <= 0.0 {
+            return 0.0;
+        }
+        (1.0 - level_resampling_variance(level) / added)
+            .max(0.0)
+            .sqrt()
+    }
+
+    /// The steps at which the coarse stage's levels start, given the first level's start
+    /// (from [`Schedule::coarse_start`]): level 1 (half resolution) at `first`, and a
+    /// level ℓ + 1 at half of level ℓ's resolution once the most blurred pixel's scale has
+    /// doubled since level ℓ began, k ≥ kℓ + ln 2 / ρ(σmax): the blur, counted in the new
+    /// level's pixels, is then at least what it was in level ℓ's pixels when that level
+    /// began (≥ `coarse_from`), so every level holds as little detail at its Nyquist
+    /// frequency as the first. A level is added only when it leaves
+    /// [`MIN_COARSE_STEPS`] steps after its start, and at most [`MAX_COARSE_LEVELS`].
+    pub fn coarse_levels(&self, first: u32) -> Vec<u32> {
+        let top = self.rate(self.sigma_max);
+        let mut starts = vec![first];
+        if top <= 0.0 {
+            return starts;
+        }
+        let doubling = std::f64::consts::LN_2 / top;
+        while starts.len() < MAX_COARSE_LEVELS {
+            let last = f64::from(*starts.last().expect("one level at least"));
+            // Rounding guard as in `coarse_start`: a doubling that lands on a step starts there.
+            let next = (last + doubling - 1e-9).ceil() as u32;
+            if self.steps.saturating_sub(next) < MIN_COARSE_STEPS {
+                break;
+            }
+            starts.push(next);
+        }
+        starts
     }
 }
+
+/// Variance (full-resolution px² per axis) of coarse level `level`'s resampling (level 1:
+/// half resolution): a level-ℓ texel is 2^ℓ px, its 2x2 average adds ¼ of the finer
+/// level's texel² and the bilinear up-sampling at a quarter and three quarters of a texel
+/// f(1 − f) = 3/16 of its own texel²: 4^(ℓ−1)·(¼ + ¾) = 4^(ℓ−1) px².
+pub fn level_resampling_variance(level: u32) -> f64 {
+    COARSE_RESAMPLING_VARIANCE * 4f64.powi(level.saturating_sub(1) as i32)
+}
+
+/// The most levels the coarse stage recurses to: half and quarter resolution. A third
+/// level (an eighth) takes the last 2-4 steps of σ 25 from a sixteenth of the pixels to a
+/// sixty-fourth: predicted no gain (its own down and blend passes cost about what it
+/// saves), measured 0.50 of full resolution against 0.55 with two levels from 3 px and
+/// 0.40 against 0.41 from 2 px (`bench speed`, 1600x1120, 5 rounds on a loaded machine,
+/// README's speed section). But each level spreads the coarse increment twice as far
+/// across a depth edge: on the space-variant haze of `tests/coarse.rs` the error against
+/// the f64 reference grew from RMS 7.4e-3 to 8.2e-3 (from 2 px) with it. Two levels keep
+/// most of the gain for a smaller error.
+pub const MAX_COARSE_LEVELS: usize = 2;
 
 /// Variance (full-resolution px² per axis) of the coarse stage's resampling: ¼ for the
 /// 2x2 box average, ¾ for bilinear up-sampling at a quarter and three quarters of a
@@ -289,6 +356,13 @@ pub const MIN_COARSE_STEPS: u32 = 2;
 /// 2π²·(1/4)²: the exponent per px² of variance of a Gaussian's transfer at a quarter of
 /// a cycle per pixel ([`Schedule::detail_weight`]).
 pub const DETAIL_DECAY: f64 = std::f64::consts::PI * std::f64::consts::PI / 8.0;
+
+/// [`DETAIL_DECAY`] for coarse level `level`'s blend: the band its average removes is
+/// centred 2^(ℓ−1) times lower in frequency than the first level's, so the exponent per px²
+/// is 4^(ℓ−1) times smaller.
+pub fn level_detail_decay(level: u32) -> f64 {
+    DETAIL_DECAY / 4f64.powi(level.saturating_sub(1) as i32)
+}
 
 /// m(h): the second moment of a bilinear fetch at distance `h` ≥ 0 from the pixel centre.
 pub fn bilinear_moment(h: f64) -> f64 {
@@ -440,6 +514,71 @@ mod tests {
             .sum();
         let want = added - COARSE_RESAMPLING_VARIANCE;
         assert!((shrink * shrink * added - want).abs() < 1e-9 * want);
+    }
+
+    #[test]
+    fn coarse_levels_start_where_the_top_scale_doubles() {
+        // σ 25, N = 13, σk = 25^(k/13): a level starts once σk has doubled since the
+        // previous level began (ln 2 / ρ = 2.8 steps), and only with 2 steps left after it.
+        let s = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25).unwrap();
+        assert_eq!(s.coarse_levels(5), vec![5, 8]); // σ 3.44, 7.18 (then 15.0 at 11)
+        assert_eq!(s.coarse_levels(3), vec![3, 6]); // (9; 12 would leave 1 step)
+        let sigma = |k: u32| 25f64.powf(f64::from(k) / 13.0);
+        for pair in s.coarse_levels(3).windows(2) {
+            assert!(sigma(pair[1]) >= 2.0 * sigma(pair[0]) - 1e-9, "{pair:?}");
+            assert!(
+                sigma(pair[1] - 1) < 2.0 * sigma(pair[0]),
+                "{pair:?} starts late"
+            );
+        }
+        // The viewer's σmax 8 (N = 9): from 3 px one level, from 2 px two.
+        let v = Schedule::new(Scheme::Matched, 1.0, 8.0, 0.25).unwrap();
+        assert_eq!(v.coarse_levels(v.coarse_start(3.0).unwrap()), vec![5]);
+        assert_eq!(v.coarse_levels(v.coarse_start(2.0).unwrap()), vec![3, 6]);
+        // A huge blur stops at MAX_COARSE_LEVELS.
+        let big = Schedule::new(Scheme::Matched, 1.0, 1e4, 0.25).unwrap();
+        assert_eq!(big.coarse_levels(3).len(), MAX_COARSE_LEVELS);
+        assert_eq!(big.coarse_levels(3), vec![3, 6]);
+    }
+
+    #[test]
+    fn each_level_takes_its_own_resampling_variance_off() {
+        // Level ℓ's 2x2 average and bilinear up-sampling add 4^(ℓ−1) px²; its steps at the
+        // top rate add (scale factor)² of the full-resolution steps' variance, so the sum
+        // over the levels plus the resampling is what full resolution adds.
+        let s = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25).unwrap();
+        let top = s.rate(25.0);
+        let step_variance = |k: u32| 2.0 * top * bilinear_moment(s.offset(top, k));
+        let starts = s.coarse_levels(3);
+        let mut total: f64 = (0..starts[0]).map(step_variance).sum();
+        for (l, &start) in starts.iter().enumerate() {
+            let level = l as u32 + 1;
+            let end = starts.get(l + 1).copied().unwrap_or(s.steps);
+            let factor = s.level_scale(level, start, end);
+            assert!(factor > 0.9 && factor < 1.0, "level {level}: {factor}");
+            let steps: f64 = (start..end).map(step_variance).sum();
+            total += factor * factor * steps + level_resampling_variance(level);
+        }
+        assert_eq!(level_resampling_variance(3), 16.0);
+        assert!((total - (625.0 - 1.0)).abs() < 1e-9, "{total}");
+        // The one-level form is level 1's.
+        assert_eq!(s.coarse_scale(5), s.level_scale(1, 5, s.steps));
+    }
+
+    #[test]
+    fn deeper_levels_keep_more_of_their_lower_band() {
+        // Level ℓ's band is centred at 2^(1−ℓ)/4 cycle per px: its transfer decays 4^(ℓ−1)
+        // times slower in the variance.
+        let s = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25).unwrap();
+        assert_eq!(level_detail_decay(1), DETAIL_DECAY);
+        assert_eq!(level_detail_decay(3), DETAIL_DECAY / 16.0);
+        let (a1, a2) = (
+            s.level_detail_weight(1, 0.02, 5),
+            s.level_detail_weight(2, 0.02, 5),
+        );
+        assert!(a2 > a1, "{a1} {a2}");
+        assert!((a2.ln() * 4.0 - a1.ln()).abs() < 1e-12);
+        assert_eq!(s.detail_weight(0.02, 5), a1);
     }
 
     #[test]

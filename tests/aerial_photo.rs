@@ -68,14 +68,15 @@ fn horizon_error(camera: &Camera, sectors: usize) -> f64 {
     for x in 0..w {
         let y = (0..h).rev().find(|&y| *sky.get(x, y)).unwrap();
         // Infinitely far: the medium's in-scattered light is I∞(T, θ, φ) of the pixel.
-        let m = medium.sample(Pixel {
+        let pixel = Pixel {
             x,
             y: h - 1 - y,
             width: w,
             height: h,
             depth: 1e9,
             sigma0: 1.0,
-        });
+        };
+        let m = medium.sample(pixel, &brume::FrameInputs::default());
         let truth = image.get(x, y);
         for (got, want) in m.inscatter.iter().zip(truth) {
             worst = worst.max((got / f64::from(*want) - 1.0).abs());

@@ -123,6 +123,9 @@ fn json_report_has_the_stable_fields() {
             "out.exr",
             "--json",
             "--no-prep",
+            // The full-resolution pipeline: N + 2 passes (the coarse stage adds two a level).
+            "--coarse-from",
+            "off",
         ],
     );
     assert!(o.status.success(), "{}", stderr(&o));
@@ -805,6 +808,19 @@ fn aerial_perspective_renders_from_a_turbidity_a_sky_or_a_source_turbidity() {
     assert_eq!(given["horizon_light_source"], "horizon");
     assert!(given["horizon_zenith"].as_f64().unwrap() > 80.0, "{given}");
     assert!(given["diffusion_passes"].as_u64().unwrap() > 0);
+    assert!(
+        given["insert"].is_null() && given["capture"].is_null(),
+        "{given}"
+    );
+    let exposed = run(&[
+        "--turbidity",
+        "3",
+        "--exposure-stops",
+        "1",
+        "--out",
+        "t3-exposed.png",
+    ]);
+    assert_eq!(exposed["capture"]["exposure_stops"].as_f64(), Some(1.0));
     let estimated = run(&["--sky", "sky.exr", "--blur", "none", "--out", "sky.png"]);
     let t = estimated["turbidity"].as_f64().unwrap();
     assert!((t - 4.0).abs() < 0.05, "estimated {t}");

@@ -38,10 +38,10 @@
 //!   plane), which bounds what the scheme, an approximation of it, does too.
 use crate::common;
 
-use brume::camera::Camera;
+use brume::camera::{Camera, FrameInputs};
 use brume::medium::{DistanceFog, FogNoise, Medium};
 use brume::raster::{Grid, RgbImage, ScalarMap};
-use brume::{reference, Blur, Headless};
+use brume::{reference, Blur, FogBlur, Headless};
 use common::ray_enters_box;
 use glam::DVec3;
 
@@ -134,7 +134,7 @@ fn scene(camera: &Camera) -> (RgbImage, ScalarMap) {
 }
 
 /// A camera at eye height looking a little down and to the right.
-fn camera_at(position: [f64; 3]) -> Camera {
+pub(crate) fn camera_at(position: [f64; 3]) -> Camera {
     Camera {
         position,
         yaw_deg: 8.0,
@@ -143,9 +143,9 @@ fn camera_at(position: [f64; 3]) -> Camera {
     }
 }
 
-fn fog(camera: Camera, noise: Option<FogNoise>, lambda: f64) -> DistanceFog {
+/// The fog of these tests; each frame gives it its camera and time.
+pub(crate) fn fog(noise: Option<FogNoise>, lambda: f64) -> DistanceFog {
     DistanceFog {
-        camera: camera.into(),
         // Toward the light: in view, right of centre and above the horizon.
         light_direction: [0.35, 0.12, -1.0],
         noise,
@@ -155,7 +155,7 @@ fn fog(camera: Camera, noise: Option<FogNoise>, lambda: f64) -> DistanceFog {
 }
 
 /// A generated noise with a tile of 40 m, so that the test frame crosses several tiles.
-fn noise() -> FogNoise {
+pub(crate) fn noise() -> FogNoise {
     FogNoise {
         size: 40.0,
         ..FogNoise::generate(128, 2018).unwrap()
@@ -187,15 +187,17 @@ struct PixelBound {
     sigma_rel: f64,
 }
 
+#[allow(clippy::too_many_arguments)]
 fn pixel_bound(
     fog: &DistanceFog,
+    camera: &Camera,
+    time: f64,
     x: usize,
     y: usize,
     d: f64,
     e: [f32; 3],
     sigma0: f64,
 ) -> PixelBound {
-    let camera = fog.camera.look().expect("brume's camera");
     let gl_row = H - 1 - y;
     // The shader's A / ((d − 1) − c) with its f32 constants: d − 1 is exact for d ≥ ½ and
     // rounds by 2⁻²⁴·|d − 1| below; both terms have the same sign.
@@ -203,7 +205,7 @@ fn pixel_bound(
     let [a32, c32] = [a, c].map(|v| f64::from(v as f32));
     let rel_z = (c32 - c).abs() / c.abs() + (a32 - a).abs() / a.abs() + 3.0 * EPS;
     let world = camera.world_position_by_inverse(x, gl_row, W, H, d);
-    let point = fog.at(world);
+    let point = fog.at(camera.eye(), world, time);
     let l = point.distance;
     let dl = l * (rel_z + 1.0 / (1u64 << 20) as f64);
 
@@ -220,9 +222,9 @@ fn pixel_bound(
             let shift = texels * (dl / n.size + 4.0 * EPS * (1.0 + l / n.size));
             let dn = 2.0 * largest_texel_step(n) * (shift + WEIGHT_QUANTUM);
             (
-                n.factor(world, fog.time),
+                n.factor(world, time),
                 (n.high - n.low).abs() * dn + 4.0 * EPS,
-                n.colour_factor(world, fog.time),
+                n.colour_factor(world, time),
                 2.0 * n.colour_strength * dn + 4.0 * EPS,
             )
         }
@@ -272,18 +274,29 @@ fn pixel_bound(
     }
 }
 
-/// Renders `fog` over the scene on the GPU and on the CPU, and checks every pixel against
-/// its bound. Returns the GPU image and the largest error.
-fn check(r: &mut Headless, fog: &DistanceFog, what: &str) -> (brume::raster::RgbaImage, f64) {
-    let (image, depth) = scene(fog.camera.look().expect("brume's camera"));
+/// Renders `fog` over the scene seen by `camera` at `time` on the GPU and on the CPU, and
+/// checks every pixel against its bound. Returns the GPU image and the largest error.
+pub(crate) fn check(
+    r: &mut Headless,
+    fog: &DistanceFog,
+    camera: &Camera,
+    time: f64,
+    what: &str,
+) -> (brume::raster::RgbaImage, f64) {
+    let (image, depth) = scene(camera);
     let blur = Blur::default();
-    let gpu = r.render(&image, &depth, fog, &blur).expect("GPU render");
-    let cpu = reference::render(&image, &depth, fog, &blur).expect("CPU render");
+    let frame = FrameInputs::new(*camera, time);
+    let gpu = r
+        .render_fog(&image, &depth, fog, &frame, &FogBlur::Diffusion(blur))
+        .expect("GPU render");
+    let cpu = reference::render(&image, &depth, fog, &frame, &blur).expect("CPU render");
     let steps = gpu.schedule.steps;
     let budget = F32_PER_PASS * f64::from(steps + 2);
     let bounds = Grid::from_fn(W, H, |x, y| {
         pixel_bound(
             fog,
+            camera,
+            time,
             x,
             y,
             f64::from(*depth.get(x, y)),
@@ -309,7 +322,7 @@ fn check(r: &mut Headless, fog: &DistanceFog, what: &str) -> (brume::raster::Rgb
             .fold(0.0, f64::max)
     };
     // The density error bound, diffused like the image (with the reference's rates).
-    let samples = reference::sample(&depth, fog, blur.sigma0);
+    let samples = reference::sample(&depth, fog, &frame, blur.sigma0);
     let rates = samples.map(|s| schedule.rate(s.sigma));
     let mut spread = bounds.map(|b| [b.density]);
     reference::diffuse(&mut spread, &rates, schedule);
@@ -379,8 +392,14 @@ fn distance_fog_matches_reference_without_and_with_noise_and_blur() {
     let camera = camera_at([0.0, 1.7, 0.0]);
     for (noise, label) in [(None, "no noise"), (Some(noise()), "noise")] {
         for lambda in [0.0, 6.0] {
-            let fog = fog(camera, noise.clone(), lambda);
-            check(&mut r, &fog, &format!("{label}, λ = {lambda}"));
+            let fog = fog(noise.clone(), lambda);
+            check(
+                &mut r,
+                &fog,
+                &camera,
+                0.0,
+                &format!("{label}, λ = {lambda}"),
+            );
         }
     }
 }
@@ -391,21 +410,25 @@ fn far_camera_and_late_time_match_reference() {
     // reduced to one tile, the reference computes it in f64 from the full values.
     let (_lock, mut r) = common::renderer();
     let camera = camera_at([5_000.25, 1.7, -12_000.5]);
-    let fog = DistanceFog {
-        time: 3_600.0,
-        ..fog(camera, Some(noise()), 0.0)
-    };
-    check(&mut r, &fog, "far camera, t = 3600 s");
+    let fog = fog(Some(noise()), 0.0);
+    check(&mut r, &fog, &camera, 3_600.0, "far camera, t = 3600 s");
 }
 
 #[test]
 fn the_scene_is_fogged_as_the_paper_says() {
     let (_lock, mut r) = common::renderer();
     let camera = camera_at([0.0, 1.7, 0.0]);
-    let fog = fog(camera, None, 0.0);
+    let fog = fog(None, 0.0);
     let (image, depth) = scene(&camera);
+    let frame = FrameInputs::new(camera, 0.0);
     let out = r
-        .render(&image, &depth, &fog, &Blur::default())
+        .render_fog(
+            &image,
+            &depth,
+            &fog,
+            &frame,
+            &FogBlur::Diffusion(Blur::default()),
+        )
         .unwrap()
         .image;
     // The near box (5 m) keeps most of its colour, the far one (650 m) is half fog.
@@ -416,7 +439,7 @@ fn the_scene_is_fogged_as_the_paper_says() {
     let mix = |(x, y): (usize, usize)| {
         let d = f64::from(*depth.get(x, y));
         let world = camera.world_position_by_inverse(x, H - 1 - y, W, H, d);
-        let l = fog.at(world).colour[2];
+        let l = fog.at(camera.eye(), world, 0.0).colour[2];
         let (e, o) = (f64::from(image.get(x, y)[2]), f64::from(out.get(x, y)[2]));
         (o - e) / (l - e)
     };
@@ -465,16 +488,22 @@ fn pixel_of(camera: &Camera, p: DVec3) -> (usize, usize) {
 fn time_moves_the_noise_on_the_gpu() {
     let (_lock, mut r) = common::renderer();
     let camera = camera_at([0.0, 1.7, 0.0]);
-    let now = fog(camera, Some(noise()), 0.0);
-    let later = DistanceFog {
-        time: 5.0,
-        ..now.clone()
-    };
+    let now = fog(Some(noise()), 0.0);
     let (image, depth) = scene(&camera);
-    let blur = Blur::default();
-    let a = r.render(&image, &depth, &now, &blur).unwrap().image;
-    let b = r.render(&image, &depth, &now, &blur).unwrap().image;
-    let c = r.render(&image, &depth, &later, &blur).unwrap().image;
+    let blur = FogBlur::Diffusion(Blur::default());
+    let at = |t: f64| FrameInputs::new(camera, t);
+    let a = r
+        .render_fog(&image, &depth, &now, &at(0.0), &blur)
+        .unwrap()
+        .image;
+    let b = r
+        .render_fog(&image, &depth, &now, &at(0.0), &blur)
+        .unwrap()
+        .image;
+    let c = r
+        .render_fog(&image, &depth, &now, &at(5.0), &blur)
+        .unwrap()
+        .image;
     assert_eq!(
         a.as_slice(),
         b.as_slice(),
@@ -486,17 +515,22 @@ fn time_moves_the_noise_on_the_gpu() {
         "time did not move the noise: {moved:?}"
     );
     // Without noise, time changes nothing.
-    let plain = fog(camera, None, 0.0);
-    let plain_later = DistanceFog {
-        time: 5.0,
-        ..plain.clone()
-    };
-    let p = r.render(&image, &depth, &plain, &blur).unwrap().image;
-    let q = r.render(&image, &depth, &plain_later, &blur).unwrap().image;
+    let plain = fog(None, 0.0);
+    let p = r
+        .render_fog(&image, &depth, &plain, &at(0.0), &blur)
+        .unwrap()
+        .image;
+    let q = r
+        .render_fog(&image, &depth, &plain, &at(5.0), &blur)
+        .unwrap()
+        .image;
     assert_eq!(p.as_slice(), q.as_slice());
     // And a fog without noise, after one with it, does not read the noise texture (the
     // same program serves both: the uniform flag decides).
-    let p2 = r.render(&image, &depth, &plain, &blur).unwrap().image;
+    let p2 = r
+        .render_fog(&image, &depth, &plain, &at(0.0), &blur)
+        .unwrap()
+        .image;
     assert_eq!(p.as_slice(), p2.as_slice());
     assert!(plain.validate().is_ok());
 }
@@ -523,14 +557,13 @@ fn noise_varies_the_fog_colour_as_the_formula_says() {
     let camera = camera_at([0.0, 1.7, 0.0]);
     let strength = 0.6;
     let tinted = fog(
-        camera,
         Some(FogNoise {
             colour_strength: strength,
             ..noise()
         }),
         0.0,
     );
-    let plain = fog(camera, Some(noise()), 0.0);
+    let plain = fog(Some(noise()), 0.0);
     assert_eq!(
         plain.noise.as_ref().unwrap().colour_strength,
         0.0,
@@ -549,9 +582,12 @@ fn noise_varies_the_fog_colour_as_the_formula_says() {
         let towards = (to / l).dot(light).clamp(0.0, 1.0);
         let scatter = towards.powf(tinted.scatter_exponent)
             * ((l - tinted.scatter_start) / l).clamp(0.0, 1.0);
-        let n = noise_by_hand(tinted.noise.as_ref().unwrap(), p, tinted.time);
+        let n = noise_by_hand(tinted.noise.as_ref().unwrap(), p, 0.0);
         let tint = 1.0 + strength * (2.0 * n - 1.0);
-        let (a, b) = (tinted.at(p), plain.at(p));
+        let (a, b) = (
+            tinted.at(camera.eye(), p, 0.0),
+            plain.at(camera.eye(), p, 0.0),
+        );
         for c in 0..3 {
             let eq8 = f64::from(tinted.colour[c]) + f64::from(tinted.scatter_colour[c]) * scatter;
             assert!(
@@ -577,8 +613,14 @@ fn noise_varies_the_fog_colour_as_the_formula_says() {
         "tint {darkest}..{brightest}"
     );
     let (_lock, mut r) = common::renderer();
-    let (image, _) = check(&mut r, &tinted, "noise on the colour, s = 0.6");
-    let (same, _) = check(&mut r, &plain, "noise on the colour, s = 0");
+    let (image, _) = check(
+        &mut r,
+        &tinted,
+        &camera,
+        0.0,
+        "noise on the colour, s = 0.6",
+    );
+    let (same, _) = check(&mut r, &plain, &camera, 0.0, "noise on the colour, s = 0");
     assert_ne!(
         image.as_slice(),
         same.as_slice(),
@@ -588,14 +630,19 @@ fn noise_varies_the_fog_colour_as_the_formula_says() {
         lambda: 6.0,
         ..tinted.clone()
     };
-    check(&mut r, &blurred, "noise on the colour, s = 0.6, λ = 6");
+    check(
+        &mut r,
+        &blurred,
+        &camera,
+        0.0,
+        "noise on the colour, s = 0.6, λ = 6",
+    );
 }
 
 #[test]
 fn bad_noise_colour_strength_is_refused_by_name() {
     for s in [-0.1, 1.5, f64::NAN] {
         let fog = fog(
-            camera_at([0.0, 1.7, 0.0]),
             Some(FogNoise {
                 colour_strength: s,
                 ..noise()

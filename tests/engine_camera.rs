@@ -13,7 +13,7 @@
 //!   with integer uniforms, renders on the GPU as its CPU `sample` says.
 use crate::common;
 
-use brume::camera::{ClipDepth, FrameCamera, MatrixCamera};
+use brume::camera::{ClipDepth, FrameInputs, MatrixCamera};
 use brume::medium::{
     DistanceFog, HeightProfile, LayeredFog, Medium, MediumSample, Pixel, UniformValue,
 };
@@ -308,31 +308,22 @@ fn projection_budget() -> f64 {
     f64::powi(2.0, -25) * FAR / NEAR + 1e-5
 }
 
-fn assert_same_fog(fog_of: impl Fn(FrameCamera) -> Box<dyn Medium>, what: &str) {
+/// One medium value through both cameras: each frame gives its own.
+fn assert_same_fog(fog: &dyn Medium, what: &str) {
     let (bevy, standard) = camera_pair();
     let image = noise_image(W, H, 11);
     let (depth_bevy, depth_standard) = (depth_buffer(&bevy), depth_buffer(&standard));
-    let (fog_bevy, fog_standard) = (fog_of(bevy.into()), fog_of(standard.into()));
-    let cpu_bevy = reference::fog(&image, &depth_bevy, fog_bevy.as_ref(), &FogBlur::None)
-        .expect("CPU fog, Bevy");
-    let cpu_standard = reference::fog(
-        &image,
-        &depth_standard,
-        fog_standard.as_ref(),
-        &FogBlur::None,
-    )
-    .expect("CPU fog, standard");
+    let (at_bevy, at_standard) = (FrameInputs::new(bevy, 0.0), FrameInputs::new(standard, 0.0));
+    let cpu_bevy =
+        reference::fog(&image, &depth_bevy, fog, &at_bevy, &FogBlur::None).expect("CPU fog, Bevy");
+    let cpu_standard = reference::fog(&image, &depth_standard, fog, &at_standard, &FogBlur::None)
+        .expect("CPU fog, standard");
     let (_lock, mut r) = renderer();
     let gpu_bevy = r
-        .render_fog(&image, &depth_bevy, fog_bevy.as_ref(), &FogBlur::None)
+        .render_fog(&image, &depth_bevy, fog, &at_bevy, &FogBlur::None)
         .expect("GPU fog, Bevy");
     let gpu_standard = r
-        .render_fog(
-            &image,
-            &depth_standard,
-            fog_standard.as_ref(),
-            &FogBlur::None,
-        )
+        .render_fog(&image, &depth_standard, fog, &at_standard, &FogBlur::None)
         .expect("GPU fog, standard");
     let budget = projection_budget();
     let errors = [
@@ -379,25 +370,17 @@ fn layered_fog_is_the_same_through_bevy_and_standard_projections() {
         base: 0.0,
         scale_height: 15.0,
     };
-    assert_same_fog(
-        |camera| Box::new(LayeredFog::new(camera, profile.clone())),
-        "layered",
-    );
+    assert_same_fog(&LayeredFog::new(profile), "layered");
 }
 
 #[test]
 fn distance_fog_is_the_same_through_bevy_and_standard_projections() {
-    assert_same_fog(
-        |camera| {
-            Box::new(DistanceFog {
-                camera,
-                noise: None,
-                distance: 150.0,
-                ..DistanceFog::default()
-            })
-        },
-        "distance",
-    );
+    let fog = DistanceFog {
+        noise: None,
+        distance: 150.0,
+        ..DistanceFog::default()
+    };
+    assert_same_fog(&fog, "distance");
 }
 
 #[test]
@@ -405,8 +388,8 @@ fn fog_reconstructs_the_same_world_point_through_both_projections() {
     // Per pixel, the CPU references of both cameras put the fragment at the scene's hit.
     let (bevy, standard) = camera_pair();
     let (depth_bevy, depth_standard) = (depth_buffer(&bevy), depth_buffer(&standard));
-    let fog = |camera: MatrixCamera| LayeredFog::new(camera, HeightProfile::EXPONENTIAL);
-    let (fog_bevy, fog_standard) = (fog(bevy), fog(standard));
+    let fog = LayeredFog::new(HeightProfile::EXPONENTIAL);
+    let (at_bevy, at_standard) = (FrameInputs::new(bevy, 0.0), FrameInputs::new(standard, 0.0));
     for (x, row) in [(5, 30), (32, 20), (60, 38), (10, 2)] {
         let y = H - 1 - row;
         let pixel = |depth: &ScalarMap| Pixel {
@@ -417,8 +400,8 @@ fn fog_reconstructs_the_same_world_point_through_both_projections() {
             depth: f64::from(*depth.get(x, row)),
             sigma0: 1.0,
         };
-        let a = fog_bevy.sample(pixel(&depth_bevy));
-        let b = fog_standard.sample(pixel(&depth_standard));
+        let a = fog.sample(pixel(&depth_bevy), &at_bevy);
+        let b = fog.sample(pixel(&depth_standard), &at_standard);
         let t = scene_hit(bevy.view(), bevy.projection(), x, y).unwrap_or(FAR);
         let point = known_point(
             bevy.view(),
@@ -427,7 +410,7 @@ fn fog_reconstructs_the_same_world_point_through_both_projections() {
             ndc(x, y),
             t,
         );
-        let exact = fog_bevy.sample_point(point.world, 1.0);
+        let exact = fog.sample_point(bevy.eye(), point.world, 1.0);
         for s in [a, b] {
             let e = (s.transmission[0] - exact.transmission[0]).abs();
             assert!(e <= projection_budget(), "pixel ({x}, {y}): {e:.2e}");
@@ -493,7 +476,7 @@ impl Medium for RuntimeMedium {
         Cow::Owned(self.glsl.clone())
     }
 
-    fn uniforms(&self) -> Vec<(Cow<'static, str>, UniformValue)> {
+    fn uniforms(&self, _frame: &FrameInputs) -> Vec<(Cow<'static, str>, UniformValue)> {
         vec![
             (
                 Cow::Owned(self.stripe_uniform.clone()),
@@ -512,7 +495,7 @@ impl Medium for RuntimeMedium {
         sigma0
     }
 
-    fn sample(&self, p: Pixel) -> MediumSample {
+    fn sample(&self, p: Pixel, _frame: &FrameInputs) -> MediumSample {
         let [width, levels] = self.stripes;
         let level = (p.x as i32 / width + self.offset) % levels;
         let floor = self.floor();
@@ -533,9 +516,22 @@ fn assert_gpu_matches_sample(r: &mut brume::Headless, medium: &RuntimeMedium) ->
     let image = noise_image(W, H, 3);
     let range = ramp_range(W, H);
     let gpu = r
-        .render_fog(&image, &range, medium, &FogBlur::None)
+        .render_fog(
+            &image,
+            &range,
+            medium,
+            &FrameInputs::default(),
+            &FogBlur::None,
+        )
         .expect("GPU render of a run-time medium");
-    let cpu = reference::fog(&image, &range, medium, &FogBlur::None).expect("CPU");
+    let cpu = reference::fog(
+        &image,
+        &range,
+        medium,
+        &FrameInputs::default(),
+        &FogBlur::None,
+    )
+    .expect("CPU");
     let e = reference::rgb_error(&gpu.image, &cpu, 0);
     eprintln!("{}: max {:.2e}", medium.name(), e.max_abs);
     assert!(e.max_abs < 1e-5, "{}: {e:?}", medium.name());

@@ -11,7 +11,7 @@
 //! k·l·2e-5 ≤ 1e-5 here (k·l ≤ 0.5), and the rest is a few f32 ulps.
 use crate::common;
 
-use brume::camera::{Camera, FrameCamera};
+use brume::camera::{Camera, FrameInputs};
 use brume::medium::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::{reference, Blur, FogBlur, GaussBlur, Precision, Scheme};
@@ -20,9 +20,12 @@ use std::borrow::Cow;
 
 const ONE_PASS_TOLERANCE: f64 = 2e-5;
 
-/// Homogeneous fog of extinction `k` per unit, seen through `camera`.
+/// Homogeneous fog of extinction `k` per unit, seen through the frame's camera; `unit`
+/// is the distance that counts as 1 in the blur law, `reach` the farthest distance a
+/// pixel sees (for σ's bound).
 struct CameraFog {
-    camera: Camera,
+    unit: f64,
+    reach: f64,
     k: f64,
     colour: [f32; 3],
     lambda: f64,
@@ -52,12 +55,12 @@ impl Medium for CameraFog {
         )
     }
 
-    fn uniforms(&self) -> Vec<(Cow<'static, str>, UniformValue)> {
+    fn uniforms(&self, _frame: &FrameInputs) -> Vec<(Cow<'static, str>, UniformValue)> {
         brume::medium::static_names(vec![
             ("u_k", UniformValue::Float(self.k as f32)),
             ("u_fog_colour", UniformValue::Vec3(self.colour)),
             ("u_lambda", UniformValue::Float(self.lambda as f32)),
-            ("u_unit", UniformValue::Float(self.camera.far as f32)),
+            ("u_unit", UniformValue::Float(self.unit as f32)),
         ])
     }
 
@@ -67,28 +70,27 @@ impl Medium for CameraFog {
 
     fn sigma_max(&self, sigma0: f64) -> f64 {
         // r ≤ 1 in the law; the optical depth is largest at the far corner.
-        let far = self.camera.far * self.camera.pixel_ray(0, 0, 4, 3).length();
-        blur_from_optical_depth(sigma0, self.lambda, 1.0, self.k * far)
+        blur_from_optical_depth(sigma0, self.lambda, 1.0, self.k * self.reach)
     }
 
-    fn sample(&self, p: Pixel) -> MediumSample {
-        let c = &self.camera;
+    fn sample(&self, p: Pixel, frame: &FrameInputs) -> MediumSample {
+        let c = frame.camera.expect("checked").for_frame(p.width, p.height);
         let pos = c.world_position_by_inverse(p.x, p.y, p.width, p.height, p.depth);
         let l = (pos - c.eye()).length();
         let tau = (-self.k * l).exp();
         MediumSample {
             transmission: [tau; 3],
             inscatter: self.colour.map(f64::from),
-            sigma: blur_from_optical_depth(p.sigma0, self.lambda, l / c.far, self.k * l),
+            sigma: blur_from_optical_depth(p.sigma0, self.lambda, l / self.unit, self.k * l),
         }
     }
 
     fn validate(&self) -> brume::Result<()> {
-        self.camera.validate()
+        Ok(())
     }
 
-    fn camera(&self) -> Option<FrameCamera> {
-        Some(self.camera.into())
+    fn needs_camera(&self) -> bool {
+        true
     }
 }
 
@@ -103,9 +105,16 @@ fn scene_camera() -> Camera {
     }
 }
 
+/// The frame of the scene camera.
+fn at() -> FrameInputs {
+    FrameInputs::new(scene_camera(), 0.0)
+}
+
 fn fog() -> CameraFog {
+    let camera = scene_camera();
     CameraFog {
-        camera: scene_camera(),
+        unit: camera.far,
+        reach: camera.far * camera.pixel_ray(0, 0, 4, 3).length(),
         k: 0.004,
         colour: [0.6, 0.65, 0.7],
         lambda: 4.0,
@@ -124,9 +133,9 @@ fn assert_fog_matches(blur: FogBlur, tolerance: f64) {
     let medium = fog();
     let (_lock, mut r) = renderer();
     let gpu = r
-        .render_fog(&image, &depth, &medium, &blur)
+        .render_fog(&image, &depth, &medium, &at(), &blur)
         .expect("GPU fog");
-    let cpu = reference::fog(&image, &depth, &medium, &blur).expect("CPU fog");
+    let cpu = reference::fog(&image, &depth, &medium, &at(), &blur).expect("CPU fog");
     let e = reference::rgb_error(&gpu.image, &cpu, 0);
     eprintln!(
         "{}: max {:.2e} (tolerance {tolerance:.1e})",
@@ -172,7 +181,7 @@ fn diffusion_blur_driven_by_the_fog_matches_the_reference() {
     let (image, depth) = frame(64, 48);
     let (_lock, mut r) = renderer();
     let gpu = r
-        .render_fog(&image, &depth, &fog(), &FogBlur::Diffusion(blur))
+        .render_fog(&image, &depth, &fog(), &at(), &FogBlur::Diffusion(blur))
         .unwrap();
     assert!(gpu.schedule.steps > 0, "the fog must ask for blur");
     drop((_lock, r));
@@ -199,7 +208,7 @@ fn the_gaussian_modes_blur_only_where_there_is_fog() {
         FogBlur::GaussSingle(GaussBlur::default()),
         FogBlur::GaussSeparate(GaussBlur::default()),
     ] {
-        let out = r.render_fog(&image, &depth, &medium, &blur).unwrap();
+        let out = r.render_fog(&image, &depth, &medium, &at(), &blur).unwrap();
         let sharp = Grid::from_fn(32, 24, |x, y| {
             let c = image.get(x, y);
             [c[0], c[1], c[2], 1.0]
@@ -219,6 +228,7 @@ fn a_gaussian_blur_needs_a_camera() {
             &image,
             &range,
             &brume::Haze::default(),
+            &at(),
             &FogBlur::GaussSingle(GaussBlur::default()),
         )
         .unwrap_err()
@@ -271,12 +281,12 @@ fn blended_fog_over_a_host_framebuffer_matches_the_one_pass_fog() {
     };
     renderer
         .pipeline()
-        .blend_fog(depth_texture.raw(), w, h, &medium, &output)
+        .blend_fog(depth_texture.raw(), w, h, &medium, &at(), &output)
         .expect("blended fog");
     let fb = brume::gpu::framebuffer::Framebuffer::over(&gl, &[&target], "read-back").unwrap();
     let mut blended = Grid::from_vec(w, h, fb.read_rgba().unwrap());
     blended.flip_rows();
-    let cpu = reference::fog(&image, &depth, &medium, &FogBlur::None).unwrap();
+    let cpu = reference::fog(&image, &depth, &medium, &at(), &FogBlur::None).unwrap();
     let e = reference::rgb_error(&blended, &cpu, 0);
     assert!(e.max_abs <= ONE_PASS_TOLERANCE, "{e:?}");
 }

@@ -365,6 +365,7 @@ fn render(
         depth,
         width: W,
         height: H,
+        frame: brume::FrameInputs::default(),
     };
     let output = Output::Texture {
         texture: target,

@@ -65,11 +65,19 @@ impl Host {
             depth: self.depth,
             width: self.image.width(),
             height: self.image.height(),
+            frame: brume::FrameInputs::default(),
         }
     }
 
     fn expected(&self, haze: &Haze, blur: &Blur) -> RgbaImage {
-        reference::render(&self.image, &self.range, haze, blur).unwrap()
+        reference::render(
+            &self.image,
+            &self.range,
+            haze,
+            &brume::FrameInputs::default(),
+            blur,
+        )
+        .unwrap()
     }
 }
 
@@ -302,7 +310,14 @@ fn srgb_8_bit_textures_in_and_out() {
         .unwrap();
     // SAFETY: as above.
     let fogged = unsafe { read_bytes(&gl, fbo, w, h) };
-    let sharp = reference::fog(&host.image, &host.range, &haze, &FogBlur::None).unwrap();
+    let sharp = reference::fog(
+        &host.image,
+        &host.range,
+        &haze,
+        &brume::FrameInputs::default(),
+        &FogBlur::None,
+    )
+    .unwrap();
     for (got, expected) in [(diffused, host.expected(&haze, &blur)), (fogged, sharp)] {
         let mut worst = 0.0f64;
         for (i, p) in expected.as_slice().iter().enumerate() {
@@ -558,8 +573,10 @@ fn gl_state_contract() {
         );
         (target, framebuffer(gl, target), fog_depth, Hostile::new(gl))
     };
+    let at = brume::FrameInputs::new(brume::camera::Camera::default(), 0.0);
     let fog_input = Input {
         depth: fog_depth,
+        frame: at,
         ..host.input()
     };
     let (haze, blur) = (Haze::default(), Blur::default());
@@ -601,7 +618,7 @@ fn gl_state_contract() {
         (
             "blend_fog",
             Box::new(|p| {
-                p.blend_fog(fog_depth, w, h, &fog, &output).unwrap();
+                p.blend_fog(fog_depth, w, h, &fog, &at, &output).unwrap();
             }),
         ),
     ];
@@ -650,7 +667,7 @@ fn gl_state_contract() {
             snapshot(gl)
         };
         let out = renderer
-            .render_fog(&host.image, &fog_depth_map, &fog, &FogBlur::None)
+            .render_fog(&host.image, &fog_depth_map, &fog, &at, &FogBlur::None)
             .unwrap();
         // SAFETY: state queries on the current context.
         unsafe {
@@ -742,16 +759,20 @@ fn engine_passes_without_blur_allocate_nothing_and_blend_in_srgb() {
         texture: target32,
         encoding: Encoding::Linear,
     };
+    let at = brume::FrameInputs::new(brume::camera::Camera::default(), 0.0);
     let input = Input {
         colour: scene,
         depth,
+        frame: at,
         ..host.input()
     };
     // The first calls compile; the objects counted are the second calls'.
     pipeline
         .fog(&input, &fog, &FogBlur::None, &linear_out)
         .unwrap();
-    pipeline.blend_fog(depth, w, h, &fog, &linear_out).unwrap();
+    pipeline
+        .blend_fog(depth, w, h, &fog, &at, &linear_out)
+        .unwrap();
     pipeline
         .fog(&input, &fog, &FogBlur::None, &linear_out)
         .unwrap();
@@ -770,7 +791,9 @@ fn engine_passes_without_blur_allocate_nothing_and_blend_in_srgb() {
         texture_refill(&gl, target32, w, h, &linear);
         got
     };
-    pipeline.blend_fog(depth, w, h, &fog, &linear_out).unwrap();
+    pipeline
+        .blend_fog(depth, w, h, &fog, &at, &linear_out)
+        .unwrap();
     assert_eq!(
         brume::gpu::objects_created(),
         made,
@@ -786,7 +809,9 @@ fn engine_passes_without_blur_allocate_nothing_and_blend_in_srgb() {
         texture: target8,
         encoding: Encoding::Srgb,
     };
-    pipeline.blend_fog(depth, w, h, &fog, &srgb_out).unwrap();
+    pipeline
+        .blend_fog(depth, w, h, &fog, &at, &srgb_out)
+        .unwrap();
     // SAFETY: reading the host's 8-bit target.
     let got = unsafe { read_bytes(&gl, fbo8, w, h) };
     let mut worst = 0.0f64;
@@ -839,7 +864,8 @@ fn two_headless_contexts_survive_dropping_either() {
     let image = noise_image(w, h, 3);
     let range = ramp_range(w, h);
     let (haze, blur) = (Haze::default(), Blur::default());
-    let expected = reference::render(&image, &range, &haze, &blur).unwrap();
+    let expected =
+        reference::render(&image, &range, &haze, &brume::FrameInputs::default(), &blur).unwrap();
     let check = |r: &mut brume::Headless| {
         let out = r.render(&image, &range, &haze, &blur).expect("render");
         let e = reference::rgb_error(&out.image, &expected, 0);

@@ -308,6 +308,21 @@ fn cli_inserts_and_fogs_an_exr_object() {
 }
 
 #[test]
+fn cli_reports_the_object_of_an_aerial_render() {
+    let dir = tempfile::tempdir().unwrap();
+    write_inputs(dir.path(), true);
+    let beta = RENDER.iter().position(|&a| a == "--beta").unwrap();
+    let mut args: Vec<&str> = [&RENDER[..beta], &RENDER[beta + 6..]].concat();
+    args.extend(["--medium", "aerial", "--turbidity", "3", "--fov", "40"]);
+    let o = common::brume(dir.path(), &args);
+    assert!(o.status.success(), "{}", common::stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(json["medium"], "aerial");
+    assert_eq!(json["insert"]["pixels_in_front"], 8 * 12);
+    assert_eq!(json["insert"]["pixels_hidden"], 8 * 12);
+}
+
+#[test]
 fn cli_takes_the_depth_from_a_separate_file_and_refuses_bad_objects() {
     let dir = tempfile::tempdir().unwrap();
     write_inputs(dir.path(), false);

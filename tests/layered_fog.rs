@@ -23,10 +23,10 @@
 //!   height with τ near 1: a horizontal ray along a layer's edge (last test).
 use crate::common;
 
-use brume::camera::Camera;
+use brume::camera::{Camera, FrameInputs};
 use brume::medium::{HeightProfile, LayeredFog, Medium, MediumSample, Pixel};
 use brume::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
-use brume::{reference, Blur, Precision, Scheme};
+use brume::{reference, Blur, FogBlur, Precision, Scheme};
 use common::*;
 use glam::DVec3;
 
@@ -150,16 +150,21 @@ fn every_profile() -> [(&'static str, HeightProfile); 3] {
     ]
 }
 
-/// Renders on both sides, checks every value is finite and returns both images.
+/// Renders the frame of `camera` on both sides, checks every value is finite and returns
+/// both images.
 fn render_both(
     r: &mut brume::Headless,
     image: &RgbImage,
     depth: &ScalarMap,
     fog: &LayeredFog,
+    camera: &Camera,
     blur: &Blur,
 ) -> (brume::Rendered, RgbaImage) {
-    let gpu = r.render(image, depth, fog, blur).expect("GPU render");
-    let cpu = reference::render(image, depth, fog, blur).expect("CPU render");
+    let frame = FrameInputs::new(*camera, 0.0);
+    let gpu = r
+        .render_fog(image, depth, fog, &frame, &FogBlur::Diffusion(*blur))
+        .expect("GPU render");
+    let cpu = reference::render(image, depth, fog, &frame, blur).expect("CPU render");
     assert!(
         gpu.image.as_slice().iter().flatten().all(|v| v.is_finite()),
         "GPU NaN/inf"
@@ -177,9 +182,10 @@ fn gpu_cpu_difference(
     image: &RgbImage,
     depth: &ScalarMap,
     fog: &LayeredFog,
+    camera: &Camera,
     blur: &Blur,
 ) -> (f64, u32) {
-    let (gpu, cpu) = render_both(r, image, depth, fog, blur);
+    let (gpu, cpu) = render_both(r, image, depth, fog, camera, blur);
     let e = reference::rgb_error(&gpu.image, &cpu, 0);
     (e.max_abs, gpu.schedule.steps)
 }
@@ -192,10 +198,11 @@ fn assert_unblurred_within_pixel_budgets(
     image: &RgbImage,
     depth: &ScalarMap,
     fog: &LayeredFog,
+    camera: &Camera,
 ) -> f64 {
     assert_eq!(fog.lambda, 0.0);
-    let (gpu, cpu) = render_both(r, image, depth, fog, &Blur::default());
-    let camera = fog.camera.look().expect("brume's camera");
+    let (gpu, cpu) = render_both(r, image, depth, fog, camera, &Blur::default());
+    let frame = FrameInputs::new(*camera, 0.0);
     let (w, h) = (image.width(), image.height());
     let mut worst: f64 = 0.0;
     for y in 0..h {
@@ -203,16 +210,15 @@ fn assert_unblurred_within_pixel_budgets(
             let d = f64::from(*depth.get(x, y));
             let z = camera.eye_depth(d);
             let l = (camera.world_position(x, h - 1 - y, w, h, d) - camera.eye()).length();
-            let tau = fog
-                .sample(Pixel {
-                    x,
-                    y: h - 1 - y,
-                    width: w,
-                    height: h,
-                    depth: d,
-                    sigma0: 1.0,
-                })
-                .transmission[0];
+            let pixel = Pixel {
+                x,
+                y: h - 1 - y,
+                width: w,
+                height: h,
+                depth: d,
+                sigma0: 1.0,
+            };
+            let tau = fog.sample(pixel, &frame).transmission[0];
             let budget =
                 reconstruction_budget() + ray_budget(&fog.profile, tau, l, z) + 2.0 * F32_PER_PASS;
             let (p, q) = (gpu.image.get(x, y), cpu.get(x, y));
@@ -245,14 +251,14 @@ fn layered_fog_matches_reference_for_every_profile_with_and_without_blur() {
         let fog = LayeredFog {
             lambda: 0.0,
             colour: [0.75, 0.8, 0.85],
-            ..LayeredFog::new(camera, profile)
+            ..LayeredFog::for_camera(camera, profile)
         };
-        let worst = assert_unblurred_within_pixel_budgets(&mut r, &image, &depth, &fog);
+        let worst = assert_unblurred_within_pixel_budgets(&mut r, &image, &depth, &fog, &camera);
         eprintln!("{name} λ = 0: worst difference {worst:.2} of its pixel's budget");
         // With blur, the frame's budget: the diffusion mixes pixels.
         let fog = LayeredFog { lambda: 3.0, ..fog };
         let blur = Blur::new(Scheme::Matched, Precision::F32);
-        let (max, steps) = gpu_cpu_difference(&mut r, &image, &depth, &fog, &blur);
+        let (max, steps) = gpu_cpu_difference(&mut r, &image, &depth, &fog, &camera, &blur);
         let tol = blurred_budget(steps);
         eprintln!("{name} λ = 3: N = {steps}, max {max:.2e} (tolerance {tol:.2e})");
         assert!(max <= tol, "{name} λ = 3: {max} > {tol}");
@@ -310,8 +316,13 @@ fn turning_the_camera_leaves_the_fog_of_a_fixed_point_unchanged() {
         },
     ];
     for profile in profiles {
-        let reference_fog = LayeredFog::new(base, profile.clone());
-        let expected = reference_fog.sample_point(point, 1.0).transmission[0];
+        // One medium value for every view: each frame gives its camera.
+        let fog = LayeredFog {
+            colour: [1.0; 3],
+            lambda: 0.0,
+            ..LayeredFog::for_camera(base, profile.clone())
+        };
+        let expected = fog.sample_point(base.eye(), point, 1.0).transmission[0];
         assert!(
             expected > 0.2 && expected < 0.8,
             "{profile:?}: τ {expected}"
@@ -322,20 +333,17 @@ fn turning_the_camera_leaves_the_fog_of_a_fixed_point_unchanged() {
             let (d, _) = camera.project_depth(point).unwrap();
             eye_depths.push(camera.eye_depth(d));
             // λ = 0 and fog colour 1 over a black image: the output is 1 − τ.
-            let fog = LayeredFog {
-                colour: [1.0; 3],
-                lambda: 0.0,
-                ..LayeredFog::new(camera, profile.clone())
-            };
+            let frame = FrameInputs::new(camera, 0.0);
             // The CPU, from the exact depth of the point at that pixel.
-            let cpu: MediumSample = fog.sample(Pixel {
+            let at_pixel = Pixel {
                 x: pixel.0,
                 y: pixel.1,
                 width: w,
                 height: h,
                 depth: d,
                 sigma0: 1.0,
-            });
+            };
+            let cpu: MediumSample = fog.sample(at_pixel, &frame);
             assert!(
                 (cpu.transmission[0] - expected).abs() < 1e-9,
                 "{profile:?} pixel {pixel:?}: CPU τ {} vs {expected}",
@@ -348,7 +356,15 @@ fn turning_the_camera_leaves_the_fog_of_a_fixed_point_unchanged() {
                 (stored - d).abs() < 1e-6,
                 "pixel {pixel:?} misses the point"
             );
-            let out = r.render(&image, &depth, &fog, &Blur::default()).unwrap();
+            let out = r
+                .render_fog(
+                    &image,
+                    &depth,
+                    &fog,
+                    &frame,
+                    &FogBlur::Diffusion(Blur::default()),
+                )
+                .unwrap();
             let tau = 1.0 - f64::from(out.image.get(pixel.0, h - 1 - pixel.1)[0]);
             // The stored depth is d rounded to f32: one more reconstruction error.
             let z = camera.eye_depth(d);
@@ -421,8 +437,9 @@ fn horizontal_rays_along_a_layer_boundary_have_no_nan() {
     for profile in profiles {
         let fog = LayeredFog {
             lambda: 0.0,
-            ..LayeredFog::new(camera, profile.clone())
+            ..LayeredFog::for_camera(camera, profile.clone())
         };
+        let frame = FrameInputs::new(camera, 0.0);
         // τ itself on the horizon row: fog colour 0 over a white image, no blur.
         let white = Grid::filled(w, h, [1.0f32; 3]);
         let readout = LayeredFog {
@@ -431,7 +448,13 @@ fn horizontal_rays_along_a_layer_boundary_have_no_nan() {
             ..fog.clone()
         };
         let tau = r
-            .render(&white, &depth, &readout, &Blur::default())
+            .render_fog(
+                &white,
+                &depth,
+                &readout,
+                &frame,
+                &FogBlur::Diffusion(Blur::default()),
+            )
             .unwrap();
         for x in 0..w {
             let v = tau.image.get(x, middle)[0];
@@ -440,14 +463,15 @@ fn horizontal_rays_along_a_layer_boundary_have_no_nan() {
                 "{profile:?} x {x}: {v}"
             );
             let d = f64::from(*depth.get(x, middle));
-            let cpu = fog.sample(Pixel {
+            let at_pixel = Pixel {
                 x,
                 y: h - 1 - middle,
                 width: w,
                 height: h,
                 depth: d,
                 sigma0: 1.0,
-            });
+            };
+            let cpu = fog.sample(at_pixel, &frame);
             let z = camera.eye_depth(d);
             let p = camera.world_position(x, h - 1 - middle, w, h, d);
             let l = (p - camera.eye()).length();
@@ -463,10 +487,11 @@ fn horizontal_rays_along_a_layer_boundary_have_no_nan() {
         // The whole frame: each pixel within its budget without blur; with blur, the
         // frame's budget plus the worst ray budget there (τ ≤ 1, l ≤ |ray|·far ≤ 1.3·far
         // at this aspect, z ≤ far).
-        let worst = assert_unblurred_within_pixel_budgets(&mut r, &image, &depth, &fog);
+        let worst = assert_unblurred_within_pixel_budgets(&mut r, &image, &depth, &fog, &camera);
         eprintln!("{profile:?} λ = 0: worst difference {worst:.2} of its pixel's budget");
         let fog = LayeredFog { lambda: 3.0, ..fog };
-        let (max, steps) = gpu_cpu_difference(&mut r, &image, &depth, &fog, &Blur::default());
+        let (max, steps) =
+            gpu_cpu_difference(&mut r, &image, &depth, &fog, &camera, &Blur::default());
         let tol = blurred_budget(steps) + ray_budget(&profile, 1.0, 1.3 * far, far);
         eprintln!("{profile:?} λ = 3: max {max:.2e} (tolerance {tol:.2e})");
         // Where δ vanishes at the eye's height (an edge of the band, the ramp's top), the
@@ -485,6 +510,14 @@ fn layered_fog_is_grey_and_names_itself() {
     let fog = LayeredFog::default();
     assert!(!fog.chromatic());
     assert_eq!(fog.name(), "layered");
-    assert_eq!(fog.camera(), Some(fog.camera));
-    assert_eq!(fog.range_unit, fog.camera.max_depth());
+    // It reads a depth buffer through the frame's camera, and says so.
+    assert!(fog.needs_camera());
+    let camera = scene_camera();
+    let frame = FrameInputs::new(camera, 0.0);
+    assert_eq!(fog.frame_camera(&frame), Some(camera.into()));
+    assert_eq!(fog.frame_camera(&FrameInputs::default()), None);
+    assert_eq!(
+        LayeredFog::for_camera(camera, HeightProfile::EXPONENTIAL).range_unit,
+        camera.far
+    );
 }

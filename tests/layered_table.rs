@@ -8,7 +8,7 @@
 //! Depth buffers are synthesised from a ground plane with boxes (as tests/layered_fog.rs).
 use crate::common;
 
-use brume::camera::Camera;
+use brume::camera::{Camera, FrameInputs};
 use brume::io::image::linear_to_srgb8;
 use brume::medium::{DensityTable, HeightProfile, LayeredFog, Medium, Pixel};
 use brume::raster::{Grid, RgbaImage, ScalarMap};
@@ -99,12 +99,21 @@ fn a_band_sampled_too_coarsely_shows_in_8bit_output() {
     let fog = |p: HeightProfile| LayeredFog {
         lambda: 0.0,
         colour: [0.75, 0.8, 0.85],
-        ..LayeredFog::new(camera, p)
+        ..LayeredFog::for_camera(camera, p)
     };
-    let blur = Blur::default();
-    let analytic = r.render(&image, &depth, &fog(profile), &blur).unwrap();
+    let blur = brume::FogBlur::Diffusion(Blur::default());
+    let at = FrameInputs::new(camera, 0.0);
+    let analytic = r
+        .render_fog(&image, &depth, &fog(profile), &at, &blur)
+        .unwrap();
     let tabled = r
-        .render(&image, &depth, &fog(HeightProfile::Table(table)), &blur)
+        .render_fog(
+            &image,
+            &depth,
+            &fog(HeightProfile::Table(table)),
+            &at,
+            &blur,
+        )
         .unwrap();
     let (a, b) = (srgb8(&analytic.image), srgb8(&tabled.image));
     let steps = a.iter().zip(&b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
@@ -134,16 +143,21 @@ fn tables_sampled_from_analytic_profiles_render_their_images_to_one_8bit_step() 
             let fog = |p: HeightProfile| LayeredFog {
                 lambda,
                 colour: [0.75, 0.8, 0.85],
-                ..LayeredFog::new(camera, p)
+                ..LayeredFog::for_camera(camera, p)
             };
+            let (at, blur) = (
+                FrameInputs::new(camera, 0.0),
+                brume::FogBlur::Diffusion(blur),
+            );
             let analytic = r
-                .render(&image, &depth, &fog(profile.clone()), &blur)
+                .render_fog(&image, &depth, &fog(profile.clone()), &at, &blur)
                 .unwrap();
             let tabled = r
-                .render(
+                .render_fog(
                     &image,
                     &depth,
                     &fog(HeightProfile::Table(table.clone())),
+                    &at,
                     &blur,
                 )
                 .unwrap();
@@ -199,11 +213,15 @@ fn table_fog_matches_the_cpu_reference_per_pixel() {
         let fog = LayeredFog {
             lambda: 0.0,
             colour: [0.75, 0.8, 0.85],
-            ..LayeredFog::new(camera, HeightProfile::Table(table.clone()))
+            ..LayeredFog::for_camera(camera, HeightProfile::Table(table.clone()))
         };
         assert_eq!(fog.name(), "layered_table");
-        let gpu = r.render(&image, &depth, &fog, &Blur::default()).unwrap();
-        let cpu = reference::render(&image, &depth, &fog, &Blur::default()).unwrap();
+        let at = FrameInputs::new(camera, 0.0);
+        let blur = Blur::default();
+        let gpu = r
+            .render_fog(&image, &depth, &fog, &at, &brume::FogBlur::Diffusion(blur))
+            .unwrap();
+        let cpu = reference::render(&image, &depth, &fog, &at, &blur).unwrap();
         let mut worst: f64 = 0.0;
         for y in 0..h {
             for x in 0..w {
@@ -211,16 +229,15 @@ fn table_fog_matches_the_cpu_reference_per_pixel() {
                 let p = camera.world_position(x, h - 1 - y, w, h, d);
                 let l = (p - camera.eye()).length();
                 let z = camera.eye_depth(d);
-                let tau = fog
-                    .sample(Pixel {
-                        x,
-                        y: h - 1 - y,
-                        width: w,
-                        height: h,
-                        depth: d,
-                        sigma0: 1.0,
-                    })
-                    .transmission[0];
+                let pixel = Pixel {
+                    x,
+                    y: h - 1 - y,
+                    width: w,
+                    height: h,
+                    depth: d,
+                    sigma0: 1.0,
+                };
+                let tau = fog.sample(pixel, &at).transmission[0];
                 // f32 budgets of τ (F moves τ by τ·ΔF): the eye depth, 3·2^-24 relative
                 // in l; the ray's rise, off by z·2^-22, moves the mean by ½·slope per unit
                 // of rise; the difference of two f32 K values, 2^-23·K_max over a rise of
@@ -305,7 +322,7 @@ fn cpu_reference_matches_simpson_along_segments() {
         .zip(table.extinction().iter().copied())
         .collect();
     let camera = scene_camera();
-    let fog = LayeredFog::new(camera, HeightProfile::Table(table));
+    let fog = LayeredFog::for_camera(camera, HeightProfile::Table(table));
     let eye = camera.eye();
     for p in [
         DVec3::new(30.0, 0.0, -400.0),
@@ -315,7 +332,7 @@ fn cpu_reference_matches_simpson_along_segments() {
         DVec3::new(2.0, 1.7 + 1e-7, -100.0),
         DVec3::new(0.0, -20.0, -60.0),
     ] {
-        let tau = fog.sample_point(p, 1.0).transmission[0];
+        let tau = fog.sample_point(eye, p, 1.0).transmission[0];
         let want = (-simpson_along(&rows, eye, p)).exp();
         assert!(
             (tau - want).abs() <= 1e-12,
@@ -334,15 +351,18 @@ fn engine_passes_render_a_table_fog() {
     let image = noise_image(w, h, 9);
     let fog = LayeredFog {
         lambda: 0.0,
-        ..LayeredFog::new(camera, HeightProfile::Table(inversion()))
+        ..LayeredFog::for_camera(camera, HeightProfile::Table(inversion()))
     };
     let (_lock, mut r) = renderer();
     for blur in [
         brume::FogBlur::None,
         brume::FogBlur::GaussSingle(brume::GaussBlur::default()),
     ] {
-        let gpu = r.render_fog(&image, &depth, &fog, &blur).expect("GPU fog");
-        let cpu = reference::fog(&image, &depth, &fog, &blur).expect("CPU fog");
+        let at = FrameInputs::new(camera, 0.0);
+        let gpu = r
+            .render_fog(&image, &depth, &fog, &at, &blur)
+            .expect("GPU fog");
+        let cpu = reference::fog(&image, &depth, &fog, &at, &blur).expect("CPU fog");
         let e = reference::rgb_error(&gpu.image, &cpu, 0);
         eprintln!("engine {}: max {:.1e}", blur.name(), e.max_abs);
         // The f32 budget of the per-pixel test above, at its largest here (≤ 1e-5), and

@@ -69,6 +69,7 @@ impl Host {
             depth: self.range.raw(),
             width: W,
             height: H,
+            frame: brume::FrameInputs::default(),
         }
     }
 
@@ -107,14 +108,19 @@ impl Host {
             encoding: Encoding::Linear,
         };
         let frame = pipeline
-            .blend_fog(self.depth.raw(), W, H, &fog(), &output)
+            .blend_fog(self.depth.raw(), W, H, &fog(), &at(), &output)
             .expect("blend_fog");
         (frame.times, target.read_rgba().expect("read-back"))
     }
 }
 
 fn fog() -> LayeredFog {
-    LayeredFog::new(Camera::default(), Default::default())
+    LayeredFog::for_camera(Camera::default(), Default::default())
+}
+
+/// The frame the layered fog is blended at: the default camera.
+fn at() -> brume::FrameInputs {
+    brume::FrameInputs::new(Camera::default(), 0.0)
 }
 
 fn assert_unavailable(t: &PassTimes, what: &str) {
@@ -357,7 +363,7 @@ fn rejected_figures_are_unavailable_and_passes_run_once() {
         encoding: Encoding::Linear,
     };
     pipeline
-        .blend_fog(host.depth.raw(), W, H, &fog(), &output)
+        .blend_fog(host.depth.raw(), W, H, &fog(), &at(), &output)
         .unwrap();
     let twice = fb.read_rgba().unwrap();
     let largest = |a: &[[f32; 4]], b: &[[f32; 4]]| {

@@ -13,7 +13,7 @@
 //! 1920 x 1080 on a GTX 970; paper 003 0.4-2.1 ms at 512²-1024² on a GeForce 6800.
 
 use crate::blur::Blur;
-use crate::camera::Camera;
+use crate::camera::{Camera, FrameInputs};
 use crate::error::{Error, Result};
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::Timing;
@@ -147,6 +147,7 @@ pub fn run_fog_bench(
         depth: frame.depth,
         width: w,
         height: h,
+        frame: FrameInputs::new(camera, 0.0),
     };
     let target = Texture::new(&gl, w, h, TexelFormat::Rgba16F, Filter::Nearest, None)?;
     let output = Output::Texture {
@@ -154,11 +155,8 @@ pub fn run_fog_bench(
         encoding: Encoding::Linear,
     };
 
-    let distance = DistanceFog {
-        camera: camera.into(),
-        ..DistanceFog::default()
-    };
-    let layered = LayeredFog::new(camera, Default::default());
+    let distance = DistanceFog::default();
+    let layered = LayeredFog::for_camera(camera, Default::default());
     let gauss = GaussBlur::default();
     let diffusion = Blur::default();
     let configs: Vec<(&'static str, &dyn Medium, Mode)> = vec![
@@ -208,7 +206,7 @@ pub fn run_fog_bench(
                 }
                 Mode::Blend => {
                     passes = vec!["fog (blended)".into()];
-                    pipeline.blend_fog(input.depth, w, h, *medium, &output)?
+                    pipeline.blend_fog(input.depth, w, h, *medium, &input.frame, &output)?
                 }
             };
             if run >= opts.warm_up {
@@ -239,7 +237,7 @@ pub fn run_fog_bench(
                 match &mode {
                     Mode::Fog(b) => pipeline.fog(&input, medium, b, &output).map(drop),
                     Mode::Blend => pipeline
-                        .blend_fog(input.depth, w, h, medium, &output)
+                        .blend_fog(input.depth, w, h, medium, &input.frame, &output)
                         .map(drop),
                 }
             };

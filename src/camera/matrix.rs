@@ -1,6 +1,6 @@
 //! An engine's camera as it is ([`MatrixCamera`]), the clip depth conventions of depth
 //! buffers ([`ClipDepth`]), the depth model every eye-depth path shares ([`DepthModel`]),
-//! and the camera a medium holds ([`FrameCamera`]). See the parent module's docs.
+//! and the camera a frame gives its medium ([`FrameCamera`]). See the parent module's docs.
 
 use super::{pixel_ndc, Camera};
 use crate::error::{Error, Result};
@@ -336,10 +336,10 @@ impl MatrixCamera {
     }
 }
 
-/// The camera a depth buffer was drawn with, as a medium holds it: brume's own
+/// The camera a depth buffer was drawn with, as a frame gives it ([`super::FrameInputs`]): brume's own
 /// (position, yaw, pitch, field of view: its projection follows the image's aspect) or an
 /// engine's matrices as they are.
-// One per medium and frame: staying `Copy` (media are copied per frame) is worth more
+// One per frame: staying `Copy` (a frame's inputs are copied per frame) is worth more
 // than the 500 bytes a box would save on brume's own camera.
 #[allow(clippy::large_enum_variant)]
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -21,8 +21,8 @@
 //!   are, with the clip depth convention of its depth buffer ([`ClipDepth`]): reversed-Z,
 //!   infinite far planes, off-centre frusta and roll. Every path above (eye depth, rays,
 //!   positions by the inverse matrices) is computed from the matrices, so brume's own
-//!   [`Camera`] goes through the same code ([`Camera::matrices`]); a medium holds either
-//!   as a [`FrameCamera`].
+//!   [`Camera`] goes through the same code ([`Camera::matrices`]); a frame gives either
+//!   as a [`FrameCamera`] in its [`FrameInputs`], with the time, to the pipeline.
 //!
 //! **Depth conventions.** brume reads the *window* depth d ∈ [0, 1] the depth buffer
 //! holds, with the default depth range (0..1). How d relates to clip space is the drawing
@@ -37,8 +37,10 @@
 //! `(x, y)` of the frame, row 0 at the bottom as GL stores it; its centre is at window
 //! coordinates `(x + ½, y + ½)`.
 
+mod frame;
 mod matrix;
 
+pub use frame::FrameInputs;
 pub use matrix::{ClipDepth, DepthModel, FrameCamera, MatrixCamera, DEFAULT_SKY_DEPTH};
 
 use crate::error::{check_positive, Error, Result};
@@ -187,7 +189,7 @@ impl Camera {
 
     /// The general camera, or (for a camera [`Camera::validate`] refuses) a camera from
     /// the default's matrices: the depth paths below must not panic on bad input, and
-    /// every medium validates its camera before it renders.
+    /// the entry points validate the frame's camera before they render.
     fn general(&self, aspect: f64) -> MatrixCamera {
         self.matrices(aspect).unwrap_or_else(|_| {
             Camera::default()

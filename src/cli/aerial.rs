@@ -12,8 +12,8 @@ use brume::io::output::Outputs;
 use brume::medium::haze::Haze;
 use brume::medium::{AerialPerspective, Medium};
 use brume::photo::{
-    pitch_for_horizon_row, turbidity_from_sky, AerialOptions, AerialPhoto, HorizonFrom, Retarget,
-    DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+    pitch_for_horizon_row, turbidity_from_sky, AerialOptions, AerialPhoto, CaptureOptions,
+    HorizonFrom, Insertion, Retarget, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
 };
 use brume::sky::horizon_sectors::{DEFAULT_SECTORS, MAX_SECTORS};
 use brume::Headless;
@@ -272,12 +272,20 @@ pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result
     })
 }
 
+/// What the render did to the photo beside the fog, for the reports: `--insert`'s object
+/// (composited before the fog) and the capture (after it).
+pub struct Extras<'a> {
+    pub inserted: Option<&'a Insertion>,
+    pub capture: &'a CaptureOptions,
+}
+
 pub fn run_aerial(
     args: &RenderArgs,
     renderer: &mut Headless,
     scene: &Scene,
     prep: &PrepReport,
     out: &Path,
+    extras: Extras,
 ) -> Result<()> {
     let job = aerial_job(args, scene, prep)?;
     let AerialJob {
@@ -292,9 +300,10 @@ pub fn run_aerial(
         blur,
         ..
     } = photo;
-    let mut rendered = renderer.render_fog(image, range, &look.medium, &photo.fog_blur())?;
-    let capture = super::render::capture_options(&args.capture, args.prep.seed)?;
-    brume::photo::capture(&mut rendered.image, &capture)?;
+    let frame = brume::FrameInputs::default();
+    let mut rendered =
+        renderer.render_fog(image, range, &look.medium, &frame, &photo.fog_blur())?;
+    brume::photo::capture(&mut rendered.image, extras.capture)?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(out, &rendered.image)?;
     super::commit(outputs)?;
@@ -328,6 +337,8 @@ pub fn run_aerial(
                 "total_ms": t.total_ms,
                 "pass_ms": t.pass_ms,
                 "out": out.display().to_string(),
+                "insert": super::render::insert_json(args, extras.inserted),
+                "capture": super::render::capture_json(extras.capture),
             })
         );
     } else {
@@ -339,6 +350,7 @@ pub fn run_aerial(
             rendered.schedule.steps,
             t.describe(1)
         );
+        super::render::print_insert_and_capture(args, extras.inserted, extras.capture);
     }
     Ok(())
 }

@@ -653,6 +653,7 @@ impl BatchArgs {
         if let Some(p) = self.precision {
             blur.precision = p;
         }
+        blur.coarse_from = self.coarse_from.0;
         if let Some(l) = self.lambda {
             opts.fog.lambda = l;
         }

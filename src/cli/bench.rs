@@ -247,7 +247,9 @@ pub struct CommonArgs {
     #[arg(long, value_name = "PATH.png|PATH.svg")]
     pub plot: Option<PathBuf>,
     /// Coarse to fine (matched scheme, grey τ): run the steps at half resolution once the
-    /// blur has reached this scale in px (≥ 2); default: every step at full resolution.
+    /// blur has reached this scale in px (≥ 2), at a quarter once it has doubled; default
+    /// here: every step at full resolution, the paper's pipeline (`render`, `batch` and
+    /// `view` default to 3).
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub coarse_from: Option<f64>,
 }

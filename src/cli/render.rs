@@ -91,7 +91,11 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let capture = capture_options(&args.capture, args.prep.seed)?;
     let range = &prep.range;
     if args.medium == MediumKind::Aerial {
-        return super::aerial::run_aerial(args, &mut headless, &scene, &prep, &out);
+        let extras = super::aerial::Extras {
+            inserted: inserted.as_ref(),
+            capture: &capture,
+        };
+        return super::aerial::run_aerial(args, &mut headless, &scene, &prep, &out, extras);
     }
     let fog = physical_from_args(args)?;
     if args.compat == Some(Compat::FoggyCityscapes) {
@@ -472,6 +476,7 @@ pub fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Loo
             sigma0: args.sigma0,
             rho_max: args.rho_max,
             precision: args.precision,
+            coarse_from: args.coarse_from.0,
             ..Blur::default()
         },
     }
@@ -725,7 +730,7 @@ fn photo_intrinsics(args: &RenderArgs, scene: &Scene) -> Option<brume::io::depth
 }
 
 /// --insert's report (`null` without it).
-fn insert_json(args: &RenderArgs, inserted: Option<&Insertion>) -> serde_json::Value {
+pub(super) fn insert_json(args: &RenderArgs, inserted: Option<&Insertion>) -> serde_json::Value {
     match (inserted, &args.insert.insert) {
         (Some(i), Some(path)) => json!({
             "object": path.display().to_string(),
@@ -738,7 +743,7 @@ fn insert_json(args: &RenderArgs, inserted: Option<&Insertion>) -> serde_json::V
 }
 
 /// The text report's lines for --insert and the capture.
-fn print_insert_and_capture(
+pub(super) fn print_insert_and_capture(
     args: &RenderArgs,
     inserted: Option<&Insertion>,
     capture: &CaptureOptions,

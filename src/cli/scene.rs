@@ -4,7 +4,7 @@
 
 use super::args::{BlurKind, FogKind, ProfileKind, SceneArgs};
 use super::limits;
-use brume::camera::Camera;
+use brume::camera::{Camera, FrameInputs};
 use brume::egl::Platform;
 use brume::io::output::{self, Outputs};
 use brume::medium::{DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium};
@@ -54,9 +54,11 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
     // One set for the whole sequence: a failure or an interrupt at any frame leaves none
     // of the frames, as every other command leaves none of its outputs.
     let mut outputs = Outputs::new();
+    // One medium for the whole sequence, as an engine keeps one: each frame gives it the
+    // camera and the time.
+    let medium = medium_from_args(args, camera, sun)?;
     for (k, out) in outs.iter().enumerate() {
         let time = args.time + k as f64 / args.fps;
-        let medium = medium_from_args(args, camera, time, sun)?;
         let frame = scene.render(&camera, width, height, time)?;
         let input = Input {
             colour: frame.colour,
@@ -64,6 +66,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
             depth: frame.depth,
             width,
             height,
+            frame: FrameInputs::new(camera, time),
         };
         let report = match &medium {
             Some(m) => {
@@ -235,25 +238,18 @@ impl SceneMedium {
         }
     }
 
-    /// Moves the fog to `time` (the distance fog's noise drifts; the layered fog is still).
-    #[cfg(all(feature = "viewer", not(target_os = "android")))]
-    pub fn set_time(&mut self, time: f64) {
-        if let SceneMedium::Distance(f) = self {
-            f.time = time;
-        }
-    }
-
     /// Checks the parameters, naming the flags that set them.
     pub fn validate(&self) -> Result<()> {
         self.medium().validate().map_err(distance_flags)
     }
 }
 
-/// The medium the options describe at `time` (`None` for `--fog none`).
+/// The medium the options describe (`None` for `--fog none`), its blur's range unit the
+/// far plane of `camera`. The camera and the time are not part of it: each frame gives
+/// them ([`FrameInputs`]).
 pub fn medium_from_args(
     args: &SceneArgs,
     camera: Camera,
-    time: f64,
     sun: [f64; 3],
 ) -> Result<Option<SceneMedium>> {
     let lambda = args.blur_options.lambda;
@@ -261,7 +257,7 @@ pub fn medium_from_args(
         FogKind::None => return Ok(None),
         FogKind::Layered => {
             let l = &args.layered;
-            let mut fog = LayeredFog::new(camera, profile_from_args(l.profile, l)?);
+            let mut fog = LayeredFog::for_camera(camera, profile_from_args(l.profile, l)?);
             fog.colour = args.fog_colour.unwrap_or(fog.colour);
             fog.albedo = l.albedo.unwrap_or(fog.albedo);
             fog.lambda = lambda.unwrap_or(fog.lambda);
@@ -271,7 +267,6 @@ pub fn medium_from_args(
             let d = &args.distance;
             let defaults = DistanceFog::default();
             SceneMedium::Distance(DistanceFog {
-                camera: camera.into(),
                 start_distance: d.fog_start.unwrap_or(defaults.start_distance),
                 distance: d.fog_distance.unwrap_or(defaults.distance),
                 exponent: d.fog_exponent.unwrap_or(defaults.exponent),
@@ -282,7 +277,6 @@ pub fn medium_from_args(
                 scatter_exponent: d.scatter_exponent.unwrap_or(defaults.scatter_exponent),
                 scatter_colour: d.scatter_colour.unwrap_or(defaults.scatter_colour),
                 noise: noise_from_args(d)?,
-                time,
                 lambda: lambda.unwrap_or(defaults.lambda),
                 range_unit: camera.far,
             })

@@ -5,7 +5,7 @@
 //!
 //! Creating or re-attaching a framebuffer and reading one back put the host's
 //! framebuffer bindings, pixel store and `PIXEL_PACK_BUFFER` back after
-//! ([`super::state`]).
+//! (`gpu::state`).
 
 use super::state::{FramebufferBindings, PixelStore};
 use super::texture::{f32_bytes_mut, Texture};

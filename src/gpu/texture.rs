@@ -5,7 +5,7 @@
 //!
 //! Creating, filling and configuring a texture binds it on the **active** unit and puts
 //! that unit's binding back after, and sets the pixel store and `PIXEL_UNPACK_BUFFER`
-//! for the upload and puts the host's values back ([`super::state`]): a host may call
+//! for the upload and puts the host's values back (`gpu::state`): a host may call
 //! these with any state of its own.
 
 use super::state::{PixelStore, TextureBinding};

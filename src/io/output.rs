@@ -390,7 +390,7 @@ fn this_host() -> String {
     }
 }
 
-/// Whether the temporary named `name` (a file name of [`temporary_prefix`]'s form) was
+/// Whether the temporary named `name` (a file name of `temporary_prefix`'s form) was
 /// left by a process that is gone: one of this machine whose process no longer runs, or
 /// any that has not changed for [`STALE_TEMPORARY_AGE`]. `age` is the time since it was
 /// last modified.

@@ -27,6 +27,7 @@ use crate::atmosphere::{
     ZETA_MIN_TURBIDITY,
 };
 use crate::camera::Camera;
+use crate::camera::FrameInputs;
 use crate::error::{check_non_negative, check_positive, Error, Result};
 use std::sync::Arc;
 
@@ -38,7 +39,12 @@ pub const MAX_BLUR_OPTICAL_DEPTH: f64 = 10.0;
 pub struct AerialPerspective {
     /// Γ over distance for the turbidity, altitude and camera sensitivity.
     pub table: Arc<AttenuationTable>,
-    /// The camera whose rays give each pixel's zenith angle (pitch, vertical field of view).
+    /// The camera whose rays give each pixel's zenith angle (pitch, vertical field of
+    /// view). Unlike the depth-buffer media's camera it is part of the medium, not of the
+    /// frame ([`crate::camera::FrameInputs`]): the horizon's light, its reference zenith
+    /// and the sector gains were measured on the photo through this camera, so they only
+    /// hold with it; a photo is one frame, and the range texture it reads needs no
+    /// projection to be turned into distance.
     pub camera: Camera,
     /// Metres per unit of the range texture (> 0).
     pub metres_per_unit: f64,
@@ -188,7 +194,10 @@ impl Medium for AerialPerspective {
         include_str!("../../glsl/medium/aerial.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
+    fn uniforms(
+        &self,
+        _frame: &FrameInputs,
+    ) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let t = &self.table;
         super::static_names(vec![
             (
@@ -222,7 +231,7 @@ impl Medium for AerialPerspective {
         blur_from_optical_depth(sigma0, self.lambda, 1.0, MAX_BLUR_OPTICAL_DEPTH)
     }
 
-    fn sample(&self, p: Pixel) -> MediumSample {
+    fn sample(&self, p: Pixel, _frame: &FrameInputs) -> MediumSample {
         let s = p.depth.max(0.0) * self.metres_per_unit;
         let gamma = Channel::ALL.map(|c| self.table.sample(c, s));
         let ray = self
@@ -269,7 +278,8 @@ impl Medium for AerialPerspective {
         self.camera.validate()
     }
 
-    fn camera(&self) -> Option<crate::camera::FrameCamera> {
+    /// The photo's own camera, whatever the frame gives: see [`AerialPerspective::camera`].
+    fn frame_camera(&self, _frame: &FrameInputs) -> Option<crate::camera::FrameCamera> {
         Some(self.camera.into())
     }
 

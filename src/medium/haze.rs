@@ -15,6 +15,7 @@
 //! With the default `[1, 1, 1]` the medium is grey and the images are paper 000's.
 
 use super::{Medium, MediumSample, Pixel, UniformValue};
+use crate::camera::FrameInputs;
 use crate::error::{check_non_negative, check_positive, Error, Result};
 use crate::raster::ScalarMap;
 
@@ -89,7 +90,10 @@ impl Medium for Haze {
         include_str!("../../glsl/medium/haze.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
+    fn uniforms(
+        &self,
+        _frame: &FrameInputs,
+    ) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let k = self.extinction_rgb().map(|v| v as f32);
         super::static_names(vec![
             ("u_extinction", UniformValue::Vec3(k)),
@@ -113,7 +117,7 @@ impl Medium for Haze {
         sigma0 + self.sigma_span()
     }
 
-    fn sample(&self, p: Pixel) -> MediumSample {
+    fn sample(&self, p: Pixel, _frame: &FrameInputs) -> MediumSample {
         let r = p.depth * (1.0 / self.range_unit);
         let sigma_max = self.sigma_max(p.sigma0);
         MediumSample {

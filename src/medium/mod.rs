@@ -38,13 +38,23 @@
 //! 3. A test renders it on the GPU and compares with the CPU reference
 //!    (`tests/gpu_vs_cpu.rs` shows how).
 //!
-//! A medium that reads a rendered frame's depth buffer returns its camera from
-//! [`Medium::camera`] (brume's [`crate::camera::Camera`], or an engine's view and
-//! projection matrices as they are: [`crate::camera::MatrixCamera`]); its GLSL then has
-//! `brume_ray` and `brume_eye_depth` (see `glsl/medium_api.glsl`), and its CPU side
-//! rebuilds positions by [`crate::camera::MatrixCamera::world_position_by_inverse`]
-//! (`layered/`, `distance/`). A medium that samples a table (a noise, a precomputed
-//! integral) returns it from [`Medium::lookups`].
+//! # Per-frame inputs
+//!
+//! A medium is the fog's description: the same value renders any number of frames. What
+//! changes every frame, the camera and the time, comes with the frame as a
+//! [`FrameInputs`] (the pipeline's [`crate::Input::frame`], an argument of
+//! [`crate::Renderer::render_fog`] and of the CPU reference), and reaches the medium
+//! through [`Medium::uniforms`] and [`Medium::sample`]; nothing is rebuilt or recompiled
+//! between frames. A medium that reads a rendered frame's depth buffer says so by
+//! [`Medium::needs_camera`]: the entry points then refuse a frame without a camera
+//! ([`crate::Error::MissingCamera`]), and set its GLSL's `brume_ray` and
+//! `brume_eye_depth` from the frame's camera (brume's [`crate::camera::Camera`], or an
+//! engine's view and projection matrices as they are: [`crate::camera::MatrixCamera`];
+//! see `glsl/medium_api.glsl`); its CPU side rebuilds positions by
+//! [`crate::camera::MatrixCamera::world_position_by_inverse`] (`layered/`, `distance/`).
+//! A medium whose geometry is its own (the aerial perspective of one photo) returns its
+//! camera from [`Medium::frame_camera`] instead. A medium that samples a table (a noise,
+//! a precomputed integral) returns it from [`Medium::lookups`].
 //!
 //! # Media defined at run time
 //!
@@ -75,7 +85,7 @@ pub use lookup::{Lookup, Wrap};
 pub use physical::PhysicalFog;
 pub use uniform::UniformBlur;
 
-use crate::camera::FrameCamera;
+use crate::camera::{FrameCamera, FrameInputs};
 use crate::error::Result;
 use std::borrow::Cow;
 
@@ -148,8 +158,12 @@ pub trait Medium {
     /// a file of brume's (`Cow::Borrowed(include_str!(…))`) or text built at run time.
     fn glsl(&self) -> Cow<'static, str>;
 
-    /// The values of the uniforms the GLSL declares, set before each pass that uses it.
-    fn uniforms(&self) -> Vec<(Cow<'static, str>, UniformValue)>;
+    /// The values of the uniforms the GLSL declares for `frame`, set before each pass
+    /// that uses it. The names must not depend on the frame (the pipeline lists them
+    /// once, when it compiles the program); a medium that needs a camera and is asked
+    /// with none uses the default camera's values (the entry points refuse such a frame
+    /// before they draw, [`Medium::validate_frame`]).
+    fn uniforms(&self, frame: &FrameInputs) -> Vec<(Cow<'static, str>, UniformValue)>;
 
     /// Whether τ can differ between channels. A grey medium's τ travels in the alpha of
     /// the pre-multiplied colour; a chromatic one adds a second target (see
@@ -160,19 +174,45 @@ pub trait Medium {
     /// number of diffusion steps.
     fn sigma_max(&self, sigma0: f64) -> f64;
 
-    /// The same as the GLSL, on the CPU in f64.
-    fn sample(&self, pixel: Pixel) -> MediumSample;
+    /// The same as the GLSL, on the CPU in f64, for one pixel of `frame` (which has
+    /// passed [`Medium::validate_frame`]; without a camera a medium that needs one uses
+    /// the default camera, as [`Medium::uniforms`] does).
+    fn sample(&self, pixel: Pixel, frame: &FrameInputs) -> MediumSample;
 
     /// Rejects out-of-domain parameters, naming the parameter (`ka`, `airlight` …).
     fn validate(&self) -> Result<()>;
 
-    /// The camera of a rendered frame, for a medium that reads a depth buffer (window
-    /// depth in [0, 1]) rather than a range map: brume's [`crate::camera::Camera`] or an
-    /// engine's matrices ([`crate::camera::MatrixCamera`]). The pipeline then sets the
-    /// shader's `brume_ray`, `brume_depth_constants` and `brume_eye` for each frame (see
-    /// [`crate::camera`]); `None` (the default) leaves them zero.
-    fn camera(&self) -> Option<FrameCamera> {
-        None
+    /// Whether the medium reads a depth buffer (window depth in [0, 1]) through the
+    /// camera of the frame, rather than a range map: the frame must then give its camera
+    /// ([`FrameInputs::camera`]). The default is no.
+    fn needs_camera(&self) -> bool {
+        false
+    }
+
+    /// The camera the pipeline sets the shader's `brume_ray`, `brume_depth_constants` and
+    /// `brume_eye` from for `frame` (see [`crate::camera`]), and the Gaussian engine
+    /// blurs measure distance with: the frame's camera for a medium that
+    /// [`Medium::needs_camera`], none (the uniforms stay zero) for the others. A medium
+    /// whose geometry is its own returns it here
+    /// ([`AerialPerspective`]: the photo's camera).
+    fn frame_camera(&self, frame: &FrameInputs) -> Option<FrameCamera> {
+        if self.needs_camera() {
+            frame.camera
+        } else {
+            None
+        }
+    }
+
+    /// Rejects a frame this medium cannot render: a non-finite time, a camera no
+    /// projection can be built from, or no camera for a medium that
+    /// [`Medium::needs_camera`] ([`crate::Error::MissingCamera`]). The pipeline, the
+    /// [`crate::Renderer`] and the CPU reference call it before they draw.
+    fn validate_frame(&self, frame: &FrameInputs) -> Result<()> {
+        frame.validate()?;
+        if self.needs_camera() {
+            frame.require_camera(&self.name())?;
+        }
+        Ok(())
     }
 
     /// Lookup textures the GLSL samples, by their `sampler2D` uniform's name (at most

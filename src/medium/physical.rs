@@ -140,6 +140,7 @@ pub fn metric_range(range: &ScalarMap) -> Result<(ScalarMap, f32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::camera::FrameInputs;
     use crate::medium::{blur_from_optical_depth, Medium, Pixel};
 
     fn pixel(depth: f64) -> Pixel {
@@ -172,7 +173,7 @@ mod tests {
         let haze = fog.haze(&Haze::default());
         haze.validate().unwrap();
         for r in [0.0, 1.0, 37.5, 149.0, 400.0, 5000.0] {
-            let tau = haze.sample(pixel(r)).transmission;
+            let tau = haze.sample(pixel(r), &FrameInputs::default()).transmission;
             let want = (-0.02 * r).exp();
             assert!(tau.iter().all(|t| (t - want).abs() < 1e-12), "{r}: {tau:?}");
         }
@@ -191,7 +192,7 @@ mod tests {
             let r_unit = (r / v).min(1.0);
             let ds = fog.scattering() * v * r_unit;
             let want = blur_from_optical_depth(1.0, 9.0, r_unit, ds);
-            let got = haze.sample(pixel(r)).sigma;
+            let got = haze.sample(pixel(r), &FrameInputs::default()).sigma;
             assert!((got - want).abs() < 1e-9, "{r}: {got} vs {want}");
         }
         // σmax = σ0 + λ·√(a·ln 20), whatever β.
@@ -214,7 +215,7 @@ mod tests {
         for r in [0.0f64, 0.1, 0.5, 0.9, 1.0] {
             let eq7 = 1.0 + r.powf(1.5) * lambda * ks.sqrt();
             let law = blur_from_optical_depth(1.0, lambda, r, ks * r);
-            let got = normalised.sample(pixel(r)).sigma;
+            let got = normalised.sample(pixel(r), &FrameInputs::default()).sigma;
             assert!(
                 (got - eq7).abs() < 1e-12 && (law - eq7).abs() < 1e-12,
                 "{r}"

@@ -4,6 +4,7 @@
 //! (`--tau rgb` times the chromatic blur with a τ that differs per channel).
 
 use super::{Medium, MediumSample, Pixel, UniformValue};
+use crate::camera::FrameInputs;
 use crate::error::{Error, Result};
 
 /// Blur everything to `sigma` px and multiply by `transmission`.
@@ -37,7 +38,10 @@ impl Medium for UniformBlur {
         include_str!("../../glsl/medium/uniform_blur.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
+    fn uniforms(
+        &self,
+        _frame: &FrameInputs,
+    ) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         super::static_names(vec![
             ("u_sigma", UniformValue::Float(self.sigma as f32)),
             (
@@ -55,7 +59,7 @@ impl Medium for UniformBlur {
         self.sigma
     }
 
-    fn sample(&self, _pixel: Pixel) -> MediumSample {
+    fn sample(&self, _pixel: Pixel, _frame: &FrameInputs) -> MediumSample {
         MediumSample {
             transmission: self.transmission,
             inscatter: [0.0; 3],

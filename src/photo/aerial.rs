@@ -12,6 +12,7 @@ use super::{Photo, PreparedPhoto};
 use crate::atmosphere::{horizon_light, AttenuationTable, Sensitivity};
 use crate::blur::Blur;
 use crate::camera::Camera;
+use crate::camera::FrameInputs;
 use crate::error::{Error, Result};
 use crate::medium::aerial::HorizonSectors;
 use crate::medium::{haze, AerialPerspective, Medium, Pixel};
@@ -326,11 +327,11 @@ pub fn dehaze(
             depth: f64::from(*range.get(x, y)),
             sigma0: 1.0,
         };
-        let m = source.sample(pixel);
+        let m = source.sample(pixel, &FrameInputs::default());
         let scale: [f64; 3] = match retarget {
             Retarget::Radiance => [1.0; 3],
             Retarget::Normalised => {
-                let t = target.sample(pixel);
+                let t = target.sample(pixel, &FrameInputs::default());
                 std::array::from_fn(|c| {
                     if m.inscatter[c] > 0.0 {
                         t.inscatter[c] / m.inscatter[c]

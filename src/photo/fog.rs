@@ -38,7 +38,8 @@ pub struct FogOptions {
 }
 
 impl Default for FogOptions {
-    /// Paper 000's defaults: κa 0.25, κs 0.75 on normalised range, λ 8.
+    /// Paper 000's defaults: κa 0.25, κs 0.75 on normalised range, λ 8; the diffusion
+    /// blur as `brume render` runs it ([`Blur::photo`]: coarse to fine from 3 px).
     fn default() -> Self {
         FogOptions {
             extinction: Extinction::Normalised {
@@ -47,7 +48,7 @@ impl Default for FogOptions {
             },
             lambda: haze::DEFAULT_LAMBDA,
             tint: [1.0; 3],
-            blur: Blur::default(),
+            blur: Blur::photo(),
         }
     }
 }

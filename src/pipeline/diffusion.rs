@@ -1,6 +1,7 @@
 //! The N + 2 passes of a render (module docs of the parent): the medium pass, the
 //! diffusion steps and the composite.
 
+use super::coarse::{CoarsePrograms, Level};
 use super::programs::{medium_key, ProgramKey};
 use super::uniforms::{bind_texture, set_int, set_value};
 use super::{
@@ -8,12 +9,15 @@ use super::{
     UNIT_SECOND,
 };
 use crate::error::{Error, Result};
+use crate::gpu::framebuffer::Framebuffer;
+use crate::gpu::texture::Texture;
 use crate::gpu::timer::PassTimer;
 use crate::medium::{Medium, UniformValue};
-use crate::schedule::{Schedule, DETAIL_DECAY};
+use crate::schedule::{level_detail_decay, Schedule};
 
 impl Pipeline {
-    /// The N + 2 passes (N + 4 with the coarse stage: its down and blend passes), timed
+    /// The N + 2 passes (N + 2 + 2L with the coarse stage's L levels: a down and a blend
+    /// pass each), timed
     /// by `timer`; returns the ping-pong target that is free for an internal result.
     pub(super) fn run_passes(
         &self,
@@ -118,7 +122,8 @@ impl Pipeline {
     }
 
     /// The coarse stage (`coarse.rs`) from step `start`, F at `start` in target
-    /// `current`: down, steps `start..N` at half resolution, blend into the other target.
+    /// `current`: for each level, down from the finer one and its steps; then the
+    /// blends, deepest level first, the last into the other full-resolution target.
     /// Returns the target that holds F at step N.
     fn run_coarse(
         &self,
@@ -127,46 +132,123 @@ impl Pipeline {
         current: usize,
         timer: &mut PassTimer,
     ) -> Result<usize> {
-        let gl = &self.gl;
         let targets = self.targets()?;
-        let (programs, half) = match (&self.coarse.programs, &self.coarse.targets) {
-            (Some(p), Some(t)) => (p, t),
+        let starts = &self.coarse.starts;
+        let (programs, levels) = match (&self.coarse.programs, &self.coarse.targets) {
+            (Some(p), Some(t))
+                if starts.first() == Some(&start) && t.levels.len() >= starts.len() =>
+            {
+                (p, &t.levels[..starts.len()])
+            }
             _ => return Err(Error::Gl("internal: coarse stage not prepared".into())),
         };
         let full_texel = [1.0 / targets.width as f32, 1.0 / targets.height as f32];
-        let half_texel = half.texel();
+        // Which of each level's D targets holds its latest result.
+        let mut latest = vec![0usize; levels.len()];
+        for (l, level) in levels.iter().enumerate() {
+            let (source, rate, texel) = match l {
+                0 => (&targets.f[current], &targets.rate, full_texel),
+                _ => {
+                    let finer = &levels[l - 1];
+                    (&finer.d[latest[l - 1]], &finer.rate, finer.texel())
+                }
+            };
+            self.coarse_down(programs, level, source, rate, texel, timer)?;
+            let end = starts.get(l + 1).copied().unwrap_or(schedule.steps);
+            latest[l] = self.coarse_steps(schedule, level, l as u32 + 1, starts[l], end, timer)?;
+        }
+        for l in (1..levels.len()).rev() {
+            let (finer, coarse) = (&levels[l - 1], &levels[l]);
+            let out = 1 - latest[l - 1];
+            self.coarse_blend(
+                programs,
+                BlendInputs {
+                    fine: &finer.d[latest[l - 1]],
+                    fine_rate: &finer.rate,
+                    coarse,
+                    coarse_latest: latest[l],
+                    level: l as u32 + 1,
+                    start: starts[l],
+                },
+                &finer.step[out],
+                schedule,
+                timer,
+            )?;
+            latest[l - 1] = out;
+        }
+        let out = 1 - current;
+        self.coarse_blend(
+            programs,
+            BlendInputs {
+                fine: &targets.f[current],
+                fine_rate: &targets.rate,
+                coarse: &levels[0],
+                coarse_latest: latest[0],
+                level: 1,
+                start,
+            },
+            &targets.step[out],
+            schedule,
+            timer,
+        )?;
+        Ok(out)
+    }
+
+    /// A coarse level's down pass: `source` and `rate` (a finer level's, `texel` = 1 / its
+    /// size) averaged over 2x2 blocks into the level's D, D(kℓ) and rate.
+    fn coarse_down(
+        &self,
+        programs: &CoarsePrograms,
+        level: &Level,
+        source: &Texture,
+        rate: &Texture,
+        texel: [f32; 2],
+        timer: &mut PassTimer,
+    ) -> Result<()> {
+        let gl = &self.gl;
+        let p = &programs.down;
         timer.pass(|| {
-            half.down.bind_for_drawing();
-            self.use_program(&programs.down);
-            targets.f[current].bind(UNIT_MAIN);
-            targets.rate.bind(UNIT_DEPTH);
-            set_int(gl, &programs.down, "u_f", UNIT_MAIN as i32);
-            set_int(gl, &programs.down, "u_rate", UNIT_DEPTH as i32);
-            set_value(
-                gl,
-                &programs.down,
-                "u_texel",
-                UniformValue::Vec2(full_texel),
-            );
+            level.down.bind_for_drawing();
+            self.use_program(p);
+            source.bind(UNIT_MAIN);
+            rate.bind(UNIT_DEPTH);
+            set_int(gl, p, "u_f", UNIT_MAIN as i32);
+            set_int(gl, p, "u_rate", UNIT_DEPTH as i32);
+            set_value(gl, p, "u_texel", UniformValue::Vec2(texel));
             draw_fullscreen(gl);
-        })?;
+        })
+    }
+
+    /// Steps `start..end` at coarse level `index` (1: half resolution), its D ping-ponged
+    /// from D[0] (the down pass's output). Returns the D target holding the result.
+    fn coarse_steps(
+        &self,
+        schedule: &Schedule,
+        level: &Level,
+        index: u32,
+        start: u32,
+        end: u32,
+        timer: &mut PassTimer,
+    ) -> Result<usize> {
+        let gl = &self.gl;
         let law = schedule.offset_law();
         let d = self.compiled(ProgramKey::Diffuse {
             matched: law.matched,
             chromatic: false,
         })?;
-        let shrink = schedule.coarse_scale(start) as f32;
-        let mut coarse = 0;
-        for k in start..schedule.steps {
-            let (src, dst) = (coarse, 1 - coarse);
+        // Offsets in the level's texels: the law's scale divided by 2^ℓ (module docs of
+        // coarse.rs: exact in variance for the matched law), less what the level's
+        // resampling adds (`Schedule::level_scale`).
+        let factor = (schedule.level_scale(index, start, end) / f64::from(1u32 << index)) as f32;
+        let texel = level.texel();
+        let mut current = 0;
+        for k in start..end {
+            let (src, dst) = (current, 1 - current);
             timer.pass(|| {
-                half.step[dst].bind_for_drawing();
+                level.step[dst].bind_for_drawing();
                 self.use_program(d);
-                half.d[src].bind(UNIT_MAIN);
-                half.rate.bind(UNIT_DEPTH);
-                // Offsets in half-resolution texels: the law's scale halves (module docs
-                // of coarse.rs: exact in variance for the matched law), less what the
-                // resampling adds (`Schedule::coarse_scale`).
+                level.d[src].bind(UNIT_MAIN);
+                level.rate.bind(UNIT_DEPTH);
                 let [scale, coefficient] = law.uniform(k);
                 set_int(gl, d, "u_f", UNIT_MAIN as i32);
                 set_int(gl, d, "u_rate", UNIT_DEPTH as i32);
@@ -174,28 +256,45 @@ impl Pipeline {
                     gl,
                     d,
                     "u_law",
-                    UniformValue::Vec2([0.5 * shrink * scale, coefficient]),
+                    UniformValue::Vec2([factor * scale, coefficient]),
                 );
-                set_value(gl, d, "u_texel", UniformValue::Vec2(half_texel));
+                set_value(gl, d, "u_texel", UniformValue::Vec2(texel));
                 draw_fullscreen(gl);
             })?;
-            coarse = dst;
+            current = dst;
         }
-        let out = 1 - current;
+        Ok(current)
+    }
+
+    /// A coarse level's blend into the finer level, drawn into `destination`.
+    fn coarse_blend(
+        &self,
+        programs: &CoarsePrograms,
+        inputs: BlendInputs,
+        destination: &Framebuffer,
+        schedule: &Schedule,
+        timer: &mut PassTimer,
+    ) -> Result<()> {
+        let gl = &self.gl;
         let b = &programs.blend;
+        let decay = level_detail_decay(inputs.level) * schedule.sigma0 * schedule.sigma0;
         timer.pass(|| {
-            targets.step[out].bind_for_drawing();
+            destination.bind_for_drawing();
             self.use_program(b);
-            targets.f[current].bind(UNIT_MAIN);
-            targets.rate.bind(UNIT_DEPTH);
-            half.d[coarse].bind(UNIT_SECOND);
-            half.d0.bind(UNIT_LOOKUP);
+            inputs.fine.bind(UNIT_MAIN);
+            inputs.fine_rate.bind(UNIT_DEPTH);
+            inputs.coarse.d[inputs.coarse_latest].bind(UNIT_SECOND);
+            inputs.coarse.d0.bind(UNIT_LOOKUP);
             set_int(gl, b, "u_f", UNIT_MAIN as i32);
             set_int(gl, b, "u_rate", UNIT_DEPTH as i32);
             set_int(gl, b, "u_coarse", UNIT_SECOND as i32);
             set_int(gl, b, "u_coarse0", UNIT_LOOKUP as i32);
-            set_value(gl, b, "u_half_texel", UniformValue::Vec2(half_texel));
-            let decay = DETAIL_DECAY * schedule.sigma0 * schedule.sigma0;
+            set_value(
+                gl,
+                b,
+                "u_half_texel",
+                UniformValue::Vec2(inputs.coarse.texel()),
+            );
             set_value(
                 gl,
                 b,
@@ -203,11 +302,24 @@ impl Pipeline {
                 UniformValue::Vec3([
                     decay as f32,
                     2.0 * schedule.steps as f32,
-                    2.0 * start as f32,
+                    2.0 * inputs.start as f32,
                 ]),
             );
             draw_fullscreen(gl);
-        })?;
-        Ok(out)
+        })
     }
+}
+
+/// What a coarse level's blend reads.
+struct BlendInputs<'a> {
+    /// The finer level's D (or F) at the coarse level's first step.
+    fine: &'a Texture,
+    /// The finer level's rate.
+    fine_rate: &'a Texture,
+    /// The coarse level, and which of its D targets holds D at step N.
+    coarse: &'a Level,
+    coarse_latest: usize,
+    /// Its index (1: half resolution) and first step.
+    level: u32,
+    start: u32,
 }

@@ -30,6 +30,7 @@ use super::{
     Pipeline, ProgramKey, UNIT_DEPTH, UNIT_MAIN,
 };
 use crate::blur::{Blur, Precision};
+use crate::camera::FrameInputs;
 use crate::error::{check_positive, Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
@@ -331,8 +332,8 @@ pub(super) const ENGINE_UNIFORMS: [&str; 6] = [
 ];
 
 impl Pipeline {
-    /// Fogs `input` with `medium` and blurs it as `blur` says (module docs), into
-    /// `output`. The diffusion mode is [`Pipeline::render`]. The GL state changed and left
+    /// Fogs `input` with `medium` at the input's camera and time ([`Input::frame`]) and
+    /// blurs it as `blur` says (module docs), into `output`. The diffusion mode is [`Pipeline::render`]. The GL state changed and left
     /// is the same as a render's (see the parent module).
     pub fn fog(
         &mut self,
@@ -397,9 +398,9 @@ impl Pipeline {
         Ok((frame, image))
     }
 
-    /// Paper 003's post-process: draws the fog of a **grey** `medium` over the host's
-    /// framebuffer (which holds the scene), `C = τ·C + (1 − τ)·L∞`, reading only the
-    /// depth texture. A destination of linear light ([`Encoding::Linear`]: a float or
+    /// Paper 003's post-process: draws the fog of a **grey** `medium`, at `frame`'s
+    /// camera and time, over the host's framebuffer (which holds the scene),
+    /// `C = τ·C + (1 − τ)·L∞`, reading only the depth texture. A destination of linear light ([`Encoding::Linear`]: a float or
     /// `SRGB8_ALPHA8` target) is blended by fixed-function GL in one pass (blend function
     /// `SRC_ALPHA, ONE_MINUS_SRC_ALPHA` for colour, `ZERO, ONE` for alpha, equation
     /// `FUNC_ADD`, all restored after). A destination holding sRGB-encoded values
@@ -413,6 +414,7 @@ impl Pipeline {
         width: usize,
         height: usize,
         medium: &dyn Medium,
+        frame: &FrameInputs,
         output: &Output,
     ) -> Result<Frame> {
         if medium.chromatic() {
@@ -445,6 +447,7 @@ impl Pipeline {
             depth,
             width,
             height,
+            frame: *frame,
         };
         self.prepare_engine_with(&input, medium, &FogBlur::None, &[key], needs)?;
         if let Some(copy) = &self.engine_targets.blend_copy {
@@ -489,11 +492,12 @@ impl Pipeline {
         needs: Needs,
     ) -> Result<()> {
         medium.validate()?;
+        medium.validate_frame(&input.frame)?;
         self.caps.require_size("input", input.width, input.height)?;
         let gauss = match blur {
             FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => {
                 g.validate()?;
-                if medium.camera().is_none() {
+                if medium.frame_camera(&input.frame).is_none() {
                     return Err(Error::invalid(
                         "blur",
                         blur.name(),

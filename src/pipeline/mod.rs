@@ -17,8 +17,10 @@
 //!
 //! [`Pipeline::fog`] and [`Pipeline::blend_fog`] run the engine passes of papers 001 and
 //! 003 instead (one or two passes; [`FogBlur`] describes them). A medium with a camera
-//! ([`Medium::camera`]) gets the eye-to-fragment ray from the vertex shader and the depth
-//! constants as uniforms ([`crate::camera`]).
+//! ([`Medium::frame_camera`]: the camera of the frame, [`Input::frame`]) gets the
+//! eye-to-fragment ray from the vertex shader and the depth constants as uniforms
+//! ([`crate::camera`]). The camera and the time come with each frame: one medium value
+//! renders every frame, with the same compiled programs.
 //!
 //! **An RGB τ through the blur.** The paper blurs one τ, in the alpha of the
 //! pre-multiplied colour. brume keeps τ_r there; a chromatic medium adds a second target
@@ -80,7 +82,7 @@
 //!   `glFinish`, no wait; a call returns once its commands are issued (the GPU may still
 //!   be drawing), with its times unavailable. [`Timing::Deferred`]: a `GL_TIME_ELAPSED`
 //!   query around each pass (query objects kept between calls, up to
-//!   [`timer::DEFERRED_IN_FLIGHT`] calls in flight), read on a later call only once its
+//!   [`crate::gpu::timer::DEFERRED_IN_FLIGHT`] calls in flight), read on a later call only once its
 //!   results are in (never waited for); a call returns the newest earlier call's figures
 //!   not yet returned ([`PassTimes::calls_ago`] says how many calls back), or unavailable
 //!   times. [`Timing::Blocking`]: the call's own figures, waiting for its queries' results
@@ -88,13 +90,13 @@
 //!   [`Timing::BlockingWall`] always by `glFinish` and the wall clock. Figures flagged
 //!   disjoint (`GL_GPU_DISJOINT_EXT`) or that cannot be right are reported unavailable:
 //!   passes are never run again (a second `blend_fog` would fog the host's frame twice).
-//!   The first call that begins queries waits once for a 1x1 draw ([`timer::warm_up`]).
+//!   The first call that begins queries waits once for a 1x1 draw ([`crate::gpu::timer::warm_up`]).
 //!   With queries, brume reads `GL_GPU_DISJOINT_EXT`, which clears it for the host too.
 //! - **A host's own query.** If a `GL_TIME_ELAPSED` query is open when a call starts
 //!   (`glGetQueryiv(GL_TIME_ELAPSED, GL_CURRENT_QUERY)` non-zero), brume begins none of its
 //!   own for that call (its times are unavailable, except by the wall clock) and never ends,
 //!   reads or deletes the host's; the host's query then measures brume's passes with its own
-//!   work. Where `glGetQueryiv` cannot be found ([`timer::HostQueryProbe`]) brume begins no
+//!   work. Where `glGetQueryiv` cannot be found ([`crate::gpu::timer::HostQueryProbe`]) brume begins no
 //!   query at all: deferred times are unavailable, blocking ones by the wall clock.
 
 mod coarse;
@@ -116,6 +118,7 @@ use targets::Targets;
 use uniforms::{bind_texture, set_int, set_value};
 
 use crate::blur::{Blur, Precision};
+use crate::camera::FrameInputs;
 use crate::caps::Capabilities;
 use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
@@ -145,7 +148,8 @@ pub enum Encoding {
     Srgb,
 }
 
-/// The host's textures for one frame. Not owned: brume never deletes them.
+/// The host's textures for one frame, and the camera and time it was drawn at. The
+/// textures are not owned: brume never deletes them.
 #[derive(Clone, Copy, Debug)]
 pub struct Input {
     /// Colour, RGB in `.rgb`.
@@ -158,6 +162,9 @@ pub struct Input {
     pub width: usize,
     /// Height of both textures (px).
     pub height: usize,
+    /// The frame's camera and time, for the medium ([`FrameInputs::default`]: none and 0,
+    /// for a medium that reads a range map).
+    pub frame: FrameInputs,
 }
 
 /// Where the result goes. Not owned: brume never deletes it.
@@ -357,6 +364,12 @@ impl Pipeline {
         self.timekeeper.queries_begun()
     }
 
+    /// The programs compiled so far (one per pass, medium GLSL and variant): a host checks
+    /// that its frames, with their new cameras and times, compile nothing.
+    pub fn program_count(&self) -> usize {
+        self.programs.len()
+    }
+
     /// Renders one frame: `input` fogged by `medium` and blurred as `blur` says, into
     /// `output`. The host's context must be current; see the module docs for the GL state
     /// this changes.
@@ -399,6 +412,7 @@ impl Pipeline {
     /// Checks the frame, plans its schedule, compiles what it needs and sizes the targets.
     fn prepare(&mut self, input: &Input, medium: &dyn Medium, blur: &Blur) -> Result<Schedule> {
         let schedule = blur.schedule_for(medium)?;
+        medium.validate_frame(&input.frame)?;
         self.caps.require_precision(blur.precision)?;
         self.caps.require_size("input", input.width, input.height)?;
         let chromatic = medium.chromatic();
@@ -434,7 +448,7 @@ impl Pipeline {
         }
         self.coarse_start = blur.coarse_start(&schedule, chromatic)?;
         if self.coarse_start.is_some() {
-            self.prepare_coarse(input.width, input.height, blur.precision)?;
+            self.prepare_coarse(input.width, input.height, blur.precision, &schedule)?;
         }
         Ok(schedule)
     }

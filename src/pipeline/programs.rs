@@ -4,6 +4,7 @@
 use super::engine::{self, EngineKey};
 use super::{external, refine, Pipeline};
 use crate::blur::Precision;
+use crate::camera::FrameInputs;
 use crate::error::{Error, Result};
 use crate::gpu::program::Program;
 use crate::medium::{Medium, MEDIUM_API_GLSL};
@@ -125,7 +126,9 @@ impl Pipeline {
                 .collect();
             list.extend(extra.iter().map(|&n| Cow::Borrowed(n)));
             if let Some(m) = medium {
-                list.extend(m.uniforms().into_iter().map(|(name, _)| name));
+                // The names do not depend on the frame (Medium::uniforms).
+                let names = m.uniforms(&FrameInputs::default());
+                list.extend(names.into_iter().map(|(name, _)| name));
                 list.extend(m.lookups().into_iter().map(|(name, _)| name));
             }
             list
@@ -197,7 +200,7 @@ impl Pipeline {
         last: ProgramKey,
     ) -> Result<()> {
         let (first, last) = (self.compiled(first)?, self.compiled(last)?);
-        for (name, _) in medium.uniforms() {
+        for (name, _) in medium.uniforms(&FrameInputs::default()) {
             if first.optional_uniform(&name).is_none() && last.optional_uniform(&name).is_none() {
                 return Err(Error::Gl(format!(
                     "glsl/medium/{}.glsl: uniform {name} is not used by the shader \

@@ -27,10 +27,10 @@ impl Pipeline {
             "brume_size",
             UniformValue::IVec2([input.width as i32, input.height as i32]),
         );
-        for (name, value) in camera_uniforms(medium, input.width, input.height) {
+        for (name, value) in camera_uniforms(medium, input) {
             set_value(gl, p, name, value);
         }
-        for (name, value) in medium.uniforms() {
+        for (name, value) in medium.uniforms(&input.frame) {
             set_value(gl, p, &name, value);
         }
         for (unit, (name, lookup)) in (UNIT_LOOKUP..).zip(medium.lookups()) {
@@ -63,15 +63,12 @@ impl Pipeline {
     }
 }
 
-/// The camera's per-frame constants (see [`crate::camera`]); zero without a camera.
-fn camera_uniforms(
-    medium: &dyn Medium,
-    width: usize,
-    height: usize,
-) -> [(&'static str, UniformValue); 3] {
-    let (rays, constants, eye) = match medium.camera() {
+/// The camera's per-frame constants (see [`crate::camera`]) for the medium and the
+/// frame of `input`; zero without a camera.
+fn camera_uniforms(medium: &dyn Medium, input: &Input) -> [(&'static str, UniformValue); 3] {
+    let (rays, constants, eye) = match medium.frame_camera(&input.frame) {
         Some(camera) => {
-            let camera = camera.for_frame(width, height);
+            let camera = camera.for_frame(input.width, input.height);
             let mut rays = [0f32; 9];
             for (i, ray) in camera.corner_rays().iter().enumerate() {
                 rays[3 * i..3 * i + 3].copy_from_slice(&ray.as_vec3().to_array());

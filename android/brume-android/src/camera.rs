@@ -470,6 +470,8 @@ impl Camera {
             depth: self.range.raw(),
             width,
             height,
+            // The haze reads a range map: no camera; the frame loop sets the time.
+            frame: brume::FrameInputs::default(),
         }))
     }
 

@@ -65,6 +65,7 @@ impl Demo {
             depth: self.range.raw(),
             width: self.width,
             height: self.height,
+            frame: brume::FrameInputs::default(),
         }
     }
 }
@@ -80,6 +81,8 @@ pub struct Live {
     /// The newest pass times that came in (deferred: a frame or more late), drawn by the
     /// overlay until newer ones come.
     shown_ms: Vec<f64>,
+    /// When the loop started: each frame's time is counted from it.
+    started: Instant,
 }
 
 impl Live {
@@ -112,6 +115,7 @@ impl Live {
             },
             stats: Stats::default(),
             shown_ms: Vec::new(),
+            started: Instant::now(),
         })
     }
 
@@ -127,8 +131,14 @@ impl Live {
     }
 
     /// Draws `input` fogged by `haze` into `target`: cleared to black, the result centred
-    /// at 1:1, the overlay over it. Logs the frame rate and pass times once a second.
+    /// at 1:1, the overlay over it. Logs the frame rate and pass times once a second. The
+    /// frame's time (seconds since the loop started) goes with it, as an engine passes
+    /// it; the haze reads a range map and needs no camera.
     pub fn draw(&mut self, input: &Input, haze: &Haze, target: &Target) -> brume::Result<Frame> {
+        let input = &Input {
+            frame: brume::FrameInputs::at_time(self.started.elapsed().as_secs_f64()),
+            ..*input
+        };
         let gl = Arc::clone(self.pipeline.gl());
         clear(&gl, target);
         let output = Output::Framebuffer {

@@ -74,6 +74,16 @@ pub struct BatchArgs {
     #[arg(long, value_name = "SCHEME", allow_hyphen_values = true)]
     pub scheme: Option<Scheme>,
 
+    /// Coarse to fine from PX px, or `off` (as `brume render --coarse-from`).
+    #[arg(
+        long,
+        value_name = "off|PX",
+        default_value_t = super::render::CoarseFrom(Some(brume::blur::DEFAULT_COARSE_FROM)),
+        allow_hyphen_values = true,
+        value_parser = super::render::parse_coarse_from
+    )]
+    pub coarse_from: super::render::CoarseFrom,
+
     /// Texture precision: f32 or f16.
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     pub precision: Option<Precision>,

@@ -126,6 +126,23 @@ pub struct RenderArgs {
     )]
     pub precision: Precision,
 
+    /// Coarse to fine: once the most blurred pixel has reached PX px, run the remaining
+    /// diffusion steps at half resolution, and at a quarter once that scale has doubled
+    /// (matched scheme, grey haze; from 3 px about 45 % less GPU time at σmax 25 px, 30 %
+    /// at 15 px, 25 % at 8). Its error against the exact Gaussian away from the image's
+    /// border stays within full resolution's, but the result is no longer the paper's
+    /// pipeline to the bit, and near depth edges it departs from it by a few per cent of
+    /// the blur's own effect: `off` runs every step at full resolution (what the f64 reference
+    /// computes). PX ≥ 2; smaller is faster and less exact.
+    #[arg(
+        long,
+        value_name = "off|PX",
+        default_value_t = super::render::CoarseFrom(Some(brume::blur::DEFAULT_COARSE_FROM)),
+        allow_hyphen_values = true,
+        value_parser = parse_coarse_from
+    )]
+    pub coarse_from: CoarseFrom,
+
     /// Blur the whole image to scale S px, with no attenuation and no airlight (an
     /// accuracy check against a Gaussian of std sqrt(S² − σ0²)).
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
@@ -341,5 +358,34 @@ impl CaptureArgs {
     /// Whether the capture draws noise, which --seed seeds.
     pub fn reads_seed(&self) -> bool {
         self.shot_noise_gain.is_some() || self.read_noise.is_some()
+    }
+}
+
+/// `--coarse-from`: the scale (px) from which the diffusion runs coarse to fine, or `None`
+/// for `off` ([`brume::Blur::coarse_from`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoarseFrom(pub Option<f64>);
+
+impl std::fmt::Display for CoarseFrom {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            Some(px) => write!(f, "{px}"),
+            None => f.write_str("off"),
+        }
+    }
+}
+
+/// `off`, or a finite scale ≥ [`brume::blur::MIN_COARSE_FROM`] px.
+pub fn parse_coarse_from(s: &str) -> Result<CoarseFrom, String> {
+    if s == "off" {
+        return Ok(CoarseFrom(None));
+    }
+    let min = brume::blur::MIN_COARSE_FROM;
+    match s.parse::<f64>() {
+        Ok(px) if px.is_finite() && px >= min => Ok(CoarseFrom(Some(px))),
+        _ => Err(format!(
+            "expected `off` or a scale in px ≥ {min} (below it the half resolution aliases \
+             detail), got `{s}`"
+        )),
     }
 }

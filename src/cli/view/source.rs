@@ -11,7 +11,7 @@ use super::super::limits;
 use super::super::render as render_cmd;
 use super::super::scene::{self as scene_cmd, SceneMedium};
 use brume::atmosphere::AttenuationTable;
-use brume::camera::Camera;
+use brume::camera::{Camera, FrameInputs};
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
 use brume::medium::haze::Haze;
 use brume::medium::{HeightProfile, Medium, UniformBlur};
@@ -218,6 +218,7 @@ impl Photo {
             depth: self.depth.raw(),
             width: self.width,
             height: self.height,
+            frame: FrameInputs::default(),
         }
     }
 
@@ -403,25 +404,21 @@ impl SceneView {
         }
     }
 
-    /// The fog in use at `time`, with the viewer's camera, and its blur. Without fog: a
-    /// medium that leaves the frame as it is (τ = 1) through the fog pass, which also
-    /// encodes it for the display target.
-    fn medium_at(&mut self, time: f64) -> (&dyn Medium, FogBlur) {
-        let camera = self.camera;
+    /// The fog in use and its blur. Without fog: a medium that leaves the frame as it is
+    /// (τ = 1) through the fog pass, which also encodes it for the display target. The
+    /// same media serve every frame: the camera and the time come with the frame's input.
+    fn medium(&self) -> (&dyn Medium, FogBlur) {
         let blur = self.fog_blur();
         let m = match self.fog {
             FogKind::None => return (&self.clear, FogBlur::None),
-            FogKind::Distance => &mut self.distance,
-            FogKind::Layered => &mut self.layered,
+            FogKind::Distance => &self.distance,
+            FogKind::Layered => &self.layered,
         };
-        m.set_time(time);
-        match m {
-            SceneMedium::Distance(f) => f.camera = camera.into(),
-            SceneMedium::Layered(f) => f.camera = camera.into(),
-        }
         (m.medium(), blur)
     }
 
+    /// Draws the scene at `time` with the viewer's camera: the input of the fog, with
+    /// that camera and time.
     fn draw(&mut self, time: f64) -> Result<Input> {
         let frame = self
             .renderer
@@ -432,6 +429,7 @@ impl SceneView {
             depth: frame.depth,
             width: self.width,
             height: self.height,
+            frame: FrameInputs::new(self.camera, time),
         })
     }
 
@@ -442,14 +440,14 @@ impl SceneView {
         time: f64,
     ) -> Result<FrameTimes> {
         let input = self.draw(time)?;
-        let (medium, blur) = self.medium_at(time);
+        let (medium, blur) = self.medium();
         let frame = pipeline.fog(&input, medium, &blur, output)?;
         Ok(times(&frame, blur.pass_names(frame.schedule.steps)))
     }
 
     fn render_to_image(&mut self, pipeline: &mut Pipeline, time: f64) -> Result<RgbaImage> {
         let input = self.draw(time)?;
-        let (medium, blur) = self.medium_at(time);
+        let (medium, blur) = self.medium();
         Ok(pipeline.fog_to_image(&input, medium, &blur)?.1)
     }
 
@@ -516,7 +514,7 @@ fn scene_media(
     let medium = |fog| -> Result<SceneMedium> {
         let mut a = args.clone();
         a.fog = fog;
-        scene_cmd::medium_from_args(&a, camera, args.time, sun)?
+        scene_cmd::medium_from_args(&a, camera, sun)?
             .ok_or_else(|| Error::invalid("--fog", "none", "a fog"))
     };
     Ok((medium(FogKind::Distance)?, medium(FogKind::Layered)?))

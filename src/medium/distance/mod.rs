@@ -5,13 +5,16 @@
 //! brume's diffusion blur, driven by the optical depth of the fog.
 //!
 //! The medium reads a **depth buffer**: the `depth` of each pixel is the window depth
-//! d ∈ [0, 1] of the frame's camera ([`Camera`], OpenGL's standard projection, or an
-//! engine's matrices, [`crate::camera::MatrixCamera`]: reversed-Z, infinite far plane),
-//! the far end of the depth range being the far plane (the sky: nothing was drawn there),
-//! whose distance is `far·|ray|` (an infinite projection's sky depth instead). Values outside [0, 1] are clamped. The world position is rebuilt from d and
-//! the camera (paper 001 eq. 1; see [`crate::camera`]): on the GPU by the eye-to-fragment
-//! ray times the linear eye depth (`brume_eye_depth`, precise to a few f32 ulps at any
-//! distance, which the noise needs: see [`Camera::shader_depth_constants`]), on the CPU
+//! d ∈ [0, 1] of the frame's camera ([`crate::camera::Camera`], OpenGL's standard
+//! projection, or an engine's matrices, [`crate::camera::MatrixCamera`]: reversed-Z,
+//! infinite far plane), which each frame gives with its time
+//! ([`crate::camera::FrameInputs`]: one medium value fogs every frame). The far end of
+//! the depth range is the far plane (the sky: nothing was drawn there), whose distance is
+//! `far·|ray|` (an infinite projection's sky depth instead). Values outside [0, 1] are
+//! clamped. The world position is rebuilt from d and the camera (paper 001 eq. 1; see
+//! [`crate::camera`]): on the GPU by the eye-to-fragment ray times the linear eye depth
+//! (`brume_eye_depth`, precise to a few f32 ulps at any distance, which the noise needs:
+//! see [`crate::camera::Camera::shader_depth_constants`]), on the CPU
 //! reference by the inverse matrices.
 //!
 //! # The model, and where it departs from the paper
@@ -96,7 +99,7 @@ use glam::DVec3;
 use super::lookup::{Lookup, Wrap};
 use super::noise::{self, TilingNoise};
 use super::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
-use crate::camera::{Camera, FrameCamera};
+use crate::camera::FrameInputs;
 use crate::error::{check_non_negative, check_positive, Error, Result};
 
 /// The paper's `StartDistance` (Listing 1: 0).
@@ -142,7 +145,7 @@ pub struct FogNoise {
     /// The noise texture, values in [0, 1]; it must tile ([`Wrap::Repeat`]): the world is
     /// larger than one tile.
     pub lookup: Lookup,
-    /// Drift of the noise (world units per unit of [`DistanceFog::time`]); only x and z
+    /// Drift of the noise (world units per unit of [`FrameInputs::time`]); only x and z
     /// count (the texture covers the horizontal plane).
     pub speed: [f64; 3],
     /// World units per noise tile (> 0).
@@ -262,12 +265,10 @@ impl FogNoise {
 }
 
 /// Paper 001's distance fog with scattering toward a light and drifting noise (see the
-/// module docs for the formulas and the units).
+/// module docs for the formulas and the units). It reads the depth buffer through the
+/// camera each frame gives, and moves its noise by the frame's time ([`FrameInputs`]).
 #[derive(Clone, Debug)]
 pub struct DistanceFog {
-    /// The camera of the frame whose depth buffer is read (brume's [`Camera`] or an
-    /// engine's [`crate::camera::MatrixCamera`]).
-    pub camera: FrameCamera,
     /// Distance from the camera where the fog starts (world units).
     pub start_distance: f64,
     /// Blend distance (> 0): the distance beyond the start where `dist` reaches 1.
@@ -289,8 +290,6 @@ pub struct DistanceFog {
     pub scatter_colour: [f32; 3],
     /// The density noise, or `None` for a uniform fog (eq. 3).
     pub noise: Option<FogNoise>,
-    /// Time (in the unit of the noise speed): moves the noise.
-    pub time: f64,
     /// Diffusion blur factor λ ≥ 0 (px): σ = σ0 + λ·r·√(−ln(1 − F)).
     pub lambda: f64,
     /// The distance that counts as 1 in the blur law (> 0, world units).
@@ -300,7 +299,6 @@ pub struct DistanceFog {
 impl Default for DistanceFog {
     fn default() -> Self {
         DistanceFog {
-            camera: Camera::default().into(),
             start_distance: DEFAULT_START_DISTANCE,
             distance: DEFAULT_DISTANCE,
             exponent: DEFAULT_EXPONENT,
@@ -311,7 +309,6 @@ impl Default for DistanceFog {
             scatter_exponent: DEFAULT_SCATTER_EXPONENT,
             scatter_colour: DEFAULT_SCATTER_COLOUR,
             noise: Some(FogNoise::default()),
-            time: 0.0,
             lambda: DEFAULT_LAMBDA,
             range_unit: DEFAULT_RANGE_UNIT,
         }
@@ -342,14 +339,12 @@ impl DistanceFog {
             .powf(self.exponent)
     }
 
-    /// The fog at world position `world` (eq. 1-10, module docs).
-    pub fn at(&self, world: DVec3) -> FogPoint {
-        let to = world - self.camera.eye();
+    /// The fog at world position `world` seen from `eye` at `time` (eq. 1-10, module
+    /// docs).
+    pub fn at(&self, eye: DVec3, world: DVec3, time: f64) -> FogPoint {
+        let to = world - eye;
         let l = to.length();
-        let factor = self
-            .noise
-            .as_ref()
-            .map_or(1.0, |n| n.factor(world, self.time));
+        let factor = self.noise.as_ref().map_or(1.0, |n| n.factor(world, time));
         let density = (self.distance_ramp(l) * factor).clamp(0.0, self.max_density);
         let towards = to.normalize_or_zero().dot(self.light()).clamp(0.0, 1.0);
         let beyond = if l > 0.0 {
@@ -361,7 +356,7 @@ impl DistanceFog {
         let tint = self
             .noise
             .as_ref()
-            .map_or(1.0, |n| n.colour_factor(world, self.time));
+            .map_or(1.0, |n| n.colour_factor(world, time));
         let colour = std::array::from_fn(|c| {
             (f64::from(self.colour[c]) + f64::from(self.scatter_colour[c]) * scatter) * tint
         });
@@ -379,7 +374,7 @@ impl DistanceFog {
 }
 
 /// A 1x1 tiling texture bound under the noise sampler when there is no noise: the program
-/// is compiled once per medium name with the sampler's name among its uniforms, so the
+/// is compiled once per GLSL with the sampler's name among its uniforms, so the
 /// name must always be there; the shader never reads it (`u_noise_on` = 0).
 fn placeholder_noise() -> Lookup {
     static PLACEHOLDER: OnceLock<Lookup> = OnceLock::new();
@@ -400,14 +395,14 @@ impl Medium for DistanceFog {
         include_str!("../../../glsl/medium/distance.glsl").into()
     }
 
-    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
+    fn uniforms(&self, frame: &FrameInputs) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let f = |v: f64| v as f32;
         // The noise's origin, eye and drift together, is reduced to one tile in f64 here:
         // the shader adds only the eye-to-point offset, so that neither a far-off camera
         // nor a long time costs f32 precision in the texture coordinates.
         let (noise_on, origin, scale, range, colour_strength) = match &self.noise {
             Some(n) => {
-                let (u, v) = n.coordinates(self.camera.eye(), self.time);
+                let (u, v) = n.coordinates(frame.camera_or_default().eye(), frame.time);
                 (
                     1.0,
                     [f(u.rem_euclid(1.0)), f(v.rem_euclid(1.0))],
@@ -463,13 +458,11 @@ impl Medium for DistanceFog {
         )
     }
 
-    fn sample(&self, p: Pixel) -> MediumSample {
+    fn sample(&self, p: Pixel, frame: &FrameInputs) -> MediumSample {
         let d = p.depth.clamp(0.0, 1.0);
-        let world = self
-            .camera
-            .for_frame(p.width, p.height)
-            .world_position_by_inverse(p.x, p.y, p.width, p.height, d);
-        let fog = self.at(world);
+        let camera = frame.camera_or_default().for_frame(p.width, p.height);
+        let world = camera.world_position_by_inverse(p.x, p.y, p.width, p.height, d);
+        let fog = self.at(camera.eye(), world, frame.time);
         let tau = 1.0 - fog.density;
         MediumSample {
             transmission: [tau; 3],
@@ -484,7 +477,6 @@ impl Medium for DistanceFog {
     }
 
     fn validate(&self) -> Result<()> {
-        self.camera.validate()?;
         if !self.start_distance.is_finite() {
             return Err(Error::invalid(
                 "start_distance",
@@ -517,15 +509,12 @@ impl Medium for DistanceFog {
         if let Some(n) = &self.noise {
             n.validate()?;
         }
-        if !self.time.is_finite() {
-            return Err(Error::invalid("time", self.time, "a finite time"));
-        }
         check_non_negative("lambda", self.lambda)?;
         check_positive("range_unit", self.range_unit)
     }
 
-    fn camera(&self) -> Option<FrameCamera> {
-        Some(self.camera)
+    fn needs_camera(&self) -> bool {
+        true
     }
 
     fn lookups(&self) -> Vec<(std::borrow::Cow<'static, str>, super::Lookup)> {

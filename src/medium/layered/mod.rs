@@ -15,7 +15,9 @@
 //! fig. 1).
 //!
 //! **The fragment's position** comes from the frame's depth buffer: the medium reads the
-//! window depth d ∈ [0, 1] (clamped there) and the camera ([`LayeredFog::camera`]). The
+//! window depth d ∈ [0, 1] (clamped there) and the frame's camera
+//! ([`crate::camera::FrameInputs::camera`]: the medium holds none, one value fogs every
+//! frame). The
 //! shader rebuilds it the fast way, eye + ray·A/(d + B) (paper 003, sec. 2.1); the CPU
 //! reference by the inverse matrices (paper 002, eq. 22-23), so that comparing the two
 //! also tests the fast path. A sky pixel (the far end of the depth range) lies on the far
@@ -52,7 +54,7 @@
 //! knowing the image: σ ≤ σ0 + λ·√(albedo·min(sup δ·range_unit, MAX_BLUR_OPTICAL_DEPTH)).
 
 use super::{blur_from_optical_depth, Medium, MediumSample, Pixel, UniformValue};
-use crate::camera::{Camera, FrameCamera};
+use crate::camera::{FrameCamera, FrameInputs};
 use crate::error::{check_non_negative, check_positive, Error, Result};
 use glam::DVec3;
 use std::f64::consts::{FRAC_PI_2, PI};
@@ -296,12 +298,14 @@ impl Default for HeightProfile {
     }
 }
 
-/// Paper 003's layered fog as a medium of a rendered frame (module docs).
+/// The distance (world units) that counts as normalised range 1 in the blur law by
+/// default: the default camera's far plane.
+pub const DEFAULT_RANGE_UNIT: f64 = 1000.0;
+
+/// Paper 003's layered fog as a medium of a rendered frame (module docs). It reads the
+/// depth buffer through the camera each frame gives ([`FrameInputs`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LayeredFog {
-    /// The camera the frame was rendered with: the depth buffer is read through it
-    /// (brume's [`Camera`] or an engine's [`crate::camera::MatrixCamera`]).
-    pub camera: FrameCamera,
     /// The fog density as a function of height.
     pub profile: HeightProfile,
     /// The fog colour C_fog (linear RGB, each ≥ 0): the in-scattered light.
@@ -310,30 +314,36 @@ pub struct LayeredFog {
     pub albedo: f64,
     /// Blur factor λ ≥ 0 (px): σ = σ0 + λ·r·√Ds (module docs); 0 turns the blur off.
     pub lambda: f64,
-    /// The distance (world units, > 0) that counts as normalised range 1 in the blur law;
-    /// [`LayeredFog::new`] takes the camera's far plane.
+    /// The distance (world units, > 0) that counts as normalised range 1 in the blur law
+    /// ([`DEFAULT_RANGE_UNIT`]; [`LayeredFog::for_camera`] takes a camera's far plane).
     pub range_unit: f64,
 }
 
 impl LayeredFog {
-    /// `profile` seen through `camera`, with the default colour, albedo and λ, and the
-    /// far plane (an infinite projection's sky depth) as the range unit.
-    pub fn new(camera: impl Into<FrameCamera>, profile: HeightProfile) -> Self {
-        let camera = camera.into();
+    /// `profile` with the default colour, albedo, λ and range unit.
+    pub fn new(profile: HeightProfile) -> Self {
         LayeredFog {
-            camera,
             profile,
             colour: DEFAULT_COLOUR,
             albedo: DEFAULT_ALBEDO,
             lambda: DEFAULT_LAMBDA,
-            range_unit: camera.max_depth(),
+            range_unit: DEFAULT_RANGE_UNIT,
         }
     }
 
-    /// The medium along the segment from the eye to the world point `p`: what a pixel
-    /// that sees `p` gets, whatever the camera's orientation.
-    pub fn sample_point(&self, p: DVec3, sigma0: f64) -> MediumSample {
-        let eye = self.camera.eye();
+    /// [`LayeredFog::new`] with the far plane of `camera` (an infinite projection's sky
+    /// depth) as the range unit, so that σ reaches its largest value at the far plane.
+    /// The camera is not kept: each frame gives its own.
+    pub fn for_camera(camera: impl Into<FrameCamera>, profile: HeightProfile) -> Self {
+        LayeredFog {
+            range_unit: camera.into().max_depth(),
+            ..LayeredFog::new(profile)
+        }
+    }
+
+    /// The medium along the segment from the eye at `eye` to the world point `p`: what a
+    /// pixel that sees `p` gets, whatever the camera's orientation.
+    pub fn sample_point(&self, eye: DVec3, p: DVec3, sigma0: f64) -> MediumSample {
         let length = (p - eye).length();
         let mean = mean_density(&self.profile, eye.y, p.y - eye.y);
         let optical_depth = length * mean;
@@ -354,9 +364,9 @@ impl LayeredFog {
 }
 
 impl Default for LayeredFog {
-    /// The default exponential fog through the default camera.
+    /// The default exponential fog.
     fn default() -> Self {
-        LayeredFog::new(Camera::default(), HeightProfile::default())
+        LayeredFog::new(HeightProfile::default())
     }
 }
 
@@ -369,7 +379,10 @@ impl Medium for LayeredFog {
         table::medium_glsl(&self.profile).into()
     }
 
-    fn uniforms(&self) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
+    fn uniforms(
+        &self,
+        _frame: &FrameInputs,
+    ) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let (selector, layer) = self.profile.uniform_values();
         super::static_names(
             vec![
@@ -394,17 +407,14 @@ impl Medium for LayeredFog {
         blur_from_optical_depth(sigma0, self.lambda, 1.0, self.albedo * depth)
     }
 
-    fn sample(&self, p: Pixel) -> MediumSample {
+    fn sample(&self, p: Pixel, frame: &FrameInputs) -> MediumSample {
         let d = p.depth.clamp(0.0, 1.0);
-        let point = self
-            .camera
-            .for_frame(p.width, p.height)
-            .world_position_by_inverse(p.x, p.y, p.width, p.height, d);
-        self.sample_point(point, p.sigma0)
+        let camera = frame.camera_or_default().for_frame(p.width, p.height);
+        let point = camera.world_position_by_inverse(p.x, p.y, p.width, p.height, d);
+        self.sample_point(camera.eye(), point, p.sigma0)
     }
 
     fn validate(&self) -> Result<()> {
-        self.camera.validate()?;
         self.profile.validate()?;
         if !self.colour.iter().all(|c| c.is_finite() && *c >= 0.0) {
             let [r, g, b] = self.colour;
@@ -425,8 +435,8 @@ impl Medium for LayeredFog {
         check_positive("range_unit", self.range_unit)
     }
 
-    fn camera(&self) -> Option<FrameCamera> {
-        Some(self.camera)
+    fn needs_camera(&self) -> bool {
+        true
     }
 
     fn lookups(&self) -> Vec<(std::borrow::Cow<'static, str>, super::Lookup)> {

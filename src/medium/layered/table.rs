@@ -74,7 +74,7 @@ pub struct DensityTable {
 }
 
 impl std::fmt::Debug for DensityTable {
-    /// The rows, not the grid (up to [`MAX_NODES`] values twice).
+    /// The rows, not the grid (up to `MAX_NODES` values twice).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("DensityTable")
             .field("heights", &self.data.heights)

@@ -1,4 +1,5 @@
 use super::*;
+use crate::camera::Camera;
 
 /// 5-point Gauss-Legendre nodes and weights on [−1, 1].
 const GAUSS5: [(f64, f64); 5] = [
@@ -244,23 +245,6 @@ fn f32_twin_is_accurate_near_the_horizon() {
 }
 
 #[test]
-fn fog_of_a_fixed_point_does_not_depend_on_the_view() {
-    let point = DVec3::new(40.0, 3.0, -250.0);
-    let fog = LayeredFog::default();
-    let reference = fog.sample_point(point, 1.0);
-    for (yaw, pitch) in [(-20.0, 0.0), (10.0, -8.0), (35.0, 12.0)] {
-        let mut turned = fog.clone();
-        turned.camera = Camera {
-            yaw_deg: yaw,
-            pitch_deg: pitch,
-            ..Camera::default()
-        }
-        .into();
-        assert_eq!(turned.sample_point(point, 1.0), reference);
-    }
-}
-
-#[test]
 fn cpu_sample_rebuilds_the_pixel_position() {
     let camera = Camera {
         position: [2.0, 1.7, 5.0],
@@ -269,35 +253,42 @@ fn cpu_sample_rebuilds_the_pixel_position() {
         near: 1.0,
         ..Camera::default()
     };
-    let fog = LayeredFog::new(camera, HeightProfile::SINE_BAND);
+    let fog = LayeredFog::for_camera(camera, HeightProfile::SINE_BAND);
+    let frame = FrameInputs::new(camera, 0.0);
     let (w, h) = (32, 24);
     for (x, y, z) in [(3, 4, 12.0), (30, 20, 300.0), (16, 11, 999.0)] {
         let d = camera.window_depth(z);
         let p = camera.world_position(x, y, w, h, d);
-        let expected = fog.sample_point(p, 1.0);
-        let got = fog.sample(Pixel {
-            x,
-            y,
-            width: w,
-            height: h,
-            depth: d,
-            sigma0: 1.0,
-        });
+        let expected = fog.sample_point(camera.eye(), p, 1.0);
+        let got = fog.sample(
+            Pixel {
+                x,
+                y,
+                width: w,
+                height: h,
+                depth: d,
+                sigma0: 1.0,
+            },
+            &frame,
+        );
         assert!(relative_error(got.transmission[0], expected.transmission[0]) < 1e-9);
         assert!(relative_error(got.sigma, expected.sigma) < 1e-9);
     }
     // A sky pixel is on the far plane.
-    let sky = fog.sample(Pixel {
-        x: 16,
-        y: 23,
-        width: w,
-        height: h,
-        depth: 1.0,
-        sigma0: 1.0,
-    });
+    let sky = fog.sample(
+        Pixel {
+            x: 16,
+            y: 23,
+            width: w,
+            height: h,
+            depth: 1.0,
+            sigma0: 1.0,
+        },
+        &frame,
+    );
     let far = camera.world_position(16, 23, w, h, 1.0);
     assert!((far - camera.eye()).dot(camera.forward()) - camera.far < 1e-6);
-    assert!(relative_error(sky.sigma, fog.sample_point(far, 1.0).sigma) < 1e-9);
+    assert!(relative_error(sky.sigma, fog.sample_point(camera.eye(), far, 1.0).sigma) < 1e-9);
 }
 
 #[test]
@@ -307,24 +298,28 @@ fn sigma_max_bounds_every_pixel() {
             pitch_deg: -30.0,
             ..Camera::default()
         };
+        let frame = FrameInputs::new(camera, 0.0);
         for range_unit in [50.0, 1000.0] {
             let fog = LayeredFog {
                 range_unit,
-                ..LayeredFog::new(camera, profile.clone())
+                ..LayeredFog::new(profile.clone())
             };
             let bound = fog.sigma_max(1.0);
             let (w, h) = (24, 16);
             for y in 0..h {
                 for x in 0..w {
                     for d in [0.0, 0.9, 0.999, 0.9999, 1.0] {
-                        let s = fog.sample(Pixel {
-                            x,
-                            y,
-                            width: w,
-                            height: h,
-                            depth: d,
-                            sigma0: 1.0,
-                        });
+                        let s = fog.sample(
+                            Pixel {
+                                x,
+                                y,
+                                width: w,
+                                height: h,
+                                depth: d,
+                                sigma0: 1.0,
+                            },
+                            &frame,
+                        );
                         assert!(s.sigma >= 1.0 && s.sigma <= bound + 1e-12);
                     }
                 }
@@ -348,7 +343,7 @@ fn sigma_max_bounds_every_pixel() {
 #[test]
 fn bad_parameters_are_refused_by_name() {
     let bad = |fog: LayeredFog| fog.validate().unwrap_err().to_string();
-    let with = |profile| LayeredFog::new(Camera::default(), profile);
+    let with = LayeredFog::new;
     assert!(bad(with(HeightProfile::Exponential {
         density: -1.0,
         base: 0.0,
@@ -404,11 +399,14 @@ fn bad_parameters_are_refused_by_name() {
         near: 0.0,
         ..Camera::default()
     };
-    assert!(bad(LayeredFog {
-        camera: camera.into(),
-        ..fog.clone()
-    })
-    .contains("near"));
+    let frame_error = |f: FrameInputs| fog.validate_frame(&f).unwrap_err();
+    assert!(frame_error(FrameInputs::new(camera, 0.0))
+        .to_string()
+        .contains("near"));
+    assert!(matches!(
+        frame_error(FrameInputs::default()),
+        Error::MissingCamera { medium } if medium.starts_with("layered")
+    ));
     for profile in profiles() {
         assert!(with(profile).validate().is_ok());
     }
