@@ -26,6 +26,8 @@ pub struct Rendered {
     pub image: RgbaImage,
     /// The schedule that ran.
     pub schedule: Schedule,
+    /// The passes that ran, one name per entry of `times.pass_ms` ([`Frame::pass_names`]).
+    pub pass_names: Vec<String>,
     /// Per-pass times, with the clock that produced them (unavailable when the GPU
     /// timer's figures were rejected, or with timing off: see [`Renderer::set_timing`]).
     pub times: PassTimes,
@@ -310,6 +312,7 @@ fn rendered_from(frame: Frame, pixels: Vec<[f32; 4]>, w: usize, h: usize) -> Ren
     Rendered {
         image,
         schedule: frame.schedule,
+        pass_names: frame.pass_names,
         times: frame.times,
     }
 }

@@ -122,7 +122,7 @@ fn contrast(
     sum
 }
 
-/// The pass names `FogBlur::pass_names` gives each mode.
+/// The pass names a frame reports (`Frame::pass_names`) in each mode.
 fn assert_pass_names(blur: &str, names: &[&str]) {
     match blur {
         "none" => assert_eq!(names, ["fog"]),

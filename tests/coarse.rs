@@ -274,6 +274,17 @@ fn impulse_keeps_its_scale_through_two_levels() {
     let schedule = out.schedule;
     let first = schedule.coarse_start(2.0).expect("a coarse stage");
     assert_eq!(schedule.coarse_levels(first), vec![3, 6]);
+    // Each timed pass is named, the coarse stage's own included.
+    let n = schedule.steps;
+    let mut expected = vec!["medium".to_string()];
+    expected.extend((1..=3).map(|k| format!("diffuse {k}")));
+    expected.push("down 1/2".into());
+    expected.extend((4..=6).map(|k| format!("diffuse {k} (1/2)")));
+    expected.push("down 1/4".into());
+    expected.extend((7..=n).map(|k| format!("diffuse {k} (1/4)")));
+    expected.extend(["blend 1/4", "blend 1/2", "composite"].map(String::from));
+    assert_eq!(out.pass_names, expected);
+    assert_eq!(out.times.pass_ms.len(), expected.len());
     let value = |x: usize, y: usize| f64::from(out.image.get(x, y)[0]);
     let mass: f64 = (0..h)
         .flat_map(|y| (0..w).map(move |x| (x, y)))

@@ -201,12 +201,14 @@ pub fn run_fog_bench(
             let frame = match mode {
                 Mode::Fog(b) => {
                     let f = pipeline.fog(&input, *medium, b, &output)?;
-                    passes = b.pass_names(f.schedule.steps);
+                    passes = f.pass_names.clone();
                     f
                 }
                 Mode::Blend => {
-                    passes = vec!["fog (blended)".into()];
-                    pipeline.blend_fog(input.depth, w, h, *medium, &input.frame, &output)?
+                    let f =
+                        pipeline.blend_fog(input.depth, w, h, *medium, &input.frame, &output)?;
+                    passes = f.pass_names.clone();
+                    f
                 }
             };
             if run >= opts.warm_up {

@@ -593,18 +593,12 @@ fn print_timings(rendered: &Rendered) {
         outln!("pass times n/a (the GPU timer's figures were rejected)");
         return;
     }
-    let n = t.pass_ms.len();
-    outln!("{:>6}  {:<12} {:>10}", "pass", "shader", "ms");
-    for (i, ms) in t.pass_ms.iter().enumerate() {
-        let name = match i {
-            0 => "medium",
-            _ if i + 1 == n => "composite",
-            _ => "diffuse",
-        };
-        outln!("{:>6}  {:<12} {:>10.3}", i + 1, name, ms);
+    outln!("{:>6}  {:<20} {:>10}", "pass", "shader", "ms");
+    for (i, (name, ms)) in rendered.pass_names.iter().zip(&t.pass_ms).enumerate() {
+        outln!("{:>6}  {:<20} {:>10.3}", i + 1, name, ms);
     }
     outln!(
-        "{:>6}  {:<12} {:>10.3}  ({})",
+        "{:>6}  {:<20} {:>10.3}  ({})",
         "total",
         "",
         t.total_ms,

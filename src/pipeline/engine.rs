@@ -131,16 +131,14 @@ impl FogBlur {
         }
     }
 
-    /// The names of the passes a render runs, in order, for `steps` diffusion steps.
-    pub fn pass_names(&self, steps: u32) -> Vec<String> {
+    /// The names of the engine passes (`FogBlur::None` and the Gaussians); a diffusion
+    /// render's depend on its schedule and coarse stage ([`Frame::pass_names`]).
+    fn engine_pass_names(&self) -> Vec<String> {
         match self {
             FogBlur::None => vec!["fog".into()],
             FogBlur::GaussSingle(_) => vec!["fog+blur".into()],
             FogBlur::GaussSeparate(_) => vec!["fog".into(), "blur".into()],
-            FogBlur::Diffusion(_) => std::iter::once("medium".to_string())
-                .chain((1..=steps).map(|k| format!("diffuse {k}")))
-                .chain(std::iter::once("composite".to_string()))
-                .collect(),
+            FogBlur::Diffusion(_) => unreachable!("diffusion renders through Pipeline::render"),
         }
     }
 }
@@ -352,6 +350,7 @@ impl Pipeline {
         });
         Ok(Frame {
             schedule: no_diffusion(),
+            pass_names: blur.engine_pass_names(),
             times: result?,
         })
     }
@@ -378,6 +377,7 @@ impl Pipeline {
         Ok((
             Frame {
                 schedule: no_diffusion(),
+                pass_names: blur.engine_pass_names(),
                 times,
             },
             pixels,
@@ -460,6 +460,7 @@ impl Pipeline {
         });
         Ok(Frame {
             schedule: no_diffusion(),
+            pass_names: vec!["fog (blended)".into()],
             times: result?,
         })
     }

@@ -196,7 +196,12 @@ pub enum Output {
 pub struct Frame {
     /// The schedule that ran.
     pub schedule: Schedule,
-    /// Per-pass times (N + 2 for a render), with the clock that produced them, as
+    /// The passes that ran, in order, one name per entry of `times.pass_ms`: `medium`,
+    /// `diffuse k` (k = 1..N; `diffuse k (1/2)` on a coarse level), the coarse stage's
+    /// `down 1/2`, `blend 1/2` …, `composite`; or the engine passes' names
+    /// ([`diffusion_pass_names`]).
+    pub pass_names: Vec<String>,
+    /// Per-pass times (N + 2 for a render, 2 more per coarse level), with the clock that produced them, as
     /// [`Pipeline::timing`] gives them: this call's, an earlier call's
     /// ([`PassTimes::calls_ago`]), or unavailable ([`PassTimes::is_available`]).
     pub times: PassTimes,
@@ -385,6 +390,7 @@ impl Pipeline {
             Ok(pipeline.run(input, medium, &schedule, destination)?.0)
         });
         Ok(Frame {
+            pass_names: self.diffusion_pass_names(&schedule),
             schedule,
             times: result?,
         })
@@ -406,7 +412,15 @@ impl Pipeline {
                 Ok((times, pixels))
             });
         let (times, pixels) = result?;
-        Ok((Frame { schedule, times }, pixels))
+        let pass_names = self.diffusion_pass_names(&schedule);
+        Ok((
+            Frame {
+                schedule,
+                pass_names,
+                times,
+            },
+            pixels,
+        ))
     }
 
     /// Checks the frame, plans its schedule, compiles what it needs and sizes the targets.
@@ -451,6 +465,16 @@ impl Pipeline {
             self.prepare_coarse(input.width, input.height, blur.precision, &schedule)?;
         }
         Ok(schedule)
+    }
+
+    /// The names of the passes [`Pipeline::run`] runs for `schedule`, with the coarse
+    /// stage's levels where this frame runs it.
+    fn diffusion_pass_names(&self, schedule: &Schedule) -> Vec<String> {
+        let levels = match self.coarse_start {
+            Some(_) => &self.coarse.starts[..],
+            None => &[],
+        };
+        diffusion_pass_names(schedule.steps, levels)
     }
 
     /// Runs the passes, timed as [`Pipeline::timing`] says. Returns the times and the
@@ -596,4 +620,27 @@ fn linear_sampler(gl: &glow::Context) -> Result<glow::Sampler> {
 fn draw_fullscreen(gl: &glow::Context) {
     // SAFETY: the empty VAO is bound; the vertex shader uses gl_VertexID only.
     unsafe { gl.draw_arrays(glow::TRIANGLES, 0, 3) };
+}
+
+/// The names of a diffusion render's passes in the order they run, for `steps` steps and
+/// the coarse stage's levels starting at the steps `coarse_starts` (empty: none): the
+/// medium, the full-resolution steps, for each level its down pass and its steps, the
+/// blends from the deepest level up, the composite.
+pub fn diffusion_pass_names(steps: u32, coarse_starts: &[u32]) -> Vec<String> {
+    let full_steps = coarse_starts.first().copied().unwrap_or(steps);
+    let scale = |level: usize| format!("1/{}", 1u32 << level);
+    let mut names = vec!["medium".to_string()];
+    names.extend((1..=full_steps).map(|k| format!("diffuse {k}")));
+    for (l, &start) in coarse_starts.iter().enumerate() {
+        let end = coarse_starts.get(l + 1).copied().unwrap_or(steps);
+        names.push(format!("down {}", scale(l + 1)));
+        names.extend((start + 1..=end).map(|k| format!("diffuse {k} ({})", scale(l + 1))));
+    }
+    names.extend(
+        (1..=coarse_starts.len())
+            .rev()
+            .map(|l| format!("blend {}", scale(l))),
+    );
+    names.push("composite".to_string());
+    names
 }

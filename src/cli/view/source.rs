@@ -226,7 +226,7 @@ impl Photo {
         let input = self.input();
         let (medium, fog_blur) = self.look.medium_and_blur();
         let frame = pipeline.fog(&input, medium, &fog_blur, output)?;
-        Ok(times(&frame, fog_blur.pass_names(frame.schedule.steps)))
+        Ok(times(&frame))
     }
 
     fn controls(&mut self, ui: &mut Ui) -> bool {
@@ -324,9 +324,9 @@ fn upload(
     Ok((colour, range))
 }
 
-fn times(frame: &brume::Frame, pass_names: Vec<String>) -> FrameTimes {
+fn times(frame: &brume::Frame) -> FrameTimes {
     FrameTimes {
-        pass_names,
+        pass_names: frame.pass_names.clone(),
         pass_ms: frame.times.pass_ms.clone(),
         total_ms: frame.times.total_ms,
         clock: frame.times.clock.name(),
@@ -442,7 +442,7 @@ impl SceneView {
         let input = self.draw(time)?;
         let (medium, blur) = self.medium();
         let frame = pipeline.fog(&input, medium, &blur, output)?;
-        Ok(times(&frame, blur.pass_names(frame.schedule.steps)))
+        Ok(times(&frame))
     }
 
     fn render_to_image(&mut self, pipeline: &mut Pipeline, time: f64) -> Result<RgbaImage> {
