@@ -9,10 +9,44 @@
     >>> out = t(image=image, depth=range_m)                   # {"image", "depth", "beta"}
     >>> noisy = brume.fog(image, range_m, beta=0.02, read_noise=0.01, jpeg_quality=80, seed=1)
 
+The engine fogs on a rendered frame and its depth buffer (window depth in [0, 1]):
+
+    >>> cam = brume.Camera(position=(0, 1.7, 0), yaw_deg=30, pitch_deg=-5, fov_y_deg=60)
+    >>> out = brume.distance_fog(frame, depth, camera=cam, time=2.5)          # paper 001
+    >>> out = brume.layered_fog(frame, depth, camera=cam, profile="band")     # paper 003
+    >>> cam = brume.MatrixCamera(view, projection, clip="zero_to_one")        # an engine's
+
+Aerial perspective from turbidity on a photo with range in metres (paper 002):
+
+    >>> hazy = brume.aerial(image, range_m, turbidity=4.0, fov_y_deg=50.0, pitch_deg=2.0)
+
 The native part is ``brume._brume`` (Rust, PyO3); see the repository's README, "Python".
 """
 
-from ._brume import Renderer, __version__, beta_quantile, fog, load_depth
+from ._brume import (
+    Camera,
+    MatrixCamera,
+    Renderer,
+    __version__,
+    aerial,
+    beta_quantile,
+    distance_fog,
+    fog,
+    layered_fog,
+    load_depth,
+)
 from . import augment
 
-__all__ = ["Renderer", "fog", "load_depth", "beta_quantile", "augment", "__version__"]
+__all__ = [
+    "Renderer",
+    "fog",
+    "load_depth",
+    "beta_quantile",
+    "distance_fog",
+    "layered_fog",
+    "aerial",
+    "Camera",
+    "MatrixCamera",
+    "augment",
+    "__version__",
+]

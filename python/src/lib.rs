@@ -1,30 +1,33 @@
 //! `brume._brume`: the native part of the Python package `brume` (see `brume/__init__.py`
 //! and the README's "Python" section). Everything here goes through brume's public library
 //! API: `brume::photo` for the fog of a photo with range in metres, `brume::io::depth` for
-//! depth files, `brume::Headless` for the EGL context.
+//! depth files, `brume::Headless` for the EGL context; `engine` the engine fogs on a
+//! frame and its depth buffer (`brume::medium`, `brume::camera`), `aerial_photo` paper
+//! 002's aerial perspective (`brume::photo::aerial`), `arrays` numpy in and out.
 //!
 //! **Threads.** A [`Renderer`] owns one GL thread, which opens brume's headless EGL context
 //! and keeps it for the renderer's life. Python calls hand it a job and wait for the answer
 //! with the GIL released; calls from several Python threads queue on it (the job queue is
 //! the lock), so the context is only ever current on its own thread.
 
+mod aerial_photo;
+mod arrays;
+mod engine;
+
+use arrays::{dtype_name, read_image, read_range, ImageIn, ImageOut};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
-use brume::io::image::{linear_to_srgb8, srgb8_to_linear_table};
 use brume::photo::{
     self, BetaDistribution, CaptureOptions, FogOptions, Photo, PrepareOptions, PreparedPhoto,
     SensorNoise,
 };
-use brume::raster::{Grid, RgbImage, ScalarMap};
+use brume::raster::{RgbImage, ScalarMap};
 use brume::refine::RefineMode;
 use brume::Headless;
-use numpy::ndarray::{Array2, Array3};
-use numpy::{
-    IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
-    PyUntypedArrayMethods,
-};
+use numpy::ndarray::Array2;
+use numpy::IntoPyArray;
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 use std::sync::{mpsc, Mutex, OnceLock};
 use std::thread;
@@ -120,185 +123,6 @@ impl GlThread {
 }
 
 // ---------------------------------------------------------------------------------------
-// Arrays in and out.
-
-/// The encoding of an image array, which the output keeps.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Pixels {
-    /// uint8 sRGB code values.
-    Srgb8,
-    /// float32 linear RGB.
-    Linear32,
-    /// float64 linear RGB.
-    Linear64,
-}
-
-/// An image copied out of numpy (with the GIL), converted to linear light later (without).
-enum RawImage {
-    Srgb8(Vec<u8>),
-    Linear(Vec<f32>),
-}
-
-struct ImageIn {
-    width: usize,
-    height: usize,
-    pixels: Pixels,
-    raw: RawImage,
-}
-
-fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
-    array
-        .dtype()
-        .str()
-        .map(|s| s.to_string())
-        .unwrap_or_else(|_| "?".into())
-}
-
-fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
-    let untyped = image.cast::<PyUntypedArray>().map_err(|_| {
-        value_error(format!(
-            "image: expected a numpy array HxWx3 (uint8 sRGB or float32 linear RGB), got {}",
-            image
-                .get_type()
-                .name()
-                .map(|n| n.to_string())
-                .unwrap_or_default()
-        ))
-    })?;
-    let shape = untyped.shape().to_vec();
-    if shape.len() != 3 || shape[2] != 3 || shape[0] == 0 || shape[1] == 0 {
-        return Err(value_error(format!(
-            "image: expected shape HxWx3 (RGB, H and W > 0), got {shape:?}"
-        )));
-    }
-    let (height, width) = (shape[0], shape[1]);
-    let dtype = untyped.dtype();
-    let py = image.py();
-    if dtype.is_equiv_to(&numpy::dtype::<u8>(py)) {
-        let a: PyReadonlyArray3<u8> = image.extract()?;
-        let raw = a.as_array().iter().copied().collect();
-        return Ok(ImageIn {
-            width,
-            height,
-            pixels: Pixels::Srgb8,
-            raw: RawImage::Srgb8(raw),
-        });
-    }
-    let (pixels, raw): (Pixels, Vec<f32>) = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
-        let a: PyReadonlyArray3<f32> = image.extract()?;
-        (Pixels::Linear32, a.as_array().iter().copied().collect())
-    } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
-        let a: PyReadonlyArray3<f64> = image.extract()?;
-        (
-            Pixels::Linear64,
-            a.as_array().iter().map(|&v| v as f32).collect(),
-        )
-    } else {
-        return Err(value_error(format!(
-            "image: expected dtype uint8 (sRGB code values) or float32 (linear RGB in [0, 1]), got {}",
-            dtype_name(untyped)
-        )));
-    };
-    if let Some(i) = raw.iter().position(|v| !v.is_finite()) {
-        let (pixel, channel) = (i / 3, i % 3);
-        return Err(value_error(format!(
-            "image: value {} at pixel (x {}, y {}), channel {channel}: expected finite linear RGB in [0, 1]",
-            raw[i],
-            pixel % width,
-            pixel / width
-        )));
-    }
-    Ok(ImageIn {
-        width,
-        height,
-        pixels,
-        raw: RawImage::Linear(raw),
-    })
-}
-
-impl ImageIn {
-    /// Linear RGB, as brume's PNG loader makes it (the exact sRGB curve for 8-bit values;
-    /// negative linear values clamped to 0, as brume does for float files).
-    fn linear(self) -> RgbImage {
-        let data = match self.raw {
-            RawImage::Srgb8(raw) => {
-                let lut = srgb8_to_linear_table();
-                raw.chunks_exact(3)
-                    .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]])
-                    .collect()
-            }
-            RawImage::Linear(raw) => raw
-                .chunks_exact(3)
-                .map(|p| [p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)])
-                .collect(),
-        };
-        Grid::from_vec(self.width, self.height, data)
-    }
-}
-
-fn read_range(range: &Bound<'_, PyAny>) -> PyResult<ScalarMap> {
-    let untyped = range.cast::<PyUntypedArray>().map_err(|_| {
-        value_error("range_m: expected a numpy array HxW of ranges in metres (float32)")
-    })?;
-    let shape = untyped.shape().to_vec();
-    if shape.len() != 2 || shape[0] == 0 || shape[1] == 0 {
-        return Err(value_error(format!(
-            "range_m: expected shape HxW (the image's size or smaller by one factor), got {shape:?}"
-        )));
-    }
-    let py = range.py();
-    let dtype = untyped.dtype();
-    let data: Vec<f32> = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
-        let a: PyReadonlyArray2<f32> = range.extract()?;
-        a.as_array().iter().copied().collect()
-    } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
-        let a: PyReadonlyArray2<f64> = range.extract()?;
-        a.as_array().iter().map(|&v| v as f32).collect()
-    } else {
-        return Err(value_error(format!(
-            "range_m: expected dtype float32 or float64 (metres; NaN or <= 0 where unknown), got {}",
-            dtype_name(untyped)
-        )));
-    };
-    Ok(Grid::from_vec(shape[1], shape[0], data))
-}
-
-/// What a fogged frame goes back to Python as.
-enum ImageOut {
-    Srgb8(Array3<u8>),
-    Linear32(Array3<f32>),
-    Linear64(Array3<f64>),
-}
-
-impl ImageOut {
-    /// brume's linear RGBA in the input's encoding: 8-bit sRGB exactly as brume's PNG
-    /// writer rounds it (clamped to [0, 1], NaN as 0), or linear floats as rendered.
-    fn encode(image: &brume::raster::RgbaImage, pixels: Pixels) -> ImageOut {
-        let shape = (image.height(), image.width(), 3);
-        let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
-        match pixels {
-            Pixels::Srgb8 => ImageOut::Srgb8(
-                Array3::from_shape_vec(shape, rgb.map(linear_to_srgb8).collect()).expect("shape"),
-            ),
-            Pixels::Linear32 => {
-                ImageOut::Linear32(Array3::from_shape_vec(shape, rgb.collect()).expect("shape"))
-            }
-            Pixels::Linear64 => ImageOut::Linear64(
-                Array3::from_shape_vec(shape, rgb.map(f64::from).collect()).expect("shape"),
-            ),
-        }
-    }
-
-    fn into_py(self, py: Python<'_>) -> Py<PyAny> {
-        match self {
-            ImageOut::Srgb8(a) => a.into_pyarray(py).into_any().unbind(),
-            ImageOut::Linear32(a) => a.into_pyarray(py).into_any().unbind(),
-            ImageOut::Linear64(a) => a.into_pyarray(py).into_any().unbind(),
-        }
-    }
-}
-
-// ---------------------------------------------------------------------------------------
 // Options.
 
 /// `brume.fog`'s keywords, checked, as brume's options.
@@ -371,6 +195,29 @@ fn refine_mode(refine: &Bound<'_, PyAny>) -> PyResult<RefineMode> {
     )))
 }
 
+/// `airlight` (None or three linear RGB values) and `refine` as brume's pre-processing
+/// options.
+fn prepare_request(
+    airlight: Option<Vec<f64>>,
+    refine: &Bound<'_, PyAny>,
+) -> PyResult<PrepareOptions> {
+    let airlight = match airlight {
+        None => None,
+        Some(a) if a.len() == 3 => Some([a[0] as f32, a[1] as f32, a[2] as f32]),
+        Some(a) => {
+            return Err(value_error(format!(
+                "invalid airlight = {a:?}: expected None (estimated from the sky) or three linear RGB values"
+            )))
+        }
+    };
+    let mut prepare = PrepareOptions {
+        airlight,
+        ..PrepareOptions::default()
+    };
+    prepare.refine.mode = refine_mode(refine)?;
+    Ok(prepare)
+}
+
 fn fog_request(
     beta: Option<f64>,
     visibility: Option<f64>,
@@ -396,20 +243,7 @@ fn fog_request(
     if !blur {
         fog.lambda = 0.0;
     }
-    let airlight = match airlight {
-        None => None,
-        Some(a) if a.len() == 3 => Some([a[0] as f32, a[1] as f32, a[2] as f32]),
-        Some(a) => {
-            return Err(value_error(format!(
-                "invalid airlight = {a:?}: expected None (estimated from the sky) or three linear RGB values"
-            )))
-        }
-    };
-    let mut prepare = PrepareOptions {
-        airlight,
-        ..PrepareOptions::default()
-    };
-    prepare.refine.mode = refine_mode(refine)?;
+    let prepare = prepare_request(airlight, refine)?;
     Ok(FogRequest {
         fog,
         prepare,
@@ -513,6 +347,225 @@ impl Renderer {
         Ok(out.into_py(py))
     }
 
+    /// distance_fog(image, depth, *, camera, time=0.0, start_distance=None, distance=None,
+    /// exponent=None, max_density=None, colour=None, light_direction=None,
+    /// scatter_start=None, scatter_exponent=None, scatter_colour=None, noise=None,
+    /// noise_seed=0, noise_size=None, noise_speed=None, noise_low=None, noise_high=None,
+    /// noise_colour_strength=None, blur='diffusion', lambda_px=None, range_unit=None,
+    /// sigma0=1.0, scheme='matched', precision='f32', rho_max=0.25, blur_distance=100.0,
+    /// blur_falloff=1.0, blur_max=1.0) -> ndarray: as brume.distance_fog, on this
+    /// renderer's context.
+    #[pyo3(signature = (image, depth, *, camera, time=0.0, start_distance=None, distance=None, exponent=None, max_density=None, colour=None, light_direction=None, scatter_start=None, scatter_exponent=None, scatter_colour=None, noise=None, noise_seed=0, noise_size=None, noise_speed=None, noise_low=None, noise_high=None, noise_colour_strength=None, blur="diffusion", lambda_px=None, range_unit=None, sigma0=1.0, scheme="matched", precision="f32", rho_max=0.25, blur_distance=100.0, blur_falloff=1.0, blur_max=1.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn distance_fog<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+        depth: &Bound<'py, PyAny>,
+        camera: &Bound<'py, PyAny>,
+        time: f64,
+        start_distance: Option<f64>,
+        distance: Option<f64>,
+        exponent: Option<f64>,
+        max_density: Option<f64>,
+        colour: Option<Vec<f64>>,
+        light_direction: Option<Vec<f64>>,
+        scatter_start: Option<f64>,
+        scatter_exponent: Option<f64>,
+        scatter_colour: Option<Vec<f64>>,
+        noise: Option<&Bound<'py, PyAny>>,
+        noise_seed: u64,
+        noise_size: Option<f64>,
+        noise_speed: Option<Vec<f64>>,
+        noise_low: Option<f64>,
+        noise_high: Option<f64>,
+        noise_colour_strength: Option<f64>,
+        blur: &str,
+        lambda_px: Option<f64>,
+        range_unit: Option<f64>,
+        sigma0: f64,
+        scheme: &str,
+        precision: &str,
+        rho_max: f64,
+        blur_distance: f64,
+        blur_falloff: f64,
+        blur_max: f64,
+    ) -> PyResult<Py<PyAny>> {
+        let blur = engine::BlurArgs {
+            blur,
+            sigma0,
+            scheme,
+            precision,
+            rho_max,
+            blur_distance,
+            blur_falloff,
+            blur_max,
+        };
+        let fog = engine::DistanceArgs {
+            start_distance,
+            distance,
+            exponent,
+            max_density,
+            colour,
+            light_direction,
+            scatter_start,
+            scatter_exponent,
+            scatter_colour,
+            noise,
+            noise_seed,
+            noise_size,
+            noise_speed,
+            noise_low,
+            noise_high,
+            noise_colour_strength,
+            lambda_px,
+            range_unit,
+        };
+        let request = engine::distance_request(image, depth, camera, time, &blur, fog)?;
+        let out = py.detach(|| engine::render(&self.gl, request))?;
+        Ok(out.into_py(py))
+    }
+
+    /// layered_fog(image, depth, *, camera, time=0.0, profile='exponential', density=None,
+    /// base=None, scale_height=None, thickness=None, top=None, table=None, colour=None,
+    /// albedo=None, blur='diffusion', lambda_px=None, range_unit=None, sigma0=1.0,
+    /// scheme='matched', precision='f32', rho_max=0.25, blur_distance=100.0,
+    /// blur_falloff=1.0, blur_max=1.0) -> ndarray: as brume.layered_fog, on this
+    /// renderer's context.
+    #[pyo3(signature = (image, depth, *, camera, time=0.0, profile="exponential", density=None, base=None, scale_height=None, thickness=None, top=None, table=None, colour=None, albedo=None, blur="diffusion", lambda_px=None, range_unit=None, sigma0=1.0, scheme="matched", precision="f32", rho_max=0.25, blur_distance=100.0, blur_falloff=1.0, blur_max=1.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn layered_fog<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+        depth: &Bound<'py, PyAny>,
+        camera: &Bound<'py, PyAny>,
+        time: f64,
+        profile: &str,
+        density: Option<f64>,
+        base: Option<f64>,
+        scale_height: Option<f64>,
+        thickness: Option<f64>,
+        top: Option<f64>,
+        table: Option<&Bound<'py, PyAny>>,
+        colour: Option<Vec<f64>>,
+        albedo: Option<f64>,
+        blur: &str,
+        lambda_px: Option<f64>,
+        range_unit: Option<f64>,
+        sigma0: f64,
+        scheme: &str,
+        precision: &str,
+        rho_max: f64,
+        blur_distance: f64,
+        blur_falloff: f64,
+        blur_max: f64,
+    ) -> PyResult<Py<PyAny>> {
+        let blur = engine::BlurArgs {
+            blur,
+            sigma0,
+            scheme,
+            precision,
+            rho_max,
+            blur_distance,
+            blur_falloff,
+            blur_max,
+        };
+        let fog = engine::LayeredArgs {
+            profile,
+            density,
+            base,
+            scale_height,
+            thickness,
+            top,
+            table: table.filter(|t| !t.is_none()),
+            colour,
+            albedo,
+            lambda_px,
+            range_unit,
+        };
+        let request = engine::layered_request(image, depth, camera, time, &blur, fog)?;
+        let out = py.detach(|| engine::render(&self.gl, request))?;
+        Ok(out.into_py(py))
+    }
+
+    /// aerial(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None,
+    /// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None,
+    /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
+    /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True,
+    /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
+    /// seed=0) -> ndarray: as brume.aerial, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
+    #[allow(clippy::too_many_arguments)]
+    fn aerial<'py>(
+        &self,
+        py: Python<'py>,
+        image: &Bound<'py, PyAny>,
+        range_m: &Bound<'py, PyAny>,
+        turbidity: f64,
+        fov_y_deg: Option<f64>,
+        focal_px: Option<f64>,
+        pitch_deg: Option<f64>,
+        horizon_row: Option<f64>,
+        altitude_m: f64,
+        metres_per_unit: f64,
+        from_turbidity: Option<f64>,
+        retarget: Option<String>,
+        airlight: Option<Vec<f64>>,
+        horizon_zenith_deg: f64,
+        horizon_sectors: i64,
+        sun: Option<(f64, f64)>,
+        sensitivity: Option<PathBuf>,
+        blur: bool,
+        lambda_px: f64,
+        sigma0: f64,
+        refine: Option<&Bound<'py, PyAny>>,
+        exposure_stops: f64,
+        shot_noise_gain: Option<f64>,
+        read_noise: Option<f64>,
+        jpeg_quality: Option<i64>,
+        seed: u64,
+    ) -> PyResult<Py<PyAny>> {
+        let default_refine = pyo3::types::PyBool::new(py, true);
+        let refine = refine.unwrap_or(default_refine.as_any());
+        let capture = capture_request(
+            exposure_stops,
+            shot_noise_gain,
+            read_noise,
+            jpeg_quality,
+            seed,
+        )?;
+        let prepare = prepare_request(airlight, refine)?;
+        let args = aerial_photo::AerialArgs {
+            turbidity,
+            fov_y_deg,
+            focal_px,
+            pitch_deg,
+            horizon_row,
+            altitude_m,
+            metres_per_unit,
+            from_turbidity,
+            retarget,
+            airlight: prepare.airlight,
+            horizon_zenith_deg,
+            horizon_sectors,
+            sun,
+            sensitivity,
+            blur,
+            lambda_px,
+            sigma0,
+        };
+        let image = read_image(image)?;
+        let range = read_range(range_m)?;
+        let pixels = image.pixels;
+        let out = py.detach(|| {
+            let rendered =
+                aerial_photo::aerial_frame(&self.gl, image, range, &args, prepare, &capture)?;
+            Ok::<_, PyErr>(ImageOut::encode(&rendered, pixels))
+        })?;
+        Ok(out.into_py(py))
+    }
+
     /// GL_RENDERER of the context, e.g. 'llvmpipe (LLVM 15.0.6, 256 bits)'.
     #[getter]
     fn gl_renderer(&self) -> String {
@@ -588,6 +641,17 @@ fn fog(
     )
 }
 
+/// Calls `method` of the default renderer with the arguments given.
+fn on_default_renderer(
+    py: Python<'_>,
+    method: &str,
+    args: &Bound<'_, PyTuple>,
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<Py<PyAny>> {
+    let renderer = default_renderer(py)?.bind(py);
+    Ok(renderer.call_method(method, args, kwargs)?.unbind())
+}
+
 /// beta_quantile(dist, p) -> float
 ///
 /// The extinction β (1/m) below which a fraction p in (0, 1) of the draws of dist fall:
@@ -655,6 +719,11 @@ fn load_depth<'py>(
 #[pymodule]
 fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Renderer>()?;
+    m.add_class::<engine::PyCamera>()?;
+    m.add_class::<engine::PyMatrixCamera>()?;
+    m.add_function(wrap_pyfunction!(engine::distance_fog, m)?)?;
+    m.add_function(wrap_pyfunction!(engine::layered_fog, m)?)?;
+    m.add_function(wrap_pyfunction!(aerial_photo::aerial, m)?)?;
     m.add_function(wrap_pyfunction!(fog, m)?)?;
     m.add_function(wrap_pyfunction!(load_depth, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;

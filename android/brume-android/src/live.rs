@@ -256,6 +256,7 @@ mod tests {
         Frame {
             schedule: brume::schedule::Schedule::new(brume::Scheme::Matched, 1.0, 1.0, 0.25)
                 .unwrap(),
+            pass_names: (0..pass_ms.len()).map(|i| format!("pass {i}")).collect(),
             times: PassTimes {
                 clock: Clock::GpuTimer,
                 pass_ms,

@@ -1,0 +1,188 @@
+//! numpy arrays in and out: images (uint8 sRGB or float linear RGB, the encoding kept for
+//! the output) and range maps, copied with the GIL and converted without it.
+
+use super::value_error;
+use brume::io::image::{linear_to_srgb8, srgb8_to_linear_table};
+use brume::raster::{Grid, RgbImage, ScalarMap};
+use numpy::ndarray::Array3;
+use numpy::{
+    IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::prelude::*;
+
+/// The encoding of an image array, which the output keeps.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Pixels {
+    /// uint8 sRGB code values.
+    Srgb8,
+    /// float32 linear RGB.
+    Linear32,
+    /// float64 linear RGB.
+    Linear64,
+}
+
+/// An image copied out of numpy (with the GIL), converted to linear light later (without).
+pub(crate) enum RawImage {
+    Srgb8(Vec<u8>),
+    Linear(Vec<f32>),
+}
+
+pub(crate) struct ImageIn {
+    pub(crate) width: usize,
+    pub(crate) height: usize,
+    pub(crate) pixels: Pixels,
+    pub(crate) raw: RawImage,
+}
+
+pub(crate) fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
+    array
+        .dtype()
+        .str()
+        .map(|s| s.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
+    let untyped = image.cast::<PyUntypedArray>().map_err(|_| {
+        value_error(format!(
+            "image: expected a numpy array HxWx3 (uint8 sRGB or float32 linear RGB), got {}",
+            image
+                .get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_default()
+        ))
+    })?;
+    let shape = untyped.shape().to_vec();
+    if shape.len() != 3 || shape[2] != 3 || shape[0] == 0 || shape[1] == 0 {
+        return Err(value_error(format!(
+            "image: expected shape HxWx3 (RGB, H and W > 0), got {shape:?}"
+        )));
+    }
+    let (height, width) = (shape[0], shape[1]);
+    let dtype = untyped.dtype();
+    let py = image.py();
+    if dtype.is_equiv_to(&numpy::dtype::<u8>(py)) {
+        let a: PyReadonlyArray3<u8> = image.extract()?;
+        let raw = a.as_array().iter().copied().collect();
+        return Ok(ImageIn {
+            width,
+            height,
+            pixels: Pixels::Srgb8,
+            raw: RawImage::Srgb8(raw),
+        });
+    }
+    let (pixels, raw): (Pixels, Vec<f32>) = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
+        let a: PyReadonlyArray3<f32> = image.extract()?;
+        (Pixels::Linear32, a.as_array().iter().copied().collect())
+    } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
+        let a: PyReadonlyArray3<f64> = image.extract()?;
+        (
+            Pixels::Linear64,
+            a.as_array().iter().map(|&v| v as f32).collect(),
+        )
+    } else {
+        return Err(value_error(format!(
+            "image: expected dtype uint8 (sRGB code values) or float32 (linear RGB in [0, 1]), got {}",
+            dtype_name(untyped)
+        )));
+    };
+    if let Some(i) = raw.iter().position(|v| !v.is_finite()) {
+        let (pixel, channel) = (i / 3, i % 3);
+        return Err(value_error(format!(
+            "image: value {} at pixel (x {}, y {}), channel {channel}: expected finite linear RGB in [0, 1]",
+            raw[i],
+            pixel % width,
+            pixel / width
+        )));
+    }
+    Ok(ImageIn {
+        width,
+        height,
+        pixels,
+        raw: RawImage::Linear(raw),
+    })
+}
+
+impl ImageIn {
+    /// Linear RGB, as brume's PNG loader makes it (the exact sRGB curve for 8-bit values;
+    /// negative linear values clamped to 0, as brume does for float files).
+    pub(crate) fn linear(self) -> RgbImage {
+        let data = match self.raw {
+            RawImage::Srgb8(raw) => {
+                let lut = srgb8_to_linear_table();
+                raw.chunks_exact(3)
+                    .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]])
+                    .collect()
+            }
+            RawImage::Linear(raw) => raw
+                .chunks_exact(3)
+                .map(|p| [p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)])
+                .collect(),
+        };
+        Grid::from_vec(self.width, self.height, data)
+    }
+}
+
+pub(crate) fn read_range(range: &Bound<'_, PyAny>) -> PyResult<ScalarMap> {
+    let untyped = range.cast::<PyUntypedArray>().map_err(|_| {
+        value_error("range_m: expected a numpy array HxW of ranges in metres (float32)")
+    })?;
+    let shape = untyped.shape().to_vec();
+    if shape.len() != 2 || shape[0] == 0 || shape[1] == 0 {
+        return Err(value_error(format!(
+            "range_m: expected shape HxW (the image's size or smaller by one factor), got {shape:?}"
+        )));
+    }
+    let py = range.py();
+    let dtype = untyped.dtype();
+    let data: Vec<f32> = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
+        let a: PyReadonlyArray2<f32> = range.extract()?;
+        a.as_array().iter().copied().collect()
+    } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
+        let a: PyReadonlyArray2<f64> = range.extract()?;
+        a.as_array().iter().map(|&v| v as f32).collect()
+    } else {
+        return Err(value_error(format!(
+            "range_m: expected dtype float32 or float64 (metres; NaN or <= 0 where unknown), got {}",
+            dtype_name(untyped)
+        )));
+    };
+    Ok(Grid::from_vec(shape[1], shape[0], data))
+}
+
+/// What a fogged frame goes back to Python as.
+pub(crate) enum ImageOut {
+    Srgb8(Array3<u8>),
+    Linear32(Array3<f32>),
+    Linear64(Array3<f64>),
+}
+
+impl ImageOut {
+    /// brume's linear RGBA in the input's encoding: 8-bit sRGB exactly as brume's PNG
+    /// writer rounds it (clamped to [0, 1], NaN as 0), or linear floats as rendered.
+    pub(crate) fn encode(image: &brume::raster::RgbaImage, pixels: Pixels) -> ImageOut {
+        let shape = (image.height(), image.width(), 3);
+        let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
+        match pixels {
+            Pixels::Srgb8 => ImageOut::Srgb8(
+                Array3::from_shape_vec(shape, rgb.map(linear_to_srgb8).collect()).expect("shape"),
+            ),
+            Pixels::Linear32 => {
+                ImageOut::Linear32(Array3::from_shape_vec(shape, rgb.collect()).expect("shape"))
+            }
+            Pixels::Linear64 => ImageOut::Linear64(
+                Array3::from_shape_vec(shape, rgb.map(f64::from).collect()).expect("shape"),
+            ),
+        }
+    }
+
+    pub(crate) fn into_py(self, py: Python<'_>) -> Py<PyAny> {
+        match self {
+            ImageOut::Srgb8(a) => a.into_pyarray(py).into_any().unbind(),
+            ImageOut::Linear32(a) => a.into_pyarray(py).into_any().unbind(),
+            ImageOut::Linear64(a) => a.into_pyarray(py).into_any().unbind(),
+        }
+    }
+}
