@@ -2,18 +2,15 @@
 errors, the augmentation's seeding, and equality with the `brume render` program."""
 
 import math
-import os
-import shutil
 import subprocess
 import threading
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import brume
+from programs import brume_bin
 
-REPO = Path(__file__).resolve().parents[2]
 H, W = 48, 64  # small: llvmpipe on 2 cores
 
 
@@ -193,21 +190,6 @@ def test_load_depth(tmp_path, range_m):
 # --- equality with the `brume render` program ------------------------------------------
 
 
-def brume_bin():
-    given = os.environ.get("BRUME_BIN")
-    if given:
-        return Path(given)
-    # The newer of the two builds: an older one may predate the library this package
-    # was built from.
-    built = [p for p in (REPO / "target/release/brume", REPO / "target/debug/brume") if p.exists()]
-    if built:
-        return max(built, key=lambda p: p.stat().st_mtime)
-    if shutil.which("cargo") is None:
-        pytest.skip("no brume binary (set BRUME_BIN) and no cargo to build it")
-    subprocess.run(
-        ["nice", "cargo", "build", "--release", "--bin", "brume"], cwd=REPO, check=True
-    )
-    return REPO / "target/release/brume"
 
 
 @pytest.mark.parametrize(

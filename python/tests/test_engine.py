@@ -2,8 +2,6 @@
 brume.MatrixCamera) and of brume.aerial: equality with the `brume scene` and `brume render
 --medium aerial` programs, an engine's matrices written out in numpy, and the errors."""
 
-import os
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -11,28 +9,13 @@ import numpy as np
 import pytest
 
 import brume
+from programs import brume_bin
 
-REPO = Path(__file__).resolve().parents[2]
 SIZE = (96, 64)  # W, H: small, llvmpipe on 2 cores
 CAMERA = dict(position=(0.0, 1.7, 0.0), yaw_deg=20.0, pitch_deg=-3.0, fov_y_deg=60.0,
               near=0.1, far=1000.0)  # fmt: skip
 
 
-def brume_bin():
-    given = os.environ.get("BRUME_BIN")
-    if given:
-        return Path(given)
-    # The newer of the two builds: an older one may predate the library this package
-    # was built from.
-    built = [p for p in (REPO / "target/release/brume", REPO / "target/debug/brume") if p.exists()]
-    if built:
-        return max(built, key=lambda p: p.stat().st_mtime)
-    if shutil.which("cargo") is None:
-        pytest.skip("no brume binary (set BRUME_BIN) and no cargo to build it")
-    subprocess.run(
-        ["nice", "cargo", "build", "--release", "--bin", "brume"], cwd=REPO, check=True
-    )
-    return REPO / "target/release/brume"
 
 
 def read_pfm(path):
