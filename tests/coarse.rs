@@ -69,25 +69,38 @@ fn uniform_blur_stays_within_the_accuracy_budget() {
     }
 }
 
-/// The blur's scale: an impulse's variance after the coarse stage is σ² to within 1 %
-/// (the resampling's 1 px² is taken off the half-resolution steps).
-#[test]
-fn impulse_reaches_the_target_scale() {
-    let (w, h) = (121, 121);
-    let sigma = 12.0;
-    let image: RgbImage = Grid::from_fn(w, h, |x, y| {
-        if (x, y) == (60, 60) {
+/// The side (px) of the impulse image and the scale it is blurred to.
+const IMPULSE_SIDE: usize = 121;
+const IMPULSE_SIGMA: f64 = 12.0;
+
+/// A black image with one white pixel at its centre, blurred to [`IMPULSE_SIGMA`] coarse
+/// to fine from `from` px.
+fn impulse_render(from: f64) -> brume::Rendered {
+    let side = IMPULSE_SIDE;
+    let image: RgbImage = Grid::from_fn(side, side, |x, y| {
+        if (x, y) == (side / 2, side / 2) {
             [1.0, 1.0, 1.0]
         } else {
             [0.0; 3]
         }
     });
     let (_lock, mut r) = renderer();
-    let range = Grid::filled(w, h, 0.0f32);
-    let out = r
-        .render(&image, &range, &UniformBlur::new(sigma), &coarse(3.0))
-        .expect("GPU render")
-        .image;
+    let range = Grid::filled(side, side, 0.0f32);
+    r.render(
+        &image,
+        &range,
+        &UniformBlur::new(IMPULSE_SIGMA),
+        &coarse(from),
+    )
+    .expect("GPU render")
+}
+
+/// The blur's scale: an impulse's variance after the coarse stage is σ² to within 1 %
+/// (the resampling's 1 px² is taken off the half-resolution steps).
+#[test]
+fn impulse_reaches_the_target_scale() {
+    let (w, h, sigma) = (IMPULSE_SIDE, IMPULSE_SIDE, IMPULSE_SIGMA);
+    let out = impulse_render(3.0).image;
     let (mut mass, mut var) = (0.0f64, 0.0f64);
     for y in 0..h {
         for x in 0..w {
@@ -257,20 +270,8 @@ fn stage_applies_to_matched_grey_only() {
 /// impulse's centre by up to ½ texel of its level.
 #[test]
 fn impulse_keeps_its_scale_through_two_levels() {
-    let (w, h) = (121, 121);
-    let sigma = 12.0;
-    let image: RgbImage = Grid::from_fn(w, h, |x, y| {
-        if (x, y) == (60, 60) {
-            [1.0, 1.0, 1.0]
-        } else {
-            [0.0; 3]
-        }
-    });
-    let (_lock, mut r) = renderer();
-    let range = Grid::filled(w, h, 0.0f32);
-    let out = r
-        .render(&image, &range, &UniformBlur::new(sigma), &coarse(2.0))
-        .expect("GPU render");
+    let (w, h, sigma) = (IMPULSE_SIDE, IMPULSE_SIDE, IMPULSE_SIGMA);
+    let out = impulse_render(2.0);
     let schedule = out.schedule;
     let first = schedule.coarse_start(2.0).expect("a coarse stage");
     assert_eq!(schedule.coarse_levels(first), vec![3, 6]);
