@@ -100,8 +100,7 @@ fn run() -> Result<bool, String> {
     // --- The host reads its framebuffer and checks brume against the CPU reference. ---
     // SAFETY: reading the host's framebuffer into a buffer of the right size.
     let fogged = unsafe { read_rgba(&gl, fbo) }?;
-    let expected = reference::render(&image, &range, &haze, &Default::default(), &blur)
-        .map_err(|e| e.to_string())?;
+    let expected = reference::render(&image, &range, &haze, &blur).map_err(|e| e.to_string())?;
     let error = reference::rgb_error(&fogged, &expected, 0);
     let tolerance = 4e-7 * f64::from(frame.schedule.steps + 2);
     println!(

@@ -19,10 +19,21 @@ pub type Rgba64 = Grid<[f64; 4]>;
 /// grey one the three are equal, so diffusing all six here is the same arithmetic.
 pub type Field = Grid<[f64; 6]>;
 
-/// The whole render on the CPU: what the GPU pipeline computes, in f64, through the same
-/// seam (the medium per pixel, then the blur, then the composite), for `frame`'s camera
-/// and time ([`FrameInputs::default`] for a photo).
+/// The whole render of a photo on the CPU (no camera, time 0, as
+/// [`crate::Renderer::render`]): what the GPU pipeline computes, in f64, through the same
+/// seam (the medium per pixel, then the blur, then the composite). A frame's camera and
+/// time: [`fog`] with [`FogBlur::Diffusion`].
 pub fn render(
+    image: &RgbImage,
+    depth: &ScalarMap,
+    medium: &dyn Medium,
+    blur: &Blur,
+) -> Result<RgbaImage> {
+    render_frame(image, depth, medium, &FrameInputs::default(), blur)
+}
+
+/// [`render`] at `frame`'s camera and time.
+fn render_frame(
     image: &RgbImage,
     depth: &ScalarMap,
     medium: &dyn Medium,
@@ -39,7 +50,7 @@ pub fn render(
 }
 
 /// Engine fog on the CPU (see [`crate::pipeline::FogBlur`]): no blur, paper 001's
-/// Gaussian in the fog's pass or in a second pass, or the diffusion blur ([`render`]).
+/// Gaussian in the fog's pass or in a second pass, or the diffusion blur (as [`render`]).
 /// The blur weight's distance is rebuilt by the camera's inverse matrices (paper 002,
 /// eq. 22-23), not by the GPU's rays, so that the comparison tests both. `frame` gives
 /// the camera and the time, as to the pipeline.
@@ -51,7 +62,7 @@ pub fn fog(
     blur: &FogBlur,
 ) -> Result<RgbaImage> {
     let gauss = match blur {
-        FogBlur::Diffusion(b) => return render(image, depth, medium, frame, b),
+        FogBlur::Diffusion(b) => return render_frame(image, depth, medium, frame, b),
         FogBlur::None => None,
         FogBlur::GaussSingle(g) | FogBlur::GaussSeparate(g) => Some(*g),
     };

@@ -61,14 +61,7 @@ fn aerial_perspective_matches_the_reference() {
         let medium = aerial(t, lambda);
         let blur = Blur::default();
         let gpu = r.render(&image, &range, &medium, &blur).unwrap();
-        let cpu = reference::render(
-            &image,
-            &range,
-            &medium,
-            &brume::FrameInputs::default(),
-            &blur,
-        )
-        .unwrap();
+        let cpu = reference::render(&image, &range, &medium, &blur).unwrap();
         let e = reference::rgb_error(&gpu.image, &cpu, 0);
         let tol = FOG_PASS + F32_PER_PASS * f64::from(gpu.schedule.steps + 2);
         eprintln!(
@@ -122,14 +115,7 @@ fn horizon_sectors_match_the_reference() {
         medium.horizon_sectors = HorizonSectors::new(gains, centre, 0.25).unwrap();
         let blur = Blur::default();
         let gpu = r.render(&image, &range, &medium, &blur).unwrap();
-        let cpu = reference::render(
-            &image,
-            &range,
-            &medium,
-            &brume::FrameInputs::default(),
-            &blur,
-        )
-        .unwrap();
+        let cpu = reference::render(&image, &range, &medium, &blur).unwrap();
         let e = reference::rgb_error(&gpu.image, &cpu, 0);
         // The gains' slope is at most 0.6 per sector: an f32 azimuth (1e-6 rad on 0.25)
         // moves them by 3e-6 of I∞.

@@ -135,22 +135,8 @@ fn haze_stays_close_to_the_reference() {
         ..haze
     };
     let (_lock, mut r) = renderer();
-    let cpu = reference::render(
-        &image,
-        &range,
-        &haze,
-        &brume::FrameInputs::default(),
-        &Blur::default(),
-    )
-    .expect("CPU render");
-    let unblurred = reference::render(
-        &image,
-        &range,
-        &sharp,
-        &brume::FrameInputs::default(),
-        &Blur::default(),
-    )
-    .unwrap();
+    let cpu = reference::render(&image, &range, &haze, &Blur::default()).expect("CPU render");
+    let unblurred = reference::render(&image, &range, &sharp, &Blur::default()).unwrap();
     let blur_effect = reference::rgb_error(&cpu, &unblurred, 0).rms;
     let gpu_full = r.render(&image, &range, &haze, &Blur::default()).unwrap();
     let e_full = reference::rgb_error(&gpu_full.image, &cpu, 0);

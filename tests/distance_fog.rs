@@ -289,7 +289,8 @@ pub(crate) fn check(
     let gpu = r
         .render_fog(&image, &depth, fog, &frame, &FogBlur::Diffusion(blur))
         .expect("GPU render");
-    let cpu = reference::render(&image, &depth, fog, &frame, &blur).expect("CPU render");
+    let cpu =
+        reference::fog(&image, &depth, fog, &frame, &FogBlur::Diffusion(blur)).expect("CPU render");
     let steps = gpu.schedule.steps;
     let budget = F32_PER_PASS * f64::from(steps + 2);
     let bounds = Grid::from_fn(W, H, |x, y| {

@@ -188,7 +188,7 @@ fn a_depth_buffer_medium_without_a_camera_is_refused_by_every_entry_point() {
         "reference::fog",
     );
     is_missing_camera(
-        reference::render(&image, &depth, &fog, &none, &Blur::default()).unwrap_err(),
+        reference::render(&image, &depth, &fog, &Blur::default()).unwrap_err(),
         "reference::render",
     );
     let (_lock, mut r) = common::renderer();

@@ -30,8 +30,7 @@ fn tolerance(precision: Precision, steps: u32) -> f64 {
 fn assert_gpu_matches_cpu(image: &RgbImage, range: &ScalarMap, medium: &dyn Medium, blur: &Blur) {
     let (_lock, mut r) = renderer();
     let gpu = r.render(image, range, medium, blur).expect("GPU render");
-    let cpu = reference::render(image, range, medium, &brume::FrameInputs::default(), blur)
-        .expect("CPU render");
+    let cpu = reference::render(image, range, medium, blur).expect("CPU render");
     let e = reference::rgb_error(&gpu.image, &cpu, 0);
     let tol = tolerance(blur.precision, gpu.schedule.steps);
     eprintln!(

@@ -70,14 +70,7 @@ impl Host {
     }
 
     fn expected(&self, haze: &Haze, blur: &Blur) -> RgbaImage {
-        reference::render(
-            &self.image,
-            &self.range,
-            haze,
-            &brume::FrameInputs::default(),
-            blur,
-        )
-        .unwrap()
+        reference::render(&self.image, &self.range, haze, blur).unwrap()
     }
 }
 
@@ -864,8 +857,7 @@ fn two_headless_contexts_survive_dropping_either() {
     let image = noise_image(w, h, 3);
     let range = ramp_range(w, h);
     let (haze, blur) = (Haze::default(), Blur::default());
-    let expected =
-        reference::render(&image, &range, &haze, &brume::FrameInputs::default(), &blur).unwrap();
+    let expected = reference::render(&image, &range, &haze, &blur).unwrap();
     let check = |r: &mut brume::Headless| {
         let out = r.render(&image, &range, &haze, &blur).expect("render");
         let e = reference::rgb_error(&out.image, &expected, 0);

@@ -164,7 +164,8 @@ fn render_both(
     let gpu = r
         .render_fog(image, depth, fog, &frame, &FogBlur::Diffusion(*blur))
         .expect("GPU render");
-    let cpu = reference::render(image, depth, fog, &frame, blur).expect("CPU render");
+    let cpu =
+        reference::fog(image, depth, fog, &frame, &FogBlur::Diffusion(*blur)).expect("CPU render");
     assert!(
         gpu.image.as_slice().iter().flatten().all(|v| v.is_finite()),
         "GPU NaN/inf"

@@ -221,7 +221,8 @@ fn table_fog_matches_the_cpu_reference_per_pixel() {
         let gpu = r
             .render_fog(&image, &depth, &fog, &at, &brume::FogBlur::Diffusion(blur))
             .unwrap();
-        let cpu = reference::render(&image, &depth, &fog, &at, &blur).unwrap();
+        let cpu =
+            reference::fog(&image, &depth, &fog, &at, &brume::FogBlur::Diffusion(blur)).unwrap();
         let mut worst: f64 = 0.0;
         for y in 0..h {
             for x in 0..w {
