@@ -2,10 +2,11 @@
 //! (sec. 4) against the synthetic sky it is measured from, and retargeting (eq. 25-26)
 //! against a hand calculation of eq. 26.
 
+use crate::common;
 use brume::atmosphere::{AttenuationTable, Channel, Sensitivity};
 use brume::camera::Camera;
 use brume::medium::aerial::HorizonSectors;
-use brume::medium::{AerialPerspective, Medium, Pixel};
+use brume::medium::{AerialPerspective, Medium};
 use brume::photo::{dehaze, Retarget};
 use brume::raster::{Grid, RgbImage};
 use brume::sky::horizon_sectors::{
@@ -68,14 +69,7 @@ fn horizon_error(camera: &Camera, sectors: usize) -> f64 {
     for x in 0..w {
         let y = (0..h).rev().find(|&y| *sky.get(x, y)).unwrap();
         // Infinitely far: the medium's in-scattered light is I∞(T, θ, φ) of the pixel.
-        let pixel = Pixel {
-            x,
-            y: h - 1 - y,
-            width: w,
-            height: h,
-            depth: 1e9,
-            sigma0: 1.0,
-        };
+        let pixel = common::pixel_top_first(x, y, w, h, 1e9);
         let m = medium.sample(pixel, &brume::FrameInputs::default());
         let truth = image.get(x, y);
         for (got, want) in m.inscatter.iter().zip(truth) {

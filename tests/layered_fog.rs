@@ -211,14 +211,7 @@ fn assert_unblurred_within_pixel_budgets(
             let d = f64::from(*depth.get(x, y));
             let z = camera.eye_depth(d);
             let l = (camera.world_position(x, h - 1 - y, w, h, d) - camera.eye()).length();
-            let pixel = Pixel {
-                x,
-                y: h - 1 - y,
-                width: w,
-                height: h,
-                depth: d,
-                sigma0: 1.0,
-            };
+            let pixel = common::pixel_top_first(x, y, w, h, d);
             let tau = fog.sample(pixel, &frame).transmission[0];
             let budget =
                 reconstruction_budget() + ray_budget(&fog.profile, tau, l, z) + 2.0 * F32_PER_PASS;
@@ -464,14 +457,7 @@ fn horizontal_rays_along_a_layer_boundary_have_no_nan() {
                 "{profile:?} x {x}: {v}"
             );
             let d = f64::from(*depth.get(x, middle));
-            let at_pixel = Pixel {
-                x,
-                y: h - 1 - middle,
-                width: w,
-                height: h,
-                depth: d,
-                sigma0: 1.0,
-            };
+            let at_pixel = common::pixel_top_first(x, middle, w, h, d);
             let cpu = fog.sample(at_pixel, &frame);
             let z = camera.eye_depth(d);
             let p = camera.world_position(x, h - 1 - middle, w, h, d);

@@ -10,7 +10,7 @@ use crate::common;
 
 use brume::camera::{Camera, FrameInputs};
 use brume::io::image::linear_to_srgb8;
-use brume::medium::{DensityTable, HeightProfile, LayeredFog, Medium, Pixel};
+use brume::medium::{DensityTable, HeightProfile, LayeredFog, Medium};
 use brume::raster::{Grid, RgbaImage, ScalarMap};
 use brume::{reference, Blur, Precision, Scheme};
 use common::*;
@@ -230,14 +230,7 @@ fn table_fog_matches_the_cpu_reference_per_pixel() {
                 let p = camera.world_position(x, h - 1 - y, w, h, d);
                 let l = (p - camera.eye()).length();
                 let z = camera.eye_depth(d);
-                let pixel = Pixel {
-                    x,
-                    y: h - 1 - y,
-                    width: w,
-                    height: h,
-                    depth: d,
-                    sigma0: 1.0,
-                };
+                let pixel = common::pixel_top_first(x, y, w, h, d);
                 let tau = fog.sample(pixel, &at).transmission[0];
                 // f32 budgets of τ (F moves τ by τ·ΔF): the eye depth, 3·2^-24 relative
                 // in l; the ray's rise, off by z·2^-22, moves the mean by ½·slope per unit

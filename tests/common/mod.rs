@@ -3,6 +3,7 @@
 //! sample, and checks on range maps.
 #![allow(dead_code)]
 
+use brume::medium::Pixel;
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::Headless;
 use std::collections::BTreeMap;
@@ -270,4 +271,18 @@ pub fn ray_enters_box(
         far = far.min(t0.max(t1));
     }
     (near <= far && near > 0.0).then_some(near)
+}
+
+/// The medium's pixel at column `x` and row `row` counted from the top, as image buffers
+/// are (a medium counts rows from the bottom, as GL stores them), of a `width x height`
+/// frame, with σ0 = 1.
+pub fn pixel_top_first(x: usize, row: usize, width: usize, height: usize, depth: f64) -> Pixel {
+    Pixel {
+        x,
+        y: height - 1 - row,
+        width,
+        height,
+        depth,
+        sigma0: 1.0,
+    }
 }
