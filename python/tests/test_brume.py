@@ -3,13 +3,12 @@ errors, the augmentation's seeding, and equality with the `brume render` program
 
 import math
 import subprocess
-import threading
 
 import numpy as np
 import pytest
 
 import brume
-from programs import brume_bin
+from shared import assert_threads_match_serial, brume_bin
 
 H, W = 48, 64  # small: llvmpipe on 2 cores
 
@@ -138,19 +137,9 @@ def test_renderer_reused_from_threads(image_u8, range_m):
     renderer = brume.Renderer()
     assert "Renderer" in repr(renderer) and renderer.gl_renderer
     betas = [0.005, 0.01, 0.02, 0.03]
-    serial = [renderer.fog(image_u8, range_m, beta=b) for b in betas]
-    results = [None] * len(betas)
-
-    def work(i):
-        results[i] = renderer.fog(image_u8, range_m, beta=betas[i])
-
-    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(betas))]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    for s, r in zip(serial, results):
-        np.testing.assert_array_equal(s, r)
+    serial = assert_threads_match_serial(
+        [lambda b=b: renderer.fog(image_u8, range_m, beta=b) for b in betas]
+    )
     np.testing.assert_array_equal(serial[2], brume.fog(image_u8, range_m, beta=0.02))
 
 

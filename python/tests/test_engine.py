@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import brume
-from programs import brume_bin
+from shared import assert_threads_match_serial, brume_bin
 
 SIZE = (96, 64)  # W, H: small, llvmpipe on 2 cores
 CAMERA = dict(position=(0.0, 1.7, 0.0), yaw_deg=20.0, pitch_deg=-3.0, fov_y_deg=60.0,
@@ -338,21 +338,10 @@ def test_engine_fog_renderer_shared_by_threads(tmp_path):
     camera = brume.Camera(**CAMERA)
     renderer = brume.Renderer()
     times = [0.0, 1.0, 2.0, 3.0]
-    serial = [renderer.distance_fog(colour, depth, camera=camera, time=t, blur="none")
-              for t in times]  # fmt: skip
-    results = [None] * len(times)
-
-    def work(i):
-        results[i] = renderer.distance_fog(colour, depth, camera=camera, time=times[i],
-                                           blur="none")  # fmt: skip
-
-    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(times))]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    for a, b in zip(serial, results):
-        np.testing.assert_array_equal(a, b)
+    assert_threads_match_serial(
+        [lambda t=t: renderer.distance_fog(colour, depth, camera=camera, time=t, blur="none")
+         for t in times]
+    )  # fmt: skip
 
 
 # --- errors ----------------------------------------------------------------------------

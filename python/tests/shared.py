@@ -1,10 +1,13 @@
-"""The `brume` program the tests compare the package with (shared by the test modules)."""
+"""What the test modules share: the `brume` program they compare the package with, and the
+check that calls on several threads give the serial results."""
 
 import os
 import shutil
 import subprocess
+import threading
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
@@ -26,3 +29,22 @@ def brume_bin():
         ["nice", "cargo", "build", "--release", "--bin", "brume"], cwd=REPO, check=True
     )
     return REPO / "target/release/brume"
+
+
+def assert_threads_match_serial(calls):
+    """Each zero-argument call run on a thread of its own, all at once, returns what it
+    returns when the calls run one after the other."""
+    serial = [call() for call in calls]
+    results = [None] * len(calls)
+
+    def work(i):
+        results[i] = calls[i]()
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(calls))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for a, b in zip(serial, results):
+        np.testing.assert_array_equal(a, b)
+    return serial
