@@ -12,7 +12,7 @@ use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::{Clock, PassTimes, Timing};
 use crate::medium::Medium;
-use crate::pipeline::{Encoding, FogBlur, Frame, Input, Pipeline, RefineInput};
+use crate::pipeline::{Encoding, FogBlur, Frame, Input, Passes, Pipeline, RefineInput};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::refine::Refine;
 use crate::schedule::Schedule;
@@ -26,11 +26,18 @@ pub struct Rendered {
     pub image: RgbaImage,
     /// The schedule that ran.
     pub schedule: Schedule,
-    /// The passes that ran, one name per entry of `times.pass_ms` ([`Frame::pass_names`]).
-    pub pass_names: Vec<String>,
+    /// Which passes ran ([`Rendered::pass_names`] names them).
+    pub passes: Passes,
     /// Per-pass times, with the clock that produced them (unavailable when the GPU
     /// timer's figures were rejected, or with timing off: see [`Renderer::set_timing`]).
     pub times: PassTimes,
+}
+
+impl Rendered {
+    /// The name of each pass, one per entry of `times.pass_ms` ([`Frame::pass_names`]).
+    pub fn pass_names(&self) -> Vec<String> {
+        self.passes.names(self.schedule.steps)
+    }
 }
 
 /// The pipeline with CPU-buffer input and output, on a context that is current. Its
@@ -312,7 +319,7 @@ fn rendered_from(frame: Frame, pixels: Vec<[f32; 4]>, w: usize, h: usize) -> Ren
     Rendered {
         image,
         schedule: frame.schedule,
-        pass_names: frame.pass_names,
+        passes: frame.passes,
         times: frame.times,
     }
 }

@@ -143,7 +143,7 @@ fn assert_fog_matches(blur: FogBlur, tolerance: f64) {
         e.max_abs
     );
     assert!(e.max_abs <= tolerance, "{}: {e:?}", blur.name());
-    assert_eq!(gpu.times.pass_ms.len(), gpu.pass_names.len());
+    assert_eq!(gpu.times.pass_ms.len(), gpu.pass_names().len());
 }
 
 #[test]

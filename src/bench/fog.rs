@@ -201,13 +201,13 @@ pub fn run_fog_bench(
             let frame = match mode {
                 Mode::Fog(b) => {
                     let f = pipeline.fog(&input, *medium, b, &output)?;
-                    passes = f.pass_names.clone();
+                    passes = f.pass_names();
                     f
                 }
                 Mode::Blend => {
                     let f =
                         pipeline.blend_fog(input.depth, w, h, *medium, &input.frame, &output)?;
-                    passes = f.pass_names.clone();
+                    passes = f.pass_names();
                     f
                 }
             };

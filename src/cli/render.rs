@@ -594,7 +594,7 @@ fn print_timings(rendered: &Rendered) {
         return;
     }
     outln!("{:>6}  {:<20} {:>10}", "pass", "shader", "ms");
-    for (i, (name, ms)) in rendered.pass_names.iter().zip(&t.pass_ms).enumerate() {
+    for (i, (name, ms)) in rendered.pass_names().iter().zip(&t.pass_ms).enumerate() {
         outln!("{:>6}  {:<20} {:>10.3}", i + 1, name, ms);
     }
     outln!(

@@ -77,7 +77,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
                 FrameReport {
                     time,
                     out: out.clone(),
-                    pass_names: done.pass_names.clone(),
+                    pass_names: done.pass_names(),
                     pass_ms: done.times.pass_ms.clone(),
                     total_ms: done.times.total_ms,
                     clock: done.times.clock.name(),

@@ -27,7 +27,7 @@
 use super::programs::MediumId;
 use super::{
     bind_texture, draw_fullscreen, set_int, set_value, Destination, Encoding, Frame, Input, Output,
-    Pipeline, ProgramKey, UNIT_DEPTH, UNIT_MAIN,
+    Passes, Pipeline, ProgramKey, UNIT_DEPTH, UNIT_MAIN,
 };
 use crate::blur::{Blur, Precision};
 use crate::camera::FrameInputs;
@@ -131,15 +131,15 @@ impl FogBlur {
         }
     }
 
-    /// The names of the engine passes (`FogBlur::None` and the Gaussians); a diffusion
-    /// render's depend on its schedule and coarse stage ([`Frame::pass_names`]).
-    fn engine_pass_names(&self) -> Vec<String> {
-        match self {
-            FogBlur::None => vec!["fog".into()],
-            FogBlur::GaussSingle(_) => vec!["fog+blur".into()],
-            FogBlur::GaussSeparate(_) => vec!["fog".into(), "blur".into()],
+    /// The engine passes (`FogBlur::None` and the Gaussians); a diffusion render's depend
+    /// on its schedule and coarse stage ([`Passes::Diffusion`]).
+    fn engine_passes(&self) -> Passes {
+        Passes::Engine(match self {
+            FogBlur::None => &["fog"],
+            FogBlur::GaussSingle(_) => &["fog+blur"],
+            FogBlur::GaussSeparate(_) => &["fog", "blur"],
             FogBlur::Diffusion(_) => unreachable!("diffusion renders through Pipeline::render"),
-        }
+        })
     }
 }
 
@@ -350,7 +350,7 @@ impl Pipeline {
         });
         Ok(Frame {
             schedule: no_diffusion(),
-            pass_names: blur.engine_pass_names(),
+            passes: blur.engine_passes(),
             times: result?,
         })
     }
@@ -377,7 +377,7 @@ impl Pipeline {
         Ok((
             Frame {
                 schedule: no_diffusion(),
-                pass_names: blur.engine_pass_names(),
+                passes: blur.engine_passes(),
                 times,
             },
             pixels,
@@ -460,7 +460,7 @@ impl Pipeline {
         });
         Ok(Frame {
             schedule: no_diffusion(),
-            pass_names: vec!["fog (blended)".into()],
+            passes: Passes::Engine(&["fog (blended)"]),
             times: result?,
         })
     }

@@ -196,15 +196,46 @@ pub enum Output {
 pub struct Frame {
     /// The schedule that ran.
     pub schedule: Schedule,
-    /// The passes that ran, in order, one name per entry of `times.pass_ms`: `medium`,
-    /// `diffuse k` (k = 1..N; `diffuse k (1/2)` on a coarse level), the coarse stage's
-    /// `down 1/2`, `blend 1/2` …, `composite`; or the engine passes' names
-    /// ([`diffusion_pass_names`]).
-    pub pass_names: Vec<String>,
+    /// Which passes ran ([`Frame::pass_names`] names them).
+    pub passes: Passes,
     /// Per-pass times (N + 2 for a render, 2 more per coarse level), with the clock that produced them, as
     /// [`Pipeline::timing`] gives them: this call's, an earlier call's
     /// ([`PassTimes::calls_ago`]), or unavailable ([`PassTimes::is_available`]).
     pub times: PassTimes,
+}
+
+/// Which passes a frame ran, in the order of its `times.pass_ms`: kept as a description,
+/// so that a host's frame loop builds no names it does not ask for.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Passes {
+    /// The medium pass, the schedule's N diffusion steps with the coarse stage's levels
+    /// starting at the steps `coarse_starts` (none: every step at full resolution), the
+    /// composite.
+    Diffusion {
+        /// The first step of each coarse level, half resolution first.
+        coarse_starts: Vec<u32>,
+    },
+    /// Engine passes, by name.
+    Engine(&'static [&'static str]),
+}
+
+impl Frame {
+    /// The name of each pass, one per entry of `times.pass_ms`: `medium`, `diffuse k`
+    /// (k = 1..N; `diffuse k (1/2)` on a coarse level), the coarse stage's `down 1/2`,
+    /// `blend 1/2` …, `composite`; or the engine passes' names.
+    pub fn pass_names(&self) -> Vec<String> {
+        self.passes.names(self.schedule.steps)
+    }
+}
+
+impl Passes {
+    /// The passes' names, for a schedule of `steps` diffusion steps.
+    pub fn names(&self, steps: u32) -> Vec<String> {
+        match self {
+            Passes::Diffusion { coarse_starts } => diffusion_pass_names(steps, coarse_starts),
+            Passes::Engine(names) => names.iter().map(|n| n.to_string()).collect(),
+        }
+    }
 }
 
 /// Where the composite pass draws.
@@ -390,7 +421,7 @@ impl Pipeline {
             Ok(pipeline.run(input, medium, &schedule, destination)?.0)
         });
         Ok(Frame {
-            pass_names: self.diffusion_pass_names(&schedule),
+            passes: self.diffusion_passes(),
             schedule,
             times: result?,
         })
@@ -412,11 +443,10 @@ impl Pipeline {
                 Ok((times, pixels))
             });
         let (times, pixels) = result?;
-        let pass_names = self.diffusion_pass_names(&schedule);
         Ok((
             Frame {
                 schedule,
-                pass_names,
+                passes: self.diffusion_passes(),
                 times,
             },
             pixels,
@@ -467,14 +497,15 @@ impl Pipeline {
         Ok(schedule)
     }
 
-    /// The names of the passes [`Pipeline::run`] runs for `schedule`, with the coarse
-    /// stage's levels where this frame runs it.
-    fn diffusion_pass_names(&self, schedule: &Schedule) -> Vec<String> {
-        let levels = match self.coarse_start {
-            Some(_) => &self.coarse.starts[..],
-            None => &[],
-        };
-        diffusion_pass_names(schedule.steps, levels)
+    /// The passes [`Pipeline::run`] runs, with the coarse stage's levels where this frame
+    /// runs it.
+    fn diffusion_passes(&self) -> Passes {
+        Passes::Diffusion {
+            coarse_starts: match self.coarse_start {
+                Some(_) => self.coarse.starts.clone(),
+                None => Vec::new(),
+            },
+        }
     }
 
     /// Runs the passes, timed as [`Pipeline::timing`] says. Returns the times and the

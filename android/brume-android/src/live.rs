@@ -256,7 +256,9 @@ mod tests {
         Frame {
             schedule: brume::schedule::Schedule::new(brume::Scheme::Matched, 1.0, 1.0, 0.25)
                 .unwrap(),
-            pass_names: (0..pass_ms.len()).map(|i| format!("pass {i}")).collect(),
+            passes: brume::pipeline::Passes::Diffusion {
+                coarse_starts: Vec::new(),
+            },
             times: PassTimes {
                 clock: Clock::GpuTimer,
                 pass_ms,

@@ -326,7 +326,7 @@ fn upload(
 
 fn times(frame: &brume::Frame) -> FrameTimes {
     FrameTimes {
-        pass_names: frame.pass_names.clone(),
+        pass_names: frame.pass_names(),
         pass_ms: frame.times.pass_ms.clone(),
         total_ms: frame.times.total_ms,
         clock: frame.times.clock.name(),
