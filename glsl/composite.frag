@@ -1,10 +1,13 @@
 // Pass N+2 (paper 000, eq. 4): out = F.rgb + (1 − τ_blurred)·L∞, with τ_blurred the
 // diffused transmission (the alpha of F, and the second target of a chromatic medium),
 // never the sharp τ; L∞ is the medium's in-scattered light at this pixel.
+// With the coarse stage (COARSE_BLEND) this pass is also its last blend: F is assembled
+// from full-resolution F at step k0 and the half-resolution level (coarse_detail.glsl),
+// which saves a full-resolution pass and its target's write and read.
 // Assembled like medium.frag: #version, #defines, prelude.glsl, medium_api.glsl, the
-// medium, then this file.
+// medium, coarse_detail.glsl with COARSE_BLEND, then this file.
 
-uniform sampler2D u_f;      // diffused F
+uniform sampler2D u_f;      // diffused F (COARSE_BLEND: F at step k0)
 #if CHROMATIC
 uniform sampler2D u_tau_gb; // diffused (τ_g, τ_b)
 #endif
@@ -16,7 +19,11 @@ out vec4 o_colour;
 
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - u_origin;
+#if COARSE_BLEND
+    vec4 f = coarse_blend(p, texelFetch(u_f, p, 0));
+#else
     vec4 f = texelFetch(u_f, p, 0);
+#endif
 #if CHROMATIC
     vec3 tau = vec3(f.a, texelFetch(u_tau_gb, p, 0).rg);
 #else

@@ -2,6 +2,8 @@
 
 #[macro_use]
 mod cli;
+#[cfg(all(feature = "viewer", not(target_os = "android")))]
+mod viewer;
 
 use clap::Parser;
 use std::process::ExitCode;

@@ -269,7 +269,7 @@ fn impulse_keeps_its_scale_through_two_levels() {
     expected.extend((4..=6).map(|k| format!("diffuse {k} (1/2)")));
     expected.push("down 1/4".into());
     expected.extend((7..=n).map(|k| format!("diffuse {k} (1/4)")));
-    expected.extend(["blend 1/4", "blend 1/2", "composite"].map(String::from));
+    expected.extend(["blend 1/4", "blend 1/2 + composite"].map(String::from));
     assert_eq!(out.pass_names(), expected);
     assert_eq!(out.times.pass_ms.len(), expected.len());
     let value = |x: usize, y: usize| f64::from(out.image.get(x, y)[0]);

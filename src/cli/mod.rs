@@ -20,8 +20,8 @@ macro_rules! err {
     ($($t:tt)*) => { $crate::cli::write_stream($crate::cli::Stream::Err, format_args!($($t)*)) };
 }
 
-mod aerial;
-mod args;
+pub(crate) mod aerial;
+pub(crate) mod args;
 mod batch;
 mod batch_checks;
 mod bench;
@@ -29,16 +29,16 @@ mod compare;
 mod compat;
 mod info;
 mod inputs;
-mod limits;
-mod options;
+pub(crate) mod limits;
+pub(crate) mod options;
 mod prep;
-mod refine;
-mod render;
-mod scene;
+pub(crate) mod refine;
+pub(crate) mod render;
+pub(crate) mod scene;
 mod sky;
 mod sun;
 #[cfg(all(feature = "viewer", not(target_os = "android")))]
-mod view;
+pub(crate) mod view;
 
 pub use args::{Cli, Command};
 use brume::egl::Platform;
@@ -61,7 +61,10 @@ pub fn run(cli: Cli) -> Result<()> {
             batch::run(&a, plan, headless.renderer()?)
         }
         #[cfg(all(feature = "viewer", not(target_os = "android")))]
-        Command::View(a) => view::run(a),
+        Command::View(a) => {
+            view::check_args(&a)?;
+            crate::viewer::run(a)
+        }
         Command::Prep(a) => prep::run(&a),
         Command::Sky(a) => sky::run_sky(&a),
         Command::Turbidity(a) => sky::run_turbidity(&a),
@@ -166,7 +169,7 @@ pub fn refuse_overlaps(outputs: &[(&str, &Path)], inputs: &[PathBuf]) -> Result<
 /// `BRUME_TEST_HOLD_OUTPUTS=SECONDS` is a hook for the interrupt tests: it announces the
 /// staged files on stderr and waits before renaming, so that a test can signal a process
 /// that is known to hold temporaries.
-fn commit(outputs: Outputs) -> Result<()> {
+pub(crate) fn commit(outputs: Outputs) -> Result<()> {
     let hold = std::env::var("BRUME_TEST_HOLD_OUTPUTS").ok();
     if let Some(seconds) = hold.and_then(|s| s.parse::<f64>().ok()) {
         errln!(

@@ -12,13 +12,17 @@
 //!    the bilinear moment, so a coarse step adds (in full-resolution px²) exactly what the
 //!    full-resolution step would. Each level's resampling adds 4^(ℓ−1) px², taken off its
 //!    own steps ([`Schedule::level_scale`]).
-//! 3. **Blend** (`coarse_blend.frag`), deepest level first, after step N: the finer
+//! 3. **Blend** (`coarse_detail.glsl`), deepest level first, after step N: the finer
 //!    level's D_N ≈ Dℓ,N↑ + a(x)·(D(kℓ) − Dℓ(kℓ)↑), the detail the average removed put
 //!    back, attenuated by the remaining blur's transfer at the centre of that band
 //!    ([`Schedule::level_detail_weight`]). The down-and-up sampling acts on the increment
-//!    Dℓ,N − Dℓ(kℓ) only, which is already smooth, so it adds no variance of note.
+//!    Dℓ,N − Dℓ(kℓ) only, which is already smooth, so it adds no variance of note. A
+//!    blend between coarse levels is a pass of its own (`coarse_blend.frag`); the blend
+//!    into full resolution is done by the composite (`composite.frag` with
+//!    `COARSE_BLEND`), which saves a full-resolution pass: its write and the composite's
+//!    read of a full-resolution RGBA32F target.
 
-use super::programs::PRELUDE_GLSL;
+use super::programs::{BLEND_UNIFORMS, COARSE_DETAIL_GLSL, PRELUDE_GLSL};
 use crate::blur::{Precision, COARSE_PRECISION};
 use crate::error::Result;
 use crate::gpu::framebuffer::Framebuffer;
@@ -60,15 +64,11 @@ impl CoarsePrograms {
             blend: Program::new(
                 gl,
                 &header,
-                ("coarse_blend.frag", BLEND_FRAG),
-                &[
-                    "u_f",
-                    "u_rate",
-                    "u_coarse",
-                    "u_coarse0",
-                    "u_half_texel",
-                    "u_detail",
-                ],
+                (
+                    "coarse_blend.frag",
+                    &format!("{COARSE_DETAIL_GLSL}\n{BLEND_FRAG}"),
+                ),
+                &BLEND_UNIFORMS,
                 &[],
             )?,
         })

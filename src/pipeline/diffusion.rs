@@ -5,19 +5,20 @@ use super::coarse::{CoarsePrograms, Level};
 use super::programs::{medium_key, ProgramKey};
 use super::uniforms::{bind_texture, set_int, set_value};
 use super::{
-    draw_fullscreen, Destination, Encoding, Input, Pipeline, UNIT_DEPTH, UNIT_LOOKUP, UNIT_MAIN,
-    UNIT_SECOND,
+    draw_fullscreen, Destination, Encoding, Input, Pipeline, UNIT_BLEND_RATE, UNIT_BLEND_START,
+    UNIT_DEPTH, UNIT_MAIN, UNIT_SECOND,
 };
 use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
+use crate::gpu::program::Program;
 use crate::gpu::texture::Texture;
 use crate::gpu::timer::PassTimer;
 use crate::medium::{Medium, UniformValue};
 use crate::schedule::{level_detail_decay, Schedule};
 
 impl Pipeline {
-    /// The N + 2 passes (N + 2 + 2L with the coarse stage's L levels: a down and a blend
-    /// pass each), timed
+    /// The N + 2 passes (N + 1 + 2L with the coarse stage's L levels: a down and a blend
+    /// pass each, the half-resolution level's blend fused with the composite), timed
     /// by `timer`; returns the ping-pong target that is free for an internal result.
     pub(super) fn run_passes(
         &self,
@@ -87,25 +88,34 @@ impl Pipeline {
             })?;
             current = dst;
         }
-        if let Some(start) = self.coarse_start {
-            current = self.run_coarse(schedule, start, current, timer)?;
-        }
+        // With the coarse stage, `current` keeps F at its first step, and the composite
+        // is also the half-resolution level's blend into full resolution.
+        let coarse = match self.coarse_start {
+            Some(start) => Some(self.run_coarse(schedule, start, current, timer)?),
+            None => None,
+        };
 
         let c = self.compiled(ProgramKey::Composite {
             medium: super::programs::MediumId::of(medium),
             chromatic,
+            coarse: coarse.is_some(),
         })?;
         let free = 1 - current;
         timer.pass(|| {
             let (origin, encoding) =
                 self.bind_destination(destination, input, Some(&targets.step[free]));
             self.use_program(c);
-            targets.f[current].bind(UNIT_MAIN);
+            match &coarse {
+                Some(last) => self.bind_blend(c, last, schedule),
+                None => {
+                    targets.f[current].bind(UNIT_MAIN);
+                    set_int(gl, c, "u_f", UNIT_MAIN as i32);
+                }
+            }
             bind_texture(gl, UNIT_DEPTH, Some(input.depth));
             if let Some(pair) = &targets.tau_gb {
                 pair[current].bind(UNIT_SECOND);
             }
-            set_int(gl, c, "u_f", UNIT_MAIN as i32);
             set_int(gl, c, "u_depth", UNIT_DEPTH as i32);
             set_int(gl, c, "u_tau_gb", UNIT_SECOND as i32);
             set_value(gl, c, "u_origin", UniformValue::IVec2(origin));
@@ -121,17 +131,17 @@ impl Pipeline {
         Ok(free)
     }
 
-    /// The coarse stage (`coarse.rs`) from step `start`, F at `start` in target
-    /// `current`: for each level, down from the finer one and its steps; then the
-    /// blends, deepest level first, the last into the other full-resolution target.
-    /// Returns the target that holds F at step N.
-    fn run_coarse(
-        &self,
+    /// The coarse stage (`coarse.rs`) from step `start`, full-resolution F at `start` in
+    /// target `current`: for each level, down from the finer one and its steps; then the
+    /// blends between coarse levels, deepest first. Returns what the composite reads to
+    /// blend the half-resolution level into full resolution.
+    fn run_coarse<'a>(
+        &'a self,
         schedule: &Schedule,
         start: u32,
         current: usize,
         timer: &mut PassTimer,
-    ) -> Result<usize> {
+    ) -> Result<BlendInputs<'a>> {
         let targets = self.targets()?;
         let starts = &self.coarse.starts;
         let (programs, levels) = match (&self.coarse.programs, &self.coarse.targets) {
@@ -162,7 +172,7 @@ impl Pipeline {
             let out = 1 - latest[l - 1];
             self.coarse_blend(
                 programs,
-                BlendInputs {
+                &BlendInputs {
                     fine: &finer.d[latest[l - 1]],
                     fine_rate: &finer.rate,
                     coarse,
@@ -176,22 +186,14 @@ impl Pipeline {
             )?;
             latest[l - 1] = out;
         }
-        let out = 1 - current;
-        self.coarse_blend(
-            programs,
-            BlendInputs {
-                fine: &targets.f[current],
-                fine_rate: &targets.rate,
-                coarse: &levels[0],
-                coarse_latest: latest[0],
-                level: 1,
-                start,
-            },
-            &targets.step[out],
-            schedule,
-            timer,
-        )?;
-        Ok(out)
+        Ok(BlendInputs {
+            fine: &targets.f[current],
+            fine_rate: &targets.rate,
+            coarse: &levels[0],
+            coarse_latest: latest[0],
+            level: 1,
+            start,
+        })
     }
 
     /// A coarse level's down pass: `source` and `rate` (a finer level's, `texel` = 1 / its
@@ -270,43 +272,48 @@ impl Pipeline {
     fn coarse_blend(
         &self,
         programs: &CoarsePrograms,
-        inputs: BlendInputs,
+        inputs: &BlendInputs,
         destination: &Framebuffer,
         schedule: &Schedule,
         timer: &mut PassTimer,
     ) -> Result<()> {
-        let gl = &self.gl;
         let b = &programs.blend;
-        let decay = level_detail_decay(inputs.level) * schedule.sigma0 * schedule.sigma0;
         timer.pass(|| {
             destination.bind_for_drawing();
             self.use_program(b);
-            inputs.fine.bind(UNIT_MAIN);
-            inputs.fine_rate.bind(UNIT_DEPTH);
-            inputs.coarse.d[inputs.coarse_latest].bind(UNIT_SECOND);
-            inputs.coarse.d0.bind(UNIT_LOOKUP);
-            set_int(gl, b, "u_f", UNIT_MAIN as i32);
-            set_int(gl, b, "u_rate", UNIT_DEPTH as i32);
-            set_int(gl, b, "u_coarse", UNIT_SECOND as i32);
-            set_int(gl, b, "u_coarse0", UNIT_LOOKUP as i32);
-            set_value(
-                gl,
-                b,
-                "u_half_texel",
-                UniformValue::Vec2(inputs.coarse.texel()),
-            );
-            set_value(
-                gl,
-                b,
-                "u_detail",
-                UniformValue::Vec3([
-                    decay as f32,
-                    2.0 * schedule.steps as f32,
-                    2.0 * inputs.start as f32,
-                ]),
-            );
-            draw_fullscreen(gl);
+            self.bind_blend(b, inputs, schedule);
+            draw_fullscreen(&self.gl);
         })
+    }
+
+    /// Binds what a blend reads (`coarse_detail.glsl`) for `program`, in use.
+    fn bind_blend(&self, program: &Program, inputs: &BlendInputs, schedule: &Schedule) {
+        let gl = &self.gl;
+        let decay = level_detail_decay(inputs.level) * schedule.sigma0 * schedule.sigma0;
+        inputs.fine.bind(UNIT_MAIN);
+        inputs.fine_rate.bind(UNIT_BLEND_RATE);
+        inputs.coarse.d[inputs.coarse_latest].bind(UNIT_SECOND);
+        inputs.coarse.d0.bind(UNIT_BLEND_START);
+        set_int(gl, program, "u_f", UNIT_MAIN as i32);
+        set_int(gl, program, "u_rate", UNIT_BLEND_RATE as i32);
+        set_int(gl, program, "u_coarse", UNIT_SECOND as i32);
+        set_int(gl, program, "u_coarse0", UNIT_BLEND_START as i32);
+        set_value(
+            gl,
+            program,
+            "u_half_texel",
+            UniformValue::Vec2(inputs.coarse.texel()),
+        );
+        set_value(
+            gl,
+            program,
+            "u_detail",
+            UniformValue::Vec3([
+                decay as f32,
+                2.0 * schedule.steps as f32,
+                2.0 * inputs.start as f32,
+            ]),
+        );
     }
 }
 

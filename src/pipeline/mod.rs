@@ -136,7 +136,12 @@ const UNIT_MAIN: u32 = 0;
 const UNIT_DEPTH: u32 = 1;
 const UNIT_SECOND: u32 = 2;
 const UNIT_LOOKUP: u32 = 3;
-const UNITS_USED: u32 = UNIT_LOOKUP + MAX_LOOKUPS as u32;
+/// The coarse stage's blend's finer rate and coarse D at its first step: after the
+/// medium's lookups, because the blend into full resolution is fused with the composite,
+/// which reads those too.
+const UNIT_BLEND_RATE: u32 = UNIT_LOOKUP + MAX_LOOKUPS as u32;
+const UNIT_BLEND_START: u32 = UNIT_BLEND_RATE + 1;
+const UNITS_USED: u32 = UNIT_BLEND_START + 1;
 
 /// How colour values are encoded in a host texture or framebuffer.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -198,7 +203,9 @@ pub struct Frame {
     pub schedule: Schedule,
     /// Which passes ran ([`Frame::pass_names`] names them).
     pub passes: Passes,
-    /// Per-pass times (N + 2 for a render, 2 more per coarse level), with the clock that produced them, as
+    /// Per-pass times (N + 2 for a render; with the coarse stage's L levels N + 1 + 2L: a
+    /// down and a blend each, the half-resolution one's blend fused with the composite),
+    /// with the clock that produced them, as
     /// [`Pipeline::timing`] gives them: this call's, an earlier call's
     /// ([`PassTimes::calls_ago`]), or unavailable ([`PassTimes::is_available`]).
     pub times: PassTimes,
@@ -222,7 +229,8 @@ pub enum Passes {
 impl Frame {
     /// The name of each pass, one per entry of `times.pass_ms`: `medium`, `diffuse k`
     /// (k = 1..N; `diffuse k (1/2)` on a coarse level), the coarse stage's `down 1/2`,
-    /// `blend 1/2` …, `composite`; or the engine passes' names.
+    /// `blend 1/4` …, `composite` (`blend 1/2 + composite` with the coarse stage); or the
+    /// engine passes' names.
     pub fn pass_names(&self) -> Vec<String> {
         self.passes.names(self.schedule.steps)
     }
@@ -460,6 +468,7 @@ impl Pipeline {
         self.caps.require_precision(blur.precision)?;
         self.caps.require_size("input", input.width, input.height)?;
         let chromatic = medium.chromatic();
+        self.coarse_start = blur.coarse_start(&schedule, chromatic)?;
         let keys = [
             medium_key(medium, blur.precision, &schedule, chromatic),
             ProgramKey::Diffuse {
@@ -469,6 +478,7 @@ impl Pipeline {
             ProgramKey::Composite {
                 medium: programs::MediumId::of(medium),
                 chromatic,
+                coarse: self.coarse_start.is_some(),
             },
         ];
         for key in keys {
@@ -490,7 +500,6 @@ impl Pipeline {
                 chromatic,
             )?);
         }
-        self.coarse_start = blur.coarse_start(&schedule, chromatic)?;
         if self.coarse_start.is_some() {
             self.prepare_coarse(input.width, input.height, blur.precision, &schedule)?;
         }
@@ -656,7 +665,8 @@ fn draw_fullscreen(gl: &glow::Context) {
 /// The names of a diffusion render's passes in the order they run, for `steps` steps and
 /// the coarse stage's levels starting at the steps `coarse_starts` (empty: none): the
 /// medium, the full-resolution steps, for each level its down pass and its steps, the
-/// blends from the deepest level up, the composite.
+/// blends between levels from the deepest up, the composite (fused with the
+/// half-resolution level's blend: `blend 1/2 + composite`).
 pub fn diffusion_pass_names(steps: u32, coarse_starts: &[u32]) -> Vec<String> {
     let full_steps = coarse_starts.first().copied().unwrap_or(steps);
     let scale = |level: usize| format!("1/{}", 1u32 << level);
@@ -668,10 +678,13 @@ pub fn diffusion_pass_names(steps: u32, coarse_starts: &[u32]) -> Vec<String> {
         names.extend((start + 1..=end).map(|k| format!("diffuse {k} ({})", scale(l + 1))));
     }
     names.extend(
-        (1..=coarse_starts.len())
+        (2..=coarse_starts.len())
             .rev()
             .map(|l| format!("blend {}", scale(l))),
     );
-    names.push("composite".to_string());
+    names.push(match coarse_starts {
+        [] => "composite".to_string(),
+        _ => format!("blend {} + composite", scale(1)),
+    });
     names
 }

@@ -17,6 +17,7 @@ pub(super) const PRELUDE_GLSL: &str = include_str!("../../glsl/prelude.glsl");
 pub(super) const MEDIUM_FRAG: &str = include_str!("../../glsl/medium.frag");
 pub(super) const DIFFUSE_FRAG: &str = include_str!("../../glsl/diffuse.frag");
 pub(super) const COMPOSITE_FRAG: &str = include_str!("../../glsl/composite.frag");
+pub(super) const COARSE_DETAIL_GLSL: &str = include_str!("../../glsl/coarse_detail.glsl");
 
 /// A medium's GLSL identity: a 128-bit hash of its source text. The program cache is
 /// keyed by it, not by [`Medium::name`], so two media of one name with different GLSL
@@ -56,6 +57,8 @@ pub(super) enum ProgramKey {
     Composite {
         medium: MediumId,
         chromatic: bool,
+        /// Also the coarse stage's last blend (`coarse_detail.glsl`).
+        coarse: bool,
     },
     /// An engine pass (see [`engine`]) of a medium.
     Engine(MediumId, EngineKey),
@@ -157,11 +160,20 @@ impl Pipeline {
                 &["u_f", "u_rate", "u_law", "u_texel"],
                 &["u_tau_gb"],
             ),
-            ProgramKey::Composite { chromatic, .. } => Program::new(
+            ProgramKey::Composite {
+                chromatic, coarse, ..
+            } => Program::new(
                 &self.gl,
-                &defines(&[("CHROMATIC", chromatic)]),
-                (&names("composite.frag"), &with_medium(COMPOSITE_FRAG)),
-                &["u_f"],
+                &defines(&[("CHROMATIC", chromatic), ("COARSE_BLEND", coarse)]),
+                (
+                    &names("composite.frag"),
+                    &with_medium(&composite_source(coarse)),
+                ),
+                if coarse {
+                    &BLEND_UNIFORMS
+                } else {
+                    &BLEND_UNIFORMS[..1]
+                },
                 &as_strs(&optional(&[
                     "u_depth",
                     "u_tau_gb",
@@ -214,6 +226,26 @@ impl Pipeline {
 }
 
 /// Borrowed names, as [`Program::new`] takes them.
+/// The composite pass's source: with the coarse stage's blend in front of it, or alone.
+fn composite_source(coarse: bool) -> Cow<'static, str> {
+    if coarse {
+        Cow::Owned(format!("{COARSE_DETAIL_GLSL}\n{COMPOSITE_FRAG}"))
+    } else {
+        Cow::Borrowed(COMPOSITE_FRAG)
+    }
+}
+
+/// The coarse stage's blend's uniforms (`coarse_blend.frag`, and the composite with
+/// `COARSE_BLEND`); `u_f` alone is the plain composite's.
+pub(super) const BLEND_UNIFORMS: [&str; 6] = [
+    "u_f",
+    "u_rate",
+    "u_coarse",
+    "u_coarse0",
+    "u_half_texel",
+    "u_detail",
+];
+
 fn as_strs<'a>(names: &'a [Cow<'static, str>]) -> Vec<&'a str> {
     names.iter().map(|n| n.as_ref()).collect()
 }

@@ -5,11 +5,11 @@
 //! medium and blur from the same options, with the same functions, as its command does,
 //! so that the window shows what the command writes; the controls then edit the medium.
 
-use super::super::aerial::{aerial_job, AerialJob};
-use super::super::args::{BlurKind, FogKind, MediumKind, RenderArgs, SceneArgs};
-use super::super::limits;
-use super::super::render as render_cmd;
-use super::super::scene::{self as scene_cmd, SceneMedium};
+use crate::cli::aerial::{aerial_job, AerialJob};
+use crate::cli::args::{BlurKind, FogKind, MediumKind, RenderArgs, SceneArgs};
+use crate::cli::limits;
+use crate::cli::render as render_cmd;
+use crate::cli::scene::{self as scene_cmd, SceneMedium};
 use brume::atmosphere::AttenuationTable;
 use brume::camera::{Camera, FrameInputs};
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
@@ -180,7 +180,7 @@ impl Photo {
         let mut prep = render_cmd::preprocess(args, &scene)?;
         // Once, at load: the CPU reference of the GPU refinement (the same result within
         // 2e-5, tests/refine.rs) keeps the viewer's pipeline to the fog.
-        super::super::refine::refine_scene(
+        crate::cli::refine::refine_scene(
             args,
             &mut scene,
             &mut prep,

@@ -11,10 +11,10 @@ mod source;
 mod ui;
 mod window;
 
-use super::args::{ViewArgs, ViewSource, Zoom};
-use super::limits::{self, MAX_WINDOW_SIDE};
+use crate::cli::args::{ViewArgs, ViewSource, Zoom};
+use crate::cli::limits::{self, MAX_WINDOW_SIDE};
 use brume::gpu::texture::{Filter, TexelFormat, Texture};
-use brume::io::output::{self, Outputs};
+use brume::io::output::Outputs;
 use brume::{Error, Pipeline, Result};
 use glow::HasContext;
 use serde_json::json;
@@ -35,9 +35,9 @@ const PANEL_WIDTH: f32 = 320.0;
 /// The panel's controls need about this much height (logical px).
 const PANEL_HEIGHT: f64 = 720.0;
 
-/// Opens the window and runs until it is closed (or `--frames` are done).
+/// Opens the window and runs until it is closed (or `--frames` are done); `args` are
+/// checked by the caller (`cli::view::check_args`).
 pub fn run(args: ViewArgs) -> Result<()> {
-    check_args(&args)?;
     if !window::display_named() {
         return Err(no_display("DISPLAY and WAYLAND_DISPLAY are unset"));
     }
@@ -54,43 +54,6 @@ pub fn run(args: ViewArgs) -> Result<()> {
         Some(e) => Err(e),
         None => Ok(()),
     }
-}
-
-/// Checks every option before a window is asked for, so that a bad value is named even
-/// with no display, and nothing is rendered for outputs that cannot be written: the
-/// outputs' formats (PNG screenshot, JSON figures), that they are not inputs nor one file,
-/// the window's size and the source's options.
-fn check_args(args: &ViewArgs) -> Result<()> {
-    if let Some(frames) = args.frames {
-        limits::check_frames(frames)?;
-    }
-    if let Some(window) = &args.window {
-        limits::parse_size("--window", window, MAX_WINDOW_SIDE)?;
-    }
-    let mut outputs: Vec<(&str, &Path)> = Vec::new();
-    if let Some(path) = &args.screenshot {
-        output::check_png_output(path, "--screenshot")?;
-        outputs.push(("--screenshot", path));
-    }
-    if let Some(path) = &args.stats {
-        output::check_output(path, "--stats", &["json"])?;
-        outputs.push(("--stats", path));
-    }
-    let inputs = match &args.source {
-        Some(ViewSource::Render(a)) => {
-            super::options::check_options(a)?;
-            super::render::input_paths(a)
-        }
-        Some(ViewSource::Scene(a)) => {
-            let (w, h) = limits::parse_image_size("--size", &a.size)?;
-            limits::check_memory("--size", w, h, super::scene::SCENE_BYTES_PER_PIXEL)?;
-            super::scene::camera_from_args(a).validate()?;
-            super::scene::fog_blur_from_args(a)?;
-            super::scene::input_paths(a)
-        }
-        None => Vec::new(),
-    };
-    super::refuse_overlaps(&outputs, &inputs)
 }
 
 fn no_display(detail: &str) -> Error {
@@ -257,7 +220,10 @@ impl Viewer {
                 (Source::Photo(Box::new(Photo::load(a, &gl)?)), 0.0, 24.0)
             }
             None => (
-                Source::Photo(Box::new(Photo::load(&default_render_args(), &gl)?)),
+                Source::Photo(Box::new(Photo::load(
+                    &crate::cli::view::default_render_args(),
+                    &gl,
+                )?)),
                 0.0,
                 24.0,
             ),
@@ -350,7 +316,7 @@ impl Viewer {
             .and_then(|image| {
                 let mut outputs = Outputs::new();
                 outputs.stage_rgba(&path, &image)?;
-                super::commit(outputs)
+                crate::cli::commit(outputs)
             });
         self.message = Some(match result {
             Ok(()) => (format!("saved {}", path.display()), false),
@@ -493,7 +459,7 @@ impl Viewer {
                 let json = self.stats_json(args);
                 outputs.stage_bytes(path, format!("{json:#}\n").as_bytes())?;
             }
-            super::commit(outputs)?;
+            crate::cli::commit(outputs)?;
             self.print_summary();
         }
         self.ui.painter.free_texture(self.display_id);
@@ -598,7 +564,7 @@ fn grouped_passes(t: &FrameTimes) -> Vec<(String, f64)> {
             diffusion.0 += 1;
             diffusion.1 += ms;
         } else {
-            if diffusion.0 > 0 && name == "composite" {
+            if diffusion.0 > 0 && name.ends_with("composite") {
                 rows.push((format!("diffusion ({} passes)", diffusion.0), diffusion.1));
             }
             rows.push((name.clone(), *ms));
@@ -691,13 +657,4 @@ fn median(mut v: Vec<f64>) -> Option<f64> {
     }
     v.sort_by(f64::total_cmp);
     Some(v[v.len() / 2])
-}
-
-/// `brume render`'s options with nothing given (the built-in demo and the default haze):
-/// what the viewer shows when it is given no photo.
-fn default_render_args() -> super::args::RenderArgs {
-    use clap::{Args, FromArgMatches};
-    let command = super::args::RenderArgs::augment_args(clap::Command::new("render"));
-    let matches = command.get_matches_from(["render"]);
-    super::args::RenderArgs::from_arg_matches(&matches).expect("the defaults parse")
 }
