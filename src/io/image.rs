@@ -417,7 +417,9 @@ mod tests {
             .step_by(61)
             .map(f32::from_bits)
             .for_each(check);
-        [-1.0, -0.0, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY].map(check);
+        [-1.0, -0.0, 1.0, 1.5, f32::INFINITY, f32::NEG_INFINITY]
+            .into_iter()
+            .for_each(check);
         assert_eq!(linear_to_srgb8(f32::NAN), 0);
         // An independent check of the curve: IEC 61966-2-1 in f64 at mid-codes.
         for code in 0..=255u8 {
