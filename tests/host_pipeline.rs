@@ -247,8 +247,33 @@ fn renders_into_a_rectangle_of_the_hosts_framebuffer() {
             }
         }
     }
-    // SAFETY: the host's own objects.
+    // With the coarse stage, whose last blend runs in the composite, the rectangle holds
+    // exactly what a target of the frame's own size gets.
+    let coarse = Blur {
+        coarse_from: Some(2.0),
+        ..Blur::default()
+    };
+    let frame = pipeline
+        .render(&host.input(), &haze, &coarse, &output)
+        .unwrap();
+    assert!(frame.pass_names().contains(&"down 1/2".to_string()));
+    // SAFETY: a target of the frame's size, read back, and the host's own objects.
     unsafe {
+        let inside = read(gl, fbo, (x0, y0, w, h));
+        let own = texture(gl, w, h, glow::RGBA32F, Upload::None);
+        let own_fbo = framebuffer(gl, own);
+        let at_origin = Output::Framebuffer {
+            framebuffer: Some(own_fbo),
+            x: 0,
+            y: 0,
+            encoding: Encoding::Linear,
+        };
+        pipeline
+            .render(&host.input(), &haze, &coarse, &at_origin)
+            .unwrap();
+        assert_eq!(inside, read(gl, own_fbo, (0, 0, w, h)));
+        gl.delete_framebuffer(own_fbo);
+        gl.delete_texture(own);
         assert!(gl.is_texture(target) && gl.is_texture(host.colour));
         gl.delete_framebuffer(fbo);
         gl.delete_texture(target);
@@ -338,8 +363,8 @@ const CAPABILITIES: [u32; 10] = [
     glow::DITHER,
 ];
 
-/// Units a hostile host binds textures and samplers on (brume uses 0-6; 9 is active).
-const HOST_UNITS: [u32; 8] = [0, 1, 2, 3, 4, 5, 6, 9];
+/// Units a hostile host binds textures and samplers on (brume uses 0-8; 9 is active).
+const HOST_UNITS: [u32; 10] = [0, 1, 2, 3, 4, 5, 6, 7, 8, 9];
 
 /// The host's objects that make up its hostile state.
 struct Hostile {
@@ -538,7 +563,7 @@ fn assert_same_state(before: &[(String, Vec<i32>)], after: &[(String, Vec<i32>)]
 /// alignment 1 and skips for unpack and pack, bound unpack and pack buffers, every
 /// capability the contract names on (`DITHER` too), a colour mask, blend state, a
 /// viewport, a scissor box, a vertex array and draw and read framebuffers of its own.
-/// Through a render (Haze, diffusion), the engine passes with a medium that has a lookup
+/// Through a render (Haze, diffusion; and with the coarse stage), the engine passes with a medium that has a lookup
 /// texture (the distance fog and its noise: `fog` without blur, with each Gaussian, and
 /// `blend_fog`) and the CPU-buffer `Renderer` (uploads and a read-back), each call on a
 /// fresh pipeline (so that its first upload of the lookups meets the host's pixel
@@ -573,6 +598,12 @@ fn gl_state_contract() {
         ..host.input()
     };
     let (haze, blur) = (Haze::default(), Blur::default());
+    // From 2 px, so that this small frame's σmax reaches it: the blend into full
+    // resolution reads units 7 and 8, after a medium's lookups.
+    let coarse = Blur {
+        coarse_from: Some(2.0),
+        ..Blur::default()
+    };
     let output = Output::Framebuffer {
         framebuffer: Some(fbo),
         x: 0,
@@ -586,6 +617,14 @@ fn gl_state_contract() {
             "render",
             Box::new(|p| {
                 p.render(&host.input(), &haze, &blur, &output).unwrap();
+            }),
+        ),
+        (
+            "render with the coarse stage",
+            Box::new(|p| {
+                let frame = p.render(&host.input(), &haze, &coarse, &output).unwrap();
+                let names = frame.pass_names();
+                assert_eq!(names.last().unwrap(), "blend 1/2 + composite", "{names:?}");
             }),
         ),
         (

@@ -59,8 +59,9 @@
 //!   refinement) saves, sets for its passes and, before it returns (also on an error),
 //!   restores exactly as the host left them: the draw and read framebuffer bindings, the
 //!   viewport, the current program, the vertex array, the active texture unit, the
-//!   `TEXTURE_2D` binding and the sampler object of units 0-6 (brume's own textures on
-//!   0-2, a medium's lookups, such as the distance fog's noise, from 3), unit 0's
+//!   `TEXTURE_2D` binding and the sampler object of units 0-8 (brume's own textures on
+//!   0-2, a medium's lookups, such as the distance fog's noise, on 3-6, the coarse
+//!   stage's last blend on 7-8), unit 0's
 //!   `GL_TEXTURE_EXTERNAL_OES` binding (an import), the capabilities `BLEND`,
 //!   `DEPTH_TEST`, `STENCIL_TEST`, `SCISSOR_TEST`, `CULL_FACE`, `RASTERIZER_DISCARD`,
 //!   `SAMPLE_ALPHA_TO_COVERAGE`, `SAMPLE_COVERAGE`, `POLYGON_OFFSET_FILL` and `DITHER`
