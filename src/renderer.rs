@@ -45,6 +45,81 @@ impl Rendered {
 /// and the `brume` program and its benchmarks report each call's times.
 pub struct Renderer {
     pipeline: Pipeline,
+    /// The uploads' textures, kept for the next call of the same size: allocating them
+    /// anew each call cost a 2048x1024 frame ~50 ms on llvmpipe (zeroed pages).
+    uploads: Uploads,
+}
+
+/// The textures a call uploads its buffers into, each reused while its size fits.
+#[derive(Default)]
+struct Uploads {
+    /// The image, RGB32F.
+    colour: Option<Texture>,
+    /// The depth or range, R32F.
+    scalar: Option<Texture>,
+}
+
+impl Uploads {
+    /// Uploads `image` and `scalar` (a depth or range map) bottom row first, into the
+    /// kept textures or new ones of their sizes; returns their GL names.
+    fn upload(
+        &mut self,
+        gl: &Arc<glow::Context>,
+        image: &RgbImage,
+        scalar: &ScalarMap,
+    ) -> Result<(glow::Texture, glow::Texture)> {
+        // The uploads set the pixel store and unbind a host's pixel buffers for
+        // themselves, and put them back (crate::gpu::state). Buffers hold the image's
+        // top row first, GL textures the bottom row first: the rows are uploaded upside
+        // down (row by row from the caller's buffers, no staging copy), so that a medium
+        // with a camera sees the sky at the top.
+        let colour = kept(
+            &mut self.colour,
+            gl,
+            image.width(),
+            image.height(),
+            TexelFormat::Rgb32F,
+        )?;
+        colour.upload_flipped(image.as_slice().as_flattened());
+        let colour = colour.raw();
+        let depth = kept(
+            &mut self.scalar,
+            gl,
+            scalar.width(),
+            scalar.height(),
+            TexelFormat::R32F,
+        )?;
+        depth.upload_flipped(scalar.as_slice());
+        Ok((colour, depth.raw()))
+    }
+}
+
+/// The texture in `slot` if it is `width x height`, else a new one there (the old one
+/// freed first).
+fn kept<'a>(
+    slot: &'a mut Option<Texture>,
+    gl: &Arc<glow::Context>,
+    width: usize,
+    height: usize,
+    format: TexelFormat,
+) -> Result<&'a Texture> {
+    if slot
+        .as_ref()
+        .is_some_and(|t| (t.width(), t.height()) != (width, height))
+    {
+        *slot = None;
+    }
+    if slot.is_none() {
+        *slot = Some(Texture::new(
+            gl,
+            width,
+            height,
+            format,
+            Filter::Nearest,
+            None,
+        )?);
+    }
+    Ok(slot.as_ref().expect("just made"))
 }
 
 impl Renderer {
@@ -53,7 +128,10 @@ impl Renderer {
     pub fn new(gl: Arc<glow::Context>) -> Result<Self> {
         let mut pipeline = Pipeline::new(gl)?;
         pipeline.set_timing(Timing::Blocking);
-        Ok(Renderer { pipeline })
+        Ok(Renderer {
+            pipeline,
+            uploads: Uploads::default(),
+        })
     }
 
     /// Sets when calls time their passes ([`Pipeline::set_timing`]).
@@ -136,7 +214,7 @@ impl Renderer {
         let blur = FogBlur::Diffusion(*blur);
         let (w, h) = (image.width(), image.height());
         let (colour, depth_texture) = self.upload_frame(image, depth)?;
-        let input = self.input_of(&colour, &depth_texture, w, h, frame);
+        let input = input_of(colour, depth_texture, w, h, frame);
         for (k, medium) in media.iter().enumerate() {
             let (frame, pixels) = self.pipeline.fog_and_read(&input, *medium, &blur)?;
             each(k, rendered_from(frame, pixels, w, h))?;
@@ -187,19 +265,14 @@ impl Renderer {
         self.caps().require_size("image", w, h)?;
         crate::refine::check_positive(range)?;
         let gl = Arc::clone(self.pipeline.gl());
-        // The uploads and the read-back set the pixel store and unbind a host's pixel
-        // buffers for themselves, and put them back (crate::gpu::state).
-        let colour = Texture::new(&gl, w, h, TexelFormat::Rgb32F, Filter::Nearest, None)?;
-        colour.upload_flipped(image.as_slice().as_flattened());
+        let (colour, range_texture) = self.uploads.upload(&gl, image, range)?;
         let (rw, rh) = (range.width(), range.height());
-        let range_texture = Texture::new(&gl, rw, rh, TexelFormat::R32F, Filter::Nearest, None)?;
-        range_texture.upload_flipped(range.as_slice());
         let input = RefineInput {
-            colour: colour.raw(),
+            colour,
             colour_encoding: Encoding::Linear,
             width: w,
             height: h,
-            range: range_texture.raw(),
+            range: range_texture,
             range_width: rw,
             range_height: rh,
         };
@@ -244,44 +317,20 @@ impl Renderer {
     ) -> Result<Rendered> {
         let (w, h) = (image.width(), image.height());
         let (colour, depth_texture) = self.upload_frame(image, depth)?;
-        let input = self.input_of(&colour, &depth_texture, w, h, *frame);
+        let input = input_of(colour, depth_texture, w, h, *frame);
         let (frame, pixels) = render(&mut self.pipeline, &input)?;
         Ok(rendered_from(frame, pixels, w, h))
     }
 
-    /// The image (RGB32F) and the depth (R32F) as textures, bottom row first.
-    fn upload_frame(&mut self, image: &RgbImage, depth: &ScalarMap) -> Result<(Texture, Texture)> {
-        let (w, h) = (image.width(), image.height());
+    /// The image (RGB32F) and the depth (R32F) uploaded, bottom row first, into the
+    /// kept textures ([`Uploads`]).
+    fn upload_frame(
+        &mut self,
+        image: &RgbImage,
+        depth: &ScalarMap,
+    ) -> Result<(glow::Texture, glow::Texture)> {
         let gl = Arc::clone(self.pipeline.gl());
-        // The uploads and the read-back set the pixel store and unbind a host's pixel
-        // buffers for themselves, and put them back (crate::gpu::state).
-        // Buffers hold the image's top row first, GL textures the bottom row first: the rows
-        // are uploaded upside down (row by row from the caller's buffers, no staging copy),
-        // so that a medium with a camera sees the sky at the top.
-        let colour = Texture::new(&gl, w, h, TexelFormat::Rgb32F, Filter::Nearest, None)?;
-        colour.upload_flipped(image.as_slice().as_flattened());
-        let depth_texture = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None)?;
-        depth_texture.upload_flipped(depth.as_slice());
-        Ok((colour, depth_texture))
-    }
-
-    /// The pipeline's input over uploaded textures, for `frame`.
-    fn input_of(
-        &self,
-        colour: &Texture,
-        depth: &Texture,
-        width: usize,
-        height: usize,
-        frame: FrameInputs,
-    ) -> Input {
-        Input {
-            colour: colour.raw(),
-            colour_encoding: Encoding::Linear,
-            depth: depth.raw(),
-            width,
-            height,
-            frame,
-        }
+        self.uploads.upload(&gl, image, depth)
     }
 
     /// On a software renderer, refuses a frame whose textures and read-back would not fit
@@ -309,6 +358,24 @@ impl Renderer {
             crate::memory::available(),
             &hint,
         )
+    }
+}
+
+/// The pipeline's input over uploaded textures, for `frame`.
+fn input_of(
+    colour: glow::Texture,
+    depth: glow::Texture,
+    width: usize,
+    height: usize,
+    frame: FrameInputs,
+) -> Input {
+    Input {
+        colour,
+        colour_encoding: Encoding::Linear,
+        depth,
+        width,
+        height,
+        frame,
     }
 }
 

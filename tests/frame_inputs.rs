@@ -12,6 +12,8 @@
 //!   and the frames after the first create no GL object and no program.
 //! - A medium that reads a depth buffer, given a frame without a camera, is refused with
 //!   [`Error::MissingCamera`] by every entry point, before anything is drawn.
+//! - A CPU-buffer `Renderer` keeps its uploads' textures: the photos after the first of
+//!   one size create no GL object, and each result is bit for bit a fresh renderer's.
 use crate::common;
 use crate::distance_fog;
 
@@ -268,4 +270,34 @@ fn a_depth_buffer_medium_without_a_camera_is_refused_by_every_entry_point() {
     )
     .unwrap_err();
     assert!(e.to_string().contains("time"), "{e}");
+}
+
+/// Photos of one size through one `Renderer`: the uploads' textures are kept (no GL object
+/// made after the first photo), each result equals a fresh renderer's bit for bit (no
+/// stale texel of the photo before), and a photo of another size gets textures of its own.
+#[test]
+fn renderer_keeps_its_uploads_between_photos() {
+    let (_lock, mut kept) = common::renderer();
+    let (haze, blur) = (Haze::default(), Blur::default());
+    let range = |w: usize, h: usize, seed: u64| {
+        let noise = noise_image(w, h, seed);
+        Grid::from_fn(w, h, |x, y| 0.05 + 0.9 * noise.get(x, y)[1])
+    };
+    for (k, (w, h)) in [(24, 16), (24, 16), (24, 16), (20, 14)]
+        .into_iter()
+        .enumerate()
+    {
+        let (image, depth) = (noise_image(w, h, 10 + k as u64), range(w, h, 20 + k as u64));
+        let before = brume::gpu::objects_created();
+        let out = kept.render(&image, &depth, &haze, &blur).unwrap();
+        let made = brume::gpu::objects_created() - before;
+        match k {
+            1 | 2 => assert_eq!(made, 0, "photo {k} of the same size: GL objects made"),
+            _ => assert!(made >= 2, "photo {k}: {made} objects, expected its uploads"),
+        }
+        let fresh = common::headless()
+            .render(&image, &depth, &haze, &blur)
+            .unwrap();
+        assert_eq!(out.image, fresh.image, "photo {k}");
+    }
 }
