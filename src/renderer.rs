@@ -42,7 +42,9 @@ impl Rendered {
 
 /// The pipeline with CPU-buffer input and output, on a context that is current. Its
 /// timing is [`Timing::Blocking`] unless set otherwise: it waits for the read-back anyway,
-/// and the `brume` program and its benchmarks report each call's times.
+/// and the `brume` program and its benchmarks report each call's times. Between calls it
+/// keeps its targets and the last upload's textures (16 bytes per pixel) for the next
+/// frame of the same size; dropping it frees them.
 pub struct Renderer {
     pipeline: Pipeline,
     /// The uploads' textures, kept for the next call of the same size: allocating them
