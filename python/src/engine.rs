@@ -5,7 +5,9 @@
 
 use super::{dtype_name, on_default_renderer, py_err, value_error, GlThread, ImageIn, ImageOut};
 use brume::camera::{Camera, ClipDepth, FrameCamera, FrameInputs, MatrixCamera};
-use brume::medium::{DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium};
+use brume::medium::{
+    DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium, ProfileValues,
+};
 use brume::raster::{Grid, ScalarMap};
 use brume::{Blur, FogBlur, GaussBlur, Precision, Scheme};
 use glam::DMat4;
@@ -537,64 +539,27 @@ impl LayeredArgs<'_> {
                 t.repr().map(|r| r.to_string()).unwrap_or_default()
             )));
         }
-        let or = |given: Option<f64>, default: f64| given.unwrap_or(default);
         let unused = |name: &str, v: Option<f64>| match v {
             Some(v) => Err(value_error(format!(
                 "invalid {name} = {v}: the {kind} profile has no {name}"
             ))),
             None => Ok(()),
         };
-        Ok(match kind.as_str() {
+        let preset = match kind.as_str() {
             "exponential" => {
                 unused("thickness", self.thickness)?;
                 unused("top", self.top)?;
-                let HeightProfile::Exponential {
-                    density,
-                    base,
-                    scale_height,
-                } = HeightProfile::EXPONENTIAL
-                else {
-                    unreachable!("the preset is exponential")
-                };
-                HeightProfile::Exponential {
-                    density: or(self.density, density),
-                    base: or(self.base, base),
-                    scale_height: or(self.scale_height, scale_height),
-                }
+                HeightProfile::EXPONENTIAL
             }
             "band" => {
                 unused("scale_height", self.scale_height)?;
                 unused("top", self.top)?;
-                let HeightProfile::SineBand {
-                    density,
-                    base,
-                    thickness,
-                } = HeightProfile::SINE_BAND
-                else {
-                    unreachable!("the preset is a band")
-                };
-                HeightProfile::SineBand {
-                    density: or(self.density, density),
-                    base: or(self.base, base),
-                    thickness: or(self.thickness, thickness),
-                }
+                HeightProfile::SINE_BAND
             }
             "ramp" => {
                 unused("scale_height", self.scale_height)?;
                 unused("thickness", self.thickness)?;
-                let HeightProfile::LinearRamp {
-                    density,
-                    floor,
-                    top,
-                } = HeightProfile::LINEAR_RAMP
-                else {
-                    unreachable!("the preset is a ramp")
-                };
-                HeightProfile::LinearRamp {
-                    density: or(self.density, density),
-                    floor: or(self.base, floor),
-                    top: or(self.top, top),
-                }
+                HeightProfile::LINEAR_RAMP
             }
             _ => {
                 return Err(value_error(format!(
@@ -602,7 +567,14 @@ impl LayeredArgs<'_> {
                     self.profile
                 )))
             }
-        })
+        };
+        Ok(preset.with(&ProfileValues {
+            density: self.density,
+            base: self.base,
+            scale_height: self.scale_height,
+            thickness: self.thickness,
+            top: self.top,
+        }))
     }
 }
 

@@ -7,7 +7,9 @@ use super::limits;
 use brume::camera::{Camera, FrameInputs};
 use brume::egl::Platform;
 use brume::io::output::{self, Outputs};
-use brume::medium::{DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium};
+use brume::medium::{
+    DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium, ProfileValues,
+};
 use brume::raster::{Grid, RgbaImage};
 use brume::scene::SceneRenderer;
 use brume::{Blur, Encoding, Error, FogBlur, GaussBlur, Input, Result};
@@ -341,37 +343,13 @@ fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> Result<
         (ProfileKind::Band, None) => HeightProfile::SINE_BAND,
         (ProfileKind::Ramp, None) => HeightProfile::LINEAR_RAMP,
     };
-    let or = |given: Option<f64>, default: f64| given.unwrap_or(default);
-    Ok(match preset {
-        HeightProfile::Exponential {
-            density,
-            base,
-            scale_height,
-        } => HeightProfile::Exponential {
-            density: or(l.density, density),
-            base: or(l.base, base),
-            scale_height: or(l.scale_height, scale_height),
-        },
-        HeightProfile::SineBand {
-            density,
-            base,
-            thickness,
-        } => HeightProfile::SineBand {
-            density: or(l.density, density),
-            base: or(l.base, base),
-            thickness: or(l.thickness, thickness),
-        },
-        HeightProfile::LinearRamp {
-            density,
-            floor,
-            top,
-        } => HeightProfile::LinearRamp {
-            density: or(l.density, density),
-            floor: or(l.base, floor),
-            top: or(l.top, top),
-        },
-        table @ HeightProfile::Table(_) => table,
-    })
+    Ok(preset.with(&ProfileValues {
+        density: l.density,
+        base: l.base,
+        scale_height: l.scale_height,
+        thickness: l.thickness,
+        top: l.top,
+    }))
 }
 
 fn noise_from_args(d: &super::args::DistanceArgs) -> Result<Option<FogNoise>> {

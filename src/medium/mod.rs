@@ -80,7 +80,7 @@ pub mod uniform;
 pub use aerial::AerialPerspective;
 pub use distance::{DistanceFog, FogNoise};
 pub use haze::Haze;
-pub use layered::{DensityTable, HeightProfile, LayeredFog};
+pub use layered::{DensityTable, HeightProfile, LayeredFog, ProfileValues};
 pub use lookup::{Lookup, Wrap};
 pub use physical::PhysicalFog;
 pub use uniform::UniformBlur;

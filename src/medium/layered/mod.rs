@@ -128,6 +128,22 @@ pub enum HeightProfile {
     Table(DensityTable),
 }
 
+/// Values to set on an analytic [`HeightProfile`] ([`HeightProfile::with`]); `None` keeps
+/// the profile's own.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ProfileValues {
+    /// δ at the base (exponential), mid-band (band) or on the floor (ramp), per world unit.
+    pub density: Option<f64>,
+    /// The exponential's and the band's `base`, the ramp's `floor` (world units).
+    pub base: Option<f64>,
+    /// The exponential's scale height (world units).
+    pub scale_height: Option<f64>,
+    /// The band's thickness (world units).
+    pub thickness: Option<f64>,
+    /// The ramp's top (world units).
+    pub top: Option<f64>,
+}
+
 impl HeightProfile {
     /// Default exponential profile: 0.01 /m at the ground (y = 0), scale height 20 m. From
     /// an eye at 1.7 m, τ ≈ 0.4 at 100 m and 2e-4 on the ground 900 m away; a
@@ -155,6 +171,44 @@ impl HeightProfile {
         floor: 0.0,
         top: 1.0,
     };
+
+    /// This profile with the values of `given` where they are set: `density`; `base` (a
+    /// ramp's `floor`); `scale_height` (exponential), `thickness` (band) or `top` (ramp).
+    /// A value the profile does not have is ignored, and a table is returned as it is:
+    /// how `brume scene`'s flags and the Python keywords adjust a preset.
+    pub fn with(self, given: &ProfileValues) -> HeightProfile {
+        let or = |given: Option<f64>, preset: f64| given.unwrap_or(preset);
+        match self {
+            HeightProfile::Exponential {
+                density,
+                base,
+                scale_height,
+            } => HeightProfile::Exponential {
+                density: or(given.density, density),
+                base: or(given.base, base),
+                scale_height: or(given.scale_height, scale_height),
+            },
+            HeightProfile::SineBand {
+                density,
+                base,
+                thickness,
+            } => HeightProfile::SineBand {
+                density: or(given.density, density),
+                base: or(given.base, base),
+                thickness: or(given.thickness, thickness),
+            },
+            HeightProfile::LinearRamp {
+                density,
+                floor,
+                top,
+            } => HeightProfile::LinearRamp {
+                density: or(given.density, density),
+                floor: or(given.base, floor),
+                top: or(given.top, top),
+            },
+            table @ HeightProfile::Table(_) => table,
+        }
+    }
 
     /// δ(y) (per world unit).
     pub fn density(&self, y: f64) -> f64 {

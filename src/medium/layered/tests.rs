@@ -10,6 +10,18 @@ const GAUSS5: [(f64, f64); 5] = [
     (0.906_179_845_938_664, 0.236_926_885_056_189_1),
 ];
 
+/// Pixel (x, y) of a `size` frame at window depth `depth`, with σ0 = 1.
+fn pixel((x, y): (usize, usize), size: (usize, usize), depth: f64) -> Pixel {
+    Pixel {
+        x,
+        y,
+        width: size.0,
+        height: size.1,
+        depth,
+        sigma0: 1.0,
+    }
+}
+
 /// The heights where a profile's δ has a kink.
 fn kinks(profile: &HeightProfile) -> Vec<f64> {
     match *profile {
@@ -260,32 +272,12 @@ fn cpu_sample_rebuilds_the_pixel_position() {
         let d = camera.window_depth(z);
         let p = camera.world_position(x, y, w, h, d);
         let expected = fog.sample_point(camera.eye(), p, 1.0);
-        let got = fog.sample(
-            Pixel {
-                x,
-                y,
-                width: w,
-                height: h,
-                depth: d,
-                sigma0: 1.0,
-            },
-            &frame,
-        );
+        let got = fog.sample(pixel((x, y), (w, h), d), &frame);
         assert!(relative_error(got.transmission[0], expected.transmission[0]) < 1e-9);
         assert!(relative_error(got.sigma, expected.sigma) < 1e-9);
     }
     // A sky pixel is on the far plane.
-    let sky = fog.sample(
-        Pixel {
-            x: 16,
-            y: 23,
-            width: w,
-            height: h,
-            depth: 1.0,
-            sigma0: 1.0,
-        },
-        &frame,
-    );
+    let sky = fog.sample(pixel((16, 23), (w, h), 1.0), &frame);
     let far = camera.world_position(16, 23, w, h, 1.0);
     assert!((far - camera.eye()).dot(camera.forward()) - camera.far < 1e-6);
     assert!(relative_error(sky.sigma, fog.sample_point(camera.eye(), far, 1.0).sigma) < 1e-9);
@@ -309,17 +301,7 @@ fn sigma_max_bounds_every_pixel() {
             for y in 0..h {
                 for x in 0..w {
                     for d in [0.0, 0.9, 0.999, 0.9999, 1.0] {
-                        let s = fog.sample(
-                            Pixel {
-                                x,
-                                y,
-                                width: w,
-                                height: h,
-                                depth: d,
-                                sigma0: 1.0,
-                            },
-                            &frame,
-                        );
+                        let s = fog.sample(pixel((x, y), (w, h), d), &frame);
                         assert!(s.sigma >= 1.0 && s.sigma <= bound + 1e-12);
                     }
                 }
@@ -423,4 +405,51 @@ fn defaults_show_fog_at_the_scene_scale() {
         assert!(near_ground > 0.3, "{profile:?}: {near_ground}");
         assert!(far_ground < 0.05, "{profile:?}: {far_ground}");
     }
+}
+
+/// `with` sets the values given on each analytic preset (a ramp's floor from `base`),
+/// keeps the others, ignores the ones a profile does not have and leaves a table as it is.
+#[test]
+fn with_sets_the_given_values_of_a_preset() {
+    let given = ProfileValues {
+        density: Some(0.5),
+        base: Some(2.0),
+        scale_height: Some(7.0),
+        thickness: Some(3.0),
+        top: Some(9.0),
+    };
+    assert_eq!(
+        HeightProfile::EXPONENTIAL.with(&given),
+        HeightProfile::Exponential {
+            density: 0.5,
+            base: 2.0,
+            scale_height: 7.0
+        }
+    );
+    assert_eq!(
+        HeightProfile::SINE_BAND.with(&given),
+        HeightProfile::SineBand {
+            density: 0.5,
+            base: 2.0,
+            thickness: 3.0
+        }
+    );
+    assert_eq!(
+        HeightProfile::LINEAR_RAMP.with(&given),
+        HeightProfile::LinearRamp {
+            density: 0.5,
+            floor: 2.0,
+            top: 9.0
+        }
+    );
+    let only_top = ProfileValues {
+        top: Some(4.0),
+        ..ProfileValues::default()
+    };
+    assert_eq!(
+        HeightProfile::EXPONENTIAL.with(&only_top),
+        HeightProfile::EXPONENTIAL
+    );
+    let table = HeightProfile::Table(DensityTable::from_rows(&[(0.0, 0.1), (5.0, 0.0)]).unwrap());
+    assert_eq!(table.clone().with(&given), table);
 }
