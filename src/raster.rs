@@ -55,6 +55,24 @@ impl<T> Grid<T> {
         }
     }
 
+    /// [`Grid::from_fn`] on every core (rayon): `f` must not depend on the order of the
+    /// calls, and the result is the same as `from_fn`'s.
+    pub fn par_from_fn(width: usize, height: usize, f: impl Fn(usize, usize) -> T + Sync) -> Self
+    where
+        T: Send,
+    {
+        use rayon::prelude::*;
+        let data = (0..width * height)
+            .into_par_iter()
+            .map(|i| f(i % width, i / width))
+            .collect();
+        Grid {
+            width,
+            height,
+            data,
+        }
+    }
+
     /// Width in pixels.
     pub fn width(&self) -> usize {
         self.width

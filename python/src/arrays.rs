@@ -2,7 +2,7 @@
 //! the output) and range maps, copied with the GIL and converted without it.
 
 use super::value_error;
-use brume::io::image::{linear_to_srgb8, srgb8_to_linear_table};
+use brume::io::image::{linear_rgba_to_srgb8_rgb, srgb8_rgb_to_linear};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use numpy::ndarray::Array3;
 use numpy::{
@@ -110,12 +110,7 @@ impl ImageIn {
     /// negative linear values clamped to 0, as brume does for float files).
     pub(crate) fn linear(self) -> RgbImage {
         let data = match self.raw {
-            RawImage::Srgb8(raw) => {
-                let lut = srgb8_to_linear_table();
-                raw.chunks_exact(3)
-                    .map(|p| [lut[p[0] as usize], lut[p[1] as usize], lut[p[2] as usize]])
-                    .collect()
-            }
+            RawImage::Srgb8(raw) => srgb8_rgb_to_linear(&raw),
             RawImage::Linear(raw) => raw
                 .chunks_exact(3)
                 .map(|p| [p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)])
@@ -167,7 +162,11 @@ impl ImageOut {
         let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
         match pixels {
             Pixels::Srgb8 => ImageOut::Srgb8(
-                Array3::from_shape_vec(shape, rgb.map(linear_to_srgb8).collect()).expect("shape"),
+                Array3::from_shape_vec(
+                    shape,
+                    linear_rgba_to_srgb8_rgb(image.as_slice()).into_flattened(),
+                )
+                .expect("shape"),
             ),
             Pixels::Linear32 => {
                 ImageOut::Linear32(Array3::from_shape_vec(shape, rgb.collect()).expect("shape"))

@@ -26,6 +26,7 @@ use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::limits::check_size;
 use crate::raster::RgbImage;
 use crate::{Error, Result};
+use rayon::prelude::*;
 
 /// sRGB-encoded value in `[0, 1]` to linear light, with the exact piecewise curve of
 /// IEC 61966-2-1 (linear segment below 0.04045).
@@ -35,6 +36,29 @@ pub fn srgb_to_linear(v: f32) -> f32 {
     } else {
         ((v + 0.055) / 1.055).powf(2.4)
     }
+}
+
+/// Interleaved 8-bit sRGB RGB (3 bytes a pixel) as linear-light pixels, by
+/// [`srgb8_to_linear_table`], on every core.
+pub fn srgb8_rgb_to_linear(rgb: &[u8]) -> Vec<[f32; 3]> {
+    let lut = srgb8_to_linear_table();
+    rgb.par_chunks_exact(3)
+        .map(|p| {
+            [
+                lut[usize::from(p[0])],
+                lut[usize::from(p[1])],
+                lut[usize::from(p[2])],
+            ]
+        })
+        .collect()
+}
+
+/// The RGB of linear RGBA pixels as 8-bit sRGB (alpha dropped), by [`linear_to_srgb8`],
+/// on every core. `into_flattened` makes it interleaved bytes without a copy.
+pub fn linear_rgba_to_srgb8_rgb(rgba: &[[f32; 4]]) -> Vec<[u8; 3]> {
+    rgba.par_iter()
+        .map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
+        .collect()
 }
 
 /// The linear value of each 8-bit sRGB code value, by the exact curve: 256 lookups
@@ -400,13 +424,7 @@ fn to_linear_rgb(img: &DynamicImage) -> RgbImage {
             | DynamicImage::ImageRgba8(_)
     );
     if is_8bit {
-        let lut = srgb8_to_linear_table();
-        let data = img
-            .to_rgb8()
-            .pixels()
-            .map(|p| p.0.map(|c| lut[usize::from(c)]))
-            .collect();
-        RgbImage::from_vec(w, h, data)
+        RgbImage::from_vec(w, h, srgb8_rgb_to_linear(img.to_rgb8().as_raw()))
     } else {
         let data = img
             .to_rgb32f()
@@ -506,5 +524,33 @@ mod tests {
         let mut huge = palette_png(&[1, 2, 3]);
         huge[8..12].copy_from_slice(&u32::MAX.to_be_bytes());
         assert!(check_png_palette(&huge, "m.png").is_ok());
+    }
+
+    /// The whole-image conversions keep each pixel's channels in order and in place (they
+    /// run in parallel chunks): every pixel differs, so a swap or a shift would show.
+    #[test]
+    fn whole_image_conversions_equal_the_per_value_ones() {
+        let bytes: Vec<u8> = (0..3 * 1000).map(|i| (i * 7 % 256) as u8).collect();
+        let linear = srgb8_rgb_to_linear(&bytes);
+        assert_eq!(linear.len(), 1000);
+        for (p, rgb) in linear.iter().enumerate() {
+            for c in 0..3 {
+                assert_eq!(rgb[c], srgb_to_linear(f32::from(bytes[3 * p + c]) / 255.0));
+            }
+        }
+        let rgba: Vec<[f32; 4]> = (0..1000)
+            .map(|i| {
+                [
+                    i as f32 / 999.0,
+                    1.0 - i as f32 / 999.0,
+                    (i % 13) as f32 / 12.0,
+                    0.5,
+                ]
+            })
+            .collect();
+        let encoded = linear_rgba_to_srgb8_rgb(&rgba);
+        for (p, q) in rgba.iter().zip(&encoded) {
+            assert_eq!(*q, [p[0], p[1], p[2]].map(linear_to_srgb8));
+        }
     }
 }

@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
 use crate::io::codec::{exr, pfm, png};
-use crate::io::image::linear_to_srgb8;
+use crate::io::image::linear_rgba_to_srgb8_rgb;
 use crate::raster::{RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
@@ -201,11 +201,7 @@ impl Outputs {
     pub fn stage_rgba(&mut self, path: &Path, img: &RgbaImage) -> Result<()> {
         match extension_of(path).as_str() {
             "png" => {
-                let rgb: Vec<[u8; 3]> = img
-                    .as_slice()
-                    .iter()
-                    .map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
-                    .collect();
+                let rgb = linear_rgba_to_srgb8_rgb(img.as_slice());
                 self.stage_png_rgb8(path, img.width(), img.height(), &rgb)
             }
             "pfm" => self.stage_with(path, |w| pfm::write_rgba(w, img)),

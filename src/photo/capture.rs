@@ -19,7 +19,7 @@
 //! same seed gives the same image on every platform and build. Alpha is kept as it was.
 
 use crate::error::{Error, Result};
-use crate::io::image::{decode_linear_rgb, linear_to_srgb8};
+use crate::io::image::{decode_linear_rgb, linear_rgba_to_srgb8_rgb};
 use crate::raster::RgbaImage;
 use crate::rng::SplitMix64;
 
@@ -170,11 +170,7 @@ pub fn encode_jpeg(image: &RgbaImage, quality: u8) -> Result<Vec<u8>> {
             "a quality in 1..=100",
         ));
     }
-    let rgb: Vec<u8> = image
-        .as_slice()
-        .iter()
-        .flat_map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
-        .collect();
+    let rgb = linear_rgba_to_srgb8_rgb(image.as_slice()).into_flattened();
     let mut bytes = Vec::new();
     let mut encoder = ::image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, quality);
     let (w, h) = (image.width() as u32, image.height() as u32);

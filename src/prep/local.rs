@@ -23,6 +23,8 @@
 //!
 //! Cost: linear in the pixels (at most 625 samples per cell of `span² / 4` px).
 
+use rayon::prelude::*;
+
 /// Removes (sets to NaN) the local outliers among the finite, positive pixels of `work`
 /// outside `sky`, as the module docs say. Returns how many pixels were removed.
 pub(crate) fn remove_local(
@@ -37,7 +39,7 @@ pub(crate) fn remove_local(
         return 0;
     }
     let disp: Vec<f32> = work
-        .iter()
+        .par_iter()
         .zip(sky)
         .map(|(&r, &s)| {
             if !s && r.is_finite() && r > 0.0 {
@@ -53,32 +55,34 @@ pub(crate) fn remove_local(
     let factor = factor as f32;
     // 0: agrees (or unknown), 1: farther than every median, 2: nearer.
     let mut flag = vec![0u8; width * height];
-    for y in 0..height {
-        let cy = y / cell;
-        for x in 0..width {
-            let d = disp[y * width + x];
-            if !d.is_finite() {
-                continue;
-            }
-            let cx = x / cell;
-            let (mut any, mut supported, mut farther) = (false, false, true);
-            for ny in cy.saturating_sub(1)..(cy + 2).min(ch) {
-                for nx in cx.saturating_sub(1)..(cx + 2).min(cw) {
-                    let m = medians[ny * cw + nx];
-                    if !m.is_finite() {
-                        continue;
+    flag.par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(y, flag)| {
+            let cy = y / cell;
+            for (x, flag) in flag.iter_mut().enumerate() {
+                let d = disp[y * width + x];
+                if !d.is_finite() {
+                    continue;
+                }
+                let cx = x / cell;
+                let (mut any, mut supported, mut farther) = (false, false, true);
+                for ny in cy.saturating_sub(1)..(cy + 2).min(ch) {
+                    for nx in cx.saturating_sub(1)..(cx + 2).min(cw) {
+                        let m = medians[ny * cw + nx];
+                        if !m.is_finite() {
+                            continue;
+                        }
+                        any = true;
+                        let ratio = if d > m { d / m } else { m / d };
+                        supported |= ratio <= factor;
+                        farther &= d < m;
                     }
-                    any = true;
-                    let ratio = if d > m { d / m } else { m / d };
-                    supported |= ratio <= factor;
-                    farther &= d < m;
+                }
+                if any && !supported {
+                    *flag = if farther { 1 } else { 2 };
                 }
             }
-            if any && !supported {
-                flag[y * width + x] = if farther { 1 } else { 2 };
-            }
-        }
-    }
+        });
     remove_small_patches(work, &mut flag, width, height, span)
 }
 
@@ -88,11 +92,11 @@ pub(crate) fn remove_local(
 fn cell_medians(disp: &[f32], width: usize, height: usize, cell: usize, half: usize) -> Vec<f32> {
     let (cw, ch) = (width.div_ceil(cell), height.div_ceil(cell));
     let stride = (half / 12).max(1);
-    let mut samples = Vec::new();
-    let mut out = Vec::with_capacity(cw * ch);
-    for cy in 0..ch {
+    let mut out = vec![0.0; cw * ch];
+    out.par_chunks_mut(cw).enumerate().for_each(|(cy, out)| {
         let yc = (cy * cell + cell / 2).min(height - 1);
-        for cx in 0..cw {
+        let mut samples = Vec::new();
+        for (cx, out) in out.iter_mut().enumerate() {
             let xc = (cx * cell + cell / 2).min(width - 1);
             samples.clear();
             let mut total = 0usize;
@@ -113,9 +117,9 @@ fn cell_medians(disp: &[f32], width: usize, height: usize, cell: usize, half: us
             } else {
                 f32::NAN
             };
-            out.push(m);
+            *out = m;
         }
-    }
+    });
     out
 }
 

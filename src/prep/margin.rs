@@ -2,6 +2,7 @@
 
 use super::components::neighbours4;
 use super::edt::{squared_edt_with, NO_SITE};
+use rayon::prelude::*;
 
 /// Sky pixels whose Euclidean distance to the nearest scene (non-sky) pixel is at most
 /// `mu`, as linear indices in raster order.
@@ -47,9 +48,10 @@ pub(crate) fn jacobi(
 ) {
     let mut next = vec![0.0f32; margin.len()];
     for _ in 0..iterations {
-        for (n, &p) in next.iter_mut().zip(margin) {
-            *n = neighbour_mean(work, width, height, p as usize);
-        }
+        let read: &[f32] = work;
+        next.par_iter_mut()
+            .zip(margin)
+            .for_each(|(n, &p)| *n = neighbour_mean(read, width, height, p as usize));
         for (&v, &p) in next.iter().zip(margin) {
             work[p as usize] = v;
         }

@@ -441,12 +441,18 @@ fn find_sky(work: &[f32], w: usize, h: usize, guides: Guides, opts: &PrepOptions
     if !opts.detect_sky || opts.sky.max_components == 0 {
         return found(vec![false; w * h], SkyMethod::Off);
     }
-    let depth_sky = sky::depth_sky(work, &opts.sky, w, h);
     let Some(image) = guides.image else {
-        return found(depth_sky, SkyMethod::Depth);
+        return found(sky::depth_sky(work, &opts.sky, w, h), SkyMethod::Depth);
     };
-    let cut = outliers::far_cut(work, |_| true, opts.far_outlier_factor);
-    let classes = sky_image::range_classes(work, w, h, cut);
+    // Independent: the depth rules' flood fill runs on one core beside the per-pixel
+    // range classes.
+    let (depth_sky, classes) = rayon::join(
+        || sky::depth_sky(work, &opts.sky, w, h),
+        || {
+            let cut = outliers::far_cut(work, |_| true, opts.far_outlier_factor);
+            sky_image::range_classes(work, w, h, cut)
+        },
+    );
     let image_sky = sky_image::image_sky(
         image,
         &classes,

@@ -10,6 +10,7 @@ use super::components::{label_mask, neighbours4};
 use super::outliers::neighbours8;
 use super::ImageSkyRules;
 use crate::raster::RgbImage;
+use rayon::prelude::*;
 
 /// Relative tolerance within which two neighbouring ranges agree.
 const AGREE: f32 = 0.05;
@@ -40,6 +41,7 @@ pub(crate) fn range_classes(
     far_cut: Option<f32>,
 ) -> Vec<RangeClass> {
     (0..work.len())
+        .into_par_iter()
         .map(|p| {
             let r = work[p];
             if !r.is_finite() {
@@ -141,7 +143,7 @@ fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize, eps: f32)
 fn luminance(colour: &[[f32; 3]]) -> Vec<f32> {
     let w = super::airlight::REC709_LUMA;
     colour
-        .iter()
+        .par_iter()
         .map(|c| (w[0] * c[0] + w[1] * c[1] + w[2] * c[2]).max(0.0))
         .collect()
 }
@@ -150,6 +152,7 @@ fn luminance(colour: &[[f32; 3]]) -> Vec<f32> {
 /// 4-neighbour.
 fn texture(colour: &[[f32; 3]], lum: &[f32], width: usize, height: usize, eps: f32) -> Vec<f32> {
     let step: Vec<f32> = (0..colour.len())
+        .into_par_iter()
         .map(|p| {
             neighbours4(p, p % width, p / width, width, height)
                 .into_iter()
@@ -164,21 +167,21 @@ fn texture(colour: &[[f32; 3]], lum: &[f32], width: usize, height: usize, eps: f
 /// Mean over the 3 x 3 window clipped to the image, by two 1D passes.
 fn box3(v: &[f32], width: usize, height: usize) -> Vec<f32> {
     let mut rows = vec![0.0f32; v.len()];
-    for y in 0..height {
-        for x in 0..width {
+    rows.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        for (x, out) in row.iter_mut().enumerate() {
             let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
             let s: f32 = (x0..=x1).map(|i| v[y * width + i]).sum();
-            rows[y * width + x] = s / (x1 - x0 + 1) as f32;
+            *out = s / (x1 - x0 + 1) as f32;
         }
-    }
+    });
     let mut out = vec![0.0f32; v.len()];
-    for y in 0..height {
+    out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
-        for x in 0..width {
+        for (x, out) in row.iter_mut().enumerate() {
             let s: f32 = (y0..=y1).map(|j| rows[j * width + x]).sum();
-            out[y * width + x] = s / (y1 - y0 + 1) as f32;
+            *out = s / (y1 - y0 + 1) as f32;
         }
-    }
+    });
     out
 }
 
@@ -247,6 +250,7 @@ pub(crate) fn image_sky(
     fill_gaps(&ev, &mut sky, width, height);
     let noise = if sky.iter().any(|&s| s) {
         (0..sky.len())
+            .into_par_iter()
             .filter(|&p| !sky[p] && range[p] == RangeClass::Unsupported && ev.looks_like_sky(p))
             .collect()
     } else {
@@ -259,6 +263,7 @@ pub(crate) fn image_sky(
 fn seeds(ev: &Evidence, depth_sky: &[bool], width: usize, height: usize) -> Vec<usize> {
     let rows = ((ev.rules.seed_rows * height as f64).ceil() as usize).clamp(1, height);
     (0..width * height)
+        .into_par_iter()
         .filter(|&p| {
             (p < rows * width && ev.admissible(p)) || (depth_sky[p] && ev.looks_like_sky(p))
         })

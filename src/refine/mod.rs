@@ -217,12 +217,19 @@ fn cell_means(
 
 /// `map` (on a depth map's grid) at the image's `width` x `height`, each pixel taking its
 /// cell's value: the masks and the measured range that go with an upsampled range.
-pub fn nearest_to_image_size<T: Copy>(map: &Grid<T>, width: usize, height: usize) -> Grid<T> {
+pub fn nearest_to_image_size<T: Copy + Send + Sync>(
+    map: &Grid<T>,
+    width: usize,
+    height: usize,
+) -> Grid<T> {
+    if (map.width(), map.height()) == (width, height) {
+        return map.clone();
+    }
     let (sx, sy) = (
         map.width() as f64 / width as f64,
         map.height() as f64 / height as f64,
     );
-    Grid::from_fn(width, height, |x, y| {
+    Grid::par_from_fn(width, height, |x, y| {
         let i = ((x as f64 * sx) as usize).min(map.width() - 1);
         let j = ((y as f64 * sy) as usize).min(map.height() - 1);
         *map.get(i, j)

@@ -254,10 +254,10 @@ pub fn refine_range(
         out = match plan.combine {
             Combine::Guided => refined,
             Combine::WhereFilled if filled.is_none() => refined,
-            Combine::WhereFilled => Grid::from_fn(w, h, |x, y| {
+            Combine::WhereFilled => Grid::par_from_fn(w, h, |x, y| {
                 *if is_filled(x, y) { &refined } else { &out }.get(x, y)
             }),
-            Combine::Repair => Grid::from_fn(w, h, |x, y| {
+            Combine::Repair => Grid::par_from_fn(w, h, |x, y| {
                 repair(*out.get(x, y), *refined.get(x, y), is_filled(x, y))
             }),
         };
