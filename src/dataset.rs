@@ -3,6 +3,7 @@
 //! Cityscapes' output names.
 
 use crate::error::{Error, Result};
+use crate::photo::BetaDistribution;
 use std::path::{Component, Path, PathBuf};
 
 /// Cityscapes' suffix of a left image: `{name}_leftImg8bit.png`.
@@ -46,6 +47,24 @@ impl Item {
     pub fn foggy_output(&self, out: &Path, beta: f64) -> PathBuf {
         out.join(&self.out_dir)
             .join(format!("{}_foggy_beta_{}.png", self.stem, beta_label(beta)))
+    }
+
+    /// A fixed 64-bit hash (FNV-1a) of the output folder and stem: the same on every run,
+    /// platform and shard. It picks the frame's β from a distribution ([`Item::drawn_beta`])
+    /// and seeds its capture noise.
+    pub fn name_hash(&self) -> u64 {
+        let name = format!("{}/{}", self.out_dir.display(), self.stem);
+        name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        })
+    }
+
+    /// This frame's β drawn from `dist` under `seed` (`brume batch --beta-dist`): a
+    /// function of the frame's name alone, whatever the order or shard it is rendered in,
+    /// rounded to 6 significant digits for its file name.
+    pub fn drawn_beta(&self, dist: &BetaDistribution, seed: u64) -> f64 {
+        let beta = dist.sample(seed, self.name_hash());
+        format!("{beta:.5e}").parse().unwrap_or(beta)
     }
 
     /// The transmittance map beside it: `{stem}_transmittance_beta_{beta}.png`.
@@ -395,6 +414,35 @@ mod tests {
             out_dir: PathBuf::from(dir),
             stem: stem.into(),
         }
+    }
+
+    /// A frame's β depends on its name and the seed, not on where the dataset lies, and
+    /// is rounded for its file name; the hash is FNV-1a's (one step from its offset basis
+    /// for the name "/" of an item with no folder and no stem).
+    #[test]
+    fn a_frames_beta_follows_its_name() {
+        let dist: BetaDistribution = "uniform:0.005,0.02".parse().unwrap();
+        let a = item("aachen", "a_leftImg8bit");
+        let mut moved = a.clone();
+        moved.image = PathBuf::from("/elsewhere/a_leftImg8bit.png");
+        assert_eq!(a.drawn_beta(&dist, 7), moved.drawn_beta(&dist, 7));
+        let betas: Vec<f64> = ["a", "b", "c", "d"]
+            .iter()
+            .map(|s| item("aachen", s).drawn_beta(&dist, 7))
+            .collect();
+        assert!(betas.windows(2).all(|w| w[0] != w[1]), "{betas:?}");
+        assert_ne!(a.drawn_beta(&dist, 7), a.drawn_beta(&dist, 8));
+        for b in betas {
+            assert!((0.005..=0.02).contains(&b), "{b}");
+            assert_eq!(b, format!("{b:.5e}").parse::<f64>().unwrap());
+        }
+        let bare = Item {
+            out_dir: PathBuf::new(),
+            stem: String::new(),
+            ..item("", "")
+        };
+        let slash = 0xcbf2_9ce4_8422_2325u64 ^ u64::from(b'/');
+        assert_eq!(bare.name_hash(), slash.wrapping_mul(0x0100_0000_01b3));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 //! turbidity a photo was taken at (sec. 7.2.3, eq. 25-26).
 
 use super::args::{AerialBlur, RenderArgs, RetargetKind};
-use super::render::{look_from_args, PrepReport, Scene};
+use super::photo_args::{look_from_args, PrepReport, Scene};
 use super::sun::PlacedSun;
 use brume::atmosphere::Sensitivity;
 use brume::camera::Camera;
@@ -337,8 +337,8 @@ pub fn run_aerial(
                 "total_ms": t.total_ms,
                 "pass_ms": t.pass_ms,
                 "out": out.display().to_string(),
-                "insert": super::render::insert_json(args, extras.inserted),
-                "capture": super::render::capture_json(extras.capture),
+                "insert": super::capture::insert_json(args, extras.inserted),
+                "capture": super::capture::capture_json(extras.capture),
             })
         );
     } else {
@@ -350,7 +350,7 @@ pub fn run_aerial(
             rendered.schedule.steps,
             t.describe(1)
         );
-        super::render::print_insert_and_capture(args, extras.inserted, extras.capture);
+        super::capture::print_insert_and_capture(args, extras.inserted, extras.capture);
     }
     Ok(())
 }

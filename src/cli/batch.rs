@@ -66,7 +66,7 @@ pub fn plan(args: &BatchArgs) -> Result<Plan> {
         None => Shard::ALL,
     };
     let betas = parse_betas(&args.beta)?;
-    let capture = super::render::capture_options(&args.capture, args.prep.seed)?;
+    let capture = super::capture::capture_options(&args.capture, args.prep.seed)?;
     let seed = capture.seed;
     // With --beta-dist, the options are checked at the β the draws stay within, and the
     // destinations at its median (the frames' own β only change the number in the name).
@@ -97,7 +97,7 @@ pub fn plan(args: &BatchArgs) -> Result<Plan> {
         .into_iter()
         .filter_map(|item| {
             let wanted = match &args.beta_dist {
-                Some(dist) => vec![drawn_beta(dist, seed, &item)],
+                Some(dist) => vec![item.drawn_beta(dist, seed)],
                 None => betas.clone(),
             };
             let todo: Vec<f64> = wanted
@@ -402,10 +402,10 @@ impl Gpu<'_> {
             "prep_ms": frame.prep_ms,
             "gpu_ms": fogged.gpu_ms,
             "render_ms": render_ms,
-            "capture": super::render::capture_json(self.capture),
+            "capture": super::capture::capture_json(self.capture),
         });
         let capture = CaptureOptions {
-            seed: self.capture.seed ^ frame_hash(item) ^ beta.to_bits(),
+            seed: self.capture.seed ^ item.name_hash() ^ beta.to_bits(),
             ..*self.capture
         };
         Encode {
@@ -520,13 +520,6 @@ const MIN_BETA: f64 = 1e-6;
 /// The densest, m⁻¹: visibility 0.3 m.
 const MAX_BETA: f64 = 10.0;
 
-/// The β of `item` drawn from `dist` under `seed`: a function of the frame's name
-/// (folder and stem) alone, rounded to 6 significant digits for its file name.
-fn drawn_beta(dist: &BetaDistribution, seed: u64, item: &Item) -> f64 {
-    let beta = dist.sample(seed, frame_hash(item));
-    format!("{beta:.5e}").parse().unwrap_or(beta)
-}
-
 /// The least and largest β that `dist` draws (its 1e-6 and 1 − 1e-6 quantiles), which
 /// must lie in [`MIN_BETA`, `MAX_BETA`] as --beta's values do.
 fn drawn_beta_bounds(dist: &BetaDistribution) -> Result<Vec<f64>> {
@@ -543,15 +536,6 @@ fn drawn_beta_bounds(dist: &BetaDistribution) -> Result<Vec<f64>> {
         ));
     }
     Ok(bounds)
-}
-
-/// A fixed 64-bit hash (FNV-1a) of a frame's output folder and stem: the same on every
-/// run, platform and shard.
-fn frame_hash(item: &Item) -> u64 {
-    let name = format!("{}/{}", item.out_dir.display(), item.stem);
-    name.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
 }
 
 /// `--beta 0.005,0.01,0.02`: each in [`MIN_BETA`, `MAX_BETA`], no repeats.

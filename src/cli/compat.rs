@@ -3,12 +3,12 @@
 
 use super::args::RenderArgs;
 use super::inputs::check_same_size;
-use super::render::Scene;
 use brume::io::depth::{DepthFormat, DepthKind, LoadedDepth};
 use brume::io::image;
 use brume::io::output::Outputs;
 use brume::medium::physical::{self, PhysicalFog};
 use brume::photo::check_memory_before_loading;
+use brume::photo::Photo as Scene;
 use brume::raster::ScalarMap;
 use brume::refine::RefineMode;
 use brume::Result;

@@ -2,7 +2,7 @@
 //! `view`, which take render's options): values, and options that cannot take effect.
 
 use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
-use super::render::haze_from_args;
+use super::photo_args::haze_from_args;
 use brume::io::depth;
 use brume::{Error, Result};
 use std::path::PathBuf;

@@ -4,9 +4,9 @@
 //! references (see `brume::refine`).
 
 use super::args::{RefineArgs, RenderArgs};
-use super::render::{PrepReport, Scene};
 use brume::io::depth::DepthFormat;
 use brume::io::image;
+use brume::photo::{Photo as Scene, PreparedPhoto as PrepReport};
 use brume::raster::Grid;
 use brume::refine::{RangeFilter, RefineMode, RefineOptions, RefinePlan};
 use brume::{Error, Refine, Result};

@@ -30,7 +30,7 @@ pub fn check_args(args: &ViewArgs) -> Result<()> {
     let inputs = match &args.source {
         Some(ViewSource::Render(a)) => {
             super::options::check_options(a)?;
-            super::render::input_paths(a)
+            super::photo_args::input_paths(a)
         }
         Some(ViewSource::Scene(a)) => {
             let (w, h) = limits::parse_image_size("--size", &a.size)?;

@@ -8,7 +8,7 @@
 use crate::cli::aerial::{aerial_job, AerialJob};
 use crate::cli::args::{BlurKind, FogKind, MediumKind, RenderArgs, SceneArgs};
 use crate::cli::limits;
-use crate::cli::render as render_cmd;
+use crate::cli::photo_args as render_cmd;
 use crate::cli::scene::{self as scene_cmd, SceneMedium};
 use brume::atmosphere::AttenuationTable;
 use brume::camera::{Camera, FrameInputs};

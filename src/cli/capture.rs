@@ -1,0 +1,160 @@
+//! `brume render`'s capture after the fog and its inserted object: options from their
+//! flags, and their part of the text and JSON reports (also `batch`'s and the aerial
+//! path's).
+
+use super::args::{CaptureArgs, RenderArgs};
+use super::photo_args::{PrepReport, Scene};
+use brume::io::depth::DepthKind;
+use brume::photo::{self, CaptureOptions, Insertion, SensorNoise, VirtualObject};
+use brume::{Error, Result};
+use serde_json::json;
+
+/// The capture after the fog that `capture` asks for (all off by default), its noise
+/// seeded by `seed` (--seed, which also seeds the hole filling).
+pub(super) fn capture_options(capture: &CaptureArgs, seed: Option<i128>) -> Result<CaptureOptions> {
+    let seed = u64::try_from(seed.unwrap_or(0)).map_err(|_| {
+        Error::invalid(
+            "--seed",
+            seed.unwrap_or(0),
+            "a whole number from 0 to 2^64 - 1",
+        )
+    })?;
+    let noise = match (capture.shot_noise_gain, capture.read_noise) {
+        (None, None) => None,
+        (gain, read) => Some(SensorNoise {
+            gain: gain.unwrap_or(0.0),
+            read_noise: read.unwrap_or(0.0),
+        }),
+    };
+    let jpeg_quality = match capture.jpeg_quality {
+        None => None,
+        Some(q) => Some(
+            u8::try_from(q)
+                .ok()
+                .filter(|q| (1..=100).contains(q))
+                .ok_or_else(|| {
+                    Error::invalid("--jpeg-quality", q, "a JPEG quality from 1 to 100")
+                })?,
+        ),
+    };
+    let opts = CaptureOptions {
+        exposure_stops: capture.exposure_stops.unwrap_or(0.0),
+        noise,
+        jpeg_quality,
+        seed,
+    };
+    opts.validate().map_err(|e| match e {
+        // The library names its fields; the user typed flags.
+        Error::InvalidParameter {
+            name,
+            value,
+            expected,
+        } => Error::InvalidParameter {
+            name: format!("--{}", name.replace('_', "-")),
+            value,
+            expected,
+        },
+        e => e,
+    })?;
+    Ok(opts)
+}
+
+/// The capture options as the JSON report gives them (`null` when off).
+pub(super) fn capture_json(capture: &CaptureOptions) -> serde_json::Value {
+    if capture.is_off() {
+        return serde_json::Value::Null;
+    }
+    json!({
+        "exposure_stops": capture.exposure_stops,
+        "shot_noise_gain": capture.noise.map(|n| n.gain),
+        "read_noise": capture.noise.map(|n| n.read_noise),
+        "jpeg_quality": capture.jpeg_quality,
+        "seed": capture.seed,
+    })
+}
+
+/// Loads --insert and composites it into the photo and its prepared range (at the
+/// image's size by now), before the fog; `None` without --insert.
+pub(super) fn insert_object(
+    args: &RenderArgs,
+    scene: &mut Scene,
+    prep: &mut PrepReport,
+) -> Result<Option<Insertion>> {
+    let Some(path) = &args.insert.insert else {
+        return Ok(None);
+    };
+    if let Some(t) = args.from_turbidity {
+        return Err(Error::invalid(
+            "--from-turbidity",
+            t,
+            "no --insert with it: retargeting first removes the photo's haze, which the \
+             object, rendered clear, does not have",
+        ));
+    }
+    let kind = args.insert.insert_depth_kind.unwrap_or(DepthKind::Depth);
+    let intrinsics = photo_intrinsics(args, scene);
+    let object = VirtualObject::load(
+        path,
+        args.insert.insert_depth.as_deref(),
+        kind,
+        intrinsics.as_ref(),
+    )?;
+    Ok(Some(photo::insert(scene, prep, &object)?))
+}
+
+/// The photo's pinhole intrinsics at the image's size: those its depth was read with
+/// (scaled from the depth map's grid), else from --focal or --fov with the principal
+/// point at the centre.
+fn photo_intrinsics(args: &RenderArgs, scene: &Scene) -> Option<brume::io::depth::Intrinsics> {
+    use brume::io::depth::Intrinsics;
+    let (w, h) = (scene.image.width(), scene.image.height());
+    if let Some(k) = scene.depth.intrinsics {
+        let s = w as f64 / scene.depth.range.width() as f64;
+        let at_image = |c: f64| (c + 0.5) * s - 0.5;
+        return Some(Intrinsics {
+            fx: k.fx * s,
+            fy: k.fy * s,
+            cx: at_image(k.cx),
+            cy: at_image(k.cy),
+        });
+    }
+    let focal = args.depth.focal.or_else(|| {
+        args.depth
+            .fov
+            .map(|fov| h as f64 / 2.0 / (fov.to_radians() / 2.0).tan())
+    })?;
+    Some(Intrinsics::centred(focal, w, h))
+}
+
+/// --insert's report (`null` without it).
+pub(super) fn insert_json(args: &RenderArgs, inserted: Option<&Insertion>) -> serde_json::Value {
+    match (inserted, &args.insert.insert) {
+        (Some(i), Some(path)) => json!({
+            "object": path.display().to_string(),
+            "pixels_in_front": i.in_front,
+            "pixels_partial": i.partial,
+            "pixels_hidden": i.hidden,
+        }),
+        _ => serde_json::Value::Null,
+    }
+}
+
+/// The text report's lines for --insert and the capture.
+pub(super) fn print_insert_and_capture(
+    args: &RenderArgs,
+    inserted: Option<&Insertion>,
+    capture: &CaptureOptions,
+) {
+    if let (Some(i), Some(path)) = (inserted, &args.insert.insert) {
+        outln!(
+            "inserted {}: {} px in front ({} partly covered), {} px hidden by the photo",
+            path.display(),
+            i.in_front + i.partial,
+            i.partial,
+            i.hidden
+        );
+    }
+    if !capture.is_off() {
+        outln!("capture: {}", capture_json(capture));
+    }
+}

@@ -1,0 +1,340 @@
+//! What `brume render`'s arguments make of a photo, shared by `render`, `prep`, `view` and
+//! the aerial and Foggy Cityscapes paths: the scene loaded (or the demo), its
+//! pre-processing, and the haze and blur it is rendered with, each error naming its flag.
+
+use super::args::{MediumKind, RenderArgs};
+use super::inputs::{depth_inputs, load_depth, load_masks, prep_options};
+use brume::blur::Blur;
+use brume::io::{demo, image};
+use brume::medium::haze::{self, Haze};
+use brume::medium::physical::{PhysicalFog, DEFAULT_ALBEDO};
+use brume::medium::{Medium, UniformBlur};
+use brume::photo::Extinction;
+use brume::raster::ScalarMap;
+use brume::{Error, Result};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// The inputs of one render and where they came from (the library's photo).
+pub use brume::photo::Photo as Scene;
+/// What pre-processing and refinement made of the range, and the airlight.
+pub use brume::photo::PreparedPhoto as PrepReport;
+
+/// What is rendered: the medium (paper 000's haze, or a uniform blur) and the blur.
+pub struct Look {
+    pub haze: Haze,
+    pub uniform: Option<UniformBlur>,
+    pub blur: Blur,
+}
+
+impl Look {
+    pub fn medium(&self) -> &dyn Medium {
+        match &self.uniform {
+            Some(u) => u,
+            None => &self.haze,
+        }
+    }
+
+    /// κa + κs as the render applies it (0 for a uniform blur).
+    pub fn extinction(&self) -> f64 {
+        if self.uniform.is_some() {
+            0.0
+        } else {
+            self.haze.extinction()
+        }
+    }
+
+    /// The airlight as the render applies it (black for a uniform blur).
+    pub fn airlight(&self) -> [f32; 3] {
+        if self.uniform.is_some() {
+            [0.0; 3]
+        } else {
+            self.haze.airlight
+        }
+    }
+
+    pub fn sigma_max(&self) -> f64 {
+        self.medium().sigma_max(self.blur.sigma0)
+    }
+}
+
+/// Every file `args` reads: none of them may be an output.
+pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
+    args.image
+        .iter()
+        .cloned()
+        .chain(depth_inputs(&args.depth))
+        .chain(args.sky.iter().cloned())
+        .chain(args.prep.sky_mask.iter().cloned())
+        .chain(args.prep.ego_mask.iter().cloned())
+        .chain(args.sensitivity.iter().cloned())
+        .chain(args.transmittance_map.iter().cloned())
+        .chain(args.right.iter().cloned())
+        .chain(args.insert.insert.iter().cloned())
+        .chain(args.insert.insert_depth.iter().cloned())
+        .collect()
+}
+
+/// The haze of `args`: paper 000's in normalised range (--ka, --ks), or with --beta or
+/// --visibility the same medium on range in metres ([`PhysicalFog::haze`]).
+pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
+    let haze = Haze {
+        ka: args.ka.unwrap_or(haze::DEFAULT_KA),
+        ks: args.ks.unwrap_or(haze::DEFAULT_KS),
+        lambda: args.lambda,
+        airlight: args.airlight.unwrap_or(haze::DEFAULT_AIRLIGHT),
+        tint: args.tint.unwrap_or([1.0; 3]),
+        range_unit: 1.0,
+    };
+    haze.validate()?;
+    let haze = match physical_from_args(args)? {
+        Some(fog) => fog.haze(&haze),
+        None => haze,
+    };
+    if !(args.sigma0.is_finite() && args.sigma0 > 0.0) {
+        return Err(Error::invalid("sigma0", args.sigma0, "a finite number > 0"));
+    }
+    if !(args.rho_max > 0.0 && args.rho_max <= 0.25) {
+        return Err(Error::invalid(
+            "rho_max",
+            args.rho_max,
+            "a rate in (0, 0.25]",
+        ));
+    }
+    if let Some(s) = args.uniform_sigma {
+        if !(s.is_finite() && s >= args.sigma0) {
+            return Err(Error::invalid(
+                "uniform_sigma",
+                s,
+                format!("a finite scale ≥ --sigma0 ({} px)", args.sigma0),
+            ));
+        }
+    }
+    Ok(haze)
+}
+
+/// The range the haze reads (see [`haze_range`]), the range that counts as 1, and the
+/// look, as `brume render` renders them.
+pub fn haze_inputs(args: &RenderArgs, prep: &PrepReport) -> Result<(ScalarMap, f64, Look)> {
+    let range = &prep.range;
+    let haze = haze_from_args(args)?;
+    let fog = physical_from_args(args)?;
+    let (medium_range, range_divisor) = haze_range(fog.as_ref(), &haze, range)?;
+    Ok((
+        medium_range,
+        range_divisor,
+        look_from_args(args, &haze, prep.airlight),
+    ))
+}
+
+/// The fog of --beta or --visibility (with --albedo), or `None` for normalised κ. Refused
+/// where it would be ignored: --albedo alone, the aerial medium, a uniform blur.
+pub fn physical_from_args(args: &RenderArgs) -> Result<Option<PhysicalFog>> {
+    let albedo = args.albedo.unwrap_or(DEFAULT_ALBEDO);
+    let (fog, flag, value) = match (args.beta, args.visibility) {
+        (Some(beta), _) => (PhysicalFog::new(beta, albedo)?, "beta", beta),
+        (None, Some(v)) => (PhysicalFog::from_visibility(v, albedo)?, "visibility", v),
+        (None, None) => {
+            return match args.albedo {
+                // --ka and --ks are absorption and scattering already.
+                Some(a) => Err(Error::invalid(
+                    "albedo",
+                    a,
+                    "--beta or --visibility with it (with --ka/--ks, κa and κs already \
+                     split the extinction)",
+                )),
+                None => Ok(None),
+            };
+        }
+    };
+    if args.medium == MediumKind::Aerial {
+        return Err(Error::invalid(
+            flag,
+            value,
+            "--medium haze (the aerial medium's extinction comes from --turbidity)",
+        ));
+    }
+    if args.uniform_sigma.is_some() {
+        return Err(Error::invalid(
+            flag,
+            value,
+            "no --uniform-sigma with it (a uniform blur has no fog)",
+        ));
+    }
+    Ok(Some(fog))
+}
+
+/// Refuses physical fog on a range that is not in trustworthy metres
+/// ([`LoadedDepth::metric`]), naming the depth, how it was read and what would do.
+fn check_metric(args: &RenderArgs, scene: &Scene) -> Result<()> {
+    let depth = &scene.depth;
+    if args.medium == MediumKind::Aerial && !depth.metric && args.metres_per_unit.is_none() {
+        return Err(Error::invalid(
+            "--metres-per-unit",
+            "(missing)",
+            format!(
+                "the scale of {}'s range for --medium aerial, which is in metres: it was read \
+                 as {} {} in {}, not trustworthy metres (give --metres-per-unit, or a \
+                 metric depth: --calib, --camera, a metric --depth-format)",
+                scene.depth_name, depth.format, depth.kind, depth.units
+            ),
+        ));
+    }
+    let given = match (args.beta, args.visibility) {
+        (Some(b), _) => ("beta", b),
+        (None, Some(v)) => ("visibility", v),
+        (None, None) => return Ok(()),
+    };
+    if depth.metric {
+        return Ok(());
+    }
+    if args.depth.depth.is_none() {
+        return Err(Error::invalid(
+            given.0,
+            given.1,
+            "range in metres, but the built-in demo's is not (middlebury2006 with \
+             approximate geometry, stretched): give --image and --depth with a metric depth \
+             (--calib, --camera, or a metric --depth-format), or use --ka/--ks",
+        ));
+    }
+    let why = if depth.units != "m" {
+        format!("in {}", depth.units)
+    } else {
+        "with approximate default geometry (give --focal, --baseline and \
+         --disparity-offset)"
+            .to_string()
+    };
+    Err(Error::invalid(
+        given.0,
+        given.1,
+        format!(
+            "range in metres, but {} was read as {} {} {why}: give its calibration \
+             (--calib calib.txt, --camera NAME_camera.json), a metric --depth-format \
+             (cityscapes, kitti, nyu, tum, android-depth16, arcore) or --depth-scale in \
+             metres per unit; or use --ka/--ks (normalised range)",
+            scene.depth_name, depth.format, depth.kind
+        ),
+    ))
+}
+
+/// The range texture of the haze and the range that counts as 1 (`range_divisor`):
+/// normalised by its largest value (paper 000), or kept in metres for physical fog, whose
+/// unit is the visibility.
+pub fn haze_range(
+    fog: Option<&PhysicalFog>,
+    haze: &Haze,
+    range: &ScalarMap,
+) -> Result<(ScalarMap, f64)> {
+    let extinction = match fog {
+        Some(f) => Extinction::Physical(*f),
+        None => Extinction::Normalised {
+            ka: haze.ka,
+            ks: haze.ks,
+        },
+    };
+    let (medium_range, r_max) = brume::photo::medium_range(&extinction, range)?;
+    Ok((
+        medium_range,
+        if fog.is_some() {
+            haze.range_unit
+        } else {
+            r_max
+        },
+    ))
+}
+
+/// The photo and its range (or the demo), checked to be of one size and, for physical
+/// fog, in metres.
+pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
+    if let (Some(image_path), Some(map)) = (&args.image, &args.transmittance_map) {
+        return super::compat::load_transmittance_scene(image_path, map);
+    }
+    match (&args.image, &args.depth.depth) {
+        (None, None) => {
+            let scene = Scene {
+                image: demo::demo_image()?,
+                depth: demo::demo_range()?,
+                image_name: "built-in demo image".into(),
+                depth_name: "built-in demo disparity".into(),
+            };
+            check_metric(args, &scene)?;
+            Ok(scene)
+        }
+        (Some(image_path), Some(_)) => {
+            brume::photo::check_memory_before_loading(image_path)?;
+            let depth = load_depth(&args.depth)?;
+            let scene = Scene {
+                image: image::load_linear_rgb(image_path)?,
+                depth,
+                image_name: image_path.display().to_string(),
+                depth_name: args
+                    .depth
+                    .depth
+                    .as_ref()
+                    .expect("checked")
+                    .display()
+                    .to_string(),
+            };
+            scene.check_depth_fits()?;
+            check_metric(args, &scene)?;
+            let mut scene = scene;
+            super::refine::drop_left_right_mismatches(args, &mut scene)?;
+            Ok(scene)
+        }
+        (None, Some(_)) => Err(Error::invalid(
+            "--image",
+            "(missing)",
+            "a colour image to go with --depth",
+        )),
+        (Some(_), None) => Err(Error::invalid(
+            "--depth",
+            "(missing)",
+            "a depth, range or disparity map to go with --image",
+        )),
+    }
+}
+
+/// Pre-processes the scene's range as `args` ask ([`brume::photo::preprocess`]): the
+/// masks of `--sky-mask` and `--ego-mask` (checked against the depth map), the
+/// pre-processing options, the airlight policy; nothing with `--no-prep` or a uniform blur
+/// (which ignores range and airlight).
+pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
+    let mut opts = brume::photo::PrepareOptions {
+        airlight: args.airlight,
+        ..Default::default()
+    };
+    if args.no_prep || args.uniform_sigma.is_some() {
+        opts.prep = None;
+        return brume::photo::preprocess(scene, &opts);
+    }
+    opts.prep = Some(prep_options(&args.prep)?);
+    let masks = load_masks(&args.prep, &scene.depth.range, &scene.depth_name)?;
+    (opts.sky_mask, opts.ego_mask) = (masks.sky, masks.ego);
+    let started = Instant::now();
+    let prepared = brume::photo::preprocess(scene, &opts)?;
+    if let Some(p) = &prepared.prepared {
+        log::info!(
+            "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
+            p.stats.holes,
+            p.stats.hole_pixels,
+            p.stats.sky_pixels,
+            started.elapsed().as_secs_f64() * 1e3
+        );
+    }
+    Ok(prepared)
+}
+
+pub fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Look {
+    Look {
+        haze: Haze { airlight, ..*haze },
+        uniform: args.uniform_sigma.map(UniformBlur::new),
+        blur: Blur {
+            scheme: args.scheme,
+            sigma0: args.sigma0,
+            rho_max: args.rho_max,
+            precision: args.precision,
+            coarse_from: args.coarse_from.0,
+            ..Blur::default()
+        },
+    }
+}
