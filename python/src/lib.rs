@@ -10,6 +10,10 @@
 //! with the GIL released; calls from several Python threads queue on it (the job queue is
 //! the lock), so the context is only ever current on its own thread.
 
+// Why mimalloc: python/Cargo.toml, beside the dependency.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 mod aerial_photo;
 mod arrays;
 mod engine;
