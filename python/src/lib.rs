@@ -22,7 +22,6 @@ use arrays::{dtype_name, read_image, read_range, ImageIn, ImageOut};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
 use brume::photo::{
     self, BetaDistribution, CaptureOptions, FogOptions, Photo, PrepareOptions, PreparedPhoto,
-    SensorNoise,
 };
 use brume::raster::{RgbImage, ScalarMap};
 use brume::refine::RefineMode;
@@ -144,34 +143,14 @@ fn capture_request(
     jpeg_quality: Option<i64>,
     seed: u64,
 ) -> PyResult<CaptureOptions> {
-    let jpeg_quality = match jpeg_quality {
-        None => None,
-        Some(q) => Some(
-            u8::try_from(q)
-                .ok()
-                .filter(|q| (1..=100).contains(q))
-                .ok_or_else(|| {
-                    value_error(format!(
-                        "invalid jpeg_quality = {q}: expected None or a quality from 1 to 100"
-                    ))
-                })?,
-        ),
-    };
-    let noise = match (shot_noise_gain, read_noise) {
-        (None, None) => None,
-        (gain, read) => Some(SensorNoise {
-            gain: gain.unwrap_or(0.0),
-            read_noise: read.unwrap_or(0.0),
-        }),
-    };
-    let capture = CaptureOptions {
+    CaptureOptions::from_parts(
         exposure_stops,
-        noise,
+        shot_noise_gain,
+        read_noise,
         jpeg_quality,
         seed,
-    };
-    capture.validate().map_err(py_err)?;
-    Ok(capture)
+    )
+    .map_err(py_err)
 }
 
 fn refine_mode(refine: &Bound<'_, PyAny>) -> PyResult<RefineMode> {

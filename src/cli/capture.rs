@@ -5,7 +5,7 @@
 use super::args::{CaptureArgs, RenderArgs};
 use super::photo_args::{PrepReport, Scene};
 use brume::io::depth::DepthKind;
-use brume::photo::{self, CaptureOptions, Insertion, SensorNoise, VirtualObject};
+use brume::photo::{self, CaptureOptions, Insertion, VirtualObject};
 use brume::{Error, Result};
 use serde_json::json;
 
@@ -19,31 +19,14 @@ pub(super) fn capture_options(capture: &CaptureArgs, seed: Option<i128>) -> Resu
             "a whole number from 0 to 2^64 - 1",
         )
     })?;
-    let noise = match (capture.shot_noise_gain, capture.read_noise) {
-        (None, None) => None,
-        (gain, read) => Some(SensorNoise {
-            gain: gain.unwrap_or(0.0),
-            read_noise: read.unwrap_or(0.0),
-        }),
-    };
-    let jpeg_quality = match capture.jpeg_quality {
-        None => None,
-        Some(q) => Some(
-            u8::try_from(q)
-                .ok()
-                .filter(|q| (1..=100).contains(q))
-                .ok_or_else(|| {
-                    Error::invalid("--jpeg-quality", q, "a JPEG quality from 1 to 100")
-                })?,
-        ),
-    };
-    let opts = CaptureOptions {
-        exposure_stops: capture.exposure_stops.unwrap_or(0.0),
-        noise,
-        jpeg_quality,
+    let opts = CaptureOptions::from_parts(
+        capture.exposure_stops.unwrap_or(0.0),
+        capture.shot_noise_gain,
+        capture.read_noise,
+        capture.jpeg_quality,
         seed,
-    };
-    opts.validate().map_err(|e| match e {
+    )
+    .map_err(|e| match e {
         // The library names its fields; the user typed flags.
         Error::InvalidParameter {
             name,

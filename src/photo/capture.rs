@@ -62,10 +62,49 @@ impl Default for CaptureOptions {
 /// frame) do not share numbers with it.
 const NOISE_STREAM: u64 = 0x006e_6f69_7365;
 
+/// What a JPEG quality may be.
+const JPEG_QUALITIES: &str = "a JPEG quality from 1 to 100";
+
 impl CaptureOptions {
     /// Whether these options leave the image as it is.
     pub fn is_off(&self) -> bool {
         self.exposure_stops == 0.0 && self.noise.is_none() && self.jpeg_quality.is_none()
+    }
+
+    /// The options as a host's flags or keywords give them, checked ([`Self::validate`]):
+    /// no noise unless a gain or a read noise is given (the other one then 0), the JPEG
+    /// quality as any integer (refused outside 1..=100, named `jpeg_quality`).
+    pub fn from_parts(
+        exposure_stops: f64,
+        shot_noise_gain: Option<f64>,
+        read_noise: Option<f64>,
+        jpeg_quality: Option<i64>,
+        seed: u64,
+    ) -> Result<Self> {
+        let jpeg_quality = match jpeg_quality {
+            None => None,
+            Some(q) => Some(
+                u8::try_from(q)
+                    .ok()
+                    .filter(|q| (1..=100).contains(q))
+                    .ok_or_else(|| Error::invalid("jpeg_quality", q, JPEG_QUALITIES))?,
+            ),
+        };
+        let noise = match (shot_noise_gain, read_noise) {
+            (None, None) => None,
+            (gain, read) => Some(SensorNoise {
+                gain: gain.unwrap_or(0.0),
+                read_noise: read.unwrap_or(0.0),
+            }),
+        };
+        let opts = CaptureOptions {
+            exposure_stops,
+            noise,
+            jpeg_quality,
+            seed,
+        };
+        opts.validate()?;
+        Ok(opts)
     }
 
     /// Checks the values, naming the one that is wrong and what it should be.
@@ -96,7 +135,7 @@ impl CaptureOptions {
         }
         if let Some(q) = self.jpeg_quality {
             if !(1..=100).contains(&q) {
-                return Err(Error::invalid("jpeg_quality", q, "a quality in 1..=100"));
+                return Err(Error::invalid("jpeg_quality", q, JPEG_QUALITIES));
             }
         }
         Ok(())
@@ -280,6 +319,25 @@ fn ln_gamma(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn from_parts_makes_noise_only_when_asked_and_names_a_bad_quality() {
+        let off = CaptureOptions::from_parts(0.0, None, None, None, 0).unwrap();
+        assert!(off.is_off());
+        let read = CaptureOptions::from_parts(0.0, None, Some(0.01), Some(90), 3).unwrap();
+        let noise = read.noise.unwrap();
+        assert_eq!((noise.gain, noise.read_noise), (0.0, 0.01));
+        assert_eq!((read.jpeg_quality, read.seed), (Some(90), 3));
+        for q in [0, 101, -1, 1 << 40] {
+            let e = CaptureOptions::from_parts(0.0, None, None, Some(q), 0).unwrap_err();
+            assert!(
+                matches!(&e, Error::InvalidParameter { name, .. } if name == "jpeg_quality"),
+                "{e}"
+            );
+        }
+        let e = CaptureOptions::from_parts(0.0, Some(2.0), None, None, 0).unwrap_err();
+        assert!(e.to_string().contains("shot_noise_gain"), "{e}");
+    }
 
     #[test]
     fn ln_gamma_matches_log_factorials() {
