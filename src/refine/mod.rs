@@ -195,11 +195,11 @@ fn cell_means(
     image: &RgbImage,
     width: usize,
     height: usize,
-    value: impl Fn(f32) -> f64,
+    value: impl Fn(f32) -> f64 + Sync,
 ) -> Grid<[f64; 3]> {
     let (w, h) = (image.width(), image.height());
     let cell = [w as f64 / width as f64, h as f64 / height as f64];
-    Grid::from_fn(width, height, |i, j| {
+    Grid::par_from_fn(width, height, |i, j| {
         let (x0, x1) = cell_span(i, cell[0], w);
         let (y0, y1) = cell_span(j, cell[1], h);
         let mut sum = [0f64; 3];
@@ -255,7 +255,7 @@ pub fn guided_range_reference(
     check_positive(range)?;
     let (gw, gh) = (g.width, g.height);
     // Pack: (I, p, I·p, I²) per cell.
-    let moments = Grid::from_fn(gw, gh, |i, j| {
+    let moments = Grid::par_from_fn(gw, gh, |i, j| {
         let (x0, x1) = cell_span(i, g.cell[0], w);
         let (y0, y1) = cell_span(j, g.cell[1], h);
         let (mut gi, mut lp) = (0.0, 0.0);
@@ -290,7 +290,7 @@ pub fn guided_range_reference(
         );
         [v[0], v[1]]
     };
-    Ok(Grid::from_fn(w, h, |x, y| {
+    Ok(Grid::par_from_fn(w, h, |x, y| {
         let cx = (x as f64 + 0.5) / g.cell[0] - 0.5;
         let cy = (y as f64 + 0.5) / g.cell[1] - 0.5;
         let (fx, fy) = (cx.floor(), cy.floor());
@@ -331,7 +331,7 @@ pub fn joint_bilateral_upsample_reference(
     let cells = image_at_depth_size_srgb(image, lw, lh);
     let scale = [lw as f64 / w as f64, lh as f64 / h as f64];
     let inv = 1.0 / (2.0 * sigma_colour * sigma_colour);
-    Ok(Grid::from_fn(w, h, |x, y| {
+    Ok(Grid::par_from_fn(w, h, |x, y| {
         let colour = encoded(*image.get(x, y));
         let centre = [
             (x as f64 + 0.5) * scale[0] - 0.5,
@@ -412,7 +412,7 @@ fn cell_span(i: usize, s: f64, n: usize) -> (usize, usize) {
 /// The mean over a (2r + 1)-tap line of in-grid values, horizontal or vertical.
 fn box_mean(src: &Grid<[f64; 4]>, r: usize, horizontal: bool) -> Grid<[f64; 4]> {
     let (w, h) = (src.width(), src.height());
-    Grid::from_fn(w, h, |x, y| {
+    Grid::par_from_fn(w, h, |x, y| {
         let (c, n) = if horizontal { (x, w) } else { (y, h) };
         let (lo, hi) = (c.saturating_sub(r), (c + r).min(n - 1));
         let mut sum = [0.0; 4];
