@@ -203,11 +203,7 @@ fn clip_to_sensor_range(image: &mut RgbaImage) {
 /// Encodes the image's colour as an 8-bit sRGB JPEG of `quality` (1..=100).
 pub fn encode_jpeg(image: &RgbaImage, quality: u8) -> Result<Vec<u8>> {
     if !(1..=100).contains(&quality) {
-        return Err(Error::invalid(
-            "jpeg_quality",
-            quality,
-            "a quality in 1..=100",
-        ));
+        return Err(Error::invalid("jpeg_quality", quality, JPEG_QUALITIES));
     }
     let rgb = linear_rgba_to_srgb8_rgb(image.as_slice()).into_flattened();
     let mut bytes = Vec::new();
