@@ -320,11 +320,11 @@ fn coarse_levels_are_freed() {
     assert_eq!(brume::gpu::live_objects(), kept);
 }
 
-/// `--coarse-from`: the CLI's default is 3 px (the same bytes as `--coarse-from 3`),
+/// `--coarse-from`: the CLI's default is 2 px (the same bytes as `--coarse-from 2`),
 /// `off` renders the full-resolution pipeline (other bytes), and a scale under 2 px or a
 /// word is refused naming the option and what it accepts.
 #[test]
-fn cli_defaults_to_coarse_from_three_and_turns_off() {
+fn cli_defaults_to_coarse_from_two_and_turns_off() {
     let dir = tempfile::tempdir().unwrap();
     let render = |extra: &[&str], out: &str| {
         let mut args = vec!["render", "--uniform-sigma", "12", "--out", out];
@@ -334,7 +334,8 @@ fn cli_defaults_to_coarse_from_three_and_turns_off() {
         std::fs::read(dir.path().join(out)).unwrap()
     };
     let default = render(&[], "default.png");
-    assert_eq!(default, render(&["--coarse-from", "3"], "three.png"));
+    assert_eq!(default, render(&["--coarse-from", "2"], "two.png"));
+    assert_ne!(default, render(&["--coarse-from", "3"], "three.png"));
     assert_ne!(default, render(&["--coarse-from", "off"], "off.png"));
     for bad in ["1.5", "-3", "nan", "fast"] {
         let o = brume(dir.path(), &["render", "--coarse-from", bad]);

@@ -208,7 +208,7 @@ impl AerialArgs {
             lambda: if self.blur { self.lambda_px } else { 0.0 },
             horizon_zenith_deg: self.horizon_zenith_deg,
             horizon_light: self.airlight,
-            // `brume render`'s blur: coarse to fine from 3 px.
+            // `brume render`'s blur: coarse to fine from 2 px.
             blur: Blur {
                 sigma0: self.sigma0,
                 ..Blur::photo()

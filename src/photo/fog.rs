@@ -39,7 +39,7 @@ pub struct FogOptions {
 
 impl Default for FogOptions {
     /// Paper 000's defaults: κa 0.25, κs 0.75 on normalised range, λ 8; the diffusion
-    /// blur as `brume render` runs it ([`Blur::photo`]: coarse to fine from 3 px).
+    /// blur as `brume render` runs it ([`Blur::photo`]: coarse to fine from 2 px).
     fn default() -> Self {
         FogOptions {
             extinction: Extinction::Normalised {
