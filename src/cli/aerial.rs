@@ -343,11 +343,12 @@ pub fn run_aerial(
         );
     } else {
         outln!(
-            "wrote {} (aerial perspective, T = {:.2} ({}), {} diffusion passes + 2, {})",
+            "wrote {} (aerial perspective, T = {:.2} ({}), {} diffusion steps in {} passes, {})",
             out.display(),
             m.table.turbidity(),
             look.turbidity_source,
             rendered.schedule.steps,
+            rendered.pass_names().len(),
             t.describe(1)
         );
         super::capture::print_insert_and_capture(args, extras.inserted, extras.capture);

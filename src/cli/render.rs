@@ -249,13 +249,14 @@ impl Report<'_> {
             outln!("τ from {lo:.4} to {hi:.4} over the pixels of known range");
         }
         outln!(
-            "wrote {} ({}x{}, {} {}, {} diffusion passes + 2, {} on {})",
+            "wrote {} ({}x{}, {} {}, {} diffusion steps in {} passes, {} on {})",
             out.display(),
             scene.image.width(),
             scene.image.height(),
             look.blur.scheme,
             look.blur.precision,
             rendered.schedule.steps,
+            rendered.pass_names().len(),
             t.describe(1),
             renderer
         );
