@@ -170,7 +170,7 @@ impl AerialPhoto {
 }
 
 /// The aerial medium for `photo` with its `prepared` range (at the image's size; see
-/// [`super::prepare`]), and the retargeted image. Errors: no known range, bad options.
+/// [`super::prepare()`]), and the retargeted image. Errors: no known range, bad options.
 pub fn aerial(
     photo: &Photo,
     prepared: &PreparedPhoto,

@@ -124,7 +124,7 @@ pub struct FoggedPhoto {
     pub range_divisor: f64,
 }
 
-/// Fogs `photo` with its `prepared` range (see [`super::prepare`]) on `renderer`.
+/// Fogs `photo` with its `prepared` range (see [`super::prepare()`]) on `renderer`.
 ///
 /// Errors: [`Error::InvalidParameter`] for bad options, for physical fog on a range not
 /// known to be in metres ([`crate::io::depth::LoadedDepth::metric`]), and for a range not

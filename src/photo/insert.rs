@@ -206,7 +206,7 @@ impl VirtualObject {
 }
 
 /// Inserts `object` into `photo` and its `prepared` range (refined to the image's size)
-/// before [`super::fog`], which then fogs it with the photo. The photo's own range
+/// before [`super::fog()`], which then fogs it with the photo. The photo's own range
 /// decides what hides the object; pre-processing's holes filled and sky found count.
 pub fn insert(
     photo: &mut Photo,

@@ -16,8 +16,8 @@
 //! The steps, each usable alone: [`Photo`] (an image and its range, loaded or given),
 //! [`preprocess`] (holes, sky, the airlight, on the depth map's grid: CPU only, so a
 //! dataset's loader thread can run it), [`PreparedPhoto::refine`] (upsampling and the
-//! guided filter, on the GPU or by the CPU references), [`insert`] (a rendered object,
-//! depth-tested, before the fog), [`fog`] (the haze in normalised or physical units, with
+//! guided filter, on the GPU or by the CPU references), [`insert()`] (a rendered object,
+//! depth-tested, before the fog), [`fog()`] (the haze in normalised or physical units, with
 //! the diffusion blur), [`transmittance_map`], and [`capture()`] (exposure, sensor noise
 //! and JPEG after the fog; [`BetaDistribution`] draws β per frame).
 

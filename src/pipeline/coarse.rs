@@ -86,9 +86,9 @@ pub(super) struct Level {
     pub(super) d0: Texture,
     /// ρ averaged over 2x2 blocks of the finer level.
     pub(super) rate: Texture,
-    /// The down pass's destination: D[0], D_k0 and the rate.
+    /// The down pass's destination: `D[0]`, `D_k0` and the rate.
     pub(super) down: Framebuffer,
-    /// The steps' and the finer level's blend's destinations: D[i].
+    /// The steps' and the finer level's blend's destinations: `D[i]`.
     pub(super) step: [Framebuffer; 2],
 }
 

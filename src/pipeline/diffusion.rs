@@ -222,7 +222,7 @@ impl Pipeline {
     }
 
     /// Steps `start..end` at coarse level `index` (1: half resolution), its D ping-ponged
-    /// from D[0] (the down pass's output). Returns the D target holding the result.
+    /// from `D[0]` (the down pass's output). Returns the D target holding the result.
     fn coarse_steps(
         &self,
         schedule: &Schedule,

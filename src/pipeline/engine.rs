@@ -537,7 +537,7 @@ impl Pipeline {
         }
     }
 
-    /// The one or two passes (`keys`, from [`engine_keys`]) of a Gaussian or no-blur fog.
+    /// The one or two passes (`keys`, from [`Self::engine_keys`]) of a Gaussian or no-blur fog.
     fn run_engine(
         &self,
         input: &Input,

@@ -272,7 +272,7 @@ pub struct Pipeline {
     /// frame's schedule starts it ([`Blur::coarse_from`]).
     coarse: coarse::Coarse,
     coarse_start: Option<u32>,
-    /// The lookups of the last medium rendered, uploaded, by [`Lookup::id`].
+    /// The lookups of the last medium rendered, uploaded, by [`crate::medium::Lookup::id`].
     lookups: HashMap<u64, Texture>,
     engine_targets: EngineTargets,
     /// The framebuffer over the host's output texture ([`Output::Texture`]), re-attached

@@ -19,9 +19,9 @@ pub(super) struct Targets {
     pub(super) tau_gb: Option<[Texture; 2]>,
     /// Per-pixel rate ρ.
     pub(super) rate: Texture,
-    /// The medium pass's destination: F[0], ρ and (τ_g, τ_b)[0].
+    /// The medium pass's destination: `F[0]`, ρ and `(τ_g, τ_b)[0]`.
     pub(super) first: Framebuffer,
-    /// The diffusion passes' destinations: F[i] and (τ_g, τ_b)[i].
+    /// The diffusion passes' destinations: `F[i]` and `(τ_g, τ_b)[i]`.
     pub(super) step: [Framebuffer; 2],
 }
 
