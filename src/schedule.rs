@@ -239,9 +239,11 @@ impl Schedule {
             return None;
         }
         let top = self.rate(self.sigma_max);
-        let start = ((from / self.sigma0).ln() / top).ceil().max(0.0);
+        // A scale within COARSE_FROM_TOLERANCE of `from` has reached it.
+        let target = (from / self.sigma0).ln() - COARSE_FROM_TOLERANCE.ln_1p();
+        let start = (target / top).ceil().max(0.0);
         // Rounding guard: `from` landing exactly on a step must not move it one later.
-        let start = if (start - 1.0) * top >= (from / self.sigma0).ln() - 1e-12 {
+        let start = if (start - 1.0) * top >= target - 1e-12 {
             start - 1.0
         } else {
             start
@@ -311,7 +313,7 @@ impl Schedule {
         if top <= 0.0 {
             return starts;
         }
-        let doubling = std::f64::consts::LN_2 / top;
+        let doubling = (std::f64::consts::LN_2 - COARSE_FROM_TOLERANCE.ln_1p()) / top;
         while starts.len() < MAX_COARSE_LEVELS {
             let last = f64::from(*starts.last().expect("one level at least"));
             // Rounding guard as in `coarse_start`: a doubling that lands on a step starts there.
@@ -348,6 +350,16 @@ pub const MAX_COARSE_LEVELS: usize = 2;
 /// 2x2 box average, ¾ for bilinear up-sampling at a quarter and three quarters of a
 /// half-resolution texel (f(1 − f) = 3/16 half texel² = ¾ px²).
 pub const COARSE_RESAMPLING_VARIANCE: f64 = 1.0;
+
+/// How far (relative) short of [`crate::Blur::coarse_from`] the most blurred pixel's
+/// scale may be and still count as having reached it ([`Schedule::coarse_start`]): σmax
+/// comes from a range, λ and κs and is shown to two decimals, and a σmax of 7.996 px (the
+/// viewer's `--lambda 8.08`, "σmax 8.00 px") gave σ3 = 1.9997 px, which made a 2 px stage
+/// start one full-resolution step later than σmax 8.000 (about a tenth of that frame's GPU
+/// time) for an aliasing residue at the half resolution's band 0.15 % larger. A scale
+/// 0.1 % short leaves 1 % more of that residue at 2 px (exp(π²/8·2·10⁻³·σ²)). The levels'
+/// doublings ([`Schedule::coarse_levels`]) take the same tolerance.
+pub const COARSE_FROM_TOLERANCE: f64 = 1e-3;
 
 /// The fewest steps the coarse stage must take over to pay for its two passes (a 2x2
 /// average and the blend): each half-resolution step costs a quarter of a full one.
@@ -492,8 +504,23 @@ mod tests {
         assert_eq!(s.coarse_start(3.0), Some(5));
         assert_eq!(s.coarse_start(2.0), Some(3));
         assert_eq!(s.coarse_start(4.0), Some(6));
-        // Landing exactly on a step starts there, not one later.
+        // Landing exactly on a step starts there, not one later; so does landing within
+        // the tolerance below it, and not beyond.
         assert_eq!(s.coarse_start(25f64.powf(5.0 / 13.0)), Some(5));
+        let sigma5 = 25f64.powf(5.0 / 13.0);
+        assert_eq!(
+            s.coarse_start(sigma5 * (1.0 + 0.9 * COARSE_FROM_TOLERANCE)),
+            Some(5)
+        );
+        assert_eq!(
+            s.coarse_start(sigma5 * (1.0 + 1.1 * COARSE_FROM_TOLERANCE)),
+            Some(6)
+        );
+        // The viewer's frame: σmax 7.996 reaches 1.9997 px at k = 3 of 9.
+        let viewer = Schedule::new(Scheme::Matched, 1.0, 7.996, 0.25).unwrap();
+        assert_eq!(viewer.steps, 9);
+        assert_eq!(viewer.coarse_start(2.0), Some(3));
+        assert_eq!(viewer.coarse_levels(3), vec![3, 6]);
         // Too few steps left, or a scheme whose offsets do not scale exactly: no stage.
         assert_eq!(s.coarse_start(20.0), None);
         for scheme in [Scheme::Euler, Scheme::Invariant] {

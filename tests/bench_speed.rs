@@ -46,6 +46,9 @@ fn max_passes_skips_euler_and_says_so() {
     for row in &report.rows[1..] {
         assert!(!row.skipped, "{row:?}");
         assert_eq!((row.passes, row.runs, row.samples_ms.len()), (7, 2, 2));
+        assert_eq!(row.pass_names.len(), 7);
+        assert_eq!(row.pass_median_ms.len(), 7);
+        assert!(row.pass_median_ms.iter().all(|&ms| ms > 0.0), "{row:?}");
         assert!(row.median_ms.unwrap() > 0.0 && row.std_ms.is_some());
         assert!(row.clock.is_some());
     }
@@ -60,6 +63,40 @@ fn max_passes_skips_euler_and_says_so() {
     assert_eq!(json["rows"][0]["skipped"], true);
     assert_eq!(json["rows"][0]["reason"], "18 passes > --max-passes 10");
     assert_eq!(json["rows"][1]["skipped"], false);
+}
+
+/// With the coarse stage a row counts the passes that ran (N + 1 + 2L, not N + 2) and
+/// names each with its median time.
+#[test]
+fn coarse_rows_count_and_name_their_passes() {
+    let opts = SpeedOptions {
+        configs: Configs {
+            sigmas: vec![25.0],
+            schemes: vec![Scheme::Matched],
+            precisions: vec![Precision::F32],
+            ..Configs::default()
+        },
+        width: 64,
+        height: 48,
+        runs: 1,
+        max_passes: None,
+        tau: Tau::Grey,
+        coarse_from: Some(2.0),
+    };
+    let (_lock, mut r) = renderer();
+    let report = run_speed(r.renderer().unwrap(), &opts, &|_| {}).expect("speed run");
+    let row = &report.rows[0];
+    // σ 25: N = 13, two levels from step 3 (σ 2.10 px) and 6.
+    assert_eq!((row.steps, row.passes), (13, 13 + 1 + 2 * 2));
+    assert_eq!(row.pass_names.len(), row.passes as usize);
+    assert_eq!(row.pass_median_ms.len(), row.passes as usize);
+    assert_eq!(row.pass_names.first().map(String::as_str), Some("medium"));
+    assert_eq!(
+        row.pass_names.last().map(String::as_str),
+        Some("blend 1/2 + composite")
+    );
+    let sum: f64 = row.pass_median_ms.iter().sum();
+    assert!(sum > 0.0 && row.median_ms.unwrap() > 0.0, "{row:?}");
 }
 
 #[test]

@@ -133,7 +133,8 @@ pub struct SpeedRow {
     pub precision: Precision,
     /// Diffusion steps N.
     pub steps: u32,
-    /// Passes per render, N + 2.
+    /// Passes per render: N + 2 at full resolution, N + 1 + 2L with L coarse levels
+    /// ([`crate::Blur::coarse_from`]; the passes of a level are smaller).
     pub passes: u32,
     /// True when `--max-passes` left this configuration out; the figures are then `None`.
     pub skipped: bool,
@@ -148,10 +149,16 @@ pub struct SpeedRow {
     pub median_ms: Option<f64>,
     /// Sample standard deviation of the total time (ms); `None` with one run.
     pub std_ms: Option<f64>,
-    /// Median time per pass, median_ms / (N + 2) (ms).
+    /// Median time per pass, median_ms / passes (ms).
     pub ms_per_pass: Option<f64>,
     /// Every timed total (ms), in run order.
     pub samples_ms: Vec<f64>,
+    /// The passes of one render as they ran (`medium`, `diffuse 1`, `down 1/2`, …): N + 2
+    /// at full resolution, more with the coarse stage. Empty when skipped.
+    pub pass_names: Vec<String>,
+    /// The median time of each pass of `pass_names` over the timed runs (ms); empty when
+    /// skipped or when no run had figures.
+    pub pass_median_ms: Vec<f64>,
 }
 
 /// A speed ratio between two schemes at one σ and precision.
@@ -228,12 +235,14 @@ pub fn run_speed(
                 };
                 let mut samples = Vec::with_capacity(opts.runs);
                 let mut clocks = Vec::with_capacity(opts.runs);
+                let mut passes = PassSamples::default();
                 // Run 0 is the warm-up: shader caches, target allocation, first query.
                 for run in 0..=opts.runs {
                     let out = renderer.render(&image, &range, &medium, &blur)?;
                     if let (true, Some(ms)) = (run > 0, out.times.total()) {
                         samples.push(ms);
                         clocks.push(out.times.clock.name());
+                        passes.add(out.pass_names(), &out.times.pass_ms);
                     }
                     done += u64::from(schedule.steps + 2);
                     progress(Progress {
@@ -242,7 +251,7 @@ pub fn run_speed(
                         what: &label,
                     });
                 }
-                timed_row(config, schedule, samples, &clocks)
+                timed_row(config, schedule, samples, &clocks, passes)
             }
         };
         rows.push(row);
@@ -292,11 +301,49 @@ fn skipped_row(config: &Config, schedule: &Schedule, reason: String) -> SpeedRow
         std_ms: None,
         ms_per_pass: None,
         samples_ms: Vec::new(),
+        pass_names: Vec::new(),
+        pass_median_ms: Vec::new(),
     }
 }
 
-fn timed_row(config: &Config, schedule: &Schedule, samples: Vec<f64>, clocks: &[&str]) -> SpeedRow {
-    let passes = schedule.steps + 2;
+/// Each pass's times over the timed runs of one configuration.
+#[derive(Default)]
+struct PassSamples {
+    names: Vec<String>,
+    times: Vec<Vec<f64>>,
+}
+
+impl PassSamples {
+    fn add(&mut self, names: Vec<String>, pass_ms: &[f64]) {
+        if names.len() != pass_ms.len() {
+            return;
+        }
+        if self.names.is_empty() {
+            self.times = vec![Vec::new(); names.len()];
+            self.names = names;
+        }
+        for (times, &ms) in self.times.iter_mut().zip(pass_ms) {
+            times.push(ms);
+        }
+    }
+
+    fn medians(&self) -> Vec<f64> {
+        self.times.iter().filter_map(|t| median(t)).collect()
+    }
+}
+
+fn timed_row(
+    config: &Config,
+    schedule: &Schedule,
+    samples: Vec<f64>,
+    clocks: &[&str],
+    pass_samples: PassSamples,
+) -> SpeedRow {
+    // The passes that ran: N + 2, or N + 1 + 2L with L coarse levels.
+    let passes = match pass_samples.names.len() {
+        0 => schedule.steps + 2,
+        n => n as u32,
+    };
     let median_ms = median(&samples);
     let clock = match clocks.first() {
         Some(first) if clocks.iter().all(|c| c == first) => first.to_string(),
@@ -316,6 +363,8 @@ fn timed_row(config: &Config, schedule: &Schedule, samples: Vec<f64>, clocks: &[
         std_ms: sample_std(&samples),
         ms_per_pass: median_ms.map(|m| m / f64::from(passes)),
         samples_ms: samples,
+        pass_median_ms: pass_samples.medians(),
+        pass_names: pass_samples.names,
     }
 }
 

@@ -249,7 +249,7 @@ pub struct CommonArgs {
     /// Coarse to fine (matched scheme, grey τ): run the steps at half resolution once the
     /// blur has reached this scale in px (≥ 2), at a quarter once it has doubled; default
     /// here: every step at full resolution, the paper's pipeline (`render`, `batch` and
-    /// `view` default to 3).
+    /// `view` default to 2).
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub coarse_from: Option<f64>,
 }
