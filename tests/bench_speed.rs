@@ -65,13 +65,12 @@ fn max_passes_skips_euler_and_says_so() {
     assert_eq!(json["rows"][1]["skipped"], false);
 }
 
-/// With the coarse stage a row counts the passes that ran (N + 1 + 2L, not N + 2) and
-/// names each with its median time.
-#[test]
-fn coarse_rows_count_and_name_their_passes() {
-    let opts = SpeedOptions {
+/// One run of the matched scheme in f32 at σ `sigma` on a 64x48 image, the coarse stage
+/// from `coarse_from` px.
+fn matched_f32_64x48(sigma: f64, coarse_from: f64) -> SpeedOptions {
+    SpeedOptions {
         configs: Configs {
-            sigmas: vec![25.0],
+            sigmas: vec![sigma],
             schemes: vec![Scheme::Matched],
             precisions: vec![Precision::F32],
             ..Configs::default()
@@ -79,10 +78,16 @@ fn coarse_rows_count_and_name_their_passes() {
         width: 64,
         height: 48,
         runs: 1,
-        max_passes: None,
-        tau: Tau::Grey,
-        coarse_from: Some(2.0),
-    };
+        coarse_from: Some(coarse_from),
+        ..SpeedOptions::default()
+    }
+}
+
+/// With the coarse stage a row counts the passes that ran (N + 1 + 2L, not N + 2) and
+/// names each with its median time.
+#[test]
+fn coarse_rows_count_and_name_their_passes() {
+    let opts = matched_f32_64x48(25.0, 2.0);
     let (_lock, mut r) = renderer();
     let report = run_speed(r.renderer().unwrap(), &opts, &|_| {}).expect("speed run");
     let row = &report.rows[0];
@@ -190,19 +195,7 @@ fn coarse_from_is_checked_and_runs() {
         let err = opts.validate().expect_err("refused").to_string();
         assert!(err.contains("--coarse-from"), "{bad}: {err}");
     }
-    let opts = SpeedOptions {
-        configs: Configs {
-            sigmas: vec![12.0],
-            schemes: vec![Scheme::Matched],
-            precisions: vec![Precision::F32],
-            ..Configs::default()
-        },
-        width: 64,
-        height: 48,
-        runs: 1,
-        coarse_from: Some(3.0),
-        ..SpeedOptions::default()
-    };
+    let opts = matched_f32_64x48(12.0, 3.0);
     let (_lock, mut r) = renderer();
     let report = run_speed(r.renderer().unwrap(), &opts, &|_| {}).expect("speed run");
     assert_eq!(report.rows.len(), 1);
