@@ -239,16 +239,10 @@ impl Schedule {
             return None;
         }
         let top = self.rate(self.sigma_max);
-        // A scale within COARSE_FROM_TOLERANCE of `from` has reached it.
+        // A scale within COARSE_FROM_TOLERANCE of `from` has reached it; so `from` landing
+        // exactly on a step starts there, whatever the rounding of the logarithms.
         let target = (from / self.sigma0).ln() - COARSE_FROM_TOLERANCE.ln_1p();
-        let start = (target / top).ceil().max(0.0);
-        // Rounding guard: `from` landing exactly on a step must not move it one later.
-        let start = if (start - 1.0) * top >= target - 1e-12 {
-            start - 1.0
-        } else {
-            start
-        };
-        let start = start.max(0.0) as u32;
+        let start = (target / top).ceil().max(0.0) as u32;
         (self.steps.saturating_sub(start) >= MIN_COARSE_STEPS).then_some(start)
     }
 
@@ -316,8 +310,8 @@ impl Schedule {
         let doubling = (std::f64::consts::LN_2 - COARSE_FROM_TOLERANCE.ln_1p()) / top;
         while starts.len() < MAX_COARSE_LEVELS {
             let last = f64::from(*starts.last().expect("one level at least"));
-            // Rounding guard as in `coarse_start`: a doubling that lands on a step starts there.
-            let next = (last + doubling - 1e-9).ceil() as u32;
+            // The tolerance in `doubling`: a doubling that lands on a step starts there.
+            let next = (last + doubling).ceil() as u32;
             if self.steps.saturating_sub(next) < MIN_COARSE_STEPS {
                 break;
             }

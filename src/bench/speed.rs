@@ -242,7 +242,7 @@ pub fn run_speed(
                     if let (true, Some(ms)) = (run > 0, out.times.total()) {
                         samples.push(ms);
                         clocks.push(out.times.clock.name());
-                        passes.add(out.pass_names(), &out.times.pass_ms);
+                        passes.add(&out);
                     }
                     done += u64::from(schedule.steps + 2);
                     progress(Progress {
@@ -314,13 +314,15 @@ struct PassSamples {
 }
 
 impl PassSamples {
-    fn add(&mut self, names: Vec<String>, pass_ms: &[f64]) {
-        if names.len() != pass_ms.len() {
-            return;
-        }
+    /// Adds a timed render's pass times; its passes are named once, from the first.
+    fn add(&mut self, out: &crate::Rendered) {
+        let pass_ms = &out.times.pass_ms;
         if self.names.is_empty() {
-            self.times = vec![Vec::new(); names.len()];
-            self.names = names;
+            self.names = out.pass_names();
+            self.times = vec![Vec::new(); self.names.len()];
+        }
+        if self.names.len() != pass_ms.len() {
+            return;
         }
         for (times, &ms) in self.times.iter_mut().zip(pass_ms) {
             times.push(ms);
