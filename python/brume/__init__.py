@@ -3,6 +3,8 @@
     >>> import brume
     >>> foggy = brume.fog(image, range_m, beta=0.02)          # uint8 sRGB in, uint8 sRGB out
     >>> foggy = brume.fog(linear, range_m, visibility=150.0)  # float32 linear in, float32 out
+    >>> foggy, info = brume.fog(image, range_m, beta=0.02, return_info=True)
+    >>> info["transmittance"], info["airlight"]               # the labels: I = J t + A (1 - t)
     >>> range_m, info = brume.load_depth("frankfurt_000000_000294_disparity.png")
     >>> r = brume.Renderer()                                  # one EGL context, many frames
     >>> t = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=0)

@@ -1,6 +1,7 @@
 """Fog as a data augmentation, in the dict convention of albumentations and torchvision's
 v2 transforms: ``t(image=..., depth=...)`` returns a dict with the fogged ``image``, the
-``depth`` unchanged and the ``beta`` drawn.
+``depth`` unchanged and the ``beta`` drawn (with ``return_info=True`` also the
+``transmittance`` and ``airlight`` labels of a dehazing dataset).
 
     >>> t = RandomFog(beta_range=(0.005, 0.03), seed=0)
     >>> out = t(image=rgb_uint8, depth=range_m)
@@ -35,6 +36,11 @@ class RandomFog:
 
     ``depth`` is the range in metres (HxW, the image's size or smaller by one factor).
     Extra keyword targets (masks, boxes) pass through unchanged.
+
+    ``return_info=True`` adds the labels of the scattering model I = J·t + A·(1 − t), as
+    :func:`brume.fog` reports them: ``transmittance`` (float32 HxW at the image's size;
+    all ones when the fog is not applied) and ``airlight`` (A, three linear RGB floats;
+    ``None`` when not applied).
     """
 
     def __init__(
@@ -52,6 +58,7 @@ class RandomFog:
         shot_noise_gain: Optional[float] = None,
         read_noise: Optional[float] = None,
         jpeg_quality: Optional[int] = None,
+        return_info: bool = False,
     ) -> None:
         if beta_dist is not None:
             beta_quantile(beta_dist, 0.5)  # a ValueError that says what is expected
@@ -75,6 +82,7 @@ class RandomFog:
             read_noise=read_noise,
             jpeg_quality=jpeg_quality,
         )
+        self.return_info = bool(return_info)
         self.rng = np.random.default_rng(seed)
 
     def __call__(self, *, image: np.ndarray, depth: np.ndarray, **targets: Any) -> dict:
@@ -89,9 +97,11 @@ class RandomFog:
         noise_seed = int(self.rng.integers(0, 2**63)) if noisy else 0
         if not apply:
             out.update(image=image, beta=None)
+            if self.return_info:
+                out.update(transmittance=np.ones(image.shape[:2], np.float32), airlight=None)
             return out
         render = self.renderer.fog if self.renderer is not None else _fog
-        out["image"] = render(
+        fogged = render(
             image,
             depth,
             beta=beta,
@@ -99,8 +109,13 @@ class RandomFog:
             blur=self.blur,
             refine=self.refine,
             seed=noise_seed,
+            return_info=self.return_info,
             **self.capture,
         )
+        if self.return_info:
+            fogged, info = fogged
+            out.update(transmittance=info["transmittance"], airlight=tuple(info["airlight"]))
+        out["image"] = fogged
         out["beta"] = beta
         return out
 
@@ -108,7 +123,7 @@ class RandomFog:
         return (
             f"RandomFog(beta_range={self.beta_range}, beta_dist={self.beta_dist!r}, p={self.p}, "
             f"airlight={self.airlight}, blur={self.blur}, refine={self.refine!r}, "
-            f"capture={self.capture})"
+            f"capture={self.capture}, return_info={self.return_info})"
         )
 
     def _draw_beta(self) -> float:

@@ -4,7 +4,7 @@
 use super::value_error;
 use brume::io::image::{linear_rgba_to_srgb8_rgb, srgb8_rgb_to_linear};
 use brume::raster::{Grid, RgbImage, ScalarMap};
-use numpy::ndarray::Array3;
+use numpy::ndarray::{Array2, Array3};
 use numpy::{
     IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
     PyUntypedArrayMethods,
@@ -145,6 +145,16 @@ pub(crate) fn read_range(range: &Bound<'_, PyAny>) -> PyResult<ScalarMap> {
         )));
     };
     Ok(Grid::from_vec(shape[1], shape[0], data))
+}
+
+/// A map (range, transmittance) as a float32 HxW array, row 0 at the top as brume keeps it.
+pub(crate) fn scalar_map_to_py(py: Python<'_>, map: ScalarMap) -> Py<PyAny> {
+    let (w, h) = (map.width(), map.height());
+    Array2::from_shape_vec((h, w), map.into_vec())
+        .expect("shape")
+        .into_pyarray(py)
+        .into_any()
+        .unbind()
 }
 
 /// What a fogged frame goes back to Python as.

@@ -18,16 +18,16 @@ mod aerial_photo;
 mod arrays;
 mod engine;
 
-use arrays::{dtype_name, read_image, read_range, ImageIn, ImageOut};
+use arrays::{dtype_name, read_image, read_range, scalar_map_to_py, ImageIn, ImageOut};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
+use brume::medium::haze::Haze;
 use brume::photo::{
-    self, BetaDistribution, CaptureOptions, FogOptions, Photo, PrepareOptions, PreparedPhoto,
+    self, BetaDistribution, CaptureOptions, Extinction, FogOptions, Photo, PrepareOptions,
+    PreparedPhoto,
 };
-use brume::raster::{RgbImage, ScalarMap};
+use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::refine::RefineMode;
 use brume::Headless;
-use numpy::ndarray::Array2;
-use numpy::IntoPyArray;
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -234,6 +234,15 @@ fn fog_request(
     })
 }
 
+/// What the GL thread hands back for one frame: the image, and what the labels of
+/// `return_info` are made from (the medium as rendered and the prepared photo).
+struct GpuFog {
+    image: RgbaImage,
+    haze: Haze,
+    prepared: PreparedPhoto,
+    sigma_max: f64,
+}
+
 /// The GPU's share of one frame, on the GL thread: the refinement of the pre-processed
 /// range and the fog (`brume::photo`'s refine and fog).
 fn fog_on_gpu(
@@ -241,30 +250,87 @@ fn fog_on_gpu(
     photo: &Photo,
     mut prepared: PreparedPhoto,
     request: &FogRequest,
-) -> brume::Result<brume::raster::RgbaImage> {
+) -> brume::Result<GpuFog> {
     prepared.refine(photo, &request.prepare.refine, headless.renderer()?)?;
     let fogged = photo::fog(headless.renderer()?, photo, &prepared, &request.fog)?;
-    Ok(fogged.rendered.image)
+    Ok(GpuFog {
+        image: fogged.rendered.image,
+        haze: fogged.haze,
+        prepared,
+        sigma_max: fogged.rendered.schedule.sigma_max,
+    })
+}
+
+/// `return_info`'s labels of one frame, the ones a dehazing dataset keeps beside the
+/// foggy image (the atmospheric scattering model I = J·t + A·(1 − t)).
+struct FogInfo {
+    /// t = exp(−β·R) at each pixel of the image, of the range the fog read.
+    transmittance: ScalarMap,
+    /// That range (m) at the image's size: pre-processed, refined, unknown pixels the
+    /// farthest, as `brume batch --transmittance` and the render take it.
+    range_m: ScalarMap,
+    airlight: [f32; 3],
+    airlight_source: &'static str,
+    beta: f64,
+    visibility_m: f64,
+    sigma_max: f64,
+}
+
+impl FogInfo {
+    /// The labels of a frame fogged with `opts` (physical fog: `brume.fog` takes β or a
+    /// visibility).
+    fn of(gpu: &GpuFog, opts: &FogOptions) -> brume::Result<FogInfo> {
+        let Extinction::Physical(fog) = opts.extinction else {
+            unreachable!("brume.fog asks for beta or visibility");
+        };
+        let (range_m, _) = photo::medium_range(&opts.extinction, &gpu.prepared.range)?;
+        Ok(FogInfo {
+            transmittance: photo::transmittance_map(&gpu.haze, &range_m),
+            range_m,
+            airlight: gpu.prepared.airlight,
+            airlight_source: gpu.prepared.airlight_from.name(),
+            beta: fog.beta,
+            visibility_m: fog.visibility_m(),
+            sigma_max: gpu.sigma_max,
+        })
+    }
+
+    fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let info = PyDict::new(py);
+        info.set_item("transmittance", scalar_map_to_py(py, self.transmittance))?;
+        info.set_item("range_m", scalar_map_to_py(py, self.range_m))?;
+        info.set_item("airlight", self.airlight.map(f64::from).to_vec())?;
+        info.set_item("airlight_source", self.airlight_source)?;
+        info.set_item("beta", self.beta)?;
+        info.set_item("visibility_m", self.visibility_m)?;
+        info.set_item("sigma_max_px", self.sigma_max)?;
+        Ok(info)
+    }
 }
 
 /// One frame fogged: pre-processing on the calling thread (the GIL released, so that
 /// another Python thread's frame can use the GL thread meanwhile, as `brume batch`
 /// overlaps its loader with the GPU), the refinement and the fog on the GL thread, the
-/// capture on the calling thread again.
+/// capture (and, with `want_info`, the labels) on the calling thread again.
 fn fog_frame(
     gl: &GlThread,
     image: RgbImage,
     range: ScalarMap,
     request: FogRequest,
-) -> PyResult<brume::raster::RgbaImage> {
+    want_info: bool,
+) -> PyResult<(RgbaImage, Option<FogInfo>)> {
     let photo = Photo::from_range(image, range).map_err(py_err)?;
     let prepared = photo::preprocess(&photo, &request.prepare).map_err(py_err)?;
-    let capture = request.capture;
-    let mut rendered = gl
+    let (capture, fog) = (request.capture, request.fog);
+    let mut gpu = gl
         .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
         .map_err(py_err)?;
-    photo::capture(&mut rendered, &capture).map_err(py_err)?;
-    Ok(rendered)
+    photo::capture(&mut gpu.image, &capture).map_err(py_err)?;
+    let info = match want_info {
+        true => Some(FogInfo::of(&gpu, &fog).map_err(py_err)?),
+        false => None,
+    };
+    Ok((gpu.image, info))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -291,8 +357,9 @@ impl Renderer {
 
     /// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
     /// refine=True, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-    /// jpeg_quality=None, seed=0) -> ndarray: as brume.fog, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
+    /// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict) with
+    /// return_info: as brume.fog, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -309,6 +376,7 @@ impl Renderer {
         read_noise: Option<f64>,
         jpeg_quality: Option<i64>,
         seed: u64,
+        return_info: bool,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
         let refine = refine.unwrap_or(default_refine.as_any());
@@ -323,11 +391,19 @@ impl Renderer {
         let image = read_image(image)?;
         let range = read_range(range_m)?;
         let pixels = image.pixels;
-        let out = py.detach(|| {
-            let rendered = fog_frame(&self.gl, image.linear(), range, request)?;
-            Ok::<_, PyErr>(ImageOut::encode(&rendered, pixels))
+        let (out, info) = py.detach(|| {
+            let (rendered, info) =
+                fog_frame(&self.gl, image.linear(), range, request, return_info)?;
+            Ok::<_, PyErr>((ImageOut::encode(&rendered, pixels), info))
         })?;
-        Ok(out.into_py(py))
+        let out = out.into_py(py);
+        match info {
+            Some(info) => Ok((out, info.into_py(py)?)
+                .into_pyobject(py)?
+                .into_any()
+                .unbind()),
+            None => Ok(out),
+        }
     }
 
     /// distance_fog(image, depth, *, camera, time=0.0, start_distance=None, distance=None,
@@ -574,7 +650,7 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 
 /// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
 /// refine=True, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-/// jpeg_quality=None, seed=0) -> ndarray
+/// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict)
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
@@ -588,8 +664,15 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// 2^stops), shot_noise_gain K (the linear value of one photo-electron: Poisson noise of
 /// variance K·v) and read_noise (Gaussian, standard deviation in linear units), seeded by
 /// seed, then jpeg_quality (1-100, an encode-decode round trip); clipped to [0, 1].
+///
+/// return_info=True also returns the labels of a dehazing dataset (the scattering model
+/// I = J·t + A·(1 - t), before the capture): transmittance (float32 HxW, t = exp(-beta R)
+/// at the image's size), range_m (float32 HxW, the range R the fog read: pre-processed,
+/// refined, unknown pixels the farthest), airlight (A, three linear RGB floats),
+/// airlight_source ('given', 'sky', 'neutral' or 'default'), beta, visibility_m and
+/// sigma_max_px (the blur's largest scale).
 #[pyfunction]
-#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
+#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
 #[allow(clippy::too_many_arguments)]
 fn fog(
     py: Python<'_>,
@@ -605,6 +688,7 @@ fn fog(
     read_noise: Option<f64>,
     jpeg_quality: Option<i64>,
     seed: u64,
+    return_info: bool,
 ) -> PyResult<Py<PyAny>> {
     let renderer = default_renderer(py)?.get();
     renderer.fog(
@@ -621,6 +705,7 @@ fn fog(
         read_noise,
         jpeg_quality,
         seed,
+        return_info,
     )
 }
 
@@ -687,7 +772,6 @@ fn load_depth<'py>(
     let loaded = py
         .detach(|| depth::load_range(&path, &opts))
         .map_err(py_err)?;
-    let (w, h) = (loaded.range.width(), loaded.range.height());
     let info = PyDict::new(py);
     info.set_item("format", loaded.format.to_string())?;
     info.set_item("kind", loaded.kind.to_string())?;
@@ -695,8 +779,7 @@ fn load_depth<'py>(
     info.set_item("metric", loaded.metric)?;
     info.set_item("notes", loaded.notes.clone())?;
     info.set_item("unknown_pixels", loaded.unknown_pixels)?;
-    let range = Array2::from_shape_vec((h, w), loaded.range.into_vec()).expect("shape");
-    Ok((range.into_pyarray(py).into_any().unbind(), info))
+    Ok((scalar_map_to_py(py, loaded.range), info))
 }
 
 #[pymodule]

@@ -81,6 +81,55 @@ def test_koschmieder_computed_in_numpy(image_u8, range_m):
     assert np.abs(out - expected).max() < 1e-4
 
 
+def test_info_gives_the_labels_the_render_used(image_u8, range_m):
+    """return_info: t = exp(-beta R) of the range the fog read, and the image obeys
+    I = J t + A (1 - t) with that t and the reported A (no blur), computed in numpy."""
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    holed = range_m.copy()
+    holed[10:14, 20:26] = np.nan  # a hole, which pre-processing fills
+    out, info = brume.fog(linear, holed, beta=0.02, blur=False, refine=False, return_info=True)
+    assert set(info) == {
+        "transmittance", "range_m", "airlight", "airlight_source", "beta", "visibility_m",
+        "sigma_max_px",
+    }  # fmt: skip
+    t, r = info["transmittance"], info["range_m"]
+    assert t.shape == r.shape == (H, W) and t.dtype == r.dtype == np.float32
+    assert np.isfinite(r).all() and (r[10:14, 20:26] > 0).all()
+    known = np.isfinite(holed)
+    np.testing.assert_allclose(r[known], holed[known], rtol=1e-6)
+    np.testing.assert_allclose(t, np.exp(-0.02 * r.astype(np.float64)), rtol=1e-6, atol=1e-7)
+    assert info["beta"] == 0.02 and abs(info["visibility_m"] - math.log(20) / 0.02) < 1e-9
+    assert info["airlight_source"] in ("sky", "neutral")
+    a = np.array(info["airlight"])
+    assert a.shape == (3,) and (a > 0).all()
+    expected = t[..., None] * linear + (1.0 - t[..., None]) * a
+    assert np.abs(out - expected).max() < 1e-4
+    # The same image as without return_info; the airlight given is the one reported.
+    np.testing.assert_array_equal(
+        out, brume.fog(linear, holed, beta=0.02, blur=False, refine=False)
+    )
+    _, given = brume.fog(image_u8, range_m, beta=0.01, airlight=(0.7, 0.75, 0.8), return_info=True)
+    assert given["airlight_source"] == "given"
+    np.testing.assert_allclose(given["airlight"], (0.7, 0.75, 0.8), rtol=1e-6)
+    assert given["sigma_max_px"] > 1.0
+
+
+def test_info_transmittance_at_the_image_size(image_u8, range_m):
+    small = range_m[::2, ::2].copy()
+    out, info = brume.fog(image_u8, small, visibility=300.0, return_info=True)
+    assert info["transmittance"].shape == info["range_m"].shape == image_u8.shape[:2]
+    np.testing.assert_allclose(
+        info["transmittance"],
+        np.exp(-info["beta"] * info["range_m"].astype(np.float64)),
+        rtol=1e-6,
+        atol=1e-7,
+    )
+    r = brume.Renderer()
+    out_r, info_r = r.fog(image_u8, small, visibility=300.0, return_info=True)
+    np.testing.assert_array_equal(out_r, out)
+    np.testing.assert_array_equal(info_r["transmittance"], info["transmittance"])
+
+
 def test_uint8_is_the_float_path_encoded(image_u8, range_m):
     linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
     kw = dict(beta=0.02, airlight=(0.7, 0.75, 0.8), blur=False, refine=False)
@@ -159,6 +208,15 @@ def test_random_fog_seeding(image_u8, range_m):
     assert skipped["image"] is image_u8 and skipped["beta"] is None
     with pytest.raises(ValueError, match="beta_range"):
         brume.augment.RandomFog(beta_range=(0.03, 0.005))
+    # return_info adds the labels and keeps the image and the betas of the same seed.
+    labelled = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=3, return_info=True)
+    first = labelled(image=image_u8, depth=range_m)
+    assert first["beta"] == outs_a[0]["beta"]
+    np.testing.assert_array_equal(first["image"], outs_a[0]["image"])
+    assert first["transmittance"].shape == (H, W) and len(first["airlight"]) == 3
+    assert first["transmittance"].min() < 0.5 < first["transmittance"].max() < 1.0
+    clear = brume.augment.RandomFog(p=0.0, return_info=True)(image=image_u8, depth=range_m)
+    assert (clear["transmittance"] == 1.0).all() and clear["airlight"] is None
 
 
 def test_load_depth(tmp_path, range_m):
