@@ -3,6 +3,7 @@
     >>> import brume
     >>> foggy = brume.fog(image, range_m, beta=0.02)          # uint8 sRGB in, uint8 sRGB out
     >>> foggy = brume.fog(linear, range_m, visibility=150.0)  # float32 linear in, float32 out
+    >>> foggy = brume.fog(image, relative_depth, ks=0.75)       # paper 000's normalised haze
     >>> foggy, info = brume.fog(image, range_m, beta=0.02, return_info=True)
     >>> info["transmittance"], info["airlight"]               # the labels: I = J t + A (1 - t)
     >>> range_m, info = brume.load_depth("frankfurt_000000_000294_disparity.png")

@@ -21,6 +21,7 @@ mod engine;
 use arrays::{dtype_name, read_image, read_range, scalar_map_to_py, ImageIn, ImageOut};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
 use brume::medium::haze::Haze;
+use brume::medium::physical::VISIBILITY_OPTICAL_DEPTH;
 use brume::photo::{
     self, BetaDistribution, CaptureOptions, Extinction, FogOptions, Photo, PrepareOptions,
     PreparedPhoto,
@@ -201,30 +202,71 @@ fn prepare_request(
     Ok(prepare)
 }
 
-fn fog_request(
+/// How dense the fog of `brume.fog` is, as its keywords give it: exactly one of β,
+/// the visibility, or paper 000's normalised κa and κs.
+struct Density {
     beta: Option<f64>,
     visibility: Option<f64>,
+    ka: Option<f64>,
+    ks: Option<f64>,
+}
+
+impl Density {
+    /// The fog options of the density given (the other options brume's defaults).
+    fn fog_options(&self) -> PyResult<FogOptions> {
+        let normalised = self.ka.is_some() || self.ks.is_some();
+        match (self.beta, self.visibility, normalised) {
+            (Some(b), None, false) => FogOptions::beta(b).map_err(py_err),
+            (None, Some(v), false) => FogOptions::visibility(v).map_err(py_err),
+            (None, None, true) => Ok(FogOptions {
+                extinction: Extinction::Normalised {
+                    ka: self.ka.unwrap_or(brume::medium::haze::DEFAULT_KA),
+                    ks: self.ks.unwrap_or(brume::medium::haze::DEFAULT_KS),
+                },
+                ..FogOptions::default()
+            }),
+            (None, None, false) => Err(value_error(
+                "neither beta, visibility nor ka/ks given: expected exactly one of beta (extinction, 1/m, e.g. 0.02), visibility (metres, e.g. 150) or ka and/or ks (paper 000's absorption and scattering per unit of range normalised by its largest value, e.g. ks=0.75)",
+            )),
+            _ => Err(value_error(format!(
+                "{} given together: expected exactly one of beta (1/m), visibility (m) or ka/ks (normalised range)",
+                [
+                    ("beta", self.beta.is_some()),
+                    ("visibility", self.visibility.is_some()),
+                    ("ka/ks", normalised),
+                ]
+                .iter()
+                .filter(|(_, given)| *given)
+                .map(|(name, _)| *name)
+                .collect::<Vec<_>>()
+                .join(" and ")
+            ))),
+        }
+    }
+}
+
+fn fog_request(
+    density: Density,
     airlight: Option<Vec<f64>>,
-    blur: bool,
+    (blur, lambda_px): (bool, Option<f64>),
     refine: &Bound<'_, PyAny>,
     capture: CaptureOptions,
 ) -> PyResult<FogRequest> {
-    let mut fog = match (beta, visibility) {
-        (Some(b), None) => FogOptions::beta(b).map_err(py_err)?,
-        (None, Some(v)) => FogOptions::visibility(v).map_err(py_err)?,
-        (Some(b), Some(v)) => {
+    let mut fog = density.fog_options()?;
+    match (blur, lambda_px) {
+        (false, Some(l)) => {
             return Err(value_error(format!(
-                "beta = {b} and visibility = {v} both given: expected exactly one, beta (extinction, 1/m) or visibility (metres, V = -ln 0.05 / beta)"
+                "blur = False and lambda_px = {l} both given: expected lambda_px only with blur"
             )))
         }
-        (None, None) => {
-            return Err(value_error(
-                "neither beta nor visibility given: expected exactly one, beta (extinction, 1/m, e.g. 0.02) or visibility (metres, e.g. 150)",
-            ))
+        (false, None) => fog.lambda = 0.0,
+        (true, Some(l)) if !(l.is_finite() && l >= 0.0) => {
+            return Err(value_error(format!(
+                "invalid lambda_px = {l}: expected the blur's strength, a number >= 0 (brume's default 8; 0 for no blur)"
+            )))
         }
-    };
-    if !blur {
-        fog.lambda = 0.0;
+        (true, Some(l)) => fog.lambda = l,
+        (true, None) => {}
     }
     let prepare = prepare_request(airlight, refine)?;
     Ok(FogRequest {
@@ -277,20 +319,25 @@ struct FogInfo {
 }
 
 impl FogInfo {
-    /// The labels of a frame fogged with `opts` (physical fog: `brume.fog` takes β or a
-    /// visibility).
+    /// The labels of a frame fogged with `opts`. With normalised κa and κs the range
+    /// stays in the caller's units, and β is (κa + κs) per largest range.
     fn of(gpu: &GpuFog, opts: &FogOptions) -> brume::Result<FogInfo> {
-        let Extinction::Physical(fog) = opts.extinction else {
-            unreachable!("brume.fog asks for beta or visibility");
+        let (medium_range, divisor) = photo::medium_range(&opts.extinction, &gpu.prepared.range)?;
+        let transmittance = photo::transmittance_map(&gpu.haze, &medium_range);
+        let (range, beta) = match opts.extinction {
+            Extinction::Physical(fog) => (medium_range, fog.beta),
+            Extinction::Normalised { ka, ks } => (
+                medium_range.map(|&r| (f64::from(r) * divisor) as f32),
+                (ka + ks) / divisor,
+            ),
         };
-        let (range_m, _) = photo::medium_range(&opts.extinction, &gpu.prepared.range)?;
         Ok(FogInfo {
-            transmittance: photo::transmittance_map(&gpu.haze, &range_m),
-            range_m,
+            transmittance,
+            range_m: range,
             airlight: gpu.prepared.airlight,
             airlight_source: gpu.prepared.airlight_from.name(),
-            beta: fog.beta,
-            visibility_m: fog.visibility_m(),
+            beta,
+            visibility_m: VISIBILITY_OPTICAL_DEPTH / beta,
             sigma_max: gpu.sigma_max,
         })
     }
@@ -355,11 +402,11 @@ impl Renderer {
         Ok(Renderer { gl })
     }
 
-    /// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
-    /// refine=True, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-    /// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict) with
-    /// return_info: as brume.fog, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
+    /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
+    /// blur=True, lambda_px=None, refine=True, exposure_stops=0.0, shot_noise_gain=None,
+    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False) -> ndarray, or
+    /// (ndarray, dict) with return_info: as brume.fog, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -368,8 +415,11 @@ impl Renderer {
         range_m: &Bound<'_, PyAny>,
         beta: Option<f64>,
         visibility: Option<f64>,
+        ka: Option<f64>,
+        ks: Option<f64>,
         airlight: Option<Vec<f64>>,
         blur: bool,
+        lambda_px: Option<f64>,
         refine: Option<&Bound<'_, PyAny>>,
         exposure_stops: f64,
         shot_noise_gain: Option<f64>,
@@ -387,7 +437,13 @@ impl Renderer {
             jpeg_quality,
             seed,
         )?;
-        let request = fog_request(beta, visibility, airlight, blur, refine, capture)?;
+        let density = Density {
+            beta,
+            visibility,
+            ka,
+            ks,
+        };
+        let request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
         let image = read_image(image)?;
         let range = read_range(range_m)?;
         let pixels = image.pixels;
@@ -648,17 +704,21 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
     Ok(DEFAULT_RENDERER.get_or_init(|| renderer))
 }
 
-/// fog(image, range_m, *, beta=None, visibility=None, airlight=None, blur=True,
-/// refine=True, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-/// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict)
+/// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
+/// blur=True, lambda_px=None, refine=True, exposure_stops=0.0, shot_noise_gain=None,
+/// read_noise=None, jpeg_quality=None, seed=0, return_info=False) -> ndarray, or
+/// (ndarray, dict)
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
 /// result has the same dtype and encoding. range_m: HxW metres from the camera centre
 /// (NaN or <= 0 unknown), the image's size or smaller by one factor. Exactly one of beta
-/// (extinction, 1/m) or visibility (m). airlight: None (estimated from the sky) or linear
-/// RGB. blur: False for none (lambda 0). refine: True ('repair'), False ('none') or
-/// 'none' | 'guided' | 'unreliable' | 'repair'.
+/// (extinction, 1/m), visibility (m), or ka and/or ks: paper 000's absorption and
+/// scattering per unit of range normalised by its largest value (`brume render`'s
+/// default; the range in any unit, e.g. a relative depth; the other one 0.25 or 0.75 when
+/// only one is given). airlight: None (estimated from the sky) or linear RGB. blur: False
+/// for none (lambda 0); lambda_px: the blur's strength (default 8, as `--lambda`).
+/// refine: True ('repair'), False ('none') or 'none' | 'guided' | 'unreliable' | 'repair'.
 ///
 /// The camera after the fog (all off by default): exposure_stops (the linear image times
 /// 2^stops), shot_noise_gain K (the linear value of one photo-electron: Poisson noise of
@@ -670,9 +730,10 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// at the image's size), range_m (float32 HxW, the range R the fog read: pre-processed,
 /// refined, unknown pixels the farthest), airlight (A, three linear RGB floats),
 /// airlight_source ('given', 'sky', 'neutral' or 'default'), beta, visibility_m and
-/// sigma_max_px (the blur's largest scale).
+/// sigma_max_px (the blur's largest scale). With ka/ks, range_m is in the caller's units
+/// and beta is (ka + ks) / the largest range, per that unit.
 #[pyfunction]
-#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, airlight=None, blur=true, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
+#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
 #[allow(clippy::too_many_arguments)]
 fn fog(
     py: Python<'_>,
@@ -680,8 +741,11 @@ fn fog(
     range_m: &Bound<'_, PyAny>,
     beta: Option<f64>,
     visibility: Option<f64>,
+    ka: Option<f64>,
+    ks: Option<f64>,
     airlight: Option<Vec<f64>>,
     blur: bool,
+    lambda_px: Option<f64>,
     refine: Option<&Bound<'_, PyAny>>,
     exposure_stops: f64,
     shot_noise_gain: Option<f64>,
@@ -697,8 +761,11 @@ fn fog(
         range_m,
         beta,
         visibility,
+        ka,
+        ks,
         airlight,
         blur,
+        lambda_px,
         refine,
         exposure_stops,
         shot_noise_gain,

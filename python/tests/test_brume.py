@@ -114,6 +114,31 @@ def test_info_gives_the_labels_the_render_used(image_u8, range_m):
     assert given["sigma_max_px"] > 1.0
 
 
+def test_normalised_haze_computed_in_numpy(image_u8, range_m):
+    """ka/ks: paper 000's haze on the range divided by its largest value, in any unit:
+    t = exp(-(ka + ks) R / R_max), the same in km as in m."""
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    airlight = np.array([0.7, 0.75, 0.8])
+    kw = dict(ka=0.5, ks=1.5, airlight=airlight, blur=False, refine=False, return_info=True)
+    out, info = brume.fog(linear, range_m, **kw)
+    r = range_m.astype(np.float64)
+    tau = np.exp(-2.0 * r / r.max())
+    np.testing.assert_allclose(info["transmittance"], tau, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(info["range_m"], r, rtol=1e-6)
+    assert abs(info["beta"] - 2.0 / r.max()) < 1e-9
+    expected = tau[..., None] * linear + (1.0 - tau[..., None]) * airlight
+    assert np.abs(out - expected).max() < 1e-4
+    km, _ = brume.fog(linear, range_m / 1000.0, **kw)
+    np.testing.assert_allclose(km, out, atol=1e-5)
+    # Only ks: ka takes paper 000's 0.25; with blur, a larger lambda_px blurs more.
+    only_ks = brume.fog(linear, range_m, ks=1.5, airlight=airlight, blur=False, refine=False)
+    tau_ks = np.exp(-1.75 * r / r.max())[..., None]
+    assert np.abs(only_ks - (tau_ks * linear + (1.0 - tau_ks) * airlight)).max() < 1e-4
+    _, weak = brume.fog(linear, range_m, ks=1.5, lambda_px=2.0, return_info=True)
+    _, strong = brume.fog(linear, range_m, ks=1.5, lambda_px=12.0, return_info=True)
+    assert 1.0 < weak["sigma_max_px"] < strong["sigma_max_px"]
+
+
 def test_info_transmittance_at_the_image_size(image_u8, range_m):
     small = range_m[::2, ::2].copy()
     out, info = brume.fog(image_u8, small, visibility=300.0, return_info=True)
@@ -145,8 +170,13 @@ def test_uint8_is_the_float_path_encoded(image_u8, range_m):
 @pytest.mark.parametrize(
     "kwargs, message",
     [
-        (dict(), "neither beta nor visibility"),
+        (dict(), "neither beta, visibility nor ka/ks"),
         (dict(beta=0.01, visibility=300.0), "expected exactly one"),
+        (dict(visibility=300.0, ks=1.0), "visibility and ka/ks given together"),
+        (dict(ka=-1.0), "ka"),
+        (dict(ks=float("inf")), "ks"),
+        (dict(beta=0.01, blur=False, lambda_px=4.0), "lambda_px only with blur"),
+        (dict(beta=0.01, lambda_px=-1.0), "invalid lambda_px"),
         (dict(beta=-1.0), "invalid beta"),
         (dict(beta=float("nan")), "invalid beta"),
         (dict(visibility=0.0), "invalid visibility"),
@@ -240,27 +270,37 @@ def test_load_depth(tmp_path, range_m):
 
 
 @pytest.mark.parametrize(
-    "blur, refine", [(True, "none"), (False, "none"), (True, "repair"), (True, "guided")]
+    "blur, refine, density",
+    [
+        (True, "none", dict(beta=0.02)),
+        (False, "none", dict(beta=0.02)),
+        (True, "repair", dict(beta=0.02)),
+        (True, "guided", dict(beta=0.02)),
+        # Paper 000's normalised haze, `brume render`'s default, with a blur strength.
+        (True, "repair", dict(ka=0.3, ks=1.2, lambda_px=10.0)),
+    ],
 )
-def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine):
+def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine, density):
     Image = pytest.importorskip("PIL.Image")
     Image.fromarray(image_u8).save(tmp_path / "image.png")
     # The range as a float .npy in metres (--depth-scale 1: a metre per unit).
     np.save(tmp_path / "range.npy", range_m.astype(np.float32))
-    beta = 0.02
     cmd = [
         str(brume_bin()), "render",
         "--image", str(tmp_path / "image.png"),
         "--depth", str(tmp_path / "range.npy"),
         "--depth-kind", "range", "--depth-scale", "1",
-        "--beta", str(beta), "--refine", refine,
+        "--refine", refine,
         "--out", str(tmp_path / "cli.png"),
     ]  # fmt: skip
+    flags = {"beta": "--beta", "ka": "--ka", "ks": "--ks", "lambda_px": "--lambda"}
+    for key, value in density.items():
+        cmd += [flags[key], str(value)]
     if not blur:
         cmd += ["--lambda", "0"]
     subprocess.run(cmd, check=True, capture_output=True)
     cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
-    ours = brume.fog(image_u8, range_m.astype(np.float32), beta=beta, blur=blur, refine=refine)
+    ours = brume.fog(image_u8, range_m.astype(np.float32), blur=blur, refine=refine, **density)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
 
 
