@@ -580,3 +580,49 @@ fn cli_ego_mask_from_cityscapes_labels() {
         "{err}"
     );
 }
+
+/// The ego vehicle is never fogged, end to end: pre-processing gives the hood range 0,
+/// and the fog reads 0 as at the camera (τ = 1), in normalised and in physical units, so
+/// the rendered hood is the input (no blur here: with it, its border takes the
+/// diffusion's flux from its neighbours). Before, the fog took 0 as unknown and so as
+/// the farthest range: the hood came out as fogged as the sky.
+#[test]
+fn ego_vehicle_is_never_fogged() {
+    use brume::photo::{self, FogOptions, Photo, PrepareOptions};
+    use brume::refine::RefineMode;
+    let s = frame();
+    let hood = |x: usize, y: usize| y >= H - 20 && (W / 4..3 * W / 4).contains(&x);
+    let photo = Photo::from_range(s.image.clone(), s.range.clone()).unwrap();
+    let mut opts = PrepareOptions {
+        ego_mask: Some(Grid::from_fn(W, H, hood)),
+        ..PrepareOptions::default()
+    };
+    opts.refine.mode = RefineMode::None;
+    let (_lock, mut headless) = common::renderer();
+    let renderer = headless.renderer().unwrap();
+    let prepared = photo::prepare(&photo, &opts, renderer).unwrap();
+    for fog in [FogOptions::default(), FogOptions::beta(0.02).unwrap()] {
+        let fog = FogOptions { lambda: 0.0, ..fog };
+        let fogged = photo::fog(renderer, &photo, &prepared, &fog).unwrap();
+        let (mut hood_error, mut rest_change) = (0f32, 0f32);
+        for y in 0..H {
+            for x in 0..W {
+                let (out, input) = (fogged.rendered.image.get(x, y), s.image.get(x, y));
+                let d = (0..3)
+                    .map(|c| (out[c] - input[c]).abs())
+                    .fold(0f32, f32::max);
+                if hood(x, y) {
+                    hood_error = hood_error.max(d);
+                } else {
+                    rest_change = rest_change.max(d);
+                }
+            }
+        }
+        assert!(
+            hood_error < 1e-6,
+            "{:?}: hood changed by {hood_error}",
+            fog.extinction
+        );
+        assert!(rest_change > 0.1, "{:?}: no fog at all", fog.extinction);
+    }
+}

@@ -144,18 +144,21 @@ impl Medium for Haze {
 }
 
 /// Normalises a range map to [0, 1] by its largest finite value (module docs). Unknown
-/// values (NaN, ±inf, ≤ 0) are treated as far (R = 1): pre-processing (`prep`) fills
-/// them properly. Returns the map and the divisor.
+/// values (NaN, ±inf, < 0) are treated as far (R = 1): pre-processing (`prep`) fills
+/// them properly. 0 stays 0, at the camera: no fog. The loaders and
+/// [`crate::photo::Photo::from_range`] make every unknown value NaN, so after them a 0 is
+/// pre-processing's ego vehicle ([`crate::prep::Guides::ego_mask`]). Returns the map and
+/// the divisor.
 pub fn normalise_range(range: &ScalarMap) -> Result<(ScalarMap, f32)> {
     let r_max = largest_range(range)?;
-    let normalised = range.map(|&v| {
-        if v.is_finite() && v > 0.0 {
-            v / r_max
-        } else {
-            1.0
-        }
-    });
+    let normalised = range.map(|&v| if at_known_range(v) { v / r_max } else { 1.0 });
     Ok((normalised, r_max))
+}
+
+/// Whether a value of a range map is a range the fog can read as it is: finite and ≥ 0
+/// (0 is the ego vehicle's, at the camera; see [`normalise_range`]).
+pub fn at_known_range(v: f32) -> bool {
+    v.is_finite() && v >= 0.0
 }
 
 /// The largest known (finite, > 0) value of a range map; an error when there is none.

@@ -31,7 +31,7 @@
 //! κs = a·ln 20. The shader is paper 000's, unchanged; the range texture holds metres
 //! ([`metric_range`]), never divided by the frame's largest range.
 
-use super::haze::Haze;
+use super::haze::{at_known_range, Haze};
 use crate::error::{Error, Result};
 use crate::raster::ScalarMap;
 
@@ -128,12 +128,13 @@ impl PhysicalFog {
 }
 
 /// A range map in metres for a [`PhysicalFog`]: known values kept as they are (never
-/// divided by the largest), unknown ones (NaN, ±inf, ≤ 0, only left by `--no-prep`) taken
-/// as the largest known range, as [`super::haze::normalise_range`] takes them as 1.
-/// Returns the map and that largest range.
+/// divided by the largest; 0, the ego vehicle's, at the camera), unknown ones (NaN, ±inf,
+/// < 0, only left by `--no-prep`) taken as the largest known range, as
+/// [`super::haze::normalise_range`] takes them as 1. Returns the map and that largest
+/// range.
 pub fn metric_range(range: &ScalarMap) -> Result<(ScalarMap, f32)> {
     let r_max = super::haze::largest_range(range)?;
-    let filled = range.map(|&v| if v.is_finite() && v > 0.0 { v } else { r_max });
+    let filled = range.map(|&v| if at_known_range(v) { v } else { r_max });
     Ok((filled, r_max))
 }
 
@@ -243,10 +244,12 @@ mod tests {
 
     #[test]
     fn metric_range_keeps_metres_and_fills_unknown_with_the_largest() {
-        let range = ScalarMap::from_vec(4, 1, vec![12.5, f32::NAN, 480.0, -1.0]);
+        let range =
+            ScalarMap::from_vec(6, 1, vec![12.5, f32::NAN, 480.0, -1.0, 0.0, f32::INFINITY]);
         let (m, r_max) = metric_range(&range).unwrap();
         assert_eq!(r_max, 480.0);
-        assert_eq!(m.as_slice(), &[12.5, 480.0, 480.0, 480.0]);
+        // 0, the ego vehicle's range after pre-processing, stays at the camera.
+        assert_eq!(m.as_slice(), &[12.5, 480.0, 480.0, 480.0, 0.0, 480.0]);
         assert!(metric_range(&ScalarMap::from_vec(1, 1, vec![f32::NAN])).is_err());
     }
 }

@@ -15,7 +15,8 @@ use crate::camera::Camera;
 use crate::camera::FrameInputs;
 use crate::error::{Error, Result};
 use crate::medium::aerial::HorizonSectors;
-use crate::medium::{haze, AerialPerspective, Medium, Pixel};
+use crate::medium::haze::{self, at_known_range};
+use crate::medium::{AerialPerspective, Medium, Pixel};
 use crate::pipeline::FogBlur;
 use crate::raster::{Grid, RgbImage, ScalarMap};
 use crate::sky::horizon_sectors::{
@@ -188,9 +189,10 @@ pub fn aerial(
             path: PathBuf::from(&photo.depth_name),
         });
     }
-    // Unknown range (only without pre-processing) is taken as the sky is by it.
+    // Unknown range (only without pre-processing) is taken as the sky is by it; 0 (the
+    // ego vehicle's) stays at the camera.
     let range = range.map(|&v| {
-        if v.is_finite() && v > 0.0 {
+        if at_known_range(v) {
             v
         } else {
             1.5 * max_range
