@@ -147,6 +147,56 @@ pub(crate) fn read_range(range: &Bound<'_, PyAny>) -> PyResult<ScalarMap> {
     Ok(Grid::from_vec(shape[1], shape[0], data))
 }
 
+/// A mask argument (`sky_mask`, `ego_mask`): an HxW numpy array of bool or integers
+/// (non-zero = set) of `shape` (the range's), not set everywhere (`all_set` says what such
+/// a mask probably is).
+pub(crate) fn read_mask(
+    mask: &Bound<'_, PyAny>,
+    name: &str,
+    shape: (usize, usize),
+    all_set: &str,
+) -> PyResult<Grid<bool>> {
+    let expected = format!(
+        "an HxW numpy array of bool or integers (non-zero = set) of the range's shape {}x{}",
+        shape.0, shape.1
+    );
+    let untyped = mask
+        .cast::<PyUntypedArray>()
+        .map_err(|_| value_error(format!("{name}: expected {expected}")))?;
+    let got = untyped.shape().to_vec();
+    if got != [shape.0, shape.1] {
+        return Err(value_error(format!(
+            "{name}: expected {expected}, got shape {got:?}"
+        )));
+    }
+    let py = mask.py();
+    let dtype = untyped.dtype();
+    let set: Vec<bool> = if dtype.is_equiv_to(&numpy::dtype::<bool>(py)) {
+        let a: PyReadonlyArray2<bool> = mask.extract()?;
+        a.as_array().iter().copied().collect()
+    } else if dtype.is_equiv_to(&numpy::dtype::<u8>(py)) {
+        let a: PyReadonlyArray2<u8> = mask.extract()?;
+        a.as_array().iter().map(|&v| v != 0).collect()
+    } else if dtype.is_equiv_to(&numpy::dtype::<i32>(py)) {
+        let a: PyReadonlyArray2<i32> = mask.extract()?;
+        a.as_array().iter().map(|&v| v != 0).collect()
+    } else if dtype.is_equiv_to(&numpy::dtype::<i64>(py)) {
+        let a: PyReadonlyArray2<i64> = mask.extract()?;
+        a.as_array().iter().map(|&v| v != 0).collect()
+    } else {
+        return Err(value_error(format!(
+            "{name}: expected {expected}, got dtype {}",
+            dtype_name(untyped)
+        )));
+    };
+    if set.iter().all(|&s| s) {
+        return Err(value_error(format!(
+            "{name}: every pixel is set: expected {all_set}"
+        )));
+    }
+    Ok(Grid::from_vec(shape.1, shape.0, set))
+}
+
 /// A map (range, transmittance) as a float32 HxW array, row 0 at the top as brume keeps it.
 pub(crate) fn scalar_map_to_py(py: Python<'_>, map: ScalarMap) -> Py<PyAny> {
     let (w, h) = (map.width(), map.height());

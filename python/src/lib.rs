@@ -18,7 +18,7 @@ mod aerial_photo;
 mod arrays;
 mod engine;
 
-use arrays::{dtype_name, read_image, read_range, scalar_map_to_py, ImageIn, ImageOut};
+use arrays::{dtype_name, read_image, read_mask, read_range, scalar_map_to_py, ImageIn, ImageOut};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
 use brume::medium::haze::Haze;
 use brume::medium::physical::VISIBILITY_OPTICAL_DEPTH;
@@ -403,10 +403,11 @@ impl Renderer {
     }
 
     /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
-    /// blur=True, lambda_px=None, refine=True, exposure_stops=0.0, shot_noise_gain=None,
-    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False) -> ndarray, or
-    /// (ndarray, dict) with return_info: as brume.fog, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
+    /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
+    /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
+    /// seed=0, return_info=False) -> ndarray, or (ndarray, dict) with return_info: as
+    /// brume.fog, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -421,6 +422,8 @@ impl Renderer {
         blur: bool,
         lambda_px: Option<f64>,
         refine: Option<&Bound<'_, PyAny>>,
+        sky_mask: Option<&Bound<'_, PyAny>>,
+        ego_mask: Option<&Bound<'_, PyAny>>,
         exposure_stops: f64,
         shot_noise_gain: Option<f64>,
         read_noise: Option<f64>,
@@ -443,9 +446,18 @@ impl Renderer {
             ka,
             ks,
         };
-        let request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
+        let mut request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
         let image = read_image(image)?;
         let range = read_range(range_m)?;
+        let shape = (range.height(), range.width());
+        if let Some(mask) = sky_mask {
+            let all_set = "a mask with ground in it (is it inverted?)";
+            request.prepare.sky_mask = Some(read_mask(mask, "sky_mask", shape, all_set)?);
+        }
+        if let Some(mask) = ego_mask {
+            let all_set = "a mask with the scene in it (is it inverted?)";
+            request.prepare.ego_mask = Some(read_mask(mask, "ego_mask", shape, all_set)?);
+        }
         let pixels = image.pixels;
         let (out, info) = py.detach(|| {
             let (rendered, info) =
@@ -705,9 +717,9 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 }
 
 /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
-/// blur=True, lambda_px=None, refine=True, exposure_stops=0.0, shot_noise_gain=None,
-/// read_noise=None, jpeg_quality=None, seed=0, return_info=False) -> ndarray, or
-/// (ndarray, dict)
+/// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
+/// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0,
+/// return_info=False) -> ndarray, or (ndarray, dict)
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
@@ -719,6 +731,9 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// only one is given). airlight: None (estimated from the sky) or linear RGB. blur: False
 /// for none (lambda 0); lambda_px: the blur's strength (default 8, as `--lambda`).
 /// refine: True ('repair'), False ('none') or 'none' | 'guided' | 'unreliable' | 'repair'.
+/// sky_mask, ego_mask: HxW arrays of range_m's shape, bool or integers (non-zero = set),
+/// e.g. `labels == 23` of a Cityscapes labelIds image: the sky instead of its detection
+/// (its range the farthest, its colour the airlight's), and the car's hood (never fogged).
 ///
 /// The camera after the fog (all off by default): exposure_stops (the linear image times
 /// 2^stops), shot_noise_gain K (the linear value of one photo-electron: Poisson noise of
@@ -733,7 +748,7 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// sigma_max_px (the blur's largest scale). With ka/ks, range_m is in the caller's units
 /// and beta is (ka + ks) / the largest range, per that unit.
 #[pyfunction]
-#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
+#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
 #[allow(clippy::too_many_arguments)]
 fn fog(
     py: Python<'_>,
@@ -747,6 +762,8 @@ fn fog(
     blur: bool,
     lambda_px: Option<f64>,
     refine: Option<&Bound<'_, PyAny>>,
+    sky_mask: Option<&Bound<'_, PyAny>>,
+    ego_mask: Option<&Bound<'_, PyAny>>,
     exposure_stops: f64,
     shot_noise_gain: Option<f64>,
     read_noise: Option<f64>,
@@ -767,6 +784,8 @@ fn fog(
         blur,
         lambda_px,
         refine,
+        sky_mask,
+        ego_mask,
         exposure_stops,
         shot_noise_gain,
         read_noise,

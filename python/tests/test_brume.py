@@ -139,6 +139,53 @@ def test_normalised_haze_computed_in_numpy(image_u8, range_m):
     assert 1.0 < weak["sigma_max_px"] < strong["sigma_max_px"]
 
 
+def test_sky_and_ego_masks(tmp_path, image_u8, range_m):
+    """A sky mask replaces the detection (its colour the airlight, its range the farthest),
+    an ego mask is never fogged; the same pixels as `brume render --sky-mask --ego-mask`."""
+    sky = np.zeros((H, W), bool)
+    sky[:10] = True
+    ego = np.zeros((H, W), np.uint8)
+    ego[-6:, 20:40] = 255
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    kw = dict(beta=0.02, blur=False, refine=False, return_info=True)
+    out, info = brume.fog(linear, range_m, sky_mask=sky, ego_mask=ego, **kw)
+    assert info["airlight_source"] == "sky"
+    np.testing.assert_allclose(info["airlight"], np.median(linear[sky], axis=0), atol=0.02)
+    # The sky's range is the farthest (but in the horizon's margin, where it is matted),
+    # the hood's 0: transmittance 1 and its pixels as they were (no blur here).
+    t = info["transmittance"]
+    assert t[0].max() == t.min() < t[~sky].min()
+    assert (info["range_m"][ego != 0] == 0).all() and (t[ego != 0] == 1).all()
+    np.testing.assert_allclose(out[ego != 0], linear[ego != 0], atol=1e-6)
+    # An integer mask is a bool one; the results equal the program's.
+    np.testing.assert_array_equal(
+        brume.fog(image_u8, range_m, beta=0.02, sky_mask=sky.astype(np.int64), ego_mask=ego),
+        ours := brume.fog(image_u8, range_m, beta=0.02, sky_mask=sky, ego_mask=ego != 0),
+    )
+    Image = pytest.importorskip("PIL.Image")
+    Image.fromarray(image_u8).save(tmp_path / "image.png")
+    Image.fromarray(sky.astype(np.uint8) * 255).save(tmp_path / "sky.png")
+    Image.fromarray(ego).save(tmp_path / "ego.png")
+    np.save(tmp_path / "range.npy", range_m.astype(np.float32))
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "image.png"),
+        "--depth", str(tmp_path / "range.npy"),
+        "--depth-kind", "range", "--depth-scale", "1", "--beta", "0.02", "--refine", "repair",
+        "--sky-mask", str(tmp_path / "sky.png"), "--ego-mask", str(tmp_path / "ego.png"),
+        "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
+    with pytest.raises(ValueError, match=r"sky_mask: .*shape 48x64, got shape \[24, 32\]"):
+        brume.fog(image_u8, range_m, beta=0.02, sky_mask=sky[::2, ::2])
+    with pytest.raises(ValueError, match="sky_mask: every pixel is set"):
+        brume.fog(image_u8, range_m, beta=0.02, sky_mask=np.ones((H, W), bool))
+    with pytest.raises(ValueError, match="ego_mask: .*got dtype float32"):
+        brume.fog(image_u8, range_m, beta=0.02, ego_mask=np.zeros((H, W), np.float32))
+
+
 def test_info_transmittance_at_the_image_size(image_u8, range_m):
     small = range_m[::2, ::2].copy()
     out, info = brume.fog(image_u8, small, visibility=300.0, return_info=True)
