@@ -35,7 +35,9 @@ class RandomFog:
     several transforms or workers share or own a context; by default the module's.
 
     ``depth`` is the range in metres (HxW, the image's size or smaller by one factor).
-    Extra keyword targets (masks, boxes) pass through unchanged.
+    Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and
+    ``ego_mask`` targets (the depth's shape, non-zero = set) also go to
+    :func:`brume.fog`: the sky instead of its detection, the car's hood never fogged.
 
     ``return_info=True`` adds the labels of the scattering model I = J·t + A·(1 − t), as
     :func:`brume.fog` reports them: ``transmittance`` (float32 HxW at the image's size;
@@ -109,6 +111,8 @@ class RandomFog:
             blur=self.blur,
             refine=self.refine,
             seed=noise_seed,
+            sky_mask=targets.get("sky_mask"),
+            ego_mask=targets.get("ego_mask"),
             return_info=self.return_info,
             **self.capture,
         )

@@ -294,6 +294,14 @@ def test_random_fog_seeding(image_u8, range_m):
     assert first["transmittance"].min() < 0.5 < first["transmittance"].max() < 1.0
     clear = brume.augment.RandomFog(p=0.0, return_info=True)(image=image_u8, depth=range_m)
     assert (clear["transmittance"] == 1.0).all() and clear["airlight"] is None
+    # sky_mask and ego_mask targets go to the fog too, and pass through.
+    ego = np.zeros((H, W), bool)
+    ego[-6:, 20:40] = True
+    masked = brume.augment.RandomFog(seed=3, return_info=True)(
+        image=image_u8, depth=range_m, ego_mask=ego
+    )
+    assert masked["ego_mask"] is ego and (masked["transmittance"][ego] == 1.0).all()
+    assert (first["transmittance"][ego] < 1.0).all()
 
 
 def test_load_depth(tmp_path, range_m):
