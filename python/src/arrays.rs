@@ -171,18 +171,14 @@ pub(crate) fn read_mask(
     }
     let py = mask.py();
     let dtype = untyped.dtype();
-    let set: Vec<bool> = if dtype.is_equiv_to(&numpy::dtype::<bool>(py)) {
-        let a: PyReadonlyArray2<bool> = mask.extract()?;
-        a.as_array().iter().copied().collect()
+    let set = if dtype.is_equiv_to(&numpy::dtype::<bool>(py)) {
+        nonzero::<bool>(mask)?
     } else if dtype.is_equiv_to(&numpy::dtype::<u8>(py)) {
-        let a: PyReadonlyArray2<u8> = mask.extract()?;
-        a.as_array().iter().map(|&v| v != 0).collect()
+        nonzero::<u8>(mask)?
     } else if dtype.is_equiv_to(&numpy::dtype::<i32>(py)) {
-        let a: PyReadonlyArray2<i32> = mask.extract()?;
-        a.as_array().iter().map(|&v| v != 0).collect()
+        nonzero::<i32>(mask)?
     } else if dtype.is_equiv_to(&numpy::dtype::<i64>(py)) {
-        let a: PyReadonlyArray2<i64> = mask.extract()?;
-        a.as_array().iter().map(|&v| v != 0).collect()
+        nonzero::<i64>(mask)?
     } else {
         return Err(value_error(format!(
             "{name}: expected {expected}, got dtype {}",
@@ -195,6 +191,14 @@ pub(crate) fn read_mask(
         )));
     }
     Ok(Grid::from_vec(shape.1, shape.0, set))
+}
+
+/// Where a 2D array of `T` is not zero (false), row by row.
+fn nonzero<T: numpy::Element + Copy + Default + PartialEq>(
+    mask: &Bound<'_, PyAny>,
+) -> PyResult<Vec<bool>> {
+    let a: PyReadonlyArray2<T> = mask.extract()?;
+    Ok(a.as_array().iter().map(|&v| v != T::default()).collect())
 }
 
 /// A map (range, transmittance) as a float32 HxW array, row 0 at the top as brume keeps it.

@@ -308,8 +308,9 @@ fn fog_on_gpu(
 struct FogInfo {
     /// t = exp(−β·R) at each pixel of the image, of the range the fog read.
     transmittance: ScalarMap,
-    /// That range (m) at the image's size: pre-processed, refined, unknown pixels the
-    /// farthest, as `brume batch --transmittance` and the render take it.
+    /// That range at the image's size (m, or the caller's unit with κa and κs):
+    /// pre-processed, refined, unknown pixels the farthest, as `brume batch
+    /// --transmittance` and the render take it.
     range_m: ScalarMap,
     airlight: [f32; 3],
     airlight_source: &'static str,
@@ -373,10 +374,10 @@ fn fog_frame(
         .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
         .map_err(py_err)?;
     photo::capture(&mut gpu.image, &capture).map_err(py_err)?;
-    let info = match want_info {
-        true => Some(FogInfo::of(&gpu, &fog).map_err(py_err)?),
-        false => None,
-    };
+    let info = want_info
+        .then(|| FogInfo::of(&gpu, &fog))
+        .transpose()
+        .map_err(py_err)?;
     Ok((gpu.image, info))
 }
 
