@@ -269,9 +269,9 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// aerial(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None,
 /// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None,
 /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
-/// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True,
-/// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0)
-/// -> ndarray
+/// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
+/// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
+/// jpeg_quality=None, seed=0) -> ndarray
 ///
 /// Paper 002's aerial perspective from the turbidity T (1-20) on a photo with its range
 /// in metres (`brume render --medium aerial`). image and range_m as for brume.fog. One of
@@ -283,7 +283,8 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// horizon_zenith_deg; horizon_sectors azimuth sectors of it; sun (zenith_deg,
 /// azimuth_deg clockwise from the image centre's heading) shapes them without a sky.
 /// sensitivity: a CSV lambda_nm,r,g,b (default CIE 1931 to linear sRGB). blur: the
-/// diffusion blur (lambda_px, sigma0); refine and the capture keywords as brume.fog.
+/// diffusion blur (lambda_px, sigma0); refine, the masks and the capture keywords as
+/// brume.fog.
 #[pyfunction]
 #[pyo3(signature = (*args, **kwargs))]
 pub(crate) fn aerial(

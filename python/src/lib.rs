@@ -202,6 +202,25 @@ fn prepare_request(
     Ok(prepare)
 }
 
+/// The `sky_mask` and `ego_mask` keywords, read on `range`'s grid, into `prepare`.
+fn set_masks(
+    prepare: &mut PrepareOptions,
+    range: &ScalarMap,
+    sky_mask: Option<&Bound<'_, PyAny>>,
+    ego_mask: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    let shape = (range.height(), range.width());
+    if let Some(mask) = sky_mask {
+        let all_set = "a mask with ground in it (is it inverted?)";
+        prepare.sky_mask = Some(read_mask(mask, "sky_mask", shape, all_set)?);
+    }
+    if let Some(mask) = ego_mask {
+        let all_set = "a mask with the scene in it (is it inverted?)";
+        prepare.ego_mask = Some(read_mask(mask, "ego_mask", shape, all_set)?);
+    }
+    Ok(())
+}
+
 /// How dense the fog of `brume.fog` is, as its keywords give it: exactly one of β,
 /// the visibility, or paper 000's normalised κa and κs.
 struct Density {
@@ -450,15 +469,7 @@ impl Renderer {
         let mut request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
         let image = read_image(image)?;
         let range = read_range(range_m)?;
-        let shape = (range.height(), range.width());
-        if let Some(mask) = sky_mask {
-            let all_set = "a mask with ground in it (is it inverted?)";
-            request.prepare.sky_mask = Some(read_mask(mask, "sky_mask", shape, all_set)?);
-        }
-        if let Some(mask) = ego_mask {
-            let all_set = "a mask with the scene in it (is it inverted?)";
-            request.prepare.ego_mask = Some(read_mask(mask, "ego_mask", shape, all_set)?);
-        }
+        set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
         let (out, info) = py.detach(|| {
             let (rendered, info) =
@@ -620,10 +631,10 @@ impl Renderer {
     /// aerial(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None,
     /// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None,
     /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
-    /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True,
-    /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
-    /// seed=0) -> ndarray: as brume.aerial, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
+    /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
+    /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
+    /// jpeg_quality=None, seed=0) -> ndarray: as brume.aerial, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
     #[allow(clippy::too_many_arguments)]
     fn aerial<'py>(
         &self,
@@ -648,6 +659,8 @@ impl Renderer {
         lambda_px: f64,
         sigma0: f64,
         refine: Option<&Bound<'py, PyAny>>,
+        sky_mask: Option<&Bound<'py, PyAny>>,
+        ego_mask: Option<&Bound<'py, PyAny>>,
         exposure_stops: f64,
         shot_noise_gain: Option<f64>,
         read_noise: Option<f64>,
@@ -663,7 +676,7 @@ impl Renderer {
             jpeg_quality,
             seed,
         )?;
-        let prepare = prepare_request(airlight, refine)?;
+        let mut prepare = prepare_request(airlight, refine)?;
         let args = aerial_photo::AerialArgs {
             turbidity,
             fov_y_deg,
@@ -685,6 +698,7 @@ impl Renderer {
         };
         let image = read_image(image)?;
         let range = read_range(range_m)?;
+        set_masks(&mut prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
         let out = py.detach(|| {
             let rendered =

@@ -306,6 +306,37 @@ def test_aerial_equals_brume_render(tmp_path, photo, flags, kwargs):
     assert np.abs(ours[:, -8:].astype(int) - image[:, -8:].astype(int)).mean() > 10
 
 
+def test_aerial_masks(tmp_path, photo):
+    """The masks as brume.fog takes them: the hood of an ego mask is left as it was (no
+    blur), and a sky mask gives the same pixels as `render --medium aerial --sky-mask`."""
+    Image = pytest.importorskip("PIL.Image")
+    image, range_m = photo
+    h, w = range_m.shape
+    linear = srgb_to_linear(image / 255.0).astype(np.float32)
+    ego = np.zeros((h, w), bool)
+    ego[-6:, 40:60] = True  # under the far right, which the veil covers most
+    kw = dict(turbidity=4.0, fov_y_deg=50.0, blur=False, refine="none")
+    out = brume.aerial(linear, range_m, ego_mask=ego, **kw)
+    np.testing.assert_allclose(out[ego], linear[ego], atol=1e-6)
+    assert np.abs(out[~ego] - linear[~ego]).max() > 0.1
+    sky = np.zeros((h, w), np.uint8)
+    sky[:8] = 1
+    Image.fromarray(image).save(tmp_path / "image.png")
+    Image.fromarray(sky * 255).save(tmp_path / "sky.png")
+    np.save(tmp_path / "range.npy", range_m)
+    cmd = [
+        str(brume_bin()), "render", "--image", str(tmp_path / "image.png"),
+        "--depth", str(tmp_path / "range.npy"), "--depth-kind", "range", "--depth-scale", "1",
+        "--medium", "aerial", "--turbidity", "4", "--fov", "50", "--refine", "none",
+        "--sky-mask", str(tmp_path / "sky.png"), "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    ours = brume.aerial(image, range_m, turbidity=4.0, fov_y_deg=50.0, refine="none", sky_mask=sky)
+    assert np.abs(ours.astype(np.int32) - png(tmp_path / "cli.png")).max() <= 1
+    with pytest.raises(ValueError, match="ego_mask: .*shape"):
+        brume.aerial(image, range_m, ego_mask=ego[:, :10], **kw)
+
+
 def test_aerial_turbidity_thickens_the_veil(photo):
     image, range_m = photo
     linear = srgb_to_linear(image / 255.0).astype(np.float32)
