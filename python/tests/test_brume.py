@@ -13,6 +13,23 @@ from shared import assert_threads_match_serial, brume_bin
 H, W = 48, 64  # small: llvmpipe on 2 cores
 
 
+def brume_render(tmp_path, image_u8, range_m, flags):
+    """`brume render` of the image (PNG) and the range (a float .npy in metres:
+    `--depth-kind range --depth-scale 1`) with `flags`; its output as uint8 RGB."""
+    Image = pytest.importorskip("PIL.Image")
+    Image.fromarray(image_u8).save(tmp_path / "image.png")
+    np.save(tmp_path / "range.npy", range_m.astype(np.float32))
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "image.png"),
+        "--depth", str(tmp_path / "range.npy"),
+        "--depth-kind", "range", "--depth-scale", "1",
+        "--out", str(tmp_path / "cli.png"), *flags,
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    return np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+
+
 def srgb_to_linear(c):
     c = np.asarray(c, dtype=np.float64)
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
@@ -163,20 +180,11 @@ def test_sky_and_ego_masks(tmp_path, image_u8, range_m):
         ours := brume.fog(image_u8, range_m, beta=0.02, sky_mask=sky, ego_mask=ego != 0),
     )
     Image = pytest.importorskip("PIL.Image")
-    Image.fromarray(image_u8).save(tmp_path / "image.png")
     Image.fromarray(sky.astype(np.uint8) * 255).save(tmp_path / "sky.png")
     Image.fromarray(ego).save(tmp_path / "ego.png")
-    np.save(tmp_path / "range.npy", range_m.astype(np.float32))
-    cmd = [
-        str(brume_bin()), "render",
-        "--image", str(tmp_path / "image.png"),
-        "--depth", str(tmp_path / "range.npy"),
-        "--depth-kind", "range", "--depth-scale", "1", "--beta", "0.02", "--refine", "repair",
-        "--sky-mask", str(tmp_path / "sky.png"), "--ego-mask", str(tmp_path / "ego.png"),
-        "--out", str(tmp_path / "cli.png"),
-    ]  # fmt: skip
-    subprocess.run(cmd, check=True, capture_output=True)
-    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    flags = ["--beta", "0.02", "--refine", "repair"]
+    flags += ["--sky-mask", str(tmp_path / "sky.png"), "--ego-mask", str(tmp_path / "ego.png")]
+    cli = brume_render(tmp_path, image_u8, range_m, flags)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
     with pytest.raises(ValueError, match=r"sky_mask: .*shape 48x64, got shape \[24, 32\]"):
         brume.fog(image_u8, range_m, beta=0.02, sky_mask=sky[::2, ::2])
@@ -336,25 +344,13 @@ def test_load_depth(tmp_path, range_m):
     ],
 )
 def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine, density):
-    Image = pytest.importorskip("PIL.Image")
-    Image.fromarray(image_u8).save(tmp_path / "image.png")
-    # The range as a float .npy in metres (--depth-scale 1: a metre per unit).
-    np.save(tmp_path / "range.npy", range_m.astype(np.float32))
-    cmd = [
-        str(brume_bin()), "render",
-        "--image", str(tmp_path / "image.png"),
-        "--depth", str(tmp_path / "range.npy"),
-        "--depth-kind", "range", "--depth-scale", "1",
-        "--refine", refine,
-        "--out", str(tmp_path / "cli.png"),
-    ]  # fmt: skip
-    flags = {"beta": "--beta", "ka": "--ka", "ks": "--ks", "lambda_px": "--lambda"}
+    names = {"beta": "--beta", "ka": "--ka", "ks": "--ks", "lambda_px": "--lambda"}
+    flags = ["--refine", refine]
     for key, value in density.items():
-        cmd += [flags[key], str(value)]
+        flags += [names[key], str(value)]
     if not blur:
-        cmd += ["--lambda", "0"]
-    subprocess.run(cmd, check=True, capture_output=True)
-    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+        flags += ["--lambda", "0"]
+    cli = brume_render(tmp_path, image_u8, range_m, flags)
     ours = brume.fog(image_u8, range_m.astype(np.float32), blur=blur, refine=refine, **density)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
 
