@@ -6,13 +6,16 @@
 use super::{on_default_renderer, py_err, value_error, GlThread, ImageIn};
 use brume::atmosphere::Sensitivity;
 use brume::camera::Camera;
+use brume::medium::{Medium, Pixel};
 use brume::photo::{
-    self, pitch_for_horizon_row, AerialOptions, CaptureOptions, Photo, PrepareOptions, Retarget,
-    DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+    self, pitch_for_horizon_row, AerialOptions, AerialPhoto, CaptureOptions, Photo, PrepareOptions,
+    Retarget, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
 };
-use brume::raster::{RgbaImage, ScalarMap};
+use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::sky::horizon_sectors::MAX_SECTORS;
 use brume::{Blur, FrameInputs};
+use numpy::ndarray::Array3;
+use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
@@ -221,6 +224,71 @@ impl AerialArgs {
     }
 }
 
+/// `return_info`'s labels of an aerial frame, per pixel and channel: I = J·t + A·(1 − t)
+/// before the blur and the capture, A the light the veil tends to at each pixel (paper
+/// 002's medium has no single airlight: it follows the view direction).
+pub(crate) struct AerialInfo {
+    /// J: the photo the medium veils (linear RGB; with `from_turbidity` its haze removed).
+    clear: RgbImage,
+    /// t per channel (HxWx3).
+    transmittance: Vec<f32>,
+    /// A per pixel and channel (HxWx3, linear RGB): the medium's L∞.
+    airlight: Vec<f32>,
+    turbidity: f64,
+    sigma_max: f64,
+}
+
+impl AerialInfo {
+    /// The medium's τ and L∞ (A) at every pixel of `job` (its CPU side, which the GPU's
+    /// `medium_sample` matches), top row first.
+    fn of(job: &AerialPhoto) -> AerialInfo {
+        let (w, h) = (job.range.width(), job.range.height());
+        let frame = FrameInputs::default();
+        let (mut transmittance, mut airlight) = (Vec::with_capacity(w * h * 3), Vec::new());
+        airlight.reserve(w * h * 3);
+        for row in 0..h {
+            for x in 0..w {
+                let pixel = Pixel {
+                    x,
+                    // The medium sees GL's rows, the bottom one first.
+                    y: h - 1 - row,
+                    width: w,
+                    height: h,
+                    depth: f64::from(*job.range.get(x, row)),
+                    sigma0: job.blur.sigma0,
+                };
+                let s = job.medium.sample(pixel, &frame);
+                transmittance.extend(s.transmission.map(|v| v as f32));
+                airlight.extend(s.inscatter.map(|v| v as f32));
+            }
+        }
+        AerialInfo {
+            clear: job.image.clone(),
+            transmittance,
+            airlight,
+            turbidity: job.medium.table.turbidity(),
+            sigma_max: job.medium.sigma_max(job.blur.sigma0),
+        }
+    }
+
+    pub(crate) fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (w, h) = (self.clear.width(), self.clear.height());
+        let rgb = |v: Vec<f32>| {
+            Array3::from_shape_vec((h, w, 3), v)
+                .expect("shape")
+                .into_pyarray(py)
+        };
+        let clear = self.clear.into_vec().into_flattened();
+        let info = PyDict::new(py);
+        info.set_item("clear", rgb(clear))?;
+        info.set_item("transmittance", rgb(self.transmittance))?;
+        info.set_item("airlight", rgb(self.airlight))?;
+        info.set_item("turbidity", self.turbidity)?;
+        info.set_item("sigma_max_px", self.sigma_max)?;
+        Ok(info)
+    }
+}
+
 /// One photo with aerial perspective (call with the GIL released): pre-processing on the
 /// calling thread, the refinement on the GL thread, the aerial medium (and retargeting) on
 /// the calling thread, the render on the GL thread, the capture here.
@@ -231,7 +299,8 @@ pub(crate) fn aerial_frame(
     args: &AerialArgs,
     prepare: PrepareOptions,
     capture: &CaptureOptions,
-) -> PyResult<RgbaImage> {
+    want_info: bool,
+) -> PyResult<(RgbaImage, Option<AerialInfo>)> {
     args.check()?;
     let opts = args.options(image.height)?;
     let photo = Photo::from_range(image.linear(), range).map_err(py_err)?;
@@ -247,6 +316,7 @@ pub(crate) fn aerial_frame(
         })?
         .map_err(py_err)?;
     let job = photo::aerial(&photo, &prepared, &opts).map_err(py_err)?;
+    let info = want_info.then(|| AerialInfo::of(&job));
     let blur = job.fog_blur();
     let mut rendered = gl
         .run(move |h| {
@@ -260,7 +330,7 @@ pub(crate) fn aerial_frame(
         })?
         .map_err(py_err)?;
     photo::capture(&mut rendered.image, capture).map_err(py_err)?;
-    Ok(rendered.image)
+    Ok((rendered.image, info))
 }
 
 /// The default of `horizon_zenith_deg` (degrees).
@@ -271,7 +341,7 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
 /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
 /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-/// jpeg_quality=None, seed=0) -> ndarray
+/// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict)
 ///
 /// Paper 002's aerial perspective from the turbidity T (1-20) on a photo with its range
 /// in metres (`brume render --medium aerial`). image and range_m as for brume.fog. One of
@@ -284,7 +354,11 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// azimuth_deg clockwise from the image centre's heading) shapes them without a sky.
 /// sensitivity: a CSV lambda_nm,r,g,b (default CIE 1931 to linear sRGB). blur: the
 /// diffusion blur (lambda_px, sigma0); refine, the masks and the capture keywords as
-/// brume.fog.
+/// brume.fog. return_info=True also returns the labels of I = J·t + A·(1 - t) (before
+/// the blur and the capture), per pixel and channel: clear (J, float32 HxWx3 linear RGB:
+/// the photo the medium veiled, its haze removed with from_turbidity), transmittance (t,
+/// HxWx3), airlight (A, HxWx3 linear RGB: the light the veil tends to, which follows the
+/// view direction), turbidity and sigma_max_px.
 #[pyfunction]
 #[pyo3(signature = (*args, **kwargs))]
 pub(crate) fn aerial(

@@ -202,6 +202,18 @@ fn prepare_request(
     Ok(prepare)
 }
 
+/// A render's result as Python gets it: the image, or `(image, info)` with `return_info`.
+fn with_info(
+    py: Python<'_>,
+    image: Py<PyAny>,
+    info: Option<Bound<'_, PyDict>>,
+) -> PyResult<Py<PyAny>> {
+    match info {
+        Some(info) => Ok((image, info).into_pyobject(py)?.into_any().unbind()),
+        None => Ok(image),
+    }
+}
+
 /// The `sky_mask` and `ego_mask` keywords, read on `range`'s grid, into `prepare`.
 fn set_masks(
     prepare: &mut PrepareOptions,
@@ -476,14 +488,11 @@ impl Renderer {
                 fog_frame(&self.gl, image.linear(), range, request, return_info)?;
             Ok::<_, PyErr>((ImageOut::encode(&rendered, pixels), info))
         })?;
-        let out = out.into_py(py);
-        match info {
-            Some(info) => Ok((out, info.into_py(py)?)
-                .into_pyobject(py)?
-                .into_any()
-                .unbind()),
-            None => Ok(out),
-        }
+        with_info(
+            py,
+            out.into_py(py),
+            info.map(|i| i.into_py(py)).transpose()?,
+        )
     }
 
     /// distance_fog(image, depth, *, camera, time=0.0, start_distance=None, distance=None,
@@ -633,8 +642,9 @@ impl Renderer {
     /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
     /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
     /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-    /// jpeg_quality=None, seed=0) -> ndarray: as brume.aerial, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0))]
+    /// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict): as
+    /// brume.aerial, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
     #[allow(clippy::too_many_arguments)]
     fn aerial<'py>(
         &self,
@@ -666,6 +676,7 @@ impl Renderer {
         read_noise: Option<f64>,
         jpeg_quality: Option<i64>,
         seed: u64,
+        return_info: bool,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
         let refine = refine.unwrap_or(default_refine.as_any());
@@ -700,12 +711,23 @@ impl Renderer {
         let range = read_range(range_m)?;
         set_masks(&mut prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
-        let out = py.detach(|| {
-            let rendered =
-                aerial_photo::aerial_frame(&self.gl, image, range, &args, prepare, &capture)?;
-            Ok::<_, PyErr>(ImageOut::encode(&rendered, pixels))
+        let (out, info) = py.detach(|| {
+            let (rendered, info) = aerial_photo::aerial_frame(
+                &self.gl,
+                image,
+                range,
+                &args,
+                prepare,
+                &capture,
+                return_info,
+            )?;
+            Ok::<_, PyErr>((ImageOut::encode(&rendered, pixels), info))
         })?;
-        Ok(out.into_py(py))
+        with_info(
+            py,
+            out.into_py(py),
+            info.map(|i| i.into_py(py)).transpose()?,
+        )
     }
 
     /// GL_RENDERER of the context, e.g. 'llvmpipe (LLVM 15.0.6, 256 bits)'.

@@ -306,6 +306,31 @@ def test_aerial_equals_brume_render(tmp_path, photo, flags, kwargs):
     assert np.abs(ours[:, -8:].astype(int) - image[:, -8:].astype(int)).mean() > 10
 
 
+def test_aerial_info_gives_the_labels_the_render_used(photo):
+    """return_info: without blur the image is J·t + A·(1 - t) per channel with the labels reported
+    (the medium's CPU side against the GPU's render); J is the photo, or with
+    from_turbidity the photo with its own haze removed."""
+    image, range_m = photo
+    linear = srgb_to_linear(image / 255.0).astype(np.float32)
+    kw = dict(turbidity=4.0, fov_y_deg=50.0, pitch_deg=2.0, blur=False, refine="none")
+    for extra in (dict(), dict(from_turbidity=2.0)):
+        out, info = brume.aerial(linear, range_m, return_info=True, **kw, **extra)
+        assert set(info) == {"clear", "transmittance", "airlight", "turbidity", "sigma_max_px"}
+        j, t, a = info["clear"], info["transmittance"], info["airlight"]
+        assert j.shape == t.shape == a.shape == linear.shape and t.dtype == np.float32
+        assert 0.0 < t.min() and t.max() <= 1.0 and (a > 0.0).all()
+        # Bluer light is attenuated more, and the far right more than the near left.
+        assert (t[..., 2] <= t[..., 0] + 1e-6).all()
+        assert t[:, -1].mean() < t[:, 0].mean()
+        np.testing.assert_allclose(out, j * t + a * (1.0 - t), atol=1e-5)
+        if extra:
+            assert np.abs(j - linear).max() > 0.01
+        else:
+            np.testing.assert_allclose(j, linear, atol=1e-6)
+        assert info["turbidity"] == 4.0
+    np.testing.assert_array_equal(out, brume.aerial(linear, range_m, **kw, from_turbidity=2.0))
+
+
 def test_aerial_masks(tmp_path, photo):
     """The masks as brume.fog takes them: the hood of an ego mask is left as it was (no
     blur), and a sky mask gives the same pixels as `render --medium aerial --sky-mask`."""
