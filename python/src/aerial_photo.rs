@@ -244,8 +244,8 @@ impl AerialInfo {
     fn of(job: &AerialPhoto) -> AerialInfo {
         let (w, h) = (job.range.width(), job.range.height());
         let frame = FrameInputs::default();
-        let (mut transmittance, mut airlight) = (Vec::with_capacity(w * h * 3), Vec::new());
-        airlight.reserve(w * h * 3);
+        let mut transmittance = Vec::with_capacity(w * h * 3);
+        let mut airlight = Vec::with_capacity(w * h * 3);
         for row in 0..h {
             for x in 0..w {
                 let pixel = Pixel {
