@@ -367,3 +367,31 @@ fn cli_takes_the_depth_from_a_separate_file_and_refuses_bad_objects() {
     let e = common::stderr(&o);
     assert!(e.contains("4x4") && e.contains("32x24"), "{e}");
 }
+
+/// The ego vehicle's hood (range 0 after pre-processing) is nearer than any object: an
+/// object drawn over it stays hidden, and the rest of it shows as before.
+#[test]
+fn the_hood_hides_the_object() {
+    let object = VirtualObject::from_range(object_rgba(), object_range(), "square").unwrap();
+    let hood = |_: usize, y: usize| y >= 14;
+    let mut image = photo_image();
+    let mut range = Grid::from_fn(W, H, |x, y| {
+        if hood(x, y) {
+            0.0
+        } else {
+            *photo_range().get(x, y)
+        }
+    });
+    object.composite(&mut image, &mut range).unwrap();
+    for y in 0..H {
+        for x in 0..W {
+            let (colour, r) = if hood(x, y) {
+                (WALL, 0.0)
+            } else {
+                expected_composite(x, y)
+            };
+            assert_eq!(*image.get(x, y), colour, "({x}, {y})");
+            assert_eq!(*range.get(x, y), r, "range at ({x}, {y})");
+        }
+    }
+}

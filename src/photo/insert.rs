@@ -8,7 +8,8 @@
 //! convention) and its range R_o against the photo's range R_p:
 //!
 //! - the object is in front where α > 0 and R_o < R_p (an unknown R_p counts as
-//!   infinitely far): the colour becomes C + (1 − α)·J_p;
+//!   infinitely far; the ego vehicle's R_p = 0 hides every object): the colour becomes
+//!   C + (1 − α)·J_p;
 //! - the range becomes R_o where the object covers at least half the pixel (α ≥ 0.5),
 //!   else it stays R_p. One range per pixel cannot hold both surfaces of an edge pixel:
 //!   taking the majority's keeps edges sharp in the range (no surface floating between
@@ -25,6 +26,7 @@ use super::{Photo, PreparedPhoto};
 use crate::error::{Error, Result};
 use crate::io::camera::Intrinsics;
 use crate::io::depth::DepthKind;
+use crate::medium::haze::at_known_range;
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 
 /// An object rendered with the photo's camera.
@@ -169,7 +171,9 @@ impl VirtualObject {
             if alpha <= 0.0 || r_o.is_nan() {
                 continue;
             }
-            let behind = r.is_finite() && *r > 0.0 && r_o >= *r;
+            // A known range hides what lies at or behind it; the ego vehicle's 0 (the
+            // nearest thing there is) hides every object.
+            let behind = at_known_range(*r) && r_o >= *r;
             if behind {
                 done.hidden += 1;
                 continue;
