@@ -348,6 +348,56 @@ fn a_gtfine_label_image_gives_the_sky() {
     assert_eq!(record["airlight_source"], "sky", "{record}");
 }
 
+/// A gtFine labelIds hood (label 1, the ego vehicle) is never fogged by `brume batch`: its
+/// pixels come out as they went in (no blur here) and its transmittance is 1 (before the
+/// fix of 2026-12-02 the fog took the hood's range 0 as the farthest).
+#[test]
+fn a_gtfine_hood_is_never_fogged() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 1);
+    let name = "aachen_000000_000019";
+    let input = root.join(format!("leftImg8bit/train/aachen/{name}_leftImg8bit.png"));
+    let (w, h) = image::image_dimensions(&input).unwrap();
+    let hood = |x: u32, y: u32| y >= h - 40 && (w / 4..3 * w / 4).contains(&x);
+    let gt = root.join("gtFine/train/aachen");
+    std::fs::create_dir_all(&gt).unwrap();
+    image::GrayImage::from_fn(w, h, |x, y| {
+        image::Luma([match (hood(x, y), y < 30) {
+            (true, _) => 1,
+            (false, true) => 23,
+            (false, false) => 7,
+        }])
+    })
+    .save(gt.join(format!("{name}_gtFine_labelIds.png")))
+    .unwrap();
+    let args = ["batch", "cityscapes", "--out", "out", "--beta", "0.01"];
+    let run = brume(
+        dir.path(),
+        &[&args[..], &["--transmittance", "--lambda", "0"]].concat(),
+    );
+    assert!(run.status.success(), "{}", stderr(&run));
+    let out = dir.path().join("out/leftImg8bit/train/aachen");
+    let before = image::open(&input).unwrap().to_rgb8();
+    let after = image::open(out.join(format!("{name}_leftImg8bit_foggy_beta_0.01.png")))
+        .unwrap()
+        .to_rgb8();
+    let tau = image::open(out.join(format!("{name}_leftImg8bit_transmittance_beta_0.01.png")))
+        .unwrap()
+        .to_luma8();
+    let (mut hood_pixels, mut fogged) = (0, 0);
+    for (x, y, p) in after.enumerate_pixels() {
+        if hood(x, y) {
+            assert_eq!(p, before.get_pixel(x, y), "hood pixel ({x}, {y})");
+            assert_eq!(tau.get_pixel(x, y)[0], 255, "hood τ at ({x}, {y})");
+            hood_pixels += 1;
+        } else {
+            fogged += usize::from(p != before.get_pixel(x, y));
+        }
+    }
+    assert_eq!(hood_pixels, (h.min(40) * (3 * w / 4 - w / 4)) as usize);
+    assert!(fogged > (w * h / 2) as usize, "only {fogged} pixels fogged");
+}
+
 /// The transmittance maps hold τ = exp(−βR) of each pixel's range in metres, computed here
 /// from the disparity file and the camera file alone: range = fx·B/d·|ray| with d = (p −
 /// 1)/256 (they were black: the range in metres was read as normalised range).
