@@ -1871,3 +1871,67 @@ fn a_float_map_with_a_depth_scale_is_metres() {
         assert!((v[key].as_f64().unwrap() - tau).abs() < 1e-6, "{key}: {v}");
     }
 }
+
+/// No loader leaves a 0 in a range map: every format's "no measurement" becomes NaN, as
+/// do a float map's 0 and negative values. The fog relies on it: after the loaders, a 0
+/// is pre-processing's ego vehicle, read as at the camera (`medium::haze::at_known_range`),
+/// so a 0 that meant "unknown" would come out unfogged.
+#[test]
+fn no_loader_leaves_a_zero_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let png16 = save_png16(dir.path(), "d.png", 3, 1, &[0, 5000, 65535]);
+    let png8 = save_png8(dir.path(), "m.png", 3, 1, &[0, 100, 200]);
+    let floats: Vec<u8> = [0.0f32, -1.0, 5.0]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let npy = write(
+        dir.path(),
+        "f.npy",
+        &common::npy_bytes("<f4", "(1, 3)", false, &floats),
+    );
+    let pfm = write(
+        dir.path(),
+        "f.pfm",
+        &pfm_bytes("Pf", 3, 1, "-1.0", &[0.0, -1.0, 5.0], true),
+    );
+    let scaled = DepthOptions {
+        scale: Some(0.01),
+        ..DepthOptions::default()
+    };
+    let mut cases = vec![
+        (png16.clone(), scaled),
+        (png8, opts(DepthFormat::Middlebury2006)),
+        (npy, opts(DepthFormat::Float)),
+        (pfm, opts(DepthFormat::Float)),
+    ];
+    for format in [
+        DepthFormat::Kitti,
+        DepthFormat::Nyu,
+        DepthFormat::Tum,
+        DepthFormat::AndroidDepth16,
+        DepthFormat::Arcore,
+    ] {
+        cases.push((png16.clone(), opts(format)));
+    }
+    let cityscapes = cityscapes_files(&dir.path().join("cs"), "f", Some(&dir.path().join("cs")));
+    cases.push((cityscapes, opts(DepthFormat::Cityscapes)));
+    for (path, o) in cases {
+        let d = load_range(&path, &o).unwrap_or_else(|e| panic!("{:?}: {e}", o.format));
+        let zeros = d.range.as_slice().iter().filter(|&&v| v == 0.0).count();
+        assert_eq!(
+            zeros,
+            0,
+            "{:?} of {}: {zeros} zero ranges",
+            o.format,
+            path.display()
+        );
+        assert!(d.unknown_pixels >= 1, "{:?}: no unknown pixel", o.format);
+        assert_eq!(
+            d.range.as_slice().iter().filter(|v| v.is_nan()).count(),
+            d.unknown_pixels,
+            "{:?}",
+            o.format
+        );
+    }
+}
