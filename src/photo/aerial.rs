@@ -178,17 +178,9 @@ pub fn aerial(
     opts: &AerialOptions,
 ) -> Result<AerialPhoto> {
     let range = &prepared.range;
-    let max_range = range
-        .as_slice()
-        .iter()
-        .copied()
-        .filter(|v| v.is_finite() && *v > 0.0)
-        .fold(0f32, f32::max);
-    if max_range <= 0.0 {
-        return Err(Error::NoValidDepth {
-            path: PathBuf::from(&photo.depth_name),
-        });
-    }
+    let max_range = haze::largest_range(range).map_err(|_| Error::NoValidDepth {
+        path: PathBuf::from(&photo.depth_name),
+    })?;
     // Unknown range (only without pre-processing) is taken as the sky is by it; 0 (the
     // ego vehicle's) stays at the camera.
     let range = range.map(|&v| {
