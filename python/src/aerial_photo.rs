@@ -360,7 +360,10 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// HxWx3), airlight (A, HxWx3 linear RGB: the light the veil tends to, which follows the
 /// view direction), turbidity and sigma_max_px.
 #[pyfunction]
-#[pyo3(signature = (*args, **kwargs))]
+#[pyo3(
+    signature = (*args, **kwargs),
+    text_signature = "(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
+)]
 pub(crate) fn aerial(
     py: Python<'_>,
     args: &Bound<'_, PyTuple>,

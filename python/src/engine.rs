@@ -715,7 +715,10 @@ pub(crate) fn render<M: Medium + Send + 'static>(
 /// 001's 5x5 Gaussian: blur_distance, blur_falloff, blur_max) or 'diffusion' (brume's:
 /// sigma0, scheme, precision, rho_max).
 #[pyfunction]
-#[pyo3(signature = (*args, **kwargs))]
+#[pyo3(
+    signature = (*args, **kwargs),
+    text_signature = "(image, depth, *, camera, time=0.0, start_distance=None, distance=None, exponent=None, max_density=None, colour=None, light_direction=None, scatter_start=None, scatter_exponent=None, scatter_colour=None, noise=None, noise_seed=0, noise_size=None, noise_speed=None, noise_low=None, noise_high=None, noise_colour_strength=None, blur='diffusion', lambda_px=None, range_unit=None, sigma0=1.0, scheme='matched', precision='f32', rho_max=0.25, blur_distance=100.0, blur_falloff=1.0, blur_max=1.0)"
+)]
 pub(crate) fn distance_fog(
     py: Python<'_>,
     args: &Bound<'_, PyTuple>,
@@ -739,7 +742,10 @@ pub(crate) fn distance_fog(
 /// 1 (the scattering fraction, which blurs); lambda_px 8; range_unit the camera's far
 /// plane.
 #[pyfunction]
-#[pyo3(signature = (*args, **kwargs))]
+#[pyo3(
+    signature = (*args, **kwargs),
+    text_signature = "(image, depth, *, camera, time=0.0, profile='exponential', density=None, base=None, scale_height=None, thickness=None, top=None, table=None, colour=None, albedo=None, blur='diffusion', lambda_px=None, range_unit=None, sigma0=1.0, scheme='matched', precision='f32', rho_max=0.25, blur_distance=100.0, blur_falloff=1.0, blur_max=1.0)"
+)]
 pub(crate) fn layered_fog(
     py: Python<'_>,
     args: &Bound<'_, PyTuple>,

@@ -3,12 +3,13 @@
 //! API: `brume::photo` for the fog of a photo with range in metres, `brume::io::depth` for
 //! depth files, `brume::Headless` for the EGL context; `engine` the engine fogs on a
 //! frame and its depth buffer (`brume::medium`, `brume::camera`), `aerial_photo` paper
-//! 002's aerial perspective (`brume::photo::aerial`), `arrays` numpy in and out.
+//! 002's aerial perspective (`brume::photo::aerial`), `photo_fog` `brume.fog`'s request and
+//! labels, `arrays` numpy in and out, `gl_thread` the EGL context's own thread.
 //!
-//! **Threads.** A [`Renderer`] owns one GL thread, which opens brume's headless EGL context
-//! and keeps it for the renderer's life. Python calls hand it a job and wait for the answer
-//! with the GIL released; calls from several Python threads queue on it (the job queue is
-//! the lock), so the context is only ever current on its own thread.
+//! **Threads.** A [`Renderer`] owns one GL thread (`gl_thread`), which opens brume's
+//! headless EGL context and keeps it for the renderer's life; Python calls wait for it with
+//! the GIL released. The module's functions (`brume.fog`, …) call the methods of a default
+//! renderer opened on first use, with the methods' signatures.
 
 // Why mimalloc: python/Cargo.toml, beside the dependency.
 #[global_allocator]
@@ -17,24 +18,21 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 mod aerial_photo;
 mod arrays;
 mod engine;
+mod gl_thread;
+mod photo_fog;
 
-use arrays::{dtype_name, read_image, read_mask, read_range, scalar_map_to_py, ImageIn, ImageOut};
+use arrays::{dtype_name, read_image, read_range, scalar_map_to_py, ImageIn, ImageOut};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
-use brume::medium::haze::Haze;
-use brume::medium::physical::VISIBILITY_OPTICAL_DEPTH;
-use brume::photo::{
-    self, BetaDistribution, CaptureOptions, Extinction, FogOptions, Photo, PrepareOptions,
-    PreparedPhoto,
+use brume::photo::BetaDistribution;
+use gl_thread::GlThread;
+use photo_fog::{
+    capture_request, fog_frame, fog_request, prepare_request, set_masks, with_info, Density,
 };
-use brume::raster::{RgbImage, RgbaImage, ScalarMap};
-use brume::refine::RefineMode;
-use brume::Headless;
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
-use std::sync::{mpsc, Mutex, OnceLock};
-use std::thread;
+use std::sync::OnceLock;
 
 /// brume's errors as Python's: bad values and files as `ValueError`, files that cannot be
 /// read as `OSError`, memory as `MemoryError`, the GL and EGL as `RuntimeError`; brume's message kept whole (it
@@ -58,362 +56,6 @@ fn py_err(e: brume::Error) -> PyErr {
 fn value_error(message: impl Into<String>) -> PyErr {
     PyValueError::new_err(message.into())
 }
-
-// ---------------------------------------------------------------------------------------
-// The GL thread.
-
-type Job = Box<dyn FnOnce(&mut Headless) + Send>;
-
-/// One EGL context on a thread of its own, fed jobs through a channel.
-struct GlThread {
-    jobs: Mutex<mpsc::Sender<Job>>,
-    renderer_name: String,
-}
-
-impl GlThread {
-    /// Starts the thread and opens the context on it; the context's error if it cannot.
-    fn start() -> PyResult<GlThread> {
-        let (jobs, queue) = mpsc::channel::<Job>();
-        let (ready, opened) = mpsc::channel::<brume::Result<String>>();
-        thread::Builder::new()
-            .name("brume-gl".into())
-            .spawn(move || {
-                let mut headless = match Headless::new(None) {
-                    Ok(h) => h,
-                    Err(e) => {
-                        let _ = ready.send(Err(e));
-                        return;
-                    }
-                };
-                let _ = ready.send(Ok(headless.caps().renderer.clone()));
-                // Ends when the renderer (the last sender) is dropped; the context is
-                // then destroyed on this thread, where it is current.
-                while let Ok(job) = queue.recv() {
-                    // A panic in one job (a bug) fails that call, not the renderer.
-                    let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        job(&mut headless)
-                    }));
-                }
-            })
-            .map_err(|e| PyRuntimeError::new_err(format!("could not start the GL thread: {e}")))?;
-        let renderer_name = opened
-            .recv()
-            .map_err(|_| PyRuntimeError::new_err("the GL thread stopped while opening EGL"))?
-            .map_err(py_err)?;
-        Ok(GlThread {
-            jobs: Mutex::new(jobs),
-            renderer_name,
-        })
-    }
-
-    /// Runs `f` on the GL thread and waits for its result (call with the GIL released).
-    fn run<T: Send + 'static>(
-        &self,
-        f: impl FnOnce(&mut Headless) -> T + Send + 'static,
-    ) -> PyResult<T> {
-        let (answer, result) = mpsc::channel();
-        let job: Job = Box::new(move |h| {
-            let _ = answer.send(f(h));
-        });
-        self.jobs
-            .lock()
-            .map_err(|_| PyRuntimeError::new_err("the GL thread's queue is poisoned"))?
-            .send(job)
-            .map_err(|_| PyRuntimeError::new_err("the GL thread has stopped"))?;
-        result.recv().map_err(|_| {
-            PyRuntimeError::new_err("the render failed inside brume (a panic on the GL thread)")
-        })
-    }
-}
-
-// ---------------------------------------------------------------------------------------
-// Options.
-
-/// `brume.fog`'s keywords, checked, as brume's options.
-struct FogRequest {
-    fog: FogOptions,
-    prepare: PrepareOptions,
-    capture: CaptureOptions,
-}
-
-/// The keywords of the capture after the fog, as brume's [`CaptureOptions`], checked.
-fn capture_request(
-    exposure_stops: f64,
-    shot_noise_gain: Option<f64>,
-    read_noise: Option<f64>,
-    jpeg_quality: Option<i64>,
-    seed: u64,
-) -> PyResult<CaptureOptions> {
-    CaptureOptions::from_parts(
-        exposure_stops,
-        shot_noise_gain,
-        read_noise,
-        jpeg_quality,
-        seed,
-    )
-    .map_err(py_err)
-}
-
-fn refine_mode(refine: &Bound<'_, PyAny>) -> PyResult<RefineMode> {
-    if let Ok(b) = refine.extract::<bool>() {
-        return Ok(if b {
-            RefineMode::Repair
-        } else {
-            RefineMode::None
-        });
-    }
-    if let Ok(s) = refine.extract::<String>() {
-        return match s.trim().to_ascii_lowercase().as_str() {
-            "none" => Ok(RefineMode::None),
-            "guided" => Ok(RefineMode::Guided),
-            "unreliable" => Ok(RefineMode::Unreliable),
-            "repair" => Ok(RefineMode::Repair),
-            _ => Err(value_error(format!(
-                "invalid refine = {s:?}: expected True (repair), False (none) or one of 'none', 'guided', 'unreliable', 'repair'"
-            ))),
-        };
-    }
-    Err(value_error(format!(
-        "invalid refine = {}: expected True (repair), False (none) or one of 'none', 'guided', 'unreliable', 'repair'",
-        refine.repr().map(|r| r.to_string()).unwrap_or_default()
-    )))
-}
-
-/// `airlight` (None or three linear RGB values) and `refine` as brume's pre-processing
-/// options.
-fn prepare_request(
-    airlight: Option<Vec<f64>>,
-    refine: &Bound<'_, PyAny>,
-) -> PyResult<PrepareOptions> {
-    let airlight = match airlight {
-        None => None,
-        Some(a) if a.len() == 3 => Some([a[0] as f32, a[1] as f32, a[2] as f32]),
-        Some(a) => {
-            return Err(value_error(format!(
-                "invalid airlight = {a:?}: expected None (estimated from the sky) or three linear RGB values"
-            )))
-        }
-    };
-    let mut prepare = PrepareOptions {
-        airlight,
-        ..PrepareOptions::default()
-    };
-    prepare.refine.mode = refine_mode(refine)?;
-    Ok(prepare)
-}
-
-/// A render's result as Python gets it: the image, or `(image, info)` with `return_info`.
-fn with_info(
-    py: Python<'_>,
-    image: Py<PyAny>,
-    info: Option<Bound<'_, PyDict>>,
-) -> PyResult<Py<PyAny>> {
-    match info {
-        Some(info) => Ok((image, info).into_pyobject(py)?.into_any().unbind()),
-        None => Ok(image),
-    }
-}
-
-/// The `sky_mask` and `ego_mask` keywords, read on `range`'s grid, into `prepare`.
-fn set_masks(
-    prepare: &mut PrepareOptions,
-    range: &ScalarMap,
-    sky_mask: Option<&Bound<'_, PyAny>>,
-    ego_mask: Option<&Bound<'_, PyAny>>,
-) -> PyResult<()> {
-    let shape = (range.height(), range.width());
-    if let Some(mask) = sky_mask {
-        let all_set = "a mask with ground in it (is it inverted?)";
-        prepare.sky_mask = Some(read_mask(mask, "sky_mask", shape, all_set)?);
-    }
-    if let Some(mask) = ego_mask {
-        let all_set = "a mask with the scene in it (is it inverted?)";
-        prepare.ego_mask = Some(read_mask(mask, "ego_mask", shape, all_set)?);
-    }
-    Ok(())
-}
-
-/// How dense the fog of `brume.fog` is, as its keywords give it: exactly one of β,
-/// the visibility, or paper 000's normalised κa and κs.
-struct Density {
-    beta: Option<f64>,
-    visibility: Option<f64>,
-    ka: Option<f64>,
-    ks: Option<f64>,
-}
-
-impl Density {
-    /// The fog options of the density given (the other options brume's defaults).
-    fn fog_options(&self) -> PyResult<FogOptions> {
-        let normalised = self.ka.is_some() || self.ks.is_some();
-        match (self.beta, self.visibility, normalised) {
-            (Some(b), None, false) => FogOptions::beta(b).map_err(py_err),
-            (None, Some(v), false) => FogOptions::visibility(v).map_err(py_err),
-            (None, None, true) => Ok(FogOptions {
-                extinction: Extinction::Normalised {
-                    ka: self.ka.unwrap_or(brume::medium::haze::DEFAULT_KA),
-                    ks: self.ks.unwrap_or(brume::medium::haze::DEFAULT_KS),
-                },
-                ..FogOptions::default()
-            }),
-            (None, None, false) => Err(value_error(
-                "neither beta, visibility nor ka/ks given: expected exactly one of beta (extinction, 1/m, e.g. 0.02), visibility (metres, e.g. 150) or ka and/or ks (paper 000's absorption and scattering per unit of range normalised by its largest value, e.g. ks=0.75)",
-            )),
-            _ => Err(value_error(format!(
-                "{} given together: expected exactly one of beta (1/m), visibility (m) or ka/ks (normalised range)",
-                [
-                    ("beta", self.beta.is_some()),
-                    ("visibility", self.visibility.is_some()),
-                    ("ka/ks", normalised),
-                ]
-                .iter()
-                .filter(|(_, given)| *given)
-                .map(|(name, _)| *name)
-                .collect::<Vec<_>>()
-                .join(" and ")
-            ))),
-        }
-    }
-}
-
-fn fog_request(
-    density: Density,
-    airlight: Option<Vec<f64>>,
-    (blur, lambda_px): (bool, Option<f64>),
-    refine: &Bound<'_, PyAny>,
-    capture: CaptureOptions,
-) -> PyResult<FogRequest> {
-    let mut fog = density.fog_options()?;
-    match (blur, lambda_px) {
-        (false, Some(l)) => {
-            return Err(value_error(format!(
-                "blur = False and lambda_px = {l} both given: expected lambda_px only with blur"
-            )))
-        }
-        (false, None) => fog.lambda = 0.0,
-        (true, Some(l)) if !(l.is_finite() && l >= 0.0) => {
-            return Err(value_error(format!(
-                "invalid lambda_px = {l}: expected the blur's strength, a number >= 0 (brume's default 8; 0 for no blur)"
-            )))
-        }
-        (true, Some(l)) => fog.lambda = l,
-        (true, None) => {}
-    }
-    let prepare = prepare_request(airlight, refine)?;
-    Ok(FogRequest {
-        fog,
-        prepare,
-        capture,
-    })
-}
-
-/// What the GL thread hands back for one frame: the image, and what the labels of
-/// `return_info` are made from (the medium as rendered and the prepared photo).
-struct GpuFog {
-    image: RgbaImage,
-    haze: Haze,
-    prepared: PreparedPhoto,
-    sigma_max: f64,
-}
-
-/// The GPU's share of one frame, on the GL thread: the refinement of the pre-processed
-/// range and the fog (`brume::photo`'s refine and fog).
-fn fog_on_gpu(
-    headless: &mut Headless,
-    photo: &Photo,
-    mut prepared: PreparedPhoto,
-    request: &FogRequest,
-) -> brume::Result<GpuFog> {
-    prepared.refine(photo, &request.prepare.refine, headless.renderer()?)?;
-    let fogged = photo::fog(headless.renderer()?, photo, &prepared, &request.fog)?;
-    Ok(GpuFog {
-        image: fogged.rendered.image,
-        haze: fogged.haze,
-        prepared,
-        sigma_max: fogged.rendered.schedule.sigma_max,
-    })
-}
-
-/// `return_info`'s labels of one frame, the ones a dehazing dataset keeps beside the
-/// foggy image (the atmospheric scattering model I = J·t + A·(1 − t)).
-struct FogInfo {
-    /// t = exp(−β·R) at each pixel of the image, of the range the fog read.
-    transmittance: ScalarMap,
-    /// That range at the image's size (m, or the caller's unit with κa and κs):
-    /// pre-processed, refined, unknown pixels the farthest, as `brume batch
-    /// --transmittance` and the render take it.
-    range_m: ScalarMap,
-    airlight: [f32; 3],
-    airlight_source: &'static str,
-    beta: f64,
-    visibility_m: f64,
-    sigma_max: f64,
-}
-
-impl FogInfo {
-    /// The labels of a frame fogged with `opts`. With normalised κa and κs the range
-    /// stays in the caller's units, and β is (κa + κs) per largest range.
-    fn of(gpu: &GpuFog, opts: &FogOptions) -> brume::Result<FogInfo> {
-        let (medium_range, divisor) = photo::medium_range(&opts.extinction, &gpu.prepared.range)?;
-        let transmittance = photo::transmittance_map(&gpu.haze, &medium_range);
-        let (range, beta) = match opts.extinction {
-            Extinction::Physical(fog) => (medium_range, fog.beta),
-            Extinction::Normalised { ka, ks } => (
-                medium_range.map(|&r| (f64::from(r) * divisor) as f32),
-                (ka + ks) / divisor,
-            ),
-        };
-        Ok(FogInfo {
-            transmittance,
-            range_m: range,
-            airlight: gpu.prepared.airlight,
-            airlight_source: gpu.prepared.airlight_from.name(),
-            beta,
-            visibility_m: VISIBILITY_OPTICAL_DEPTH / beta,
-            sigma_max: gpu.sigma_max,
-        })
-    }
-
-    fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let info = PyDict::new(py);
-        info.set_item("transmittance", scalar_map_to_py(py, self.transmittance))?;
-        info.set_item("range_m", scalar_map_to_py(py, self.range_m))?;
-        info.set_item("airlight", self.airlight.map(f64::from).to_vec())?;
-        info.set_item("airlight_source", self.airlight_source)?;
-        info.set_item("beta", self.beta)?;
-        info.set_item("visibility_m", self.visibility_m)?;
-        info.set_item("sigma_max_px", self.sigma_max)?;
-        Ok(info)
-    }
-}
-
-/// One frame fogged: pre-processing on the calling thread (the GIL released, so that
-/// another Python thread's frame can use the GL thread meanwhile, as `brume batch`
-/// overlaps its loader with the GPU), the refinement and the fog on the GL thread, the
-/// capture (and, with `want_info`, the labels) on the calling thread again.
-fn fog_frame(
-    gl: &GlThread,
-    image: RgbImage,
-    range: ScalarMap,
-    request: FogRequest,
-    want_info: bool,
-) -> PyResult<(RgbaImage, Option<FogInfo>)> {
-    let photo = Photo::from_range(image, range).map_err(py_err)?;
-    let prepared = photo::preprocess(&photo, &request.prepare).map_err(py_err)?;
-    let (capture, fog) = (request.capture, request.fog);
-    let mut gpu = gl
-        .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
-        .map_err(py_err)?;
-    photo::capture(&mut gpu.image, &capture).map_err(py_err)?;
-    let info = want_info
-        .then(|| FogInfo::of(&gpu, &fog))
-        .transpose()
-        .map_err(py_err)?;
-    Ok((gpu.image, info))
-}
-
-// ---------------------------------------------------------------------------------------
-// The Python classes and functions.
 
 /// Renderer(): one EGL context (brume's headless one) kept for many frames.
 ///
@@ -644,7 +286,10 @@ impl Renderer {
     /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
     /// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict): as
     /// brume.aerial, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
+    #[pyo3(
+        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false),
+        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
+    )]
     #[allow(clippy::too_many_arguments)]
     fn aerial<'py>(
         &self,
@@ -785,51 +430,16 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// sigma_max_px (the blur's largest scale). With ka/ks, range_m is in the caller's units
 /// and beta is (ka + ks) / the largest range, per that unit.
 #[pyfunction]
-#[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(
+    signature = (*args, **kwargs),
+    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
+)]
 fn fog(
     py: Python<'_>,
-    image: &Bound<'_, PyAny>,
-    range_m: &Bound<'_, PyAny>,
-    beta: Option<f64>,
-    visibility: Option<f64>,
-    ka: Option<f64>,
-    ks: Option<f64>,
-    airlight: Option<Vec<f64>>,
-    blur: bool,
-    lambda_px: Option<f64>,
-    refine: Option<&Bound<'_, PyAny>>,
-    sky_mask: Option<&Bound<'_, PyAny>>,
-    ego_mask: Option<&Bound<'_, PyAny>>,
-    exposure_stops: f64,
-    shot_noise_gain: Option<f64>,
-    read_noise: Option<f64>,
-    jpeg_quality: Option<i64>,
-    seed: u64,
-    return_info: bool,
+    args: &Bound<'_, PyTuple>,
+    kwargs: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyAny>> {
-    let renderer = default_renderer(py)?.get();
-    renderer.fog(
-        py,
-        image,
-        range_m,
-        beta,
-        visibility,
-        ka,
-        ks,
-        airlight,
-        blur,
-        lambda_px,
-        refine,
-        sky_mask,
-        ego_mask,
-        exposure_stops,
-        shot_noise_gain,
-        read_noise,
-        jpeg_quality,
-        seed,
-        return_info,
-    )
+    on_default_renderer(py, "fog", args, kwargs)
 }
 
 /// Calls `method` of the default renderer with the arguments given.

@@ -431,3 +431,18 @@ def test_random_fog_with_capture_is_seeded(image_u8, range_m):
     plain = brume.augment.RandomFog(seed=2, blur=False, refine=False)(image=image_u8, depth=range_m)
     assert plain["beta"] == a["beta"]
     assert not np.array_equal(plain["image"], a["image"])
+
+
+@pytest.mark.parametrize("name", ["fog", "distance_fog", "layered_fog", "aerial"])
+def test_module_functions_have_their_methods_signatures(name):
+    """brume.X calls Renderer.X on the default renderer: help() and IDEs must see the same
+    keywords and defaults (not `*args, **kwargs`), and every default a value (not `...`,
+    what PyO3 shows for a default that is not a literal)."""
+    import inspect
+
+    method = inspect.signature(getattr(brume.Renderer, name))
+    params = list(method.parameters.values())
+    assert params[0].name == "self"
+    assert inspect.signature(getattr(brume, name)) == method.replace(parameters=params[1:])
+    assert [p.name for p in params if p.default is Ellipsis] == []
+    assert getattr(brume, name).__doc__.startswith(name + "(")

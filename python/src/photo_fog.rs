@@ -1,0 +1,300 @@
+//! `brume.fog`: a photo with its range fogged through `brume::photo` (pre-processing on
+//! the calling thread, refinement and fog on the GL thread, the capture after it), the
+//! keywords checked into brume's options, and `return_info`'s labels.
+
+use super::arrays::{read_mask, scalar_map_to_py};
+use super::gl_thread::GlThread;
+use super::{py_err, value_error};
+use brume::medium::haze::Haze;
+use brume::medium::physical::VISIBILITY_OPTICAL_DEPTH;
+use brume::photo::{
+    self, CaptureOptions, Extinction, FogOptions, Photo, PrepareOptions, PreparedPhoto,
+};
+use brume::raster::{RgbImage, RgbaImage, ScalarMap};
+use brume::refine::RefineMode;
+use brume::Headless;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+/// `brume.fog`'s keywords, checked, as brume's options.
+pub(crate) struct FogRequest {
+    fog: FogOptions,
+    pub(crate) prepare: PrepareOptions,
+    capture: CaptureOptions,
+}
+
+/// The keywords of the capture after the fog, as brume's [`CaptureOptions`], checked.
+pub(crate) fn capture_request(
+    exposure_stops: f64,
+    shot_noise_gain: Option<f64>,
+    read_noise: Option<f64>,
+    jpeg_quality: Option<i64>,
+    seed: u64,
+) -> PyResult<CaptureOptions> {
+    CaptureOptions::from_parts(
+        exposure_stops,
+        shot_noise_gain,
+        read_noise,
+        jpeg_quality,
+        seed,
+    )
+    .map_err(py_err)
+}
+
+fn refine_mode(refine: &Bound<'_, PyAny>) -> PyResult<RefineMode> {
+    if let Ok(b) = refine.extract::<bool>() {
+        return Ok(if b {
+            RefineMode::Repair
+        } else {
+            RefineMode::None
+        });
+    }
+    if let Ok(s) = refine.extract::<String>() {
+        return match s.trim().to_ascii_lowercase().as_str() {
+            "none" => Ok(RefineMode::None),
+            "guided" => Ok(RefineMode::Guided),
+            "unreliable" => Ok(RefineMode::Unreliable),
+            "repair" => Ok(RefineMode::Repair),
+            _ => Err(value_error(format!(
+                "invalid refine = {s:?}: expected True (repair), False (none) or one of 'none', 'guided', 'unreliable', 'repair'"
+            ))),
+        };
+    }
+    Err(value_error(format!(
+        "invalid refine = {}: expected True (repair), False (none) or one of 'none', 'guided', 'unreliable', 'repair'",
+        refine.repr().map(|r| r.to_string()).unwrap_or_default()
+    )))
+}
+
+/// `airlight` (None or three linear RGB values) and `refine` as brume's pre-processing
+/// options.
+pub(crate) fn prepare_request(
+    airlight: Option<Vec<f64>>,
+    refine: &Bound<'_, PyAny>,
+) -> PyResult<PrepareOptions> {
+    let airlight = match airlight {
+        None => None,
+        Some(a) if a.len() == 3 => Some([a[0] as f32, a[1] as f32, a[2] as f32]),
+        Some(a) => {
+            return Err(value_error(format!(
+                "invalid airlight = {a:?}: expected None (estimated from the sky) or three linear RGB values"
+            )))
+        }
+    };
+    let mut prepare = PrepareOptions {
+        airlight,
+        ..PrepareOptions::default()
+    };
+    prepare.refine.mode = refine_mode(refine)?;
+    Ok(prepare)
+}
+
+/// A render's result as Python gets it: the image, or `(image, info)` with `return_info`.
+pub(crate) fn with_info(
+    py: Python<'_>,
+    image: Py<PyAny>,
+    info: Option<Bound<'_, PyDict>>,
+) -> PyResult<Py<PyAny>> {
+    match info {
+        Some(info) => Ok((image, info).into_pyobject(py)?.into_any().unbind()),
+        None => Ok(image),
+    }
+}
+
+/// The `sky_mask` and `ego_mask` keywords, read on `range`'s grid, into `prepare`.
+pub(crate) fn set_masks(
+    prepare: &mut PrepareOptions,
+    range: &ScalarMap,
+    sky_mask: Option<&Bound<'_, PyAny>>,
+    ego_mask: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    let shape = (range.height(), range.width());
+    if let Some(mask) = sky_mask {
+        let all_set = "a mask with ground in it (is it inverted?)";
+        prepare.sky_mask = Some(read_mask(mask, "sky_mask", shape, all_set)?);
+    }
+    if let Some(mask) = ego_mask {
+        let all_set = "a mask with the scene in it (is it inverted?)";
+        prepare.ego_mask = Some(read_mask(mask, "ego_mask", shape, all_set)?);
+    }
+    Ok(())
+}
+
+/// How dense the fog of `brume.fog` is, as its keywords give it: exactly one of β,
+/// the visibility, or paper 000's normalised κa and κs.
+pub(crate) struct Density {
+    pub(crate) beta: Option<f64>,
+    pub(crate) visibility: Option<f64>,
+    pub(crate) ka: Option<f64>,
+    pub(crate) ks: Option<f64>,
+}
+
+impl Density {
+    /// The fog options of the density given (the other options brume's defaults).
+    fn fog_options(&self) -> PyResult<FogOptions> {
+        let normalised = self.ka.is_some() || self.ks.is_some();
+        match (self.beta, self.visibility, normalised) {
+            (Some(b), None, false) => FogOptions::beta(b).map_err(py_err),
+            (None, Some(v), false) => FogOptions::visibility(v).map_err(py_err),
+            (None, None, true) => Ok(FogOptions {
+                extinction: Extinction::Normalised {
+                    ka: self.ka.unwrap_or(brume::medium::haze::DEFAULT_KA),
+                    ks: self.ks.unwrap_or(brume::medium::haze::DEFAULT_KS),
+                },
+                ..FogOptions::default()
+            }),
+            (None, None, false) => Err(value_error(
+                "neither beta, visibility nor ka/ks given: expected exactly one of beta (extinction, 1/m, e.g. 0.02), visibility (metres, e.g. 150) or ka and/or ks (paper 000's absorption and scattering per unit of range normalised by its largest value, e.g. ks=0.75)",
+            )),
+            _ => Err(value_error(format!(
+                "{} given together: expected exactly one of beta (1/m), visibility (m) or ka/ks (normalised range)",
+                [
+                    ("beta", self.beta.is_some()),
+                    ("visibility", self.visibility.is_some()),
+                    ("ka/ks", normalised),
+                ]
+                .iter()
+                .filter(|(_, given)| *given)
+                .map(|(name, _)| *name)
+                .collect::<Vec<_>>()
+                .join(" and ")
+            ))),
+        }
+    }
+}
+
+pub(crate) fn fog_request(
+    density: Density,
+    airlight: Option<Vec<f64>>,
+    (blur, lambda_px): (bool, Option<f64>),
+    refine: &Bound<'_, PyAny>,
+    capture: CaptureOptions,
+) -> PyResult<FogRequest> {
+    let mut fog = density.fog_options()?;
+    match (blur, lambda_px) {
+        (false, Some(l)) => {
+            return Err(value_error(format!(
+                "blur = False and lambda_px = {l} both given: expected lambda_px only with blur"
+            )))
+        }
+        (false, None) => fog.lambda = 0.0,
+        (true, Some(l)) if !(l.is_finite() && l >= 0.0) => {
+            return Err(value_error(format!(
+                "invalid lambda_px = {l}: expected the blur's strength, a number >= 0 (brume's default 8; 0 for no blur)"
+            )))
+        }
+        (true, Some(l)) => fog.lambda = l,
+        (true, None) => {}
+    }
+    let prepare = prepare_request(airlight, refine)?;
+    Ok(FogRequest {
+        fog,
+        prepare,
+        capture,
+    })
+}
+
+/// What the GL thread hands back for one frame: the image, and what the labels of
+/// `return_info` are made from (the medium as rendered and the prepared photo).
+struct GpuFog {
+    image: RgbaImage,
+    haze: Haze,
+    prepared: PreparedPhoto,
+    sigma_max: f64,
+}
+
+/// The GPU's share of one frame, on the GL thread: the refinement of the pre-processed
+/// range and the fog (`brume::photo`'s refine and fog).
+fn fog_on_gpu(
+    headless: &mut Headless,
+    photo: &Photo,
+    mut prepared: PreparedPhoto,
+    request: &FogRequest,
+) -> brume::Result<GpuFog> {
+    prepared.refine(photo, &request.prepare.refine, headless.renderer()?)?;
+    let fogged = photo::fog(headless.renderer()?, photo, &prepared, &request.fog)?;
+    Ok(GpuFog {
+        image: fogged.rendered.image,
+        haze: fogged.haze,
+        prepared,
+        sigma_max: fogged.rendered.schedule.sigma_max,
+    })
+}
+
+/// `return_info`'s labels of one frame, the ones a dehazing dataset keeps beside the
+/// foggy image (the atmospheric scattering model I = J·t + A·(1 − t)).
+pub(crate) struct FogInfo {
+    /// t = exp(−β·R) at each pixel of the image, of the range the fog read.
+    transmittance: ScalarMap,
+    /// That range at the image's size (m, or the caller's unit with κa and κs):
+    /// pre-processed, refined, unknown pixels the farthest, as `brume batch
+    /// --transmittance` and the render take it.
+    range_m: ScalarMap,
+    airlight: [f32; 3],
+    airlight_source: &'static str,
+    beta: f64,
+    visibility_m: f64,
+    sigma_max: f64,
+}
+
+impl FogInfo {
+    /// The labels of a frame fogged with `opts`. With normalised κa and κs the range
+    /// stays in the caller's units, and β is (κa + κs) per largest range.
+    fn of(gpu: &GpuFog, opts: &FogOptions) -> brume::Result<FogInfo> {
+        let (medium_range, divisor) = photo::medium_range(&opts.extinction, &gpu.prepared.range)?;
+        let transmittance = photo::transmittance_map(&gpu.haze, &medium_range);
+        let (range, beta) = match opts.extinction {
+            Extinction::Physical(fog) => (medium_range, fog.beta),
+            Extinction::Normalised { ka, ks } => (
+                medium_range.map(|&r| (f64::from(r) * divisor) as f32),
+                (ka + ks) / divisor,
+            ),
+        };
+        Ok(FogInfo {
+            transmittance,
+            range_m: range,
+            airlight: gpu.prepared.airlight,
+            airlight_source: gpu.prepared.airlight_from.name(),
+            beta,
+            visibility_m: VISIBILITY_OPTICAL_DEPTH / beta,
+            sigma_max: gpu.sigma_max,
+        })
+    }
+
+    pub(crate) fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let info = PyDict::new(py);
+        info.set_item("transmittance", scalar_map_to_py(py, self.transmittance))?;
+        info.set_item("range_m", scalar_map_to_py(py, self.range_m))?;
+        info.set_item("airlight", self.airlight.map(f64::from).to_vec())?;
+        info.set_item("airlight_source", self.airlight_source)?;
+        info.set_item("beta", self.beta)?;
+        info.set_item("visibility_m", self.visibility_m)?;
+        info.set_item("sigma_max_px", self.sigma_max)?;
+        Ok(info)
+    }
+}
+
+/// One frame fogged: pre-processing on the calling thread (the GIL released, so that
+/// another Python thread's frame can use the GL thread meanwhile, as `brume batch`
+/// overlaps its loader with the GPU), the refinement and the fog on the GL thread, the
+/// capture (and, with `want_info`, the labels) on the calling thread again.
+pub(crate) fn fog_frame(
+    gl: &GlThread,
+    image: RgbImage,
+    range: ScalarMap,
+    request: FogRequest,
+    want_info: bool,
+) -> PyResult<(RgbaImage, Option<FogInfo>)> {
+    let photo = Photo::from_range(image, range).map_err(py_err)?;
+    let prepared = photo::preprocess(&photo, &request.prepare).map_err(py_err)?;
+    let (capture, fog) = (request.capture, request.fog);
+    let mut gpu = gl
+        .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
+        .map_err(py_err)?;
+    photo::capture(&mut gpu.image, &capture).map_err(py_err)?;
+    let info = want_info
+        .then(|| FogInfo::of(&gpu, &fog))
+        .transpose()
+        .map_err(py_err)?;
+    Ok((gpu.image, info))
+}
