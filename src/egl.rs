@@ -8,6 +8,15 @@
 //! has no 3.2) with no surface where `EGL_KHR_surfaceless_context` allows it, else a 1x1
 //! pbuffer.
 //!
+//! **Forked processes.** A display opened before a `fork()` is unusable in the child: the
+//! child has a copy of the driver's state but not the driver's threads (llvmpipe's, its
+//! shader queue's), so its first draw waits for them forever. Mesa keeps one display per
+//! platform and native display, and hands the child that copy again, so a child skips the
+//! platforms its parent opened and opens another: after a parent's surfaceless display,
+//! the EGL device (`EGL_EXT_platform_device`, which on llvmpipe is
+//! `EGL_MESA_device_software`), a display of its own with threads of its own. A PyTorch
+//! `DataLoader`'s workers and Python's `multiprocessing` fork this way on Linux.
+//!
 //! **Several contexts on one thread.** Creating a context makes it current; a context
 //! never releases another one: dropping a context that is not current leaves the current
 //! one alone, and [`GlContext::make_current`] is how an owner gets its own back (brume's
@@ -18,13 +27,38 @@ use khronos_egl as egl;
 use std::ffi::c_void;
 use std::fmt;
 use std::str::FromStr;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 type EglInstance = egl::DynamicInstance<egl::EGL1_4>;
 
 const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
 const PLATFORM_DEVICE_EXT: egl::Enum = 0x313F;
 const DEBIAN_PACKAGES: &str = "libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri";
+
+/// The platforms whose display this process, or a process it was forked from, opened, with
+/// the process that opened each.
+static OPENED: Mutex<Vec<(Platform, u32)>> = Mutex::new(Vec::new());
+
+/// The process this one was forked from that opened `platform`'s display, if any: the
+/// display is then this process's copy of it, whose driver threads are not here. A forked
+/// process also leaves `EGL_DEFAULT_DISPLAY` alone, which may be any platform's display.
+fn opened_before_fork(platform: Platform) -> Option<u32> {
+    let pid = std::process::id();
+    let opened = OPENED.lock().unwrap_or_else(|e| e.into_inner());
+    opened
+        .iter()
+        .find(|&&(p, by)| by != pid && (p == platform || platform == Platform::Default))
+        .map(|&(_, by)| by)
+}
+
+/// Records that this process opened `platform`'s display.
+fn record_opened(platform: Platform) {
+    let pid = std::process::id();
+    let mut opened = OPENED.lock().unwrap_or_else(|e| e.into_inner());
+    if !opened.contains(&(platform, pid)) {
+        opened.push((platform, pid));
+    }
+}
 
 /// Environment variable naming the EGL library to load instead of `libEGL.so.1` (a
 /// vendor's libEGL, or a path, e.g. `/usr/lib/x86_64-linux-gnu/libEGL_mesa.so.0`).
@@ -119,7 +153,20 @@ impl GlContext {
         };
         let mut tried = Vec::new();
         for p in order {
-            match open_display(&egl, p).and_then(|display| create_context(&egl, display)) {
+            if let Some(parent) = opened_before_fork(p) {
+                log::debug!("EGL {p}: skipped, opened by process {parent} before a fork");
+                tried.push(format!(
+                    "{p}: opened by process {parent} before it forked this one, and a \
+                     display's driver threads do not survive fork() (open brume's first \
+                     context after the fork, or start processes with 'spawn')"
+                ));
+                continue;
+            }
+            let opened = open_display(&egl, p).and_then(|display| {
+                record_opened(p);
+                create_context(&egl, display)
+            });
+            match opened {
                 Ok(parts) => {
                     return Ok(GlContext {
                         gl: Arc::new(parts.gl),

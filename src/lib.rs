@@ -31,6 +31,7 @@ pub mod io;
 pub mod medium;
 pub mod memory;
 pub mod metrics;
+pub mod parallel;
 pub mod photo;
 pub mod pipeline;
 pub mod prep;

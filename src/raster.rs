@@ -62,10 +62,12 @@ impl<T> Grid<T> {
         T: Send,
     {
         use rayon::prelude::*;
-        let data = (0..width * height)
-            .into_par_iter()
-            .map(|i| f(i % width, i / width))
-            .collect();
+        let data = crate::parallel::run(|| {
+            (0..width * height)
+                .into_par_iter()
+                .map(|i| f(i % width, i / width))
+                .collect()
+        });
         Grid {
             width,
             height,

@@ -21,6 +21,7 @@ mod distance_fog;
 mod engine_camera;
 mod engine_fog;
 mod external_oes;
+mod fork;
 mod frame_inputs;
 mod fuzz_regressions;
 mod gpu_errors;

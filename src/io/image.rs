@@ -42,23 +42,27 @@ pub fn srgb_to_linear(v: f32) -> f32 {
 /// [`srgb8_to_linear_table`], on every core.
 pub fn srgb8_rgb_to_linear(rgb: &[u8]) -> Vec<[f32; 3]> {
     let lut = srgb8_to_linear_table();
-    rgb.par_chunks_exact(3)
-        .map(|p| {
-            [
-                lut[usize::from(p[0])],
-                lut[usize::from(p[1])],
-                lut[usize::from(p[2])],
-            ]
-        })
-        .collect()
+    crate::parallel::run(|| {
+        rgb.par_chunks_exact(3)
+            .map(|p| {
+                [
+                    lut[usize::from(p[0])],
+                    lut[usize::from(p[1])],
+                    lut[usize::from(p[2])],
+                ]
+            })
+            .collect()
+    })
 }
 
 /// The RGB of linear RGBA pixels as 8-bit sRGB (alpha dropped), by [`linear_to_srgb8`],
 /// on every core. `into_flattened` makes it interleaved bytes without a copy.
 pub fn linear_rgba_to_srgb8_rgb(rgba: &[[f32; 4]]) -> Vec<[u8; 3]> {
-    rgba.par_iter()
-        .map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
-        .collect()
+    crate::parallel::run(|| {
+        rgba.par_iter()
+            .map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
+            .collect()
+    })
 }
 
 /// The linear value of each 8-bit sRGB code value, by the exact curve: 256 lookups

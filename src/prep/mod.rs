@@ -274,6 +274,12 @@ pub fn prepare(range: &ScalarMap, opts: &PrepOptions) -> Result<Prepared> {
 /// detection: the mask is the sky). Errors as [`prepare`], and [`Error::SizeMismatch`]
 /// when a guide's size differs from the range's.
 pub fn prepare_guided(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Result<Prepared> {
+    crate::parallel::run(|| prepare_on_pool(range, guides, opts))
+}
+
+/// [`prepare_guided`] on brume's thread pool (`crate::parallel`), where its parallel loops
+/// (the sky, the local outliers, the margin) run.
+fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Result<Prepared> {
     opts.validate()?;
     check_guide_sizes(range, &guides)?;
     let t0 = Instant::now();

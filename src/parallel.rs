@@ -1,0 +1,107 @@
+//! brume's CPU thread pool: every parallel loop of the library (rayon's iterators and
+//! `join`) runs on it, through [`run`] and [`join`].
+//!
+//! Why not rayon's global pool: a process that forks after brume's first parallel call (a
+//! PyTorch `DataLoader`'s workers, Python's `multiprocessing` on Linux, a server that
+//! forks workers) gives its child a copy of the pool without the pool's threads, so the
+//! child's first parallel call waits for them forever, and rayon's global pool cannot be
+//! built again. This pool is built once per process: a child that finds the parent's
+//! builds its own.
+
+use rayon::{ThreadPool, ThreadPoolBuilder};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+
+/// The pool and the process that built it.
+static POOL: Mutex<Option<(u32, Arc<ThreadPool>)>> = Mutex::new(None);
+
+/// The pool's size that [`set_num_threads`] asked for; 0: rayon's default.
+static NUM_THREADS: AtomicUsize = AtomicUsize::new(0);
+
+/// Sizes brume's pool: `Some(n)` threads, or `None` for `RAYON_NUM_THREADS`, else one a
+/// core (the default). Work already running keeps the pool it started on; the next call
+/// builds the new one.
+pub fn set_num_threads(threads: Option<usize>) {
+    NUM_THREADS.store(threads.unwrap_or(0), Ordering::Relaxed);
+    let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    if slot
+        .as_ref()
+        .is_some_and(|(owner, _)| *owner == std::process::id())
+    {
+        *slot = None;
+    }
+}
+
+/// This process's pool, built on first use; `None` if its threads cannot be started (then
+/// rayon's own pool is used).
+fn pool() -> Option<Arc<ThreadPool>> {
+    let pid = std::process::id();
+    let mut slot = POOL.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some((owner, pool)) = slot.as_ref() {
+        if *owner == pid {
+            return Some(Arc::clone(pool));
+        }
+    }
+    // A parent's pool (this process was forked): its threads are not in this process, and
+    // dropping it would wait on them, so it is leaked.
+    if let Some((_, inherited)) = slot.take() {
+        std::mem::forget(inherited);
+    }
+    let pool = ThreadPoolBuilder::new()
+        .num_threads(NUM_THREADS.load(Ordering::Relaxed))
+        .thread_name(|i| format!("brume-cpu-{i}"))
+        .build()
+        .map_err(|e| log::warn!("brume's CPU thread pool could not start ({e}): using rayon's"))
+        .ok()?;
+    let pool = Arc::new(pool);
+    *slot = Some((pid, Arc::clone(&pool)));
+    Some(pool)
+}
+
+/// Runs `f` on this process's pool, so that the parallel iterators inside it use the pool.
+pub fn run<R: Send>(f: impl FnOnce() -> R + Send) -> R {
+    match pool() {
+        Some(pool) => pool.install(f),
+        None => f(),
+    }
+}
+
+/// `a` and `b`, possibly in parallel on this process's pool (`rayon::join`).
+pub fn join<A: Send, B: Send>(
+    a: impl FnOnce() -> A + Send,
+    b: impl FnOnce() -> B + Send,
+) -> (A, B) {
+    run(|| rayon::join(a, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rayon::prelude::*;
+
+    #[test]
+    fn parallel_work_runs_on_brumes_pool() {
+        let names: Vec<String> = run(|| {
+            (0..64)
+                .into_par_iter()
+                .map(|_| std::thread::current().name().unwrap_or("").to_owned())
+                .collect()
+        });
+        assert!(
+            names.iter().all(|n| n.starts_with("brume-cpu-")),
+            "{names:?}"
+        );
+        let (a, b) = join(|| 2 + 2, || "four");
+        assert_eq!((a, b), (4, "four"));
+        set_num_threads(Some(3));
+        assert_eq!(run(rayon::current_num_threads), 3);
+        set_num_threads(None);
+        assert_eq!(
+            run(rayon::current_num_threads),
+            ThreadPoolBuilder::new()
+                .build()
+                .unwrap()
+                .current_num_threads()
+        );
+    }
+}
