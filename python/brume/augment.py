@@ -1,18 +1,21 @@
 """Fog as a data augmentation, in the dict convention of albumentations and torchvision's
-v2 transforms: ``t(image=..., depth=...)`` returns a dict with the fogged ``image``, the
-``depth`` unchanged and the ``beta`` drawn (with ``return_info=True`` also the
-``transmittance`` and ``airlight`` labels of a dehazing dataset).
+v2 transforms: ``t(image=..., depth=...)``, or ``t(sample)`` with a dict of the same keys
+(as torchvision v2's ``Compose`` calls its transforms), returns a dict with the fogged
+``image``, the ``depth`` unchanged and the ``beta`` drawn (with ``return_info=True`` also
+the ``transmittance`` and ``airlight`` labels of a dehazing dataset).
 
     >>> t = RandomFog(beta_range=(0.005, 0.03), seed=0)
     >>> out = t(image=rgb_uint8, depth=range_m)
     >>> out["image"].shape == rgb_uint8.shape, out["beta"]
+    >>> out = t({"image": rgb_uint8, "depth": range_m})   # as torchvision v2's Compose calls it
 
-Pure Python on top of :func:`brume.fog`.
+Inside ``albumentations.Compose``, which takes only its own transforms, use
+:class:`brume.albumentations.Fog`. Pure Python on top of :func:`brume.fog`.
 """
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence, Tuple
+from typing import Any, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -87,7 +90,29 @@ class RandomFog:
         self.return_info = bool(return_info)
         self.rng = np.random.default_rng(seed)
 
-    def __call__(self, *, image: np.ndarray, depth: np.ndarray, **targets: Any) -> dict:
+    def __call__(self, sample: Optional[Mapping[str, Any]] = None, /, **targets: Any) -> dict:
+        """``t(image=…, depth=…, **targets)`` (albumentations' convention), or ``t(sample)``
+        with the same keys in one dict (torchvision v2's ``Compose`` passes a dict sample
+        this way). ``image`` is a numpy array or a PIL image (fogged in RGB, returned as a
+        PIL image)."""
+        if sample is not None:
+            if targets or not isinstance(sample, Mapping):
+                raise TypeError(
+                    "RandomFog takes image=…, depth=… as keywords, or one dict of them, not both"
+                )
+            targets = dict(sample)
+        missing = [k for k in ("image", "depth") if targets.get(k) is None]
+        if missing:
+            raise TypeError(f"RandomFog needs {' and '.join(missing)}: t(image=…, depth=range_m)")
+        given, depth = targets.pop("image"), targets.pop("depth")
+        pil = _pil_image_class(given)
+        image = np.asarray(given.convert("RGB")) if pil is not None else given
+        out = self._fog(image, depth, targets)
+        if pil is not None:
+            out["image"] = given if out["image"] is image else pil.fromarray(out["image"])
+        return out
+
+    def _fog(self, image: np.ndarray, depth: np.ndarray, targets: dict) -> dict:
         out = dict(targets)
         out["depth"] = depth
         # One draw for p and one for beta on every call, so that a seed gives the same
@@ -137,3 +162,13 @@ class RandomFog:
         p = float(self.rng.random())
         p = min(max(p, 1e-16), 1.0 - 1e-16)
         return float(beta_quantile(self.beta_dist, p))
+
+
+def _pil_image_class(image: Any) -> Any:
+    """PIL's ``Image`` module if ``image`` is a PIL image, else ``None`` (PIL is optional)."""
+    module = type(image).__module__
+    if not module.startswith("PIL."):
+        return None
+    from PIL import Image
+
+    return Image if isinstance(image, Image.Image) else None

@@ -384,6 +384,13 @@ impl Renderer {
     fn __repr__(&self) -> String {
         format!("brume.Renderer({:?})", self.gl.renderer_name)
     }
+
+    /// Pickled as a new renderer: a context belongs to its process, so a transform that
+    /// holds one (`RandomFog(renderer=…)`) can go to spawned worker processes, each of
+    /// which opens its own on unpickling.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> (Bound<'py, pyo3::types::PyType>, ()) {
+        (slf.get_type(), ())
+    }
 }
 
 /// The renderer `brume.fog` uses, opened on its first call.

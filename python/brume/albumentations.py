@@ -1,0 +1,103 @@
+"""brume's fog as an albumentations transform (albumentations 2), for pipelines built with
+``albumentations.Compose``, which takes only its own transforms:
+
+    >>> import albumentations as A
+    >>> from brume.albumentations import Fog
+    >>> pipeline = A.Compose(
+    ...     [A.HorizontalFlip(), A.RandomCrop(256, 256), Fog(beta_range=(0.005, 0.03))],
+    ...     additional_targets={"depth": "mask"},   # flips and crops move the range too
+    ...     seed=0,
+    ... )
+    >>> out = pipeline(image=rgb_uint8, depth=range_m)
+
+The range in metres comes from the sample's ``depth``, after the transforms before ``Fog``
+(declared as a mask target, geometric transforms resample it by nearest neighbour, as a
+range must be); ``sky_mask`` and ``ego_mask``, when the sample has them, go to the fog
+too. β is drawn from the pipeline's random generator, so ``Compose(seed=…)`` repeats it.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional, Sequence, Tuple
+
+import albumentations as A
+import numpy as np
+
+from ._brume import beta_quantile, fog as _fog
+
+__all__ = ["Fog"]
+
+
+class Fog(A.ImageOnlyTransform):
+    """Fog of a random density on the image, from the sample's ``depth`` (HxW metres, the
+    image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
+    from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
+    ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur`` and
+    ``refine`` are :func:`brume.fog`'s. The image is uint8 sRGB or float32 linear RGB, as
+    :func:`brume.fog` takes it.
+    """
+
+    def __init__(
+        self,
+        beta_range: Tuple[float, float] = (0.005, 0.03),
+        *,
+        beta_dist: Optional[str] = None,
+        airlight: Optional[Sequence[float]] = None,
+        blur: bool = True,
+        refine: Any = True,
+        p: float = 1.0,
+    ) -> None:
+        super().__init__(p=p)
+        lo, hi = (float(b) for b in beta_range)
+        if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 < lo <= hi):
+            raise ValueError(
+                f"invalid beta_range = {beta_range!r}: expected (low, high) with 0 < low <= high, in 1/m"
+            )
+        if beta_dist is not None:
+            beta_quantile(beta_dist, 0.5)  # a ValueError that says what is expected
+        self.beta_range = (lo, hi)
+        self.beta_dist = beta_dist
+        self.airlight = airlight
+        self.blur = blur
+        self.refine = refine
+
+    @property
+    def targets_as_params(self) -> list:
+        return ["depth"]
+
+    def get_params_dependent_on_data(self, params: dict, data: dict) -> dict:
+        rng = self.random_generator
+        if self.beta_dist is None:
+            beta = float(rng.uniform(*self.beta_range))
+        else:
+            u = min(max(float(rng.random()), 1e-16), 1.0 - 1e-16)
+            beta = float(beta_quantile(self.beta_dist, u))
+        return {
+            "beta": beta,
+            "depth": data["depth"],
+            "sky_mask": data.get("sky_mask"),
+            "ego_mask": data.get("ego_mask"),
+        }
+
+    def apply(
+        self,
+        img: np.ndarray,
+        beta: float,
+        depth: np.ndarray,
+        sky_mask: Optional[np.ndarray] = None,
+        ego_mask: Optional[np.ndarray] = None,
+        **params: Any,
+    ) -> np.ndarray:
+        return _fog(
+            img,
+            depth,
+            beta=beta,
+            airlight=self.airlight,
+            blur=self.blur,
+            refine=self.refine,
+            sky_mask=sky_mask,
+            ego_mask=ego_mask,
+        )
+
+    def get_transform_init_args_names(self) -> Tuple[str, ...]:
+        return ("beta_range", "beta_dist", "airlight", "blur", "refine")
