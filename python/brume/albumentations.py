@@ -23,7 +23,8 @@ from typing import Any, Optional, Sequence, Tuple
 import albumentations as A
 import numpy as np
 
-from ._brume import beta_quantile, fog as _fog
+from ._brume import fog as _fog
+from .augment import _checked_betas, _draw_beta
 
 __all__ = ["Fog"]
 
@@ -48,14 +49,7 @@ class Fog(A.ImageOnlyTransform):
         p: float = 1.0,
     ) -> None:
         super().__init__(p=p)
-        lo, hi = (float(b) for b in beta_range)
-        if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 < lo <= hi):
-            raise ValueError(
-                f"invalid beta_range = {beta_range!r}: expected (low, high) with 0 < low <= high, in 1/m"
-            )
-        if beta_dist is not None:
-            beta_quantile(beta_dist, 0.5)  # a ValueError that says what is expected
-        self.beta_range = (lo, hi)
+        self.beta_range = _checked_betas(beta_range, beta_dist)
         self.beta_dist = beta_dist
         self.airlight = airlight
         self.blur = blur
@@ -66,14 +60,8 @@ class Fog(A.ImageOnlyTransform):
         return ["depth"]
 
     def get_params_dependent_on_data(self, params: dict, data: dict) -> dict:
-        rng = self.random_generator
-        if self.beta_dist is None:
-            beta = float(rng.uniform(*self.beta_range))
-        else:
-            u = min(max(float(rng.random()), 1e-16), 1.0 - 1e-16)
-            beta = float(beta_quantile(self.beta_dist, u))
         return {
-            "beta": beta,
+            "beta": _draw_beta(self.random_generator, self.beta_range, self.beta_dist),
             "depth": data["depth"],
             "sky_mask": data.get("sky_mask"),
             "ego_mask": data.get("ego_mask"),

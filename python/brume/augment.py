@@ -65,16 +65,9 @@ class RandomFog:
         jpeg_quality: Optional[int] = None,
         return_info: bool = False,
     ) -> None:
-        if beta_dist is not None:
-            beta_quantile(beta_dist, 0.5)  # a ValueError that says what is expected
-        lo, hi = (float(b) for b in beta_range)
-        if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 < lo <= hi):
-            raise ValueError(
-                f"invalid beta_range = {beta_range!r}: expected (low, high) with 0 < low <= high, in 1/m"
-            )
+        self.beta_range = _checked_betas(beta_range, beta_dist)
         if not 0.0 <= float(p) <= 1.0:
             raise ValueError(f"invalid p = {p!r}: expected a probability in [0, 1]")
-        self.beta_range = (lo, hi)
         self.p = float(p)
         self.airlight = airlight
         self.blur = blur
@@ -118,7 +111,7 @@ class RandomFog:
         # One draw for p and one for beta on every call, so that a seed gives the same
         # sequence of betas whatever p lets through.
         apply = self.rng.random() < self.p
-        beta = self._draw_beta()
+        beta = _draw_beta(self.rng, self.beta_range, self.beta_dist)
         noisy = self.capture["shot_noise_gain"] is not None or self.capture["read_noise"] is not None
         # Drawn only with noise, so that a seed without it gives the betas it always gave.
         noise_seed = int(self.rng.integers(0, 2**63)) if noisy else 0
@@ -155,13 +148,31 @@ class RandomFog:
             f"capture={self.capture}, return_info={self.return_info})"
         )
 
-    def _draw_beta(self) -> float:
-        if self.beta_dist is None:
-            return float(self.rng.uniform(*self.beta_range))
-        # A uniform p in (0, 1) through the distribution's quantile (brume's own).
-        p = float(self.rng.random())
-        p = min(max(p, 1e-16), 1.0 - 1e-16)
-        return float(beta_quantile(self.beta_dist, p))
+
+def _checked_betas(
+    beta_range: Tuple[float, float], beta_dist: Optional[str]
+) -> Tuple[float, float]:
+    """``beta_range`` as two floats, after checking it and ``beta_dist`` (a ValueError that
+    says what is expected)."""
+    if beta_dist is not None:
+        beta_quantile(beta_dist, 0.5)
+    lo, hi = (float(b) for b in beta_range)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 < lo <= hi):
+        raise ValueError(
+            f"invalid beta_range = {beta_range!r}: expected (low, high) with 0 < low <= high, in 1/m"
+        )
+    return lo, hi
+
+
+def _draw_beta(
+    rng: np.random.Generator, beta_range: Tuple[float, float], beta_dist: Optional[str]
+) -> float:
+    """β uniform in ``beta_range``, or from ``beta_dist`` (a uniform p in (0, 1) through
+    the distribution's quantile, brume's own)."""
+    if beta_dist is None:
+        return float(rng.uniform(*beta_range))
+    p = min(max(float(rng.random()), 1e-16), 1.0 - 1e-16)
+    return float(beta_quantile(beta_dist, p))
 
 
 def _pil_image_class(image: Any) -> Any:
