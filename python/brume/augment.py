@@ -15,6 +15,7 @@ Inside ``albumentations.Compose``, which takes only its own transforms, use
 
 from __future__ import annotations
 
+import sys
 from typing import Any, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
@@ -41,6 +42,11 @@ class RandomFog:
     Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and
     ``ego_mask`` targets (the depth's shape, non-zero = set) also go to
     :func:`brume.fog`: the sky instead of its detection, the car's hood never fogged.
+
+    In a PyTorch ``DataLoader`` worker the generator is seeded again, from ``seed`` and
+    the worker's seed (``torch.utils.data.get_worker_info().seed``, which differs between
+    workers and follows ``torch.manual_seed``): each worker holds a copy of the transform,
+    and the copies would otherwise draw the same betas.
 
     ``return_info=True`` adds the labels of the scattering model I = J·t + A·(1 − t), as
     :func:`brume.fog` reports them: ``transmittance`` (float32 HxW at the image's size;
@@ -81,7 +87,9 @@ class RandomFog:
             jpeg_quality=jpeg_quality,
         )
         self.return_info = bool(return_info)
+        self.seed = seed
         self.rng = np.random.default_rng(seed)
+        self._worker: Optional[int] = None
 
     def __call__(self, sample: Optional[Mapping[str, Any]] = None, /, **targets: Any) -> dict:
         """``t(image=…, depth=…, **targets)`` (albumentations' convention), or ``t(sample)``
@@ -108,6 +116,7 @@ class RandomFog:
     def _fog(self, image: np.ndarray, depth: np.ndarray, targets: dict) -> dict:
         out = dict(targets)
         out["depth"] = depth
+        self._reseed_in_torch_worker()
         # One draw for p and one for beta on every call, so that a seed gives the same
         # sequence of betas whatever p lets through.
         apply = self.rng.random() < self.p
@@ -147,6 +156,15 @@ class RandomFog:
             f"airlight={self.airlight}, blur={self.blur}, refine={self.refine!r}, "
             f"capture={self.capture}, return_info={self.return_info})"
         )
+
+    def _reseed_in_torch_worker(self) -> None:
+        torch = sys.modules.get("torch")  # imported by the DataLoader that runs a worker
+        info = torch.utils.data.get_worker_info() if torch is not None else None
+        if info is None or info.seed == self._worker:
+            return
+        self._worker = info.seed
+        entropy = [info.seed] if self.seed is None else [self.seed, info.seed]
+        self.rng = np.random.default_rng(entropy)
 
 
 def _checked_betas(

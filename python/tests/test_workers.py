@@ -124,3 +124,30 @@ def test_albumentations_fog_follows_the_pipelines_geometry_and_seed(sample):
         Fog(beta_range=(0.03, 0.005))
     with pytest.raises(ValueError, match="depth"):
         A.Compose([Fog()])(image=image)
+
+
+def test_random_fog_draws_other_betas_in_each_torch_worker(sample, monkeypatch):
+    """A DataLoader gives each worker a copy of the transform; the copies must not draw the
+    same betas. Seeded again from torch's per-worker seed (get_worker_info().seed, the
+    documented API, stood in for here by a module of that shape)."""
+    import copy
+    import types
+
+    image, range_m = sample
+    worker = types.SimpleNamespace(id=0, seed=None, num_workers=2)
+    fake = types.ModuleType("torch")
+    fake.utils = types.SimpleNamespace(
+        data=types.SimpleNamespace(get_worker_info=lambda: worker if worker.seed else None)
+    )
+    monkeypatch.setitem(sys.modules, "torch", fake)
+
+    def betas(transform, seed):
+        worker.seed = seed
+        return [transform(image=image, depth=range_m)["beta"] for _ in range(3)]
+
+    transform = RandomFog(seed=3, blur=False, refine=False)
+    main = betas(copy.deepcopy(transform), None)  # not in a worker: the seed's own draws
+    assert main == betas(RandomFog(seed=3, blur=False, refine=False), None)
+    first, second = (betas(copy.deepcopy(transform), s) for s in (1000, 1001))
+    assert first != second and first != main
+    assert betas(copy.deepcopy(transform), 1000) == first  # torch's seed repeats it
