@@ -17,12 +17,12 @@ static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 mod aerial_photo;
 mod arrays;
+mod depth;
 mod engine;
 mod gl_thread;
 mod photo_fog;
 
-use arrays::{dtype_name, read_image, read_range, scalar_map_to_py, ImageIn, ImageOut};
-use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
+use arrays::{dtype_name, read_image, read_range, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
 use gl_thread::GlThread;
 use photo_fog::{
@@ -38,8 +38,13 @@ use std::sync::OnceLock;
 /// read as `OSError`, memory as `MemoryError`, the GL and EGL as `RuntimeError`; brume's message kept whole (it
 /// names the value and what was expected).
 fn py_err(e: brume::Error) -> PyErr {
-    use brume::Error as E;
     let message = e.to_string();
+    py_err_saying(e, message)
+}
+
+/// [`py_err`] with another message, for the same kind of error.
+fn py_err_saying(e: brume::Error, message: String) -> PyErr {
+    use brume::Error as E;
     match e {
         E::InvalidParameter { .. }
         | E::SizeMismatch { .. }
@@ -476,52 +481,6 @@ fn beta_quantile(dist: &str, p: f64) -> PyResult<f64> {
     Ok(dist.quantile(p))
 }
 
-/// load_depth(path, camera=None, format=None, *, kind=None, scale=None)
-///     -> (range_m, info)
-///
-/// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown)
-/// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
-/// beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
-/// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore'. kind:
-/// 'depth', 'range', 'disparity' or 'zbuffer' (default: the format's). scale: metres per
-/// unit of a 16-bit PNG. info: format, kind, units, metric (whether the range is in
-/// trustworthy metres, which fog with beta or visibility needs), notes, unknown_pixels.
-#[pyfunction]
-#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None))]
-fn load_depth<'py>(
-    py: Python<'py>,
-    path: PathBuf,
-    camera: Option<PathBuf>,
-    format: Option<&str>,
-    kind: Option<&str>,
-    scale: Option<f64>,
-) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
-    let opts = DepthOptions {
-        format: match format {
-            Some(f) => f.parse::<DepthFormat>().map_err(py_err)?,
-            None => DepthFormat::Auto,
-        },
-        kind: kind
-            .map(|k| k.parse::<DepthKind>())
-            .transpose()
-            .map_err(py_err)?,
-        camera,
-        scale,
-        ..DepthOptions::default()
-    };
-    let loaded = py
-        .detach(|| depth::load_range(&path, &opts))
-        .map_err(py_err)?;
-    let info = PyDict::new(py);
-    info.set_item("format", loaded.format.to_string())?;
-    info.set_item("kind", loaded.kind.to_string())?;
-    info.set_item("units", loaded.units.clone())?;
-    info.set_item("metric", loaded.metric)?;
-    info.set_item("notes", loaded.notes.clone())?;
-    info.set_item("unknown_pixels", loaded.unknown_pixels)?;
-    Ok((scalar_map_to_py(py, loaded.range), info))
-}
-
 #[pymodule]
 fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Renderer>()?;
@@ -531,7 +490,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(engine::layered_fog, m)?)?;
     m.add_function(wrap_pyfunction!(aerial_photo::aerial, m)?)?;
     m.add_function(wrap_pyfunction!(fog, m)?)?;
-    m.add_function(wrap_pyfunction!(load_depth, m)?)?;
+    m.add_function(wrap_pyfunction!(depth::load_depth, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -327,6 +327,43 @@ def test_load_depth(tmp_path, range_m):
         brume.load_depth(path, format="jpeg")
 
 
+def pixel_radius2(h, w, focal):
+    """((x - cx)² + (y - cy)²) / f² at the pixel centres, the principal point at the
+    image's centre."""
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    return ((x + 0.5 - w / 2) ** 2 + (y + 0.5 - h / 2) ** 2) / focal**2
+
+
+def test_load_depth_geometry_keywords(tmp_path):
+    """Every depth flag of `brume render` is a keyword, and the loaders' messages and notes
+    name the keywords: a z-buffer (near, far, fov_y_deg) and a depth map (focal_px) give
+    the range computed here in numpy."""
+    h, w = 48, 64
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    eye = 2.0 + 0.5 * x + 0.1 * y  # eye depth (m) along the optical axis
+    near, far, fov = 0.5, 200.0, 60.0
+    # OpenGL: NDC z = (f + n)/(f - n) - 2fn/((f - n) Z), window depth (z + 1)/2.
+    ndc = (far + near) / (far - near) - 2.0 * far * near / ((far - near) * eye)
+    np.save(tmp_path / "z.npy", ((ndc + 1.0) / 2.0).astype(np.float32))
+    focal = (h / 2) / np.tan(np.radians(fov / 2))
+    expected = eye * np.sqrt(1.0 + pixel_radius2(h, w, focal))
+    rng, info = brume.load_depth(
+        tmp_path / "z.npy", kind="zbuffer", near=near, far=far, fov_y_deg=fov
+    )
+    np.testing.assert_allclose(rng, expected, rtol=1e-4)
+    assert info["kind"] == "zbuffer"
+    with pytest.raises(ValueError, match="needs near, far and fov_y_deg") as error:
+        brume.load_depth(tmp_path / "z.npy", kind="zbuffer", near=near)
+    assert "--" not in str(error.value)
+    # A depth map along the optical axis, with its focal length in pixels.
+    np.save(tmp_path / "depth.npy", eye.astype(np.float32))
+    rng, info = brume.load_depth(tmp_path / "depth.npy", kind="depth", focal_px=50.0)
+    np.testing.assert_allclose(rng, eye * np.sqrt(1.0 + pixel_radius2(h, w, 50.0)), rtol=1e-5)
+    _, info = brume.load_depth(tmp_path / "depth.npy", kind="range", focal_px=50.0)
+    assert any("focal_px ignored" in n for n in info["notes"]), info["notes"]
+    assert not any("--" in n for n in info["notes"]), info["notes"]
+
+
 # --- equality with the `brume render` program ------------------------------------------
 
 
