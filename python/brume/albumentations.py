@@ -4,16 +4,19 @@
     >>> import albumentations as A
     >>> from brume.albumentations import Fog
     >>> pipeline = A.Compose(
-    ...     [A.HorizontalFlip(), A.RandomCrop(256, 256), Fog(beta_range=(0.005, 0.03))],
-    ...     additional_targets={"depth": "mask"},   # flips and crops move the range too
+    ...     [Fog(beta_range=(0.005, 0.03)), A.HorizontalFlip(), A.RandomCrop(256, 256)],
+    ...     additional_targets={"depth": "mask"},   # the range flipped and cropped too
     ...     seed=0,
     ... )
     >>> out = pipeline(image=rgb_uint8, depth=range_m)
 
-The range in metres comes from the sample's ``depth``, after the transforms before ``Fog``
-(declared as a mask target, geometric transforms resample it by nearest neighbour, as a
-range must be); ``sky_mask`` and ``ego_mask``, when the sample has them, go to the fog
-too. β is drawn from the pipeline's random generator, so ``Compose(seed=…)`` repeats it.
+The range in metres comes from the sample's ``depth`` as the transforms before ``Fog``
+left it (declared as a mask target, geometric transforms resample it by nearest
+neighbour, as a range must be); ``sky_mask`` and ``ego_mask``, when the sample has them,
+go to the fog too. Put ``Fog`` before crops and resizes: the airlight is the sky's colour
+in the image it gets, and the sky and holes take its largest range, so a crop changes
+the fog of what it keeps (and a crop of sky alone has no range at all). β is drawn from
+the pipeline's random generator, so ``Compose(seed=…)`` repeats it.
 """
 
 from __future__ import annotations
