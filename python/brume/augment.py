@@ -39,6 +39,8 @@ class RandomFog:
     several transforms or workers share or own a context; by default the module's.
 
     ``depth`` is the range in metres (HxW, the image's size or smaller by one factor).
+    Fog whole frames and crop after: the airlight and the range of the sky come from the
+    image the fog gets.
     Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and
     ``ego_mask`` targets (the depth's shape, non-zero = set) also go to
     :func:`brume.fog`: the sky instead of its detection, the car's hood never fogged.
