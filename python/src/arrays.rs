@@ -56,8 +56,14 @@ pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
     })?;
     let shape = untyped.shape().to_vec();
     if shape.len() != 3 || shape[2] != 3 || shape[0] == 0 || shape[1] == 0 {
+        let hint = match shape.as_slice() {
+            [3, _, _] => " (channels first, as torch holds images: image.transpose(1, 2, 0))",
+            [_, _, 4] => " (RGBA: image[..., :3])",
+            [_, _] => " (grey: np.repeat(image[..., None], 3, axis=2))",
+            _ => "",
+        };
         return Err(value_error(format!(
-            "image: expected shape HxWx3 (RGB, H and W > 0), got {shape:?}"
+            "image: expected shape HxWx3 (RGB, H and W > 0), got {shape:?}{hint}"
         )));
     }
     let (height, width) = (shape[0], shape[1]);

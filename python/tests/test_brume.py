@@ -249,6 +249,13 @@ def test_bad_options(image_u8, range_m, kwargs, message):
 def test_bad_arrays(image_u8, range_m):
     with pytest.raises(ValueError, match="shape HxWx3"):
         brume.fog(image_u8[..., :2], range_m, beta=0.01)
+    # The usual mistakes get their fix: channels first (torch's layout), RGBA, grey.
+    with pytest.raises(ValueError, match=r"channels first.*transpose\(1, 2, 0\)"):
+        brume.fog(np.ascontiguousarray(image_u8.transpose(2, 0, 1)), range_m, beta=0.01)
+    with pytest.raises(ValueError, match=r"RGBA: image\[\.\.\., :3\]"):
+        brume.fog(np.dstack([image_u8, image_u8[..., :1]]), range_m, beta=0.01)
+    with pytest.raises(ValueError, match="grey"):
+        brume.fog(image_u8[..., 0], range_m, beta=0.01)
     with pytest.raises(ValueError, match="dtype uint8"):
         brume.fog(image_u8.astype(np.int16), range_m, beta=0.01)
     with pytest.raises(ValueError, match="numpy array"):
