@@ -16,7 +16,7 @@ Inside ``albumentations.Compose``, which takes only its own transforms, use
 from __future__ import annotations
 
 import sys
-from typing import Any, Mapping, Optional, Sequence, Tuple
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
 import numpy as np
 
@@ -82,7 +82,7 @@ class RandomFog:
         self.refine = refine
         self.renderer = renderer
         self.beta_dist = beta_dist
-        self.capture = dict(
+        self.capture: Dict[str, Any] = dict(
             exposure_stops=float(exposure_stops),
             shot_noise_gain=shot_noise_gain,
             read_noise=read_noise,

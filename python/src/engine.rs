@@ -33,7 +33,10 @@ pub(crate) struct PyCamera {
 #[pymethods]
 impl PyCamera {
     #[new]
-    #[pyo3(signature = (position=(0.0, 1.7, 0.0), yaw_deg=0.0, pitch_deg=0.0, fov_y_deg=60.0, near=0.1, far=1000.0))]
+    #[pyo3(
+        signature = (position=(0.0, 1.7, 0.0), yaw_deg=0.0, pitch_deg=0.0, fov_y_deg=60.0, near=0.1, far=1000.0),
+        text_signature = "(position=(0.0, 1.7, 0.0), yaw_deg=0.0, pitch_deg=0.0, fov_y_deg=60.0, near=0.1, far=1000.0)"
+    )]
     fn new(
         position: (f64, f64, f64),
         yaw_deg: f64,

@@ -490,3 +490,57 @@ def test_module_functions_have_their_methods_signatures(name):
     assert inspect.signature(getattr(brume, name)) == method.replace(parameters=params[1:])
     assert [p.name for p in params if p.default is Ellipsis] == []
     assert getattr(brume, name).__doc__.startswith(name + "(")
+
+
+def test_type_stubs_match_the_module():
+    """brume/_brume.pyi (what type checkers and IDEs read of the native module) names every
+    public function, class, method and property of brume._brume, with the runtime's
+    parameters, kinds and defaults."""
+    import ast
+    import inspect
+    from pathlib import Path
+
+    native = brume._brume
+    stub = ast.parse((Path(brume.__file__).parent / "_brume.pyi").read_text())
+
+    def stub_params(fn, drop_self):
+        a = fn.args
+        positional = a.posonlyargs + a.args
+        defaults = [None] * (len(positional) - len(a.defaults)) + list(a.defaults)
+        params = [(p.arg, "positional", d) for p, d in zip(positional, defaults)]
+        params += [(p.arg, "keyword", d) for p, d in zip(a.kwonlyargs, a.kw_defaults)]
+        params = params[1:] if drop_self else params
+        return [(n, k, inspect.Parameter.empty if d is None else ast.literal_eval(d))
+                for n, k, d in params]
+
+    def runtime_params(obj):
+        kinds = {inspect.Parameter.KEYWORD_ONLY: "keyword"}
+        return [(p.name, kinds.get(p.kind, "positional"), p.default)
+                for p in inspect.signature(obj).parameters.values() if p.name != "self"]
+
+    def public(names):
+        return {n for n in names if not n.startswith("_") or n == "__version__"}
+
+    stubbed = set()
+    for node in stub.body:
+        if isinstance(node, ast.FunctionDef):
+            stubbed.add(node.name)
+            assert stub_params(node, False) == runtime_params(getattr(native, node.name)), node.name
+        elif isinstance(node, ast.ClassDef):
+            stubbed.add(node.name)
+            cls = getattr(native, node.name)
+            members = set()
+            for item in node.body:
+                if not isinstance(item, ast.FunctionDef):
+                    continue
+                if item.name == "__init__":
+                    assert stub_params(item, True) == runtime_params(cls), node.name
+                    continue
+                members.add(item.name)
+                if not any(getattr(d, "id", None) == "property" for d in item.decorator_list):
+                    assert stub_params(item, True) == runtime_params(getattr(cls, item.name)), (
+                        f"{node.name}.{item.name}")
+            assert members == public(dir(cls)), node.name
+        elif isinstance(node, ast.AnnAssign) and node.target.id == "__version__":
+            stubbed.add("__version__")
+    assert stubbed == public(dir(native)) - {"Array", "PathArg"}

@@ -1,0 +1,307 @@
+"""Type stubs of brume's native module (Rust, PyO3): the signatures that help(), IDEs and
+type checkers read. python/tests/test_brume.py checks them against the module itself."""
+
+from os import PathLike
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
+
+from numpy.typing import NDArray
+
+Array = NDArray[Any]
+PathArg = Union[str, "PathLike[str]"]
+
+__version__: str
+
+class Camera:
+    """brume's perspective camera of a rendered frame (`brume scene`'s)."""
+
+    def __init__(
+        self,
+        position: Sequence[float] = (0.0, 1.7, 0.0),
+        yaw_deg: float = 0.0,
+        pitch_deg: float = 0.0,
+        fov_y_deg: float = 60.0,
+        near: float = 0.1,
+        far: float = 1000.0,
+    ) -> None: ...
+    @property
+    def position(self) -> Tuple[float, float, float]: ...
+    @property
+    def yaw_deg(self) -> float: ...
+    @property
+    def pitch_deg(self) -> float: ...
+    @property
+    def fov_y_deg(self) -> float: ...
+    @property
+    def near(self) -> float: ...
+    @property
+    def far(self) -> float: ...
+
+class MatrixCamera:
+    """An engine's camera from its view and projection matrices (4x4, row-major)."""
+
+    def __init__(
+        self,
+        view: Array,
+        projection: Array,
+        clip: str = "minus_one_to_one",
+        sky_depth: Optional[float] = None,
+    ) -> None: ...
+    @property
+    def near(self) -> float: ...
+    @property
+    def far(self) -> float: ...
+    @property
+    def reversed(self) -> bool: ...
+    @property
+    def sky_depth(self) -> float: ...
+
+class Renderer:
+    """One EGL context kept for many frames (on a GL thread of its own)."""
+
+    def __init__(self) -> None: ...
+    @property
+    def gl_renderer(self) -> str: ...
+    def fog(
+        self,
+        image: Array,
+        range_m: Array,
+        *,
+        beta: Optional[float] = None,
+        visibility: Optional[float] = None,
+        ka: Optional[float] = None,
+        ks: Optional[float] = None,
+        airlight: Optional[Sequence[float]] = None,
+        blur: bool = True,
+        lambda_px: Optional[float] = None,
+        refine: Union[bool, str, None] = None,
+        sky_mask: Optional[Array] = None,
+        ego_mask: Optional[Array] = None,
+        exposure_stops: float = 0.0,
+        shot_noise_gain: Optional[float] = None,
+        read_noise: Optional[float] = None,
+        jpeg_quality: Optional[int] = None,
+        seed: int = 0,
+        return_info: bool = False
+    ) -> Any: ...
+    def distance_fog(
+        self,
+        image: Array,
+        depth: Array,
+        *,
+        camera: Union[Camera, MatrixCamera],
+        time: float = 0.0,
+        start_distance: Optional[float] = None,
+        distance: Optional[float] = None,
+        exponent: Optional[float] = None,
+        max_density: Optional[float] = None,
+        colour: Optional[Sequence[float]] = None,
+        light_direction: Optional[Sequence[float]] = None,
+        scatter_start: Optional[float] = None,
+        scatter_exponent: Optional[float] = None,
+        scatter_colour: Optional[Sequence[float]] = None,
+        noise: Union[str, bool, PathArg, None] = None,
+        noise_seed: int = 0,
+        noise_size: Optional[float] = None,
+        noise_speed: Optional[Sequence[float]] = None,
+        noise_low: Optional[float] = None,
+        noise_high: Optional[float] = None,
+        noise_colour_strength: Optional[float] = None,
+        blur: str = "diffusion",
+        lambda_px: Optional[float] = None,
+        range_unit: Optional[float] = None,
+        sigma0: float = 1.0,
+        scheme: str = "matched",
+        precision: str = "f32",
+        rho_max: float = 0.25,
+        blur_distance: float = 100.0,
+        blur_falloff: float = 1.0,
+        blur_max: float = 1.0
+    ) -> Array: ...
+    def layered_fog(
+        self,
+        image: Array,
+        depth: Array,
+        *,
+        camera: Union[Camera, MatrixCamera],
+        time: float = 0.0,
+        profile: str = "exponential",
+        density: Optional[float] = None,
+        base: Optional[float] = None,
+        scale_height: Optional[float] = None,
+        thickness: Optional[float] = None,
+        top: Optional[float] = None,
+        table: Union[PathArg, Array, None] = None,
+        colour: Optional[Sequence[float]] = None,
+        albedo: Optional[float] = None,
+        blur: str = "diffusion",
+        lambda_px: Optional[float] = None,
+        range_unit: Optional[float] = None,
+        sigma0: float = 1.0,
+        scheme: str = "matched",
+        precision: str = "f32",
+        rho_max: float = 0.25,
+        blur_distance: float = 100.0,
+        blur_falloff: float = 1.0,
+        blur_max: float = 1.0
+    ) -> Array: ...
+    def aerial(
+        self,
+        image: Array,
+        range_m: Array,
+        *,
+        turbidity: float,
+        fov_y_deg: Optional[float] = None,
+        focal_px: Optional[float] = None,
+        pitch_deg: Optional[float] = None,
+        horizon_row: Optional[float] = None,
+        altitude_m: float = 0.0,
+        metres_per_unit: float = 1.0,
+        from_turbidity: Optional[float] = None,
+        retarget: Optional[str] = None,
+        airlight: Optional[Sequence[float]] = None,
+        horizon_zenith_deg: float = 85.0,
+        horizon_sectors: int = 8,
+        sun: Optional[Tuple[float, float]] = None,
+        sensitivity: Optional[PathArg] = None,
+        blur: bool = True,
+        lambda_px: Optional[float] = 8.0,
+        sigma0: float = 1.0,
+        refine: Union[bool, str, None] = None,
+        sky_mask: Optional[Array] = None,
+        ego_mask: Optional[Array] = None,
+        exposure_stops: float = 0.0,
+        shot_noise_gain: Optional[float] = None,
+        read_noise: Optional[float] = None,
+        jpeg_quality: Optional[int] = None,
+        seed: int = 0,
+        return_info: bool = False
+    ) -> Any: ...
+
+def fog(
+    image: Array,
+    range_m: Array,
+    *,
+    beta: Optional[float] = None,
+    visibility: Optional[float] = None,
+    ka: Optional[float] = None,
+    ks: Optional[float] = None,
+    airlight: Optional[Sequence[float]] = None,
+    blur: bool = True,
+    lambda_px: Optional[float] = None,
+    refine: Union[bool, str, None] = None,
+    sky_mask: Optional[Array] = None,
+    ego_mask: Optional[Array] = None,
+    exposure_stops: float = 0.0,
+    shot_noise_gain: Optional[float] = None,
+    read_noise: Optional[float] = None,
+    jpeg_quality: Optional[int] = None,
+    seed: int = 0,
+    return_info: bool = False
+) -> Any: ...
+def distance_fog(
+    image: Array,
+    depth: Array,
+    *,
+    camera: Union[Camera, MatrixCamera],
+    time: float = 0.0,
+    start_distance: Optional[float] = None,
+    distance: Optional[float] = None,
+    exponent: Optional[float] = None,
+    max_density: Optional[float] = None,
+    colour: Optional[Sequence[float]] = None,
+    light_direction: Optional[Sequence[float]] = None,
+    scatter_start: Optional[float] = None,
+    scatter_exponent: Optional[float] = None,
+    scatter_colour: Optional[Sequence[float]] = None,
+    noise: Union[str, bool, PathArg, None] = None,
+    noise_seed: int = 0,
+    noise_size: Optional[float] = None,
+    noise_speed: Optional[Sequence[float]] = None,
+    noise_low: Optional[float] = None,
+    noise_high: Optional[float] = None,
+    noise_colour_strength: Optional[float] = None,
+    blur: str = "diffusion",
+    lambda_px: Optional[float] = None,
+    range_unit: Optional[float] = None,
+    sigma0: float = 1.0,
+    scheme: str = "matched",
+    precision: str = "f32",
+    rho_max: float = 0.25,
+    blur_distance: float = 100.0,
+    blur_falloff: float = 1.0,
+    blur_max: float = 1.0
+) -> Array: ...
+def layered_fog(
+    image: Array,
+    depth: Array,
+    *,
+    camera: Union[Camera, MatrixCamera],
+    time: float = 0.0,
+    profile: str = "exponential",
+    density: Optional[float] = None,
+    base: Optional[float] = None,
+    scale_height: Optional[float] = None,
+    thickness: Optional[float] = None,
+    top: Optional[float] = None,
+    table: Union[PathArg, Array, None] = None,
+    colour: Optional[Sequence[float]] = None,
+    albedo: Optional[float] = None,
+    blur: str = "diffusion",
+    lambda_px: Optional[float] = None,
+    range_unit: Optional[float] = None,
+    sigma0: float = 1.0,
+    scheme: str = "matched",
+    precision: str = "f32",
+    rho_max: float = 0.25,
+    blur_distance: float = 100.0,
+    blur_falloff: float = 1.0,
+    blur_max: float = 1.0
+) -> Array: ...
+def aerial(
+    image: Array,
+    range_m: Array,
+    *,
+    turbidity: float,
+    fov_y_deg: Optional[float] = None,
+    focal_px: Optional[float] = None,
+    pitch_deg: Optional[float] = None,
+    horizon_row: Optional[float] = None,
+    altitude_m: float = 0.0,
+    metres_per_unit: float = 1.0,
+    from_turbidity: Optional[float] = None,
+    retarget: Optional[str] = None,
+    airlight: Optional[Sequence[float]] = None,
+    horizon_zenith_deg: float = 85.0,
+    horizon_sectors: int = 8,
+    sun: Optional[Tuple[float, float]] = None,
+    sensitivity: Optional[PathArg] = None,
+    blur: bool = True,
+    lambda_px: Optional[float] = 8.0,
+    sigma0: float = 1.0,
+    refine: Union[bool, str, None] = None,
+    sky_mask: Optional[Array] = None,
+    ego_mask: Optional[Array] = None,
+    exposure_stops: float = 0.0,
+    shot_noise_gain: Optional[float] = None,
+    read_noise: Optional[float] = None,
+    jpeg_quality: Optional[int] = None,
+    seed: int = 0,
+    return_info: bool = False
+) -> Any: ...
+def load_depth(
+    path: PathArg,
+    camera: Optional[PathArg] = None,
+    format: Optional[str] = None,
+    *,
+    kind: Optional[str] = None,
+    scale: Optional[float] = None,
+    calib: Optional[PathArg] = None,
+    focal_px: Optional[float] = None,
+    baseline_mm: Optional[float] = None,
+    disparity_offset_px: Optional[float] = None,
+    near: Optional[float] = None,
+    far: Optional[float] = None,
+    fov_y_deg: Optional[float] = None,
+    min_confidence: Optional[float] = None
+) -> Tuple[Array, Dict[str, Any]]: ...
+def beta_quantile(dist: str, p: float) -> float: ...
