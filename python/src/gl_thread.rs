@@ -23,23 +23,59 @@ pub(crate) struct GlThread {
     pub(crate) renderer_name: String,
 }
 
-/// The way to a GL thread, and the process it runs in.
+/// The way to a GL thread, and the process it runs in; no thread once closed.
 struct Queue {
     pid: u32,
+    thread: Option<Running>,
+}
+
+/// A GL thread: its job queue, and its handle to wait for its end.
+struct Running {
     jobs: mpsc::Sender<Job>,
+    handle: thread::JoinHandle<()>,
 }
 
 impl GlThread {
     /// Starts the thread and opens the context on it; the context's error if it cannot.
     pub(crate) fn start() -> PyResult<GlThread> {
-        let (jobs, renderer_name) = spawn()?;
+        let (running, renderer_name) = spawn()?;
         Ok(GlThread {
             queue: Mutex::new(Queue {
                 pid: std::process::id(),
-                jobs,
+                thread: Some(running),
             }),
             renderer_name,
         })
+    }
+
+    /// Ends the thread after the jobs already queued, and waits until it has destroyed
+    /// its context (call with the GIL released). Later calls of [`GlThread::run`] fail.
+    pub(crate) fn close(&self) -> PyResult<()> {
+        let mut queue = self.lock()?;
+        let Some(Running { jobs, handle }) = queue.thread.take() else {
+            return Ok(());
+        };
+        if queue.pid != std::process::id() {
+            // A parent's thread: nothing here to end or wait for (see `run`).
+            std::mem::forget((jobs, handle));
+            return Ok(());
+        }
+        drop(queue);
+        drop(jobs);
+        handle
+            .join()
+            .map_err(|_| PyRuntimeError::new_err("the GL thread panicked while closing"))
+    }
+
+    /// Whether [`GlThread::close`] has ended the thread.
+    pub(crate) fn is_closed(&self) -> bool {
+        self.lock().map_or(true, |q| q.thread.is_none())
+    }
+
+    fn lock(&self) -> PyResult<std::sync::MutexGuard<'_, Queue>> {
+        self.queue
+            .lock()
+            .map_err(|_| PyRuntimeError::new_err("the GL thread's queue is poisoned"))
     }
 
     /// Runs `f` on the GL thread and waits for its result (call with the GIL released).
@@ -51,21 +87,25 @@ impl GlThread {
         let job: Job = Box::new(move |h| {
             let _ = answer.send(f(h));
         });
-        let mut queue = self
-            .queue
-            .lock()
-            .map_err(|_| PyRuntimeError::new_err("the GL thread's queue is poisoned"))?;
-        if queue.pid != std::process::id() {
-            // Forked: the thread behind `jobs` is the parent's. Its sender is leaked, not
-            // dropped: dropping would signal a receiver that is not in this process.
-            let (jobs, _) = spawn()?;
-            std::mem::forget(std::mem::replace(&mut queue.jobs, jobs));
-            queue.pid = std::process::id();
+        let mut queue = self.lock()?;
+        let forked = queue.pid != std::process::id();
+        let Some(running) = queue.thread.as_mut() else {
+            return Err(PyRuntimeError::new_err(
+                "this brume.Renderer is closed: open a new one",
+            ));
+        };
+        if forked {
+            // The thread behind `jobs` is the parent's. Its sender and handle are leaked,
+            // not dropped: dropping would signal a receiver that is not in this process,
+            // and its thread cannot be waited for here.
+            let (fresh, _) = spawn()?;
+            std::mem::forget(std::mem::replace(running, fresh));
         }
-        queue
+        running
             .jobs
             .send(job)
             .map_err(|_| PyRuntimeError::new_err("the GL thread has stopped"))?;
+        queue.pid = std::process::id();
         drop(queue);
         result.recv().map_err(|_| {
             PyRuntimeError::new_err("the render failed inside brume (a panic on the GL thread)")
@@ -73,12 +113,12 @@ impl GlThread {
     }
 }
 
-/// Starts a GL thread and opens brume's headless context on it: the thread's queue and the
-/// GL renderer's name, or the context's error.
-fn spawn() -> PyResult<(mpsc::Sender<Job>, String)> {
+/// Starts a GL thread and opens brume's headless context on it: the thread and the GL
+/// renderer's name, or the context's error.
+fn spawn() -> PyResult<(Running, String)> {
     let (jobs, queue) = mpsc::channel::<Job>();
     let (ready, opened) = mpsc::channel::<brume::Result<String>>();
-    thread::Builder::new()
+    let handle = thread::Builder::new()
         .name("brume-gl".into())
         .spawn(move || {
             let mut headless = match Headless::new(None) {
@@ -102,5 +142,5 @@ fn spawn() -> PyResult<(mpsc::Sender<Job>, String)> {
         .recv()
         .map_err(|_| PyRuntimeError::new_err("the GL thread stopped while opening EGL"))?
         .map_err(py_err)?;
-    Ok((jobs, renderer_name))
+    Ok((Running { jobs, handle }, renderer_name))
 }

@@ -388,7 +388,37 @@ impl Renderer {
     }
 
     fn __repr__(&self) -> String {
-        format!("brume.Renderer({:?})", self.gl.renderer_name)
+        let closed = if self.gl.is_closed() { ", closed" } else { "" };
+        format!("brume.Renderer({:?}{closed})", self.gl.renderer_name)
+    }
+
+    /// close(): ends the renderer's GL thread after the calls already queued and destroys
+    /// its context (its GPU memory is freed when this returns); later calls raise
+    /// RuntimeError. Also what `with brume.Renderer() as r:` does at the end of the block.
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        py.detach(|| self.gl.close())
+    }
+
+    /// Whether close() has been called.
+    #[getter]
+    fn closed(&self) -> bool {
+        self.gl.is_closed()
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    /// Closes the renderer; an exception in the block goes on.
+    fn __exit__(
+        &self,
+        py: Python<'_>,
+        _kind: Option<&Bound<'_, PyAny>>,
+        _value: Option<&Bound<'_, PyAny>>,
+        _traceback: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<bool> {
+        self.close(py)?;
+        Ok(false)
     }
 
     /// Pickled as a new renderer: a context belongs to its process, so a transform that

@@ -536,6 +536,9 @@ def test_type_stubs_match_the_module():
                 if item.name == "__init__":
                     assert stub_params(item, True) == runtime_params(cls), node.name
                     continue
+                if item.name.startswith("__"):
+                    assert hasattr(cls, item.name), f"{node.name}.{item.name}"
+                    continue
                 members.add(item.name)
                 if not any(getattr(d, "id", None) == "property" for d in item.decorator_list):
                     assert stub_params(item, True) == runtime_params(getattr(cls, item.name)), (
@@ -544,3 +547,20 @@ def test_type_stubs_match_the_module():
         elif isinstance(node, ast.AnnAssign) and node.target.id == "__version__":
             stubbed.add("__version__")
     assert stubbed == public(dir(native)) - {"Array", "PathArg"}
+
+
+def test_renderer_closes(image_u8, range_m):
+    """close() (and the end of a with block) ends the GL thread after what is queued and
+    destroys the context; the renderer then refuses calls, and closing again is harmless."""
+    with brume.Renderer() as renderer:
+        expected = renderer.fog(image_u8, range_m, beta=0.01)
+        assert not renderer.closed
+    assert renderer.closed and "closed" in repr(renderer)
+    with pytest.raises(RuntimeError, match="closed"):
+        renderer.fog(image_u8, range_m, beta=0.01)
+    renderer.close()
+    np.testing.assert_array_equal(brume.Renderer().fog(image_u8, range_m, beta=0.01), expected)
+    with pytest.raises(ValueError):  # an exception in the block goes on, the renderer closed
+        with brume.Renderer() as renderer:
+            renderer.fog(image_u8, range_m)
+    assert renderer.closed
