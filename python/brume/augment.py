@@ -15,6 +15,7 @@ Inside ``albumentations.Compose``, which takes only its own transforms, use
 
 from __future__ import annotations
 
+import os
 import sys
 from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
 
@@ -48,7 +49,9 @@ class RandomFog:
     In a PyTorch ``DataLoader`` worker the generator is seeded again, from ``seed`` and
     the worker's seed (``torch.utils.data.get_worker_info().seed``, which differs between
     workers and follows ``torch.manual_seed``): each worker holds a copy of the transform,
-    and the copies would otherwise draw the same betas.
+    and the copies would otherwise draw the same betas. Without a seed, a copy in any
+    other process (``multiprocessing``) draws from fresh entropy; with one, it repeats
+    the seed's draws, as asked.
 
     ``return_info=True`` adds the labels of the scattering model I = J·t + A·(1 − t), as
     :func:`brume.fog` reports them: ``transmittance`` (float32 HxW at the image's size;
@@ -92,6 +95,7 @@ class RandomFog:
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self._worker: Optional[int] = None
+        self._pid = os.getpid()
 
     def __call__(self, sample: Optional[Mapping[str, Any]] = None, /, **targets: Any) -> dict:
         """``t(image=…, depth=…, **targets)`` (albumentations' convention), or ``t(sample)``
@@ -118,7 +122,7 @@ class RandomFog:
     def _fog(self, image: np.ndarray, depth: np.ndarray, targets: dict) -> dict:
         out = dict(targets)
         out["depth"] = depth
-        self._reseed_in_torch_worker()
+        self._reseed_in_worker()
         # One draw for p and one for beta on every call, so that a seed gives the same
         # sequence of betas whatever p lets through.
         apply = self.rng.random() < self.p
@@ -159,14 +163,19 @@ class RandomFog:
             f"capture={self.capture}, return_info={self.return_info})"
         )
 
-    def _reseed_in_torch_worker(self) -> None:
+    def _reseed_in_worker(self) -> None:
         torch = sys.modules.get("torch")  # imported by the DataLoader that runs a worker
         info = torch.utils.data.get_worker_info() if torch is not None else None
-        if info is None or info.seed == self._worker:
-            return
-        self._worker = info.seed
-        entropy = [info.seed] if self.seed is None else [self.seed, info.seed]
-        self.rng = np.random.default_rng(entropy)
+        if info is not None:
+            if info.seed != self._worker:
+                self._worker = info.seed
+                entropy = [info.seed] if self.seed is None else [self.seed, info.seed]
+                self.rng = np.random.default_rng(entropy)
+        elif self.seed is None and os.getpid() != self._pid:
+            # Another process's copy (multiprocessing): fresh entropy, as the unseeded
+            # transform had when it was made, rather than the parent's stream again.
+            self._pid = os.getpid()
+            self.rng = np.random.default_rng()
 
 
 def _checked_betas(
