@@ -1,5 +1,5 @@
 //! brume's CPU thread pool: every parallel loop of the library (rayon's iterators and
-//! `join`) runs on it, through [`run`] and [`join`].
+//! `join`) runs on it, inside [`run`].
 //!
 //! Why not rayon's global pool: a process that forks after brume's first parallel call (a
 //! PyTorch `DataLoader`'s workers, Python's `multiprocessing` on Linux, a server that
@@ -66,14 +66,6 @@ pub fn run<R: Send>(f: impl FnOnce() -> R + Send) -> R {
     }
 }
 
-/// `a` and `b`, possibly in parallel on this process's pool (`rayon::join`).
-pub fn join<A: Send, B: Send>(
-    a: impl FnOnce() -> A + Send,
-    b: impl FnOnce() -> B + Send,
-) -> (A, B) {
-    run(|| rayon::join(a, b))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -91,7 +83,7 @@ mod tests {
             names.iter().all(|n| n.starts_with("brume-cpu-")),
             "{names:?}"
         );
-        let (a, b) = join(|| 2 + 2, || "four");
+        let (a, b) = run(|| rayon::join(|| 2 + 2, || "four"));
         assert_eq!((a, b), (4, "four"));
         set_num_threads(Some(3));
         assert_eq!(run(rayon::current_num_threads), 3);
