@@ -153,17 +153,19 @@ def test_random_fog_draws_other_betas_in_each_torch_worker(sample, monkeypatch):
     assert betas(copy.deepcopy(transform), 1000) == first  # torch's seed repeats it
 
 
-def _three_betas(transform):
-    return [transform(image=_three_betas.image, depth=_three_betas.depth)["beta"] for _ in range(3)]
+def _three_betas(args):
+    transform, image, depth = args
+    return [transform(image=image, depth=depth)["beta"] for _ in range(3)]
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="fork() as Linux's multiprocessing does")
 def test_unseeded_random_fog_draws_other_betas_in_each_process(sample):
     """Copies of an unseeded transform in forked processes draw from fresh entropy, not the
     parent's stream again; a seeded one repeats its seed's draws in every process."""
-    _three_betas.image, _three_betas.depth = sample
+    image, range_m = sample
     for seed, differ in ((None, True), (7, False)):
         transform = RandomFog(seed=seed, blur=False, refine=False)
         with multiprocessing.get_context("fork").Pool(2) as pool:
-            first, second = pool.map_async(_three_betas, [transform] * 2, chunksize=1).get(120)
+            jobs = [(transform, image, range_m)] * 2
+            first, second = pool.map_async(_three_betas, jobs, chunksize=1).get(120)
         assert (first != second) == differ, (seed, first, second)
