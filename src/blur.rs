@@ -101,8 +101,10 @@ pub struct Blur {
     /// [`MIN_COARSE_FROM`]), run the remaining steps at half resolution and blend the
     /// result back ([`Schedule::coarse_start`], `src/pipeline/coarse.rs`); once its scale
     /// has doubled again, at a quarter of the resolution, and so on
-    /// ([`Schedule::coarse_levels`]). Matched scheme, grey τ and at least two remaining
-    /// steps only; `None` (the library's default): every step at full resolution, the
+    /// ([`Schedule::coarse_levels`]). A medium whose every pixel is blurred past the
+    /// detail the half resolution drops ([`Medium::sigma_min`], a uniform blur of
+    /// [`crate::schedule::STEP0_COARSE_SIGMA`] px or more) starts at step 0 whatever this scale ([`Schedule::coarse_start_above`]).
+    /// Matched scheme, grey τ and at least two remaining steps only; `None` (the library's default): every step at full resolution, the
     /// paper's pipeline. The CLI's and [`crate::photo`]'s default is
     /// [`DEFAULT_COARSE_FROM`] ([`Blur::photo`]).
     pub coarse_from: Option<f64>,
@@ -169,27 +171,36 @@ impl Blur {
         )
     }
 
-    /// The step from which `schedule` runs at half resolution, if
-    /// [`Blur::coarse_from`] asks for it and the stage applies (see the field); an error
-    /// names `coarse_from` when it is not a finite scale ≥ [`MIN_COARSE_FROM`].
-    pub fn coarse_start(&self, schedule: &Schedule, chromatic: bool) -> Result<Option<u32>> {
-        let Some(from) = self.coarse_from else {
-            return Ok(None);
-        };
-        if !(from.is_finite() && from >= MIN_COARSE_FROM) {
-            return Err(Error::invalid(
+    /// Rejects a [`Blur::coarse_from`] that is not a finite scale ≥ [`MIN_COARSE_FROM`]
+    /// (`None` passes), naming `coarse_from`.
+    pub fn check_coarse_from(&self) -> Result<()> {
+        match self.coarse_from {
+            Some(from) if !(from.is_finite() && from >= MIN_COARSE_FROM) => Err(Error::invalid(
                 "coarse_from",
                 from,
                 format!(
                     "a finite scale ≥ {MIN_COARSE_FROM} px (below it the half resolution \
                      aliases detail), or none"
                 ),
-            ));
+            )),
+            _ => Ok(()),
         }
-        Ok(if chromatic {
+    }
+
+    /// The step from which `schedule` runs at half resolution, if
+    /// [`Blur::coarse_from`] asks for it and the stage applies to `medium` (see the field;
+    /// step 0 when its [`Medium::sigma_min`] is past
+    /// [`crate::schedule::STEP0_COARSE_SIGMA`]); an error names
+    /// `coarse_from` when it is not a finite scale ≥ [`MIN_COARSE_FROM`].
+    pub fn coarse_start(&self, schedule: &Schedule, medium: &dyn Medium) -> Result<Option<u32>> {
+        self.check_coarse_from()?;
+        let Some(from) = self.coarse_from else {
+            return Ok(None);
+        };
+        Ok(if medium.chromatic() {
             None
         } else {
-            schedule.coarse_start(from)
+            schedule.coarse_start_above(from, medium.sigma_min(self.sigma0))
         })
     }
 

@@ -74,19 +74,16 @@ pub fn check_coarse_from(coarse_from: Option<f64>) -> Result<()> {
         coarse_from,
         ..crate::Blur::default()
     };
-    let schedule = Schedule::new(Scheme::Matched, 1.0, 25.0, 0.25)?;
-    blur.coarse_start(&schedule, false)
-        .map(|_| ())
-        .map_err(|_| {
-            Error::invalid(
-                "--coarse-from",
-                coarse_from.unwrap_or(f64::NAN),
-                format!(
-                    "a finite scale ≥ {} px (below it the half resolution aliases detail)",
-                    crate::blur::MIN_COARSE_FROM
-                ),
-            )
-        })
+    blur.check_coarse_from().map_err(|_| {
+        Error::invalid(
+            "--coarse-from",
+            coarse_from.unwrap_or(f64::NAN),
+            format!(
+                "a finite scale ≥ {} px (below it the half resolution aliases detail)",
+                crate::blur::MIN_COARSE_FROM
+            ),
+        )
+    })
 }
 
 impl Default for SpeedOptions {

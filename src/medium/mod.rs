@@ -174,6 +174,15 @@ pub trait Medium {
     /// number of diffusion steps.
     fn sigma_max(&self, sigma0: f64) -> f64;
 
+    /// A lower bound on the σ every pixel asks for (px), given the inner scale σ0. The
+    /// coarse stage ([`crate::Blur::coarse_from`]) starts at step 0 when this σ is
+    /// past [`crate::schedule::STEP0_COARSE_SIGMA`] ([`crate::schedule::Schedule::coarse_start_above`]),
+    /// as for a uniform blur. The default, σ0, promises nothing: a medium whose σ follows the
+    /// range has pixels at σ0 wherever the range is 0.
+    fn sigma_min(&self, sigma0: f64) -> f64 {
+        sigma0
+    }
+
     /// The same as the GLSL, on the CPU in f64, for one pixel of `frame` (which has
     /// passed [`Medium::validate_frame`]; without a camera a medium that needs one uses
     /// the default camera, as [`Medium::uniforms`] does).

@@ -59,6 +59,10 @@ impl Medium for UniformBlur {
         self.sigma
     }
 
+    fn sigma_min(&self, _sigma0: f64) -> f64 {
+        self.sigma
+    }
+
     fn sample(&self, _pixel: Pixel, _frame: &FrameInputs) -> MediumSample {
         MediumSample {
             transmission: self.transmission,

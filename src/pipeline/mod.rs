@@ -469,7 +469,7 @@ impl Pipeline {
         self.caps.require_precision(blur.precision)?;
         self.caps.require_size("input", input.width, input.height)?;
         let chromatic = medium.chromatic();
-        self.coarse_start = blur.coarse_start(&schedule, chromatic)?;
+        self.coarse_start = blur.coarse_start(&schedule, medium)?;
         let keys = [
             medium_key(medium, blur.precision, &schedule, chromatic),
             ProgramKey::Diffuse {
