@@ -175,10 +175,12 @@ pub trait Medium {
     fn sigma_max(&self, sigma0: f64) -> f64;
 
     /// A lower bound on the σ every pixel asks for (px), given the inner scale σ0. The
-    /// coarse stage ([`crate::Blur::coarse_from`]) starts at step 0 when this σ is
-    /// past [`crate::schedule::STEP0_COARSE_SIGMA`] ([`crate::schedule::Schedule::coarse_start_above`]),
-    /// as for a uniform blur. The default, σ0, promises nothing: a medium whose σ follows the
-    /// range has pixels at σ0 wherever the range is 0.
+    /// coarse stage ([`crate::Blur::coarse_from`]) starts at step 0 when it is at least
+    /// [`crate::schedule::STEP0_COARSE_SIGMA`], as for a uniform blur
+    /// ([`crate::schedule::Schedule::coarse_start_above`]). The default, σ0, promises
+    /// nothing: a medium whose σ follows the range has pixels at σ0 wherever the range is
+    /// 0. A bound above what some pixel asks for loses that pixel's detail to the half
+    /// resolution.
     fn sigma_min(&self, sigma0: f64) -> f64 {
         sigma0
     }
