@@ -6,7 +6,8 @@ On the same machine, image size (default 1600x1120, 4-channel float32) and scale
 
 * OpenCV ``cv2.GaussianBlur(img, (0, 0), sigmaX=s, sigmaY=s, borderType=BORDER_REPLICATE)``
 * SciPy ``scipy.ndimage.gaussian_filter(img, sigma=(s, s, 0), mode='nearest')``
-* ``brume bench speed --sigmas 5,25 --schemes matched --precisions f32 --json --size WxH``
+* ``brume bench speed --sigmas 5,25 --schemes matched --precisions f32 --json --size WxH
+  --coarse-from 2`` (``--coarse-from off``: the paper's full-resolution pipeline)
 
 Each peer is run once as a warm-up, then timed ``--runs`` times (default 5); the median is
 reported. brume reports its own median (GL_TIME_ELAPSED where available: see its clock).
@@ -60,9 +61,11 @@ def parse_args(argv):
     p.add_argument("--runs", type=int, default=5, help="timed runs after a warm-up (default 5)")
     p.add_argument(
         "--coarse-from",
-        metavar="PX",
-        help="pass --coarse-from PX to brume (coarse to fine: steps at half resolution "
-        "once the blur has reached PX)",
+        metavar="PX|off",
+        default="2",
+        help="brume's coarse to fine (steps at half resolution once the blur has reached PX; "
+        "a sigma of 10 px or more starts at step 0): default 2, as `brume render`; off runs "
+        "the paper's full-resolution pipeline, `brume bench speed`'s default",
     )
     p.add_argument(
         "--brume-json",
@@ -157,7 +160,7 @@ def run_brume(binary, args):
         "--runs",
         str(args.runs),
     ]
-    if args.coarse_from is not None:
+    if args.coarse_from != "off":
         cmd += ["--coarse-from", str(args.coarse_from)]
     print("running: " + " ".join(cmd), file=sys.stderr)
     done = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -203,7 +206,10 @@ def cpu_model():
 
 def markdown(args, img_desc, peers, report, versions):
     brume = brume_medians(report)
-    coarse = f" --coarse-from {args.coarse_from}" if args.coarse_from is not None else ""
+    if args.coarse_from == "off":
+        coarse = " (full resolution)"
+    else:
+        coarse = f" --coarse-from {args.coarse_from}"
     lines = [
         f"Machine: {cpu_model()}, nproc = {os.cpu_count()}; "
         f"brume renderer: {report['renderer']}, clock: {report['clock']}",

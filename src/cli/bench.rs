@@ -247,9 +247,10 @@ pub struct CommonArgs {
     #[arg(long, value_name = "PATH.png|PATH.svg")]
     pub plot: Option<PathBuf>,
     /// Coarse to fine (matched scheme, grey τ): run the steps at half resolution once the
-    /// blur has reached this scale in px (≥ 2), at a quarter once it has doubled; default
-    /// here: every step at full resolution, the paper's pipeline (`render`, `batch` and
-    /// `view` default to 2).
+    /// blur has reached this scale in px (≥ 2), at a quarter once it has doubled; a σref of
+    /// 10 px or more starts at step 0 whatever PX (a uniform blur keeps no full-resolution
+    /// detail); default here: every step at full resolution, the paper's pipeline
+    /// (`render`, `batch` and `view` default to 2).
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub coarse_from: Option<f64>,
 }

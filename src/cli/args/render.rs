@@ -133,7 +133,9 @@ pub struct RenderArgs {
     /// border stays within full resolution's, but the result is no longer the paper's
     /// pipeline to the bit, and near depth edges it departs from it by a few per cent of
     /// the blur's own effect: `off` runs every step at full resolution (what the f64 reference
-    /// computes). PX ≥ 2; smaller is faster and less exact.
+    /// computes). PX ≥ 2; smaller is faster and less exact. With --uniform-sigma 10 or more
+    /// the stage starts at step 0 whatever PX (a uniform blur keeps no full-resolution
+    /// detail).
     #[arg(
         long,
         value_name = "off|PX",
