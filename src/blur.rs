@@ -103,9 +103,10 @@ pub struct Blur {
     /// has doubled again, at a quarter of the resolution, and so on
     /// ([`Schedule::coarse_levels`]). A medium whose every pixel is blurred past the
     /// detail the half resolution drops ([`Medium::sigma_min`], a uniform blur of
-    /// [`crate::schedule::STEP0_COARSE_SIGMA`] px or more) starts at step 0 whatever this scale ([`Schedule::coarse_start_above`]).
-    /// Matched scheme, grey τ and at least two remaining steps only; `None` (the library's default): every step at full resolution, the
-    /// paper's pipeline. The CLI's and [`crate::photo`]'s default is
+    /// [`crate::schedule::STEP0_COARSE_SIGMA`] px or more) starts at step 0 whatever this
+    /// scale ([`Schedule::coarse_start_above`]). Matched scheme, grey τ and at least two
+    /// remaining steps only; `None` (the library's default): every step at full
+    /// resolution, the paper's pipeline. The CLI's and [`crate::photo`]'s default is
     /// [`DEFAULT_COARSE_FROM`] ([`Blur::photo`]).
     pub coarse_from: Option<f64>,
 }
@@ -189,9 +190,9 @@ impl Blur {
 
     /// The step from which `schedule` runs at half resolution, if
     /// [`Blur::coarse_from`] asks for it and the stage applies to `medium` (see the field;
-    /// step 0 when its [`Medium::sigma_min`] is past
-    /// [`crate::schedule::STEP0_COARSE_SIGMA`]); an error names
-    /// `coarse_from` when it is not a finite scale ≥ [`MIN_COARSE_FROM`].
+    /// step 0 when its [`Medium::sigma_min`] is at least
+    /// [`crate::schedule::STEP0_COARSE_SIGMA`]); an error names `coarse_from` when it is
+    /// not a finite scale ≥ [`MIN_COARSE_FROM`].
     pub fn coarse_start(&self, schedule: &Schedule, medium: &dyn Medium) -> Result<Option<u32>> {
         self.check_coarse_from()?;
         let Some(from) = self.coarse_from else {

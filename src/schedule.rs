@@ -379,9 +379,10 @@ pub const COARSE_FROM_TOLERANCE: f64 = 1e-3;
 /// unblurred image aliases its finest detail into the half resolution, and only the blur
 /// that follows takes the aliased band down, as 1/σ. Measured on white noise, the worst
 /// case (`tests/coarse.rs`, interior RMS against the exact Gaussian, f32), starting at step
-/// 0 against full resolution: +110 % at 3 px, +39 % at 5, +20 % at 8, +2 % at 9, −2 % at
-/// 10 and −10 % at 12, where issue 21's accuracy budget is +10 %. (`bench accuracy`'s
-/// photo, with little energy near the Nyquist frequency, stays within it from 3 px.)
+/// 0 against full resolution: +112 % at 3 px, +138 % at 4, +39 % at 5, +20 % at 8, −10 %
+/// at 12 (160x128 px); +2 % at 9, −2 % at 10 (256x224 px, another noise), where issue
+/// 21's accuracy budget is +10 %. (`bench accuracy`'s photo, with little energy near the
+/// Nyquist frequency, stays within it from 3 px.)
 pub const STEP0_COARSE_SIGMA: f64 = 10.0;
 
 /// The fewest steps the coarse stage must take over to pay for its two passes (a 2x2

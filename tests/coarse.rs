@@ -312,11 +312,12 @@ fn impulse_keeps_its_scale_through_two_levels() {
 }
 
 /// A blur the medium says is uniform and ≥ `STEP0_COARSE_SIGMA` (10 px) keeps no
-/// full-resolution detail, so the stage starts at step 0 whatever `coarse_from` says (levels at steps 0 and 3 of
-/// 10: no full-resolution step). The impulse is then still sharp at each level's 2x2
-/// average, which moves it whole instead of adding the variance it adds to a smooth image
-/// (¼ px² at the half, 1 px² at the quarter, taken off the steps all the same): measured
-/// 11.946 px, −0.45 % (variance 1.28 px² short), against a bound of 0.5 %.
+/// full-resolution detail, so the stage starts at step 0 whatever `coarse_from` says
+/// (levels at steps 0 and 3 of 10: no full-resolution step). The impulse is then still
+/// sharp at each level's 2x2 average, which moves it whole instead of adding the variance
+/// it adds to a smooth image (¼ px² at the half, 1 px² at the quarter, taken off the steps
+/// all the same): measured 11.946 px, −0.45 % (variance 1.28 px² short), against a bound
+/// of 0.5 %.
 #[test]
 fn uniform_blur_starts_at_step_zero() {
     for from in [2.0, 3.0] {
@@ -395,9 +396,9 @@ fn coarse_levels_are_freed() {
 }
 
 /// `--coarse-from`: the CLI's default is 2 px (the same bytes as `--coarse-from 2`),
-/// `off` renders the full-resolution pipeline (other bytes), a uniform blur starts at
-/// step 0 from any scale, and a scale under 2 px or a
-/// word is refused naming the option and what it accepts.
+/// `off` renders the full-resolution pipeline (other bytes), a uniform blur of 10 px starts
+/// at step 0 from any scale, and a scale under 2 px or a word is refused naming the option
+/// and what it accepts.
 #[test]
 fn cli_defaults_to_coarse_from_two_and_turns_off() {
     let dir = tempfile::tempdir().unwrap();
