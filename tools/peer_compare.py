@@ -204,12 +204,25 @@ def cpu_model():
     return platform.processor() or "unknown"
 
 
+def pipeline_label(args, report):
+    """Which of brume's pipelines the report timed: read from its pass names (a coarse
+    stage has `down` passes), so that a saved report (--brume-json) is not labelled with
+    this run's --coarse-from; the scale itself is known only when brume ran here."""
+    coarse = any(
+        name.startswith("down")
+        for row in report["rows"]
+        for name in row.get("pass_names") or []
+    )
+    if not coarse:
+        return " (full resolution)"
+    if args.brume_json:
+        return " (coarse to fine)"
+    return f" --coarse-from {args.coarse_from}"
+
+
 def markdown(args, img_desc, peers, report, versions):
     brume = brume_medians(report)
-    if args.coarse_from == "off":
-        coarse = " (full resolution)"
-    else:
-        coarse = f" --coarse-from {args.coarse_from}"
+    coarse = pipeline_label(args, report)
     lines = [
         f"Machine: {cpu_model()}, nproc = {os.cpu_count()}; "
         f"brume renderer: {report['renderer']}, clock: {report['clock']}",
