@@ -1,6 +1,7 @@
 // The coarse stage's blend of a coarse level into the next finer coarse level (the blend
 // into full resolution is fused with the composite: composite.frag, COARSE_BLEND).
-// Preceded by the #version line, prelude.glsl and coarse_detail.glsl.
+// Preceded by the #version line, the #define OFFSET_LAYOUT, prelude.glsl and
+// coarse_detail.glsl.
 
 uniform sampler2D u_f; // the finer level's D at the coarse level's first step
 

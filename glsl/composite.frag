@@ -1,6 +1,8 @@
 // Pass N+2 (paper 000, eq. 4): out = F.rgb + (1 − τ_blurred)·L∞, with τ_blurred the
 // diffused transmission (the alpha of F, and the second target of a chromatic medium),
-// never the sharp τ; L∞ is the medium's in-scattered light at this pixel.
+// never the sharp τ; L∞ is the medium's in-scattered light at this pixel. In the offset
+// layout (OFFSET_LAYOUT: L∞ the same everywhere, F = (τ·(E − L∞), ρ) diffused) the same
+// image is L∞ + F.rgb.
 // With the coarse stage (COARSE_BLEND) this pass is also its last blend: F is assembled
 // from full-resolution F at step k0 and the half-resolution level (coarse_detail.glsl),
 // which saves a full-resolution pass and its target's write and read.
@@ -24,12 +26,16 @@ void main() {
 #else
     vec4 f = texelFetch(u_f, p, 0);
 #endif
+    vec3 inscatter = medium_sample(p, texelFetch(u_depth, p, 0).r).inscatter;
+#if OFFSET_LAYOUT
+    vec3 c = inscatter + f.rgb;
+#else
 #if CHROMATIC
     vec3 tau = vec3(f.a, texelFetch(u_tau_gb, p, 0).rg);
 #else
     vec3 tau = vec3(f.a);
 #endif
-    vec3 inscatter = medium_sample(p, texelFetch(u_depth, p, 0).r).inscatter;
     vec3 c = f.rgb + (1.0 - tau) * inscatter;
+#endif
     o_colour = vec4(u_output_srgb != 0 ? linear_to_srgb(c) : c, 1.0);
 }

@@ -3,8 +3,11 @@
 //   ρ(σ)             the pixel's diffusion rate (eq. 13 for euler, eq. 18 otherwise; the
 //                    same as Schedule::rate in src/schedule.rs)
 //   (τ_g, τ_b)       a chromatic medium's other two transmissions (CHROMATIC only)
-// Assembled by src/pipeline/mod.rs as: #version, #defines (CHROMATIC, RATE_LAW_LOG, RATE_HALF),
-// prelude.glsl, medium_api.glsl, the medium's glsl/medium/*.glsl, then this file.
+// or, in the offset layout (OFFSET_LAYOUT: L∞ the same at every pixel), one target
+//   (τ·(E − L∞), ρ)  which the composite turns into the same image (src/pipeline/mod.rs)
+// Assembled by src/pipeline/mod.rs as: #version, #defines (CHROMATIC, OFFSET_LAYOUT,
+// RATE_LAW_LOG, RATE_HALF), prelude.glsl, medium_api.glsl, the medium's
+// glsl/medium/*.glsl, then this file.
 
 uniform sampler2D u_colour; // the host's colour texture
 uniform sampler2D u_depth;  // the host's depth or range texture (.r)
@@ -12,7 +15,9 @@ uniform int u_colour_srgb;  // 1: the colour texture holds sRGB-encoded values
 uniform vec2 u_schedule;    // (σmax, 1/N) of the schedule; 1/N = 0 when N = 0
 
 layout(location = 0) out vec4 o_f;
+#if !OFFSET_LAYOUT
 layout(location = 1) out float o_rate;
+#endif
 #if CHROMATIC
 layout(location = 2) out vec2 o_tau_gb;
 #endif
@@ -44,8 +49,12 @@ void main() {
         e = srgb_to_linear(e);
     }
     MediumSample m = medium_sample(p, texelFetch(u_depth, p, 0).r);
+#if OFFSET_LAYOUT
+    o_f = vec4(m.transmission * (e - m.inscatter), store_rate(rate_for(m.sigma)));
+#else
     o_f = vec4(m.transmission * e, m.transmission.r);
     o_rate = store_rate(rate_for(m.sigma));
+#endif
 #if CHROMATIC
     o_tau_gb = m.transmission.gb;
 #endif

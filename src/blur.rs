@@ -6,6 +6,7 @@
 use crate::error::{check_positive, Error, Result};
 use crate::gpu::texture::TexelFormat;
 use crate::medium::Medium;
+use crate::pipeline::Layout;
 use crate::schedule::{Schedule, Scheme};
 use std::fmt;
 use std::str::FromStr;
@@ -104,8 +105,9 @@ pub struct Blur {
     /// ([`Schedule::coarse_levels`]). A medium whose every pixel is blurred past the
     /// detail the half resolution drops ([`Medium::sigma_min`], a uniform blur of
     /// [`crate::schedule::STEP0_COARSE_SIGMA`] px or more) starts at step 0 whatever this
-    /// scale ([`Schedule::coarse_start_above`]). Matched scheme, grey τ and at least two
-    /// remaining steps only; `None` (the library's default): every step at full
+    /// scale ([`Schedule::coarse_start_above`]). Matched scheme, one τ target (a grey τ,
+    /// or any τ of a medium whose in-scattered light is uniform,
+    /// [`Medium::uniform_inscatter`]) and at least two remaining steps only; `None` (the library's default): every step at full
     /// resolution, the paper's pipeline. The CLI's and [`crate::photo`]'s default is
     /// [`DEFAULT_COARSE_FROM`] ([`Blur::photo`]).
     pub coarse_from: Option<f64>,
@@ -198,27 +200,36 @@ impl Blur {
         let Some(from) = self.coarse_from else {
             return Ok(None);
         };
-        Ok(if medium.chromatic() {
+        Ok(if Layout::of(medium).chromatic() {
             None
         } else {
             schedule.coarse_start_above(from, medium.sigma_min(self.sigma0))
         })
     }
 
-    /// Bytes per full-resolution pixel that the coarse stage's levels may take for a
-    /// medium (0 when [`Blur::coarse_from`] is off or τ is `chromatic`): every level
-    /// ([`crate::schedule::MAX_COARSE_LEVELS`]) holds three colour targets and a rate in
+    /// Bytes per full-resolution pixel that the coarse stage's levels may take for
+    /// `medium` (0 when [`Blur::coarse_from`] is off or the stage does not apply to it):
+    /// every level ([`crate::schedule::MAX_COARSE_LEVELS`]) holds three colour targets
+    /// and, unless ρ travels in their alpha ([`Medium::uniform_inscatter`]), a rate in
     /// [`COARSE_PRECISION`] on a quarter of the pixels of the level above, Σ 4^−ℓ < ⅓
     /// of one such texel per pixel, rounded up. The memory check adds it to the frame's
     /// own textures (`Renderer`, [`crate::memory`]).
-    pub fn coarse_bytes_per_pixel(&self, chromatic: bool) -> u64 {
-        if self.coarse_from.is_none() || chromatic {
+    pub fn coarse_bytes_per_pixel(&self, medium: &dyn Medium) -> u64 {
+        self.coarse_bytes_in(Layout::of(medium))
+    }
+
+    /// [`Blur::coarse_bytes_per_pixel`] for a frame in `layout`.
+    fn coarse_bytes_in(&self, layout: Layout) -> u64 {
+        if self.coarse_from.is_none() || layout.chromatic() {
             return 0;
         }
         let texel = |format: TexelFormat| format.bytes_per_texel() as u64;
-        let per_texel =
-            3 * texel(COARSE_PRECISION.colour_format()) + texel(COARSE_PRECISION.rate_format());
-        per_texel.div_ceil(3)
+        let rate = if layout.rate_in_alpha() {
+            0
+        } else {
+            texel(COARSE_PRECISION.rate_format())
+        };
+        (3 * texel(COARSE_PRECISION.colour_format()) + rate).div_ceil(3)
     }
 
     /// The N-step schedule that takes σ0 to `sigma_max`, the largest scale a medium asks
@@ -275,15 +286,19 @@ mod tests {
             coarse_from: Some(DEFAULT_COARSE_FROM),
             ..Blur::default()
         };
+        let grey = Layout::Premultiplied { chromatic: false };
         // f32 levels: three RGBA32F targets and an R32F rate, 52 bytes, on ⅓ of the pixels.
-        assert_eq!(on.coarse_bytes_per_pixel(false), 18);
+        assert_eq!(on.coarse_bytes_in(grey), 18);
         // The same in f16: the levels stay f32.
         let half = Blur {
             precision: Precision::F16,
             ..on
         };
-        assert_eq!(half.coarse_bytes_per_pixel(false), 18);
-        assert_eq!(on.coarse_bytes_per_pixel(true), 0);
-        assert_eq!(Blur::default().coarse_bytes_per_pixel(false), 0);
+        assert_eq!(half.coarse_bytes_in(grey), 18);
+        // ρ in the colour's alpha: three RGBA32F targets, 48 bytes.
+        assert_eq!(on.coarse_bytes_in(Layout::Offset), 16);
+        let chromatic = Layout::Premultiplied { chromatic: true };
+        assert_eq!(on.coarse_bytes_in(chromatic), 0);
+        assert_eq!(Blur::default().coarse_bytes_in(grey), 0);
     }
 }

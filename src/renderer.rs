@@ -341,14 +341,14 @@ impl Renderer {
         if !self.caps().software() {
             return Ok(());
         }
-        let coarse = blur.coarse_bytes_per_pixel(medium.chromatic());
-        let per_pixel = bytes_per_pixel(blur.precision, medium.chromatic()) + coarse;
+        let coarse = blur.coarse_bytes_per_pixel(medium);
+        let per_pixel = bytes_per_pixel(blur.precision, medium) + coarse;
         let needed = per_pixel * (w as u64) * (h as u64);
         let mut hint = format!(
             "this renderer keeps textures in system memory ({per_pixel} bytes per pixel here); "
         );
         if blur.precision == Precision::F32 {
-            let half = bytes_per_pixel(Precision::F16, medium.chromatic()) + coarse;
+            let half = bytes_per_pixel(Precision::F16, medium) + coarse;
             hint.push_str(&format!("use precision f16 ({half} bytes per pixel) or "));
         } else {
             hint.push_str("use ");
@@ -395,8 +395,8 @@ fn rendered_from(frame: Frame, pixels: Vec<[f32; 4]>, w: usize, h: usize) -> Ren
 
 /// Bytes per pixel of one CPU-buffer render: the uploads (RGB32F colour, R32F depth), the
 /// RGBA32F read-back and the pipeline's own textures.
-fn bytes_per_pixel(precision: Precision, chromatic: bool) -> u64 {
-    12 + 4 + 16 + Pipeline::bytes_per_pixel(precision, chromatic)
+fn bytes_per_pixel(precision: Precision, medium: &dyn Medium) -> u64 {
+    12 + 4 + 16 + Pipeline::bytes_per_pixel(precision, medium)
 }
 
 /// brume's own headless context (EGL, no window) with a [`Renderer`] on it. Every call

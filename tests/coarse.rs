@@ -190,8 +190,11 @@ fn haze_stays_close_to_the_reference() {
     let blur_effect = reference::rgb_error(&cpu, &unblurred, 0).rms;
     let gpu_full = r.render(&image, &range, &haze, &Blur::default()).unwrap();
     let e_full = reference::rgb_error(&gpu_full.image, &cpu, 0);
-    for from in [2.0, 3.0] {
-        let gpu = r.render(&image, &range, &haze, &coarse(from)).unwrap();
+    // The offset layout (ρ in alpha), and the pre-multiplied one that media of varying
+    // in-scattered light take.
+    let layouts: [&dyn Medium; 2] = [&haze, &Premultiplied(haze)];
+    for (from, medium) in [2.0, 3.0].into_iter().flat_map(|f| layouts.map(|m| (f, m))) {
+        let gpu = r.render(&image, &range, medium, &coarse(from)).unwrap();
         let sched = gpu.schedule;
         assert!(
             sched.coarse_start(from).is_some(),
@@ -200,9 +203,15 @@ fn haze_stays_close_to_the_reference() {
         );
         let e = reference::rgb_error(&gpu.image, &cpu, 0);
         eprintln!(
-            "from {from}: σmax {:.1} N {}: blur changes rms {blur_effect:.2e}; full rms {:.2e} \
-             max {:.2e}; coarse rms {:.2e} max {:.2e}",
-            sched.sigma_max, sched.steps, e_full.rms, e_full.max_abs, e.rms, e.max_abs
+            "from {from}, ρ in alpha {}: σmax {:.1} N {}: blur changes rms {blur_effect:.2e}; \
+             full rms {:.2e} max {:.2e}; coarse rms {:.2e} max {:.2e}",
+            medium.uniform_inscatter(),
+            sched.sigma_max,
+            sched.steps,
+            e_full.rms,
+            e_full.max_abs,
+            e.rms,
+            e.max_abs
         );
         // Measured with two levels (half, quarter): RMS 7.4e-3 (from 2 px) and 5.7e-3
         // (from 3 px), max 8.6e-2 and 6.1e-2, against a blur that changes the image by
@@ -261,18 +270,20 @@ fn bad_coarse_from_is_an_error() {
     }
 }
 
-/// The stage leaves a medium alone where it does not apply: a chromatic τ, and schemes
-/// other than matched, render exactly as without it.
+/// The stage leaves a medium alone where it does not apply: a chromatic τ in the
+/// pre-multiplied layout (its (τ_g, τ_b) pair; in the offset layout it applies,
+/// `tests/offset_layout.rs`), and schemes other than matched, render exactly as without
+/// it.
 #[test]
-fn stage_applies_to_matched_grey_only() {
+fn stage_applies_to_matched_single_target_only() {
     let (w, h) = (64, 48);
     let image = noise_image(w, h, 2);
     let range = ramp_range(w, h);
-    let chromatic = Haze {
+    let chromatic = Premultiplied(Haze {
         lambda: 16.0,
         tint: [0.6, 1.0, 1.8],
         ..Haze::default()
-    };
+    });
     assert!(chromatic.chromatic());
     let (_lock, mut r) = renderer();
     let a = r

@@ -24,9 +24,9 @@ const DIFFUSE: &str = include_str!("../glsl/diffuse.frag");
 /// One ULP of an f32, relative to the value: 2⁻²³.
 const ULP: f64 = 1.0 / 8_388_608.0;
 
-/// The header `Pipeline::compile` puts before `diffuse.frag`: `#version`, the two
-/// switches, the prelude.
-fn header(gl: &glow::Context, matched: bool) -> String {
+/// The header `Pipeline::compile` puts before `diffuse.frag`: `#version`, the three
+/// switches (a grey τ, ρ in a texture of its own or in F's alpha: `offset`), the prelude.
+fn header(gl: &glow::Context, matched: bool, offset: bool) -> String {
     let version = if gl.version().is_embedded && gl.version().major * 10 + gl.version().minor >= 32
     {
         "#version 320 es"
@@ -34,8 +34,10 @@ fn header(gl: &glow::Context, matched: bool) -> String {
         "#version 300 es"
     };
     format!(
-        "{version}\n#define VARIANCE_MATCHED {}\n#define CHROMATIC 0\n{PRELUDE}",
-        i32::from(matched)
+        "{version}\n#define VARIANCE_MATCHED {}\n#define CHROMATIC 0\n#define OFFSET_LAYOUT {}\n\
+         {PRELUDE}",
+        i32::from(matched),
+        i32::from(offset)
     )
 }
 
@@ -167,7 +169,7 @@ void main() {
         let matched = scheme == Scheme::Matched;
         let program = Program::new(
             g,
-            &header(g, matched),
+            &header(g, matched, false),
             ("diffuse.frag (probe)", &probe),
             &["u_rate", "u_f", "u_law"],
             &[],
@@ -248,7 +250,8 @@ void main() {
 /// and a rate constant along each row: at the column x0 the update is exactly
 /// F(x0) + ρ·(F(x0 + h) + F(x0 − h) − 2F(x0)) = 2aρ·m(h), m the bilinear moment (the
 /// hardware interpolates the parabola linearly between texels; the y neighbours add
-/// nothing). So the pass's output there measures the offset it used, per rate and step.
+/// nothing). So the pass's output there measures the offset it used, per rate and step,
+/// in both layouts: ρ in a texture of its own, or in F's alpha (the offset layout).
 #[test]
 fn one_diffusion_pass_blurs_by_the_f64_schedules_moment() {
     let gl = Gl::open();
@@ -273,22 +276,46 @@ fn one_diffusion_pass_blurs_by_the_f64_schedules_moment() {
     let f_tex = Texture::new(g, w, h, TexelFormat::Rgba32F, Filter::Linear, Some(&f_data)).unwrap();
     let rate_tex =
         Texture::new(g, w, h, TexelFormat::R32F, Filter::Linear, Some(&rate_data)).unwrap();
+    // The offset layout: the same F with each row's rate in alpha.
+    let offset_data: Vec<f32> = f_data
+        .chunks(4)
+        .zip(&rate_data)
+        .flat_map(|(f, &rate)| [f[0], f[1], f[2], rate])
+        .collect();
+    let offset_tex = Texture::new(
+        g,
+        w,
+        h,
+        TexelFormat::Rgba32F,
+        Filter::Linear,
+        Some(&offset_data),
+    )
+    .unwrap();
     let target = Texture::new(g, w, h, TexelFormat::Rgba32F, Filter::Nearest, None).unwrap();
 
     let mut worst: f64 = 0.0;
     let mut checked = 0;
-    for (scheme, sigma0) in [
+    let cases = [
         (Scheme::Matched, 1.0),
         (Scheme::Matched, 1.7),
         (Scheme::Invariant, 1.0),
         (Scheme::Euler, 1.0),
-    ] {
+    ];
+    for ((scheme, sigma0), offset) in cases.into_iter().flat_map(|c| [(c, false), (c, true)]) {
         let matched = scheme == Scheme::Matched;
+        let (uniforms, textures): (&[&str], Vec<(&str, &Texture)>) = if offset {
+            (&["u_f", "u_law", "u_texel"], vec![("u_f", &offset_tex)])
+        } else {
+            (
+                &["u_f", "u_rate", "u_law", "u_texel"],
+                vec![("u_f", &f_tex), ("u_rate", &rate_tex)],
+            )
+        };
         let program = Program::new(
             g,
-            &header(g, matched),
+            &header(g, matched, offset),
             ("diffuse.frag", DIFFUSE),
-            &["u_f", "u_rate", "u_law", "u_texel"],
+            uniforms,
             &[],
         )
         .unwrap_or_else(|e| panic!("{e}"));
@@ -300,12 +327,7 @@ fn one_diffusion_pass_blurs_by_the_f64_schedules_moment() {
             (0..schedule.steps).collect()
         };
         for k in ks {
-            let out = gl.draw(
-                &program,
-                &[("u_f", &f_tex), ("u_rate", &rate_tex)],
-                law.uniform(k),
-                &target,
-            );
+            let out = gl.draw(&program, &textures, law.uniform(k), &target);
             for (j, &rate) in rates.iter().enumerate() {
                 let rate = f64::from(rate);
                 let want_h = law.offset(rate, k);
@@ -315,7 +337,7 @@ fn one_diffusion_pass_blurs_by_the_f64_schedules_moment() {
                 );
                 let want = bilinear_moment(want_h);
                 let got = f64::from(out[j * w + x0][0]) / (2.0 * a * rate);
-                let case = format!("{scheme} σ0 = {sigma0}, k = {k}, ρ = {rate}");
+                let case = format!("{scheme} σ0 = {sigma0}, k = {k}, ρ = {rate}, offset {offset}");
                 // Budget: the offset law as in the test above (16 + 4|c_k ρ| ULPs of m);
                 // each neighbour's coordinate x0 + ½ ± h rounds to half an ULP of a value
                 // below 1 times 64 texels, 2⁻¹⁹ texel, where the interpolated parabola has

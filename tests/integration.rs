@@ -36,6 +36,7 @@ mod io_output;
 mod layered_fog;
 mod layered_table;
 mod limits;
+mod offset_layout;
 mod physical_units;
 mod prep_aloe;
 mod prep_edt;

@@ -146,14 +146,26 @@ fn an_image_too_large_for_memory_is_refused_with_sizes() {
     assert!(!dir.path().join("out.png").exists());
 }
 
-/// The per-pixel estimate the memory check uses follows the textures the pipeline makes.
+/// The per-pixel estimate the memory check uses follows the textures the pipeline makes:
+/// two colour targets for a medium of uniform in-scattered light (ρ in their alpha, any
+/// τ), and the rate and a chromatic τ's pair on top for the others.
 #[test]
-fn bytes_per_pixel_follow_precision_and_chromatic_tau() {
+fn bytes_per_pixel_follow_precision_layout_and_chromatic_tau() {
     use brume::Pipeline;
-    assert_eq!(Pipeline::bytes_per_pixel(Precision::F32, false), 2 * 16 + 4);
-    assert_eq!(Pipeline::bytes_per_pixel(Precision::F16, false), 2 * 8 + 2);
+    let tinted = Haze {
+        tint: [0.8, 1.0, 1.3],
+        ..Haze::default()
+    };
     assert_eq!(
-        Pipeline::bytes_per_pixel(Precision::F32, true),
+        Pipeline::bytes_per_pixel(Precision::F32, &Haze::default()),
+        2 * 16
+    );
+    assert_eq!(Pipeline::bytes_per_pixel(Precision::F16, &tinted), 2 * 8);
+    let grey = Premultiplied(Haze::default());
+    assert_eq!(Pipeline::bytes_per_pixel(Precision::F32, &grey), 2 * 16 + 4);
+    assert_eq!(Pipeline::bytes_per_pixel(Precision::F16, &grey), 2 * 8 + 2);
+    assert_eq!(
+        Pipeline::bytes_per_pixel(Precision::F32, &Premultiplied(tinted)),
         2 * 16 + 4 + 2 * 8
     );
     // And a render leaves no object behind but what the pipeline keeps.

@@ -24,8 +24,9 @@ pub const DEFAULT_SIZE: (usize, usize) = (1600, 1120);
 /// Default number of timed runs per configuration.
 pub const DEFAULT_RUNS: usize = 5;
 
-/// Whether the transmission is the same in every channel (paper 000: τ in the alpha of
-/// the pre-multiplied colour) or differs per channel (a second target in every pass).
+/// Whether the transmission is the same in every channel (paper 000) or differs per
+/// channel. A uniform blur has no in-scattered light, so both run the offset layout, one
+/// RGBA target (`crate::pipeline`, *Two layouts*).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Tau {

@@ -246,7 +246,7 @@ pub struct CommonArgs {
     /// Draw the paper's figure to this file; the extension picks the format (.png or .svg).
     #[arg(long, value_name = "PATH.png|PATH.svg")]
     pub plot: Option<PathBuf>,
-    /// Coarse to fine (matched scheme, grey τ): run the steps at half resolution once the
+    /// Coarse to fine (matched scheme): run the steps at half resolution once the
     /// blur has reached this scale in px (≥ 2), at a quarter once it has doubled; a σref of
     /// 10 px or more starts at step 0 whatever PX (a uniform blur keeps no full-resolution
     /// detail); default here: every step at full resolution, the paper's pipeline
@@ -290,8 +290,10 @@ pub struct SpeedArgs {
     /// out Euler at large σ (1250 passes at σ = 25); skipped rows say so.
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     pub max_passes: Option<i64>,
-    /// Transmission: grey (τ = 1, paper 000's pipeline) or rgb (τ = 0.9,0.8,0.6, which
-    /// adds a second target to every pass: the cost of a chromatic medium).
+    /// Transmission: grey (τ = 1, paper 000's pipeline) or rgb (τ = 0.9,0.8,0.6). A
+    /// uniform blur has no in-scattered light, so both diffuse one RGBA texture, ρ in its
+    /// alpha: what a grey or tinted haze costs (a medium whose in-scattered light varies,
+    /// such as the aerial perspective, adds the rate's and a (τ_g, τ_b) texture).
     #[arg(long, value_name = "TAU", default_value = "grey", value_parser = parse_tau, allow_hyphen_values = true)]
     pub tau: Tau,
 }

@@ -109,6 +109,11 @@ impl Medium for Haze {
         ])
     }
 
+    // The airlight B is one colour.
+    fn uniform_inscatter(&self) -> bool {
+        true
+    }
+
     fn chromatic(&self) -> bool {
         self.tint.iter().any(|&t| t != self.tint[0])
     }

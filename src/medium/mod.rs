@@ -11,7 +11,9 @@
 //!
 //! The image is then `F = τ·E` pre-multiplied, diffused to σ(x), and composited as
 //! `F + (1 − τ_blurred)·L∞` (paper 000, eq. 2-4), τ blurred with the colour as the paper
-//! does (see [`crate::pipeline`] for how an RGB τ travels through the blur).
+//! does (see [`crate::pipeline`] for how an RGB τ travels through the blur, and for the
+//! cheaper equivalent it runs when L∞ is the same at every pixel,
+//! [`Medium::uniform_inscatter`]).
 //!
 //! # The blur law of a general medium
 //!
@@ -167,8 +169,21 @@ pub trait Medium {
 
     /// Whether τ can differ between channels. A grey medium's τ travels in the alpha of
     /// the pre-multiplied colour; a chromatic one adds a second target (see
-    /// [`crate::pipeline`]).
+    /// [`crate::pipeline`]), unless its in-scattered light is uniform
+    /// ([`Medium::uniform_inscatter`]).
     fn chromatic(&self) -> bool;
+
+    /// Whether the in-scattered light L∞ is the same at every pixel of a frame (it may
+    /// change from frame to frame). The pipeline then diffuses τ·(E − L∞) with ρ in its
+    /// alpha, one RGBA target, and composites L∞ + the result: the same image as
+    /// F = (τ·E, τ) diffused and composited as `F + (1 − τ_blurred)·L∞` (the diffusion is
+    /// linear and L∞ a constant), with half the texture fetches per step and no second
+    /// target for a chromatic τ (see [`crate::pipeline`]). A medium that says so while its
+    /// L∞ varies renders wrong wherever the blur mixes pixels of different L∞. The
+    /// default, no, is always right.
+    fn uniform_inscatter(&self) -> bool {
+        false
+    }
 
     /// The largest σ any pixel can ask for (px), given the inner scale σ0: it sets the
     /// number of diffusion steps.

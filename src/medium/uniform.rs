@@ -51,6 +51,11 @@ impl Medium for UniformBlur {
         ])
     }
 
+    // No in-scattered light at all.
+    fn uniform_inscatter(&self) -> bool {
+        true
+    }
+
     fn chromatic(&self) -> bool {
         self.transmission.iter().any(|&t| t != self.transmission[0])
     }

@@ -5,8 +5,9 @@
 //! ([`Schedule::coarse_levels`]).
 //!
 //! 1. **Down** (`coarse_down.frag`), at each level's first step kℓ: D and ρ of the finer
-//!    level (F and ρ for the first) averaged over 2x2 blocks (one bilinear fetch each)
-//!    into the level's D, a copy Dℓ(kℓ) and its rate.
+//!    level (F and ρ for the first) averaged over 2x2 blocks (one bilinear fetch each;
+//!    one for both in the offset layout, ρ in alpha) into the level's D, a copy Dℓ(kℓ)
+//!    and its rate.
 //! 2. **Steps** kℓ..kℓ+1 at that level: `diffuse.frag` unchanged, with the offset law's
 //!    scale divided by 2^ℓ. Exact in variance for the matched scheme: its offset inverts
 //!    the bilinear moment, so a coarse step adds (in full-resolution px²) exactly what the
@@ -22,61 +23,26 @@
 //!    `COARSE_BLEND`), which saves a full-resolution pass: its write and the composite's
 //!    read of a full-resolution RGBA32F target.
 
-use super::programs::{BLEND_UNIFORMS, COARSE_DETAIL_GLSL, PRELUDE_GLSL};
+use super::programs::ProgramKey;
 use crate::blur::{Precision, COARSE_PRECISION};
 use crate::error::Result;
 use crate::gpu::framebuffer::Framebuffer;
-use crate::gpu::program::Program;
 use crate::gpu::texture::{Filter, Texture};
 use crate::schedule::Schedule;
 use std::sync::Arc;
 
-const DOWN_FRAG: &str = include_str!("../../glsl/coarse_down.frag");
-const BLEND_FRAG: &str = include_str!("../../glsl/coarse_blend.frag");
-
-/// The coarse stage's two programs and its levels' targets, made on first use, and the
-/// steps at which this frame's levels start.
+/// The coarse stage's levels' targets, made on first use, and the steps at which this
+/// frame's levels start.
 #[derive(Default)]
 pub(super) struct Coarse {
-    pub(super) programs: Option<CoarsePrograms>,
     pub(super) targets: Option<CoarseTargets>,
     /// Level ℓ + 1 runs steps `starts[ℓ]..starts[ℓ + 1]` (the last one to N).
     pub(super) starts: Vec<u32>,
 }
 
-/// The down and blend passes.
-pub(super) struct CoarsePrograms {
-    pub(super) down: Program,
-    pub(super) blend: Program,
-}
-
-impl CoarsePrograms {
-    pub(super) fn compile(gl: &Arc<glow::Context>, version_line: &str) -> Result<Self> {
-        let header = format!("{version_line}\n{PRELUDE_GLSL}");
-        Ok(CoarsePrograms {
-            down: Program::new(
-                gl,
-                &header,
-                ("coarse_down.frag", DOWN_FRAG),
-                &["u_f", "u_rate", "u_texel"],
-                &[],
-            )?,
-            blend: Program::new(
-                gl,
-                &header,
-                (
-                    "coarse_blend.frag",
-                    &format!("{COARSE_DETAIL_GLSL}\n{BLEND_FRAG}"),
-                ),
-                &BLEND_UNIFORMS,
-                &[],
-            )?,
-        })
-    }
-}
-
-/// One coarse level's textures (grey τ only): level ℓ is the finer level's size halved,
-/// rounded up (an odd last row or column averages its texel with itself: clamp to edge).
+/// One coarse level's textures (one τ: grey, or any in the offset layout): level ℓ is the
+/// finer level's size halved, rounded up (an odd last row or column averages its texel
+/// with itself: clamp to edge).
 pub(super) struct Level {
     /// Its size in texels.
     pub(super) size: (usize, usize),
@@ -84,25 +50,36 @@ pub(super) struct Level {
     pub(super) d: [Texture; 2],
     /// D at the level's first step, for its blend.
     pub(super) d0: Texture,
-    /// ρ averaged over 2x2 blocks of the finer level.
-    pub(super) rate: Texture,
-    /// The down pass's destination: `D[0]`, `D_k0` and the rate.
+    /// ρ averaged over 2x2 blocks of the finer level, in the pre-multiplied layout (the
+    /// offset layout's is D's alpha).
+    pub(super) rate: Option<Texture>,
+    /// The down pass's destination: `D[0]`, `D_k0` and the rate where it has its own.
     pub(super) down: Framebuffer,
     /// The steps' and the finer level's blend's destinations: `D[i]`.
     pub(super) step: [Framebuffer; 2],
 }
 
 impl Level {
-    fn new(gl: &Arc<glow::Context>, size: (usize, usize), precision: Precision) -> Result<Self> {
+    fn new(
+        gl: &Arc<glow::Context>,
+        size: (usize, usize),
+        precision: Precision,
+        rate_in_alpha: bool,
+    ) -> Result<Self> {
         let target = |format| Texture::new(gl, size.0, size.1, format, Filter::Linear, None);
         let d = [
             target(precision.colour_format())?,
             target(precision.colour_format())?,
         ];
         let d0 = target(precision.colour_format())?;
-        let rate = target(precision.rate_format())?;
+        let rate = if rate_in_alpha {
+            None
+        } else {
+            Some(target(precision.rate_format())?)
+        };
         let what = "the coarse stage";
-        let down = Framebuffer::over(gl, &[&d[0], &d0, &rate], what)?;
+        let attachments: Vec<&Texture> = [&d[0], &d0].into_iter().chain(&rate).collect();
+        let down = Framebuffer::over(gl, &attachments, what)?;
         let step = [
             Framebuffer::over(gl, &[&d[0]], what)?,
             Framebuffer::over(gl, &[&d[1]], what)?,
@@ -128,6 +105,7 @@ pub(super) struct CoarseTargets {
     /// Full-resolution size they serve.
     full: (usize, usize),
     precision: Precision,
+    rate_in_alpha: bool,
     pub(super) levels: Vec<Level>,
 }
 
@@ -162,57 +140,65 @@ impl CoarseTargets {
         width: usize,
         height: usize,
         precision: Precision,
+        rate_in_alpha: bool,
         count: usize,
     ) -> Result<Self> {
         let levels = (1..=count as u32)
-            .map(|l| Level::new(gl, Self::level_size(width, height, l), COARSE_PRECISION))
+            .map(|l| {
+                let size = Self::level_size(width, height, l);
+                Level::new(gl, size, COARSE_PRECISION, rate_in_alpha)
+            })
             .collect::<Result<Vec<_>>>()?;
         Ok(CoarseTargets {
             full: (width, height),
             precision,
+            rate_in_alpha,
             levels,
         })
     }
 
-    /// Whether these targets serve a `width x height` frame at `precision` with (at
-    /// least) `count` levels: more are kept, so that a viewer whose σmax moves does not
-    /// reallocate at every change.
+    /// Whether these targets serve a `width x height` frame at `precision` in a layout
+    /// with ρ in alpha or not, with (at least) `count` levels: more are kept, so that a
+    /// viewer whose σmax moves does not reallocate at every change.
     pub(super) fn fits(
         &self,
         width: usize,
         height: usize,
         precision: Precision,
+        rate_in_alpha: bool,
         count: usize,
     ) -> bool {
-        (self.full, self.precision) == ((width, height), precision) && self.levels.len() >= count
+        (self.full, self.precision, self.rate_in_alpha)
+            == ((width, height), precision, rate_in_alpha)
+            && self.levels.len() >= count
     }
 }
 
 impl super::Pipeline {
-    /// Compiles the coarse stage's programs once, plans this frame's levels from the
-    /// first level's start `first` ([`Schedule::coarse_levels`], as many as the frame
-    /// has room for) and sizes their targets.
+    /// Compiles the coarse stage's programs once per layout, plans this frame's levels
+    /// from the first level's start `first` ([`Schedule::coarse_levels`], as many as the
+    /// frame has room for) and sizes their targets.
     pub(super) fn prepare_coarse(
         &mut self,
         width: usize,
         height: usize,
         precision: Precision,
+        rate_in_alpha: bool,
         schedule: &Schedule,
     ) -> Result<()> {
         let Some(first) = self.coarse_start else {
             self.coarse.starts.clear();
             return Ok(());
         };
-        if self.coarse.programs.is_none() {
-            self.coarse.programs = Some(CoarsePrograms::compile(&self.gl, self.version_line)?);
-        }
+        self.program(ProgramKey::CoarseDown { rate_in_alpha }, None)?;
+        self.program(ProgramKey::CoarseBlend { rate_in_alpha }, None)?;
         let mut starts = schedule.coarse_levels(first);
         starts.truncate(CoarseTargets::levels_that_fit(width, height, starts.len()));
         let fits = self
             .coarse
             .targets
             .as_ref()
-            .is_some_and(|t| t.fits(width, height, precision, starts.len()));
+            .is_some_and(|t| t.fits(width, height, precision, rate_in_alpha, starts.len()));
         if !fits {
             self.coarse.targets = None; // free the old textures first
             self.coarse.targets = Some(CoarseTargets::new(
@@ -220,6 +206,7 @@ impl super::Pipeline {
                 width,
                 height,
                 precision,
+                rate_in_alpha,
                 starts.len(),
             )?);
         }

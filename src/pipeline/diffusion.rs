@@ -1,8 +1,9 @@
 //! The N + 2 passes of a render (module docs of the parent): the medium pass, the
 //! diffusion steps and the composite.
 
-use super::coarse::{CoarsePrograms, Level};
+use super::coarse::Level;
 use super::programs::{medium_key, ProgramKey};
+use super::targets::Layout;
 use super::uniforms::{bind_texture, set_int, set_value};
 use super::{
     draw_fullscreen, Destination, Encoding, Input, Pipeline, UNIT_BLEND_RATE, UNIT_BLEND_START,
@@ -30,9 +31,9 @@ impl Pipeline {
     ) -> Result<usize> {
         let gl = &self.gl;
         let targets = self.targets()?;
-        let chromatic = targets.tau_gb.is_some();
+        let layout = targets.layout;
 
-        let p = self.compiled(medium_key(medium, targets.precision, schedule, chromatic))?;
+        let p = self.compiled(medium_key(medium, targets.precision, schedule, layout))?;
         timer.pass(|| {
             targets.first.bind_for_drawing();
             self.use_program(p);
@@ -64,7 +65,7 @@ impl Pipeline {
         let law = schedule.offset_law();
         let d = self.compiled(ProgramKey::Diffuse {
             matched: law.matched,
-            chromatic,
+            layout,
         })?;
         let texel = [1.0 / input.width as f32, 1.0 / input.height as f32];
         let full_steps = self.coarse_start.unwrap_or(schedule.steps);
@@ -75,7 +76,9 @@ impl Pipeline {
                 targets.step[dst].bind_for_drawing();
                 self.use_program(d);
                 targets.f[src].bind(UNIT_MAIN);
-                targets.rate.bind(UNIT_DEPTH);
+                if let Some(rate) = &targets.rate {
+                    rate.bind(UNIT_DEPTH);
+                }
                 if let Some(pair) = &targets.tau_gb {
                     pair[src].bind(UNIT_SECOND);
                 }
@@ -97,7 +100,7 @@ impl Pipeline {
 
         let c = self.compiled(ProgramKey::Composite {
             medium: super::programs::MediumId::of(medium),
-            chromatic,
+            layout,
             coarse: coarse.is_some(),
         })?;
         let free = 1 - current;
@@ -144,37 +147,39 @@ impl Pipeline {
     ) -> Result<BlendInputs<'a>> {
         let targets = self.targets()?;
         let starts = &self.coarse.starts;
-        let (programs, levels) = match (&self.coarse.programs, &self.coarse.targets) {
-            (Some(p), Some(t))
-                if starts.first() == Some(&start) && t.levels.len() >= starts.len() =>
-            {
-                (p, &t.levels[..starts.len()])
+        let levels = match &self.coarse.targets {
+            Some(t) if starts.first() == Some(&start) && t.levels.len() >= starts.len() => {
+                &t.levels[..starts.len()]
             }
             _ => return Err(Error::Gl("internal: coarse stage not prepared".into())),
         };
+        let rate_in_alpha = targets.layout.rate_in_alpha();
+        let down = self.compiled(ProgramKey::CoarseDown { rate_in_alpha })?;
+        let blend = self.compiled(ProgramKey::CoarseBlend { rate_in_alpha })?;
         let full_texel = [1.0 / targets.width as f32, 1.0 / targets.height as f32];
         // Which of each level's D targets holds its latest result.
         let mut latest = vec![0usize; levels.len()];
         for (l, level) in levels.iter().enumerate() {
             let (source, rate, texel) = match l {
-                0 => (&targets.f[current], &targets.rate, full_texel),
+                0 => (&targets.f[current], targets.rate.as_ref(), full_texel),
                 _ => {
                     let finer = &levels[l - 1];
-                    (&finer.d[latest[l - 1]], &finer.rate, finer.texel())
+                    (&finer.d[latest[l - 1]], finer.rate.as_ref(), finer.texel())
                 }
             };
-            self.coarse_down(programs, level, source, rate, texel, timer)?;
+            self.coarse_down(down, level, source, rate, texel, timer)?;
             let end = starts.get(l + 1).copied().unwrap_or(schedule.steps);
-            latest[l] = self.coarse_steps(schedule, level, l as u32 + 1, starts[l], end, timer)?;
+            let steps = (l as u32 + 1, starts[l], end);
+            latest[l] = self.coarse_steps(schedule, targets.layout, level, steps, timer)?;
         }
         for l in (1..levels.len()).rev() {
             let (finer, coarse) = (&levels[l - 1], &levels[l]);
             let out = 1 - latest[l - 1];
             self.coarse_blend(
-                programs,
+                blend,
                 &BlendInputs {
                     fine: &finer.d[latest[l - 1]],
-                    fine_rate: &finer.rate,
+                    fine_rate: finer.rate.as_ref(),
                     coarse,
                     coarse_latest: latest[l],
                     level: l as u32 + 1,
@@ -188,7 +193,7 @@ impl Pipeline {
         }
         Ok(BlendInputs {
             fine: &targets.f[current],
-            fine_rate: &targets.rate,
+            fine_rate: targets.rate.as_ref(),
             coarse: &levels[0],
             coarse_latest: latest[0],
             level: 1,
@@ -196,24 +201,26 @@ impl Pipeline {
         })
     }
 
-    /// A coarse level's down pass: `source` and `rate` (a finer level's, `texel` = 1 / its
-    /// size) averaged over 2x2 blocks into the level's D, D(kℓ) and rate.
+    /// A coarse level's down pass (program `p`): `source` and `rate` (a finer level's,
+    /// `texel` = 1 / its size; no rate in the offset layout, where it is `source`'s alpha)
+    /// averaged over 2x2 blocks into the level's D, D(kℓ) and rate.
     fn coarse_down(
         &self,
-        programs: &CoarsePrograms,
+        p: &Program,
         level: &Level,
         source: &Texture,
-        rate: &Texture,
+        rate: Option<&Texture>,
         texel: [f32; 2],
         timer: &mut PassTimer,
     ) -> Result<()> {
         let gl = &self.gl;
-        let p = &programs.down;
         timer.pass(|| {
             level.down.bind_for_drawing();
             self.use_program(p);
             source.bind(UNIT_MAIN);
-            rate.bind(UNIT_DEPTH);
+            if let Some(rate) = rate {
+                rate.bind(UNIT_DEPTH);
+            }
             set_int(gl, p, "u_f", UNIT_MAIN as i32);
             set_int(gl, p, "u_rate", UNIT_DEPTH as i32);
             set_value(gl, p, "u_texel", UniformValue::Vec2(texel));
@@ -221,22 +228,22 @@ impl Pipeline {
         })
     }
 
-    /// Steps `start..end` at coarse level `index` (1: half resolution), its D ping-ponged
-    /// from `D[0]` (the down pass's output). Returns the D target holding the result.
+    /// Steps `start..end` at coarse level `index` (1: half resolution), `(index, start,
+    /// end)`, its D ping-ponged from `D[0]` (the down pass's output) in `layout`. Returns
+    /// the D target holding the result.
     fn coarse_steps(
         &self,
         schedule: &Schedule,
+        layout: Layout,
         level: &Level,
-        index: u32,
-        start: u32,
-        end: u32,
+        (index, start, end): (u32, u32, u32),
         timer: &mut PassTimer,
     ) -> Result<usize> {
         let gl = &self.gl;
         let law = schedule.offset_law();
         let d = self.compiled(ProgramKey::Diffuse {
             matched: law.matched,
-            chromatic: false,
+            layout,
         })?;
         // Offsets in the level's texels: the law's scale divided by 2^ℓ (module docs of
         // coarse.rs: exact in variance for the matched law), less what the level's
@@ -250,7 +257,9 @@ impl Pipeline {
                 level.step[dst].bind_for_drawing();
                 self.use_program(d);
                 level.d[src].bind(UNIT_MAIN);
-                level.rate.bind(UNIT_DEPTH);
+                if let Some(rate) = &level.rate {
+                    rate.bind(UNIT_DEPTH);
+                }
                 let [scale, coefficient] = law.uniform(k);
                 set_int(gl, d, "u_f", UNIT_MAIN as i32);
                 set_int(gl, d, "u_rate", UNIT_DEPTH as i32);
@@ -268,16 +277,16 @@ impl Pipeline {
         Ok(current)
     }
 
-    /// A coarse level's blend into the finer level, drawn into `destination`.
+    /// A coarse level's blend (program `b`) into the finer level, drawn into
+    /// `destination`.
     fn coarse_blend(
         &self,
-        programs: &CoarsePrograms,
+        b: &Program,
         inputs: &BlendInputs,
         destination: &Framebuffer,
         schedule: &Schedule,
         timer: &mut PassTimer,
     ) -> Result<()> {
-        let b = &programs.blend;
         timer.pass(|| {
             destination.bind_for_drawing();
             self.use_program(b);
@@ -291,7 +300,9 @@ impl Pipeline {
         let gl = &self.gl;
         let decay = level_detail_decay(inputs.level) * schedule.sigma0 * schedule.sigma0;
         inputs.fine.bind(UNIT_MAIN);
-        inputs.fine_rate.bind(UNIT_BLEND_RATE);
+        if let Some(rate) = inputs.fine_rate {
+            rate.bind(UNIT_BLEND_RATE);
+        }
         inputs.coarse.d[inputs.coarse_latest].bind(UNIT_SECOND);
         inputs.coarse.d0.bind(UNIT_BLEND_START);
         set_int(gl, program, "u_f", UNIT_MAIN as i32);
@@ -321,8 +332,8 @@ impl Pipeline {
 struct BlendInputs<'a> {
     /// The finer level's D (or F) at the coarse level's first step.
     fine: &'a Texture,
-    /// The finer level's rate.
-    fine_rate: &'a Texture,
+    /// The finer level's rate (none in the offset layout: `fine`'s alpha).
+    fine_rate: Option<&'a Texture>,
     /// The coarse level, and which of its D targets holds D at step N.
     coarse: &'a Level,
     coarse_latest: usize,

@@ -2,6 +2,7 @@
 //! from the prelude, the medium's GLSL and the pass, and the cache that compiles each once.
 
 use super::engine::{self, EngineKey};
+use super::targets::Layout;
 use super::{external, refine, Pipeline};
 use crate::blur::Precision;
 use crate::camera::FrameInputs;
@@ -18,6 +19,8 @@ pub(super) const MEDIUM_FRAG: &str = include_str!("../../glsl/medium.frag");
 pub(super) const DIFFUSE_FRAG: &str = include_str!("../../glsl/diffuse.frag");
 pub(super) const COMPOSITE_FRAG: &str = include_str!("../../glsl/composite.frag");
 pub(super) const COARSE_DETAIL_GLSL: &str = include_str!("../../glsl/coarse_detail.glsl");
+const COARSE_DOWN_FRAG: &str = include_str!("../../glsl/coarse_down.frag");
+const COARSE_BLEND_FRAG: &str = include_str!("../../glsl/coarse_blend.frag");
 
 /// A medium's GLSL identity: a 128-bit hash of its source text. The program cache is
 /// keyed by it, not by [`Medium::name`], so two media of one name with different GLSL
@@ -41,24 +44,32 @@ impl MediumId {
 }
 
 /// Which program: the medium's two passes are compiled per medium GLSL, and every pass
-/// per grey or chromatic τ.
+/// of the diffusion per layout of its targets ([`Layout`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(super) enum ProgramKey {
     Medium {
         medium: MediumId,
-        chromatic: bool,
+        layout: Layout,
         log_rate: bool,
         half_rate: bool,
     },
     Diffuse {
         matched: bool,
-        chromatic: bool,
+        layout: Layout,
     },
     Composite {
         medium: MediumId,
-        chromatic: bool,
+        layout: Layout,
         /// Also the coarse stage's last blend (`coarse_detail.glsl`).
         coarse: bool,
+    },
+    /// The coarse stage's 2x2 average (`coarse.rs`), ρ in alpha or not.
+    CoarseDown {
+        rate_in_alpha: bool,
+    },
+    /// The coarse stage's blend of a level into the next finer one.
+    CoarseBlend {
+        rate_in_alpha: bool,
     },
     /// An engine pass (see [`engine`]) of a medium.
     Engine(MediumId, EngineKey),
@@ -73,11 +84,11 @@ pub(super) fn medium_key(
     medium: &dyn Medium,
     precision: Precision,
     schedule: &Schedule,
-    chromatic: bool,
+    layout: Layout,
 ) -> ProgramKey {
     ProgramKey::Medium {
         medium: MediumId::of(medium),
-        chromatic,
+        layout,
         log_rate: schedule.scheme != Scheme::Euler,
         half_rate: precision == Precision::F16,
     }
@@ -105,6 +116,8 @@ impl Pipeline {
     }
 
     pub(super) fn compile(&self, key: ProgramKey, medium: Option<&dyn Medium>) -> Result<Program> {
+        // The rate's own texture, read by every diffusion pass but in the offset layout.
+        let rate = |rate_in_alpha: bool| if rate_in_alpha { None } else { Some("u_rate") };
         let defines = |pairs: &[(&str, bool)]| {
             let mut header = self.version_line.to_string();
             for (name, on) in pairs {
@@ -113,6 +126,14 @@ impl Pipeline {
             header.push('\n');
             header.push_str(PRELUDE_GLSL);
             header
+        };
+        let layout_defines = |layout: Layout, more: &[(&str, bool)]| {
+            let mut pairs = vec![
+                ("CHROMATIC", layout.chromatic()),
+                ("OFFSET_LAYOUT", layout.rate_in_alpha()),
+            ];
+            pairs.extend_from_slice(more);
+            defines(&pairs)
         };
         let with_medium = |pass: &str| {
             let m = medium.expect("the medium passes need a medium");
@@ -138,41 +159,38 @@ impl Pipeline {
         };
         match key {
             ProgramKey::Medium {
-                chromatic,
+                layout,
                 log_rate,
                 half_rate,
                 ..
             } => Program::new(
                 &self.gl,
-                &defines(&[
-                    ("CHROMATIC", chromatic),
-                    ("RATE_LAW_LOG", log_rate),
-                    ("RATE_HALF", half_rate),
-                ]),
+                &layout_defines(
+                    layout,
+                    &[("RATE_LAW_LOG", log_rate), ("RATE_HALF", half_rate)],
+                ),
                 (&names("medium.frag"), &with_medium(MEDIUM_FRAG)),
                 &["u_colour"],
                 &as_strs(&optional(&["u_depth", "u_colour_srgb", "u_schedule"])),
             ),
-            ProgramKey::Diffuse { matched, chromatic } => Program::new(
+            ProgramKey::Diffuse { matched, layout } => Program::new(
                 &self.gl,
-                &defines(&[("VARIANCE_MATCHED", matched), ("CHROMATIC", chromatic)]),
+                &layout_defines(layout, &[("VARIANCE_MATCHED", matched)]),
                 ("diffuse.frag", DIFFUSE_FRAG),
-                &["u_f", "u_rate", "u_law", "u_texel"],
+                &with_rate(&["u_f", "u_law", "u_texel"], rate(layout.rate_in_alpha())),
                 &["u_tau_gb"],
             ),
-            ProgramKey::Composite {
-                chromatic, coarse, ..
-            } => Program::new(
+            ProgramKey::Composite { layout, coarse, .. } => Program::new(
                 &self.gl,
-                &defines(&[("CHROMATIC", chromatic), ("COARSE_BLEND", coarse)]),
+                &layout_defines(layout, &[("COARSE_BLEND", coarse)]),
                 (
                     &names("composite.frag"),
                     &with_medium(&composite_source(coarse)),
                 ),
-                if coarse {
-                    &BLEND_UNIFORMS
+                &if coarse {
+                    with_rate(&BLEND_UNIFORMS, rate(layout.rate_in_alpha()))
                 } else {
-                    &BLEND_UNIFORMS[..1]
+                    vec!["u_f"]
                 },
                 &as_strs(&optional(&[
                     "u_depth",
@@ -180,6 +198,23 @@ impl Pipeline {
                     "u_origin",
                     "u_output_srgb",
                 ])),
+            ),
+            ProgramKey::CoarseDown { rate_in_alpha } => Program::new(
+                &self.gl,
+                &defines(&[("OFFSET_LAYOUT", rate_in_alpha)]),
+                ("coarse_down.frag", COARSE_DOWN_FRAG),
+                &with_rate(&["u_f", "u_texel"], rate(rate_in_alpha)),
+                &[],
+            ),
+            ProgramKey::CoarseBlend { rate_in_alpha } => Program::new(
+                &self.gl,
+                &defines(&[("OFFSET_LAYOUT", rate_in_alpha)]),
+                (
+                    "coarse_blend.frag",
+                    &format!("{COARSE_DETAIL_GLSL}\n{COARSE_BLEND_FRAG}"),
+                ),
+                &with_rate(&BLEND_UNIFORMS, rate(rate_in_alpha)),
+                &[],
             ),
             ProgramKey::Engine(_, key) => {
                 let (file, source, pairs) = key.source();
@@ -235,16 +270,14 @@ fn composite_source(coarse: bool) -> Cow<'static, str> {
     }
 }
 
+/// `names` and the rate's own texture where the pass reads one.
+fn with_rate<'a>(names: &[&'a str], rate: Option<&'a str>) -> Vec<&'a str> {
+    names.iter().copied().chain(rate).collect()
+}
+
 /// The coarse stage's blend's uniforms (`coarse_blend.frag`, and the composite with
-/// `COARSE_BLEND`); `u_f` alone is the plain composite's.
-pub(super) const BLEND_UNIFORMS: [&str; 6] = [
-    "u_f",
-    "u_rate",
-    "u_coarse",
-    "u_coarse0",
-    "u_half_texel",
-    "u_detail",
-];
+/// `COARSE_BLEND`) but the rate's texture, which the offset layout does not have.
+const BLEND_UNIFORMS: [&str; 5] = ["u_f", "u_coarse", "u_coarse0", "u_half_texel", "u_detail"];
 
 fn as_strs<'a>(names: &'a [Cow<'static, str>]) -> Vec<&'a str> {
     names.iter().map(|n| n.as_ref()).collect()

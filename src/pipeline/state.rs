@@ -251,7 +251,7 @@ impl Pipeline {
         let target = Framebuffer::over(gl, &[&texture], "the timer warm-up")?;
         let program = self.compiled(ProgramKey::Diffuse {
             matched: false,
-            chromatic: false,
+            layout: super::Layout::Premultiplied { chromatic: false },
         })?;
         self.enter_state();
         timer::warm_up(gl, || {

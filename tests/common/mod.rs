@@ -3,9 +3,11 @@
 //! sample, and checks on range maps.
 #![allow(dead_code)]
 
-use brume::medium::Pixel;
+use brume::camera::{FrameCamera, FrameInputs};
+use brume::medium::{Lookup, MediumSample, Pixel, UniformValue};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::Headless;
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fs;
 use std::path::Path;
@@ -284,5 +286,50 @@ pub fn pixel_top_first(x: usize, row: usize, width: usize, height: usize, depth:
         height,
         depth,
         sigma0: 1.0,
+    }
+}
+
+/// `M` as a medium that does not say its in-scattered light is uniform
+/// (`Medium::uniform_inscatter` left at its default): the pipeline renders it in paper
+/// 000's pre-multiplied layout, F = (τ·E, τ) and ρ in targets of their own, which the
+/// offset layout must match. Everything else is `M`'s.
+pub struct Premultiplied<M>(pub M);
+
+impl<M: brume::Medium> brume::Medium for Premultiplied<M> {
+    fn name(&self) -> Cow<'static, str> {
+        self.0.name()
+    }
+    fn glsl(&self) -> Cow<'static, str> {
+        self.0.glsl()
+    }
+    fn uniforms(&self, frame: &FrameInputs) -> Vec<(Cow<'static, str>, UniformValue)> {
+        self.0.uniforms(frame)
+    }
+    fn chromatic(&self) -> bool {
+        self.0.chromatic()
+    }
+    fn sigma_max(&self, sigma0: f64) -> f64 {
+        self.0.sigma_max(sigma0)
+    }
+    fn sigma_min(&self, sigma0: f64) -> f64 {
+        self.0.sigma_min(sigma0)
+    }
+    fn sample(&self, pixel: Pixel, frame: &FrameInputs) -> MediumSample {
+        self.0.sample(pixel, frame)
+    }
+    fn validate(&self) -> brume::Result<()> {
+        self.0.validate()
+    }
+    fn needs_camera(&self) -> bool {
+        self.0.needs_camera()
+    }
+    fn frame_camera(&self, frame: &FrameInputs) -> Option<FrameCamera> {
+        self.0.frame_camera(frame)
+    }
+    fn validate_frame(&self, frame: &FrameInputs) -> brume::Result<()> {
+        self.0.validate_frame(frame)
+    }
+    fn lookups(&self) -> Vec<(Cow<'static, str>, Lookup)> {
+        self.0.lookups()
     }
 }

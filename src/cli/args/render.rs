@@ -102,8 +102,9 @@ pub struct RenderArgs {
 
     /// Relative extinction per channel as R,G,B factors (default 1,1,1: grey haze, as
     /// paper 000). E.g. 0.8,1,1.3 makes a bluish veil: blue is attenuated, and replaced by
-    /// airlight, most. A tint that is not grey blurs each channel's τ on its own (a second
-    /// texture in every pass).
+    /// airlight, most. A tint that is not grey blurs each channel's τ on its own, at the
+    /// cost of a grey haze (the airlight is uniform: τ·(E − airlight) diffuses in one
+    /// texture).
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_tint)]
     pub tint: Option<[f64; 3]>,
 
@@ -128,7 +129,7 @@ pub struct RenderArgs {
 
     /// Coarse to fine: once the most blurred pixel has reached PX px, run the remaining
     /// diffusion steps at half resolution, and at a quarter once that scale has doubled
-    /// (matched scheme, grey haze; from 2 px, the default, about 65 % less GPU time at σmax
+    /// (matched scheme, haze of any tint; from 2 px, the default, about 65 % less GPU time at σmax
     /// 25 px and 35 % at 15 and 8 px on llvmpipe). Its error against the exact Gaussian away from the image's
     /// border stays within full resolution's, but the result is no longer the paper's
     /// pipeline to the bit, and near depth edges it departs from it by a few per cent of

@@ -452,6 +452,11 @@ impl Medium for LayeredFog {
         )
     }
 
+    // The fog's colour, the same along every ray.
+    fn uniform_inscatter(&self) -> bool {
+        true
+    }
+
     fn chromatic(&self) -> bool {
         false
     }
