@@ -4,42 +4,10 @@
 //! against the same budgets the full-resolution GPU path meets.
 use crate::common;
 
-use brume::camera::FrameInputs;
-use brume::medium::{MediumSample, Pixel, UniformValue};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::reference;
 use brume::{Blur, Haze, Medium, Precision, Scheme, UniformBlur};
 use common::*;
-use std::borrow::Cow;
-
-/// A uniform blur that does not say its σ is the same everywhere (`Medium::sigma_min` left
-/// at σ0, as a haze's): the coarse stage then starts where σmax reaches `coarse_from`, the
-/// path of every frame with unblurred pixels, judged here by the exact Gaussian.
-struct Unpromised(UniformBlur);
-
-impl Medium for Unpromised {
-    fn name(&self) -> Cow<'static, str> {
-        self.0.name()
-    }
-    fn glsl(&self) -> Cow<'static, str> {
-        self.0.glsl()
-    }
-    fn uniforms(&self, frame: &FrameInputs) -> Vec<(Cow<'static, str>, UniformValue)> {
-        self.0.uniforms(frame)
-    }
-    fn chromatic(&self) -> bool {
-        self.0.chromatic()
-    }
-    fn sigma_max(&self, sigma0: f64) -> f64 {
-        self.0.sigma_max(sigma0)
-    }
-    fn sample(&self, pixel: Pixel, frame: &FrameInputs) -> MediumSample {
-        self.0.sample(pixel, frame)
-    }
-    fn validate(&self) -> brume::Result<()> {
-        self.0.validate()
-    }
-}
 
 fn coarse(from: f64) -> Blur {
     Blur {
@@ -49,12 +17,14 @@ fn coarse(from: f64) -> Blur {
 }
 
 /// The uniform blur to `sigma`, told as uniform (`promised`: the coarse stage may start at
-/// step 0) or not ([`Unpromised`]).
+/// step 0) or not ([`unpromised`]: a uniform blur that does not say its σ is the same
+/// everywhere, as a haze's, so the coarse stage starts where σmax reaches `coarse_from`,
+/// the path of every frame with unblurred pixels, judged here by the exact Gaussian).
 fn uniform(sigma: f64, promised: bool) -> Box<dyn Medium> {
     if promised {
         Box::new(UniformBlur::new(sigma))
     } else {
-        Box::new(Unpromised(UniformBlur::new(sigma)))
+        Box::new(unpromised(UniformBlur::new(sigma)))
     }
 }
 
@@ -192,7 +162,7 @@ fn haze_stays_close_to_the_reference() {
     let e_full = reference::rgb_error(&gpu_full.image, &cpu, 0);
     // The offset layout (ρ in alpha), and the pre-multiplied one that media of varying
     // in-scattered light take.
-    let layouts: [&dyn Medium; 2] = [&haze, &Premultiplied(haze)];
+    let layouts: [&dyn Medium; 2] = [&haze, &premultiplied(haze)];
     for (from, medium) in [2.0, 3.0].into_iter().flat_map(|f| layouts.map(|m| (f, m))) {
         let gpu = r.render(&image, &range, medium, &coarse(from)).unwrap();
         let sched = gpu.schedule;
@@ -279,7 +249,7 @@ fn stage_applies_to_matched_single_target_only() {
     let (w, h) = (64, 48);
     let image = noise_image(w, h, 2);
     let range = ramp_range(w, h);
-    let chromatic = Premultiplied(Haze {
+    let chromatic = premultiplied(Haze {
         lambda: 16.0,
         tint: [0.6, 1.0, 1.8],
         ..Haze::default()

@@ -161,11 +161,11 @@ fn bytes_per_pixel_follow_precision_layout_and_chromatic_tau() {
         2 * 16
     );
     assert_eq!(Pipeline::bytes_per_pixel(Precision::F16, &tinted), 2 * 8);
-    let grey = Premultiplied(Haze::default());
+    let grey = premultiplied(Haze::default());
     assert_eq!(Pipeline::bytes_per_pixel(Precision::F32, &grey), 2 * 16 + 4);
     assert_eq!(Pipeline::bytes_per_pixel(Precision::F16, &grey), 2 * 8 + 2);
     assert_eq!(
-        Pipeline::bytes_per_pixel(Precision::F32, &Premultiplied(tinted)),
+        Pipeline::bytes_per_pixel(Precision::F32, &premultiplied(tinted)),
         2 * 16 + 4 + 2 * 8
     );
     // And a render leaves no object behind but what the pipeline keeps.

@@ -2,7 +2,7 @@
 //! the same at every pixel is diffused as τ·(E − L∞) with ρ in alpha, one RGBA target,
 //! and composited as L∞ + the result. The diffusion is linear, so this is the image of
 //! paper 000's pre-multiplied layout, F = (τ·E, τ) composited as F + (1 − τ_blurred)·L∞:
-//! checked here against that layout (the same medium wrapped as [`Premultiplied`]) and
+//! checked here against that layout (the same medium wrapped as [`premultiplied`]) and
 //! against the f64 reference, grey and chromatic, at full resolution and with the coarse
 //! stage, with a camera and lookups (the layered fog).
 use crate::common;
@@ -54,7 +54,7 @@ fn haze_renders_the_same_in_both_layouts() {
     let (_lock, mut r) = renderer();
     for tint in [GREY, TINT] {
         let offset = haze(tint);
-        let premultiplied = Premultiplied(offset);
+        let premultiplied = premultiplied(offset);
         assert!(offset.uniform_inscatter() && !premultiplied.uniform_inscatter());
         for blur in [Blur::default(), Blur::photo()] {
             let a = r.render(&image, &range, &offset, &blur).unwrap();
@@ -96,7 +96,7 @@ fn f16_offset_layout_has_no_larger_rms_error() {
         let cpu = reference::render(&image, &range, &offset, &blur).expect("CPU render");
         let a = r.render(&image, &range, &offset, &blur).unwrap();
         let b = r
-            .render(&image, &range, &Premultiplied(offset), &blur)
+            .render(&image, &range, &premultiplied(offset), &blur)
             .unwrap();
         let (ea, eb) = (
             reference::rgb_error(&a.image, &cpu, 4),
@@ -127,7 +127,7 @@ fn tinted_haze_gets_the_coarse_stage() {
     let fast = r.render(&image, &range, &tinted, &Blur::photo()).unwrap();
     assert_eq!(coarse_passes(&fast), 2, "{:?}", fast.pass_names());
     let slow = r
-        .render(&image, &range, &Premultiplied(tinted), &Blur::photo())
+        .render(&image, &range, &premultiplied(tinted), &Blur::photo())
         .unwrap();
     assert_eq!(coarse_passes(&slow), 0, "{:?}", slow.pass_names());
 
@@ -163,7 +163,7 @@ fn layered_fog_renders_the_same_in_both_layouts() {
     let (_lock, mut r) = renderer();
     let a = r.render_fog(&image, &depth, &fog, &frame, &blur).unwrap();
     let b = r
-        .render_fog(&image, &depth, &Premultiplied(fog.clone()), &frame, &blur)
+        .render_fog(&image, &depth, &premultiplied(fog.clone()), &frame, &blur)
         .unwrap();
     assert!(a.schedule.steps > 0);
     let d = max_difference(&a.image, &b.image);

@@ -289,47 +289,72 @@ pub fn pixel_top_first(x: usize, row: usize, width: usize, height: usize, depth:
     }
 }
 
-/// `M` as a medium that does not say its in-scattered light is uniform
-/// (`Medium::uniform_inscatter` left at its default): the pipeline renders it in paper
-/// 000's pre-multiplied layout, F = (τ·E, τ) and ρ in targets of their own, which the
-/// offset layout must match. Everything else is `M`'s.
-pub struct Premultiplied<M>(pub M);
+/// `M` as a medium that keeps to itself what the pipeline uses to go faster:
+/// `Medium::uniform_inscatter` (so it renders in paper 000's pre-multiplied layout,
+/// F = (τ·E, τ) and ρ in targets of their own, which the offset layout must match) and,
+/// unless `sigma_min`, `Medium::sigma_min` (left at σ0, as a haze's: the coarse stage then
+/// starts where σmax reaches `coarse_from`, never at step 0). Everything else is `M`'s.
+pub struct Withheld<M> {
+    pub medium: M,
+    /// Whether `Medium::sigma_min` is `M`'s.
+    pub sigma_min: bool,
+}
 
-impl<M: brume::Medium> brume::Medium for Premultiplied<M> {
+/// `medium` in the pre-multiplied layout, otherwise as it is.
+pub fn premultiplied<M>(medium: M) -> Withheld<M> {
+    Withheld {
+        medium,
+        sigma_min: true,
+    }
+}
+
+/// `medium` in the pre-multiplied layout, promising no σ above σ0 either.
+pub fn unpromised<M>(medium: M) -> Withheld<M> {
+    Withheld {
+        medium,
+        sigma_min: false,
+    }
+}
+
+impl<M: brume::Medium> brume::Medium for Withheld<M> {
     fn name(&self) -> Cow<'static, str> {
-        self.0.name()
+        self.medium.name()
     }
     fn glsl(&self) -> Cow<'static, str> {
-        self.0.glsl()
+        self.medium.glsl()
     }
     fn uniforms(&self, frame: &FrameInputs) -> Vec<(Cow<'static, str>, UniformValue)> {
-        self.0.uniforms(frame)
+        self.medium.uniforms(frame)
     }
     fn chromatic(&self) -> bool {
-        self.0.chromatic()
+        self.medium.chromatic()
     }
     fn sigma_max(&self, sigma0: f64) -> f64 {
-        self.0.sigma_max(sigma0)
+        self.medium.sigma_max(sigma0)
     }
     fn sigma_min(&self, sigma0: f64) -> f64 {
-        self.0.sigma_min(sigma0)
+        if self.sigma_min {
+            self.medium.sigma_min(sigma0)
+        } else {
+            sigma0
+        }
     }
     fn sample(&self, pixel: Pixel, frame: &FrameInputs) -> MediumSample {
-        self.0.sample(pixel, frame)
+        self.medium.sample(pixel, frame)
     }
     fn validate(&self) -> brume::Result<()> {
-        self.0.validate()
+        self.medium.validate()
     }
     fn needs_camera(&self) -> bool {
-        self.0.needs_camera()
+        self.medium.needs_camera()
     }
     fn frame_camera(&self, frame: &FrameInputs) -> Option<FrameCamera> {
-        self.0.frame_camera(frame)
+        self.medium.frame_camera(frame)
     }
     fn validate_frame(&self, frame: &FrameInputs) -> brume::Result<()> {
-        self.0.validate_frame(frame)
+        self.medium.validate_frame(frame)
     }
     fn lookups(&self) -> Vec<(Cow<'static, str>, Lookup)> {
-        self.0.lookups()
+        self.medium.lookups()
     }
 }
