@@ -200,7 +200,7 @@ impl Blur {
         let Some(from) = self.coarse_from else {
             return Ok(None);
         };
-        Ok(if Layout::of(medium).chromatic() {
+        Ok(if Layout::of(medium).tau_pair() {
             None
         } else {
             schedule.coarse_start_above(from, medium.sigma_min(self.sigma0))
@@ -220,7 +220,7 @@ impl Blur {
 
     /// [`Blur::coarse_bytes_per_pixel`] for a frame in `layout`.
     fn coarse_bytes_in(&self, layout: Layout) -> u64 {
-        if self.coarse_from.is_none() || layout.chromatic() {
+        if self.coarse_from.is_none() || layout.tau_pair() {
             return 0;
         }
         let texel = |format: TexelFormat| format.bytes_per_texel() as u64;

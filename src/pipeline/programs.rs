@@ -129,7 +129,7 @@ impl Pipeline {
         };
         let layout_defines = |layout: Layout, more: &[(&str, bool)]| {
             let mut pairs = vec![
-                ("CHROMATIC", layout.chromatic()),
+                ("CHROMATIC", layout.tau_pair()),
                 ("OFFSET_LAYOUT", layout.rate_in_alpha()),
             ];
             pairs.extend_from_slice(more);

@@ -33,7 +33,7 @@ impl Layout {
     }
 
     /// Whether (τ_g, τ_b) travel in a target pair of their own.
-    pub(crate) fn chromatic(self) -> bool {
+    pub(crate) fn tau_pair(self) -> bool {
         self == Layout::Premultiplied { chromatic: true }
     }
 
@@ -92,7 +92,7 @@ impl Targets {
             target(precision.colour_format())?,
             target(precision.colour_format())?,
         ];
-        let tau_gb = if layout.chromatic() {
+        let tau_gb = if layout.tau_pair() {
             Some([
                 target(precision.pair_format())?,
                 target(precision.pair_format())?,
