@@ -7,9 +7,10 @@
 // #defined by the pipeline: compile-time switches, because every uniform a fragment reads
 // costs it a load per lane on llvmpipe. CHROMATIC diffuses a second target, (τ_g, τ_b),
 // with the same weights (multiple render targets), for media whose transmission differs
-// per channel (in the pre-multiplied layout only). OFFSET_LAYOUT: F = (τ·(E − L∞), ρ), whose alpha is the rate, constant over
-// the steps: one fetch per neighbour reads its colour and its rate, four in all where the
-// rate's own texture takes eight (a third less time per step on llvmpipe).
+// per channel (in the pre-multiplied layout only). OFFSET_LAYOUT: F = (τ·(E − L∞), ρ),
+// whose alpha is the rate, constant over the steps: one fetch per neighbour reads its
+// colour and its rate, four in all where the rate's own texture takes eight (a third
+// less time per step on llvmpipe).
 // Preceded by the #version line, the #defines and prelude.glsl.
 
 uniform sampler2D u_f;    // F at step k (bilinear, clamp to edge)

@@ -107,9 +107,9 @@ pub struct Blur {
     /// [`crate::schedule::STEP0_COARSE_SIGMA`] px or more) starts at step 0 whatever this
     /// scale ([`Schedule::coarse_start_above`]). Matched scheme, one τ target (a grey τ,
     /// or any τ of a medium whose in-scattered light is uniform,
-    /// [`Medium::uniform_inscatter`]) and at least two remaining steps only; `None` (the library's default): every step at full
-    /// resolution, the paper's pipeline. The CLI's and [`crate::photo`]'s default is
-    /// [`DEFAULT_COARSE_FROM`] ([`Blur::photo`]).
+    /// [`Medium::uniform_inscatter`]) and at least two remaining steps only; `None` (the
+    /// library's default): every step at full resolution, the paper's pipeline. The
+    /// CLI's and [`crate::photo`]'s default is [`DEFAULT_COARSE_FROM`] ([`Blur::photo`]).
     pub coarse_from: Option<f64>,
 }
 
