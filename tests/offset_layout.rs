@@ -9,7 +9,6 @@ use crate::common;
 
 use brume::camera::{Camera, FrameInputs};
 use brume::medium::{HeightProfile, LayeredFog};
-use brume::raster::RgbaImage;
 use brume::{reference, Blur, FogBlur, Haze, Medium, Precision, Rendered, Scheme};
 use common::*;
 
@@ -25,12 +24,8 @@ const GREY: [f64; 3] = [1.0; 3];
 const TINT: [f64; 3] = [0.6, 1.0, 1.8];
 
 /// The largest difference of two renders' RGB.
-fn max_difference(a: &RgbaImage, b: &RgbaImage) -> f32 {
-    a.as_slice()
-        .iter()
-        .zip(b.as_slice())
-        .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs()))
-        .fold(0.0, f32::max)
+fn max_difference(a: &Rendered, b: &Rendered) -> f64 {
+    reference::rgb_error(&a.image, &b.image, 0).max_abs
 }
 
 fn coarse_passes(r: &Rendered) -> usize {
@@ -59,7 +54,7 @@ fn haze_renders_the_same_in_both_layouts() {
         for blur in [Blur::default(), Blur::photo()] {
             let a = r.render(&image, &range, &offset, &blur).unwrap();
             let b = r.render(&image, &range, &premultiplied, &blur).unwrap();
-            let d = max_difference(&a.image, &b.image);
+            let d = max_difference(&a, &b);
             eprintln!(
                 "tint {tint:?} coarse {:?}: passes {} / {}, max difference {d:.2e}",
                 blur.coarse_from,
@@ -166,7 +161,7 @@ fn layered_fog_renders_the_same_in_both_layouts() {
         .render_fog(&image, &depth, &premultiplied(fog.clone()), &frame, &blur)
         .unwrap();
     assert!(a.schedule.steps > 0);
-    let d = max_difference(&a.image, &b.image);
+    let d = max_difference(&a, &b);
     eprintln!(
         "layered fog: N = {}, max difference {d:.2e}",
         a.schedule.steps
