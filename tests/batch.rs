@@ -665,3 +665,67 @@ fn the_library_frame_loop_fogs_each_beta_as_a_render_of_its_own() {
         })
         .unwrap();
 }
+
+/// The library's batch (`brume::dataset::Batch`), with no command line: it plans a
+/// dataset's outputs, tells its observer of each as it is in place, logs each, reports
+/// what it did, and a second plan of the same batch finds nothing left to write. Bad
+/// options are refused by their library names before anything is made.
+#[test]
+fn the_library_batch_writes_logs_and_reports_each_output() {
+    use brume::dataset::{Batch, BatchEvent, BatchOptions, Betas};
+    use std::sync::Mutex;
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 2);
+    let out = dir.path().join("foggy");
+    let mut opts = BatchOptions::new(out.clone());
+    opts.betas = Betas::Each(vec![0.01, 0.02]);
+    opts.frame.fog.lambda = 0.0; // the blur is the other tests' concern
+    let refused = |betas: Betas, name: &str| {
+        let opts = BatchOptions {
+            betas,
+            ..opts.clone()
+        };
+        match Batch::plan(std::slice::from_ref(&root), None, opts) {
+            Err(brume::Error::InvalidParameter { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{name}: {:?}", other.map(|b| b.outputs())),
+        }
+        assert!(!out.exists(), "{name}: the output folder was made");
+    };
+    refused(Betas::Each(vec![0.01, 0.01]), "beta");
+    refused(Betas::Each(vec![1e-300]), "beta");
+    refused(
+        Betas::Drawn("uniform:0.001,20".parse().unwrap()),
+        "beta_dist",
+    );
+
+    let batch = Batch::plan(std::slice::from_ref(&root), None, opts.clone()).unwrap();
+    assert_eq!(
+        (batch.frames_found(), batch.outputs(), batch.skipped()),
+        (2, 4, 0)
+    );
+    let written = Mutex::new(Vec::new());
+    let report = {
+        let (_lock, mut headless) = common::renderer();
+        batch
+            .run(headless.renderer().unwrap(), &|event| match event {
+                BatchEvent::Written { output } => {
+                    assert!(output.is_file(), "{} is not in place", output.display());
+                    written.lock().unwrap().push(output.to_path_buf());
+                }
+                BatchEvent::Staged { .. } => {}
+                other => panic!("{other:?}"),
+            })
+            .unwrap()
+    };
+    report.check().unwrap();
+    let written = written.into_inner().unwrap();
+    assert_eq!((report.written, report.frames, written.len()), (4, 2, 4));
+    assert_eq!(outputs(&out).len(), 4);
+    let log = std::fs::read_to_string(&report.log).unwrap();
+    for path in &written {
+        let line = log.lines().find(|l| l.contains(&*path.to_string_lossy()));
+        assert!(line.is_some_and(|l| l.contains("\"ok\"")), "{log}");
+    }
+    let again = Batch::plan(&[root], None, opts).unwrap();
+    assert_eq!((again.outputs(), again.skipped()), (0, 4));
+}

@@ -338,7 +338,7 @@ pub fn run_aerial(
                 "pass_ms": t.pass_ms,
                 "out": out.display().to_string(),
                 "insert": super::capture::insert_json(args, extras.inserted),
-                "capture": super::capture::capture_json(extras.capture),
+                "capture": extras.capture.to_json(),
             })
         );
     } else {

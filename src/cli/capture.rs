@@ -42,20 +42,6 @@ pub(super) fn capture_options(capture: &CaptureArgs, seed: Option<i128>) -> Resu
     Ok(opts)
 }
 
-/// The capture options as the JSON report gives them (`null` when off).
-pub(super) fn capture_json(capture: &CaptureOptions) -> serde_json::Value {
-    if capture.is_off() {
-        return serde_json::Value::Null;
-    }
-    json!({
-        "exposure_stops": capture.exposure_stops,
-        "shot_noise_gain": capture.noise.map(|n| n.gain),
-        "read_noise": capture.noise.map(|n| n.read_noise),
-        "jpeg_quality": capture.jpeg_quality,
-        "seed": capture.seed,
-    })
-}
-
 /// Loads --insert and composites it into the photo and its prepared range (at the
 /// image's size by now), before the fog; `None` without --insert.
 pub(super) fn insert_object(
@@ -138,6 +124,6 @@ pub(super) fn print_insert_and_capture(
         );
     }
     if !capture.is_off() {
-        outln!("capture: {}", capture_json(capture));
+        outln!("capture: {}", capture.to_json());
     }
 }

@@ -23,7 +23,6 @@ macro_rules! err {
 pub(crate) mod aerial;
 pub(crate) mod args;
 mod batch;
-mod batch_checks;
 mod bench;
 mod capture;
 mod compare;
@@ -60,7 +59,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Batch(a) => {
             let plan = batch::plan(&a)?;
             let mut headless = open_renderer(cli.egl)?;
-            batch::run(&a, plan, headless.renderer()?)
+            batch::run(plan, headless.renderer()?)
         }
         #[cfg(all(feature = "viewer", not(target_os = "android")))]
         Command::View(a) => {
@@ -172,6 +171,12 @@ pub fn refuse_overlaps(outputs: &[(&str, &Path)], inputs: &[PathBuf]) -> Result<
 /// staged files on stderr and waits before renaming, so that a test can signal a process
 /// that is known to hold temporaries.
 pub(crate) fn commit(outputs: Outputs) -> Result<()> {
+    hold_staged_outputs(&outputs);
+    outputs.commit()
+}
+
+/// The hook of [`commit`], for outputs the library commits itself (`brume batch`).
+fn hold_staged_outputs(outputs: &Outputs) {
     let hold = std::env::var("BRUME_TEST_HOLD_OUTPUTS").ok();
     if let Some(seconds) = hold.and_then(|s| s.parse::<f64>().ok()) {
         errln!(
@@ -180,7 +185,6 @@ pub(crate) fn commit(outputs: Outputs) -> Result<()> {
         );
         std::thread::sleep(Duration::from_secs_f64(seconds.clamp(0.0, 600.0)));
     }
-    outputs.commit()
 }
 
 /// On SIGINT, SIGTERM or SIGHUP, removes the temporary outputs of this process and exits

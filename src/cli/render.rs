@@ -1,9 +1,7 @@
 //! `brume render`: load (or the demo), pre-process, render on the GPU, write, report.
 
 use super::args::{Compat, MediumKind, RenderArgs};
-use super::capture::{
-    capture_json, capture_options, insert_json, insert_object, print_insert_and_capture,
-};
+use super::capture::{capture_options, insert_json, insert_object, print_insert_and_capture};
 use super::photo_args::{
     haze_inputs, input_paths, load_scene, physical_from_args, preprocess, Look, PrepReport, Scene,
 };
@@ -95,7 +93,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
             "guided": refined.guided.map(|r| json!({"radius_px": r.radius_px, "epsilon": r.epsilon})),
         });
         json["insert"] = insert_json(args, inserted.as_ref());
-        json["capture"] = capture_json(&capture);
+        json["capture"] = capture.to_json();
         outln!("{json}");
     } else {
         report.print_summary();

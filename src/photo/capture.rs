@@ -66,6 +66,20 @@ const NOISE_STREAM: u64 = 0x006e_6f69_7365;
 const JPEG_QUALITIES: &str = "a JPEG quality from 1 to 100";
 
 impl CaptureOptions {
+    /// The options as brume's JSON reports give them: `null` when off.
+    pub fn to_json(&self) -> serde_json::Value {
+        if self.is_off() {
+            return serde_json::Value::Null;
+        }
+        serde_json::json!({
+            "exposure_stops": self.exposure_stops,
+            "shot_noise_gain": self.noise.map(|n| n.gain),
+            "read_noise": self.noise.map(|n| n.read_noise),
+            "jpeg_quality": self.jpeg_quality,
+            "seed": self.seed,
+        })
+    }
+
     /// Whether these options leave the image as it is.
     pub fn is_off(&self) -> bool {
         self.exposure_stops == 0.0 && self.noise.is_none() && self.jpeg_quality.is_none()

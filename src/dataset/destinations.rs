@@ -1,19 +1,15 @@
-//! What `brume batch` proves about a dataset before it makes anything: every frame's
-//! outputs lie under `--out` (after `..` and links) and are that frame's alone, and a
-//! shared `--sky-mask` has every frame's size.
+//! What a batch proves about a dataset before it makes anything: every frame's outputs lie
+//! under the output folder (after `..` and links) and are that frame's alone, and a shared
+//! sky mask has every frame's size.
 
-use super::args::BatchArgs;
-use brume::dataset::Item;
-use brume::{Error, Result};
+use super::Item;
+use crate::error::{Error, Result};
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
 
-/// A batch's `--sky-mask` (one mask for every frame) has each frame's size: refused up
-/// front, from the files' headers, rather than frame by frame.
-pub fn check_sky_mask_size(args: &BatchArgs, items: &[Item]) -> Result<()> {
-    let Some(mask) = &args.prep.sky_mask else {
-        return Ok(());
-    };
+/// A sky mask shared by the frames without their own has each such frame's size: refused
+/// up front, from the files' headers, rather than frame by frame.
+pub(super) fn check_sky_mask_size(mask: &Path, items: &[Item]) -> Result<()> {
     let size = |path: &Path| {
         ::image::ImageReader::open(path)
             .and_then(|r| r.with_guessed_format())
@@ -23,7 +19,7 @@ pub fn check_sky_mask_size(args: &BatchArgs, items: &[Item]) -> Result<()> {
     };
     let (mw, mh) = size(mask).map_err(|e| match e {
         Error::Io { .. } | Error::Format { .. } => Error::invalid(
-            "--sky-mask",
+            "sky_mask",
             mask.display(),
             format!("a readable PNG sky mask ({e})"),
         ),
@@ -33,7 +29,7 @@ pub fn check_sky_mask_size(args: &BatchArgs, items: &[Item]) -> Result<()> {
         let (w, h) = size(&item.image)?;
         if (w, h) != (mw, mh) {
             return Err(Error::invalid(
-                "--sky-mask",
+                "sky_mask",
                 format!("{} ({mw}x{mh})", mask.display()),
                 format!(
                     "a mask of each frame's size: {} is {w}x{h}",
@@ -45,10 +41,16 @@ pub fn check_sky_mask_size(args: &BatchArgs, items: &[Item]) -> Result<()> {
     Ok(())
 }
 
-/// Proves that every output of every frame lies under `--out` (after `..` and links are
+/// Proves that every output of every frame (its fogged image at each of `betas`, and its
+/// transmittance map with `transmittance`) lies under `out` (after `..` and links are
 /// resolved) and that no two frames write one file (`X.png` and `X.jpg` in one folder, a
 /// row given twice, a folder given twice), before any work.
-pub fn check_destinations(args: &BatchArgs, items: &[Item], betas: &[f64]) -> Result<()> {
+pub(super) fn check_destinations(
+    out: &Path,
+    transmittance: bool,
+    items: &[Item],
+    betas: &[f64],
+) -> Result<()> {
     let mut owners: HashMap<PathBuf, &Path> = HashMap::new();
     for item in items {
         let out_dir = contained_dir(&item.out_dir).ok_or_else(|| {
@@ -56,22 +58,21 @@ pub fn check_destinations(args: &BatchArgs, items: &[Item], betas: &[f64]) -> Re
                 "inputs",
                 item.image.display(),
                 format!(
-                    "a frame whose outputs stay under --out: its folder `{}` climbs out",
+                    "a frame whose outputs stay under the output folder: its folder `{}` \
+                     climbs out",
                     item.out_dir.display()
                 ),
             )
         })?;
-        check_no_link_out(&args.out, &out_dir, item)?;
+        check_no_link_out(out, &out_dir, item)?;
         let normalised = Item {
             out_dir,
             ..item.clone()
         };
         let here = Path::new("");
         for &beta in betas {
-            let paths = std::iter::once(normalised.foggy_output(here, beta)).chain(
-                args.transmittance
-                    .then(|| normalised.transmittance_output(here, beta)),
-            );
+            let paths = std::iter::once(normalised.foggy_output(here, beta))
+                .chain(transmittance.then(|| normalised.transmittance_output(here, beta)));
             for path in paths {
                 let Some(other) = owners.insert(path.clone(), &item.image) else {
                     continue;
@@ -84,7 +85,7 @@ pub fn check_destinations(args: &BatchArgs, items: &[Item], betas: &[f64]) -> Re
                     format!(
                         "frames with outputs of their own: {} also writes {}",
                         other.display(),
-                        args.out.join(&path).display()
+                        out.join(&path).display()
                     )
                 };
                 return Err(Error::invalid("inputs", item.image.display(), expected));
@@ -115,7 +116,7 @@ fn contained_dir(dir: &Path) -> Option<PathBuf> {
 /// outside `out`: the outputs would be written there.
 fn check_no_link_out(out: &Path, out_dir: &Path, item: &Item) -> Result<()> {
     let Ok(root) = out.canonicalize() else {
-        return Ok(()); // --out does not exist yet: neither does anything under it
+        return Ok(()); // the output folder does not exist yet: nor does anything under it
     };
     let mut dir = out.to_path_buf();
     for part in out_dir.components() {
@@ -123,7 +124,7 @@ fn check_no_link_out(out: &Path, out_dir: &Path, item: &Item) -> Result<()> {
         match dir.canonicalize() {
             Ok(real) if !real.starts_with(&root) => {
                 return Err(Error::invalid(
-                    "--out",
+                    "out",
                     out.display(),
                     format!(
                         "a folder whose sub-folders stay inside it: {} (the outputs of {}) \
@@ -135,7 +136,7 @@ fn check_no_link_out(out: &Path, out_dir: &Path, item: &Item) -> Result<()> {
                 ))
             }
             Ok(_) => {}
-            Err(_) => break, // made by the run, inside --out
+            Err(_) => break, // made by the run, inside the output folder
         }
     }
     Ok(())

@@ -1,6 +1,13 @@
 //! Datasets of RGBD frames to fog in bulk (`brume batch`): Cityscapes triplets found under
 //! folders, or the rows of a CSV manifest; deterministic shards for array jobs; Foggy
-//! Cityscapes' output names.
+//! Cityscapes' output names; and the whole run ([`Batch`]).
+
+mod batch;
+mod destinations;
+
+pub use batch::{
+    check_beta, Batch, BatchEvent, BatchOptions, BatchReport, Betas, MAX_BETA, MIN_BETA,
+};
 
 use crate::error::{Error, Result};
 use crate::photo::BetaDistribution;

@@ -1,0 +1,765 @@
+//! A dataset fogged in bulk, as `brume batch` does it, for any host. Each frame is loaded
+//! and pre-processed once, then rendered for every β on one GL context; loading the next
+//! frame and writing the last outputs run on their own threads while the GPU works.
+//! Outputs are written atomically and logged (JSON lines) as soon as each is in place, so
+//! a run that stops leaves only complete files, and the next run skips them. A [`Shard`]
+//! takes a deterministic share of the frames, for array jobs.
+//!
+//! ```no_run
+//! use brume::dataset::{Batch, BatchEvent, BatchOptions};
+//! # fn main() -> brume::Result<()> {
+//! let opts = BatchOptions::new("foggy".into());
+//! let batch = Batch::plan(&["cityscapes/leftImg8bit/val".into()], None, opts)?;
+//! let mut headless = brume::Headless::new(None)?;
+//! let report = batch.run(headless.renderer()?, &|event: BatchEvent| {
+//!     if let BatchEvent::Written { output } = event {
+//!         println!("{}", output.display());
+//!     }
+//! })?;
+//! report.check()?; // an error if a frame or an output failed
+//! # Ok(()) }
+//! ```
+
+use super::destinations::{check_destinations, check_sky_mask_size};
+use super::{find_cityscapes, read_manifest, Item, Shard};
+use crate::blur::Blur;
+use crate::error::{Error, Result};
+use crate::io::output::{self, Outputs};
+use crate::medium::Medium;
+use crate::photo::{
+    capture, transmittance_rgb8, BetaDistribution, CaptureOptions, Frame, FrameFog, FrameOptions,
+};
+use crate::raster::RgbaImage;
+use crate::renderer::Renderer;
+use serde_json::json;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::time::Instant;
+
+/// The thinnest fog a batch renders, m⁻¹: visibility 3,000 km, no fog a camera can see
+/// (and β names the output files: 1e-300 would be a 300-digit name).
+pub const MIN_BETA: f64 = 1e-6;
+/// The densest, m⁻¹: visibility 0.3 m.
+pub const MAX_BETA: f64 = 10.0;
+
+/// The extinctions a batch fogs its frames at.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Betas {
+    /// Every frame at each of these β (m⁻¹), each in [`MIN_BETA`, `MAX_BETA`] and given
+    /// once.
+    Each(Vec<f64>),
+    /// One β per frame, drawn from the distribution under the capture's seed: a function
+    /// of the frame's name alone ([`Item::drawn_beta`]), whatever the order or shard.
+    Drawn(BetaDistribution),
+}
+
+/// What a batch writes and how: the output folder, the extinctions, the share of the
+/// frames, and how each frame is read, prepared, fogged and captured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BatchOptions {
+    /// The output folder (made by [`Batch::run`]); the input tree is mirrored under it,
+    /// and the log is `brume-batch-{K}-of-{N}.jsonl` in it.
+    pub out: PathBuf,
+    /// The extinctions of each frame's outputs.
+    pub betas: Betas,
+    /// The share of the frames this run takes.
+    pub shard: Shard,
+    /// Also write each output's transmittance τ as an 8-bit grey PNG.
+    pub transmittance: bool,
+    /// How every frame is read, prepared and fogged.
+    pub frame: FrameOptions,
+    /// The camera after the fog; each output's noise is seeded by the seed, the frame's
+    /// name and its β.
+    pub capture: CaptureOptions,
+}
+
+impl BatchOptions {
+    /// Foggy Cityscapes' three extinctions (0.005, 0.01, 0.02 m⁻¹) of every frame, written
+    /// under `out`, with brume's default frame options and no capture.
+    pub fn new(out: PathBuf) -> BatchOptions {
+        BatchOptions {
+            out,
+            betas: Betas::Each(vec![0.005, 0.01, 0.02]),
+            shard: Shard::ALL,
+            transmittance: false,
+            frame: FrameOptions::default(),
+            capture: CaptureOptions::default(),
+        }
+    }
+}
+
+/// Refuses a β outside [`MIN_BETA`, `MAX_BETA`], named `beta`.
+pub fn check_beta(beta: f64) -> Result<()> {
+    if (MIN_BETA..=MAX_BETA).contains(&beta) {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "beta",
+        beta,
+        format!(
+            "an extinction coefficient from {MIN_BETA} to {MAX_BETA} per metre (visibility \
+             from 3,000 km to 0.3 m)"
+        ),
+    ))
+}
+
+/// A frame that could not be loaded or rendered.
+struct Failed {
+    item: Item,
+    error: Error,
+}
+
+/// A batch checked and ready to run: its options, the frames of its shard with the β
+/// values still to write, and the outputs proven to lie under the output folder, one
+/// file each.
+pub struct Batch {
+    opts: BatchOptions,
+    /// Frames of this shard with the β values whose outputs are missing.
+    pending: Vec<(Item, Vec<f64>)>,
+    /// Frames of this shard that could not be assembled (no disparity, no camera).
+    failures: Vec<Failed>,
+    /// Frames found in all shards.
+    total: usize,
+    /// Outputs of this shard already complete, skipped.
+    skipped: usize,
+}
+
+impl Batch {
+    /// The frames of the Cityscapes trees under `inputs` ([`find_cityscapes`]) and of
+    /// `manifest` ([`read_manifest`]), checked before any file or folder is made: the
+    /// options (each β, the masks exist, the blur's schedule at each β), a shared sky mask
+    /// of every frame's size, every frame's outputs under [`BatchOptions::out`] and its
+    /// own. Outputs already complete are skipped. Frames that cannot be assembled
+    /// (missing disparity or camera) are not an error here: the run logs them as failed.
+    pub fn plan(inputs: &[PathBuf], manifest: Option<&Path>, opts: BatchOptions) -> Result<Batch> {
+        let bounds = checked_betas(&opts.betas)?;
+        check_frame_options(&opts.frame, &bounds)?;
+        if opts.out.exists() && !opts.out.is_dir() {
+            return Err(Error::invalid(
+                "out",
+                opts.out.display(),
+                "a folder for the outputs (this is a file)",
+            ));
+        }
+        let (items, mut failures) = collect_items(inputs, manifest)?;
+        if let Some(mask) = &opts.frame.sky_mask {
+            check_sky_mask_size(mask, &items)?;
+        }
+        // A drawn β only changes the number in an output's name: its median stands for
+        // all of them.
+        let named = match &opts.betas {
+            Betas::Drawn(dist) => vec![dist.quantile(0.5)],
+            Betas::Each(betas) => betas.clone(),
+        };
+        check_destinations(&opts.out, opts.transmittance, &items, &named)?;
+        let total = items.len() + failures.len();
+        failures.retain(|f| opts.shard.contains(&f.item));
+        let mut skipped = 0;
+        let pending = items
+            .into_iter()
+            .filter(|item| opts.shard.contains(item))
+            .filter_map(|item| {
+                let wanted = match &opts.betas {
+                    Betas::Drawn(dist) => vec![item.drawn_beta(dist, opts.capture.seed)],
+                    Betas::Each(betas) => betas.clone(),
+                };
+                let todo: Vec<f64> = wanted
+                    .iter()
+                    .copied()
+                    .filter(|&b| !outputs_complete(&opts, &item, b))
+                    .collect();
+                skipped += wanted.len() - todo.len();
+                (!todo.is_empty()).then_some((item, todo))
+            })
+            .collect();
+        Ok(Batch {
+            opts,
+            pending,
+            failures,
+            total,
+            skipped,
+        })
+    }
+
+    /// Frames found, in all shards.
+    pub fn frames_found(&self) -> usize {
+        self.total
+    }
+
+    /// Outputs this run will write (or fail).
+    pub fn outputs(&self) -> usize {
+        self.pending.iter().map(|(_, b)| b.len()).sum()
+    }
+
+    /// Outputs of this shard already complete, which the run skips.
+    pub fn skipped(&self) -> usize {
+        self.skipped
+    }
+
+    /// The run's log: one JSON object per output or failed frame, appended.
+    pub fn log_path(&self) -> PathBuf {
+        let Shard { index, count } = self.opts.shard;
+        self.opts
+            .out
+            .join(format!("brume-batch-{index}-of-{count}.jsonl"))
+    }
+
+    /// Makes the output folder, removes the temporaries an interrupted run left in it,
+    /// and writes every pending output, each atomically and logged as soon as it is in
+    /// place. `observe` hears of each output and failure as it happens (on the writer
+    /// thread, hence `Sync`). A frame or an output that fails is logged and skipped: the
+    /// report counts them ([`BatchReport::check`]). Errors: the output folder or the log
+    /// cannot be made or written.
+    pub fn run(
+        self,
+        renderer: &mut Renderer,
+        observe: &(dyn Fn(BatchEvent) + Sync),
+    ) -> Result<BatchReport> {
+        let outputs = self.outputs();
+        let log_path = self.log_path();
+        let Batch {
+            opts,
+            pending,
+            failures,
+            total,
+            skipped,
+        } = self;
+        log::info!(
+            "{total} frames found, {} in shard {}/{}; {outputs} outputs to write, {skipped} \
+             already written",
+            pending.len() + failures.len(),
+            opts.shard.index,
+            opts.shard.count
+        );
+        std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
+        let stale = output::remove_stale_temporaries(&opts.out)?;
+        if stale > 0 {
+            observe(BatchEvent::RemovedTemporaries {
+                count: stale,
+                folder: &opts.out,
+            });
+        }
+        let file = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&log_path)
+            .map_err(|e| Error::io(&log_path, e))?;
+        let mut log = Log {
+            file,
+            path: log_path,
+            observe,
+            report: BatchReport {
+                skipped,
+                ..BatchReport::default()
+            },
+        };
+        for f in &failures {
+            log.frame_failed(f, 0)?;
+        }
+        let started = Instant::now();
+        let (load_tx, load_rx) = sync_channel::<std::result::Result<Frame, Failed>>(1);
+        let (event_tx, event_rx) = sync_channel::<Event>(2);
+        let frames: Vec<Item> = pending.iter().map(|(i, _)| i.clone()).collect();
+        let mut gpu = Gpu {
+            opts: &opts,
+            events: event_tx,
+            times: BatchReport::default(),
+        };
+        let (log, t) = std::thread::scope(|s| -> Result<(Log, BatchReport)> {
+            s.spawn(|| load_frames(&opts.frame, frames, load_tx));
+            let writer = s.spawn(move || write_outputs(event_rx, log));
+            gpu.render_frames(renderer, &pending, load_rx);
+            let Gpu { times, events, .. } = gpu;
+            drop(events); // ends the writer's loop
+            let log = writer.join().expect("the writer thread does not panic")?;
+            Ok((log, times))
+        })?;
+        Ok(BatchReport {
+            frames: t.frames,
+            decode_ms: t.decode_ms,
+            prep_ms: t.prep_ms,
+            refine_ms: t.refine_ms,
+            gpu_ms: t.gpu_ms,
+            render_ms: t.render_ms,
+            wall_s: started.elapsed().as_secs_f64(),
+            log: log.path,
+            ..log.report
+        })
+    }
+}
+
+/// What happens in a run, as it happens.
+#[derive(Debug)]
+pub enum BatchEvent<'a> {
+    /// Temporaries an interrupted run left under the output folder were removed.
+    RemovedTemporaries {
+        /// How many files.
+        count: usize,
+        /// The output folder.
+        folder: &'a Path,
+    },
+    /// An output's files are written under temporary names and are about to be renamed
+    /// into place.
+    Staged {
+        /// The staged files.
+        outputs: &'a Outputs,
+    },
+    /// An output is in place and logged.
+    Written {
+        /// The fogged image's path.
+        output: &'a Path,
+    },
+    /// An output could not be made or written; it is logged as failed.
+    OutputFailed {
+        /// The fogged image's path.
+        output: &'a Path,
+        /// Why.
+        error: &'a Error,
+    },
+    /// A frame could not be loaded or rendered, and is logged as failed.
+    FrameFailed {
+        /// The frame's colour image.
+        image: &'a Path,
+        /// Why.
+        error: &'a Error,
+        /// How many of its outputs will not be written.
+        outputs: usize,
+    },
+}
+
+/// What a run did and what it cost, totals over its outputs.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BatchReport {
+    /// Outputs written.
+    pub written: usize,
+    /// Outputs already complete, skipped.
+    pub skipped: usize,
+    /// Outputs that failed.
+    pub failed_outputs: usize,
+    /// Frames that could not be loaded or rendered.
+    pub failed_frames: usize,
+    /// Frames rendered.
+    pub frames: usize,
+    /// Decoding the frames' files, ms (wall, on the loader thread).
+    pub decode_ms: f64,
+    /// Pre-processing, ms (wall, on the loader thread).
+    pub prep_ms: f64,
+    /// Refinement and the range in metres, once per frame, ms (wall, on the GPU's thread).
+    pub refine_ms: f64,
+    /// The GPU's time for the passes, ms (outputs whose timer figures were rejected do
+    /// not count).
+    pub gpu_ms: f64,
+    /// Rendering and reading back, ms (wall, on the GPU's thread).
+    pub render_ms: f64,
+    /// The capture, encoding and writing, ms (wall, on the writer thread).
+    pub encode_ms: f64,
+    /// The whole run, s.
+    pub wall_s: f64,
+    /// The run's log.
+    pub log: PathBuf,
+}
+
+impl BatchReport {
+    /// [`Error::BatchFailures`] if a frame or an output failed.
+    pub fn check(&self) -> Result<()> {
+        if self.failed_frames == 0 && self.failed_outputs == 0 {
+            return Ok(());
+        }
+        Err(Error::BatchFailures {
+            frames: self.failed_frames,
+            outputs: self.failed_outputs,
+            log: self.log.clone(),
+        })
+    }
+}
+
+/// The β values the options are checked at: each of a list (in range, no repeats), or
+/// the least and largest a distribution draws (its 1e-6 and 1 − 1e-6 quantiles).
+fn checked_betas(betas: &Betas) -> Result<Vec<f64>> {
+    match betas {
+        Betas::Each(list) => {
+            if list.is_empty() {
+                return Err(Error::invalid("beta", "(none)", "at least one β"));
+            }
+            for (i, &beta) in list.iter().enumerate() {
+                check_beta(beta)?;
+                if list[..i].contains(&beta) {
+                    return Err(Error::invalid("beta", beta, "each β once"));
+                }
+            }
+            Ok(list.clone())
+        }
+        Betas::Drawn(dist) => {
+            let bounds = vec![dist.quantile(1e-6), dist.quantile(1.0 - 1e-6)];
+            if bounds.iter().any(|&b| check_beta(b).is_err()) {
+                return Err(Error::invalid(
+                    "beta_dist",
+                    dist,
+                    format!(
+                        "a distribution whose draws stay from {MIN_BETA} to {MAX_BETA} per \
+                         metre (its 1e-6 and 1 − 1e-6 quantiles are {:.3e} and {:.3e})",
+                        bounds[0], bounds[1]
+                    ),
+                ));
+            }
+            Ok(bounds)
+        }
+    }
+}
+
+/// The frame options hold at every β of `betas`: the shared masks exist, and the blur's
+/// schedule can be made (a λ too large for the pass limit is named `lambda`).
+fn check_frame_options(opts: &FrameOptions, betas: &[f64]) -> Result<()> {
+    for (name, mask) in [("sky_mask", &opts.sky_mask), ("ego_mask", &opts.ego_mask)] {
+        if let Some(mask) = mask.as_ref().filter(|m| !m.is_file()) {
+            return Err(Error::invalid(name, mask.display(), "an existing PNG mask"));
+        }
+    }
+    for &beta in betas {
+        let haze = opts.fog_at(beta)?.haze([1.0; 3])?;
+        check_schedule(&haze, &opts.fog.blur, opts.fog.lambda)?;
+    }
+    Ok(())
+}
+
+fn check_schedule(medium: &dyn Medium, blur: &Blur, lambda: f64) -> Result<()> {
+    blur.schedule_for(medium).map(|_| ()).map_err(|e| match e {
+        Error::InvalidParameter { name, expected, .. } if name != "rho_max" => {
+            Error::invalid("lambda", lambda, expected)
+        }
+        e => e,
+    })
+}
+
+/// The frames of the roots and the manifest, sorted by key; frames that cannot be
+/// assembled (missing disparity or camera) as failures.
+fn collect_items(inputs: &[PathBuf], manifest: Option<&Path>) -> Result<(Vec<Item>, Vec<Failed>)> {
+    let mut items = Vec::new();
+    let mut failures = Vec::new();
+    for root in inputs {
+        if !root.is_dir() {
+            return Err(Error::invalid(
+                "input folder",
+                root.display(),
+                "a folder to search for Cityscapes frames ({name}_leftImg8bit.png)",
+            ));
+        }
+        for found in find_cityscapes(root)? {
+            match found {
+                Ok(item) => items.push(item),
+                Err(error) => failures.push(Failed {
+                    item: unassembled(&error),
+                    error,
+                }),
+            }
+        }
+    }
+    if let Some(m) = manifest {
+        items.extend(read_manifest(m)?);
+    }
+    if items.is_empty() && failures.is_empty() {
+        return Err(Error::invalid(
+            "inputs",
+            "(no frames)",
+            "folders with Cityscapes frames or a manifest (CSV) with at least one row",
+        ));
+    }
+    items.sort_by_key(Item::key);
+    Ok((items, failures))
+}
+
+/// A stand-in item for a frame that could not be assembled, so that its failure can be
+/// logged and sharded like the others.
+fn unassembled(error: &Error) -> Item {
+    let image = match error {
+        Error::Format { path, .. } => path.clone(),
+        _ => PathBuf::new(),
+    };
+    Item {
+        stem: image
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        depth: PathBuf::new(),
+        camera: None,
+        calib: None,
+        sky_mask: None,
+        out_dir: image.parent().map(Path::to_path_buf).unwrap_or_default(),
+        image,
+    }
+}
+
+fn outputs_complete(opts: &BatchOptions, item: &Item, beta: f64) -> bool {
+    item.foggy_output(&opts.out, beta).is_file()
+        && (!opts.transmittance || item.transmittance_output(&opts.out, beta).is_file())
+}
+
+/// The loader thread: decodes and pre-processes each frame in turn, one ahead of the GPU.
+fn load_frames(
+    options: &FrameOptions,
+    frames: Vec<Item>,
+    tx: SyncSender<std::result::Result<Frame, Failed>>,
+) {
+    for item in frames {
+        let loaded = Frame::load(&item, options).map_err(|error| Failed {
+            item: item.clone(),
+            error,
+        });
+        if tx.send(loaded).is_err() {
+            return;
+        }
+    }
+}
+
+/// One output for the writer thread.
+struct Encode {
+    path: PathBuf,
+    image: RgbaImage,
+    transmittance: Option<(PathBuf, Vec<[u8; 3]>, usize, usize)>,
+    record: serde_json::Value,
+    /// The capture after the fog, seeded for this output (applied on the writer thread).
+    capture: CaptureOptions,
+}
+
+/// What the GPU loop hands the writer thread.
+enum Event {
+    /// An output to encode and write.
+    Output(Encode),
+    /// A frame that failed, with the number of its outputs that will not be written.
+    FrameFailed { failed: Failed, outputs: usize },
+}
+
+/// The GPU's side of a run: the options, the channel to the writer thread, and the
+/// times it adds up (the loader's and its own).
+struct Gpu<'a> {
+    opts: &'a BatchOptions,
+    events: SyncSender<Event>,
+    times: BatchReport,
+}
+
+impl Gpu<'_> {
+    /// The GPU loop: every β of every frame, in the order the loader delivers them;
+    /// outputs and failures go to the writer thread as they come.
+    fn render_frames(
+        &mut self,
+        renderer: &mut Renderer,
+        pending: &[(Item, Vec<f64>)],
+        rx: Receiver<std::result::Result<Frame, Failed>>,
+    ) {
+        for ((_, betas), loaded) in pending.iter().zip(rx) {
+            let writer_alive = match loaded {
+                Ok(frame) => {
+                    self.times.frames += 1;
+                    self.times.decode_ms += frame.decode_ms;
+                    self.times.prep_ms += frame.prep_ms;
+                    self.render_frame(renderer, frame, betas)
+                }
+                Err(failed) => self.frame_failed(failed, betas.len()),
+            };
+            if !writer_alive {
+                return;
+            }
+        }
+    }
+
+    /// Hands a frame's failure (`outputs` of it not written) to the writer; false when the
+    /// writer is gone.
+    fn frame_failed(&self, failed: Failed, outputs: usize) -> bool {
+        let event = Event::FrameFailed { failed, outputs };
+        self.events.send(event).is_ok()
+    }
+
+    /// Refines a frame once on the GPU, then renders its β values from one upload, each
+    /// output handed to the writer thread as soon as it is read back. A failure after some
+    /// outputs counts only those not sent. False when the writer is gone.
+    fn render_frame(&mut self, renderer: &mut Renderer, mut frame: Frame, betas: &[f64]) -> bool {
+        let fail = |item: &Item, error| Failed {
+            item: item.clone(),
+            error,
+        };
+        if let Err(e) = frame.refine(&self.opts.frame, renderer) {
+            return self.frame_failed(fail(&frame.item, e), betas.len());
+        }
+        self.times.refine_ms += frame.refine_ms;
+        let (mut sent, mut writer_gone) = (0, false);
+        let mut started = Instant::now();
+        let (opts, events) = (self.opts, &self.events);
+        let times = &mut self.times;
+        let result = frame.fog_each(renderer, &opts.frame, betas, |beta, fogged| {
+            let render_ms = started.elapsed().as_secs_f64() * 1e3;
+            // NaN (JSON null) where the GPU timer's figures were rejected.
+            if fogged.gpu_ms.is_finite() {
+                times.gpu_ms += fogged.gpu_ms;
+            }
+            times.render_ms += render_ms;
+            let job = encode(opts, &frame, beta, fogged, render_ms);
+            if events.send(Event::Output(job)).is_err() {
+                writer_gone = true;
+                return Err(Error::invalid(
+                    "writer",
+                    "stopped",
+                    "a running writer thread",
+                ));
+            }
+            sent += 1;
+            started = Instant::now();
+            Ok(())
+        });
+        match result {
+            Ok(()) => true,
+            // The writer is gone: the run is ending, nothing more to report.
+            Err(_) if writer_gone => false,
+            Err(error) => self.frame_failed(fail(&frame.item, error), betas.len() - sent),
+        }
+    }
+}
+
+/// One output of a frame: the image, its transmittance map if asked for, and its log
+/// record.
+fn encode(
+    opts: &BatchOptions,
+    frame: &Frame,
+    beta: f64,
+    fogged: FrameFog,
+    render_ms: f64,
+) -> Encode {
+    let item = &frame.item;
+    let path = item.foggy_output(&opts.out, beta);
+    let metres = frame.metres().expect("refined before fog");
+    let transmittance = opts.transmittance.then(|| {
+        (
+            item.transmittance_output(&opts.out, beta),
+            transmittance_rgb8(&fogged.haze, metres),
+            metres.width(),
+            metres.height(),
+        )
+    });
+    let beta_dist = match &opts.betas {
+        Betas::Drawn(dist) => Some(dist.to_string()),
+        Betas::Each(_) => None,
+    };
+    let record = json!({
+        "status": "ok",
+        "image": item.image.display().to_string(),
+        "depth": item.depth.display().to_string(),
+        "camera": item.camera.as_ref().map(|p| p.display().to_string()),
+        "sky_mask": item.sky_mask.as_ref().map(|p| p.display().to_string()),
+        "output": path.display().to_string(),
+        "beta": beta,
+        "beta_dist": beta_dist,
+        "visibility_m": -(0.05f64.ln()) / beta,
+        "width": fogged.image.width(),
+        "height": fogged.image.height(),
+        "sigma_max": fogged.sigma_max,
+        "diffusion_passes": fogged.passes,
+        "airlight": fogged.airlight,
+        "airlight_source": fogged.airlight_source,
+        "decode_ms": frame.decode_ms,
+        "prep_ms": frame.prep_ms,
+        "gpu_ms": fogged.gpu_ms,
+        "render_ms": render_ms,
+        "capture": opts.capture.to_json(),
+    });
+    let capture = CaptureOptions {
+        seed: opts.capture.seed ^ item.name_hash() ^ beta.to_bits(),
+        ..opts.capture
+    };
+    Encode {
+        path,
+        image: fogged.image,
+        transmittance,
+        record,
+        capture,
+    }
+}
+
+/// The writer thread: captures, encodes and writes each output atomically, and logs it
+/// as soon as it is in place.
+fn write_outputs(rx: Receiver<Event>, mut log: Log) -> Result<Log> {
+    for event in rx {
+        match event {
+            Event::Output(mut job) => {
+                let t = Instant::now();
+                let result = capture(&mut job.image, &job.capture)
+                    .and_then(|_| write_one(&job, log.observe));
+                log.report.encode_ms += t.elapsed().as_secs_f64() * 1e3;
+                log.output(&job.path, job.record, result)?;
+            }
+            Event::FrameFailed { failed, outputs } => log.frame_failed(&failed, outputs)?,
+        }
+    }
+    Ok(log)
+}
+
+fn write_one(job: &Encode, observe: &(dyn Fn(BatchEvent) + Sync)) -> Result<()> {
+    if let Some(dir) = job.path.parent() {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    let mut outputs = Outputs::new();
+    outputs.stage_rgba(&job.path, &job.image)?;
+    if let Some((path, rgb, w, h)) = &job.transmittance {
+        outputs.stage_png_rgb8(path, *w, *h, rgb)?;
+    }
+    observe(BatchEvent::Staged { outputs: &outputs });
+    outputs.commit()
+}
+
+/// The run's JSON-lines log and its counts: one line per output, written (in one
+/// `write`, on a file opened for appending, so that shards sharing nothing but the folder
+/// never interleave) as soon as the output is in place or has failed.
+struct Log<'a> {
+    file: std::fs::File,
+    path: PathBuf,
+    observe: &'a (dyn Fn(BatchEvent) + Sync),
+    report: BatchReport,
+}
+
+impl Log<'_> {
+    fn output(
+        &mut self,
+        output: &Path,
+        mut record: serde_json::Value,
+        result: Result<()>,
+    ) -> Result<()> {
+        if let Err(error) = &result {
+            record["status"] = json!("failed");
+            record["error"] = json!(error.to_string());
+        }
+        self.append(&record)?;
+        match &result {
+            Ok(()) => self.report.written += 1,
+            Err(_) => self.report.failed_outputs += 1,
+        }
+        (self.observe)(match &result {
+            Ok(()) => BatchEvent::Written { output },
+            Err(error) => BatchEvent::OutputFailed { output, error },
+        });
+        Ok(())
+    }
+
+    /// A frame that could not be loaded or rendered; `outputs` of it are not written.
+    fn frame_failed(&mut self, failed: &Failed, outputs: usize) -> Result<()> {
+        let (item, error) = (&failed.item, &failed.error);
+        self.append(&json!({
+            "status": "failed",
+            "image": item.image.display().to_string(),
+            "error": error.to_string(),
+        }))?;
+        self.report.failed_frames += 1;
+        (self.observe)(BatchEvent::FrameFailed {
+            image: &item.image,
+            error,
+            outputs,
+        });
+        Ok(())
+    }
+
+    fn append(&mut self, record: &serde_json::Value) -> Result<()> {
+        let line = format!("{record}\n");
+        self.file
+            .write_all(line.as_bytes())
+            .and_then(|()| self.file.flush())
+            .map_err(|e| Error::io(&self.path, e))
+    }
+}
