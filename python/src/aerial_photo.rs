@@ -8,8 +8,8 @@ use brume::atmosphere::Sensitivity;
 use brume::camera::Camera;
 use brume::medium::{Medium, Pixel};
 use brume::photo::{
-    self, pitch_for_horizon_row, AerialOptions, AerialPhoto, CaptureOptions, Photo, PrepareOptions,
-    Retarget, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+    self, AerialOptions, AerialPhoto, CaptureOptions, Photo, PhotoView, PrepareOptions, Retarget,
+    DEFAULT_HORIZON_ZENITH_DEG,
 };
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::sky::horizon_sectors::MAX_SECTORS;
@@ -19,11 +19,6 @@ use numpy::IntoPyArray;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
-
-/// The turbidities the model is fitted for (Preetham et al.'s), as `brume render` checks.
-const TURBIDITY_RANGE: (f64, f64) = (1.0, 20.0);
-/// The altitudes `brume render --altitude` takes, metres.
-const ALTITUDE_RANGE_M: (f64, f64) = (-500.0, 20_000.0);
 
 /// `Renderer.aerial`'s keywords.
 pub(crate) struct AerialArgs {
@@ -52,55 +47,15 @@ fn out_of_range(name: &str, value: f64, expected: impl std::fmt::Display) -> PyE
 }
 
 impl AerialArgs {
-    /// Checks the values as `brume render` checks its flags, naming the keywords.
+    /// Checks what the library's [`AerialOptions::validate`] cannot see: the keywords'
+    /// own forms (an integer count, a retarget name, the sun in degrees) and the inner
+    /// scale.
     fn check(&self) -> PyResult<()> {
-        let (t_lo, t_hi) = TURBIDITY_RANGE;
-        for (name, t) in [
-            ("turbidity", Some(self.turbidity)),
-            ("from_turbidity", self.from_turbidity),
-        ] {
-            if let Some(t) = t.filter(|t| !(t_lo..=t_hi).contains(t)) {
-                return Err(out_of_range(
-                    name,
-                    t,
-                    format!("a turbidity in [{t_lo}, {t_hi}]"),
-                ));
-            }
-        }
-        if !(1..=MAX_SECTORS as i64).contains(&self.horizon_sectors) {
+        if self.horizon_sectors < 1 {
             return Err(out_of_range(
                 "horizon_sectors",
                 self.horizon_sectors as f64,
                 format!("a number of azimuth sectors in [1, {MAX_SECTORS}]"),
-            ));
-        }
-        if !(0.0..=90.0).contains(&self.horizon_zenith_deg) {
-            return Err(out_of_range(
-                "horizon_zenith_deg",
-                self.horizon_zenith_deg,
-                "a zenith angle in [0, 90] degrees (90 is the horizon)",
-            ));
-        }
-        let (a_lo, a_hi) = ALTITUDE_RANGE_M;
-        if !(a_lo..=a_hi).contains(&self.altitude_m) {
-            return Err(out_of_range(
-                "altitude_m",
-                self.altitude_m,
-                format!("an altitude above sea level in [{a_lo}, {a_hi}] m"),
-            ));
-        }
-        if !(self.metres_per_unit.is_finite() && self.metres_per_unit > 0.0) {
-            return Err(out_of_range(
-                "metres_per_unit",
-                self.metres_per_unit,
-                "metres per unit of range_m, > 0 (1 for metres)",
-            ));
-        }
-        if !(self.lambda_px.is_finite() && self.lambda_px >= 0.0) {
-            return Err(out_of_range(
-                "lambda_px",
-                self.lambda_px,
-                "a blur factor >= 0 px",
             ));
         }
         if !(self.sigma0.is_finite() && self.sigma0 > 0.0) {
@@ -135,66 +90,21 @@ impl AerialArgs {
     }
 
     /// The camera whose rays give each pixel's zenith angle, for an image `height` rows
-    /// tall, as `brume render`'s `aerial_camera` builds it.
+    /// tall ([`PhotoView::camera`], whose fields are these keywords); one of fov_y_deg
+    /// and focal_px.
     fn camera(&self, height: usize) -> PyResult<Camera> {
-        let fov_y_deg =
-            match (self.fov_y_deg, self.focal_px) {
-                (Some(fov), None) => fov,
-                (None, Some(f)) if f.is_finite() && f > 0.0 => {
-                    (2.0 * (height as f64 / (2.0 * f)).atan()).to_degrees()
-                }
-                (None, Some(f)) => {
-                    return Err(out_of_range("focal_px", f, "a focal length in px, > 0"));
-                }
-                (Some(fov), Some(f)) => {
-                    return Err(value_error(format!(
-                        "fov_y_deg = {fov} and focal_px = {f} both given: expected one of them"
-                    )))
-                }
-                (None, None) => return Err(value_error(
-                    "neither fov_y_deg nor focal_px given: expected the camera's vertical field \
-                     of view in degrees or its focal length in px (each pixel's zenith angle \
-                     depends on it)",
-                )),
-            };
-        let pitch_deg = match (self.pitch_deg, self.horizon_row) {
-            (Some(_), Some(_)) => {
-                return Err(value_error(
-                    "pitch_deg and horizon_row both given: expected one of them",
-                ))
-            }
-            (None, Some(row)) => {
-                let pitch = pitch_for_horizon_row(row, height, fov_y_deg);
-                if !row.is_finite() || pitch.is_nan() || pitch.abs() > MAX_PITCH_DEG {
-                    return Err(out_of_range(
-                        "horizon_row",
-                        row,
-                        format!(
-                            "a row (0 at the top) that puts the camera's pitch within \
-                             ±{MAX_PITCH_DEG}° with this {height}-row image"
-                        ),
-                    ));
-                }
-                pitch
-            }
-            (pitch, None) => pitch.unwrap_or(0.0),
-        };
-        if pitch_deg.is_nan() || pitch_deg.abs() > MAX_PITCH_DEG {
-            return Err(out_of_range(
-                "pitch_deg",
-                pitch_deg,
-                format!("a pitch in [-{MAX_PITCH_DEG}, {MAX_PITCH_DEG}] degrees"),
-            ));
+        if let (Some(fov), Some(f)) = (self.fov_y_deg, self.focal_px) {
+            return Err(value_error(format!(
+                "fov_y_deg = {fov} and focal_px = {f} both given: expected one of them"
+            )));
         }
-        let camera = Camera {
-            pitch_deg,
-            fov_y_deg,
-            ..Camera::default()
+        let view = PhotoView {
+            fov_y_deg: self.fov_y_deg,
+            focal_px: self.focal_px,
+            pitch_deg: self.pitch_deg,
+            horizon_row: self.horizon_row,
         };
-        camera
-            .validate()
-            .map_err(|e| value_error(format!("fov_y_deg/focal_px give an invalid camera: {e}")))?;
-        Ok(camera)
+        view.camera(height).map_err(py_err)
     }
 
     /// The library's options for an image `height` rows tall.
@@ -203,7 +113,7 @@ impl AerialArgs {
             Some(path) => Sensitivity::from_csv(path).map_err(py_err)?,
             None => Sensitivity::cie_srgb(),
         };
-        Ok(AerialOptions {
+        let opts = AerialOptions {
             from_turbidity: self.from_turbidity,
             altitude_m: self.altitude_m,
             metres_per_unit: self.metres_per_unit,
@@ -220,7 +130,19 @@ impl AerialArgs {
             retarget: self.retarget()?,
             sun: self.sun.map(|(z, a)| [z.to_radians(), a.to_radians()]),
             ..AerialOptions::new(self.turbidity, self.camera(height)?)
-        })
+        };
+        // The library names its fields as the keywords are named, but for λ.
+        opts.validate().map_err(|e| match e {
+            brume::Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            } if name == "lambda" => value_error(format!(
+                "invalid lambda_px = {value}: expected {expected}"
+            )),
+            e => py_err(e),
+        })?;
+        Ok(opts)
     }
 }
 

@@ -467,7 +467,7 @@ def test_aerial_errors(photo):
     image, range_m = photo
     ok = dict(turbidity=4.0, fov_y_deg=50.0)
     cases = [
-        (dict(turbidity=4.0), "neither fov_y_deg nor focal_px"),
+        (dict(turbidity=4.0), "invalid fov_y_deg = \\(missing\\)"),
         (dict(ok, focal_px=60.0), "both given"),
         (dict(ok, turbidity=30.0), "invalid turbidity = 30"),
         (dict(ok, from_turbidity=0.5), "invalid from_turbidity"),
@@ -476,7 +476,7 @@ def test_aerial_errors(photo):
         (dict(ok, horizon_sectors=0), "invalid horizon_sectors"),
         (dict(ok, altitude_m=1e6), "invalid altitude_m"),
         (dict(ok, pitch_deg=89.0), "invalid pitch_deg"),
-        (dict(ok, pitch_deg=1.0, horizon_row=3.0), "pitch_deg and horizon_row"),
+        (dict(ok, pitch_deg=1.0, horizon_row=3.0), "horizon_row = 3: expected no pitch_deg"),
         (dict(ok, metres_per_unit=0.0), "invalid metres_per_unit"),
         (dict(ok, horizon_zenith_deg=120.0), "invalid horizon_zenith_deg"),
         (dict(ok, airlight=(1.0, 1.0)), "invalid airlight"),

@@ -4,9 +4,9 @@
 
 use super::args::{DepthArgs, PrepOptionArgs};
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
-use brume::io::mask::{self, SkyMaskFormat};
+use brume::io::mask::{self, RangeMasks};
 use brume::prep::PrepOptions;
-use brume::raster::{Grid, RgbImage, ScalarMap};
+use brume::raster::{RgbImage, ScalarMap};
 use brume::{Error, Result};
 use std::path::PathBuf;
 
@@ -99,54 +99,13 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
     Ok(opts)
 }
 
-/// The masks of `--sky-mask` and `--ego-mask`.
-pub struct Masks {
-    /// The sky (true = sky).
-    pub sky: Option<Grid<bool>>,
-    /// How the sky mask was read.
-    pub sky_format: Option<SkyMaskFormat>,
-    /// The ego vehicle (true = the car's hood).
-    pub ego: Option<Grid<bool>>,
-}
-
 /// Loads the `--sky-mask` and `--ego-mask` of `args`, if any, which must have the size of
 /// `range` (named `range_name` in messages) and not be set everywhere.
-pub fn load_masks(args: &PrepOptionArgs, range: &ScalarMap, range_name: &str) -> Result<Masks> {
-    let loaded = match &args.sky_mask {
-        Some(path) => {
-            let (m, format) = mask::load_sky_mask(path, args.sky_mask_format)?;
-            mask::check_mask(
-                ("--sky-mask", path, "sky mask"),
-                &m,
-                range,
-                range_name,
-                &mask::all_sky_hint(format),
-            )?;
-            Some((m, format))
-        }
-        None => None,
-    };
-    let ego = match &args.ego_mask {
-        Some(path) => {
-            let (m, format) = mask::load_ego_mask(path, None)?;
-            mask::check_mask(
-                ("--ego-mask", path, "ego-vehicle mask"),
-                &m,
-                range,
-                range_name,
-                &mask::all_ego_hint(format),
-            )?;
-            Some(m)
-        }
-        None => None,
-    };
-    let (sky, sky_format) = match loaded {
-        Some((m, f)) => (Some(m), Some(f)),
-        None => (None, None),
-    };
-    Ok(Masks {
-        sky,
-        sky_format,
-        ego,
-    })
+pub fn load_masks(
+    args: &PrepOptionArgs,
+    range: &ScalarMap,
+    range_name: &str,
+) -> Result<RangeMasks> {
+    let sky = args.sky_mask.as_deref().map(|p| (p, args.sky_mask_format));
+    mask::load_range_masks(sky, args.ego_mask.as_deref(), range, range_name)
 }

@@ -131,11 +131,16 @@ fn open_renderer(egl: Option<Platform>) -> Result<Headless> {
 }
 
 /// Library fields whose flag is not the field's name with dashes.
-const FLAG_ALIASES: [(&str, &str); 4] = [
+const FLAG_ALIASES: [(&str, &str); 9] = [
     ("local_outlier_factor", "--local-outliers"),
     ("sky_range_factor", "--sky-factor"),
     ("min_area_fraction", "--sky-min-area"),
     ("margin_px", "--margin"),
+    ("fov_y_deg", "--fov"),
+    ("focal_px", "--focal"),
+    ("pitch_deg", "--pitch"),
+    ("altitude_m", "--altitude"),
+    ("horizon_zenith_deg", "--horizon-zenith"),
 ];
 /// Refuses, before any work, an output that is one of the inputs (nothing a user gave us
 /// is overwritten) and two outputs that are one file (neither would survive). `outputs`

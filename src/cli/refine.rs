@@ -5,77 +5,18 @@
 
 use super::args::{RefineArgs, RenderArgs};
 use brume::io::depth::DepthFormat;
-use brume::io::image;
 use brume::photo::{Photo as Scene, PreparedPhoto as PrepReport};
-use brume::raster::Grid;
 use brume::refine::{RangeFilter, RefineMode, RefineOptions, RefinePlan};
 use brume::{Error, Refine, Result};
 use std::time::Instant;
 
-/// With a right image (`--right`), takes the disparities that fail the left-right
-/// photoconsistency check as unknown ([`brume::prep::stereo`]), for pre-processing to fill
-/// from reliable neighbours. Only when asked for: on brume's scene matched by StereoSGBM it
-/// flagged correct pixels too and made τ worse (README, "Real depth").
+/// With a right image (`--right`), takes the disparities that fail the left-right check
+/// as unknown ([`Scene::drop_left_right_mismatches`]).
 pub fn drop_left_right_mismatches(args: &RenderArgs, scene: &mut Scene) -> Result<()> {
-    let Some(right) = args.right.clone() else {
+    let (Some(right), Some(depth)) = (&args.right, &args.depth.depth) else {
         return Ok(());
     };
-    if scene.depth.format != DepthFormat::Cityscapes {
-        return Err(Error::invalid(
-            "--right",
-            right.display(),
-            "a Cityscapes disparity as --depth with it (the left-right check reads the \
-             disparity in pixels)",
-        ));
-    }
-    let depth_path = args.depth.depth.as_ref().expect("a depth was loaded");
-    let raw = ::image::open(depth_path)
-        .map_err(|e| Error::format(depth_path, format!("{e}")))?
-        .to_luma16();
-    let disparity = Grid::from_vec(
-        raw.width() as usize,
-        raw.height() as usize,
-        raw.pixels()
-            .map(|p| brume::io::depth::cityscapes_disparity_px(p[0]).map_or(f32::NAN, |d| d as f32))
-            .collect(),
-    );
-    let right_image = image::load_linear_rgb(&right)?;
-    let bad = brume::prep::stereo::inconsistent_pixels(
-        &scene.image,
-        &right_image,
-        &disparity,
-        brume::prep::stereo::DEFAULT_THRESHOLD,
-    )
-    .map_err(|e| match e {
-        Error::SizeMismatch { .. } => Error::invalid(
-            "--right",
-            right.display(),
-            format!(
-                "a right image of the left image's size, {}x{}",
-                scene.image.width(),
-                scene.image.height()
-            ),
-        ),
-        e => e,
-    })?;
-    let mut dropped = 0;
-    for (v, _) in scene
-        .depth
-        .range
-        .as_mut_slice()
-        .iter_mut()
-        .zip(bad.as_slice())
-        .filter(|(v, &b)| b && v.is_finite())
-    {
-        *v = f32::NAN;
-        dropped += 1;
-    }
-    scene.depth.unknown_pixels += dropped;
-    scene.depth.notes.push(format!(
-        "{dropped} px failed the left-right check against {} (> 12/255) and are unknown",
-        right.display()
-    ));
-    Ok(())
+    scene.drop_left_right_mismatches(depth, right)
 }
 
 impl RefineArgs {

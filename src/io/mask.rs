@@ -161,6 +161,42 @@ pub fn check_mask(
     Ok(())
 }
 
+/// A range's sky and ego-vehicle masks, checked against it ([`load_range_masks`]).
+#[derive(Clone, Debug, Default)]
+pub struct RangeMasks {
+    /// The sky (true = sky).
+    pub sky: Option<Grid<bool>>,
+    /// How the sky mask was read.
+    pub sky_format: Option<SkyMaskFormat>,
+    /// The ego vehicle (true = the car's hood).
+    pub ego: Option<Grid<bool>>,
+}
+
+/// Loads the sky mask `sky` (its path, and its format or `None` for the one its name
+/// announces) and the ego-vehicle mask `ego`, each checked against `range` (named
+/// `range_name` in messages) by [`check_mask`] as `sky_mask` and `ego_mask`.
+pub fn load_range_masks(
+    sky: Option<(&Path, Option<SkyMaskFormat>)>,
+    ego: Option<&Path>,
+    range: &crate::raster::ScalarMap,
+    range_name: &str,
+) -> Result<RangeMasks> {
+    let mut masks = RangeMasks::default();
+    if let Some((path, format)) = sky {
+        let (m, format) = load_sky_mask(path, format)?;
+        let what = ("sky_mask", path, "sky mask");
+        check_mask(what, &m, range, range_name, &all_sky_hint(format))?;
+        (masks.sky, masks.sky_format) = (Some(m), Some(format));
+    }
+    if let Some(path) = ego {
+        let (m, format) = load_ego_mask(path, None)?;
+        let what = ("ego_mask", path, "ego-vehicle mask");
+        check_mask(what, &m, range, range_name, &all_ego_hint(format))?;
+        masks.ego = Some(m);
+    }
+    Ok(masks)
+}
+
 /// What an all-sky mask of `format` probably is, for [`check_mask`].
 pub fn all_sky_hint(format: SkyMaskFormat) -> String {
     format!(

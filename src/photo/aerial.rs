@@ -23,6 +23,7 @@ use crate::sky::horizon_sectors::{
     horizon_light_by_azimuth, sun_gains, SectorGeometry, DEFAULT_SECTORS, MAX_SECTORS,
 };
 use crate::sky::turbidity::{estimate_turbidity, TurbidityEstimate, TurbidityOptions};
+use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -33,6 +34,11 @@ const MIN_SOURCE_GAMMA: f64 = 1e-3;
 pub const DEFAULT_HORIZON_ZENITH_DEG: f64 = 85.0;
 /// Largest camera pitch, degrees: beyond it the image holds no horizon to speak of.
 pub const MAX_PITCH_DEG: f64 = 85.0;
+/// The turbidities the model is fitted for (Preetham et al.'s range).
+pub const TURBIDITY_RANGE: (f64, f64) = (1.0, 20.0);
+/// The camera's altitude, metres above sea level: the Dead Sea's shore to above any
+/// airliner.
+pub const ALTITUDE_RANGE_M: (f64, f64) = (-500.0, 20_000.0);
 
 /// How a photo gets aerial perspective.
 #[derive(Clone, Debug, PartialEq)]
@@ -118,6 +124,164 @@ impl AerialOptions {
             sun: None,
         }
     }
+
+    /// Checks the values, naming the field that is wrong and what it should be: the
+    /// turbidities in [`TURBIDITY_RANGE`], the altitude in [`ALTITUDE_RANGE_M`], metres per
+    /// unit > 0, λ ≥ 0, the horizon's zenith angle in [0, 90]°, the sectors in [1,
+    /// [`MAX_SECTORS`]], the sun's angles, the camera.
+    pub fn validate(&self) -> Result<()> {
+        let (t_lo, t_hi) = TURBIDITY_RANGE;
+        for (name, t) in [
+            ("turbidity", Some(self.turbidity)),
+            ("from_turbidity", self.from_turbidity),
+        ] {
+            if let Some(t) = t.filter(|t| !(t_lo..=t_hi).contains(t)) {
+                let expected = format!("a turbidity in [{t_lo}, {t_hi}]");
+                return Err(Error::invalid(name, t, expected));
+            }
+        }
+        let (a_lo, a_hi) = ALTITUDE_RANGE_M;
+        let checks = [
+            (
+                "altitude_m",
+                self.altitude_m,
+                (a_lo..=a_hi).contains(&self.altitude_m),
+                format!("an altitude above sea level in [{a_lo}, {a_hi}] m"),
+            ),
+            (
+                "metres_per_unit",
+                self.metres_per_unit,
+                self.metres_per_unit.is_finite() && self.metres_per_unit > 0.0,
+                "metres per unit of the photo's range, > 0 (1 for a range in metres)".into(),
+            ),
+            (
+                "lambda",
+                self.lambda,
+                self.lambda.is_finite() && self.lambda >= 0.0,
+                "a blur factor ≥ 0 px".into(),
+            ),
+            (
+                "horizon_zenith_deg",
+                self.horizon_zenith_deg,
+                (0.0..=90.0).contains(&self.horizon_zenith_deg),
+                "a zenith angle in [0, 90] degrees (90 is the horizon)".into(),
+            ),
+        ];
+        if let Some((name, value, _, expected)) = checks.into_iter().find(|c| !c.2) {
+            return Err(Error::invalid(name, value, expected));
+        }
+        if !(1..=MAX_SECTORS).contains(&self.horizon_sectors) {
+            return Err(Error::invalid(
+                "horizon_sectors",
+                self.horizon_sectors,
+                format!("a number of azimuth sectors in [1, {MAX_SECTORS}]"),
+            ));
+        }
+        if let Some([zenith, azimuth]) = self.sun {
+            if !(zenith.is_finite() && (0.0..=PI).contains(&zenith) && azimuth.is_finite()) {
+                return Err(Error::invalid(
+                    "sun",
+                    format!("[{zenith}, {azimuth}]"),
+                    "a zenith angle in [0, π] and a finite azimuth, radians",
+                ));
+            }
+        }
+        self.camera.validate()
+    }
+}
+
+/// What a host knows of a photo's camera: [`PhotoView::camera`] makes of it the camera
+/// whose rays give each pixel's zenith angle ([`AerialOptions::camera`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhotoView {
+    /// The vertical field of view, degrees; with it [`PhotoView::focal_px`] is not used.
+    pub fov_y_deg: Option<f64>,
+    /// The focal length in px (a calibration's f_y), for the field of view.
+    pub focal_px: Option<f64>,
+    /// The pitch, degrees, up positive; 0 (level) when neither it nor the horizon's row is
+    /// given.
+    pub pitch_deg: Option<f64>,
+    /// The image row of the horizon (0 at the top, centres at integers), which gives the
+    /// pitch ([`pitch_for_horizon_row`]); not with [`PhotoView::pitch_deg`].
+    pub horizon_row: Option<f64>,
+}
+
+impl PhotoView {
+    /// The camera of an image `height` rows tall. With no field of view to be had it is
+    /// an error, not a guess: a guess would tilt every pixel's zenith angle. Errors name
+    /// the field (`fov_y_deg`, `focal_px`, `pitch_deg`, `horizon_row`).
+    pub fn camera(&self, height: usize) -> Result<Camera> {
+        let fov_y_deg = match (self.fov_y_deg, self.focal_px) {
+            (Some(fov), _) => fov,
+            (None, Some(f)) if f.is_finite() && f > 0.0 => {
+                (2.0 * (height as f64 / (2.0 * f)).atan()).to_degrees()
+            }
+            (None, Some(f)) => {
+                return Err(Error::invalid("focal_px", f, "a focal length in px, > 0"))
+            }
+            (None, None) => {
+                return Err(Error::invalid(
+                    "fov_y_deg",
+                    "(missing)",
+                    "the camera's vertical field of view in degrees, or its focal length in                      px (or a depth whose calibration gives it): each pixel's zenith angle                      depends on it",
+                ))
+            }
+        };
+        let pitch_deg = match (self.pitch_deg, self.horizon_row) {
+            (Some(_), Some(row)) => {
+                let expected = "no pitch_deg with it: the horizon's row gives the pitch";
+                return Err(Error::invalid("horizon_row", row, expected));
+            }
+            (None, Some(row)) => {
+                let pitch = pitch_for_horizon_row(row, height, fov_y_deg);
+                if !(-MAX_PITCH_DEG..=MAX_PITCH_DEG).contains(&pitch) {
+                    return Err(Error::invalid(
+                        "horizon_row",
+                        row,
+                        format!(
+                            "a row (0 at the top) that puts the camera's pitch within                              ±{MAX_PITCH_DEG}° with this {height}-row image and a                              {fov_y_deg:.1}° field of view (it gives {pitch:.5}°; the horizon                              may lie a little outside the image)"
+                        ),
+                    ));
+                }
+                pitch
+            }
+            (pitch, None) => pitch.unwrap_or(0.0),
+        };
+        if !(-MAX_PITCH_DEG..=MAX_PITCH_DEG).contains(&pitch_deg) {
+            return Err(Error::invalid(
+                "pitch_deg",
+                pitch_deg,
+                format!("a pitch in [-{MAX_PITCH_DEG}, {MAX_PITCH_DEG}] degrees"),
+            ));
+        }
+        let camera = Camera {
+            pitch_deg,
+            fov_y_deg,
+            ..Camera::default()
+        };
+        camera.validate().map_err(|e| match e {
+            Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            } if name == "fov" && self.fov_y_deg.is_none() => Error::invalid(
+                "focal_px",
+                self.focal_px.unwrap_or(f64::NAN),
+                format!("a focal length giving a valid field of view: {value} is not {expected}"),
+            ),
+            Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            } if name == "fov" => Error::InvalidParameter {
+                name: "fov_y_deg".into(),
+                value,
+                expected,
+            },
+            e => e,
+        })?;
+        Ok(camera)
+    }
 }
 
 /// Where an aerial photo's horizon light came from.
@@ -190,13 +354,7 @@ pub fn aerial(
             1.5 * max_range
         }
     });
-    if !(1..=MAX_SECTORS).contains(&opts.horizon_sectors) {
-        return Err(Error::invalid(
-            "horizon_sectors",
-            opts.horizon_sectors,
-            format!("a number of azimuth sectors in [1, {MAX_SECTORS}]"),
-        ));
-    }
+    opts.validate()?;
     // The sky's own turbidity carries a sector's light between zenith angles.
     let sky_turbidity = opts.from_turbidity.unwrap_or(opts.turbidity);
     let found = match (&opts.horizon_light, &prepared.prepared) {
@@ -371,4 +529,27 @@ pub fn pitch_for_horizon_row(row: f64, height: usize, fov_y_deg: f64) -> f64 {
     (-ndc * (fov_y_deg.to_radians() / 2.0).tan())
         .atan()
         .to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_horizon_row_gives_the_pitch_that_levels_its_ray() {
+        let (h, fov) = (480, 50.0);
+        for row in [0.0, 100.0, 239.5, 400.0, 479.0] {
+            let pitch = pitch_for_horizon_row(row, h, fov);
+            let camera = Camera {
+                pitch_deg: pitch,
+                fov_y_deg: fov,
+                ..Camera::default()
+            };
+            // The ray through the row's centre (GL row h − 1 − row) is level.
+            let ndc = 1.0 - 2.0 * (row + 0.5) / h as f64;
+            let ray = camera.ray_at_ndc(0.0, ndc, 1.0);
+            assert!(ray.y.abs() < 1e-12, "row {row}: {ray}");
+        }
+        assert_eq!(pitch_for_horizon_row(239.5, 480, 50.0), 0.0);
+    }
 }

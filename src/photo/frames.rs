@@ -282,38 +282,16 @@ fn frame_masks(opts: &FrameOptions, item: &Item, photo: &Photo) -> Result<Masks>
     let Some(prep) = &opts.prepare.prep else {
         return Ok((None, None));
     };
-    let (range, range_name) = (&photo.depth.range, photo.depth_name.as_str());
     let own = item.sky_mask.as_deref().map(|p| (p, None));
     let shared = opts.sky_mask.as_deref().map(|p| (p, opts.sky_mask_format));
-    let sky = match own.or(shared).filter(|_| prep.detect_sky) {
-        Some((path, format)) => {
-            let (m, format) = mask::load_sky_mask(path, format)?;
-            let hint = mask::all_sky_hint(format);
-            mask::check_mask(("sky_mask", path, "sky mask"), &m, range, range_name, &hint)?;
-            Some(m)
-        }
-        None => None,
-    };
+    let sky = own.or(shared).filter(|_| prep.detect_sky);
     let labels = item
         .sky_mask
         .as_deref()
         .filter(|p| SkyMaskFormat::from_file_name(p) == SkyMaskFormat::CityscapesLabelIds);
-    let ego = match opts.ego_mask.as_deref().or(labels) {
-        Some(path) => {
-            let (m, format) = mask::load_ego_mask(path, None)?;
-            let hint = mask::all_ego_hint(format);
-            mask::check_mask(
-                ("ego_mask", path, "ego-vehicle mask"),
-                &m,
-                range,
-                range_name,
-                &hint,
-            )?;
-            Some(m)
-        }
-        None => None,
-    };
-    Ok((sky, ego))
+    let ego = opts.ego_mask.as_deref().or(labels);
+    let masks = mask::load_range_masks(sky, ego, &photo.depth.range, &photo.depth_name)?;
+    Ok((masks.sky, masks.ego))
 }
 
 /// A frame's sky and ego-vehicle masks.

@@ -31,7 +31,8 @@ mod prepare;
 
 pub use aerial::{
     aerial, dehaze, pitch_for_horizon_row, turbidity_from_sky, AerialOptions, AerialPhoto,
-    HorizonFrom, Retarget, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+    HorizonFrom, PhotoView, Retarget, ALTITUDE_RANGE_M, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+    TURBIDITY_RANGE,
 };
 pub use capture::{capture, CaptureOptions, SensorNoise};
 pub use distribution::BetaDistribution;
@@ -148,6 +149,65 @@ impl Photo {
                 self.depth_name, self.depth.format, self.depth.kind, self.depth.units
             ),
         ))
+    }
+
+    /// Takes the disparities that fail the left-right photoconsistency check against
+    /// `right`, the stereo pair's right image ([`crate::prep::stereo`]), as unknown, for
+    /// pre-processing to fill from reliable neighbours; the depth's notes say how many.
+    /// For a Cityscapes disparity only, read again from `depth_path` in pixels. Errors
+    /// name `right`. Only when asked for: on brume's scene matched by StereoSGBM it flagged
+    /// correct pixels too and made τ worse (README, "Real depth").
+    pub fn drop_left_right_mismatches(&mut self, depth_path: &Path, right: &Path) -> Result<()> {
+        if self.depth.format != DepthFormat::Cityscapes {
+            return Err(Error::invalid(
+                "right",
+                right.display(),
+                "a Cityscapes disparity as the depth with it (the left-right check reads the \
+                 disparity in pixels)",
+            ));
+        }
+        let raw = ::image::open(depth_path)
+            .map_err(|e| Error::format(depth_path, format!("{e}")))?
+            .to_luma16();
+        let disparity = crate::raster::Grid::from_vec(
+            raw.width() as usize,
+            raw.height() as usize,
+            raw.pixels()
+                .map(|p| depth::cityscapes_disparity_px(p[0]).map_or(f32::NAN, |d| d as f32))
+                .collect(),
+        );
+        let right_image = image::load_linear_rgb(right)?;
+        let (w, h) = (self.image.width(), self.image.height());
+        let stereo = crate::prep::stereo::inconsistent_pixels;
+        let bad = stereo(
+            &self.image,
+            &right_image,
+            &disparity,
+            crate::prep::stereo::DEFAULT_THRESHOLD,
+        )
+        .map_err(|e| match e {
+            Error::SizeMismatch { .. } => Error::invalid(
+                "right",
+                right.display(),
+                format!("a right image of the left image's size, {w}x{h}"),
+            ),
+            e => e,
+        })?;
+        let mut dropped = 0;
+        let range = self.depth.range.as_mut_slice().iter_mut();
+        for (v, _) in range
+            .zip(bad.as_slice())
+            .filter(|(v, &b)| b && v.is_finite())
+        {
+            *v = f32::NAN;
+            dropped += 1;
+        }
+        self.depth.unknown_pixels += dropped;
+        self.depth.notes.push(format!(
+            "{dropped} px failed the left-right check against {} (> 12/255) and are unknown",
+            right.display()
+        ));
+        Ok(())
     }
 
     /// The depth map has the image's size, or is smaller by one factor on both sides (it
