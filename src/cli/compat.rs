@@ -2,12 +2,8 @@
 //! `--transmittance-map`); the conventions themselves are `brume::compat`.
 
 use super::args::RenderArgs;
-use super::inputs::check_same_size;
-use brume::io::depth::{DepthFormat, DepthKind, LoadedDepth};
-use brume::io::image;
 use brume::io::output::Outputs;
 use brume::medium::physical::{self, PhysicalFog};
-use brume::photo::check_memory_before_loading;
 use brume::photo::Photo as Scene;
 use brume::raster::ScalarMap;
 use brume::refine::RefineMode;
@@ -15,37 +11,8 @@ use brume::Result;
 use serde_json::json;
 use std::path::Path;
 
-/// The photo and a given transmittance map, read as its optical depth −ln τ: a range in
-/// "metres" for a fog of β = 1 m⁻¹ (see [`transmittance_map_args`]).
-pub fn load_transmittance_scene(image_path: &Path, map: &Path) -> Result<Scene> {
-    check_memory_before_loading(image_path)?;
-    let depth = brume::compat::load_optical_depth(map)?;
-    let image = image::load_linear_rgb(image_path)?;
-    check_same_size(
-        &image,
-        &image_path.display().to_string(),
-        &depth,
-        &map.display().to_string(),
-    )?;
-    Ok(Scene {
-        image,
-        depth: LoadedDepth {
-            range: depth,
-            format: DepthFormat::Float,
-            kind: DepthKind::Range,
-            units: "optical depth".into(),
-            metric: true,
-            intrinsics: None,
-            notes: vec!["transmittance map: its optical depth −ln τ, fogged at β = 1".into()],
-            unknown_pixels: 0,
-        },
-        image_name: image_path.display().to_string(),
-        depth_name: map.display().to_string(),
-    })
-}
-
-/// `args` for a render from a transmittance map: physical fog at β = 1 on the optical
-/// depth (so τ is the map's and the blur follows βR = −ln τ, as it would from the range),
+/// `args` for a render from a transmittance map ([`Scene::load_transmittance`]): physical
+/// fog at β = 1 on the optical depth (so τ is the map's and the blur follows βR = −ln τ, as it would from the range),
 /// no refinement (the map is what it is) and no pre-processing of the optical depth (the
 /// sky is still found for the airlight, from the image).
 pub fn transmittance_map_args(args: &RenderArgs) -> RenderArgs {

@@ -6,9 +6,9 @@ use super::args::{DepthArgs, PrepOptionArgs};
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::mask::{self, RangeMasks};
 use brume::prep::PrepOptions;
-use brume::raster::{RgbImage, ScalarMap};
+use brume::raster::ScalarMap;
 use brume::{Error, Result};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Loads the depth named by `args` (which must have one) as a range map.
 pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
@@ -16,7 +16,14 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
         .depth
         .as_ref()
         .ok_or_else(|| Error::invalid("--depth", "(missing)", "a depth, range or disparity map"))?;
-    let opts = DepthOptions {
+    let loaded = depth::load_range(path, &depth_options(args))?;
+    log_depth_notes(path, &loaded);
+    Ok(loaded)
+}
+
+/// How `args` say the depth is read.
+pub fn depth_options(args: &DepthArgs) -> DepthOptions {
+    DepthOptions {
         format: args.depth_format,
         kind: args.depth_kind,
         calib: args.calib.clone(),
@@ -29,17 +36,19 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
         far: args.far,
         fov: args.fov,
         min_confidence: args.min_confidence,
-    };
-    let loaded = depth::load_range(path, &opts)?;
+    }
+}
+
+/// Says the loader's notes on the depth at `path`: an option given and not used where the
+/// user looks (a warning), not only in `--json`.
+pub fn log_depth_notes(path: &Path, loaded: &LoadedDepth) {
     for note in &loaded.notes {
-        // An option given and not used is said where the user looks, not only in --json.
         if note.contains("ignored") {
             log::warn!("{}: {note}", path.display());
         } else {
             log::info!("{}: {note}", path.display());
         }
     }
-    Ok(loaded)
 }
 
 /// The files a depth argument set reads.
@@ -50,26 +59,6 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
         .chain(args.camera.iter())
         .cloned()
         .collect()
-}
-
-/// Checks that the colour image and the range map have one size; the error names both.
-pub fn check_same_size(
-    image: &RgbImage,
-    image_name: &str,
-    range: &ScalarMap,
-    range_name: &str,
-) -> Result<()> {
-    if (image.width(), image.height()) == (range.width(), range.height()) {
-        return Ok(());
-    }
-    Err(Error::SizeMismatch {
-        a: image_name.to_string(),
-        aw: image.width() as u32,
-        ah: image.height() as u32,
-        b: range_name.to_string(),
-        bw: range.width() as u32,
-        bh: range.height() as u32,
-    })
 }
 
 /// Builds the pre-processing options from the command line over the library defaults.

@@ -3,9 +3,8 @@
 //! pre-processing, and the haze and blur it is rendered with, each error naming its flag.
 
 use super::args::{MediumKind, RenderArgs};
-use super::inputs::{depth_inputs, load_depth, load_masks, prep_options};
+use super::inputs::{depth_inputs, depth_options, load_masks, log_depth_notes, prep_options};
 use brume::blur::Blur;
-use brume::io::{demo, image};
 use brume::medium::haze::{self, Haze};
 use brume::medium::physical::{PhysicalFog, DEFAULT_ALBEDO};
 use brume::medium::{Medium, UniformBlur};
@@ -247,37 +246,18 @@ pub fn haze_range(
 /// fog, in metres.
 pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
     if let (Some(image_path), Some(map)) = (&args.image, &args.transmittance_map) {
-        return super::compat::load_transmittance_scene(image_path, map);
+        return Scene::load_transmittance(image_path, map);
     }
     match (&args.image, &args.depth.depth) {
         (None, None) => {
-            let scene = Scene {
-                image: demo::demo_image()?,
-                depth: demo::demo_range()?,
-                image_name: "built-in demo image".into(),
-                depth_name: "built-in demo disparity".into(),
-            };
+            let scene = Scene::demo()?;
             check_metric(args, &scene)?;
             Ok(scene)
         }
-        (Some(image_path), Some(_)) => {
-            brume::photo::check_memory_before_loading(image_path)?;
-            let depth = load_depth(&args.depth)?;
-            let scene = Scene {
-                image: image::load_linear_rgb(image_path)?,
-                depth,
-                image_name: image_path.display().to_string(),
-                depth_name: args
-                    .depth
-                    .depth
-                    .as_ref()
-                    .expect("checked")
-                    .display()
-                    .to_string(),
-            };
-            scene.check_depth_fits()?;
+        (Some(image_path), Some(depth_path)) => {
+            let mut scene = Scene::load(image_path, depth_path, &depth_options(&args.depth))?;
+            log_depth_notes(depth_path, &scene.depth);
             check_metric(args, &scene)?;
-            let mut scene = scene;
             super::refine::drop_left_right_mismatches(args, &mut scene)?;
             Ok(scene)
         }

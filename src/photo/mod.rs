@@ -122,6 +122,44 @@ impl Photo {
         Ok(photo)
     }
 
+    /// An image and a transmittance map τ (Foggy Cityscapes' and others' τ maps, any
+    /// float or 8/16-bit format [`crate::compat::load_optical_depth`] reads), the map read
+    /// as its optical depth −ln τ: a range in "metres" for a fog of β = 1 m⁻¹, so that
+    /// physical fog at β = 1 gives back the map's τ and the blur follows βR = −ln τ as it
+    /// would from the range. Errors: the loaders', the memory check, a map of another
+    /// size than the image.
+    pub fn load_transmittance(image_path: &Path, map_path: &Path) -> Result<Photo> {
+        check_memory_before_loading(image_path)?;
+        let range = crate::compat::load_optical_depth(map_path)?;
+        let image = image::load_linear_rgb(image_path)?;
+        let (image_name, depth_name) = (image_path.display(), map_path.display());
+        if (image.width(), image.height()) != (range.width(), range.height()) {
+            return Err(Error::SizeMismatch {
+                a: image_name.to_string(),
+                aw: image.width() as u32,
+                ah: image.height() as u32,
+                b: depth_name.to_string(),
+                bw: range.width() as u32,
+                bh: range.height() as u32,
+            });
+        }
+        Ok(Photo {
+            image,
+            depth: LoadedDepth {
+                range,
+                format: DepthFormat::Float,
+                kind: DepthKind::Range,
+                units: "optical depth".into(),
+                metric: true,
+                intrinsics: None,
+                notes: vec!["transmittance map: its optical depth −ln τ, fogged at β = 1".into()],
+                unknown_pixels: 0,
+            },
+            image_name: image_name.to_string(),
+            depth_name: depth_name.to_string(),
+        })
+    }
+
     /// The built-in demo: Middlebury's Aloe at half size, its disparity read with offset 0
     /// (normalised range, not metres).
     pub fn demo() -> Result<Photo> {
