@@ -61,7 +61,7 @@ pub(super) fn insert_object(
         ));
     }
     let kind = args.insert.insert_depth_kind.unwrap_or(DepthKind::Depth);
-    let intrinsics = photo_intrinsics(args, scene);
+    let intrinsics = scene.image_intrinsics(args.depth.focal, args.depth.fov);
     let object = VirtualObject::load(
         path,
         args.insert.insert_depth.as_deref(),
@@ -69,30 +69,6 @@ pub(super) fn insert_object(
         intrinsics.as_ref(),
     )?;
     Ok(Some(photo::insert(scene, prep, &object)?))
-}
-
-/// The photo's pinhole intrinsics at the image's size: those its depth was read with
-/// (scaled from the depth map's grid), else from --focal or --fov with the principal
-/// point at the centre.
-fn photo_intrinsics(args: &RenderArgs, scene: &Scene) -> Option<brume::io::depth::Intrinsics> {
-    use brume::io::depth::Intrinsics;
-    let (w, h) = (scene.image.width(), scene.image.height());
-    if let Some(k) = scene.depth.intrinsics {
-        let s = w as f64 / scene.depth.range.width() as f64;
-        let at_image = |c: f64| (c + 0.5) * s - 0.5;
-        return Some(Intrinsics {
-            fx: k.fx * s,
-            fy: k.fy * s,
-            cx: at_image(k.cx),
-            cy: at_image(k.cy),
-        });
-    }
-    let focal = args.depth.focal.or_else(|| {
-        args.depth
-            .fov
-            .map(|fov| h as f64 / 2.0 / (fov.to_radians() / 2.0).tan())
-    })?;
-    Some(Intrinsics::centred(focal, w, h))
 }
 
 /// --insert's report (`null` without it).

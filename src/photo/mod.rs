@@ -248,6 +248,32 @@ impl Photo {
         Ok(())
     }
 
+    /// The photo's pinhole intrinsics at the image's size: those its depth was read with
+    /// (scaled from the depth map's grid), else square pixels of `focal_px`, or of the
+    /// vertical field of view `fov_y_deg`, with the principal point at the centre; `None`
+    /// with none of them. What a virtual object's depth is stretched to range by
+    /// ([`VirtualObject::load`]).
+    pub fn image_intrinsics(
+        &self,
+        focal_px: Option<f64>,
+        fov_y_deg: Option<f64>,
+    ) -> Option<depth::Intrinsics> {
+        let (w, h) = (self.image.width(), self.image.height());
+        if let Some(k) = self.depth.intrinsics {
+            let s = w as f64 / self.depth.range.width() as f64;
+            let at_image = |c: f64| (c + 0.5) * s - 0.5;
+            return Some(depth::Intrinsics {
+                fx: k.fx * s,
+                fy: k.fy * s,
+                cx: at_image(k.cx),
+                cy: at_image(k.cy),
+            });
+        }
+        let from_fov = |fov: f64| h as f64 / 2.0 / (fov.to_radians() / 2.0).tan();
+        let focal = focal_px.or_else(|| fov_y_deg.map(from_fov))?;
+        Some(depth::Intrinsics::centred(focal, w, h))
+    }
+
     /// The depth map has the image's size, or is smaller by one factor on both sides (it
     /// is then upsampled, guided by the image); the error names both.
     pub fn check_depth_fits(&self) -> Result<()> {
