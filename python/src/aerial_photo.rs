@@ -137,9 +137,9 @@ impl AerialArgs {
                 name,
                 value,
                 expected,
-            } if name == "lambda" => value_error(format!(
-                "invalid lambda_px = {value}: expected {expected}"
-            )),
+            } if name == "lambda" => {
+                value_error(format!("invalid lambda_px = {value}: expected {expected}"))
+            }
             e => py_err(e),
         })?;
         Ok(opts)
