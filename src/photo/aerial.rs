@@ -223,7 +223,9 @@ impl PhotoView {
                 return Err(Error::invalid(
                     "fov_y_deg",
                     "(missing)",
-                    "the camera's vertical field of view in degrees, or its focal length in                      px (or a depth whose calibration gives it): each pixel's zenith angle                      depends on it",
+                    "the camera's vertical field of view in degrees, or its focal length in \
+                     px (or a depth whose calibration gives it): each pixel's zenith angle \
+                     depends on it",
                 ))
             }
         };
@@ -239,7 +241,10 @@ impl PhotoView {
                         "horizon_row",
                         row,
                         format!(
-                            "a row (0 at the top) that puts the camera's pitch within                              ±{MAX_PITCH_DEG}° with this {height}-row image and a                              {fov_y_deg:.1}° field of view (it gives {pitch:.5}°; the horizon                              may lie a little outside the image)"
+                            "a row (0 at the top) that puts the camera's pitch within \
+                             ±{MAX_PITCH_DEG}° with this {height}-row image and a \
+                             {fov_y_deg:.1}° field of view (it gives {pitch:.5}°; the horizon \
+                             may lie a little outside the image)"
                         ),
                     ));
                 }
