@@ -183,8 +183,9 @@ fn bad_options_fail_before_any_work() {
     }
 }
 
-/// `--coarse-from` below 2 px (or not finite) is refused before any work, naming the
-/// option; a valid one runs the configuration with the coarse stage.
+/// `coarse_from` below 2 px (or not finite) is refused before any work, naming the field
+/// (the program's `--coarse-from`: `tests/cli_bad_input.rs`); a valid one runs the
+/// configuration with the coarse stage.
 #[test]
 fn coarse_from_is_checked_and_runs() {
     for bad in [1.0, 0.0, -2.0, f64::NAN] {
@@ -193,7 +194,7 @@ fn coarse_from_is_checked_and_runs() {
             ..SpeedOptions::default()
         };
         let err = opts.validate().expect_err("refused").to_string();
-        assert!(err.contains("--coarse-from"), "{bad}: {err}");
+        assert!(err.contains("invalid coarse_from"), "{bad}: {err}");
     }
     let opts = matched_f32_64x48(12.0, 3.0);
     let (_lock, mut r) = renderer();

@@ -304,8 +304,8 @@ fn tint_makes_a_chromatic_haze() {
     let dir = tempfile::tempdir().unwrap();
     let (image, depth) = small_scene(dir.path());
     let run = |extra: &[&str], out: &str| {
-        // A chromatic medium never runs the coarse stage (grey τ only): the grey render
-        // runs every step at full resolution too, so that the blur is the same in both.
+        // Every step at full resolution in both renders, so that the blur is the same
+        // in both whatever the coarse stage does with a tint.
         let mut args = vec![
             "--depth-kind",
             "range",

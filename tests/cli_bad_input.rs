@@ -402,6 +402,8 @@ fn bench_is_all_or_nothing() {
         s("--max-passes -5", 1, "--max-passes"),
         s("--runs two", 2, "--runs"),
         s("--tau blue", 2, "--tau"),
+        s("--coarse-from 1", 1, "--coarse-from 1"),
+        a("--coarse-from NaN", "--coarse-from NaN"),
         s("--csv range.pfm.csv --plot table.csv", 1, "--plot"),
         case("bench sideways", "", 2, "sideways"),
     ]);

@@ -69,22 +69,14 @@ pub struct SpeedOptions {
     pub coarse_from: Option<f64>,
 }
 
-/// Rejects a [`crate::Blur::coarse_from`] the pipeline would refuse, before any work.
+/// Rejects a [`crate::Blur::coarse_from`] the pipeline would refuse, before any work
+/// ([`crate::Blur::check_coarse_from`]: the error names `coarse_from`).
 pub fn check_coarse_from(coarse_from: Option<f64>) -> Result<()> {
     let blur = crate::Blur {
         coarse_from,
         ..crate::Blur::default()
     };
-    blur.check_coarse_from().map_err(|_| {
-        Error::invalid(
-            "--coarse-from",
-            coarse_from.unwrap_or(f64::NAN),
-            format!(
-                "a finite scale ≥ {} px (below it the half resolution aliases detail)",
-                crate::blur::MIN_COARSE_FROM
-            ),
-        )
-    })
+    blur.check_coarse_from()
 }
 
 impl Default for SpeedOptions {
