@@ -562,6 +562,7 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
         ("down.csv", format!("{header}0,0.01\n5,0.02\n3,0.01\n")),
         ("negative.csv", format!("{header}0,0.01\n5,-0.02\n")),
         ("word.csv", format!("{header}0,0.01\n5,thick\n")),
+        ("good.csv", format!("{header}0,0.01\n5,0.02\n")),
     ] {
         fs::write(dir.path().join(name), text).unwrap();
     }
@@ -683,6 +684,22 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
             "--fog layered --profile band --thickness 0",
             1,
             "--thickness 0",
+        ),
+        // A value the profile does not have is refused, not ignored.
+        (
+            "--fog layered --thickness 5",
+            1,
+            "--thickness 5 exponential",
+        ),
+        (
+            "--fog layered --profile ramp --scale-height 9",
+            1,
+            "--scale-height 9 ramp",
+        ),
+        (
+            "--fog layered --profile table --density-csv good.csv --density 2",
+            1,
+            "--density 2 table",
         ),
         ("--position 0,nan,0", 2, "--position 0,nan,0"),
         ("--position 1,2", 2, "--position 1,2"),

@@ -523,47 +523,29 @@ impl LayeredArgs<'_> {
         Ok(fog)
     }
 
+    /// The profile named, or the table, with the values given (the library refuses one
+    /// the profile does not have).
     fn profile(&self) -> PyResult<HeightProfile> {
         let kind = self.profile.trim().to_ascii_lowercase();
-        if kind == "table" {
-            let table = self.table.ok_or_else(|| {
-                value_error(
+        let profile = match (kind.as_str(), self.table) {
+            ("table", Some(table)) => HeightProfile::Table(density_table(table)?),
+            ("table", None) => {
+                return Err(value_error(
                     "profile = 'table' without table: expected table= the path of a CSV \
                      (header height_m,extinction_per_m) or an Nx2 array of (height_m, \
                      extinction_per_m) rows",
-                )
-            })?;
-            return Ok(HeightProfile::Table(density_table(table)?));
-        }
-        if let Some(t) = self.table {
-            return Err(value_error(format!(
-                "invalid table = {}: expected profile='table' with it (the analytic profiles \
-                 take no table)",
-                t.repr().map(|r| r.to_string()).unwrap_or_default()
-            )));
-        }
-        let unused = |name: &str, v: Option<f64>| match v {
-            Some(v) => Err(value_error(format!(
-                "invalid {name} = {v}: the {kind} profile has no {name}"
-            ))),
-            None => Ok(()),
-        };
-        let preset = match kind.as_str() {
-            "exponential" => {
-                unused("thickness", self.thickness)?;
-                unused("top", self.top)?;
-                HeightProfile::EXPONENTIAL
+                ))
             }
-            "band" => {
-                unused("scale_height", self.scale_height)?;
-                unused("top", self.top)?;
-                HeightProfile::SINE_BAND
+            (_, Some(t)) => {
+                return Err(value_error(format!(
+                    "invalid table = {}: expected profile='table' with it (the analytic \
+                     profiles take no table)",
+                    t.repr().map(|r| r.to_string()).unwrap_or_default()
+                )))
             }
-            "ramp" => {
-                unused("scale_height", self.scale_height)?;
-                unused("thickness", self.thickness)?;
-                HeightProfile::LINEAR_RAMP
-            }
+            ("exponential", None) => HeightProfile::EXPONENTIAL,
+            ("band", None) => HeightProfile::SINE_BAND,
+            ("ramp", None) => HeightProfile::LINEAR_RAMP,
             _ => {
                 return Err(value_error(format!(
                     "invalid profile = {:?}: expected 'exponential', 'band', 'ramp' or 'table'",
@@ -571,13 +553,14 @@ impl LayeredArgs<'_> {
                 )))
             }
         };
-        Ok(preset.with(&ProfileValues {
+        let values = ProfileValues {
             density: self.density,
             base: self.base,
             scale_height: self.scale_height,
             thickness: self.thickness,
             top: self.top,
-        }))
+        };
+        profile.with_checked(&values).map_err(py_err)
     }
 }
 

@@ -443,6 +443,7 @@ def test_engine_fog_errors():
         (dict(table=[[0, 0.01], [1, 0.02]]), "invalid table"),
         (dict(profile="table", table=[[1, 0.01], [0, 0.02]]), "table"),
         (dict(profile="band", scale_height=5.0), "invalid scale_height"),
+        (dict(profile="table", table=[[0, 0.01], [1, 0.02]], density=2.0), "invalid density"),
         (dict(albedo=2.0), "albedo"),
         (dict(density=-1.0), "density"),
     ]

@@ -318,13 +318,11 @@ fn distance_flags(e: Error) -> Error {
     }
 }
 
-/// The chosen profile: its preset (src/medium/layered/) with the options given, or the
-/// table of `--density-csv`.
+/// The chosen profile: its preset (src/medium/layered/) or the table of `--density-csv`,
+/// with the options given (refused where the profile does not have them).
 fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> Result<HeightProfile> {
-    let preset = match (kind, &l.density_csv) {
-        (ProfileKind::Table, Some(path)) => {
-            return Ok(HeightProfile::Table(DensityTable::from_csv(path)?));
-        }
+    let profile = match (kind, &l.density_csv) {
+        (ProfileKind::Table, Some(path)) => HeightProfile::Table(DensityTable::from_csv(path)?),
         (ProfileKind::Table, None) => {
             return Err(Error::invalid(
                 "--profile",
@@ -343,13 +341,13 @@ fn profile_from_args(kind: ProfileKind, l: &super::args::LayeredArgs) -> Result<
         (ProfileKind::Band, None) => HeightProfile::SINE_BAND,
         (ProfileKind::Ramp, None) => HeightProfile::LINEAR_RAMP,
     };
-    Ok(preset.with(&ProfileValues {
+    profile.with_checked(&ProfileValues {
         density: l.density,
         base: l.base,
         scale_height: l.scale_height,
         thickness: l.thickness,
         top: l.top,
-    }))
+    })
 }
 
 fn noise_from_args(d: &super::args::DistanceArgs) -> Result<Option<FogNoise>> {

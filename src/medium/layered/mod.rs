@@ -210,6 +210,42 @@ impl HeightProfile {
         }
     }
 
+    /// [`HeightProfile::with`], refusing a value the profile does not have (a band's
+    /// `scale_height`, any value with a table) rather than ignoring it: the error names
+    /// the value (`density`, `base`, `scale_height`, `thickness`, `top`) and what the
+    /// profile has.
+    pub fn with_checked(self, given: &ProfileValues) -> Result<HeightProfile> {
+        let (kind, has): (&str, &[&str]) = match self {
+            HeightProfile::Exponential { .. } => {
+                ("exponential", &["density", "base", "scale_height"])
+            }
+            HeightProfile::SineBand { .. } => ("band", &["density", "base", "thickness"]),
+            HeightProfile::LinearRamp { .. } => ("ramp", &["density", "base", "top"]),
+            HeightProfile::Table(_) => ("table", &[]),
+        };
+        let values = [
+            ("density", given.density),
+            ("base", given.base),
+            ("scale_height", given.scale_height),
+            ("thickness", given.thickness),
+            ("top", given.top),
+        ];
+        for (name, value) in values {
+            if let Some(v) = value.filter(|_| !has.contains(&name)) {
+                let what = match has {
+                    [] => "nothing to set: its rows give the density at each height".to_string(),
+                    _ => has.join(", "),
+                };
+                return Err(Error::invalid(
+                    name,
+                    v,
+                    format!("no {name} with the {kind} profile (it has {what})"),
+                ));
+            }
+        }
+        Ok(self.with(given))
+    }
+
     /// δ(y) (per world unit).
     pub fn density(&self, y: f64) -> f64 {
         mean_density(self, y, 0.0)
