@@ -81,7 +81,7 @@ fn check_medium_options(args: &RenderArgs) -> Result<()> {
 }
 
 /// Refuses the first option of `options` (flag, value if given) that was given.
-fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -> Result<()> {
+pub(super) fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -> Result<()> {
     match options
         .iter()
         .find_map(|(flag, v)| v.as_ref().map(|v| (*flag, v)))

@@ -37,6 +37,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
     let camera = camera_from_args(args);
     camera.validate()?;
     check_sequence(args)?;
+    check_fog_options(args)?;
     let outs = frame_paths(&args.out, args.frames);
     check_outputs(args, &outs)?;
     let blur = fog_blur_from_args(args)?;
@@ -121,6 +122,85 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
         );
     } else {
         print_summary(args, &blur, &renderer_name, &reports);
+    }
+    Ok(())
+}
+
+/// Refuses an option that cannot take effect, as `brume render` refuses the other
+/// medium's: the layered fog's with another fog, the distance fog's (its noise included)
+/// with another, the noise's with `--noise none` (and `--noise-seed` with a noise file),
+/// a fog's colour or λ with `--fog none`. (`brume view scene` takes them all: its panel
+/// switches between the fogs.)
+fn check_fog_options(args: &SceneArgs) -> Result<()> {
+    let text = |v: Option<f64>| v.map(|v| v.to_string());
+    let list = |v: Option<[f64; 3]>| v.map(|[x, y, z]| format!("{x},{y},{z}"));
+    let rgb = |v: Option<[f32; 3]>| v.map(|[r, g, b]| format!("{r},{g},{b}"));
+    let (l, d) = (&args.layered, &args.distance);
+    let layered = [
+        (
+            "--profile",
+            (l.profile != ProfileKind::Exponential)
+                .then(|| format!("{:?}", l.profile).to_lowercase()),
+        ),
+        ("--density", text(l.density)),
+        ("--base", text(l.base)),
+        ("--scale-height", text(l.scale_height)),
+        ("--thickness", text(l.thickness)),
+        ("--top", text(l.top)),
+        ("--albedo", text(l.albedo)),
+        (
+            "--density-csv",
+            l.density_csv.as_ref().map(|p| p.display().to_string()),
+        ),
+    ];
+    let noise = [
+        (
+            "--noise-seed",
+            (d.noise_seed != 0).then(|| d.noise_seed.to_string()),
+        ),
+        ("--noise-size", text(d.noise_size)),
+        ("--noise-speed", list(d.noise_speed)),
+        ("--noise-low", text(d.noise_low)),
+        ("--noise-high", text(d.noise_high)),
+        ("--noise-colour-strength", text(d.noise_colour_strength)),
+    ];
+    let distance = [
+        ("--fog-start", text(d.fog_start)),
+        ("--fog-distance", text(d.fog_distance)),
+        ("--fog-exponent", text(d.fog_exponent)),
+        ("--max-density", text(d.max_density)),
+        ("--light-dir", list(d.light_dir)),
+        ("--scatter-start", text(d.scatter_start)),
+        ("--scatter-exponent", text(d.scatter_exponent)),
+        ("--scatter-colour", rgb(d.scatter_colour)),
+        ("--noise", (d.noise != "generated").then(|| d.noise.clone())),
+    ];
+    let refuse = super::options::refuse_given;
+    if args.fog != FogKind::Layered {
+        refuse(
+            &layered,
+            "--fog layered with it (an option of the layered fog)",
+        )?;
+    }
+    if args.fog != FogKind::Distance {
+        let expected = "--fog distance with it (an option of the distance fog)";
+        refuse(&distance, expected)?;
+        refuse(&noise, expected)?;
+    }
+    match d.noise.as_str() {
+        "none" => refuse(&noise, "a noise with it, not --noise none")?,
+        "generated" => {}
+        _ => refuse(
+            &noise[..1],
+            "--noise generated with it (a noise file has no seed)",
+        )?,
+    }
+    if args.fog == FogKind::None {
+        let given = [
+            ("--fog-colour", rgb(args.fog_colour)),
+            ("--lambda", text(args.blur_options.lambda)),
+        ];
+        refuse(&given, "a fog with it, not --fog none")?;
     }
     Ok(())
 }
