@@ -661,6 +661,11 @@ fn render_refuses_options_that_cannot_take_effect() {
             "--uniform-sigma --medium haze",
         ),
         r(
+            "--uniform-sigma 3 --airlight 1,1,1",
+            "--airlight --uniform-sigma",
+        ),
+        r("--uniform-sigma 3 --ks 0.5", "--ks --uniform-sigma"),
+        r(
             "--medium aerial --turbidity 1000 --metres-per-unit 1 --fov 40",
             "--turbidity 1000 [1, 20]",
         ),

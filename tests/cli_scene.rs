@@ -686,12 +686,36 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
             "--thickness 0",
         ),
         // An option of another fog, or of no noise, is refused, not ignored.
-        ("--fog layered --fog-start 10", 1, "--fog-start 10 --fog distance"),
-        ("--fog distance --thickness 4", 1, "--thickness 4 --fog layered"),
-        ("--fog distance --profile band", 1, "--profile band --fog layered"),
-        ("--fog layered --noise-size 3", 1, "--noise-size 3 --fog distance"),
-        ("--noise none --noise-low 0.2", 1, "--noise-low 0.2 --noise none"),
-        ("--fog none --fog-colour 1,0,0", 1, "--fog-colour --fog none"),
+        (
+            "--fog layered --fog-start 10",
+            1,
+            "--fog-start 10 --fog distance",
+        ),
+        (
+            "--fog distance --thickness 4",
+            1,
+            "--thickness 4 --fog layered",
+        ),
+        (
+            "--fog distance --profile band",
+            1,
+            "--profile band --fog layered",
+        ),
+        (
+            "--fog layered --noise-size 3",
+            1,
+            "--noise-size 3 --fog distance",
+        ),
+        (
+            "--noise none --noise-low 0.2",
+            1,
+            "--noise-low 0.2 --noise none",
+        ),
+        (
+            "--fog none --fog-colour 1,0,0",
+            1,
+            "--fog-colour --fog none",
+        ),
         // A value the profile does not have is refused, not ignored.
         (
             "--fog layered --thickness 5",

@@ -77,7 +77,16 @@ fn check_medium_options(args: &RenderArgs) -> Result<()> {
     refuse_given(
         others,
         &format!("--medium {wanted} with it: the {this} medium of this render does not read it"),
-    )
+    )?;
+    if args.uniform_sigma.is_some() {
+        let rgb = |v: Option<[f32; 3]>| v.map(|[r, g, b]| format!("{r},{g},{b}"));
+        let fog = [&haze_only[..3], &[("--airlight", rgb(args.airlight))]].concat();
+        refuse_given(
+            &fog,
+            "no --uniform-sigma with it: a uniform blur has no attenuation and no airlight",
+        )?;
+    }
+    Ok(())
 }
 
 /// Refuses the first option of `options` (flag, value if given) that was given.
