@@ -554,6 +554,19 @@ fn batch_checks_every_option_first() {
         b("--no-prep --margin 3", "--margin --no-prep"),
         b("--shard 0/4", "--shard"),
         b("--shard slurm", "--shard SLURM_ARRAY_TASK_ID"),
+        // Options that cannot take effect.
+        b(
+            "--compat foggy-cityscapes --lambda 3",
+            "--lambda 3 --compat foggy-cityscapes",
+        ),
+        b(
+            "--compat foggy-cityscapes --precision f16",
+            "--precision f16 --compat",
+        ),
+        b(
+            "--refine none --refine-eps 0.01",
+            "--refine-eps --refine none",
+        ),
     ]);
 }
 
@@ -665,6 +678,15 @@ fn render_refuses_options_that_cannot_take_effect() {
             "--airlight --uniform-sigma",
         ),
         r("--uniform-sigma 3 --ks 0.5", "--ks --uniform-sigma"),
+        r(
+            "--beta 0.01 --compat foggy-cityscapes --scheme euler",
+            "--scheme euler --compat foggy-cityscapes",
+        ),
+        r("--refine-radius 5", "--refine-radius --refine"),
+        r(
+            "--refine none --refine-radius 5",
+            "--refine-radius --refine none",
+        ),
         r(
             "--medium aerial --turbidity 1000 --metres-per-unit 1 --fov 40",
             "--turbidity 1000 [1, 20]",

@@ -3,8 +3,10 @@
 
 use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
 use super::photo_args::haze_from_args;
+use brume::blur::{DEFAULT_COARSE_FROM, DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::io::depth;
-use brume::{Error, Result};
+use brume::medium::haze;
+use brume::{Error, Precision, Result, Scheme};
 use std::path::PathBuf;
 
 /// Checks `args` before any file is read: the medium's values and options that cannot
@@ -28,8 +30,54 @@ pub fn check_options(args: &RenderArgs) -> Result<()> {
                  is τ = exp(−βR) on the haze medium)",
             ));
         }
+        let changed = |flag, differs: bool, value: String| (flag, differs.then_some(value));
+        let text = |v: Option<f64>| v.map(|v| v.to_string());
+        refuse_with_foggy_cityscapes(&[
+            changed(
+                "--lambda",
+                args.lambda != haze::DEFAULT_LAMBDA,
+                args.lambda.to_string(),
+            ),
+            changed(
+                "--sigma0",
+                args.sigma0 != DEFAULT_SIGMA0,
+                args.sigma0.to_string(),
+            ),
+            changed(
+                "--rho-max",
+                args.rho_max != DEFAULT_RHO_MAX,
+                args.rho_max.to_string(),
+            ),
+            changed(
+                "--scheme",
+                args.scheme != Scheme::Matched,
+                args.scheme.to_string(),
+            ),
+            changed(
+                "--precision",
+                args.precision != Precision::F32,
+                args.precision.to_string(),
+            ),
+            changed(
+                "--coarse-from",
+                args.coarse_from.0 != Some(DEFAULT_COARSE_FROM),
+                args.coarse_from.to_string(),
+            ),
+            ("--albedo", text(args.albedo)),
+            ("--tint", args.tint.map(|[r, g, b]| format!("{r},{g},{b}"))),
+        ])?;
     }
     Ok(())
+}
+
+/// Refuses an option of brume's fog that Foggy Cityscapes' conventions (the blend in code
+/// values, no blur) would ignore; `options` pairs each flag with its value where given.
+pub(super) fn refuse_with_foggy_cityscapes(options: &[(&str, Option<String>)]) -> Result<()> {
+    refuse_given(
+        options,
+        "no --compat foggy-cityscapes with it: Foggy Cityscapes' conventions blend τ = \
+         exp(−βR) in code values, with no blur",
+    )
 }
 
 /// An option that cannot take effect is an error, not a silent no-op: the options of the

@@ -36,6 +36,9 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         .as_ref()
         .map(|p| p.display().to_string())
         .unwrap_or_default();
+    if args.image.is_none() {
+        refuse_refinement_without_image(&args.refine)?;
+    }
     let refine = args.refine.options(loaded.format)?;
     let masks = load_masks(&args.prep, &loaded.range, &depth_name)?;
     let mask_format = masks.sky_format;
@@ -65,7 +68,6 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             (photo.depth, p, Some(airlight), Some(plan))
         }
         None => {
-            refuse_refinement_without_image(&args.refine)?;
             let guides = Guides {
                 image: None,
                 sky_mask: masks.sky.as_ref(),

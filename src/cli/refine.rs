@@ -24,8 +24,25 @@ impl RefineArgs {
     /// default mode is [`RefineMode::default_for`]); a depth map smaller than the image is
     /// always upsampled, guided by it.
     pub fn options(&self, format: DepthFormat) -> Result<RefineOptions> {
+        let mode = self.mode.unwrap_or(RefineMode::default_for(format));
+        // A batch's format is each frame's (Auto here): only --refine none is known.
+        if mode == RefineMode::None && (self.mode.is_some() || format != DepthFormat::Auto) {
+            let why = match self.mode {
+                Some(_) => "--refine none does not filter".to_string(),
+                None => format!("a {format} depth is not refined by default"),
+            };
+            let text = |v: Option<f64>| v.map(|v| v.to_string());
+            let window = [
+                ("--refine-radius", text(self.radius)),
+                ("--refine-eps", text(self.eps)),
+            ];
+            super::options::refuse_given(
+                &window,
+                &format!("--refine repair, guided or unreliable with it ({why})"),
+            )?;
+        }
         let opts = RefineOptions {
-            mode: self.mode.unwrap_or(RefineMode::default_for(format)),
+            mode,
             filter: Refine {
                 radius_px: self.radius.unwrap_or(brume::refine::DEFAULT_RADIUS_PX),
                 epsilon: self.eps.unwrap_or(brume::refine::DEFAULT_EPSILON),
