@@ -567,6 +567,7 @@ fn batch_checks_every_option_first() {
             "--refine none --refine-eps 0.01",
             "--refine-eps --refine none",
         ),
+        b("--no-sky --sky-factor 2", "--sky-factor --no-sky"),
     ]);
 }
 

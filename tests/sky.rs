@@ -226,6 +226,10 @@ fn bad_input_is_named() {
         (&["--clouds", "2"][..], "--clouds"),
         (&["--sun-disc", "-1"][..], "--sun-disc"),
         (&["--cloud-seed", "-1"][..], "--cloud-seed"),
+        (
+            &["--cloud-seed", "5"][..],
+            "--cloud-seed = 5: expected --clouds",
+        ),
         (&["--out", "bad.jpg"][..], "--out"),
     ] {
         let o = sky(extra);

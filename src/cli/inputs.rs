@@ -63,6 +63,16 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
 
 /// Builds the pre-processing options from the command line over the library defaults.
 pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
+    if args.no_sky {
+        let text = |v: Option<f64>| v.map(|v| v.to_string());
+        let sky = [
+            ("--sky-factor", text(args.sky_factor)),
+            ("--sky-min-area", text(args.sky_min_area)),
+            ("--margin", text(args.margin)),
+        ];
+        let expected = "sky with it, not --no-sky (the sky's range, area and horizon margin)";
+        super::options::refuse_given(&sky, expected)?;
+    }
     let mut opts = PrepOptions::default();
     if let Some(m) = args.margin {
         opts.margin_px = m;

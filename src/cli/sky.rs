@@ -295,6 +295,13 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
         d => d.map(f64::to_radians),
     };
     let cloud_seed = seed("--cloud-seed", args.cloud_seed)?;
+    if args.clouds.is_none() && cloud_seed != 0 {
+        return Err(Error::invalid(
+            "--cloud-seed",
+            cloud_seed,
+            "--clouds FRACTION with it (without clouds there is nothing to seed)",
+        ));
+    }
     output::check_image_output(&args.out, "--out")?;
 
     let mut image = sky::render_sky_image(&model, size, &fisheye)?;
