@@ -163,6 +163,24 @@ impl Error {
         }
     }
 
+    /// [`Error::SizeMismatch`]: input `a` is `a_size` (width, height) where `b` is
+    /// `b_size`.
+    pub fn size_mismatch(
+        a: impl std::fmt::Display,
+        a_size: (usize, usize),
+        b: impl std::fmt::Display,
+        b_size: (usize, usize),
+    ) -> Self {
+        Error::SizeMismatch {
+            a: a.to_string(),
+            aw: a_size.0 as u32,
+            ah: a_size.1 as u32,
+            b: b.to_string(),
+            bw: b_size.0 as u32,
+            bh: b_size.1 as u32,
+        }
+    }
+
     /// An out-of-domain parameter.
     pub fn invalid(
         name: impl Into<String>,

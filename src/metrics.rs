@@ -42,14 +42,12 @@ pub struct Similarity {
 /// Compares two linear-light images of one size (`a_name`, `b_name` name them in errors).
 pub fn compare(a: &RgbImage, a_name: &str, b: &RgbImage, b_name: &str) -> Result<Similarity> {
     if (a.width(), a.height()) != (b.width(), b.height()) {
-        return Err(Error::SizeMismatch {
-            a: a_name.into(),
-            aw: a.width() as u32,
-            ah: a.height() as u32,
-            b: b_name.into(),
-            bw: b.width() as u32,
-            bh: b.height() as u32,
-        });
+        return Err(Error::size_mismatch(
+            a_name,
+            (a.width(), a.height()),
+            b_name,
+            (b.width(), b.height()),
+        ));
     }
     let side = 2 * WINDOW_RADIUS + 1;
     if a.width() < side || a.height() < side {

@@ -296,14 +296,12 @@ impl Renderer {
         let (w, h) = (image.width(), image.height());
         self.caps().require_size("image", w, h)?;
         if (w, h) != (depth.width(), depth.height()) {
-            return Err(Error::SizeMismatch {
-                a: "image".into(),
-                aw: w as u32,
-                ah: h as u32,
-                b: "range map".into(),
-                bw: depth.width() as u32,
-                bh: depth.height() as u32,
-            });
+            return Err(Error::size_mismatch(
+                "image",
+                (w, h),
+                "range map",
+                (depth.width(), depth.height()),
+            ));
         }
         medium.validate()?;
         medium.validate_frame(frame)

@@ -140,14 +140,12 @@ pub fn check_mask(
     all_set: &str,
 ) -> Result<()> {
     if (mask.width(), mask.height()) != (range.width(), range.height()) {
-        return Err(Error::SizeMismatch {
-            a: path.display().to_string(),
-            aw: mask.width() as u32,
-            ah: mask.height() as u32,
-            b: range_name.to_string(),
-            bw: range.width() as u32,
-            bh: range.height() as u32,
-        });
+        return Err(Error::size_mismatch(
+            path.display(),
+            (mask.width(), mask.height()),
+            range_name,
+            (range.width(), range.height()),
+        ));
     }
     let set = mask.as_slice().iter().filter(|&&s| s).count();
     log::info!(

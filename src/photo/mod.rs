@@ -134,14 +134,12 @@ impl Photo {
         let image = image::load_linear_rgb(image_path)?;
         let (image_name, depth_name) = (image_path.display(), map_path.display());
         if (image.width(), image.height()) != (range.width(), range.height()) {
-            return Err(Error::SizeMismatch {
-                a: image_name.to_string(),
-                aw: image.width() as u32,
-                ah: image.height() as u32,
-                b: depth_name.to_string(),
-                bw: range.width() as u32,
-                bh: range.height() as u32,
-            });
+            return Err(Error::size_mismatch(
+                image_name,
+                (image.width(), image.height()),
+                depth_name,
+                (range.width(), range.height()),
+            ));
         }
         Ok(Photo {
             image,

@@ -410,14 +410,12 @@ fn check_guide_sizes(range: &ScalarMap, guides: &Guides) -> Result<()> {
     ];
     for (name, gw, gh) in sizes.into_iter().flatten() {
         if (gw, gh) != (w, h) {
-            return Err(Error::SizeMismatch {
-                a: name.to_string(),
-                aw: gw as u32,
-                ah: gh as u32,
-                b: "the range map".to_string(),
-                bw: w as u32,
-                bh: h as u32,
-            });
+            return Err(Error::size_mismatch(
+                name,
+                (gw, gh),
+                "the range map",
+                (w, h),
+            ));
         }
     }
     Ok(())

@@ -30,14 +30,12 @@ pub fn inconsistent_pixels(
         ("disparity", (disparity.width(), disparity.height())),
     ] {
         if size != (w, h) {
-            return Err(Error::SizeMismatch {
-                a: "left image".into(),
-                aw: w as u32,
-                ah: h as u32,
-                b: what.into(),
-                bw: size.0 as u32,
-                bh: size.1 as u32,
-            });
+            return Err(Error::size_mismatch(
+                "left image",
+                (w, h),
+                what,
+                (size.0, size.1),
+            ));
         }
     }
     let encode = |p: [f32; 3]| p.map(|v| linear_to_srgb(v.clamp(0.0, 1.0)));

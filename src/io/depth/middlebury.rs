@@ -323,14 +323,12 @@ fn check_calib_size(calib: &Calib, calib_path: &Path, map: &ScalarMap, path: &Pa
     if (calib.width, calib.height) == (map.width(), map.height()) {
         return Ok(());
     }
-    Err(Error::SizeMismatch {
-        a: format!("{} (width=, height=)", calib_path.display()),
-        aw: calib.width as u32,
-        ah: calib.height as u32,
-        b: path.display().to_string(),
-        bw: map.width() as u32,
-        bh: map.height() as u32,
-    })
+    Err(Error::size_mismatch(
+        format!("{} (width=, height=)", calib_path.display()),
+        (calib.width, calib.height),
+        path.display(),
+        (map.width(), map.height()),
+    ))
 }
 
 fn note_ignored_stereo_options(opts: &DepthOptions, notes: &mut Vec<String>) {
