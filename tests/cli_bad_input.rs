@@ -416,6 +416,13 @@ fn info_refuses_bad_options() {
         case("info --egl nowhere", "", 2, "--egl"),
         case("info extra", "", 2, "extra"),
         case("frobnicate", "", 2, "frobnicate"),
+        // A command with no headless context (CPU only) has no EGL display to choose.
+        case(
+            "sun --latitude 48 --longitude 2 --time 2024-06-21T12:00:00Z",
+            "--egl device",
+            1,
+            "--egl device CPU",
+        ),
     ]);
 }
 

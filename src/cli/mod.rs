@@ -51,6 +51,14 @@ use std::time::Duration;
 
 /// Runs the chosen subcommand.
 pub fn run(cli: Cli) -> Result<()> {
+    if let Some(platform) = cli.egl.filter(|_| !opens_headless_context(&cli.command)) {
+        return Err(Error::invalid(
+            "--egl",
+            platform,
+            "a command that opens brume's headless GL context with it (render, scene, batch, \
+             info, bench): this one runs on the CPU or in a window of its own",
+        ));
+    }
     match cli.command {
         Command::Render(a) => render::run(&a, cli.egl),
         Command::Scene(a) => scene::run(&a, cli.egl),
@@ -81,6 +89,22 @@ pub fn run(cli: Cli) -> Result<()> {
                 &|p| brume::io::image::load_linear_rgb(p),
             )
         }
+    }
+}
+
+/// Whether `command` opens brume's headless EGL context, which `--egl` chooses.
+fn opens_headless_context(command: &Command) -> bool {
+    match command {
+        Command::Render(_) | Command::Scene(_) | Command::Batch(_) | Command::Info(_) => true,
+        Command::Bench(bench::BenchCommand::Turbidity(_)) => false,
+        Command::Bench(_) => true,
+        #[cfg(all(feature = "viewer", not(target_os = "android")))]
+        Command::View(_) => false,
+        Command::Compare(_)
+        | Command::Prep(_)
+        | Command::Sky(_)
+        | Command::Turbidity(_)
+        | Command::Sun(_) => false,
     }
 }
 
