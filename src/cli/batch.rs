@@ -2,7 +2,6 @@
 //! summary. `--shard K/N` takes a deterministic share of the frames, for array jobs.
 
 use super::args::{BatchArgs, Compat};
-use brume::blur::DEFAULT_COARSE_FROM;
 use brume::dataset::{self, Batch, BatchEvent, BatchOptions, BatchReport, Betas, Shard};
 use brume::io::depth::DepthFormat;
 use brume::photo::{Conventions, FrameOptions};
@@ -152,17 +151,13 @@ impl BatchArgs {
         opts.sky_mask_format = self.prep.sky_mask_format;
         opts.ego_mask = self.prep.ego_mask.clone();
         if self.compat == Some(Compat::FoggyCityscapes) {
-            let text = |v: Option<f64>| v.map(|v| v.to_string());
-            let from = self.coarse_from;
+            use super::options::shown;
             super::options::refuse_with_foggy_cityscapes(&[
-                ("--lambda", text(self.lambda)),
-                ("--scheme", self.scheme.map(|s| s.to_string())),
-                ("--precision", self.precision.map(|p| p.to_string())),
-                (
-                    "--coarse-from",
-                    (from.0 != Some(DEFAULT_COARSE_FROM)).then(|| from.to_string()),
-                ),
-                ("--albedo", text(self.albedo)),
+                ("--lambda", shown(self.lambda)),
+                ("--scheme", shown(self.scheme)),
+                ("--precision", shown(self.precision)),
+                ("--coarse-from", self.coarse_from.changed()),
+                ("--albedo", shown(self.albedo)),
             ])?;
             opts.conventions = Conventions::FoggyCityscapes;
         }

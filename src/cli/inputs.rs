@@ -64,11 +64,11 @@ pub fn depth_inputs(args: &DepthArgs) -> Vec<PathBuf> {
 /// Builds the pre-processing options from the command line over the library defaults.
 pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
     if args.no_sky {
-        let text = |v: Option<f64>| v.map(|v| v.to_string());
+        use super::options::shown;
         let sky = [
-            ("--sky-factor", text(args.sky_factor)),
-            ("--sky-min-area", text(args.sky_min_area)),
-            ("--margin", text(args.margin)),
+            ("--sky-factor", shown(args.sky_factor)),
+            ("--sky-min-area", shown(args.sky_min_area)),
+            ("--margin", shown(args.margin)),
         ];
         let expected = "sky with it, not --no-sky (the sky's range, area and horizon margin)";
         super::options::refuse_given(&sky, expected)?;

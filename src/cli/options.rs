@@ -3,7 +3,7 @@
 
 use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
 use super::photo_args::haze_from_args;
-use brume::blur::{DEFAULT_COARSE_FROM, DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
+use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::io::depth;
 use brume::medium::haze;
 use brume::{Error, Precision, Result, Scheme};
@@ -31,7 +31,6 @@ pub fn check_options(args: &RenderArgs) -> Result<()> {
             ));
         }
         let changed = |flag, differs: bool, value: String| (flag, differs.then_some(value));
-        let text = |v: Option<f64>| v.map(|v| v.to_string());
         refuse_with_foggy_cityscapes(&[
             changed(
                 "--lambda",
@@ -58,13 +57,9 @@ pub fn check_options(args: &RenderArgs) -> Result<()> {
                 args.precision != Precision::F32,
                 args.precision.to_string(),
             ),
-            changed(
-                "--coarse-from",
-                args.coarse_from.0 != Some(DEFAULT_COARSE_FROM),
-                args.coarse_from.to_string(),
-            ),
-            ("--albedo", text(args.albedo)),
-            ("--tint", args.tint.map(|[r, g, b]| format!("{r},{g},{b}"))),
+            ("--coarse-from", args.coarse_from.changed()),
+            ("--albedo", shown(args.albedo)),
+            ("--tint", shown3(args.tint)),
         ])?;
     }
     Ok(())
@@ -83,40 +78,33 @@ pub(super) fn refuse_with_foggy_cityscapes(options: &[(&str, Option<String>)]) -
 /// An option that cannot take effect is an error, not a silent no-op: the options of the
 /// other medium (`--turbidity` on haze, `--tint` on aerial, …).
 fn check_medium_options(args: &RenderArgs) -> Result<()> {
-    let text = |v: Option<f64>| v.map(|v| v.to_string());
     let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
     let aerial_only = [
-        ("--turbidity", text(args.turbidity)),
+        ("--turbidity", shown(args.turbidity)),
         ("--sky", path(&args.sky)),
-        ("--from-turbidity", text(args.from_turbidity)),
-        ("--altitude", text(args.altitude)),
-        ("--metres-per-unit", text(args.metres_per_unit)),
-        ("--pitch", text(args.pitch)),
-        ("--horizon-row", text(args.horizon_row)),
-        ("--horizon-zenith", text(args.horizon_zenith)),
-        (
-            "--horizon-sectors",
-            args.horizon_sectors.map(|n| n.to_string()),
-        ),
+        ("--from-turbidity", shown(args.from_turbidity)),
+        ("--altitude", shown(args.altitude)),
+        ("--metres-per-unit", shown(args.metres_per_unit)),
+        ("--pitch", shown(args.pitch)),
+        ("--horizon-row", shown(args.horizon_row)),
+        ("--horizon-zenith", shown(args.horizon_zenith)),
+        ("--horizon-sectors", shown(args.horizon_sectors)),
         (
             "--retarget",
             args.retarget.map(|r| format!("{r:?}").to_lowercase()),
         ),
-        ("--latitude", text(args.place.latitude)),
-        ("--longitude", text(args.place.longitude)),
+        ("--latitude", shown(args.place.latitude)),
+        ("--longitude", shown(args.place.longitude)),
         ("--time", args.place.time.clone()),
-        ("--heading", text(args.place.heading)),
+        ("--heading", shown(args.place.heading)),
         ("--sensitivity", path(&args.sensitivity)),
         ("--blur", args.blur.map(|b| format!("{b:?}").to_lowercase())),
     ];
     let haze_only = [
-        ("--ka", text(args.ka)),
-        ("--ks", text(args.ks)),
-        (
-            "--tint",
-            args.tint.map(|t| format!("{},{},{}", t[0], t[1], t[2])),
-        ),
-        ("--uniform-sigma", text(args.uniform_sigma)),
+        ("--ka", shown(args.ka)),
+        ("--ks", shown(args.ks)),
+        ("--tint", shown3(args.tint)),
+        ("--uniform-sigma", shown(args.uniform_sigma)),
     ];
     let (others, wanted, this) = match args.medium {
         MediumKind::Haze => (&aerial_only[..], "aerial", "haze"),
@@ -127,14 +115,23 @@ fn check_medium_options(args: &RenderArgs) -> Result<()> {
         &format!("--medium {wanted} with it: the {this} medium of this render does not read it"),
     )?;
     if args.uniform_sigma.is_some() {
-        let rgb = |v: Option<[f32; 3]>| v.map(|[r, g, b]| format!("{r},{g},{b}"));
-        let fog = [&haze_only[..3], &[("--airlight", rgb(args.airlight))]].concat();
+        let fog = [&haze_only[..3], &[("--airlight", shown3(args.airlight))]].concat();
         refuse_given(
             &fog,
             "no --uniform-sigma with it: a uniform blur has no attenuation and no airlight",
         )?;
     }
     Ok(())
+}
+
+/// An option's value as a refusal names it; `None` where it was not given.
+pub(super) fn shown(value: Option<impl std::fmt::Display>) -> Option<String> {
+    value.map(|v| v.to_string())
+}
+
+/// An R,G,B or X,Y,Z option's value as typed; `None` where it was not given.
+pub(super) fn shown3<T: std::fmt::Display>(value: Option<[T; 3]>) -> Option<String> {
+    value.map(|[a, b, c]| format!("{a},{b},{c}"))
 }
 
 /// Refuses the first option of `options` (flag, value if given) that was given.
@@ -152,14 +149,8 @@ pub(super) fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -
 pub fn check_depth_options(depth: &DepthArgs) -> Result<()> {
     let zbuffer = depth.depth_kind == Some(depth::DepthKind::ZBuffer);
     let planes = [
-        (
-            "--near",
-            depth.near.filter(|_| !zbuffer).map(|v| v.to_string()),
-        ),
-        (
-            "--far",
-            depth.far.filter(|_| !zbuffer).map(|v| v.to_string()),
-        ),
+        ("--near", shown(depth.near.filter(|_| !zbuffer))),
+        ("--far", shown(depth.far.filter(|_| !zbuffer))),
     ];
     refuse_given(
         &planes,
@@ -172,10 +163,10 @@ pub fn check_depth_options(depth: &DepthArgs) -> Result<()> {
 /// draws), so it is not refused.
 pub fn refuse_prep_options(prep: &PrepOptionArgs, seed_read_elsewhere: bool) -> Result<()> {
     let given = [
-        ("--margin", prep.margin.map(|v| v.to_string())),
-        ("--sky-factor", prep.sky_factor.map(|v| v.to_string())),
+        ("--margin", shown(prep.margin)),
+        ("--sky-factor", shown(prep.sky_factor)),
         ("--no-sky", prep.no_sky.then(|| "given".to_string())),
-        ("--sky-min-area", prep.sky_min_area.map(|v| v.to_string())),
+        ("--sky-min-area", shown(prep.sky_min_area)),
         (
             "--seed",
             prep.seed
@@ -186,14 +177,8 @@ pub fn refuse_prep_options(prep: &PrepOptionArgs, seed_read_elsewhere: bool) -> 
             "--sky-mask",
             prep.sky_mask.as_ref().map(|p| p.display().to_string()),
         ),
-        (
-            "--far-outlier-factor",
-            prep.far_outlier_factor.map(|v| v.to_string()),
-        ),
-        (
-            "--local-outliers",
-            prep.local_outliers.map(|v| v.to_string()),
-        ),
+        ("--far-outlier-factor", shown(prep.far_outlier_factor)),
+        ("--local-outliers", shown(prep.local_outliers)),
         (
             "--ego-mask",
             prep.ego_mask.as_ref().map(|p| p.display().to_string()),

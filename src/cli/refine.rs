@@ -31,10 +31,10 @@ impl RefineArgs {
                 Some(_) => "--refine none does not filter".to_string(),
                 None => format!("a {format} depth is not refined by default"),
             };
-            let text = |v: Option<f64>| v.map(|v| v.to_string());
+            use super::options::shown;
             let window = [
-                ("--refine-radius", text(self.radius)),
-                ("--refine-eps", text(self.eps)),
+                ("--refine-radius", shown(self.radius)),
+                ("--refine-eps", shown(self.eps)),
             ];
             super::options::refuse_given(
                 &window,

@@ -132,9 +132,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
 /// a fog's colour or λ with `--fog none`. (`brume view scene` takes them all: its panel
 /// switches between the fogs.)
 fn check_fog_options(args: &SceneArgs) -> Result<()> {
-    let text = |v: Option<f64>| v.map(|v| v.to_string());
-    let list = |v: Option<[f64; 3]>| v.map(|[x, y, z]| format!("{x},{y},{z}"));
-    let rgb = |v: Option<[f32; 3]>| v.map(|[r, g, b]| format!("{r},{g},{b}"));
+    use super::options::{shown, shown3};
     let (l, d) = (&args.layered, &args.distance);
     let layered = [
         (
@@ -142,12 +140,12 @@ fn check_fog_options(args: &SceneArgs) -> Result<()> {
             (l.profile != ProfileKind::Exponential)
                 .then(|| format!("{:?}", l.profile).to_lowercase()),
         ),
-        ("--density", text(l.density)),
-        ("--base", text(l.base)),
-        ("--scale-height", text(l.scale_height)),
-        ("--thickness", text(l.thickness)),
-        ("--top", text(l.top)),
-        ("--albedo", text(l.albedo)),
+        ("--density", shown(l.density)),
+        ("--base", shown(l.base)),
+        ("--scale-height", shown(l.scale_height)),
+        ("--thickness", shown(l.thickness)),
+        ("--top", shown(l.top)),
+        ("--albedo", shown(l.albedo)),
         (
             "--density-csv",
             l.density_csv.as_ref().map(|p| p.display().to_string()),
@@ -158,21 +156,21 @@ fn check_fog_options(args: &SceneArgs) -> Result<()> {
             "--noise-seed",
             (d.noise_seed != 0).then(|| d.noise_seed.to_string()),
         ),
-        ("--noise-size", text(d.noise_size)),
-        ("--noise-speed", list(d.noise_speed)),
-        ("--noise-low", text(d.noise_low)),
-        ("--noise-high", text(d.noise_high)),
-        ("--noise-colour-strength", text(d.noise_colour_strength)),
+        ("--noise-size", shown(d.noise_size)),
+        ("--noise-speed", shown3(d.noise_speed)),
+        ("--noise-low", shown(d.noise_low)),
+        ("--noise-high", shown(d.noise_high)),
+        ("--noise-colour-strength", shown(d.noise_colour_strength)),
     ];
     let distance = [
-        ("--fog-start", text(d.fog_start)),
-        ("--fog-distance", text(d.fog_distance)),
-        ("--fog-exponent", text(d.fog_exponent)),
-        ("--max-density", text(d.max_density)),
-        ("--light-dir", list(d.light_dir)),
-        ("--scatter-start", text(d.scatter_start)),
-        ("--scatter-exponent", text(d.scatter_exponent)),
-        ("--scatter-colour", rgb(d.scatter_colour)),
+        ("--fog-start", shown(d.fog_start)),
+        ("--fog-distance", shown(d.fog_distance)),
+        ("--fog-exponent", shown(d.fog_exponent)),
+        ("--max-density", shown(d.max_density)),
+        ("--light-dir", shown3(d.light_dir)),
+        ("--scatter-start", shown(d.scatter_start)),
+        ("--scatter-exponent", shown(d.scatter_exponent)),
+        ("--scatter-colour", shown3(d.scatter_colour)),
         ("--noise", (d.noise != "generated").then(|| d.noise.clone())),
     ];
     let refuse = super::options::refuse_given;
@@ -197,8 +195,8 @@ fn check_fog_options(args: &SceneArgs) -> Result<()> {
     }
     if args.fog == FogKind::None {
         let given = [
-            ("--fog-colour", rgb(args.fog_colour)),
-            ("--lambda", text(args.blur_options.lambda)),
+            ("--fog-colour", shown3(args.fog_colour)),
+            ("--lambda", shown(args.blur_options.lambda)),
         ];
         refuse(&given, "a fog with it, not --fog none")?;
     }

@@ -378,6 +378,13 @@ impl std::fmt::Display for CoarseFrom {
     }
 }
 
+impl CoarseFrom {
+    /// The value as typed where it is not the default (2 px), for a refusal.
+    pub fn changed(self) -> Option<String> {
+        (self.0 != Some(brume::blur::DEFAULT_COARSE_FROM)).then(|| self.to_string())
+    }
+}
+
 /// `off`, or a finite scale ≥ [`brume::blur::MIN_COARSE_FROM`] px.
 pub fn parse_coarse_from(s: &str) -> Result<CoarseFrom, String> {
     if s == "off" {
