@@ -158,9 +158,10 @@ pub struct AerialJob {
 }
 
 /// `--medium aerial`: paper 002's aerial perspective on the prepared range in metres
-/// ([`brume::photo::aerial`]), the horizon's light from the sky found (or `--airlight`).
+/// ([`brume::photo::aerial`], which validates the options), the horizon's light from the
+/// sky found (or `--airlight`). `args` have passed [`check_aerial_options`] (render and
+/// view check every option before any file is read).
 pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result<AerialJob> {
-    check_aerial_options(args)?;
     let sun = args.place.sun(None, args.altitude.unwrap_or(0.0))?;
     let (turbidity, turbidity_source) = turbidity(args, sun.as_ref())?;
     let sensitivity = match &args.sensitivity {
