@@ -174,6 +174,14 @@ impl Blur {
         )
     }
 
+    /// Checks σ0 (finite, > 0), ρmax (in (0, 1/4]) and [`Blur::coarse_from`] before any
+    /// work, naming the field; planning a schedule checks them too.
+    pub fn validate(&self) -> Result<()> {
+        check_positive("sigma0", self.sigma0)?;
+        crate::schedule::check_rate_limit(self.rho_max)?;
+        self.check_coarse_from()
+    }
+
     /// Rejects a [`Blur::coarse_from`] that is not a finite scale ≥ [`MIN_COARSE_FROM`]
     /// (`None` passes), naming `coarse_from`.
     pub fn check_coarse_from(&self) -> Result<()> {

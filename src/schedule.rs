@@ -159,19 +159,25 @@ pub struct Schedule {
     pub steps: u32,
 }
 
+/// Accepts a rate limit ρmax in (0, 1/4], or names `rho_max`.
+pub(crate) fn check_rate_limit(rho_max: f64) -> Result<()> {
+    if rho_max > 0.0 && rho_max <= 0.25 {
+        return Ok(());
+    }
+    Err(Error::invalid(
+        "rho_max",
+        rho_max,
+        "a rate in (0, 0.25] (larger rates make the 4-neighbour update unstable)",
+    ))
+}
+
 impl Schedule {
     /// Plans the N steps that take σ0 to `sigma_max` under `scheme` with rates ≤ `rho_max`
     /// (paper 000, eq. 13 and eq. 18).
     pub fn new(scheme: Scheme, sigma0: f64, sigma_max: f64, rho_max: f64) -> Result<Self> {
         check_positive("sigma0", sigma0)?;
         check_positive("sigma_max", sigma_max)?;
-        if !(rho_max > 0.0 && rho_max <= 0.25) {
-            return Err(Error::invalid(
-                "rho_max",
-                rho_max,
-                "a rate in (0, 0.25] (larger rates make the 4-neighbour update unstable)",
-            ));
-        }
+        check_rate_limit(rho_max)?;
         if sigma_max < sigma0 {
             return Err(Error::invalid(
                 "sigma_max",

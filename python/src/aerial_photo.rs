@@ -48,8 +48,7 @@ fn out_of_range(name: &str, value: f64, expected: impl std::fmt::Display) -> PyE
 
 impl AerialArgs {
     /// Checks what the library's [`AerialOptions::validate`] cannot see: the keywords'
-    /// own forms (an integer count, a retarget name, the sun in degrees) and the inner
-    /// scale.
+    /// own forms (an integer count, a retarget name, the sun in degrees).
     fn check(&self) -> PyResult<()> {
         if self.horizon_sectors < 1 {
             return Err(out_of_range(
@@ -57,9 +56,6 @@ impl AerialArgs {
                 self.horizon_sectors as f64,
                 format!("a number of azimuth sectors in [1, {MAX_SECTORS}]"),
             ));
-        }
-        if !(self.sigma0.is_finite() && self.sigma0 > 0.0) {
-            return Err(out_of_range("sigma0", self.sigma0, "an inner scale > 0 px"));
         }
         if let (Some(r), None) = (&self.retarget, self.from_turbidity) {
             return Err(value_error(format!(

@@ -344,18 +344,7 @@ impl BlurArgs<'_> {
             "gauss-single" => Ok(FogBlur::GaussSingle(gauss)),
             "gauss-separate" => Ok(FogBlur::GaussSeparate(gauss)),
             "diffusion" => {
-                if !(self.sigma0.is_finite() && self.sigma0 > 0.0) {
-                    return Err(value_error(format!(
-                        "invalid sigma0 = {}: expected the frame's inner scale in px, > 0",
-                        self.sigma0
-                    )));
-                }
-                if !(self.rho_max > 0.0 && self.rho_max <= 0.25) {
-                    return Err(value_error(format!(
-                        "invalid rho_max = {}: expected a diffusion rate per step in (0, 0.25]",
-                        self.rho_max
-                    )));
-                }
+                diffusion.validate().map_err(py_err)?;
                 Ok(FogBlur::Diffusion(diffusion))
             }
             other => Err(value_error(format!(

@@ -199,6 +199,9 @@ pub(crate) fn fog_request(
 struct GpuFog {
     image: RgbaImage,
     haze: Haze,
+    /// The range the haze read and the range that counts as 1 ([`photo::FoggedPhoto`]).
+    range: ScalarMap,
+    range_divisor: f64,
     prepared: PreparedPhoto,
     sigma_max: f64,
 }
@@ -216,6 +219,8 @@ fn fog_on_gpu(
     Ok(GpuFog {
         image: fogged.rendered.image,
         haze: fogged.haze,
+        range: fogged.range,
+        range_divisor: fogged.range_divisor,
         prepared,
         sigma_max: fogged.rendered.schedule.sigma_max,
     })
@@ -240,17 +245,17 @@ pub(crate) struct FogInfo {
 impl FogInfo {
     /// The labels of a frame fogged with `opts`. With normalised κa and κs the range
     /// stays in the caller's units, and β is (κa + κs) per largest range.
-    fn of(gpu: &GpuFog, opts: &FogOptions) -> brume::Result<FogInfo> {
-        let (medium_range, divisor) = photo::medium_range(&opts.extinction, &gpu.prepared.range)?;
-        let transmittance = photo::transmittance_map(&gpu.haze, &medium_range);
+    fn of(gpu: &GpuFog, opts: &FogOptions) -> FogInfo {
+        let transmittance = photo::transmittance_map(&gpu.haze, &gpu.range);
+        let divisor = gpu.range_divisor;
         let (range, beta) = match opts.extinction {
-            Extinction::Physical(fog) => (medium_range, fog.beta),
+            Extinction::Physical(fog) => (gpu.range.clone(), fog.beta),
             Extinction::Normalised { ka, ks } => (
-                medium_range.map(|&r| (f64::from(r) * divisor) as f32),
+                gpu.range.map(|&r| (f64::from(r) * divisor) as f32),
                 (ka + ks) / divisor,
             ),
         };
-        Ok(FogInfo {
+        FogInfo {
             transmittance,
             range_m: range,
             airlight: gpu.prepared.airlight,
@@ -258,7 +263,7 @@ impl FogInfo {
             beta,
             visibility_m: VISIBILITY_OPTICAL_DEPTH / beta,
             sigma_max: gpu.sigma_max,
-        })
+        }
     }
 
     pub(crate) fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
@@ -292,9 +297,6 @@ pub(crate) fn fog_frame(
         .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
         .map_err(py_err)?;
     photo::capture(&mut gpu.image, &capture).map_err(py_err)?;
-    let info = want_info
-        .then(|| FogInfo::of(&gpu, &fog))
-        .transpose()
-        .map_err(py_err)?;
+    let info = want_info.then(|| FogInfo::of(&gpu, &fog));
     Ok((gpu.image, info))
 }

@@ -3,14 +3,13 @@
 //! turbidity a photo was taken at (sec. 7.2.3, eq. 25-26).
 
 use super::args::{AerialBlur, RenderArgs, RetargetKind};
-use super::photo_args::{look_from_args, PrepReport, Scene};
+use super::photo_args::{blur_from_args, PrepReport, Scene};
 use super::sun::PlacedSun;
 use brume::atmosphere::Sensitivity;
 use brume::blur::Blur;
 use brume::camera::Camera;
 use brume::io::camera::Intrinsics;
 use brume::io::output::Outputs;
-use brume::medium::haze::Haze;
 use brume::medium::{AerialPerspective, Medium};
 use brume::photo::{
     turbidity_from_sky, AerialOptions, AerialPhoto, CaptureOptions, HorizonFrom, Insertion,
@@ -169,10 +168,9 @@ pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result
         None => Sensitivity::cie_srgb(),
     };
     let camera = aerial_camera(args, scene.image.height(), scene.depth.intrinsics.as_ref())?;
-    let blur = look_from_args(args, &Haze::default(), prep.airlight).blur;
     let opts = AerialOptions {
         sun: sun.map(|s| [s.zenith, s.azimuth - s.heading]),
-        ..aerial_options(args, turbidity, camera, sensitivity, blur)?
+        ..aerial_options(args, turbidity, camera, sensitivity, blur_from_args(args))?
     };
     let photo = brume::photo::aerial(scene, prep, &opts)?;
     let light_source = match photo.horizon_from {

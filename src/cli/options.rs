@@ -2,7 +2,7 @@
 //! `view`, which take render's options): values, and options that cannot take effect.
 
 use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
-use super::photo_args::haze_from_args;
+use super::photo_args::fog_options;
 use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::io::depth;
 use brume::medium::haze;
@@ -12,7 +12,7 @@ use std::path::PathBuf;
 /// Checks `args` before any file is read: the medium's values and options that cannot
 /// take effect together.
 pub fn check_options(args: &RenderArgs) -> Result<()> {
-    haze_from_args(args)?;
+    fog_options(args)?;
     check_medium_options(args)?;
     super::aerial::check_aerial_options(args)?;
     check_depth_options(&args.depth)?;

@@ -5,11 +5,9 @@
 use super::args::{MediumKind, RenderArgs};
 use super::inputs::{depth_inputs, depth_options, load_masks, log_depth_notes, prep_options};
 use brume::blur::Blur;
-use brume::medium::haze::{self, Haze};
+use brume::medium::haze;
 use brume::medium::physical::{PhysicalFog, DEFAULT_ALBEDO};
-use brume::medium::{Medium, UniformBlur};
-use brume::photo::Extinction;
-use brume::raster::ScalarMap;
+use brume::photo::{Extinction, FogOptions};
 use brume::{Error, Result};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -18,44 +16,6 @@ use std::time::Instant;
 pub use brume::photo::Photo as Scene;
 /// What pre-processing and refinement made of the range, and the airlight.
 pub use brume::photo::PreparedPhoto as PrepReport;
-
-/// What is rendered: the medium (paper 000's haze, or a uniform blur) and the blur.
-pub struct Look {
-    pub haze: Haze,
-    pub uniform: Option<UniformBlur>,
-    pub blur: Blur,
-}
-
-impl Look {
-    pub fn medium(&self) -> &dyn Medium {
-        match &self.uniform {
-            Some(u) => u,
-            None => &self.haze,
-        }
-    }
-
-    /// κa + κs as the render applies it (0 for a uniform blur).
-    pub fn extinction(&self) -> f64 {
-        if self.uniform.is_some() {
-            0.0
-        } else {
-            self.haze.extinction()
-        }
-    }
-
-    /// The airlight as the render applies it (black for a uniform blur).
-    pub fn airlight(&self) -> [f32; 3] {
-        if self.uniform.is_some() {
-            [0.0; 3]
-        } else {
-            self.haze.airlight
-        }
-    }
-
-    pub fn sigma_max(&self) -> f64 {
-        self.medium().sigma_max(self.blur.sigma0)
-    }
-}
 
 /// Every file `args` reads: none of them may be an output.
 pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
@@ -74,32 +34,26 @@ pub fn input_paths(args: &RenderArgs) -> Vec<PathBuf> {
         .collect()
 }
 
-/// The haze of `args`: paper 000's in normalised range (--ka, --ks), or with --beta or
-/// --visibility the same medium on range in metres ([`PhysicalFog::haze`]).
-pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
-    let haze = Haze {
-        ka: args.ka.unwrap_or(haze::DEFAULT_KA),
-        ks: args.ks.unwrap_or(haze::DEFAULT_KS),
+/// `brume render`'s fog in the library's terms: paper 000's haze in normalised range
+/// (--ka, --ks), or with --beta or --visibility the same medium on range in metres, with
+/// --lambda, --tint and the blur. Every value is checked (--airlight's and
+/// --uniform-sigma's too) before any file is read.
+pub fn fog_options(args: &RenderArgs) -> Result<FogOptions> {
+    let extinction = match physical_from_args(args)? {
+        Some(fog) => Extinction::Physical(fog),
+        None => Extinction::Normalised {
+            ka: args.ka.unwrap_or(haze::DEFAULT_KA),
+            ks: args.ks.unwrap_or(haze::DEFAULT_KS),
+        },
+    };
+    let opts = FogOptions {
+        extinction,
         lambda: args.lambda,
-        airlight: args.airlight.unwrap_or(haze::DEFAULT_AIRLIGHT),
         tint: args.tint.unwrap_or([1.0; 3]),
-        range_unit: 1.0,
+        blur: blur_from_args(args),
     };
-    haze.validate()?;
-    let haze = match physical_from_args(args)? {
-        Some(fog) => fog.haze(&haze),
-        None => haze,
-    };
-    if !(args.sigma0.is_finite() && args.sigma0 > 0.0) {
-        return Err(Error::invalid("sigma0", args.sigma0, "a finite number > 0"));
-    }
-    if !(args.rho_max > 0.0 && args.rho_max <= 0.25) {
-        return Err(Error::invalid(
-            "rho_max",
-            args.rho_max,
-            "a rate in (0, 0.25]",
-        ));
-    }
+    opts.haze(args.airlight.unwrap_or(haze::DEFAULT_AIRLIGHT))?;
+    opts.blur.validate()?;
     if let Some(s) = args.uniform_sigma {
         if !(s.is_finite() && s >= args.sigma0) {
             return Err(Error::invalid(
@@ -109,21 +63,19 @@ pub fn haze_from_args(args: &RenderArgs) -> Result<Haze> {
             ));
         }
     }
-    Ok(haze)
+    Ok(opts)
 }
 
-/// The range the haze reads (see [`haze_range`]), the range that counts as 1, and the
-/// look, as `brume render` renders them.
-pub fn haze_inputs(args: &RenderArgs, prep: &PrepReport) -> Result<(ScalarMap, f64, Look)> {
-    let range = &prep.range;
-    let haze = haze_from_args(args)?;
-    let fog = physical_from_args(args)?;
-    let (medium_range, range_divisor) = haze_range(fog.as_ref(), &haze, range)?;
-    Ok((
-        medium_range,
-        range_divisor,
-        look_from_args(args, &haze, prep.airlight),
-    ))
+/// The diffusion blur of `args`.
+pub fn blur_from_args(args: &RenderArgs) -> Blur {
+    Blur {
+        scheme: args.scheme,
+        sigma0: args.sigma0,
+        rho_max: args.rho_max,
+        precision: args.precision,
+        coarse_from: args.coarse_from.0,
+        ..Blur::default()
+    }
 }
 
 /// The fog of --beta or --visibility (with --albedo), or `None` for normalised κ. Refused
@@ -216,32 +168,6 @@ fn check_metric(args: &RenderArgs, scene: &Scene) -> Result<()> {
     ))
 }
 
-/// The range texture of the haze and the range that counts as 1 (`range_divisor`):
-/// normalised by its largest value (paper 000), or kept in metres for physical fog, whose
-/// unit is the visibility.
-pub fn haze_range(
-    fog: Option<&PhysicalFog>,
-    haze: &Haze,
-    range: &ScalarMap,
-) -> Result<(ScalarMap, f64)> {
-    let extinction = match fog {
-        Some(f) => Extinction::Physical(*f),
-        None => Extinction::Normalised {
-            ka: haze.ka,
-            ks: haze.ks,
-        },
-    };
-    let (medium_range, r_max) = brume::photo::medium_range(&extinction, range)?;
-    Ok((
-        medium_range,
-        if fog.is_some() {
-            haze.range_unit
-        } else {
-            r_max
-        },
-    ))
-}
-
 /// The photo and its range (or the demo), checked to be of one size and, for physical
 /// fog, in metres.
 pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
@@ -302,19 +228,4 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
         );
     }
     Ok(prepared)
-}
-
-pub fn look_from_args(args: &RenderArgs, haze: &Haze, airlight: [f32; 3]) -> Look {
-    Look {
-        haze: Haze { airlight, ..*haze },
-        uniform: args.uniform_sigma.map(UniformBlur::new),
-        blur: Blur {
-            scheme: args.scheme,
-            sigma0: args.sigma0,
-            rho_max: args.rho_max,
-            precision: args.precision,
-            coarse_from: args.coarse_from.0,
-            ..Blur::default()
-        },
-    }
 }

@@ -2,13 +2,13 @@
 
 use super::args::{Compat, MediumKind, RenderArgs};
 use super::capture::{capture_options, insert_json, insert_object, print_insert_and_capture};
-use super::photo_args::{
-    haze_inputs, input_paths, load_scene, physical_from_args, preprocess, Look, PrepReport, Scene,
-};
+use super::photo_args::{fog_options, input_paths, load_scene, preprocess, PrepReport, Scene};
 use brume::egl::Platform;
 use brume::io::output::{self, Outputs};
+use brume::medium::haze::Haze;
 use brume::medium::physical::PhysicalFog;
-use brume::photo;
+use brume::medium::{Medium, UniformBlur};
+use brume::photo::{self, Extinction, FogOptions};
 use brume::raster::ScalarMap;
 use brume::Rendered;
 use brume::{Error, Result};
@@ -51,9 +51,11 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         };
         return super::aerial::run_aerial(args, &mut headless, &scene, &prep, &out, extras);
     }
-    let fog = physical_from_args(args)?;
+    let opts = fog_options(args)?;
     if args.compat == Some(Compat::FoggyCityscapes) {
-        let fog = fog.expect("checked: --compat foggy-cityscapes has physical fog");
+        let Extinction::Physical(fog) = opts.extinction else {
+            unreachable!("checked: --compat foggy-cityscapes has physical fog")
+        };
         if !capture.is_off() {
             return Err(Error::invalid(
                 "--compat",
@@ -64,11 +66,20 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         }
         return super::compat::run_foggy_cityscapes(args, &scene, range, &fog, &out);
     }
-    let (medium_range, range_divisor, look) = haze_inputs(args, &prep)?;
-    let transmittance = transmittance_range(&look, &medium_range, &scene.depth.range);
-
-    let renderer = &mut headless;
-    let mut rendered = renderer.render(&scene.image, &medium_range, look.medium(), &look.blur)?;
+    let uniform = args.uniform_sigma.map(UniformBlur::new);
+    let (mut rendered, haze, range_divisor, transmittance) = match &uniform {
+        None => {
+            let f = photo::fog(headless.renderer()?, &scene, &prep, &opts)?;
+            let t = transmittance_range(&f.haze, &f.range, &scene.depth.range);
+            (f.rendered, Some(f.haze), f.range_divisor, t)
+        }
+        Some(u) => {
+            // The range is read as the fog would read it, and changes nothing.
+            let (range, divisor) = photo::medium_range(&opts.extinction, &prep.range)?;
+            let rendered = headless.render(&scene.image, &range, u, &opts.blur)?;
+            (rendered, None, divisor, None)
+        }
+    };
     photo::capture(&mut rendered.image, &capture)?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(&out, &rendered.image)?;
@@ -77,11 +88,15 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let report = Report {
         scene: &scene,
         prep: &prep,
-        look: &look,
-        fog: fog.as_ref(),
+        medium: match (&uniform, &haze) {
+            (Some(u), _) => u,
+            (None, h) => h.as_ref().expect("the fog renders a haze"),
+        },
+        haze: haze.as_ref(),
+        opts: &opts,
         transmittance,
         rendered: &rendered,
-        renderer: &renderer.caps().renderer,
+        renderer: &headless.caps().renderer,
         out: &out,
     };
     if args.json {
@@ -109,9 +124,11 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
 struct Report<'a> {
     scene: &'a Scene,
     prep: &'a PrepReport,
-    look: &'a Look,
-    /// The fog in physical units, when --beta or --visibility gave it.
-    fog: Option<&'a PhysicalFog>,
+    /// The haze, or the uniform blur of `--uniform-sigma`.
+    medium: &'a dyn Medium,
+    /// The haze as rendered; `None` for a uniform blur.
+    haze: Option<&'a Haze>,
+    opts: &'a FogOptions,
     /// The least and the largest τ over the pixels of known range (none for a uniform blur).
     transmittance: Option<[f64; 2]>,
     rendered: &'a Rendered,
@@ -119,18 +136,13 @@ struct Report<'a> {
     out: &'a Path,
 }
 
-/// The least and the largest τ (over channels) of the haze at the pixels whose range
-/// was measured (`measured` known), as the medium computes it from its range texture;
-/// `None` for a uniform blur.
+/// The least and the largest τ (over channels) of `haze` at the pixels whose range was
+/// measured (`measured` known), as the medium computes it from its range texture.
 fn transmittance_range(
-    look: &Look,
+    haze: &Haze,
     medium_range: &ScalarMap,
     measured: &ScalarMap,
 ) -> Option<[f64; 2]> {
-    if look.uniform.is_some() {
-        return None;
-    }
-    let haze = &look.haze;
     medium_range
         .as_slice()
         .iter()
@@ -156,24 +168,48 @@ fn output_path(args: &RenderArgs) -> Result<PathBuf> {
 }
 
 impl Report<'_> {
+    /// The fog in physical units, when --beta or --visibility gave it.
+    fn physical(&self) -> Option<&PhysicalFog> {
+        match &self.opts.extinction {
+            Extinction::Physical(fog) => Some(fog),
+            Extinction::Normalised { .. } => None,
+        }
+    }
+
+    /// κa + κs as the render applied it (0 for a uniform blur).
+    fn extinction(&self) -> f64 {
+        self.haze.map_or(0.0, Haze::extinction)
+    }
+
+    /// The airlight as the render applied it (black for a uniform blur).
+    fn airlight(&self) -> [f32; 3] {
+        self.haze.map_or([0.0; 3], |h| h.airlight)
+    }
+
+    fn sigma_max(&self) -> f64 {
+        self.medium.sigma_max(self.opts.blur.sigma0)
+    }
+
     fn json(&self, args: &RenderArgs, range_divisor: f64) -> serde_json::Value {
         let Report {
             scene,
             prep,
-            look,
-            fog,
+            medium,
+            opts,
             transmittance,
             rendered,
             renderer,
             out,
+            ..
         } = *self;
+        let fog = self.physical();
         let prep_json = prep.prepared.as_ref().map(|p| &p.stats);
         json!({
             "width": scene.image.width(),
             "height": scene.image.height(),
-            "medium": look.medium().name(),
-            "scheme": look.blur.scheme,
-            "precision": look.blur.precision,
+            "medium": medium.name(),
+            "scheme": opts.blur.scheme,
+            "precision": opts.blur.precision,
             "diffusion_passes": rendered.schedule.steps,
             "passes": rendered.times.pass_ms.len(),
             "renderer": renderer,
@@ -186,18 +222,18 @@ impl Report<'_> {
             "depth_format": scene.depth.format.to_string(),
             "depth_kind": scene.depth.kind.to_string(),
             "depth_notes": scene.depth.notes,
-            "sigma0": look.blur.sigma0,
-            "sigma_max": look.sigma_max(),
+            "sigma0": opts.blur.sigma0,
+            "sigma_max": self.sigma_max(),
             "uniform_sigma": args.uniform_sigma,
-            "extinction": look.extinction(),
-            "tint": look.haze.tint,
+            "extinction": self.extinction(),
+            "tint": opts.tint,
             "range_divisor": range_divisor,
             "beta": fog.map(|f| f.beta),
             "visibility_m": fog.map(PhysicalFog::visibility_m),
             "albedo": fog.map(|f| f.albedo),
             "transmittance_min": transmittance.map(|t| t[0]),
             "transmittance_max": transmittance.map(|t| t[1]),
-            "airlight": look.airlight(),
+            "airlight": self.airlight(),
             "airlight_source": prep.airlight_from.name(),
             "prep": prep_json,
         })
@@ -207,13 +243,14 @@ impl Report<'_> {
         let Report {
             scene,
             prep,
-            look,
-            fog,
+            opts,
             transmittance,
             rendered,
             renderer,
             out,
+            ..
         } = *self;
+        let fog = self.physical();
         let t = &rendered.times;
         if let Some(p) = &prep.prepared {
             let s = &p.stats;
@@ -225,15 +262,15 @@ impl Report<'_> {
                 s.total_ms
             );
         }
-        let b = look.airlight();
+        let b = self.airlight();
         outln!(
             "airlight {:.3},{:.3},{:.3} ({}), σmax {:.2} px, κ {:.3}",
             b[0],
             b[1],
             b[2],
             prep.airlight_from.name(),
-            look.sigma_max(),
-            look.extinction()
+            self.sigma_max(),
+            self.extinction()
         );
         if let Some(f) = fog {
             outln!(
@@ -251,8 +288,8 @@ impl Report<'_> {
             out.display(),
             scene.image.width(),
             scene.image.height(),
-            look.blur.scheme,
-            look.blur.precision,
+            opts.blur.scheme,
+            opts.blur.precision,
             rendered.schedule.steps,
             rendered.pass_names().len(),
             t.describe(1),

@@ -128,7 +128,7 @@ impl AerialOptions {
     /// Checks the values, naming the field that is wrong and what it should be: the
     /// turbidities in [`TURBIDITY_RANGE`], the altitude in [`ALTITUDE_RANGE_M`], metres per
     /// unit > 0, λ ≥ 0, the horizon's zenith angle in [0, 90]°, the sectors in [1,
-    /// [`MAX_SECTORS`]], the sun's angles, the camera.
+    /// [`MAX_SECTORS`]], the sun's angles, the blur ([`Blur::validate`]), the camera.
     pub fn validate(&self) -> Result<()> {
         let (t_lo, t_hi) = TURBIDITY_RANGE;
         for (name, t) in [
@@ -186,6 +186,7 @@ impl AerialOptions {
                 ));
             }
         }
+        self.blur.validate()?;
         self.camera.validate()
     }
 }

@@ -74,6 +74,13 @@ impl FogOptions {
         })
     }
 
+    /// Checks every value before any work, naming the field: the haze's (with paper
+    /// 000's default airlight) and the blur's ([`Blur::validate`]).
+    pub fn validate(&self) -> Result<()> {
+        self.haze(haze::DEFAULT_AIRLIGHT)?;
+        self.blur.validate()
+    }
+
     /// The haze medium with `airlight`, its values checked.
     pub fn haze(&self, airlight: [f32; 3]) -> Result<Haze> {
         let (ka, ks) = match self.extinction {
@@ -119,6 +126,9 @@ pub struct FoggedPhoto {
     pub rendered: Rendered,
     /// The medium as rendered (its `range_unit` the visibility for physical fog).
     pub haze: Haze,
+    /// The range texture the haze read ([`medium_range`]): normalised by its largest
+    /// value, or in metres for physical fog.
+    pub range: ScalarMap,
     /// The range that counts as 1 in the medium's units: the largest range (normalised
     /// extinction) or the visibility in metres (physical fog).
     pub range_divisor: f64,
@@ -159,6 +169,7 @@ pub fn fog(
     Ok(FoggedPhoto {
         rendered,
         haze,
+        range,
         range_divisor,
     })
 }

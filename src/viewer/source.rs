@@ -175,7 +175,7 @@ impl PhotoLook {
 impl Photo {
     /// The photo `brume render ARGS` would render, uploaded to `gl`.
     pub fn load(args: &RenderArgs, gl: &Arc<glow::Context>) -> Result<Self> {
-        render_cmd::haze_from_args(args)?;
+        let fog = render_cmd::fog_options(args)?;
         let mut scene = render_cmd::load_scene(args)?;
         let mut prep = render_cmd::preprocess(args, &scene)?;
         // Once, at load: the CPU reference of the GPU refinement (the same result within
@@ -191,11 +191,11 @@ impl Photo {
             let look = aerial_look(&job);
             (job.photo.image, job.photo.range, look)
         } else {
-            let (medium_range, _, look) = render_cmd::haze_inputs(args, &prep)?;
+            let (medium_range, _) = brume::photo::medium_range(&fog.extinction, &prep.range)?;
             let look = PhotoLook::Haze {
-                haze: look.haze,
-                uniform: look.uniform,
-                blur: look.blur,
+                haze: fog.haze(prep.airlight)?,
+                uniform: args.uniform_sigma.map(UniformBlur::new),
+                blur: fog.blur,
             };
             (scene.image, medium_range, look)
         };
