@@ -4,7 +4,7 @@
 //! `brume sun`.
 
 use brume::sky::sun_position::{
-    delta_t_estimate, parse_rfc3339, sun_position, Observer, SunPosition,
+    delta_t_estimate, parse_rfc3339, sun_position, Observer, Place, SunPosition,
 };
 use serde_json::Value;
 use std::process::Command;
@@ -110,6 +110,61 @@ fn the_default_delta_t_matches_pvlibs_and_keeps_the_accuracy() {
     for w in worst {
         assert!(w < TOLERANCE_DEG, "{worst:?}");
     }
+}
+
+/// `Place::sun`, what `--latitude/--longitude/--time/--heading` use, against pvlib: the
+/// geometric zenith and the azimuth (which the refraction of pvlib's random pressures does
+/// not change) within 0.01° with ΔT estimated, the heading in radians as given, and a sun
+/// clearly below the horizon refused, naming the time.
+#[test]
+fn a_place_and_time_put_the_sun_where_pvlib_does() {
+    let (mut placed, mut refused) = (0, 0);
+    for r in reference() {
+        let place = Place {
+            latitude_deg: r.observer.latitude_deg,
+            longitude_deg: r.observer.longitude_deg,
+            time: r.time.clone(),
+            heading_deg: 30.0,
+            altitude_m: r.observer.altitude_m,
+        };
+        if r.zenith > 91.0 {
+            let e = place.sun().unwrap_err().to_string();
+            assert!(e.contains("time") && e.contains("sun is up"), "{e}");
+            refused += 1;
+        } else if r.apparent < 89.0 {
+            let sun = place.sun().unwrap();
+            let p = sun.position;
+            assert!(
+                (p.zenith_deg - r.zenith).abs() < TOLERANCE_DEG,
+                "{}: {p:?}",
+                r.time
+            );
+            assert!(
+                azimuth_diff(p.azimuth_deg, r.azimuth) < TOLERANCE_DEG,
+                "{p:?}"
+            );
+            assert_eq!(sun.zenith, p.apparent_zenith_deg.to_radians());
+            assert_eq!(sun.azimuth, p.azimuth_deg.to_radians());
+            assert_eq!((sun.heading, sun.heading_deg), (30f64.to_radians(), 30.0));
+            placed += 1;
+        }
+    }
+    assert!(
+        placed >= 100 && refused >= 100,
+        "{placed} placed, {refused} refused"
+    );
+    let bad = Place {
+        heading_deg: f64::NAN,
+        ..Place {
+            latitude_deg: 48.0,
+            longitude_deg: 2.0,
+            time: "2024-06-21T12:00:00Z".into(),
+            heading_deg: 0.0,
+            altitude_m: 0.0,
+        }
+    };
+    let e = bad.sun().unwrap_err().to_string();
+    assert!(e.contains("heading_deg"), "{e}");
 }
 
 /// Reda & Andreas' example: 2003-10-17 12:30:30 local (UTC−7), 39.742476° N,

@@ -4,7 +4,6 @@
 
 use super::args::{AerialBlur, RenderArgs, RetargetKind};
 use super::photo_args::{blur_from_args, PrepReport, Scene};
-use super::sun::PlacedSun;
 use brume::atmosphere::Sensitivity;
 use brume::blur::Blur;
 use brume::camera::Camera;
@@ -16,6 +15,7 @@ use brume::photo::{
     PhotoView, Retarget, DEFAULT_HORIZON_ZENITH_DEG, TURBIDITY_RANGE,
 };
 use brume::sky::horizon_sectors::{DEFAULT_SECTORS, MAX_SECTORS};
+use brume::sky::sun_position::PlacedSun;
 use brume::Headless;
 use brume::{Error, Result};
 use serde_json::json;
@@ -239,7 +239,7 @@ pub fn run_aerial(
                 "turbidity_source": look.turbidity_source,
                 "from_turbidity": look.from_turbidity,
                 "retarget": look.from_turbidity.map(|_| look.retarget.name()),
-                "sun": look.sun.map(|s| s.json()),
+                "sun": look.sun.as_ref().map(super::sun::placed_sun_json),
                 "horizon_sectors": m.horizon_sectors.gains(),
                 "altitude": m.table.altitude_m(),
                 "metres_per_unit": m.metres_per_unit,

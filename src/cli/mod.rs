@@ -155,8 +155,14 @@ fn open_renderer(egl: Option<Platform>) -> Result<Headless> {
 }
 
 /// Library fields whose flag is not the field's name with dashes.
-const FLAG_ALIASES: [(&str, &str); 9] = [
+const FLAG_ALIASES: [(&str, &str); 15] = [
     ("local_outlier_factor", "--local-outliers"),
+    ("latitude_deg", "--latitude"),
+    ("longitude_deg", "--longitude"),
+    ("pressure_hpa", "--pressure"),
+    ("temperature_c", "--temperature"),
+    ("delta_t_s", "--delta-t"),
+    ("heading_deg", "--heading"),
     ("sky_range_factor", "--sky-factor"),
     ("min_area_fraction", "--sky-min-area"),
     ("margin_px", "--margin"),

@@ -2,11 +2,12 @@
 //! turbidity of a fisheye sky image, paper 002 sec. 3.4). CPU only: no GL context.
 
 use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
-use super::sun::{PlaceTimeArgs, PlacedSun};
+use super::sun::PlaceTimeArgs;
 use brume::io::image::load_linear_rgb;
 use brume::io::output::{self, Outputs};
 use brume::raster::Grid;
 use brume::sky::clouds::{add_clouds, CloudOptions};
+use brume::sky::sun_position::PlacedSun;
 use brume::sky::turbidity::{self, SunSource, TurbidityEstimate};
 use brume::sky::{self, Fisheye, Lens, PreethamSky, TurbidityOptions};
 use brume::{Error, Result};
@@ -367,7 +368,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             "turbidity": args.turbidity,
             "sun_zenith_deg": sun_zenith_deg,
             "sun_azimuth_deg": sun_azimuth_deg,
-            "sun_from_place": placed.map(|p| p.json()),
+            "sun_from_place": placed.as_ref().map(super::sun::placed_sun_json),
             "fisheye": {
                 "lens": fisheye.lens.name(),
                 "counter_clockwise": fisheye.counter_clockwise,

@@ -3,8 +3,7 @@
 //! `render --medium aerial` take instead of sun angles.
 
 use brume::sky::sun_position::{
-    delta_t_estimate, parse_rfc3339, sun_position, Observer, SunPosition, DEFAULT_PRESSURE_HPA,
-    DEFAULT_TEMPERATURE_C,
+    Observer, Place, PlacedSun, DEFAULT_PRESSURE_HPA, DEFAULT_TEMPERATURE_C,
 };
 use brume::{Error, Result};
 use clap::Args;
@@ -63,7 +62,7 @@ pub fn run_sun(args: &SunArgs) -> Result<()> {
         pressure_hpa: args.pressure,
         temperature_c: args.temperature,
     };
-    let sun = locate(&observer, &args.time, args.delta_t)?;
+    let sun = observer.sun_at(&args.time, args.delta_t)?;
     if args.json {
         outln!(
             "{}",
@@ -97,13 +96,6 @@ pub fn run_sun(args: &SunArgs) -> Result<()> {
     Ok(())
 }
 
-/// The sun seen by `observer` at RFC 3339 `time`, ΔT given or estimated.
-fn locate(observer: &Observer, time: &str, delta_t: Option<f64>) -> Result<SunPosition> {
-    let utc = parse_rfc3339(time)?;
-    let delta_t = delta_t.unwrap_or_else(|| delta_t_estimate(utc.decimal_year()));
-    sun_position(&utc, observer, delta_t)
-}
-
 /// `--latitude/--longitude/--time/--heading`, flattened into the commands that take a
 /// sun.
 #[derive(Args, Debug, Clone, Default)]
@@ -129,32 +121,15 @@ pub struct PlaceTimeArgs {
     pub heading: Option<f64>,
 }
 
-/// The sun found from place and time, in the library's radians.
-#[derive(Clone, Copy, Debug)]
-pub struct PlacedSun {
-    /// The apparent (refracted) zenith angle: what a camera sees, radians.
-    pub zenith: f64,
-    /// Azimuth clockwise from north, radians.
-    pub azimuth: f64,
-    /// The camera's heading, radians clockwise from north.
-    pub heading: f64,
-    /// The heading as given, degrees.
-    pub heading_deg: f64,
-    /// The full result, for reports.
-    pub position: SunPosition,
-}
-
-impl PlacedSun {
-    /// The report's fields.
-    pub fn json(&self) -> serde_json::Value {
-        json!({
-            "zenith_deg": self.position.zenith_deg,
-            "apparent_zenith_deg": self.position.apparent_zenith_deg,
-            "azimuth_deg": self.position.azimuth_deg,
-            "heading_deg": self.heading_deg,
-            "delta_t_s": self.position.delta_t_s,
-        })
-    }
+/// The report's fields of a sun placed from `--latitude/--longitude/--time/--heading`.
+pub fn placed_sun_json(sun: &PlacedSun) -> serde_json::Value {
+    json!({
+        "zenith_deg": sun.position.zenith_deg,
+        "apparent_zenith_deg": sun.position.apparent_zenith_deg,
+        "azimuth_deg": sun.position.azimuth_deg,
+        "heading_deg": sun.heading_deg,
+        "delta_t_s": sun.position.delta_t_s,
+    })
 }
 
 impl PlaceTimeArgs {
@@ -200,36 +175,13 @@ impl PlaceTimeArgs {
                 ));
             }
         };
-        let heading = self.heading.unwrap_or(0.0);
-        if !heading.is_finite() {
-            return Err(Error::invalid(
-                "--heading",
-                heading,
-                "a compass heading in degrees, clockwise from north",
-            ));
-        }
-        let observer = Observer {
+        let place = Place {
+            latitude_deg: latitude,
+            longitude_deg: longitude,
+            time: time.clone(),
+            heading_deg: self.heading.unwrap_or(0.0),
             altitude_m,
-            ..Observer::new(latitude, longitude)
         };
-        let position = locate(&observer, time, None)?;
-        if position.apparent_zenith_deg >= 90.0 {
-            return Err(Error::invalid(
-                "--time",
-                time,
-                format!(
-                    "a time when the sun is up at {latitude}°, {longitude}° (its apparent \
-                     zenith angle is then {:.2}°, at or below the horizon)",
-                    position.apparent_zenith_deg
-                ),
-            ));
-        }
-        Ok(Some(PlacedSun {
-            zenith: position.apparent_zenith_deg.to_radians(),
-            azimuth: position.azimuth_deg.to_radians(),
-            heading: heading.to_radians(),
-            heading_deg: heading,
-            position,
-        }))
+        place.sun().map(Some)
     }
 }

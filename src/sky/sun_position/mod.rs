@@ -112,7 +112,7 @@ fn days_from_civil(year: i32, month: u32, day: u32) -> i64 {
 pub fn parse_rfc3339(text: &str) -> Result<UtcTime> {
     let bad = |why: &str| {
         Error::invalid(
-            "--time",
+            "time",
             text,
             format!(
                 "an RFC 3339 time such as 2003-10-17T12:30:30-07:00 or \
@@ -272,35 +272,35 @@ impl Observer {
         }
     }
 
-    /// Checks the ranges, naming the command line's flags.
+    /// Checks the ranges, naming the field that is out of range.
     pub fn validate(&self) -> Result<()> {
         let checks = [
             (
-                "--latitude",
+                "latitude_deg",
                 self.latitude_deg,
                 (-90.0..=90.0).contains(&self.latitude_deg),
                 "a latitude in [-90, 90] degrees, north positive",
             ),
             (
-                "--longitude",
+                "longitude_deg",
                 self.longitude_deg,
                 (-180.0..=180.0).contains(&self.longitude_deg),
                 "a longitude in [-180, 180] degrees, east positive",
             ),
             (
-                "--altitude",
+                "altitude_m",
                 self.altitude_m,
                 (-500.0..=20_000.0).contains(&self.altitude_m),
                 "an altitude above sea level in [-500, 20000] m",
             ),
             (
-                "--pressure",
+                "pressure_hpa",
                 self.pressure_hpa,
                 (0.0..=1200.0).contains(&self.pressure_hpa),
                 "a pressure in [0, 1200] hPa",
             ),
             (
-                "--temperature",
+                "temperature_c",
                 self.temperature_c,
                 (-90.0..=60.0).contains(&self.temperature_c),
                 "a temperature in [-90, 60] °C",
@@ -312,6 +312,85 @@ impl Observer {
             }
         }
         Ok(())
+    }
+
+    /// The sun this observer sees at `time` (RFC 3339, [`parse_rfc3339`]), with ΔT in
+    /// seconds or, when `None`, [`delta_t_estimate`]'s for the year.
+    pub fn sun_at(&self, time: &str, delta_t_s: Option<f64>) -> Result<SunPosition> {
+        let utc = parse_rfc3339(time)?;
+        let delta_t = delta_t_s.unwrap_or_else(|| delta_t_estimate(utc.decimal_year()));
+        sun_position(&utc, self, delta_t)
+    }
+}
+
+/// Where and when a photo or a fisheye sky was taken, and which way the camera looked:
+/// what [`Place::sun`] needs to put the sun in the image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Place {
+    /// Latitude, degrees, north positive.
+    pub latitude_deg: f64,
+    /// Longitude, degrees, east positive.
+    pub longitude_deg: f64,
+    /// The instant, RFC 3339 with its UTC offset ([`parse_rfc3339`]).
+    pub time: String,
+    /// The camera's heading, degrees clockwise from north: for a fisheye sky the compass
+    /// direction at the top of the image, for a photo the direction of its centre.
+    pub heading_deg: f64,
+    /// The observer's height above sea level, metres.
+    pub altitude_m: f64,
+}
+
+/// The sun found from a [`Place`], in the library's radians.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlacedSun {
+    /// The apparent (refracted) zenith angle: what a camera sees, radians.
+    pub zenith: f64,
+    /// Azimuth clockwise from north, radians.
+    pub azimuth: f64,
+    /// The camera's heading, radians clockwise from north.
+    pub heading: f64,
+    /// The heading as given, degrees.
+    pub heading_deg: f64,
+    /// The full result of the algorithm.
+    pub position: SunPosition,
+}
+
+impl Place {
+    /// The sun at this place and time (standard pressure and temperature for the
+    /// refraction, ΔT estimated). Errors name the field: a place or time out of range, a
+    /// heading that is not finite, a sun at or below the horizon (no daylight photo
+    /// has it there).
+    pub fn sun(&self) -> Result<PlacedSun> {
+        if !self.heading_deg.is_finite() {
+            return Err(Error::invalid(
+                "heading_deg",
+                self.heading_deg,
+                "a compass heading in degrees, clockwise from north",
+            ));
+        }
+        let observer = Observer {
+            altitude_m: self.altitude_m,
+            ..Observer::new(self.latitude_deg, self.longitude_deg)
+        };
+        let position = observer.sun_at(&self.time, None)?;
+        if position.apparent_zenith_deg >= 90.0 {
+            return Err(Error::invalid(
+                "time",
+                &self.time,
+                format!(
+                    "a time when the sun is up at {}°, {}° (its apparent zenith angle is \
+                     then {:.2}°, at or below the horizon)",
+                    self.latitude_deg, self.longitude_deg, position.apparent_zenith_deg
+                ),
+            ));
+        }
+        Ok(PlacedSun {
+            zenith: position.apparent_zenith_deg.to_radians(),
+            azimuth: position.azimuth_deg.to_radians(),
+            heading: self.heading_deg.to_radians(),
+            heading_deg: self.heading_deg,
+            position,
+        })
     }
 }
 
@@ -416,14 +495,14 @@ pub fn sun_position(time: &UtcTime, observer: &Observer, delta_t_s: f64) -> Resu
     let (lo, hi) = VALID_YEARS;
     if !(lo..=hi).contains(&time.year) {
         return Err(Error::invalid(
-            "--time",
+            "time",
             time.year,
             format!("a year in [{lo}, {hi}], where the algorithm holds"),
         ));
     }
     if !(delta_t_s.is_finite() && delta_t_s.abs() < 1e5) {
         return Err(Error::invalid(
-            "--delta-t",
+            "delta_t_s",
             delta_t_s,
             "ΔT = TT − UT in seconds (about 64 to 200 for 2000-2100)",
         ));
@@ -555,7 +634,7 @@ mod tests {
             "2024-01-01T00:00:00.Z",
         ] {
             let e = parse_rfc3339(bad).unwrap_err().to_string();
-            assert!(e.contains("--time") && e.contains("RFC 3339"), "{bad}: {e}");
+            assert!(e.contains("time") && e.contains("RFC 3339"), "{bad}: {e}");
         }
     }
 
