@@ -402,8 +402,13 @@ fn bench_is_all_or_nothing() {
         s("--max-passes -5", 1, "--max-passes"),
         s("--runs two", 2, "--runs"),
         s("--tau blue", 2, "--tau"),
-        s("--coarse-from 1", 1, "--coarse-from 1"),
-        a("--coarse-from NaN", "--coarse-from NaN"),
+        s("--coarse-from 1", 2, "`off` or a scale in px ≥ 2"),
+        case(
+            &accuracy,
+            "--coarse-from NaN",
+            2,
+            "'NaN' for '--coarse-from",
+        ),
         s("--csv range.pfm.csv --plot table.csv", 1, "--plot"),
         case("bench sideways", "", 2, "sideways"),
     ]);

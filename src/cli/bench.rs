@@ -2,6 +2,7 @@
 //! an open renderer. Lists and sizes are taken as text and checked here, so that a bad
 //! value is an [`Error::invalid`] naming the option, like every other brume error.
 
+use super::args::{parse_coarse_from, CoarseFrom};
 use super::limits::{self, MAX_ESTIMATIONS, MAX_RUNS, MAX_SAMPLES, MAX_TURBIDITY_BENCH_SIDE};
 use brume::bench::accuracy::{run_accuracy, AccuracyOptions};
 use brume::bench::fog::{fog_table, run_fog_bench, FogBenchOptions};
@@ -249,10 +250,16 @@ pub struct CommonArgs {
     /// Coarse to fine (matched scheme): run the steps at half resolution once the
     /// blur has reached this scale in px (≥ 2), at a quarter once it has doubled; a σref of
     /// 10 px or more starts at step 0 whatever PX (a uniform blur keeps no full-resolution
-    /// detail); default here: every step at full resolution, the paper's pipeline
-    /// (`render`, `batch` and `view` default to 2).
-    #[arg(long, value_name = "PX", allow_hyphen_values = true)]
-    pub coarse_from: Option<f64>,
+    /// detail); `off`, the default here, runs every step at full resolution, the paper's
+    /// pipeline (`render`, `batch` and `view` default to 2).
+    #[arg(
+        long,
+        value_name = "off|PX",
+        default_value_t = CoarseFrom(None),
+        allow_hyphen_values = true,
+        value_parser = parse_coarse_from
+    )]
+    pub coarse_from: CoarseFrom,
 }
 
 /// `brume bench accuracy`.
@@ -344,7 +351,7 @@ impl AccuracyArgs {
     pub fn options(&self) -> Result<AccuracyOptions> {
         let opts = AccuracyOptions {
             configs: self.common.configs()?,
-            coarse_from: self.common.coarse_from,
+            coarse_from: self.common.coarse_from.0,
         };
         opts.validate()?;
         Ok(opts)
@@ -365,7 +372,7 @@ impl SpeedArgs {
                 .map(|p| count("--max-passes", p, "a number of passes ≥ 0"))
                 .transpose()?,
             tau: self.tau,
-            coarse_from: self.common.coarse_from,
+            coarse_from: self.common.coarse_from.0,
         };
         opts.validate()?;
         Ok(opts)

@@ -23,7 +23,10 @@ mod scene;
 mod view;
 
 pub use batch::BatchArgs;
-pub use render::{AerialBlur, CaptureArgs, Compat, MediumKind, RenderArgs, RetargetKind};
+pub use render::{
+    parse_coarse_from, AerialBlur, CaptureArgs, CoarseFrom, Compat, MediumKind, RenderArgs,
+    RetargetKind,
+};
 pub use scene::{BlurKind, DistanceArgs, FogKind, LayeredArgs, ProfileKind, SceneArgs};
 #[cfg(all(feature = "viewer", not(target_os = "android")))]
 pub use view::{ViewArgs, ViewSource, Zoom};
