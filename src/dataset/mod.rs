@@ -203,31 +203,21 @@ fn fnv1a(bytes: &[u8]) -> u64 {
 /// skip them.
 pub fn find_cityscapes(root: &Path) -> Result<Vec<std::result::Result<Item, Error>>> {
     let mut images = Vec::new();
-    walk(root, &mut images)?;
+    crate::io::visit_files(root, &mut |entry, _| {
+        if entry
+            .file_name()
+            .to_string_lossy()
+            .ends_with(CITYSCAPES_IMAGE_SUFFIX)
+        {
+            images.push(entry.path());
+        }
+        Ok(())
+    })?;
     images.sort();
     Ok(images
         .iter()
         .map(|image| cityscapes_item(root, image))
         .collect())
-}
-
-/// Collects the Cityscapes left images under `dir`, recursively.
-fn walk(dir: &Path, images: &mut Vec<PathBuf>) -> Result<()> {
-    let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
-    for entry in entries {
-        let entry = entry.map_err(|e| Error::io(dir, e))?;
-        let path = entry.path();
-        let kind = entry.file_type().map_err(|e| Error::io(&path, e))?;
-        if kind.is_dir() {
-            walk(&path, images)?;
-        } else if path
-            .file_name()
-            .is_some_and(|n| n.to_string_lossy().ends_with(CITYSCAPES_IMAGE_SUFFIX))
-        {
-            images.push(path);
-        }
-    }
-    Ok(())
 }
 
 fn cityscapes_item(root: &Path, image: &Path) -> std::result::Result<Item, Error> {

@@ -424,17 +424,9 @@ fn process_runs(pid: u32) -> bool {
 /// processes left (see [`is_stale_temporary`]); returns how many. Links are not followed.
 pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
     let mut removed = 0;
-    let entries = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
-    for entry in entries {
-        let entry = entry.map_err(|e| Error::io(dir, e))?;
-        let path = entry.path();
-        let kind = entry.file_type().map_err(|e| Error::io(&path, e))?;
-        if kind.is_dir() {
-            removed += remove_stale_temporaries(&path)?;
-            continue;
-        }
+    super::visit_files(dir, &mut |entry, kind| {
         if !kind.is_file() {
-            continue;
+            return Ok(());
         }
         let age = entry
             .metadata()
@@ -442,14 +434,17 @@ pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {
             .ok()
             .and_then(|t| t.elapsed().ok())
             .unwrap_or_default();
-        if is_stale_temporary(&entry.file_name().to_string_lossy(), age) {
-            match std::fs::remove_file(&path) {
-                Ok(()) => removed += 1,
-                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
-                Err(e) => return Err(Error::io(&path, e)),
-            }
+        if !is_stale_temporary(&entry.file_name().to_string_lossy(), age) {
+            return Ok(());
         }
-    }
+        let path = entry.path();
+        match std::fs::remove_file(&path) {
+            Ok(()) => removed += 1,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(Error::io(&path, e)),
+        }
+        Ok(())
+    })?;
     Ok(removed)
 }
 
