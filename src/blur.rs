@@ -309,4 +309,60 @@ mod tests {
         assert_eq!(on.coarse_bytes_in(chromatic), 0);
         assert_eq!(Blur::default().coarse_bytes_in(grey), 0);
     }
+
+    #[test]
+    fn validate_names_the_field_that_is_out_of_range() {
+        assert!(Blur::default().validate().is_ok());
+        assert!(Blur::photo().validate().is_ok());
+        let cases = [
+            (
+                Blur {
+                    sigma0: 0.0,
+                    ..Blur::default()
+                },
+                "sigma0",
+            ),
+            (
+                Blur {
+                    sigma0: f64::NAN,
+                    ..Blur::default()
+                },
+                "sigma0",
+            ),
+            (
+                Blur {
+                    rho_max: 0.3,
+                    ..Blur::default()
+                },
+                "rho_max",
+            ),
+            (
+                Blur {
+                    rho_max: 0.0,
+                    ..Blur::default()
+                },
+                "rho_max",
+            ),
+            (
+                Blur {
+                    coarse_from: Some(1.0),
+                    ..Blur::default()
+                },
+                "coarse_from",
+            ),
+            (
+                Blur {
+                    coarse_from: Some(f64::INFINITY),
+                    ..Blur::default()
+                },
+                "coarse_from",
+            ),
+        ];
+        for (blur, field) in cases {
+            match blur.validate() {
+                Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, field, "{blur:?}"),
+                other => panic!("{blur:?}: {other:?}"),
+            }
+        }
+    }
 }

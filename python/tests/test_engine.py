@@ -419,6 +419,8 @@ def test_engine_fog_errors():
         (dict(precision="f64"), "invalid precision"),
         (dict(lambda_px=-1.0), "invalid lambda_px"),
         (dict(blur="gauss-single", blur_max=2.0), "blur_max"),
+        (dict(blur="diffusion", sigma0=0.0), "invalid sigma0 = 0"),
+        (dict(blur="diffusion", rho_max=0.3), r"invalid rho_max = 0.3: expected a rate in \(0, 0.25\]"),
     ]
     for fog in (brume.distance_fog, brume.layered_fog):
         for change, message in cases:
@@ -482,6 +484,8 @@ def test_aerial_errors(photo):
         (dict(ok, horizon_zenith_deg=120.0), "invalid horizon_zenith_deg"),
         (dict(ok, airlight=(1.0, 1.0)), "invalid airlight"),
         (dict(ok, refine="sometimes"), "invalid refine"),
+        (dict(ok, sigma0=0.0), "invalid sigma0 = 0"),
+        (dict(ok, sigma0=float("nan")), "invalid sigma0"),
     ]
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=message):

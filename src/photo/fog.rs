@@ -179,3 +179,42 @@ pub fn fog(
 pub fn transmittance_map(haze: &Haze, medium_range: &ScalarMap) -> ScalarMap {
     medium_range.map(|&r| haze.transmission(f64::from(r) / haze.range_unit)[1] as f32)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every value is checked before any work, the field named: the haze's, then the
+    /// blur's.
+    #[test]
+    fn validate_checks_the_haze_and_the_blur() {
+        assert!(FogOptions::default().validate().is_ok());
+        assert!(FogOptions::beta(0.02).unwrap().validate().is_ok());
+        let bad = |opts: FogOptions| match opts.validate() {
+            Err(Error::InvalidParameter { name, .. }) => name,
+            other => panic!("{opts:?}: {other:?}"),
+        };
+        let d = FogOptions::default();
+        assert_eq!(bad(FogOptions { lambda: -1.0, ..d }), "lambda");
+        assert_eq!(
+            bad(FogOptions {
+                tint: [1.0, f64::NAN, 1.0],
+                ..d
+            }),
+            "tint"
+        );
+        let ka = Extinction::Normalised { ka: -1.0, ks: 0.5 };
+        assert_eq!(
+            bad(FogOptions {
+                extinction: ka,
+                ..d
+            }),
+            "ka"
+        );
+        let blur = Blur {
+            rho_max: 0.5,
+            ..d.blur
+        };
+        assert_eq!(bad(FogOptions { blur, ..d }), "rho_max");
+    }
+}
