@@ -110,7 +110,7 @@ impl Shard {
         }
         let bad = || {
             Error::invalid(
-                "--shard",
+                "shard",
                 text,
                 "K/N with 1 ≤ K ≤ N (e.g. 3/8), or slurm in a task of a Slurm job array",
             )
@@ -144,8 +144,8 @@ impl Shard {
                 None => Ok(None),
                 Some(text) => text.trim().parse::<u64>().map(Some).map_err(|_| {
                     Error::invalid(
-                        "--shard slurm",
-                        format!("{name}={text}"),
+                        "shard",
+                        format!("slurm: {name}={text}"),
                         "a whole number, as Slurm sets it in each task of a job array",
                     )
                 }),
@@ -153,8 +153,8 @@ impl Shard {
         };
         let missing = || {
             Error::invalid(
-                "--shard slurm",
-                "(SLURM_ARRAY_TASK_ID, _MIN or _COUNT unset)",
+                "shard",
+                "slurm: SLURM_ARRAY_TASK_ID, _MIN or _COUNT unset",
                 "a task of a Slurm job array (sbatch --array=...)",
             )
         };
@@ -172,10 +172,10 @@ impl Shard {
                 count,
             }),
             _ => Err(Error::invalid(
-                "--shard slurm",
-                format!("task {id} of an array from {min} by {step}, {count} tasks"),
+                "shard",
+                format!("slurm: task {id} of an array from {min} by {step}, {count} tasks"),
                 "an array of evenly spaced task ids (`--array=1-16` or `0-30:2`, not a \
-                 list): use --shard K/N",
+                 list): use a K/N shard",
             )),
         }
     }
@@ -564,7 +564,7 @@ mod tests {
             env("x", "1", None, "16"),
         ] {
             let e = bad.unwrap_err().to_string();
-            assert!(e.contains("--shard slurm"), "{e}");
+            assert!(e.contains("shard = slurm: "), "{e}");
         }
         let unset = Shard::from_slurm(|_| None).unwrap_err().to_string();
         assert!(unset.contains("SLURM_ARRAY_TASK_ID"), "{unset}");
@@ -575,7 +575,7 @@ mod tests {
         assert_eq!(Shard::parse("3/8").unwrap(), Shard { index: 3, count: 8 });
         for bad in ["0/4", "5/4", "3", "a/b", "1/0", "-1/4", ""] {
             let e = Shard::parse(bad).unwrap_err().to_string();
-            assert!(e.contains("--shard") && e.contains("K/N"), "{bad}: {e}");
+            assert!(e.contains("shard") && e.contains("K/N"), "{bad}: {e}");
         }
     }
 

@@ -437,16 +437,15 @@ impl TurbidityEstimator {
             }
         }
         if usable.len() < opts.samples {
-            return Err(Error::format(
-                name,
+            return Err(Error::invalid(
+                "samples",
+                opts.samples,
                 format!(
-                    "only {} usable sky pixels (inside the circle, ≥ {:.1}° above the \
-                     horizon, ≥ {:.1}° from the sun, not clipped, not black); --samples {} \
-                     needs at least as many",
+                    "at most the {} usable sky pixels of {name} (inside the circle, ≥ {:.1}° \
+                     above the horizon, ≥ {:.1}° from the sun, not clipped, not black)",
                     usable.len(),
                     opts.horizon_margin.to_degrees(),
                     opts.sun_exclusion.to_degrees(),
-                    opts.samples
                 ),
             ));
         }

@@ -99,7 +99,10 @@ fn bad_images_and_options_are_named() {
     let e = estimate_turbidity(&image(3.0, 64), "c.exr", &o)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("c.exr") && e.contains("--samples"), "{e}");
+    assert!(
+        e.contains("invalid samples") && e.contains("usable sky pixels of c.exr"),
+        "{e}"
+    );
     for (o, name) in [
         (
             TurbidityOptions {
