@@ -314,55 +314,19 @@ mod tests {
     fn validate_names_the_field_that_is_out_of_range() {
         assert!(Blur::default().validate().is_ok());
         assert!(Blur::photo().validate().is_ok());
-        let cases = [
-            (
-                Blur {
-                    sigma0: 0.0,
-                    ..Blur::default()
-                },
-                "sigma0",
-            ),
-            (
-                Blur {
-                    sigma0: f64::NAN,
-                    ..Blur::default()
-                },
-                "sigma0",
-            ),
-            (
-                Blur {
-                    rho_max: 0.3,
-                    ..Blur::default()
-                },
-                "rho_max",
-            ),
-            (
-                Blur {
-                    rho_max: 0.0,
-                    ..Blur::default()
-                },
-                "rho_max",
-            ),
-            (
-                Blur {
-                    coarse_from: Some(1.0),
-                    ..Blur::default()
-                },
-                "coarse_from",
-            ),
-            (
-                Blur {
-                    coarse_from: Some(f64::INFINITY),
-                    ..Blur::default()
-                },
-                "coarse_from",
-            ),
-        ];
-        for (blur, field) in cases {
+        let refused = |change: fn(&mut Blur), field: &str| {
+            let mut blur = Blur::default();
+            change(&mut blur);
             match blur.validate() {
                 Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, field, "{blur:?}"),
                 other => panic!("{blur:?}: {other:?}"),
             }
-        }
+        };
+        refused(|b| b.sigma0 = 0.0, "sigma0");
+        refused(|b| b.sigma0 = f64::NAN, "sigma0");
+        refused(|b| b.rho_max = 0.3, "rho_max");
+        refused(|b| b.rho_max = 0.0, "rho_max");
+        refused(|b| b.coarse_from = Some(1.0), "coarse_from");
+        refused(|b| b.coarse_from = Some(f64::INFINITY), "coarse_from");
     }
 }

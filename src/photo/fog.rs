@@ -190,31 +190,20 @@ mod tests {
     fn validate_checks_the_haze_and_the_blur() {
         assert!(FogOptions::default().validate().is_ok());
         assert!(FogOptions::beta(0.02).unwrap().validate().is_ok());
-        let bad = |opts: FogOptions| match opts.validate() {
-            Err(Error::InvalidParameter { name, .. }) => name,
-            other => panic!("{opts:?}: {other:?}"),
+        let refused = |change: fn(&mut FogOptions), field: &str| {
+            let mut opts = FogOptions::default();
+            change(&mut opts);
+            match opts.validate() {
+                Err(Error::InvalidParameter { name, .. }) => assert_eq!(name, field, "{opts:?}"),
+                other => panic!("{opts:?}: {other:?}"),
+            }
         };
-        let d = FogOptions::default();
-        assert_eq!(bad(FogOptions { lambda: -1.0, ..d }), "lambda");
-        assert_eq!(
-            bad(FogOptions {
-                tint: [1.0, f64::NAN, 1.0],
-                ..d
-            }),
-            "tint"
+        refused(|o| o.lambda = -1.0, "lambda");
+        refused(|o| o.tint = [1.0, f64::NAN, 1.0], "tint");
+        refused(
+            |o| o.extinction = Extinction::Normalised { ka: -1.0, ks: 0.5 },
+            "ka",
         );
-        let ka = Extinction::Normalised { ka: -1.0, ks: 0.5 };
-        assert_eq!(
-            bad(FogOptions {
-                extinction: ka,
-                ..d
-            }),
-            "ka"
-        );
-        let blur = Blur {
-            rho_max: 0.5,
-            ..d.blur
-        };
-        assert_eq!(bad(FogOptions { blur, ..d }), "rho_max");
+        refused(|o| o.blur.rho_max = 0.5, "rho_max");
     }
 }
