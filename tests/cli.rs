@@ -186,6 +186,45 @@ fn uniform_sigma_pfm_output_and_timings() {
     assert!(pfm.starts_with(b"PF\n"));
 }
 
+/// A uniform blur reads no range, but a Cityscapes disparity (repaired by default, which
+/// needs the holes filled) is prepared as for the haze: the render works, the report says
+/// the blur has no airlight, and the picture is the one the same blur gives with the
+/// depth taken as it is (`--no-prep --refine none`).
+#[test]
+fn a_uniform_blur_works_on_a_cityscapes_disparity_and_ignores_it() {
+    let dir = tempfile::tempdir().unwrap();
+    crate::batch::cityscapes_frame(dir.path(), "aachen", "aachen_000000_000019");
+    let frame =
+        |kind: &str, suffix: &str| format!("{kind}/train/aachen/aachen_000000_000019_{suffix}");
+    let (image, depth) = (
+        frame("leftImg8bit", "leftImg8bit.png"),
+        frame("disparity", "disparity.png"),
+    );
+    let render = |out: &str, extra: &[&str]| {
+        let mut args = vec!["render", "--image", &image, "--depth", &depth];
+        args.extend_from_slice(&["--uniform-sigma", "4", "--out", out, "--json"]);
+        args.extend_from_slice(extra);
+        let o = brume(dir.path(), &args);
+        assert!(
+            o.status.success(),
+            "{extra:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        serde_json::from_slice::<Value>(&o.stdout).unwrap()
+    };
+    let prepared = render("prepared.pfm", &[]);
+    assert_eq!(prepared["medium"], "uniform_blur", "{prepared}");
+    assert_eq!(prepared["airlight_source"], "none", "{prepared}");
+    assert_eq!(prepared["airlight"], serde_json::json!([0.0, 0.0, 0.0]));
+    assert!(prepared["transmittance_min"].is_null() && prepared["prep"].is_object());
+    render("as_read.pfm", &["--no-prep", "--refine", "none"]);
+    let read = |name: &str| fs::read(dir.path().join(name)).unwrap();
+    assert!(
+        read("prepared.pfm") == read("as_read.pfm"),
+        "the depth changed a uniform blur"
+    );
+}
+
 #[test]
 fn info_reports_the_driver() {
     let dir = tempfile::tempdir().unwrap();

@@ -202,14 +202,16 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
 
 /// Pre-processes the scene's range as `args` ask ([`brume::photo::preprocess`]): the
 /// masks of `--sky-mask` and `--ego-mask` (checked against the depth map), the
-/// pre-processing options, the airlight policy; nothing with `--no-prep` or a uniform blur
-/// (which ignores range and airlight).
+/// pre-processing options, the airlight policy; nothing with `--no-prep`. A uniform blur,
+/// which reads neither range nor airlight, is prepared all the same: the refinement that
+/// follows needs a range known everywhere, and every option given takes effect as it
+/// would on the haze.
 pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     let mut opts = brume::photo::PrepareOptions {
         airlight: args.airlight,
         ..Default::default()
     };
-    if args.no_prep || args.uniform_sigma.is_some() {
+    if args.no_prep {
         opts.prep = None;
         return brume::photo::preprocess(scene, &opts);
     }

@@ -186,6 +186,14 @@ impl Report<'_> {
         self.haze.map_or([0.0; 3], |h| h.airlight)
     }
 
+    /// Where the applied airlight came from (`none` for a uniform blur, which has none).
+    fn airlight_source(&self) -> &'static str {
+        match self.haze {
+            Some(_) => self.prep.airlight_from.name(),
+            None => "none",
+        }
+    }
+
     fn sigma_max(&self) -> f64 {
         self.medium.sigma_max(self.opts.blur.sigma0)
     }
@@ -234,7 +242,7 @@ impl Report<'_> {
             "transmittance_min": transmittance.map(|t| t[0]),
             "transmittance_max": transmittance.map(|t| t[1]),
             "airlight": self.airlight(),
-            "airlight_source": prep.airlight_from.name(),
+            "airlight_source": self.airlight_source(),
             "prep": prep_json,
         })
     }
@@ -268,7 +276,7 @@ impl Report<'_> {
             b[0],
             b[1],
             b[2],
-            prep.airlight_from.name(),
+            self.airlight_source(),
             self.sigma_max(),
             self.extinction()
         );
