@@ -225,6 +225,55 @@ fn a_uniform_blur_works_on_a_cityscapes_disparity_and_ignores_it() {
     );
 }
 
+/// `--no-prep` where the refinement needs a range known everywhere is refused, and the
+/// error says which refinement needs it (the format's default, or the upsampling of a
+/// smaller depth map) and what would do.
+#[test]
+fn no_prep_where_the_refinement_needs_it_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    crate::batch::cityscapes_frame(dir.path(), "aachen", "aachen_000000_000019");
+    let frame =
+        |kind: &str, suffix: &str| format!("{kind}/train/aachen/aachen_000000_000019_{suffix}");
+    let (image, depth) = (
+        frame("leftImg8bit", "leftImg8bit.png"),
+        frame("disparity", "disparity.png"),
+    );
+    let full = image::open(dir.path().join(&depth)).unwrap().to_luma16();
+    let (w, h) = (full.width() / 2, full.height() / 2);
+    image::imageops::resize(&full, w, h, image::imageops::FilterType::Nearest)
+        .save(dir.path().join("half_disparity.png"))
+        .unwrap();
+    let camera = frame("camera", "camera.json");
+    let refused = |depth: &str, extra: &[&str], says: &[&str]| {
+        let mut args = vec!["render", "--image", &image, "--depth", depth, "--no-prep"];
+        args.extend_from_slice(&["--camera", &camera, "--depth-format", "cityscapes"]);
+        args.extend_from_slice(&["--out", "o.png"]);
+        args.extend_from_slice(extra);
+        let o = brume(dir.path(), &args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{extra:?}");
+        for s in says {
+            assert!(err.contains(s), "{extra:?}: {err}");
+        }
+    };
+    refused(
+        &depth,
+        &[],
+        &[
+            "--no-prep",
+            "--refine repair, the default for a cityscapes depth",
+            "--refine none",
+        ],
+    );
+    refused(&depth, &["--refine", "guided"], &["with --refine guided:"]);
+    let smaller = format!("a depth map of {w}x{h}, smaller than the");
+    refused(
+        "half_disparity.png",
+        &["--refine", "none"],
+        &[&smaller, "(keep pre-processing on)"],
+    );
+}
+
 #[test]
 fn info_reports_the_driver() {
     let dir = tempfile::tempdir().unwrap();

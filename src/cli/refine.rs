@@ -88,13 +88,37 @@ pub fn refine_scene(
         return Ok(plan);
     }
     let started = Instant::now();
+    let mut needs = Vec::new();
+    if plan.upsample {
+        needs.push(format!(
+            "a depth map of {}x{}, smaller than the {w}x{h} image (it is upsampled)",
+            range.width(),
+            range.height()
+        ));
+    }
+    match args.refine.mode {
+        _ if plan.guided.is_none() => {}
+        Some(mode) => needs.push(format!("--refine {}", mode_name(mode))),
+        None => needs.push(format!(
+            "--refine {}, the default for a {} depth",
+            mode_name(opts.mode),
+            scene.depth.format
+        )),
+    }
+    let remedy = if plan.upsample {
+        "keep pre-processing on"
+    } else {
+        "keep pre-processing on, or give --refine none"
+    };
     prep.refine(scene, &opts, filter).map_err(|e| match e {
         Error::InvalidParameter { name, .. } if name == "prep" => Error::invalid(
             "--no-prep",
             "given",
-            "pre-processing with --refine guided or a depth map smaller than the image: \
-             refinement reads a range known at every pixel, which pre-processing fills (or \
-             give --refine none)",
+            format!(
+                "pre-processing with {}: refinement reads a range known at every pixel, \
+                 which pre-processing fills ({remedy})",
+                needs.join(" and ")
+            ),
         ),
         e => e,
     })?;
