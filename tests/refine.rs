@@ -255,3 +255,40 @@ fn guided_upsampling_beats_bilinear_on_aloe() {
         assert!(gp <= 0.65 * bp, "1/{k}: p95 {gp:.4} vs bilinear {bp:.4}");
     }
 }
+
+/// Without pre-processing, a range with unknown pixels cannot be refined: the error names
+/// `prep` and says what needs the range filled (the guided filter of the mode given, the
+/// upsampling of a smaller depth map) and, where the filter alone does, that mode none
+/// would do.
+#[test]
+fn refinement_without_pre_processing_says_what_needs_the_range_filled() {
+    use brume::photo::{self, Photo, PrepareOptions};
+    use brume::refine::{CpuFilter, RefineMode, RefineOptions};
+    let refused = |range: ScalarMap, mode: RefineMode| -> String {
+        let photo = Photo::from_range(common::noise_image(16, 12, 3), range).unwrap();
+        let opts = PrepareOptions {
+            prep: None,
+            ..PrepareOptions::default()
+        };
+        let mut prepared = photo::preprocess(&photo, &opts).unwrap();
+        let refine = RefineOptions {
+            mode,
+            ..RefineOptions::default()
+        };
+        match prepared.refine(&photo, &refine, &mut CpuFilter) {
+            Err(brume::Error::InvalidParameter { name, expected, .. }) if name == "prep" => {
+                expected
+            }
+            other => panic!("{mode:?}: {other:?}"),
+        }
+    };
+    let holed = |w, h| Grid::from_fn(w, h, |x, _| if x == 0 { f32::NAN } else { 5.0 });
+    let full = refused(holed(16, 12), RefineMode::Repair);
+    assert!(full.contains("the repair refinement") && full.contains("(or refinement none)"));
+    let half = refused(holed(8, 6), RefineMode::None);
+    assert!(
+        half.contains("a depth map of 8x6, smaller than the 16x12 image"),
+        "{half}"
+    );
+    assert!(!half.contains("refinement none"), "{half}");
+}

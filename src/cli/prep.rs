@@ -94,7 +94,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             "width": w, "height": h,
             "depth_width": loaded.range.width(), "depth_height": loaded.range.height(),
             "upsampled": plan.is_some_and(|p| p.upsample),
-            "refine": plan.map(|_| super::refine::mode_name(args.refine.mode.unwrap_or(RefineMode::default_for(loaded.format)))),
+            "refine": plan.map(|_| args.refine.mode.unwrap_or(RefineMode::default_for(loaded.format)).name()),
             "refine_ms": refine_ms,
             "out": args.out.display().to_string(),
             "vis": args.vis.as_ref().map(|p| p.display().to_string()),

@@ -63,13 +63,6 @@ pub fn guided_text(plan: &RefinePlan) -> String {
     }
 }
 
-/// `--refine`'s value for `mode`, as reports print it.
-pub fn mode_name(mode: RefineMode) -> String {
-    use clap::ValueEnum;
-    mode.to_possible_value()
-        .map_or_else(String::new, |v| v.get_name().to_string())
-}
-
 /// Refines the scene's range with its image, in place ([`brume::refine::refine_prepared`]):
 /// the prepared range (or, with --no-prep, the loaded one) is upsampled to the image's
 /// size and/or guided-filtered, and the masks and measured range that go with it are
@@ -98,10 +91,10 @@ pub fn refine_scene(
     }
     match args.refine.mode {
         _ if plan.guided.is_none() => {}
-        Some(mode) => needs.push(format!("--refine {}", mode_name(mode))),
+        Some(mode) => needs.push(format!("--refine {}", mode.name())),
         None => needs.push(format!(
             "--refine {}, the default for a {} depth",
-            mode_name(opts.mode),
+            opts.mode.name(),
             scene.depth.format
         )),
     }

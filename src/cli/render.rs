@@ -35,7 +35,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let mut prep = preprocess(args, &scene)?;
     let mut headless = super::open_renderer(egl)?;
     let depth_size = [scene.depth.range.width(), scene.depth.range.height()];
-    let refine_mode = super::refine::mode_name(args.refine.options(scene.depth.format)?.mode);
+    let refine_mode = args.refine.options(scene.depth.format)?.mode.name();
     let refined = super::refine::refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
     if args.transmittance_map.is_some() {
         // The map's τ as given: pre-processing found the sky for the airlight only.

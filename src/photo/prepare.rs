@@ -164,15 +164,8 @@ impl PreparedPhoto {
                 let (w, h) = (photo.image.width(), photo.image.height());
                 let plan = opts.plan((w, h), (self.range.width(), self.range.height()));
                 if !plan.is_empty() {
-                    refine::check_positive(&self.range).map_err(|_| {
-                        Error::invalid(
-                            "prep",
-                            "off",
-                            "pre-processing with a guided refinement or a depth map \
-                             smaller than the image: refinement reads a range known at \
-                             every pixel, which pre-processing fills",
-                        )
-                    })?;
+                    refine::check_positive(&self.range)
+                        .map_err(|_| unprepared_range(plan, opts.mode, &self.range, (w, h)))?;
                     self.range =
                         refine::refine_range(&photo.image, &self.range, None, opts, filter)?;
                 }
@@ -193,4 +186,40 @@ pub fn prepare(
     let mut prepared = preprocess(photo, opts)?;
     prepared.refine(photo, &opts.refine, filter)?;
     Ok(prepared)
+}
+
+/// The error of a refinement `plan` (in `mode`) on a range that was not pre-processed and
+/// has unknown pixels: what needs the range filled (the upsampling of a depth map smaller
+/// than the `image` size, the guided filter) and what would do.
+fn unprepared_range(
+    plan: RefinePlan,
+    mode: RefineMode,
+    range: &ScalarMap,
+    (w, h): (usize, usize),
+) -> Error {
+    let mut needs = Vec::new();
+    if plan.upsample {
+        needs.push(format!(
+            "a depth map of {}x{}, smaller than the {w}x{h} image (it is upsampled)",
+            range.width(),
+            range.height()
+        ));
+    }
+    if plan.guided.is_some() {
+        needs.push(format!("the {} refinement", mode.name()));
+    }
+    let remedy = if plan.upsample {
+        ""
+    } else {
+        " (or refinement none)"
+    };
+    Error::invalid(
+        "prep",
+        "off",
+        format!(
+            "pre-processing with {}: refinement reads a range known at every pixel, which \
+             pre-processing fills{remedy}",
+            needs.join(" and ")
+        ),
+    )
 }

@@ -32,6 +32,16 @@ pub enum RefineMode {
 }
 
 impl RefineMode {
+    /// The mode's name as the command line and the Python package take it.
+    pub fn name(self) -> &'static str {
+        match self {
+            RefineMode::None => "none",
+            RefineMode::Guided => "guided",
+            RefineMode::Unreliable => "unreliable",
+            RefineMode::Repair => "repair",
+        }
+    }
+
     /// The refinement a depth map of `format` gets unless told otherwise: [`Self::Repair`]
     /// for stereo-matched disparity (Cityscapes' SGM), measured to make it better in every
     /// region (README, "Real depth"); none for the rest, whose depth is a sensor's or a
