@@ -186,6 +186,19 @@ fn uniform_sigma_pfm_output_and_timings() {
     assert!(pfm.starts_with(b"PF\n"));
 }
 
+/// brume's Aloe as a Cityscapes frame under `dir`: its image, disparity and camera file,
+/// relative to `dir`.
+fn cityscapes_frame_files(dir: &Path) -> [String; 3] {
+    crate::batch::cityscapes_frame(dir, "aachen", "aachen_000000_000019");
+    let frame =
+        |kind: &str, suffix: &str| format!("{kind}/train/aachen/aachen_000000_000019_{suffix}");
+    [
+        frame("leftImg8bit", "leftImg8bit.png"),
+        frame("disparity", "disparity.png"),
+        frame("camera", "camera.json"),
+    ]
+}
+
 /// A uniform blur reads no range, but a Cityscapes disparity (repaired by default, which
 /// needs the holes filled) is prepared as for the haze: the render works, the report says
 /// the blur has no airlight, and the picture is the one the same blur gives with the
@@ -193,13 +206,7 @@ fn uniform_sigma_pfm_output_and_timings() {
 #[test]
 fn a_uniform_blur_works_on_a_cityscapes_disparity_and_ignores_it() {
     let dir = tempfile::tempdir().unwrap();
-    crate::batch::cityscapes_frame(dir.path(), "aachen", "aachen_000000_000019");
-    let frame =
-        |kind: &str, suffix: &str| format!("{kind}/train/aachen/aachen_000000_000019_{suffix}");
-    let (image, depth) = (
-        frame("leftImg8bit", "leftImg8bit.png"),
-        frame("disparity", "disparity.png"),
-    );
+    let [image, depth, _] = cityscapes_frame_files(dir.path());
     let render = |out: &str, extra: &[&str]| {
         let mut args = vec!["render", "--image", &image, "--depth", &depth];
         args.extend_from_slice(&["--uniform-sigma", "4", "--out", out, "--json"]);
@@ -231,19 +238,12 @@ fn a_uniform_blur_works_on_a_cityscapes_disparity_and_ignores_it() {
 #[test]
 fn no_prep_where_the_refinement_needs_it_says_why() {
     let dir = tempfile::tempdir().unwrap();
-    crate::batch::cityscapes_frame(dir.path(), "aachen", "aachen_000000_000019");
-    let frame =
-        |kind: &str, suffix: &str| format!("{kind}/train/aachen/aachen_000000_000019_{suffix}");
-    let (image, depth) = (
-        frame("leftImg8bit", "leftImg8bit.png"),
-        frame("disparity", "disparity.png"),
-    );
+    let [image, depth, camera] = cityscapes_frame_files(dir.path());
     let full = image::open(dir.path().join(&depth)).unwrap().to_luma16();
     let (w, h) = (full.width() / 2, full.height() / 2);
     image::imageops::resize(&full, w, h, image::imageops::FilterType::Nearest)
         .save(dir.path().join("half_disparity.png"))
         .unwrap();
-    let camera = frame("camera", "camera.json");
     let refused = |depth: &str, extra: &[&str], says: &[&str]| {
         let mut args = vec!["render", "--image", &image, "--depth", depth, "--no-prep"];
         args.extend_from_slice(&["--camera", &camera, "--depth-format", "cityscapes"]);
@@ -261,17 +261,17 @@ fn no_prep_where_the_refinement_needs_it_says_why() {
         &[],
         &[
             "--no-prep",
-            "--refine repair, the default for a cityscapes depth",
-            "--refine none",
+            "with the repair refinement",
+            "(or refinement mode none); repair is --refine's default for a cityscapes depth",
         ],
     );
-    refused(&depth, &["--refine", "guided"], &["with --refine guided:"]);
-    let smaller = format!("a depth map of {w}x{h}, smaller than the");
     refused(
-        "half_disparity.png",
-        &["--refine", "none"],
-        &[&smaller, "(keep pre-processing on)"],
+        &depth,
+        &["--refine", "guided"],
+        &["with the guided refinement:"],
     );
+    let smaller = format!("with a depth map of {w}x{h}, smaller than the");
+    refused("half_disparity.png", &["--refine", "none"], &[&smaller]);
 }
 
 #[test]

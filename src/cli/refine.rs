@@ -81,38 +81,19 @@ pub fn refine_scene(
         return Ok(plan);
     }
     let started = Instant::now();
-    let mut needs = Vec::new();
-    if plan.upsample {
-        needs.push(format!(
-            "a depth map of {}x{}, smaller than the {w}x{h} image (it is upsampled)",
-            range.width(),
-            range.height()
-        ));
-    }
-    match args.refine.mode {
-        _ if plan.guided.is_none() => {}
-        Some(mode) => needs.push(format!("--refine {}", mode.name())),
-        None => needs.push(format!(
-            "--refine {}, the default for a {} depth",
+    // The library says what needs the range filled; the flag that chose the mode is ours.
+    let default = match (plan.guided, args.refine.mode) {
+        (Some(_), None) => format!(
+            "; {} is --refine's default for a {} depth",
             opts.mode.name(),
             scene.depth.format
-        )),
-    }
-    let remedy = if plan.upsample {
-        "keep pre-processing on"
-    } else {
-        "keep pre-processing on, or give --refine none"
+        ),
+        _ => String::new(),
     };
     prep.refine(scene, &opts, filter).map_err(|e| match e {
-        Error::InvalidParameter { name, .. } if name == "prep" => Error::invalid(
-            "--no-prep",
-            "given",
-            format!(
-                "pre-processing with {}: refinement reads a range known at every pixel, \
-                 which pre-processing fills ({remedy})",
-                needs.join(" and ")
-            ),
-        ),
+        Error::InvalidParameter { name, expected, .. } if name == "prep" => {
+            Error::invalid("--no-prep", "given", format!("{expected}{default}"))
+        }
         e => e,
     })?;
     if prep.prepared.is_some() {

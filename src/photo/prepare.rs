@@ -211,7 +211,7 @@ fn unprepared_range(
     let remedy = if plan.upsample {
         ""
     } else {
-        " (or refinement none)"
+        " (or refinement mode none)"
     };
     Error::invalid(
         "prep",
