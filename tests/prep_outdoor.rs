@@ -364,3 +364,30 @@ fn visualize_stacks_before_and_after() {
         "near is dark"
     );
 }
+
+/// An ego-vehicle mask that covers every known pixel (a wrong file: a depth map given as
+/// the mask) leaves no range outside the sky; the error counts the sky, the ego vehicle
+/// and the unknown pixels, so that the mask shows as the cause.
+#[test]
+fn no_range_left_says_how_much_the_ego_mask_took() {
+    let (map, _) = scene();
+    let known = Grid::from_fn(W, H, |x, y| map.get(x, y).is_finite());
+    let guides = Guides {
+        image: None,
+        sky_mask: None,
+        ego_mask: Some(&known),
+    };
+    let e = prepare_guided(&map, guides, &paper_options())
+        .unwrap_err()
+        .to_string();
+    let ego = known.as_slice().iter().filter(|&&k| k).count();
+    let said = format!("{ego} the ego vehicle (its mask)");
+    assert!(
+        e.contains("no valid range value outside the sky") && e.contains(&said),
+        "{e}"
+    );
+    assert!(
+        e.contains(&format!("of the {} pixels ({W}x{H})", W * H)),
+        "{e}"
+    );
+}

@@ -213,7 +213,7 @@ pub fn all_ego_hint(format: SkyMaskFormat) -> String {
 
 /// [`load_sky_mask`] on bytes in memory; `name` stands for the file in messages.
 pub fn decode_sky_mask(bytes: &[u8], name: &str, format: SkyMaskFormat) -> Result<Grid<bool>> {
-    decode_label(bytes, name, format, format.sky_label())
+    decode_label(bytes, name, format, format.sky_label(), Masked::Sky)
 }
 
 /// Loads an ego-vehicle mask (true = the ego vehicle) from a PNG in `format`, or, for
@@ -243,7 +243,14 @@ pub fn decode_ego_mask(bytes: &[u8], name: &str, format: SkyMaskFormat) -> Resul
             ))
         }
     };
-    decode_label(bytes, name, format, label)
+    decode_label(bytes, name, format, label, Masked::EgoVehicle)
+}
+
+/// What a mask marks, for the warning about a binary mask that looks like a label image.
+#[derive(Clone, Copy)]
+enum Masked {
+    Sky,
+    EgoVehicle,
 }
 
 /// The pixels of a PNG mask equal to `label` (label formats) or not zero (`None`).
@@ -252,6 +259,7 @@ fn decode_label(
     name: &str,
     format: SkyMaskFormat,
     label: Option<u16>,
+    masked: Masked,
 ) -> Result<Grid<bool>> {
     if !bytes.starts_with(&PNG_SIGNATURE) {
         return Err(Error::format(
@@ -263,7 +271,7 @@ fn decode_label(
     let img = super::image::decode_any(bytes, name)?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     let mask = match label {
-        None => binary_mask(&img, name),
+        None => binary_mask(&img, name, masked),
         Some(label) => label_values(&img, name, format)?
             .iter()
             .map(|&v| v == label)
@@ -272,9 +280,9 @@ fn decode_label(
     Ok(Grid::from_vec(w, h, mask))
 }
 
-/// Non-zero colour = sky. Warns when the file holds more than two values, as a label
-/// image given as binary would make nearly everything sky.
-fn binary_mask(img: &DynamicImage, name: &str) -> Vec<bool> {
+/// Non-zero colour = set (sky, or the ego vehicle). Warns when the file holds more than
+/// two values, as a label image given as binary would set nearly every pixel.
+fn binary_mask(img: &DynamicImage, name: &str, masked: Masked) -> Vec<bool> {
     let rgb = img.to_rgb16();
     let mut values = std::collections::BTreeSet::new();
     let mask = rgb
@@ -287,10 +295,20 @@ fn binary_mask(img: &DynamicImage, name: &str) -> Vec<bool> {
         })
         .collect();
     if values.len() > 2 {
+        let (what, labels) = match masked {
+            Masked::Sky => (
+                "sky",
+                "for a Cityscapes label PNG give --sky-mask-format cityscapes-labelids or \
+                 cityscapes-trainids",
+            ),
+            Masked::EgoVehicle => (
+                "the ego vehicle",
+                "a Cityscapes label PNG is read as labels when named *_labelIds.png",
+            ),
+        };
         log::warn!(
-            "{name}: a binary sky mask with more than two values (every non-zero pixel is sky); \
-             for a Cityscapes label PNG give --sky-mask-format cityscapes-labelids or \
-             cityscapes-trainids"
+            "{name}: a binary mask with more than two values (every non-zero pixel is \
+             {what}); {labels}"
         );
     }
     mask

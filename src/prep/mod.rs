@@ -277,6 +277,23 @@ pub fn prepare_guided(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> 
     crate::parallel::run(|| prepare_on_pool(range, guides, opts))
 }
 
+/// The error of a range with no known value outside the sky: how many pixels are sky,
+/// the ego vehicle (so that a wrong ego mask shows) and unknown.
+fn no_range_outside_the_sky(sky: &[bool], ego: &[bool], (w, h): (usize, usize)) -> Error {
+    let sky_px = sky.iter().filter(|&&s| s).count();
+    let ego_px = ego.iter().filter(|&&e| e).count();
+    let ego_part = if ego.is_empty() {
+        String::new()
+    } else {
+        format!(", {ego_px} the ego vehicle (its mask)")
+    };
+    Error::Prep(format!(
+        "no valid range value outside the sky: of the {} pixels ({w}x{h}), {sky_px} are sky{ego_part} and {} unknown",
+        w * h,
+        w * h - sky_px - ego_px
+    ))
+}
+
 /// [`prepare_guided`] on brume's thread pool (`crate::parallel`), where its parallel loops
 /// (the sky, the local outliers, the margin) run.
 fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Result<Prepared> {
@@ -334,12 +351,8 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
 
     remove_far_outliers(&mut work, &sky, w, h, opts, &mut stats);
     remove_local_outliers(&mut work, &sky, w, h, opts, &mut stats);
-    stats.r_max = max_known_outside(&work, &sky).ok_or_else(|| {
-        Error::Prep(format!(
-            "no valid range value outside the sky: all {} pixels ({w}x{h}) are sky or unknown",
-            range.len()
-        ))
-    })?;
+    stats.r_max = max_known_outside(&work, &sky)
+        .ok_or_else(|| no_range_outside_the_sky(&sky, &ego, (w, h)))?;
     let mut filled = vec![false; w * h];
     if opts.border_band_fraction > 0.0 {
         let r_min = min_known_outside(&work, &sky).unwrap_or(stats.r_max);
