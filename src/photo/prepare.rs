@@ -190,7 +190,7 @@ pub fn prepare(
 
 /// The error of a refinement `plan` (in `mode`) on a range that was not pre-processed and
 /// has unknown pixels: what needs the range filled (the upsampling of a depth map smaller
-/// than the `image` size, the guided filter) and what would do.
+/// than the image, `w`x`h`; the guided filter) and what would do.
 fn unprepared_range(
     plan: RefinePlan,
     mode: RefineMode,

@@ -288,7 +288,8 @@ fn no_range_outside_the_sky(sky: &[bool], ego: &[bool], (w, h): (usize, usize)) 
         format!(", {ego_px} the ego vehicle (its mask)")
     };
     Error::Prep(format!(
-        "no valid range value outside the sky: of the {} pixels ({w}x{h}), {sky_px} are sky{ego_part} and {} unknown",
+        "no valid range value outside the sky: of the {} pixels ({w}x{h}), {sky_px} are \
+         sky{ego_part} and {} unknown",
         w * h,
         w * h - sky_px - ego_px
     ))
