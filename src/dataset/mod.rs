@@ -308,69 +308,57 @@ pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
 pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let base = path.parent().unwrap_or(Path::new("."));
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
-    let (_, header) = lines.next().ok_or_else(|| Error::Format {
+    let bad = |detail: String| Error::Format {
         path: path.to_path_buf(),
-        detail: "empty manifest: expected a header `image,depth[,camera][,calib][,sky_mask]`"
-            .into(),
-    })?;
-    let columns: Vec<String> = header.split(',').map(|c| c.trim().to_lowercase()).collect();
+        detail,
+    };
+    let mut records = manifest_records(text).map_err(|e| bad(format!("not CSV: {e}")))?;
+    if records.is_empty() {
+        return Err(bad(
+            "empty manifest: expected a header `image,depth[,camera][,calib][,sky_mask]`".into(),
+        ));
+    }
+    let (_, header_cells) = records.remove(0);
+    let header = header_cells.join(",");
+    let columns: Vec<String> = header_cells.iter().map(|c| c.to_lowercase()).collect();
     let column = |name: &str| columns.iter().position(|c| c == name);
     for (i, c) in columns.iter().enumerate() {
         if !["image", "depth", "camera", "calib", "sky_mask"].contains(&c.as_str()) {
-            return Err(Error::Format {
-                path: path.to_path_buf(),
-                detail: format!(
-                    "unknown column `{c}`: expected image, depth, camera, calib, sky_mask"
-                ),
-            });
+            return Err(bad(format!(
+                "unknown column `{c}`: expected image, depth, camera, calib, sky_mask"
+            )));
         }
         if columns[..i].contains(c) {
-            return Err(Error::Format {
-                path: path.to_path_buf(),
-                detail: format!("the header `{header}` names the column `{c}` twice"),
-            });
+            return Err(bad(format!(
+                "the header `{header}` names the column `{c}` twice"
+            )));
         }
     }
     let (Some(image_col), Some(depth_col)) = (column("image"), column("depth")) else {
-        return Err(Error::Format {
-            path: path.to_path_buf(),
-            detail: format!("the header `{header}` lacks the column `image` or `depth`"),
-        });
+        return Err(bad(format!(
+            "the header `{header}` lacks the column `image` or `depth`"
+        )));
     };
     let mut items = Vec::new();
-    for (n, line) in lines {
-        let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+    for (line, cells) in records {
         if cells.len() != columns.len() {
-            return Err(Error::Format {
-                path: path.to_path_buf(),
-                detail: format!(
-                    "line {}: {} cells, expected {} (as the header)",
-                    n + 1,
-                    cells.len(),
-                    columns.len()
-                ),
-            });
+            return Err(bad(format!(
+                "line {line}: {} cells, expected {} (as the header)",
+                cells.len(),
+                columns.len()
+            )));
         }
         let cell = |i: Option<usize>| {
-            i.map(|i| cells[i])
+            i.map(|i| cells[i].as_str())
                 .filter(|c| !c.is_empty())
                 .map(|c| base.join(c))
         };
         let (Some(image), Some(depth)) = (cell(Some(image_col)), cell(Some(depth_col))) else {
-            return Err(Error::Format {
-                path: path.to_path_buf(),
-                detail: format!("line {}: the image or depth cell is empty", n + 1),
-            });
+            return Err(bad(format!(
+                "line {line}: the image or depth cell is empty"
+            )));
         };
-        let out_dir = image
-            .parent()
-            .and_then(|p| p.strip_prefix(base).ok())
-            .map(Path::to_path_buf)
-            .unwrap_or_default();
+        let out_dir = folder_under(&image, base);
         let stem = image
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -386,15 +374,52 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
         });
     }
     if items.is_empty() {
-        return Err(Error::Format {
-            path: path.to_path_buf(),
-            detail: format!(
-                "the manifest has a header but no rows: expected one row per frame after \
-                 `{header}`"
-            ),
-        });
+        return Err(bad(format!(
+            "the manifest has a header but no rows: expected one row per frame after \
+             `{header}`"
+        )));
     }
     Ok(items)
+}
+
+/// The records of a manifest's CSV text with their line numbers, cells trimmed (quoted
+/// cells as CSV quotes them); blank lines and lines starting with `#` are skipped.
+fn manifest_records(text: &str) -> std::result::Result<Vec<(u64, Vec<String>)>, csv::Error> {
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .comment(Some(b'#'))
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let mut records = Vec::new();
+    for record in reader.records() {
+        let record = record?;
+        if record.iter().all(str::is_empty) {
+            continue;
+        }
+        let line = record.position().map_or(0, |p| p.line());
+        records.push((line, record.iter().map(str::to_owned).collect()));
+    }
+    Ok(records)
+}
+
+/// The folder of `image` relative to the manifest's folder `base`, both made absolute
+/// without touching the file system, so that how the manifest's path was typed does not
+/// matter; empty for an image outside that folder, whose outputs go to the output root.
+fn folder_under(image: &Path, base: &Path) -> PathBuf {
+    let absolute = |p: &Path| {
+        let p = if p.as_os_str().is_empty() {
+            Path::new(".")
+        } else {
+            p
+        };
+        std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
+    };
+    absolute(image)
+        .parent()
+        .and_then(|folder| folder.strip_prefix(absolute(base)).ok())
+        .map(Path::to_path_buf)
+        .unwrap_or_default()
 }
 
 #[cfg(test)]
@@ -616,6 +641,42 @@ mod tests {
             items[1].sky_mask.as_deref(),
             Some(Path::new("/data/set/masks/b.png"))
         );
+    }
+
+    /// Cells are CSV: a quoted path may hold a comma or quotes, as spreadsheets and pandas
+    /// write it.
+    #[test]
+    fn manifest_cells_may_be_quoted() {
+        let path = Path::new("/data/frames.csv");
+        let text = "image,depth\n\"left/a, b.png\",\"d/\"\"q\"\".png\"\n";
+        let items = parse_manifest(text, path).unwrap();
+        assert_eq!(items[0].image, Path::new("/data/left/a, b.png"));
+        assert_eq!(items[0].depth, Path::new("/data/d/\"q\".png"));
+        assert_eq!(
+            (items[0].out_dir.as_path(), items[0].stem.as_str()),
+            (Path::new("left"), "a, b")
+        );
+    }
+
+    /// The folder an image's outputs mirror does not depend on how the manifest's path was
+    /// typed: an absolute image inside the manifest's folder mirrors its folder, one outside
+    /// goes to the output root, with the manifest named relative to the working folder or
+    /// not.
+    #[test]
+    fn manifest_folders_do_not_depend_on_how_its_path_is_typed() {
+        let cwd = std::env::current_dir().unwrap();
+        let inside = cwd.join("set/left/a.png");
+        let text = format!(
+            "image,depth\n{},d.png\n/elsewhere/b.png,d.png\n",
+            inside.display()
+        );
+        for manifest in [Path::new("set/m.csv"), &cwd.join("set/m.csv")] {
+            let items = parse_manifest(&text, manifest).unwrap();
+            assert_eq!(items[0].out_dir, Path::new("left"), "{manifest:?}");
+            assert_eq!(items[1].out_dir, Path::new(""), "{manifest:?}");
+        }
+        let items = parse_manifest("image,depth\n/elsewhere/b.png,d.png\n", Path::new("m.csv"));
+        assert_eq!(items.unwrap()[0].out_dir, Path::new(""));
     }
 
     #[test]
