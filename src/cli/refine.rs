@@ -81,17 +81,17 @@ pub fn refine_scene(
         return Ok(plan);
     }
     let started = Instant::now();
-    // The library says what needs the range filled; the flag that chose the mode is ours.
-    let default = match (plan.guided, args.refine.mode) {
-        (Some(_), None) => format!(
-            "; {} is --refine's default for a {} depth",
-            opts.mode.name(),
-            scene.depth.format
-        ),
-        _ => String::new(),
-    };
     prep.refine(scene, &opts, filter).map_err(|e| match e {
+        // The library says what needs the range filled; the flag that chose the mode is ours.
         Error::InvalidParameter { name, expected, .. } if name == "prep" => {
+            let default = match (plan.guided, args.refine.mode) {
+                (Some(_), None) => format!(
+                    "; {} is --refine's default for a {} depth",
+                    opts.mode.name(),
+                    scene.depth.format
+                ),
+                _ => String::new(),
+            };
             Error::invalid("--no-prep", "given", format!("{expected}{default}"))
         }
         e => e,

@@ -312,13 +312,14 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
         path: path.to_path_buf(),
         detail,
     };
-    let mut records = manifest_records(text).map_err(|e| bad(format!("not CSV: {e}")))?;
-    if records.is_empty() {
+    let mut records = manifest_records(text)
+        .map_err(|e| bad(format!("not CSV: {e}")))?
+        .into_iter();
+    let Some((_, header_cells)) = records.next() else {
         return Err(bad(
             "empty manifest: expected a header `image,depth[,camera][,calib][,sky_mask]`".into(),
         ));
-    }
-    let (_, header_cells) = records.remove(0);
+    };
     let header = header_cells.join(",");
     let columns: Vec<String> = header_cells.iter().map(|c| c.to_lowercase()).collect();
     let column = |name: &str| columns.iter().position(|c| c == name);
@@ -339,6 +340,7 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
             "the header `{header}` lacks the column `image` or `depth`"
         )));
     };
+    let folder = absolute(base);
     let mut items = Vec::new();
     for (line, cells) in records {
         if cells.len() != columns.len() {
@@ -358,7 +360,7 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
                 "line {line}: the image or depth cell is empty"
             )));
         };
-        let out_dir = folder_under(&image, base);
+        let out_dir = folder_under(&image, &folder);
         let stem = image
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -403,21 +405,24 @@ fn manifest_records(text: &str) -> std::result::Result<Vec<(u64, Vec<String>)>, 
     Ok(records)
 }
 
-/// The folder of `image` relative to the manifest's folder `base`, both made absolute
-/// without touching the file system, so that how the manifest's path was typed does not
-/// matter; empty for an image outside that folder, whose outputs go to the output root.
-fn folder_under(image: &Path, base: &Path) -> PathBuf {
-    let absolute = |p: &Path| {
-        let p = if p.as_os_str().is_empty() {
-            Path::new(".")
-        } else {
-            p
-        };
-        std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf())
+/// `path` made absolute against the working folder without touching the file system
+/// (`.` for an empty path), so that how a path was typed does not change what it names.
+fn absolute(path: &Path) -> PathBuf {
+    let path = if path.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        path
     };
+    std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
+}
+
+/// The folder of `image` relative to `folder`, the manifest's folder made [`absolute`],
+/// so that how the manifest's path was typed does not matter; empty for an image outside
+/// that folder, whose outputs go to the output root.
+fn folder_under(image: &Path, folder: &Path) -> PathBuf {
     absolute(image)
         .parent()
-        .and_then(|folder| folder.strip_prefix(absolute(base)).ok())
+        .and_then(|parent| parent.strip_prefix(folder).ok())
         .map(Path::to_path_buf)
         .unwrap_or_default()
 }
