@@ -1,5 +1,10 @@
 //! The one error type of brume. Every variant says what failed, on which file, shader or
 //! extension, and what the user can do about it.
+//!
+//! A message that tells the caller to set another option names it as a field in
+//! backticks (`` `depth_scale` ``), never as one host's spelling of it: each host shows
+//! them as its own ([`Error::rename_options`], [`rename_options`]), the command line as
+//! its flags (`--depth-scale`), the Python package as its keywords.
 
 use std::path::PathBuf;
 
@@ -195,6 +200,72 @@ impl Error {
     }
 }
 
+impl Error {
+    /// This error with the options it names shown as a host calls them: the parameter's
+    /// name, and every option a message names in backticks, become what `rename` gives
+    /// for the field (kept as they are where it gives `None`).
+    pub fn rename_options(self, rename: impl Fn(&str) -> Option<String>) -> Error {
+        let text = |t: String| rename_options(&t, &rename);
+        match self {
+            Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            } => Error::InvalidParameter {
+                name: rename(&name).unwrap_or(name),
+                value,
+                expected: text(expected),
+            },
+            Error::Format { path, detail } => Error::Format {
+                path,
+                detail: text(detail),
+            },
+            Error::Prep(detail) => Error::Prep(text(detail)),
+            Error::OutOfMemory { what, detail, hint } => Error::OutOfMemory {
+                what,
+                detail,
+                hint: text(hint),
+            },
+            other => other,
+        }
+    }
+}
+
+/// `text` with every option it names in backticks (`` `depth_scale` ``) replaced, the
+/// backticks included, by what `rename` gives for the field; kept where it gives `None`.
+pub fn rename_options(text: &str, rename: impl Fn(&str) -> Option<String>) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(open) = rest.find('`') {
+        let (before, quoted) = rest.split_at(open);
+        out.push_str(before);
+        let field = quoted[1..].find('`').map(|close| &quoted[1..1 + close]);
+        match field
+            .filter(|f| is_field_name(f))
+            .and_then(|f| Some((f, rename(f)?)))
+        {
+            Some((field, shown)) => {
+                out.push_str(&shown);
+                rest = &quoted[field.len() + 2..];
+            }
+            None => {
+                out.push('`');
+                rest = &quoted[1..];
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// Whether `text` can be a field's name: lower-case letters, digits and underscores.
+fn is_field_name(text: &str) -> bool {
+    !text.is_empty()
+        && text
+            .bytes()
+            .all(|b| b.is_ascii_lowercase() || b.is_ascii_digit() || b == b'_')
+}
+
 /// Accepts a finite `value` > 0, or names the parameter.
 pub fn check_positive(name: &str, value: f64) -> Result<()> {
     if value.is_finite() && value > 0.0 {
@@ -241,5 +312,25 @@ mod tests {
         assert_eq!(shown(0.25), "invalid x = 0.25: expected y");
         assert_eq!(shown(207043.0), "invalid x = 207043: expected y");
         assert_eq!(shown(f64::INFINITY), "invalid x = inf: expected y");
+    }
+
+    #[test]
+    fn options_in_backticks_are_renamed_and_other_text_kept() {
+        let flag = |f: &str| (f != "unknown").then(|| format!("--{}", f.replace('_', "-")));
+        assert_eq!(
+            rename_options(
+                "`depth_scale` ignored; see `unknown`, a `Code block`, `",
+                flag
+            ),
+            "--depth-scale ignored; see `unknown`, a `Code block`, `"
+        );
+        assert_eq!(rename_options("``", flag), "``");
+        let e = Error::invalid("sigma0", 0, "more, or set `blur_kind`").rename_options(flag);
+        assert_eq!(
+            e.to_string(),
+            "invalid --sigma0 = 0: expected more, or set --blur-kind"
+        );
+        let e = Error::format("a.png", "give `camera`").rename_options(flag);
+        assert_eq!(e.to_string(), "a.png: give --camera");
     }
 }

@@ -28,6 +28,13 @@ fn init_logging(verbose: u8) {
         _ => "debug",
     };
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(level))
-        .format_target(false)
+        .format(|buf, record| {
+            use std::io::Write;
+            let level = record.level();
+            let style = buf.default_level_style(level);
+            // The library's warnings name options as fields; here they are flags.
+            let text = cli::flags_in(&record.args().to_string());
+            writeln!(buf, "[{style}{level:<5}{style:#}] {text}")
+        })
         .init();
 }

@@ -717,7 +717,7 @@ fn ignored_depth_options_are_said_on_stderr() {
             "--min-confidence ignored",
         ),
     ] {
-        let mut args = vec!["--out", "o.png"];
+        let mut args = vec!["--out", "o.png", "--json"];
         args.extend_from_slice(extra);
         let o = render_files(dir.path(), &image, &dir.path().join(depth), &args);
         let err = stderr(&o);
@@ -725,6 +725,13 @@ fn ignored_depth_options_are_said_on_stderr() {
         assert!(
             err.contains("WARN") && err.contains(said),
             "{extra:?}: {err}"
+        );
+        // The report keeps the note as the warning says it, with the flags' names.
+        let report: Value = serde_json::from_slice(&o.stdout).unwrap();
+        let notes = report["depth_notes"].as_array().unwrap();
+        assert!(
+            notes.iter().any(|n| n.as_str().unwrap().contains(said)),
+            "{extra:?}: {notes:?}"
         );
     }
 }

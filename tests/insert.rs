@@ -227,7 +227,7 @@ fn a_blender_multilayer_object_is_read_with_its_alpha_and_depth() {
     let e = VirtualObject::load(&path, None, DepthKind::Depth, None)
         .unwrap_err()
         .to_string();
-    assert!(e.contains("--focal") && e.contains("--fov"), "{e}");
+    assert!(e.contains("`focal`") && e.contains("`fov`"), "{e}");
 }
 
 /// Writes the photo (linear EXR colour, range EXR in metres) and the object into `dir`.

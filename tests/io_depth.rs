@@ -300,7 +300,7 @@ fn bytes_in_memory_load_as_the_files_do() {
     assert!(d
         .notes
         .iter()
-        .any(|n| n.contains("--calib") && n.contains("ignored")));
+        .any(|n| n.contains("`calib`") && n.contains("ignored")));
 }
 
 #[test]
@@ -323,7 +323,7 @@ fn middlebury2014_size_disagreement_and_missing_calib() {
             &dir.path().join("disp0.pfm"),
             &opts(DepthFormat::Middlebury2014),
         ),
-        "--calib",
+        "give it as `calib`",
     );
     // Without calib, Auto reads a PFM as a float depth map.
     let d = load_range(&dir.path().join("disp0.pfm"), &DepthOptions::default()).unwrap();
@@ -480,7 +480,7 @@ fn sixteen_bit_png_without_format_or_scale_is_an_error() {
     let p = save_png16(dir.path(), "d.png", 2, 1, &[1, 2]);
     expect_format_error(
         load_range(&p, &DepthOptions::default()),
-        "--depth-format kitti|nyu|tum",
+        "`depth_format` kitti, nyu or tum",
     );
     let err = expect_err(load_range(&p, &opts(DepthFormat::Png16)));
     // The library names the parameter; the CLI shows it as --depth-scale.
@@ -776,13 +776,13 @@ fn float_disparity_needs_focal_and_baseline() {
         ..DepthOptions::default()
     };
     let err = expect_err(load_range(&p, &disparity));
-    assert!(err.to_string().contains("--focal"), "{err}");
+    assert!(err.to_string().contains("`focal`"), "{err}");
     let with_focal = DepthOptions {
         focal: Some(100.0),
         ..disparity.clone()
     };
     let err = expect_err(load_range(&p, &with_focal));
-    assert!(err.to_string().contains("--baseline"), "{err}");
+    assert!(err.to_string().contains("`baseline`"), "{err}");
     let full = DepthOptions {
         baseline: Some(50.0),
         disparity_offset: Some(6.0),
@@ -1031,7 +1031,7 @@ fn android_depth16_splits_range_and_confidence() {
     assert!(
         d.notes
             .iter()
-            .any(|n| n.contains("4 of 10") && n.contains("--min-confidence 0.5")),
+            .any(|n| n.contains("4 of 10") && n.contains("`min_confidence` 0.5")),
         "{:?}",
         d.notes
     );
@@ -1106,7 +1106,7 @@ fn min_confidence_outside_zero_to_one_is_refused() {
     assert!(d
         .notes
         .iter()
-        .any(|n| n.contains("--min-confidence ignored") && n.contains("kitti")));
+        .any(|n| n.contains("`min_confidence` ignored") && n.contains("kitti")));
     let kitti = DepthOptions {
         min_confidence: Some(2.0),
         ..kitti
@@ -1123,7 +1123,7 @@ fn android_depth16_with_nothing_confident_enough_says_why() {
     let p = save_png16(dir.path(), "unsure.png", 2, 2, &unsure);
     let msg = expect_format_error(
         load_range(&p, &opts(DepthFormat::AndroidDepth16)),
-        "--min-confidence 0.5",
+        "`min_confidence` 0.5",
     );
     assert!(
         msg.contains("unsure.png") && msg.contains("all 3") && msg.contains("highest is 0.429"),
@@ -1161,7 +1161,7 @@ fn phone_formats_refuse_what_is_not_a_16_bit_grey_png() {
     let jpg = write(dir.path(), "d.jpg", b"\xff\xd8\xff\xe0");
     for format in [DepthFormat::AndroidDepth16, DepthFormat::Arcore] {
         let msg = expect_format_error(load_range(&png8, &opts(format)), "d8.png");
-        let expected = format!("--depth-format {format} expects a 16-bit grey PNG");
+        let expected = format!("`depth_format` {format} expects a 16-bit grey PNG");
         assert!(
             msg.contains(&expected) && msg.contains("found an 8-bit PNG"),
             "{msg}"
@@ -1182,7 +1182,7 @@ fn phone_formats_refuse_what_is_not_a_16_bit_grey_png() {
             };
             let msg = expect_err(load_range(&png16, &o)).to_string();
             assert!(
-                msg.contains("depth_kind") && msg.contains(&format!("--depth-format {format}")),
+                msg.contains("depth_kind") && msg.contains(&format!("`depth_format` {format}")),
                 "{msg}"
             );
         }
@@ -1590,7 +1590,7 @@ fn cityscapes_disparity_and_camera_give_range_in_metres() {
         &opts(DepthFormat::Cityscapes),
         None,
     ));
-    assert!(err.to_string().contains("--camera"), "{err}");
+    assert!(err.to_string().contains("`camera`"), "{err}");
 }
 
 #[test]
@@ -1622,7 +1622,7 @@ fn cityscapes_camera_is_found_beside_and_in_the_dataset_layout() {
     // Neither: the error names both places and the option.
     let lonely = dir.path().join("disparity/val/bonn");
     let p = cityscapes_files(&lonely, "b", None);
-    let msg = expect_format_error(load_range(&p, &opts(DepthFormat::Cityscapes)), "--camera");
+    let msg = expect_format_error(load_range(&p, &opts(DepthFormat::Cityscapes)), "`camera`");
     for tried in [
         lonely.join("b_camera.json"),
         dir.path().join("camera/val/bonn/b_camera.json"),
@@ -1692,7 +1692,7 @@ fn cityscapes_camera_errors_name_the_file_the_key_and_the_value() {
     let p8 = save_png8(dir.path(), "d8_disparity.png", 6, 4, &[9; 24]);
     expect_format_error(
         load_range(&p8, &with_camera),
-        "--depth-format cityscapes expects a 16-bit grey PNG, found an 8-bit PNG",
+        "`depth_format` cityscapes expects a 16-bit grey PNG, found an 8-bit PNG",
     );
     let as_depth = DepthOptions {
         kind: Some(DepthKind::Depth),

@@ -1,37 +1,13 @@
 //! `brume.load_depth`: brume's depth loaders (`brume::io::depth`) with every option of
-//! `brume render`'s depth flags as a keyword, and the loaders' messages and notes in those
-//! keywords' names instead of the flags'.
+//! `brume render`'s depth flags as a keyword, and the loaders' messages and notes naming
+//! those keywords.
 
 use super::arrays::scalar_map_to_py;
-use super::{py_err, py_err_saying};
+use super::{keyword_of, py_err};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
-
-/// The depth flags of `brume render` that the loaders' messages name, and the keyword of
-/// `load_depth` that sets each; the longer flags first, where one starts another.
-const KEYWORDS: [(&str, &str); 12] = [
-    ("--disparity-offset", "disparity_offset_px"),
-    ("--min-confidence", "min_confidence"),
-    ("--depth-format", "format"),
-    ("--depth-scale", "scale"),
-    ("--depth-kind", "kind"),
-    ("--baseline", "baseline_mm"),
-    ("--camera", "camera"),
-    ("--calib", "calib"),
-    ("--focal", "focal_px"),
-    ("--near", "near"),
-    ("--far", "far"),
-    ("--fov", "fov_y_deg"),
-];
-
-/// `text` with the depth flags it names as `load_depth`'s keywords.
-fn in_keywords(text: &str) -> String {
-    KEYWORDS.iter().fold(text.to_owned(), |t, (flag, keyword)| {
-        t.replace(flag, keyword)
-    })
-}
 
 /// load_depth(path, camera=None, format=None, *, kind=None, scale=None, calib=None,
 /// focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None,
@@ -90,11 +66,12 @@ pub(crate) fn load_depth<'py>(
         fov: fov_y_deg,
         min_confidence,
     };
-    let loaded = py.detach(|| depth::load_range(&path, &opts)).map_err(|e| {
-        let message = in_keywords(&e.to_string());
-        py_err_saying(e, message)
-    })?;
-    let notes: Vec<String> = loaded.notes.iter().map(|n| in_keywords(n)).collect();
+    let loaded = py
+        .detach(|| depth::load_range(&path, &opts))
+        .map_err(py_err)?;
+    let notes: Vec<String> = (loaded.notes.iter())
+        .map(|n| brume::error::rename_options(n, keyword_of))
+        .collect();
     let info = PyDict::new(py);
     info.set_item("format", loaded.format.to_string())?;
     info.set_item("kind", loaded.kind.to_string())?;

@@ -36,16 +36,13 @@ use std::path::PathBuf;
 use std::sync::OnceLock;
 
 /// brume's errors as Python's: bad values and files as `ValueError`, files that cannot be
-/// read as `OSError`, memory as `MemoryError`, the GL and EGL as `RuntimeError`; brume's message kept whole (it
-/// names the value and what was expected).
+/// read as `OSError`, memory as `MemoryError`, the GL and EGL as `RuntimeError`; brume's
+/// message kept whole (it names the value and what was expected), with the options it
+/// names as this package's keywords.
 fn py_err(e: brume::Error) -> PyErr {
-    let message = e.to_string();
-    py_err_saying(e, message)
-}
-
-/// [`py_err`] with another message, for the same kind of error.
-fn py_err_saying(e: brume::Error, message: String) -> PyErr {
     use brume::Error as E;
+    let e = e.rename_options(keyword_of);
+    let message = e.to_string();
     match e {
         E::InvalidParameter { .. }
         | E::SizeMismatch { .. }
@@ -57,6 +54,25 @@ fn py_err_saying(e: brume::Error, message: String) -> PyErr {
         E::OutOfMemory { .. } => PyMemoryError::new_err(message),
         _ => PyRuntimeError::new_err(message),
     }
+}
+
+/// The library's fields whose keyword here has another name (the depth loaders' options
+/// as `load_depth` takes them, the focal length and field of view with their units).
+const KEYWORDS: [(&str, &str); 7] = [
+    ("depth_format", "format"),
+    ("depth_kind", "kind"),
+    ("depth_scale", "scale"),
+    ("focal", "focal_px"),
+    ("baseline", "baseline_mm"),
+    ("disparity_offset", "disparity_offset_px"),
+    ("fov", "fov_y_deg"),
+];
+
+/// The keyword that sets the library's field `field`: its name, or its entry in
+/// [`KEYWORDS`].
+fn keyword_of(field: &str) -> Option<String> {
+    let keyword = KEYWORDS.iter().find(|(f, _)| *f == field);
+    Some(keyword.map_or(field, |(_, k)| k).to_owned())
 }
 
 fn value_error(message: impl Into<String>) -> PyErr {

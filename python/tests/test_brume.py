@@ -330,7 +330,8 @@ def test_load_depth(tmp_path, range_m):
     assert set(info) == {"format", "kind", "units", "metric", "notes", "unknown_pixels"}
     with pytest.raises(OSError, match="missing.npy"):
         brume.load_depth(tmp_path / "missing.npy")
-    with pytest.raises(ValueError, match="depth_format"):
+    # The loaders' errors name the keywords, here `format` (the library's `depth_format`).
+    with pytest.raises(ValueError, match="invalid format = jpeg"):
         brume.load_depth(path, format="jpeg")
 
 

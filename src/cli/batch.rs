@@ -43,7 +43,7 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
         BatchEvent::Staged { outputs } => super::hold_staged_outputs(outputs),
         BatchEvent::Written { .. } => progress.inc(1),
         BatchEvent::OutputFailed { error, .. } => {
-            progress.suspend(|| errln!("brume: error: {error}"));
+            progress.suspend(|| errln!("brume: error: {}", super::flags_shown(error)));
             progress.inc(1);
         }
         BatchEvent::FrameFailed {
@@ -51,7 +51,13 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
             error,
             outputs,
         } => {
-            progress.suspend(|| errln!("brume: error: skipped {}: {error}", image.display()));
+            progress.suspend(|| {
+                errln!(
+                    "brume: error: skipped {}: {}",
+                    image.display(),
+                    super::flags_shown(error)
+                )
+            });
             progress.inc(outputs as u64);
         }
     };

@@ -16,8 +16,8 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
         .depth
         .as_ref()
         .ok_or_else(|| Error::invalid("--depth", "(missing)", "a depth, range or disparity map"))?;
-    let loaded = depth::load_range(path, &depth_options(args))?;
-    log_depth_notes(path, &loaded);
+    let mut loaded = depth::load_range(path, &depth_options(args))?;
+    show_depth_notes(path, &mut loaded);
     Ok(loaded)
 }
 
@@ -39,10 +39,12 @@ pub fn depth_options(args: &DepthArgs) -> DepthOptions {
     }
 }
 
-/// Says the loader's notes on the depth at `path`: an option given and not used where the
-/// user looks (a warning), not only in `--json`.
-pub fn log_depth_notes(path: &Path, loaded: &LoadedDepth) {
-    for note in &loaded.notes {
+/// Says the loader's notes on the depth at `path`, with the options they name as flags
+/// (in the notes kept for `--json` too): an option given and not used where the user
+/// looks (a warning), not only in `--json`.
+pub fn show_depth_notes(path: &Path, loaded: &mut LoadedDepth) {
+    for note in &mut loaded.notes {
+        *note = super::flags_in(note);
         if note.contains("ignored") {
             log::warn!("{}: {note}", path.display());
         } else {

@@ -243,29 +243,43 @@ pub fn remove_temporaries_on_signals() {
     }
 }
 
-/// The library names a bad parameter as its field (`rho_max`); on the command line it is
-/// a flag (`--rho-max`). Names that are a flag of `brume` become that flag; others (a
-/// file's field, `range map`) are kept.
+/// The library names a bad parameter as its field (`rho_max`), and an option its message
+/// asks for in backticks (`` `depth_scale` ``); on the command line they are flags
+/// (`--rho-max`, `--depth-scale`). Names that are a flag of `brume` become that flag;
+/// others (a file's field, `range map`) are kept.
 pub fn name_flags(e: Error) -> Error {
+    e.rename_options(flag_of)
+}
+
+/// [`name_flags`] for an error the library keeps, as the text to show.
+pub fn flags_shown(e: &Error) -> String {
     match e {
         Error::InvalidParameter {
             name,
             value,
             expected,
-        } => {
-            let flag = match FLAG_ALIASES.iter().find(|(field, _)| *field == name) {
-                Some((_, flag)) => flag.to_string(),
-                None => format!("--{}", name.replace('_', "-")),
-            };
-            let name = if is_flag(&flag) { flag } else { name };
-            Error::InvalidParameter {
-                name,
-                value,
-                expected,
-            }
-        }
-        other => other,
+        } => name_flags(Error::InvalidParameter {
+            name: name.clone(),
+            value: value.clone(),
+            expected: expected.clone(),
+        })
+        .to_string(),
+        other => flags_in(&other.to_string()),
     }
+}
+
+/// `text` (a loader's note, a warning) with the options it names in backticks as flags.
+pub fn flags_in(text: &str) -> String {
+    brume::error::rename_options(text, flag_of)
+}
+
+/// The flag that sets the library's field `field`, if `brume` has one.
+fn flag_of(field: &str) -> Option<String> {
+    let flag = match FLAG_ALIASES.iter().find(|(f, _)| *f == field) {
+        Some((_, flag)) => flag.to_string(),
+        None => format!("--{}", field.replace('_', "-")),
+    };
+    is_flag(&flag).then_some(flag)
 }
 
 /// Whether `flag` (`--name`) is a long option of any `brume` command.

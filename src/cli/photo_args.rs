@@ -3,7 +3,7 @@
 //! pre-processing, and the haze and blur it is rendered with, each error naming its flag.
 
 use super::args::{MediumKind, RenderArgs};
-use super::inputs::{depth_inputs, depth_options, load_masks, log_depth_notes, prep_options};
+use super::inputs::{depth_inputs, depth_options, load_masks, prep_options, show_depth_notes};
 use brume::blur::Blur;
 use brume::medium::haze;
 use brume::medium::physical::{PhysicalFog, DEFAULT_ALBEDO};
@@ -182,7 +182,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         }
         (Some(image_path), Some(depth_path)) => {
             let mut scene = Scene::load(image_path, depth_path, &depth_options(&args.depth))?;
-            log_depth_notes(depth_path, &scene.depth);
+            show_depth_notes(depth_path, &mut scene.depth);
             check_metric(args, &scene)?;
             super::refine::drop_left_right_mismatches(args, &mut scene)?;
             Ok(scene)

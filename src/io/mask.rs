@@ -199,7 +199,7 @@ pub fn load_range_masks(
 pub fn all_sky_hint(format: SkyMaskFormat) -> String {
     format!(
         "a mask with ground in it: every pixel is sky as read ({format}); is it inverted, \
-         or of another --sky-mask-format?"
+         or of another `sky_mask_format`?"
     )
 }
 
@@ -298,7 +298,7 @@ fn binary_mask(img: &DynamicImage, name: &str, masked: Masked) -> Vec<bool> {
         let (what, labels) = match masked {
             Masked::Sky => (
                 "sky",
-                "for a Cityscapes label PNG give --sky-mask-format cityscapes-labelids or \
+                "for a Cityscapes label PNG give `sky_mask_format` cityscapes-labelids or \
                  cityscapes-trainids",
             ),
             Masked::EgoVehicle => (
@@ -324,7 +324,7 @@ fn label_values(img: &DynamicImage, name: &str, format: SkyMaskFormat) -> Result
             format!(
                 "a {format} mask is one grey channel of label ids, but this PNG is {:?} \
                  (a Cityscapes *_color.png? give the *_labelIds.png, or a binary mask with \
-                 --sky-mask-format binary)",
+                 `sky_mask_format` binary)",
                 other.color()
             ),
         )),

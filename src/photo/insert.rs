@@ -122,7 +122,7 @@ impl VirtualObject {
                 return Err(Error::format(
                     path,
                     "the object has no depth channel (Z, <layer>.Depth.Z or depth): give \
-                     its depth map with --insert-depth",
+                     its depth map as `insert_depth`",
                 ))
             }
         };
@@ -133,8 +133,8 @@ impl VirtualObject {
                     Error::invalid(
                         "insert_depth_kind",
                         "depth",
-                        "the camera's focal length to turn depth into range: give --focal or \
-                         --fov (the object's camera is the photo's), or --insert-depth-kind \
+                        "the camera's focal length to turn depth into range: give `focal` or \
+                         `fov` (the object's camera is the photo's), or `insert_depth_kind` \
                          range",
                     )
                 })?;

@@ -391,7 +391,7 @@ pub fn check_positive(range: &ScalarMap) -> Result<()> {
             range.as_slice()[at],
             format!(
                 "a range > 0 at every pixel for refinement (pixel {} of {}x{} is not): \
-                 pre-processing fills unknown values, so refine without --no-prep",
+                 pre-processing fills unknown values, so refine a prepared range",
                 at,
                 range.width(),
                 range.height()

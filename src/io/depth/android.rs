@@ -73,7 +73,7 @@ pub(super) fn min_confidence(
     }
     if format != DepthFormat::AndroidDepth16 {
         notes.push(format!(
-            "--min-confidence ignored: {format} carries no confidence"
+            "`min_confidence` ignored: {format} carries no confidence"
         ));
     }
     Ok(value)
@@ -113,16 +113,16 @@ pub(super) fn check_confidence(
             path,
             format!(
                 "all {measured} DEPTH16 samples with a range have a confidence below \
-                 --min-confidence {min_confidence} (the highest is {best:.3}): expected \
-                 some at or above it; lower --min-confidence, or check that the file is \
-                 DEPTH16 (a plain millimetre map is --depth-format arcore or nyu)"
+                 `min_confidence` {min_confidence} (the highest is {best:.3}): expected \
+                 some at or above it; lower `min_confidence`, or check that the file is \
+                 DEPTH16 (a plain millimetre map is `depth_format` arcore or nyu)"
             ),
         ));
     }
     if dropped > 0 {
         notes.push(format!(
             "{dropped} of {measured} DEPTH16 samples with a range are below \
-             --min-confidence {min_confidence}: unknown"
+             `min_confidence` {min_confidence}: unknown"
         ));
     }
     Ok(())

@@ -219,14 +219,14 @@ pub(super) fn camera_file(path: &Path, ext: &str, opts: &DepthOptions) -> Result
     Err(Error::format(
         path,
         format!(
-            "a Cityscapes disparity needs its camera file: none at {}; pass it with --camera",
+            "a Cityscapes disparity needs its camera file: none at {}; give it as `camera`",
             tried.join(" or ")
         ),
     ))
 }
 
 /// Parses the camera file found by [`camera_file`] (its path and text) if this format uses
-/// one, noting where it came from when it was found rather than given, or that `--camera`
+/// one, noting where it came from when it was found rather than given, or that `camera`
 /// was ignored.
 pub(super) fn take_camera(
     path: &Path,
@@ -238,7 +238,7 @@ pub(super) fn take_camera(
     if !wants_camera(path, ext, opts) {
         if let Some(given) = opts.camera.as_deref().or(camera.map(|c| c.0)) {
             notes.push(format!(
-                "--camera {} ignored: only Cityscapes disparity PNGs use it",
+                "`camera` {} ignored: only Cityscapes disparity PNGs use it",
                 given.display()
             ));
         }
@@ -268,7 +268,7 @@ pub(super) fn range(
         || opts.fov.is_some()
     {
         notes.push(
-            "--focal, --baseline, --disparity-offset, --depth-scale and --fov ignored: the \
+            "`focal`, `baseline`, `disparity_offset`, `depth_scale` and `fov` ignored: the \
              Cityscapes camera file gives the geometry"
                 .to_string(),
         );

@@ -31,33 +31,32 @@ fn resolve_format(
 ) -> Result<DepthFormat> {
     use DepthFormat as F;
     let (has_calib, has_camera) = (side.calib.is_some(), side.camera.is_some());
-    let format = match (requested, raw) {
-        (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
-        (F::Auto, Raw::Float { .. }) => F::Float,
-        (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
-        // A camera file was given, or found for a `*_disparity.png`.
-        (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
-        (F::Auto, Raw::Grey16(_))
-            if opts.scale.is_some() || opts.kind == Some(DepthKind::ZBuffer) =>
-        {
-            F::Png16
-        }
-        (F::Auto, Raw::Grey16(_)) => {
-            return Err(Error::format(
+    let format =
+        match (requested, raw) {
+            (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
+            (F::Auto, Raw::Float { .. }) => F::Float,
+            (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
+            // A camera file was given, or found for a `*_disparity.png`.
+            (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
+            (F::Auto, Raw::Grey16(_))
+                if opts.scale.is_some() || opts.kind == Some(DepthKind::ZBuffer) =>
+            {
+                F::Png16
+            }
+            (F::Auto, Raw::Grey16(_)) => return Err(Error::format(
                 path,
-                "16-bit PNG depth has no standard scale: pass --depth-format kitti|nyu|tum, \
-                 or --depth-scale with the metres per unit (a Cityscapes disparity: \
-                 --depth-format cityscapes with --camera)",
-            ))
-        }
-        (f, _) => f,
-    };
+                "16-bit PNG depth has no standard scale: give `depth_format` kitti, nyu or tum, \
+                 or `depth_scale` with the metres per unit (a Cityscapes disparity: \
+                 `depth_format` cityscapes with `camera`)",
+            )),
+            (f, _) => f,
+        };
     let layout = format.rule().layout;
     if !layout.fits(raw) {
         return Err(Error::format(
             path,
             format!(
-                "--depth-format {format} expects {}, found {}",
+                "`depth_format` {format} expects {}, found {}",
                 layout.expected(),
                 raw.describe()
             ),
@@ -66,14 +65,14 @@ fn resolve_format(
     if format == F::Middlebury2014 && !has_calib {
         return Err(Error::format(
             path,
-            "Middlebury 2014 disparity needs its calib.txt: none next to the file; pass --calib",
+            "Middlebury 2014 disparity needs its calib.txt: none next to the file; give it as `calib`",
         ));
     }
     if format == F::Cityscapes && !has_camera {
         return Err(Error::format(
             path,
-            "a Cityscapes disparity needs its camera file ({name}_camera.json): pass --camera \
-             (in the library, load_cityscapes_from_bytes)",
+            "a Cityscapes disparity needs its camera file ({name}_camera.json): give it as `camera` \
+             (or read both with load_cityscapes_from_bytes)",
         ));
     }
     Ok(format)
@@ -84,9 +83,9 @@ fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<Dep
     let kind = requested.unwrap_or(rule.default_kind);
     if !rule.accepts(kind) {
         let expected = if rule.default_kind == DepthKind::Disparity {
-            format!("disparity for --depth-format {format}")
+            format!("disparity for `depth_format` {format}")
         } else {
-            format!("depth or range for --depth-format {format}")
+            format!("depth or range for `depth_format` {format}")
         };
         return Err(Error::invalid("depth_kind", kind, expected));
     }
@@ -102,7 +101,10 @@ impl Stereo {
             Error::invalid(
                 name,
                 "nothing",
-                format!("a value: --depth-format {format} with --depth-kind disparity needs --focal (px) and --baseline (mm)"),
+                format!(
+                    "a value: `depth_format` {format} with `depth_kind` disparity needs `focal` \
+                     (px) and `baseline` (mm)"
+                ),
             )
         };
         let focal = opts.focal.ok_or_else(|| missing("focal"))?;
@@ -256,7 +258,7 @@ fn zbuffer(
         Error::invalid(
             name,
             "nothing",
-            format!("{what}: --depth-kind zbuffer needs --near, --far and --fov"),
+            format!("{what}: `depth_kind` zbuffer needs `near`, `far` and `fov`"),
         )
     };
     let camera = Camera {
@@ -284,7 +286,7 @@ fn focal_from_fov(fov_deg: f64, height: usize) -> f64 {
     height as f64 / 2.0 / (fov_deg.to_radians() / 2.0).tan()
 }
 
-/// Intrinsics for a depth map without calibration: only if `--focal` or `--fov` is given.
+/// Intrinsics for a depth map without calibration: only if `focal` or `fov` is given.
 fn depth_intrinsics(
     kind: DepthKind,
     opts: &DepthOptions,
@@ -307,12 +309,12 @@ fn depth_intrinsics(
     };
     match (kind, opts.focal.or(from_fov)) {
         (DepthKind::Range, Some(_)) => {
-            // --fov may still serve the camera (aerial perspective): only --focal, which
+            // `fov` may still serve the camera (aerial perspective): only `focal`, which
             // has no other use here, is ignored.
             notes.push(if opts.focal.is_some() {
-                "--focal ignored: the map already holds range".to_string()
+                "`focal` ignored: the map already holds range".to_string()
             } else {
-                "the map already holds range: --fov not needed to convert it".to_string()
+                "the map already holds range: `fov` not needed to convert it".to_string()
             });
             Ok(None)
         }

@@ -213,7 +213,7 @@ pub(super) fn calib_file(path: &Path, ext: &str, opts: &DepthOptions) -> Option<
 }
 
 /// Parses the `calib.txt` found by [`calib_file`] (its path and text) if this format uses
-/// one, noting where it came from, or that `--calib` was ignored.
+/// one, noting where it came from, or that `calib` was ignored.
 pub(super) fn take_calib(
     ext: &str,
     opts: &DepthOptions,
@@ -223,7 +223,7 @@ pub(super) fn take_calib(
     if !wants_calib(ext, opts) {
         if let Some(given) = opts.calib.as_deref().or(calib.map(|c| c.0)) {
             notes.push(format!(
-                "--calib {} ignored: only Middlebury 2014 .pfm disparities use it",
+                "`calib` {} ignored: only Middlebury 2014 .pfm disparities use it",
                 given.display()
             ));
         }
@@ -334,7 +334,7 @@ fn check_calib_size(calib: &Calib, calib_path: &Path, map: &ScalarMap, path: &Pa
 fn note_ignored_stereo_options(opts: &DepthOptions, notes: &mut Vec<String>) {
     if opts.focal.is_some() || opts.baseline.is_some() || opts.disparity_offset.is_some() {
         notes.push(
-            "--focal, --baseline and --disparity-offset ignored: calib.txt gives them".to_string(),
+            "`focal`, `baseline` and `disparity_offset` ignored: calib.txt gives them".to_string(),
         );
     }
 }

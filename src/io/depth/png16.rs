@@ -1,12 +1,12 @@
 //! 16-bit PNG depth conventions: KITTI, NYU Depth v2 and TUM RGB-D each fix the metres
-//! per unit (their rows in `format.rs`), and `--depth-format png16` takes it from
-//! `--depth-scale`.
+//! per unit (their rows in `format.rs`), and `png16` takes it from the `depth_scale`
+//! option (`DepthOptions::scale`).
 
 use super::{positive_option, DepthFormat, DepthOptions};
 use crate::{Error, Result};
 
 /// Metres per unit of a 16-bit PNG in `format`: the dataset's fixed scale, or
-/// `--depth-scale` for `png16`.
+/// `depth_scale` for `png16`.
 pub(super) fn scale(
     format: DepthFormat,
     opts: &DepthOptions,
@@ -18,18 +18,18 @@ pub(super) fn scale(
         None => given_scale(opts)?,
     };
     if fixed.is_some() && opts.scale.is_some() {
-        notes.push(format!("--depth-scale ignored: {format} has a fixed scale"));
+        notes.push(format!("`depth_scale` ignored: {format} has a fixed scale"));
     }
     Ok(scale)
 }
 
-/// `--depth-scale`, required and positive.
+/// `depth_scale` (`DepthOptions::scale`), required and positive.
 pub(super) fn given_scale(opts: &DepthOptions) -> Result<f64> {
     let scale = opts.scale.ok_or_else(|| {
         Error::invalid(
             "depth_scale",
             "nothing",
-            "a positive multiplier for --depth-format png16 (e.g. 0.001 for millimetres)",
+            "a positive multiplier for `depth_format` png16 (e.g. 0.001 for millimetres)",
         )
     })?;
     positive_option(scale, "depth_scale", "a positive finite multiplier")

@@ -457,7 +457,7 @@ impl TurbidityEstimator {
                     format!(
                         "the reference point (zenith {:.1}°, azimuth {:.1}°) has no usable \
                          pixel within {REFERENCE_RADIUS_PX} px (clipped or black): choose \
-                         another with --reference-zenith/--reference-azimuth",
+                         another with `reference_zenith`/`reference_azimuth`",
                         reference[0].to_degrees(),
                         reference[1].to_degrees()
                     ),

@@ -205,8 +205,8 @@ pub fn find_sun(image: &RgbImage, name: &str, fisheye: &Fisheye) -> Result<SunDe
     if zenith >= FRAC_PI_2 - 1e-6 {
         return Err(Error::format(
             name,
-            "cannot find the sun: the brightest pixels are at the horizon; give --sun-zenith \
-             and --sun-azimuth",
+            "cannot find the sun: the brightest pixels are at the horizon; give `sun_zenith` \
+             and `sun_azimuth`",
         ));
     }
     Ok(SunDetection {
