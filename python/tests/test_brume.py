@@ -256,7 +256,7 @@ def test_bad_arrays(image_u8, range_m):
         brume.fog(np.dstack([image_u8, image_u8[..., :1]]), range_m, beta=0.01)
     with pytest.raises(ValueError, match="grey"):
         brume.fog(image_u8[..., 0], range_m, beta=0.01)
-    with pytest.raises(ValueError, match="dtype uint8"):
+    with pytest.raises(ValueError, match="dtype uint8.*float32 or float64"):
         brume.fog(image_u8.astype(np.int16), range_m, beta=0.01)
     with pytest.raises(ValueError, match="numpy array"):
         brume.fog([[1, 2, 3]], range_m, beta=0.01)
@@ -264,7 +264,8 @@ def test_bad_arrays(image_u8, range_m):
         brume.fog(image_u8, range_m[..., None], beta=0.01)
     with pytest.raises(ValueError, match="dtype float32"):
         brume.fog(image_u8, range_m.astype(np.int32), beta=0.01)
-    with pytest.raises(ValueError, match="64x10"):
+    # Named by the arguments: range_m and the image.
+    with pytest.raises(ValueError, match=r"invalid depth = range_m \(64x10\): expected a depth map for image"):
         brume.fog(image_u8, range_m[:10], beta=0.01)
     bad = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
     bad[3, 5, 1] = np.nan
@@ -272,6 +273,9 @@ def test_bad_arrays(image_u8, range_m):
         brume.fog(bad, range_m, beta=0.01)
     with pytest.raises(ValueError, match="no valid depth|range"):
         brume.fog(image_u8, np.full((H, W), np.nan, np.float32), beta=0.01)
+    # A range of 0 or less is unknown, and the message says so.
+    with pytest.raises(ValueError, match="mark a range ≤ 0 unknown"):
+        brume.fog(image_u8, -range_m, beta=0.01)
 
 
 def test_renderer_reused_from_threads(image_u8, range_m):

@@ -115,8 +115,9 @@ impl Photo {
                 notes: Vec::new(),
                 unknown_pixels,
             },
+            // The arguments' names, as the messages say them.
             image_name: "image".into(),
-            depth_name: "range".into(),
+            depth_name: "range_m".into(),
         };
         photo.check_depth_fits()?;
         Ok(photo)
@@ -285,7 +286,7 @@ impl Photo {
                 "depth",
                 format!("{} ({}x{})", self.depth_name, sizes.1 .0, sizes.1 .1),
                 format!(
-                    "a depth map for the image {} ({}x{}): {expected}",
+                    "a depth map for {} ({}x{}): {expected}",
                     self.image_name, sizes.0 .0, sizes.0 .1
                 ),
             ),

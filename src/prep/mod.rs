@@ -309,7 +309,8 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         .collect();
     if !work.iter().any(|v| v.is_finite()) {
         return Err(Error::Prep(format!(
-            "no valid range value: all {} pixels ({w}x{h}) are unknown (NaN or infinite)",
+            "no valid range value: all {} pixels ({w}x{h}) are unknown (NaN or infinite; the \
+             loaders and `Photo::from_range` mark a range ≤ 0 unknown)",
             range.len()
         )));
     }
