@@ -944,6 +944,13 @@ fn zbuffer_becomes_range_with_near_far_and_fov() {
     };
     let err = expect_err(load_range(&pfm, &without_far)).to_string();
     assert!(err.contains("far") && err.contains("zbuffer"), "{err}");
+    // The camera's field of view is the option `fov` here.
+    let bad_fov = DepthOptions {
+        fov: Some(0.0),
+        ..with_camera.clone()
+    };
+    let err = expect_err(load_range(&pfm, &bad_fov)).to_string();
+    assert!(err.starts_with("invalid fov = 0:"), "{err}");
     let kitti = DepthOptions {
         format: DepthFormat::Kitti,
         ..with_camera

@@ -454,8 +454,13 @@ def test_engine_fog_errors():
             brume.layered_fog(image, depth, camera=camera, **kwargs)
     with pytest.raises(TypeError):
         brume.layered_fog(image, depth)  # camera is required
-    with pytest.raises(ValueError, match="pitch"):
+    # The camera's errors name its keywords.
+    with pytest.raises(ValueError, match="invalid pitch_deg = 95"):
         brume.Camera(pitch_deg=95.0)
+    with pytest.raises(ValueError, match="invalid fov_y_deg = 0"):
+        brume.Camera(fov_y_deg=0.0)
+    with pytest.raises(ValueError, match="invalid yaw_deg = NaN"):
+        brume.Camera(yaw_deg=float("nan"))
     with pytest.raises(ValueError, match="far"):
         brume.Camera(near=10.0, far=5.0)
     with pytest.raises(ValueError, match="view: expected a 4x4"):

@@ -91,21 +91,21 @@ impl Camera {
         }
         if !self.yaw_deg.is_finite() {
             return Err(Error::invalid(
-                "yaw",
+                "yaw_deg",
                 self.yaw_deg,
                 "a finite angle (degrees)",
             ));
         }
         if !(self.pitch_deg.is_finite() && self.pitch_deg.abs() < 90.0) {
             return Err(Error::invalid(
-                "pitch",
+                "pitch_deg",
                 self.pitch_deg,
                 "an angle strictly between −90 and 90 degrees",
             ));
         }
         if !(self.fov_y_deg.is_finite() && self.fov_y_deg > 0.0 && self.fov_y_deg < 180.0) {
             return Err(Error::invalid(
-                "fov",
+                "fov_y_deg",
                 self.fov_y_deg,
                 "a vertical field of view strictly between 0 and 180 degrees",
             ));
@@ -411,12 +411,12 @@ mod tests {
             fov_y_deg: 180.0,
             ..Camera::default()
         })
-        .contains("fov"));
+        .contains("invalid fov_y_deg"));
         assert!(bad(Camera {
             pitch_deg: 90.0,
             ..Camera::default()
         })
-        .contains("pitch"));
+        .contains("invalid pitch_deg"));
         assert!(Camera::default().validate().is_ok());
     }
 }

@@ -155,7 +155,7 @@ fn open_renderer(egl: Option<Platform>) -> Result<Headless> {
 }
 
 /// Library fields whose flag is not the field's name with dashes.
-const FLAG_ALIASES: [(&str, &str); 15] = [
+const FLAG_ALIASES: [(&str, &str); 16] = [
     ("local_outlier_factor", "--local-outliers"),
     ("latitude_deg", "--latitude"),
     ("longitude_deg", "--longitude"),
@@ -169,6 +169,7 @@ const FLAG_ALIASES: [(&str, &str); 15] = [
     ("fov_y_deg", "--fov"),
     ("focal_px", "--focal"),
     ("pitch_deg", "--pitch"),
+    ("yaw_deg", "--yaw"),
     ("altitude_m", "--altitude"),
     ("horizon_zenith_deg", "--horizon-zenith"),
 ];

@@ -31,7 +31,7 @@ pub fn demo_image() -> Result<RgbImage> {
 /// spans only [0.63, 1], haze is nearly uniform and the near leaves blur almost as much as
 /// the cloth. With offset 0 the range is ∝ 1/d and spans [0.2, 1] (a scene about five
 /// times deeper), which shows what the model does with depth. Real data should use its
-/// real offset (`--disparity-offset`).
+/// real offset (`DepthOptions::disparity_offset`).
 pub const DEMO_DISPARITY_OFFSET_PX: f64 = 0.0;
 
 /// The demo range map (NaN where the disparity is unknown), read as a Middlebury 2006

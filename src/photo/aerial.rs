@@ -270,20 +270,11 @@ impl PhotoView {
                 name,
                 value,
                 expected,
-            } if name == "fov" && self.fov_y_deg.is_none() => Error::invalid(
+            } if name == "fov_y_deg" && self.fov_y_deg.is_none() => Error::invalid(
                 "focal_px",
                 self.focal_px.unwrap_or(f64::NAN),
                 format!("a focal length giving a valid field of view: {value} is not {expected}"),
             ),
-            Error::InvalidParameter {
-                name,
-                value,
-                expected,
-            } if name == "fov" => Error::InvalidParameter {
-                name: "fov_y_deg".into(),
-                value,
-                expected,
-            },
             e => e,
         })?;
         Ok(camera)

@@ -17,11 +17,11 @@
 //! hint the other way is weak: the depth-photo writer above stores the map in a Dynamic
 //! Depth container without setting its measure type, whose default is "optical axis".)
 //! brume follows the documented word and reads DEPTH16 as [`DepthKind::Range`], which needs no
-//! field of view; a device known to write z-depth is read with `--depth-kind depth` and
-//! `--fov` (or `--focal`), like any other depth map.
+//! field of view; a device known to write z-depth is read with the kind `Depth` and
+//! `fov` (or `focal`), like any other depth map.
 //!
 //! A sample with range 0 is unknown (nothing measured), and so is one whose confidence is
-//! below the threshold ([`DEPTH16_DEFAULT_MIN_CONFIDENCE`] unless `--min-confidence`
+//! below the threshold ([`DEPTH16_DEFAULT_MIN_CONFIDENCE`] unless `min_confidence`
 //! says otherwise).
 //!
 //! [`DepthKind::Range`]: super::DepthKind::Range
@@ -32,9 +32,9 @@ use super::{DepthFormat, DepthOptions};
 use crate::raster::Grid;
 use crate::{Error, Result};
 
-/// Lowest confidence of a DEPTH16 sample kept when `--min-confidence` is not given: codes
-/// 0 (100 %) and 5 to 7 (4/7 to 6/7) are kept, codes 1 to 4 (0 to 3/7) are unknown. Half
-/// way: a sample more likely wrong than right is not worth a haze value.
+/// Lowest confidence of a DEPTH16 sample kept when `DepthOptions::min_confidence` is
+/// `None`: codes 0 (100 %) and 5 to 7 (4/7 to 6/7) are kept, codes 1 to 4 (0 to 3/7) are
+/// unknown. Half way: a sample more likely wrong than right is not worth a haze value.
 pub const DEPTH16_DEFAULT_MIN_CONFIDENCE: f64 = 0.5;
 
 /// The bits of a sample that hold the range in millimetres (the low 13).
@@ -54,8 +54,9 @@ pub(super) fn confidence(code: u16) -> f64 {
     }
 }
 
-/// `--min-confidence`, checked whatever the format (a value outside [0, 1] is a mistake
-/// even where it would be ignored); a note when the format has no confidence to test.
+/// `DepthOptions::min_confidence`, checked whatever the format (a value outside [0, 1] is
+/// a mistake even where it would be ignored); a note when the format has no confidence
+/// to test.
 pub(super) fn min_confidence(
     format: DepthFormat,
     opts: &DepthOptions,

@@ -184,7 +184,7 @@ fn camera_folder(folder: &Path) -> Option<PathBuf> {
 }
 
 /// Whether a file read with `opts` may be a Cityscapes disparity whose camera file is
-/// looked for: `--depth-format cityscapes`, or `auto` for a `*_disparity.png` (a plain
+/// looked for: `DepthFormat::Cityscapes`, or `auto` for a `*_disparity.png` (a plain
 /// 16-bit PNG beside some JSON file is not taken for one).
 fn wants_camera(path: &Path, ext: &str, opts: &DepthOptions) -> bool {
     let named = path
@@ -200,7 +200,7 @@ fn wants_camera(path: &Path, ext: &str, opts: &DepthOptions) -> bool {
 
 /// The camera file to read for `path`: [`DepthOptions::camera`], or else the first of
 /// [`camera_candidates`] that exists. `Ok(None)` when this format uses none;
-/// `--depth-format cityscapes` with none found is an error naming every path tried.
+/// `DepthFormat::Cityscapes` with none found is an error naming every path tried.
 pub(super) fn camera_file(path: &Path, ext: &str, opts: &DepthOptions) -> Result<Option<PathBuf>> {
     if !wants_camera(path, ext, opts) {
         return Ok(None);

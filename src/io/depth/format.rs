@@ -49,7 +49,7 @@ impl Layout {
 /// Which kinds of values a format may hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Kinds {
-    /// Depth, range, disparity or a z-buffer (`--depth-kind` says).
+    /// Depth, range, disparity or a z-buffer (`DepthOptions::kind` says).
     Any,
     /// Disparity only (the Middlebury sets).
     Disparity,
@@ -64,7 +64,7 @@ pub(super) struct FormatRule {
     pub name: &'static str,
     /// The file it reads.
     pub layout: Layout,
-    /// The kind of values when `--depth-kind` is not given.
+    /// The kind of values when `DepthOptions::kind` is `None`.
     pub default_kind: DepthKind,
     /// The kinds it accepts.
     pub kinds: Kinds,

@@ -269,7 +269,10 @@ fn zbuffer(
             .ok_or_else(|| needs("fov", "the vertical field of view (degrees)"))?,
         ..Camera::default()
     };
-    camera.validate()?;
+    // The camera names its field of view `fov_y_deg`; here it is the option `fov`.
+    camera
+        .validate()
+        .map_err(|e| e.rename_options(|f| (f == "fov_y_deg").then(|| "fov".into())))?;
     notes.push(format!(
         "z-buffer of a perspective projection, near {} far {}, vertical field of view {}°; \
          window depth 1 (nothing drawn) is unknown",

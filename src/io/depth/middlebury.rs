@@ -9,15 +9,16 @@ use crate::io::camera::{to_range, Intrinsics, Stereo};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
-/// Focal length in pixels assumed for Middlebury 2006 full-size images when `--focal` is
-/// not given. Approximate, quoted from memory of the dataset page, not read from a file.
+/// Focal length in pixels assumed for Middlebury 2006 full-size images when
+/// `DepthOptions::focal` is `None`. Approximate, quoted from memory of the dataset page,
+/// not read from a file.
 pub const MIDDLEBURY2006_FOCAL_PX: f64 = 3740.0;
-/// Baseline in millimetres assumed for Middlebury 2006 when `--baseline` is not given.
-/// Approximate, from memory, not from a file.
+/// Baseline in millimetres assumed for Middlebury 2006 when `DepthOptions::baseline` is
+/// `None`. Approximate, from memory, not from a file.
 pub const MIDDLEBURY2006_BASELINE_MM: f64 = 160.0;
 /// Disparity offset in pixels (the scene's `dmin`) assumed for Middlebury 2006 when
-/// `--disparity-offset` is not given. Each scene has its own; this is a typical value from
-/// memory, not from a file. Only relative range matters for haze.
+/// `DepthOptions::disparity_offset` is `None`. Each scene has its own; this is a typical
+/// value from memory, not from a file. Only relative range matters for haze.
 pub const MIDDLEBURY2006_DISPARITY_OFFSET_PX: f64 = 270.0;
 
 /// The content of a Middlebury 2014 `calib.txt`.
@@ -200,8 +201,8 @@ fn wants_calib(ext: &str, opts: &DepthOptions) -> bool {
     matches!(opts.format, DepthFormat::Auto | DepthFormat::Middlebury2014) && ext == "pfm"
 }
 
-/// The `calib.txt` to read for `path`: `--calib`, or else one beside the file; none for
-/// formats that do not use one (an ignored `--calib` is not read, so it need not exist).
+/// The `calib.txt` to read for `path`: `DepthOptions::calib`, or else one beside the file; none for
+/// formats that do not use one (an ignored `calib` is not read, so it need not exist).
 pub(super) fn calib_file(path: &Path, ext: &str, opts: &DepthOptions) -> Option<PathBuf> {
     if !wants_calib(ext, opts) {
         return None;

@@ -118,7 +118,7 @@ pub enum DepthFormat {
     Nyu,
     /// TUM RGB-D: 16-bit PNG, metres = value / 5000, `0` unknown.
     Tum,
-    /// Any 16-bit PNG, metres = value * `--depth-scale`, `0` unknown.
+    /// Any 16-bit PNG, metres = value * `DepthOptions::scale`, `0` unknown.
     Png16,
     /// Float map (`.exr`, float `.tif`, `.npy`, `.pfm` without calibration); NaN, infinite
     /// or non-positive values are unknown.
@@ -222,7 +222,7 @@ pub struct LoadedDepth {
     /// Whether `range` is in metres that can be trusted: the scale comes from a
     /// calibration (Middlebury 2014 `calib.txt`, a Cityscapes camera file), from a
     /// dataset's fixed scale (KITTI, NYU, TUM, Android DEPTH16, ARCore), or from geometry
-    /// the caller gave in full (`--depth-scale`; `--focal` and `--baseline` for a
+    /// the caller gave in full (`scale`; `focal` and `baseline` for a
     /// disparity). False for maps in file units (float maps, z-buffers) and for
     /// Middlebury 2006 read with any of its approximate default focal, baseline or offset
     /// (the built-in demo among them). Physical fog (β in m⁻¹) needs it.
