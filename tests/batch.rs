@@ -398,6 +398,31 @@ fn a_gtfine_hood_is_never_fogged() {
     assert!(fogged > (w * h / 2) as usize, "only {fogged} pixels fogged");
 }
 
+/// `--no-prep` where the refinement needs the range filled (repair, the default for a
+/// Cityscapes disparity, which has holes) fails each frame saying so in the flags' words,
+/// writes nothing for it, and exits non-zero.
+#[test]
+fn no_prep_with_the_default_refinement_fails_each_frame_naming_the_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    cityscapes_dataset(dir.path(), 2);
+    let args = [
+        "batch",
+        "cityscapes",
+        "--out",
+        "out",
+        "--beta",
+        "0.01",
+        "--no-prep",
+    ];
+    let run = brume(dir.path(), &args);
+    let err = stderr(&run);
+    assert!(!run.status.success(), "{err}");
+    let said = "invalid --no-prep = given: expected pre-processing with the repair refinement";
+    assert_eq!(err.matches(said).count(), 2, "{err}");
+    assert!(err.contains("(or --refine none)"), "{err}");
+    assert!(!dir.path().join("out/leftImg8bit").exists(), "{err}");
+}
+
 /// The transmittance maps hold τ = exp(−βR) of each pixel's range in metres, computed here
 /// from the disparity file and the camera file alone: range = fx·B/d·|ray| with d = (p −
 /// 1)/256 (they were black: the range in metres was read as normalised range).

@@ -262,7 +262,8 @@ fn no_prep_where_the_refinement_needs_it_says_why() {
         &[
             "--no-prep",
             "with the repair refinement",
-            "(or refinement mode none); repair is --refine's default for a cityscapes depth",
+            "invalid --no-prep = given",
+            "(or --refine none); repair is --refine's default for a cityscapes depth",
         ],
     );
     refused(

@@ -284,11 +284,11 @@ fn refinement_without_pre_processing_says_what_needs_the_range_filled() {
     };
     let holed = |w, h| Grid::from_fn(w, h, |x, _| if x == 0 { f32::NAN } else { 5.0 });
     let full = refused(holed(16, 12), RefineMode::Repair);
-    assert!(full.contains("the repair refinement") && full.contains("(or refinement mode none)"));
+    assert!(full.contains("the repair refinement") && full.contains("(or `refine` none)"));
     let half = refused(holed(8, 6), RefineMode::None);
     assert!(
         half.contains("a depth map of 8x6, smaller than the 16x12 image"),
         "{half}"
     );
-    assert!(!half.contains("refinement mode none"), "{half}");
+    assert!(!half.contains("`refine` none"), "{half}");
 }

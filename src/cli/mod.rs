@@ -249,7 +249,19 @@ pub fn remove_temporaries_on_signals() {
 /// (`--rho-max`, `--depth-scale`). Names that are a flag of `brume` become that flag;
 /// others (a file's field, `range map`) are kept.
 pub fn name_flags(e: Error) -> Error {
-    e.rename_options(flag_of)
+    match e.rename_options(flag_of) {
+        // The library's pre-processing turned off is the flag `--no-prep` given.
+        Error::InvalidParameter {
+            name,
+            value,
+            expected,
+        } if name == "prep" && value == "off" => Error::InvalidParameter {
+            name: "--no-prep".into(),
+            value: "given".into(),
+            expected,
+        },
+        e => e,
+    }
 }
 
 /// [`name_flags`] for an error the library keeps, as the text to show.

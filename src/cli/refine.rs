@@ -83,7 +83,11 @@ pub fn refine_scene(
     let started = Instant::now();
     prep.refine(scene, &opts, filter).map_err(|e| match e {
         // The library says what needs the range filled; the flag that chose the mode is ours.
-        Error::InvalidParameter { name, expected, .. } if name == "prep" => {
+        Error::InvalidParameter {
+            name,
+            value,
+            expected,
+        } if name == "prep" => {
             let default = match (plan.guided, args.refine.mode) {
                 (Some(_), None) => format!(
                     "; {} is --refine's default for a {} depth",
@@ -92,7 +96,12 @@ pub fn refine_scene(
                 ),
                 _ => String::new(),
             };
-            Error::invalid("--no-prep", "given", format!("{expected}{default}"))
+            let expected = format!("{expected}{default}");
+            Error::InvalidParameter {
+                name,
+                value,
+                expected,
+            }
         }
         e => e,
     })?;

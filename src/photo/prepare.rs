@@ -211,7 +211,7 @@ fn unprepared_range(
     let remedy = if plan.upsample {
         ""
     } else {
-        " (or refinement mode none)"
+        " (or `refine` none)"
     };
     Error::invalid(
         "prep",
