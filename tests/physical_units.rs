@@ -507,6 +507,42 @@ fn bad_physical_values_are_refused_before_writing() {
 /// `--compat foggy-cityscapes`: every output code value is Foggy Cityscapes' blend of the
 /// input's code values, R·t + L·(1 − t) with t = exp(−βR) and R worked out by hand from
 /// the disparity and the camera, within 1 of 255 (the output's rounding).
+/// The library refuses physical fog on a range not in metres in its own words: the
+/// options it names are fields in backticks, which the command line shows as flags.
+#[test]
+fn the_library_says_what_would_make_a_range_metric() {
+    let dir = tempfile::tempdir().unwrap();
+    colour(dir.path(), "im.png", 8, 6);
+    write_scalar(&dir.path().join("range.pfm"), &Grid::filled(8, 6, 5.0f32)).unwrap();
+    let photo = brume::photo::Photo::load(
+        &dir.path().join("im.png"),
+        &dir.path().join("range.pfm"),
+        &brume::io::depth::DepthOptions::default(),
+    )
+    .unwrap();
+    let e = photo.require_metres("beta", 0.01).unwrap_err().to_string();
+    for said in [
+        "invalid beta = 0.01",
+        "range.pfm was read as float depth in file units",
+        "`calib` calib.txt, `camera` NAME_camera.json",
+        "a metric `depth_format`",
+        "`depth_scale` in metres per unit",
+        "`ka`/`ks`",
+    ] {
+        assert!(e.contains(said), "{said}: {e}");
+    }
+    let options = brume::photo::FogOptions::beta(0.01).unwrap();
+    let mut gpu = brume::Headless::new(None).unwrap();
+    let prepared = brume::photo::prepare(
+        &photo,
+        &brume::photo::PrepareOptions::for_photo(&photo),
+        gpu.renderer().unwrap(),
+    )
+    .unwrap();
+    let fogged = brume::photo::fog(gpu.renderer().unwrap(), &photo, &prepared, &options);
+    assert_eq!(fogged.unwrap_err().to_string(), e);
+}
+
 #[test]
 fn foggy_cityscapes_blends_code_values() {
     let dir = tempfile::tempdir().unwrap();

@@ -148,24 +148,7 @@ fn check_metric(args: &RenderArgs, scene: &Scene) -> Result<()> {
              (--calib, --camera, or a metric --depth-format), or use --ka/--ks",
         ));
     }
-    let why = if depth.units != "m" {
-        format!("in {}", depth.units)
-    } else {
-        "with approximate default geometry (give --focal, --baseline and \
-         --disparity-offset)"
-            .to_string()
-    };
-    Err(Error::invalid(
-        given.0,
-        given.1,
-        format!(
-            "range in metres, but {} was read as {} {} {why}: give its calibration \
-             (--calib calib.txt, --camera NAME_camera.json), a metric --depth-format \
-             (cityscapes, kitti, nyu, tum, android-depth16, arcore) or --depth-scale in \
-             metres per unit; or use --ka/--ks (normalised range)",
-            scene.depth_name, depth.format, depth.kind
-        ),
-    ))
+    scene.require_metres(given.0, given.1)
 }
 
 /// The photo and its range (or the demo), checked to be of one size and, for physical

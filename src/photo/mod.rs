@@ -176,14 +176,23 @@ impl Photo {
         if self.depth.metric {
             return Ok(());
         }
+        let depth = &self.depth;
+        let why = if depth.units != "m" {
+            format!("in {}", depth.units)
+        } else {
+            "with approximate default geometry (give `focal`, `baseline` and \
+             `disparity_offset`)"
+                .to_string()
+        };
         Err(Error::invalid(
             name,
             value,
             format!(
-                "range in metres, but {} was read as {} {} in {}: give its calibration or \
-                 camera file, a metric depth format or a scale in metres per unit, or use \
-                 normalised extinction",
-                self.depth_name, self.depth.format, self.depth.kind, self.depth.units
+                "range in metres, but {} was read as {} {} {why}: give its calibration \
+                 (`calib` calib.txt, `camera` NAME_camera.json), a metric `depth_format` \
+                 (cityscapes, kitti, nyu, tum, android-depth16, arcore) or `depth_scale` in \
+                 metres per unit; or use `ka`/`ks` (normalised range)",
+                self.depth_name, depth.format, depth.kind
             ),
         ))
     }
