@@ -159,21 +159,12 @@ impl TurbidityBenchArgs {
             opts.size,
             TURBIDITY_BENCH_BYTES_PER_PIXEL,
         )?;
-        opts.validate().map_err(|e| match e {
-            Error::InvalidParameter {
-                name,
-                value,
-                expected,
-            } => Error::InvalidParameter {
-                name: match name.as_str() {
-                    "cloud_cover" => "--clouds".into(),
-                    "turbidity" => "--turbidities".into(),
-                    _ => name,
-                },
-                value,
-                expected,
-            },
-            e => e,
+        opts.validate().map_err(|e| {
+            e.rename_options(|field| match field {
+                "cloud_cover" => Some("--clouds".into()),
+                "turbidity" => Some("--turbidities".into()),
+                _ => None,
+            })
         })?;
         Ok(opts)
     }

@@ -19,27 +19,14 @@ pub(super) fn capture_options(capture: &CaptureArgs, seed: Option<i128>) -> Resu
             "a whole number from 0 to 2^64 - 1",
         )
     })?;
-    let opts = CaptureOptions::from_parts(
+    // The library names its fields, which `name_flags` shows as the flags.
+    CaptureOptions::from_parts(
         capture.exposure_stops.unwrap_or(0.0),
         capture.shot_noise_gain,
         capture.read_noise,
         capture.jpeg_quality,
         seed,
     )
-    .map_err(|e| match e {
-        // The library names its fields; the user typed flags.
-        Error::InvalidParameter {
-            name,
-            value,
-            expected,
-        } => Error::InvalidParameter {
-            name: format!("--{}", name.replace('_', "-")),
-            value,
-            expected,
-        },
-        e => e,
-    })?;
-    Ok(opts)
 }
 
 /// Loads --insert and composites it into the photo and its prepared range (at the

@@ -379,21 +379,10 @@ fn distance_flags(e: Error) -> Error {
         ("noise high", "--noise-high"),
         ("noise colour strength", "--noise-colour-strength"),
     ];
-    match e {
-        Error::InvalidParameter {
-            name,
-            value,
-            expected,
-        } => Error::InvalidParameter {
-            name: FLAGS
-                .iter()
-                .find(|(field, _)| *field == name)
-                .map_or(name, |(_, flag)| flag.to_string()),
-            value,
-            expected,
-        },
-        other => other,
-    }
+    e.rename_options(|field| {
+        let flag = FLAGS.iter().find(|(f, _)| *f == field);
+        flag.map(|(_, flag)| flag.to_string())
+    })
 }
 
 /// The chosen profile: its preset (src/medium/layered/) or the table of `--density-csv`,

@@ -306,30 +306,20 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
     output::check_image_output(&args.out, "--out")?;
 
     let mut image = sky::render_sky_image(&model, size, &fisheye)?;
-    let clouds = match args.clouds {
-        Some(coverage) => {
-            let opts = CloudOptions {
-                coverage,
-                seed: cloud_seed,
-                ..CloudOptions::default()
-            };
-            Some(
-                add_clouds(&mut image, &fisheye, &opts).map_err(|e| match e {
-                    Error::InvalidParameter {
-                        name,
-                        value,
-                        expected,
-                    } if name == "coverage" => Error::InvalidParameter {
-                        name: "--clouds".into(),
-                        value,
-                        expected,
-                    },
-                    e => e,
-                })?,
-            )
-        }
-        None => None,
-    };
+    let clouds =
+        match args.clouds {
+            Some(coverage) => {
+                let opts = CloudOptions {
+                    coverage,
+                    seed: cloud_seed,
+                    ..CloudOptions::default()
+                };
+                Some(add_clouds(&mut image, &fisheye, &opts).map_err(|e| {
+                    e.rename_options(|f| (f == "coverage").then(|| "--clouds".into()))
+                })?)
+            }
+            None => None,
+        };
     let disc_pixels = match disc {
         Some(r) => Some(sky::draw_sun_disc(
             &mut image, &fisheye, zenith, azimuth, r,
