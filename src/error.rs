@@ -127,12 +127,14 @@ pub enum Error {
         hint: String,
     },
     /// Some frames of a batch failed; the others were written.
-    #[error("{frames} frames and {outputs} outputs failed (the others were written); each failure is in {}", log.display())]
+    #[error("{frames} frames and {outputs} outputs failed ({written} outputs written); each failure is in {}", log.display())]
     BatchFailures {
         /// Frames that could not be loaded or rendered.
         frames: usize,
         /// Outputs that could not be written.
         outputs: usize,
+        /// Outputs written by the run.
+        written: usize,
         /// The run's log.
         log: PathBuf,
     },

@@ -420,6 +420,10 @@ fn no_prep_with_the_default_refinement_fails_each_frame_naming_the_flags() {
     let said = "invalid --no-prep = given: expected pre-processing with the repair refinement";
     assert_eq!(err.matches(said).count(), 2, "{err}");
     assert!(err.contains("(or --refine none)"), "{err}");
+    assert!(
+        err.contains("2 frames and 0 outputs failed (0 outputs written)"),
+        "{err}"
+    );
     assert!(!dir.path().join("out/leftImg8bit").exists(), "{err}");
 }
 

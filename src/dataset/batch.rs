@@ -369,6 +369,7 @@ impl BatchReport {
         Err(Error::BatchFailures {
             frames: self.failed_frames,
             outputs: self.failed_outputs,
+            written: self.written,
             log: self.log.clone(),
         })
     }
