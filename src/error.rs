@@ -200,9 +200,7 @@ impl Error {
             expected: expected.into(),
         }
     }
-}
 
-impl Error {
     /// This error with the options it names shown as a host calls them: the parameter's
     /// name, and every option a message names in backticks, become what `rename` gives
     /// for the field (kept as they are where it gives `None`).

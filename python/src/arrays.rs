@@ -46,7 +46,8 @@ pub(crate) fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
 pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
     let untyped = image.cast::<PyUntypedArray>().map_err(|_| {
         value_error(format!(
-            "image: expected a numpy array HxWx3 (uint8 sRGB, or float32 or float64 linear RGB), got {}",
+            "image: expected a numpy array HxWx3 (uint8 sRGB, or float32 or float64 linear \
+             RGB), got {}",
             image
                 .get_type()
                 .name()

@@ -306,20 +306,19 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
     output::check_image_output(&args.out, "--out")?;
 
     let mut image = sky::render_sky_image(&model, size, &fisheye)?;
-    let clouds =
-        match args.clouds {
-            Some(coverage) => {
-                let opts = CloudOptions {
-                    coverage,
-                    seed: cloud_seed,
-                    ..CloudOptions::default()
-                };
-                Some(add_clouds(&mut image, &fisheye, &opts).map_err(|e| {
-                    e.rename_options(|f| (f == "coverage").then(|| "--clouds".into()))
-                })?)
-            }
-            None => None,
-        };
+    // The library names the coverage as its field; here it is --clouds.
+    let clouds_flag = |e: Error| e.rename_options(|f| (f == "coverage").then(|| "--clouds".into()));
+    let clouds = match args.clouds {
+        Some(coverage) => {
+            let opts = CloudOptions {
+                coverage,
+                seed: cloud_seed,
+                ..CloudOptions::default()
+            };
+            Some(add_clouds(&mut image, &fisheye, &opts).map_err(clouds_flag)?)
+        }
+        None => None,
+    };
     let disc_pixels = match disc {
         Some(r) => Some(sky::draw_sun_disc(
             &mut image, &fisheye, zenith, azimuth, r,

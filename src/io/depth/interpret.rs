@@ -31,26 +31,27 @@ fn resolve_format(
 ) -> Result<DepthFormat> {
     use DepthFormat as F;
     let (has_calib, has_camera) = (side.calib.is_some(), side.camera.is_some());
-    let format =
-        match (requested, raw) {
-            (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
-            (F::Auto, Raw::Float { .. }) => F::Float,
-            (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
-            // A camera file was given, or found for a `*_disparity.png`.
-            (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
-            (F::Auto, Raw::Grey16(_))
-                if opts.scale.is_some() || opts.kind == Some(DepthKind::ZBuffer) =>
-            {
-                F::Png16
-            }
-            (F::Auto, Raw::Grey16(_)) => return Err(Error::format(
+    let format = match (requested, raw) {
+        (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
+        (F::Auto, Raw::Float { .. }) => F::Float,
+        (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
+        // A camera file was given, or found for a `*_disparity.png`.
+        (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
+        (F::Auto, Raw::Grey16(_))
+            if opts.scale.is_some() || opts.kind == Some(DepthKind::ZBuffer) =>
+        {
+            F::Png16
+        }
+        (F::Auto, Raw::Grey16(_)) => {
+            return Err(Error::format(
                 path,
-                "16-bit PNG depth has no standard scale: give `depth_format` kitti, nyu or tum, \
-                 or `depth_scale` with the metres per unit (a Cityscapes disparity: \
+                "16-bit PNG depth has no standard scale: give `depth_format` kitti, nyu or \
+                 tum, or `depth_scale` with the metres per unit (a Cityscapes disparity: \
                  `depth_format` cityscapes with `camera`)",
-            )),
-            (f, _) => f,
-        };
+            ))
+        }
+        (f, _) => f,
+    };
     let layout = format.rule().layout;
     if !layout.fits(raw) {
         return Err(Error::format(
@@ -65,14 +66,15 @@ fn resolve_format(
     if format == F::Middlebury2014 && !has_calib {
         return Err(Error::format(
             path,
-            "Middlebury 2014 disparity needs its calib.txt: none next to the file; give it as `calib`",
+            "Middlebury 2014 disparity needs its calib.txt: none next to the file; give it as \
+             `calib`",
         ));
     }
     if format == F::Cityscapes && !has_camera {
         return Err(Error::format(
             path,
-            "a Cityscapes disparity needs its camera file ({name}_camera.json): give it as `camera` \
-             (or read both with load_cityscapes_from_bytes)",
+            "a Cityscapes disparity needs its camera file ({name}_camera.json): give it as \
+             `camera` (or read both with load_cityscapes_from_bytes)",
         ));
     }
     Ok(format)
