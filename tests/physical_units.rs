@@ -541,6 +541,22 @@ fn the_library_says_what_would_make_a_range_metric() {
     .unwrap();
     let fogged = brume::photo::fog(gpu.renderer().unwrap(), &photo, &prepared, &options);
     assert_eq!(fogged.unwrap_err().to_string(), e);
+
+    // Aerial perspective reads metres too: without `metres_per_unit` it is refused on
+    // this range, and given, the medium takes it.
+    let camera = brume::camera::Camera::default();
+    let mut aerial = brume::photo::AerialOptions::new(3.0, camera);
+    let e = brume::photo::aerial(&photo, &prepared, &aerial).unwrap_err();
+    let e = e.to_string();
+    assert!(
+        e.starts_with("invalid metres_per_unit = (missing)")
+            && e.contains("range.pfm's range")
+            && e.contains("give `metres_per_unit`, or a metric depth"),
+        "{e}"
+    );
+    aerial.metres_per_unit = Some(2.0);
+    let fogged = brume::photo::aerial(&photo, &prepared, &aerial).unwrap();
+    assert_eq!(fogged.medium.metres_per_unit, 2.0);
 }
 
 #[test]

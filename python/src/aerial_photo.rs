@@ -112,7 +112,7 @@ impl AerialArgs {
         let opts = AerialOptions {
             from_turbidity: self.from_turbidity,
             altitude_m: self.altitude_m,
-            metres_per_unit: self.metres_per_unit,
+            metres_per_unit: Some(self.metres_per_unit),
             sensitivity,
             lambda: if self.blur { self.lambda_px } else { 0.0 },
             horizon_zenith_deg: self.horizon_zenith_deg,

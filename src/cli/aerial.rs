@@ -132,7 +132,7 @@ fn aerial_options(
     Ok(AerialOptions {
         from_turbidity: args.from_turbidity,
         altitude_m: args.altitude.unwrap_or(0.0),
-        metres_per_unit: args.metres_per_unit.unwrap_or(1.0),
+        metres_per_unit: args.metres_per_unit,
         sensitivity,
         lambda: match args.blur.unwrap_or(AerialBlur::Diffusion) {
             AerialBlur::None => 0.0,

@@ -119,17 +119,8 @@ pub fn physical_from_args(args: &RenderArgs) -> Result<Option<PhysicalFog>> {
 /// ([`LoadedDepth::metric`]), naming the depth, how it was read and what would do.
 fn check_metric(args: &RenderArgs, scene: &Scene) -> Result<()> {
     let depth = &scene.depth;
-    if args.medium == MediumKind::Aerial && !depth.metric && args.metres_per_unit.is_none() {
-        return Err(Error::invalid(
-            "--metres-per-unit",
-            "(missing)",
-            format!(
-                "the scale of {}'s range for --medium aerial, which is in metres: it was read \
-                 as {} {} in {}, not trustworthy metres (give --metres-per-unit, or a \
-                 metric depth: --calib, --camera, a metric --depth-format)",
-                scene.depth_name, depth.format, depth.kind, depth.units
-            ),
-        ));
+    if args.medium == MediumKind::Aerial {
+        brume::photo::metres_per_unit(scene, args.metres_per_unit)?;
     }
     let given = match (args.beta, args.visibility) {
         (Some(b), _) => ("beta", b),

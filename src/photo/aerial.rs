@@ -49,8 +49,9 @@ pub struct AerialOptions {
     pub from_turbidity: Option<f64>,
     /// The camera's altitude above sea level, metres.
     pub altitude_m: f64,
-    /// Metres per unit of the photo's range (1 for a range in metres).
-    pub metres_per_unit: f64,
+    /// Metres per unit of the photo's range; `None`: the range is in metres, which the
+    /// photo's depth must be known to be ([`metres_per_unit`]).
+    pub metres_per_unit: Option<f64>,
     /// The camera whose rays give each pixel's zenith angle (pitch, vertical field of
     /// view).
     pub camera: Camera,
@@ -112,7 +113,7 @@ impl AerialOptions {
             turbidity,
             from_turbidity: None,
             altitude_m: 0.0,
-            metres_per_unit: 1.0,
+            metres_per_unit: None,
             camera,
             sensitivity: Sensitivity::cie_srgb(),
             lambda: haze::DEFAULT_LAMBDA,
@@ -150,8 +151,9 @@ impl AerialOptions {
             ),
             (
                 "metres_per_unit",
-                self.metres_per_unit,
-                self.metres_per_unit.is_finite() && self.metres_per_unit > 0.0,
+                self.metres_per_unit.unwrap_or(1.0),
+                self.metres_per_unit
+                    .is_none_or(|m| m.is_finite() && m > 0.0),
                 "metres per unit of the photo's range, > 0 (1 for a range in metres)".into(),
             ),
             (
@@ -308,7 +310,8 @@ impl HorizonFrom {
 pub struct AerialPhoto {
     /// The photo (its haze removed with [`AerialOptions::from_turbidity`]).
     pub image: RgbImage,
-    /// The range in [`AerialOptions::metres_per_unit`], unknown samples taken as the sky.
+    /// The range in the photo's units ([`AerialOptions::metres_per_unit`]), unknown
+    /// samples taken as the sky.
     pub range: ScalarMap,
     /// The medium.
     pub medium: AerialPerspective,
@@ -352,6 +355,7 @@ pub fn aerial(
         }
     });
     opts.validate()?;
+    let metres_per_unit = metres_per_unit(photo, opts.metres_per_unit)?;
     // The sky's own turbidity carries a sector's light between zenith angles.
     let sky_turbidity = opts.from_turbidity.unwrap_or(opts.turbidity);
     let found = match (&opts.horizon_light, &prepared.prepared) {
@@ -387,7 +391,8 @@ pub fn aerial(
             HorizonFrom::Airlight,
         ),
     };
-    let mut medium = aerial_medium(opts, 1.5 * f64::from(max_range), light, zenith)?;
+    let far = 1.5 * f64::from(max_range);
+    let mut medium = aerial_medium(opts, metres_per_unit, far, light, zenith)?;
     let sectors = match (sectors, opts.sun) {
         (Some(s), _) => Some(s),
         (None, Some([sun_zenith, sun_azimuth])) if opts.horizon_sectors > 1 => {
@@ -422,18 +427,40 @@ pub fn aerial(
     })
 }
 
-/// The medium of `opts` over ranges up to `max_range` (in the photo's units), the
-/// horizon's light `light` at zenith angle `zenith` (radians).
+/// Metres per unit of `photo`'s range: `given`, or 1 where its depth is known to be in
+/// metres ([`LoadedDepth::metric`](crate::io::depth::LoadedDepth::metric)); an error
+/// naming `metres_per_unit` where it is not, since aerial perspective reads metres.
+pub fn metres_per_unit(photo: &Photo, given: Option<f64>) -> Result<f64> {
+    let depth = &photo.depth;
+    match given {
+        Some(m) => Ok(m),
+        None if depth.metric => Ok(1.0),
+        None => Err(Error::invalid(
+            "metres_per_unit",
+            "(missing)",
+            format!(
+                "the scale of {}'s range, which aerial perspective reads in metres: it was \
+                 read as {} {} in {}, not trustworthy metres (give `metres_per_unit`, or a \
+                 metric depth: `calib`, `camera`, a metric `depth_format`)",
+                photo.depth_name, depth.format, depth.kind, depth.units
+            ),
+        )),
+    }
+}
+
+/// The medium of `opts` with `metres_per_unit` over ranges up to `max_range` (in the
+/// photo's units), the horizon's light `light` at zenith angle `zenith` (radians).
 fn aerial_medium(
     opts: &AerialOptions,
+    metres_per_unit: f64,
     max_range: f64,
     light: [f32; 3],
     zenith: f64,
 ) -> Result<AerialPerspective> {
-    let s_max = (max_range * opts.metres_per_unit).max(1.0);
+    let s_max = (max_range * metres_per_unit).max(1.0);
     let table = AttenuationTable::new(&opts.sensitivity, opts.turbidity, opts.altitude_m, s_max)?;
     let medium = AerialPerspective {
-        metres_per_unit: opts.metres_per_unit,
+        metres_per_unit,
         lambda: opts.lambda,
         reference_zenith: zenith,
         ..AerialPerspective::new(Arc::new(table), opts.camera, light)

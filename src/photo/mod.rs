@@ -30,9 +30,9 @@ mod insert;
 mod prepare;
 
 pub use aerial::{
-    aerial, dehaze, pitch_for_horizon_row, turbidity_from_sky, AerialOptions, AerialPhoto,
-    HorizonFrom, PhotoView, Retarget, ALTITUDE_RANGE_M, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
-    TURBIDITY_RANGE,
+    aerial, dehaze, metres_per_unit, pitch_for_horizon_row, turbidity_from_sky, AerialOptions,
+    AerialPhoto, HorizonFrom, PhotoView, Retarget, ALTITUDE_RANGE_M, DEFAULT_HORIZON_ZENITH_DEG,
+    MAX_PITCH_DEG, TURBIDITY_RANGE,
 };
 pub use capture::{capture, CaptureOptions, SensorNoise};
 pub use distribution::BetaDistribution;
