@@ -944,6 +944,19 @@ fn zbuffer_becomes_range_with_near_far_and_fov() {
     };
     let err = expect_err(load_range(&pfm, &without_far)).to_string();
     assert!(err.contains("far") && err.contains("zbuffer"), "{err}");
+    // Clipping planes are read from a z-buffer only.
+    let as_depth = DepthOptions {
+        kind: Some(DepthKind::Depth),
+        ..with_camera.clone()
+    };
+    let d = load_range(&pfm, &as_depth).unwrap();
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n.starts_with("`near` and `far` ignored")),
+        "{:?}",
+        d.notes
+    );
     // The camera's field of view is the option `fov` here.
     let bad_fov = DepthOptions {
         fov: Some(0.0),

@@ -373,6 +373,9 @@ def test_load_depth_geometry_keywords(tmp_path):
     np.testing.assert_allclose(rng, eye * np.sqrt(1.0 + pixel_radius2(h, w, 50.0)), rtol=1e-5)
     _, info = brume.load_depth(tmp_path / "depth.npy", kind="range", focal_px=50.0)
     assert any("focal_px ignored" in n for n in info["notes"]), info["notes"]
+    # Clipping planes belong to a z-buffer only.
+    _, info = brume.load_depth(tmp_path / "depth.npy", kind="depth", focal_px=50.0, near=0.5)
+    assert any("near and far ignored" in n for n in info["notes"]), info["notes"]
     assert not any("--" in n for n in info["notes"]), info["notes"]
 
 

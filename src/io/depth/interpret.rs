@@ -138,6 +138,12 @@ pub(super) fn interpret(
             camera_path.display()
         ));
     }
+    if kind != DepthKind::ZBuffer && (opts.near.is_some() || opts.far.is_some()) {
+        notes.push(format!(
+            "`near` and `far` ignored: only a z-buffer's projection has clipping planes, and \
+             the file was read as {kind}"
+        ));
+    }
     let min_confidence = android::min_confidence(format, opts, &mut notes)?;
     let (width, height) = raw.size();
     let metres = "m".to_string();
