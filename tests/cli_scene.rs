@@ -592,6 +592,27 @@ fn bad_input_fails_with_one_line_and_writes_nothing() {
             "--blur-falloff -1",
         ),
         ("--rho-max 0.3", 1, "--rho-max 0.3"),
+        // A blur's options with another blur cannot take effect.
+        (
+            "--blur none --sigma0 2",
+            1,
+            "--sigma0 2 --blur diffusion not --blur none",
+        ),
+        (
+            "--blur gauss-single --scheme euler",
+            1,
+            "--scheme euler --blur diffusion",
+        ),
+        (
+            "--blur-distance 50",
+            1,
+            "--blur-distance 50 gauss-single not --blur diffusion",
+        ),
+        (
+            "--blur none --precision f16",
+            1,
+            "--precision f16 --blur none",
+        ),
         ("--sigma0 0", 1, "--sigma0 0"),
         ("--lambda -1", 1, "--lambda -1"),
         ("--max-density 1", 1, "--max-density 1"),
