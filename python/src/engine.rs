@@ -325,7 +325,6 @@ impl BlurArgs<'_> {
             maximum: self.blur_max,
             precision,
         };
-        gauss.validate().map_err(py_err)?;
         let diffusion = Blur {
             scheme,
             sigma0: self.sigma0,
@@ -333,25 +332,8 @@ impl BlurArgs<'_> {
             precision,
             ..Blur::default()
         };
-        match self
-            .blur
-            .trim()
-            .to_ascii_lowercase()
-            .replace('_', "-")
-            .as_str()
-        {
-            "none" => Ok(FogBlur::None),
-            "gauss-single" => Ok(FogBlur::GaussSingle(gauss)),
-            "gauss-separate" => Ok(FogBlur::GaussSeparate(gauss)),
-            "diffusion" => {
-                diffusion.validate().map_err(py_err)?;
-                Ok(FogBlur::Diffusion(diffusion))
-            }
-            other => Err(value_error(format!(
-                "invalid blur = {other:?}: expected 'none', 'gauss-single', 'gauss-separate' \
-                 or 'diffusion'"
-            ))),
-        }
+        let name = self.blur.trim().to_ascii_lowercase().replace('_', "-");
+        FogBlur::chosen(&name, gauss, diffusion).map_err(py_err)
     }
 }
 
@@ -379,22 +361,10 @@ fn rgb(name: &str, v: Option<Vec<f64>>) -> PyResult<Option<[f32; 3]>> {
     Ok(triple(name, v, true)?.map(|c| c.map(|x| x as f32)))
 }
 
-/// A medium's error with its field named as the Python keyword that sets it.
+/// A medium's error with its field named as the Python keyword that sets it (`noise
+/// size` is `noise_size`; `py_err` renames the others).
 fn keyword_error(e: brume::Error) -> PyErr {
-    match e {
-        brume::Error::InvalidParameter {
-            name,
-            value,
-            expected,
-        } => {
-            let name = match name.as_str() {
-                "lambda" => "lambda_px".to_string(),
-                n => n.replace(' ', "_"),
-            };
-            value_error(format!("invalid {name} = {value}: expected {expected}"))
-        }
-        e => py_err(e),
-    }
+    py_err(e.rename_options(|name| name.contains(' ').then(|| name.replace(' ', "_"))))
 }
 
 /// The distance fog's keywords (`None`: the library's default).
@@ -592,13 +562,14 @@ pub(crate) struct EngineRequest<M> {
     depth: ScalarMap,
 }
 
-/// The common checks of both engine fogs: the arrays, the camera, the time, the blur.
+/// The common checks of both engine fogs: the arrays, the camera, the time, the blur
+/// (and `lambda_px`, the medium's, which only the diffusion blur reads).
 fn request<M>(
     image: &Bound<'_, PyAny>,
     depth: &Bound<'_, PyAny>,
     camera: &Bound<'_, PyAny>,
     time: f64,
-    blur: &BlurArgs,
+    (blur, lambda_px): (&BlurArgs, Option<f64>),
     medium: impl FnOnce(&FrameCamera) -> PyResult<M>,
 ) -> PyResult<EngineRequest<M>> {
     let image = super::read_image(image)?;
@@ -609,8 +580,16 @@ fn request<M>(
             "invalid time = {time}: expected a finite time in seconds"
         )));
     }
+    let blur = blur.fog_blur()?;
+    if let (Some(lambda), false) = (lambda_px, matches!(blur, FogBlur::Diffusion(_))) {
+        return Err(value_error(format!(
+            "invalid lambda_px = {lambda}: expected blur 'diffusion' with it, not blur '{}': \
+             only that blur reads it",
+            blur.name()
+        )));
+    }
     Ok(EngineRequest {
-        blur: blur.fog_blur()?,
+        blur,
         medium: medium(&camera)?,
         frame: FrameInputs::new(camera, time),
         image,
@@ -627,7 +606,9 @@ pub(crate) fn distance_request(
     blur: &BlurArgs,
     fog: DistanceArgs,
 ) -> PyResult<EngineRequest<DistanceFog>> {
-    request(image, depth, camera, time, blur, |c| fog.medium(c))
+    request(image, depth, camera, time, (blur, fog.lambda_px), |c| {
+        fog.medium(c)
+    })
 }
 
 /// `Renderer.layered_fog`'s request, checked (with the GIL).
@@ -639,7 +620,9 @@ pub(crate) fn layered_request(
     blur: &BlurArgs,
     fog: LayeredArgs,
 ) -> PyResult<EngineRequest<LayeredFog>> {
-    request(image, depth, camera, time, blur, |c| fog.medium(c))
+    request(image, depth, camera, time, (blur, fog.lambda_px), |c| {
+        fog.medium(c)
+    })
 }
 
 /// Renders the request on the GL thread (call with the GIL released): the image in

@@ -57,8 +57,8 @@ fn py_err(e: brume::Error) -> PyErr {
 }
 
 /// The library's fields whose keyword here has another name (the depth loaders' options
-/// as `load_depth` takes them, the focal length and field of view with their units).
-const KEYWORDS: [(&str, &str); 7] = [
+/// as `load_depth` takes them, the focal length, field of view and λ with their units).
+const KEYWORDS: [(&str, &str); 8] = [
     ("depth_format", "format"),
     ("depth_kind", "kind"),
     ("depth_scale", "scale"),
@@ -66,6 +66,7 @@ const KEYWORDS: [(&str, &str); 7] = [
     ("baseline", "baseline_mm"),
     ("disparity_offset", "disparity_offset_px"),
     ("fov", "fov_y_deg"),
+    ("lambda", "lambda_px"),
 ];
 
 /// The keyword that sets the library's field `field`: its name, or its entry in

@@ -421,6 +421,11 @@ def test_engine_fog_errors():
         (dict(blur="gauss-single", blur_max=2.0), "blur_max"),
         (dict(blur="diffusion", sigma0=0.0), "invalid sigma0 = 0"),
         (dict(blur="diffusion", rho_max=0.3), r"invalid rho_max = 0.3: expected a rate in \(0, 0.25\]"),
+        # A blur's settings with another blur cannot take effect: refused, as by `brume scene`.
+        (dict(blur="none", sigma0=2.0), "invalid sigma0 = 2: expected blur diffusion with it, not blur none"),
+        (dict(blur="diffusion", blur_max=0.5), "invalid blur_max = 0.5: expected blur gauss-single"),
+        (dict(blur="none", precision="f16"), "invalid precision = f16: expected a blur with it"),
+        (dict(blur="gauss-single", lambda_px=4.0), "invalid lambda_px = 4: expected blur 'diffusion'"),
     ]
     for fog in (brume.distance_fog, brume.layered_fog):
         for change, message in cases:

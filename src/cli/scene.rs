@@ -4,7 +4,6 @@
 
 use super::args::{BlurKind, FogKind, ProfileKind, SceneArgs};
 use super::limits;
-use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::camera::{Camera, FrameInputs};
 use brume::egl::Platform;
 use brume::io::output::{self, Outputs};
@@ -13,7 +12,7 @@ use brume::medium::{
 };
 use brume::raster::{Grid, RgbaImage};
 use brume::scene::SceneRenderer;
-use brume::{Blur, Encoding, Error, FogBlur, GaussBlur, Input, Precision, Result, Scheme};
+use brume::{Blur, Encoding, Error, FogBlur, GaussBlur, Input, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -204,64 +203,19 @@ fn check_fog_options(args: &SceneArgs) -> Result<()> {
     check_blur_options(args)
 }
 
-/// Refuses a blur option that the chosen `--blur` does not read (one changed from its
-/// default, as `--compat foggy-cityscapes` finds them): the diffusion's with another
-/// blur, the Gaussian's without one, the precision without a blur.
+/// Refuses `--lambda` without the diffusion blur: it is the medium's, and only that blur
+/// reads it ([`FogBlur::chosen`] refuses the blurs' own options).
 fn check_blur_options(args: &SceneArgs) -> Result<()> {
-    use super::options::{refuse_given, shown};
-    let b = &args.blur_options;
-    let changed = |flag, differs: bool, value: String| (flag, differs.then_some(value));
-    let gauss = GaussBlur::default();
-    let diffusion = [
-        ("--lambda", shown(b.lambda)),
-        changed(
-            "--scheme",
-            b.scheme != Scheme::Matched,
-            b.scheme.to_string(),
-        ),
-        changed("--sigma0", b.sigma0 != DEFAULT_SIGMA0, b.sigma0.to_string()),
-        changed(
-            "--rho-max",
-            b.rho_max != DEFAULT_RHO_MAX,
-            b.rho_max.to_string(),
-        ),
-    ];
-    let gaussian = [
-        changed(
-            "--blur-distance",
-            b.blur_distance != gauss.distance,
-            b.blur_distance.to_string(),
-        ),
-        changed(
-            "--blur-falloff",
-            b.blur_falloff != gauss.falloff,
-            b.blur_falloff.to_string(),
-        ),
-        changed(
-            "--blur-max",
-            b.blur_max != gauss.maximum,
-            b.blur_max.to_string(),
-        ),
-    ];
-    let blur = clap::ValueEnum::to_possible_value(&args.blur).expect("no variant is skipped");
-    let what = blur.get_name();
-    if args.blur != BlurKind::Diffusion {
-        let expected = format!("--blur diffusion with it, not --blur {what}");
-        refuse_given(&diffusion, &expected)?;
+    if args.blur == BlurKind::Diffusion {
+        return Ok(());
     }
-    if matches!(args.blur, BlurKind::None | BlurKind::Diffusion) {
-        let expected = format!("--blur gauss-single or gauss-separate with it, not --blur {what}");
-        refuse_given(&gaussian, &expected)?;
-    }
-    let precision = [changed(
-        "--precision",
-        b.precision != Precision::F32,
-        b.precision.to_string(),
-    )];
-    if args.blur == BlurKind::None {
-        refuse_given(&precision, "a blur with it, not --blur none")?;
-    }
-    Ok(())
+    super::options::refuse_given(
+        &[("--lambda", super::options::shown(args.blur_options.lambda))],
+        &format!(
+            "--blur diffusion with it, not --blur {}: only that blur reads it",
+            blur_name(args.blur)
+        ),
+    )
 }
 
 pub fn camera_from_args(args: &SceneArgs) -> Camera {
@@ -332,12 +286,13 @@ fn check_outputs(args: &SceneArgs, outs: &[PathBuf]) -> Result<()> {
 
 pub fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
     let (gauss, diffusion) = blurs_from_args(args)?;
-    Ok(match args.blur {
-        BlurKind::None => FogBlur::None,
-        BlurKind::GaussSingle => FogBlur::GaussSingle(gauss),
-        BlurKind::GaussSeparate => FogBlur::GaussSeparate(gauss),
-        BlurKind::Diffusion => FogBlur::Diffusion(diffusion),
-    })
+    FogBlur::chosen(&blur_name(args.blur), gauss, diffusion)
+}
+
+/// `--blur`'s value as typed: the name [`FogBlur::chosen`] takes.
+fn blur_name(blur: BlurKind) -> String {
+    let value = clap::ValueEnum::to_possible_value(&blur).expect("no variant is skipped");
+    value.get_name().to_owned()
 }
 
 /// The Gaussian and the diffusion blur the options describe, whichever `--blur` chose.

@@ -36,7 +36,10 @@ pub fn check_args(args: &ViewArgs) -> Result<()> {
             let (w, h) = limits::parse_image_size("--size", &a.size)?;
             limits::check_memory("--size", w, h, super::scene::SCENE_BYTES_PER_PIXEL)?;
             super::scene::camera_from_args(a).validate()?;
-            super::scene::fog_blur_from_args(a)?;
+            // Both blurs' values are checked: the panel switches between them, so the
+            // options of the one not chosen are taken, not refused as `brume scene` does.
+            let (_, diffusion) = super::scene::blurs_from_args(a)?;
+            diffusion.validate()?;
             super::scene::input_paths(a)
         }
         None => Vec::new(),

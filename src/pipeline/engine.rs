@@ -24,14 +24,15 @@
 //! a camera. [`Pipeline::blend_fog`] is paper 003's way: one pass drawn over the host's
 //! framebuffer, which already holds the scene, blended by fixed-function GL.
 
+use super::fog_blur::{FogBlur, GaussBlur};
 use super::programs::MediumId;
 use super::{
     bind_texture, draw_fullscreen, set_int, set_value, Destination, Encoding, Frame, Input, Output,
     Passes, Pipeline, ProgramKey, UNIT_DEPTH, UNIT_MAIN,
 };
-use crate::blur::{Blur, Precision};
+use crate::blur::Precision;
 use crate::camera::FrameInputs;
-use crate::error::{check_positive, Error, Result};
+use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{Filter, TexelFormat, Texture};
 use crate::gpu::timer::PassTimes;
@@ -50,87 +51,7 @@ const GAUSS5_GLSL: &str = include_str!("../../glsl/gauss5.glsl");
 /// over −2..2 (the same numbers as `glsl/gauss5.glsl`).
 pub const GAUSS_WEIGHTS: [f64; 3] = [0.40261995, 0.24420134, 0.05448868];
 
-/// The Gaussian blur's parameters (paper 001, sec. 3.4; see the module docs for b).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct GaussBlur {
-    /// Distance (world units) at which the weight reaches the fog's density (> 0).
-    pub distance: f64,
-    /// Exponent of the distance (≥ 0).
-    pub falloff: f64,
-    /// Largest weight, in [0, 1].
-    pub maximum: f64,
-    /// Precision of the intermediate target of the separate mode, and of the read-back.
-    pub precision: Precision,
-}
-
-impl Default for GaussBlur {
-    /// Weight = the fog's density at 100 units, growing linearly with distance, at most 1.
-    fn default() -> Self {
-        GaussBlur {
-            distance: 100.0,
-            falloff: 1.0,
-            maximum: 1.0,
-            precision: Precision::F32,
-        }
-    }
-}
-
-impl GaussBlur {
-    /// Rejects out-of-domain parameters by name.
-    pub fn validate(&self) -> Result<()> {
-        check_positive("blur_distance", self.distance)?;
-        if !(self.falloff.is_finite() && self.falloff >= 0.0) {
-            return Err(Error::invalid("blur_falloff", self.falloff, "a number ≥ 0"));
-        }
-        if !(0.0..=1.0).contains(&self.maximum) {
-            return Err(Error::invalid(
-                "blur_max",
-                self.maximum,
-                "a weight in [0, 1]",
-            ));
-        }
-        Ok(())
-    }
-
-    /// The weight b of the blurred image at distance `l` for a fog of `density` (the
-    /// GLSL's `blur_weight`).
-    pub fn weight(&self, density: f64, l: f64) -> f64 {
-        (density * (l.max(0.0) / self.distance).powf(self.falloff)).min(self.maximum)
-    }
-
-    fn uniform(&self) -> UniformValue {
-        UniformValue::Vec3([
-            self.distance as f32,
-            self.falloff as f32,
-            self.maximum as f32,
-        ])
-    }
-}
-
-/// How engine fog is blurred (module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum FogBlur {
-    /// Fog only, one pass.
-    None,
-    /// Paper 001: the fog-free image blurred in the fog's pass.
-    GaussSingle(GaussBlur),
-    /// Paper 001: the fogged image blurred in a second pass.
-    GaussSeparate(GaussBlur),
-    /// brume's diffusion blur to the medium's σ.
-    Diffusion(Blur),
-}
-
 impl FogBlur {
-    /// `none`, `gauss-single`, `gauss-separate` or `diffusion`.
-    pub fn name(&self) -> &'static str {
-        match self {
-            FogBlur::None => "none",
-            FogBlur::GaussSingle(_) => "gauss-single",
-            FogBlur::GaussSeparate(_) => "gauss-separate",
-            FogBlur::Diffusion(_) => "diffusion",
-        }
-    }
-
     /// The engine passes (`FogBlur::None` and the Gaussians); a diffusion render's depend
     /// on its schedule and coarse stage ([`Passes::Diffusion`]).
     fn engine_passes(&self) -> Passes {

@@ -118,6 +118,7 @@ mod coarse;
 mod diffusion;
 mod engine;
 mod external;
+mod fog_blur;
 mod programs;
 mod refine;
 mod state;
@@ -125,8 +126,9 @@ mod targets;
 mod uniforms;
 
 use engine::EngineTargets;
-pub use engine::{FogBlur, GaussBlur, GAUSS_WEIGHTS};
+pub use engine::GAUSS_WEIGHTS;
 pub use external::{ExternalColour, IDENTITY, TEXTURE_BINDING_EXTERNAL_OES, TEXTURE_EXTERNAL_OES};
+pub use fog_blur::{FogBlur, GaussBlur};
 use programs::{medium_key, ProgramKey};
 pub use refine::RefineInput;
 pub(crate) use targets::Layout;
