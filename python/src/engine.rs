@@ -582,11 +582,8 @@ fn request<M>(
     }
     let blur = blur.fog_blur()?;
     if let (Some(lambda), false) = (lambda_px, matches!(blur, FogBlur::Diffusion(_))) {
-        return Err(value_error(format!(
-            "invalid lambda_px = {lambda}: expected blur 'diffusion' with it, not blur '{}': \
-             only that blur reads it",
-            blur.name()
-        )));
+        let needs = format!("`blur` diffusion with it, not `blur` {}", blur.name());
+        return Err(py_err(brume::Error::invalid("lambda", lambda, needs)));
     }
     Ok(EngineRequest {
         blur,

@@ -425,7 +425,7 @@ def test_engine_fog_errors():
         (dict(blur="none", sigma0=2.0), "invalid sigma0 = 2: expected blur diffusion with it, not blur none"),
         (dict(blur="diffusion", blur_max=0.5), "invalid blur_max = 0.5: expected blur gauss-single"),
         (dict(blur="none", precision="f16"), "invalid precision = f16: expected a blur with it"),
-        (dict(blur="gauss-single", lambda_px=4.0), "invalid lambda_px = 4: expected blur 'diffusion'"),
+        (dict(blur="gauss-single", lambda_px=4.0), "invalid lambda_px = 4: expected blur diffusion with it, not blur gauss-single"),
     ]
     for fog in (brume.distance_fog, brume.layered_fog):
         for change, message in cases:

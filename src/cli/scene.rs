@@ -212,7 +212,7 @@ fn check_blur_options(args: &SceneArgs) -> Result<()> {
     super::options::refuse_given(
         &[("--lambda", super::options::shown(args.blur_options.lambda))],
         &format!(
-            "--blur diffusion with it, not --blur {}: only that blur reads it",
+            "--blur diffusion with it, not --blur {}",
             blur_name(args.blur)
         ),
     )
@@ -305,7 +305,8 @@ pub fn blurs_from_args(args: &SceneArgs) -> Result<(GaussBlur, Blur)> {
         precision: b.precision,
     };
     // A bad value is refused whatever the mode, not ignored because another blur was
-    // chosen. The diffusion blur's options are checked when its schedule is planned.
+    // chosen. The diffusion blur's are checked where it is chosen (`FogBlur::chosen`) and
+    // by the viewer, whose panel switches to it.
     gauss.validate()?;
     let diffusion = Blur {
         scheme: b.scheme,
