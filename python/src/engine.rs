@@ -581,10 +581,7 @@ fn request<M>(
         )));
     }
     let blur = blur.fog_blur()?;
-    if let (Some(lambda), false) = (lambda_px, matches!(blur, FogBlur::Diffusion(_))) {
-        let needs = format!("`blur` diffusion with it, not `blur` {}", blur.name());
-        return Err(py_err(brume::Error::invalid("lambda", lambda, needs)));
-    }
+    blur.check_lambda(lambda_px).map_err(py_err)?;
     Ok(EngineRequest {
         blur,
         medium: medium(&camera)?,

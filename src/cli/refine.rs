@@ -81,29 +81,20 @@ pub fn refine_scene(
         return Ok(plan);
     }
     let started = Instant::now();
-    prep.refine(scene, &opts, filter).map_err(|e| match e {
+    prep.refine(scene, &opts, filter).map_err(|mut e| {
         // The library says what needs the range filled; the flag that chose the mode is ours.
-        Error::InvalidParameter {
-            name,
-            value,
-            expected,
-        } if name == "prep" => {
-            let default = match (plan.guided, args.refine.mode) {
-                (Some(_), None) => format!(
-                    "; {} is --refine's default for a {} depth",
-                    opts.mode.name(),
-                    scene.depth.format
-                ),
-                _ => String::new(),
-            };
-            let expected = format!("{expected}{default}");
-            Error::InvalidParameter {
-                name,
-                value,
-                expected,
+        if let (Error::InvalidParameter { name, expected, .. }, Some(_), None) =
+            (&mut e, plan.guided, args.refine.mode)
+        {
+            if name == "prep" {
+                let mode = opts.mode.name();
+                let format = scene.depth.format;
+                expected.push_str(&format!(
+                    "; {mode} is --refine's default for a {format} depth"
+                ));
             }
         }
-        e => e,
+        e
     })?;
     if prep.prepared.is_some() {
         // The measured range at the image's size, for the report's known pixels.

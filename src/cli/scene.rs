@@ -200,22 +200,7 @@ fn check_fog_options(args: &SceneArgs) -> Result<()> {
         ];
         refuse(&given, "a fog with it, not --fog none")?;
     }
-    check_blur_options(args)
-}
-
-/// Refuses `--lambda` without the diffusion blur: it is the medium's, and only that blur
-/// reads it ([`FogBlur::chosen`] refuses the blurs' own options).
-fn check_blur_options(args: &SceneArgs) -> Result<()> {
-    if args.blur == BlurKind::Diffusion {
-        return Ok(());
-    }
-    super::options::refuse_given(
-        &[("--lambda", super::options::shown(args.blur_options.lambda))],
-        &format!(
-            "--blur diffusion with it, not --blur {}",
-            blur_name(args.blur)
-        ),
-    )
+    Ok(())
 }
 
 pub fn camera_from_args(args: &SceneArgs) -> Camera {
@@ -284,9 +269,13 @@ fn check_outputs(args: &SceneArgs, outs: &[PathBuf]) -> Result<()> {
     super::refuse_overlaps(&all, &input_paths(args))
 }
 
+/// The blur `--blur` chose, with its options ([`FogBlur::chosen`]); `--lambda` only with
+/// the diffusion blur, which is the only one to read it.
 pub fn fog_blur_from_args(args: &SceneArgs) -> Result<FogBlur> {
-    let (gauss, diffusion) = blurs_from_args(args)?;
-    FogBlur::chosen(&blur_name(args.blur), gauss, diffusion)
+    let (gauss, diffusion) = blurs_from_args(args);
+    let blur = FogBlur::chosen(&blur_name(args.blur), gauss, diffusion)?;
+    blur.check_lambda(args.blur_options.lambda)?;
+    Ok(blur)
 }
 
 /// `--blur`'s value as typed: the name [`FogBlur::chosen`] takes.
@@ -295,8 +284,10 @@ fn blur_name(blur: BlurKind) -> String {
     value.get_name().to_owned()
 }
 
-/// The Gaussian and the diffusion blur the options describe, whichever `--blur` chose.
-pub fn blurs_from_args(args: &SceneArgs) -> Result<(GaussBlur, Blur)> {
+/// The Gaussian and the diffusion blur the options describe, whichever `--blur` chose,
+/// unchecked: [`FogBlur::chosen`] checks them for `brume scene`, and `brume view scene`
+/// checks both (its panel switches between them).
+pub fn blurs_from_args(args: &SceneArgs) -> (GaussBlur, Blur) {
     let b = &args.blur_options;
     let gauss = GaussBlur {
         distance: b.blur_distance,
@@ -304,10 +295,6 @@ pub fn blurs_from_args(args: &SceneArgs) -> Result<(GaussBlur, Blur)> {
         maximum: b.blur_max,
         precision: b.precision,
     };
-    // A bad value is refused whatever the mode, not ignored because another blur was
-    // chosen. The diffusion blur's are checked where it is chosen (`FogBlur::chosen`) and
-    // by the viewer, whose panel switches to it.
-    gauss.validate()?;
     let diffusion = Blur {
         scheme: b.scheme,
         sigma0: b.sigma0,
@@ -315,7 +302,7 @@ pub fn blurs_from_args(args: &SceneArgs) -> Result<(GaussBlur, Blur)> {
         precision: b.precision,
         ..Blur::default()
     };
-    Ok((gauss, diffusion))
+    (gauss, diffusion)
 }
 
 /// The fog of a scene frame, kept concrete so that the viewer can edit it and move its time.

@@ -38,7 +38,8 @@ pub fn check_args(args: &ViewArgs) -> Result<()> {
             super::scene::camera_from_args(a).validate()?;
             // Both blurs' values are checked: the panel switches between them, so the
             // options of the one not chosen are taken, not refused as `brume scene` does.
-            let (_, diffusion) = super::scene::blurs_from_args(a)?;
+            let (gauss, diffusion) = super::scene::blurs_from_args(a);
+            gauss.validate()?;
             diffusion.validate()?;
             super::scene::input_paths(a)
         }

@@ -115,6 +115,21 @@ impl FogBlur {
         }
         refuse_unread(&blur, &gauss, &diffusion)
     }
+
+    /// Refuses a medium's blur strength λ given (`lambda`) with a blur other than the
+    /// diffusion, the only one that reads it.
+    pub fn check_lambda(&self, lambda: Option<f64>) -> Result<()> {
+        match (lambda, self) {
+            (Some(lambda), FogBlur::None | FogBlur::GaussSingle(_) | FogBlur::GaussSeparate(_)) => {
+                Err(Error::invalid(
+                    "lambda",
+                    lambda,
+                    format!("`blur` diffusion with it, not `blur` {}", self.name()),
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
 }
 
 /// `blur`, or the first setting of `gauss` or `diffusion` that it does not read and
@@ -217,6 +232,16 @@ mod tests {
         // when it is.
         let bad = GaussBlur { maximum: 2.0, ..g };
         assert!(err(chosen("none", bad, d)).starts_with("invalid blur_max = 2"));
+        // λ is the medium's, and only the diffusion blur reads it.
+        assert!(FogBlur::Diffusion(d).check_lambda(Some(4.0)).is_ok());
+        assert!(FogBlur::None.check_lambda(None).is_ok());
+        assert_eq!(
+            FogBlur::GaussSingle(g)
+                .check_lambda(Some(4.0))
+                .unwrap_err()
+                .to_string(),
+            "invalid lambda = 4: expected `blur` diffusion with it, not `blur` gauss-single"
+        );
         let bad = Blur { sigma0: 0.0, ..d };
         assert!(err(chosen("diffusion", g, bad)).starts_with("invalid sigma0 = 0"));
         assert!(err(chosen("box", g, d)).starts_with("invalid blur = \"box\""));

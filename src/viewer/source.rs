@@ -360,7 +360,7 @@ impl SceneView {
         let renderer = SceneRenderer::new(Arc::clone(gl))?;
         let sun = renderer.scene().sun_direction;
         let (distance, layered) = scene_media(args, camera, sun)?;
-        let (gauss, diffusion) = scene_cmd::blurs_from_args(args)?;
+        let (gauss, diffusion) = scene_cmd::blurs_from_args(args);
         Ok(SceneView {
             renderer,
             args: args.clone(),
@@ -383,13 +383,10 @@ impl SceneView {
         let camera = scene_cmd::camera_from_args(&self.args);
         let sun = self.renderer.scene().sun_direction;
         // The options were accepted at start-up: building from them again cannot fail.
-        if let (Ok(media), Ok(blurs)) = (
-            scene_media(&self.args, camera, sun),
-            scene_cmd::blurs_from_args(&self.args),
-        ) {
+        if let Ok(media) = scene_media(&self.args, camera, sun) {
             (self.distance, self.layered) = media;
-            (self.gauss, self.diffusion) = blurs;
         }
+        (self.gauss, self.diffusion) = scene_cmd::blurs_from_args(&self.args);
         self.camera = camera;
         self.fog = self.args.fog;
         self.blur = self.args.blur;
