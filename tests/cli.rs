@@ -386,6 +386,40 @@ fn bad_parameters_are_named() {
     }
 }
 
+/// One `--airlight` value is a grey: the render and its report are those of the triple.
+#[test]
+fn one_airlight_value_is_a_grey() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let run = |airlight: &str, out: &str| {
+        let args = ["--depth-kind", "range", "--airlight", airlight, "--json"];
+        let o = render_files(
+            dir.path(),
+            &image,
+            &depth,
+            &[&args[..], &["--out", out]].concat(),
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        (
+            v["airlight"].clone(),
+            fs::read(dir.path().join(out)).unwrap(),
+        )
+    };
+    let (grey, grey_pfm) = run("0.6", "grey.pfm");
+    let (triple, triple_pfm) = run("0.6,0.6,0.6", "triple.pfm");
+    assert_eq!(grey, serde_json::json!([0.6f32, 0.6f32, 0.6f32]));
+    assert_eq!(grey, triple);
+    assert!(grey_pfm == triple_pfm, "the grey renders another image");
+    let o = brume(dir.path(), &["render", "--airlight", "0.6,0.6"]);
+    assert!(!o.status.success());
+    assert!(
+        stderr(&o).contains("'0.6,0.6' has 2 values: expected three"),
+        "{}",
+        stderr(&o)
+    );
+}
+
 /// A chromatic tint renders through the second target and is reported; blue, the most
 /// attenuated channel, takes the most airlight.
 #[test]

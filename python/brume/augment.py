@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import Any, Dict, Mapping, Optional, Sequence, Tuple
+from typing import Any, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -65,7 +65,7 @@ class RandomFog:
         seed: Optional[int] = None,
         p: float = 1.0,
         *,
-        airlight: Optional[Sequence[float]] = None,
+        airlight: Optional[Union[float, Sequence[float]]] = None,
         blur: bool = True,
         refine: Any = True,
         renderer: Optional[Renderer] = None,

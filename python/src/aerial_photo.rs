@@ -267,7 +267,7 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// pitch_deg (default 0) or horizon_row (the image row of the horizon, 0 at the top).
 /// altitude_m: above sea level. from_turbidity: the photo's own turbidity, its haze
 /// removed first (retargeting, retarget 'normalised' (eq. 26) or 'radiance'). airlight:
-/// the horizon's linear RGB (default: from the sky pre-processing finds), taken at
+/// the horizon's linear RGB or a grey (default: from the sky pre-processing finds), taken at
 /// horizon_zenith_deg; horizon_sectors azimuth sectors of it; sun (zenith_deg,
 /// azimuth_deg clockwise from the image centre's heading) shapes them without a sky.
 /// sensitivity: a CSV lambda_nm,r,g,b (default CIE 1931 to linear sRGB). blur: the

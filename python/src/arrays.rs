@@ -9,7 +9,34 @@ use numpy::{
     IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
     PyUntypedArrayMethods,
 };
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::PyBool;
+
+/// A colour keyword as Python gives it: one number for a grey, or three linear RGB values
+/// in any sequence (list, tuple, numpy array). The values are checked where the keyword is
+/// read, which names it.
+pub(crate) struct Colour(pub Vec<f64>);
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Colour {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        // A bool is an int to Python: `airlight=True` is a mistake, not a grey of 1.
+        if !obj.is_instance_of::<PyBool>() {
+            if let Ok(grey) = obj.extract::<f64>() {
+                return Ok(Colour(vec![grey; 3]));
+            }
+            if let Ok(rgb) = obj.extract::<Vec<f64>>() {
+                return Ok(Colour(rgb));
+            }
+        }
+        let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+        Err(PyTypeError::new_err(format!(
+            "{repr} is not a colour: expected a number (a grey) or three linear RGB values"
+        )))
+    }
+}
 
 /// The encoding of an image array, which the output keeps.
 #[derive(Clone, Copy, PartialEq, Eq)]

@@ -3,6 +3,7 @@
 //! colour and depth buffer, through `brume::medium`, `brume::camera` and
 //! `Headless::render_fog`, as `brume scene` builds them.
 
+use super::arrays::Colour;
 use super::{dtype_name, on_default_renderer, py_err, value_error, GlThread, ImageIn, ImageOut};
 use brume::camera::{Camera, ClipDepth, FrameCamera, FrameInputs, MatrixCamera};
 use brume::medium::{
@@ -346,7 +347,7 @@ fn triple(name: &str, v: Option<Vec<f64>>, colour: bool) -> PyResult<Option<[f64
     let ok = v.len() == 3 && v.iter().all(|x| x.is_finite() && (!colour || *x >= 0.0));
     if !ok {
         let what = if colour {
-            "three linear RGB values, each finite and >= 0"
+            "a number (a grey) or three linear RGB values, each finite and >= 0"
         } else {
             "three finite numbers (x, y, z)"
         };
@@ -357,8 +358,8 @@ fn triple(name: &str, v: Option<Vec<f64>>, colour: bool) -> PyResult<Option<[f64
     Ok(Some([v[0], v[1], v[2]]))
 }
 
-fn rgb(name: &str, v: Option<Vec<f64>>) -> PyResult<Option<[f32; 3]>> {
-    Ok(triple(name, v, true)?.map(|c| c.map(|x| x as f32)))
+fn rgb(name: &str, v: Option<Colour>) -> PyResult<Option<[f32; 3]>> {
+    Ok(triple(name, v.map(|c| c.0), true)?.map(|c| c.map(|x| x as f32)))
 }
 
 /// A medium's error with its field named as the Python keyword that sets it (`noise
@@ -373,11 +374,11 @@ pub(crate) struct DistanceArgs<'py> {
     pub distance: Option<f64>,
     pub exponent: Option<f64>,
     pub max_density: Option<f64>,
-    pub colour: Option<Vec<f64>>,
+    pub colour: Option<Colour>,
     pub light_direction: Option<Vec<f64>>,
     pub scatter_start: Option<f64>,
     pub scatter_exponent: Option<f64>,
-    pub scatter_colour: Option<Vec<f64>>,
+    pub scatter_colour: Option<Colour>,
     pub noise: Option<&'py Bound<'py, PyAny>>,
     pub noise_seed: u64,
     pub noise_size: Option<f64>,
@@ -464,7 +465,7 @@ pub(crate) struct LayeredArgs<'py> {
     pub thickness: Option<f64>,
     pub top: Option<f64>,
     pub table: Option<&'py Bound<'py, PyAny>>,
-    pub colour: Option<Vec<f64>>,
+    pub colour: Option<Colour>,
     pub albedo: Option<f64>,
     pub lambda_px: Option<f64>,
     pub range_unit: Option<f64>,
@@ -690,7 +691,7 @@ pub(crate) fn distance_fog(
 /// (density 0.01 /m at base 0, scale_height 20), 'band' (sea mist: density 0.01, base 0,
 /// thickness 5), 'ramp' (dry ice: density 1 below base 0, none above top 1) or 'table'
 /// (table: a CSV path with the header height_m,extinction_per_m, or an Nx2 array of
-/// those rows; linear between rows). colour: the fog's linear RGB (0.8, 0.8, 0.8); albedo
+/// those rows; linear between rows). colour: the fog's linear RGB or a grey (0.8); albedo
 /// 1 (the scattering fraction, which blurs); lambda_px 8; range_unit the camera's far
 /// plane.
 #[pyfunction]

@@ -23,7 +23,7 @@ mod engine;
 mod gl_thread;
 mod photo_fog;
 
-use arrays::{dtype_name, read_image, read_range, ImageIn, ImageOut};
+use arrays::{dtype_name, read_image, read_range, Colour, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
 use gl_thread::GlThread;
 use photo_fog::{
@@ -115,7 +115,7 @@ impl Renderer {
         visibility: Option<f64>,
         ka: Option<f64>,
         ks: Option<f64>,
-        airlight: Option<Vec<f64>>,
+        airlight: Option<Colour>,
         blur: bool,
         lambda_px: Option<f64>,
         refine: Option<&Bound<'_, PyAny>>,
@@ -181,11 +181,11 @@ impl Renderer {
         distance: Option<f64>,
         exponent: Option<f64>,
         max_density: Option<f64>,
-        colour: Option<Vec<f64>>,
+        colour: Option<Colour>,
         light_direction: Option<Vec<f64>>,
         scatter_start: Option<f64>,
         scatter_exponent: Option<f64>,
-        scatter_colour: Option<Vec<f64>>,
+        scatter_colour: Option<Colour>,
         noise: Option<&Bound<'py, PyAny>>,
         noise_seed: u64,
         noise_size: Option<f64>,
@@ -261,7 +261,7 @@ impl Renderer {
         thickness: Option<f64>,
         top: Option<f64>,
         table: Option<&Bound<'py, PyAny>>,
-        colour: Option<Vec<f64>>,
+        colour: Option<Colour>,
         albedo: Option<f64>,
         blur: &str,
         lambda_px: Option<f64>,
@@ -328,7 +328,7 @@ impl Renderer {
         metres_per_unit: f64,
         from_turbidity: Option<f64>,
         retarget: Option<String>,
-        airlight: Option<Vec<f64>>,
+        airlight: Option<Colour>,
         horizon_zenith_deg: f64,
         horizon_sectors: i64,
         sun: Option<(f64, f64)>,
@@ -470,7 +470,8 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// (extinction, 1/m), visibility (m), or ka and/or ks: paper 000's absorption and
 /// scattering per unit of range normalised by its largest value (`brume render`'s
 /// default; the range in any unit, e.g. a relative depth; the other one 0.25 or 0.75 when
-/// only one is given). airlight: None (estimated from the sky) or linear RGB. blur: False
+/// only one is given). airlight: None (estimated from the sky), a grey (0.8) or linear RGB
+/// (0.8, 0.82, 0.85). blur: False
 /// for none (lambda 0); lambda_px: the blur's strength (default 8, as `--lambda`).
 /// refine: True ('repair'), False ('none') or 'none' | 'guided' | 'unreliable' | 'repair'.
 /// sky_mask, ego_mask: HxW arrays of range_m's shape, bool or integers (non-zero = set),

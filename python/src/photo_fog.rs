@@ -2,7 +2,7 @@
 //! the calling thread, refinement and fog on the GL thread, the capture after it), the
 //! keywords checked into brume's options, and `return_info`'s labels.
 
-use super::arrays::{read_mask, scalar_map_to_py};
+use super::arrays::{read_mask, scalar_map_to_py, Colour};
 use super::gl_thread::GlThread;
 use super::{py_err, value_error};
 use brume::medium::haze::Haze;
@@ -66,18 +66,19 @@ fn refine_mode(refine: &Bound<'_, PyAny>) -> PyResult<RefineMode> {
     )))
 }
 
-/// `airlight` (None or three linear RGB values) and `refine` as brume's pre-processing
-/// options.
+/// `airlight` (None, a grey or three linear RGB values) and `refine` as brume's
+/// pre-processing options.
 pub(crate) fn prepare_request(
-    airlight: Option<Vec<f64>>,
+    airlight: Option<Colour>,
     refine: &Bound<'_, PyAny>,
 ) -> PyResult<PrepareOptions> {
-    let airlight = match airlight {
+    let airlight = match airlight.map(|c| c.0) {
         None => None,
         Some(a) if a.len() == 3 => Some([a[0] as f32, a[1] as f32, a[2] as f32]),
         Some(a) => {
             return Err(value_error(format!(
-                "invalid airlight = {a:?}: expected None (estimated from the sky) or three linear RGB values"
+                "invalid airlight = {a:?}: expected None (estimated from the sky), a number \
+                 (a grey) or three linear RGB values"
             )))
         }
     };
@@ -165,7 +166,7 @@ impl Density {
 
 pub(crate) fn fog_request(
     density: Density,
-    airlight: Option<Vec<f64>>,
+    airlight: Option<Colour>,
     (blur, lambda_px): (bool, Option<f64>),
     refine: &Bound<'_, PyAny>,
     capture: CaptureOptions,

@@ -98,6 +98,19 @@ def test_koschmieder_computed_in_numpy(image_u8, range_m):
     assert np.abs(out - expected).max() < 1e-4
 
 
+def test_one_airlight_value_is_a_grey(image_u8, range_m):
+    """airlight=0.7 (RESIDE's scalar A) is the grey (0.7, 0.7, 0.7); a bool is no colour."""
+    kw = dict(beta=0.02, blur=False, refine=False)
+    grey = brume.fog(image_u8, range_m, airlight=0.7, **kw)
+    np.testing.assert_array_equal(grey, brume.fog(image_u8, range_m, airlight=(0.7,) * 3, **kw))
+    np.testing.assert_array_equal(
+        grey, brume.fog(image_u8, range_m, airlight=np.float32(0.7), **kw)
+    )
+    for bad in (True, "grey", [[0.7, 0.7, 0.7]]):
+        with pytest.raises(TypeError, match="is not a colour: expected a number"):
+            brume.fog(image_u8, range_m, airlight=bad, **kw)
+
+
 def test_info_gives_the_labels_the_render_used(image_u8, range_m):
     """return_info: t = exp(-beta R) of the range the fog read, and the image obeys
     I = J t + A (1 - t) with that t and the reported A (no blur), computed in numpy."""

@@ -144,6 +144,16 @@ def test_distance_noise_keywords(tmp_path):
     )
 
 
+def test_one_colour_value_is_a_grey(tmp_path):
+    colour, depth = clear_frame(tmp_path)
+    camera = brume.Camera(**CAMERA)
+    for fog, kw in ((brume.distance_fog, dict(noise="none")), (brume.layered_fog, dict())):
+        grey = fog(colour, depth, camera=camera, blur="none", colour=0.6, **kw)
+        np.testing.assert_array_equal(
+            grey, fog(colour, depth, camera=camera, blur="none", colour=[0.6] * 3, **kw)
+        )
+
+
 def test_uint8_frame_is_the_float_path_encoded(tmp_path):
     colour, depth = clear_frame(tmp_path)
     camera = brume.Camera(**CAMERA)

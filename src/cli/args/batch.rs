@@ -88,7 +88,8 @@ pub struct BatchArgs {
     #[arg(long, value_name = "P", allow_hyphen_values = true)]
     pub precision: Option<Precision>,
 
-    /// Airlight as linear R,G,B [default: from the sky found, per frame].
+    /// Airlight as linear R,G,B, or one value for a grey [default: from the sky found, per
+    /// frame].
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
     pub airlight: Option<[f32; 3]>,
 

@@ -306,19 +306,21 @@ pub struct PrepArgs {
     pub json: bool,
 }
 
-/// Parses `R,G,B` into three floats.
+/// Parses `R,G,B` into three floats, or one value `V` into the grey `V,V,V`.
 fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
-    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
-    let values: Result<Vec<f32>, _> = parts.iter().map(|p| p.parse::<f32>()).collect();
+    let values: Result<Vec<f32>, _> = s.split(',').map(|p| p.trim().parse::<f32>()).collect();
     match values {
-        Ok(v) if v.len() == 3 && v.iter().all(|c| c.is_finite() && *c >= 0.0) => {
-            Ok([v[0], v[1], v[2]])
-        }
-        _ => Err(format!(
-            "'{s}' is not three finite linear values ≥ 0 separated by commas, e.g. 0.8,0.8,0.8"
-        )),
+        Ok(v) if v.iter().all(|c| c.is_finite() && *c >= 0.0) => match v[..] {
+            [grey] => Ok([grey; 3]),
+            [r, g, b] => Ok([r, g, b]),
+            _ => Err(format!("'{s}' has {} values", v.len()) + RGB_EXPECTED),
+        },
+        _ => Err(format!("'{s}' is not finite linear values ≥ 0") + RGB_EXPECTED),
     }
 }
+
+const RGB_EXPECTED: &str =
+    ": expected three separated by commas (0.8,0.82,0.85) or one for a grey (0.8)";
 
 /// Parses `R,G,B` into three factors > 0.
 fn parse_tint(s: &str) -> Result<[f64; 3], String> {

@@ -95,8 +95,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "RHO", default_value_t = DEFAULT_RHO_MAX, allow_hyphen_values = true)]
     pub rho_max: f64,
 
-    /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85). Default: the median sky
-    /// colour; with no sky, a neutral grey at the 99th percentile of the luminance.
+    /// Airlight colour B as linear R,G,B (e.g. 0.8,0.82,0.85), or one value for a grey
+    /// (0.8). Default: the median sky colour; with no sky, a neutral grey at the 99th
+    /// percentile of the luminance.
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
     pub airlight: Option<[f32; 3]>,
 

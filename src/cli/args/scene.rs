@@ -161,7 +161,7 @@ pub struct SceneArgs {
     )]
     pub fps: f64,
 
-    /// Fog colour as linear R,G,B [default: the model's].
+    /// Fog colour as linear R,G,B, or one value for a grey [default: the model's].
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
     pub fog_colour: Option<[f32; 3]>,
 
@@ -252,7 +252,7 @@ pub struct DistanceArgs {
     #[arg(long, value_name = "E", allow_hyphen_values = true)]
     pub scatter_exponent: Option<f64>,
 
-    /// Scattering colour as linear R,G,B [1,0.65,0.28].
+    /// Scattering colour as linear R,G,B, or one value for a grey [1,0.65,0.28].
     #[arg(long, value_name = "R,G,B", allow_hyphen_values = true, value_parser = parse_rgb)]
     pub scatter_colour: Option<[f32; 3]>,
 
