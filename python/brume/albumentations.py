@@ -21,13 +21,13 @@ the pipeline's random generator, so ``Compose(seed=…)`` repeats it.
 
 from __future__ import annotations
 
-from typing import Any, Optional, Sequence, Tuple
+from typing import Any, Optional, Sequence, Tuple, Union
 
 import albumentations as A
 import numpy as np
 
 from ._brume import fog as _fog
-from .augment import _checked_betas, _draw_beta
+from .augment import _checked_airlights, _checked_betas, _draw_airlight, _draw_beta
 
 __all__ = ["Fog"]
 
@@ -37,7 +37,8 @@ class Fog(A.ImageOnlyTransform):
     image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
     ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur`` and
-    ``refine`` are :func:`brume.fog`'s. The image is uint8 sRGB or float32 linear RGB, as
+    ``refine`` are :func:`brume.fog`'s; ``airlight_range`` draws a grey airlight in it
+    instead, as :class:`brume.augment.RandomFog`'s. The image is uint8 sRGB or float32 linear RGB, as
     :func:`brume.fog` takes it: albumentations' ``ToFloat`` gives sRGB-encoded floats,
     which the fog would take for linear light, so put ``Fog`` before it.
     """
@@ -47,7 +48,8 @@ class Fog(A.ImageOnlyTransform):
         beta_range: Tuple[float, float] = (0.005, 0.03),
         *,
         beta_dist: Optional[str] = None,
-        airlight: Optional[Sequence[float]] = None,
+        airlight: Optional[Union[float, Sequence[float]]] = None,
+        airlight_range: Optional[Tuple[float, float]] = None,
         blur: bool = True,
         refine: Any = True,
         p: float = 1.0,
@@ -56,6 +58,7 @@ class Fog(A.ImageOnlyTransform):
         self.beta_range = _checked_betas(beta_range, beta_dist)
         self.beta_dist = beta_dist
         self.airlight = airlight
+        self.airlight_range = _checked_airlights(airlight_range, airlight)
         self.blur = blur
         self.refine = refine
 
@@ -66,6 +69,7 @@ class Fog(A.ImageOnlyTransform):
     def get_params_dependent_on_data(self, params: dict, data: dict) -> dict:
         return {
             "beta": _draw_beta(self.random_generator, self.beta_range, self.beta_dist),
+            "airlight": _draw_airlight(self.random_generator, self.airlight_range, self.airlight),
             "depth": data["depth"],
             "sky_mask": data.get("sky_mask"),
             "ego_mask": data.get("ego_mask"),
@@ -76,6 +80,7 @@ class Fog(A.ImageOnlyTransform):
         img: np.ndarray,
         beta: float,
         depth: np.ndarray,
+        airlight: Any = None,
         sky_mask: Optional[np.ndarray] = None,
         ego_mask: Optional[np.ndarray] = None,
         **params: Any,
@@ -84,7 +89,7 @@ class Fog(A.ImageOnlyTransform):
             img,
             depth,
             beta=beta,
-            airlight=self.airlight,
+            airlight=airlight,
             blur=self.blur,
             refine=self.refine,
             sky_mask=sky_mask,
@@ -92,4 +97,4 @@ class Fog(A.ImageOnlyTransform):
         )
 
     def get_transform_init_args_names(self) -> Tuple[str, ...]:
-        return ("beta_range", "beta_dist", "airlight", "blur", "refine")
+        return ("beta_range", "beta_dist", "airlight", "airlight_range", "blur", "refine")

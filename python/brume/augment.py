@@ -36,7 +36,9 @@ class RandomFog:
     drawn from the generator on each call) and ``jpeg_quality``.
 
     The other keywords go to :func:`brume.fog` as they are: ``airlight`` (None: estimated
-    from the sky), ``blur``, ``refine``. ``renderer`` (a :class:`brume.Renderer`) lets
+    from the sky; a grey or linear RGB), ``blur``, ``refine``. ``airlight_range=(low,
+    high)`` draws a grey airlight uniformly in it on each call instead (linear light, as
+    every brume airlight: RESIDE's A in [0.7, 1] of code values is about (0.45, 1.0)). ``renderer`` (a :class:`brume.Renderer`) lets
     several transforms or workers share or own a context; by default the module's.
 
     ``depth`` is the range in metres (HxW, the image's size or smaller by one factor).
@@ -66,6 +68,7 @@ class RandomFog:
         p: float = 1.0,
         *,
         airlight: Optional[Union[float, Sequence[float]]] = None,
+        airlight_range: Optional[Tuple[float, float]] = None,
         blur: bool = True,
         refine: Any = True,
         renderer: Optional[Renderer] = None,
@@ -81,6 +84,7 @@ class RandomFog:
             raise ValueError(f"invalid p = {p!r}: expected a probability in [0, 1]")
         self.p = float(p)
         self.airlight = airlight
+        self.airlight_range = _checked_airlights(airlight_range, airlight)
         self.blur = blur
         self.refine = refine
         self.renderer = renderer
@@ -130,6 +134,8 @@ class RandomFog:
         noisy = self.capture["shot_noise_gain"] is not None or self.capture["read_noise"] is not None
         # Drawn only with noise, so that a seed without it gives the betas it always gave.
         noise_seed = int(self.rng.integers(0, 2**63)) if noisy else 0
+        # Drawn only with a range, after the others, for the same reason.
+        airlight = _draw_airlight(self.rng, self.airlight_range, self.airlight)
         if not apply:
             out.update(image=image, beta=None)
             if self.return_info:
@@ -140,7 +146,7 @@ class RandomFog:
             image,
             depth,
             beta=beta,
-            airlight=self.airlight,
+            airlight=airlight,
             blur=self.blur,
             refine=self.refine,
             seed=noise_seed,
@@ -159,7 +165,8 @@ class RandomFog:
     def __repr__(self) -> str:
         return (
             f"RandomFog(beta_range={self.beta_range}, beta_dist={self.beta_dist!r}, p={self.p}, "
-            f"airlight={self.airlight}, blur={self.blur}, refine={self.refine!r}, "
+            f"airlight={self.airlight}, airlight_range={self.airlight_range}, "
+            f"blur={self.blur}, refine={self.refine!r}, "
             f"capture={self.capture}, return_info={self.return_info})"
         )
 
@@ -191,6 +198,35 @@ def _checked_betas(
             f"invalid beta_range = {beta_range!r}: expected (low, high) with 0 < low <= high, in 1/m"
         )
     return lo, hi
+
+
+def _checked_airlights(
+    airlight_range: Optional[Tuple[float, float]], airlight: Any
+) -> Optional[Tuple[float, float]]:
+    """``airlight_range`` as two floats (or None), refused with an ``airlight`` given."""
+    if airlight_range is None:
+        return None
+    if airlight is not None:
+        raise ValueError(
+            f"airlight = {airlight!r} and airlight_range = {airlight_range!r} both given: "
+            "expected one (a fixed airlight, or a grey drawn on each call)"
+        )
+    lo, hi = (float(a) for a in airlight_range)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 <= lo <= hi):
+        raise ValueError(
+            f"invalid airlight_range = {airlight_range!r}: expected (low, high) with "
+            "0 <= low <= high, linear light"
+        )
+    return lo, hi
+
+
+def _draw_airlight(
+    rng: np.random.Generator, airlight_range: Optional[Tuple[float, float]], airlight: Any
+) -> Any:
+    """A grey uniform in ``airlight_range``, or ``airlight`` as given without a range."""
+    if airlight_range is None:
+        return airlight
+    return float(rng.uniform(*airlight_range))
 
 
 def _draw_beta(

@@ -336,6 +336,27 @@ def test_random_fog_seeding(image_u8, range_m):
     assert (first["transmittance"][ego] < 1.0).all()
 
 
+def test_random_fog_airlight_range(image_u8, range_m):
+    """airlight_range draws a grey A on each call (reported by return_info) after β, and
+    renders as brume.fog with that β and grey."""
+    t = brume.augment.RandomFog(seed=3, airlight_range=(0.45, 1.0), return_info=True, blur=False)
+    first_beta = brume.augment.RandomFog(seed=3)(image=image_u8, depth=range_m)["beta"]
+    greys = []
+    for k in range(3):
+        out = t(image=image_u8, depth=range_m)
+        assert k > 0 or out["beta"] == first_beta
+        grey = out["airlight"][0]
+        assert 0.45 <= grey <= 1.0 and out["airlight"] == (grey, grey, grey)
+        expected = brume.fog(image_u8, range_m, beta=out["beta"], airlight=grey, blur=False)
+        np.testing.assert_array_equal(out["image"], expected)
+        greys.append(grey)
+    assert len(set(greys)) == 3
+    with pytest.raises(ValueError, match="both given"):
+        brume.augment.RandomFog(airlight=0.8, airlight_range=(0.7, 1.0))
+    with pytest.raises(ValueError, match="invalid airlight_range"):
+        brume.augment.RandomFog(airlight_range=(1.0, 0.7))
+
+
 def test_load_depth(tmp_path, range_m):
     path = tmp_path / "range.npy"
     np.save(path, range_m)

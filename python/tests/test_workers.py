@@ -122,6 +122,13 @@ def test_albumentations_fog_follows_the_pipelines_geometry_and_seed(sample):
     assert not np.array_equal(masked["image"][~ego], image[~ego])
     with pytest.raises(ValueError, match="beta_range"):
         Fog(beta_range=(0.03, 0.005))
+    # airlight_range: a grey drawn from the pipeline's generator, in the applied params.
+    grey = pipeline(airlight_range=(0.45, 1.0), blur=False)(image=image, depth=range_m)
+    params = grey["applied_transforms"][1][1]
+    assert 0.45 <= params["airlight"] <= 1.0
+    expected = brume.fog(image[:, ::-1].copy(), range_m[:, ::-1].copy(), beta=params["beta"],
+                         airlight=params["airlight"], blur=False)  # fmt: skip
+    np.testing.assert_array_equal(grey["image"], expected)
     with pytest.raises(ValueError, match="depth"):
         A.Compose([Fog()])(image=image)
 
