@@ -42,7 +42,7 @@ fn max_passes_skips_euler_and_says_so() {
     let euler = &report.rows[0];
     assert_eq!(euler.scheme, Scheme::Euler);
     assert!(euler.skipped && euler.median_ms.is_none());
-    assert_eq!(euler.reason.as_deref(), Some("18 passes > --max-passes 10"));
+    assert_eq!(euler.reason.as_deref(), Some("18 passes > the limit of 10"));
     for row in &report.rows[1..] {
         assert!(!row.skipped, "{row:?}");
         assert_eq!((row.passes, row.runs, row.samples_ms.len()), (7, 2, 2));
@@ -55,13 +55,13 @@ fn max_passes_skips_euler_and_says_so() {
     assert!(report.ratios.is_empty(), "no Euler figure, no ratio");
     let table = brume::bench::report::speed_table(&report);
     assert!(
-        table.contains("skipped: 18 passes > --max-passes 10"),
+        table.contains("skipped: 18 passes > the limit of 10"),
         "{table}"
     );
     let json: serde_json::Value =
         serde_json::from_str(&brume::bench::report::speed_json(&report).unwrap()).unwrap();
     assert_eq!(json["rows"][0]["skipped"], true);
-    assert_eq!(json["rows"][0]["reason"], "18 passes > --max-passes 10");
+    assert_eq!(json["rows"][0]["reason"], "18 passes > the limit of 10");
     assert_eq!(json["rows"][1]["skipped"], false);
 }
 

@@ -315,7 +315,7 @@ fn speed_panel<DB: DrawingBackend>(
     let skipped = rows.iter().filter(|r| r.skipped).count();
     let caption = match skipped {
         0 => format!("{name}: median ± 1 std"),
-        n => format!("{name}: median ± 1 std ({n} skipped by --max-passes)"),
+        n => format!("{name}: median ± 1 std ({n} over the pass limit, skipped)"),
     };
     let mut chart = ChartBuilder::on(area)
         .caption(caption, (FAMILY, 16))

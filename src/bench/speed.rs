@@ -126,7 +126,7 @@ pub struct SpeedRow {
     /// Passes per render: N + 2 at full resolution, N + 1 + 2L with L coarse levels
     /// ([`crate::Blur::coarse_from`]; the passes of a level are smaller).
     pub passes: u32,
-    /// True when `--max-passes` left this configuration out; the figures are then `None`.
+    /// True when `max_passes` left this configuration out; the figures are then `None`.
     pub skipped: bool,
     /// Why it was skipped.
     pub reason: Option<String>,
@@ -179,7 +179,8 @@ pub struct SpeedReport {
     pub height: usize,
     /// Timed runs per configuration.
     pub runs: usize,
-    /// The `--max-passes` limit, if any.
+    /// The most passes (N + 2) a configuration may take, if any; one that takes more is
+    /// skipped, and its row says so.
     pub max_passes: Option<u32>,
     /// Grey or chromatic transmission.
     pub tau: Tau,
@@ -260,7 +261,7 @@ pub fn run_speed(
     })
 }
 
-/// Every configuration with its schedule and, if `--max-passes` rules it out, why.
+/// Every configuration with its schedule and, if `max_passes` rules it out, why.
 fn plan(opts: &SpeedOptions) -> Result<Vec<(Config, Schedule, Option<String>)>> {
     opts.configs
         .each()
@@ -270,7 +271,7 @@ fn plan(opts: &SpeedOptions) -> Result<Vec<(Config, Schedule, Option<String>)>> 
             let skip = opts
                 .max_passes
                 .filter(|&max| passes > max)
-                .map(|max| format!("{passes} passes > --max-passes {max}"));
+                .map(|max| format!("{passes} passes > the limit of {max}"));
             Ok((config, schedule, skip))
         })
         .collect()
@@ -446,7 +447,7 @@ mod tests {
             .iter()
             .find(|p| p.0.blur.scheme == Scheme::Euler)
             .unwrap();
-        assert_eq!(euler.2.as_deref(), Some("1250 passes > --max-passes 100"));
+        assert_eq!(euler.2.as_deref(), Some("1250 passes > the limit of 100"));
         assert!(plans
             .iter()
             .filter(|p| p.0.blur.scheme != Scheme::Euler)
