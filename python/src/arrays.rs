@@ -9,9 +9,10 @@ use numpy::{
     IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyTypeError, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::types::PyBool;
+use std::ffi::CString;
 
 /// A colour keyword as Python gives it: one number for a grey, or three linear RGB values
 /// in any sequence (list, tuple, numpy array). The values are checked where the keyword is
@@ -132,12 +133,31 @@ pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
             pixel / width
         )));
     }
+    warn_if_code_values(py, &raw)?;
     Ok(ImageIn {
         width,
         height,
         pixels,
         raw: RawImage::Linear(raw),
     })
+}
+
+/// Warns (Python's `UserWarning`) when a float image holds only whole numbers and some
+/// above 1: 8-bit code values cast to float (`image.astype(np.float32)`), which would be
+/// fogged as linear light hundreds of times too bright. Not an error: a float image above
+/// 1 is HDR, which brume takes, and a whole-numbered one is only very likely a mistake.
+fn warn_if_code_values(py: Python<'_>, raw: &[f32]) -> PyResult<()> {
+    let max = raw.iter().copied().fold(0.0f32, f32::max);
+    if max <= 1.0 || raw.iter().any(|v| v.fract() != 0.0) {
+        return Ok(());
+    }
+    let message = format!(
+        "image: a float image of whole numbers up to {max} looks like 8-bit code values; a \
+         float image is taken as linear RGB in [0, 1] (above 1 as HDR): pass the uint8 array \
+         itself, or linear light (the sRGB curve of image / 255)"
+    );
+    let message = CString::new(message).expect("no NUL in the message");
+    PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)
 }
 
 impl ImageIn {

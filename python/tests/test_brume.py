@@ -3,6 +3,7 @@ errors, the augmentation's seeding, and equality with the `brume render` program
 
 import math
 import subprocess
+import warnings
 
 import numpy as np
 import pytest
@@ -257,6 +258,18 @@ def test_uint8_is_the_float_path_encoded(image_u8, range_m):
 def test_bad_options(image_u8, range_m, kwargs, message):
     with pytest.raises(ValueError, match=message):
         brume.fog(image_u8, range_m, **kwargs)
+
+
+def test_float_code_values_are_warned_about(image_u8, range_m):
+    """image.astype(np.float32) (code values as floats) warns; linear light, HDR above 1
+    and uint8 do not."""
+    with pytest.warns(UserWarning, match=f"up to {image_u8.max()} looks like 8-bit code values"):
+        brume.fog(image_u8.astype(np.float32), range_m, beta=0.02)
+    linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for image in (image_u8, linear, linear * 40.0):
+            brume.fog(image, range_m, beta=0.02)
 
 
 def test_bad_arrays(image_u8, range_m):
