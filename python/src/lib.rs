@@ -471,8 +471,8 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// scattering per unit of range normalised by its largest value (`brume render`'s
 /// default; the range in any unit, e.g. a relative depth; the other one 0.25 or 0.75 when
 /// only one is given). airlight: None (estimated from the sky), a grey (0.8) or linear RGB
-/// (0.8, 0.82, 0.85). blur: False
-/// for none (lambda 0); lambda_px: the blur's strength (default 8, as `--lambda`).
+/// (0.8, 0.82, 0.85). blur: False for none (lambda 0); lambda_px: the blur's strength
+/// (default 8, as `--lambda`).
 /// refine: True ('repair'), False ('none') or 'none' | 'guided' | 'unreliable' | 'repair'.
 /// sky_mask, ego_mask: HxW arrays of range_m's shape, bool or integers (non-zero = set),
 /// e.g. `labels == 23` of a Cityscapes labelIds image: the sky instead of its detection
