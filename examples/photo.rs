@@ -70,8 +70,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     )?;
     let fog = FogOptions::visibility(visibility)?;
     let fogged = photo::fog(headless.renderer()?, &photo, &prepared, &fog)?;
-    let (range, _) = photo::medium_range(&fog.extinction, &prepared.range)?;
-    let tau = photo::transmittance_map(&fogged.haze, &range);
+    let tau = fogged.transmittance();
     write_rgba(&out, &fogged.rendered.image)?;
     let tau_path = out.with_extension("transmittance.pfm");
     write_scalar(&tau_path, &tau)?;

@@ -134,6 +134,14 @@ pub struct FoggedPhoto {
     pub range_divisor: f64,
 }
 
+impl FoggedPhoto {
+    /// The transmittance τ (green channel) at each pixel, as the render applied it: the
+    /// dehazing label of I = J·τ + A·(1 − τ) ([`transmittance_map`] of its haze and range).
+    pub fn transmittance(&self) -> ScalarMap {
+        transmittance_map(&self.haze, &self.range)
+    }
+}
+
 /// Fogs `photo` with its `prepared` range (see [`super::prepare()`]) on `renderer`.
 ///
 /// Errors: [`Error::InvalidParameter`] for bad options, for physical fog on a range not
