@@ -8,6 +8,10 @@ with its diffusion blur, and the PNG encode. Batch overlaps decode, pre-processi
 encode with the GPU on its own threads; the plain Python loop does them one after
 another, and the threaded one runs two frames at once on one `Renderer`.
 
+With several β (`--beta 0.005,0.01,0.02`, Foggy Cityscapes' three) batch pre-processes and
+refines each frame once for all of them; so does the Python loop, which passes the list
+(`beta=[...]`). `python_separate_*` is the same loop with one `fog` call per β.
+
     cargo run --release --example scene_to_cityscapes -- /tmp/frames 3 2048 1024
     python3 tools/python_speed.py /tmp/frames --brume target/release/brume --runs 3
 
@@ -42,11 +46,11 @@ def frames(root):
     return out
 
 
-def batch_per_output(brume_bin, root, beta):
+def batch_per_output(brume_bin, root, betas):
     """Wall seconds per output of one `brume batch` run (its own summary line)."""
     with tempfile.TemporaryDirectory() as out:
         run = subprocess.run(
-            [brume_bin, "batch", str(root), "--out", out, "--beta", str(beta)],
+            [brume_bin, "batch", str(root), "--out", out, "--beta", ",".join(map(str, betas))],
             capture_output=True, text=True, check=True)
     m = re.search(r"([0-9.]+) s per output \(wall\)", run.stdout)
     if not m:
@@ -54,7 +58,14 @@ def batch_per_output(brume_bin, root, beta):
     return float(m.group(1))
 
 
-def python_per_output(renderer, items, beta):
+def fog_all(renderer, rgb, range_m, betas, separate=False):
+    """The frame's outputs, one per β: one `fog` call with the list, or one call each."""
+    if separate:
+        return [renderer.fog(rgb, range_m, beta=b, refine="repair") for b in betas]
+    return renderer.fog(rgb, range_m, beta=list(betas), refine="repair")
+
+
+def python_per_output(renderer, items, betas, separate=False):
     """Wall seconds per output of a plain Python loop (decode, fog, encode) and of its
     `Renderer.fog` calls alone."""
     fog_s = 0.0
@@ -64,14 +75,16 @@ def python_per_output(renderer, items, beta):
             rgb = np.asarray(Image.open(image).convert("RGB"))
             range_m, _ = brume.load_depth(str(disparity), camera=str(camera))
             t = time.perf_counter()
-            foggy = renderer.fog(rgb, range_m, beta=beta, refine="repair")
+            outputs = fog_all(renderer, rgb, range_m, betas, separate)
             fog_s += time.perf_counter() - t
-            Image.fromarray(foggy).save(pathlib.Path(out) / f"{k}.png")
+            for j, foggy in enumerate(outputs):
+                Image.fromarray(foggy).save(pathlib.Path(out) / f"{k}_{j}.png")
         loop_s = time.perf_counter() - started
-    return loop_s / len(items), fog_s / len(items)
+    n = len(items) * len(betas)
+    return loop_s / n, fog_s / n
 
 
-def python_threaded_per_output(renderer, items, beta, threads):
+def python_threaded_per_output(renderer, items, betas, threads):
     """Wall seconds per output of the same loop on `threads` Python threads sharing one
     renderer: one frame's decode, pre-processing and encode overlap another's GPU work."""
     from concurrent.futures import ThreadPoolExecutor
@@ -81,36 +94,42 @@ def python_threaded_per_output(renderer, items, beta, threads):
             image, disparity, camera = items[k]
             rgb = np.asarray(Image.open(image).convert("RGB"))
             range_m, _ = brume.load_depth(str(disparity), camera=str(camera))
-            foggy = renderer.fog(rgb, range_m, beta=beta, refine="repair")
-            Image.fromarray(foggy).save(pathlib.Path(out) / f"{k}.png")
+            for j, foggy in enumerate(fog_all(renderer, rgb, range_m, betas)):
+                Image.fromarray(foggy).save(pathlib.Path(out) / f"{k}_{j}.png")
 
         started = time.perf_counter()
         with ThreadPoolExecutor(threads) as pool:
             list(pool.map(one, range(len(items))))
-        return (time.perf_counter() - started) / len(items)
+        return (time.perf_counter() - started) / (len(items) * len(betas))
 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("root", type=pathlib.Path, help="Cityscapes-layout frames")
     p.add_argument("--brume", default=shutil.which("brume") or "target/release/brume")
-    p.add_argument("--beta", type=float, default=0.01)
+    p.add_argument("--beta", default="0.01", help="one β or a comma list, e.g. 0.005,0.01,0.02")
     p.add_argument("--runs", type=int, default=3)
     args = p.parse_args()
     items = frames(args.root)
     if not items:
         raise SystemExit(f"no *_leftImg8bit.png under {args.root}")
+    betas = [float(b) for b in args.beta.split(",")]
     renderer = brume.Renderer()
-    python_per_output(renderer, items[:1], args.beta)  # warm-up: shaders, first context
-    batch, python, fog, threaded = [], [], [], []
+    python_per_output(renderer, items[:1], betas)  # warm-up: shaders, first context
+    batch, python, fog, threaded, separate, separate_fog = [], [], [], [], [], []
     for _ in range(args.runs):
-        batch.append(batch_per_output(args.brume, args.root, args.beta))
-        loop_s, fog_s = python_per_output(renderer, items, args.beta)
+        batch.append(batch_per_output(args.brume, args.root, betas))
+        loop_s, fog_s = python_per_output(renderer, items, betas)
         python.append(loop_s)
         fog.append(fog_s)
-        threaded.append(python_threaded_per_output(renderer, items, args.beta, 2))
+        threaded.append(python_threaded_per_output(renderer, items, betas, 2))
+        if len(betas) > 1:
+            loop_s, fog_s = python_per_output(renderer, items, betas, separate=True)
+            separate.append(loop_s)
+            separate_fog.append(fog_s)
     report = {
         "frames": len(items),
+        "betas": betas,
         "size": list(Image.open(items[0][0]).size),
         "renderer": renderer.gl_renderer,
         "batch_s_per_output": batch,
@@ -125,6 +144,13 @@ def main():
         "threaded_ratio": statistics.median(threaded) / statistics.median(batch),
         "fog_ratio": statistics.median(fog) / statistics.median(batch),
     }
+    if separate:
+        report.update(
+            python_separate_s_per_output=separate,
+            python_separate_fog_s_per_output=separate_fog,
+            python_separate_fog_median=statistics.median(separate_fog),
+            separate_fog_ratio=statistics.median(separate_fog) / statistics.median(batch),
+        )
     print(json.dumps(report, indent=1))
 
 

@@ -27,11 +27,12 @@ use arrays::{dtype_name, read_image, read_range, Colour, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
 use gl_thread::GlThread;
 use photo_fog::{
-    capture_request, fog_frame, fog_request, prepare_request, set_masks, with_info, Density,
+    capture_request, fog_frame, fog_request, prepare_request, set_masks, with_info, Densities,
+    Density,
 };
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyTuple};
+use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
@@ -102,8 +103,9 @@ impl Renderer {
     /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
     /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
     /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
-    /// seed=0, return_info=False) -> ndarray, or (ndarray, dict) with return_info: as
-    /// brume.fog, on this renderer's context.
+    /// seed=0, return_info=False) -> ndarray, or (ndarray, dict) with return_info, or a
+    /// list of those for a sequence of betas or visibilities: as brume.fog, on this
+    /// renderer's context.
     #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
@@ -111,8 +113,8 @@ impl Renderer {
         py: Python<'_>,
         image: &Bound<'_, PyAny>,
         range_m: &Bound<'_, PyAny>,
-        beta: Option<f64>,
-        visibility: Option<f64>,
+        beta: Option<Densities>,
+        visibility: Option<Densities>,
         ka: Option<f64>,
         ks: Option<f64>,
         airlight: Option<Colour>,
@@ -143,21 +145,29 @@ impl Renderer {
             ka,
             ks,
         };
+        let many = density.many();
         let mut request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
         let image = read_image(image)?;
         let range = read_range(range_m)?;
         set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
-        let (out, info) = py.detach(|| {
-            let (rendered, info) =
-                fog_frame(&self.gl, image.linear(), range, request, return_info)?;
-            Ok::<_, PyErr>((ImageOut::encode(&rendered, pixels), info))
+        let outputs = py.detach(|| {
+            let frames = fog_frame(&self.gl, image.linear(), range, request, return_info)?;
+            let encode = |(rendered, info)| (ImageOut::encode(&rendered, pixels), info);
+            Ok::<_, PyErr>(frames.into_iter().map(encode).collect::<Vec<_>>())
         })?;
-        with_info(
-            py,
-            out.into_py(py),
-            info.map(|i| i.into_py(py)).transpose()?,
-        )
+        let mut results = outputs.into_iter().map(|(out, info)| {
+            with_info(
+                py,
+                out.into_py(py),
+                info.map(|i| i.into_py(py)).transpose()?,
+            )
+        });
+        if many {
+            let list = results.collect::<PyResult<Vec<_>>>()?;
+            return Ok(PyList::new(py, list)?.into_any().unbind());
+        }
+        results.next().expect("one density, one output")
     }
 
     /// distance_fog(image, depth, *, camera, time=0.0, start_distance=None, distance=None,
@@ -461,13 +471,15 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
 /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
 /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0,
-/// return_info=False) -> ndarray, or (ndarray, dict)
+/// return_info=False) -> ndarray, or (ndarray, dict), or a list of those
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
 /// result has the same dtype and encoding. range_m: HxW metres from the camera centre
 /// (NaN or <= 0 unknown), the image's size or smaller by one factor. Exactly one of beta
-/// (extinction, 1/m), visibility (m), or ka and/or ks: paper 000's absorption and
+/// (extinction, 1/m), visibility (m) — either may be a sequence: one output each, in a
+/// list, from one pre-processing and refinement of the frame, each equal to the call with
+/// that value alone — or ka and/or ks: paper 000's absorption and
 /// scattering per unit of range normalised by its largest value (`brume render`'s
 /// default; the range in any unit, e.g. a relative depth; the other one 0.25 or 0.75 when
 /// only one is given). airlight: None (estimated from the sky), a grey (0.8) or linear RGB

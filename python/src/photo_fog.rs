@@ -13,12 +13,14 @@ use brume::photo::{
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::refine::RefineMode;
 use brume::Headless;
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyBool, PyDict};
 
-/// `brume.fog`'s keywords, checked, as brume's options.
+/// `brume.fog`'s keywords, checked, as brume's options: one fog per output, from one
+/// pre-processing.
 pub(crate) struct FogRequest {
-    fog: FogOptions,
+    fogs: Vec<FogOptions>,
     pub(crate) prepare: PrepareOptions,
     capture: CaptureOptions,
 }
@@ -121,29 +123,87 @@ pub(crate) fn set_masks(
     Ok(())
 }
 
+/// `beta` or `visibility` as Python gives it: one number, or a sequence of them (one
+/// output each, from one pre-processing and refinement of the frame, as `brume batch
+/// --beta 0.005,0.01,0.02` makes them).
+pub(crate) struct Densities {
+    values: Vec<f64>,
+    many: bool,
+}
+
+impl<'a, 'py> FromPyObject<'a, 'py> for Densities {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        // A bool is an int to Python: `beta=True` is a mistake, not a β of 1.
+        if !obj.is_instance_of::<PyBool>() {
+            if let Ok(value) = obj.extract::<f64>() {
+                return Ok(Densities {
+                    values: vec![value],
+                    many: false,
+                });
+            }
+            if let Ok(values) = obj.extract::<Vec<f64>>() {
+                return Ok(Densities { values, many: true });
+            }
+        }
+        let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+        Err(PyTypeError::new_err(format!(
+            "{repr} is not a number: expected a number, or a sequence of numbers for one \
+             output each"
+        )))
+    }
+}
+
+impl Densities {
+    /// The fog options of each value, `make` checking it and naming `name`.
+    fn fogs(
+        &self,
+        name: &str,
+        make: fn(f64) -> brume::Result<FogOptions>,
+    ) -> PyResult<Vec<FogOptions>> {
+        if self.values.is_empty() {
+            return Err(value_error(format!(
+                "invalid {name} = []: expected a number, or a non-empty sequence of numbers"
+            )));
+        }
+        self.values
+            .iter()
+            .map(|&v| make(v).map_err(py_err))
+            .collect()
+    }
+}
+
 /// How dense the fog of `brume.fog` is, as its keywords give it: exactly one of β,
 /// the visibility, or paper 000's normalised κa and κs.
 pub(crate) struct Density {
-    pub(crate) beta: Option<f64>,
-    pub(crate) visibility: Option<f64>,
+    pub(crate) beta: Option<Densities>,
+    pub(crate) visibility: Option<Densities>,
     pub(crate) ka: Option<f64>,
     pub(crate) ks: Option<f64>,
 }
 
 impl Density {
-    /// The fog options of the density given (the other options brume's defaults).
-    fn fog_options(&self) -> PyResult<FogOptions> {
+    /// True when β or the visibility was given as a sequence: the call returns a list.
+    pub(crate) fn many(&self) -> bool {
+        [&self.beta, &self.visibility]
+            .into_iter()
+            .any(|d| d.as_ref().is_some_and(|d| d.many))
+    }
+
+    /// The fog options of each density given (the other options brume's defaults).
+    fn fog_options(&self) -> PyResult<Vec<FogOptions>> {
         let normalised = self.ka.is_some() || self.ks.is_some();
-        match (self.beta, self.visibility, normalised) {
-            (Some(b), None, false) => FogOptions::beta(b).map_err(py_err),
-            (None, Some(v), false) => FogOptions::visibility(v).map_err(py_err),
-            (None, None, true) => Ok(FogOptions {
+        match (&self.beta, &self.visibility, normalised) {
+            (Some(b), None, false) => b.fogs("beta", FogOptions::beta),
+            (None, Some(v), false) => v.fogs("visibility", FogOptions::visibility),
+            (None, None, true) => Ok(vec![FogOptions {
                 extinction: Extinction::Normalised {
                     ka: self.ka.unwrap_or(brume::medium::haze::DEFAULT_KA),
                     ks: self.ks.unwrap_or(brume::medium::haze::DEFAULT_KS),
                 },
                 ..FogOptions::default()
-            }),
+            }]),
             (None, None, false) => Err(value_error(
                 "neither beta, visibility nor ka/ks given: expected exactly one of beta (extinction, 1/m, e.g. 0.02), visibility (metres, e.g. 150) or ka and/or ks (paper 000's absorption and scattering per unit of range normalised by its largest value, e.g. ks=0.75)",
             )),
@@ -171,44 +231,50 @@ pub(crate) fn fog_request(
     refine: &Bound<'_, PyAny>,
     capture: CaptureOptions,
 ) -> PyResult<FogRequest> {
-    let mut fog = density.fog_options()?;
-    match (blur, lambda_px) {
+    let mut fogs = density.fog_options()?;
+    let lambda = match (blur, lambda_px) {
         (false, Some(l)) => {
             return Err(value_error(format!(
                 "blur = False and lambda_px = {l} both given: expected lambda_px only with blur"
             )))
         }
-        (false, None) => fog.lambda = 0.0,
+        (false, None) => Some(0.0),
         (true, Some(l)) if !(l.is_finite() && l >= 0.0) => {
             return Err(value_error(format!(
                 "invalid lambda_px = {l}: expected the blur's strength, a number >= 0 (brume's default 8; 0 for no blur)"
             )))
         }
-        (true, Some(l)) => fog.lambda = l,
-        (true, None) => {}
+        (true, l) => l,
+    };
+    if let Some(l) = lambda {
+        fogs.iter_mut().for_each(|fog| fog.lambda = l);
     }
     let prepare = prepare_request(airlight, refine)?;
     Ok(FogRequest {
-        fog,
+        fogs,
         prepare,
         capture,
     })
 }
 
-/// What the GL thread hands back for one frame: the image, and what the labels of
-/// `return_info` are made from (the medium as rendered and the prepared photo).
+/// What the GL thread hands back for one frame: the prepared photo and its outputs.
 struct GpuFog {
+    prepared: PreparedPhoto,
+    outputs: Vec<GpuOutput>,
+}
+
+/// One output's image, and what the labels of `return_info` are made from.
+struct GpuOutput {
     image: RgbaImage,
     haze: Haze,
     /// The range the haze read and the range that counts as 1 ([`photo::FoggedPhoto`]).
     range: ScalarMap,
     range_divisor: f64,
-    prepared: PreparedPhoto,
     sigma_max: f64,
 }
 
 /// The GPU's share of one frame, on the GL thread: the refinement of the pre-processed
-/// range and the fog (`brume::photo`'s refine and fog).
+/// range, once, and each fog (`brume::photo`'s refine and fog).
 fn fog_on_gpu(
     headless: &mut Headless,
     photo: &Photo,
@@ -216,15 +282,18 @@ fn fog_on_gpu(
     request: &FogRequest,
 ) -> brume::Result<GpuFog> {
     prepared.refine(photo, &request.prepare.refine, headless.renderer()?)?;
-    let fogged = photo::fog(headless.renderer()?, photo, &prepared, &request.fog)?;
-    Ok(GpuFog {
-        image: fogged.rendered.image,
-        haze: fogged.haze,
-        range: fogged.range,
-        range_divisor: fogged.range_divisor,
-        prepared,
-        sigma_max: fogged.rendered.schedule.sigma_max,
-    })
+    let mut outputs = Vec::with_capacity(request.fogs.len());
+    for fog in &request.fogs {
+        let fogged = photo::fog(headless.renderer()?, photo, &prepared, fog)?;
+        outputs.push(GpuOutput {
+            image: fogged.rendered.image,
+            haze: fogged.haze,
+            range: fogged.range,
+            range_divisor: fogged.range_divisor,
+            sigma_max: fogged.rendered.schedule.sigma_max,
+        });
+    }
+    Ok(GpuFog { prepared, outputs })
 }
 
 /// `return_info`'s labels of one frame, the ones a dehazing dataset keeps beside the
@@ -246,7 +315,7 @@ pub(crate) struct FogInfo {
 impl FogInfo {
     /// The labels of a frame fogged with `opts`. With normalised κa and κs the range
     /// stays in the caller's units, and β is (κa + κs) per largest range.
-    fn of(gpu: &GpuFog, opts: &FogOptions) -> FogInfo {
+    fn of(prepared: &PreparedPhoto, gpu: &GpuOutput, opts: &FogOptions) -> FogInfo {
         let transmittance = photo::transmittance_map(&gpu.haze, &gpu.range);
         let divisor = gpu.range_divisor;
         let (range, beta) = match opts.extinction {
@@ -259,8 +328,8 @@ impl FogInfo {
         FogInfo {
             transmittance,
             range_m: range,
-            airlight: gpu.prepared.airlight,
-            airlight_source: gpu.prepared.airlight_from.name(),
+            airlight: prepared.airlight,
+            airlight_source: prepared.airlight_from.name(),
             beta,
             visibility_m: VISIBILITY_OPTICAL_DEPTH / beta,
             sigma_max: gpu.sigma_max,
@@ -280,7 +349,7 @@ impl FogInfo {
     }
 }
 
-/// One frame fogged: pre-processing on the calling thread (the GIL released, so that
+/// One frame fogged, once per fog of `request`: pre-processing on the calling thread (the GIL released, so that
 /// another Python thread's frame can use the GL thread meanwhile, as `brume batch`
 /// overlaps its loader with the GPU), the refinement and the fog on the GL thread, the
 /// capture (and, with `want_info`, the labels) on the calling thread again.
@@ -290,14 +359,20 @@ pub(crate) fn fog_frame(
     range: ScalarMap,
     request: FogRequest,
     want_info: bool,
-) -> PyResult<(RgbaImage, Option<FogInfo>)> {
+) -> PyResult<Vec<(RgbaImage, Option<FogInfo>)>> {
     let photo = Photo::from_range(image, range).map_err(py_err)?;
     let prepared = photo::preprocess(&photo, &request.prepare).map_err(py_err)?;
-    let (capture, fog) = (request.capture, request.fog);
-    let mut gpu = gl
+    let (capture, fogs) = (request.capture, request.fogs.clone());
+    let GpuFog { prepared, outputs } = gl
         .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
         .map_err(py_err)?;
-    photo::capture(&mut gpu.image, &capture).map_err(py_err)?;
-    let info = want_info.then(|| FogInfo::of(&gpu, &fog));
-    Ok((gpu.image, info))
+    outputs
+        .into_iter()
+        .zip(&fogs)
+        .map(|(mut out, fog)| {
+            let info = want_info.then(|| FogInfo::of(&prepared, &out, fog));
+            photo::capture(&mut out.image, &capture).map_err(py_err)?;
+            Ok((out.image, info))
+        })
+        .collect()
 }

@@ -88,6 +88,30 @@ def test_beta_and_visibility_agree(image_u8, range_m):
     np.testing.assert_allclose(a, b, atol=1e-5)
 
 
+def test_a_sequence_of_betas_gives_one_output_each(image_u8, range_m):
+    """beta=[...] (or visibility=[...]) returns a list, each output the call with that
+    value alone (the capture's noise and return_info's labels included)."""
+    betas = (0.005, 0.01, 0.02)
+    kw = dict(read_noise=0.01, seed=7, return_info=True)
+    many = brume.fog(image_u8, range_m, beta=list(betas), **kw)
+    assert isinstance(many, list) and len(many) == 3
+    for beta, (image, info) in zip(betas, many):
+        alone, alone_info = brume.fog(image_u8, range_m, beta=beta, **kw)
+        np.testing.assert_array_equal(image, alone)
+        np.testing.assert_array_equal(info["transmittance"], alone_info["transmittance"])
+        assert info["beta"] == beta and info["airlight"] == alone_info["airlight"]
+    visibilities = np.array([100.0, 300.0])
+    images = brume.Renderer().fog(image_u8, range_m, visibility=visibilities)
+    assert len(images) == 2 and images[0].mean() > images[1].mean()
+    np.testing.assert_array_equal(images[1], brume.fog(image_u8, range_m, visibility=300.0))
+    # A one-element sequence is still a list; a single number is not.
+    assert isinstance(brume.fog(image_u8, range_m, beta=[0.01]), list)
+    assert isinstance(brume.fog(image_u8, range_m, beta=0.01), np.ndarray)
+    # A string from a config file is named by its value, on every Python version.
+    with pytest.raises(TypeError, match="'0.02' is not a number: expected a number, or a"):
+        brume.fog(image_u8, range_m, beta="0.02")
+
+
 def test_koschmieder_computed_in_numpy(image_u8, range_m):
     """blur=False, given airlight: I = tau J + (1 - tau) A with tau = exp(-beta R)."""
     linear = srgb_to_linear(image_u8 / 255.0).astype(np.float32)
@@ -253,6 +277,9 @@ def test_uint8_is_the_float_path_encoded(image_u8, range_m):
         (dict(beta=0.01, refine=3), "invalid refine"),
         (dict(beta=0.01, airlight=(1.0, 1.0)), "invalid airlight"),
         (dict(beta=0.01, airlight=(-1.0, 1.0, 1.0)), "airlight"),
+        (dict(beta=[]), r"invalid beta = \[\]: expected a number, or a non-empty sequence"),
+        (dict(beta=[0.01, -1.0]), "invalid beta = -1"),
+        (dict(visibility=[100.0, 0.0]), "invalid visibility = 0"),
     ],
 )
 def test_bad_options(image_u8, range_m, kwargs, message):
