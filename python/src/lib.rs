@@ -146,8 +146,9 @@ impl Renderer {
             ks,
         };
         let many = density.many();
-        let mut request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
         let image = read_image(image)?;
+        density.check_outputs_fit(image.width * image.height)?;
+        let mut request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
         let range = read_range(range_m)?;
         set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;

@@ -183,12 +183,38 @@ pub(crate) struct Density {
     pub(crate) ks: Option<f64>,
 }
 
+/// Bytes per pixel that one output holds until the call returns, counted from its
+/// buffers (not measured): its linear RGBA image (16), the range the medium read (4), the
+/// encoded result (up to 12 as float32) and, with `return_info`, the labels and their
+/// numpy copies (16).
+const OUTPUT_BYTES_PER_PIXEL: u64 = 48;
+
 impl Density {
     /// True when β or the visibility was given as a sequence: the call returns a list.
     pub(crate) fn many(&self) -> bool {
         [&self.beta, &self.visibility]
             .into_iter()
             .any(|d| d.as_ref().is_some_and(|d| d.many))
+    }
+
+    /// Refuses, before any work, more outputs of `pixels` each than the memory left can
+    /// hold at once: a list's outputs are all held until the call returns.
+    pub(crate) fn check_outputs_fit(&self, pixels: usize) -> PyResult<()> {
+        let outputs = [&self.beta, &self.visibility]
+            .into_iter()
+            .flatten()
+            .map(|d| d.values.len())
+            .max()
+            .unwrap_or(1) as u64;
+        brume::memory::check_fits(
+            &format!("{outputs} outputs of {pixels} px each"),
+            outputs
+                .saturating_mul(pixels as u64)
+                .saturating_mul(OUTPUT_BYTES_PER_PIXEL),
+            brume::memory::available(),
+            "give fewer betas or visibilities in one call: every output is held until it returns",
+        )
+        .map_err(py_err)
     }
 
     /// The fog options of each density given (the other options brume's defaults).

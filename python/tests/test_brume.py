@@ -107,6 +107,9 @@ def test_a_sequence_of_betas_gives_one_output_each(image_u8, range_m):
     # A one-element sequence is still a list; a single number is not.
     assert isinstance(brume.fog(image_u8, range_m, beta=[0.01]), list)
     assert isinstance(brume.fog(image_u8, range_m, beta=0.01), np.ndarray)
+    # Every output of a list is held until the call returns: too many is refused first.
+    with pytest.raises(MemoryError, match="2000000 outputs of 3072 px each needs about"):
+        brume.fog(image_u8, range_m, beta=[0.01] * 2_000_000)
     # A string from a config file is named by its value, on every Python version.
     with pytest.raises(TypeError, match="'0.02' is not a number: expected a number, or a"):
         brume.fog(image_u8, range_m, beta="0.02")
