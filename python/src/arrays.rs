@@ -23,20 +23,35 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Colour {
     type Error = PyErr;
 
     fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
-        // A bool is an int to Python: `airlight=True` is a mistake, not a grey of 1.
-        if !obj.is_instance_of::<PyBool>() {
-            if let Ok(grey) = obj.extract::<f64>() {
-                return Ok(Colour(vec![grey; 3]));
-            }
-            if let Ok(rgb) = obj.extract::<Vec<f64>>() {
-                return Ok(Colour(rgb));
-            }
+        match numbers(obj) {
+            Some((grey, false)) => Ok(Colour(vec![grey[0]; 3])),
+            Some((rgb, true)) => Ok(Colour(rgb)),
+            None => Err(not_numbers(
+                obj,
+                "a colour: expected a number (a grey) or three linear RGB values",
+            )),
         }
-        let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
-        Err(PyTypeError::new_err(format!(
-            "{repr} is not a colour: expected a number (a grey) or three linear RGB values"
-        )))
     }
+}
+
+/// One number as `([v], false)`, or a sequence of numbers (list, tuple, numpy array) as
+/// `(values, true)`; `None` for anything else. A bool is an int to Python, but
+/// `airlight=True` or `beta=True` is a mistake, not a value of 1: `None`.
+pub(crate) fn numbers(obj: Borrowed<'_, '_, PyAny>) -> Option<(Vec<f64>, bool)> {
+    if obj.is_instance_of::<PyBool>() {
+        return None;
+    }
+    if let Ok(value) = obj.extract::<f64>() {
+        return Some((vec![value], false));
+    }
+    obj.extract::<Vec<f64>>().ok().map(|values| (values, true))
+}
+
+/// The `TypeError` of a keyword that [`numbers`] could not read: its value, then "is not
+/// {what}".
+pub(crate) fn not_numbers(obj: Borrowed<'_, '_, PyAny>, what: &str) -> PyErr {
+    let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+    PyTypeError::new_err(format!("{repr} is not {what}"))
 }
 
 /// The encoding of an image array, which the output keeps.

@@ -2,7 +2,7 @@
 //! the calling thread, refinement and fog on the GL thread, the capture after it), the
 //! keywords checked into brume's options, and `return_info`'s labels.
 
-use super::arrays::{read_mask, scalar_map_to_py, Colour};
+use super::arrays::{not_numbers, numbers, read_mask, scalar_map_to_py, Colour};
 use super::gl_thread::GlThread;
 use super::{py_err, value_error};
 use brume::medium::haze::Haze;
@@ -13,9 +13,8 @@ use brume::photo::{
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::refine::RefineMode;
 use brume::Headless;
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict};
+use pyo3::types::PyDict;
 
 /// `brume.fog`'s keywords, checked, as brume's options: one fog per output, from one
 /// pre-processing.
@@ -135,23 +134,9 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Densities {
     type Error = PyErr;
 
     fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
-        // A bool is an int to Python: `beta=True` is a mistake, not a β of 1.
-        if !obj.is_instance_of::<PyBool>() {
-            if let Ok(value) = obj.extract::<f64>() {
-                return Ok(Densities {
-                    values: vec![value],
-                    many: false,
-                });
-            }
-            if let Ok(values) = obj.extract::<Vec<f64>>() {
-                return Ok(Densities { values, many: true });
-            }
-        }
-        let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
-        Err(PyTypeError::new_err(format!(
-            "{repr} is not a number: expected a number, or a sequence of numbers for one \
-             output each"
-        )))
+        let what = "a number: expected a number, or a sequence of numbers for one output each";
+        let (values, many) = numbers(obj).ok_or_else(|| not_numbers(obj, what))?;
+        Ok(Densities { values, many })
     }
 }
 
