@@ -86,6 +86,7 @@ class Renderer:
         read_noise: Optional[float] = None,
         jpeg_quality: Optional[int] = None,
         seed: int = 0,
+        compat: Optional[str] = None,
         return_info: bool = False
     ) -> Any: ...
     def distance_fog(
@@ -201,6 +202,7 @@ def fog(
     read_noise: Optional[float] = None,
     jpeg_quality: Optional[int] = None,
     seed: int = 0,
+    compat: Optional[str] = None,
     return_info: bool = False
 ) -> Any: ...
 def distance_fog(

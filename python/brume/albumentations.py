@@ -37,7 +37,7 @@ class Fog(A.ImageOnlyTransform):
     image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
     ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur`` and
-    ``refine`` are :func:`brume.fog`'s; ``airlight_range`` draws a grey airlight in it
+    ``refine`` (and ``compat``) are :func:`brume.fog`'s; ``airlight_range`` draws a grey airlight in it
     instead, as :class:`brume.augment.RandomFog`'s. The image is uint8 sRGB or float32
     linear RGB, as :func:`brume.fog` takes it: albumentations' ``ToFloat`` gives
     sRGB-encoded floats, which the fog would take for linear light, so put ``Fog`` before
@@ -53,6 +53,7 @@ class Fog(A.ImageOnlyTransform):
         airlight_range: Optional[Tuple[float, float]] = None,
         blur: bool = True,
         refine: Any = True,
+        compat: Optional[str] = None,
         p: float = 1.0,
     ) -> None:
         super().__init__(p=p)
@@ -62,6 +63,7 @@ class Fog(A.ImageOnlyTransform):
         self.airlight_range = _checked_airlights(airlight_range, airlight)
         self.blur = blur
         self.refine = refine
+        self.compat = compat
 
     @property
     def targets_as_params(self) -> list:
@@ -93,9 +95,18 @@ class Fog(A.ImageOnlyTransform):
             airlight=airlight,
             blur=self.blur,
             refine=self.refine,
+            compat=self.compat,
             sky_mask=sky_mask,
             ego_mask=ego_mask,
         )
 
     def get_transform_init_args_names(self) -> Tuple[str, ...]:
-        return ("beta_range", "beta_dist", "airlight", "airlight_range", "blur", "refine")
+        return (
+            "beta_range",
+            "beta_dist",
+            "airlight",
+            "airlight_range",
+            "blur",
+            "refine",
+            "compat",
+        )

@@ -36,7 +36,8 @@ class RandomFog:
     drawn from the generator on each call) and ``jpeg_quality``.
 
     The other keywords go to :func:`brume.fog` as they are: ``airlight`` (None: estimated
-    from the sky; a grey or linear RGB), ``blur``, ``refine``. ``airlight_range=(low,
+    from the sky; a grey or linear RGB), ``blur``, ``refine``, ``compat``
+    (``'foggy-cityscapes'``: Foggy Cityscapes' blend). ``airlight_range=(low,
     high)`` draws a grey airlight uniformly in it on each call instead (linear light, as
     every brume airlight: RESIDE's A in [0.7, 1] of code values is about (0.45, 1.0)). ``renderer`` (a :class:`brume.Renderer`) lets
     several transforms or workers share or own a context; by default the module's.
@@ -71,6 +72,7 @@ class RandomFog:
         airlight_range: Optional[Tuple[float, float]] = None,
         blur: bool = True,
         refine: Any = True,
+        compat: Optional[str] = None,
         renderer: Optional[Renderer] = None,
         beta_dist: Optional[str] = None,
         exposure_stops: float = 0.0,
@@ -87,6 +89,7 @@ class RandomFog:
         self.airlight_range = _checked_airlights(airlight_range, airlight)
         self.blur = blur
         self.refine = refine
+        self.compat = compat
         self.renderer = renderer
         self.beta_dist = beta_dist
         self.capture: Dict[str, Any] = dict(
@@ -149,6 +152,7 @@ class RandomFog:
             airlight=airlight,
             blur=self.blur,
             refine=self.refine,
+            compat=self.compat,
             seed=noise_seed,
             sky_mask=targets.get("sky_mask"),
             ego_mask=targets.get("ego_mask"),
@@ -166,7 +170,7 @@ class RandomFog:
         return (
             f"RandomFog(beta_range={self.beta_range}, beta_dist={self.beta_dist!r}, p={self.p}, "
             f"airlight={self.airlight}, airlight_range={self.airlight_range}, "
-            f"blur={self.blur}, refine={self.refine!r}, "
+            f"blur={self.blur}, refine={self.refine!r}, compat={self.compat!r}, "
             f"capture={self.capture}, return_info={self.return_info})"
         )
 

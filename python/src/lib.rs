@@ -103,10 +103,11 @@ impl Renderer {
     /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
     /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
     /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
-    /// seed=0, return_info=False) -> ndarray, or (ndarray, dict) with return_info, or a
+    /// seed=0, compat=None, return_info=False) -> ndarray, or (ndarray, dict) with
+    /// return_info, or a
     /// list of those for a sequence of betas or visibilities: as brume.fog, on this
     /// renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false))]
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -128,6 +129,7 @@ impl Renderer {
         read_noise: Option<f64>,
         jpeg_quality: Option<i64>,
         seed: u64,
+        compat: Option<&str>,
         return_info: bool,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
@@ -148,7 +150,8 @@ impl Renderer {
         let many = density.many();
         let image = read_image(image)?;
         density.check_outputs_fit(image.width * image.height)?;
-        let mut request = fog_request(density, airlight, (blur, lambda_px), refine, capture)?;
+        let blur = (blur, lambda_px);
+        let mut request = fog_request(density, airlight, blur, refine, capture, compat)?;
         let range = read_range(range_m)?;
         set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
@@ -472,7 +475,7 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
 /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
 /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0,
-/// return_info=False) -> ndarray, or (ndarray, dict), or a list of those
+/// compat=None, return_info=False) -> ndarray, or (ndarray, dict), or a list of those
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
@@ -496,6 +499,11 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// variance K·v) and read_noise (Gaussian, standard deviation in linear units), seeded by
 /// seed, then jpeg_quality (1-100, an encode-decode round trip); clipped to [0, 1].
 ///
+/// compat='foggy-cityscapes' follows Foggy Cityscapes' conventions instead, as `brume
+/// render --compat foggy-cityscapes`: I = R·t + L·(1 - t) blended in sRGB code values, L
+/// the dark channel's (or airlight, encoded), no blur; with beta or visibility only, no
+/// lambda_px and no capture. Its labels' airlight is L decoded to linear RGB.
+///
 /// return_info=True also returns the labels of a dehazing dataset (the scattering model
 /// I = J·t + A·(1 - t), before the capture): transmittance (float32 HxW, t = exp(-beta R)
 /// at the image's size), range_m (float32 HxW, the range R the fog read: pre-processed,
@@ -506,7 +514,7 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 #[pyfunction]
 #[pyo3(
     signature = (*args, **kwargs),
-    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
+    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=False)"
 )]
 fn fog(
     py: Python<'_>,

@@ -5,10 +5,12 @@
 use super::arrays::{not_numbers, numbers, read_mask, scalar_map_to_py, Colour};
 use super::gl_thread::GlThread;
 use super::{py_err, value_error};
+use brume::compat;
+use brume::io::image::srgb_to_linear;
 use brume::medium::haze::Haze;
-use brume::medium::physical::VISIBILITY_OPTICAL_DEPTH;
+use brume::medium::physical::{self, VISIBILITY_OPTICAL_DEPTH};
 use brume::photo::{
-    self, CaptureOptions, Extinction, FogOptions, Photo, PrepareOptions, PreparedPhoto,
+    self, CaptureOptions, Conventions, Extinction, FogOptions, Photo, PrepareOptions, PreparedPhoto,
 };
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::refine::RefineMode;
@@ -22,6 +24,7 @@ pub(crate) struct FogRequest {
     fogs: Vec<FogOptions>,
     pub(crate) prepare: PrepareOptions,
     capture: CaptureOptions,
+    conventions: Conventions,
 }
 
 /// The keywords of the capture after the fog, as brume's [`CaptureOptions`], checked.
@@ -235,13 +238,54 @@ impl Density {
     }
 }
 
+/// `compat`: None or 'brume' (brume's fog), or 'foggy-cityscapes' (Foggy Cityscapes'
+/// blend), refused with what its blend cannot take, as `brume render --compat` refuses it:
+/// κa and κs (it needs β), λ (it has no blur) and the capture.
+fn conventions(
+    compat: Option<&str>,
+    density: &Density,
+    lambda_px: Option<f64>,
+    capture: &CaptureOptions,
+) -> PyResult<Conventions> {
+    let name = compat.map(|c| c.trim().to_ascii_lowercase().replace('_', "-"));
+    match name.as_deref() {
+        None | Some("brume") => return Ok(Conventions::Brume),
+        Some("foggy-cityscapes") => {}
+        Some(_) => {
+            return Err(value_error(format!(
+                "invalid compat = '{}': expected None or 'brume' (brume's fog in linear \
+                 light, with its blur), or 'foggy-cityscapes' (Foggy Cityscapes' blend in sRGB \
+                 code values, no blur)",
+                compat.unwrap_or_default()
+            )))
+        }
+    }
+    let refused = if density.ka.is_some() || density.ks.is_some() {
+        Some("ka/ks: expected beta or visibility with it (its fog is exp(-beta R) on range in metres)")
+    } else if lambda_px.is_some() {
+        Some("lambda_px: expected no lambda_px with it (its blend has no blur)")
+    } else if !capture.is_off() {
+        Some("the capture (exposure_stops, shot_noise_gain, read_noise, jpeg_quality): expected none with it (Foggy Cityscapes' images have none)")
+    } else {
+        None
+    };
+    match refused {
+        Some(what) => Err(value_error(format!(
+            "compat = 'foggy-cityscapes' and {what}"
+        ))),
+        None => Ok(Conventions::FoggyCityscapes),
+    }
+}
+
 pub(crate) fn fog_request(
     density: Density,
     airlight: Option<Colour>,
     (blur, lambda_px): (bool, Option<f64>),
     refine: &Bound<'_, PyAny>,
     capture: CaptureOptions,
+    compat: Option<&str>,
 ) -> PyResult<FogRequest> {
+    let conventions = conventions(compat, &density, lambda_px, &capture)?;
     let mut fogs = density.fog_options()?;
     let lambda = match (blur, lambda_px) {
         (false, Some(l)) => {
@@ -265,6 +309,7 @@ pub(crate) fn fog_request(
         fogs,
         prepare,
         capture,
+        conventions,
     })
 }
 
@@ -373,6 +418,9 @@ pub(crate) fn fog_frame(
 ) -> PyResult<Vec<(RgbaImage, Option<FogInfo>)>> {
     let photo = Photo::from_range(image, range).map_err(py_err)?;
     let prepared = photo::preprocess(&photo, &request.prepare).map_err(py_err)?;
+    if request.conventions == Conventions::FoggyCityscapes {
+        return foggy_cityscapes_frame(gl, photo, prepared, &request, want_info);
+    }
     let (capture, fogs) = (request.capture, request.fogs.clone());
     let GpuFog { prepared, outputs } = gl
         .run(move |h| fog_on_gpu(h, &photo, prepared, &request))?
@@ -386,4 +434,50 @@ pub(crate) fn fog_frame(
             Ok((out.image, info))
         })
         .collect()
+}
+
+/// One frame under Foggy Cityscapes' conventions, as `brume render --compat
+/// foggy-cityscapes` makes it: the range refined on the GL thread, then each β's blend in
+/// sRGB code values with the dark-channel airlight (or the one given) on the calling
+/// thread, no blur ([`brume::compat::foggy_cityscapes`]). Its labels: τ = exp(−βR), the
+/// range, and the airlight the blend used, decoded to linear RGB.
+fn foggy_cityscapes_frame(
+    gl: &GlThread,
+    photo: Photo,
+    mut prepared: PreparedPhoto,
+    request: &FogRequest,
+    want_info: bool,
+) -> PyResult<Vec<(RgbaImage, Option<FogInfo>)>> {
+    let refine = request.prepare.refine;
+    let (photo, prepared) = gl
+        .run(move |h| -> brume::Result<_> {
+            prepared.refine(&photo, &refine, h.renderer()?)?;
+            Ok((photo, prepared))
+        })?
+        .map_err(py_err)?;
+    let (metres, _) = physical::metric_range(&prepared.range).map_err(py_err)?;
+    let given = request.prepare.airlight;
+    let beta_of = |fog: &FogOptions| match fog.extinction {
+        Extinction::Physical(f) => f.beta,
+        Extinction::Normalised { .. } => unreachable!("refused: foggy-cityscapes needs beta"),
+    };
+    Ok(request
+        .fogs
+        .iter()
+        .map(|fog| {
+            let beta = beta_of(fog);
+            let (image, airlight, source) =
+                compat::foggy_cityscapes(&photo.image, &metres, beta, given);
+            let info = want_info.then(|| FogInfo {
+                transmittance: metres.map(|&r| (-beta * f64::from(r)).exp() as f32),
+                range_m: metres.clone(),
+                airlight: airlight.map(srgb_to_linear),
+                airlight_source: source,
+                beta,
+                visibility_m: VISIBILITY_OPTICAL_DEPTH / beta,
+                sigma_max: 0.0,
+            });
+            (image, info)
+        })
+        .collect())
 }

@@ -396,6 +396,12 @@ def test_random_fog_airlight_range(image_u8, range_m):
     assert len(set(greys)) == 3
     with pytest.raises(ValueError, match="both given"):
         brume.augment.RandomFog(airlight=0.8, airlight_range=(0.7, 1.0))
+    # compat goes to brume.fog as it is.
+    fc = brume.augment.RandomFog(seed=3, compat="foggy-cityscapes")(image=image_u8, depth=range_m)
+    assert fc["beta"] == first_beta
+    np.testing.assert_array_equal(
+        fc["image"], brume.fog(image_u8, range_m, beta=first_beta, compat="foggy-cityscapes")
+    )
     with pytest.raises(ValueError, match="invalid airlight_range"):
         brume.augment.RandomFog(airlight_range=(1.0, 0.7))
 
@@ -482,6 +488,43 @@ def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine, density)
     cli = brume_render(tmp_path, image_u8, range_m, flags)
     ours = brume.fog(image_u8, range_m.astype(np.float32), blur=blur, refine=refine, **density)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
+
+
+@pytest.mark.parametrize("airlight", [None, (0.6, 0.65, 0.7)])
+def test_foggy_cityscapes_compat_equals_brume_render(tmp_path, image_u8, range_m, airlight):
+    flags = ["--refine", "none", "--beta", "0.02", "--compat", "foggy-cityscapes"]
+    if airlight is not None:
+        flags += ["--airlight", ",".join(map(str, airlight))]
+    cli = brume_render(tmp_path, image_u8, range_m, flags)
+    kw = dict(beta=0.02, refine="none", compat="foggy-cityscapes", airlight=airlight)
+    ours, info = brume.fog(image_u8, range_m, return_info=True, **kw)
+    assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
+    # Its labels: t = exp(-beta R) and, in code values, I = R t + L (1 - t), L the
+    # airlight reported, encoded.
+    np.testing.assert_allclose(info["transmittance"], np.exp(-0.02 * info["range_m"]), rtol=1e-5)
+    assert info["airlight_source"] == ("dark-channel" if airlight is None else "given")
+    assert info["sigma_max_px"] == 0.0
+    t = info["transmittance"][..., None].astype(np.float64)
+    code = linear_to_srgb(np.array(info["airlight"]))
+    expected = (image_u8 / 255.0) * t + code * (1.0 - t)
+    assert np.abs(ours / 255.0 - expected).max() <= 1.0 / 255.0
+    # Brume's own fog differs: linear light, and a blur.
+    assert not np.array_equal(ours, brume.fog(image_u8, range_m, beta=0.02, refine="none"))
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        (dict(ks=0.75), "compat = 'foggy-cityscapes' and ka/ks: expected beta or visibility"),
+        (dict(beta=0.02, lambda_px=4.0), "and lambda_px: expected no lambda_px"),
+        (dict(beta=0.02, read_noise=0.01), "and the capture"),
+        (dict(beta=0.02, compat="foggy"), "invalid compat = 'foggy'"),
+    ],
+)
+def test_foggy_cityscapes_compat_refusals(image_u8, range_m, kwargs, message):
+    kwargs.setdefault("compat", "foggy-cityscapes")
+    with pytest.raises(ValueError, match=message):
+        brume.fog(image_u8, range_m, **kwargs)
 
 
 def test_capture_noise_has_the_model_variance(image_u8, range_m):

@@ -122,6 +122,12 @@ def test_albumentations_fog_follows_the_pipelines_geometry_and_seed(sample):
     assert not np.array_equal(masked["image"][~ego], image[~ego])
     with pytest.raises(ValueError, match="beta_range"):
         Fog(beta_range=(0.03, 0.005))
+    # compat goes to brume.fog as it is.
+    fc = A.Compose([Fog(beta_range=(0.02, 0.02), compat="foggy-cityscapes")], seed=1)
+    np.testing.assert_array_equal(
+        fc(image=image, depth=range_m)["image"],
+        brume.fog(image, range_m, beta=0.02, compat="foggy-cityscapes"),
+    )
     # airlight_range: a grey drawn from the pipeline's generator, in the applied params.
     grey = pipeline(airlight_range=(0.45, 1.0), blur=False)(image=image, depth=range_m)
     params = grey["applied_transforms"][1][1]
