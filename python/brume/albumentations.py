@@ -36,8 +36,8 @@ class Fog(A.ImageOnlyTransform):
     """Fog of a random density on the image, from the sample's ``depth`` (HxW metres, the
     image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
-    ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur`` and
-    ``refine`` (and ``compat``) are :func:`brume.fog`'s; ``airlight_range`` draws a grey airlight in it
+    ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur``, ``refine``
+    and ``compat`` are :func:`brume.fog`'s; ``airlight_range`` draws a grey airlight in it
     instead, as :class:`brume.augment.RandomFog`'s. The image is uint8 sRGB or float32
     linear RGB, as :func:`brume.fog` takes it: albumentations' ``ToFloat`` gives
     sRGB-encoded floats, which the fog would take for linear light, so put ``Fog`` before

@@ -37,10 +37,11 @@ class RandomFog:
 
     The other keywords go to :func:`brume.fog` as they are: ``airlight`` (None: estimated
     from the sky; a grey or linear RGB), ``blur``, ``refine``, ``compat``
-    (``'foggy-cityscapes'``: Foggy Cityscapes' blend). ``airlight_range=(low,
-    high)`` draws a grey airlight uniformly in it on each call instead (linear light, as
-    every brume airlight: RESIDE's A in [0.7, 1] of code values is about (0.45, 1.0)). ``renderer`` (a :class:`brume.Renderer`) lets
-    several transforms or workers share or own a context; by default the module's.
+    (``'foggy-cityscapes'``: Foggy Cityscapes' blend). ``airlight_range=(low, high)``
+    draws a grey airlight uniformly in it on each call instead (linear light, as every
+    brume airlight: RESIDE's A in [0.7, 1] of code values is about (0.45, 1.0)).
+    ``renderer`` (a :class:`brume.Renderer`) lets several transforms or workers share or
+    own a context; by default the module's.
 
     ``depth`` is the range in metres (HxW, the image's size or smaller by one factor).
     Fog whole frames and crop after: the airlight and the range of the sky come from the
