@@ -41,10 +41,12 @@ pub(crate) fn numbers(obj: Borrowed<'_, '_, PyAny>) -> Option<(Vec<f64>, bool)> 
     if obj.is_instance_of::<PyBool>() {
         return None;
     }
-    if let Ok(value) = obj.extract::<f64>() {
-        return Some((vec![value], false));
+    // The sequence first: numpy 2.2 still converts a one-element array to a number (with
+    // a DeprecationWarning; 2.4 refuses), and `beta=np.array([0.01])` is a list of one.
+    if let Ok(values) = obj.extract::<Vec<f64>>() {
+        return Some((values, true));
     }
-    obj.extract::<Vec<f64>>().ok().map(|values| (values, true))
+    obj.extract::<f64>().ok().map(|value| (vec![value], false))
 }
 
 /// The `TypeError` of a keyword that [`numbers`] could not read: its value, then "is not

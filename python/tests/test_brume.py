@@ -104,9 +104,16 @@ def test_a_sequence_of_betas_gives_one_output_each(image_u8, range_m):
     images = brume.Renderer().fog(image_u8, range_m, visibility=visibilities)
     assert len(images) == 2 and images[0].mean() > images[1].mean()
     np.testing.assert_array_equal(images[1], brume.fog(image_u8, range_m, visibility=300.0))
-    # A one-element sequence is still a list; a single number is not.
-    assert isinstance(brume.fog(image_u8, range_m, beta=[0.01]), list)
-    assert isinstance(brume.fog(image_u8, range_m, beta=0.01), np.ndarray)
+    # A one-element sequence is still a list, a numpy one too (which numpy 2.2, on Python
+    # 3.10, would also convert to a number, warning); a single number is not, nor a 0-d
+    # array.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for one in ([0.01], np.array([0.01])):
+            assert isinstance(brume.fog(image_u8, range_m, beta=one), list)
+        for number in (0.01, np.float32(0.01), np.array(0.01)):
+            assert isinstance(brume.fog(image_u8, range_m, beta=number), np.ndarray)
+    assert not caught, [str(w.message) for w in caught]
     # Every output of a list is held until the call returns: too many is refused first.
     with pytest.raises(MemoryError, match="2000000 outputs of 3072 px each needs about"):
         brume.fog(image_u8, range_m, beta=[0.01] * 2_000_000)
