@@ -78,6 +78,32 @@ pub fn foggy_cityscapes(
     beta: f64,
     airlight: Option<[f32; 3]>,
 ) -> (crate::raster::RgbaImage, [f32; 3], &'static str) {
+    let (airlight, source) = foggy_cityscapes_airlight(image, airlight);
+    let fogged = foggy_cityscapes_at(image, metres, beta, airlight);
+    (fogged, airlight, source)
+}
+
+/// The airlight of Foggy Cityscapes' blend of `image`, in sRGB code values, and where it
+/// came from: `given` (linear RGB) encoded, or else the dark channel's. It does not depend
+/// on β: a frame fogged at several β finds it once, for [`foggy_cityscapes_at`].
+pub fn foggy_cityscapes_airlight(
+    image: &RgbImage,
+    given: Option<[f32; 3]>,
+) -> ([f32; 3], &'static str) {
+    match given {
+        Some(l) => (l.map(linear_to_srgb), "given"),
+        None => (dark_channel_airlight(image), "dark-channel"),
+    }
+}
+
+/// [`foggy_cityscapes`] with its airlight in code values already found
+/// ([`foggy_cityscapes_airlight`]): the image, linear, alpha 1.
+pub fn foggy_cityscapes_at(
+    image: &RgbImage,
+    metres: &ScalarMap,
+    beta: f64,
+    airlight: [f32; 3],
+) -> crate::raster::RgbaImage {
     let tau = metres.map(|&r| {
         if r.is_finite() {
             (-beta * f64::from(r)).exp() as f32
@@ -85,12 +111,8 @@ pub fn foggy_cityscapes(
             0.0
         }
     });
-    let (airlight, source) = match airlight {
-        Some(l) => (l.map(linear_to_srgb), "given"),
-        None => (dark_channel_airlight(image), "dark-channel"),
-    };
     let fogged = blend_in_code_values(image, &tau, airlight);
-    (fogged.map(|p| [p[0], p[1], p[2], 1.0]), airlight, source)
+    fogged.map(|p| [p[0], p[1], p[2], 1.0])
 }
 
 /// The optical depth of τ = 1.

@@ -265,19 +265,30 @@ fn bad_batch_options_are_refused_before_any_work() {
 
 #[test]
 fn each_output_is_what_render_writes_with_the_same_beta() {
+    batch_outputs_are_renders(&[]);
+}
+
+/// Foggy Cityscapes' conventions too: batch finds the frame's dark-channel airlight once
+/// for all its β, render once for its one.
+#[test]
+fn each_foggy_cityscapes_output_is_what_render_writes_with_the_same_beta() {
+    batch_outputs_are_renders(&["--compat", "foggy-cityscapes"]);
+}
+
+/// Batch at β 0.005 and 0.02 with `extra` writes, for each β, the bytes `brume render`
+/// writes with that β and `extra`, and two different images.
+fn batch_outputs_are_renders(extra: &[&str]) {
     let dir = tempfile::tempdir().unwrap();
     let root = cityscapes_dataset(dir.path(), 1);
-    let run = brume(
-        dir.path(),
-        &[
-            "batch",
-            "cityscapes",
-            "--out",
-            "out",
-            "--beta",
-            "0.005,0.02",
-        ],
-    );
+    let args = [
+        "batch",
+        "cityscapes",
+        "--out",
+        "out",
+        "--beta",
+        "0.005,0.02",
+    ];
+    let run = brume(dir.path(), &[&args[..], extra].concat());
     assert!(run.status.success(), "{}", stderr(&run));
     let frame = "train/aachen/aachen_000000_000019";
     let image = root.join(format!("leftImg8bit/{frame}_leftImg8bit.png"));
@@ -285,20 +296,18 @@ fn each_output_is_what_render_writes_with_the_same_beta() {
     let mut previous: Option<Vec<u8>> = None;
     for beta in ["0.005", "0.02"] {
         let out = format!("render-{beta}.png");
-        let render = brume(
-            dir.path(),
-            &[
-                "render",
-                "--image",
-                image.to_str().unwrap(),
-                "--depth",
-                depth.to_str().unwrap(),
-                "--beta",
-                beta,
-                "--out",
-                &out,
-            ],
-        );
+        let args = [
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--beta",
+            beta,
+            "--out",
+            &out,
+        ];
+        let render = brume(dir.path(), &[&args[..], extra].concat());
         assert!(render.status.success(), "{}", stderr(&render));
         let batch = std::fs::read(dir.path().join(format!(
             "out/leftImg8bit/{frame}_leftImg8bit_foggy_beta_{beta}.png"

@@ -504,9 +504,6 @@ fn bad_physical_values_are_refused_before_writing() {
     );
 }
 
-/// `--compat foggy-cityscapes`: every output code value is Foggy Cityscapes' blend of the
-/// input's code values, R·t + L·(1 − t) with t = exp(−βR) and R worked out by hand from
-/// the disparity and the camera, within 1 of 255 (the output's rounding).
 /// The library refuses physical fog on a range not in metres in its own words: the
 /// options it names are fields in backticks, which the command line shows as flags.
 #[test]
@@ -559,6 +556,9 @@ fn the_library_says_what_would_make_a_range_metric() {
     assert_eq!(fogged.medium.metres_per_unit, 2.0);
 }
 
+/// `--compat foggy-cityscapes`: every output code value is Foggy Cityscapes' blend of the
+/// input's code values, R·t + L·(1 − t) with t = exp(−βR) and R worked out by hand from
+/// the disparity and the camera, within 1 of 255 (the output's rounding).
 #[test]
 fn foggy_cityscapes_blends_code_values() {
     let dir = tempfile::tempdir().unwrap();

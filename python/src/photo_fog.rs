@@ -456,7 +456,8 @@ fn foggy_cityscapes_frame(
         })?
         .map_err(py_err)?;
     let (metres, _) = physical::metric_range(&prepared.range).map_err(py_err)?;
-    let given = request.prepare.airlight;
+    let (airlight, source) =
+        compat::foggy_cityscapes_airlight(&photo.image, request.prepare.airlight);
     let beta_of = |fog: &FogOptions| match fog.extinction {
         Extinction::Physical(f) => f.beta,
         Extinction::Normalised { .. } => unreachable!("refused: foggy-cityscapes needs beta"),
@@ -466,8 +467,7 @@ fn foggy_cityscapes_frame(
         .iter()
         .map(|fog| {
             let beta = beta_of(fog);
-            let (image, airlight, source) =
-                compat::foggy_cityscapes(&photo.image, &metres, beta, given);
+            let image = compat::foggy_cityscapes_at(&photo.image, &metres, beta, airlight);
             let info = want_info.then(|| FogInfo {
                 transmittance: metres.map(|&r| (-beta * f64::from(r)).exp() as f32),
                 range_m: metres.clone(),

@@ -223,10 +223,10 @@ impl Frame {
             .map(|f| f.haze(self.prepared.airlight))
             .collect::<Result<_>>()?;
         if opts.conventions == Conventions::FoggyCityscapes {
+            let (airlight, source) =
+                compat::foggy_cityscapes_airlight(&self.photo.image, opts.prepare.airlight);
             for ((&beta, haze), fog) in betas.iter().zip(&hazes).zip(&fogs) {
-                let given = opts.prepare.airlight;
-                let (image, airlight, source) =
-                    compat::foggy_cityscapes(&self.photo.image, metres, beta, given);
+                let image = compat::foggy_cityscapes_at(&self.photo.image, metres, beta, airlight);
                 each(
                     beta,
                     FrameFog {
