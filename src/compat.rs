@@ -79,8 +79,8 @@ pub fn foggy_cityscapes(
     airlight: Option<[f32; 3]>,
 ) -> (crate::raster::RgbaImage, [f32; 3], &'static str) {
     let (airlight, source) = foggy_cityscapes_airlight(image, airlight);
-    let fogged = foggy_cityscapes_at(image, metres, beta, airlight);
-    (fogged, airlight, source)
+    let tau = foggy_cityscapes_transmittance(metres, beta);
+    (foggy_cityscapes_at(image, &tau, airlight), airlight, source)
 }
 
 /// The airlight of Foggy Cityscapes' blend of `image`, in sRGB code values, and where it
@@ -96,22 +96,27 @@ pub fn foggy_cityscapes_airlight(
     }
 }
 
-/// [`foggy_cityscapes`] with its airlight in code values already found
-/// ([`foggy_cityscapes_airlight`]): the image, linear, alpha 1.
-pub fn foggy_cityscapes_at(
-    image: &RgbImage,
-    metres: &ScalarMap,
-    beta: f64,
-    airlight: [f32; 3],
-) -> crate::raster::RgbaImage {
-    let tau = metres.map(|&r| {
+/// Foggy Cityscapes' transmittance t = exp(−βR) of `metres` at `beta` (1/m); 0 where the
+/// range is not finite. Also the label a dehazing dataset keeps.
+pub fn foggy_cityscapes_transmittance(metres: &ScalarMap, beta: f64) -> ScalarMap {
+    metres.map(|&r| {
         if r.is_finite() {
             (-beta * f64::from(r)).exp() as f32
         } else {
             0.0
         }
-    });
-    let fogged = blend_in_code_values(image, &tau, airlight);
+    })
+}
+
+/// [`foggy_cityscapes`] with its transmittance `tau` ([`foggy_cityscapes_transmittance`])
+/// and its airlight in code values ([`foggy_cityscapes_airlight`]) already found: the
+/// image, linear, alpha 1.
+pub fn foggy_cityscapes_at(
+    image: &RgbImage,
+    tau: &ScalarMap,
+    airlight: [f32; 3],
+) -> crate::raster::RgbaImage {
+    let fogged = blend_in_code_values(image, tau, airlight);
     fogged.map(|p| [p[0], p[1], p[2], 1.0])
 }
 

@@ -439,8 +439,8 @@ pub(crate) fn fog_frame(
 /// One frame under Foggy Cityscapes' conventions, as `brume render --compat
 /// foggy-cityscapes` makes it: the range refined on the GL thread, then each β's blend in
 /// sRGB code values with the dark-channel airlight (or the one given) on the calling
-/// thread, no blur ([`brume::compat::foggy_cityscapes`]). Its labels: τ = exp(−βR), the
-/// range, and the airlight the blend used, decoded to linear RGB.
+/// thread, no blur ([`brume::compat::foggy_cityscapes`]). Its labels: the τ the blend used,
+/// the range, and the airlight the blend used, decoded to linear RGB.
 fn foggy_cityscapes_frame(
     gl: &GlThread,
     photo: Photo,
@@ -467,9 +467,10 @@ fn foggy_cityscapes_frame(
         .iter()
         .map(|fog| {
             let beta = beta_of(fog);
-            let image = compat::foggy_cityscapes_at(&photo.image, &metres, beta, airlight);
+            let tau = compat::foggy_cityscapes_transmittance(&metres, beta);
+            let image = compat::foggy_cityscapes_at(&photo.image, &tau, airlight);
             let info = want_info.then(|| FogInfo {
-                transmittance: metres.map(|&r| (-beta * f64::from(r)).exp() as f32),
+                transmittance: tau,
                 range_m: metres.clone(),
                 airlight: airlight.map(srgb_to_linear),
                 airlight_source: source,

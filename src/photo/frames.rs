@@ -226,7 +226,8 @@ impl Frame {
             let (airlight, source) =
                 compat::foggy_cityscapes_airlight(&self.photo.image, opts.prepare.airlight);
             for ((&beta, haze), fog) in betas.iter().zip(&hazes).zip(&fogs) {
-                let image = compat::foggy_cityscapes_at(&self.photo.image, metres, beta, airlight);
+                let tau = compat::foggy_cityscapes_transmittance(metres, beta);
+                let image = compat::foggy_cityscapes_at(&self.photo.image, &tau, airlight);
                 each(
                     beta,
                     FrameFog {
