@@ -741,3 +741,80 @@ fn left_right_check_and_refining_only_the_unreliable() {
         }
     }
 }
+
+/// `photo::fog_each` gives, for each option, what `photo::fog` gives with it alone: the
+/// same bytes, haze, range and divisor, whether the options share one upload (β and
+/// visibilities, one blur) or not (normalised κ beside β, another blur). An option that
+/// cannot take effect is refused before any render.
+#[test]
+fn fog_each_gives_what_fog_gives_with_each_option() {
+    use brume::photo::{self, Extinction, FogOptions, Photo, PrepareOptions};
+    let (w, h) = (48, 32);
+    let range = Grid::from_fn(w, h, |x, y| {
+        if y < 8 {
+            f32::NAN // sky
+        } else {
+            10.0 + 4.0 * x as f32 + y as f32
+        }
+    });
+    let photo = Photo::from_range(common::noise_image(w, h, 9), range).unwrap();
+    let (_lock, mut gpu) = common::renderer();
+    let prepared = photo::prepare(
+        &photo,
+        &PrepareOptions::for_photo(&photo),
+        gpu.renderer().unwrap(),
+    )
+    .unwrap();
+    let mut thin = FogOptions::beta(0.004).unwrap();
+    thin.lambda = 3.0;
+    let shared = vec![
+        FogOptions::beta(0.02).unwrap(),
+        FogOptions::visibility(150.0).unwrap(),
+        thin,
+    ];
+    let mut sharper = FogOptions::beta(0.01).unwrap();
+    sharper.blur.coarse_from = None;
+    let mixed = vec![
+        FogOptions::beta(0.01).unwrap(),
+        FogOptions {
+            extinction: Extinction::Normalised { ka: 0.5, ks: 1.0 },
+            ..FogOptions::default()
+        },
+        sharper,
+    ];
+    for opts in [&shared, &mixed] {
+        let mut each = Vec::new();
+        photo::fog_each(gpu.renderer().unwrap(), &photo, &prepared, opts, |k, f| {
+            assert_eq!(k, each.len(), "in order");
+            each.push(f);
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(each.len(), opts.len());
+        for (o, e) in opts.iter().zip(&each) {
+            let alone = photo::fog(gpu.renderer().unwrap(), &photo, &prepared, o).unwrap();
+            assert!(e.rendered.image.as_slice() == alone.rendered.image.as_slice());
+            assert_eq!(e.haze, alone.haze);
+            assert!(e.range.as_slice() == alone.range.as_slice());
+            assert_eq!(e.range_divisor, alone.range_divisor);
+            assert_eq!(e.rendered.schedule.steps, alone.rendered.schedule.steps);
+        }
+    }
+    let none: &[FogOptions] = &[];
+    photo::fog_each(gpu.renderer().unwrap(), &photo, &prepared, none, |_, _| {
+        panic!("no options, no render")
+    })
+    .unwrap();
+
+    // A bad option anywhere in the list stops the call before the first render.
+    let mut bad = shared.clone();
+    bad[2].lambda = -1.0;
+    let mut renders = 0;
+    let e = photo::fog_each(gpu.renderer().unwrap(), &photo, &prepared, &bad, |_, _| {
+        renders += 1;
+        Ok(())
+    })
+    .unwrap_err();
+    assert_eq!(renders, 0);
+    assert!(e.to_string().contains("lambda"), "{e}");
+}

@@ -330,7 +330,7 @@ struct GpuOutput {
 }
 
 /// The GPU's share of one frame, on the GL thread: the refinement of the pre-processed
-/// range, once, and each fog (`brume::photo`'s refine and fog).
+/// range, once, and each fog (`brume::photo`'s refine and fog_each: one upload for all).
 fn fog_on_gpu(
     headless: &mut Headless,
     photo: &Photo,
@@ -339,8 +339,8 @@ fn fog_on_gpu(
 ) -> brume::Result<GpuFog> {
     prepared.refine(photo, &request.prepare.refine, headless.renderer()?)?;
     let mut outputs = Vec::with_capacity(request.fogs.len());
-    for fog in &request.fogs {
-        let fogged = photo::fog(headless.renderer()?, photo, &prepared, fog)?;
+    let renderer = headless.renderer()?;
+    photo::fog_each(renderer, photo, &prepared, &request.fogs, |_, fogged| {
         outputs.push(GpuOutput {
             image: fogged.rendered.image,
             haze: fogged.haze,
@@ -348,7 +348,8 @@ fn fog_on_gpu(
             range_divisor: fogged.range_divisor,
             sigma_max: fogged.rendered.schedule.sigma_max,
         });
-    }
+        Ok(())
+    })?;
     Ok(GpuFog { prepared, outputs })
 }
 

@@ -153,6 +153,66 @@ pub fn fog(
     prepared: &PreparedPhoto,
     opts: &FogOptions,
 ) -> Result<FoggedPhoto> {
+    let haze = checked_haze(photo, prepared, opts)?;
+    let (range, r_max) = medium_range(&opts.extinction, &prepared.range)?;
+    let rendered = renderer.render(&photo.image, &range, &haze, &opts.blur)?;
+    Ok(FoggedPhoto {
+        rendered,
+        haze,
+        range_divisor: range_divisor(opts, &haze, r_max),
+        range,
+    })
+}
+
+/// [`fog`] of `photo` once per entry of `opts` (a dataset's extinctions), each result
+/// handed to `each` with its index as soon as it is read back; every option is checked
+/// before the first render. When all of `opts` read one range texture with one blur
+/// (extinctions of one kind: β or visibilities, or κa and κs), the image and that range
+/// are uploaded once for all of them ([`Renderer::render_each`]); otherwise each is
+/// rendered on its own. Stops at the first error (of a render or of `each`).
+pub fn fog_each(
+    renderer: &mut Renderer,
+    photo: &Photo,
+    prepared: &PreparedPhoto,
+    opts: &[FogOptions],
+    mut each: impl FnMut(usize, FoggedPhoto) -> Result<()>,
+) -> Result<()> {
+    let hazes: Vec<Haze> = opts
+        .iter()
+        .map(|o| checked_haze(photo, prepared, o))
+        .collect::<Result<_>>()?;
+    let Some(first) = opts.first() else {
+        return Ok(());
+    };
+    let shared = opts.iter().all(|o| {
+        o.blur == first.blur
+            && std::mem::discriminant(&o.extinction) == std::mem::discriminant(&first.extinction)
+    });
+    if !shared {
+        for (k, o) in opts.iter().enumerate() {
+            each(k, fog(renderer, photo, prepared, o)?)?;
+        }
+        return Ok(());
+    }
+    let (range, r_max) = medium_range(&first.extinction, &prepared.range)?;
+    let media: Vec<&dyn Medium> = hazes.iter().map(|h| h as &dyn Medium).collect();
+    renderer.render_each(&photo.image, &range, &media, &first.blur, |k, rendered| {
+        let haze = hazes[k];
+        each(
+            k,
+            FoggedPhoto {
+                rendered,
+                haze,
+                range: range.clone(),
+                range_divisor: range_divisor(&opts[k], &haze, r_max),
+            },
+        )
+    })
+}
+
+/// The haze of `opts` on `prepared`'s airlight, once `photo` and `prepared` are checked
+/// to suit it: a range in metres for physical fog, at the image's size.
+fn checked_haze(photo: &Photo, prepared: &PreparedPhoto, opts: &FogOptions) -> Result<Haze> {
     if let Extinction::Physical(fog) = &opts.extinction {
         photo.require_metres("beta", fog.beta)?;
     }
@@ -167,19 +227,16 @@ pub fn fog(
             ),
         ));
     }
-    let haze = opts.haze(prepared.airlight)?;
-    let (range, r_max) = medium_range(&opts.extinction, &prepared.range)?;
-    let range_divisor = match opts.extinction {
+    opts.haze(prepared.airlight)
+}
+
+/// [`FoggedPhoto::range_divisor`] of `haze` made from `opts`, `r_max` the largest range
+/// ([`medium_range`]).
+fn range_divisor(opts: &FogOptions, haze: &Haze, r_max: f64) -> f64 {
+    match opts.extinction {
         Extinction::Physical(_) => haze.range_unit,
         Extinction::Normalised { .. } => r_max,
-    };
-    let rendered = renderer.render(&photo.image, &range, &haze, &opts.blur)?;
-    Ok(FoggedPhoto {
-        rendered,
-        haze,
-        range,
-        range_divisor,
-    })
+    }
 }
 
 /// The transmittance τ (green channel) of `haze` at each pixel of `medium_range` (as

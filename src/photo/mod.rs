@@ -36,7 +36,9 @@ pub use aerial::{
 };
 pub use capture::{capture, CaptureOptions, SensorNoise};
 pub use distribution::BetaDistribution;
-pub use fog::{fog, medium_range, transmittance_map, Extinction, FogOptions, FoggedPhoto};
+pub use fog::{
+    fog, fog_each, medium_range, transmittance_map, Extinction, FogOptions, FoggedPhoto,
+};
 pub use frames::{transmittance_rgb8, Conventions, Frame, FrameFog, FrameOptions};
 pub use insert::{insert, Insertion, VirtualObject};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
