@@ -60,7 +60,7 @@ pub enum Error {
         bh: u32,
     },
     /// A range or depth map holds no usable value at all.
-    #[error("{}: no valid depth value (all pixels unknown, zero, NaN or infinite)", path.display())]
+    #[error("{}: no valid depth value (every pixel unknown: NaN, infinite, zero or negative)", path.display())]
     NoValidDepth {
         /// The depth file.
         path: PathBuf,

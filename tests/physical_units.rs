@@ -818,3 +818,23 @@ fn fog_each_gives_what_fog_gives_with_each_option() {
     assert_eq!(renders, 0);
     assert!(e.to_string().contains("lambda"), "{e}");
 }
+
+/// A range with no pixel known (NaN, infinite, zero or negative everywhere) is refused
+/// when the photo is made, by the argument's name, as the loaders refuse such a file.
+#[test]
+fn a_range_with_no_known_pixel_is_refused_by_name() {
+    for unknown in [f32::NAN, f32::INFINITY, 0.0, -3.0] {
+        let e = brume::photo::Photo::from_range(
+            common::noise_image(6, 4, 1),
+            Grid::filled(6, 4, unknown),
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "range_m: no valid depth value (every pixel unknown: NaN, infinite, zero or negative)"
+        );
+    }
+    let mut one = Grid::filled(6, 4, f32::NAN);
+    *one.get_mut(2, 1) = 4.0;
+    assert!(brume::photo::Photo::from_range(common::noise_image(6, 4, 1), one).is_ok());
+}

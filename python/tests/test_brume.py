@@ -334,11 +334,13 @@ def test_bad_arrays(image_u8, range_m):
     bad[3, 5, 1] = np.nan
     with pytest.raises(ValueError, match=r"x 5, y 3\), channel 1"):
         brume.fog(bad, range_m, beta=0.01)
-    with pytest.raises(ValueError, match="no valid depth|range"):
-        brume.fog(image_u8, np.full((H, W), np.nan, np.float32), beta=0.01)
-    # A range of 0 or less is unknown, and the message says so.
-    with pytest.raises(ValueError, match="mark a range ≤ 0 unknown"):
-        brume.fog(image_u8, -range_m, beta=0.01)
+    # No pixel of known range: refused by the argument's name, whatever else is asked
+    # (no pre-processing, no refinement); a range of 0 or less is unknown, and the
+    # message says so.
+    for unknown in [np.full((H, W), np.nan, np.float32), -range_m, 0 * range_m]:
+        for kwargs in [dict(beta=0.01), dict(ka=0.2, ks=0.5, refine=False)]:
+            with pytest.raises(ValueError, match=r"^range_m: no valid depth value \(every pixel unknown: NaN, infinite, zero or negative\)$"):
+                brume.fog(image_u8, unknown, **kwargs)
 
 
 def test_renderer_reused_from_threads(image_u8, range_m):

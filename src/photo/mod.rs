@@ -91,13 +91,19 @@ impl Photo {
 
     /// A photo from arrays: `image` linear RGB and `range_m` the distance from the camera
     /// centre in metres (NaN, ≤ 0 or infinite where unknown), the image's size or smaller
-    /// by one factor.
+    /// by one factor. Errors: [`Error::NoValidDepth`] (named `range_m`) where no pixel's
+    /// range is known, as the loaders refuse such a file.
     pub fn from_range(image: RgbImage, range_m: ScalarMap) -> Result<Photo> {
         let unknown_pixels = range_m
             .as_slice()
             .iter()
             .filter(|v| !(v.is_finite() && **v > 0.0))
             .count();
+        if unknown_pixels == range_m.len() {
+            return Err(Error::NoValidDepth {
+                path: "range_m".into(),
+            });
+        }
         let range = range_m.map(|&v| {
             if v.is_finite() && v > 0.0 {
                 v
