@@ -395,3 +395,47 @@ fn the_hood_hides_the_object() {
         }
     }
 }
+
+/// An object whose colour or coverage holds a NaN (a renderer's or compositor's fault)
+/// is refused, naming the file, the pixel and the channel, and nothing is written: before,
+/// the fog's blur spread the NaN over the whole frame and `brume render` wrote an image
+/// of NaN with success. A negative colour (a sharp filter's ringing) is set to 0.
+#[test]
+fn an_object_with_nan_colour_or_coverage_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    write_inputs(dir.path(), true);
+    let mut args = RENDER.to_vec();
+    let lambda = args.iter().position(|a| *a == "--lambda").unwrap();
+    args[lambda + 1] = "4";
+    for (x, channel, name) in [(20, 0, "R"), (21, 3, "A")] {
+        let mut rgba = object_rgba();
+        rgba.get_mut(x, 10)[channel] = f32::NAN;
+        let channel = |c: usize| rgba.as_slice().iter().map(|p| p[c]).collect::<Vec<f32>>();
+        let channels = ["R", "G", "B", "A"]
+            .iter()
+            .enumerate()
+            .map(|(c, n)| (*n, f32s(&channel(c))))
+            .chain([("Z", f32s(object_range().as_slice()))])
+            .collect();
+        std::fs::write(
+            dir.path().join("object.exr"),
+            exr_bytes(W, H, vec![(None, channels)]),
+        )
+        .unwrap();
+        let o = common::brume(dir.path(), &args);
+        let err = common::stderr(&o);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        let said = format!(
+            "object.exr: object value NaN at pixel ({x}, 10) (x, y from the top left), \
+             channel {name}; 1 value(s) are NaN or infinite in all"
+        );
+        assert!(err.contains(&said), "{err}");
+        assert!(!dir.path().join("out.exr").exists());
+    }
+
+    let mut rgba = object_rgba();
+    rgba.get_mut(20, 10)[1] = -0.25;
+    let object = VirtualObject::from_range(rgba, object_range(), "ringing").unwrap();
+    assert_eq!(object.rgba.get(20, 10)[1], 0.0);
+    assert_eq!(object.rgba.get(20, 10)[0], RED[0]);
+}
