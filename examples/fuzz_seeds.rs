@@ -9,8 +9,9 @@
 //! loaders accept, so that the fuzzer starts from inputs that reach deep into each
 //! decoder instead of having to find a magic number first. The `depth_png` and
 //! `load_range` seeds start with the option bytes that `fuzz/src/lib.rs` decodes; the
-//! `sky_mask` seeds with one byte that picks the mask format. The `camera` and `manifest`
-//! seeds are plain Cityscapes camera files and `brume batch` CSV manifests.
+//! `sky_mask` seeds with one byte that picks the mask format, the `tables` seeds with one
+//! byte that picks the table. The `camera`, `manifest` and `sun_time` seeds are plain
+//! Cityscapes camera files, `brume batch` CSV manifests and RFC 3339 times.
 
 use std::io::Cursor;
 use std::path::{Path, PathBuf};
@@ -380,6 +381,66 @@ fn main() -> Res<()> {
         "palette.bin",
         mask(0, &palette_png(4, 2, &palette, &[1, 1, 1, 2, 0, 2, 1, 0])),
     );
+
+    // Transmittance maps: 8-bit grey as Foggy Cityscapes publishes them, 16-bit grey, an
+    // RGB map whose channels agree, and a palette of colours (refused after decoding).
+    let tau: Vec<u8> = crop.iter().map(|&d| 255 - d).collect();
+    seeds.put("transmittance_map", "grey8.png", png(&tau, 12, 9, grey)?);
+    let tau16: Vec<u16> = tau.iter().map(|&t| u16::from(t) * 257).collect();
+    seeds.put(
+        "transmittance_map",
+        "grey16.png",
+        png(&be16(&tau16), 12, 9, image::ExtendedColorType::L16)?,
+    );
+    let tau_rgb: Vec<u8> = tau[..12].iter().flat_map(|&t| [t, t, t]).collect();
+    seeds.put(
+        "transmittance_map",
+        "rgb.png",
+        png(&tau_rgb, 4, 3, image::ExtendedColorType::Rgb8)?,
+    );
+    seeds.put(
+        "transmittance_map",
+        "palette.png",
+        palette_png(4, 2, &palette, &[1, 1, 1, 2, 0, 2, 1, 0]),
+    );
+
+    // CSV tables: byte 0 picks the density table (even) or the spectral sensitivity (odd).
+    let tables = [
+        (
+            "density.csv",
+            0,
+            "# fog bank\nheight_m,extinction_per_m\n0,0.02\n50,0.01\n200,0\n",
+        ),
+        (
+            "density_bom.csv",
+            2,
+            "\u{feff}height_m , extinction_per_m\r\n-10,0.5 # below sea level\r\n1e3,1e-4\r\n",
+        ),
+        (
+            "sensitivity.csv",
+            1,
+            "lambda_nm,r,g,b\n380,0,0,0.01\n450,0.02,0.1,0.9\n550,0.1,0.95,0.1\n\
+             600,0.8,0.3,0\n700,0.4,0,0\n780,0,0,0\n",
+        ),
+        (
+            "sensitivity_bare.csv",
+            3,
+            "# no header\n400,0.1,0.2,0.9\n500,0.2,0.9,0.3\n600,0.9,0.2,-0.01\n",
+        ),
+    ];
+    for (name, which, text) in tables {
+        seeds.put("tables", name, [&[which][..], text.as_bytes()].concat());
+    }
+
+    // RFC 3339 times, as `--time` takes them.
+    for (name, time) in [
+        ("offset.txt", "2003-10-17T12:30:30-07:00"),
+        ("utc.txt", "2024-06-21T10:00:00Z"),
+        ("fraction_space.txt", "1999-12-31 23:59:59.125+05:45"),
+        ("leap_day.txt", "2000-02-29t00:00:00z"),
+    ] {
+        seeds.put("sun_time", name, time.into());
+    }
     seeds.finish()
 }
 

@@ -132,15 +132,18 @@ fn floor_of(max_code: f32) -> f32 {
 /// Reads a transmittance map (8- or 16-bit grey PNG; an RGB one must be grey), as the
 /// optical depth −ln t per pixel (row 0 at the top), for brume's fog at β = 1.
 pub fn load_optical_depth(path: &Path) -> Result<ScalarMap> {
-    let decoded = image::ImageReader::open(path)
-        .map_err(|e| Error::io(path, e))?
-        .with_guessed_format()
-        .map_err(|e| Error::io(path, e))?;
-    let (w, h) = decoded
-        .into_dimensions()
-        .map_err(|e| Error::format(path, format!("not a readable image: {e}")))?;
-    crate::io::limits::check_size(path, "PNG", u64::from(w), u64::from(h))?;
-    let img = image::open(path).map_err(|e| Error::format(path, format!("{e}")))?;
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_optical_depth(&bytes, &path.display().to_string())
+}
+
+/// [`load_optical_depth`] of bytes in memory; `name` stands for the file in messages. The
+/// bytes go through the checks every brume image reader makes before decoding (the size
+/// against `io::limits`, a PNG's palette, a JPEG's length), so that a hostile file is an
+/// error naming it, never a panic or a huge allocation.
+pub fn decode_optical_depth(bytes: &[u8], name: &str) -> Result<ScalarMap> {
+    let path = Path::new(name);
+    let img = crate::io::image::decode_any(bytes, name)?;
+    let (w, h) = (img.width(), img.height());
     let (values, max_code): (Vec<f32>, f32) = match img {
         image::DynamicImage::ImageLuma8(g) => {
             (g.pixels().map(|p| f32::from(p[0])).collect(), 255.0)

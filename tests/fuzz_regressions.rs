@@ -1,8 +1,8 @@
 //! Inputs the fuzzers in `fuzz/` found crashing a loader, kept as files in
 //! `tests/data/fuzz/` and replayed on stable Rust: each must now give its expected result
-//! without a panic or an abort. Also checks that the fuzzers' seeds in `fuzz/seeds/` are
-//! files the loaders accept, so that fuzzing starts from inputs that reach deep into each
-//! decoder.
+//! without a panic or an abort; also inputs of the same kind found by reading the code.
+//! Also checks that the fuzzers' seeds in `fuzz/seeds/` are files the loaders accept, so
+//! that fuzzing starts from inputs that reach deep into each decoder.
 
 use std::path::{Path, PathBuf};
 
@@ -83,6 +83,43 @@ fn seeds_of_the_camera_manifest_and_sky_mask_fuzzers_load() {
     assert!(counts.iter().all(|&n| n >= 4), "seeds: {counts:?}");
 }
 
+#[test]
+fn seeds_of_the_transmittance_map_table_and_time_fuzzers_load() {
+    use brume::atmosphere::Sensitivity;
+    use brume::medium::DensityTable;
+
+    let maps = files("fuzz/seeds/transmittance_map");
+    for path in &maps {
+        let loaded = brume::compat::load_optical_depth(path);
+        // Kept on purpose to reach the refusal after decoding: a palette of colours.
+        if path.ends_with("palette.png") {
+            expect_err_with(loaded, "an RGB transmittance map whose channels differ");
+            continue;
+        }
+        let map = loaded.unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        assert!(map.as_slice().iter().all(|&v| v.is_finite() && v > 0.0));
+    }
+    // Byte 0 picks the table, as in fuzz/fuzz_targets/tables.rs; the rest is the CSV.
+    let tables = files("fuzz/seeds/tables");
+    for path in &tables {
+        let bytes = std::fs::read(path).unwrap();
+        let text = std::str::from_utf8(&bytes[1..]).unwrap();
+        let ok = match bytes[0] % 2 {
+            0 => DensityTable::parse_csv(text, path).err(),
+            _ => Sensitivity::parse_csv(text, path).err(),
+        };
+        assert!(ok.is_none(), "{}: {ok:?}", path.display());
+    }
+    let times = files("fuzz/seeds/sun_time");
+    for path in &times {
+        let text = std::fs::read_to_string(path).unwrap();
+        let sun = brume::sky::sun_position::Observer::new(47.4, 8.5).sun_at(&text, None);
+        assert!(sun.is_ok(), "{}: {:?}", path.display(), sun.err());
+    }
+    let counts = [maps.len(), tables.len(), times.len()];
+    assert!(counts.iter().all(|&n| n >= 4), "seeds: {counts:?}");
+}
+
 fn fuzz_file(name: &str) -> PathBuf {
     root().join("tests/data/fuzz").join(name)
 }
@@ -157,8 +194,8 @@ fn tiny_jpeg_claiming_a_huge_size_is_refused_before_decoding() {
 
 // sky_mask fuzzer, 1.27 million runs in: a palette PNG whose PLTE chunk is 521 bytes, not
 // a multiple of 3, made png 0.18.1 panic building its colour table (slice index out of
-// range; image-rs/image-png#694). Every PNG reader goes through the same decoder, so the
-// colour image and depth loaders refused it with the same panic.
+// range; image-rs/image-png#694). The colour image and depth loaders go through the same
+// decoder, so they refused it with the same panic.
 #[test]
 fn png_palette_of_partial_entries_is_refused() {
     use brume::io::mask::{decode_sky_mask, SkyMaskFormat};
@@ -179,4 +216,42 @@ fn png_palette_of_partial_entries_is_refused() {
         ),
         needle,
     );
+}
+
+// Found by reading, not by a fuzzer: the transmittance map's loader (`--transmittance-map`)
+// and the left-right check's second read of a Cityscapes disparity decoded with the image
+// crate directly, past the checks above, and the same palette (here with valid CRCs, which
+// the sky mask's file lacks) made `brume render` panic. Now both go through brume's
+// decoder: an error naming the file, and no output.
+#[test]
+fn transmittance_map_with_a_palette_of_partial_entries_is_refused() {
+    let path = fuzz_file("transmittance-map-plte-521-bytes.png");
+    let needle = "PNG palette (PLTE chunk) of 521 bytes";
+    expect_err_with(brume::compat::load_optical_depth(&path), needle);
+
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("im.png");
+    ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
+        .save(&image)
+        .unwrap();
+    let out = dir.path().join("out.png");
+    let run = crate::common::brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--transmittance-map",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    let err = crate::common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("transmittance-map-plte-521-bytes.png") && err.contains(needle),
+        "{err}"
+    );
+    assert!(!out.exists());
 }

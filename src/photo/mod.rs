@@ -131,8 +131,8 @@ impl Photo {
         Ok(photo)
     }
 
-    /// An image and a transmittance map τ (Foggy Cityscapes' and others' τ maps, any
-    /// float or 8/16-bit format [`crate::compat::load_optical_depth`] reads), the map read
+    /// An image and a transmittance map τ (Foggy Cityscapes' and others' τ maps: an 8- or
+    /// 16-bit grey PNG, as [`crate::compat::load_optical_depth`] reads it), the map read
     /// as its optical depth −ln τ: a range in "metres" for a fog of β = 1 m⁻¹, so that
     /// physical fog at β = 1 gives back the map's τ and the blur follows βR = −ln τ as it
     /// would from the range. Errors: the loaders', the memory check, a map of another
@@ -220,9 +220,8 @@ impl Photo {
                  disparity in pixels)",
             ));
         }
-        let raw = ::image::open(depth_path)
-            .map_err(|e| Error::format(depth_path, format!("{e}")))?
-            .to_luma16();
+        let bytes = std::fs::read(depth_path).map_err(|e| Error::io(depth_path, e))?;
+        let raw = image::decode_any(&bytes, &depth_path.display().to_string())?.to_luma16();
         let disparity = crate::raster::Grid::from_vec(
             raw.width() as usize,
             raw.height() as usize,
