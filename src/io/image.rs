@@ -204,26 +204,42 @@ fn is_pfm(bytes: &[u8]) -> bool {
 /// infinite value, with its pixel, and clamps negative values to 0, with a warning.
 fn linear_float(mut image: RgbImage, name: &str) -> Result<RgbImage> {
     let width = image.width();
-    let values = image.as_slice().iter().flatten();
+    finite_light(image.as_mut_slice(), width, name, "colour", ["R", "G", "B"])?;
+    Ok(image)
+}
+
+/// Refuses the first NaN or infinite value of `pixels` (rows of `width`), naming the pixel
+/// and its channel of `channels`, and sets negative values of the R, G and B channels (the
+/// first three) to 0, with a warning in the log: the checks of float colour images and of
+/// inserted objects, whose light and coverage the fog's blur would spread over the frame.
+/// `what` names the values in the message.
+pub(crate) fn finite_light<const N: usize>(
+    pixels: &mut [[f32; N]],
+    width: usize,
+    name: &str,
+    what: &str,
+    channels: [&str; N],
+) -> Result<()> {
+    let values = pixels.iter().flatten();
     if let Some(i) = values.clone().position(|v| !v.is_finite()) {
-        let (pixel, channel) = (i / 3, i % 3);
-        let value = image.as_slice()[pixel][channel];
+        let (pixel, channel) = (i / N, i % N);
         let count = values.filter(|v| !v.is_finite()).count();
         return Err(Error::format(
             name,
             format!(
-                "colour value {value} at pixel ({}, {}) (x, y from the top left), channel {}; \
-                 {count} value(s) are NaN or infinite in all, and brume needs finite colour: \
+                "{what} value {} at pixel ({}, {}) (x, y from the top left), channel {}; \
+                 {count} value(s) are NaN or infinite in all, and brume needs finite values: \
                  fix them in the renderer or compositor",
+                pixels[pixel][channel],
                 pixel % width,
                 pixel / width,
-                ["R", "G", "B"][channel]
+                channels[channel]
             ),
         ));
     }
     let mut negative = 0usize;
     let mut lowest = 0.0f32;
-    for v in image.as_mut_slice().iter_mut().flatten() {
+    for v in pixels.iter_mut().flat_map(|p| &mut p[..N.min(3)]) {
         if *v < 0.0 {
             negative += 1;
             lowest = lowest.min(*v);
@@ -233,7 +249,7 @@ fn linear_float(mut image: RgbImage, name: &str) -> Result<RgbImage> {
     if negative > 0 {
         log::warn!("{name}: {negative} negative colour value(s), down to {lowest}, set to 0");
     }
-    Ok(image)
+    Ok(())
 }
 
 /// Decodes PNG or JPEG bytes without any colour conversion; shared with the depth loaders

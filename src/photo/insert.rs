@@ -59,7 +59,9 @@ impl VirtualObject {
     /// fog's blur would spread it over the whole frame); a negative colour is set to 0,
     /// with a warning in the log, as for colour images ([`crate::io::image`]).
     pub fn from_range(mut rgba: RgbaImage, range: ScalarMap, name: &str) -> Result<VirtualObject> {
-        check_object_colour(&mut rgba, name)?;
+        let width = rgba.width();
+        let channels = ["R", "G", "B", "A"];
+        crate::io::image::finite_light(rgba.as_mut_slice(), width, name, "object", channels)?;
         let sizes = (
             (rgba.width(), rgba.height()),
             (range.width(), range.height()),
@@ -211,40 +213,6 @@ impl VirtualObject {
         }
         Ok(())
     }
-}
-
-/// Refuses the first NaN or infinite value of an object's RGBA and sets negative colour
-/// values to 0, as [`VirtualObject::from_range`] says.
-fn check_object_colour(rgba: &mut RgbaImage, name: &str) -> Result<()> {
-    let width = rgba.width();
-    let values = rgba.as_slice().iter().flatten();
-    if let Some(i) = values.clone().position(|v| !v.is_finite()) {
-        let (pixel, channel) = (i / 4, i % 4);
-        let count = values.filter(|v| !v.is_finite()).count();
-        return Err(Error::format(
-            name,
-            format!(
-                "object value {} at pixel ({}, {}) (x, y from the top left), channel {}; {count} \
-                 value(s) are NaN or infinite in all, and brume needs finite colour and \
-                 coverage: fix them in the renderer or compositor",
-                rgba.as_slice()[pixel][channel],
-                pixel % width,
-                pixel / width,
-                ["R", "G", "B", "A"][channel]
-            ),
-        ));
-    }
-    let mut negative = 0usize;
-    for v in rgba.as_mut_slice().iter_mut().flat_map(|p| &mut p[..3]) {
-        if *v < 0.0 {
-            negative += 1;
-            *v = 0.0;
-        }
-    }
-    if negative > 0 {
-        log::warn!("{name}: {negative} negative colour value(s) set to 0");
-    }
-    Ok(())
 }
 
 /// Inserts `object` into `photo` and its `prepared` range (refined to the image's size)
