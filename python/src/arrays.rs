@@ -2,7 +2,9 @@
 //! the output) and range maps, copied with the GIL and converted without it.
 
 use super::value_error;
-use brume::io::image::{linear_rgba_to_srgb8_rgb, srgb8_rgb_to_linear};
+use brume::io::image::{
+    linear_rgba_to_srgb8_rgb, linear_to_srgb, srgb8_rgb_to_linear, srgb_to_linear,
+};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
@@ -61,6 +63,8 @@ pub(crate) fn not_numbers(obj: Borrowed<'_, '_, PyAny>, what: &str) -> PyErr {
 pub(crate) enum Pixels {
     /// uint8 sRGB code values.
     Srgb8,
+    /// uint16 sRGB code values (a 16-bit PNG as OpenCV or imageio decode it).
+    Srgb16,
     /// float32 linear RGB.
     Linear32,
     /// float64 linear RGB.
@@ -70,6 +74,7 @@ pub(crate) enum Pixels {
 /// An image copied out of numpy (with the GIL), converted to linear light later (without).
 pub(crate) enum RawImage {
     Srgb8(Vec<u8>),
+    Srgb16(Vec<u16>),
     Linear(Vec<f32>),
 }
 
@@ -91,8 +96,8 @@ pub(crate) fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
 pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
     let untyped = image.cast::<PyUntypedArray>().map_err(|_| {
         value_error(format!(
-            "image: expected a numpy array HxWx3 (uint8 sRGB, or float32 or float64 linear \
-             RGB), got {}",
+            "image: expected a numpy array HxWx3 (uint8 or uint16 sRGB, or float32 or float64 \
+             linear RGB), got {}",
             image
                 .get_type()
                 .name()
@@ -125,6 +130,16 @@ pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
             raw: RawImage::Srgb8(raw),
         });
     }
+    if dtype.is_equiv_to(&numpy::dtype::<u16>(py)) {
+        let a: PyReadonlyArray3<u16> = image.extract()?;
+        let raw = a.as_array().iter().copied().collect();
+        return Ok(ImageIn {
+            width,
+            height,
+            pixels: Pixels::Srgb16,
+            raw: RawImage::Srgb16(raw),
+        });
+    }
     let (pixels, raw): (Pixels, Vec<f32>) = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
         let a: PyReadonlyArray3<f32> = image.extract()?;
         (Pixels::Linear32, a.as_array().iter().copied().collect())
@@ -136,8 +151,8 @@ pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
         )
     } else {
         return Err(value_error(format!(
-            "image: expected dtype uint8 (sRGB code values), or float32 or float64 (linear RGB in \
-             [0, 1]), got {}",
+            "image: expected dtype uint8 or uint16 (sRGB code values), or float32 or float64 \
+             (linear RGB in [0, 1]), got {}",
             dtype_name(untyped)
         )));
     };
@@ -183,6 +198,11 @@ impl ImageIn {
     pub(crate) fn linear(self) -> RgbImage {
         let data = match self.raw {
             RawImage::Srgb8(raw) => srgb8_rgb_to_linear(&raw),
+            // As brume's loader decodes a 16-bit PNG: code / 65535, then the sRGB curve.
+            RawImage::Srgb16(raw) => raw
+                .chunks_exact(3)
+                .map(|p| [0, 1, 2].map(|k| srgb_to_linear(f32::from(p[k]) / 65535.0)))
+                .collect(),
             RawImage::Linear(raw) => raw
                 .chunks_exact(3)
                 .map(|p| [p[0].max(0.0), p[1].max(0.0), p[2].max(0.0)])
@@ -286,13 +306,15 @@ pub(crate) fn scalar_map_to_py(py: Python<'_>, map: ScalarMap) -> Py<PyAny> {
 /// What a fogged frame goes back to Python as.
 pub(crate) enum ImageOut {
     Srgb8(Array3<u8>),
+    Srgb16(Array3<u16>),
     Linear32(Array3<f32>),
     Linear64(Array3<f64>),
 }
 
 impl ImageOut {
     /// brume's linear RGBA in the input's encoding: 8-bit sRGB exactly as brume's PNG
-    /// writer rounds it (clamped to [0, 1], NaN as 0), or linear floats as rendered.
+    /// writer rounds it (clamped to [0, 1], NaN as 0), 16-bit sRGB likewise to the nearest
+    /// of 65535 codes, or linear floats as rendered.
     pub(crate) fn encode(image: &brume::raster::RgbaImage, pixels: Pixels) -> ImageOut {
         let shape = (image.height(), image.width(), 3);
         let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
@@ -303,6 +325,9 @@ impl ImageOut {
                     linear_rgba_to_srgb8_rgb(image.as_slice()).into_flattened(),
                 )
                 .expect("shape"),
+            ),
+            Pixels::Srgb16 => ImageOut::Srgb16(
+                Array3::from_shape_vec(shape, rgb.map(linear_to_srgb16).collect()).expect("shape"),
             ),
             Pixels::Linear32 => {
                 ImageOut::Linear32(Array3::from_shape_vec(shape, rgb.collect()).expect("shape"))
@@ -316,8 +341,16 @@ impl ImageOut {
     pub(crate) fn into_py(self, py: Python<'_>) -> Py<PyAny> {
         match self {
             ImageOut::Srgb8(a) => a.into_pyarray(py).into_any().unbind(),
+            ImageOut::Srgb16(a) => a.into_pyarray(py).into_any().unbind(),
             ImageOut::Linear32(a) => a.into_pyarray(py).into_any().unbind(),
             ImageOut::Linear64(a) => a.into_pyarray(py).into_any().unbind(),
         }
     }
+}
+
+/// A linear value as a 16-bit sRGB code: clamped to [0, 1] (NaN as 0), the sRGB curve,
+/// rounded to the nearest of 65535 steps.
+fn linear_to_srgb16(v: f32) -> u16 {
+    let v = if v.is_nan() { 0.0 } else { v.clamp(0.0, 1.0) };
+    (linear_to_srgb(v) * 65535.0).round() as u16
 }

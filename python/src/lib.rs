@@ -477,8 +477,8 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// compat=None, return_info=False) -> ndarray, or (ndarray, dict), or a list of those
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
-/// diffusion blur). image: HxWx3 uint8 (sRGB code values) or float32 (linear RGB); the
-/// result has the same dtype and encoding. range_m: HxW metres from the camera centre
+/// diffusion blur). image: HxWx3 uint8 or uint16 (sRGB code values) or float32 or
+/// float64 (linear RGB); the result has the same dtype and encoding. range_m: HxW metres from the camera centre
 /// (NaN or <= 0 unknown), the image's size or smaller by one factor. Exactly one of beta
 /// (extinction, 1/m), visibility (m) — either may be a sequence: one output each, in a
 /// list, from one pre-processing and refinement of the frame, each equal to the call with

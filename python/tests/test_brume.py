@@ -270,6 +270,38 @@ def test_uint8_is_the_float_path_encoded(image_u8, range_m):
     assert out8[far].mean() > image_u8[far].mean()
 
 
+def test_uint16_is_the_float_path_encoded_and_what_render_reads(tmp_path, image_u8, range_m):
+    # 16-bit sRGB code values that 8 bits cannot hold: a smooth ramp plus fine steps.
+    y, x = np.mgrid[0:H, 0:W]
+    ramp = np.stack([x / W, y / H, (x + y) / (W + H)], axis=-1)
+    image16 = np.round(ramp * 60000 + (x % 7)[..., None] * 13).astype(np.uint16)
+    linear = srgb_to_linear(image16 / 65535.0).astype(np.float32)
+    kw = dict(beta=0.02, airlight=(0.7, 0.75, 0.8), blur=False, refine=False)
+    out16 = brume.fog(image16, range_m, **kw)
+    assert out16.dtype == np.uint16 and out16.shape == image16.shape
+    out32 = brume.fog(linear, range_m, **kw)
+    expected = np.round(linear_to_srgb(out32) * 65535.0)
+    assert np.abs(out16.astype(np.int64) - expected).max() <= 1
+    far = range_m > 100
+    assert out16[far].mean() > image16[far].mean()
+
+    # `brume render` reads a 16-bit PNG the same way (and writes 8 bits).
+    cv2 = pytest.importorskip("cv2")
+    cv2.imwrite(str(tmp_path / "image16.png"), image16[..., ::-1])
+    np.save(tmp_path / "range.npy", range_m.astype(np.float32))
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "image16.png"),
+        "--depth", str(tmp_path / "range.npy"),
+        "--depth-kind", "range", "--depth-scale", "1", "--no-prep",
+        "--beta", "0.02", "--airlight", "0.7,0.75,0.8", "--lambda", "0",
+        "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    cli = cv2.imread(str(tmp_path / "cli.png"))[..., ::-1]
+    assert np.abs(out16 / 257.0 - cli).max() <= 1.0
+
+
 @pytest.mark.parametrize(
     "kwargs, message",
     [
