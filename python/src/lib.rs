@@ -478,12 +478,12 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 or uint16 (sRGB code values) or float32 or
-/// float64 (linear RGB); the result has the same dtype and encoding. range_m: HxW metres from the camera centre
-/// (NaN or <= 0 unknown), the image's size or smaller by one factor. Exactly one of beta
-/// (extinction, 1/m), visibility (m) — either may be a sequence: one output each, in a
-/// list, from one pre-processing and refinement of the frame, each equal to the call with
-/// that value alone — or ka and/or ks: paper 000's absorption and
-/// scattering per unit of range normalised by its largest value (`brume render`'s
+/// float64 (linear RGB); the result has the same dtype and encoding. range_m: HxW metres
+/// from the camera centre (NaN or <= 0 unknown), the image's size or smaller by one
+/// factor. Exactly one of beta (extinction, 1/m), visibility (m) — either may be a
+/// sequence: one output each, in a list, from one pre-processing and refinement of the
+/// frame, each equal to the call with that value alone — or ka and/or ks: paper 000's
+/// absorption and scattering per unit of range normalised by its largest value (`brume render`'s
 /// default; the range in any unit, e.g. a relative depth; the other one 0.25 or 0.75 when
 /// only one is given). airlight: None (estimated from the sky), a grey (0.8) or linear RGB
 /// (0.8, 0.82, 0.85). blur: False for none (lambda 0); lambda_px: the blur's strength
