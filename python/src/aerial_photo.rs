@@ -22,7 +22,8 @@ use std::path::PathBuf;
 
 /// `Renderer.aerial`'s keywords.
 pub(crate) struct AerialArgs {
-    pub turbidity: f64,
+    /// One output each (a list when `turbidity` was a sequence).
+    pub turbidities: Vec<f64>,
     pub fov_y_deg: Option<f64>,
     pub focal_px: Option<f64>,
     pub pitch_deg: Option<f64>,
@@ -40,6 +41,12 @@ pub(crate) struct AerialArgs {
     pub lambda_px: f64,
     pub sigma0: f64,
 }
+
+/// Bytes per pixel that one output holds until the call returns, counted from its
+/// buffers (not measured): its linear RGBA image (16), the encoded result (up to 12 as
+/// float32) and, with `return_info`, the labels (clear, transmittance, airlight: 12 each)
+/// and their numpy copies (36).
+pub(crate) const OUTPUT_BYTES_PER_PIXEL: u64 = 100;
 
 /// A value outside its range, named as the keyword.
 fn out_of_range(name: &str, value: f64, expected: impl std::fmt::Display) -> PyErr {
@@ -103,8 +110,9 @@ impl AerialArgs {
         view.camera(height).map_err(py_err)
     }
 
-    /// The library's options for an image `height` rows tall.
-    fn options(&self, height: usize) -> PyResult<AerialOptions> {
+    /// The library's options for an image `height` rows tall, one per turbidity (the
+    /// sensitivity read once).
+    fn options(&self, height: usize) -> PyResult<Vec<AerialOptions>> {
         let sensitivity = match &self.sensitivity {
             Some(path) => Sensitivity::from_csv(path).map_err(py_err)?,
             None => Sensitivity::cie_srgb(),
@@ -125,21 +133,30 @@ impl AerialArgs {
             horizon_sectors: self.horizon_sectors as usize,
             retarget: self.retarget()?,
             sun: self.sun.map(|(z, a)| [z.to_radians(), a.to_radians()]),
-            ..AerialOptions::new(self.turbidity, self.camera(height)?)
+            ..AerialOptions::new(self.turbidities[0], self.camera(height)?)
         };
-        // The library names its fields as the keywords are named, but for λ.
-        opts.validate().map_err(|e| match e {
-            brume::Error::InvalidParameter {
-                name,
-                value,
-                expected,
-            } if name == "lambda" => {
-                value_error(format!("invalid lambda_px = {value}: expected {expected}"))
-            }
-            e => py_err(e),
-        })?;
-        Ok(opts)
+        let each = self.turbidities.iter().map(|&turbidity| AerialOptions {
+            turbidity,
+            ..opts.clone()
+        });
+        each.map(validated).collect()
     }
+}
+
+/// `opts` once [`AerialOptions::validate`] passed them, its error named as the keyword.
+fn validated(opts: AerialOptions) -> PyResult<AerialOptions> {
+    // The library names its fields as the keywords are named, but for λ.
+    opts.validate().map_err(|e| match e {
+        brume::Error::InvalidParameter {
+            name,
+            value,
+            expected,
+        } if name == "lambda" => {
+            value_error(format!("invalid lambda_px = {value}: expected {expected}"))
+        }
+        e => py_err(e),
+    })?;
+    Ok(opts)
 }
 
 /// `return_info`'s labels of an aerial frame, per pixel and channel: I = J·t + A·(1 − t)
@@ -207,9 +224,11 @@ impl AerialInfo {
     }
 }
 
-/// One photo with aerial perspective (call with the GIL released): pre-processing on the
-/// calling thread, the refinement on the GL thread, the aerial medium (and retargeting) on
-/// the calling thread, the render on the GL thread, the capture here.
+/// One photo with aerial perspective at each of `args`' turbidities (call with the GIL
+/// released): pre-processing on the calling thread and the refinement on the GL thread,
+/// once; then for each turbidity the aerial medium (and retargeting) on the calling
+/// thread, the render on the GL thread, the capture here. Each output equals the call
+/// with that turbidity alone.
 pub(crate) fn aerial_frame(
     gl: &GlThread,
     image: ImageIn,
@@ -218,9 +237,9 @@ pub(crate) fn aerial_frame(
     prepare: PrepareOptions,
     capture: &CaptureOptions,
     want_info: bool,
-) -> PyResult<(RgbaImage, Option<AerialInfo>)> {
+) -> PyResult<Vec<(RgbaImage, Option<AerialInfo>)>> {
     args.check()?;
-    let opts = args.options(image.height)?;
+    let each = args.options(image.height)?;
     let photo = Photo::from_range(image.linear(), range).map_err(py_err)?;
     let prepared = photo::preprocess(&photo, &prepare).map_err(py_err)?;
     let refine = prepare.refine;
@@ -233,22 +252,26 @@ pub(crate) fn aerial_frame(
             refined.map(|_| (photo, prepared))
         })?
         .map_err(py_err)?;
-    let job = photo::aerial(&photo, &prepared, &opts).map_err(py_err)?;
-    let info = want_info.then(|| AerialInfo::of(&job));
-    let blur = job.fog_blur();
-    let mut rendered = gl
-        .run(move |h| {
-            h.render_fog(
-                &job.image,
-                &job.range,
-                &job.medium,
-                &FrameInputs::default(),
-                &blur,
-            )
-        })?
-        .map_err(py_err)?;
-    photo::capture(&mut rendered.image, capture).map_err(py_err)?;
-    Ok((rendered.image, info))
+    let mut outputs = Vec::with_capacity(each.len());
+    for opts in &each {
+        let job = photo::aerial(&photo, &prepared, opts).map_err(py_err)?;
+        let info = want_info.then(|| AerialInfo::of(&job));
+        let blur = job.fog_blur();
+        let mut rendered = gl
+            .run(move |h| {
+                h.render_fog(
+                    &job.image,
+                    &job.range,
+                    &job.medium,
+                    &FrameInputs::default(),
+                    &blur,
+                )
+            })?
+            .map_err(py_err)?;
+        photo::capture(&mut rendered.image, capture).map_err(py_err)?;
+        outputs.push((rendered.image, info));
+    }
+    Ok(outputs)
 }
 
 /// The default of `horizon_zenith_deg` (degrees).
@@ -259,11 +282,14 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
 /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
 /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-/// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict)
+/// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict), or a list
+/// of those
 ///
 /// Paper 002's aerial perspective from the turbidity T (1-20) on a photo with its range
-/// in metres (`brume render --medium aerial`). image and range_m as for brume.fog. One of
-/// fov_y_deg (vertical field of view) or focal_px gives each pixel's zenith angle, with
+/// in metres (`brume render --medium aerial`). turbidity may be a sequence: a list, one
+/// output each, from one pre-processing and refinement of the frame. image and range_m
+/// as for brume.fog. One of fov_y_deg (vertical field of view) or focal_px gives each
+/// pixel's zenith angle, with
 /// pitch_deg (default 0) or horizon_row (the image row of the horizon, 0 at the top).
 /// altitude_m: above sea level. from_turbidity: the photo's own turbidity, its haze
 /// removed first (retargeting, retarget 'normalised' (eq. 26) or 'radiance'). airlight:

@@ -27,14 +27,28 @@ use arrays::{dtype_name, read_image, read_range, Colour, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
 use gl_thread::GlThread;
 use photo_fog::{
-    capture_request, fog_frame, fog_request, prepare_request, set_masks, with_info, Densities,
-    Density,
+    capture_request, check_outputs_fit, fog_frame, fog_request, prepare_request, set_masks,
+    with_info, Densities, Density,
 };
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use std::path::PathBuf;
 use std::sync::OnceLock;
+
+/// A call's results as Python gets them: a list when the density or turbidity was given
+/// as a sequence (`many`), else the one result.
+fn one_or_list(
+    py: Python<'_>,
+    mut results: impl Iterator<Item = PyResult<Py<PyAny>>>,
+    many: bool,
+) -> PyResult<Py<PyAny>> {
+    if many {
+        let list = results.collect::<PyResult<Vec<_>>>()?;
+        return Ok(PyList::new(py, list)?.into_any().unbind());
+    }
+    results.next().expect("one value, one output")
+}
 
 /// brume's errors as Python's: bad values and files as `ValueError`, files that cannot be
 /// read as `OSError`, memory as `MemoryError`, the GL and EGL as `RuntimeError`; brume's
@@ -159,18 +173,14 @@ impl Renderer {
             let encode = |(rendered, info)| (ImageOut::encode(&rendered, pixels), info);
             Ok::<_, PyErr>(frames.into_iter().map(encode).collect::<Vec<_>>())
         })?;
-        let mut results = outputs.into_iter().map(|(out, info)| {
+        let results = outputs.into_iter().map(|(out, info)| {
             with_info(
                 py,
                 out.into_py(py),
                 info.map(|i| i.into_py(py)).transpose()?,
             )
         });
-        if many {
-            let list = results.collect::<PyResult<Vec<_>>>()?;
-            return Ok(PyList::new(py, list)?.into_any().unbind());
-        }
-        results.next().expect("one density, one output")
+        one_or_list(py, results, many)
     }
 
     /// distance_fog(image, depth, *, camera, time=0.0, start_distance=None, distance=None,
@@ -320,8 +330,8 @@ impl Renderer {
     /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
     /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
     /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-    /// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict): as
-    /// brume.aerial, on this renderer's context.
+    /// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict), or a
+    /// list of those: as brume.aerial, on this renderer's context.
     #[pyo3(
         signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false),
         text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
@@ -332,7 +342,7 @@ impl Renderer {
         py: Python<'py>,
         image: &Bound<'py, PyAny>,
         range_m: &Bound<'py, PyAny>,
-        turbidity: f64,
+        turbidity: Densities,
         fov_y_deg: Option<f64>,
         focal_px: Option<f64>,
         pitch_deg: Option<f64>,
@@ -370,7 +380,7 @@ impl Renderer {
         )?;
         let mut prepare = prepare_request(airlight, refine)?;
         let args = aerial_photo::AerialArgs {
-            turbidity,
+            turbidities: turbidity.non_empty("turbidity")?.to_vec(),
             fov_y_deg,
             focal_px,
             pitch_deg,
@@ -389,11 +399,17 @@ impl Renderer {
             sigma0,
         };
         let image = read_image(image)?;
+        check_outputs_fit(
+            args.turbidities.len(),
+            image.width * image.height,
+            aerial_photo::OUTPUT_BYTES_PER_PIXEL,
+            "give fewer turbidities in one call: every output is held until it returns",
+        )?;
         let range = read_range(range_m)?;
         set_masks(&mut prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
-        let (out, info) = py.detach(|| {
-            let (rendered, info) = aerial_photo::aerial_frame(
+        let outputs = py.detach(|| {
+            let frames = aerial_photo::aerial_frame(
                 &self.gl,
                 image,
                 range,
@@ -402,13 +418,17 @@ impl Renderer {
                 &capture,
                 return_info,
             )?;
-            Ok::<_, PyErr>((ImageOut::encode(&rendered, pixels), info))
+            let encode = |(rendered, info)| (ImageOut::encode(&rendered, pixels), info);
+            Ok::<_, PyErr>(frames.into_iter().map(encode).collect::<Vec<_>>())
         })?;
-        with_info(
-            py,
-            out.into_py(py),
-            info.map(|i| i.into_py(py)).transpose()?,
-        )
+        let results = outputs.into_iter().map(|(out, info)| {
+            with_info(
+                py,
+                out.into_py(py),
+                info.map(|i| i.into_py(py)).transpose()?,
+            )
+        });
+        one_or_list(py, results, turbidity.many())
     }
 
     /// GL_RENDERER of the context, e.g. 'llvmpipe (LLVM 15.0.6, 256 bits)'.

@@ -144,18 +144,28 @@ impl<'a, 'py> FromPyObject<'a, 'py> for Densities {
 }
 
 impl Densities {
+    /// True when given as a sequence: the call returns a list.
+    pub(crate) fn many(&self) -> bool {
+        self.many
+    }
+
+    /// The values, refused by `name` when the sequence is empty.
+    pub(crate) fn non_empty(&self, name: &str) -> PyResult<&[f64]> {
+        if self.values.is_empty() {
+            return Err(value_error(format!(
+                "invalid {name} = []: expected a number, or a non-empty sequence of numbers"
+            )));
+        }
+        Ok(&self.values)
+    }
+
     /// The fog options of each value, `make` checking it and naming `name`.
     fn fogs(
         &self,
         name: &str,
         make: fn(f64) -> brume::Result<FogOptions>,
     ) -> PyResult<Vec<FogOptions>> {
-        if self.values.is_empty() {
-            return Err(value_error(format!(
-                "invalid {name} = []: expected a number, or a non-empty sequence of numbers"
-            )));
-        }
-        self.values
+        self.non_empty(name)?
             .iter()
             .map(|&v| make(v).map_err(py_err))
             .collect()
@@ -193,16 +203,13 @@ impl Density {
             .flatten()
             .map(|d| d.values.len())
             .max()
-            .unwrap_or(1) as u64;
-        brume::memory::check_fits(
-            &format!("{outputs} outputs of {pixels} px each"),
-            outputs
-                .saturating_mul(pixels as u64)
-                .saturating_mul(OUTPUT_BYTES_PER_PIXEL),
-            brume::memory::available(),
+            .unwrap_or(1);
+        check_outputs_fit(
+            outputs,
+            pixels,
+            OUTPUT_BYTES_PER_PIXEL,
             "give fewer betas or visibilities in one call: every output is held until it returns",
         )
-        .map_err(py_err)
     }
 
     /// The fog options of each density given (the other options brume's defaults).
@@ -236,6 +243,25 @@ impl Density {
             ))),
         }
     }
+}
+
+/// Refuses, before any work, `outputs` outputs of `pixels` each, `bytes_per_pixel` each
+/// held until the call returns, that the memory left cannot hold; `hint` says what to do.
+pub(crate) fn check_outputs_fit(
+    outputs: usize,
+    pixels: usize,
+    bytes_per_pixel: u64,
+    hint: &str,
+) -> PyResult<()> {
+    brume::memory::check_fits(
+        &format!("{outputs} outputs of {pixels} px each"),
+        (outputs as u64)
+            .saturating_mul(pixels as u64)
+            .saturating_mul(bytes_per_pixel),
+        brume::memory::available(),
+        hint,
+    )
+    .map_err(py_err)
 }
 
 /// `compat`: None or 'brume' (brume's fog), or 'foggy-cityscapes' (Foggy Cityscapes'

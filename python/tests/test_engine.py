@@ -383,6 +383,35 @@ def test_aerial_turbidity_thickens_the_veil(photo):
     assert np.abs(hazy[far] - air).mean() < np.abs(clear[far] - air).mean()
 
 
+def test_a_sequence_of_turbidities_gives_one_output_each(photo):
+    """turbidity=[...]: one output each (with its labels), from one pre-processing and
+    refinement, each equal to the call with that turbidity alone, the capture's noise
+    included; a one-element list is a list, a number is not."""
+    image, range_m = photo
+    kw = dict(fov_y_deg=50.0, pitch_deg=2.0, refine="repair", shot_noise_gain=0.002, seed=5)
+    turbidities = [2.0, 4.5, 9.0]
+    many = brume.aerial(image, range_m, turbidity=turbidities, return_info=True, **kw)
+    assert isinstance(many, list) and len(many) == 3
+    for t, (out, info) in zip(turbidities, many):
+        alone, info_alone = brume.aerial(image, range_m, turbidity=t, return_info=True, **kw)
+        np.testing.assert_array_equal(out, alone)
+        assert info["turbidity"] == t
+        for label in ("clear", "transmittance", "airlight"):
+            np.testing.assert_array_equal(info[label], info_alone[label])
+    # Each turbidity is its own veil: the outputs differ.
+    assert np.abs(many[0][0].astype(int) - many[2][0].astype(int)).max() > 10
+    one = brume.aerial(image, range_m, turbidity=np.array([4.5]), **kw)
+    assert isinstance(one, list) and len(one) == 1
+    np.testing.assert_array_equal(one[0], many[1][0])
+    assert isinstance(brume.aerial(image, range_m, turbidity=4.5, **kw), np.ndarray)
+    with pytest.raises(ValueError, match=r"invalid turbidity = \[\]: expected a number, or a non-empty"):
+        brume.aerial(image, range_m, turbidity=[], **kw)
+    with pytest.raises(ValueError, match="invalid turbidity = 30"):
+        brume.aerial(image, range_m, turbidity=[4.0, 30.0], **kw)
+    with pytest.raises(TypeError, match="'4' is not a number"):
+        brume.aerial(image, range_m, turbidity="4", **kw)
+
+
 def test_aerial_sun_brightens_the_fog_toward_it(photo):
     # With the airlight given (no sky light measured), the sun shapes the horizon's light
     # by azimuth (sec. 4): the veil on the side of the sun is brighter.
