@@ -120,29 +120,23 @@ pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
     let (height, width) = (shape[0], shape[1]);
     let dtype = untyped.dtype();
     let py = image.py();
-    if dtype.is_equiv_to(&numpy::dtype::<u8>(py)) {
-        let a: PyReadonlyArray3<u8> = image.extract()?;
-        let raw = a.as_array().iter().copied().collect();
+    let code_values = if dtype.is_equiv_to(&numpy::dtype::<u8>(py)) {
+        Some((Pixels::Srgb8, RawImage::Srgb8(copied(image)?)))
+    } else if dtype.is_equiv_to(&numpy::dtype::<u16>(py)) {
+        Some((Pixels::Srgb16, RawImage::Srgb16(copied(image)?)))
+    } else {
+        None
+    };
+    if let Some((pixels, raw)) = code_values {
         return Ok(ImageIn {
             width,
             height,
-            pixels: Pixels::Srgb8,
-            raw: RawImage::Srgb8(raw),
-        });
-    }
-    if dtype.is_equiv_to(&numpy::dtype::<u16>(py)) {
-        let a: PyReadonlyArray3<u16> = image.extract()?;
-        let raw = a.as_array().iter().copied().collect();
-        return Ok(ImageIn {
-            width,
-            height,
-            pixels: Pixels::Srgb16,
-            raw: RawImage::Srgb16(raw),
+            pixels,
+            raw,
         });
     }
     let (pixels, raw): (Pixels, Vec<f32>) = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
-        let a: PyReadonlyArray3<f32> = image.extract()?;
-        (Pixels::Linear32, a.as_array().iter().copied().collect())
+        (Pixels::Linear32, copied(image)?)
     } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
         let a: PyReadonlyArray3<f64> = image.extract()?;
         (
@@ -172,6 +166,12 @@ pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
         pixels,
         raw: RawImage::Linear(raw),
     })
+}
+
+/// The values of an HxWx3 array of `T`, row by row.
+fn copied<T: numpy::Element + Copy>(image: &Bound<'_, PyAny>) -> PyResult<Vec<T>> {
+    let a: PyReadonlyArray3<T> = image.extract()?;
+    Ok(a.as_array().iter().copied().collect())
 }
 
 /// Warns (Python's `UserWarning`) when a float image holds only whole numbers and some
