@@ -7,7 +7,7 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 from numpy.typing import NDArray
 
 Array = NDArray[Any]
-PathArg = Union[str, "PathLike[str]"]
+PathArg = Union[str, bytes, "PathLike[str]", "PathLike[bytes]"]
 
 __version__: str
 

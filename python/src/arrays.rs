@@ -15,6 +15,7 @@ use pyo3::exceptions::{PyTypeError, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::types::PyBool;
 use std::ffi::CString;
+use std::path::PathBuf;
 
 /// A colour keyword as Python gives it: one number for a grey, or three linear RGB values
 /// in any sequence (list, tuple, numpy array). The values are checked where the keyword is
@@ -56,6 +57,20 @@ pub(crate) fn numbers(obj: Borrowed<'_, '_, PyAny>) -> Option<(Vec<f64>, bool)> 
 pub(crate) fn not_numbers(obj: Borrowed<'_, '_, PyAny>, what: &str) -> PyErr {
     let repr = obj.repr().map(|r| r.to_string()).unwrap_or_default();
     PyTypeError::new_err(format!("{repr} is not {what}"))
+}
+
+/// A path as Python's own file functions take it: str, bytes or os.PathLike, decoded
+/// by `os.fsdecode` (PyO3's `PathBuf` refuses bytes, although its message lists them).
+pub(crate) struct FsPath(pub(crate) PathBuf);
+
+impl<'a, 'py> FromPyObject<'a, 'py> for FsPath {
+    type Error = PyErr;
+
+    fn extract(obj: Borrowed<'a, 'py, PyAny>) -> PyResult<Self> {
+        let os = obj.py().import("os")?;
+        let decoded = os.call_method1("fsdecode", (obj,))?;
+        Ok(FsPath(decoded.extract()?))
+    }
 }
 
 /// The encoding of an image array, which the output keeps.

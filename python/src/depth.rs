@@ -2,12 +2,11 @@
 //! `brume render`'s depth flags as a keyword, and the loaders' messages and notes naming
 //! those keywords.
 
-use super::arrays::scalar_map_to_py;
+use super::arrays::{scalar_map_to_py, FsPath};
 use super::{keyword_of, py_err};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use std::path::PathBuf;
 
 /// load_depth(path, camera=None, format=None, *, kind=None, scale=None, calib=None,
 /// focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None,
@@ -32,12 +31,12 @@ use std::path::PathBuf;
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn load_depth<'py>(
     py: Python<'py>,
-    path: PathBuf,
-    camera: Option<PathBuf>,
+    path: FsPath,
+    camera: Option<FsPath>,
     format: Option<&str>,
     kind: Option<&str>,
     scale: Option<f64>,
-    calib: Option<PathBuf>,
+    calib: Option<FsPath>,
     focal_px: Option<f64>,
     baseline_mm: Option<f64>,
     disparity_offset_px: Option<f64>,
@@ -55,8 +54,8 @@ pub(crate) fn load_depth<'py>(
             .map(|k| k.parse::<DepthKind>())
             .transpose()
             .map_err(py_err)?,
-        calib,
-        camera,
+        calib: calib.map(|p| p.0),
+        camera: camera.map(|p| p.0),
         scale,
         focal: focal_px,
         baseline: baseline_mm,
@@ -67,7 +66,7 @@ pub(crate) fn load_depth<'py>(
         min_confidence,
     };
     let loaded = py
-        .detach(|| depth::load_range(&path, &opts))
+        .detach(|| depth::load_range(&path.0, &opts))
         .map_err(py_err)?;
     let notes: Vec<String> = (loaded.notes.iter())
         .map(|n| brume::error::rename_options(n, keyword_of))

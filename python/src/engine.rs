@@ -3,7 +3,7 @@
 //! colour and depth buffer, through `brume::medium`, `brume::camera` and
 //! `Headless::render_fog`, as `brume scene` builds them.
 
-use super::arrays::Colour;
+use super::arrays::{Colour, FsPath};
 use super::{dtype_name, on_default_renderer, py_err, value_error, GlThread, ImageIn, ImageOut};
 use brume::camera::{Camera, ClipDepth, FrameCamera, FrameInputs, MatrixCamera};
 use brume::medium::{
@@ -15,7 +15,6 @@ use glam::DMat4;
 use numpy::{PyArrayDescrMethods, PyReadonlyArray2, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
-use std::path::PathBuf;
 
 // ---------------------------------------------------------------------------------------
 // Cameras.
@@ -429,7 +428,7 @@ impl DistanceArgs<'_> {
                 Ok(s) if s == "generated" => generated()?,
                 _ if n.extract::<bool>().is_ok_and(|b| !b) => return Ok(None),
                 _ => {
-                    let path: PathBuf = n.extract().map_err(|_| {
+                    let FsPath(path) = n.extract().map_err(|_| {
                         value_error(format!(
                             "invalid noise = {}: expected 'generated' (or None), 'none' (or \
                              False) or the path of a greyscale PNG that tiles",
@@ -526,7 +525,7 @@ impl LayeredArgs<'_> {
 
 /// `table`: a CSV path or an Nx2 array of (height_m, extinction_per_m) rows.
 fn density_table(table: &Bound<'_, PyAny>) -> PyResult<DensityTable> {
-    if let Ok(path) = table.extract::<PathBuf>() {
+    if let Ok(FsPath(path)) = table.extract::<FsPath>() {
         return DensityTable::from_csv(&path).map_err(py_err);
     }
     let numpy = table.py().import("numpy")?;

@@ -23,7 +23,7 @@ mod engine;
 mod gl_thread;
 mod photo_fog;
 
-use arrays::{dtype_name, read_image, read_range, Colour, ImageIn, ImageOut};
+use arrays::{dtype_name, read_image, read_range, Colour, FsPath, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
 use gl_thread::GlThread;
 use photo_fog::{
@@ -33,7 +33,6 @@ use photo_fog::{
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use std::path::PathBuf;
 use std::sync::OnceLock;
 
 /// A call's results as Python gets them: a list when the density or turbidity was given
@@ -355,7 +354,7 @@ impl Renderer {
         horizon_zenith_deg: f64,
         horizon_sectors: i64,
         sun: Option<(f64, f64)>,
-        sensitivity: Option<PathBuf>,
+        sensitivity: Option<FsPath>,
         blur: bool,
         lambda_px: f64,
         sigma0: f64,
@@ -393,7 +392,7 @@ impl Renderer {
             horizon_zenith_deg,
             horizon_sectors,
             sun,
-            sensitivity,
+            sensitivity: sensitivity.map(|p| p.0),
             blur,
             lambda_px,
             sigma0,

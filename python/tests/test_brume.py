@@ -2,6 +2,7 @@
 errors, the augmentation's seeding, and equality with the `brume render` program."""
 
 import math
+import os
 import subprocess
 import warnings
 
@@ -458,6 +459,12 @@ def test_load_depth(tmp_path, range_m):
     assert set(info) == {"format", "kind", "units", "metric", "notes", "unknown_pixels"}
     with pytest.raises(OSError, match="missing.npy"):
         brume.load_depth(tmp_path / "missing.npy")
+    # A path as Python's file functions take it: str, os.PathLike or bytes.
+    for given in (str(path), os.fsencode(path)):
+        again, _ = brume.load_depth(given, format="float", kind="range")
+        np.testing.assert_array_equal(again, range_m)
+    with pytest.raises(TypeError, match="expected str, bytes or os.PathLike object, not int"):
+        brume.load_depth(3)
     # The loaders' errors name the keywords, here `format` (the library's `depth_format`).
     with pytest.raises(ValueError, match="invalid format = jpeg"):
         brume.load_depth(path, format="jpeg")
