@@ -3,6 +3,7 @@
 //! (pre-processing, refinement, the horizon's light from the sky, retargeting, the
 //! diffusion blur, the capture).
 
+use super::photo_fog::Labels;
 use super::{on_default_renderer, py_err, value_error, GlThread, ImageIn};
 use brume::atmosphere::Sensitivity;
 use brume::camera::Camera;
@@ -173,6 +174,25 @@ pub(crate) struct AerialInfo {
     sigma_max: f64,
 }
 
+impl Labels for AerialInfo {
+    fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let (w, h) = (self.clear.width(), self.clear.height());
+        let rgb = |v: Vec<f32>| {
+            Array3::from_shape_vec((h, w, 3), v)
+                .expect("shape")
+                .into_pyarray(py)
+        };
+        let clear = self.clear.into_vec().into_flattened();
+        let info = PyDict::new(py);
+        info.set_item("clear", rgb(clear))?;
+        info.set_item("transmittance", rgb(self.transmittance))?;
+        info.set_item("airlight", rgb(self.airlight))?;
+        info.set_item("turbidity", self.turbidity)?;
+        info.set_item("sigma_max_px", self.sigma_max)?;
+        Ok(info)
+    }
+}
+
 impl AerialInfo {
     /// The medium's τ and L∞ (A) at every pixel of `job` (its CPU side, which the GPU's
     /// `medium_sample` matches), top row first.
@@ -204,23 +224,6 @@ impl AerialInfo {
             turbidity: job.medium.table.turbidity(),
             sigma_max: job.medium.sigma_max(job.blur.sigma0),
         }
-    }
-
-    pub(crate) fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let (w, h) = (self.clear.width(), self.clear.height());
-        let rgb = |v: Vec<f32>| {
-            Array3::from_shape_vec((h, w, 3), v)
-                .expect("shape")
-                .into_pyarray(py)
-        };
-        let clear = self.clear.into_vec().into_flattened();
-        let info = PyDict::new(py);
-        info.set_item("clear", rgb(clear))?;
-        info.set_item("transmittance", rgb(self.transmittance))?;
-        info.set_item("airlight", rgb(self.airlight))?;
-        info.set_item("turbidity", self.turbidity)?;
-        info.set_item("sigma_max_px", self.sigma_max)?;
-        Ok(info)
     }
 }
 

@@ -27,27 +27,13 @@ use arrays::{dtype_name, read_image, read_range, Colour, FsPath, ImageIn, ImageO
 use brume::photo::BetaDistribution;
 use gl_thread::GlThread;
 use photo_fog::{
-    capture_request, check_outputs_fit, fog_frame, fog_request, prepare_request, set_masks,
-    with_info, Densities, Density,
+    capture_request, check_outputs_fit, fog_frame, fog_request, outputs_to_py, prepare_request,
+    set_masks, Densities, Density,
 };
 use pyo3::exceptions::{PyMemoryError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyTuple};
+use pyo3::types::{PyDict, PyTuple};
 use std::sync::OnceLock;
-
-/// A call's results as Python gets them: a list when the density or turbidity was given
-/// as a sequence (`many`), else the one result.
-fn one_or_list(
-    py: Python<'_>,
-    mut results: impl Iterator<Item = PyResult<Py<PyAny>>>,
-    many: bool,
-) -> PyResult<Py<PyAny>> {
-    if many {
-        let list = results.collect::<PyResult<Vec<_>>>()?;
-        return Ok(PyList::new(py, list)?.into_any().unbind());
-    }
-    results.next().expect("one value, one output")
-}
 
 /// brume's errors as Python's: bad values and files as `ValueError`, files that cannot be
 /// read as `OSError`, memory as `MemoryError`, the GL and EGL as `RuntimeError`; brume's
@@ -172,14 +158,7 @@ impl Renderer {
             let encode = |(rendered, info)| (ImageOut::encode(&rendered, pixels), info);
             Ok::<_, PyErr>(frames.into_iter().map(encode).collect::<Vec<_>>())
         })?;
-        let results = outputs.into_iter().map(|(out, info)| {
-            with_info(
-                py,
-                out.into_py(py),
-                info.map(|i| i.into_py(py)).transpose()?,
-            )
-        });
-        one_or_list(py, results, many)
+        outputs_to_py(py, outputs, many)
     }
 
     /// distance_fog(image, depth, *, camera, time=0.0, start_distance=None, distance=None,
@@ -420,14 +399,7 @@ impl Renderer {
             let encode = |(rendered, info)| (ImageOut::encode(&rendered, pixels), info);
             Ok::<_, PyErr>(frames.into_iter().map(encode).collect::<Vec<_>>())
         })?;
-        let results = outputs.into_iter().map(|(out, info)| {
-            with_info(
-                py,
-                out.into_py(py),
-                info.map(|i| i.into_py(py)).transpose()?,
-            )
-        });
-        one_or_list(py, results, turbidity.many())
+        outputs_to_py(py, outputs, turbidity.many())
     }
 
     /// GL_RENDERER of the context, e.g. 'llvmpipe (LLVM 15.0.6, 256 bits)'.

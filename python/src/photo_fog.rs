@@ -2,21 +2,21 @@
 //! the calling thread, refinement and fog on the GL thread, the capture after it), the
 //! keywords checked into brume's options, and `return_info`'s labels.
 
-use super::arrays::{not_numbers, numbers, read_mask, scalar_map_to_py, Colour};
+use super::arrays::{not_numbers, numbers, read_mask, scalar_map_to_py, Colour, ImageOut};
 use super::gl_thread::GlThread;
 use super::{py_err, value_error};
 use brume::compat;
 use brume::io::image::srgb_to_linear;
-use brume::medium::haze::Haze;
 use brume::medium::physical::{self, VISIBILITY_OPTICAL_DEPTH};
 use brume::photo::{
-    self, CaptureOptions, Conventions, Extinction, FogOptions, Photo, PrepareOptions, PreparedPhoto,
+    self, CaptureOptions, Conventions, Extinction, FogOptions, FoggedPhoto, Photo, PrepareOptions,
+    PreparedPhoto,
 };
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::refine::RefineMode;
 use brume::Headless;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 
 /// `brume.fog`'s keywords, checked, as brume's options: one fog per output, from one
 /// pre-processing.
@@ -94,16 +94,34 @@ pub(crate) fn prepare_request(
     Ok(prepare)
 }
 
-/// A render's result as Python gets it: the image, or `(image, info)` with `return_info`.
-pub(crate) fn with_info(
+/// `return_info`'s labels of one output, as the dict Python gets.
+pub(crate) trait Labels {
+    fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>>;
+}
+
+/// A call's outputs as Python gets them: each the image, or `(image, info)` with
+/// `return_info`; a list when the density or turbidity was given as a sequence (`many`),
+/// else the one output.
+pub(crate) fn outputs_to_py<L: Labels>(
     py: Python<'_>,
-    image: Py<PyAny>,
-    info: Option<Bound<'_, PyDict>>,
+    outputs: Vec<(ImageOut, Option<L>)>,
+    many: bool,
 ) -> PyResult<Py<PyAny>> {
-    match info {
-        Some(info) => Ok((image, info).into_pyobject(py)?.into_any().unbind()),
-        None => Ok(image),
+    let mut results = outputs.into_iter().map(|(image, info)| {
+        let image = image.into_py(py);
+        match info {
+            Some(info) => Ok((image, info.into_py(py)?)
+                .into_pyobject(py)?
+                .into_any()
+                .unbind()),
+            None => Ok(image),
+        }
+    });
+    if many {
+        let list = results.collect::<PyResult<Vec<_>>>()?;
+        return Ok(PyList::new(py, list)?.into_any().unbind());
     }
+    results.next().expect("one value, one output")
 }
 
 /// The `sky_mask` and `ego_mask` keywords, read on `range`'s grid, into `prepare`.
@@ -339,20 +357,11 @@ pub(crate) fn fog_request(
     })
 }
 
-/// What the GL thread hands back for one frame: the prepared photo and its outputs.
+/// What the GL thread hands back for one frame: the prepared photo and each fog (its
+/// image, and what the labels of `return_info` are made from).
 struct GpuFog {
     prepared: PreparedPhoto,
-    outputs: Vec<GpuOutput>,
-}
-
-/// One output's image, and what the labels of `return_info` are made from.
-struct GpuOutput {
-    image: RgbaImage,
-    haze: Haze,
-    /// The range the haze read and the range that counts as 1 ([`photo::FoggedPhoto`]).
-    range: ScalarMap,
-    range_divisor: f64,
-    sigma_max: f64,
+    outputs: Vec<FoggedPhoto>,
 }
 
 /// The GPU's share of one frame, on the GL thread: the refinement of the pre-processed
@@ -367,13 +376,7 @@ fn fog_on_gpu(
     let mut outputs = Vec::with_capacity(request.fogs.len());
     let renderer = headless.renderer()?;
     photo::fog_each(renderer, photo, &prepared, &request.fogs, |_, fogged| {
-        outputs.push(GpuOutput {
-            image: fogged.rendered.image,
-            haze: fogged.haze,
-            range: fogged.range,
-            range_divisor: fogged.range_divisor,
-            sigma_max: fogged.rendered.schedule.sigma_max,
-        });
+        outputs.push(fogged);
         Ok(())
     })?;
     Ok(GpuFog { prepared, outputs })
@@ -395,16 +398,30 @@ pub(crate) struct FogInfo {
     sigma_max: f64,
 }
 
+impl Labels for FogInfo {
+    fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let info = PyDict::new(py);
+        info.set_item("transmittance", scalar_map_to_py(py, self.transmittance))?;
+        info.set_item("range_m", scalar_map_to_py(py, self.range_m))?;
+        info.set_item("airlight", self.airlight.map(f64::from).to_vec())?;
+        info.set_item("airlight_source", self.airlight_source)?;
+        info.set_item("beta", self.beta)?;
+        info.set_item("visibility_m", self.visibility_m)?;
+        info.set_item("sigma_max_px", self.sigma_max)?;
+        Ok(info)
+    }
+}
+
 impl FogInfo {
     /// The labels of a frame fogged with `opts`. With normalised κa and κs the range
     /// stays in the caller's units, and β is (κa + κs) per largest range.
-    fn of(prepared: &PreparedPhoto, gpu: &GpuOutput, opts: &FogOptions) -> FogInfo {
-        let transmittance = photo::transmittance_map(&gpu.haze, &gpu.range);
-        let divisor = gpu.range_divisor;
+    fn of(prepared: &PreparedPhoto, fogged: &FoggedPhoto, opts: &FogOptions) -> FogInfo {
+        let transmittance = fogged.transmittance();
+        let divisor = fogged.range_divisor;
         let (range, beta) = match opts.extinction {
-            Extinction::Physical(fog) => (gpu.range.clone(), fog.beta),
+            Extinction::Physical(fog) => (fogged.range.clone(), fog.beta),
             Extinction::Normalised { ka, ks } => (
-                gpu.range.map(|&r| (f64::from(r) * divisor) as f32),
+                fogged.range.map(|&r| (f64::from(r) * divisor) as f32),
                 (ka + ks) / divisor,
             ),
         };
@@ -415,20 +432,8 @@ impl FogInfo {
             airlight_source: prepared.airlight_from.name(),
             beta,
             visibility_m: VISIBILITY_OPTICAL_DEPTH / beta,
-            sigma_max: gpu.sigma_max,
+            sigma_max: fogged.rendered.schedule.sigma_max,
         }
-    }
-
-    pub(crate) fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let info = PyDict::new(py);
-        info.set_item("transmittance", scalar_map_to_py(py, self.transmittance))?;
-        info.set_item("range_m", scalar_map_to_py(py, self.range_m))?;
-        info.set_item("airlight", self.airlight.map(f64::from).to_vec())?;
-        info.set_item("airlight_source", self.airlight_source)?;
-        info.set_item("beta", self.beta)?;
-        info.set_item("visibility_m", self.visibility_m)?;
-        info.set_item("sigma_max_px", self.sigma_max)?;
-        Ok(info)
     }
 }
 
@@ -455,10 +460,11 @@ pub(crate) fn fog_frame(
     outputs
         .into_iter()
         .zip(&fogs)
-        .map(|(mut out, fog)| {
-            let info = want_info.then(|| FogInfo::of(&prepared, &out, fog));
-            photo::capture(&mut out.image, &capture).map_err(py_err)?;
-            Ok((out.image, info))
+        .map(|(mut fogged, fog)| {
+            let info = want_info.then(|| FogInfo::of(&prepared, &fogged, fog));
+            let image = &mut fogged.rendered.image;
+            photo::capture(image, &capture).map_err(py_err)?;
+            Ok((fogged.rendered.image, info))
         })
         .collect()
 }
