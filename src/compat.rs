@@ -132,7 +132,7 @@ fn floor_of(max_code: f32) -> f32 {
 /// Reads a transmittance map (8- or 16-bit grey PNG; an RGB one must be grey), as the
 /// optical depth −ln t per pixel (row 0 at the top), for brume's fog at β = 1.
 pub fn load_optical_depth(path: &Path) -> Result<ScalarMap> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     decode_optical_depth(&bytes, &path.display().to_string())
 }
 

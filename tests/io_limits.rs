@@ -225,3 +225,51 @@ fn images_at_the_side_limit_still_load() {
     let d = load_range(&p, &float_opts()).unwrap();
     assert_eq!((d.range.width(), d.range.height()), (MAX_SIDE, 1));
 }
+
+// A file far larger than any image brume takes was read whole (40 GB asked of the
+// allocator: "out of memory", or the OOM killer), and a stream that never ends
+// (`--image /dev/zero`) was read until memory ran out. A regular file is now refused from
+// its size, before anything is read; a stream is read only as far as the limit (the
+// unit test in `io::limits` covers that with a small limit).
+#[test]
+fn an_input_larger_than_any_image_is_refused_from_its_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let depth = dir.path().join("d.png");
+    // Sparse: no disk space and no read needed.
+    let huge = brume::io::limits::MAX_FILE_BYTES + 1;
+    std::fs::File::create(&depth)
+        .unwrap()
+        .set_len(huge)
+        .unwrap();
+    let err = brume::io::limits::read_file(&depth)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains(&format!("({huge} bytes)")), "{err}");
+
+    let image = write(dir.path(), "im.png", &[]);
+    ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
+        .save(&image)
+        .unwrap();
+    let out = dir.path().join("out.png");
+    let run = common::brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            image.to_str().unwrap(),
+            "--depth",
+            depth.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    );
+    let err = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("d.png")
+            && err.contains("larger than any input brume takes")
+            && err.contains(&brume::io::limits::MAX_FILE_BYTES.to_string()),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

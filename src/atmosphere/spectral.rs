@@ -225,7 +225,7 @@ impl Sensitivity {
     /// respond positively to a flat spectrum. Errors name the file, the line and the value.
     pub fn from_csv(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::io::limits::read_text(path)?;
         Self::parse_csv(&text, path)
     }
 

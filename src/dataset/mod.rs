@@ -294,7 +294,7 @@ fn swap_component(path: &Path, from: &str, to: &str) -> Option<PathBuf> {
 /// row per frame. Relative paths are relative to the manifest's folder; outputs mirror
 /// the images' folders relative to it. See [`parse_manifest`].
 pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::io::limits::read_text(path)?;
     parse_manifest(&text, path)
 }
 

@@ -155,7 +155,7 @@ const COLOUR_FORMATS: &str =
 /// module docs for the EXR channels read and for NaN and negative values). Errors name the
 /// file; sizes beyond `io::limits` are refused before the pixels are allocated.
 pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     decode_linear_rgb(&bytes, &path.display().to_string())
 }
 

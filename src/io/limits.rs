@@ -1,7 +1,12 @@
 //! The largest image any reader accepts, checked on the size a file's header claims before
 //! anything is allocated for its pixels, so that a few hundred hostile bytes cannot make
-//! the process ask for gigabytes (and abort when the allocator refuses).
+//! the process ask for gigabytes (and abort when the allocator refuses); and the most bytes
+//! read from one input file, so that a path that never ends (`/dev/zero`, a pipe) or a
+//! file far larger than any image brume takes is refused instead of read until memory
+//! runs out.
 
+use std::fs::File;
+use std::io::Read;
 use std::path::Path;
 
 use crate::{Error, Result};
@@ -41,6 +46,69 @@ pub fn check_size(path: &Path, what: &str, width: u64, height: u64) -> Result<()
     Ok(())
 }
 
+/// Most bytes read from one binary input (image, depth, mask, noise): [`MAX_PIXELS`] at
+/// 32 bytes each (four 64-bit samples, the widest pixel a reader takes, a float64 RGBA
+/// TIFF) and 1 MiB for headers, about 2.1 GB.
+pub const MAX_FILE_BYTES: u64 = MAX_PIXELS as u64 * 32 + (1 << 20);
+
+/// Most bytes read from one text input (tables, calibration, camera files, manifests):
+/// 256 MiB (268 MB), a manifest of more than a million frames.
+pub const MAX_TEXT_BYTES: u64 = 256 << 20;
+
+/// Reads the whole of the input file `path`, at most [`MAX_FILE_BYTES`]. A larger file is
+/// refused from its size before anything is read; a path that is not a regular file (a
+/// pipe, a device) is read until the limit and refused beyond it.
+pub fn read_file(path: &Path) -> Result<Vec<u8>> {
+    read_at_most(path, MAX_FILE_BYTES, "an input file")
+}
+
+/// Reads the whole of the text file `path` (UTF-8), at most [`MAX_TEXT_BYTES`], as
+/// [`read_file`] does.
+pub fn read_text(path: &Path) -> Result<String> {
+    let bytes = read_at_most(path, MAX_TEXT_BYTES, "a text file")?;
+    String::from_utf8(bytes).map_err(|e| {
+        Error::format(
+            path,
+            format!(
+                "not UTF-8 text (byte {} is not valid UTF-8); expected a text file",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
+}
+
+fn read_at_most(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
+    let most = format!("{} ({limit} bytes)", crate::memory::human(limit));
+    let mut file = File::open(path).map_err(|e| Error::io(path, e))?;
+    let meta = file.metadata().map_err(|e| Error::io(path, e))?;
+    if meta.is_file() && meta.len() > limit {
+        let len = meta.len();
+        return Err(Error::format(
+            path,
+            format!(
+                "{} ({len} bytes), larger than any input brume takes; expected {what} of at \
+                 most {most}",
+                crate::memory::human(len)
+            ),
+        ));
+    }
+    let mut bytes = Vec::new();
+    (&mut file)
+        .take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| Error::io(path, e))?;
+    if bytes.len() as u64 > limit {
+        return Err(Error::format(
+            path,
+            format!(
+                "not a regular file, and it went on past {most}; expected {what} that ends \
+                 within that"
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -61,5 +129,28 @@ mod tests {
             .to_string();
         assert!(e.contains("268435456") && e.contains("67108864"), "{e}");
         assert!(check_size(p, "NPY", u64::MAX, u64::MAX).is_err());
+    }
+
+    #[test]
+    fn reads_stop_at_the_limit_for_files_and_for_streams() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("d.png");
+        std::fs::write(&file, [7u8; 1000]).unwrap();
+        assert_eq!(read_at_most(&file, 1000, "a file").unwrap().len(), 1000);
+        let e = read_at_most(&file, 999, "a file").unwrap_err().to_string();
+        assert!(
+            e.contains("d.png") && e.contains("(1000 bytes)") && e.contains("999 bytes"),
+            "{e}"
+        );
+        // A stream has no size to refuse up front: it is read only as far as the limit.
+        let zero = Path::new("/dev/zero");
+        let e = read_at_most(zero, 4096, "a file").unwrap_err().to_string();
+        assert!(
+            e.contains("/dev/zero") && e.contains("not a regular file") && e.contains("4096"),
+            "{e}"
+        );
+        std::fs::write(&file, b"ok\n\xff").unwrap();
+        let e = read_text(&file).unwrap_err().to_string();
+        assert!(e.contains("byte 3") && e.contains("UTF-8"), "{e}");
     }
 }

@@ -123,7 +123,7 @@ pub fn load_sky_mask(
     path: &Path,
     format: Option<SkyMaskFormat>,
 ) -> Result<(Grid<bool>, SkyMaskFormat)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     let format = format.unwrap_or_else(|| SkyMaskFormat::from_file_name(path));
     let mask = decode_sky_mask(&bytes, &path.display().to_string(), format)?;
     Ok((mask, format))
@@ -224,7 +224,7 @@ pub fn load_ego_mask(
     path: &Path,
     format: Option<SkyMaskFormat>,
 ) -> Result<(Grid<bool>, SkyMaskFormat)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     let format = format.unwrap_or_else(|| SkyMaskFormat::from_file_name(path));
     let mask = decode_ego_mask(&bytes, &path.display().to_string(), format)?;
     Ok((mask, format))

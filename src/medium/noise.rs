@@ -211,7 +211,7 @@ fn perlin(perm: &[u8; TABLE], period: usize, u: f64, v: f64) -> f64 {
 /// channel is used, as paper 001's listing reads `.x`. The image's top row becomes texture
 /// row 0 (v = 0). Errors name the file and say what was expected.
 pub fn load_png(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     const SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
     if !bytes.starts_with(&SIGNATURE) {
         return Err(Error::format(

@@ -239,7 +239,7 @@ fn is_depth_channel(full: &str) -> bool {
 #[cfg(feature = "codecs")]
 fn read_object_exr(path: &Path, want_depth: bool) -> Result<(RgbaImage, Option<ScalarMap>)> {
     use crate::io::codec::exr::{parse_exr_channel, parse_exr_rgb};
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     if !bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
         return Err(Error::format(
             path,

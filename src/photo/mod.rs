@@ -220,7 +220,7 @@ impl Photo {
                  disparity in pixels)",
             ));
         }
-        let bytes = std::fs::read(depth_path).map_err(|e| Error::io(depth_path, e))?;
+        let bytes = crate::io::limits::read_file(depth_path)?;
         let raw = image::decode_any(&bytes, &depth_path.display().to_string())?.to_luma16();
         let disparity = crate::raster::Grid::from_vec(
             raw.width() as usize,

@@ -30,7 +30,7 @@ use crate::{Error, Result};
 /// Reads a one-channel float map from an OpenEXR file; the channel is chosen by
 /// [`DEPTH_CHANNEL_ORDER`].
 pub fn read_exr_scalar(path: &Path) -> Result<ScalarMap> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     parse_exr_scalar(&bytes, path)
 }
 

@@ -10,7 +10,7 @@ use crate::{Error, Result};
 /// Reads a 2-D (or `h x w x 1`) float32 or float64 NumPy `.npy` array, C or Fortran order,
 /// no larger than `io::limits` allows.
 pub fn read_npy_scalar(path: &Path) -> Result<ScalarMap> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     parse_npy_scalar(&bytes, path)
 }
 

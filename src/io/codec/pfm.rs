@@ -20,7 +20,7 @@ pub enum Pfm {
 
 /// Reads a PFM file (`Pf` or `PF`, either byte order).
 pub fn read_pfm(path: &Path) -> Result<Pfm> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     parse_pfm(&bytes, path)
 }
 

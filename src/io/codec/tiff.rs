@@ -10,7 +10,7 @@ use crate::{Error, Result};
 
 /// Reads a one-channel 32- or 64-bit float TIFF no larger than `io::limits` allows.
 pub fn read_tiff_scalar(path: &Path) -> Result<ScalarMap> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     parse_tiff_scalar(&bytes, path)
 }
 

@@ -72,7 +72,7 @@ pub fn disparity_px(p: u16) -> Option<f64> {
 
 /// Reads and checks a Cityscapes camera file.
 pub fn parse_camera(path: &Path) -> Result<CityscapesCamera> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::io::limits::read_text(path)?;
     parse_camera_str(&text, path)
 }
 

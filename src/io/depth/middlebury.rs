@@ -64,7 +64,7 @@ impl Calib {
 
 /// Reads and checks a Middlebury 2014 `calib.txt`.
 pub fn parse_calib(path: &Path) -> Result<Calib> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = crate::io::limits::read_text(path)?;
     parse_calib_str(&text, path)
 }
 

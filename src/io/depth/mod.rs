@@ -256,7 +256,7 @@ fn finite_option(value: f64, name: &str) -> Result<f64> {
 /// Loads a depth, range or disparity file and returns a range map with NaN for unknown
 /// pixels. See [`DepthFormat`] for the layouts and [`DepthOptions`] for the knobs.
 pub fn load_range(path: &Path, opts: &DepthOptions) -> Result<LoadedDepth> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bytes = crate::io::limits::read_file(path)?;
     let ext = extension_of(path);
     let calib = read_side_file(middlebury::calib_file(path, &ext, opts))?;
     let camera = read_side_file(cityscapes::camera_file(path, &ext, opts)?)?;
@@ -272,7 +272,7 @@ fn side(file: &Option<(PathBuf, String)>) -> Option<(&Path, &str)> {
 fn read_side_file(path: Option<PathBuf>) -> Result<Option<(PathBuf, String)>> {
     match path {
         Some(p) => {
-            let text = std::fs::read_to_string(&p).map_err(|e| Error::io(&p, e))?;
+            let text = crate::io::limits::read_text(&p)?;
             Ok(Some((p, text)))
         }
         None => Ok(None),

@@ -13,7 +13,7 @@ impl DensityTable {
     /// A table from a CSV file (module docs of `layered::csv`): `height_m,extinction_per_m`.
     pub fn from_csv(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::io::limits::read_text(path)?;
         Self::parse_csv(&text, path)
     }
 
