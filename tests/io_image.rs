@@ -77,6 +77,76 @@ fn jpeg_decodes() {
     assert!((img.get(8, 8)[1] - want).abs() < 0.02);
 }
 
+/// A little-endian EXIF (TIFF) block holding one entry: orientation `value`.
+fn exif_orientation(value: u16) -> Vec<u8> {
+    let mut b = b"II*\0".to_vec();
+    b.extend(8u32.to_le_bytes()); // the first IFD
+    b.extend(1u16.to_le_bytes()); // one entry
+    b.extend(0x0112u16.to_le_bytes()); // Orientation
+    b.extend(3u16.to_le_bytes()); // SHORT
+    b.extend(1u32.to_le_bytes()); // one value, held in the entry
+    b.extend(u32::from(value).to_le_bytes());
+    b.extend(0u32.to_le_bytes()); // no next IFD
+    b
+}
+
+// A phone photo taken upright is stored sideways with an orientation tag. brume fogs the
+// pixels as stored (the depth map has no tag), which is right, but said nothing: the
+// output came out sideways to a user whose viewer showed the input upright.
+#[test]
+fn a_jpeg_orientation_is_not_applied_and_the_render_says_so() {
+    use image::ImageEncoder;
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("phone.jpg");
+    let (w, h) = (24u32, 16u32);
+    let mut bytes = Vec::new();
+    let mut jpeg = image::codecs::jpeg::JpegEncoder::new(&mut bytes);
+    jpeg.set_exif_metadata(exif_orientation(6)).unwrap();
+    jpeg.write_image(
+        &vec![150u8; (w * h * 3) as usize],
+        w,
+        h,
+        image::ExtendedColorType::Rgb8,
+    )
+    .unwrap();
+    std::fs::write(&image, &bytes).unwrap();
+    let img = load_linear_rgb(&image).unwrap();
+    assert_eq!((img.width(), img.height()), (24, 16), "read as stored");
+
+    let depth = dir.path().join("d.png");
+    image::GrayImage::from_pixel(w, h, image::Luma([100]))
+        .save(&depth)
+        .unwrap();
+    let out = dir.path().join("out.png");
+    let args = [
+        "render",
+        "--image",
+        "phone.jpg",
+        "--depth",
+        "d.png",
+        "--out",
+        "out.png",
+    ];
+    let run = common::brume(dir.path(), &args);
+    let err = common::stderr(&run);
+    assert!(run.status.success(), "{err}");
+    assert!(
+        err.contains(
+            "phone.jpg: its EXIF orientation (viewers show it turned 90° clockwise) is not applied"
+        ),
+        "{err}"
+    );
+    assert_eq!(image::image_dimensions(&out).unwrap(), (24, 16));
+
+    // Without the tag, nothing is said.
+    image::RgbImage::from_pixel(w, h, image::Rgb([150, 150, 150]))
+        .save(&image)
+        .unwrap();
+    let run = common::brume(dir.path(), &args);
+    assert!(run.status.success());
+    assert!(!common::stderr(&run).contains("orientation"));
+}
+
 /// Expects an error without printing the (large) image if there is none.
 fn expect_err<T>(r: brume::Result<T>) -> Error {
     match r {

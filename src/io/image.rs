@@ -19,6 +19,7 @@
 
 use std::path::Path;
 
+use image::metadata::Orientation;
 use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 
 use crate::io::codec::exr::parse_exr_rgb;
@@ -297,7 +298,8 @@ fn decode_image(bytes: &[u8], name: &str, expected: &str) -> Result<DynamicImage
         )
     };
     // The size is checked from the header, before the pixel buffer is allocated.
-    let decoder = reader.into_decoder().map_err(cannot)?;
+    let mut decoder = reader.into_decoder().map_err(cannot)?;
+    warn_if_oriented(decoder.orientation(), name);
     let (w, h) = decoder.dimensions();
     check_size(
         Path::new(name),
@@ -313,6 +315,28 @@ fn decode_image(bytes: &[u8], name: &str, expected: &str) -> Result<DynamicImage
         .reserve(decoder.total_bytes())
         .map_err(cannot)?;
     DynamicImage::from_decoder(decoder).map_err(cannot)
+}
+
+/// Says that a file's EXIF orientation is not applied (see the module docs): a phone photo
+/// taken upright is stored sideways with a tag that viewers apply, so its fogged output,
+/// written as stored, would otherwise come out sideways without a word. An orientation
+/// that cannot be read is no orientation, as for a viewer.
+fn warn_if_oriented(orientation: image::ImageResult<Orientation>, name: &str) {
+    let shown = match orientation {
+        Ok(Orientation::NoTransforms) | Err(_) => return,
+        Ok(Orientation::Rotate90) => "turned 90° clockwise",
+        Ok(Orientation::Rotate180) => "turned 180°",
+        Ok(Orientation::Rotate270) => "turned 90° anticlockwise",
+        Ok(Orientation::FlipHorizontal) => "mirrored left to right",
+        Ok(Orientation::FlipVertical) => "mirrored top to bottom",
+        Ok(Orientation::Rotate90FlipH) => "turned 90° clockwise and mirrored",
+        Ok(Orientation::Rotate270FlipH) => "turned 90° anticlockwise and mirrored",
+    };
+    log::warn!(
+        "{name}: its EXIF orientation (viewers show it {shown}) is not applied: brume reads \
+         and writes the pixels as stored, aligned with the depth map, so the output shows \
+         as stored"
+    );
 }
 
 /// Refuses a PNG whose palette (`PLTE` chunk) is not whole RGB entries of 3 bytes, as the
