@@ -61,8 +61,9 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
             progress.inc(outputs as u64);
         }
     };
-    let report = batch.run(renderer, &observe)?;
+    let report = batch.run(renderer, &observe);
     progress.finish_and_clear();
+    let report = report?;
     print_summary(&report);
     report.check()
 }

@@ -21,18 +21,17 @@
 //! ```
 
 use super::destinations::{check_destinations, check_sky_mask_size};
+use super::writer::{write_outputs, Encode, Event, Log};
 use super::{find_cityscapes, read_manifest, Item, Shard};
 use crate::blur::Blur;
 use crate::error::{Error, Result};
 use crate::io::output::{self, Outputs};
 use crate::medium::Medium;
 use crate::photo::{
-    capture, transmittance_rgb8, BetaDistribution, CaptureOptions, Frame, FrameFog, FrameOptions,
+    transmittance_rgb8, BetaDistribution, CaptureOptions, Frame, FrameFog, FrameOptions,
 };
-use crate::raster::RgbaImage;
 use crate::renderer::Renderer;
 use serde_json::json;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
 use std::time::Instant;
@@ -105,9 +104,9 @@ pub fn check_beta(beta: f64) -> Result<()> {
 }
 
 /// A frame that could not be loaded or rendered.
-struct Failed {
-    item: Item,
-    error: Error,
+pub(super) struct Failed {
+    pub(super) item: Item,
+    pub(super) error: Error,
 }
 
 /// A batch checked and ready to run: its options, the frames of its shard with the β
@@ -513,24 +512,6 @@ fn load_frames(
     }
 }
 
-/// One output for the writer thread.
-struct Encode {
-    path: PathBuf,
-    image: RgbaImage,
-    transmittance: Option<(PathBuf, Vec<[u8; 3]>, usize, usize)>,
-    record: serde_json::Value,
-    /// The capture after the fog, seeded for this output (applied on the writer thread).
-    capture: CaptureOptions,
-}
-
-/// What the GPU loop hands the writer thread.
-enum Event {
-    /// An output to encode and write.
-    Output(Encode),
-    /// A frame that failed, with the number of its outputs that will not be written.
-    FrameFailed { failed: Failed, outputs: usize },
-}
-
 /// The GPU's side of a run: the options, the channel to the writer thread, and the
 /// times it adds up (the loader's and its own).
 struct Gpu<'a> {
@@ -672,95 +653,5 @@ fn encode(
         transmittance,
         record,
         capture,
-    }
-}
-
-/// The writer thread: captures, encodes and writes each output atomically, and logs it
-/// as soon as it is in place.
-fn write_outputs(rx: Receiver<Event>, mut log: Log) -> Result<Log> {
-    for event in rx {
-        match event {
-            Event::Output(mut job) => {
-                let t = Instant::now();
-                let result = capture(&mut job.image, &job.capture)
-                    .and_then(|_| write_one(&job, log.observe));
-                log.report.encode_ms += t.elapsed().as_secs_f64() * 1e3;
-                log.output(&job.path, job.record, result)?;
-            }
-            Event::FrameFailed { failed, outputs } => log.frame_failed(&failed, outputs)?,
-        }
-    }
-    Ok(log)
-}
-
-fn write_one(job: &Encode, observe: &(dyn Fn(BatchEvent) + Sync)) -> Result<()> {
-    if let Some(dir) = job.path.parent() {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
-    let mut outputs = Outputs::new();
-    outputs.stage_rgba(&job.path, &job.image)?;
-    if let Some((path, rgb, w, h)) = &job.transmittance {
-        outputs.stage_png_rgb8(path, *w, *h, rgb)?;
-    }
-    observe(BatchEvent::Staged { outputs: &outputs });
-    outputs.commit()
-}
-
-/// The run's JSON-lines log and its counts: one line per output, written (in one
-/// `write`, on a file opened for appending, so that shards sharing nothing but the folder
-/// never interleave) as soon as the output is in place or has failed.
-struct Log<'a> {
-    file: std::fs::File,
-    path: PathBuf,
-    observe: &'a (dyn Fn(BatchEvent) + Sync),
-    report: BatchReport,
-}
-
-impl Log<'_> {
-    fn output(
-        &mut self,
-        output: &Path,
-        mut record: serde_json::Value,
-        result: Result<()>,
-    ) -> Result<()> {
-        if let Err(error) = &result {
-            record["status"] = json!("failed");
-            record["error"] = json!(error.to_string());
-        }
-        self.append(&record)?;
-        match &result {
-            Ok(()) => self.report.written += 1,
-            Err(_) => self.report.failed_outputs += 1,
-        }
-        (self.observe)(match &result {
-            Ok(()) => BatchEvent::Written { output },
-            Err(error) => BatchEvent::OutputFailed { output, error },
-        });
-        Ok(())
-    }
-
-    /// A frame that could not be loaded or rendered; `outputs` of it are not written.
-    fn frame_failed(&mut self, failed: &Failed, outputs: usize) -> Result<()> {
-        let (item, error) = (&failed.item, &failed.error);
-        self.append(&json!({
-            "status": "failed",
-            "image": item.image.display().to_string(),
-            "error": error.to_string(),
-        }))?;
-        self.report.failed_frames += 1;
-        (self.observe)(BatchEvent::FrameFailed {
-            image: &item.image,
-            error,
-            outputs,
-        });
-        Ok(())
-    }
-
-    fn append(&mut self, record: &serde_json::Value) -> Result<()> {
-        let line = format!("{record}\n");
-        self.file
-            .write_all(line.as_bytes())
-            .and_then(|()| self.file.flush())
-            .map_err(|e| Error::io(&self.path, e))
     }
 }

@@ -4,6 +4,7 @@
 
 mod batch;
 mod destinations;
+mod writer;
 
 pub use batch::{
     check_beta, Batch, BatchEvent, BatchOptions, BatchReport, Betas, MAX_BETA, MIN_BETA,

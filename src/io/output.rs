@@ -420,6 +420,26 @@ fn process_runs(pid: u32) -> bool {
     }
 }
 
+/// Whether `e` is a write refused because the device or the user's disk quota is full
+/// (`ENOSPC`, `EDQUOT`), also when an encoder wrapped the OS error in its own: every later
+/// write to that device fails too, so a long run should stop rather than go on.
+pub fn is_out_of_space(e: &Error) -> bool {
+    use std::io::ErrorKind::{QuotaExceeded, StorageFull};
+    let Error::Io { source, .. } = e else {
+        return false;
+    };
+    let mut io: &std::io::Error = source;
+    loop {
+        if matches!(io.kind(), StorageFull | QuotaExceeded) {
+            return true;
+        }
+        match io.get_ref().and_then(|inner| inner.downcast_ref()) {
+            Some(inner) => io = inner,
+            None => return false,
+        }
+    }
+}
+
 /// Removes, under `dir` and its sub-folders, the temporary outputs that killed brume
 /// processes left (see [`is_stale_temporary`]); returns how many. Links are not followed.
 pub fn remove_stale_temporaries(dir: &Path) -> Result<usize> {

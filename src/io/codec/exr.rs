@@ -520,7 +520,11 @@ fn write_exr<const N: usize>(
     Image::from_layer(layer)
         .write()
         .to_buffered(out)
-        .map_err(|e| std::io::Error::other(format!("OpenEXR encoder: {e}")))
+        .map_err(|e| match e {
+            // The OS error as it is: a full disk must stay a full disk (`is_out_of_space`).
+            exr::error::Error::Io(io) => io,
+            e => std::io::Error::other(format!("OpenEXR encoder: {e}")),
+        })
 }
 
 /// Reads the first channel (in [`Channels`] order) whose full name (`part.layer.leaf`)

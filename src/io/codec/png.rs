@@ -49,9 +49,14 @@ fn first_channel<T: image::Primitive>(img: image::ImageBuffer<image::LumaA<T>, V
 }
 
 /// Encodes `bytes`, `w * h` RGB pixels of 8 bits each, row 0 at the top.
-pub(crate) fn write_rgb8(out: impl Write, bytes: &[u8], w: u32, h: u32) -> std::io::Result<()> {
+pub(crate) fn write_rgb8(mut out: impl Write, bytes: &[u8], w: u32, h: u32) -> std::io::Result<()> {
     use image::ImageEncoder;
-    image::codecs::png::PngEncoder::new(out)
+    // Encoded in memory, then written: the png crate turns the OS's errors into text
+    // ("No space left on device (os error 28)" of kind `Other`), and a full disk must
+    // stay a full disk for a long run to stop on it (`output::is_out_of_space`).
+    let mut png = Vec::new();
+    image::codecs::png::PngEncoder::new(&mut png)
         .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| std::io::Error::other(e.to_string()))
+        .map_err(|e| std::io::Error::other(e.to_string()))?;
+    out.write_all(&png)
 }
