@@ -139,6 +139,45 @@ fn unknown_extension_is_an_error_and_creates_nothing() {
     assert!(entries(dir.path()).is_empty());
 }
 
+// A rename replaces its destination whatever the destination's mode, so a file its owner
+// made read-only to keep it was replaced by `--out` like any other.
+#[test]
+fn a_read_only_file_is_not_replaced() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let kept = dir.path().join("kept.png");
+    std::fs::write(&kept, b"the user's").unwrap();
+    std::fs::set_permissions(&kept, std::fs::Permissions::from_mode(0o444)).unwrap();
+    let err = write_rgba(&kept, &sample()).unwrap_err().to_string();
+    assert!(
+        err.contains("kept.png") && err.contains("read-only"),
+        "{err}"
+    );
+    let err = brume::io::output::check_image_output(&kept, "--out").unwrap_err();
+    assert!(err.to_string().contains("--out"), "{err}");
+    assert_eq!(std::fs::read(&kept).unwrap(), b"the user's");
+    assert_eq!(entries(dir.path()), ["kept.png"], "no temporary left");
+
+    let image = dir.path().join("im.png");
+    ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
+        .save(&image)
+        .unwrap();
+    ::image::GrayImage::from_pixel(8, 6, ::image::Luma([100]))
+        .save(dir.path().join("d.png"))
+        .unwrap();
+    let args = [
+        "render", "--image", "im.png", "--depth", "d.png", "--out", "kept.png",
+    ];
+    let run = crate::common::brume(dir.path(), &args);
+    let err = crate::common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("--out") && err.contains("read-only"), "{err}");
+    assert_eq!(std::fs::read(&kept).unwrap(), b"the user's");
+
+    std::fs::set_permissions(&kept, std::fs::Permissions::from_mode(0o644)).unwrap();
+    write_rgba(&kept, &sample()).unwrap();
+}
+
 #[test]
 fn failing_write_leaves_nothing_and_keeps_the_old_file() {
     let dir = tempfile::tempdir().unwrap();

@@ -57,8 +57,9 @@ pub fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()
     check_destination(path, option)
 }
 
-/// Checks that `path` can be renamed onto: its directory exists and it is not itself a
-/// directory (a rename onto one fails only after all the work is done).
+/// Checks that `path` can be renamed onto: its directory exists, it is not itself a
+/// directory (a rename onto one fails only after all the work is done), and it is not a
+/// read-only file.
 pub fn check_destination(path: &Path, option: &str) -> Result<()> {
     if path.is_dir() {
         return Err(Error::invalid(
@@ -67,6 +68,7 @@ pub fn check_destination(path: &Path, option: &str) -> Result<()> {
             "a file path, not a directory",
         ));
     }
+    refuse_read_only(path, option)?;
     match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::invalid(
             option,
@@ -78,6 +80,20 @@ pub fn check_destination(path: &Path, option: &str) -> Result<()> {
         )),
         _ => Ok(()),
     }
+}
+
+/// Refuses a destination that is a read-only file: renaming onto it would replace it
+/// whatever its mode, and a file made read-only is one its owner protected.
+fn refuse_read_only(path: &Path, option: &str) -> Result<()> {
+    if std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly()) {
+        return Err(Error::invalid(
+            option,
+            path.display(),
+            "a file brume may replace: this one is read-only, and brume does not replace a \
+             file its owner protected; make it writable (chmod u+w) or choose another name",
+        ));
+    }
+    Ok(())
 }
 
 /// Writes `bytes` to `path` atomically (temporary file, then rename), with the same
@@ -269,6 +285,7 @@ impl Outputs {
                 std::io::Error::other("is a directory, not a file to write"),
             ));
         }
+        refuse_read_only(path, "output")?;
         let tmp = create_temporary(path)?;
         // Pushed before writing so that an error below drops (removes) it with the set.
         self.staged.push(Staged {
