@@ -195,6 +195,18 @@ fn main() -> Res<()> {
     );
     seeds.put("colour_image", "grey8.png", png8.clone());
     seeds.put("colour_image", "rgb.jpg", jpeg.clone());
+    // A phone photo's orientation tag, read (to warn that it is not applied) from a JPEG's
+    // APP1 and a PNG's eXIf chunk: EXIF is a TIFF structure of its own, in either byte order.
+    seeds.put(
+        "colour_image",
+        "exif-rotate90.jpg",
+        tagged(&rgb, 4, 4, exif_orientation(6, false), true)?,
+    );
+    seeds.put(
+        "colour_image",
+        "exif-mirror.png",
+        tagged(&rgb, 4, 4, exif_orientation(2, true), false)?,
+    );
     // Renderers' linear float frames: flat R, G, B beside a depth Z; Blender's multilayer
     // names in half floats; a colour PFM.
     let hdr = [0.25f32, 3.5, 0.0, 1.0, 64.0, 0.5];
@@ -540,6 +552,56 @@ fn png(bytes: &[u8], w: u32, h: u32, colour: image::ExtendedColorType) -> Res<Ve
     let mut out = Vec::new();
     image::codecs::png::PngEncoder::new(&mut out).write_image(bytes, w, h, colour)?;
     Ok(out)
+}
+
+/// An RGB image as JPEG or PNG carrying the EXIF block `exif`.
+fn tagged(rgb: &[u8], w: u32, h: u32, exif: Vec<u8>, jpeg: bool) -> Res<Vec<u8>> {
+    use image::ImageEncoder;
+    let mut out = Vec::new();
+    let colour = image::ExtendedColorType::Rgb8;
+    if jpeg {
+        let mut e = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, 80);
+        e.set_exif_metadata(exif)?;
+        e.write_image(rgb, w, h, colour)?;
+    } else {
+        let mut e = image::codecs::png::PngEncoder::new(&mut out);
+        e.set_exif_metadata(exif)?;
+        e.write_image(rgb, w, h, colour)?;
+    }
+    Ok(out)
+}
+
+/// An EXIF (TIFF) block with one entry, the orientation `value`.
+fn exif_orientation(value: u16, big_endian: bool) -> Vec<u8> {
+    let u16b = |v: u16| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let u32b = |v: u32| {
+        if big_endian {
+            v.to_be_bytes()
+        } else {
+            v.to_le_bytes()
+        }
+    };
+    let mut b = if big_endian {
+        b"MM".to_vec()
+    } else {
+        b"II".to_vec()
+    };
+    b.extend(u16b(42));
+    b.extend(u32b(8)); // the first IFD
+    b.extend(u16b(1)); // one entry
+    b.extend(u16b(0x0112)); // Orientation
+    b.extend(u16b(3)); // SHORT
+    b.extend(u32b(1)); // one value, held in the entry
+    b.extend(u16b(value));
+    b.extend([0, 0]);
+    b.extend(u32b(0)); // no next IFD
+    b
 }
 
 /// An 8-bit palette PNG (colour type 3), which the image crate's encoder does not write:

@@ -209,7 +209,9 @@ impl Batch {
     /// place. `observe` hears of each output and failure as it happens (on the writer
     /// thread, hence `Sync`). A frame or an output that fails is logged and skipped: the
     /// report counts them ([`BatchReport::check`]). Errors: the output folder or the log
-    /// cannot be made or written.
+    /// cannot be made or written, or an output was refused for want of space on its device
+    /// or in the disk quota ([`output::is_out_of_space`]), which stops the run there, the
+    /// failure logged, as every later output would fail too.
     pub fn run(
         self,
         renderer: &mut Renderer,

@@ -92,7 +92,14 @@ fn read_at_most(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
             ),
         ));
     }
+    // The size a regular file has, so that reading it does not grow the buffer by copies;
+    // a size the memory cannot hold is an error, not an abort.
     let mut bytes = Vec::new();
+    if meta.is_file() {
+        bytes
+            .try_reserve_exact(meta.len() as usize)
+            .map_err(|_| Error::io(path, std::io::ErrorKind::OutOfMemory.into()))?;
+    }
     (&mut file)
         .take(limit + 1)
         .read_to_end(&mut bytes)
