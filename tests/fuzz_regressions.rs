@@ -255,3 +255,19 @@ fn transmittance_map_with_a_palette_of_partial_entries_is_refused() {
     );
     assert!(!out.exists());
 }
+
+// colour_image fuzzer, 2026-12-03 (about 140 000 runs from the seeds): a 697-byte EXR of
+// B44-compressed half channels. exr 1.74.2's `unpack14` computes `s[0] + delta - bias` in
+// u32 and truncates to u16, as OpenEXR's C does in wrapping unsigned arithmetic; with
+// overflow checks on (every debug and test build) the subtraction panicked, in exr's
+// decompressor thread, where a panic aborts the whole process. The wrap is the format's:
+// exr is built without overflow checks in every profile (Cargo.toml), as in release, where
+// this file decodes to values brume then refuses by pixel.
+#[test]
+fn b44_exr_whose_deltas_wrap_is_decoded_as_openexr_does() {
+    let path = fuzz_file("colour-exr-b44-wrapping-delta.exr");
+    let bytes = std::fs::read(&path).unwrap();
+    let name = "colour-exr-b44-wrapping-delta.exr";
+    let r = brume::io::image::decode_linear_rgb(&bytes, name);
+    expect_err_with(r, "colour value NaN at pixel (0, 0)");
+}
