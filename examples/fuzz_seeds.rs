@@ -112,6 +112,31 @@ fn main() -> Res<()> {
     for (name, channels, compression, tiled) in exrs {
         seeds.put("exr", name, exr(channels, compression, tiled)?);
     }
+    // The other decompressors. exr stores a block raw when compressing does not make it
+    // smaller, which it never does at 3x2: these are 32x32 smooth ramps, whose blocks are
+    // compressed, so that the seeds reach B44's and PXR24's decoders (a B44 block made the
+    // colour decoder panic before exr was built without overflow checks). DWA is refused
+    // before decoding (`io::codec::exr::refuse_dwa`).
+    for (name, compression) in [
+        ("b44", Compression::B44),
+        ("b44a", Compression::B44A),
+        ("pxr24", Compression::PXR24),
+    ] {
+        let halves = || FlatSamples::F16(ramp(32).map(half::f16::from_f32).collect());
+        let floats = || FlatSamples::F32(ramp(32).collect());
+        let depth = vec![("Z", floats())];
+        seeds.put(
+            "exr",
+            &format!("z_{name}.exr"),
+            exr_sized(depth, compression, 32)?,
+        );
+        let rgb = vec![("R", halves()), ("G", halves()), ("B", halves())];
+        seeds.put(
+            "colour_image",
+            &format!("rgb_{name}.exr"),
+            exr_sized(rgb, compression, 32)?,
+        );
+    }
 
     use tiff::encoder::{colortype, compression as tc};
     let f64s: Vec<f64> = small.iter().map(|&v| f64::from(v)).collect();
@@ -658,7 +683,30 @@ fn crc32(bytes: &[u8]) -> u32 {
     !crc
 }
 
+/// `side`² values rising smoothly from 0.5 to about 2.5 (row by row), which compress.
+fn ramp(side: usize) -> impl Iterator<Item = f32> {
+    (0..side * side).map(move |i| 0.5 + (i / side + i % side) as f32 / side as f32)
+}
+
+/// A `side` x `side` scan-line EXR of `channels`.
+fn exr_sized(
+    channels: Vec<(&str, exr::prelude::FlatSamples)>,
+    compression: exr::prelude::Compression,
+    side: usize,
+) -> Res<Vec<u8>> {
+    exr_of((side, side), channels, compression, false)
+}
+
 fn exr(
+    channels: Vec<(&str, exr::prelude::FlatSamples)>,
+    compression: exr::prelude::Compression,
+    tiled: bool,
+) -> Res<Vec<u8>> {
+    exr_of((3, 2), channels, compression, tiled)
+}
+
+fn exr_of(
+    size: (usize, usize),
     channels: Vec<(&str, exr::prelude::FlatSamples)>,
     compression: exr::prelude::Compression,
     tiled: bool,
@@ -679,7 +727,7 @@ fn exr(
         line_order: LineOrder::Increasing,
     };
     let layer = Layer::new(
-        (3, 2),
+        size,
         LayerAttributes::default(),
         encoding,
         AnyChannels::sort(list),

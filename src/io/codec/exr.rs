@@ -456,6 +456,7 @@ impl<'s, C: ReadChannels<'s>> ReadChannels<'s> for OnlyPart<C> {
 fn check_header(header: &exr::meta::header::Header, file_len: usize, path: &Path) -> Result<()> {
     let size = header.layer_size;
     check_size(path, "EXR", size.width() as u64, size.height() as u64)?;
+    refuse_dwa(header.compression, path)?;
     let chunks = header.chunk_count as u64;
     let mut needed = chunks.saturating_mul(16);
     if header.compression == exr::compression::Compression::Uncompressed {
@@ -472,6 +473,26 @@ fn check_header(header: &exr::meta::header::Header, file_len: usize, path: &Path
                 size.width(),
                 size.height(),
                 header.compression
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses DWAA and DWAB compression. exr's DWA decoder, new in 1.74, allocates the size a
+/// block's own header claims before checking it: a damaged 1,199-byte file asked for
+/// 1.7 PB, and a failed allocation aborts the process (found by the `exr` fuzzer,
+/// `tests/data/fuzz/depth-exr-dwa-claims-1.7-petabytes.exr`). No other compression does.
+fn refuse_dwa(compression: exr::compression::Compression, path: &Path) -> Result<()> {
+    use exr::compression::Compression::{DWAA, DWAB};
+    if matches!(compression, DWAA(_) | DWAB(_)) {
+        return Err(Error::format(
+            path,
+            format!(
+                "EXR with {compression}, which brume does not read (the OpenEXR decoder \
+                 it uses trusts sizes inside DWA data, and a damaged file could abort the \
+                 program); expected ZIP, PIZ, RLE, PXR24, B44 or no compression: re-save it \
+                 with one, e.g. `oiiotool in.exr --compression zip -o out.exr`"
             ),
         ));
     }
