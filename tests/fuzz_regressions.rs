@@ -228,32 +228,8 @@ fn transmittance_map_with_a_palette_of_partial_entries_is_refused() {
     let path = fuzz_file("transmittance-map-plte-521-bytes.png");
     let needle = "PNG palette (PLTE chunk) of 521 bytes";
     expect_err_with(brume::compat::load_optical_depth(&path), needle);
-
-    let dir = tempfile::tempdir().unwrap();
-    let image = dir.path().join("im.png");
-    ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
-        .save(&image)
-        .unwrap();
-    let out = dir.path().join("out.png");
-    let run = crate::common::brume(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--transmittance-map",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-    );
-    let err = crate::common::stderr(&run);
-    assert_eq!(run.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("transmittance-map-plte-521-bytes.png") && err.contains(needle),
-        "{err}"
-    );
-    assert!(!out.exists());
+    let name = "transmittance-map-plte-521-bytes.png";
+    crate::common::assert_render_refuses("--transmittance-map", &path, &[name, needle]);
 }
 
 // colour_image fuzzer, 2026-12-03 (2.6 M runs from the seeds): a 697-byte EXR of
@@ -285,27 +261,5 @@ fn dwa_compressed_exr_is_refused_before_decoding() {
     expect_err_with(load_range(&path, &opts), needle);
     let bytes = std::fs::read(&path).unwrap();
     expect_err_with(brume::io::image::decode_linear_rgb(&bytes, "d.exr"), needle);
-
-    let dir = tempfile::tempdir().unwrap();
-    let image = dir.path().join("im.png");
-    ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
-        .save(&image)
-        .unwrap();
-    let out = dir.path().join("out.png");
-    let run = crate::common::brume(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            image.to_str().unwrap(),
-            "--depth",
-            path.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ],
-    );
-    let err = crate::common::stderr(&run);
-    assert_eq!(run.status.code(), Some(1), "{err}");
-    assert!(err.contains(needle) && err.contains("oiiotool"), "{err}");
-    assert!(!out.exists());
+    crate::common::assert_render_refuses("--depth", &path, &[needle, "oiiotool"]);
 }

@@ -38,6 +38,34 @@ pub fn brume(dir: &Path, args: &[&str]) -> std::process::Output {
         .expect("run brume")
 }
 
+/// Runs `brume render` on a small image with `flag path` (and nothing else but `--out`)
+/// and asserts that it is refused: exit 1, stderr holding every one of `needles`, and no
+/// output written.
+pub fn assert_render_refuses(flag: &str, path: &Path, needles: &[&str]) {
+    let dir = tempfile::tempdir().unwrap();
+    let image = dir.path().join("im.png");
+    ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
+        .save(&image)
+        .unwrap();
+    let out = dir.path().join("out.png");
+    let args = [
+        "render",
+        "--image",
+        image.to_str().unwrap(),
+        flag,
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let run = brume(dir.path(), &args);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    for needle in needles {
+        assert!(err.contains(needle), "`{err}` should mention `{needle}`");
+    }
+    assert!(!out.exists());
+}
+
 /// A program's stderr as text.
 pub fn stderr(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
