@@ -192,7 +192,7 @@ pub fn decode_linear_rgb(bytes: &[u8], name: &str) -> Result<RgbImage> {
 }
 
 /// The first four bytes of every OpenEXR file.
-const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
+pub(crate) const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 
 /// Whether the bytes start like a PFM: `PF` or `Pf`, then whitespace (or nothing, so that
 /// a file cut after its magic gets the PFM reader's message).

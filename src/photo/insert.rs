@@ -240,7 +240,7 @@ fn is_depth_channel(full: &str) -> bool {
 fn read_object_exr(path: &Path, want_depth: bool) -> Result<(RgbaImage, Option<ScalarMap>)> {
     use crate::io::codec::exr::{parse_exr_channel, parse_exr_rgb};
     let bytes = crate::io::limits::read_file(path)?;
-    if !bytes.starts_with(&[0x76, 0x2f, 0x31, 0x01]) {
+    if !bytes.starts_with(&crate::io::image::EXR_MAGIC) {
         return Err(Error::format(
             path,
             "not an OpenEXR file; expected the object as an EXR with R, G, B, A (and Z)",
