@@ -114,13 +114,15 @@ fn main() -> Res<()> {
     }
     // The other decompressors. exr stores a block raw when compressing does not make it
     // smaller, which it never does at 3x2: these are 32x32 smooth ramps, whose blocks are
-    // compressed, so that the seeds reach B44's and PXR24's decoders (a B44 block made the
-    // colour decoder panic before exr was built without overflow checks). DWA is refused
-    // before decoding (`io::codec::exr::refuse_dwa`).
+    // compressed, so that the seeds reach B44's, PXR24's and DWA's decoders (a B44 block
+    // made the colour decoder panic before exr was built without overflow checks; a DWAA
+    // block claiming 1.7 PB aborted brume before `io::codec::exr::check_dwa_blocks`).
     for (name, compression) in [
         ("b44", Compression::B44),
         ("b44a", Compression::B44A),
         ("pxr24", Compression::PXR24),
+        ("dwaa", Compression::DWAA(None)),
+        ("dwab", Compression::DWAB(None)),
     ] {
         let halves = || FlatSamples::F16(ramp(32).map(half::f16::from_f32).collect());
         let floats = || FlatSamples::F32(ramp(32).collect());

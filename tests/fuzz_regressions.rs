@@ -251,15 +251,15 @@ fn b44_exr_whose_deltas_wrap_is_decoded_as_openexr_does() {
 // exr fuzzer, 2026-12-03, about 38 000 runs after seeds of each compression that really
 // compress (32x32 ramps): a 1,199-byte DWAA EXR. exr 1.74.2's DWA decoder (new in 1.74)
 // passes the size a block's header claims to zlib as the buffer to allocate; this one
-// claims 1.7 PB, the allocation fails and the process aborts, in release builds too. DWA
-// is refused from the header, before any block is decoded, with what to re-save it as.
+// claims 1.7 PB, the allocation fails and the process aborts, in release builds too. Every
+// DWA block's claims are now checked against its pixels before exr decodes any.
 #[test]
-fn dwa_compressed_exr_is_refused_before_decoding() {
+fn dwa_block_claiming_petabytes_is_refused_before_decoding() {
     let path = fuzz_file("depth-exr-dwa-claims-1.7-petabytes.exr");
-    let needle = "EXR with dwaa compression, which brume does not read";
+    let needle = "claims 1688849860268032 bytes of raw channel data, more than the 4096";
     let opts = DepthOptions::default();
     expect_err_with(load_range(&path, &opts), needle);
     let bytes = std::fs::read(&path).unwrap();
     expect_err_with(brume::io::image::decode_linear_rgb(&bytes, "d.exr"), needle);
-    crate::common::assert_render_refuses("--depth", &path, &[needle, "oiiotool"]);
+    crate::common::assert_render_refuses("--depth", &path, &[needle, "corrupt"]);
 }

@@ -1,8 +1,9 @@
 //! OpenEXR through the `exr` crate: a scalar map (depth) or a colour image read from the
 //! channels renderers and engines name them, in any part of a multi-part file, with every
-//! header checked against `io::limits` before any pixel is decoded; and 32-bit float RGBA
-//! images or one-channel `Y` maps written with lossless compression so that outputs
-//! round-trip exactly.
+//! header (and every DWA block's sizes) checked against `io::limits` before any pixel is
+//! decoded, and the blocks decoded on brume's pool, where a decoder panic is an error; and
+//! 32-bit float RGBA images or one-channel `Y` maps written with lossless compression so
+//! that outputs round-trip exactly.
 //!
 //! Channel names: OpenEXR has no layer field, so tools put the layer in the name, joined by
 //! dots: `R` is a flat channel, `depth.Z` (Nuke) the `Z` of layer `depth`, and
@@ -13,15 +14,12 @@
 use std::collections::HashMap;
 use std::fs::File;
 use std::io::{BufWriter, Cursor};
+use std::panic::AssertUnwindSafe;
 use std::path::Path;
 
-use exr::image::read::image::ReadLayers;
-use exr::image::read::layers::{ReadChannels, ReadFirstValidLayer};
-use exr::image::{Layer, SpecificChannels};
-use exr::math::Vec2;
 use exr::meta::attribute::{ChannelList, Text};
 use exr::meta::header::Header;
-use exr::prelude::ReadSpecificChannel;
+use rayon::iter::{ParallelBridge, ParallelIterator};
 
 use crate::io::limits::check_size;
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
@@ -216,6 +214,7 @@ fn checked_meta(bytes: &[u8], path: &Path) -> Result<exr::meta::MetaData> {
     if meta.headers.is_empty() {
         return Err(Error::format(path, "EXR file has no part; expected one"));
     }
+    check_dwa_blocks(bytes, &meta, path)?;
     Ok(meta)
 }
 
@@ -253,16 +252,7 @@ fn read_channel(chosen: &Channel, bytes: &[u8], path: &Path) -> Result<ScalarMap
         chosen.header.layer_size.width(),
         chosen.header.layer_size.height(),
     );
-    let read = exr::prelude::read()
-        .no_deep_data()
-        .largest_resolution_level()
-        .specific_channels()
-        .required(chosen.text.clone())
-        .collect_pixels(
-            |size, _| vec![f32::NAN; size.area()],
-            move |data: &mut Vec<f32>, pos, (v,): (f32,)| data[pos.y() * w + pos.x()] = v,
-        );
-    let pixels = read_part(read, bytes, chosen.header, path)?;
+    let pixels = decode_pixels([chosen], bytes, path, f32::NAN, |p, _, v| *p = v)?;
     Ok(Grid::from_vec(w, h, pixels))
 }
 
@@ -292,21 +282,8 @@ pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
             full_resolution(c, path)?;
         }
         let (w, h) = (r.header.layer_size.width(), r.header.layer_size.height());
-        // Only the three channels are decoded: a multilayer file holds many more.
-        let read = exr::prelude::read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .specific_channels()
-            .required(r.text.clone())
-            .required(g.text.clone())
-            .required(b.text.clone())
-            .collect_pixels(
-                |size, _| vec![[f32::NAN; 3]; size.area()],
-                move |data: &mut Vec<[f32; 3]>, pos, (r, g, b): (f32, f32, f32)| {
-                    data[pos.y() * w + pos.x()] = [r, g, b];
-                },
-            );
-        let pixels = read_part(read, bytes, r.header, path)?;
+        // Only the three channels are kept: a multilayer file holds many more.
+        let pixels = decode_pixels([r, g, b], bytes, path, [f32::NAN; 3], |p, i, v| p[i] = v)?;
         let source = match r.layer() {
             "" => "R, G, B".to_string(),
             layer => format!("{layer}.R, .G, .B"),
@@ -325,18 +302,7 @@ pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
     if let Some(y) = grey.filter(|_| !chroma) {
         full_resolution(y, path)?;
         let (w, h) = (y.header.layer_size.width(), y.header.layer_size.height());
-        let read = exr::prelude::read()
-            .no_deep_data()
-            .largest_resolution_level()
-            .specific_channels()
-            .required(y.text.clone())
-            .collect_pixels(
-                |size, _| vec![[f32::NAN; 3]; size.area()],
-                move |data: &mut Vec<[f32; 3]>, pos, (v,): (f32,)| {
-                    data[pos.y() * w + pos.x()] = [v; 3];
-                },
-            );
-        let pixels = read_part(read, bytes, y.header, path)?;
+        let pixels = decode_pixels([y], bytes, path, [f32::NAN; 3], |p, _, v| *p = [v; 3])?;
         return Ok(ExrColour {
             image: Grid::from_vec(w, h, pixels),
             source: "Y (grey)".to_string(),
@@ -386,68 +352,119 @@ fn full_resolution(c: &Channel, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Decodes the pixels that `read` collects from the one part `header` describes (the
-/// decoder's own choice, the first part that has the channels, could be another), and
-/// checks that the decoder saw the size the header claims.
-fn read_part<C, T, D>(read: C, bytes: &[u8], header: &Header, path: &Path) -> Result<Vec<T>>
-where
-    for<'s> C: ReadChannels<'s>,
-    for<'s> ReadFirstValidLayer<OnlyPart<C>>:
-        ReadLayers<'s, Layers = Layer<SpecificChannels<Vec<T>, D>>>,
-{
-    let only = OnlyPart {
-        read,
-        name: header.own_attributes.layer_name.clone(),
-        channels: header.channels.clone(),
-        size: header.layer_size,
-        position: header.own_attributes.layer_position,
-    };
-    let image = only
-        .first_valid_layer()
-        .all_attributes()
-        .from_buffered(Cursor::new(bytes))
-        .map_err(|e| cannot_read(path, e))?;
-    let size = image.layer_data.size;
+/// Decodes `channels`, all of one part, at full resolution into pixels of type `P`, row 0
+/// at the top: each starts as `empty` (where the file has no block) and `set(pixel, i, v)`
+/// stores the value `v` of `channels[i]`. Blocks are decoded in parallel on brume's pool
+/// and copied out as each is done, so only the pixels asked for are held. The decoder
+/// runs inside `catch_unwind`: a file it cannot handle is an error, not the end of the
+/// program (exr's own parallel decoder runs on threads where a panic aborts).
+fn decode_pixels<P: Copy + Send, const N: usize>(
+    channels: [&Channel; N],
+    bytes: &[u8],
+    path: &Path,
+    empty: P,
+    set: impl Fn(&mut P, usize, f32) + Sync,
+) -> Result<Vec<P>> {
+    let header = channels[0].header;
+    let part = channels[0].part;
     let (w, h) = (header.layer_size.width(), header.layer_size.height());
-    if (size.width(), size.height()) != (w, h) {
-        return Err(Error::format(
-            path,
-            format!(
-                "EXR layer read is {}x{} but its header says {w}x{h}",
-                size.width(),
-                size.height()
-            ),
-        ));
+    let wanted: [usize; N] = channels.map(|c| {
+        let list = &header.channels.list;
+        list.iter()
+            .position(|d| &d.name == c.text)
+            .expect("the channel is the part's")
+    });
+    let chunks = exr::block::read(Cursor::new(bytes), false)
+        .and_then(|reader| {
+            reader.filter_chunks(false, |_, tile, block| {
+                block.layer == part && tile.is_largest_resolution_level()
+            })
+        })
+        .map_err(|e| cannot_read(path, e))?;
+    let meta = exr::block::reader::ChunksReader::meta_data(&chunks).clone();
+    let pixels = std::sync::Mutex::new(vec![empty; w * h]);
+    let decode = || {
+        chunks.par_bridge().try_for_each(|chunk| {
+            let block = exr::block::UncompressedBlock::decompress_chunk(chunk?, &meta, false)?;
+            let (lines, values) = block_lines(&block, &header.channels, &wanted, w, h)?;
+            let mut pixels = pixels.lock().unwrap_or_else(|e| e.into_inner());
+            for (channel, start, range) in lines {
+                let line = pixels[start..start + range.len()].iter_mut();
+                line.zip(&values[range])
+                    .for_each(|(p, &v)| set(p, channel, v));
+            }
+            Ok(())
+        })
+    };
+    match std::panic::catch_unwind(AssertUnwindSafe(|| crate::parallel::run(decode))) {
+        Ok(decoded) => decoded.map_err(|e| cannot_read(path, e))?,
+        Err(panic) => return Err(decoder_panicked(path, panic.as_ref())),
     }
-    Ok(image.layer_data.channel_data.pixels)
+    Ok(pixels.into_inner().unwrap_or_else(|e| e.into_inner()))
 }
 
-/// A channel reader that accepts only one part, so that the decoder's "first layer with
-/// these channels" is the part chosen here. Parts are told apart by what differs between
-/// them (the whole header could hold a NaN attribute, unequal to itself); the format
-/// requires each part of a multi-part file to have a name of its own.
-struct OnlyPart<C> {
-    read: C,
-    name: Option<Text>,
-    channels: ChannelList,
-    size: Vec2<usize>,
-    position: Vec2<i32>,
-}
+/// A line of a block: the index of its channel in `wanted`, where it starts in the
+/// `width`x`height` pixels, and where its values are in the block's values.
+type BlockLine = (usize, usize, std::ops::Range<usize>);
 
-impl<'s, C: ReadChannels<'s>> ReadChannels<'s> for OnlyPart<C> {
-    type Reader = C::Reader;
-
-    fn create_channels_reader(&'s self, header: &Header) -> exr::error::Result<C::Reader> {
-        let same = header.own_attributes.layer_name == self.name
-            && header.channels == self.channels
-            && header.layer_size == self.size
-            && header.own_attributes.layer_position == self.position;
-        if same {
-            self.read.create_channels_reader(header)
-        } else {
-            Err(exr::error::Error::Invalid("not the part chosen".into()))
+/// The lines of `block` in the channels `wanted` (indices into `channels`), and their
+/// values as f32. A line outside the pixels is an error.
+fn block_lines(
+    block: &exr::block::UncompressedBlock,
+    channels: &ChannelList,
+    wanted: &[usize],
+    width: usize,
+    height: usize,
+) -> exr::error::Result<(Vec<BlockLine>, Vec<f32>)> {
+    use exr::meta::attribute::SampleType;
+    let (mut lines, mut values) = (Vec::new(), Vec::new());
+    let mut halves = Vec::new();
+    for line in block.lines(channels) {
+        let at = line.location;
+        let Some(channel) = wanted.iter().position(|&c| c == at.channel) else {
+            continue;
+        };
+        let (x, y, n) = (at.position.x(), at.position.y(), at.sample_count);
+        if y >= height || x.checked_add(n).is_none_or(|end| end > width) {
+            return Err(exr::error::Error::Invalid("block outside the layer".into()));
         }
+        let first = values.len();
+        values.resize(first + n, 0.0);
+        let out = &mut values[first..];
+        match channels.list[at.channel].sample_type {
+            SampleType::F32 => line.read_samples_into_slice(out)?,
+            SampleType::F16 => {
+                halves.resize(n, half::f16::ZERO);
+                line.read_samples_into_slice(&mut halves[..])?;
+                half::slice::HalfFloatSliceExt::convert_to_f32_slice(&halves[..], out);
+            }
+            SampleType::U32 => {
+                for (o, v) in out.iter_mut().zip(line.read_samples::<u32>()) {
+                    *o = v? as f32;
+                }
+            }
+        }
+        lines.push((channel, y * width + x, first..first + n));
     }
+    Ok((lines, values))
+}
+
+/// The error for a panic inside exr's decoder: a file it could not handle, which must not
+/// end the program of a library's host.
+fn decoder_panicked(path: &Path, panic: &(dyn std::any::Any + Send)) -> Error {
+    let what = panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".into());
+    Error::format(
+        path,
+        format!(
+            "the OpenEXR decoder failed on this file ({what}); it is corrupt, or uses a \
+             feature the decoder cannot handle: re-save it, e.g. with `oiiotool in.exr \
+             --compression zip -o out.exr`"
+        ),
+    )
 }
 
 /// Refuses a layer whose claimed size is beyond `io::limits`, or which the file is too
@@ -456,7 +473,6 @@ impl<'s, C: ReadChannels<'s>> ReadChannels<'s> for OnlyPart<C> {
 fn check_header(header: &exr::meta::header::Header, file_len: usize, path: &Path) -> Result<()> {
     let size = header.layer_size;
     check_size(path, "EXR", size.width() as u64, size.height() as u64)?;
-    refuse_dwa(header.compression, path)?;
     let chunks = header.chunk_count as u64;
     let mut needed = chunks.saturating_mul(16);
     if header.compression == exr::compression::Compression::Uncompressed {
@@ -479,24 +495,111 @@ fn check_header(header: &exr::meta::header::Header, file_len: usize, path: &Path
     Ok(())
 }
 
-/// Refuses DWAA and DWAB compression. exr's DWA decoder, new in 1.74, allocates the size a
-/// block's own header claims before checking it: a damaged 1,199-byte file asked for
-/// 1.7 PB, and a failed allocation aborts the process (found by the `exr` fuzzer,
-/// `tests/data/fuzz/depth-exr-dwa-claims-1.7-petabytes.exr`). No other compression does.
-fn refuse_dwa(compression: exr::compression::Compression, path: &Path) -> Result<()> {
+/// Whether a part is DWA-compressed (lossy DCT for colour channels, RLE or zlib for the
+/// others).
+fn is_dwa(compression: exr::compression::Compression) -> bool {
     use exr::compression::Compression::{DWAA, DWAB};
-    if matches!(compression, DWAA(_) | DWAB(_)) {
-        return Err(Error::format(
-            path,
-            format!(
-                "EXR with {compression}, which brume does not read (the OpenEXR decoder \
-                 it uses trusts sizes inside DWA data, and a damaged file could abort the \
-                 program); expected ZIP, PIZ, RLE, PXR24, B44 or no compression: re-save it \
-                 with one, e.g. `oiiotool in.exr --compression zip -o out.exr`"
-            ),
-        ));
+    matches!(compression, DWAA(_) | DWAB(_))
+}
+
+/// Checks the sizes every block of a DWA part claims before the decoder sees them. exr's
+/// DWA decoder (new in 1.74) allocates what a block's header claims before checking it: a
+/// damaged 1,199-byte file asked for 1.7 PB, and a failed allocation aborts the process
+/// (found by the `exr` fuzzer, `tests/data/fuzz/depth-exr-dwa-claims-1.7-petabytes.exr`).
+/// No other compression does. The chunks are found as the decoder finds them, through
+/// the offset tables, so a block it decodes is a block checked here.
+fn check_dwa_blocks(bytes: &[u8], meta: &exr::meta::MetaData, path: &Path) -> Result<()> {
+    use exr::block::chunk::CompressedBlock;
+    if !meta.headers.iter().any(|h| is_dwa(h.compression)) {
+        return Ok(());
+    }
+    let chunks = exr::block::read(Cursor::new(bytes), false)
+        .and_then(|reader| reader.filter_chunks(false, |_, _, _| true))
+        .map_err(|e| cannot_read(path, e))?;
+    for chunk in chunks {
+        let chunk = chunk.map_err(|e| cannot_read(path, e))?;
+        let Some(header) = meta.headers.get(chunk.layer_index) else {
+            continue; // the decoder refuses it
+        };
+        if !is_dwa(header.compression) {
+            continue;
+        }
+        let data = match &chunk.compressed_block {
+            CompressedBlock::ScanLine(b) => &b.compressed_pixels_le,
+            CompressedBlock::Tile(t) => &t.compressed_pixels_le,
+            _ => continue, // deep data: refused by the decoder
+        };
+        let bounds = header
+            .get_block_data_indices(&chunk.compressed_block)
+            .and_then(|tile| header.get_absolute_block_pixel_coordinates(tile))
+            .map_err(|e| cannot_read(path, e))?;
+        let (w, h) = (bounds.size.width(), bounds.size.height());
+        let channels = &header.channels;
+        if let Some(claim) =
+            dwa_over_claim(data, w, h, channels.list.len(), channels.bytes_per_pixel)
+        {
+            return Err(Error::format(
+                path,
+                format!(
+                    "EXR block at row {} ({w}x{h} pixels, {}) claims {claim}; the file \
+                     is corrupt",
+                    bounds.position.y(),
+                    header.compression
+                ),
+            ));
+        }
     }
     Ok(())
+}
+
+/// The first size in a DWA block's header (OpenEXR's `DataSizesSingle`: eleven
+/// little-endian `u64`) that no block of `width`x`height` pixels of `channels` channels
+/// can need, described; `None` when all fit, or when the block is stored raw or too short
+/// to hold the header (the decoder reads those itself). The bounds are what OpenEXR's
+/// encoder can write at most: raw and zlib-packed channel data no larger than the pixels,
+/// run-length tokens at most two bytes per byte, one DC and 63 AC coefficients per 8x8
+/// block of each channel.
+fn dwa_over_claim(
+    data: &[u8],
+    width: usize,
+    height: usize,
+    channels: usize,
+    bytes_per_pixel: usize,
+) -> Option<String> {
+    const UNKNOWN_UNCOMPRESSED: usize = 1;
+    const RLE_UNCOMPRESSED: usize = 6;
+    const RLE_RAW: usize = 7;
+    const AC_COUNT: usize = 8;
+    const DC_COUNT: usize = 9;
+    let pixel_bytes = width.saturating_mul(height).saturating_mul(bytes_per_pixel) as u64;
+    if data.len() as u64 == pixel_bytes || data.len() < 11 * 8 {
+        return None;
+    }
+    let counter = |i: usize| {
+        let field: [u8; 8] = data[i * 8..i * 8 + 8].try_into().expect("8 bytes");
+        u64::from_le_bytes(field)
+    };
+    let blocks = width.div_ceil(8).saturating_mul(height.div_ceil(8));
+    let blocks = blocks.saturating_mul(channels) as u64;
+    let limits = [
+        (
+            UNKNOWN_UNCOMPRESSED,
+            "bytes of raw channel data",
+            pixel_bytes,
+        ),
+        (
+            RLE_UNCOMPRESSED,
+            "bytes of run-length tokens",
+            pixel_bytes.saturating_mul(2),
+        ),
+        (RLE_RAW, "bytes of run-length data", pixel_bytes),
+        (AC_COUNT, "AC coefficients", blocks.saturating_mul(63)),
+        (DC_COUNT, "DC coefficients", blocks),
+    ];
+    limits.into_iter().find_map(|(i, what, most)| {
+        let claimed = counter(i);
+        (claimed > most).then(|| format!("{claimed} {what}, more than the {most} it can hold"))
+    })
 }
 
 /// Writes an RGBA image as four 32-bit channels `R`, `G`, `B`, `A`.
