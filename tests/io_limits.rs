@@ -43,16 +43,30 @@ fn float_opts() -> DepthOptions {
 /// A 1x1 uncompressed one-channel EXR whose data window is then rewritten to claim
 /// `w` x `h` pixels: a few hundred bytes, like a hostile file.
 fn exr_claiming(w: i32, h: i32) -> Vec<u8> {
+    // Uncompressed scan lines come one per chunk.
+    exr_of_claiming(&["Z"], exr::prelude::Encoding::UNCOMPRESSED, w, h, h)
+}
+
+/// A 1x1 EXR of float `channels` whose data window is then rewritten to claim `w` x `h`
+/// pixels in `chunks` chunks.
+fn exr_of_claiming(
+    channels: &[&str],
+    encoding: exr::prelude::Encoding,
+    w: i32,
+    h: i32,
+    chunks: i32,
+) -> Vec<u8> {
     use exr::prelude::*;
     let mut bytes = Vec::new();
+    let channels = channels
+        .iter()
+        .map(|&name| AnyChannel::new(name, FlatSamples::F32(vec![1.0])))
+        .collect();
     let layer = Layer::new(
         (1, 1),
         LayerAttributes::default(),
-        Encoding::UNCOMPRESSED,
-        AnyChannels::sort(SmallVec::from_vec(vec![AnyChannel::new(
-            "Z",
-            FlatSamples::F32(vec![1.0]),
-        )])),
+        encoding,
+        AnyChannels::sort(channels),
     );
     Image::from_layer(layer)
         .write()
@@ -70,14 +84,40 @@ fn exr_claiming(w: i32, h: i32) -> Vec<u8> {
             bytes[at + 4 * i..at + 4 * i + 4].copy_from_slice(&v.to_le_bytes());
         }
     }
-    // Uncompressed scan lines come one per chunk; a consistent count gets the header past
-    // the decoder's own checks.
+    // A consistent count gets the header past the decoder's own checks.
     let name = b"chunkCount\0int\0";
     if let Some(at) = bytes.windows(name.len()).position(|win| win == name) {
         let at = at + name.len() + 4;
-        bytes[at..at + 4].copy_from_slice(&h.to_le_bytes());
+        bytes[at..at + 4].copy_from_slice(&chunks.to_le_bytes());
     }
     bytes
+}
+
+#[test]
+fn exr_claiming_blocks_larger_than_a_gigabyte_is_refused_before_decoding() {
+    use exr::prelude::{Blocks, Compression, Encoding, LineOrder};
+    let encoding = Encoding {
+        compression: Compression::DWAB(None),
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let names: Vec<String> = (0..65).map(|i| format!("c{i:02}")).collect();
+    let names: Vec<&str> = names.iter().map(String::as_str).collect();
+    // One DWAB block of 256 rows of 16384 pixels of 65 floats: 1 090 519 040 bytes, just
+    // over the limit; a legal size in pixels, and a file of a few kilobytes.
+    let bytes = exr_of_claiming(&names, encoding, 16384, 256, 1);
+    assert!(bytes.len() < 4000, "{} bytes", bytes.len());
+    let dir = tempfile::tempdir().unwrap();
+    let p = write(dir.path(), "wide.exr", &bytes);
+    let err = load_range(&p, &float_opts()).map(|_| ()).unwrap_err();
+    let needle = "EXR blocks of 16384x256 pixels of 65 channels (260 bytes a pixel, dwab \
+                  compression) decode to 1090519040 bytes each, more than the 1073741824";
+    assert!(err.to_string().contains(needle), "`{err}`");
+    // One channel fewer fits, and gets as far as the missing pixel data.
+    let bytes = exr_of_claiming(&names[1..], encoding, 16384, 256, 1);
+    let p = write(dir.path(), "fits.exr", &bytes);
+    let err = load_range(&p, &float_opts()).map(|_| ()).unwrap_err();
+    assert!(!err.to_string().contains("EXR blocks of"), "`{err}`");
 }
 
 #[test]

@@ -467,12 +467,21 @@ fn decoder_panicked(path: &Path, panic: &(dyn std::any::Any + Send)) -> Error {
     )
 }
 
-/// Refuses a layer whose claimed size is beyond `io::limits`, or which the file is too
-/// short to hold: every chunk takes an 8-byte offset and an 8-byte chunk header at least,
-/// and uncompressed pixels take their full size.
+/// The most bytes one block of an EXR part may decode to: 256 rows (DWAB's blocks) of a
+/// 16384-pixel-wide image ([`crate::io::limits::MAX_SIDE`]) with 64 float channels. exr
+/// decodes a block whole, every channel of it, and allocates its size before reading its
+/// data: a file of a few bytes could claim hundreds of channels, and a failed allocation
+/// aborts the process.
+pub const MAX_EXR_BLOCK_BYTES: u64 = 1 << 30;
+
+/// Refuses a layer whose claimed size is beyond `io::limits`, whose blocks decode to more
+/// than [`MAX_EXR_BLOCK_BYTES`] each, or which the file is too short to hold: every chunk
+/// takes an 8-byte offset and an 8-byte chunk header at least, and uncompressed pixels take
+/// their full size.
 fn check_header(header: &exr::meta::header::Header, file_len: usize, path: &Path) -> Result<()> {
     let size = header.layer_size;
     check_size(path, "EXR", size.width() as u64, size.height() as u64)?;
+    check_block_bytes(header, path)?;
     let chunks = header.chunk_count as u64;
     let mut needed = chunks.saturating_mul(16);
     if header.compression == exr::compression::Compression::Uncompressed {
@@ -488,6 +497,34 @@ fn check_header(header: &exr::meta::header::Header, file_len: usize, path: &Path
                  {needed} bytes, but the file has {file_len}; it is truncated or corrupt",
                 size.width(),
                 size.height(),
+                header.compression
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses a part whose largest block decodes to more than [`MAX_EXR_BLOCK_BYTES`].
+fn check_block_bytes(header: &Header, path: &Path) -> Result<()> {
+    use exr::meta::BlockDescription;
+    let (w, h) = (header.layer_size.width(), header.layer_size.height());
+    let (block_w, block_h) = match header.blocks {
+        BlockDescription::ScanLines => (w, header.compression.scan_lines_per_block()),
+        BlockDescription::Tiles(t) => (t.tile_size.width(), t.tile_size.height()),
+    };
+    let (block_w, block_h) = (block_w.min(w) as u64, block_h.min(h) as u64);
+    let per_pixel = header.channels.bytes_per_pixel as u64;
+    let bytes = (block_w * block_h).saturating_mul(per_pixel);
+    if bytes > MAX_EXR_BLOCK_BYTES {
+        return Err(Error::format(
+            path,
+            format!(
+                "EXR blocks of {block_w}x{block_h} pixels of {} channels ({per_pixel} bytes \
+                 a pixel, {}) decode to {bytes} bytes each, more than the {MAX_EXR_BLOCK_BYTES} \
+                 brume decodes at once; the file is corrupt, or re-save it with fewer \
+                 channels or smaller blocks, e.g. `oiiotool in.exr --compression zip -o \
+                 out.exr` (16 rows a block)",
+                header.channels.list.len(),
                 header.compression
             ),
         ));
