@@ -30,7 +30,7 @@ mod host_pipeline;
 mod insert;
 mod io_demo;
 mod io_depth;
-mod io_dwa;
+mod io_exr_blocks;
 mod io_image;
 mod io_limits;
 mod io_output;

@@ -1,7 +1,7 @@
 """Writes tests/data/exr/aloe-{dwaa,dwab}.exr with OpenEXR's own C++ library (the
 `OpenEXR` Python bindings), and beside each the pixels OpenEXR decodes from it
 (`.rgb.f32`, raw little-endian float32, rows top first, R G B interleaved), and the
-depth written (`aloe.z.f32`, the same layout, one value a pixel), which tests/io_dwa.rs
+depth written (`aloe.z.f32`, the same layout, one value a pixel), which tests/io_exr_blocks.rs
 compares brume's decoder against.
 
     pip install OpenEXR numpy pillow && python3 tools/dwa_reference.py

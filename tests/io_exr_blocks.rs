@@ -1,7 +1,8 @@
-//! DWAA and DWAB EXRs (lossy DCT for colour channels, lossless for the others) as
-//! OpenEXR's own library writes them (`tools/dwa_reference.py`), read as OpenEXR reads
-//! them; and blocks whose headers claim more than their pixels, refused before exr's DWA
-//! decoder allocates what they claim.
+//! EXR blocks as brume assembles them (`io::codec::exr::decode_pixels`): DWAA and DWAB
+//! (lossy DCT for colour channels, lossless for the others) as OpenEXR's own library writes
+//! them (`tools/dwa_reference.py`), read as OpenEXR reads them; DWA blocks whose headers
+//! claim more than their pixels, refused before exr's DWA decoder allocates what they
+//! claim; and tiles, partial at the edges, with mip levels that must not be read.
 
 use std::path::{Path, PathBuf};
 
@@ -103,5 +104,74 @@ fn dwa_blocks_claiming_more_than_their_pixels_are_refused() {
         assert!(err
             .to_string()
             .contains("EXR block at row 0 (70x32 pixels, dwaa"));
+    }
+}
+
+/// A `w` x `h` tiled EXR (8x8 tiles, so the last column and row of tiles are partial) of
+/// `channels`, each a name and its full-resolution values; with `mip`, also a mip map
+/// whose smaller levels are all -1.
+fn tiled_exr(w: usize, h: usize, channels: &[(&str, Vec<f32>)], mip: bool) -> Vec<u8> {
+    use exr::prelude::*;
+    let list = channels
+        .iter()
+        .map(|(name, full)| {
+            let full = FlatSamples::F32(full.clone());
+            let levels = if mip {
+                let round = exr::math::RoundingMode::Down;
+                let sizes = exr::meta::mip_map_levels(round, Vec2(w, h));
+                let level = |(i, size): (usize, Vec2<usize>)| match i {
+                    0 => full.clone(),
+                    _ => FlatSamples::F32(vec![-1.0; size.area()]),
+                };
+                Levels::Mip {
+                    rounding_mode: round,
+                    level_data: sizes.map(level).collect(),
+                }
+            } else {
+                Levels::Singular(full)
+            };
+            AnyChannel::new(*name, levels)
+        })
+        .collect();
+    let encoding = Encoding {
+        compression: Compression::PIZ,
+        blocks: Blocks::Tiles(Vec2(8, 8)),
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        encoding,
+        AnyChannels::sort(list),
+    );
+    let mut bytes = Vec::new();
+    let image = Image::from_layer(layer);
+    let cursor = std::io::Cursor::new(&mut bytes);
+    image.write().to_buffered(cursor).unwrap();
+    bytes
+}
+
+#[test]
+fn tiled_and_mip_mapped_exr_read_at_full_resolution() {
+    let (w, h) = (37, 23);
+    let ramp = |k: f32| {
+        (0..w * h)
+            .map(|i| k + i as f32 * 0.25)
+            .collect::<Vec<f32>>()
+    };
+    let (r, g, b, z) = (ramp(1.0), ramp(2.0), ramp(3.0), ramp(50.0));
+    for mip in [false, true] {
+        let channels = [("R", r.clone()), ("G", g.clone()), ("B", b.clone())];
+        let bytes = tiled_exr(w, h, &channels, mip);
+        let image = decode_linear_rgb(&bytes, "tiles.exr").unwrap();
+        assert_eq!((image.width(), image.height()), (w, h));
+        for (i, p) in image.as_slice().iter().enumerate() {
+            assert_eq!(*p, [r[i], g[i], b[i]], "mip {mip}, pixel {i}");
+        }
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("z.exr");
+        std::fs::write(&path, tiled_exr(w, h, &[("Z", z.clone())], mip)).unwrap();
+        let depth = load_range(&path, &DepthOptions::default()).unwrap();
+        assert_eq!(depth.range.as_slice(), &z[..], "mip {mip}");
     }
 }
