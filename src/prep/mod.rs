@@ -50,7 +50,12 @@
 //!      4-connected region of non-sky pixels that does not reach the bottom row and holds
 //!      no confident range is a gap in the sky (a bird, a lamp head, a cloud's textured
 //!      rim, blobs of matcher noise) and becomes sky when it is at most 0.2 % of the image
-//!      or at least half as bright as the floor. The left band below the sky shows the
+//!      or at least half as bright as the floor. Then each 4-connected set of pixels of
+//!      confident range next to the sky that would look like sky but for its range,
+//!      smooth and reached from the sky in colour steps of at most half the growth's (a
+//!      matcher's streak: semi-global matching carries an object's disparity along the
+//!      rows of a textureless sky as smooth, backed-up values) becomes sky unless it
+//!      reaches the bottom row. The left band below the sky shows the
 //!      scene (textured, darker, not blue): it is not grown into and is filled as a hole.
 //!      Once sky is found, known pixels left outside it that look like sky and whose
 //!      range is unsupported are matcher noise in slivers of sky the growth could not

@@ -4,7 +4,8 @@
 //! are [`ImageSkyRules`]. In short: per-pixel evidence (luminance, 3 x 3 texture, a range
 //! class), seeds in the top rows, breadth-first growth over smooth, bright, blue-or-grey
 //! pixels in small colour steps (jumping thin occluders), edge refinement, regions that
-//! are large enough and do not reach the bottom row, then the gaps in the sky.
+//! are large enough and do not reach the bottom row, then the gaps in the sky and a stereo
+//! matcher's streaks in it.
 
 use super::components::{label_mask, neighbours4};
 use super::outliers::neighbours8;
@@ -109,9 +110,13 @@ struct Evidence<'a> {
 impl Evidence<'_> {
     /// Bright enough and blue or grey.
     fn looks_like_sky(&self, p: usize) -> bool {
+        self.range[p] != RangeClass::Confident && self.looks_like_sky_but_for_range(p)
+    }
+
+    /// Bright enough and blue or grey, whatever its range says.
+    fn looks_like_sky_but_for_range(&self, p: usize) -> bool {
         let c = self.colour[p];
         self.lum[p] >= self.floor
-            && self.range[p] != RangeClass::Confident
             && f64::from(c[2]) >= self.rules.min_blue_ratio * f64::from(c[0].max(c[1]))
     }
 
@@ -248,6 +253,7 @@ pub(crate) fn image_sky(
     let mut sky = grow_regions(&ev, &seeds, width, height, min_area_fraction);
     sky.iter_mut().zip(depth_sky).for_each(|(s, &d)| *s |= d);
     fill_gaps(&ev, &mut sky, width, height);
+    reclaim_vetoed(&ev, &mut sky, width, height);
     let noise = if sky.iter().any(|&s| s) {
         (0..sky.len())
             .into_par_iter()
@@ -394,6 +400,76 @@ fn fill_gaps(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) {
     }
 }
 
+/// Turns into sky the pixels whose range alone kept them out of it: a stereo matcher's
+/// streaks, where semi-global matching carries an object's disparity along the rows of a
+/// textureless sky as smooth, backed-up values (the range calls them confident, so the
+/// growth stops at them, and fogged at the object's range they show as a band of clear
+/// sky). Each 4-connected set of such pixels next to the sky, reached from the sky in
+/// colour steps of at most half [`ImageSkyRules::max_step`], that are smooth, bright and
+/// blue or grey, with the edge refinement of the growth (the texture window of a pixel
+/// next to the object sees the object), becomes sky unless it reaches the bottom row. A
+/// real object in front of the sky stops the flood at its outline, where the colour
+/// changes.
+fn reclaim_vetoed(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) {
+    let vetoed: Vec<bool> = (0..width * height)
+        .into_par_iter()
+        .map(|p| {
+            !sky[p] && ev.range[p] == RangeClass::Confident && ev.looks_like_sky_but_for_range(p)
+        })
+        .collect();
+    if !vetoed.contains(&true) {
+        return;
+    }
+    let smooth = |p: usize| f64::from(ev.texture[p]) <= ev.rules.max_texture;
+    let small_step = |p: usize, q: usize| {
+        let step = relative_step(ev.colour, &ev.lum, p, q, ev.eps);
+        f64::from(step) <= ev.rules.max_step / 2.0
+    };
+    let neighbours = |p: usize| neighbours4(p, p % width, p / width, width, height);
+    let mut seen = vec![false; width * height];
+    let mut set = Vec::new();
+    for start in 0..width * height {
+        if !sky[start] {
+            continue;
+        }
+        for q in neighbours(start).into_iter().flatten() {
+            if seen[q] || !vetoed[q] || !smooth(q) || !small_step(start, q) {
+                continue;
+            }
+            set.clear();
+            set.push(q);
+            seen[q] = true;
+            let mut head = 0;
+            while head < set.len() {
+                let p = set[head];
+                head += 1;
+                for r in neighbours(p).into_iter().flatten() {
+                    if !seen[r] && vetoed[r] && smooth(r) && small_step(p, r) {
+                        seen[r] = true;
+                        set.push(r);
+                    }
+                }
+            }
+            let mut from = 0;
+            for _ in 0..REFINE_ROUNDS {
+                let to = set.len();
+                for i in from..to {
+                    for r in neighbours(set[i]).into_iter().flatten() {
+                        if !seen[r] && vetoed[r] && small_step(set[i], r) {
+                            seen[r] = true;
+                            set.push(r);
+                        }
+                    }
+                }
+                from = to;
+            }
+            if !set.iter().any(|&p| p / width == height - 1) {
+                set.iter().for_each(|&p| sky[p] = true);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -507,6 +583,63 @@ mod tests {
         for (p, &s) in sky.iter().enumerate() {
             let y = p / w;
             assert_eq!(s, y < 20 && y != 8, "pixel ({}, {y})", p % w);
+        }
+    }
+
+    #[test]
+    fn a_matchers_streak_in_the_sky_is_sky_and_the_tower_it_came_from_is_not() {
+        // A smooth blue sky over rows 0..20 and textured ground below; a grey tower (x
+        // 30..36, from row 5 down) and a sky-coloured wall (x 45..52, from row 12 down),
+        // both standing on the ground; and a semi-global matcher's streak, the tower's
+        // range carried along rows 8..11 of the sky.
+        let (w, h) = (60, 40);
+        let sky_colour = |y: usize| {
+            let t = y as f32 / 20.0;
+            [0.4 + 0.1 * t, 0.5 + 0.1 * t, 0.8 + 0.05 * t]
+        };
+        let tower = |x: usize, y: usize| (30..36).contains(&x) && y >= 5;
+        let wall = |x: usize, y: usize| (45..52).contains(&x) && y >= 12;
+        let streak = |x: usize, y: usize| (5..30).contains(&x) && (8..11).contains(&y);
+        let image = Grid::from_fn(w, h, |x, y| {
+            if tower(x, y) {
+                [0.3, 0.3, 0.3]
+            } else if wall(x, y) {
+                sky_colour(12)
+            } else if y < 20 {
+                sky_colour(y)
+            } else {
+                let k = ((x * 7 + y * 13) % 5) as f32 / 5.0;
+                [0.2 + 0.2 * k, 0.15 + 0.1 * k, 0.1]
+            }
+        });
+        let range: Vec<f32> = (0..w * h)
+            .map(|p| {
+                let (x, y) = (p % w, p / w);
+                match () {
+                    _ if tower(x, y) || streak(x, y) => 80.0,
+                    _ if wall(x, y) => 60.0,
+                    _ if y < 20 => f32::NAN,
+                    _ => 50.0 - y as f32,
+                }
+            })
+            .collect();
+        let classes = range_classes(&range, w, h, None);
+        assert_eq!(classes[9 * w + 15], RangeClass::Confident, "the streak");
+        let rules = ImageSkyRules::default();
+        let sky = image_sky(&image, &classes, &vec![false; w * h], &rules, 0.01).sky;
+        // Slivers of sky within 2 px of an object and of the ground may stay out, as
+        // without a streak (the texture window sees the object).
+        let open_sky = |x: usize, y: usize| {
+            (y < 18 && !(28..38).contains(&x) && !(43..54).contains(&x)) || (x < 28 && y < 20)
+        };
+        for (p, &s) in sky.iter().enumerate() {
+            let (x, y) = (p % w, p / w);
+            if streak(x, y) || open_sky(x, y) {
+                assert!(s, "sky at ({x}, {y})");
+            }
+            if tower(x, y) || wall(x, y) || y >= 20 {
+                assert!(!s, "not sky at ({x}, {y})");
+            }
         }
     }
 }
