@@ -1,14 +1,14 @@
 """Writes tests/data/exr/aloe-{dwaa,dwab}.exr with OpenEXR's own C++ library (the
 `OpenEXR` Python bindings), and beside each the pixels OpenEXR decodes from it
 (`.rgb.f32`, raw little-endian float32, rows top first, R G B interleaved), and the
-depth written (`aloe.z.f32`, the same layout, one value a pixel), which tests/io_exr_blocks.rs
-compares brume's decoder against.
+depth written (`aloe.z.f32`, the same layout, one value a pixel), which
+tests/io_exr_blocks.rs compares brume's decoder against.
 
     pip install OpenEXR numpy pillow && python3 tools/dwa_reference.py
 
 The picture is tests/data/aloe (Middlebury 2006 "Aloe"), cropped and downsampled to
 70x45 (neither side a multiple of 8, the side of DWA's DCT blocks; 45 rows are two
-DWAA blocks of 32 lines and part of one DWAB block of 256): R, G, B as half floats
+DWAA blocks, of 32 and 13 lines, and part of one DWAB block of 256): R, G, B as half floats
 (linear, lossy in DWA), A = 1 (run-length coded) and Z as float32 (zlib coded, lossless):
 depth in metres from the disparity, Z = 3740 px * 0.16 m / (d + 240 px), NaN where
 the disparity is unknown (0).

@@ -108,7 +108,7 @@ struct Evidence<'a> {
 }
 
 impl Evidence<'_> {
-    /// Bright enough and blue or grey.
+    /// Bright enough and blue or grey, and its range not confident.
     fn looks_like_sky(&self, p: usize) -> bool {
         self.range[p] != RangeClass::Confident && self.looks_like_sky_but_for_range(p)
     }
@@ -545,19 +545,25 @@ mod tests {
 
     /// A sky over a textured ground; an unknown band on the left through both; a one-pixel
     /// dark wire across the sky.
+    /// A smooth blue sky over rows 0..20, lighter toward the horizon.
+    fn sky_colour(y: usize) -> [f32; 3] {
+        let t = y as f32 / 20.0;
+        [0.4 + 0.1 * t, 0.5 + 0.1 * t, 0.8 + 0.05 * t]
+    }
+
+    /// Textured, brownish ground.
+    fn ground_colour(x: usize, y: usize) -> [f32; 3] {
+        let k = ((x * 7 + y * 13) % 5) as f32 / 5.0;
+        [0.2 + 0.2 * k, 0.15 + 0.1 * k, 0.1]
+    }
+
     #[test]
     fn sky_crosses_a_wire_and_stops_at_the_band_scene() {
         let (w, h) = (60, 40);
-        let image = Grid::from_fn(w, h, |x, y| {
-            if y == 8 {
-                [0.05, 0.05, 0.05]
-            } else if y < 20 {
-                let t = y as f32 / 20.0;
-                [0.4 + 0.1 * t, 0.5 + 0.1 * t, 0.8 + 0.05 * t]
-            } else {
-                let k = ((x * 7 + y * 13) % 5) as f32 / 5.0;
-                [0.2 + 0.2 * k, 0.15 + 0.1 * k, 0.1]
-            }
+        let image = Grid::from_fn(w, h, |x, y| match y {
+            8 => [0.05, 0.05, 0.05],
+            0..20 => sky_colour(y),
+            _ => ground_colour(x, y),
         });
         let range: Vec<f32> = (0..w * h)
             .map(|p| {
@@ -593,10 +599,6 @@ mod tests {
         // both standing on the ground; and a semi-global matcher's streak, the tower's
         // range carried along rows 8..11 of the sky.
         let (w, h) = (60, 40);
-        let sky_colour = |y: usize| {
-            let t = y as f32 / 20.0;
-            [0.4 + 0.1 * t, 0.5 + 0.1 * t, 0.8 + 0.05 * t]
-        };
         let tower = |x: usize, y: usize| (30..36).contains(&x) && y >= 5;
         let wall = |x: usize, y: usize| (45..52).contains(&x) && y >= 12;
         let streak = |x: usize, y: usize| (5..30).contains(&x) && (8..11).contains(&y);
@@ -608,8 +610,7 @@ mod tests {
             } else if y < 20 {
                 sky_colour(y)
             } else {
-                let k = ((x * 7 + y * 13) % 5) as f32 / 5.0;
-                [0.2 + 0.2 * k, 0.15 + 0.1 * k, 0.1]
+                ground_colour(x, y)
             }
         });
         let range: Vec<f32> = (0..w * h)

@@ -1,9 +1,10 @@
 //! OpenEXR through the `exr` crate: a scalar map (depth) or a colour image read from the
 //! channels renderers and engines name them, in any part of a multi-part file, with every
-//! header (and every DWA block's sizes) checked against `io::limits` before any pixel is
-//! decoded, and the blocks decoded on brume's pool, where a decoder panic is an error; and
-//! 32-bit float RGBA images or one-channel `Y` maps written with lossless compression so
-//! that outputs round-trip exactly.
+//! header checked against `io::limits` and [`MAX_EXR_BLOCK_BYTES`] (and every DWA block's
+//! claimed sizes against its pixels) before any pixel is decoded, and the blocks decoded on
+//! brume's pool, where a decoder panic is an error; and 32-bit float RGBA images or
+//! one-channel `Y` maps written with lossless compression so that outputs round-trip
+//! exactly.
 //!
 //! Channel names: OpenEXR has no layer field, so tools put the layer in the name, joined by
 //! dots: `R` is a flat channel, `depth.Z` (Nuke) the `Z` of layer `depth`, and
