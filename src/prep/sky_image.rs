@@ -297,7 +297,9 @@ fn grow_regions(
         region.push(seed);
         reached[seed] = true;
         grow(ev, &mut reached, &mut region, width, height);
-        refine(ev, &mut reached, &mut region, width, height);
+        refine(&mut reached, &mut region, width, height, |p, q| {
+            ev.looks_like_sky(q) && ev.step_ok(p, q)
+        });
         let bottom = height > 1 && region.iter().any(|&p| p / width == height - 1);
         if region.len() as f64 >= min_area && !bottom {
             region.iter().for_each(|&p| sky[p] = true);
@@ -343,14 +345,15 @@ fn grow(ev: &Evidence, reached: &mut [bool], region: &mut Vec<usize>, width: usi
     }
 }
 
-/// Edge refinement: [`REFINE_ROUNDS`] rounds adding the 4-neighbours of the region that
-/// look like sky and pass the step test, without the texture test.
+/// Edge refinement: [`REFINE_ROUNDS`] rounds adding the 4-neighbours `q` of the region
+/// that `admit(p, q)` lets in from the region's pixel `p` (the growth's tests without the
+/// texture test: the texture window of a pixel next to the horizon sees the horizon).
 fn refine(
-    ev: &Evidence,
     reached: &mut [bool],
     region: &mut Vec<usize>,
     width: usize,
     height: usize,
+    admit: impl Fn(usize, usize) -> bool,
 ) {
     let mut from = 0;
     for _ in 0..REFINE_ROUNDS {
@@ -361,7 +364,7 @@ fn refine(
                 .into_iter()
                 .flatten()
             {
-                if !reached[q] && ev.looks_like_sky(q) && ev.step_ok(p, q) {
+                if !reached[q] && admit(p, q) {
                     reached[q] = true;
                     region.push(q);
                 }
@@ -450,19 +453,9 @@ fn reclaim_vetoed(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) 
                     }
                 }
             }
-            let mut from = 0;
-            for _ in 0..REFINE_ROUNDS {
-                let to = set.len();
-                for i in from..to {
-                    for r in neighbours(set[i]).into_iter().flatten() {
-                        if !seen[r] && vetoed[r] && small_step(set[i], r) {
-                            seen[r] = true;
-                            set.push(r);
-                        }
-                    }
-                }
-                from = to;
-            }
+            refine(&mut seen, &mut set, width, height, |p, r| {
+                vetoed[r] && small_step(p, r)
+            });
             if !set.iter().any(|&p| p / width == height - 1) {
                 set.iter().for_each(|&p| sky[p] = true);
             }
