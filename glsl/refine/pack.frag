@@ -1,8 +1,9 @@
-// Guided refinement, pass 1 of 4 (He & Sun's fast guided filter, 2015): on the
-// low-resolution grid, each cell's guide I (the colour's sRGB-encoded luminance, averaged
-// over the cell's full-resolution pixels) and its log range p (the range texture's own
-// value where the range is on this grid, a depth map smaller than the image; else the mean
-// of log range over the cell), written as (I, p, I·p, I²) for the box means.
+// Guided refinement, pass 1 (He & Sun's fast guided filter, 2015): on the low-resolution
+// grid, each cell's guide I (the colour's sRGB-encoded values less 0.5, averaged over the
+// cell's full-resolution pixels) and its log range p (the range texture's own value where
+// the range is on this grid, a depth map smaller than the image; else the mean of log range
+// over the cell), written as the moments the windows' means need, in four targets:
+// (I, p), (I·p, I_r²), (I_r·I_g, I_r·I_b, I_g², I_g·I_b), (I_b², 0, 0, 0).
 
 uniform sampler2D u_colour;   // full resolution, RGB
 uniform sampler2D u_range;    // R: range > 0, on the low grid or at full resolution
@@ -11,14 +12,16 @@ uniform vec2 u_cell;          // full-resolution pixels per low-resolution cell 
 uniform bool u_colour_srgb;   // the colour texture holds sRGB-encoded values already
 uniform bool u_range_full;    // the range is at full resolution (averaged per cell)
 
-out vec4 o_moments;
+layout(location = 0) out vec4 o_guide_range;
+layout(location = 1) out vec4 o_cross;
+layout(location = 2) out vec4 o_products;
+layout(location = 3) out vec4 o_blue;
 
-float guide_at(ivec2 q) {
+// The guide, centred: its covariance in f32 loses less to cancellation (refine::GUIDE_CENTRE).
+vec3 guide_at(ivec2 q) {
     vec3 c = texelFetch(u_colour, q, 0).rgb;
-    if (!u_colour_srgb) {
-        c = linear_to_srgb(c);
-    }
-    return dot(clamp(c, 0.0, 1.0), vec3(0.2126, 0.7152, 0.0722));
+    c = u_colour_srgb ? clamp(c, 0.0, 1.0) : linear_to_srgb(c);
+    return c - 0.5;
 }
 
 void main() {
@@ -27,7 +30,7 @@ void main() {
     ivec2 lo = ivec2(floor(vec2(cell) * u_cell));
     ivec2 hi = max(ivec2(floor(vec2(cell + 1) * u_cell)), lo + 1);
     hi = min(hi, u_colour_size);
-    float guide = 0.0;
+    vec3 guide = vec3(0.0);
     float log_range = 0.0;
     for (int y = lo.y; y < hi.y; ++y) {
         for (int x = lo.x; x < hi.x; ++x) {
@@ -38,7 +41,10 @@ void main() {
         }
     }
     float n = float((hi.x - lo.x) * (hi.y - lo.y));
-    float i = guide / n;
+    vec3 i = guide / n;
     float p = u_range_full ? log_range / n : log(texelFetch(u_range, cell, 0).r);
-    o_moments = vec4(i, p, i * p, i * i);
+    o_guide_range = vec4(i, p);
+    o_cross = vec4(i * p, i.r * i.r);
+    o_products = vec4(i.r * i.g, i.r * i.b, i.g * i.g, i.g * i.b);
+    o_blue = vec4(i.b * i.b, 0.0, 0.0, 0.0);
 }

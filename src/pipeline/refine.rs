@@ -1,5 +1,5 @@
 //! Image-guided refinement of a range texture on the GPU (see [`crate::refine`] for the
-//! filter and why it works on log range): seven fragment passes over brume's own
+//! filter and why it works on log range): six fragment passes over brume's own
 //! textures, from the host's colour texture and a range texture of the image's size or
 //! smaller, into a new R32F range texture of the image's size (or, for the upsampling,
 //! into one the caller keeps: [`Pipeline::upsample_range_into`]).
@@ -24,17 +24,22 @@ use std::sync::Arc;
 /// The passes' files, in `glsl/refine/`.
 pub(super) const PACK_FRAG: &str = include_str!("../../glsl/refine/pack.frag");
 pub(super) const BOX_FRAG: &str = include_str!("../../glsl/refine/box.frag");
-pub(super) const COEFFICIENTS_FRAG: &str = include_str!("../../glsl/refine/coefficients.frag");
+pub(super) const MODEL_GLSL: &str = include_str!("../../glsl/refine/model.glsl");
 pub(super) const APPLY_FRAG: &str = include_str!("../../glsl/refine/apply.frag");
 pub(super) const CELLS_FRAG: &str = include_str!("../../glsl/refine/cells.frag");
 pub(super) const UPSAMPLE_FRAG: &str = include_str!("../../glsl/refine/upsample.frag");
 
-/// The four programs of the refinement.
+/// The programs of the refinement.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(super) enum RefinePass {
     Pack,
+    /// The box pass over the moments' four textures.
+    BoxMoments,
+    /// The box pass over the moments' four textures that writes the windows' models
+    /// (`model.glsl`) instead of their means.
+    BoxModels,
+    /// The box pass over one texture (the models).
     Box,
-    Coefficients,
     Apply,
     Cells,
     Upsample,
@@ -56,15 +61,37 @@ impl RefinePass {
                     "u_range_full",
                 ],
             ),
+            RefinePass::BoxMoments => (
+                "refine/box.frag",
+                BOX_FRAG,
+                &[
+                    "u_source0",
+                    "u_source1",
+                    "u_source2",
+                    "u_source3",
+                    "u_size",
+                    "u_step",
+                    "u_radius",
+                ],
+            ),
+            RefinePass::BoxModels => (
+                "refine/box.frag",
+                BOX_FRAG,
+                &[
+                    "u_source0",
+                    "u_source1",
+                    "u_source2",
+                    "u_source3",
+                    "u_size",
+                    "u_step",
+                    "u_radius",
+                    "u_epsilon",
+                ],
+            ),
             RefinePass::Box => (
                 "refine/box.frag",
                 BOX_FRAG,
-                &["u_source", "u_size", "u_step", "u_radius"],
-            ),
-            RefinePass::Coefficients => (
-                "refine/coefficients.frag",
-                COEFFICIENTS_FRAG,
-                &["u_means", "u_epsilon"],
+                &["u_source0", "u_size", "u_step", "u_radius"],
             ),
             RefinePass::Cells => (
                 "refine/cells.frag",
@@ -124,14 +151,15 @@ pub struct RefineInput {
     pub range_height: usize,
 }
 
-/// The low grid's ping-pong pair and the framebuffers over them.
+/// Textures of the low grid written together, and the framebuffer over them (one
+/// attachment each: the moments' four are written by one pass).
 struct LowTargets {
-    framebuffers: [Framebuffer; 2],
-    textures: [Texture; 2],
+    framebuffer: Framebuffer,
+    textures: Vec<Texture>,
 }
 
 impl LowTargets {
-    fn new(gl: &Arc<glow::Context>, width: usize, height: usize) -> Result<Self> {
+    fn new(gl: &Arc<glow::Context>, width: usize, height: usize, count: usize) -> Result<Self> {
         let make = || {
             Texture::new(
                 gl,
@@ -142,17 +170,29 @@ impl LowTargets {
                 None,
             )
         };
-        let textures = [make()?, make()?];
-        let framebuffers = [
-            Framebuffer::over(gl, &[&textures[0]], "the refinement's low grid")?,
-            Framebuffer::over(gl, &[&textures[1]], "the refinement's low grid")?,
-        ];
+        let textures = (0..count).map(|_| make()).collect::<Result<Vec<_>>>()?;
+        let attached: Vec<&Texture> = textures.iter().collect();
+        let framebuffer = Framebuffer::over(gl, &attached, "the refinement's low grid")?;
         Ok(LowTargets {
-            framebuffers,
+            framebuffer,
             textures,
         })
     }
+
+    /// Binds the textures on units 0, 1, ... and points `names` (a sampler each) at them.
+    fn bind_as(&self, gl: &glow::Context, program: &Program, names: &[&str]) {
+        for (unit, (texture, name)) in self.textures.iter().zip(names).enumerate() {
+            texture.bind(unit as u32);
+            set_int(gl, program, name, unit as i32);
+        }
+    }
 }
+
+/// The box pass's sources, one per texture of the [`LowTargets`] it reads.
+const BOX_SOURCES: [&str; MOMENT_TEXTURES] = ["u_source0", "u_source1", "u_source2", "u_source3"];
+
+/// The textures the moments of a colour guide take (13 values: see `pack.frag`).
+const MOMENT_TEXTURES: usize = 4;
 
 /// The inputs of a refinement's first pass, the same for the guided filter's pack pass
 /// and the upsampling's cells pass: the colour and the range on their units, the colour's
@@ -177,7 +217,7 @@ fn bind_cell_inputs(
 impl Pipeline {
     /// Refines `input.range` with `input.colour` as guide and returns the refined range,
     /// an R32F texture of the image's size that the caller owns, with the passes' times
-    /// (seven passes). Upsamples a range smaller than the image on the way.
+    /// (six passes). Upsamples a range smaller than the image on the way.
     ///
     /// Errors: [`crate::Error::InvalidParameter`] for bad options or sizes,
     /// [`crate::Error::TooLarge`] above `GL_MAX_TEXTURE_SIZE`, GL errors naming the pass.
@@ -193,68 +233,76 @@ impl Pipeline {
         self.caps.require_size("image", input.width, input.height)?;
         for pass in [
             RefinePass::Pack,
+            RefinePass::BoxMoments,
+            RefinePass::BoxModels,
             RefinePass::Box,
-            RefinePass::Coefficients,
             RefinePass::Apply,
         ] {
             self.program(ProgramKey::Refine(pass), None)?;
         }
         let gl = Arc::clone(&self.gl);
-        let low = LowTargets::new(&gl, grid.width, grid.height)?;
+        // The moments and their horizontal means take four textures each; the windows'
+        // models ping-pong between two of one.
+        let make = |count| LowTargets::new(&gl, grid.width, grid.height, count);
+        let (moments, moment_means) = (make(MOMENT_TEXTURES)?, make(MOMENT_TEXTURES)?);
+        let models = [make(1)?, make(1)?];
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let low_size = [grid.width as i32, grid.height as i32];
         self.passes_into_range(input, "refining the range", |pipeline, timer, output_fb| {
             let program = |pass| pipeline.compiled(ProgramKey::Refine(pass));
-            let (pack, boxes, coefficients, apply) = (
-                program(RefinePass::Pack)?,
-                program(RefinePass::Box)?,
-                program(RefinePass::Coefficients)?,
-                program(RefinePass::Apply)?,
-            );
+            let (pack, apply) = (program(RefinePass::Pack)?, program(RefinePass::Apply)?);
             timer.pass(|| {
-                low.framebuffers[0].bind_for_drawing();
+                moments.framebuffer.bind_for_drawing();
                 pipeline.use_program(pack);
                 let cell = grid.cell.map(|c| c as f32);
                 bind_cell_inputs(&gl, pack, input, cell, srgb);
                 set_int(&gl, pack, "u_range_full", i32::from(grid.range_full));
                 draw_fullscreen(&gl);
             })?;
-            // One line of a box mean, from texture `from` into the other one.
+            // One line of a box mean of every texture of `from` into `to` by `pass`.
             let box_pass = |timer: &mut crate::gpu::timer::PassTimer<'_>,
-                            from: usize,
+                            pass: RefinePass,
+                            from: &LowTargets,
+                            to: &LowTargets,
                             step: [i32; 2]|
              -> Result<()> {
+                let boxes = program(pass)?;
                 timer.pass(|| {
-                    low.framebuffers[1 - from].bind_for_drawing();
+                    to.framebuffer.bind_for_drawing();
                     pipeline.use_program(boxes);
-                    low.textures[from].bind(UNIT_MAIN);
-                    set_int(&gl, boxes, "u_source", UNIT_MAIN as i32);
+                    from.bind_as(&gl, boxes, &BOX_SOURCES[..from.textures.len()]);
                     set_value(&gl, boxes, "u_size", UniformValue::IVec2(low_size));
                     set_value(&gl, boxes, "u_step", UniformValue::IVec2(step));
                     set_int(&gl, boxes, "u_radius", grid.radius as i32);
+                    if pass == RefinePass::BoxModels {
+                        let epsilon = UniformValue::Float(opts.epsilon as f32);
+                        set_value(&gl, boxes, "u_epsilon", epsilon);
+                    }
                     draw_fullscreen(&gl);
                 })
             };
-            // The moments: 0 → 1 → 0.
-            box_pass(timer, 0, [1, 0])?;
-            box_pass(timer, 1, [0, 1])?;
-            timer.pass(|| {
-                low.framebuffers[1].bind_for_drawing();
-                pipeline.use_program(coefficients);
-                low.textures[0].bind(UNIT_MAIN);
-                set_int(&gl, coefficients, "u_means", UNIT_MAIN as i32);
-                let epsilon = UniformValue::Float(opts.epsilon as f32);
-                set_value(&gl, coefficients, "u_epsilon", epsilon);
-                draw_fullscreen(&gl);
-            })?;
-            // The coefficients: 1 → 0 → 1, where the last pass reads them.
-            box_pass(timer, 1, [1, 0])?;
-            box_pass(timer, 0, [0, 1])?;
+            // The moments' means, then the windows' models, then their means.
+            box_pass(
+                timer,
+                RefinePass::BoxMoments,
+                &moments,
+                &moment_means,
+                [1, 0],
+            )?;
+            box_pass(
+                timer,
+                RefinePass::BoxModels,
+                &moment_means,
+                &models[0],
+                [0, 1],
+            )?;
+            box_pass(timer, RefinePass::Box, &models[0], &models[1], [1, 0])?;
+            box_pass(timer, RefinePass::Box, &models[1], &models[0], [0, 1])?;
             timer.pass(|| {
                 output_fb.bind_for_drawing();
                 pipeline.use_program(apply);
                 bind_texture(&gl, UNIT_MAIN, Some(input.colour));
-                low.textures[1].bind(UNIT_DEPTH);
+                models[0].textures[0].bind(UNIT_DEPTH);
                 set_int(&gl, apply, "u_colour", UNIT_MAIN as i32);
                 set_int(&gl, apply, "u_coefficients", UNIT_DEPTH as i32);
                 set_value(&gl, apply, "u_low_size", UniformValue::IVec2(low_size));
@@ -319,7 +367,7 @@ impl Pipeline {
         self.program(ProgramKey::Refine(RefinePass::Cells), None)?;
         self.program(ProgramKey::Refine(RefinePass::Upsample), None)?;
         let gl = Arc::clone(&self.gl);
-        let low = LowTargets::new(&gl, lw, lh)?;
+        let low = LowTargets::new(&gl, lw, lh, 1)?;
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let cell = [w as f32 / lw as f32, h as f32 / lh as f32];
         self.passes_into(
@@ -329,7 +377,7 @@ impl Pipeline {
                 let cells = pipeline.compiled(ProgramKey::Refine(RefinePass::Cells))?;
                 let upsample = pipeline.compiled(ProgramKey::Refine(RefinePass::Upsample))?;
                 timer.pass(|| {
-                    low.framebuffers[0].bind_for_drawing();
+                    low.framebuffer.bind_for_drawing();
                     pipeline.use_program(cells);
                     bind_cell_inputs(&gl, cells, input, cell, srgb);
                     draw_fullscreen(&gl);
@@ -412,6 +460,16 @@ pub(super) fn compile(
     pass: RefinePass,
 ) -> Result<Program> {
     let (file, source, uniforms) = pass.source();
-    let header = format!("{version_line}\n{prelude}");
+    let defines = match pass {
+        RefinePass::BoxMoments => "#define LAYERS 4\n",
+        RefinePass::BoxModels => "#define LAYERS 4\n#define WINDOW_MODEL\n",
+        _ => "#define LAYERS 1\n",
+    };
+    let model = if pass == RefinePass::BoxModels {
+        MODEL_GLSL
+    } else {
+        ""
+    };
+    let header = format!("{version_line}\n{defines}{prelude}\n{model}");
     Program::new(gl, &header, (file, source), uniforms, &[])
 }

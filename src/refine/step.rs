@@ -73,9 +73,9 @@ pub const REPAIR_FILLED_WEIGHT: f64 = 0.5;
 /// can err only upward (a disparity below 0 is invalid, and there the true one is near
 /// 0), so its false matches are always too near, often by a factor of 5 to 50 (measured
 /// on StereoSGBM with a known truth, `tools/stereo_refine_eval.py`); where the guided
-/// filter is wrong on correct depth, it mostly pulls a far surface nearer (a tower's face
-/// toward the brighter sky in luminance) or blurs an edge by less than a factor of 2.7,
-/// which the rule leaves alone.
+/// filter is wrong on correct depth, it mostly pulls a far surface nearer (where a window
+/// holds a near and a far surface the guide cannot tell apart) or blurs an edge by less
+/// than a factor of 2.7, which the rule leaves alone.
 pub fn repair(measured: f32, guided: f32, filled: bool) -> f32 {
     let (lm, lg) = (f64::from(measured).ln(), f64::from(guided).ln());
     let [t0, t1] = REPAIR_NEARER;

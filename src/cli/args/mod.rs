@@ -254,7 +254,7 @@ pub struct RefineArgs {
     /// Image-guided refinement of the range: repair (the guided range where the measured
     /// range is far nearer than it, as a stereo matcher's false matches in the sky are,
     /// half of each where pre-processing filled the range, the measured range elsewhere),
-    /// guided (He et al.'s guided filter of log range everywhere, the image's luminance as
+    /// guided (He et al.'s guided filter of log range everywhere, the image's colour as
     /// guide), unreliable (the guided range only where pre-processing filled the range) or
     /// none [default: repair for Cityscapes disparity, none otherwise: measured on
     /// stereo-matched disparity, see the README]. On the GPU in render and batch, by its
@@ -268,9 +268,9 @@ pub struct RefineArgs {
     #[arg(long = "refine-radius", value_name = "PX", allow_hyphen_values = true)]
     pub radius: Option<f64>,
 
-    /// Regularisation ε of the guided refinement, a variance of the sRGB-encoded
-    /// luminance in (0, 1]: edges of less contrast than about √ε are smoothed across
-    /// [default: 0.001].
+    /// Regularisation ε of the guided refinement, a variance of sRGB-encoded colour values
+    /// in (0, 1]: edges of less contrast than about √ε are smoothed across [default:
+    /// 0.001].
     #[arg(long = "refine-eps", value_name = "EPS", allow_hyphen_values = true)]
     pub eps: Option<f64>,
 }
