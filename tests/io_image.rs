@@ -91,7 +91,7 @@ fn exif_orientation(value: u16) -> Vec<u8> {
 }
 
 // A phone photo taken upright is stored sideways with an orientation tag. brume fogs the
-// pixels as stored (the depth map has no tag), which is right, but said nothing: the
+// pixels as stored, aligned with the depth map, which is right, but said nothing: the
 // output came out sideways to a user whose viewer showed the input upright.
 #[test]
 fn a_jpeg_orientation_is_not_applied_and_the_render_says_so() {
@@ -113,10 +113,20 @@ fn a_jpeg_orientation_is_not_applied_and_the_render_says_so() {
     let img = load_linear_rgb(&image).unwrap();
     assert_eq!((img.width(), img.height()), (24, 16), "read as stored");
 
-    let depth = dir.path().join("d.png");
-    image::GrayImage::from_pixel(w, h, image::Luma([100]))
-        .save(&depth)
+    // The depth map carries a tag too (a phone's depth PNG may): a map is read aligned with
+    // the image whatever its tag, so it is not warned about.
+    let mut depth_png = Vec::new();
+    let mut encoder = image::codecs::png::PngEncoder::new(&mut depth_png);
+    encoder.set_exif_metadata(exif_orientation(6)).unwrap();
+    encoder
+        .write_image(
+            &vec![100u8; (w * h) as usize],
+            w,
+            h,
+            image::ExtendedColorType::L8,
+        )
         .unwrap();
+    std::fs::write(dir.path().join("d.png"), &depth_png).unwrap();
     let out = dir.path().join("out.png");
     let args = [
         "render",
@@ -137,8 +147,9 @@ fn a_jpeg_orientation_is_not_applied_and_the_render_says_so() {
         "{err}"
     );
     assert_eq!(image::image_dimensions(&out).unwrap(), (24, 16));
+    assert!(!err.contains("d.png: its EXIF orientation"), "{err}");
 
-    // Without the tag, nothing is said.
+    // Without the tag on the image, nothing is said.
     image::RgbImage::from_pixel(w, h, image::Rgb([150, 150, 150]))
         .save(&image)
         .unwrap();

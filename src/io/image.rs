@@ -187,7 +187,7 @@ pub fn decode_linear_rgb(bytes: &[u8], name: &str) -> Result<RgbImage> {
             )),
         };
     }
-    let decoded = decode_image(bytes, name, COLOUR_FORMATS)?;
+    let decoded = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
     Ok(to_linear_rgb(&decoded))
 }
 
@@ -256,12 +256,22 @@ pub(crate) fn finite_light<const N: usize>(
 /// Decodes PNG or JPEG bytes without any colour conversion; shared with the depth loaders
 /// so that 8- and 16-bit PNG depth maps keep their raw values.
 pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
-    decode_image(bytes, name, "a PNG or JPEG file")
+    decode_image(bytes, name, "a PNG or JPEG file", Role::Map)
+}
+
+/// What a decoded file is to brume, for the one thing that differs: a colour image's EXIF
+/// orientation decides how the output shows, and is warned about; a map's (depth,
+/// transmittance, mask, noise) is not, as it is read aligned with the image whatever
+/// its tag.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Colour,
+    Map,
 }
 
 /// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
-/// is none of them.
-fn decode_image(bytes: &[u8], name: &str, expected: &str) -> Result<DynamicImage> {
+/// is none of them, and the file's `role`.
+fn decode_image(bytes: &[u8], name: &str, expected: &str, role: Role) -> Result<DynamicImage> {
     let reader = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::io(name, e))?;
@@ -299,7 +309,9 @@ fn decode_image(bytes: &[u8], name: &str, expected: &str) -> Result<DynamicImage
     };
     // The size is checked from the header, before the pixel buffer is allocated.
     let mut decoder = reader.into_decoder().map_err(cannot)?;
-    warn_if_oriented(decoder.orientation(), name);
+    if role == Role::Colour {
+        warn_if_oriented(decoder.orientation(), name);
+    }
     let (w, h) = decoder.dimensions();
     check_size(
         Path::new(name),
