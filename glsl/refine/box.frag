@@ -1,8 +1,8 @@
 // Guided refinement, the box passes: the mean over a (2r + 1)-tap line, horizontal or
 // vertical, of the four channels of each of LAYERS sources (4: the moments' textures, or
 // 1: the windows' models), counting only taps inside the grid (He et al.'s normalisation
-// by the box of ones: the borders are not darkened). With WINDOW_MODEL (after
-// model.glsl), the vertical pass over the moments writes each window's model from the
+// by the box of ones: the borders are not darkened). After model.glsl (which defines
+// WINDOW_MODEL), the vertical pass over the moments writes each window's model from the
 // means instead of the means. Preceded by the #version line and #define LAYERS (a
 // constant, not a uniform: llvmpipe ran a one-texture box 3x slower when the other three
 // textures were only skipped at run time).

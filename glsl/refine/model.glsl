@@ -1,7 +1,10 @@
 // Guided refinement: the local linear model p ≈ a·I + b of one window with a colour guide
 // (He et al. 2013, eq. 14): a = (Σ + εU)⁻¹ cov(I, p), b = mean(p) − a·mean(I), Σ the 3 x 3
 // covariance of the window's colour, from the window's means of the moments pack.frag
-// writes. Put before box.frag for its last pass over the moments (#define WINDOW_MODEL).
+// writes. Put before box.frag for its last pass over the moments, which it turns into the
+// pass that writes the models.
+
+#define WINDOW_MODEL
 
 uniform float u_epsilon;
 

@@ -29,6 +29,20 @@ pub(super) const APPLY_FRAG: &str = include_str!("../../glsl/refine/apply.frag")
 pub(super) const CELLS_FRAG: &str = include_str!("../../glsl/refine/cells.frag");
 pub(super) const UPSAMPLE_FRAG: &str = include_str!("../../glsl/refine/upsample.frag");
 
+/// The uniforms of the box pass over the moments: first its sources, one per texture of
+/// the [`LowTargets`] it reads (the box over one texture has the first), and last ε, only
+/// in the pass that writes the windows' models.
+const MOMENT_BOX_UNIFORMS: &[&str] = &[
+    "u_source0",
+    "u_source1",
+    "u_source2",
+    "u_source3",
+    "u_size",
+    "u_step",
+    "u_radius",
+    "u_epsilon",
+];
+
 /// The programs of the refinement.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(super) enum RefinePass {
@@ -64,30 +78,11 @@ impl RefinePass {
             RefinePass::BoxMoments => (
                 "refine/box.frag",
                 BOX_FRAG,
-                &[
-                    "u_source0",
-                    "u_source1",
-                    "u_source2",
-                    "u_source3",
-                    "u_size",
-                    "u_step",
-                    "u_radius",
-                ],
+                MOMENT_BOX_UNIFORMS
+                    .split_at(MOMENT_BOX_UNIFORMS.len() - 1)
+                    .0,
             ),
-            RefinePass::BoxModels => (
-                "refine/box.frag",
-                BOX_FRAG,
-                &[
-                    "u_source0",
-                    "u_source1",
-                    "u_source2",
-                    "u_source3",
-                    "u_size",
-                    "u_step",
-                    "u_radius",
-                    "u_epsilon",
-                ],
-            ),
+            RefinePass::BoxModels => ("refine/box.frag", BOX_FRAG, MOMENT_BOX_UNIFORMS),
             RefinePass::Box => (
                 "refine/box.frag",
                 BOX_FRAG,
@@ -188,9 +183,6 @@ impl LowTargets {
     }
 }
 
-/// The box pass's sources, one per texture of the [`LowTargets`] it reads.
-const BOX_SOURCES: [&str; MOMENT_TEXTURES] = ["u_source0", "u_source1", "u_source2", "u_source3"];
-
 /// The textures the moments of a colour guide take (13 values: see `pack.frag`).
 const MOMENT_TEXTURES: usize = 4;
 
@@ -270,7 +262,7 @@ impl Pipeline {
                 timer.pass(|| {
                     to.framebuffer.bind_for_drawing();
                     pipeline.use_program(boxes);
-                    from.bind_as(&gl, boxes, &BOX_SOURCES[..from.textures.len()]);
+                    from.bind_as(&gl, boxes, &MOMENT_BOX_UNIFORMS[..from.textures.len()]);
                     set_value(&gl, boxes, "u_size", UniformValue::IVec2(low_size));
                     set_value(&gl, boxes, "u_step", UniformValue::IVec2(step));
                     set_int(&gl, boxes, "u_radius", grid.radius as i32);
@@ -460,16 +452,17 @@ pub(super) fn compile(
     pass: RefinePass,
 ) -> Result<Program> {
     let (file, source, uniforms) = pass.source();
-    let defines = match pass {
-        RefinePass::BoxMoments => "#define LAYERS 4\n",
-        RefinePass::BoxModels => "#define LAYERS 4\n#define WINDOW_MODEL\n",
-        _ => "#define LAYERS 1\n",
+    let layers = match pass {
+        RefinePass::BoxMoments | RefinePass::BoxModels => MOMENT_TEXTURES,
+        _ => 1,
     };
+    // model.glsl defines WINDOW_MODEL, which turns box.frag's last pass over the moments
+    // into the one that writes the models.
     let model = if pass == RefinePass::BoxModels {
         MODEL_GLSL
     } else {
         ""
     };
-    let header = format!("{version_line}\n{defines}{prelude}\n{model}");
+    let header = format!("{version_line}\n#define LAYERS {layers}\n{prelude}\n{model}");
     Program::new(gl, &header, (file, source), uniforms, &[])
 }
