@@ -297,9 +297,14 @@ fn grow_regions(
         region.push(seed);
         reached[seed] = true;
         grow(ev, &mut reached, &mut region, width, height);
-        refine(&mut reached, &mut region, width, height, |p, q| {
-            ev.looks_like_sky(q) && ev.step_ok(p, q)
-        });
+        spread(
+            &mut reached,
+            &mut region,
+            width,
+            height,
+            REFINE_ROUNDS,
+            |p, q| ev.looks_like_sky(q) && ev.step_ok(p, q),
+        );
         let bottom = height > 1 && region.iter().any(|&p| p / width == height - 1);
         if region.len() as f64 >= min_area && !bottom {
             region.iter().for_each(|&p| sky[p] = true);
@@ -345,19 +350,26 @@ fn grow(ev: &Evidence, reached: &mut [bool], region: &mut Vec<usize>, width: usi
     }
 }
 
-/// Edge refinement: [`REFINE_ROUNDS`] rounds adding the 4-neighbours `q` of the region
-/// that `admit(p, q)` lets in from the region's pixel `p` (the growth's tests without the
-/// texture test: the texture window of a pixel next to the horizon sees the horizon).
-fn refine(
+/// Breadth-first spread of `region` (its pixels already `reached`), at most `rounds`
+/// rounds, each adding the 4-neighbours `q` of the last round's pixels that `admit(p, q)`
+/// lets in from the region's pixel `p`; it stops early once a round adds nothing. The edge
+/// refinement is [`REFINE_ROUNDS`] rounds with the growth's tests but the texture test
+/// (the texture window of a pixel next to the horizon sees the horizon); `usize::MAX`
+/// rounds is a flood fill.
+fn spread(
     reached: &mut [bool],
     region: &mut Vec<usize>,
     width: usize,
     height: usize,
+    rounds: usize,
     admit: impl Fn(usize, usize) -> bool,
 ) {
     let mut from = 0;
-    for _ in 0..REFINE_ROUNDS {
+    for _ in 0..rounds {
         let to = region.len();
+        if from == to {
+            break;
+        }
         for i in from..to {
             let p = region[i];
             for q in neighbours4(p, p % width, p / width, width, height)
@@ -442,18 +454,10 @@ fn reclaim_vetoed(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) 
             set.clear();
             set.push(q);
             seen[q] = true;
-            let mut head = 0;
-            while head < set.len() {
-                let p = set[head];
-                head += 1;
-                for r in neighbours(p).into_iter().flatten() {
-                    if !seen[r] && vetoed[r] && smooth(r) && small_step(p, r) {
-                        seen[r] = true;
-                        set.push(r);
-                    }
-                }
-            }
-            refine(&mut seen, &mut set, width, height, |p, r| {
+            spread(&mut seen, &mut set, width, height, usize::MAX, |p, r| {
+                vetoed[r] && smooth(r) && small_step(p, r)
+            });
+            spread(&mut seen, &mut set, width, height, REFINE_ROUNDS, |p, r| {
                 vetoed[r] && small_step(p, r)
             });
             if !set.iter().any(|&p| p / width == height - 1) {
@@ -536,8 +540,6 @@ mod tests {
         assert_eq!(b[1], (0.0 + 1.0 + 2.0 + 3.0 + 4.0 + 5.0) / 6.0);
     }
 
-    /// A sky over a textured ground; an unknown band on the left through both; a one-pixel
-    /// dark wire across the sky.
     /// A smooth blue sky over rows 0..20, lighter toward the horizon.
     fn sky_colour(y: usize) -> [f32; 3] {
         let t = y as f32 / 20.0;
@@ -550,6 +552,8 @@ mod tests {
         [0.2 + 0.2 * k, 0.15 + 0.1 * k, 0.1]
     }
 
+    /// A sky over a textured ground; an unknown band on the left through both; a one-pixel
+    /// dark wire across the sky.
     #[test]
     fn sky_crosses_a_wire_and_stops_at_the_band_scene() {
         let (w, h) = (60, 40);
