@@ -1,8 +1,9 @@
 //! `brume render --beta/--visibility/--albedo`: fog in physical units on range in metres
 //! (here from Cityscapes disparities and camera files the tests write), end to end:
 //! τ = exp(−β·R) at pixels of known range, --beta and --visibility render the same bytes,
-//! a far outlier no longer changes the fog of the rest, the JSON report, and bad values
-//! refused with a clear message and nothing written.
+//! a far outlier no longer changes the fog of the rest, the JSON report, bad values
+//! refused with a clear message and nothing written, and a phone's shallow depth under a
+//! sky that fog veils.
 
 use brume::io::output::{write_rgba, write_scalar};
 use brume::raster::{Grid, RgbImage};
@@ -837,4 +838,89 @@ fn a_range_with_no_known_pixel_is_refused_by_name() {
     let mut one = Grid::filled(6, 4, f32::NAN);
     *one.get_mut(2, 1) = 4.0;
     assert!(brume::photo::Photo::from_range(common::noise_image(6, 4, 1), one).is_ok());
+}
+
+/// A phone's street frame through the CLI: ARCore's depth (millimetres of z-depth, 0
+/// unknown) 4 times smaller than the image, reaching 20 m, the sky unknown above. Under
+/// fog of 150 m visibility the sky is veiled (it is seen 1 km away, not at 1.5 times the
+/// depth's reach), and so is the sky from 8 px above the horizon, the horizon margin
+/// being 8 of the image's pixels (2 cells of the depth map), not 8 cells
+/// (32 px: the whole sky, tapered from the ground's range). Before both, τ was 0.52 to
+/// 0.61 over the whole sky. The ground keeps τ = exp(−β·R) of its range.
+#[test]
+fn a_phone_frame_has_its_sky_veiled_beyond_the_horizon_margin() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h, factor) = (64, 48, 4);
+    let horizon = h / 2;
+    let image = Grid::from_fn(w, h, |x, y| match y < horizon {
+        true => [0.35f32, 0.5, 0.9, 1.0],
+        false => [0.1 + 0.02 * ((x / 3 + y / 3) % 2) as f32, 0.3, 0.1, 1.0],
+    });
+    write_rgba(&dir.path().join("frame.png"), &image).unwrap();
+    // z from 20 m on the first ground cell row down to 3 m on the last.
+    let (dw, dh) = (w / factor, h / factor);
+    let z_mm = |cy: usize| 20_000 - (17_000 * (cy - dh / 2) / (dh / 2 - 1)) as u16;
+    let depth: Vec<u16> = (0..dw * dh)
+        .map(|i| if i / dw < dh / 2 { 0 } else { z_mm(i / dw) })
+        .collect();
+    image::ImageBuffer::<image::Luma<u16>, _>::from_raw(dw as u32, dh as u32, depth)
+        .unwrap()
+        .save(dir.path().join("arcore.png"))
+        .unwrap();
+    let tau = |refine: &str| {
+        let out: Vec<RgbImage> = ["0,0,0", "1,1,1"]
+            .iter()
+            .map(|a| {
+                let name = format!("a{}.pfm", &a[..1]);
+                let o = brume(
+                    dir.path(),
+                    &[
+                        "render",
+                        "--image",
+                        "frame.png",
+                        "--depth",
+                        "arcore.png",
+                        "--depth-format",
+                        "arcore",
+                        "--fov",
+                        "45",
+                        "--visibility",
+                        "150",
+                        "--lambda",
+                        "0",
+                        "--airlight",
+                        a,
+                        "--refine",
+                        refine,
+                        "--out",
+                        &name,
+                    ],
+                );
+                assert!(o.status.success(), "{}", stderr(&o));
+                load(&dir.path().join(name))
+            })
+            .collect();
+        Grid::from_fn(w, h, |x, y| {
+            1.0 - (out[1].get(x, y)[1] - out[0].get(x, y)[1])
+        })
+    };
+    for refine in ["none", "guided"] {
+        let t = tau(refine);
+        for x in 0..w {
+            for y in 0..horizon - 8 {
+                let v = *t.get(x, y);
+                assert!(v < 1e-4, "--refine {refine}: sky ({x}, {y}): τ = {v}");
+            }
+        }
+        // The ground 12 px below the horizon: cell row 9 of z = 9.8 m, between its
+        // neighbours' 13.2 and 6.4 m (the ray is 1.01 times as long there).
+        let beta = LN_20 / 150.0;
+        let (x, y) = (w / 2, horizon + 12);
+        let v = f64::from(*t.get(x, y));
+        let (lo, hi) = ((-beta * 13.2 * 1.01).exp(), (-beta * 6.4).exp());
+        assert!(
+            v > lo && v < hi,
+            "--refine {refine}: ground τ = {v}, not in {lo}..{hi}"
+        );
+    }
 }

@@ -497,7 +497,8 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// return_info=True also returns the labels of a dehazing dataset (the scattering model
 /// I = J·t + A·(1 - t), before the capture): transmittance (float32 HxW, t = exp(-beta R)
 /// at the image's size), range_m (float32 HxW, the range R the fog read: pre-processed,
-/// refined, unknown pixels the farthest), airlight (A, three linear RGB floats),
+/// refined, unknown pixels the farthest, the sky at least 1 km away with beta or
+/// visibility), airlight (A, three linear RGB floats),
 /// airlight_source ('given', 'sky', 'neutral' or 'default'), beta, visibility_m and
 /// sigma_max_px (the blur's largest scale). With ka/ks, range_m is in the caller's units
 /// and beta is (ka + ks) / the largest range, per that unit.

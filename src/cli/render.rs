@@ -75,7 +75,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         }
         Some(u) => {
             // The range is read as the fog would read it, and changes nothing.
-            let (range, divisor) = photo::medium_range(&opts.extinction, &prep.range)?;
+            let (range, divisor) = photo::medium_range(&opts.extinction, &prep)?;
             let rendered = headless.render(&scene.image, &range, u, &opts.blur)?;
             (rendered, None, divisor, None)
         }

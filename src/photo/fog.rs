@@ -103,19 +103,61 @@ impl FogOptions {
     }
 }
 
-/// The range texture the haze reads: `range` normalised by its largest value (paper 000),
-/// returned with it, or kept in metres for physical fog (returned with 1). Unknown values
+/// The range texture the haze reads: `prepared`'s range normalised by its largest value
+/// (paper 000), returned with it, or in metres for physical fog, its sky at least
+/// [`SKY_RANGE_M`] away ([`PreparedPhoto::metres`]; returned with 1). Unknown values
 /// (NaN, ≤ 0) are taken as the largest.
-pub fn medium_range(extinction: &Extinction, range: &ScalarMap) -> Result<(ScalarMap, f64)> {
+pub fn medium_range(extinction: &Extinction, prepared: &PreparedPhoto) -> Result<(ScalarMap, f64)> {
     match extinction {
-        Extinction::Physical(_) => {
-            let (metres, _) = physical::metric_range(range)?;
-            Ok((metres, 1.0))
-        }
+        Extinction::Physical(_) => Ok((prepared.metres()?, 1.0)),
         Extinction::Normalised { .. } => {
-            let (normalised, r_max) = haze::normalise_range(range)?;
+            let (normalised, r_max) = haze::normalise_range(&prepared.range)?;
             Ok((normalised, f64::from(r_max)))
         }
+    }
+}
+
+/// The least range, in metres, at which physical fog sees the sky (1 km: a low cloud
+/// deck seen across a valley; the clear sky is farther): fog of visibility V veils it to
+/// τ = 20^(−1000 m / V), 2e-9 at V = 150 m and 0.37 at V = 3 km.
+///
+/// Pre-processing puts the sky at Smax = 1.5·Rmax (`PrepOptions::sky_range_factor`),
+/// paper 000's sky for normalised range, where only ratios count. In metres that ties the
+/// sky to how far the sensor reached: a phone's depth stops at 8.2 m (`DEPTH16`) or
+/// 65.5 m (ARCore), which put the sky 12 or 98 m away, and fog of 150 m visibility left it
+/// 78 % or 14 % of its own colour.
+pub const SKY_RANGE_M: f64 = 1000.0;
+
+impl PreparedPhoto {
+    /// The range in metres that physical fog reads ([`physical::metric_range`] of
+    /// [`PreparedPhoto::range`]), the sky moved out to at least [`SKY_RANGE_M`]: the range
+    /// above Rmax, the farthest scene point, is stretched in log range so that the sky's
+    /// Smax lands on [`SKY_RANGE_M`] (r ↦ Rmax·(r/Rmax)^k, k = ln(SKY_RANGE_M/Rmax) /
+    /// ln(Smax/Rmax)). The scene up to Rmax keeps its range bit for bit, and the horizon
+    /// margin's taper from the scene into the sky, and the refinement's blend across the
+    /// skyline, stay continuous. Without pre-processing, without sky, or with the sky
+    /// already at [`SKY_RANGE_M`] or farther, the range is only made metric.
+    pub fn metres(&self) -> Result<ScalarMap> {
+        let (metres, _) = physical::metric_range(&self.range)?;
+        let Some((r_max, s_max)) = self
+            .prepared
+            .as_ref()
+            .and_then(|p| Some((f64::from(p.stats.r_max), f64::from(p.stats.s_max?))))
+        else {
+            return Ok(metres);
+        };
+        if !(r_max > 0.0 && s_max > r_max && s_max < SKY_RANGE_M) {
+            return Ok(metres);
+        }
+        let k = (SKY_RANGE_M / r_max).ln() / (s_max / r_max).ln();
+        Ok(metres.map(|&r| {
+            let r = f64::from(r);
+            if r > r_max {
+                (r_max * (r / r_max).powf(k)) as f32
+            } else {
+                r as f32
+            }
+        }))
     }
 }
 
@@ -154,7 +196,7 @@ pub fn fog(
     opts: &FogOptions,
 ) -> Result<FoggedPhoto> {
     let haze = checked_haze(photo, prepared, opts)?;
-    let (range, r_max) = medium_range(&opts.extinction, &prepared.range)?;
+    let (range, r_max) = medium_range(&opts.extinction, prepared)?;
     let rendered = renderer.render(&photo.image, &range, &haze, &opts.blur)?;
     Ok(FoggedPhoto {
         rendered,
@@ -194,7 +236,7 @@ pub fn fog_each(
         }
         return Ok(());
     }
-    let (range, r_max) = medium_range(&first.extinction, &prepared.range)?;
+    let (range, r_max) = medium_range(&first.extinction, prepared)?;
     let media: Vec<&dyn Medium> = hazes.iter().map(|h| h as &dyn Medium).collect();
     renderer.render_each(&photo.image, &range, &media, &first.blur, |k, rendered| {
         let haze = hazes[k];
@@ -248,6 +290,7 @@ pub fn transmittance_map(haze: &Haze, medium_range: &ScalarMap) -> ScalarMap {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::raster::RgbImage;
 
     /// Every value is checked before any work, the field named: the haze's, then the
     /// blur's.
@@ -270,5 +313,86 @@ mod tests {
             "ka",
         );
         refused(|o| o.blur.rho_max = 0.5, "rho_max");
+    }
+
+    /// A phone's street frame: a blue sky the depth does not reach over ground measured
+    /// from 2 to `far` metres, its range prepared (sky found, margin tapered).
+    fn phone_frame(far: f32) -> PreparedPhoto {
+        let (w, h) = (64, 48);
+        let image = RgbImage::from_fn(w, h, |x, y| match y < h / 2 {
+            true => [0.35, 0.5, 0.9],
+            false => [0.1 + 0.01 * (x % 7) as f32, 0.3, 0.1],
+        });
+        let range = ScalarMap::from_fn(w, h, |_, y| match y < h / 2 {
+            true => f32::NAN,
+            false => far - (far - 2.0) * (y - h / 2) as f32 / (h / 2 - 1) as f32,
+        });
+        let photo = Photo::from_range(image, range).unwrap();
+        super::super::preprocess(&photo, &super::super::PrepareOptions::default()).unwrap()
+    }
+
+    /// Physical fog sees the sky of a shallow depth map 1 km away, not at 1.5 times the
+    /// depth's reach; the scene keeps its range to the bit, and the taper into the sky
+    /// stays in order (a step would draw the horizon).
+    #[test]
+    fn physical_fog_puts_a_shallow_sky_a_kilometre_away() {
+        let prepared = phone_frame(8.0);
+        let p = prepared.prepared.as_ref().unwrap();
+        let (r_max, s_max) = (p.stats.r_max, p.stats.s_max.unwrap());
+        assert_eq!(r_max, 8.0);
+        assert!((s_max - 12.0).abs() < 1e-5, "{s_max}");
+        assert!(p.stats.margin_pixels > 0, "{:?}", p.stats);
+        let plain = physical::metric_range(&prepared.range).unwrap().0;
+        let metres = prepared.metres().unwrap();
+        let mut pairs: Vec<(f32, f32)> = plain
+            .as_slice()
+            .iter()
+            .copied()
+            .zip(metres.as_slice().iter().copied())
+            .collect();
+        for &(before, after) in &pairs {
+            if before <= r_max {
+                assert_eq!(before.to_bits(), after.to_bits());
+            } else if before == s_max {
+                assert!((f64::from(after) - SKY_RANGE_M).abs() < 1e-3, "{after}");
+            } else {
+                assert!(
+                    after > before && f64::from(after) < SKY_RANGE_M,
+                    "{before} -> {after}"
+                );
+            }
+        }
+        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert!(pairs.windows(2).all(|w| w[0].1 <= w[1].1), "not monotone");
+        // The fog of 150 m visibility: the sky veiled, the scene as before.
+        let fog = FogOptions::visibility(150.0).unwrap();
+        let (range, divisor) = medium_range(&fog.extinction, &prepared).unwrap();
+        assert_eq!(divisor, 1.0);
+        let haze = fog.haze(prepared.airlight).unwrap();
+        let tau = transmittance_map(&haze, &range);
+        let sky_tau = tau.get(0, 0);
+        assert!(*sky_tau < 1e-8, "{sky_tau}");
+        assert_eq!(tau.get(0, 47), transmittance_map(&haze, &plain).get(0, 47));
+    }
+
+    /// A sky already a kilometre away or more, normalised κ, and a photo without
+    /// pre-processing read the range as they did.
+    #[test]
+    fn a_deep_sky_and_normalised_range_are_left_alone() {
+        let deep = phone_frame(800.0);
+        let plain = physical::metric_range(&deep.range).unwrap().0;
+        assert_eq!(deep.metres().unwrap().as_slice(), plain.as_slice());
+        let shallow = phone_frame(8.0);
+        let kappa = FogOptions::default();
+        let (range, r_max) = medium_range(&kappa.extinction, &shallow).unwrap();
+        let (normalised, largest) = haze::normalise_range(&shallow.range).unwrap();
+        assert_eq!(
+            (range.as_slice(), r_max),
+            (normalised.as_slice(), f64::from(largest))
+        );
+        let mut unprepared = shallow.clone();
+        unprepared.prepared = None;
+        let plain = physical::metric_range(&unprepared.range).unwrap().0;
+        assert_eq!(unprepared.metres().unwrap().as_slice(), plain.as_slice());
     }
 }

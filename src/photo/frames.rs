@@ -119,8 +119,9 @@ pub struct Frame {
     pub prep_ms: f64,
     /// The refinement and the range in metres, ms (wall), once [`Frame::refine`] ran.
     pub refine_ms: f64,
-    /// The range in metres at the image's size, unknown pixels the farthest: what every
-    /// β reads, made once by [`Frame::refine`].
+    /// The range in metres at the image's size, unknown pixels the farthest (in brume's
+    /// conventions the sky at least [`super::SKY_RANGE_M`] away: [`PreparedPhoto::metres`]):
+    /// what every β reads, made once by [`Frame::refine`].
     metres: Option<ScalarMap>,
 }
 
@@ -186,7 +187,12 @@ impl Frame {
             .refine_mode
             .unwrap_or(RefineMode::default_for(self.photo.depth.format));
         let plan = self.prepared.refine(&self.photo, &refine, filter)?;
-        self.metres = Some(physical::metric_range(&self.prepared.range)?.0);
+        self.metres = Some(match opts.conventions {
+            Conventions::Brume => self.prepared.metres()?,
+            // Their τ = exp(−βR) of the range as made metric, the sky where pre-processing
+            // put it.
+            Conventions::FoggyCityscapes => physical::metric_range(&self.prepared.range)?.0,
+        });
         self.refine_ms = elapsed_ms(started);
         Ok(plan)
     }

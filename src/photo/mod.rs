@@ -38,6 +38,7 @@ pub use capture::{capture, CaptureOptions, SensorNoise};
 pub use distribution::BetaDistribution;
 pub use fog::{
     fog, fog_each, medium_range, transmittance_map, Extinction, FogOptions, FoggedPhoto,
+    SKY_RANGE_M,
 };
 pub use frames::{transmittance_rgb8, Conventions, Frame, FrameFog, FrameOptions};
 pub use insert::{insert, Insertion, VirtualObject};

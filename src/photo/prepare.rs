@@ -112,12 +112,13 @@ pub fn preprocess(photo: &Photo, opts: &PrepareOptions) -> Result<PreparedPhoto>
         });
     };
     let (w, h) = (range.width(), range.height());
-    let small;
-    let image = if (photo.image.width(), photo.image.height()) == (w, h) {
-        &photo.image
+    let (small, cell_opts);
+    let (image, prep_opts) = if (photo.image.width(), photo.image.height()) == (w, h) {
+        (&photo.image, prep_opts)
     } else {
         small = refine::image_at_depth_size(&photo.image, w, h);
-        &small
+        cell_opts = margin_in_cells(prep_opts, photo.image.width() as f64 / w as f64);
+        (&small, &cell_opts)
     };
     let guides = Guides {
         image: Some(image),
@@ -140,6 +141,20 @@ pub fn preprocess(photo: &Photo, opts: &PrepareOptions) -> Result<PreparedPhoto>
         airlight_from,
         refined: None,
     })
+}
+
+/// `opts` for a depth map `factor` times smaller than the image: the horizon margin
+/// ([`PrepOptions::margin_px`]) is a width in the image's pixels, so on the depth map's
+/// grid it spans `margin_px / factor` cells, at least one (none stays none). Measured on a
+/// phone's depth at 1/8 (`tools/phone_depth_eval.py`): 8 cells, 64 of the image's pixels,
+/// tapered the range of every tower far into the sky round it, and fogged a halo of sky
+/// that much too thin.
+fn margin_in_cells(opts: &PrepOptions, factor: f64) -> PrepOptions {
+    let mut cells = opts.clone();
+    if opts.margin_px > 0.0 {
+        cells.margin_px = (opts.margin_px / factor).max(1.0);
+    }
+    cells
 }
 
 impl PreparedPhoto {

@@ -191,7 +191,7 @@ impl Photo {
             let look = aerial_look(&job);
             (job.photo.image, job.photo.range, look)
         } else {
-            let (medium_range, _) = brume::photo::medium_range(&fog.extinction, &prep.range)?;
+            let (medium_range, _) = brume::photo::medium_range(&fog.extinction, &prep)?;
             let look = PhotoLook::Haze {
                 haze: fog.haze(prep.airlight)?,
                 uniform: args.uniform_sigma.map(UniformBlur::new),

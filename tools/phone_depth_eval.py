@@ -1,0 +1,252 @@
+#!/usr/bin/env python3
+"""Judge brume's refinement of phone depth: coarse, noisy, with holes, under a street photo with sky.
+
+What it does, in one run:
+
+1. Renders brume's procedural 3D scene (``brume scene --fog none``) at ``--size`` with its
+   z-buffer, and from it the TRUE eye depth z and range R (as ``tools/stereo_refine_eval.py``:
+   ``z = n·f / (f − d·(f − n))``, ``R = z·|ray|``, focal ``F = (H/2) / tan(fov/2)`` px; one
+   scene unit is one metre).
+2. Makes a PHONE depth map from it, ``--factor`` times smaller on each side, in ARCore's Depth
+   API format (``acquireDepthImage16Bits``: 16-bit PNG, millimetres of z-depth, 0 unknown),
+   which is what an Android app saves. The model (its parameters are options; they are
+   assumptions, not measurements of one phone):
+   - each cell is the mean z of the full-resolution pixels it covers (a coarse sensor or a
+     depth-from-motion estimate mixes both sides of an edge: "flying pixels");
+   - a cell more than half sky, or with its z beyond ARCore's 65.535 m, is unknown (0);
+   - the known cells are smoothed by a normalised box of ``--bleed`` cells' radius (dense
+     phone depth bleeds across edges; 0 turns it off);
+   - multiplicative log-normal noise, σ = ``--noise-base`` + ``--noise-per-m``·z (depth from
+     motion or stereo loses precision with distance), seeded by ``--seed``;
+   - quantised to millimetres.
+3. Measures brume's transmittance per pixel for each ``--refine`` (none = joint bilateral
+   upsampling only, the default for ``arcore``; guided; unreliable; repair): ``brume render
+   --image left.png --depth phone.png --depth-format arcore --fov FOV --beta B --lambda 0``,
+   run with ``--airlight 0,0,0`` and ``1,1,1``: with λ = 0 nothing is blurred, so
+   ``τ = 1 − (out(A=1) − out(A=0))`` exactly. τ_true = exp(−β·R_true), 0 in the sky.
+4. Prints |τ − τ_true| (mean and 95th percentile, green channel) over: all pixels; pixels
+   within ``--edge-px`` of a truth depth edge (log z jumps by more than 0.05 between
+   neighbours, or sky next to a surface); the sky; surfaces away from edges; surfaces whose
+   phone depth is unknown (beyond 65.5 m, or mixed with the sky).
+5. Renders the foggy image (default airlight and blur) from the true range and from the phone
+   depth with each refinement, as PNGs, and the truth beside ``none`` and ``guided``.
+
+Outputs (in OUT_DIR): left.png, left_z.pfm, truth_range.pfm, phone.png (the ARCore map),
+err_*.png (|τ error| × 4, grey), fog_truth.png, fog_phone_{mode}.png, fog_side_by_side.png,
+results.json.
+
+Usage (from the repository root, after ``cargo build --release --bin brume``):
+
+    pip install opencv-python-headless numpy
+    python3 tools/phone_depth_eval.py OUT_DIR [--brume target/release/brume]
+        [--size 1024x512] [--factor 8] [--fov 45] [--beta 0.02] [--position 0,1.7,0]
+        [--yaw 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
+        [--margin PX]  (passed to brume render)
+        [--docs DIR]   (also copy fog_truth and fog_phone_none there as refine-phone-*.png)
+
+Needs numpy, OpenCV and the brume binary (headless EGL; llvmpipe is fine). About 10 s at
+1024x512 on 2 cores.
+"""
+
+import argparse
+import json
+import math
+import os
+import shutil
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from stereo_refine_eval import cv2, read_pfm, run, stats  # noqa: E402
+
+MODES = ("none", "guided", "unreliable", "repair")
+ARCORE_MAX_M = 65.535
+
+
+def write_pfm(path, a):
+    """A float32 grey PFM, little-endian, rows stored bottom to top."""
+    h, w = a.shape
+    with open(path, "wb") as f:
+        f.write(f"Pf\n{w} {h}\n-1.0\n".encode())
+        np.flipud(a).astype("<f4").tofile(f)
+
+
+def cell_mean(z, factor):
+    """The mean of the finite values over each factor x factor cell, and the known fraction."""
+    h, w = z.shape
+    cells = z.reshape(h // factor, factor, w // factor, factor)
+    known = np.isfinite(cells)
+    total = np.where(known, cells, 0.0).sum(axis=(1, 3))
+    count = known.sum(axis=(1, 3))
+    mean = np.where(count > 0, total / np.maximum(count, 1), np.nan)
+    return mean, count / float(factor * factor)
+
+
+def box_known(v, radius):
+    """The mean over a (2r + 1)² box of the known (finite) values; unknown stays unknown."""
+    if radius <= 0:
+        return v
+    known = np.isfinite(v)
+    k = (2 * radius + 1, 2 * radius + 1)
+    s = cv2.boxFilter(np.where(known, v, 0.0), -1, k, normalize=False,
+                      borderType=cv2.BORDER_CONSTANT)
+    n = cv2.boxFilter(known.astype(np.float64), -1, k, normalize=False,
+                      borderType=cv2.BORDER_CONSTANT)
+    return np.where(known, s / np.maximum(n, 1e-9), np.nan)
+
+
+def phone_depth(z, a):
+    """The phone's z-depth in metres at 1/factor (NaN unknown), as the docstring models it."""
+    mean, known_fraction = cell_mean(z, a.factor)
+    mean[(known_fraction <= 0.5) | ~(mean <= ARCORE_MAX_M)] = np.nan
+    log_z = box_known(np.log(mean), a.bleed)
+    rng = np.random.default_rng(a.seed)
+    sigma = a.noise_base + a.noise_per_m * np.exp(log_z)
+    noisy = np.exp(log_z + sigma * rng.standard_normal(log_z.shape))
+    return np.where(np.isfinite(noisy) & (noisy <= ARCORE_MAX_M), noisy, np.nan)
+
+
+def write_arcore(path, z_m):
+    """ARCore's 16-bit depth: millimetres of z-depth, 0 unknown."""
+    mm = np.where(np.isfinite(z_m), np.clip(np.round(z_m * 1000.0), 1, 65535), 0)
+    cv2.imwrite(path, mm.astype(np.uint16))
+
+
+def edges_of(z, sky, edge_px):
+    """Pixels within edge_px of a truth depth edge (log z jump > 0.05, or sky beside surface)."""
+    log_z = np.log(np.where(sky, 1.0, z))
+    e = np.zeros(z.shape, bool)
+    jx = (np.abs(np.diff(log_z, axis=1)) > 0.05) | (sky[:, 1:] != sky[:, :-1])
+    jy = (np.abs(np.diff(log_z, axis=0)) > 0.05) | (sky[1:, :] != sky[:-1, :])
+    e[:, 1:] |= jx
+    e[:, :-1] |= jx
+    e[1:, :] |= jy
+    e[:-1, :] |= jy
+    k = 2 * edge_px + 1
+    return cv2.dilate(e.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("out_dir")
+    ap.add_argument("--brume", default="target/release/brume")
+    ap.add_argument("--size", default="1024x512")
+    ap.add_argument("--factor", type=int, default=8, help="the phone depth is this much smaller")
+    ap.add_argument("--fov", type=float, default=45.0)
+    ap.add_argument("--near", type=float, default=2.0)
+    ap.add_argument("--far", type=float, default=1000.0)
+    ap.add_argument("--beta", type=float, default=0.02)
+    ap.add_argument("--position", default="0,1.7,0")
+    ap.add_argument("--yaw", type=float, default=0.0)
+    ap.add_argument("--pitch", type=float, default=0.0)
+    ap.add_argument("--bleed", type=int, default=1, help="smoothing radius in cells (0: none)")
+    ap.add_argument("--noise-base", type=float, default=0.01, help="relative noise at 0 m")
+    ap.add_argument("--noise-per-m", type=float, default=0.0015,
+                    help="relative noise added per metre of z")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--edge-px", type=int, default=None, help="[the factor]")
+    ap.add_argument("--margin", default=None, help="passed to brume render [its default]")
+    ap.add_argument("--docs", default=None)
+    a = ap.parse_args()
+
+    os.makedirs(a.out_dir, exist_ok=True)
+    o = lambda n: os.path.join(a.out_dir, n)  # noqa: E731
+    W, H = (int(v) for v in a.size.lower().split("x"))
+    if W % a.factor or H % a.factor:
+        sys.exit(f"phone_depth_eval: --size {a.size} is not a multiple of --factor {a.factor}")
+    edge_px = a.edge_px if a.edge_px is not None else a.factor
+    B = a.brume
+
+    # 1. The photo and the truth.
+    run([B, "scene", "--fog", "none", "--size", f"{W}x{H}", "--yaw", str(a.yaw),
+         "--pitch", str(a.pitch), "--fov", str(a.fov), "--near", str(a.near), "--far",
+         str(a.far), "--position", a.position, "--out", o("left.png"),
+         "--depth-out", o("left_z.pfm")])
+    F = (H / 2.0) / math.tan(math.radians(a.fov) / 2.0)
+    cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
+    zbuf = read_pfm(o("left_z.pfm"))
+    sky = zbuf >= 1.0
+    n, f = a.near, a.far
+    z = np.where(sky, np.inf, n * f / (f - zbuf * (f - n)))
+    xs, ys = np.meshgrid(np.arange(W), np.arange(H))
+    R_true = z * np.sqrt(1.0 + ((xs - cx) / F) ** 2 + ((ys - cy) / F) ** 2)
+    tau_true = np.where(sky, 0.0, np.exp(-a.beta * R_true))
+    write_pfm(o("truth_range.pfm"), np.where(sky, np.inf, R_true))
+
+    # 2. The phone's depth.
+    z_phone = phone_depth(np.where(sky, np.nan, z), a)
+    write_arcore(o("phone.png"), z_phone)
+    unknown_full = np.kron(~np.isfinite(z_phone), np.ones((a.factor, a.factor), bool))
+
+    surf = ~sky
+    near_edge = edges_of(z, sky, edge_px)
+    masks = {
+        "all": np.ones((H, W), bool),
+        f"near edges ({edge_px} px)": near_edge,
+        "sky": sky,
+        "surfaces, not near edges": surf & ~near_edge,
+        "surfaces without phone depth": surf & unknown_full,
+    }
+
+    # 3. τ per refinement.
+    prep_opts = [] if a.margin is None else ["--margin", a.margin]
+
+    def render(refine, out, extra):
+        run([B, "render", "--image", o("left.png"), "--depth", o("phone.png"),
+             "--depth-format", "arcore", "--fov", str(a.fov), "--beta", str(a.beta),
+             "--refine", refine, "--out", out] + extra + prep_opts)
+
+    results = {"setup": {"size": [W, H], "factor": a.factor, "fov_deg": a.fov,
+                         "beta": a.beta, "position": a.position, "yaw": a.yaw,
+                         "pitch": a.pitch, "bleed": a.bleed, "noise_base": a.noise_base,
+                         "noise_per_m": a.noise_per_m, "seed": a.seed,
+                         "phone_unknown_fraction": float((~np.isfinite(z_phone)).mean()),
+                         "sky_fraction": float(sky.mean()),
+                         "mask_pixels": {m: int(v.sum()) for m, v in masks.items()}},
+               "tau_abs_error": {}}
+    for mode in MODES:
+        outs = []
+        for A in ("0,0,0", "1,1,1"):
+            p = o(f"tau_{mode}_A{A[0]}.pfm")
+            render(mode, p, ["--lambda", "0", "--airlight", A])
+            outs.append(read_pfm(p)[..., 1])
+            os.remove(p)
+        err = np.abs(1.0 - (outs[1] - outs[0]) - tau_true)
+        cv2.imwrite(o(f"err_{mode}.png"), np.clip(err * 4 * 255, 0, 255).astype(np.uint8))
+        results["tau_abs_error"][mode] = {m: stats(err, v) for m, v in masks.items()}
+
+    # 5. Foggy pictures.
+    run([B, "render", "--image", o("left.png"), "--depth", o("truth_range.pfm"),
+         "--depth-format", "float", "--depth-kind", "range", "--depth-scale", "1", "--beta", str(a.beta),
+         "--out", o("fog_truth.png")])
+    for mode in MODES:
+        render(mode, o(f"fog_phone_{mode}.png"), [])
+    sheet = [cv2.imread(o(p)) for p in ("fog_truth.png", "fog_phone_none.png",
+                                         "fog_phone_guided.png")]
+    cv2.imwrite(o("fog_side_by_side.png"), np.hstack(sheet))
+    if a.docs:
+        os.makedirs(a.docs, exist_ok=True)
+        for mode in ("truth", "phone_none"):
+            dst = "refine-phone-" + mode.replace("phone_", "") + ".png"
+            shutil.copyfile(o(f"fog_{mode}.png"), os.path.join(a.docs, dst))
+
+    with open(o("results.json"), "w") as fh:
+        json.dump(results, fh, indent=1)
+
+    # 4. The table.
+    s = results["setup"]
+    print(f"scene {W}x{H}, fov {a.fov}°, beta {a.beta}/m; phone depth {W // a.factor}x"
+          f"{H // a.factor} (1/{a.factor}), {100 * s['phone_unknown_fraction']:.1f} % unknown, "
+          f"bleed {a.bleed}, noise {a.noise_base} + {a.noise_per_m}/m; sky "
+          f"{100 * s['sky_fraction']:.1f} %")
+    print("|tau - tau_true|, mean / 95th percentile, per region (pixels):")
+    print(f"{'region':40s}" + "".join(f"{m:>18s}" for m in MODES))
+    for m in masks:
+        cells = "".join("{:>9.4f} /{:>7.4f}".format(*results["tau_abs_error"][mode][m][:2])
+                        for mode in MODES)
+        print(f"{m + ' (' + str(int(masks[m].sum())) + ')':40s}" + cells)
+
+
+if __name__ == "__main__":
+    main()
