@@ -615,36 +615,55 @@ fn a_transmittance_map_is_applied_as_given() {
     let (w, h) = (16, 8);
     let white = Grid::filled(w, h, [1.0f32, 1.0, 1.0, 1.0]);
     write_rgba(&dir.path().join("white.pfm"), &white).unwrap();
-    let codes = |x: usize, y: usize| ((x * 17 + y * 31) % 256) as u8;
+    // The top rows, which a sky mask covers below, far denser than the rest (a sky's τ
+    // near 0 in a map).
+    let codes = |x: usize, y: usize| match y < 3 {
+        true => (2 + x % 3) as u8,
+        false => (40 + (x * 17 + y * 31) % 216) as u8,
+    };
     image::GrayImage::from_fn(w as u32, h as u32, |x, y| {
         image::Luma([codes(x as usize, y as usize)])
     })
     .save(dir.path().join("tau.png"))
     .unwrap();
-    let o = brume(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            "white.pfm",
-            "--transmittance-map",
-            "tau.png",
-            "--airlight",
-            "0,0,0",
-            "--lambda",
-            "0",
-            "--out",
-            "out.pfm",
-        ],
-    );
+    let args = [
+        "render",
+        "--image",
+        "white.pfm",
+        "--transmittance-map",
+        "tau.png",
+        "--airlight",
+        "0,0,0",
+        "--lambda",
+        "0",
+        "--out",
+        "out.pfm",
+    ];
+    let o = brume(dir.path(), &args);
     assert!(o.status.success(), "{}", stderr(&o));
-    let out = load(&dir.path().join("out.pfm"));
-    for y in 0..h {
-        for x in 0..w {
-            let want = (f32::from(codes(x, y)) / 255.0).max(0.5 / 255.0);
-            for got in out.get(x, y) {
-                // exp(ln τ) in f32 on the GPU: a few ulps.
-                assert!((got - want).abs() < 2e-6, "({x}, {y}): {got} vs {want}");
+    // With a sky mask too, whose sky physical fog would otherwise see 1 km away: the
+    // map's τ there as given as well.
+    image::GrayImage::from_fn(w as u32, h as u32, |_, y| {
+        image::Luma([255 * u8::from(y < 3)])
+    })
+    .save(dir.path().join("sky.png"))
+    .unwrap();
+    let mut masked = args.to_vec();
+    masked.extend(["--sky-mask", "sky.png", "--json"]);
+    let out_at = masked.iter().position(|a| *a == "out.pfm").unwrap();
+    masked[out_at] = "masked.pfm";
+    let report = json(&brume(dir.path(), &masked));
+    assert_eq!(report["prep"]["sky_pixels"], 3 * w, "{report}");
+    assert!(report["prep"]["s_max"].is_null(), "{report}");
+    for out in ["out.pfm", "masked.pfm"] {
+        let out = load(&dir.path().join(out));
+        for y in 0..h {
+            for x in 0..w {
+                let want = (f32::from(codes(x, y)) / 255.0).max(0.5 / 255.0);
+                for got in out.get(x, y) {
+                    // exp(ln τ) in f32 on the GPU: a few ulps.
+                    assert!((got - want).abs() < 2e-6, "({x}, {y}): {got} vs {want}");
+                }
             }
         }
     }

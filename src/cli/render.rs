@@ -38,8 +38,13 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let refine_mode = args.refine.options(scene.depth.format)?.mode.name();
     let refined = super::refine::refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
     if args.transmittance_map.is_some() {
-        // The map's τ as given: pre-processing found the sky for the airlight only.
+        // The map's τ as given: pre-processing found the sky for the airlight only, and
+        // put no sky at Smax in what the fog reads, so physical fog moves no sky out
+        // (`PreparedPhoto::metres`) and the report says so.
         prep.range = scene.depth.range.clone();
+        if let Some(p) = &mut prep.prepared {
+            p.stats.s_max = None;
+        }
     }
     let inserted = insert_object(args, &mut scene, &mut prep)?;
     let capture = capture_options(&args.capture, args.prep.seed)?;
