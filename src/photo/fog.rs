@@ -290,7 +290,7 @@ pub fn transmittance_map(haze: &Haze, medium_range: &ScalarMap) -> ScalarMap {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::raster::RgbImage;
+    use crate::raster::{Grid, RgbImage};
 
     /// Every value is checked before any work, the field named: the haze's, then the
     /// blur's.
@@ -373,6 +373,33 @@ mod tests {
         let sky_tau = tau.get(0, 0);
         assert!(*sky_tau < 1e-8, "{sky_tau}");
         assert_eq!(tau.get(0, 47), transmittance_map(&haze, &plain).get(0, 47));
+    }
+
+    /// An object inserted between the farthest scene point and the sky keeps its range
+    /// under physical fog, and the sky round it still goes 1 km out.
+    #[test]
+    fn an_inserted_object_beyond_the_scene_keeps_its_range() {
+        let mut prepared = phone_frame(8.0);
+        let (w, h) = (prepared.range.width(), prepared.range.height());
+        let mut photo = Photo::from_range(
+            RgbImage::filled(w, h, [0.35, 0.5, 0.9]),
+            ScalarMap::filled(w, h, 5.0),
+        )
+        .unwrap();
+        let at = |x: usize, y: usize| (20..30).contains(&x) && (4..10).contains(&y);
+        let rgba = Grid::from_fn(w, h, |x, y| match at(x, y) {
+            true => [0.5, 0.2, 0.1, 1.0],
+            false => [0.0; 4],
+        });
+        let range = ScalarMap::from_fn(w, h, |x, y| if at(x, y) { 10.0 } else { f32::NAN });
+        let object = super::super::VirtualObject::from_range(rgba, range, "tower").unwrap();
+        let done = super::super::insert(&mut photo, &mut prepared, &object).unwrap();
+        assert_eq!(done.in_front, 60, "{done:?}");
+        let p = prepared.prepared.as_ref().unwrap();
+        assert_eq!(p.stats.r_max, 10.0);
+        let metres = prepared.metres().unwrap();
+        assert_eq!(*metres.get(25, 6), 10.0);
+        assert!((f64::from(*metres.get(2, 0)) - SKY_RANGE_M).abs() < 1e-3);
     }
 
     /// A sky already a kilometre away or more, normalised κ, and a photo without

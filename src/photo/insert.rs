@@ -218,12 +218,26 @@ impl VirtualObject {
 /// Inserts `object` into `photo` and its `prepared` range (refined to the image's size)
 /// before [`super::fog()`], which then fogs it with the photo. The photo's own range
 /// decides what hides the object; pre-processing's holes filled and sky found count.
+/// The object is scene: pre-processing's farthest scene point (`PrepStats::r_max`) grows
+/// to the object's farthest visible pixel, so that physical fog, which moves what lies
+/// beyond it out with the sky ([`PreparedPhoto::metres`]), reads the object's range as
+/// given.
 pub fn insert(
     photo: &mut Photo,
     prepared: &mut PreparedPhoto,
     object: &VirtualObject,
 ) -> Result<Insertion> {
-    object.composite(&mut photo.image, &mut prepared.range)
+    let before = prepared.range.clone();
+    let done = object.composite(&mut photo.image, &mut prepared.range)?;
+    if let Some(p) = &mut prepared.prepared {
+        let written = before.as_slice().iter().zip(prepared.range.as_slice());
+        let farthest = written
+            .filter(|(b, a)| b.to_bits() != a.to_bits())
+            .map(|(_, a)| *a)
+            .fold(p.stats.r_max, f32::max);
+        p.stats.r_max = farthest;
+    }
+    Ok(done)
 }
 
 /// Whether an EXR channel's full name is a depth: `Z`, a `Z` in a layer named `Depth`
