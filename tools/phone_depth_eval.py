@@ -58,7 +58,8 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from stereo_refine_eval import cv2, read_pfm, run, stats  # noqa: E402
+from stereo_refine_eval import (  # noqa: E402
+    cv2, print_error_table, read_pfm, run, stats, tau_from_two_airlights)
 
 MODES = ("none", "guided", "unreliable", "repair")
 ARCORE_MAX_M = 65.535
@@ -206,13 +207,10 @@ def main():
                          "mask_pixels": {m: int(v.sum()) for m, v in masks.items()}},
                "tau_abs_error": {}}
     for mode in MODES:
-        outs = []
-        for A in ("0,0,0", "1,1,1"):
-            p = o(f"tau_{mode}_A{A[0]}.pfm")
-            render(mode, p, ["--lambda", "0", "--airlight", A])
-            outs.append(read_pfm(p)[..., 1])
-            os.remove(p)
-        err = np.abs(1.0 - (outs[1] - outs[0]) - tau_true)
+        tau = tau_from_two_airlights(
+            lambda A, out: render(mode, out, ["--lambda", "0", "--airlight", A]),
+            lambda A: o(f"tau_{mode}_A{A}.pfm"))
+        err = np.abs(tau - tau_true)
         cv2.imwrite(o(f"err_{mode}.png"), np.clip(err * 4 * 255, 0, 255).astype(np.uint8))
         results["tau_abs_error"][mode] = {m: stats(err, v) for m, v in masks.items()}
 
@@ -240,12 +238,7 @@ def main():
           f"{H // a.factor} (1/{a.factor}), {100 * s['phone_unknown_fraction']:.1f} % unknown, "
           f"bleed {a.bleed}, noise {a.noise_base} + {a.noise_per_m}/m; sky "
           f"{100 * s['sky_fraction']:.1f} %")
-    print("|tau - tau_true|, mean / 95th percentile, per region (pixels):")
-    print(f"{'region':40s}" + "".join(f"{m:>18s}" for m in MODES))
-    for m in masks:
-        cells = "".join("{:>9.4f} /{:>7.4f}".format(*results["tau_abs_error"][mode][m][:2])
-                        for mode in MODES)
-        print(f"{m + ' (' + str(int(masks[m].sum())) + ')':40s}" + cells)
+    print_error_table(40, MODES, results["tau_abs_error"], masks)
 
 
 if __name__ == "__main__":

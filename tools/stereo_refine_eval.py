@@ -97,6 +97,28 @@ def write_cityscapes(path, disp):
     cv2.imwrite(path, p)
 
 
+def tau_from_two_airlights(render, path_for):
+    """τ (green channel) from two renders without blur, ``render(airlight, out_path)`` with
+    airlight 0 and 1: out = τ·J + (1 − τ)·A, so τ = 1 − (out(A=1) − out(A=0)) whatever J."""
+    outs = []
+    for A in ("0,0,0", "1,1,1"):
+        p = path_for(A[0])
+        render(A, p)
+        outs.append(read_pfm(p)[..., 1])
+        os.remove(p)
+    return 1.0 - (outs[1] - outs[0])
+
+
+def print_error_table(width, columns, errors, masks):
+    """The |τ − τ_true| table: a row per region of ``masks``, the mean / 95th percentile of
+    each entry of ``errors`` (in its order, headed by ``columns``) in turn."""
+    print("|tau - tau_true|, mean / 95th percentile, per region (pixels):")
+    print(f"{'region':{width}s}" + "".join(f"{c:>18s}" for c in columns))
+    for m in masks:
+        cells = "".join("{:>9.4f} /{:>7.4f}".format(*e[m][:2]) for e in errors.values())
+        print(f"{m + ' (' + str(int(masks[m].sum())) + ')':{width}s}" + cells)
+
+
 def stats(err, mask):
     e = err[mask]
     if e.size == 0:
@@ -218,18 +240,13 @@ def main():
 
     # 3. τ per condition.
     def tau_of(depth, refine, tag):
-        outs = []
-        for A in ("0,0,0", "1,1,1"):
-            p = o(f"tau_{tag}_A{A[0]}.pfm")
+        def render(airlight, out):
             run([B, "render", "--image", o("left.png"), "--depth", o(depth),
                  "--depth-format", "cityscapes", "--camera",
                  o(depth.replace("_disparity.png", "_camera.json")),
-                 "--beta", str(a.beta), "--lambda", "0", "--airlight", A,
-                 "--refine", refine, "--out", p] + refine_opts + right_opts)
-            outs.append(read_pfm(p)[..., 1])
-            os.remove(p)
-        t = 1.0 - (outs[1] - outs[0])
-        return t
+                 "--beta", str(a.beta), "--lambda", "0", "--airlight", airlight,
+                 "--refine", refine, "--out", out] + refine_opts + right_opts)
+        return tau_from_two_airlights(render, lambda A: o(f"tau_{tag}_A{A}.pfm"))
 
     right_opts = ["--right", o("right.png")] if a.right else []
     conds = [("truth disparity, refine none", "truth_disparity.png", "none", "truth_none"),
@@ -293,15 +310,9 @@ def main():
               disp_stats["valid_in_sky_fraction_of_sky"],
               disp_stats["bad1_fraction_valid_surfaces"],
               disp_stats["bad3_fraction_valid_surfaces"]))
-    print("|tau - tau_true|, mean / 95th percentile, per region (pixels):")
-    labels = list(results["tau_abs_error"])
     short = ["truth/none", "truth/guided", "SGBM/none", "SGBM/guided", "SGBM/unreliable",
              "truth/repair", "SGBM/repair"]
-    print(f"{'region':42s}" + "".join(f"{c:>18s}" for c in short))
-    for m in masks:
-        cells = "".join("{:>9.4f} /{:>7.4f}".format(*results["tau_abs_error"][lb][m][:2])
-                        for lb in labels)
-        print(f"{m + ' (' + str(int(masks[m].sum())) + ')':42s}" + cells)
+    print_error_table(42, short, results["tau_abs_error"], masks)
 
 if __name__ == "__main__":
     main()
