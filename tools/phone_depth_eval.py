@@ -50,7 +50,6 @@ Needs numpy, OpenCV and the brume binary (headless EGL; llvmpipe is fine). About
 
 import argparse
 import json
-import math
 import os
 import shutil
 import sys
@@ -59,7 +58,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stereo_refine_eval import (  # noqa: E402
-    cv2, print_error_table, read_pfm, run, stats, tau_from_two_airlights)
+    cv2, print_error_table, run, stats, tau_from_two_airlights, truth_from_zbuffer)
 
 MODES = ("none", "guided", "unreliable", "repair")
 ARCORE_MAX_M = 65.535
@@ -164,14 +163,7 @@ def main():
          "--pitch", str(a.pitch), "--fov", str(a.fov), "--near", str(a.near), "--far",
          str(a.far), "--position", a.position, "--out", o("left.png"),
          "--depth-out", o("left_z.pfm")])
-    F = (H / 2.0) / math.tan(math.radians(a.fov) / 2.0)
-    cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
-    zbuf = read_pfm(o("left_z.pfm"))
-    sky = zbuf >= 1.0
-    n, f = a.near, a.far
-    z = np.where(sky, np.inf, n * f / (f - zbuf * (f - n)))
-    xs, ys = np.meshgrid(np.arange(W), np.arange(H))
-    R_true = z * np.sqrt(1.0 + ((xs - cx) / F) ** 2 + ((ys - cy) / F) ** 2)
+    _, sky, z, R_true = truth_from_zbuffer(o("left_z.pfm"), a.fov, a.near, a.far)
     tau_true = np.where(sky, 0.0, np.exp(-a.beta * R_true))
     write_pfm(o("truth_range.pfm"), np.where(sky, np.inf, R_true))
 

@@ -97,6 +97,21 @@ def write_cityscapes(path, disp):
     cv2.imwrite(path, p)
 
 
+def truth_from_zbuffer(path, fov, near, far):
+    """The true eye depth z and range R (inf in the sky) of brume's z-buffer at ``path``
+    (OpenGL window depth in [0, 1], 1 = sky), the sky mask and the focal length F in px:
+    ``z = n·f / (f − d·(f − n))``, ``R = z·|ray|``, principal point at the image's centre."""
+    zbuf = read_pfm(path)
+    H, W = zbuf.shape
+    F = (H / 2.0) / math.tan(math.radians(fov) / 2.0)
+    cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
+    sky = zbuf >= 1.0
+    z = np.where(sky, np.inf, near * far / (far - zbuf * (far - near)))
+    xs, ys = np.meshgrid(np.arange(W), np.arange(H))
+    R = z * np.sqrt(1.0 + ((xs - cx) / F) ** 2 + ((ys - cy) / F) ** 2)
+    return F, sky, z, R
+
+
 def tau_from_two_airlights(render, path_for):
     """τ (green channel) from two renders without blur, ``render(airlight, out_path)`` with
     airlight 0 and 1: out = τ·J + (1 − τ)·A, so τ = 1 − (out(A=1) − out(A=0)) whatever J."""
@@ -175,15 +190,9 @@ def main():
                         "--depth-out", o("left_z.pfm")])
     run([B] + common + ["--position", ",".join(map(str, pos_r)), "--out", o("right.png")])
 
-    F = (H / 2.0) / math.tan(math.radians(a.fov) / 2.0)
+    F, sky, z, R_true = truth_from_zbuffer(o("left_z.pfm"), a.fov, a.near, a.far)
     cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
-    zbuf = read_pfm(o("left_z.pfm"))
-    sky = zbuf >= 1.0
-    n, f = a.near, a.far
-    z = np.where(sky, np.inf, n * f / (f - zbuf * (f - n)))
-    xs, ys = np.meshgrid(np.arange(W), np.arange(H))
-    ray = np.sqrt(1.0 + ((xs - cx) / F) ** 2 + ((ys - cy) / F) ** 2)
-    R_true = z * ray
+    xs = np.meshgrid(np.arange(W), np.arange(H))[0]
     d_true = np.where(sky, 0.0, F * a.baseline / z)
     tau_true = np.where(sky, 0.0, np.exp(-a.beta * R_true))
 
