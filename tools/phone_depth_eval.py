@@ -7,31 +7,35 @@ What it does, in one run:
    z-buffer, and from it the TRUE eye depth z and range R (as ``tools/stereo_refine_eval.py``:
    ``z = n·f / (f − d·(f − n))``, ``R = z·|ray|``, focal ``F = (H/2) / tan(fov/2)`` px; one
    scene unit is one metre).
-2. Makes a PHONE depth map from it, ``--factor`` times smaller on each side, in ARCore's Depth
-   API format (``acquireDepthImage16Bits``: 16-bit PNG, millimetres of z-depth, 0 unknown),
-   which is what an Android app saves. The model (its parameters are options; they are
-   assumptions, not measurements of one phone):
-   - each cell is the mean z of the full-resolution pixels it covers (a coarse sensor or a
-     depth-from-motion estimate mixes both sides of an edge: "flying pixels");
-   - a cell more than half sky, or with its z beyond ARCore's 65.535 m, is unknown (0);
+2. Makes a PHONE depth map from it, ``--factor`` times smaller on each side, as an Android
+   app saves it (``--format``): ARCore's Depth API (``acquireDepthImage16Bits``: 16-bit PNG,
+   millimetres of z-depth, 0 unknown, 65.535 m at most; the default) or Camera2's
+   ``DEPTH16`` from a time-of-flight sensor (13 bits of millimetres of range, 8.191 m at most,
+   the 3 confidence bits 0: full confidence). The model (its parameters are options; they
+   are assumptions, not measurements of one phone):
+   - each cell is the mean depth (z, or range for DEPTH16) of the full-resolution pixels it
+     covers (a coarse sensor or a depth-from-motion estimate mixes both sides of an edge:
+     "flying pixels");
+   - a cell more than half sky, or beyond the format's reach, is unknown (0);
    - the known cells are smoothed by a normalised box of ``--bleed`` cells' radius (dense
      phone depth bleeds across edges; 0 turns it off);
    - multiplicative log-normal noise, σ = ``--noise-base`` + ``--noise-per-m``·z (depth from
      motion or stereo loses precision with distance), seeded by ``--seed``;
    - quantised to millimetres.
 3. Measures brume's transmittance per pixel for each ``--refine`` (none = joint bilateral
-   upsampling only, the default for ``arcore``; guided; unreliable; repair): ``brume render
-   --image left.png --depth phone.png --depth-format arcore --fov FOV --beta B --lambda 0``,
+   upsampling only, the default for both formats; guided; unreliable; repair): ``brume
+   render --image left.png --depth phone.png --depth-format arcore --fov FOV --beta B
+   --lambda 0`` (``--depth-format android-depth16``, read as range, for DEPTH16),
    run with ``--airlight 0,0,0`` and ``1,1,1``: with λ = 0 nothing is blurred, so
    ``τ = 1 − (out(A=1) − out(A=0))`` exactly. τ_true = exp(−β·R_true), 0 in the sky.
 4. Prints |τ − τ_true| (mean and 95th percentile, green channel) over: all pixels; pixels
    within ``--edge-px`` of a truth depth edge (log z jumps by more than 0.05 between
    neighbours, or sky next to a surface); the sky; surfaces away from edges; surfaces whose
-   phone depth is unknown (beyond 65.5 m, or mixed with the sky).
+   phone depth is unknown (beyond its reach, or mixed with the sky).
 5. Renders the foggy image (default airlight and blur) from the true range and from the phone
    depth with each refinement, as PNGs, and the truth beside ``none`` and ``guided``.
 
-Outputs (in OUT_DIR): left.png, left_z.pfm, truth_range.pfm, phone.png (the ARCore map),
+Outputs (in OUT_DIR): left.png, left_z.pfm, truth_range.pfm, phone.png (the phone's map),
 err_*.png (|τ error| × 4, grey), fog_truth.png, fog_phone_{mode}.png, fog_side_by_side.png,
 results.json.
 
@@ -39,7 +43,8 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
 
     pip install opencv-python-headless numpy
     python3 tools/phone_depth_eval.py OUT_DIR [--brume target/release/brume]
-        [--size 1024x512] [--factor 8] [--fov 45] [--beta 0.02] [--position 0,1.7,0]
+        [--format arcore|android-depth16] [--size 1024x512] [--factor 8] [--fov 45]
+        [--beta 0.02] [--position 0,1.7,0]
         [--yaw 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
         [--margin PX]  (passed to brume render)
         [--docs DIR]   (also copy fog_truth and fog_phone_none there as refine-phone-*.png)
@@ -61,7 +66,8 @@ from stereo_refine_eval import (  # noqa: E402
     cv2, print_error_table, run, stats, tau_from_two_airlights, truth_from_zbuffer)
 
 MODES = ("none", "guided", "unreliable", "repair")
-ARCORE_MAX_M = 65.535
+# The most each format holds, in metres: 16 and 13 bits of millimetres.
+REACH_M = {"arcore": 65.535, "android-depth16": 8.191}
 
 
 def write_pfm(path, a):
@@ -97,19 +103,22 @@ def box_known(v, radius):
 
 
 def phone_depth(z, a):
-    """The phone's z-depth in metres at 1/factor (NaN unknown), as the docstring models it."""
+    """The phone's depth in metres at 1/factor (NaN unknown), as the docstring models it."""
+    reach = REACH_M[a.format]
     mean, known_fraction = cell_mean(z, a.factor)
-    mean[(known_fraction <= 0.5) | ~(mean <= ARCORE_MAX_M)] = np.nan
+    mean[(known_fraction <= 0.5) | ~(mean <= reach)] = np.nan
     log_z = box_known(np.log(mean), a.bleed)
     rng = np.random.default_rng(a.seed)
     sigma = a.noise_base + a.noise_per_m * np.exp(log_z)
     noisy = np.exp(log_z + sigma * rng.standard_normal(log_z.shape))
-    return np.where(np.isfinite(noisy) & (noisy <= ARCORE_MAX_M), noisy, np.nan)
+    return np.where(np.isfinite(noisy) & (noisy <= reach), noisy, np.nan)
 
 
-def write_arcore(path, z_m):
-    """ARCore's 16-bit depth: millimetres of z-depth, 0 unknown."""
-    mm = np.where(np.isfinite(z_m), np.clip(np.round(z_m * 1000.0), 1, 65535), 0)
+def write_phone(path, depth_m, fmt):
+    """16 bits of millimetres, 0 unknown: all 16 for ARCore, the low 13 for DEPTH16 (its
+    confidence bits 0, full confidence)."""
+    top = 65535 if fmt == "arcore" else 8191
+    mm = np.where(np.isfinite(depth_m), np.clip(np.round(depth_m * 1000.0), 1, top), 0)
     cv2.imwrite(path, mm.astype(np.uint16))
 
 
@@ -132,6 +141,7 @@ def main():
     ap.add_argument("out_dir")
     ap.add_argument("--brume", default="target/release/brume")
     ap.add_argument("--size", default="1024x512")
+    ap.add_argument("--format", choices=sorted(REACH_M), default="arcore")
     ap.add_argument("--factor", type=int, default=8, help="the phone depth is this much smaller")
     ap.add_argument("--fov", type=float, default=45.0)
     ap.add_argument("--near", type=float, default=2.0)
@@ -168,8 +178,9 @@ def main():
     write_pfm(o("truth_range.pfm"), np.where(sky, np.inf, R_true))
 
     # 2. The phone's depth.
-    z_phone = phone_depth(np.where(sky, np.nan, z), a)
-    write_arcore(o("phone.png"), z_phone)
+    measured = z if a.format == "arcore" else R_true
+    z_phone = phone_depth(np.where(sky, np.nan, measured), a)
+    write_phone(o("phone.png"), z_phone, a.format)
     unknown_full = np.kron(~np.isfinite(z_phone), np.ones((a.factor, a.factor), bool))
 
     surf = ~sky
@@ -185,12 +196,16 @@ def main():
     # 3. τ per refinement.
     prep_opts = [] if a.margin is None else ["--margin", a.margin]
 
-    def render(refine, out, extra):
-        run([B, "render", "--image", o("left.png"), "--depth", o("phone.png"),
-             "--depth-format", "arcore", "--fov", str(a.fov), "--beta", str(a.beta),
-             "--refine", refine, "--out", out] + extra + prep_opts)
+    depth_opts = ["--depth-format", a.format]
+    if a.format == "arcore":
+        depth_opts += ["--fov", str(a.fov)]
 
-    results = {"setup": {"size": [W, H], "factor": a.factor, "fov_deg": a.fov,
+    def render(refine, out, extra):
+        run([B, "render", "--image", o("left.png"), "--depth", o("phone.png")] + depth_opts
+            + ["--beta", str(a.beta), "--refine", refine, "--out", out] + extra + prep_opts)
+
+    results = {"setup": {"format": a.format, "size": [W, H], "factor": a.factor,
+                         "fov_deg": a.fov,
                          "beta": a.beta, "position": a.position, "yaw": a.yaw,
                          "pitch": a.pitch, "bleed": a.bleed, "noise_base": a.noise_base,
                          "noise_per_m": a.noise_per_m, "seed": a.seed,
@@ -226,7 +241,7 @@ def main():
 
     # 4. The table.
     s = results["setup"]
-    print(f"scene {W}x{H}, fov {a.fov}°, beta {a.beta}/m; phone depth {W // a.factor}x"
+    print(f"scene {W}x{H}, fov {a.fov}°, beta {a.beta}/m; {a.format} depth {W // a.factor}x"
           f"{H // a.factor} (1/{a.factor}), {100 * s['phone_unknown_fraction']:.1f} % unknown, "
           f"bleed {a.bleed}, noise {a.noise_base} + {a.noise_per_m}/m; sky "
           f"{100 * s['sky_fraction']:.1f} %")
