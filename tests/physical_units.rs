@@ -913,9 +913,12 @@ fn a_phone_frame_has_its_sky_veiled_beyond_the_horizon_margin() {
                         refine,
                         "--out",
                         &name,
+                        "--json",
                     ],
                 );
-                assert!(o.status.success(), "{}", stderr(&o));
+                let report = json(&o);
+                assert_eq!(report["sky_range_m"], 1000.0, "{report}");
+                assert!(number(&report["prep"], "s_max") < 40.0, "{report}");
                 load(&dir.path().join(name))
             })
             .collect();

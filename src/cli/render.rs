@@ -241,6 +241,7 @@ impl Report<'_> {
             "extinction": self.extinction(),
             "tint": opts.tint,
             "range_divisor": range_divisor,
+            "sky_range_m": fog.and(prep.sky_range_m()),
             "beta": fog.map(|f| f.beta),
             "visibility_m": fog.map(PhysicalFog::visibility_m),
             "albedo": fog.map(|f| f.albedo),

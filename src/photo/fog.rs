@@ -139,16 +139,9 @@ impl PreparedPhoto {
     /// already at [`SKY_RANGE_M`] or farther, the range is only made metric.
     pub fn metres(&self) -> Result<ScalarMap> {
         let (metres, _) = physical::metric_range(&self.range)?;
-        let Some((r_max, s_max)) = self
-            .prepared
-            .as_ref()
-            .and_then(|p| Some((f64::from(p.stats.r_max), f64::from(p.stats.s_max?))))
-        else {
+        let Some((r_max, s_max)) = self.sky_to_move_out() else {
             return Ok(metres);
         };
-        if !(r_max > 0.0 && s_max > r_max && s_max < SKY_RANGE_M) {
-            return Ok(metres);
-        }
         let k = (SKY_RANGE_M / r_max).ln() / (s_max / r_max).ln();
         Ok(metres.map(|&r| {
             let r = f64::from(r);
@@ -158,6 +151,25 @@ impl PreparedPhoto {
                 r as f32
             }
         }))
+    }
+
+    /// The range in metres at which physical fog sees the sky ([`PreparedPhoto::metres`]):
+    /// [`SKY_RANGE_M`], or pre-processing's Smax where that is farther; `None` without
+    /// sky (or without pre-processing).
+    pub fn sky_range_m(&self) -> Option<f64> {
+        let s_max = self.prepared.as_ref()?.stats.s_max?;
+        Some(match self.sky_to_move_out() {
+            Some(_) => SKY_RANGE_M,
+            None => f64::from(s_max),
+        })
+    }
+
+    /// Pre-processing's Rmax and Smax where [`PreparedPhoto::metres`] moves the sky out:
+    /// there is sky, nearer than [`SKY_RANGE_M`], beyond a scene of range > 0.
+    fn sky_to_move_out(&self) -> Option<(f64, f64)> {
+        let stats = &self.prepared.as_ref()?.stats;
+        let (r_max, s_max) = (f64::from(stats.r_max), f64::from(stats.s_max?));
+        (r_max > 0.0 && s_max > r_max && s_max < SKY_RANGE_M).then_some((r_max, s_max))
     }
 }
 
@@ -372,6 +384,7 @@ mod tests {
         let tau = transmittance_map(&haze, &range);
         let sky_tau = tau.get(0, 0);
         assert!(*sky_tau < 1e-8, "{sky_tau}");
+        assert_eq!(prepared.sky_range_m(), Some(SKY_RANGE_M));
         assert_eq!(tau.get(0, 47), transmittance_map(&haze, &plain).get(0, 47));
     }
 
@@ -409,6 +422,7 @@ mod tests {
         let deep = phone_frame(800.0);
         let plain = physical::metric_range(&deep.range).unwrap().0;
         assert_eq!(deep.metres().unwrap().as_slice(), plain.as_slice());
+        assert_eq!(deep.sky_range_m(), Some(1200.0));
         let shallow = phone_frame(8.0);
         let kappa = FogOptions::default();
         let (range, r_max) = medium_range(&kappa.extinction, &shallow).unwrap();
@@ -421,5 +435,6 @@ mod tests {
         unprepared.prepared = None;
         let plain = physical::metric_range(&unprepared.range).unwrap().0;
         assert_eq!(unprepared.metres().unwrap().as_slice(), plain.as_slice());
+        assert_eq!(unprepared.sky_range_m(), None);
     }
 }
