@@ -63,7 +63,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stereo_refine_eval import (  # noqa: E402
-    cv2, print_error_table, run, stats, tau_from_two_airlights, truth_from_zbuffer)
+    cv2, near_edges, print_error_table, run, stats, tau_from_two_airlights,
+    truth_from_zbuffer)
 
 MODES = ("none", "guided", "unreliable", "repair")
 # The most each format holds, in metres: 16 and 13 bits of millimetres.
@@ -122,20 +123,6 @@ def write_phone(path, depth_m, fmt):
     cv2.imwrite(path, mm.astype(np.uint16))
 
 
-def edges_of(z, sky, edge_px):
-    """Pixels within edge_px of a truth depth edge (log z jump > 0.05, or sky beside surface)."""
-    log_z = np.log(np.where(sky, 1.0, z))
-    e = np.zeros(z.shape, bool)
-    jx = (np.abs(np.diff(log_z, axis=1)) > 0.05) | (sky[:, 1:] != sky[:, :-1])
-    jy = (np.abs(np.diff(log_z, axis=0)) > 0.05) | (sky[1:, :] != sky[:-1, :])
-    e[:, 1:] |= jx
-    e[:, :-1] |= jx
-    e[1:, :] |= jy
-    e[:-1, :] |= jy
-    k = 2 * edge_px + 1
-    return cv2.dilate(e.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out_dir")
@@ -184,7 +171,8 @@ def main():
     unknown_full = np.kron(~np.isfinite(z_phone), np.ones((a.factor, a.factor), bool))
 
     surf = ~sky
-    near_edge = edges_of(z, sky, edge_px)
+    # Truth edges: log z jumps by more than 0.05, or sky beside a surface.
+    near_edge = near_edges(np.log(np.where(sky, 1.0, z)), 0.05, sky, edge_px)
     masks = {
         "all": np.ones((H, W), bool),
         f"near edges ({edge_px} px)": near_edge,

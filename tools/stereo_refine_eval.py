@@ -112,6 +112,20 @@ def truth_from_zbuffer(path, fov, near, far):
     return F, sky, z, R
 
 
+def near_edges(field, jump, sky, edge_px):
+    """Pixels within ``edge_px`` (Chebyshev) of a truth depth edge: 4-neighbours whose
+    ``field`` differs by more than ``jump``, or sky beside a surface."""
+    e = np.zeros(field.shape, bool)
+    jx = (np.abs(np.diff(field, axis=1)) > jump) | (sky[:, 1:] != sky[:, :-1])
+    jy = (np.abs(np.diff(field, axis=0)) > jump) | (sky[1:, :] != sky[:-1, :])
+    e[:, 1:] |= jx
+    e[:, :-1] |= jx
+    e[1:, :] |= jy
+    e[:-1, :] |= jy
+    k = 2 * edge_px + 1
+    return cv2.dilate(e.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
+
+
 def tau_from_two_airlights(render, path_for):
     """τ (green channel) from two renders without blur, ``render(airlight, out_path)`` with
     airlight 0 and 1: out = τ·J + (1 − τ)·A, so τ = 1 − (out(A=1) − out(A=0)) whatever J."""
@@ -227,15 +241,7 @@ def main():
     }
 
     # Masks: truth edges (disparity jump > 1 px or sky/surface), dilated by edge_px.
-    e = np.zeros((H, W), bool)
-    jx = (np.abs(np.diff(d_true, axis=1)) > 1.0) | (sky[:, 1:] != sky[:, :-1])
-    jy = (np.abs(np.diff(d_true, axis=0)) > 1.0) | (sky[1:, :] != sky[:-1, :])
-    e[:, 1:] |= jx
-    e[:, :-1] |= jx
-    e[1:, :] |= jy
-    e[:-1, :] |= jy
-    k = 2 * a.edge_px + 1
-    near_edge = cv2.dilate(e.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
+    near_edge = near_edges(d_true, 1.0, sky, a.edge_px)
     band = xs < a.num_disparities
     masks = {
         "all": np.ones((H, W), bool),
