@@ -938,6 +938,41 @@ fn zbuffer_becomes_range_with_near_far_and_fov() {
     let got = f64::from(d16.range.as_slice()[near_pixel]);
     assert!((got - expected[near_pixel]).abs() < 0.01 * expected[near_pixel]);
 
+    // The range is in the planes' units, not known to be metres, until `scale` says how
+    // many metres one is: planes given in centimetres with scale 0.01 read as the planes
+    // in metres, and count as metric.
+    assert_eq!((d.units.as_str(), d.metric), ("file units", false));
+    assert_eq!((d16.units.as_str(), d16.metric), ("file units", false));
+    let in_cm = DepthOptions {
+        near: Some(camera.near * 100.0),
+        far: Some(camera.far * 100.0),
+        scale: Some(0.01),
+        ..with_camera.clone()
+    };
+    for (path, in_m) in [(&pfm, &d), (&png, &d16)] {
+        let cm = load_range(path, &in_cm).unwrap();
+        assert_eq!((cm.units.as_str(), cm.metric), ("m", true), "{path:?}");
+        assert!(
+            cm.notes
+                .iter()
+                .any(|n| n == "near and far x 0.01 = metres (depth scale)"),
+            "{:?}",
+            cm.notes
+        );
+        for (a, b) in cm.range.as_slice().iter().zip(in_m.range.as_slice()) {
+            assert!(
+                (a.is_nan() && b.is_nan()) || (a - b).abs() <= 1e-6 * b,
+                "{path:?}: {a} from centimetres, {b} from metres"
+            );
+        }
+    }
+    let bad_scale = DepthOptions {
+        scale: Some(-1.0),
+        ..with_camera.clone()
+    };
+    let err = expect_err(load_range(&pfm, &bad_scale)).to_string();
+    assert!(err.starts_with("invalid depth_scale = -1"), "{err}");
+
     let without_far = DepthOptions {
         far: None,
         ..with_camera.clone()

@@ -107,6 +107,46 @@ fn load(path: &Path) -> RgbImage {
     brume::io::image::load_linear_rgb(path).unwrap()
 }
 
+/// The flags that make the output τ itself on a white image: `--beta 0.02` ([`BETA`]), a
+/// black airlight, no blur, `tau.pfm`, and the JSON report.
+const TAU_FLAGS: [&str; 9] = [
+    "--beta",
+    "0.02",
+    "--airlight",
+    "0,0,0",
+    "--lambda",
+    "0",
+    "--out",
+    "tau.pfm",
+    "--json",
+];
+/// The β of [`TAU_FLAGS`].
+const BETA: f64 = 0.02;
+
+/// Asserts that every channel of `tau` is exp(−β·R) with β = [`BETA`] and R = `range(x,
+/// y)` worked out by hand, within 2e-6 (f32 range and exp on the GPU); returns the least
+/// and largest R.
+fn assert_tau_is_exp_minus_beta_r(
+    tau: &RgbImage,
+    range: impl Fn(usize, usize) -> f64,
+) -> (f64, f64) {
+    let (mut r_min, mut r_max) = (f64::INFINITY, 0f64);
+    for y in 0..tau.height() {
+        for x in 0..tau.width() {
+            let r = range(x, y);
+            (r_min, r_max) = (r_min.min(r), r_max.max(r));
+            let want = (-BETA * r).exp();
+            for got in tau.get(x, y) {
+                assert!(
+                    (f64::from(*got) - want).abs() < 2e-6,
+                    "({x}, {y}): τ = {got}, expected exp(−{BETA}·{r:.3}) = {want}"
+                );
+            }
+        }
+    }
+    (r_min, r_max)
+}
+
 /// On a white image with a black airlight and no blur the output is τ itself: every
 /// pixel must be exp(−β·R) with R worked out by hand from the disparity and the camera.
 /// A normalised κ (τ = exp(−κ·R/Rmax)) or a range left along the optical axis fails.
@@ -127,38 +167,11 @@ fn tau_is_exp_minus_beta_r_at_every_pixel_of_known_range() {
     });
     let white = Grid::filled(w, h, [1.0f32, 1.0, 1.0, 1.0]);
     write_rgba(&dir.path().join("white.pfm"), &white).unwrap();
-    let beta = 0.02;
-    let v = json(&render(
-        dir.path(),
-        "white.pfm",
-        &[
-            "--beta",
-            "0.02",
-            "--airlight",
-            "0,0,0",
-            "--lambda",
-            "0",
-            "--out",
-            "tau.pfm",
-            "--json",
-        ],
-    ));
+    let beta = BETA;
+    let v = json(&render(dir.path(), "white.pfm", &TAU_FLAGS));
     let out = load(&dir.path().join("tau.pfm"));
-    let (mut r_min, mut r_max) = (f64::INFINITY, 0f64);
-    for y in 0..h {
-        for x in 0..w {
-            let r = camera.range(*p.get(x, y), x, y);
-            (r_min, r_max) = (r_min.min(r), r_max.max(r));
-            let want = (-beta * r).exp();
-            for got in out.get(x, y) {
-                // f32 range and exp on the GPU: 2e-6 absolute on τ ≤ 1.
-                assert!(
-                    (f64::from(*got) - want).abs() < 2e-6,
-                    "({x}, {y}): τ = {got}, expected exp(−{beta}·{r:.3}) = {want}"
-                );
-            }
-        }
-    }
+    let (r_min, r_max) =
+        assert_tau_is_exp_minus_beta_r(&out, |x, y| camera.range(*p.get(x, y), x, y));
     assert!(r_max > 190.0 && r_min < 3.2, "{r_min}..{r_max}");
     // The report: the fog, its visibility, and τ's range over the pixels, 1e-6 (f32).
     assert_eq!(number(&v, "beta"), beta, "{v}");
@@ -178,6 +191,77 @@ fn tau_is_exp_minus_beta_r_at_every_pixel_of_known_range() {
     assert_eq!(v["depth_format"], "cityscapes", "{v}");
     // λ = 0: nothing blurs beyond σ0.
     assert_eq!(number(&v, "sigma_max"), number(&v, "sigma0"), "{v}");
+}
+
+/// A renderer's z-buffer whose near and far planes are in metres (`--depth-scale 1`)
+/// takes physical fog: τ = exp(−β·R) at every pixel, R worked out by hand from the stored
+/// window depth, the planes and the field of view. Without `--depth-scale` its range is
+/// in the planes' unknown unit, and --beta is refused saying what would do.
+#[test]
+fn a_zbuffer_with_planes_in_metres_takes_physical_fog() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (16, 8);
+    let (near, far, fov_deg) = (0.5f64, 400.0f64, 60.0f64);
+    // Eye depth z from 2 to 192.5 m; window depth d = f·(1 − n/z)/(f − n).
+    let zbuffer = Grid::from_fn(w, h, |x, y| {
+        let z = 2.0 + 1.5 * (x + w * y) as f64;
+        (far * (1.0 - near / z) / (far - near)) as f32
+    });
+    write_scalar(&dir.path().join("z.pfm"), &zbuffer).unwrap();
+    let white = Grid::filled(w, h, [1.0f32, 1.0, 1.0, 1.0]);
+    write_rgba(&dir.path().join("white.pfm"), &white).unwrap();
+    let base = [
+        &[
+            "render",
+            "--image",
+            "white.pfm",
+            "--depth",
+            "z.pfm",
+            "--depth-kind",
+            "zbuffer",
+            "--near",
+            "0.5",
+            "--far",
+            "400",
+            "--fov",
+            "60",
+            "--refine",
+            "none",
+        ][..],
+        &TAU_FLAGS,
+    ]
+    .concat();
+    let refused = brume(dir.path(), &base);
+    let err = stderr(&refused);
+    assert_eq!(refused.status.code(), Some(1), "{err}");
+    for said in [
+        "invalid --beta = 0.02",
+        "z.pfm",
+        "zbuffer",
+        "file units",
+        "--depth-scale",
+    ] {
+        assert!(err.contains(said), "{said}: {err}");
+    }
+    assert!(!dir.path().join("tau.pfm").exists());
+
+    let v = json(&brume(
+        dir.path(),
+        &[&base[..], &["--depth-scale", "1"]].concat(),
+    ));
+    let notes = v["depth_notes"].to_string();
+    assert!(notes.contains("near and far x 1 = metres"), "{v}");
+    let out = load(&dir.path().join("tau.pfm"));
+    let focal = h as f64 / 2.0 / (fov_deg.to_radians() / 2.0).tan();
+    let (cx, cy) = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
+    let (r_min, r_max) = assert_tau_is_exp_minus_beta_r(&out, |x, y| {
+        let d = f64::from(*zbuffer.get(x, y));
+        let z = near * far / (far - d * (far - near));
+        let (u, v) = ((x as f64 - cx) / focal, (y as f64 - cy) / focal);
+        z * (1.0 + u * u + v * v).sqrt()
+    });
+    // Wide rays: z 2 m at a corner is R 3.1 m, 192.5 m at the other 300 m.
+    assert!(r_min < 3.2 && r_max > 290.0, "{r_min}..{r_max}");
 }
 
 /// --json: σmax follows the law σ0 + λ·√(a·ln 20) whatever β; --albedo moves the blur, not

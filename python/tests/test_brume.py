@@ -495,6 +495,14 @@ def test_load_depth_geometry_keywords(tmp_path):
     )
     np.testing.assert_allclose(rng, expected, rtol=1e-4)
     assert info["kind"] == "zbuffer"
+    assert (info["units"], info["metric"]) == ("file units", False)
+    # Planes given in centimetres, scale: metres per unit of near and far.
+    rng_cm, info = brume.load_depth(
+        tmp_path / "z.npy", kind="zbuffer", near=near * 100, far=far * 100, fov_y_deg=fov,
+        scale=0.01,
+    )
+    np.testing.assert_allclose(rng_cm, expected, rtol=1e-4)
+    assert (info["units"], info["metric"]) == ("m", True)
     with pytest.raises(ValueError, match="needs near, far and fov_y_deg") as error:
         brume.load_depth(tmp_path / "z.npy", kind="zbuffer", near=near)
     assert "--" not in str(error.value)

@@ -138,8 +138,10 @@ pub struct DepthArgs {
     )]
     pub depth_format: DepthFormat,
 
-    /// Metres per stored value of a 16-bit PNG (e.g. 0.001 for millimetres), or of a
-    /// float map (1 for a map already in metres: it then counts as metric, for --beta).
+    /// Metres per stored value of a 16-bit PNG (e.g. 0.001 for millimetres), of a float
+    /// map (1 for a map already in metres), or per unit of a z-buffer's --near and --far
+    /// (1 when they are in metres); a float map or a z-buffer then counts as metric, for
+    /// --beta.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub depth_scale: Option<f64>,
 
@@ -158,7 +160,8 @@ pub struct DepthArgs {
     pub disparity_offset: Option<f64>,
 
     /// Near clipping plane of the projection that wrote a z-buffer (--depth-kind zbuffer),
-    /// in the scene's units.
+    /// in the scene's units: the range comes out in them (metres, for --beta, with
+    /// --depth-scale 1).
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub near: Option<f64>,
 

@@ -56,8 +56,8 @@ pub struct RenderArgs {
     /// Cityscapes: 0.005, 0.01, 0.02). τ = exp(−β·R); blur σ = σ0 +
     /// λ·√(a·ln 20)·min(β·R/ln 20, 1)^(3/2), a = --albedo. Needs metric range:
     /// middlebury2014 with calib.txt, cityscapes with its camera file, kitti, nyu, tum,
-    /// android-depth16, arcore, png16 with --depth-scale, or a disparity with --focal and
-    /// --baseline.
+    /// android-depth16, arcore, png16, a float map or a z-buffer with --depth-scale, or a
+    /// disparity with --focal and --baseline.
     #[arg(
         long,
         value_name = "PER_M",

@@ -163,16 +163,19 @@ pub(super) fn interpret(
             let (range, k) = middlebury::range_2006(&disp, opts, pixel_scale, &mut notes)?;
             (range, metres, Some(k))
         }
+        // A z-buffer's range is in the units of its near and far planes.
         (_, Raw::Grey16(raw)) if kind == DepthKind::ZBuffer => {
             let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
-            let scale = opts.scale.unwrap_or(1.0 / f64::from(u16::MAX));
-            let range = to_range(&raw, |v| depth(f64::from(v) * scale), Some(&k));
-            (range, "file units".to_string(), Some(k))
+            let scale = vouched_scale(opts, "near and far", &mut notes)?;
+            let window = 1.0 / f64::from(u16::MAX);
+            let metres = |v: u16| depth(f64::from(v) * window).map(|z| z * scale.unwrap_or(1.0));
+            (to_range(&raw, metres, Some(&k)), units_of(scale), Some(k))
         }
         (_, Raw::Float { map, .. }) if kind == DepthKind::ZBuffer => {
             let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
-            let range = to_range(&map, |v| depth(f64::from(v)), Some(&k));
-            (range, "file units".to_string(), Some(k))
+            let scale = vouched_scale(opts, "near and far", &mut notes)?;
+            let metres = |v: f32| depth(f64::from(v)).map(|z| z * scale.unwrap_or(1.0));
+            (to_range(&map, metres, Some(&k)), units_of(scale), Some(k))
         }
         (DepthFormat::Png16, Raw::Grey16(raw)) if kind == DepthKind::Disparity => {
             let scale = png16::given_scale(opts)?;
@@ -208,20 +211,9 @@ pub(super) fn interpret(
         }
         (_, Raw::Float { map, .. }) => {
             let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
-            // With a scale the values are metres once multiplied (1 for a map in metres):
-            // the caller vouches for the unit, as for a 16-bit PNG.
-            match opts.scale {
-                Some(_) => {
-                    let scale = png16::given_scale(opts)?;
-                    notes.push(format!("values x {scale} = metres (depth scale)"));
-                    let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
-                    (range, metres, k)
-                }
-                None => {
-                    let range = to_range(&map, |v| Some(f64::from(v)), k.as_ref());
-                    (range, "file units".to_string(), k)
-                }
-            }
+            let scale = vouched_scale(opts, "values", &mut notes)?;
+            let metres = |v: f32| Some(f64::from(v) * scale.unwrap_or(1.0));
+            (to_range(&map, metres, k.as_ref()), units_of(scale), k)
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
@@ -242,6 +234,26 @@ pub(super) fn interpret(
         notes,
         unknown_pixels,
     })
+}
+
+/// The metres per unit of a map in file units (a float map, a z-buffer's near and far
+/// planes) where `depth_scale` gives them (1 for metres): the caller vouches for the unit,
+/// as for a 16-bit PNG, and the notes say that `what` was scaled. `None` without it.
+fn vouched_scale(opts: &DepthOptions, what: &str, notes: &mut Vec<String>) -> Result<Option<f64>> {
+    if opts.scale.is_none() {
+        return Ok(None);
+    }
+    let scale = png16::given_scale(opts)?;
+    notes.push(format!("{what} x {scale} = metres (depth scale)"));
+    Ok(Some(scale))
+}
+
+/// The units of a map in file units scaled by [`vouched_scale`]'s result.
+fn units_of(scale: Option<f64>) -> String {
+    match scale {
+        Some(_) => "m".to_string(),
+        None => "file units".to_string(),
+    }
 }
 
 /// Whether a range in `units` read as `format` is in trustworthy metres

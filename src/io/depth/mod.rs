@@ -168,7 +168,10 @@ pub struct DepthOptions {
     /// Cityscapes `{name}_camera.json`; `None` looks for it beside a `*_disparity.png` and
     /// in the dataset's layout (see [`camera_candidates`]).
     pub camera: Option<PathBuf>,
-    /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity).
+    /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity); for
+    /// a float map, metres per unit; for a z-buffer, metres per unit of `near` and `far`
+    /// (1 when they are in metres). Given for a float map or a z-buffer, it makes the
+    /// range metric ([`LoadedDepth::metric`]).
     pub scale: Option<f64>,
     /// Focal length in pixels.
     pub focal: Option<f64>,
@@ -176,7 +179,8 @@ pub struct DepthOptions {
     pub baseline: Option<f64>,
     /// Added to disparity before dividing (Middlebury `doffs`/`dmin`), in pixels.
     pub disparity_offset: Option<f64>,
-    /// Near clipping plane of a z-buffer's projection (file units, e.g. metres).
+    /// Near clipping plane of a z-buffer's projection, in the range's units (metres with
+    /// `scale` 1).
     pub near: Option<f64>,
     /// Far clipping plane of a z-buffer's projection.
     pub far: Option<f64>,
@@ -217,15 +221,17 @@ pub struct LoadedDepth {
     pub format: DepthFormat,
     /// What the file's values measured.
     pub kind: DepthKind,
-    /// Units of `range`: `m`, or `file units` for float maps of depth or range.
+    /// Units of `range`: `m`, or `file units` for float maps of depth or range and
+    /// z-buffers read without `scale`.
     pub units: String,
     /// Whether `range` is in metres that can be trusted: the scale comes from a
     /// calibration (Middlebury 2014 `calib.txt`, a Cityscapes camera file), from a
     /// dataset's fixed scale (KITTI, NYU, TUM, Android DEPTH16, ARCore), or from geometry
-    /// the caller gave in full (`scale`; `focal` and `baseline` for a
-    /// disparity). False for maps in file units (float maps, z-buffers) and for
-    /// Middlebury 2006 read with any of its approximate default focal, baseline or offset
-    /// (the built-in demo among them). Physical fog (β in m⁻¹) needs it.
+    /// the caller gave in full (`scale` for a 16-bit PNG, a float map or a z-buffer's
+    /// planes; `focal` and `baseline` for a disparity). False for maps in file units
+    /// (float maps and z-buffers without `scale`) and for Middlebury 2006 read with any
+    /// of its approximate default focal, baseline or offset (the built-in demo among
+    /// them). Physical fog (β in m⁻¹) needs it.
     pub metric: bool,
     /// Intrinsics used to turn depth into range, if any.
     pub intrinsics: Option<Intrinsics>,
