@@ -251,6 +251,10 @@ fn bad_batch_options_are_refused_before_any_work() {
             &["batch", "--manifest", "missing.csv", "--out", "o"][..],
             "missing.csv",
         ),
+        (
+            &["batch", "cityscapes", "--out", "o", "--near", "3"][..],
+            "--depth-kind zbuffer",
+        ),
     ] {
         let run = brume(dir.path(), args);
         assert!(!run.status.success(), "{args:?} was accepted");
@@ -323,6 +327,95 @@ fn batch_outputs_are_renders(extra: &[&str]) {
             "β {beta} gave the image of the β before"
         );
         previous = Some(batch);
+    }
+}
+
+/// Writes the demo's Aloe as `{name}.png` with its range in metres (2,000/d: 9.5-47 m,
+/// unknown where d = 0) as a KITTI depth PNG (`{name}_kitti.png`, metres·256) and a float
+/// map in metres (`{name}_range.pfm`), and a manifest over each (`kitti.csv`,
+/// `float.csv`).
+fn metric_frames(dir: &Path, name: &str) {
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/demo");
+    image::open(demo.join("aloe-left-half.jpg"))
+        .unwrap()
+        .to_rgb8()
+        .save(dir.join(format!("{name}.png")))
+        .unwrap();
+    let disparity = image::open(demo.join("aloe-disparity-half.png"))
+        .unwrap()
+        .to_luma8();
+    let metres = |x: u32, y: u32| match disparity.get_pixel(x, y)[0] {
+        0 => f32::NAN,
+        d => 2000.0 / f32::from(d),
+    };
+    let (w, h) = disparity.dimensions();
+    image::ImageBuffer::<image::Luma<u16>, Vec<u16>>::from_fn(w, h, |x, y| {
+        let m = metres(x, y);
+        image::Luma([if m.is_nan() {
+            0
+        } else {
+            (m * 256.0).round() as u16
+        }])
+    })
+    .save(dir.join(format!("{name}_kitti.png")))
+    .unwrap();
+    let range =
+        brume::raster::Grid::from_fn(w as usize, h as usize, |x, y| metres(x as u32, y as u32));
+    brume::io::output::write_scalar(&dir.join(format!("{name}_range.pfm")), &range).unwrap();
+    for (csv, depth) in [("kitti.csv", "kitti.png"), ("float.csv", "range.pfm")] {
+        let rows = format!("image,depth\n{name}.png,{name}_{depth}\n");
+        std::fs::write(dir.join(csv), rows).unwrap();
+    }
+}
+
+/// A manifest of KITTI depth, or of float range in metres, is read as the depth flags
+/// say for every row: each output is the bytes `brume render` writes with the same flags.
+/// Without them the frames fail, each naming the flag that would read it.
+#[test]
+fn a_manifests_depth_is_read_as_the_depth_flags_say() {
+    let dir = tempfile::tempdir().unwrap();
+    metric_frames(dir.path(), "aloe");
+    for (csv, depth, flags, unread) in [
+        (
+            "kitti.csv",
+            "aloe_kitti.png",
+            &["--depth-format", "kitti", "--fov", "40"][..],
+            "--depth-format kitti",
+        ),
+        (
+            "float.csv",
+            "aloe_range.pfm",
+            &["--depth-scale", "1", "--fov", "40"][..],
+            "--depth-scale",
+        ),
+    ] {
+        let out = format!("out-{csv}");
+        let batch = ["batch", "--manifest", csv, "--out", &out, "--beta", "0.02"];
+        let refused = brume(dir.path(), &batch);
+        assert!(!refused.status.success(), "{csv} read without flags");
+        assert!(stderr(&refused).contains(unread), "{}", stderr(&refused));
+        let _ = std::fs::remove_dir_all(dir.path().join(&out));
+
+        let run = brume(dir.path(), &[&batch[..], flags].concat());
+        assert!(run.status.success(), "{csv}: {}", stderr(&run));
+        let render = [
+            "render",
+            "--image",
+            "aloe.png",
+            "--depth",
+            depth,
+            "--beta",
+            "0.02",
+            "--out",
+            "render.png",
+        ];
+        let render = brume(dir.path(), &[&render[..], flags].concat());
+        assert!(render.status.success(), "{}", stderr(&render));
+        assert!(
+            std::fs::read(dir.path().join(format!("{out}/aloe_foggy_beta_0.02.png"))).unwrap()
+                == std::fs::read(dir.path().join("render.png")).unwrap(),
+            "{csv}: batch and render differ"
+        );
     }
 }
 

@@ -71,8 +71,8 @@ pub fn aerial_camera(
     intrinsics: Option<&Intrinsics>,
 ) -> Result<Camera> {
     let view = PhotoView {
-        fov_y_deg: args.depth.fov,
-        focal_px: intrinsics.map(|i| i.fy).or(args.depth.focal),
+        fov_y_deg: args.depth.reading.fov,
+        focal_px: intrinsics.map(|i| i.fy).or(args.depth.reading.focal),
         pitch_deg: args.pitch,
         horizon_row: args.horizon_row,
     };

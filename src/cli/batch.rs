@@ -3,7 +3,6 @@
 
 use super::args::{BatchArgs, Compat};
 use brume::dataset::{self, Batch, BatchEvent, BatchOptions, BatchReport, Betas, Shard};
-use brume::io::depth::DepthFormat;
 use brume::photo::{Conventions, FrameOptions};
 use brume::{Error, Renderer, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -132,7 +131,11 @@ impl BatchArgs {
             let seed_read = self.capture.reads_seed() || self.beta_dist.is_some();
             super::options::refuse_prep_options(&self.prep, seed_read)?;
         }
-        let mut opts = FrameOptions::default();
+        super::options::check_depth_options(&self.depth)?;
+        let mut opts = FrameOptions {
+            depth: super::inputs::reading_options(&self.depth),
+            ..FrameOptions::default()
+        };
         let blur = &mut opts.fog.blur;
         if let Some(s) = self.scheme {
             blur.scheme = s;
@@ -152,7 +155,7 @@ impl BatchArgs {
             true => None,
             false => Some(super::inputs::prep_options(&self.prep)?),
         };
-        opts.prepare.refine = self.refine.options(DepthFormat::Auto)?;
+        opts.prepare.refine = self.refine.options(self.depth.depth_format)?;
         opts.refine_mode = self.refine.mode;
         opts.sky_mask = self.prep.sky_mask.clone();
         opts.sky_mask_format = self.prep.sky_mask_format;

@@ -48,7 +48,7 @@ pub(super) fn insert_object(
         ));
     }
     let kind = args.insert.insert_depth_kind.unwrap_or(DepthKind::Depth);
-    let intrinsics = scene.image_intrinsics(args.depth.focal, args.depth.fov);
+    let intrinsics = scene.image_intrinsics(args.depth.reading.focal, args.depth.reading.fov);
     let object = VirtualObject::load(
         path,
         args.insert.insert_depth.as_deref(),

@@ -2,7 +2,7 @@
 //! map, the masks of pre-processing and its options, so that the commands share them
 //! without importing one another.
 
-use super::args::{DepthArgs, PrepOptionArgs};
+use super::args::{DepthArgs, DepthReadingArgs, PrepOptionArgs};
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::mask::{self, RangeMasks};
 use brume::prep::PrepOptions;
@@ -24,10 +24,18 @@ pub fn load_depth(args: &DepthArgs) -> Result<LoadedDepth> {
 /// How `args` say the depth is read.
 pub fn depth_options(args: &DepthArgs) -> DepthOptions {
     DepthOptions {
-        format: args.depth_format,
-        kind: args.depth_kind,
         calib: args.calib.clone(),
         camera: args.camera.clone(),
+        ..reading_options(&args.reading)
+    }
+}
+
+/// How `args` say depth files are read, without a calibration or camera file of their
+/// own (`batch`'s frames bring theirs).
+pub fn reading_options(args: &DepthReadingArgs) -> DepthOptions {
+    DepthOptions {
+        format: args.depth_format,
+        kind: args.depth_kind,
         scale: args.depth_scale,
         focal: args.focal,
         baseline: args.baseline,
@@ -36,6 +44,7 @@ pub fn depth_options(args: &DepthArgs) -> DepthOptions {
         far: args.far,
         fov: args.fov,
         min_confidence: args.min_confidence,
+        ..DepthOptions::default()
     }
 }
 

@@ -1,7 +1,7 @@
 //! The checks of `brume render`'s options before any file is read (also for `batch` and
 //! `view`, which take render's options): values, and options that cannot take effect.
 
-use super::args::{Compat, DepthArgs, MediumKind, PrepOptionArgs, RenderArgs};
+use super::args::{Compat, DepthReadingArgs, MediumKind, PrepOptionArgs, RenderArgs};
 use super::photo_args::fog_options;
 use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::io::depth;
@@ -15,7 +15,7 @@ pub fn check_options(args: &RenderArgs) -> Result<()> {
     fog_options(args)?;
     check_medium_options(args)?;
     super::aerial::check_aerial_options(args)?;
-    check_depth_options(&args.depth)?;
+    check_depth_options(&args.depth.reading)?;
     if args.no_prep {
         refuse_prep_options(&args.prep, args.capture.reads_seed())?;
     }
@@ -146,7 +146,7 @@ pub(super) fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -
 }
 
 /// Depth options that only some inputs read, refused where none of them can.
-pub fn check_depth_options(depth: &DepthArgs) -> Result<()> {
+pub fn check_depth_options(depth: &DepthReadingArgs) -> Result<()> {
     let zbuffer = depth.depth_kind == Some(depth::DepthKind::ZBuffer);
     let planes = [
         ("--near", shown(depth.near.filter(|_| !zbuffer))),

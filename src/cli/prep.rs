@@ -14,7 +14,7 @@ use std::time::Instant;
 
 pub fn run(args: &PrepArgs) -> Result<()> {
     let opts = prep_options(&args.prep)?;
-    super::options::check_depth_options(&args.depth)?;
+    super::options::check_depth_options(&args.depth.reading)?;
     output::check_scalar_output(&args.out, "--out")?;
     let mut outs: Vec<(&str, &Path)> = vec![("--out", &args.out)];
     if let Some(vis) = &args.vis {

@@ -11,6 +11,7 @@ use brume::photo::BetaDistribution;
 {out}/brume-batch-{K}-of-{N}.jsonl.\n\n\
 Examples:\n  brume batch cityscapes/leftImg8bit/val --out foggy --beta 0.005,0.01,0.02\n  \
 brume batch --manifest frames.csv --out foggy --shard 3/8\n  \
+brume batch --manifest kitti.csv --depth-format kitti --focal 721 --out foggy\n  \
 brume batch cityscapes --out foggy --shard $((SLURM_ARRAY_TASK_ID+1))/$SLURM_ARRAY_TASK_COUNT"
 )]
 pub struct BatchArgs {
@@ -21,13 +22,20 @@ pub struct BatchArgs {
     pub inputs: Vec<PathBuf>,
 
     /// A CSV manifest: header image,depth[,camera][,calib][,sky_mask], one frame per row,
-    /// paths relative to the manifest.
+    /// paths relative to the manifest. Its depth files are read as --depth-format,
+    /// --depth-scale, --depth-kind and the geometry flags say, for every row (KITTI:
+    /// --depth-format kitti; a float map in metres: --depth-scale 1).
     #[arg(long, value_name = "CSV", allow_hyphen_values = true)]
     pub manifest: Option<PathBuf>,
 
     /// Output folder (created); the input tree is mirrored under it.
     #[arg(long, short, value_name = "DIR", allow_hyphen_values = true)]
     pub out: PathBuf,
+
+    /// How every frame's depth is read (as `brume render`'s); a frame's own camera or
+    /// calibration file comes from its manifest row or its Cityscapes layout.
+    #[command(flatten)]
+    pub depth: DepthReadingArgs,
 
     /// Extinction coefficients β in 1/m, comma-separated: one output per frame and β
     /// (Foggy Cityscapes: 0.005, 0.01, 0.02, visibility 600, 300, 150 m).

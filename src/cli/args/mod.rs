@@ -118,6 +118,16 @@ pub struct DepthArgs {
     #[arg(long, value_name = "PATH")]
     pub camera: Option<PathBuf>,
 
+    /// How the depth's values are read.
+    #[command(flatten)]
+    pub reading: DepthReadingArgs,
+}
+
+/// How a depth file's values are read: its format, what they measure, their scale and the
+/// geometry that turns them into range (shared by `render`'s one depth and `batch`'s
+/// every frame).
+#[derive(Args, Debug, Clone)]
+pub struct DepthReadingArgs {
     /// What the depth values are: depth (along the optical axis), range (distance to the
     /// camera centre), disparity (px), or zbuffer (a rendered frame's OpenGL window depth
     /// in [0, 1], with --near, --far and --fov). Default: what the format implies.
