@@ -370,7 +370,8 @@ fn metric_frames(dir: &Path, name: &str) {
 
 /// A manifest of KITTI depth, or of float range in metres, is read as the depth flags
 /// say for every row: each output is the bytes `brume render` writes with the same flags.
-/// Without them the frames fail, each naming the flag that would read it.
+/// Without them the frames fail, each naming the flag that would read it, and a frame's
+/// own camera file as its manifest column (`camera`), not as `render`'s `--camera`.
 #[test]
 fn a_manifests_depth_is_read_as_the_depth_flags_say() {
     let dir = tempfile::tempdir().unwrap();
@@ -393,7 +394,12 @@ fn a_manifests_depth_is_read_as_the_depth_flags_say() {
         let batch = ["batch", "--manifest", csv, "--out", &out, "--beta", "0.02"];
         let refused = brume(dir.path(), &batch);
         assert!(!refused.status.success(), "{csv} read without flags");
-        assert!(stderr(&refused).contains(unread), "{}", stderr(&refused));
+        let err = stderr(&refused);
+        assert!(err.contains(unread), "{err}");
+        assert!(
+            err.contains("`camera`") && !err.contains("--camera"),
+            "{err}"
+        );
         let _ = std::fs::remove_dir_all(dir.path().join(&out));
 
         let run = brume(dir.path(), &[&batch[..], flags].concat());

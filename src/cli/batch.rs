@@ -42,7 +42,7 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
         BatchEvent::Staged { outputs } => super::hold_staged_outputs(outputs),
         BatchEvent::Written { .. } => progress.inc(1),
         BatchEvent::OutputFailed { error, .. } => {
-            progress.suspend(|| errln!("brume: error: {}", super::flags_shown(error)));
+            progress.suspend(|| errln!("brume: error: {}", super::batch_flags_shown(error)));
             progress.inc(1);
         }
         BatchEvent::FrameFailed {
@@ -54,7 +54,7 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
                 errln!(
                     "brume: error: skipped {}: {}",
                     image.display(),
-                    super::flags_shown(error)
+                    super::batch_flags_shown(error)
                 )
             });
             progress.inc(outputs as u64);

@@ -249,7 +249,12 @@ pub fn remove_temporaries_on_signals() {
 /// (`--rho-max`, `--depth-scale`). Names that are a flag of `brume` become that flag;
 /// others (a file's field, `range map`) are kept.
 pub fn name_flags(e: Error) -> Error {
-    match e.rename_options(flag_of) {
+    name_flags_of(e, None)
+}
+
+/// [`name_flags`] with the flags of `command` only (`None`: of any command).
+fn name_flags_of(e: Error, command: Option<&str>) -> Error {
+    match e.rename_options(|field| flag_of(field, command)) {
         // The library's pre-processing turned off is the flag `--no-prep` given.
         Error::InvalidParameter {
             name,
@@ -264,46 +269,60 @@ pub fn name_flags(e: Error) -> Error {
     }
 }
 
-/// [`name_flags`] for an error the library keeps, as the text to show.
-pub fn flags_shown(e: &Error) -> String {
+/// A frame's error in `brume batch` (one the library keeps, for its log), as the text to
+/// show: the options it names become flags only where `batch` has them; the others keep
+/// their names, as `depth`, `camera` and `calib` (a frame's own files) do, which are its
+/// manifest's columns.
+pub fn batch_flags_shown(e: &Error) -> String {
+    let command = Some("batch");
     match e {
         Error::InvalidParameter {
             name,
             value,
             expected,
-        } => name_flags(Error::InvalidParameter {
-            name: name.clone(),
-            value: value.clone(),
-            expected: expected.clone(),
-        })
+        } => name_flags_of(
+            Error::InvalidParameter {
+                name: name.clone(),
+                value: value.clone(),
+                expected: expected.clone(),
+            },
+            command,
+        )
         .to_string(),
-        other => flags_in(&other.to_string()),
+        other => brume::error::rename_options(&other.to_string(), |f| flag_of(f, command)),
     }
 }
 
 /// `text` (a loader's note, a warning) with the options it names in backticks as flags.
 pub fn flags_in(text: &str) -> String {
-    brume::error::rename_options(text, flag_of)
+    brume::error::rename_options(text, |field| flag_of(field, None))
 }
 
-/// The flag that sets the library's field `field`, if `brume` has one.
-fn flag_of(field: &str) -> Option<String> {
+/// The flag that sets the library's field `field`, if `command` (`None`: any `brume`
+/// command) has one.
+fn flag_of(field: &str, command: Option<&str>) -> Option<String> {
     let flag = match FLAG_ALIASES.iter().find(|(f, _)| *f == field) {
         Some((_, flag)) => flag.to_string(),
         None => format!("--{}", field.replace('_', "-")),
     };
-    is_flag(&flag).then_some(flag)
+    is_flag(&flag, command).then_some(flag)
 }
 
-/// Whether `flag` (`--name`) is a long option of any `brume` command.
-fn is_flag(flag: &str) -> bool {
-    fn walk(cmd: &clap::Command, flag: &str) -> bool {
+/// Whether `flag` (`--name`) is a long option of `command` (`None`: of any command).
+fn is_flag(flag: &str, command: Option<&str>) -> bool {
+    fn has(cmd: &clap::Command, flag: &str, nested: bool) -> bool {
         cmd.get_arguments()
             .filter_map(|a| a.get_long())
             .any(|long| flag.strip_prefix("--") == Some(long))
-            || cmd.get_subcommands().any(|sub| walk(sub, flag))
+            || (nested && cmd.get_subcommands().any(|sub| has(sub, flag, true)))
     }
-    walk(&Cli::command(), flag)
+    let cli = Cli::command();
+    match command {
+        None => has(&cli, flag, true),
+        Some(name) => cli
+            .find_subcommand(name)
+            .is_some_and(|cmd| has(cmd, flag, false)),
+    }
 }
 
 #[cfg(test)]
@@ -331,6 +350,21 @@ mod tests {
             };
             assert_eq!(name, shown);
         }
+    }
+
+    /// A batch frame's error names `batch`'s flags, and a frame's own files as its
+    /// manifest's columns, not as `render`'s flags.
+    #[test]
+    fn batch_errors_name_only_batch_flags() {
+        let e = Error::invalid("depth", "d.npy", "give `camera`, `calib` or `depth_scale`");
+        assert_eq!(
+            batch_flags_shown(&e),
+            "invalid depth = d.npy: expected give `camera`, `calib` or --depth-scale"
+        );
+        assert_eq!(
+            name_flags(e).to_string(),
+            "invalid --depth = d.npy: expected give --camera, --calib or --depth-scale"
+        );
     }
 
     /// Every option whose value is not a path takes a leading hyphen, so that
