@@ -727,6 +727,13 @@ fn render_refuses_options_that_cannot_take_effect() {
         ),
         r("--medium aerial --turbidity 3 --metres-per-unit 1", "--fov"),
         r("--near 1 --far 10", "--near zbuffer"),
+        r("--reversed-z", "--reversed-z zbuffer"),
+        case(
+            "render --image im.png --depth range.pfm --out out.png",
+            "--depth-kind zbuffer --near 1 --far 0.5 --fov 40",
+            1,
+            "--far 0.5 inf",
+        ),
         r("--right im.png", "--right im.png Cityscapes"),
         r("--no-prep --sky-mask allsky.png", "--sky-mask --no-prep"),
         r("--sky-mask allsky.png", "--sky-mask allsky.png sky"),

@@ -868,6 +868,117 @@ fn kind_and_format_parse_and_print() {
     assert!(err.contains("far") && err.contains("disparity"), "{err}");
 }
 
+/// Engines' z-buffers: reversed-Z (window depth 1 at near, 0 at far: Bevy and Unreal's
+/// infinite one, D3D's reversed finite one) and OpenGL's with an infinite far plane, each
+/// written here from eye depths by its projection's own formula, become the range worked
+/// out by hand; the sky (nothing drawn: 0 reversed, 1 standard) is unknown.
+#[test]
+fn reversed_and_infinite_zbuffers_become_range() {
+    let (w, h, fov_deg, n, f) = (24usize, 16usize, 50.0f64, 0.1f64, 500.0f64);
+    let focal = h as f64 / 2.0 / (fov_deg.to_radians() / 2.0).tan();
+    // Eye depth from 0.75 to 430 across the frame, the top row sky.
+    let eye = |x: usize, y: usize| (y > 0).then(|| 0.5 * 1.0178f64.powi((x + w * y) as i32));
+    let range = |x: usize, y: usize, z: f64| {
+        let (u, v) = (
+            (x as f64 - (w as f64 - 1.0) / 2.0) / focal,
+            (y as f64 - (h as f64 - 1.0) / 2.0) / focal,
+        );
+        z * (1.0 + u * u + v * v).sqrt()
+    };
+    type Window = fn(f64, f64, f64) -> f64;
+    let cases: [(&str, bool, f64, Window, f32); 3] = [
+        // clip (x, y, near, −z) / −z: z_ndc = n/z in [0, 1].
+        (
+            "reversed infinite",
+            true,
+            f64::INFINITY,
+            |z, n, _| n / z,
+            0.0,
+        ),
+        // D3D's reversed [0, 1]: z_ndc = n(f − z)/(z(f − n)).
+        (
+            "reversed finite",
+            true,
+            f,
+            |z, n, f| n * (f - z) / (z * (f - n)),
+            0.0,
+        ),
+        // OpenGL's infinite: z_ndc = 1 − 2n/z in [−1, 1], window (z_ndc + 1)/2.
+        (
+            "standard infinite",
+            false,
+            f64::INFINITY,
+            |z, n, _| 1.0 - n / z,
+            1.0,
+        ),
+    ];
+    let dir = tempfile::tempdir().unwrap();
+    for (name, reversed, far, window, sky) in cases {
+        let d = Grid::from_fn(w, h, |x, y| match eye(x, y) {
+            Some(z) => window(z, n, f) as f32,
+            None => sky,
+        });
+        let path = dir.path().join("z.pfm");
+        write_scalar(&path, &d).unwrap();
+        let opts = DepthOptions {
+            kind: Some(DepthKind::ZBuffer),
+            near: Some(n),
+            far: Some(far),
+            fov: Some(fov_deg),
+            reversed_z: reversed,
+            ..DepthOptions::default()
+        };
+        let loaded = load_range(&path, &opts).unwrap();
+        assert_eq!(loaded.unknown_pixels, w, "{name}: the sky row");
+        for y in 0..h {
+            for x in 0..w {
+                let got = *loaded.range.get(x, y);
+                match eye(x, y) {
+                    None => assert!(got.is_nan(), "{name} ({x}, {y}): {got}"),
+                    Some(z) => {
+                        // f32 window depth: 2.6e-4 relative at 430 units from an infinite
+                        // projection's standard buffer (6e-8 of d near 1 is z/n times
+                        // that), 6e-8 reversed.
+                        let want = range(x, y, z);
+                        let tol = if reversed { 1e-5 } else { 5e-4 };
+                        assert!(
+                            (f64::from(got) - want).abs() <= tol * want,
+                            "{name} ({x}, {y}): {got} vs {want}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(loaded.notes[0].contains(if reversed { "reversed-Z" } else { "standard" }));
+    }
+    // A far plane before the near one, and --reversed-z where no z-buffer is read.
+    let bad_far = DepthOptions {
+        kind: Some(DepthKind::ZBuffer),
+        near: Some(n),
+        far: Some(n / 2.0),
+        fov: Some(fov_deg),
+        ..DepthOptions::default()
+    };
+    let err = expect_err(load_range(&dir.path().join("z.pfm"), &bad_far)).to_string();
+    assert!(
+        err.starts_with("invalid far = 0.05") && err.contains("inf"),
+        "{err}"
+    );
+    let as_depth = DepthOptions {
+        kind: Some(DepthKind::Depth),
+        reversed_z: true,
+        ..DepthOptions::default()
+    };
+    let d = load_range(&dir.path().join("z.pfm"), &as_depth).unwrap();
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n.starts_with("`reversed_z` ignored")),
+        "{:?}",
+        d.notes
+    );
+}
+
 /// A rendered frame's z-buffer (top row first) of the ground plane y = 0 seen by a level
 /// camera 2 units up, with the analytic range of every pixel (NaN where the ray misses).
 fn ground_zbuffer(camera: &brume::camera::Camera, w: usize, h: usize) -> (ScalarMap, Vec<f64>) {

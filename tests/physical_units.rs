@@ -195,8 +195,9 @@ fn tau_is_exp_minus_beta_r_at_every_pixel_of_known_range() {
 
 /// A renderer's z-buffer whose near and far planes are in metres (`--depth-scale 1`)
 /// takes physical fog: τ = exp(−β·R) at every pixel, R worked out by hand from the stored
-/// window depth, the planes and the field of view. Without `--depth-scale` its range is
-/// in the planes' unknown unit, and --beta is refused saying what would do.
+/// window depth, the planes and the field of view, from OpenGL's standard buffer and from
+/// an engine's reversed-Z one with an infinite far plane. Without `--depth-scale` its
+/// range is in the planes' unknown unit, and --beta is refused saying what would do.
 #[test]
 fn a_zbuffer_with_planes_in_metres_takes_physical_fog() {
     let dir = tempfile::tempdir().unwrap();
@@ -261,6 +262,31 @@ fn a_zbuffer_with_planes_in_metres_takes_physical_fog() {
         z * (1.0 + u * u + v * v).sqrt()
     });
     // Wide rays: z 2 m at a corner is R 3.1 m, 192.5 m at the other 300 m.
+    assert!(r_min < 3.2 && r_max > 290.0, "{r_min}..{r_max}");
+
+    // An engine's reversed-Z buffer with an infinite far plane (Bevy's, Unreal's):
+    // d = n/z, the same eye depths.
+    let reversed = Grid::from_fn(w, h, |x, y| {
+        (near / (2.0 + 1.5 * (x + w * y) as f64)) as f32
+    });
+    write_scalar(&dir.path().join("rz.pfm"), &reversed).unwrap();
+    let args: Vec<&str> = base
+        .iter()
+        .map(|a| match *a {
+            "z.pfm" => "rz.pfm",
+            "400" => "inf",
+            a => a,
+        })
+        .chain(["--reversed-z", "--depth-scale", "1"])
+        .collect();
+    let v = json(&brume(dir.path(), &args));
+    assert!(v["depth_notes"].to_string().contains("reversed-Z"), "{v}");
+    let out = load(&dir.path().join("tau.pfm"));
+    let (r_min, r_max) = assert_tau_is_exp_minus_beta_r(&out, |x, y| {
+        let z = near / f64::from(*reversed.get(x, y));
+        let (u, v) = ((x as f64 - cx) / focal, (y as f64 - cy) / focal);
+        z * (1.0 + u * u + v * v).sqrt()
+    });
     assert!(r_min < 3.2 && r_max > 290.0, "{r_min}..{r_max}");
 }
 

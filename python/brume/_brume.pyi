@@ -309,6 +309,7 @@ def load_depth(
     near: Optional[float] = None,
     far: Optional[float] = None,
     fov_y_deg: Optional[float] = None,
-    min_confidence: Optional[float] = None
+    min_confidence: Optional[float] = None,
+    reversed_z: bool = False
 ) -> Tuple[Array, Dict[str, Any]]: ...
 def beta_quantile(dist: str, p: float) -> float: ...

@@ -10,7 +10,7 @@ use pyo3::types::PyDict;
 
 /// load_depth(path, camera=None, format=None, *, kind=None, scale=None, calib=None,
 /// focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None,
-/// fov_y_deg=None, min_confidence=None) -> (range_m, info)
+/// fov_y_deg=None, min_confidence=None, reversed_z=False) -> (range_m, info)
 ///
 /// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown)
 /// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
@@ -23,12 +23,14 @@ use pyo3::types::PyDict;
 /// disparity's stereo geometry (disparity_offset_px added to the disparity first),
 /// focal_px or fov_y_deg (vertical) the intrinsics that turn depth along the optical axis
 /// into range (principal point at the centre). near, far and fov_y_deg: a z-buffer's
-/// projection (an OpenGL window depth in [0, 1]; near and far in the range's unit).
+/// projection (an OpenGL window depth in [0, 1]; near and far in the range's unit, far
+/// float('inf') for an infinite far plane); reversed_z: its depth is 1 at near and 0 at
+/// far (Unreal, Bevy, Godot 4), nothing drawn at 0.
 /// min_confidence: the lowest confidence in [0, 1] of an Android DEPTH16 sample that is
 /// kept. info: format, kind, units, metric (whether the range is in trustworthy metres,
 /// which fog with beta or visibility needs), notes, unknown_pixels.
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None))]
+#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn load_depth<'py>(
     py: Python<'py>,
@@ -45,6 +47,7 @@ pub(crate) fn load_depth<'py>(
     far: Option<f64>,
     fov_y_deg: Option<f64>,
     min_confidence: Option<f64>,
+    reversed_z: bool,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
     let opts = DepthOptions {
         format: match format {
@@ -63,6 +66,7 @@ pub(crate) fn load_depth<'py>(
         disparity_offset: disparity_offset_px,
         near,
         far,
+        reversed_z,
         fov: fov_y_deg,
         min_confidence,
     };

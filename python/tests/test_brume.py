@@ -503,6 +503,14 @@ def test_load_depth_geometry_keywords(tmp_path):
     )
     np.testing.assert_allclose(rng_cm, expected, rtol=1e-4)
     assert (info["units"], info["metric"]) == ("m", True)
+    # Bevy's reversed-Z buffer with an infinite far plane: window depth near/eye.
+    np.save(tmp_path / "rz.npy", (near / eye).astype(np.float32))
+    rng_rz, info = brume.load_depth(
+        tmp_path / "rz.npy", kind="zbuffer", near=near, far=float("inf"), fov_y_deg=fov,
+        reversed_z=True,
+    )
+    np.testing.assert_allclose(rng_rz, expected, rtol=1e-5)
+    assert any("reversed-Z" in n for n in info["notes"])
     with pytest.raises(ValueError, match="needs near, far and fov_y_deg") as error:
         brume.load_depth(tmp_path / "z.npy", kind="zbuffer", near=near)
     assert "--" not in str(error.value)

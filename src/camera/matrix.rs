@@ -49,6 +49,28 @@ pub struct DepthModel {
 }
 
 impl DepthModel {
+    /// The model of a depth buffer written by a perspective projection with planes `near`
+    /// and `far` (`f64::INFINITY`: an infinite far plane, its sky at `far`'s cap
+    /// [`DEFAULT_SKY_DEPTH`]), standard (window depth 0 at near, 1 at far) or `reversed`
+    /// (1 at near, 0 at far), whatever the clip depth convention (the window depth is the
+    /// same under both): `a`, `k`, `c` as [`MatrixCamera::new`] reads them off such a
+    /// projection's matrix. The standard finite model is [`Camera::depth_model`]'s.
+    pub fn of_planes(near: f64, far: f64, reversed: bool) -> DepthModel {
+        let (n, f) = (near, far);
+        let (a, k, c) = match (reversed, f.is_finite()) {
+            (false, true) => (-n * f / (f - n), 1.0, n / (f - n)),
+            (false, false) => (-n, 1.0, 0.0),
+            (true, true) => (n * f / (f - n), 0.0, -n / (f - n)),
+            (true, false) => (n, 0.0, 0.0),
+        };
+        let max = if f.is_finite() {
+            f
+        } else {
+            DEFAULT_SKY_DEPTH.max(2.0 * n)
+        };
+        DepthModel { a, k, c, max }
+    }
+
     /// Eye depth of window depth `d` (clamped to [0, 1]), at most [`DepthModel::max`].
     pub fn eye_depth(&self, d: f64) -> f64 {
         let den = (d.clamp(0.0, 1.0) - self.k) - self.c;

@@ -292,6 +292,67 @@ mod tests {
         }
     }
 
+    /// The depth model of a projection's planes is the one read off the projection's
+    /// matrix (glam's, for the four kinds: standard or reversed, finite or infinite), and
+    /// the standard finite one is the camera's own to the bit.
+    #[test]
+    fn the_planes_model_is_the_matrix_model() {
+        use super::matrix::{ClipDepth, DepthModel, MatrixCamera};
+        let (n, f, fov) = (0.25, 400.0, 1.0);
+        let gl = ClipDepth::MinusOneToOne;
+        let zo = ClipDepth::ZeroToOne;
+        let cases = [
+            (false, f, DMat4::perspective_rh_gl(fov, 1.5, n, f), gl),
+            (
+                false,
+                f64::INFINITY,
+                DMat4::perspective_infinite_rh(fov, 1.5, n),
+                zo,
+            ),
+            (true, f, DMat4::perspective_rh(fov, 1.5, f, n), zo),
+            (
+                true,
+                f64::INFINITY,
+                DMat4::perspective_infinite_reverse_rh(fov, 1.5, n),
+                zo,
+            ),
+        ];
+        for (reversed, far, projection, clip) in cases {
+            let from_matrix = MatrixCamera::new(DMat4::IDENTITY, projection, clip)
+                .unwrap()
+                .depth_model();
+            let model = DepthModel::of_planes(n, far, reversed);
+            assert_eq!(model.k, from_matrix.k);
+            let pairs = [
+                (model.a, from_matrix.a),
+                (model.c, from_matrix.c),
+                (model.max, from_matrix.max),
+            ];
+            for (got, want) in pairs {
+                assert!(
+                    (got - want).abs() <= 1e-12 * want.abs().max(1e-3),
+                    "{got} {want}"
+                );
+            }
+            for z in [0.3, 1.0, 17.0, 399.0] {
+                let d = model.window_depth(z);
+                let t = model.eye_depth(d);
+                assert!(
+                    (t - z).abs() < 1e-9 * z,
+                    "{reversed} {far}: {z} -> {d} -> {t}"
+                );
+                let d_matrix = from_matrix.window_depth(z);
+                assert!((d - d_matrix).abs() < 1e-12, "{d} {d_matrix}");
+            }
+        }
+        let camera = Camera {
+            near: n,
+            far: f,
+            ..Camera::default()
+        };
+        assert_eq!(DepthModel::of_planes(n, f, false), camera.depth_model());
+    }
+
     #[test]
     fn fast_reconstruction_matches_the_inverse_matrices() {
         let camera = tilted();

@@ -42,6 +42,7 @@ pub fn reading_options(args: &DepthReadingArgs) -> DepthOptions {
         disparity_offset: args.disparity_offset,
         near: args.near,
         far: args.far,
+        reversed_z: args.reversed_z,
         fov: args.fov,
         min_confidence: args.min_confidence,
         ..DepthOptions::default()

@@ -151,6 +151,10 @@ pub fn check_depth_options(depth: &DepthReadingArgs) -> Result<()> {
     let planes = [
         ("--near", shown(depth.near.filter(|_| !zbuffer))),
         ("--far", shown(depth.far.filter(|_| !zbuffer))),
+        (
+            "--reversed-z",
+            (depth.reversed_z && !zbuffer).then(|| "given".to_string()),
+        ),
     ];
     refuse_given(
         &planes,

@@ -175,9 +175,15 @@ pub struct DepthReadingArgs {
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub near: Option<f64>,
 
-    /// Far clipping plane of the projection that wrote a z-buffer.
+    /// Far clipping plane of the projection that wrote a z-buffer; inf for an infinite far
+    /// plane.
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub far: Option<f64>,
+
+    /// The z-buffer is reversed-Z: window depth 1 at --near and 0 at --far (Unreal, Bevy,
+    /// Godot 4; usually with --far inf), nothing drawn at 0.
+    #[arg(long)]
+    pub reversed_z: bool,
 
     /// Vertical field of view in degrees: of a z-buffer's projection, or of a depth map
     /// (instead of --focal) to turn depth into range.

@@ -9,7 +9,7 @@ use super::middlebury::{self, Calib};
 use super::raw::Raw;
 use super::{android, png16};
 use super::{finite_option, positive_option, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
-use crate::camera::Camera;
+use crate::camera::{Camera, DepthModel};
 use crate::io::camera::{to_range, Intrinsics, Stereo};
 use crate::{Error, Result};
 
@@ -144,6 +144,12 @@ pub(super) fn interpret(
              the file was read as {kind}"
         ));
     }
+    if kind != DepthKind::ZBuffer && opts.reversed_z {
+        notes.push(format!(
+            "`reversed_z` ignored: only a z-buffer's depth is reversed, and the file was \
+             read as {kind}"
+        ));
+    }
     let min_confidence = android::min_confidence(format, opts, &mut notes)?;
     let (width, height) = raw.size();
     let metres = "m".to_string();
@@ -266,8 +272,9 @@ fn is_metric(format: DepthFormat, units: &str, opts: &DepthOptions) -> bool {
 }
 
 /// A z-buffer's conversion: window depth → eye depth by the near and far planes (one
-/// addition and one division, [`Camera::eye_depth`]), unknown at and beyond the far plane,
-/// and the intrinsics of its vertical field of view.
+/// addition and one division, [`DepthModel::of_planes`]: standard or reversed-Z, finite or
+/// infinite far plane), unknown where nothing was drawn (1, or 0 reversed) and outside
+/// [0, 1], and the intrinsics of its vertical field of view.
 fn zbuffer(
     opts: &DepthOptions,
     width: usize,
@@ -281,26 +288,42 @@ fn zbuffer(
             format!("{what}: `depth_kind` zbuffer needs `near`, `far` and `fov`"),
         )
     };
+    let near = opts.near.ok_or_else(|| needs("near", "the near plane"))?;
+    let far = opts.far.ok_or_else(|| needs("far", "the far plane"))?;
+    let fov = opts
+        .fov
+        .ok_or_else(|| needs("fov", "the vertical field of view (degrees)"))?;
+    // The camera checks the near plane and the field of view (its own far plane stands
+    // in); the camera names its field of view `fov_y_deg`, here the option `fov`.
     let camera = Camera {
-        near: opts.near.ok_or_else(|| needs("near", "the near plane"))?,
-        far: opts.far.ok_or_else(|| needs("far", "the far plane"))?,
-        fov_y_deg: opts
-            .fov
-            .ok_or_else(|| needs("fov", "the vertical field of view (degrees)"))?,
+        near,
+        far: f64::MAX,
+        fov_y_deg: fov,
         ..Camera::default()
     };
-    // The camera names its field of view `fov_y_deg`; here it is the option `fov`.
     camera
         .validate()
         .map_err(|e| e.rename_options(|f| (f == "fov_y_deg").then(|| "fov".into())))?;
+    if far.is_nan() || far <= near {
+        return Err(Error::invalid(
+            "far",
+            far,
+            format!("a distance greater than near ({near}), or inf for an infinite far plane"),
+        ));
+    }
+    let reversed = opts.reversed_z;
+    let sky = if reversed { 0.0 } else { 1.0 };
     notes.push(format!(
-        "z-buffer of a perspective projection, near {} far {}, vertical field of view {}°; \
-         window depth 1 (nothing drawn) is unknown",
-        camera.near, camera.far, camera.fov_y_deg
+        "{} z-buffer of a perspective projection, near {near} far {far}, vertical field of \
+         view {fov}°; window depth {sky} (nothing drawn) is unknown",
+        if reversed { "reversed-Z" } else { "standard" },
     ));
-    let k = Intrinsics::centred(focal_from_fov(camera.fov_y_deg, height), width, height);
-    let depth =
-        move |d: f64| (d.is_finite() && (0.0..1.0).contains(&d)).then(|| camera.eye_depth(d));
+    let model = DepthModel::of_planes(near, far, reversed);
+    let k = Intrinsics::centred(focal_from_fov(fov, height), width, height);
+    let depth = move |d: f64| {
+        let drawn = d.is_finite() && (0.0..=1.0).contains(&d) && d != sky;
+        drawn.then(|| model.eye_depth(d))
+    };
     Ok((depth, k))
 }
 

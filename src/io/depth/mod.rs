@@ -182,8 +182,13 @@ pub struct DepthOptions {
     /// Near clipping plane of a z-buffer's projection, in the range's units (metres with
     /// `scale` 1).
     pub near: Option<f64>,
-    /// Far clipping plane of a z-buffer's projection.
+    /// Far clipping plane of a z-buffer's projection; `f64::INFINITY` for an infinite
+    /// far plane (engines' reversed-Z projections have one).
     pub far: Option<f64>,
+    /// Whether a z-buffer is reversed-Z: window depth 1 at the near plane and 0 at the far
+    /// one (Unreal, Bevy, Godot 4), nothing drawn at 0. False: OpenGL's standard, 0 at
+    /// near, nothing drawn at 1.
+    pub reversed_z: bool,
     /// Vertical field of view in degrees: the focal length of a z-buffer, or of a depth
     /// map when `focal` is not given.
     pub fov: Option<f64>,
@@ -206,6 +211,7 @@ impl Default for DepthOptions {
             disparity_offset: None,
             near: None,
             far: None,
+            reversed_z: false,
             fov: None,
             min_confidence: None,
         }
