@@ -1112,3 +1112,55 @@ fn prep_refuses_refinement_without_an_image() {
         assert!(!dir.path().join("r.pfm").exists());
     }
 }
+
+/// A monocular estimator's relative inverse depth (`--depth-kind inverse`) fogs as the
+/// depth it inverts: paper 000's haze reads range over its largest value, so the unknown
+/// scale cancels; its sky (0) is found and fogged as the depth map's unknown sky is.
+#[test]
+fn relative_inverse_depth_fogs_as_the_depth_it_inverts() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (24usize, 16usize);
+    write_rgba(
+        &dir.path().join("im.png"),
+        &Grid::from_fn(w, h, |x, y| match y < 4 {
+            true => [0.35, 0.5, 0.9, 1.0],
+            false => [0.2 + 0.02 * (x % 5) as f32, 0.4, 0.15, 1.0],
+        }),
+    )
+    .unwrap();
+    let z = |x: usize, y: usize| (y >= 4).then(|| 40.0 / (y - 3) as f32 + 0.1 * x as f32);
+    let depth = Grid::from_fn(w, h, |x, y| z(x, y).unwrap_or(f32::NAN));
+    let inverse = Grid::from_fn(w, h, |x, y| z(x, y).map_or(0.0, |z| 3.0 / z));
+    write_scalar(&dir.path().join("depth.pfm"), &depth).unwrap();
+    write_scalar(&dir.path().join("inverse.pfm"), &inverse).unwrap();
+    let fog = |depth: &str, kind: &str, out: &str| {
+        let o = brume(
+            dir.path(),
+            &[
+                "render",
+                "--image",
+                "im.png",
+                "--depth",
+                depth,
+                "--depth-kind",
+                kind,
+                "--fov",
+                "45",
+                "--out",
+                out,
+            ],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        brume::io::image::load_linear_rgb(&dir.path().join(out)).unwrap()
+    };
+    let from_depth = fog("depth.pfm", "depth", "depth.pfm.out.pfm");
+    let from_inverse = fog("inverse.pfm", "inverse", "inverse.out.pfm");
+    let largest = from_depth
+        .as_slice()
+        .iter()
+        .zip(from_inverse.as_slice())
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
+        .fold(0.0f32, f32::max);
+    // 3/(3/z) is z to an ulp or two.
+    assert!(largest < 1e-5, "{largest}");
+}

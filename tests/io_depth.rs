@@ -868,6 +868,75 @@ fn kind_and_format_parse_and_print() {
     assert!(err.contains("far") && err.contains("disparity"), "{err}");
 }
 
+/// A monocular estimator's relative inverse depth (`depth_kind` inverse): depth =
+/// S/(d + offset) along the optical axis, then range with `fov`; d + offset ≤ 0 (the
+/// sky) unknown; relative units, or metres with `scale`; a 16-bit PNG read as png16
+/// without a scale.
+#[test]
+fn relative_inverse_depth_becomes_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h, fov) = (6usize, 4usize, 60.0f64);
+    let focal = h as f64 / 2.0 / (fov.to_radians() / 2.0).tan();
+    let values = [0.0f32, -0.5, 0.25, 1.0, 7.5, f32::NAN];
+    let map = Grid::from_fn(w, h, |x, y| values[(x + y) % values.len()]);
+    let pfm = dir.path().join("inverse.pfm");
+    write_scalar(&pfm, &map).unwrap();
+    let ray = |x: usize, y: usize| {
+        let (u, v) = (
+            (x as f64 - (w as f64 - 1.0) / 2.0) / focal,
+            (y as f64 - (h as f64 - 1.0) / 2.0) / focal,
+        );
+        (1.0 + u * u + v * v).sqrt()
+    };
+    for (scale, offset, units) in [
+        (None, None, "relative units"),
+        (Some(20.0), Some(0.75), "m"),
+    ] {
+        let opts = DepthOptions {
+            kind: Some(DepthKind::Inverse),
+            fov: Some(fov),
+            scale,
+            disparity_offset: offset,
+            ..DepthOptions::default()
+        };
+        let d = load_range(&pfm, &opts).unwrap();
+        assert_eq!((d.units.as_str(), d.metric), (units, scale.is_some()));
+        let (s, o) = (scale.unwrap_or(1.0), offset.unwrap_or(0.0));
+        for y in 0..h {
+            for x in 0..w {
+                let v = f64::from(*map.get(x, y)) + o;
+                let got = *d.range.get(x, y);
+                if v.is_finite() && v > 0.0 {
+                    let want = s / v * ray(x, y);
+                    assert!(
+                        (f64::from(got) - want).abs() <= 1e-6 * want,
+                        "{got} vs {want}"
+                    );
+                } else {
+                    assert!(got.is_nan(), "({x}, {y}) {v}: {got}");
+                }
+            }
+        }
+    }
+    // MiDaS writes 16-bit PNGs of its output: read as png16, no scale needed.
+    let png = save_png16(dir.path(), "inverse.png", 3, 1, &[0, 1000, 4000]);
+    let opts = DepthOptions {
+        kind: Some(DepthKind::Inverse),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&png, &opts).unwrap();
+    assert_eq!(d.format, DepthFormat::Png16);
+    assert!(d.range.get(0, 0).is_nan());
+    assert_eq!(
+        (*d.range.get(1, 0), *d.range.get(2, 0)),
+        (1.0 / 1000.0, 1.0 / 4000.0)
+    );
+    assert_eq!(
+        "inverse-depth".parse::<DepthKind>().unwrap(),
+        DepthKind::Inverse
+    );
+}
+
 /// Engines' z-buffers: reversed-Z (window depth 1 at near, 0 at far: Bevy and Unreal's
 /// infinite one, D3D's reversed finite one) and OpenGL's with an infinite far plane, each
 /// written here from eye depths by its projection's own formula, become the range worked

@@ -16,7 +16,9 @@ use pyo3::types::PyDict;
 /// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
 /// beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
 /// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore'. kind:
-/// 'depth', 'range', 'disparity' or 'zbuffer' (default: the format's). scale: metres per
+/// 'depth', 'range', 'disparity', 'zbuffer' or 'inverse' (a monocular estimator's relative
+/// inverse depth: depth = 1/(d + disparity_offset_px), or scale/(…) in metres; 0 the sky)
+/// (default: the format's). scale: metres per
 /// unit of a 16-bit PNG, of a float map, or of a z-buffer's near and far (1 when they
 /// are in metres; a float map or a z-buffer then counts as metric). calib: a Middlebury
 /// 2014 calib.txt (else calib.txt beside the file). focal_px and baseline_mm: a

@@ -511,6 +511,13 @@ def test_load_depth_geometry_keywords(tmp_path):
     )
     np.testing.assert_allclose(rng_rz, expected, rtol=1e-5)
     assert any("reversed-Z" in n for n in info["notes"])
+    # A monocular estimator's inverse depth, its scale fitted: depth = scale/d.
+    np.save(tmp_path / "inverse.npy", (2.0 / eye).astype(np.float32))
+    rng_inv, info = brume.load_depth(
+        tmp_path / "inverse.npy", kind="inverse", fov_y_deg=fov, scale=2.0
+    )
+    np.testing.assert_allclose(rng_inv, expected, rtol=1e-5)
+    assert (info["kind"], info["metric"]) == ("inverse", True)
     with pytest.raises(ValueError, match="needs near, far and fov_y_deg") as error:
         brume.load_depth(tmp_path / "z.npy", kind="zbuffer", near=near)
     assert "--" not in str(error.value)

@@ -129,8 +129,10 @@ pub struct DepthArgs {
 #[derive(Args, Debug, Clone)]
 pub struct DepthReadingArgs {
     /// What the depth values are: depth (along the optical axis), range (distance to the
-    /// camera centre), disparity (px), or zbuffer (a rendered frame's OpenGL window depth
-    /// in [0, 1], with --near, --far and --fov). Default: what the format implies.
+    /// camera centre), disparity (px), zbuffer (a rendered frame's OpenGL window depth in
+    /// [0, 1], with --near, --far and --fov), or inverse (a monocular estimator's relative
+    /// inverse depth, MiDaS or Depth Anything: depth ∝ 1/(d + --disparity-offset), 0 the
+    /// sky; metres with --depth-scale). Default: what the format implies.
     #[arg(long, value_name = "KIND", allow_hyphen_values = true)]
     pub depth_kind: Option<DepthKind>,
 
@@ -149,9 +151,9 @@ pub struct DepthReadingArgs {
     pub depth_format: DepthFormat,
 
     /// Metres per stored value of a 16-bit PNG (e.g. 0.001 for millimetres), of a float
-    /// map (1 for a map already in metres), or per unit of a z-buffer's --near and --far
-    /// (1 when they are in metres); a float map or a z-buffer then counts as metric, for
-    /// --beta.
+    /// map (1 for a map already in metres), per unit of a z-buffer's --near and --far (1
+    /// when they are in metres), or the metres of 1/(d + offset) of inverse depth; a float
+    /// map, a z-buffer or inverse depth then counts as metric, for --beta.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub depth_scale: Option<f64>,
 
@@ -165,7 +167,8 @@ pub struct DepthReadingArgs {
     pub baseline: Option<f64>,
 
     /// Disparity offset (doffs / dmin) in px added to every disparity (Middlebury 2006
-    /// default: 270).
+    /// default: 270); with --depth-kind inverse, the shift added to the inverse depth
+    /// [default: 0].
     #[arg(long, value_name = "PX", allow_hyphen_values = true)]
     pub disparity_offset: Option<f64>,
 

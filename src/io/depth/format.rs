@@ -49,7 +49,7 @@ impl Layout {
 /// Which kinds of values a format may hold.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Kinds {
-    /// Depth, range, disparity or a z-buffer (`DepthOptions::kind` says).
+    /// Depth, range, disparity, a z-buffer or inverse depth (`DepthOptions::kind` says).
     Any,
     /// Disparity only (the Middlebury sets).
     Disparity,

@@ -38,7 +38,8 @@ fn resolve_format(
         // A camera file was given, or found for a `*_disparity.png`.
         (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
         (F::Auto, Raw::Grey16(_))
-            if opts.scale.is_some() || opts.kind == Some(DepthKind::ZBuffer) =>
+            if opts.scale.is_some()
+                || matches!(opts.kind, Some(DepthKind::ZBuffer | DepthKind::Inverse)) =>
         {
             F::Png16
         }
@@ -183,6 +184,18 @@ pub(super) fn interpret(
             let metres = |v: f32| depth(f64::from(v)).map(|z| z * scale.unwrap_or(1.0));
             (to_range(&map, metres, Some(&k)), units_of(scale), Some(k))
         }
+        (_, Raw::Grey16(raw)) if kind == DepthKind::Inverse => {
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let (depth, units) = inverse_depth(opts, &mut notes)?;
+            let range = to_range(&raw, |v| depth(f64::from(v)), k.as_ref());
+            (range, units, k)
+        }
+        (_, Raw::Float { map, .. }) if kind == DepthKind::Inverse => {
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let (depth, units) = inverse_depth(opts, &mut notes)?;
+            let range = to_range(&map, |v| depth(f64::from(v)), k.as_ref());
+            (range, units, k)
+        }
         (DepthFormat::Png16, Raw::Grey16(raw)) if kind == DepthKind::Disparity => {
             let scale = png16::given_scale(opts)?;
             let stereo = Stereo::from_options(opts, format)?;
@@ -252,6 +265,34 @@ fn vouched_scale(opts: &DepthOptions, what: &str, notes: &mut Vec<String>) -> Re
     let scale = png16::given_scale(opts)?;
     notes.push(format!("{what} x {scale} = metres (depth scale)"));
     Ok(Some(scale))
+}
+
+/// A monocular estimator's relative inverse depth d: depth = S/(d + offset) with S the
+/// `depth_scale` (metres: metric) or 1 (relative units), `disparity_offset` the shift
+/// (default 0); unknown where d + offset ≤ 0 (the sky) or not finite. With the units.
+fn inverse_depth(
+    opts: &DepthOptions,
+    notes: &mut Vec<String>,
+) -> Result<(impl Fn(f64) -> Option<f64>, String)> {
+    let offset = match opts.disparity_offset {
+        Some(o) => finite_option(o, "disparity_offset")?,
+        None => 0.0,
+    };
+    let scale = vouched_scale(opts, "1/(d + offset)", notes)?;
+    notes.push(format!(
+        "relative inverse depth: depth = {}/(d + {offset}), unknown where d + {offset} ≤ 0",
+        scale.unwrap_or(1.0)
+    ));
+    let units = match scale {
+        Some(_) => "m".to_string(),
+        None => "relative units".to_string(),
+    };
+    let s = scale.unwrap_or(1.0);
+    let depth = move |d: f64| {
+        let d = d + offset;
+        (d.is_finite() && d > 0.0).then(|| s / d)
+    };
+    Ok((depth, units))
 }
 
 /// The units of a map in file units scaled by [`vouched_scale`]'s result.

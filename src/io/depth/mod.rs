@@ -72,10 +72,15 @@ pub enum DepthKind {
     /// planes and into range by the vertical field of view ([`crate::camera`]). d = 1
     /// (the far plane: nothing drawn, sky) is unknown.
     ZBuffer,
+    /// A monocular depth estimator's relative inverse depth (MiDaS, DPT, Depth Anything's
+    /// relative models): larger is nearer, known up to scale and shift, so depth ∝
+    /// 1/(d + `disparity_offset`); 0 and below (the sky) is unknown. Not metric, unless
+    /// `scale` gives the metres of 1/(d + offset).
+    Inverse,
 }
 
 impl DepthKind {
-    const NAMES: &'static str = "depth, range, disparity or zbuffer";
+    const NAMES: &'static str = "depth, range, disparity, zbuffer or inverse";
 }
 
 impl FromStr for DepthKind {
@@ -87,6 +92,7 @@ impl FromStr for DepthKind {
             "range" => Ok(DepthKind::Range),
             "disparity" => Ok(DepthKind::Disparity),
             "zbuffer" => Ok(DepthKind::ZBuffer),
+            "inverse" | "inverse-depth" | "inverse_depth" => Ok(DepthKind::Inverse),
             _ => Err(Error::invalid("depth_kind", s, DepthKind::NAMES)),
         }
     }
@@ -99,6 +105,7 @@ impl fmt::Display for DepthKind {
             DepthKind::Range => "range",
             DepthKind::Disparity => "disparity",
             DepthKind::ZBuffer => "zbuffer",
+            DepthKind::Inverse => "inverse",
         })
     }
 }
@@ -170,7 +177,8 @@ pub struct DepthOptions {
     pub camera: Option<PathBuf>,
     /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity); for
     /// a float map, metres per unit; for a z-buffer, metres per unit of `near` and `far`
-    /// (1 when they are in metres). Given for a float map or a z-buffer, it makes the
+    /// (1 when they are in metres); for relative inverse depth, the metres of
+    /// 1/(d + offset). Given for a float map, a z-buffer or inverse depth, it makes the
     /// range metric ([`LoadedDepth::metric`]).
     pub scale: Option<f64>,
     /// Focal length in pixels.
