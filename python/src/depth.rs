@@ -16,21 +16,21 @@ use pyo3::types::PyDict;
 /// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
 /// beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
 /// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore'. kind:
-/// 'depth', 'range', 'disparity', 'zbuffer' or 'inverse' (a monocular estimator's relative
-/// inverse depth: depth = 1/(d + disparity_offset_px), or scale/(…) in metres; 0 the sky)
-/// (default: the format's). scale: metres per
-/// unit of a 16-bit PNG, of a float map, or of a z-buffer's near and far (1 when they
-/// are in metres; a float map or a z-buffer then counts as metric). calib: a Middlebury
-/// 2014 calib.txt (else calib.txt beside the file). focal_px and baseline_mm: a
-/// disparity's stereo geometry (disparity_offset_px added to the disparity first),
+/// 'depth', 'range', 'disparity', 'zbuffer' or 'inverse' (a monocular estimator's
+/// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) (default:
+/// the format's). scale: metres per unit of a 16-bit PNG, of a float map, of a z-buffer's
+/// near and far (1 when they are in metres), or the metres of 1/(d + offset) of inverse
+/// depth; a float map, a z-buffer or inverse depth then counts as metric. calib: a
+/// Middlebury 2014 calib.txt (else calib.txt beside the file). focal_px and baseline_mm:
+/// a disparity's stereo geometry (disparity_offset_px added to the disparity first),
 /// focal_px or fov_y_deg (vertical) the intrinsics that turn depth along the optical axis
 /// into range (principal point at the centre). near, far and fov_y_deg: a z-buffer's
 /// projection (an OpenGL window depth in [0, 1]; near and far in the range's unit, far
 /// float('inf') for an infinite far plane); reversed_z: its depth is 1 at near and 0 at
-/// far (Unreal, Bevy, Godot 4), nothing drawn at 0.
-/// min_confidence: the lowest confidence in [0, 1] of an Android DEPTH16 sample that is
-/// kept. info: format, kind, units, metric (whether the range is in trustworthy metres,
-/// which fog with beta or visibility needs), notes, unknown_pixels.
+/// far (Unreal, Bevy, Godot 4), nothing drawn at 0. min_confidence: the lowest
+/// confidence in [0, 1] of an Android DEPTH16 sample that is kept. info: format, kind,
+/// units, metric (whether the range is in trustworthy metres, which fog with beta or
+/// visibility needs), notes, unknown_pixels.
 #[pyfunction]
 #[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false))]
 #[allow(clippy::too_many_arguments)]

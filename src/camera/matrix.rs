@@ -50,7 +50,7 @@ pub struct DepthModel {
 
 impl DepthModel {
     /// The model of a depth buffer written by a perspective projection with planes `near`
-    /// and `far` (`f64::INFINITY`: an infinite far plane, its sky at `far`'s cap
+    /// and `far` (`f64::INFINITY`: an infinite far plane, eye depth then capped at
     /// [`DEFAULT_SKY_DEPTH`]), standard (window depth 0 at near, 1 at far) or `reversed`
     /// (1 at near, 0 at far), whatever the clip depth convention (the window depth is the
     /// same under both): `a`, `k`, `c` as [`MatrixCamera::new`] reads them off such a

@@ -175,14 +175,22 @@ pub(super) fn interpret(
             let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
             let scale = vouched_scale(opts, "near and far", &mut notes)?;
             let window = 1.0 / f64::from(u16::MAX);
-            let metres = |v: u16| depth(f64::from(v) * window).map(|z| z * scale.unwrap_or(1.0));
-            (to_range(&raw, metres, Some(&k)), units_of(scale), Some(k))
+            let scaled = |v: u16| depth(f64::from(v) * window).map(|z| z * scale.unwrap_or(1.0));
+            (
+                to_range(&raw, scaled, Some(&k)),
+                units_of(scale, FILE_UNITS),
+                Some(k),
+            )
         }
         (_, Raw::Float { map, .. }) if kind == DepthKind::ZBuffer => {
             let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
             let scale = vouched_scale(opts, "near and far", &mut notes)?;
-            let metres = |v: f32| depth(f64::from(v)).map(|z| z * scale.unwrap_or(1.0));
-            (to_range(&map, metres, Some(&k)), units_of(scale), Some(k))
+            let scaled = |v: f32| depth(f64::from(v)).map(|z| z * scale.unwrap_or(1.0));
+            (
+                to_range(&map, scaled, Some(&k)),
+                units_of(scale, FILE_UNITS),
+                Some(k),
+            )
         }
         (_, Raw::Grey16(raw)) if kind == DepthKind::Inverse => {
             let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
@@ -231,8 +239,12 @@ pub(super) fn interpret(
         (_, Raw::Float { map, .. }) => {
             let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
             let scale = vouched_scale(opts, "values", &mut notes)?;
-            let metres = |v: f32| Some(f64::from(v) * scale.unwrap_or(1.0));
-            (to_range(&map, metres, k.as_ref()), units_of(scale), k)
+            let scaled = |v: f32| Some(f64::from(v) * scale.unwrap_or(1.0));
+            (
+                to_range(&map, scaled, k.as_ref()),
+                units_of(scale, FILE_UNITS),
+                k,
+            )
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
@@ -283,10 +295,7 @@ fn inverse_depth(
         "relative inverse depth: depth = {}/(d + {offset}), unknown where d + {offset} ≤ 0",
         scale.unwrap_or(1.0)
     ));
-    let units = match scale {
-        Some(_) => "m".to_string(),
-        None => "relative units".to_string(),
-    };
+    let units = units_of(scale, "relative units");
     let s = scale.unwrap_or(1.0);
     let depth = move |d: f64| {
         let d = d + offset;
@@ -295,13 +304,17 @@ fn inverse_depth(
     Ok((depth, units))
 }
 
-/// The units of a map in file units scaled by [`vouched_scale`]'s result.
-fn units_of(scale: Option<f64>) -> String {
+/// The units of a map whose values are in `unscaled` units, scaled by
+/// [`vouched_scale`]'s result.
+fn units_of(scale: Option<f64>, unscaled: &str) -> String {
     match scale {
         Some(_) => "m".to_string(),
-        None => "file units".to_string(),
+        None => unscaled.to_string(),
     }
 }
+
+/// The units of a map whose unit nothing says (a float map, a z-buffer's planes).
+const FILE_UNITS: &str = "file units";
 
 /// Whether a range in `units` read as `format` is in trustworthy metres
 /// ([`LoadedDepth::metric`]): every conversion that yields metres does, except Middlebury
