@@ -170,27 +170,16 @@ pub(super) fn interpret(
             let (range, k) = middlebury::range_2006(&disp, opts, pixel_scale, &mut notes)?;
             (range, metres, Some(k))
         }
-        // A z-buffer's range is in the units of its near and far planes.
         (_, Raw::Grey16(raw)) if kind == DepthKind::ZBuffer => {
-            let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
-            let scale = vouched_scale(opts, "near and far", &mut notes)?;
+            let (depth, k, units) = zbuffer(opts, width, height, &mut notes)?;
             let window = 1.0 / f64::from(u16::MAX);
-            let scaled = |v: u16| depth(f64::from(v) * window).map(|z| z * scale.unwrap_or(1.0));
-            (
-                to_range(&raw, scaled, Some(&k)),
-                units_of(scale, FILE_UNITS),
-                Some(k),
-            )
+            let range = to_range(&raw, |v| depth(f64::from(v) * window), Some(&k));
+            (range, units, Some(k))
         }
         (_, Raw::Float { map, .. }) if kind == DepthKind::ZBuffer => {
-            let (depth, k) = zbuffer(opts, width, height, &mut notes)?;
-            let scale = vouched_scale(opts, "near and far", &mut notes)?;
-            let scaled = |v: f32| depth(f64::from(v)).map(|z| z * scale.unwrap_or(1.0));
-            (
-                to_range(&map, scaled, Some(&k)),
-                units_of(scale, FILE_UNITS),
-                Some(k),
-            )
+            let (depth, k, units) = zbuffer(opts, width, height, &mut notes)?;
+            let range = to_range(&map, |v| depth(f64::from(v)), Some(&k));
+            (range, units, Some(k))
         }
         (_, Raw::Grey16(raw)) if kind == DepthKind::Inverse => {
             let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
@@ -238,13 +227,9 @@ pub(super) fn interpret(
         }
         (_, Raw::Float { map, .. }) => {
             let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
-            let scale = vouched_scale(opts, "values", &mut notes)?;
-            let scaled = |v: f32| Some(f64::from(v) * scale.unwrap_or(1.0));
-            (
-                to_range(&map, scaled, k.as_ref()),
-                units_of(scale, FILE_UNITS),
-                k,
-            )
+            let (scale, units) = vouched_scale(opts, "values", FILE_UNITS, &mut notes)?;
+            let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
+            (range, units, k)
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
@@ -267,16 +252,22 @@ pub(super) fn interpret(
     })
 }
 
-/// The metres per unit of a map in file units (a float map, a z-buffer's near and far
-/// planes) where `depth_scale` gives them (1 for metres): the caller vouches for the unit,
-/// as for a 16-bit PNG, and the notes say that `what` was scaled. `None` without it.
-fn vouched_scale(opts: &DepthOptions, what: &str, notes: &mut Vec<String>) -> Result<Option<f64>> {
+/// The multiplier to metres of a map whose unit nothing says (a float map, a z-buffer's
+/// near and far planes, inverse depth) and the units it leaves: `depth_scale` where given
+/// (1 for metres), the caller vouching for the unit as for a 16-bit PNG, with a note that
+/// `what` was scaled, and metres; 1 and `unscaled` without it.
+fn vouched_scale(
+    opts: &DepthOptions,
+    what: &str,
+    unscaled: &str,
+    notes: &mut Vec<String>,
+) -> Result<(f64, String)> {
     if opts.scale.is_none() {
-        return Ok(None);
+        return Ok((1.0, unscaled.to_string()));
     }
     let scale = png16::given_scale(opts)?;
     notes.push(format!("{what} x {scale} = metres (depth scale)"));
-    Ok(Some(scale))
+    Ok((scale, "m".to_string()))
 }
 
 /// A monocular estimator's relative inverse depth d: depth = S/(d + offset) with S the
@@ -290,27 +281,15 @@ fn inverse_depth(
         Some(o) => finite_option(o, "disparity_offset")?,
         None => 0.0,
     };
-    let scale = vouched_scale(opts, "1/(d + offset)", notes)?;
+    let (scale, units) = vouched_scale(opts, "1/(d + offset)", "relative units", notes)?;
     notes.push(format!(
-        "relative inverse depth: depth = {}/(d + {offset}), unknown where d + {offset} ≤ 0",
-        scale.unwrap_or(1.0)
+        "relative inverse depth: depth = {scale}/(d + {offset}), unknown where d + {offset} ≤ 0"
     ));
-    let units = units_of(scale, "relative units");
-    let s = scale.unwrap_or(1.0);
     let depth = move |d: f64| {
         let d = d + offset;
-        (d.is_finite() && d > 0.0).then(|| s / d)
+        (d.is_finite() && d > 0.0).then(|| scale / d)
     };
     Ok((depth, units))
-}
-
-/// The units of a map whose values are in `unscaled` units, scaled by
-/// [`vouched_scale`]'s result.
-fn units_of(scale: Option<f64>, unscaled: &str) -> String {
-    match scale {
-        Some(_) => "m".to_string(),
-        None => unscaled.to_string(),
-    }
 }
 
 /// The units of a map whose unit nothing says (a float map, a z-buffer's planes).
@@ -327,14 +306,15 @@ fn is_metric(format: DepthFormat, units: &str, opts: &DepthOptions) -> bool {
 
 /// A z-buffer's conversion: window depth → eye depth by the near and far planes (one
 /// addition and one division, [`DepthModel::of_planes`]: standard or reversed-Z, finite or
-/// infinite far plane), unknown where nothing was drawn (1, or 0 reversed) and outside
-/// [0, 1], and the intrinsics of its vertical field of view.
+/// infinite far plane) times `depth_scale` where given ([`vouched_scale`]), unknown where
+/// nothing was drawn (1, or 0 reversed) and outside [0, 1]; the intrinsics of its vertical
+/// field of view, and the range's units.
 fn zbuffer(
     opts: &DepthOptions,
     width: usize,
     height: usize,
     notes: &mut Vec<String>,
-) -> Result<(impl Fn(f64) -> Option<f64>, Intrinsics)> {
+) -> Result<(impl Fn(f64) -> Option<f64>, Intrinsics, String)> {
     let needs = |name: &str, what: &str| {
         Error::invalid(
             name,
@@ -372,13 +352,15 @@ fn zbuffer(
          view {fov}°; window depth {sky} (nothing drawn) is unknown",
         if reversed { "reversed-Z" } else { "standard" },
     ));
+    // The range is in the units of the near and far planes.
+    let (scale, units) = vouched_scale(opts, "near and far", FILE_UNITS, notes)?;
     let model = DepthModel::of_planes(near, far, reversed);
     let k = Intrinsics::centred(focal_from_fov(fov, height), width, height);
     let depth = move |d: f64| {
         let drawn = d.is_finite() && (0.0..=1.0).contains(&d) && d != sky;
-        drawn.then(|| model.eye_depth(d))
+        drawn.then(|| model.eye_depth(d) * scale)
     };
-    Ok((depth, k))
+    Ok((depth, k, units))
 }
 
 /// The focal length in pixels of a vertical field of view over `height` pixels.
