@@ -156,7 +156,7 @@ impl Frame {
         let started = Instant::now();
         let depth_opts = frame_depth_options(&opts.depth, item);
         let photo = Photo::load(&item.image, &item.depth, &depth_opts)?;
-        photo.require_metres("depth", item.depth.display())?;
+        photo.require_metric_depth("depth", item.depth.display())?;
         let mut prepare = opts.prepare.clone();
         (prepare.sky_mask, prepare.ego_mask) = frame_masks(opts, item, &photo)?;
         let decode_ms = elapsed_ms(started);

@@ -180,8 +180,28 @@ impl Photo {
     }
 
     /// Refuses fog in physical units (the option `name` = `value`) on a range not known
-    /// to be in metres ([`LoadedDepth::metric`]), saying how it was read and what would do.
+    /// to be in metres ([`LoadedDepth::metric`]), saying how it was read and what would do,
+    /// normalised range (`ka`/`ks`) among it.
     pub fn require_metres(&self, name: &str, value: impl std::fmt::Display) -> Result<()> {
+        self.refuse_unless_metric(name, value, "; or use `ka`/`ks` (normalised range)")
+    }
+
+    /// [`Photo::require_metres`] for a caller that has no normalised range to offer
+    /// (a dataset's frames, whose fog is always in metres).
+    pub(crate) fn require_metric_depth(
+        &self,
+        name: &str,
+        value: impl std::fmt::Display,
+    ) -> Result<()> {
+        self.refuse_unless_metric(name, value, "")
+    }
+
+    fn refuse_unless_metric(
+        &self,
+        name: &str,
+        value: impl std::fmt::Display,
+        alternative: &str,
+    ) -> Result<()> {
         if self.depth.metric {
             return Ok(());
         }
@@ -200,7 +220,7 @@ impl Photo {
                 "range in metres, but {} was read as {} {} {why}: give its calibration \
                  (`calib` calib.txt, `camera` NAME_camera.json), a metric `depth_format` \
                  (cityscapes, kitti, nyu, tum, android-depth16, arcore) or `depth_scale` in \
-                 metres per unit; or use `ka`/`ks` (normalised range)",
+                 metres per unit{alternative}",
                 self.depth_name, depth.format, depth.kind
             ),
         ))
