@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 
 use brume::io::depth::{
     load_cityscapes, load_cityscapes_from_bytes, load_range, load_range_from_bytes, parse_calib,
-    parse_camera_str, parse_pfm, read_pfm, DepthFormat, DepthKind, DepthOptions, LoadedDepth, Pfm,
-    DEPTH16_DEFAULT_MIN_CONFIDENCE,
+    parse_camera_str, parse_pfm, range_from_map, read_pfm, DepthFormat, DepthKind, DepthOptions,
+    LoadedDepth, Pfm, DEPTH16_DEFAULT_MIN_CONFIDENCE,
 };
 use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
@@ -301,6 +301,80 @@ fn bytes_in_memory_load_as_the_files_do() {
         .notes
         .iter()
         .any(|n| n.contains("`calib`") && n.contains("ignored")));
+}
+
+/// A map in memory reads as a float file of it (range, units, kind, intrinsics, notes)
+/// for every kind; side files and file layouts are refused, naming the map.
+#[test]
+fn a_map_in_memory_reads_as_a_float_file_of_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let map: ScalarMap = Grid::from_fn(6, 4, |x, y| 0.2 + 0.05 * x as f32 + 0.01 * y as f32);
+    let path = dir.path().join("map.pfm");
+    write_scalar(&path, &map).unwrap();
+    let geometry = DepthOptions {
+        fov: Some(50.0),
+        ..DepthOptions::default()
+    };
+    let cases = [
+        (DepthKind::Depth, geometry.clone()),
+        (
+            DepthKind::Range,
+            DepthOptions {
+                scale: Some(2.0),
+                ..DepthOptions::default()
+            },
+        ),
+        (
+            DepthKind::Disparity,
+            DepthOptions {
+                focal: Some(40.0),
+                baseline: Some(100.0),
+                disparity_offset: Some(0.5),
+                ..DepthOptions::default()
+            },
+        ),
+        (DepthKind::Inverse, geometry.clone()),
+        (
+            DepthKind::ZBuffer,
+            DepthOptions {
+                near: Some(0.1),
+                far: Some(100.0),
+                ..geometry
+            },
+        ),
+    ];
+    for (kind, opts) in cases {
+        let opts = DepthOptions {
+            kind: Some(kind),
+            ..opts
+        };
+        let from_map = range_from_map(map.clone(), "depth", &opts).unwrap();
+        let from_file = load_range(&path, &opts).unwrap();
+        assert_eq!(from_map, from_file, "{kind}");
+    }
+    for (opts, needle) in [
+        (
+            DepthOptions {
+                camera: Some(dir.path().join("camera.json")),
+                ..DepthOptions::default()
+            },
+            "invalid camera",
+        ),
+        (
+            DepthOptions {
+                calib: Some(dir.path().join("calib.txt")),
+                ..DepthOptions::default()
+            },
+            "invalid calib",
+        ),
+        (
+            opts(DepthFormat::Kitti),
+            "depth: `depth_format` kitti expects",
+        ),
+    ] {
+        let e = expect_err(range_from_map(map.clone(), "depth", &opts)).to_string();
+        assert!(e.contains(needle), "{needle}: {e}");
+    }
 }
 
 #[test]

@@ -7,6 +7,7 @@
     >>> foggy, info = brume.fog(image, range_m, beta=0.02, return_info=True)
     >>> info["transmittance"], info["airlight"]               # the labels: I = J t + A (1 - t)
     >>> range_m, info = brume.load_depth("frankfurt_000000_000294_disparity.png")
+    >>> range_m, info = brume.range_from_depth(z_m, kind="depth", fov_y_deg=60.0)  # an array
     >>> r = brume.Renderer()                                  # one EGL context, many frames
     >>> t = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=0)
     >>> out = t(image=image, depth=range_m)                   # {"image", "depth", "beta"}
@@ -37,6 +38,7 @@ from ._brume import (
     fog,
     layered_fog,
     load_depth,
+    range_from_depth,
 )
 from . import augment
 
@@ -44,6 +46,7 @@ __all__ = [
     "Renderer",
     "fog",
     "load_depth",
+    "range_from_depth",
     "beta_quantile",
     "distance_fog",
     "layered_fog",

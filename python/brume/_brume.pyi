@@ -312,4 +312,17 @@ def load_depth(
     min_confidence: Optional[float] = None,
     reversed_z: bool = False
 ) -> Tuple[Array, Dict[str, Any]]: ...
+def range_from_depth(
+    depth: Array,
+    *,
+    kind: str,
+    scale: Optional[float] = None,
+    focal_px: Optional[float] = None,
+    baseline_mm: Optional[float] = None,
+    disparity_offset_px: Optional[float] = None,
+    near: Optional[float] = None,
+    far: Optional[float] = None,
+    fov_y_deg: Optional[float] = None,
+    reversed_z: bool = False
+) -> Tuple[Array, Dict[str, Any]]: ...
 def beta_quantile(dist: str, p: float) -> float: ...

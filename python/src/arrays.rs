@@ -228,26 +228,46 @@ impl ImageIn {
 }
 
 pub(crate) fn read_range(range: &Bound<'_, PyAny>) -> PyResult<ScalarMap> {
-    let untyped = range.cast::<PyUntypedArray>().map_err(|_| {
-        value_error("range_m: expected a numpy array HxW of ranges in metres (float32)")
+    read_scalar_map(
+        range,
+        "range_m",
+        "ranges in metres",
+        "the image's size or smaller by one factor",
+        "metres; NaN or <= 0 where unknown",
+    )
+}
+
+/// An HxW float32 or float64 array argument named `what` (holding `holds`, its shape
+/// `shape_is`, its values `values`: said when it is not) as a float map.
+pub(crate) fn read_scalar_map(
+    array: &Bound<'_, PyAny>,
+    what: &str,
+    holds: &str,
+    shape_is: &str,
+    values: &str,
+) -> PyResult<ScalarMap> {
+    let untyped = array.cast::<PyUntypedArray>().map_err(|_| {
+        value_error(format!(
+            "{what}: expected a numpy array HxW of {holds} (float32)"
+        ))
     })?;
     let shape = untyped.shape().to_vec();
     if shape.len() != 2 || shape[0] == 0 || shape[1] == 0 {
         return Err(value_error(format!(
-            "range_m: expected shape HxW (the image's size or smaller by one factor), got {shape:?}"
+            "{what}: expected shape HxW ({shape_is}), got {shape:?}"
         )));
     }
-    let py = range.py();
+    let py = array.py();
     let dtype = untyped.dtype();
     let data: Vec<f32> = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
-        let a: PyReadonlyArray2<f32> = range.extract()?;
+        let a: PyReadonlyArray2<f32> = array.extract()?;
         a.as_array().iter().copied().collect()
     } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
-        let a: PyReadonlyArray2<f64> = range.extract()?;
+        let a: PyReadonlyArray2<f64> = array.extract()?;
         a.as_array().iter().map(|&v| v as f32).collect()
     } else {
         return Err(value_error(format!(
-            "range_m: expected dtype float32 or float64 (metres; NaN or <= 0 where unknown), got {}",
+            "{what}: expected dtype float32 or float64 ({values}), got {}",
             dtype_name(untyped)
         )));
     };

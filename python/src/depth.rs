@@ -1,10 +1,10 @@
-//! `brume.load_depth`: brume's depth loaders (`brume::io::depth`) with every option of
-//! `brume render`'s depth flags as a keyword, and the loaders' messages and notes naming
-//! those keywords.
+//! `brume.load_depth` and `brume.range_from_depth`: brume's depth loaders
+//! (`brume::io::depth`) with every option of `brume render`'s depth flags as a keyword, and
+//! the loaders' messages and notes naming those keywords.
 
-use super::arrays::{scalar_map_to_py, FsPath};
+use super::arrays::{read_scalar_map, scalar_map_to_py, FsPath};
 use super::{keyword_of, py_err};
-use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
+use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -56,25 +56,100 @@ pub(crate) fn load_depth<'py>(
             Some(f) => f.parse::<DepthFormat>().map_err(py_err)?,
             None => DepthFormat::Auto,
         },
-        kind: kind
-            .map(|k| k.parse::<DepthKind>())
-            .transpose()
-            .map_err(py_err)?,
         calib: calib.map(|p| p.0),
         camera: camera.map(|p| p.0),
-        scale,
-        focal: focal_px,
-        baseline: baseline_mm,
-        disparity_offset: disparity_offset_px,
-        near,
-        far,
-        reversed_z,
-        fov: fov_y_deg,
         min_confidence,
+        ..geometry_options(
+            kind,
+            scale,
+            [focal_px, baseline_mm, disparity_offset_px],
+            [near, far, fov_y_deg],
+            reversed_z,
+        )?
     };
     let loaded = py
         .detach(|| depth::load_range(&path.0, &opts))
         .map_err(py_err)?;
+    range_and_info(py, loaded)
+}
+
+/// range_from_depth(depth, *, kind, scale=None, focal_px=None, baseline_mm=None,
+/// disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=False)
+/// -> (range_m, info)
+///
+/// Reads an HxW float32 or float64 array already in memory (a depth camera's frame, a
+/// monocular model's output, an engine's depth buffer) as range, exactly as load_depth
+/// reads a float file of it: NaN or infinite unknown, float32 HxW range out, NaN where
+/// unknown. kind (required: an array does not say what it holds): 'depth' (along the
+/// optical axis; focal_px or fov_y_deg turn it into range), 'range', 'disparity'
+/// (focal_px and baseline_mm), 'inverse' (a monocular estimator's relative inverse depth,
+/// depth = 1/(d + disparity_offset_px)) or 'zbuffer' (near, far, fov_y_deg, reversed_z).
+/// The other keywords are load_depth's. info: as load_depth's (format 'float').
+#[pyfunction]
+#[pyo3(signature = (depth, *, kind, scale=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn range_from_depth<'py>(
+    py: Python<'py>,
+    depth: &Bound<'py, PyAny>,
+    kind: &str,
+    scale: Option<f64>,
+    focal_px: Option<f64>,
+    baseline_mm: Option<f64>,
+    disparity_offset_px: Option<f64>,
+    near: Option<f64>,
+    far: Option<f64>,
+    fov_y_deg: Option<f64>,
+    reversed_z: bool,
+) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
+    let opts = geometry_options(
+        Some(kind),
+        scale,
+        [focal_px, baseline_mm, disparity_offset_px],
+        [near, far, fov_y_deg],
+        reversed_z,
+    )?;
+    let map = read_scalar_map(
+        depth,
+        "depth",
+        "depth, range, disparity or window depth",
+        "one value per pixel",
+        "NaN or infinite where unknown",
+    )?;
+    let loaded = py
+        .detach(|| depth::range_from_map(map, "depth", &opts))
+        .map_err(py_err)?;
+    range_and_info(py, loaded)
+}
+
+/// The options both functions take: what the values are, their scale, the stereo
+/// geometry (focal, baseline, offset) and the projection (near, far, field of view).
+fn geometry_options(
+    kind: Option<&str>,
+    scale: Option<f64>,
+    [focal, baseline, disparity_offset]: [Option<f64>; 3],
+    [near, far, fov]: [Option<f64>; 3],
+    reversed_z: bool,
+) -> PyResult<DepthOptions> {
+    Ok(DepthOptions {
+        kind: kind
+            .map(|k| k.parse::<DepthKind>())
+            .transpose()
+            .map_err(py_err)?,
+        scale,
+        focal,
+        baseline,
+        disparity_offset,
+        near,
+        far,
+        reversed_z,
+        fov,
+        ..DepthOptions::default()
+    })
+}
+
+/// The range as a numpy array and the info dict (format, kind, units, metric, notes
+/// naming this package's keywords, unknown_pixels).
+fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, Bound<'_, PyDict>)> {
     let notes: Vec<String> = (loaded.notes.iter())
         .map(|n| brume::error::rename_options(n, keyword_of))
         .collect();

@@ -552,6 +552,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(aerial_photo::aerial, m)?)?;
     m.add_function(wrap_pyfunction!(fog, m)?)?;
     m.add_function(wrap_pyfunction!(depth::load_depth, m)?)?;
+    m.add_function(wrap_pyfunction!(depth::range_from_depth, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

@@ -533,6 +533,79 @@ def test_load_depth_geometry_keywords(tmp_path):
     assert not any("--" in n for n in info["notes"]), info["notes"]
 
 
+def test_range_from_depth(tmp_path):
+    """An array in memory reads as load_depth reads a float file of it: each kind gives
+    the range computed here in numpy, and equals load_depth of the same array as .npy."""
+    h, w = 48, 64
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    eye = 2.0 + 0.5 * x + 0.1 * y  # eye depth (m) along the optical axis
+    fov, focal, baseline_mm = 60.0, 50.0, 120.0
+    ray_fov = np.sqrt(1.0 + pixel_radius2(h, w, (h / 2) / np.tan(np.radians(fov / 2))))
+    ray_focal = np.sqrt(1.0 + pixel_radius2(h, w, focal))
+    near, far = 0.5, 200.0
+    ndc = (far + near) / (far - near) - 2.0 * far * near / ((far - near) * eye)
+    cases = [
+        (eye, dict(kind="depth", fov_y_deg=fov), eye * ray_fov, ("file units", False)),
+        (eye * 100, dict(kind="depth", focal_px=focal, scale=0.01), eye * ray_focal, ("m", True)),
+        (eye * ray_fov, dict(kind="range", scale=1.0), eye * ray_fov, ("m", True)),
+        # Disparity d = f B / z with the offset taken off first: z = f B / (d + offset).
+        (
+            focal * baseline_mm / 1000 / eye - 3.0,
+            dict(kind="disparity", focal_px=focal, baseline_mm=baseline_mm, disparity_offset_px=3.0),
+            eye * ray_focal,
+            ("m", True),
+        ),
+        # A monocular model's relative inverse depth with a shift: depth = 1/(d + offset).
+        (1.0 / eye - 0.02, dict(kind="inverse", fov_y_deg=fov, disparity_offset_px=0.02),
+         eye * ray_fov, ("relative units", False)),
+        ((ndc + 1.0) / 2.0, dict(kind="zbuffer", near=near, far=far, fov_y_deg=fov),
+         eye * ray_fov, ("file units", False)),
+        (near / eye, dict(kind="zbuffer", near=near, far=float("inf"), fov_y_deg=fov,
+                          reversed_z=True, scale=1.0), eye * ray_fov, ("m", True)),
+    ]  # fmt: skip
+    for values, keywords, expected, (units, metric) in cases:
+        for dtype in (np.float32, np.float64):
+            rng, info = brume.range_from_depth(values.astype(dtype), **keywords)
+            assert rng.dtype == np.float32 and rng.shape == (h, w)
+            np.testing.assert_allclose(rng, expected, rtol=2e-5, err_msg=str(keywords))
+            assert (info["format"], info["kind"]) == ("float", keywords["kind"])
+            assert (info["units"], info["metric"]) == (units, metric), keywords
+        np.save(tmp_path / "map.npy", values.astype(np.float32))
+        from_file, file_info = brume.load_depth(tmp_path / "map.npy", **keywords)
+        np.testing.assert_array_equal(rng, from_file)
+        assert info == file_info
+
+    # Unknown values: NaN and infinite; the sky of inverse depth (d + offset <= 0).
+    holes = eye.copy()
+    holes[0, :3] = [np.nan, np.inf, -np.inf]
+    rng, info = brume.range_from_depth(holes, kind="range")
+    assert np.isnan(rng[0, :3]).all() and info["unknown_pixels"] == 3
+    sky = 1.0 / eye
+    sky[:5] = 0.0
+    rng, info = brume.range_from_depth(sky, kind="inverse", fov_y_deg=fov)
+    assert np.isnan(rng[:5]).all() and info["unknown_pixels"] == 5 * w
+    # The range fogs as any range in metres does.
+    image = np.full((h, w, 3), 128, np.uint8)
+    rng, _ = brume.range_from_depth(eye * 10, kind="depth", fov_y_deg=fov, scale=1.0)
+    assert brume.fog(image, rng, beta=0.02, refine="none").shape == (h, w, 3)
+
+    # The kind is required: an array does not say what it holds.
+    with pytest.raises(TypeError, match="kind"):
+        brume.range_from_depth(eye)
+    with pytest.raises(ValueError, match="invalid kind = metres"):
+        brume.range_from_depth(eye, kind="metres")
+    with pytest.raises(ValueError, match="depth: expected shape HxW"):
+        brume.range_from_depth(np.zeros((4, 4, 3)), kind="depth")
+    with pytest.raises(ValueError, match="depth: expected dtype float32 or float64"):
+        brume.range_from_depth(np.zeros((4, 4), np.uint16), kind="depth")
+    with pytest.raises(ValueError, match="depth: expected a numpy array"):
+        brume.range_from_depth([[1.0]], kind="depth")
+    with pytest.raises(ValueError, match="needs focal_px"):
+        brume.range_from_depth(eye, kind="disparity")
+    with pytest.raises(ValueError, match="no valid"):
+        brume.range_from_depth(np.full((4, 4), np.nan), kind="range")
+
+
 # --- equality with the `brume render` program ------------------------------------------
 
 

@@ -314,6 +314,32 @@ pub fn load_range_from_bytes(
     load_with_side_files(bytes, name, opts, calib, None)
 }
 
+/// A depth, range, disparity, inverse-depth or z-buffer map already in memory (a depth
+/// camera's frame, a monocular model's output, an engine's depth buffer read back), read
+/// as [`load_range`] reads a float file of it with `opts`: NaN or infinite unknown, the
+/// kind, scale and geometry from `opts`. `opts.format` is `Auto` or `Float` (other
+/// formats name a file layout); no side file is read, so `calib` and `camera` are
+/// refused (give `focal` and `baseline`). `name` stands for the map in messages.
+pub fn range_from_map(map: ScalarMap, name: &str, opts: &DepthOptions) -> Result<LoadedDepth> {
+    let side_file = |option: &str, path: &Option<PathBuf>| match path {
+        Some(p) => Err(Error::invalid(
+            option,
+            p.display(),
+            "no side file for a map in memory: give its geometry (`focal`, `baseline`, \
+             `disparity_offset`, `fov`)",
+        )),
+        None => Ok(()),
+    };
+    side_file("calib", &opts.calib)?;
+    side_file("camera", &opts.camera)?;
+    let raw = raw::Raw::Float {
+        map,
+        from_pfm: false,
+    };
+    let name = Path::new(name);
+    interpret(raw, name, opts, SideFiles::default(), Vec::new(), 1.0)
+}
+
 /// Loads a Cityscapes `{name}_disparity.png` as range in metres ([`LoadedDepth::metric`]),
 /// with its camera file: `camera`, or else the first of [`camera_candidates`] that exists
 /// (an error names them all when none does).
