@@ -55,7 +55,9 @@
 //!      smooth and reached from the sky in colour steps of at most half the growth's (a
 //!      matcher's streak: semi-global matching carries an object's disparity along the
 //!      rows of a textureless sky as smooth, backed-up values) becomes sky unless it
-//!      reaches the bottom row. The left band below the sky shows the
+//!      reaches the bottom row, and the sky grows on from it as from seeds (sky between
+//!      far towers that a streak wider than the jump closed off; a region that reaches
+//!      the bottom row is dropped). The left band below the sky shows the
 //!      scene (textured, darker, not blue): it is not grown into and is filled as a hole.
 //!      Once sky is found, known pixels left outside it that look like sky and whose
 //!      range is unsupported are matcher noise in slivers of sky the growth could not
