@@ -100,7 +100,7 @@ pub(crate) struct ImageIn {
     pub(crate) raw: RawImage,
 }
 
-pub(crate) fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
+fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
     array
         .dtype()
         .str()
@@ -237,7 +237,7 @@ pub(crate) fn read_range(range: &Bound<'_, PyAny>) -> PyResult<ScalarMap> {
     )
 }
 
-/// An HxW float32 or float64 array argument named `what` (holding `holds`, its shape
+/// An HxW float32, float64 or float16 array argument named `what` (holding `holds`, its shape
 /// `shape_is`, its values `values`: said when it is not) as a float map.
 pub(crate) fn read_scalar_map(
     array: &Bound<'_, PyAny>,
@@ -265,9 +265,13 @@ pub(crate) fn read_scalar_map(
     } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
         let a: PyReadonlyArray2<f64> = array.extract()?;
         a.as_array().iter().map(|&v| v as f32).collect()
+    } else if dtype.is_equiv_to(&numpy::dtype::<half::f16>(py)) {
+        // Exact: every float16 is a float32.
+        let a: PyReadonlyArray2<half::f16> = array.extract()?;
+        a.as_array().iter().map(|v| v.to_f32()).collect()
     } else {
         return Err(value_error(format!(
-            "{what}: expected dtype float32 or float64 ({values}), got {}",
+            "{what}: expected dtype float32, float64 or float16 ({values}), got {}",
             dtype_name(untyped)
         )));
     };

@@ -77,7 +77,7 @@ pub(crate) fn load_depth<'py>(
 /// disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=False)
 /// -> (range_m, info)
 ///
-/// Reads an HxW float32 or float64 array already in memory (a depth camera's frame, a
+/// Reads an HxW float32, float64 or float16 array already in memory (a depth camera's frame, a
 /// monocular model's output, an engine's depth buffer) as range, exactly as load_depth
 /// reads a float file of it: NaN or infinite unknown, float32 HxW range out, NaN where
 /// unknown. kind (required: an array does not say what it holds): 'depth' (along the

@@ -3,16 +3,16 @@
 //! colour and depth buffer, through `brume::medium`, `brume::camera` and
 //! `Headless::render_fog`, as `brume scene` builds them.
 
-use super::arrays::{Colour, FsPath};
-use super::{dtype_name, on_default_renderer, py_err, value_error, GlThread, ImageIn, ImageOut};
+use super::arrays::{read_scalar_map, Colour, FsPath};
+use super::{on_default_renderer, py_err, value_error, GlThread, ImageIn, ImageOut};
 use brume::camera::{Camera, ClipDepth, FrameCamera, FrameInputs, MatrixCamera};
 use brume::medium::{
     DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium, ProfileValues,
 };
-use brume::raster::{Grid, ScalarMap};
+use brume::raster::ScalarMap;
 use brume::{Blur, FogBlur, GaussBlur, Precision, Scheme};
 use glam::DMat4;
-use numpy::{PyArrayDescrMethods, PyReadonlyArray2, PyUntypedArray, PyUntypedArrayMethods};
+use numpy::{PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -254,29 +254,21 @@ fn frame_camera(camera: &Bound<'_, PyAny>) -> PyResult<FrameCamera> {
 
 /// `depth` (HxW window depth in [0, 1], the image's size) as brume's map, top row first.
 fn read_depth(depth: &Bound<'_, PyAny>, width: usize, height: usize) -> PyResult<ScalarMap> {
-    let untyped = depth.cast::<PyUntypedArray>().map_err(|_| {
-        value_error("depth: expected a numpy array HxW of window depth in [0, 1] (float32)")
-    })?;
-    let shape = untyped.shape().to_vec();
-    if shape != [height, width] {
+    let map = read_scalar_map(
+        depth,
+        "depth",
+        "window depth in [0, 1]",
+        &format!("{height}x{width}, the image's"),
+        "window depth in [0, 1]",
+    )?;
+    if (map.width(), map.height()) != (width, height) {
         return Err(value_error(format!(
-            "depth: expected shape {height}x{width} (HxW, the image's), got {shape:?}"
+            "depth: expected shape {height}x{width} (HxW, the image's), got [{}, {}]",
+            map.height(),
+            map.width()
         )));
     }
-    let py = depth.py();
-    let dtype = untyped.dtype();
-    let data: Vec<f32> = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
-        let a: PyReadonlyArray2<f32> = depth.extract()?;
-        a.as_array().iter().copied().collect()
-    } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
-        let a: PyReadonlyArray2<f64> = depth.extract()?;
-        a.as_array().iter().map(|&v| v as f32).collect()
-    } else {
-        return Err(value_error(format!(
-            "depth: expected dtype float32 or float64 (window depth in [0, 1]), got {}",
-            dtype_name(untyped)
-        )));
-    };
+    let data = map.as_slice();
     if let Some(i) = data.iter().position(|v| !(0.0..=1.0).contains(v)) {
         return Err(value_error(format!(
             "depth: value {} at pixel (x {}, y {}): expected window depth in [0, 1] (a depth \
@@ -286,7 +278,7 @@ fn read_depth(depth: &Bound<'_, PyAny>, width: usize, height: usize) -> PyResult
             i / width
         )));
     }
-    Ok(Grid::from_vec(width, height, data))
+    Ok(map)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -23,7 +23,7 @@ mod engine;
 mod gl_thread;
 mod photo_fog;
 
-use arrays::{dtype_name, read_image, read_range, Colour, FsPath, ImageIn, ImageOut};
+use arrays::{read_image, read_range, Colour, FsPath, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
 use gl_thread::GlThread;
 use photo_fog::{

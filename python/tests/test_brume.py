@@ -588,6 +588,17 @@ def test_range_from_depth(tmp_path):
     image = np.full((h, w, 3), 128, np.uint8)
     rng, _ = brume.range_from_depth(eye * 10, kind="depth", fov_y_deg=fov, scale=1.0)
     assert brume.fog(image, rng, beta=0.02, refine="none").shape == (h, w, 3)
+    # float16, as a depth model run in half precision returns it: read exactly as the
+    # float32 of the same values, here and as fog's range.
+    half = (1.0 / eye).astype(np.float16)
+    np.testing.assert_array_equal(
+        brume.range_from_depth(half, kind="inverse", fov_y_deg=fov)[0],
+        brume.range_from_depth(half.astype(np.float32), kind="inverse", fov_y_deg=fov)[0],
+    )
+    np.testing.assert_array_equal(
+        brume.fog(image, rng.astype(np.float16), beta=0.02, refine="none"),
+        brume.fog(image, rng.astype(np.float16).astype(np.float32), beta=0.02, refine="none"),
+    )
 
     # The kind is required: an array does not say what it holds.
     with pytest.raises(TypeError, match="kind"):
@@ -596,7 +607,7 @@ def test_range_from_depth(tmp_path):
         brume.range_from_depth(eye, kind="metres")
     with pytest.raises(ValueError, match="depth: expected shape HxW"):
         brume.range_from_depth(np.zeros((4, 4, 3)), kind="depth")
-    with pytest.raises(ValueError, match="depth: expected dtype float32 or float64"):
+    with pytest.raises(ValueError, match="depth: expected dtype float32, float64 or float16"):
         brume.range_from_depth(np.zeros((4, 4), np.uint16), kind="depth")
     with pytest.raises(ValueError, match="depth: expected a numpy array"):
         brume.range_from_depth([[1.0]], kind="depth")

@@ -124,6 +124,16 @@ def test_distance_fog_equals_brume_scene(tmp_path, blur, time, flags, kwargs):
     assert np.abs(linear_to_srgb8(ours) - linear_to_srgb8(colour)).max() > 20
 
 
+def test_a_float16_depth_buffer_reads_as_its_float32_values(tmp_path):
+    colour, depth = clear_frame(tmp_path)
+    camera = brume.Camera(**CAMERA)
+    half = depth.astype(np.float16)
+    np.testing.assert_array_equal(
+        brume.distance_fog(colour, half, camera=camera, blur="none"),
+        brume.distance_fog(colour, half.astype(np.float32), camera=camera, blur="none"),
+    )
+
+
 def test_distance_noise_keywords(tmp_path):
     colour, depth = clear_frame(tmp_path)
     camera = brume.Camera(**CAMERA)
