@@ -2,7 +2,8 @@
 
 use crate::common;
 
-use brume::prep::{prepare, PrepOptions};
+use brume::prep::{prepare, prepare_guided, Guides, PrepOptions};
+use brume::raster::ScalarMap;
 use common::*;
 
 #[test]
@@ -34,4 +35,52 @@ fn aloe_has_no_sky_and_every_hole_is_filled() {
         let (w, h, px) = brume::prep::visualize(&map, &p);
         save_png(&format!("{dir}/aloe.png"), w, h, &px);
     }
+}
+
+/// Aloe's holes are occlusions: wall or leaf the right camera could not see beside a
+/// nearer leaf's left edge. Stereo's standard guess for such a pixel (Hirschmüller 2008,
+/// SGM's occlusion rule) is the farther of the nearest known pixels left and right of it
+/// in its row. The mean relative difference of a fill from that guess over the holes'
+/// pixels that have a known pixel on both sides.
+fn mean_difference_from_the_row_background(map: &ScalarMap, filled: &ScalarMap) -> f64 {
+    let (w, h) = (map.width(), map.height());
+    let (m, f) = (map.as_slice(), filled.as_slice());
+    let (mut sum, mut n) = (0.0, 0usize);
+    for y in 0..h {
+        let row = &m[y * w..(y + 1) * w];
+        let mut left = None;
+        for x in 0..w {
+            if !row[x].is_nan() {
+                left = Some(row[x]);
+                continue;
+            }
+            let right = row[x..].iter().find(|v| !v.is_nan());
+            if let (Some(l), Some(&r)) = (left, right) {
+                let guess = l.max(r);
+                sum += f64::from((f[y * w + x] - guess).abs() / guess);
+                n += 1;
+            }
+        }
+    }
+    sum / n as f64
+}
+
+#[test]
+fn aloes_occlusions_are_filled_with_what_is_behind_given_the_image() {
+    let map = aloe_range();
+    let image = brume::io::image::load_linear_rgb(&aloe_path("left.jpg")).unwrap();
+    let opts = PrepOptions::default();
+    let alone = prepare(&map, &opts).unwrap();
+    let guides = Guides {
+        image: Some(&image),
+        ..Guides::default()
+    };
+    let guided = prepare_guided(&map, guides, &opts).unwrap();
+    assert!(guided.stats.colour_regions > 100, "{:?}", guided.stats);
+    assert_eq!(alone.stats.colour_regions, 0);
+    assert_known_unchanged(&map, &guided.range);
+    let before = mean_difference_from_the_row_background(&map, &alone.range);
+    let after = mean_difference_from_the_row_background(&map, &guided.range);
+    // Measured: 0.0261 alone, 0.0225 with the image.
+    assert!(after < 0.9 * before, "{before} -> {after}");
 }

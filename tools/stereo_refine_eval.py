@@ -47,7 +47,7 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
     python3 tools/stereo_refine_eval.py OUT_DIR [--brume target/release/brume]
         [--size 1024x512] [--fov 45] [--baseline 0.5] [--beta 0.02]
         [--position 0,1.7,0] [--yaw 0] [--pitch 0] [--num-disparities 144 per 1024 px of width]
-        [--refine-radius PX] [--refine-eps EPS]   (passed to brume render)
+        [--refine-radius PX] [--refine-eps EPS] [--seed N]   (passed to brume render)
         [--docs DIR]   (also copy the four foggy PNGs there as refine-sgbm-{truth,none,guided,repair}.png)
 
 Needs: numpy, opencv-python-headless (``pip install opencv-python-headless numpy``), and the
@@ -173,6 +173,8 @@ def main():
                     help="SGBM search range, px, a multiple of 16 [144 per 1024 px of width]")
     ap.add_argument("--refine-radius", default=None, help="passed to brume render [its default]")
     ap.add_argument("--refine-eps", default=None, help="passed to brume render [its default]")
+    ap.add_argument("--seed", default=None,
+                    help="passed to brume render: the hole fill's RANSAC draws [its default]")
     ap.add_argument("--block-size", type=int, default=5)
     ap.add_argument("--right", action="store_true",
                     help="give brume the right view (--right): its left-right check")
@@ -190,6 +192,8 @@ def main():
         refine_opts += ["--refine-radius", str(a.refine_radius)]
     if a.refine_eps is not None:
         refine_opts += ["--refine-eps", str(a.refine_eps)]
+    if a.seed is not None:
+        refine_opts += ["--seed", str(a.seed)]
     B = a.brume
 
     # 1. The stereo pair and the truth.

@@ -112,10 +112,11 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         outln!("{report}");
     } else {
         outln!(
-            "{} unknown px: {} holes ({} px) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
+            "{} unknown px: {} holes ({} px; {} regions from their own colour) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
             loaded.unknown_pixels,
             s.holes,
             s.hole_pixels,
+            s.colour_regions,
             s.sky_components,
             s.sky_pixels,
             s.margin_pixels,

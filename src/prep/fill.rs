@@ -2,6 +2,8 @@
 //!
 //! See the module docs of [`crate::prep`] for the method and its justification.
 
+use super::sky_image::{luminance, relative_step};
+use crate::raster::RgbImage;
 use crate::rng::SplitMix64;
 use crate::{Error, Result};
 
@@ -58,27 +60,111 @@ impl HoleFiller {
         trials: usize,
         rng: &mut SplitMix64,
     ) -> Result<()> {
-        self.collect_edges(work, width, height, pixels);
-        if self.edges.is_empty() {
-            return Err(Error::Prep(format!(
-                "a hole of {} pixels has no known pixel on its boundary (nothing to fill it from)",
-                pixels.len()
-            )));
+        self.collect_edges(work, (width, height), pixels, |_, _| true);
+        no_boundary_error(&self.edges, pixels)?;
+        self.fit(trials, rng).apply(work, width, pixels);
+        Ok(())
+    }
+
+    /// Fills the hole made of `pixels` as [`HoleFiller::fill`] does, but each region of one
+    /// colour in it that has at least [`MIN_OWN_EDGES`] boundary edges to known pixels of
+    /// its own colour, most of which agree with one surface, from those edges alone (a
+    /// surface seen in the image continues its own range, not that of whatever else
+    /// borders the hole), and then each piece of the rest from what is round it, those
+    /// regions included (see [`crate::prep`], step 4).
+    /// `state` is scratch of `work`'s length, [`Pixel::Other`] where this hole is. Returns
+    /// the number of regions filled on their own.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn fill_by_colour(
+        &mut self,
+        work: &mut [f32],
+        size: (usize, usize),
+        pixels: &[u32],
+        guide: &ColourGuide,
+        state: &mut [Pixel],
+        trials: usize,
+        rng: &mut SplitMix64,
+    ) -> Result<usize> {
+        self.collect_edges(work, size, pixels, |_, _| true);
+        no_boundary_error(&self.edges, pixels)?;
+        // The whole hole's surface, for what is not filled otherwise; among that, a region
+        // whose own colour's edges disagree (a column of false matches on a face without
+        // texture among the right ones).
+        let whole = self.fit(trials, rng);
+        let mut fits = Vec::new();
+        let (mut ambiguous, mut rest) = (Vec::new(), Vec::new());
+        for region in guide.regions(size, pixels, state) {
+            self.collect_edges(work, size, &region, |p, q| guide.own_colour(p, q));
+            if self.edges.len() < MIN_OWN_EDGES {
+                rest.extend(region);
+                continue;
+            }
+            let fit = self.fit(trials, rng);
+            if self.agreement(&fit) >= MIN_AGREEMENT {
+                fits.push((fit, region));
+            } else {
+                ambiguous.extend(region);
+            }
         }
+        if fits.is_empty() {
+            whole.apply(work, size.0, pixels);
+            return Ok(0);
+        }
+        // Applied once all are fitted: a filled region is not the boundary of the next.
+        for (fit, region) in &fits {
+            fit.apply(work, size.0, region);
+        }
+        whole.apply(work, size.0, &ambiguous);
+        // The rest (regions too small to have edges of their own colour: texture), in
+        // pieces. A speck amid regions of the background is the background, not the mean
+        // of the whole hole; a large piece (a textured surface the matcher missed whole)
+        // has only other guesses round it and takes the whole hole's surface.
+        let pieces = split(size, &rest, state, |_, _| true);
+        let (specks, large): (Vec<_>, Vec<_>) =
+            pieces.into_iter().partition(|p| p.len() <= MAX_SPECK);
+        large.iter().for_each(|p| whole.apply(work, size.0, p));
+        for speck in specks {
+            self.fill(work, size.0, size.1, &speck, trials, rng)?;
+        }
+        Ok(fits.len())
+    }
+
+    /// The RANSAC fit to the collected edges (at least one).
+    fn fit(&mut self, trials: usize, rng: &mut SplitMix64) -> Fit {
         let origin = self.origin();
         let delta = self.robust_scale();
         let model = self.ransac(origin, delta, trials, rng);
         let (lo, hi) = self.value_range();
-        for &p in pixels {
-            let p = p as usize;
-            let (dx, dy) = ((p % width) as f64 - origin.0, (p / width) as f64 - origin.1);
-            work[p] = model.eval(dx, dy).clamp(lo, hi) as f32;
+        Fit {
+            model,
+            origin,
+            lo,
+            hi,
         }
-        Ok(())
     }
 
-    /// Every (hole pixel, known 4-neighbour) pair, as the known pixel's position and value.
-    fn collect_edges(&mut self, work: &[f32], width: usize, height: usize, pixels: &[u32]) {
+    /// The fraction of the collected edges within [`AGREEMENT_TOLERANCE`] of `fit`.
+    fn agreement(&self, fit: &Fit) -> f64 {
+        let close = self
+            .edges
+            .iter()
+            .filter(|e| {
+                let v = fit.at(e.x as f64, e.y as f64);
+                (v - f64::from(e.r)).abs() <= AGREEMENT_TOLERANCE * f64::from(e.r)
+            })
+            .count();
+        close as f64 / self.edges.len() as f64
+    }
+
+    /// Every (hole pixel `p`, known 4-neighbour `q`) pair that `keep(p, q)` accepts, as the
+    /// known pixel's position and value.
+    fn collect_edges(
+        &mut self,
+        work: &[f32],
+        (width, height): (usize, usize),
+        pixels: &[u32],
+        keep: impl Fn(usize, usize) -> bool,
+    ) {
         self.edges.clear();
         for &p in pixels {
             let p = p as usize;
@@ -88,7 +174,7 @@ impl HoleFiller {
                 .flatten()
             {
                 let r = work[q];
-                if r.is_finite() {
+                if r.is_finite() && keep(p, q) {
                     let (qx, qy) = ((q % width) as i32, (q / width) as i32);
                     self.edges.push(Edge { x: qx, y: qy, r });
                 }
@@ -197,6 +283,146 @@ impl HoleFiller {
     }
 }
 
+/// A fitted fill surface, clamped to the range of the values it was fitted to.
+struct Fit {
+    model: Model,
+    origin: (f64, f64),
+    lo: f64,
+    hi: f64,
+}
+
+impl Fit {
+    /// The surface at pixel `(x, y)`.
+    fn at(&self, x: f64, y: f64) -> f64 {
+        let (dx, dy) = (x - self.origin.0, y - self.origin.1);
+        self.model.eval(dx, dy).clamp(self.lo, self.hi)
+    }
+
+    /// Writes the surface into `pixels` of `work`.
+    fn apply(&self, work: &mut [f32], width: usize, pixels: &[u32]) {
+        for &p in pixels {
+            let p = p as usize;
+            work[p] = self.at((p % width) as f64, (p / width) as f64) as f32;
+        }
+    }
+}
+
+/// The error for a hole with no known pixel round it.
+fn no_boundary_error(edges: &[Edge], pixels: &[u32]) -> Result<()> {
+    if edges.is_empty() {
+        return Err(Error::Prep(format!(
+            "a hole of {} pixels has no known pixel on its boundary (nothing to fill it from)",
+            pixels.len()
+        )));
+    }
+    Ok(())
+}
+
+/// A region of one colour is filled on its own from at least this many edges of its colour.
+pub(crate) const MIN_OWN_EDGES: usize = 8;
+/// ... when at least this fraction of them agree with its fit ...
+const MIN_AGREEMENT: f64 = 0.7;
+/// ... to within this fraction of their range.
+const AGREEMENT_TOLERANCE: f64 = 0.25;
+/// Pieces of the rest of at most this many pixels are filled from what is round them.
+const MAX_SPECK: usize = 256;
+
+/// A pixel as [`ColourGuide::regions`] sees it.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) enum Pixel {
+    /// Not in the hole being split.
+    #[default]
+    Other,
+    /// In the hole, not yet in a region.
+    InHole,
+    /// In the hole and in a region.
+    InRegion,
+}
+
+/// The colour image as the hole fill reads it.
+pub(crate) struct ColourGuide<'a> {
+    colour: &'a [[f32; 3]],
+    lum: Vec<f32>,
+    /// Smallest luminance a relative step is measured against.
+    eps: f32,
+    /// Largest relative step between two pixels of one region.
+    region_step: f32,
+    /// Largest relative step between a region's pixel and a known pixel of its colour.
+    own_step: f32,
+}
+
+impl<'a> ColourGuide<'a> {
+    /// The guide of `image`; `step` is the image-guided sky growth's colour step, which
+    /// also bounds one region (a known pixel of its colour may be twice as far).
+    pub(crate) fn new(image: &'a RgbImage, step: f64) -> Self {
+        let colour = image.as_slice();
+        let lum = luminance(colour);
+        // The median of every 16th pixel: the scale of the image, at a 16th of the cost.
+        let mut sample: Vec<f32> = lum.iter().step_by(16).copied().collect();
+        let eps = match sample.len() {
+            0 => 1e-6,
+            n => (0.01 * *sample.select_nth_unstable_by(n / 2, f32::total_cmp).1).max(1e-6),
+        };
+        ColourGuide {
+            colour,
+            lum,
+            eps,
+            region_step: step as f32,
+            own_step: 2.0 * step as f32,
+        }
+    }
+
+    /// Whether known pixel `q` has the colour of hole pixel `p`.
+    fn own_colour(&self, p: usize, q: usize) -> bool {
+        relative_step(self.colour, &self.lum, p, q, self.eps) <= self.own_step
+    }
+
+    /// The hole `pixels` split into 4-connected regions of one colour (steps of at most
+    /// `region_step` between neighbours).
+    fn regions(&self, size: (usize, usize), pixels: &[u32], state: &mut [Pixel]) -> Vec<Vec<u32>> {
+        split(size, pixels, state, |p, q| {
+            relative_step(self.colour, &self.lum, p, q, self.eps) <= self.region_step
+        })
+    }
+}
+
+/// `pixels` split into 4-connected regions, two neighbours joined when `joined(p, q)`.
+/// `state` is scratch, [`Pixel::Other`] or [`Pixel::InRegion`] outside `pixels`.
+fn split(
+    (width, height): (usize, usize),
+    pixels: &[u32],
+    state: &mut [Pixel],
+    joined: impl Fn(usize, usize) -> bool,
+) -> Vec<Vec<u32>> {
+    pixels
+        .iter()
+        .for_each(|&p| state[p as usize] = Pixel::InHole);
+    let mut regions = Vec::new();
+    for &start in pixels {
+        if state[start as usize] != Pixel::InHole {
+            continue;
+        }
+        state[start as usize] = Pixel::InRegion;
+        let mut region = vec![start];
+        let mut next = 0;
+        while let Some(&p) = region.get(next) {
+            next += 1;
+            let p = p as usize;
+            for q in super::components::neighbours4(p, p % width, p / width, width, height)
+                .into_iter()
+                .flatten()
+            {
+                if state[q] == Pixel::InHole && joined(p, q) {
+                    state[q] = Pixel::InRegion;
+                    region.push(q as u32);
+                }
+            }
+        }
+        regions.push(region);
+    }
+    regions
+}
+
 /// The plane through three boundary edges, or `None` if they are collinear (integer
 /// coordinates: the doubled triangle area is then exactly 0).
 fn plane_through(t: &[Edge; 3], origin: (f64, f64)) -> Option<Model> {
@@ -267,5 +493,87 @@ mod tests {
         f.fill(&mut m, w, h, &[12], 8, &mut SplitMix64::new(1))
             .unwrap();
         assert_eq!(m[12], 3.0);
+    }
+
+    /// A 20 x 10 frame: grey 0.2 left of x = 10, grey 0.8 right of it; range 10 left of
+    /// x = 5, 50 from x = 15, a hole between (infinite, as `label_unknown` leaves holes).
+    fn two_faces() -> (RgbImage, Vec<f32>, Vec<u32>) {
+        let (w, h) = (20, 10);
+        let image = RgbImage::from_fn(w, h, |x, _| if x < 10 { [0.2; 3] } else { [0.8; 3] });
+        let work: Vec<f32> = (0..w * h)
+            .map(|p| match p % w {
+                x if x < 5 => 10.0,
+                x if x >= 15 => 50.0,
+                _ => f32::INFINITY,
+            })
+            .collect();
+        let hole = (0..w * h)
+            .filter(|&p| !work[p].is_finite())
+            .map(|p| p as u32);
+        (image, work.clone(), hole.collect())
+    }
+
+    fn fill_by_colour(image: &RgbImage, work: &mut [f32], hole: &[u32], seed: u64) -> usize {
+        let guide = ColourGuide::new(image, 0.08);
+        let mut state = vec![Pixel::Other; work.len()];
+        HoleFiller::default()
+            .fill_by_colour(
+                work,
+                (image.width(), image.height()),
+                hole,
+                &guide,
+                &mut state,
+                8,
+                &mut SplitMix64::new(seed),
+            )
+            .unwrap()
+    }
+
+    #[test]
+    fn each_colour_continues_its_own_surface() {
+        let (image, mut work, hole) = two_faces();
+        let mut plain = work.clone();
+        HoleFiller::default()
+            .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
+            .unwrap();
+        // Without the image the plane through both sides wins: a ramp across the hole.
+        assert!(
+            (20.0..40.0).contains(&plain[5 * 20 + 9]),
+            "{}",
+            plain[5 * 20 + 9]
+        );
+
+        assert_eq!(fill_by_colour(&image, &mut work, &hole, 3), 2);
+        for &p in &hole {
+            let expected = if p % 20 < 10 { 10.0 } else { 50.0 };
+            assert_eq!(work[p as usize], expected, "pixel {p}");
+        }
+    }
+
+    #[test]
+    fn a_speck_of_another_colour_takes_what_is_round_it() {
+        let (mut image, mut work, hole) = two_faces();
+        *image.get_mut(7, 5) = [0.5, 0.1, 0.1];
+        fill_by_colour(&image, &mut work, &hole, 3);
+        assert_eq!(work[5 * 20 + 7], 10.0);
+    }
+
+    #[test]
+    fn a_colour_whose_known_pixels_disagree_takes_the_whole_holes_surface() {
+        // The left face's known pixels say 10 in its top half and 100 in its bottom half
+        // (false matches on a face without texture): no fit of them is trusted.
+        let (image, mut work, hole) = two_faces();
+        (5 * 20..10 * 20)
+            .filter(|p| p % 20 < 5)
+            .for_each(|p| work[p] = 100.0);
+        let mut plain = work.clone();
+        HoleFiller::default()
+            .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
+            .unwrap();
+        assert_eq!(fill_by_colour(&image, &mut work, &hole, 3), 1);
+        for &p in hole.iter().filter(|&&p| p % 20 < 10) {
+            assert_eq!(work[p as usize], plain[p as usize], "pixel {p}");
+        }
+        assert_eq!(work[5 * 20 + 12], 50.0);
     }
 }

@@ -115,6 +115,20 @@
 //!    outliers in the sky) has nothing to be filled from and is sky (the ego vehicle, when
 //!    only it and no sky is round it).
 //!
+//!    **With the colour image**, a hole is first split into regions of one colour
+//!    (4-neighbours within [`ImageSkyRules::max_step`], the sky growth's step). A region
+//!    with at least 8 edges to known pixels of its own colour (within twice that step) is
+//!    filled by the same RANSAC from those edges alone, when at least 70 % of them lie
+//!    within 25 % of the range of its fit: a stereo occlusion is the background the image
+//!    shows there, not a blend of it with the foreground on the hole's other side, and a
+//!    face the matcher left blank continues the face ([`PrepStats::colour_regions`]). A
+//!    region whose own colour's edges disagree (a column of false matches on a face
+//!    without texture, beside the right ones) and the large pieces of what is left (a
+//!    textured surface the matcher missed whole) take the whole hole's surface, as
+//!    without the image; small pieces left (up to 256 pixels: texture specks) are filled
+//!    from what is round them once the regions are, so a speck amid the background is
+//!    the background.
+//!
 //!    **The ego vehicle** ([`Guides::ego_mask`]): its pixels are unknown and black to the
 //!    sky detector, then neither data nor holes, and finally get range 0 (never fogged;
 //!    [`PrepStats::ego_pixels`]).
@@ -142,8 +156,9 @@
 //! lists), 2 bytes per pixel (the `sky` and `filled` masks), 4 bytes per known pixel (the
 //! percentile of the far-outlier cut) and 4 bytes per pixel of the sky's bounding box
 //! (distance transform). The image-guided detector adds about 20 bytes per pixel
-//! (luminance, texture, range class, region and gap lists) while it runs; on a 2048 x
-//! 1024 street frame it takes about 80 % of the whole 0.2-0.4 s.
+//! (luminance, texture, range class, region and gap lists) while it runs, the hole fill
+//! with the image 5 (luminance and the regions' state); on a 2048 x
+//! 1024 street frame the detector takes about 80 % of the whole 0.2-0.4 s.
 
 mod airlight;
 mod border;
@@ -195,6 +210,9 @@ pub struct PrepStats {
     pub holes: usize,
     /// Number of pixels in those holes.
     pub hole_pixels: usize,
+    /// Number of regions of one colour in those holes filled from the known pixels of
+    /// their own colour alone (with the colour image only).
+    pub colour_regions: usize,
     /// Number of sky components (4-connected regions of the final sky).
     pub sky_components: usize,
     /// Number of sky pixels (margin included).
@@ -380,7 +398,17 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         sky: &mut sky,
         ego: &mut ego,
     };
-    fill_holes(&mut work, &mut holes, w, h, opts, &mut stats)?;
+    let guide = guides
+        .image
+        .map(|i| fill::ColourGuide::new(i, opts.image_sky.max_step));
+    fill_holes(
+        &mut work,
+        &mut holes,
+        (w, h),
+        guide.as_ref(),
+        opts,
+        &mut stats,
+    )?;
     for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {
         *v = 0.0;
     }
@@ -558,8 +586,8 @@ struct Holes<'m> {
 fn fill_holes(
     work: &mut [f32],
     m: &mut Holes,
-    w: usize,
-    h: usize,
+    (w, h): (usize, usize),
+    guide: Option<&fill::ColourGuide>,
     opts: &PrepOptions,
     stats: &mut PrepStats,
 ) -> Result<()> {
@@ -570,6 +598,7 @@ fn fill_holes(
         .for_each(|(v, _)| *v = f32::INFINITY);
     let comps = components::label_unknown(work, w, h);
     let mut filler = fill::HoleFiller::default();
+    let mut state = vec![fill::Pixel::Other; if guide.is_some() { w * h } else { 0 }];
     for c in &comps.list {
         let pixels = comps.pixels_of(c);
         if !has_known_neighbour(work, w, h, pixels) {
@@ -592,7 +621,20 @@ fn fill_holes(
             continue;
         }
         let mut rng = crate::rng::SplitMix64::for_stream(opts.seed, pixels[0] as u64);
-        filler.fill(work, w, h, pixels, opts.ransac_samples, &mut rng)?;
+        match guide {
+            Some(guide) => {
+                stats.colour_regions += filler.fill_by_colour(
+                    work,
+                    (w, h),
+                    pixels,
+                    guide,
+                    &mut state,
+                    opts.ransac_samples,
+                    &mut rng,
+                )?
+            }
+            None => filler.fill(work, w, h, pixels, opts.ransac_samples, &mut rng)?,
+        }
         pixels.iter().for_each(|&p| m.filled[p as usize] = true);
         stats.holes += 1;
         stats.hole_pixels += pixels.len();

@@ -133,7 +133,7 @@ impl Evidence<'_> {
 
 /// Largest channel difference of `p` and `q` over the brighter one's luminance (at least
 /// `eps`); NaN for non-finite colours, so that every test on it fails.
-fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize, eps: f32) -> f32 {
+pub(crate) fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize, eps: f32) -> f32 {
     let (a, b) = (colour[p], colour[q]);
     let d = (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max);
     let d = if a.iter().chain(&b).all(|v| v.is_finite()) {
@@ -145,7 +145,7 @@ fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize, eps: f32)
 }
 
 /// Rec. 709 luminance of every pixel, clamped at 0 (NaN stays NaN).
-fn luminance(colour: &[[f32; 3]]) -> Vec<f32> {
+pub(crate) fn luminance(colour: &[[f32; 3]]) -> Vec<f32> {
     let w = super::airlight::REC709_LUMA;
     colour
         .par_iter()
