@@ -70,10 +70,11 @@ impl HoleFiller {
     /// colour in it that has at least [`MIN_OWN_EDGES`] boundary edges to known pixels of
     /// its own colour, most of which agree with one surface, from those edges alone (a
     /// surface seen in the image continues its own range, not that of whatever else
-    /// borders the hole), and then each piece of the rest from what is round it, those
-    /// regions included (see [`crate::prep`], step 4).
-    /// `state` is scratch of `work`'s length, [`Pixel::Other`] where this hole is. Returns
-    /// the number of regions filled on their own.
+    /// borders the hole). Regions whose edges disagree and large pieces of the rest take
+    /// the whole hole's surface, small pieces of the rest the range round them once the
+    /// regions are filled (see [`crate::prep`], step 4). `state` is scratch of `work`'s
+    /// length, not [`Pixel::InHole`] anywhere. Returns the number of regions filled on
+    /// their own.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn fill_by_colour(
         &mut self,
@@ -93,17 +94,18 @@ impl HoleFiller {
         let whole = self.fit(trials, rng);
         let mut fits = Vec::new();
         let (mut ambiguous, mut rest) = (Vec::new(), Vec::new());
-        for region in guide.regions(size, pixels, state) {
-            self.collect_edges(work, size, &region, |p, q| guide.own_colour(p, q));
+        let regions = guide.regions(size, pixels, state);
+        for region in regions.iter() {
+            self.collect_edges(work, size, region, |p, q| guide.own_colour(p, q));
             if self.edges.len() < MIN_OWN_EDGES {
-                rest.extend(region);
+                rest.extend_from_slice(region);
                 continue;
             }
             let fit = self.fit(trials, rng);
             if self.agreement(&fit) >= MIN_AGREEMENT {
                 fits.push((fit, region));
             } else {
-                ambiguous.extend(region);
+                ambiguous.extend_from_slice(region);
             }
         }
         if fits.is_empty() {
@@ -120,11 +122,12 @@ impl HoleFiller {
         // of the whole hole; a large piece (a textured surface the matcher missed whole)
         // has only other guesses round it and takes the whole hole's surface.
         let pieces = split(size, &rest, state, |_, _| true);
-        let (specks, large): (Vec<_>, Vec<_>) =
-            pieces.into_iter().partition(|p| p.len() <= MAX_SPECK);
-        large.iter().for_each(|p| whole.apply(work, size.0, p));
-        for speck in specks {
-            self.fill(work, size.0, size.1, &speck, trials, rng)?;
+        for piece in pieces.iter() {
+            if piece.len() > MAX_SPECK {
+                whole.apply(work, size.0, piece);
+            } else {
+                self.fill(work, size.0, size.1, piece, trials, rng)?;
+            }
         }
         Ok(fits.len())
     }
@@ -319,7 +322,7 @@ fn no_boundary_error(edges: &[Edge], pixels: &[u32]) -> Result<()> {
 }
 
 /// A region of one colour is filled on its own from at least this many edges of its colour.
-pub(crate) const MIN_OWN_EDGES: usize = 8;
+const MIN_OWN_EDGES: usize = 8;
 /// ... when at least this fraction of them agree with its fit ...
 const MIN_AGREEMENT: f64 = 0.7;
 /// ... to within this fraction of their range.
@@ -327,7 +330,7 @@ const AGREEMENT_TOLERANCE: f64 = 0.25;
 /// Pieces of the rest of at most this many pixels are filled from what is round them.
 const MAX_SPECK: usize = 256;
 
-/// A pixel as [`ColourGuide::regions`] sees it.
+/// A pixel as [`split`] sees it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub(crate) enum Pixel {
     /// Not in the hole being split.
@@ -379,10 +382,25 @@ impl<'a> ColourGuide<'a> {
 
     /// The hole `pixels` split into 4-connected regions of one colour (steps of at most
     /// `region_step` between neighbours).
-    fn regions(&self, size: (usize, usize), pixels: &[u32], state: &mut [Pixel]) -> Vec<Vec<u32>> {
+    fn regions(&self, size: (usize, usize), pixels: &[u32], state: &mut [Pixel]) -> Regions {
         split(size, pixels, state, |p, q| {
             relative_step(self.colour, &self.lum, p, q, self.eps) <= self.region_step
         })
+    }
+}
+
+/// Regions of pixels, one after the other in one list (a hole of a noisy image is a
+/// region per pixel: no allocation each).
+struct Regions {
+    pixels: Vec<u32>,
+    ends: Vec<usize>,
+}
+
+impl Regions {
+    /// Each region's pixels.
+    fn iter(&self) -> impl Iterator<Item = &[u32]> {
+        let starts = std::iter::once(0).chain(self.ends.iter().copied());
+        starts.zip(&self.ends).map(|(a, &b)| &self.pixels[a..b])
     }
 }
 
@@ -393,19 +411,23 @@ fn split(
     pixels: &[u32],
     state: &mut [Pixel],
     joined: impl Fn(usize, usize) -> bool,
-) -> Vec<Vec<u32>> {
+) -> Regions {
     pixels
         .iter()
         .for_each(|&p| state[p as usize] = Pixel::InHole);
-    let mut regions = Vec::new();
+    let mut regions = Regions {
+        pixels: Vec::with_capacity(pixels.len()),
+        ends: Vec::new(),
+    };
     for &start in pixels {
         if state[start as usize] != Pixel::InHole {
             continue;
         }
         state[start as usize] = Pixel::InRegion;
-        let mut region = vec![start];
-        let mut next = 0;
-        while let Some(&p) = region.get(next) {
+        // Breadth first, the list itself as the queue.
+        let mut next = regions.pixels.len();
+        regions.pixels.push(start);
+        while let Some(&p) = regions.pixels.get(next) {
             next += 1;
             let p = p as usize;
             for q in super::components::neighbours4(p, p % width, p / width, width, height)
@@ -414,11 +436,11 @@ fn split(
             {
                 if state[q] == Pixel::InHole && joined(p, q) {
                     state[q] = Pixel::InRegion;
-                    region.push(q as u32);
+                    regions.pixels.push(q as u32);
                 }
             }
         }
-        regions.push(region);
+        regions.ends.push(regions.pixels.len());
     }
     regions
 }
@@ -509,8 +531,9 @@ mod tests {
             .collect();
         let hole = (0..w * h)
             .filter(|&p| !work[p].is_finite())
-            .map(|p| p as u32);
-        (image, work.clone(), hole.collect())
+            .map(|p| p as u32)
+            .collect();
+        (image, work, hole)
     }
 
     fn fill_by_colour(image: &RgbImage, work: &mut [f32], hole: &[u32], seed: u64) -> usize {
