@@ -616,6 +616,18 @@ def test_range_from_depth(tmp_path):
     with pytest.raises(ValueError, match="no valid"):
         brume.range_from_depth(np.full((4, 4), np.nan), kind="range")
 
+    # Depth without intrinsics is used as range, with a warning: in a 2:1 frame at a 45°
+    # vertical field of view the corner's ray is sqrt(1 + 5 tan²(22.5°)) long.
+    short = 100 * (1 - 1 / np.sqrt(1 + 5 * np.tan(np.radians(22.5)) ** 2))
+    with pytest.warns(UserWarning, match=f"{short:.0f} % short in this 8x4 frame"):
+        rng, info = brume.range_from_depth(np.full((4, 8), 5.0), kind="depth")
+    np.testing.assert_array_equal(rng, 5.0)
+    assert "no intrinsics: depth used as range" in info["notes"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        brume.range_from_depth(np.full((4, 8), 5.0), kind="depth", fov_y_deg=45.0)
+        brume.range_from_depth(np.full((4, 8), 5.0), kind="range")
+
 
 # --- equality with the `brume render` program ------------------------------------------
 
