@@ -1164,3 +1164,28 @@ fn relative_inverse_depth_fogs_as_the_depth_it_inverts() {
     // 3/(3/z) is z to an ulp or two.
     assert!(largest < 1e-5, "{largest}");
 }
+
+#[test]
+fn depth_taken_as_range_for_want_of_intrinsics_warns() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let o = render_files(
+        dir.path(),
+        &image,
+        &depth,
+        &["--depth-kind", "depth", "--out", "o.png"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let warning = "depth along the optical axis used as range for want of --focal or --fov";
+    assert!(stderr(&o).contains(warning), "{}", stderr(&o));
+    for (geometry, out) in [
+        (["--fov", "50"], "fov.png"),
+        (["--focal", "30"], "focal.png"),
+    ] {
+        let mut args = vec!["--depth-kind", "depth", "--out", out];
+        args.extend_from_slice(&geometry);
+        let o = render_files(dir.path(), &image, &depth, &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(!stderr(&o).contains(warning), "{}", stderr(&o));
+    }
+}

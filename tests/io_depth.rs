@@ -406,6 +406,23 @@ fn middlebury2014_size_disagreement_and_missing_calib() {
         .notes
         .iter()
         .any(|n| n == "no intrinsics: depth used as range"));
+    // The warning's shortfall: the corner pixel's ray at a 45° vertical field of view,
+    // from its offsets to the centre over the focal length.
+    let (w, h) = (d.range.width() as f64, d.range.height() as f64);
+    let focal = (h / 2.0) / 22.5f64.to_radians().tan();
+    let ray = (1.0 + ((w / 2.0).powi(2) + (h / 2.0).powi(2)) / focal.powi(2)).sqrt();
+    let warning = d.depth_as_range_warning().expect("depth used as range");
+    let expected = format!(
+        "{:.0} % short in this {w}x{h} frame's corners",
+        100.0 * (1.0 - 1.0 / ray)
+    );
+    assert!(warning.contains(&expected), "{warning} / {expected}");
+    let opts = DepthOptions {
+        fov: Some(45.0),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&dir.path().join("disp0.pfm"), &opts).unwrap();
+    assert_eq!(d.depth_as_range_warning(), None);
 }
 
 // ---------------------------------------------------------------- 8- and 16-bit PNG

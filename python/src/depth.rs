@@ -165,21 +165,14 @@ fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, B
 }
 
 /// Warns (Python's `UserWarning`) when depth along the axis was taken as range for want of
-/// intrinsics: the loaders accept it with a note, but a Python caller rarely reads `info`,
-/// and the fog is then too thin away from the centre (range exceeds depth by 1/cos of the
-/// angle off the axis).
+/// intrinsics: the loaders accept it with a note, but a Python caller rarely reads `info`.
 fn warn_if_depth_taken_as_range(py: Python<'_>, loaded: &LoadedDepth) -> PyResult<()> {
-    if loaded.kind != DepthKind::Depth || loaded.intrinsics.is_some() {
+    let Some(warning) = loaded.depth_as_range_warning() else {
         return Ok(());
-    }
-    let (w, h) = (loaded.range.width(), loaded.range.height());
-    let corner = (w as f64 / h as f64).hypot(1.0);
-    let at_45 = (corner * (22.5f64).to_radians().tan()).hypot(1.0);
+    };
     let message = format!(
-        "depth: kind='depth' without focal_px or fov_y_deg: the depth is used as range, \
-         which is {:.0} % short in this {w}x{h} frame's corners at a 45-degree vertical \
-         field of view (less fog there than there should be); give focal_px or fov_y_deg",
-        (1.0 - 1.0 / at_45) * 100.0
+        "depth: {}",
+        brume::error::rename_options(&warning, keyword_of)
     );
     let message = std::ffi::CString::new(message).expect("no NUL in the message");
     PyErr::warn(

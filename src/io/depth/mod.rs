@@ -255,6 +255,27 @@ pub struct LoadedDepth {
     pub unknown_pixels: usize,
 }
 
+impl LoadedDepth {
+    /// A warning when depth along the optical axis was used as range for want of `focal`
+    /// or `fov`: range exceeds depth by 1/cos of the angle off the axis, so the fog is too
+    /// thin away from the centre. It says by how much in this frame's corners at a 45°
+    /// vertical field of view. `None` for range, or depth turned into range.
+    pub fn depth_as_range_warning(&self) -> Option<String> {
+        if self.kind != DepthKind::Depth || self.intrinsics.is_some() {
+            return None;
+        }
+        let (w, h) = (self.range.width(), self.range.height());
+        let corner_tan = (w as f64 / h as f64).hypot(1.0) * 22.5f64.to_radians().tan();
+        let short = 1.0 - 1.0 / corner_tan.hypot(1.0);
+        Some(format!(
+            "depth along the optical axis used as range for want of `focal` or `fov`: {:.0} % \
+             short in this {w}x{h} frame's corners at a 45° vertical field of view (less fog \
+             there than there should be); give `focal` or `fov`",
+            short * 100.0
+        ))
+    }
+}
+
 // Checks of option values, shared by the dataset modules so that a bad value reads the
 // same whichever format it came with.
 fn positive_option(value: f64, name: &str, what: &str) -> Result<f64> {
