@@ -623,6 +623,9 @@ def test_range_from_depth(tmp_path):
         rng, info = brume.range_from_depth(np.full((4, 8), 5.0), kind="depth")
     np.testing.assert_array_equal(rng, 5.0)
     assert "no intrinsics: depth used as range" in info["notes"]
+    # A monocular model's inverse depth is depth along the axis too.
+    with pytest.warns(UserWarning, match="used as range for want of focal_px or fov_y_deg"):
+        brume.range_from_depth(np.full((4, 8), 0.5), kind="inverse")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         brume.range_from_depth(np.full((4, 8), 5.0), kind="depth", fov_y_deg=45.0)
