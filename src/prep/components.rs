@@ -61,7 +61,7 @@ pub(crate) fn label_unknown(work: &mut [f32], width: usize, height: usize) -> Co
     let mut out = Components::default();
     for seed in 0..work.len() {
         if work[seed].is_nan() {
-            let comp = flood(width, height, seed, &mut out.pixels, |q| {
+            let comp = flood(width, height, seed, &mut out.pixels, |_, q| {
                 let take = work[q].is_nan();
                 if take {
                     work[q] = f32::INFINITY;
@@ -195,18 +195,19 @@ fn union(parent: &mut [usize], a: usize, b: usize) {
     parent[hi] = lo;
 }
 
-/// Breadth-first flood fill from `seed`, appending the pixels to `pixels`. `take(q)` says
-/// whether pixel `q` joins the component, and marks it visited when it does; it is asked
-/// once for the seed, which must join.
-fn flood(
+/// Breadth-first flood fill from `seed`, appending the pixels to `pixels`. `take(p, q)`
+/// says whether pixel `q`, reached from its 4-neighbour `p` in the component, joins it, and
+/// marks it visited when it does; it is asked once for the seed as `take(seed, seed)`,
+/// which must join.
+pub(crate) fn flood(
     width: usize,
     height: usize,
     seed: usize,
     pixels: &mut Vec<u32>,
-    mut take: impl FnMut(usize) -> bool,
+    mut take: impl FnMut(usize, usize) -> bool,
 ) -> Component {
     let start = pixels.len();
-    let joined = take(seed);
+    let joined = take(seed, seed);
     debug_assert!(joined, "the seed of a flood fill must join it");
     pixels.push(seed as u32);
     let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
@@ -219,7 +220,7 @@ fn flood(
         (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
         top_pixels += usize::from(y == 0);
         for q in neighbours4(p, x, y, width, height).into_iter().flatten() {
-            if take(q) {
+            if take(p, q) {
                 pixels.push(q as u32);
             }
         }
@@ -279,7 +280,7 @@ mod tests {
         let mut out = Components::default();
         for seed in 0..mask.len() {
             if mask[seed] && !seen[seed] {
-                let comp = flood(width, height, seed, &mut out.pixels, |q| {
+                let comp = flood(width, height, seed, &mut out.pixels, |_, q| {
                     let take = mask[q] && !seen[q];
                     seen[q] |= take;
                     take

@@ -2,6 +2,7 @@
 //!
 //! See the module docs of [`crate::prep`] for the method and its justification.
 
+use super::components::flood;
 use super::sky_image::{luminance, relative_step};
 use crate::raster::RgbImage;
 use crate::rng::SplitMix64;
@@ -389,8 +390,9 @@ impl<'a> ColourGuide<'a> {
     }
 }
 
-/// Regions of pixels, one after the other in one list (a hole of a noisy image is a
-/// region per pixel: no allocation each).
+/// Regions of pixels, one after the other in one list, and where each ends: a hole of a
+/// noisy image is a region per pixel, and [`super::components::Components`] would keep 56
+/// bytes for each.
 struct Regions {
     pixels: Vec<u32>,
     ends: Vec<usize>,
@@ -419,28 +421,18 @@ fn split(
         pixels: Vec::with_capacity(pixels.len()),
         ends: Vec::new(),
     };
-    for &start in pixels {
-        if state[start as usize] != Pixel::InHole {
+    for &seed in pixels {
+        if state[seed as usize] != Pixel::InHole {
             continue;
         }
-        state[start as usize] = Pixel::InRegion;
-        // Breadth first, the list itself as the queue.
-        let mut next = regions.pixels.len();
-        regions.pixels.push(start);
-        while let Some(&p) = regions.pixels.get(next) {
-            next += 1;
-            let p = p as usize;
-            for q in super::components::neighbours4(p, p % width, p / width, width, height)
-                .into_iter()
-                .flatten()
-            {
-                if state[q] == Pixel::InHole && joined(p, q) {
-                    state[q] = Pixel::InRegion;
-                    regions.pixels.push(q as u32);
-                }
+        let region = flood(width, height, seed as usize, &mut regions.pixels, |p, q| {
+            let take = state[q] == Pixel::InHole && (p == q || joined(p, q));
+            if take {
+                state[q] = Pixel::InRegion;
             }
-        }
-        regions.ends.push(regions.pixels.len());
+            take
+        });
+        regions.ends.push(region.start + region.len);
     }
     regions
 }
