@@ -203,6 +203,11 @@ fn warn_if_code_values(py: Python<'_>, raw: &[f32]) -> PyResult<()> {
          float image is taken as linear RGB in [0, 1] (above 1 as HDR): pass the uint8 array \
          itself, or linear light (the sRGB curve of image / 255)"
     );
+    user_warning(py, message)
+}
+
+/// Raises Python's `UserWarning` with `message`, attributed to the caller's line.
+pub(crate) fn user_warning(py: Python<'_>, message: String) -> PyResult<()> {
     let message = CString::new(message).expect("no NUL in the message");
     PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)
 }

@@ -2,7 +2,7 @@
 //! (`brume::io::depth`) with every option of `brume render`'s depth flags as a keyword, and
 //! the loaders' messages and notes naming those keywords.
 
-use super::arrays::{read_scalar_map, scalar_map_to_py, FsPath};
+use super::arrays::{read_scalar_map, scalar_map_to_py, user_warning, FsPath};
 use super::{keyword_of, py_err};
 use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
 use pyo3::prelude::*;
@@ -174,11 +174,5 @@ fn warn_if_depth_taken_as_range(py: Python<'_>, loaded: &LoadedDepth) -> PyResul
         "depth: {}",
         brume::error::rename_options(&warning, keyword_of)
     );
-    let message = std::ffi::CString::new(message).expect("no NUL in the message");
-    PyErr::warn(
-        py,
-        &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-        &message,
-        1,
-    )
+    user_warning(py, message)
 }
