@@ -428,6 +428,66 @@ fn a_manifests_depth_is_read_as_the_depth_flags_say() {
     }
 }
 
+/// Depth along the axis (KITTI's) read without `--fov` or `--focal` is used as range: a
+/// batch warns once with the flags to give, counts the frames in its summary and lists
+/// the warning in each output's log record; with `--fov` nothing warns.
+#[test]
+fn depth_taken_as_range_warns_once_and_is_logged_for_each_output() {
+    let dir = tempfile::tempdir().unwrap();
+    metric_frames(dir.path(), "a");
+    metric_frames(dir.path(), "b");
+    let rows = "image,depth\na.png,a_kitti.png\nb.png,b_kitti.png\n";
+    std::fs::write(dir.path().join("two.csv"), rows).unwrap();
+    let batch = |out: &str, extra: &[&str]| {
+        let args = [
+            "batch",
+            "--manifest",
+            "two.csv",
+            "--out",
+            out,
+            "--beta",
+            "0.02,0.03",
+        ];
+        let run = brume(
+            dir.path(),
+            &[&args[..], &["--depth-format", "kitti"], extra].concat(),
+        );
+        assert!(run.status.success(), "{}", stderr(&run));
+        let log = std::fs::read_to_string(dir.path().join(out).join("brume-batch-1-of-1.jsonl"));
+        let records: Vec<serde_json::Value> = (log.unwrap().lines())
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        assert_eq!(records.len(), 4, "two frames, two betas");
+        (
+            stderr(&run),
+            String::from_utf8_lossy(&run.stdout).into_owned(),
+            records,
+        )
+    };
+
+    let (err, summary, records) = batch("warned", &[]);
+    let warning = "used as range for want of --focal or --fov";
+    assert_eq!(err.matches(warning).count(), 1, "{err}");
+    assert!(err.contains("a.png"), "the first frame is named: {err}");
+    assert!(summary.contains("2 frames with warnings"), "{summary}");
+    for r in &records {
+        let warnings = r["warnings"].as_array().unwrap();
+        assert!(
+            warnings
+                .iter()
+                .any(|w| w.as_str().unwrap().contains("`focal` or `fov`")),
+            "{r}"
+        );
+    }
+
+    let (err, summary, records) = batch("with-fov", &["--fov", "40"]);
+    assert!(!err.contains("warn"), "{err}");
+    assert!(!summary.contains("warnings"), "{summary}");
+    assert!(records
+        .iter()
+        .all(|r| r["warnings"] == serde_json::json!([])));
+}
+
 #[test]
 fn a_gtfine_label_image_gives_the_sky() {
     let dir = tempfile::tempdir().unwrap();

@@ -150,7 +150,7 @@ fn geometry_options(
 /// The range as a numpy array and the info dict (format, kind, units, metric, notes
 /// naming this package's keywords, unknown_pixels).
 fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, Bound<'_, PyDict>)> {
-    warn_if_depth_taken_as_range(py, &loaded)?;
+    warn_of_depth_warnings(py, &loaded)?;
     let notes: Vec<String> = (loaded.notes.iter())
         .map(|n| brume::error::rename_options(n, keyword_of))
         .collect();
@@ -164,15 +164,16 @@ fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, B
     Ok((scalar_map_to_py(py, loaded.range), info))
 }
 
-/// Warns (Python's `UserWarning`) when depth along the axis was taken as range for want of
-/// intrinsics: the loaders accept it with a note, but a Python caller rarely reads `info`.
-fn warn_if_depth_taken_as_range(py: Python<'_>, loaded: &LoadedDepth) -> PyResult<()> {
-    let Some(warning) = loaded.depth_as_range_warning() else {
-        return Ok(());
-    };
-    let message = format!(
-        "depth: {}",
-        brume::error::rename_options(&warning, keyword_of)
-    );
-    user_warning(py, message)
+/// Warns (Python's `UserWarning`) of what the loader says a user must see: depth along the
+/// axis taken as range for want of intrinsics, keywords given and ignored. The loaders
+/// accept both with a note, but a Python caller rarely reads `info`.
+fn warn_of_depth_warnings(py: Python<'_>, loaded: &LoadedDepth) -> PyResult<()> {
+    for warning in loaded.warnings() {
+        let message = format!(
+            "depth: {}",
+            brume::error::rename_options(&warning, keyword_of)
+        );
+        user_warning(py, message)?;
+    }
+    Ok(())
 }

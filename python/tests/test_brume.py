@@ -525,10 +525,14 @@ def test_load_depth_geometry_keywords(tmp_path):
     np.save(tmp_path / "depth.npy", eye.astype(np.float32))
     rng, info = brume.load_depth(tmp_path / "depth.npy", kind="depth", focal_px=50.0)
     np.testing.assert_allclose(rng, eye * np.sqrt(1.0 + pixel_radius2(h, w, 50.0)), rtol=1e-5)
-    _, info = brume.load_depth(tmp_path / "depth.npy", kind="range", focal_px=50.0)
+    with pytest.warns(UserWarning, match="focal_px ignored"):
+        _, info = brume.load_depth(tmp_path / "depth.npy", kind="range", focal_px=50.0)
     assert any("focal_px ignored" in n for n in info["notes"]), info["notes"]
     # Clipping planes belong to a z-buffer only.
-    _, info = brume.load_depth(tmp_path / "depth.npy", kind="depth", focal_px=50.0, near=0.5)
+    with pytest.warns(UserWarning, match="near and far ignored"):
+        _, info = brume.load_depth(
+            tmp_path / "depth.npy", kind="depth", focal_px=50.0, near=0.5
+        )
     assert any("near and far ignored" in n for n in info["notes"]), info["notes"]
     assert not any("--" in n for n in info["notes"]), info["notes"]
 
@@ -630,6 +634,9 @@ def test_range_from_depth(tmp_path):
         warnings.simplefilter("error")
         brume.range_from_depth(np.full((4, 8), 5.0), kind="depth", fov_y_deg=45.0)
         brume.range_from_depth(np.full((4, 8), 5.0), kind="range")
+    # A keyword given to no effect warns too: range needs no focal length.
+    with pytest.warns(UserWarning, match="depth: focal_px ignored: the map already holds range"):
+        brume.range_from_depth(np.full((4, 8), 5.0), kind="range", focal_px=500.0)
 
 
 # --- equality with the `brume render` program ------------------------------------------

@@ -34,6 +34,7 @@ pub fn plan(args: &BatchArgs) -> Result<Batch> {
 /// and the summary at the end.
 pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
     let progress = progress_bar(batch.outputs() as u64);
+    let shown = std::sync::Mutex::new(std::collections::HashSet::new());
     let observe = |event: BatchEvent| match event {
         BatchEvent::RemovedTemporaries { count, folder } => errln!(
             "brume: removed {count} temporary files left under {} by an interrupted run",
@@ -44,6 +45,9 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
         BatchEvent::OutputFailed { error, .. } => {
             progress.suspend(|| errln!("brume: error: {}", super::batch_flags_shown(error)));
             progress.inc(1);
+        }
+        BatchEvent::FrameWarned { image, warnings } => {
+            show_new_warnings(image, warnings, &shown, &progress)
         }
         BatchEvent::FrameFailed {
             image,
@@ -65,6 +69,24 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
     let report = report?;
     print_summary(&report);
     report.check()
+}
+
+/// Shows each warning the first time its text comes (most datasets' frames share one
+/// reading and one size, so they would repeat it frame after frame); the summary counts
+/// the frames and the log's records list every one.
+fn show_new_warnings(
+    image: &std::path::Path,
+    warnings: &[String],
+    shown: &std::sync::Mutex<std::collections::HashSet<String>>,
+    progress: &ProgressBar,
+) {
+    let mut shown = shown.lock().unwrap_or_else(|p| p.into_inner());
+    for warning in warnings {
+        if shown.insert(warning.clone()) {
+            let text = super::batch_flags_in(warning);
+            progress.suspend(|| log::warn!("{}: {text}", image.display()));
+        }
+    }
 }
 
 /// `--beta 0.005,0.01,0.02`: each a number the library accepts ([`dataset::check_beta`]),
@@ -117,6 +139,12 @@ fn print_summary(r: &BatchReport) {
             r.render_ms / n,
             r.gpu_ms / n,
             r.encode_ms / n,
+        );
+    }
+    if r.warned_frames > 0 {
+        line += &format!(
+            "; {} frames with warnings (each output's log record lists them)",
+            r.warned_frames
         );
     }
     outln!("{line}; log {}", r.log.display());

@@ -53,14 +53,12 @@ pub fn reading_options(args: &DepthReadingArgs) -> DepthOptions {
 /// (in the notes kept for `--json` too): an option given and not used where the user
 /// looks (a warning), not only in `--json`.
 pub fn show_depth_notes(path: &Path, loaded: &mut LoadedDepth) {
-    if let Some(warning) = loaded.depth_as_range_warning() {
+    for warning in loaded.warnings() {
         log::warn!("{}: {}", path.display(), super::flags_in(&warning));
     }
     for note in &mut loaded.notes {
         *note = super::flags_in(note);
-        if note.contains("ignored") {
-            log::warn!("{}: {note}", path.display());
-        } else {
+        if !depth::is_ignored_option_note(note) {
             log::info!("{}: {note}", path.display());
         }
     }

@@ -289,8 +289,14 @@ pub fn batch_flags_shown(e: &Error) -> String {
             command,
         )
         .to_string(),
-        other => brume::error::rename_options(&other.to_string(), |f| flag_of(f, command)),
+        other => batch_flags_in(&other.to_string()),
     }
+}
+
+/// `text` (a frame's warning in `brume batch`) with the options it names as flags where
+/// `batch` has them, as [`batch_flags_shown`] names them in errors.
+pub fn batch_flags_in(text: &str) -> String {
+    brume::error::rename_options(text, |f| flag_of(f, Some("batch")))
 }
 
 /// `text` (a loader's note, a warning) with the options it names in backticks as flags.

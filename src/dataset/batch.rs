@@ -318,6 +318,17 @@ pub enum BatchEvent<'a> {
         /// Why.
         error: &'a Error,
     },
+    /// A frame was loaded with warnings ([`LoadedDepth::warnings`]: its depth taken as
+    /// range for want of intrinsics, options given and ignored); it is rendered, and each
+    /// of its outputs' log records lists them under `warnings`. Sent before its outputs.
+    ///
+    /// [`LoadedDepth::warnings`]: crate::io::depth::LoadedDepth::warnings
+    FrameWarned {
+        /// The frame's colour image.
+        image: &'a Path,
+        /// What to tell the user, naming the library's options in backticks.
+        warnings: &'a [String],
+    },
     /// A frame could not be loaded or rendered, and is logged as failed.
     FrameFailed {
         /// The frame's colour image.
@@ -342,6 +353,8 @@ pub struct BatchReport {
     pub failed_frames: usize,
     /// Frames rendered.
     pub frames: usize,
+    /// Frames rendered with warnings ([`BatchEvent::FrameWarned`]).
+    pub warned_frames: usize,
     /// Decoding the frames' files, ms (wall, on the loader thread).
     pub decode_ms: f64,
     /// Pre-processing, ms (wall, on the loader thread).
@@ -537,7 +550,7 @@ impl Gpu<'_> {
                     self.times.frames += 1;
                     self.times.decode_ms += frame.decode_ms;
                     self.times.prep_ms += frame.prep_ms;
-                    self.render_frame(renderer, frame, betas)
+                    self.frame_warned(&frame) && self.render_frame(renderer, frame, betas)
                 }
                 Err(failed) => self.frame_failed(failed, betas.len()),
             };
@@ -545,6 +558,18 @@ impl Gpu<'_> {
                 return;
             }
         }
+    }
+
+    /// Hands a frame's warnings, if it has any, to the writer; false when the writer is
+    /// gone.
+    fn frame_warned(&self, frame: &Frame) -> bool {
+        let warnings = frame.photo.depth.warnings();
+        if warnings.is_empty() {
+            return true;
+        }
+        let image = frame.item.image.clone();
+        let event = Event::FrameWarned { image, warnings };
+        self.events.send(event).is_ok()
     }
 
     /// Hands a frame's failure (`outputs` of it not written) to the writer; false when the
@@ -644,6 +669,8 @@ fn encode(
         "gpu_ms": fogged.gpu_ms,
         "render_ms": render_ms,
         "capture": opts.capture.to_json(),
+        "warnings": frame.photo.depth.warnings(),
+        "depth_notes": frame.photo.depth.notes,
     });
     let capture = CaptureOptions {
         seed: opts.capture.seed ^ item.name_hash() ^ beta.to_bits(),

@@ -28,6 +28,11 @@ pub(super) enum Event {
     Output(Encode),
     /// A frame that failed, with the number of its outputs that will not be written.
     FrameFailed { failed: Failed, outputs: usize },
+    /// A frame loaded with warnings, before its outputs.
+    FrameWarned {
+        image: PathBuf,
+        warnings: Vec<String>,
+    },
 }
 
 /// The writer thread: captures, encodes and writes each output atomically, and logs it
@@ -43,6 +48,7 @@ pub(super) fn write_outputs(rx: Receiver<Event>, mut log: Log) -> Result<Log> {
                 log.output(&job.path, job.record, result)?;
             }
             Event::FrameFailed { failed, outputs } => log.frame_failed(&failed, outputs)?,
+            Event::FrameWarned { image, warnings } => log.frame_warned(&image, &warnings),
         }
     }
     Ok(log)
@@ -134,6 +140,12 @@ impl Log<'_> {
             outputs,
         });
         Ok(())
+    }
+
+    /// A frame loaded with warnings (its outputs' records carry them).
+    fn frame_warned(&mut self, image: &Path, warnings: &[String]) {
+        self.report.warned_frames += 1;
+        (self.observe)(BatchEvent::FrameWarned { image, warnings });
     }
 
     fn append(&mut self, record: &serde_json::Value) -> Result<()> {

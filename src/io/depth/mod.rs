@@ -275,6 +275,24 @@ impl LoadedDepth {
             short * 100.0
         ))
     }
+
+    /// What a host should show even to a user who reads no notes: the
+    /// [`depth_as_range_warning`](Self::depth_as_range_warning), and the notes of options
+    /// given but ignored (an option the user set to no effect is most often a mistake).
+    /// The other notes (assumptions such as a default principal point) stay in `notes`.
+    pub fn warnings(&self) -> Vec<String> {
+        let ignored = self.notes.iter().filter(|n| is_ignored_option_note(n));
+        self.depth_as_range_warning()
+            .into_iter()
+            .chain(ignored.cloned())
+            .collect()
+    }
+}
+
+/// Whether a loader's note tells of an option (or a file) given and not used: they all
+/// say "ignored", and no other note does.
+pub fn is_ignored_option_note(note: &str) -> bool {
+    note.contains("ignored")
 }
 
 // Checks of option values, shared by the dataset modules so that a bad value reads the
