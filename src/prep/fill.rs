@@ -1,4 +1,5 @@
-//! Hole filling by RANSAC over constants and planes sampled from the hole boundary.
+//! Hole filling by RANSAC over constants, planes in range and planes of the scene (planes
+//! in inverse range) sampled from the hole boundary.
 //!
 //! See the module docs of [`crate::prep`] for the method and its justification.
 
@@ -30,6 +31,10 @@ pub(crate) enum Model {
     Constant(f64),
     /// R = a + b (x - ox) + c (y - oy).
     Plane { a: f64, b: f64, c: f64 },
+    /// 1/R = a + b (x - ox) + c (y - oy): a plane of the scene (in a pinhole camera its
+    /// inverse depth is affine in the pixel's position), infinitely far where it reaches
+    /// its horizon.
+    InversePlane { a: f64, b: f64, c: f64 },
 }
 
 impl Model {
@@ -38,18 +43,34 @@ impl Model {
         match *self {
             Model::Constant(c) => c,
             Model::Plane { a, b, c } => a + b * dx + c * dy,
+            Model::InversePlane { a, b, c } => match a + b * dx + c * dy {
+                d if d > 0.0 => 1.0 / d,
+                _ => f64::INFINITY,
+            },
         }
     }
 }
 
 /// Reusable buffers for filling holes one after the other.
-#[derive(Default)]
 pub(crate) struct HoleFiller {
     edges: Vec<Edge>,
     scratch: Vec<f64>,
+    /// The farthest a plane of the scene may be continued to: the farthest known range
+    /// outside the sky.
+    far_limit: f64,
 }
 
 impl HoleFiller {
+    /// A filler whose planes of the scene go no farther than `far_limit`, the farthest
+    /// known range outside the sky (as the border bands' continuation).
+    pub(crate) fn new(far_limit: f64) -> Self {
+        HoleFiller {
+            edges: Vec::new(),
+            scratch: Vec::new(),
+            far_limit,
+        }
+    }
+
     /// Fills the hole made of `pixels` in `work` (known pixels finite, the hole's pixels
     /// not finite), drawing candidates with `rng`, `trials` constants and `trials` planes.
     pub(crate) fn fill(
@@ -138,7 +159,14 @@ impl HoleFiller {
         let origin = self.origin();
         let delta = self.robust_scale();
         let model = self.ransac(origin, delta, trials, rng);
-        let (lo, hi) = self.value_range();
+        let (lo, mut hi) = self.value_range();
+        // A plane of the scene continued past its farthest edge recedes (the ground toward
+        // the horizon, where the sky and not a known pixel bounds the hole): as far as
+        // the scene's farthest range, not only the boundary's. In a hole enclosed by
+        // known pixels an affine 1/R lies between its values on the boundary anyway.
+        if matches!(model, Model::InversePlane { .. }) {
+            hi = hi.max(self.far_limit);
+        }
         Fit {
             model,
             origin,
@@ -237,8 +265,10 @@ impl HoleFiller {
         if n >= MIN_PLANE_EDGES {
             for _ in 0..trials {
                 let t = [rng.below(n), rng.below(n), rng.below(n)].map(|i| self.edges[i]);
-                if let Some(m) = plane_through(&t, origin) {
-                    consider(m);
+                for inverse in [false, true] {
+                    if let Some(m) = plane_through(&t, origin, inverse) {
+                        consider(m);
+                    }
                 }
             }
         }
@@ -265,25 +295,35 @@ impl HoleFiller {
 
     /// Least-squares plane through the inliers (residual < delta) of a winning plane.
     fn refit_plane(&self, m: &Model, origin: (f64, f64), delta: f64) -> Option<Model> {
-        if !matches!(m, Model::Plane { .. }) {
-            return None;
-        }
+        let inverse = match m {
+            Model::Constant(_) => return None,
+            Model::Plane { .. } => false,
+            Model::InversePlane { .. } => true,
+        };
         let mut ata = [[0.0f64; 3]; 3];
         let mut atb = [0.0f64; 3];
         for e in &self.edges {
             let (dx, dy) = (e.x as f64 - origin.0, e.y as f64 - origin.1);
             if (m.eval(dx, dy) - e.r as f64).abs() < delta {
                 let row = [1.0, dx, dy];
+                let v = if inverse {
+                    1.0 / e.r as f64
+                } else {
+                    e.r as f64
+                };
                 for i in 0..3 {
                     for j in 0..3 {
                         ata[i][j] += row[i] * row[j];
                     }
-                    atb[i] += row[i] * e.r as f64;
+                    atb[i] += row[i] * v;
                 }
             }
         }
         let [a, b, c] = solve3(ata, atb)?;
-        Some(Model::Plane { a, b, c })
+        Some(match inverse {
+            false => Model::Plane { a, b, c },
+            true => Model::InversePlane { a, b, c },
+        })
     }
 }
 
@@ -439,15 +479,22 @@ fn split(
 
 /// The plane through three boundary edges, or `None` if they are collinear (integer
 /// coordinates: the doubled triangle area is then exactly 0).
-fn plane_through(t: &[Edge; 3], origin: (f64, f64)) -> Option<Model> {
+fn plane_through(t: &[Edge; 3], origin: (f64, f64), inverse: bool) -> Option<Model> {
     let rows = t.map(|e| [1.0, e.x as f64 - origin.0, e.y as f64 - origin.1]);
     let area2 = (t[1].x - t[0].x) as i64 * (t[2].y - t[0].y) as i64
         - (t[2].x - t[0].x) as i64 * (t[1].y - t[0].y) as i64;
     if area2 == 0 {
         return None;
     }
-    let [a, b, c] = solve3(rows, t.map(|e| e.r as f64))?;
-    Some(Model::Plane { a, b, c })
+    if !inverse {
+        let [a, b, c] = solve3(rows, t.map(|e| e.r as f64))?;
+        return Some(Model::Plane { a, b, c });
+    }
+    if t.iter().any(|e| e.r <= 0.0) {
+        return None;
+    }
+    let [a, b, c] = solve3(rows, t.map(|e| 1.0 / e.r as f64))?;
+    Some(Model::InversePlane { a, b, c })
 }
 
 /// Solves the 3x3 system `m x = v` by Cramer's rule; `None` if (nearly) singular.
@@ -503,10 +550,88 @@ mod tests {
         let (w, h) = (5, 5);
         let mut m = vec![3.0f32; w * h];
         m[12] = f32::INFINITY;
-        let mut f = HoleFiller::default();
+        let mut f = HoleFiller::new(100.0);
         f.fill(&mut m, w, h, &[12], 8, &mut SplitMix64::new(1))
             .unwrap();
         assert_eq!(m[12], 3.0);
+    }
+
+    /// The range of the ground 1.5 m below a level pinhole camera (focal 500 px, principal
+    /// point at the centre of a 64 x 48 frame whose horizon is row -10, above it): depth
+    /// Z = f H / (y - y_h), range Z sqrt(1 + ((x - cx)² + (y - cy)²) / f²).
+    fn ground(x: usize, y: usize) -> f64 {
+        let (f, height, horizon) = (500.0, 1.5, -10.0);
+        let (dx, dy) = (x as f64 - 31.5, y as f64 - 23.5);
+        let z = f * height / (y as f64 - horizon);
+        z * (1.0 + (dx * dx + dy * dy) / (f * f)).sqrt()
+    }
+
+    // A hole in the ground was filled with a plane in range, a ramp that puts its middle
+    // rows much farther than the ground they show (range grows as 1 / (y - y_h) toward the
+    // horizon, not linearly). A plane of the scene is affine in inverse depth, and nearly
+    // so in inverse range: that plane fills it.
+    #[test]
+    fn a_hole_in_the_ground_is_filled_with_the_ground() {
+        let (w, h) = (64, 48);
+        let mut work: Vec<f32> = (0..w * h).map(|p| ground(p % w, p / w) as f32).collect();
+        let inside = |x: usize, y: usize| (8..56).contains(&x) && (4..44).contains(&y);
+        let hole: Vec<u32> = (0..w * h)
+            .filter(|&p| inside(p % w, p / w))
+            .map(|p| p as u32)
+            .collect();
+        hole.iter().for_each(|&p| work[p as usize] = f32::INFINITY);
+        HoleFiller::new(100.0)
+            .fill(&mut work, w, h, &hole, 32, &mut SplitMix64::new(5))
+            .unwrap();
+        let worst = hole.iter().fold(0.0f64, |m, &p| {
+            let (x, y) = (p as usize % w, p as usize / w);
+            m.max((f64::from(work[p as usize]) / ground(x, y) - 1.0).abs())
+        });
+        assert!(worst < 0.01, "worst relative error {worst}");
+        // The ramp a plane in range would be: rows 4 and 43 at the centre, linear between.
+        let (top, bottom) = (ground(32, 3), ground(32, 44));
+        let ramp = top + (bottom - top) * (23.5 - 3.0) / 41.0;
+        assert!(
+            ramp / ground(32, 23) - 1.0 > 0.4,
+            "{ramp} {}",
+            ground(32, 23)
+        );
+    }
+
+    // The ground's unknown far part below the sky (+inf, not a boundary value) continues
+    // the ground past the boundary's farthest value, up to the filler's far limit.
+    #[test]
+    fn the_ground_below_the_sky_recedes_up_to_the_far_limit() {
+        let (w, h) = (64, 48);
+        // Sky above row 4, a hole from there down to row 20 (left half) or 24 (right half):
+        // the step gives the boundary a second row, so planes can be fitted.
+        let bottom = |x: usize| if x < 32 { 20 } else { 24 };
+        let start: Vec<f32> = (0..w * h)
+            .map(|p| match (p % w, p / w) {
+                (_, y) if y < 4 => f32::INFINITY,
+                (x, y) if y < bottom(x) => f32::NAN,
+                (x, y) => ground(x, y) as f32,
+            })
+            .collect();
+        let hole: Vec<u32> = (0..w * h)
+            .filter(|&p| start[p].is_nan())
+            .map(|p| p as u32)
+            .collect();
+        let farthest_edge = (0..w).map(|x| ground(x, bottom(x))).fold(0.0, f64::max);
+        let top = 4 * w + 20;
+        assert!(ground(20, 4) > 2.0 * farthest_edge);
+        for far_limit in [100.0, 40.0] {
+            let mut work = start.clone();
+            HoleFiller::new(far_limit)
+                .fill(&mut work, w, h, &hole, 32, &mut SplitMix64::new(5))
+                .unwrap();
+            let want = ground(20, 4).min(far_limit);
+            let got = f64::from(work[top]);
+            assert!(
+                (got / want - 1.0).abs() < 0.01,
+                "limit {far_limit}: {got} / {want}"
+            );
+        }
     }
 
     /// A 20 x 10 frame: grey 0.2 left of x = 10, grey 0.8 right of it; range 10 left of
@@ -531,7 +656,7 @@ mod tests {
     fn fill_by_colour(image: &RgbImage, work: &mut [f32], hole: &[u32], seed: u64) -> usize {
         let guide = ColourGuide::new(image, 0.08);
         let mut state = vec![Pixel::Other; work.len()];
-        HoleFiller::default()
+        HoleFiller::new(100.0)
             .fill_by_colour(
                 work,
                 (image.width(), image.height()),
@@ -548,7 +673,7 @@ mod tests {
     fn each_colour_continues_its_own_surface() {
         let (image, mut work, hole) = two_faces();
         let mut plain = work.clone();
-        HoleFiller::default()
+        HoleFiller::new(100.0)
             .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
             .unwrap();
         // Without the image the plane through both sides wins: a ramp across the hole.
@@ -582,7 +707,7 @@ mod tests {
             .filter(|p| p % 20 < 5)
             .for_each(|p| work[p] = 100.0);
         let mut plain = work.clone();
-        HoleFiller::default()
+        HoleFiller::new(100.0)
             .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
             .unwrap();
         assert_eq!(fill_by_colour(&image, &mut work, &hole, 3), 1);

@@ -103,14 +103,22 @@
 //!    `delta = 1.4826 x MAD` of the boundary values (one robust standard deviation),
 //!    floored at a few ulps of their median. Each of the `ransac_samples` (default 32)
 //!    trials draws one constant (a boundary value; all boundary values are tried when
-//!    there are no more of them than trials) and one plane `R = a + b x + c y` through
-//!    three boundary samples (only for boundaries of at least 4 edges; collinear triplets
-//!    are skipped). Long boundaries are scored on an evenly strided subset of 1024 edges.
-//!    A winning plane is refitted by least squares to its inliers (jump `< delta`) if that
+//!    there are no more of them than trials) and, through three boundary samples, a plane
+//!    in range `R = a + b x + c y` and a plane of the scene `1/R = a + b x + c y` (only
+//!    for boundaries of at least 4 edges; collinear triplets are skipped). A plane of the
+//!    scene is affine in inverse depth in a pinhole image, and so nearly in inverse
+//!    range: the ground behind an occluder grows as `1/(y - y_horizon)`, which a plane in
+//!    range fills as a ramp, its middle too far (60 % in the unit test). Long boundaries
+//!    are scored on an evenly strided subset of 1024 edges. A winning plane is refitted
+//!    by least squares to its inliers (jump `< delta`), in its own variable, if that
 //!    scores no worse; a plane must be strictly better than the best constant. This
 //!    generalises the paper's sampled values to sampled planes, so a hole in a tilted
 //!    surface is filled with the surface, not a step. The fill is finally clamped to the
-//!    range of the boundary values, so extrapolation can never create a spike. Sky pixels
+//!    range of the boundary values, so extrapolation can never create a spike, except
+//!    that a plane of the scene may recede up to `Rmax` (the ground's unknown far part
+//!    below the sky, which no known pixel bounds, continues toward the horizon, as the
+//!    border bands continue; a hole enclosed by known pixels lies between its boundary's
+//!    values in any case). Sky pixels
 //!    are not boundary values; a hole with no known pixel round it (sky all round: a wire,
 //!    outliers in the sky) has nothing to be filled from and is sky (the ego vehicle, when
 //!    only it and no sky is round it).
@@ -598,7 +606,7 @@ fn fill_holes(
         .filter(|(_, &s)| s)
         .for_each(|(v, _)| *v = f32::INFINITY);
     let comps = components::label_unknown(work, w, h);
-    let mut filler = fill::HoleFiller::default();
+    let mut filler = fill::HoleFiller::new(f64::from(stats.r_max));
     let mut state = vec![fill::Pixel::Other; if guide.is_some() { w * h } else { 0 }];
     for c in &comps.list {
         let pixels = comps.pixels_of(c);
