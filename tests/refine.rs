@@ -22,6 +22,26 @@ fn worst_relative(a: &ScalarMap, b: &ScalarMap) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Asserts that an upsampled range read back from the GPU agrees with the CPU reference:
+/// f32 rounding (a weighted mean of 36 log ranges ~ 1-3.4 and its exp: a few 1e-7) at
+/// 99 % of the pixels, and everywhere within what the mean shift makes of it. Where two
+/// surfaces share a pixel's weight about equally, each mean-shift step multiplies a
+/// difference in its start by the taps' variance under its weights over σ² (up to
+/// (Δ/2σ)², 4 to 15 for this scene's surfaces 1.2 to 2.3 apart in log range), so two
+/// steps make the rounding up to ~200x larger there (measured 1.5e-4).
+fn assert_upsampling_agrees(gpu: &ScalarMap, cpu: &ScalarMap, what: &str) {
+    let mut diffs: Vec<f64> = (gpu.as_slice().iter().zip(cpu.as_slice()))
+        .map(|(x, y)| (f64::from(*x) / f64::from(*y) - 1.0).abs())
+        .collect();
+    diffs.sort_by(f64::total_cmp);
+    let (p99, worst) = (diffs[diffs.len() * 99 / 100], diffs[diffs.len() - 1]);
+    assert!(
+        p99 < 1e-5,
+        "{what}: 99th percentile of the relative difference {p99:e}"
+    );
+    assert!(worst < 1e-3, "{what}: worst relative difference {worst:e}");
+}
+
 /// A range > 0 with an edge the image shares and one it does not, and a smooth slope.
 fn scene(w: usize, h: usize) -> (RgbImage, ScalarMap) {
     let image = common::noise_image(w, h, 7);
@@ -73,9 +93,7 @@ fn gpu_upsampling_matches_the_cpu_reference() {
             .unwrap();
         let cpu = joint_bilateral_upsample_reference(&image, &low, DEFAULT_UPSAMPLE_SIGMA_COLOUR)
             .unwrap();
-        let worst = worst_relative(&gpu, &cpu);
-        // f32: a weighted mean of 36 log ranges ~ 1-3.4 and its exp: a few 1e-7.
-        assert!(worst < 1e-5, "1/{k}: worst relative difference {worst:e}");
+        assert_upsampling_agrees(&gpu, &cpu, &format!("1/{k}"));
         assert_eq!(times.pass_ms.len(), 2);
     }
 }
@@ -142,12 +160,7 @@ fn upsampling_into_a_kept_texture_matches_upsample_range() {
         assert!(into.as_slice().iter().all(|&v| v > 0.0), "frame {frame}");
         assert_eq!(worst_relative(&into, &once), 0.0, "frame {frame}");
         let cpu = joint_bilateral_upsample_reference(&image, &low, sigma).unwrap();
-        let worst = worst_relative(&into, &cpu);
-        // As gpu_upsampling_matches_the_cpu_reference.
-        assert!(
-            worst < 1e-5,
-            "frame {frame}: worst relative difference {worst:e}"
-        );
+        assert_upsampling_agrees(&into, &cpu, &format!("frame {frame}"));
 
         let small = Texture::new(&gl, w / 2, h, TexelFormat::R32F, Filter::Nearest, None).unwrap();
         let rgba = Texture::new(&gl, w, h, TexelFormat::Rgba32F, Filter::Nearest, None).unwrap();
@@ -230,7 +243,7 @@ fn error_stats(estimate: &ScalarMap, truth: &ScalarMap, measured: &[bool]) -> (f
 
 /// Issue 19's target: upsampling a 1/4 and a 1/8 range guided by the image has a mean
 /// relative error ≤ 0.75x and a 95th percentile ≤ 0.65x those of bilinear upsampling.
-/// Measured: joint bilateral upsampling 0.56x / 0.57x at 1/4, 0.58x / 0.62x at 1/8; the
+/// Measured: joint bilateral upsampling 0.56x / 0.57x at 1/4, 0.58x / 0.61x at 1/8; the
 /// guided filter on the depth's grid reached 0.58x / 0.63x and 0.66x / 0.87x, 0.58x /
 /// 0.82x even in 2x steps: its cells' linear models cannot undo a coarse cell that
 /// averages both sides of an edge, a bilateral weight skips it.

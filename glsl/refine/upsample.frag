@@ -2,7 +2,17 @@
 // cells around the pixel, each weighted by its distance (a Gaussian of one cell) and by
 // how far its colour is from the pixel's (a Gaussian of u_sigma_colour in sRGB-encoded
 // values): a pixel takes the range of the nearby cells that look like it, so an edge of
-// the image is an edge of the range even where the coarse cells straddle it.
+// the image is an edge of the range even where the coarse cells straddle it. The mean is
+// then moved by two mean-shift steps (a Gaussian of SHIFT_SIGMA in log range) toward the
+// surface that holds most of the weight, so that taps of two surfaces the colour lets
+// through do not make a range neither has (`shift_to_dominant_surface` in
+// src/refine/mod.rs, the CPU reference).
+
+const float SHIFT_SIGMA = 0.3;
+const int SHIFT_STEPS = 2;
+// The taps' weighted standard deviation in log range below which the mean is kept (one
+// surface), so that most pixels skip the steps.
+const float SHIFT_MIN_SPREAD = 0.03;
 
 uniform sampler2D u_colour;
 uniform sampler2D u_cells;        // (r, g, b, log range) per cell
@@ -24,6 +34,9 @@ void main() {
     float weight = 0.0;
     float nearest = 0.0;
     float nearest_d2 = 1e30;
+    float tap_weight[36];
+    float tap_log_range[36];
+    int n = 0;
     for (int j = -2; j <= 3; ++j) {
         for (int i = -2; i <= 3; ++i) {
             ivec2 q = base + ivec2(i, j);
@@ -36,6 +49,9 @@ void main() {
             float w = exp(-0.5 * dot(d, d) - dot(dc, dc) * inv_colour);
             sum += w * cell.a;
             weight += w;
+            tap_weight[n] = w;
+            tap_log_range[n] = cell.a;
+            ++n;
             if (dot(d, d) < nearest_d2) {
                 nearest_d2 = dot(d, d);
                 nearest = cell.a;
@@ -43,6 +59,31 @@ void main() {
         }
     }
     // A colour unlike every cell around (all weights underflow): the nearest cell's.
-    float log_range = weight > 1e-30 ? sum / weight : nearest;
+    float log_range = nearest;
+    if (weight > 1e-30) {
+        log_range = sum / weight;
+        float spread = 0.0;
+        for (int k = 0; k < n; ++k) {
+            float dv = tap_log_range[k] - log_range;
+            spread += tap_weight[k] * dv * dv;
+        }
+        int steps = spread > SHIFT_MIN_SPREAD * SHIFT_MIN_SPREAD * weight ? SHIFT_STEPS : 0;
+        float inv_shift = 1.0 / (2.0 * SHIFT_SIGMA * SHIFT_SIGMA);
+        for (int step = 0; step < steps; ++step) {
+            float s = 0.0;
+            float wsum = 0.0;
+            for (int k = 0; k < n; ++k) {
+                float dv = tap_log_range[k] - log_range;
+                float w = tap_weight[k] * exp(-dv * dv * inv_shift);
+                s += w * dv;
+                wsum += w;
+            }
+            // Every tap too far from the estimate to count: keep it.
+            if (wsum <= 1e-30) {
+                break;
+            }
+            log_range += s / wsum;
+        }
+    }
     o_range = vec4(exp(log_range), 0.0, 0.0, 1.0);
 }
