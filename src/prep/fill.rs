@@ -72,7 +72,8 @@ impl HoleFiller {
     }
 
     /// Fills the hole made of `pixels` in `work` (known pixels finite, the hole's pixels
-    /// not finite), drawing candidates with `rng`, `trials` constants and `trials` planes.
+    /// not finite), drawing candidates with `rng`: `trials` constants, `trials` planes in
+    /// range and `trials` planes of the scene.
     pub(crate) fn fill(
         &mut self,
         work: &mut [f32],
