@@ -46,7 +46,12 @@
 //!      without the texture test (the texture window of a pixel next to the horizon sees
 //!      the horizon). A region is kept when it covers at least
 //!      [`SkyRules::min_area_fraction`] of the image and does not reach the bottom row (it
-//!      leaked). The sky is the kept regions and the depth rules' sky; finally each
+//!      leaked). The sky is the kept regions and the pixels of the depth rules' sky they
+//!      reach over pixels of it that look like sky, in the growth's colour steps (all of
+//!      the depth rules' sky when the image finds none: a sunset's orange sky is not blue
+//!      or grey). What is left of the depth rules' sky is the scene beyond the sensor's
+//!      reach (a time-of-flight camera stops at 8 m; the ground, the street and the city
+//!      behind are unknown and joined to the sky), filled in step 4. Finally each
 //!      4-connected region of non-sky pixels that does not reach the bottom row and holds
 //!      no confident range is a gap in the sky (a bird, a lamp head, a cloud's textured
 //!      rim, blobs of matcher noise) and becomes sky when it is at most 0.2 % of the image
@@ -137,6 +142,17 @@
 //!    from what is round them once the regions are, so a speck amid the background is
 //!    the background.
 //!
+//!    **The scene beyond the sensor's reach** (step 2; [`PrepStats::beyond_reach`]) is
+//!    at least as far as the farthest range measured and no farther than the sky: each
+//!    vertical run of it recedes from `Rmax` where it meets the scene to `Smax` where it
+//!    meets the sky, linearly in log range (the ground toward the horizon, the city
+//!    behind fading into the sky). Each column is filled on its own: the known range beside
+//!    it (a near pole) says nothing of the background behind, and blending it in would
+//!    draw a clear halo round the pole. Like the sky, it is not marked `filled`: the
+//!    refinement's guided filter (`--refine unreliable`, `repair`) would pull it toward
+//!    the near scene round it. Without the image none of this is found: the depth rules'
+//!    sky is all sky (a wall of fog at the sensor's reach).
+//!
 //!    **The ego vehicle** ([`Guides::ego_mask`]): its pixels are unknown and black to the
 //!    sky detector, then neither data nor holes, and finally get range 0 (never fogged;
 //!    [`PrepStats::ego_pixels`]).
@@ -166,7 +182,8 @@
 //! (distance transform). The image-guided detector adds about 20 bytes per pixel
 //! (luminance, texture, range class, region and gap lists) while it runs, and the hole
 //! fill with the image 5 (luminance, the regions' state) and up to 16 bytes per unknown
-//! pixel (its region lists); on a 2048 x 1024 street frame the detector takes about 80 %
+//! pixel (its region lists); the scene beyond the sensor's reach 1 byte per pixel and 8
+//! per pixel of it (its mask and list); on a 2048 x 1024 street frame the detector takes about 80 %
 //! of the whole 0.2-0.4 s.
 
 mod airlight;
@@ -178,6 +195,7 @@ mod local;
 mod margin;
 mod options;
 mod outliers;
+mod reach;
 mod sky;
 mod sky_image;
 pub mod stereo;
@@ -243,6 +261,10 @@ pub struct PrepStats {
     pub border_filled: usize,
     /// Number of unknown pixels of border bands made sky (they meet the sky).
     pub border_sky: usize,
+    /// Number of unknown pixels of the scene beyond the sensor's reach (image-guided
+    /// detection only: the depth rules took them for sky, the image does not join them to
+    /// its sky), filled receding from `Rmax` into the sky.
+    pub beyond_reach: usize,
     /// Number of pixels under the ego-vehicle mask (range 0: never fogged).
     pub ego_pixels: usize,
     /// Number of known values removed as matcher noise in slivers of sky (image-guided
@@ -275,7 +297,7 @@ pub struct Prepared {
     /// Pixels that are sky (set to `Smax`, or relaxed in the margin).
     pub sky: Grid<bool>,
     /// Pixels that were holes (unknown, far outliers or matcher noise) and have been
-    /// filled.
+    /// filled; not the scene beyond the sensor's reach ([`PrepStats::beyond_reach`]).
     pub filled: Grid<bool>,
     /// What was found and timings.
     pub stats: PrepStats,
@@ -379,6 +401,11 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
     stats.sky_method = found.method;
     stats.sky_noise = found.noise.len();
     found.noise.iter().for_each(|&p| work[p] = f32::NAN);
+    // Neither known nor a hole (as the sky) until the scene round it is filled.
+    found
+        .beyond_reach
+        .iter()
+        .for_each(|&p| work[p] = f32::INFINITY);
     for (p, _) in ego.iter().enumerate().filter(|(_, &e)| e) {
         sky[p] = false;
         work[p] = f32::INFINITY;
@@ -418,6 +445,16 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         opts,
         &mut stats,
     )?;
+    if !found.beyond_reach.is_empty() {
+        let s_max = (opts.sky_range_factor * f64::from(stats.r_max)) as f32;
+        reach::recede(
+            &mut work,
+            (&sky, &found.beyond_reach),
+            (w, h),
+            (stats.r_max, s_max),
+        );
+        stats.beyond_reach = found.beyond_reach.len();
+    }
     for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {
         *v = 0.0;
     }
@@ -488,6 +525,8 @@ struct FoundSky {
     method: SkyMethod,
     /// Known pixels that are matcher noise in slivers of sky (image-guided only).
     noise: Vec<usize>,
+    /// Unknown pixels of the scene beyond the sensor's reach (image-guided only).
+    beyond_reach: Vec<usize>,
 }
 
 /// The sky: the user's mask; else, unless detection is off, the depth rules, joined by the
@@ -497,6 +536,7 @@ fn find_sky(work: &[f32], w: usize, h: usize, guides: Guides, opts: &PrepOptions
         sky,
         method,
         noise: Vec::new(),
+        beyond_reach: Vec::new(),
     };
     if let Some(mask) = guides.sky_mask {
         return found(mask.as_slice().to_vec(), SkyMethod::Mask);
@@ -527,6 +567,7 @@ fn find_sky(work: &[f32], w: usize, h: usize, guides: Guides, opts: &PrepOptions
         sky: image_sky.sky,
         method: SkyMethod::DepthAndImage,
         noise: image_sky.noise,
+        beyond_reach: image_sky.beyond_reach,
     }
 }
 

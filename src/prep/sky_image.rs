@@ -209,6 +209,11 @@ pub(crate) struct ImageSky {
     /// roof, between leaves). Far values are left to the far-outlier rule. Empty when no
     /// sky was found.
     pub noise: Vec<usize>,
+    /// Unknown pixels the depth rules took for sky that the image does not join to the
+    /// sky it found: the scene beyond the sensor's reach. Empty when the image found no
+    /// sky (the depth rules' sky is then kept whole: a sunset's orange sky is not blue or
+    /// grey).
+    pub beyond_reach: Vec<usize>,
 }
 
 /// The sky from the image, the range classes and the depth rules' sky (see the module
@@ -226,6 +231,7 @@ pub(crate) fn image_sky(
     let depth_only = || ImageSky {
         sky: depth_sky.to_vec(),
         noise: Vec::new(),
+        beyond_reach: Vec::new(),
     };
     // The floor is set by the scene (the pixels of confident range), not by the whole
     // image: in a frame mostly of sky the image's median is the sky's own, and the darker
@@ -251,10 +257,18 @@ pub(crate) fn image_sky(
     };
     ev.floor = ev.floor.max(SEED_DIMMING * seed_lum);
     let mut sky = grow_regions(&ev, &seeds, width, height, min_area_fraction);
-    sky.iter_mut().zip(depth_sky).for_each(|(s, &d)| *s |= d);
+    // A sensor that does not reach the far scene (a phone's time-of-flight camera stops at
+    // 8 m) leaves it unknown and joined to the sky, and the depth rules take it all for
+    // sky: where the image found sky, only what the sky reaches in its own colour is.
+    if sky.iter().any(|&s| s) {
+        join_depth_sky(&ev, &mut sky, depth_sky, width, height);
+    } else {
+        sky.copy_from_slice(depth_sky);
+    }
     fill_gaps(&ev, &mut sky, width, height);
     let reclaimed = reclaim_vetoed(&ev, &mut sky, width, height);
     grow_past_reclaimed(&ev, &mut sky, &reclaimed, width, height);
+    let beyond_reach = beyond_reach(ev.rules, &mut sky, depth_sky, width, height);
     let noise = if sky.iter().any(|&s| s) {
         (0..sky.len())
             .into_par_iter()
@@ -263,7 +277,11 @@ pub(crate) fn image_sky(
     } else {
         Vec::new()
     };
-    ImageSky { sky, noise }
+    ImageSky {
+        sky,
+        noise,
+        beyond_reach,
+    }
 }
 
 /// Admissible pixels of the top rows, and the depth rules' sky where it looks like sky.
@@ -486,6 +504,59 @@ fn grow_past_reclaimed(
             region.iter().for_each(|&p| sky[p] = true);
         }
     }
+}
+
+/// The pixels of the depth rules' sky left out of `sky`: the scene beyond the sensor's
+/// reach. A piece of them no larger than a gap in the sky ([`ImageSkyRules::max_gap_fraction`]
+/// of the image) is sky after all: a glint, a bird, a far tower too thin for a sensor to
+/// see.
+fn beyond_reach(
+    rules: &ImageSkyRules,
+    sky: &mut [bool],
+    depth_sky: &[bool],
+    width: usize,
+    height: usize,
+) -> Vec<usize> {
+    let left_out: Vec<bool> = (0..sky.len()).map(|p| depth_sky[p] && !sky[p]).collect();
+    let comps = label_mask(&left_out, width, height);
+    let max_gap = rules.max_gap_fraction * (width * height) as f64;
+    let mut beyond = Vec::new();
+    for c in &comps.list {
+        let pixels = comps.pixels_of(c).iter().map(|&p| p as usize);
+        if c.len as f64 <= max_gap {
+            pixels.for_each(|p| sky[p] = true);
+        } else {
+            beyond.extend(pixels);
+        }
+    }
+    beyond
+}
+
+/// Adds to `sky` the pixels of the depth rules' sky that are admissible (a patch of sky
+/// between branches too small to be kept as a region of its own), and those reached from
+/// the sky over pixels of that sky that look like sky, in the growth's colour steps (a
+/// textured cloud, the sky's rim at the skyline whose texture window sees the skyline).
+fn join_depth_sky(
+    ev: &Evidence,
+    sky: &mut [bool],
+    depth_sky: &[bool],
+    width: usize,
+    height: usize,
+) {
+    for (p, s) in sky.iter_mut().enumerate() {
+        *s |= depth_sky[p] && ev.admissible(p);
+    }
+    let mut reached = sky.to_vec();
+    let mut region: Vec<usize> = (0..sky.len()).filter(|&p| sky[p]).collect();
+    spread(
+        &mut reached,
+        &mut region,
+        width,
+        height,
+        usize::MAX,
+        |p, q| depth_sky[q] && ev.looks_like_sky(q) && ev.step_ok(p, q),
+    );
+    region.iter().for_each(|&p| sky[p] = true);
 }
 
 /// The growth of one region from its seeds (already in it and `reached`), then its edge

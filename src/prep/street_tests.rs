@@ -227,3 +227,61 @@ fn the_ego_vehicle_gets_range_zero_and_touches_nothing_else() {
         with.stats
     );
 }
+
+/// A time-of-flight sensor that stops at 20 m: the street beyond it is unknown and joined
+/// to the sky. The depth rules alone take it for sky (fogged as the sky: a wall of fog at
+/// the sensor's reach); the image shows it is not, and it recedes from Rmax into the sky.
+#[test]
+fn the_street_beyond_the_sensors_reach_is_not_sky() {
+    const REACH: f32 = 20.0;
+    let s = street_scene(W, H, 7);
+    let range = s.truth.map(|&t| if t <= REACH { t } else { f32::NAN });
+    let beyond: Vec<usize> = (0..W * H)
+        .filter(|&i| s.truth.as_slice()[i] > REACH)
+        .collect();
+    assert!(
+        beyond.len() > W * H / 20,
+        "{} px beyond the reach",
+        beyond.len()
+    );
+    let opts = PrepOptions::default();
+    let alone = prepare_guided(&range, Guides::default(), &opts).unwrap();
+    let with = prepare_guided(
+        &range,
+        Guides {
+            image: Some(&s.image),
+            ..Guides::default()
+        },
+        &opts,
+    )
+    .unwrap();
+    let called_sky = |p: &Prepared| beyond.iter().filter(|&&i| p.sky.as_slice()[i]).count();
+    assert!(
+        called_sky(&alone) > beyond.len() * 9 / 10,
+        "{:?}",
+        alone.stats
+    );
+    assert!(
+        called_sky(&with) < beyond.len() / 20,
+        "{} of {}: {:?}",
+        called_sky(&with),
+        beyond.len(),
+        with.stats
+    );
+    assert!(with.stats.beyond_reach > 0, "{:?}", with.stats);
+    let (r_max, s_max) = (with.stats.r_max, with.stats.s_max.unwrap());
+    for &i in beyond.iter().filter(|&&i| !with.sky.as_slice()[i]) {
+        let v = with.range.as_slice()[i];
+        assert!(
+            v >= 0.999 * r_max && v <= 1.001 * s_max,
+            "pixel {i}: {v} outside [{r_max}, {s_max}]"
+        );
+    }
+    // The true sky is still found.
+    let sky = s.sky.as_slice();
+    let found = (0..W * H)
+        .filter(|&i| sky[i] && with.sky.as_slice()[i])
+        .count();
+    let total = sky.iter().filter(|&&v| v).count();
+    assert!(found as f64 > 0.97 * total as f64, "{found} of {total}");
+}
