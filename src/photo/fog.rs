@@ -7,7 +7,7 @@ use crate::error::{Error, Result};
 use crate::medium::haze::{self, Haze};
 use crate::medium::physical::{self, PhysicalFog, DEFAULT_ALBEDO};
 use crate::medium::Medium;
-use crate::raster::ScalarMap;
+use crate::raster::{Grid, ScalarMap};
 use crate::renderer::{Rendered, Renderer};
 
 /// How dense the haze is.
@@ -133,22 +133,41 @@ impl PreparedPhoto {
     /// [`PreparedPhoto::range`]), the sky moved out to at least [`SKY_RANGE_M`]: the range
     /// above Rmax, the farthest scene point, is stretched in log range so that the sky's
     /// Smax lands on [`SKY_RANGE_M`] (r ↦ Rmax·(r/Rmax)^k, k = ln(SKY_RANGE_M/Rmax) /
-    /// ln(Smax/Rmax)). The scene up to Rmax keeps its range bit for bit, and the horizon
-    /// margin's taper from the scene into the sky, and the refinement's blend across the
-    /// skyline, stay continuous. Without pre-processing, without sky, or with the sky
-    /// already at [`SKY_RANGE_M`] or farther, the range is only made metric.
+    /// ln(Smax/Rmax)). The scene beyond the sensor's reach
+    /// ([`crate::prep::Prepared::beyond_reach`], filled from Rmax to Smax linearly in log
+    /// range, its parameter u in [0, 1]) is the ground receding toward the horizon
+    /// instead: 1/R linear in u from 1/Rmax to 1/[`SKY_RANGE_M`], R = Rmax / (1 − (1 −
+    /// Rmax/[`SKY_RANGE_M`])·u). The power law would put the ground halfway to the horizon
+    /// at √(Rmax·1 km), 90 m for a phone's 8 m, where a plane puts it at 16 m. The scene up
+    /// to Rmax keeps its range bit for bit, and the horizon margin's taper from the scene
+    /// into the sky and the refinement's blend across the skyline stay continuous (the two
+    /// maps agree at Rmax and at the sky, where the ground beyond the reach meets them).
+    /// Without pre-processing, without sky, or with the sky already at [`SKY_RANGE_M`] or
+    /// farther, the range is only made metric.
     pub fn metres(&self) -> Result<ScalarMap> {
         let (metres, _) = physical::metric_range(&self.range)?;
         let Some((r_max, s_max)) = self.sky_to_move_out() else {
             return Ok(metres);
         };
-        let k = (SKY_RANGE_M / r_max).ln() / (s_max / r_max).ln();
-        Ok(metres.map(|&r| {
-            let r = f64::from(r);
-            if r > r_max {
-                (r_max * (r / r_max).powf(k)) as f32
+        let log_span = (s_max / r_max).ln();
+        let k = (SKY_RANGE_M / r_max).ln() / log_span;
+        let c = 1.0 - r_max / SKY_RANGE_M;
+        let beyond = self.prepared.as_ref().map(|p| &p.beyond_reach);
+        let beyond =
+            beyond.filter(|b| (b.width(), b.height()) == (metres.width(), metres.height()));
+        let w = metres.width();
+        Ok(Grid::from_fn(w, metres.height(), |x, y| {
+            let r = f64::from(*metres.get(x, y));
+            if r <= r_max {
+                return r as f32;
+            }
+            if beyond.is_some_and(|b| *b.get(x, y)) {
+                // The ground receding toward the horizon: 1/R linear in the fill's
+                // parameter, from 1/Rmax at the reach to 1/SKY_RANGE_M at the horizon.
+                let u = ((r / r_max).ln() / log_span).min(1.0);
+                (r_max / (1.0 - c * u)) as f32
             } else {
-                r as f32
+                (r_max * (r / r_max).powf(k)) as f32
             }
         }))
     }
@@ -386,6 +405,51 @@ mod tests {
         assert!(*sky_tau < 1e-8, "{sky_tau}");
         assert_eq!(prepared.sky_range_m(), Some(SKY_RANGE_M));
         assert_eq!(tau.get(0, 47), transmittance_map(&haze, &plain).get(0, 47));
+    }
+
+    /// The ground a phone's depth did not reach (green below the blue sky, unknown like
+    /// the sky) is no sky: physical fog sees it recede as the ground does, 1/R linear in
+    /// the fill's parameter from the reach to the sky's 1 km, where the sky's own taper
+    /// runs out in log range.
+    #[test]
+    fn physical_fog_sees_the_ground_beyond_the_reach_recede() {
+        let (w, h) = (64, 48);
+        let image = RgbImage::from_fn(w, h, |x, y| match y {
+            y if y < h / 4 => [0.35, 0.5, 0.9],
+            _ => [0.1 + 0.01 * (x % 7) as f32, 0.3, 0.1],
+        });
+        let range = ScalarMap::from_fn(w, h, |_, y| match y < h / 2 {
+            true => f32::NAN,
+            false => 8.0 - 6.0 * (y - h / 2) as f32 / (h / 2 - 1) as f32,
+        });
+        let photo = Photo::from_range(image, range).unwrap();
+        let prepared =
+            super::super::preprocess(&photo, &super::super::PrepareOptions::default()).unwrap();
+        let p = prepared.prepared.as_ref().unwrap();
+        let (r_max, s_max) = (f64::from(p.stats.r_max), f64::from(p.stats.s_max.unwrap()));
+        assert_eq!(p.stats.beyond_reach, w * h / 4, "{:?}", p.stats);
+        let metres = prepared.metres().unwrap();
+        let c = 1.0 - r_max / SKY_RANGE_M;
+        for y in h / 4..h / 2 {
+            let (before, after) = (f64::from(*prepared.range.get(5, y)), *metres.get(5, y));
+            assert!(*p.beyond_reach.get(5, y) && !*p.sky.get(5, y));
+            let u = (before / r_max).ln() / (s_max / r_max).ln();
+            let want = r_max / (1.0 - c * u);
+            assert!(
+                (f64::from(after) - want).abs() < 1e-4 * want,
+                "row {y}: {after} / {want}"
+            );
+            if y > h / 4 {
+                assert!(
+                    after < *metres.get(5, y - 1),
+                    "row {y} not nearer than above"
+                );
+            }
+        }
+        // The contour's row is about the reach; half a row below the horizon (t = 23/24)
+        // the ground is 20 times as far.
+        assert!(f64::from(*metres.get(5, h / 2 - 1)) < 1.2 * r_max);
+        assert!(f64::from(*metres.get(5, h / 4)) > 15.0 * r_max);
     }
 
     /// An object inserted between the farthest scene point and the sky keeps its range

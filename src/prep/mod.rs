@@ -143,12 +143,17 @@
 //!    the background.
 //!
 //!    **The scene beyond the sensor's reach** (step 2; [`PrepStats::beyond_reach`]) is
-//!    at least as far as the farthest range measured and no farther than the sky: each
-//!    vertical run of it recedes from `Rmax` where it meets the scene to `Smax` where it
-//!    meets the sky, linearly in log range (the ground toward the horizon, the city
-//!    behind fading into the sky). Each column is filled on its own: the known range beside
-//!    it (a near pole) says nothing of the background behind, and blending it in would
-//!    draw a clear halo round the pole. Like the sky, it is not marked `filled`: the
+//!    at least as far as the farthest range measured and no farther than the sky: the
+//!    ground receding toward the horizon and what stands on it. In each column it goes
+//!    from `Rmax` where it meets the scene below to `Smax` at the horizon, linearly in log
+//!    range, and is `Smax` above the horizon; the horizon is the lowest row the sky comes
+//!    down to within a quarter of the width either side (between far towers), so the
+//!    ground below a far tower recedes as the ground beside it (the tower's own skyline
+//!    would draw its ghost down to the ground). Physical fog reads that parameter as the
+//!    ground's 1/R, linear from `1/Rmax` to the sky's 1/1 km ([`Prepared::beyond_reach`],
+//!    `PreparedPhoto::metres`). The known range beside it (a near pole) is not used: it
+//!    says nothing of the background behind the pole, and blending it in would draw a
+//!    clear halo round the pole. Like the sky, it is not marked `filled`: the
 //!    refinement's guided filter (`--refine unreliable`, `repair`) would pull it toward
 //!    the near scene round it. Without the image none of this is found: the depth rules'
 //!    sky is all sky (a wall of fog at the sensor's reach).
@@ -299,6 +304,10 @@ pub struct Prepared {
     /// Pixels that were holes (unknown, far outliers or matcher noise) and have been
     /// filled; not the scene beyond the sensor's reach ([`PrepStats::beyond_reach`]).
     pub filled: Grid<bool>,
+    /// Pixels of the scene beyond the sensor's reach ([`PrepStats::beyond_reach`]): their
+    /// range recedes from `Rmax` to `Smax` linearly in log range, which physical fog reads
+    /// as the ground's recession toward the horizon (`PreparedPhoto::metres`).
+    pub beyond_reach: Grid<bool>,
     /// What was found and timings.
     pub stats: PrepStats,
 }
@@ -445,7 +454,13 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         opts,
         &mut stats,
     )?;
+    let mut beyond_mask = Vec::new();
     if !found.beyond_reach.is_empty() {
+        beyond_mask = vec![false; w * h];
+        found
+            .beyond_reach
+            .iter()
+            .for_each(|&p| beyond_mask[p] = true);
         let s_max = (opts.sky_range_factor * f64::from(stats.r_max)) as f32;
         reach::recede(
             &mut work,
@@ -482,6 +497,7 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         range: Grid::from_vec(w, h, work),
         sky: Grid::from_vec(w, h, sky),
         filled: Grid::from_vec(w, h, filled),
+        beyond_reach: Grid::from_fn(w, h, |x, y| beyond_mask.get(y * w + x) == Some(&true)),
         stats,
     })
 }

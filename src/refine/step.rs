@@ -302,6 +302,7 @@ pub fn refine_prepared(
     prepared.range = refine_range(image, &prepared.range, Some(&prepared.filled), opts, filter)?;
     prepared.sky = nearest_to_image_size(&prepared.sky, w, h);
     prepared.filled = nearest_to_image_size(&prepared.filled, w, h);
+    prepared.beyond_reach = nearest_to_image_size(&prepared.beyond_reach, w, h);
     Ok(plan)
 }
 
