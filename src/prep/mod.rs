@@ -147,7 +147,8 @@
 //!    ground receding toward the horizon and what stands on it. In each column it goes
 //!    from `Rmax` where it meets the scene below to `Smax` at the horizon, linearly in log
 //!    range, and is `Smax` above the horizon; the horizon is the lowest row the sky comes
-//!    down to within a quarter of the width either side (between far towers), so the
+//!    down to within a quarter of the width either side (between far towers; only the sky
+//!    that reaches the top row: sky seen in water is no horizon), so the
 //!    ground below a far tower recedes as the ground beside it (the tower's own skyline
 //!    would draw its ghost down to the ground). Physical fog reads that parameter as the
 //!    ground's 1/R, linear from `1/Rmax` to the sky's 1/1 km ([`Prepared::beyond_reach`],

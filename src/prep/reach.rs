@@ -1,6 +1,8 @@
 //! The scene beyond the sensor's reach: unknown pixels joined to the sky that the image
 //! shows are not sky (see the module docs of [`crate::prep`], step 4).
 
+use super::components::label_mask;
+
 /// Half the width of the window in which a column's horizon is looked for, as a fraction
 /// of the image's width: wide enough that a city dense over several towers' width does
 /// not hide the horizon behind it, narrow enough that a horizon tilted by the camera's
@@ -19,9 +21,9 @@ struct Run {
 /// least as far as the farthest range measured) to `s_max` (the sky's): what the sensor
 /// did not reach is the ground receding toward the horizon and what stands on it. In each
 /// column the fill goes from `r_max` where a run meets the scene below it to `s_max` at
-/// the column's horizon, the lowest row the sky comes down to within
+/// the column's horizon, the lowest row the sky reaching the top row comes down to within
 /// [`HORIZON_WINDOW`] of it (between far towers), and is `s_max` above it; a run with the
-/// sky below it is `s_max`. The horizon is shared by neighbouring columns so that the
+/// sky (or the image's bottom border) below it is `s_max`. The horizon is shared by neighbouring columns so that the
 /// ground below a far tower recedes as the ground beside it (a column's own skyline would
 /// draw the tower's ghost down to the ground); without one (no sky above any run nearby,
 /// or not above the run), the run recedes from its lower end to its upper end. The known
@@ -37,7 +39,8 @@ pub(crate) fn recede(
     beyond.iter().for_each(|&p| is_beyond[p] = true);
     let runs = runs_of(&is_beyond, w, h);
     let is_sky = |y: Option<usize>, x: usize| y.is_none_or(|y| y >= h || sky[y * w + x]);
-    let horizon = horizon_rows(&runs, |r| r.top > 0 && is_sky(Some(r.top - 1), r.x), w);
+    let open_sky = sky_from_the_top(sky, w, h);
+    let horizon = horizon_rows(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w);
     let (lo, hi) = (f64::from(r_max).ln(), f64::from(s_max).ln());
     for r in &runs {
         let above_sky = is_sky(r.top.checked_sub(1), r.x);
@@ -66,6 +69,20 @@ pub(crate) fn recede(
     }
 }
 
+/// The sky's components that reach the top row: sky seen in water below the horizon (a
+/// lake that looks like sky) is not where the horizon is.
+fn sky_from_the_top(sky: &[bool], w: usize, h: usize) -> Vec<bool> {
+    let comps = label_mask(sky, w, h);
+    let mut open = vec![false; w * h];
+    for c in comps.list.iter().filter(|c| c.bbox[1] == 0) {
+        comps
+            .pixels_of(c)
+            .iter()
+            .for_each(|&p| open[p as usize] = true);
+    }
+    open
+}
+
 /// The vertical runs of `mask`, column by column.
 fn runs_of(mask: &[bool], w: usize, h: usize) -> Vec<Run> {
     let mut runs = Vec::new();
@@ -87,8 +104,9 @@ fn runs_of(mask: &[bool], w: usize, h: usize) -> Vec<Run> {
 }
 
 /// Each column's horizon: the boundary row (between pixel rows, so `top - 0.5`) below
-/// the lowest sky pixel over a run that `under_sky` accepts, within [`HORIZON_WINDOW`] of
-/// the column; `None` without such a run nearby.
+/// the lowest sky pixel over a run that `under_sky` accepts (the sky reaching the top
+/// row above it), within [`HORIZON_WINDOW`] of the column; `None` without such a run
+/// nearby.
 fn horizon_rows(runs: &[Run], under_sky: impl Fn(&Run) -> bool, w: usize) -> Vec<Option<f64>> {
     let mut skyline: Vec<Option<usize>> = vec![None; w];
     for r in runs.iter().filter(|r| under_sky(r)) {
@@ -177,5 +195,29 @@ mod tests {
             "the tower above the horizon: the sky's range"
         );
         assert!(work[2 * w] > work[4 * w], "farther up: {work:?}");
+    }
+
+    #[test]
+    fn sky_in_the_water_is_not_the_horizon() {
+        // Three columns: the sky in rows 0-1, beyond the reach rows 2-6, the scene row 7;
+        // in the right column row 5 is sky seen in water, not joined to the sky above.
+        let (w, h) = (3, 8);
+        let mut sky = vec![false; w * h];
+        let mut work = vec![5.0f32; w * h];
+        let mut beyond = Vec::new();
+        for p in 0..w * 7 {
+            if p < 2 * w || p == 5 * w + 2 {
+                sky[p] = true;
+                work[p] = f32::INFINITY;
+            } else {
+                beyond.push(p);
+                work[p] = f32::NAN;
+            }
+        }
+        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 40.0));
+        // The horizon at 1.5, the contour at 6.5: row 4 is halfway up (the water's row
+        // would have put the horizon at 5.5 and row 4 in the sky's range).
+        let want = 10.0 * 4f64.powf(0.5);
+        assert!(close(work[4 * w], want), "{} / {want}", work[4 * w]);
     }
 }
