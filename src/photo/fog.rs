@@ -140,8 +140,10 @@ impl PreparedPhoto {
     /// Rmax/[`SKY_RANGE_M`])·u). The power law would put the ground halfway to the horizon
     /// at √(Rmax·1 km), 90 m for a phone's 8 m, where a plane puts it at 16 m. The scene up
     /// to Rmax keeps its range bit for bit, and the horizon margin's taper from the scene
-    /// into the sky and the refinement's blend across the skyline stay continuous (the two
-    /// maps agree at Rmax and at the sky, where the ground beyond the reach meets them).
+    /// into the sky and the refinement's blend across the skyline stay continuous; the two
+    /// maps agree at Rmax and at the sky, and differ between, so across the edge of the
+    /// mask of the scene beyond the reach (brought to the image's size by nearest
+    /// neighbour) a range upsampled between them may step.
     /// Without pre-processing, without sky, or with the sky already at [`SKY_RANGE_M`] or
     /// farther, the range is only made metric.
     pub fn metres(&self) -> Result<ScalarMap> {

@@ -46,12 +46,13 @@
 //!      without the texture test (the texture window of a pixel next to the horizon sees
 //!      the horizon). A region is kept when it covers at least
 //!      [`SkyRules::min_area_fraction`] of the image and does not reach the bottom row (it
-//!      leaked). The sky is the kept regions and the pixels of the depth rules' sky they
-//!      reach over pixels of it that look like sky, in the growth's colour steps (all of
-//!      the depth rules' sky when the image finds none: a sunset's orange sky is not blue
-//!      or grey). What is left of the depth rules' sky is the scene beyond the sensor's
-//!      reach (a time-of-flight camera stops at 8 m; the ground, the street and the city
-//!      behind are unknown and joined to the sky), filled in step 4. Finally each
+//!      leaked). The sky is the kept regions and, of the depth rules' sky, the admissible
+//!      pixels and those the sky reaches over pixels of it that look like sky, in the
+//!      growth's colour steps (all of the depth rules' sky when the image finds none: a
+//!      sunset's orange sky is not blue or grey). What is left of the depth rules' sky, in
+//!      pieces larger than a gap (below), is the scene beyond the sensor's reach (a
+//!      time-of-flight camera stops at 8 m; the ground, the street and the city behind are
+//!      unknown and joined to the sky), filled in step 4. Finally each
 //!      4-connected region of non-sky pixels that does not reach the bottom row and holds
 //!      no confident range is a gap in the sky (a bird, a lamp head, a cloud's textured
 //!      rim, blobs of matcher noise) and becomes sky when it is at most 0.2 % of the image
@@ -189,8 +190,8 @@
 //! (luminance, texture, range class, region and gap lists) while it runs, and the hole
 //! fill with the image 5 (luminance, the regions' state) and up to 16 bytes per unknown
 //! pixel (its region lists); the scene beyond the sensor's reach 1 byte per pixel and 8
-//! per pixel of it (its mask and list); on a 2048 x 1024 street frame the detector takes about 80 %
-//! of the whole 0.2-0.4 s.
+//! per pixel of it (its mask and list); on a 2048 x 1024 street frame the detector takes
+//! about 80 % of the whole 0.2-0.4 s.
 
 mod airlight;
 mod border;

@@ -23,10 +23,11 @@ struct Run {
 /// column the fill goes from `r_max` where a run meets the scene below it to `s_max` at
 /// the column's horizon, the lowest row the sky reaching the top row comes down to within
 /// [`HORIZON_WINDOW`] of it (between far towers), and is `s_max` above it; a run with the
-/// sky (or the image's bottom border) below it is `s_max`. The horizon is shared by neighbouring columns so that the
-/// ground below a far tower recedes as the ground beside it (a column's own skyline would
-/// draw the tower's ghost down to the ground); without one (no sky above any run nearby,
-/// or not above the run), the run recedes from its lower end to its upper end. The known
+/// sky (or the image's bottom border) below it is `s_max`. The horizon is shared by
+/// neighbouring columns so that the ground below a far tower recedes as the ground beside
+/// it (a column's own skyline would draw the tower's ghost down to the ground); without
+/// one (no sky above any run nearby, or not above the run), the run recedes from its
+/// lower end to its upper end. The known
 /// range beside a run (a near pole) is not used: it says nothing of the background behind
 /// the pole, and blending it in would draw a clear halo round the pole.
 pub(crate) fn recede(
