@@ -131,6 +131,29 @@ mod tests {
         (f64::from(got) - want).abs() < 1e-4 * want
     }
 
+    /// A `w x h` frame whose last row is the scene (range 5) and whose other pixels are
+    /// sky where `is_sky`, else beyond the reach: the sky mask, the range, the pixels
+    /// beyond.
+    fn frame(
+        w: usize,
+        h: usize,
+        is_sky: impl Fn(usize, usize) -> bool,
+    ) -> (Vec<bool>, Vec<f32>, Vec<usize>) {
+        let mut sky = vec![false; w * h];
+        let mut work = vec![5.0f32; w * h];
+        let mut beyond = Vec::new();
+        for p in 0..w * (h - 1) {
+            if is_sky(p % w, p / w) {
+                sky[p] = true;
+                work[p] = f32::INFINITY;
+            } else {
+                beyond.push(p);
+                work[p] = f32::NAN;
+            }
+        }
+        (sky, work, beyond)
+    }
+
     #[test]
     fn a_column_recedes_from_the_reach_to_its_horizon_in_log_range() {
         // One column: sky, three pixels beyond the reach, the scene (a near pole at 2).
@@ -170,21 +193,7 @@ mod tests {
         // row 1 beside it. Beyond the reach: rows 2-4 beside, 1-4 in the middle; row 5 the
         // scene.
         let (w, h) = (3, 6);
-        let mut sky = vec![false; w * h];
-        let mut work = vec![5.0f32; w * h];
-        let mut beyond = Vec::new();
-        for y in 0..5 {
-            for x in 0..3 {
-                let p = y * w + x;
-                if y == 0 || (y == 1 && x != 1) {
-                    sky[p] = true;
-                    work[p] = f32::INFINITY;
-                } else {
-                    beyond.push(p);
-                    work[p] = f32::NAN;
-                }
-            }
-        }
+        let (sky, mut work, beyond) = frame(w, h, |x, y| y == 0 || (y == 1 && x != 1));
         recede(&mut work, (&sky, &beyond), (w, h), (10.0, 40.0));
         for y in 2..5 {
             let row = &work[y * w..y * w + 3];
@@ -203,18 +212,7 @@ mod tests {
         // Three columns: the sky in rows 0-1, beyond the reach rows 2-6, the scene row 7;
         // in the right column row 5 is sky seen in water, not joined to the sky above.
         let (w, h) = (3, 8);
-        let mut sky = vec![false; w * h];
-        let mut work = vec![5.0f32; w * h];
-        let mut beyond = Vec::new();
-        for p in 0..w * 7 {
-            if p < 2 * w || p == 5 * w + 2 {
-                sky[p] = true;
-                work[p] = f32::INFINITY;
-            } else {
-                beyond.push(p);
-                work[p] = f32::NAN;
-            }
-        }
+        let (sky, mut work, beyond) = frame(w, h, |x, y| y < 2 || (x, y) == (2, 5));
         recede(&mut work, (&sky, &beyond), (w, h), (10.0, 40.0));
         // The horizon at 1.5, the contour at 6.5: row 4 is halfway up (the water's row
         // would have put the horizon at 5.5 and row 4 in the sky's range).
