@@ -47,9 +47,10 @@
 //!      the horizon). A region is kept when it covers at least
 //!      [`SkyRules::min_area_fraction`] of the image and does not reach the bottom row (it
 //!      leaked). The sky is the kept regions and, of the depth rules' sky, the admissible
-//!      pixels and those the sky reaches over pixels of it that look like sky, in the
-//!      growth's colour steps (all of the depth rules' sky when the image finds none: a
-//!      sunset's orange sky is not blue or grey). What is left of the depth rules' sky, in
+//!      pixels and those the sky reaches over pixels of it that look like sky or glow
+//!      (bright and smooth whatever the hue: a sunset's orange under the blue), in the
+//!      growth's colour steps, with the growth's edge refinement (all of the depth rules'
+//!      sky when the image finds none: a sunset's orange sky alone is not blue or grey). What is left of the depth rules' sky, in
 //!      pieces larger than a gap (below), is the scene beyond the sensor's reach (a
 //!      time-of-flight camera stops at 8 m; the ground, the street and the city behind are
 //!      unknown and joined to the sky), filled in step 4. Finally each

@@ -120,6 +120,12 @@ impl Evidence<'_> {
             && f64::from(c[2]) >= self.rules.min_blue_ratio * f64::from(c[0].max(c[1]))
     }
 
+    /// Bright enough and smooth, whatever its hue: the orange of a sunset's sky near the
+    /// horizon, under the blue.
+    fn glows(&self, p: usize) -> bool {
+        self.lum[p] >= self.floor && f64::from(self.texture[p]) <= self.rules.max_texture
+    }
+
     /// Looks like sky, is smooth, and its range does not say otherwise.
     fn admissible(&self, p: usize) -> bool {
         self.looks_like_sky(p) && f64::from(self.texture[p]) <= self.rules.max_texture
@@ -534,8 +540,10 @@ fn beyond_reach(
 
 /// Adds to `sky` the pixels of the depth rules' sky that are admissible (a patch of sky
 /// between branches too small to be kept as a region of its own), and those reached from
-/// the sky over pixels of that sky that look like sky, in the growth's colour steps (a
-/// textured cloud, the sky's rim at the skyline whose texture window sees the skyline).
+/// the sky over pixels of that sky that look like sky or glow (bright and smooth, whatever
+/// the hue: a sunset's orange under the blue), in the growth's colour steps (a textured
+/// cloud, the sky's rim at the skyline whose texture window sees the skyline), then
+/// [`REFINE_ROUNDS`] rounds more over bright pixels in those steps (the glow's rim).
 fn join_depth_sky(
     ev: &Evidence,
     sky: &mut [bool],
@@ -554,7 +562,17 @@ fn join_depth_sky(
         width,
         height,
         usize::MAX,
-        |p, q| depth_sky[q] && ev.looks_like_sky(q) && ev.step_ok(p, q),
+        |p, q| depth_sky[q] && ev.step_ok(p, q) && (ev.looks_like_sky(q) || ev.glows(q)),
+    );
+    // The edge refinement of the growth: the texture window of the glow's last rows sees
+    // the skyline.
+    spread(
+        &mut reached,
+        &mut region,
+        width,
+        height,
+        REFINE_ROUNDS,
+        |p, q| depth_sky[q] && ev.step_ok(p, q) && ev.lum[q] >= ev.floor,
     );
     region.iter().for_each(|&p| sky[p] = true);
 }

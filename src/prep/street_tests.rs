@@ -285,3 +285,36 @@ fn the_street_beyond_the_sensors_reach_is_not_sky() {
     let total = sky.iter().filter(|&&v| v).count();
     assert!(found as f64 > 0.97 * total as f64, "{found} of {total}");
 }
+
+/// A sunset under a phone's short reach: the blue sky turns orange toward the horizon, in
+/// steps too small to see, above a band of green ground the sensor did not reach. The
+/// orange is not blue or grey, yet it is sky (reached from the blue, smooth and bright);
+/// the ground below it is not.
+#[test]
+fn a_sunsets_orange_sky_stays_sky() {
+    let (w, h) = (64, 96);
+    let (blue, orange) = ([0.35f32, 0.5, 0.9], [1.0f32, 0.6, 0.3]);
+    let (glow_from, glow_to, ground_from, known_from) = (10, 50, 56, 64);
+    let image = crate::raster::RgbImage::from_fn(w, h, |x, y| match y {
+        y if y < glow_from => blue,
+        y if y < glow_to => {
+            let t = (y - glow_from) as f32 / (glow_to - glow_from) as f32;
+            [0, 1, 2].map(|c| blue[c] + t * (orange[c] - blue[c]))
+        }
+        y if y < ground_from => orange,
+        _ => [0.1 + 0.03 * ((x + y) % 5) as f32, 0.3, 0.1],
+    });
+    let range = ScalarMap::from_fn(w, h, |_, y| match y {
+        y if y < known_from => f32::NAN,
+        y => 8.0 - 6.0 * (y - known_from) as f32 / (h - known_from - 1) as f32,
+    });
+    let guides = Guides {
+        image: Some(&image),
+        ..Guides::default()
+    };
+    let p = prepare_guided(&range, guides, &PrepOptions::default()).unwrap();
+    let sky = |y: usize| (0..w).all(|x| *p.sky.get(x, y));
+    assert!((0..ground_from).all(sky), "{:?}", p.stats);
+    let beyond = |y: usize| (0..w).all(|x| *p.beyond_reach.get(x, y));
+    assert!((ground_from..known_from).all(beyond), "{:?}", p.stats);
+}
