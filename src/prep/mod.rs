@@ -203,6 +203,7 @@ mod local;
 mod margin;
 mod options;
 mod outliers;
+mod range_class;
 mod reach;
 mod sky;
 mod sky_image;
@@ -572,7 +573,7 @@ fn find_sky(work: &[f32], w: usize, h: usize, guides: Guides, opts: &PrepOptions
         || sky::depth_sky(work, &opts.sky, w, h),
         || {
             let cut = outliers::far_cut(work, |_| true, opts.far_outlier_factor);
-            sky_image::range_classes(work, w, h, cut)
+            range_class::range_classes(work, w, h, cut)
         },
     );
     let image_sky = sky_image::image_sky(

@@ -2,6 +2,33 @@
 //! shows are not sky (see the module docs of [`crate::prep`], step 4).
 
 use super::components::label_mask;
+use super::ImageSkyRules;
+
+/// The pixels of the depth rules' sky left out of `sky`: the scene beyond the sensor's
+/// reach. A piece of them no larger than a gap in the sky ([`ImageSkyRules::max_gap_fraction`]
+/// of the image) is sky after all: a glint, a bird, a far tower too thin for a sensor to
+/// see.
+pub(crate) fn beyond_reach(
+    rules: &ImageSkyRules,
+    sky: &mut [bool],
+    depth_sky: &[bool],
+    width: usize,
+    height: usize,
+) -> Vec<usize> {
+    let left_out: Vec<bool> = (0..sky.len()).map(|p| depth_sky[p] && !sky[p]).collect();
+    let comps = label_mask(&left_out, width, height);
+    let max_gap = rules.max_gap_fraction * (width * height) as f64;
+    let mut beyond = Vec::new();
+    for c in &comps.list {
+        let pixels = comps.pixels_of(c).iter().map(|&p| p as usize);
+        if c.len as f64 <= max_gap {
+            pixels.for_each(|p| sky[p] = true);
+        } else {
+            beyond.extend(pixels);
+        }
+    }
+    beyond
+}
 
 /// Half the width of the window in which a column's horizon is looked for, as a fraction
 /// of the image's width: wide enough that a city dense over several towers' width does

@@ -8,91 +8,15 @@
 //! matcher's streaks in it.
 
 use super::components::{label_mask, neighbours4};
-use super::outliers::neighbours8;
+use super::range_class::RangeClass;
 use super::ImageSkyRules;
 use crate::raster::RgbImage;
 use rayon::prelude::*;
 
-/// Relative tolerance within which two neighbouring ranges agree.
-const AGREE: f32 = 0.05;
 /// Edge refinement rounds: the radius of the texture window plus one.
 const REFINE_ROUNDS: usize = 2;
 /// The sky may be this much darker than the seeds' median luminance.
 const SEED_DIMMING: f32 = 0.5;
-
-/// What the range says about one pixel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum RangeClass {
-    /// No value.
-    Unknown,
-    /// A value its neighbours do not back up: noise.
-    Unsupported,
-    /// A value above the far-outlier cut.
-    Far,
-    /// A measured, backed-up value: not sky.
-    Confident,
-}
-
-/// The range class of every pixel of `work` (NaN = unknown); `far_cut` as from
-/// [`super::outliers::far_cut`].
-pub(crate) fn range_classes(
-    work: &[f32],
-    width: usize,
-    height: usize,
-    far_cut: Option<f32>,
-) -> Vec<RangeClass> {
-    (0..work.len())
-        .into_par_iter()
-        .map(|p| {
-            let r = work[p];
-            if !r.is_finite() {
-                return RangeClass::Unknown;
-            }
-            if far_cut.is_some_and(|c| r > c) {
-                return RangeClass::Far;
-            }
-            let (mut known, mut agree) = (0, 0);
-            for q in neighbours8(p, width, height).into_iter().flatten() {
-                let v = work[q];
-                if v.is_finite() {
-                    known += 1;
-                    agree += usize::from((v - r).abs() <= AGREE * r.abs());
-                }
-            }
-            if (agree >= 2 && 2 * agree >= known) || on_a_slope(work, width, height, p) {
-                RangeClass::Confident
-            } else {
-                RangeClass::Unsupported
-            }
-        })
-        .collect()
-}
-
-/// Whether the range at `p` continues a surface that its neighbours on a line through it
-/// span: the mean of two opposite known neighbours within [`AGREE`] of it, on at least two
-/// of the four lines (a row, a column, the diagonals). Ground or water seen at a grazing
-/// angle changes range by more than 5 % from row to row near the horizon, so its vertical
-/// neighbours disagree with it, yet it lies between them; a matcher's noise does not.
-fn on_a_slope(work: &[f32], width: usize, height: usize, p: usize) -> bool {
-    let (x, y) = ((p % width) as isize, (p / width) as isize);
-    let at = |dx: isize, dy: isize| -> Option<f32> {
-        let (nx, ny) = (x + dx, y + dy);
-        if nx < 0 || ny < 0 || nx >= width as isize || ny >= height as isize {
-            return None;
-        }
-        let v = work[ny as usize * width + nx as usize];
-        v.is_finite().then_some(v)
-    };
-    let r = work[p];
-    let lines = [(1, 0), (0, 1), (1, 1), (1, -1)]
-        .into_iter()
-        .filter(|&(dx, dy)| match (at(dx, dy), at(-dx, -dy)) {
-            (Some(a), Some(b)) => ((a + b) / 2.0 - r).abs() <= AGREE * r.abs(),
-            _ => false,
-        })
-        .count();
-    lines >= 2
-}
 
 /// The per-pixel evidence of the detector.
 struct Evidence<'a> {
@@ -274,7 +198,7 @@ pub(crate) fn image_sky(
     fill_gaps(&ev, &mut sky, width, height);
     let reclaimed = reclaim_vetoed(&ev, &mut sky, width, height);
     grow_past_reclaimed(&ev, &mut sky, &reclaimed, width, height);
-    let beyond_reach = beyond_reach(ev.rules, &mut sky, depth_sky, width, height);
+    let beyond_reach = super::reach::beyond_reach(ev.rules, &mut sky, depth_sky, width, height);
     let noise = if sky.iter().any(|&s| s) {
         (0..sky.len())
             .into_par_iter()
@@ -512,32 +436,6 @@ fn grow_past_reclaimed(
     }
 }
 
-/// The pixels of the depth rules' sky left out of `sky`: the scene beyond the sensor's
-/// reach. A piece of them no larger than a gap in the sky ([`ImageSkyRules::max_gap_fraction`]
-/// of the image) is sky after all: a glint, a bird, a far tower too thin for a sensor to
-/// see.
-fn beyond_reach(
-    rules: &ImageSkyRules,
-    sky: &mut [bool],
-    depth_sky: &[bool],
-    width: usize,
-    height: usize,
-) -> Vec<usize> {
-    let left_out: Vec<bool> = (0..sky.len()).map(|p| depth_sky[p] && !sky[p]).collect();
-    let comps = label_mask(&left_out, width, height);
-    let max_gap = rules.max_gap_fraction * (width * height) as f64;
-    let mut beyond = Vec::new();
-    for c in &comps.list {
-        let pixels = comps.pixels_of(c).iter().map(|&p| p as usize);
-        if c.len as f64 <= max_gap {
-            pixels.for_each(|p| sky[p] = true);
-        } else {
-            beyond.extend(pixels);
-        }
-    }
-    beyond
-}
-
 /// Adds to `sky` the pixels of the depth rules' sky that are admissible (a patch of sky
 /// between branches too small to be kept as a region of its own), and those reached from
 /// the sky over pixels of that sky that look like sky or glow (bright and smooth, whatever
@@ -599,40 +497,9 @@ fn reaches_bottom(region: &[usize], width: usize, height: usize) -> bool {
 
 #[cfg(test)]
 mod tests {
+    use super::super::range_class::range_classes;
     use super::*;
     use crate::raster::Grid;
-
-    #[test]
-    fn range_classes_tell_noise_from_surfaces() {
-        let n = f32::NAN;
-        #[rustfmt::skip]
-        let m = vec![
-            10.0, 10.1, 10.2, n,
-            10.0, 10.1, 500.0, n,
-            10.0, 10.1, 10.2, 77.0,
-        ];
-        let c = range_classes(&m, 4, 3, Some(100.0));
-        assert_eq!(c[0], RangeClass::Confident);
-        assert_eq!(c[3], RangeClass::Unknown);
-        assert_eq!(c[6], RangeClass::Far);
-        assert_eq!(c[11], RangeClass::Unsupported, "no neighbour agrees");
-    }
-
-    /// Water at a grazing angle: range grows by 10 % a row, so no vertical neighbour
-    /// agrees within 5 %, but each row lies between its neighbours: a surface, not noise.
-    /// A spike on it is still noise.
-    #[test]
-    fn a_grazing_surface_is_supported_and_a_spike_on_it_is_not() {
-        let (w, h) = (5, 5);
-        let mut m: Vec<f32> = (0..w * h)
-            .map(|p| 100.0 * 1.1f32.powi((p / w) as i32))
-            .collect();
-        let c = range_classes(&m, w, h, None);
-        assert_eq!(c[2 * w + 2], RangeClass::Confident);
-        m[2 * w + 2] *= 1.3;
-        let c = range_classes(&m, w, h, None);
-        assert_eq!(c[2 * w + 2], RangeClass::Unsupported);
-    }
 
     /// 80 % of the frame is sky, darker at the zenith than its median: still all sky.
     #[test]
