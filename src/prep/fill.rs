@@ -24,6 +24,16 @@ struct Edge {
     r: f32,
 }
 
+impl Edge {
+    /// The value a plane is fitted to: the range, or its inverse for a plane of the scene.
+    fn fitted(&self, inverse: bool) -> f64 {
+        match inverse {
+            false => f64::from(self.r),
+            true => 1.0 / f64::from(self.r),
+        }
+    }
+}
+
 /// A candidate fill surface, in coordinates relative to the hole's origin.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) enum Model {
@@ -38,6 +48,14 @@ pub(crate) enum Model {
 }
 
 impl Model {
+    /// The plane `a + b dx + c dy` in range, or in inverse range for a plane of the scene.
+    fn affine(inverse: bool, [a, b, c]: [f64; 3]) -> Model {
+        match inverse {
+            false => Model::Plane { a, b, c },
+            true => Model::InversePlane { a, b, c },
+        }
+    }
+
     #[inline]
     fn eval(&self, dx: f64, dy: f64) -> f64 {
         match *self {
@@ -307,11 +325,7 @@ impl HoleFiller {
             let (dx, dy) = (e.x as f64 - origin.0, e.y as f64 - origin.1);
             if (m.eval(dx, dy) - e.r as f64).abs() < delta {
                 let row = [1.0, dx, dy];
-                let v = if inverse {
-                    1.0 / e.r as f64
-                } else {
-                    e.r as f64
-                };
+                let v = e.fitted(inverse);
                 for i in 0..3 {
                     for j in 0..3 {
                         ata[i][j] += row[i] * row[j];
@@ -320,11 +334,7 @@ impl HoleFiller {
                 }
             }
         }
-        let [a, b, c] = solve3(ata, atb)?;
-        Some(match inverse {
-            false => Model::Plane { a, b, c },
-            true => Model::InversePlane { a, b, c },
-        })
+        Some(Model::affine(inverse, solve3(ata, atb)?))
     }
 }
 
@@ -487,15 +497,13 @@ fn plane_through(t: &[Edge; 3], origin: (f64, f64), inverse: bool) -> Option<Mod
     if area2 == 0 {
         return None;
     }
-    if !inverse {
-        let [a, b, c] = solve3(rows, t.map(|e| e.r as f64))?;
-        return Some(Model::Plane { a, b, c });
-    }
-    if t.iter().any(|e| e.r <= 0.0) {
+    if inverse && t.iter().any(|e| e.r <= 0.0) {
         return None;
     }
-    let [a, b, c] = solve3(rows, t.map(|e| 1.0 / e.r as f64))?;
-    Some(Model::InversePlane { a, b, c })
+    Some(Model::affine(
+        inverse,
+        solve3(rows, t.map(|e| e.fitted(inverse)))?,
+    ))
 }
 
 /// Solves the 3x3 system `m x = v` by Cramer's rule; `None` if (nearly) singular.
