@@ -458,20 +458,12 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         opts,
         &mut stats,
     )?;
-    let mut beyond_mask = Vec::new();
+    let mut beyond_reach = Grid::filled(w, h, false);
     if !found.beyond_reach.is_empty() {
-        beyond_mask = vec![false; w * h];
-        found
-            .beyond_reach
-            .iter()
-            .for_each(|&p| beyond_mask[p] = true);
+        let mask = beyond_reach.as_mut_slice();
+        found.beyond_reach.iter().for_each(|&p| mask[p] = true);
         let s_max = (opts.sky_range_factor * f64::from(stats.r_max)) as f32;
-        reach::recede(
-            &mut work,
-            (&sky, &found.beyond_reach),
-            (w, h),
-            (stats.r_max, s_max),
-        );
+        reach::recede(&mut work, (&sky, mask), (w, h), (stats.r_max, s_max));
         stats.beyond_reach = found.beyond_reach.len();
     }
     for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {
@@ -501,7 +493,7 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         range: Grid::from_vec(w, h, work),
         sky: Grid::from_vec(w, h, sky),
         filled: Grid::from_vec(w, h, filled),
-        beyond_reach: Grid::from_fn(w, h, |x, y| beyond_mask.get(y * w + x) == Some(&true)),
+        beyond_reach,
         stats,
     })
 }

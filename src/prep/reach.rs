@@ -59,13 +59,11 @@ struct Run {
 /// the pole, and blending it in would draw a clear halo round the pole.
 pub(crate) fn recede(
     work: &mut [f32],
-    (sky, beyond): (&[bool], &[usize]),
+    (sky, beyond): (&[bool], &[bool]),
     (w, h): (usize, usize),
     (r_max, s_max): (f32, f32),
 ) {
-    let mut is_beyond = vec![false; w * h];
-    beyond.iter().for_each(|&p| is_beyond[p] = true);
-    let runs = runs_of(&is_beyond, w, h);
+    let runs = runs_of(beyond, w, h);
     let is_sky = |y: Option<usize>, x: usize| y.is_none_or(|y| y >= h || sky[y * w + x]);
     let open_sky = sky_from_the_top(sky, w, h);
     let horizon = horizon_rows(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w);
@@ -159,22 +157,22 @@ mod tests {
     }
 
     /// A `w x h` frame whose last row is the scene (range 5) and whose other pixels are
-    /// sky where `is_sky`, else beyond the reach: the sky mask, the range, the pixels
-    /// beyond.
+    /// sky where `is_sky`, else beyond the reach: the sky mask, the range, the mask of the
+    /// pixels beyond.
     fn frame(
         w: usize,
         h: usize,
         is_sky: impl Fn(usize, usize) -> bool,
-    ) -> (Vec<bool>, Vec<f32>, Vec<usize>) {
+    ) -> (Vec<bool>, Vec<f32>, Vec<bool>) {
         let mut sky = vec![false; w * h];
         let mut work = vec![5.0f32; w * h];
-        let mut beyond = Vec::new();
+        let mut beyond = vec![false; w * h];
         for p in 0..w * (h - 1) {
             if is_sky(p % w, p / w) {
                 sky[p] = true;
                 work[p] = f32::INFINITY;
             } else {
-                beyond.push(p);
+                beyond[p] = true;
                 work[p] = f32::NAN;
             }
         }
@@ -186,7 +184,8 @@ mod tests {
         // One column: sky, three pixels beyond the reach, the scene (a near pole at 2).
         let sky = [true, false, false, false, false];
         let mut work = [f32::INFINITY, f32::NAN, f32::NAN, f32::NAN, 2.0];
-        recede(&mut work, (&sky, &[1, 2, 3]), (1, 5), (8.0, 128.0));
+        let beyond = [false, true, true, true, false];
+        recede(&mut work, (&sky, &beyond), (1, 5), (8.0, 128.0));
         // The contour at row 3.5, the horizon at 0.5: t = 5/6, 1/2, 1/6 of ln 16 over ln 8.
         for (got, t) in work[1..4].iter().zip([5.0 / 6.0, 0.5, 1.0 / 6.0]) {
             let want = 8.0 * 16f64.powf(t);
@@ -209,7 +208,8 @@ mod tests {
             1.0,
             f32::INFINITY,
         ];
-        recede(&mut work, (&sky, &[2, 3]), (w, h), (10.0, 15.0));
+        let beyond = [false, false, true, true, false, false];
+        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 15.0));
         assert!(close(work[2], 150f64.sqrt()), "{}", work[2]);
         assert_eq!(work[3], 15.0, "sky above and below: the sky's range");
     }
