@@ -432,6 +432,11 @@ impl<'a> ColourGuide<'a> {
         relative_step(self.colour, &self.lum, p, q, self.eps) <= self.own_step
     }
 
+    /// The colour (linear RGB) of pixel `p`.
+    pub(crate) fn colour_at(&self, p: usize) -> [f32; 3] {
+        self.colour[p]
+    }
+
     /// The hole `pixels` split into 4-connected regions of one colour (steps of at most
     /// `region_step` between neighbours).
     fn regions(&self, size: (usize, usize), pixels: &[u32], state: &mut [Pixel]) -> Regions {

@@ -152,7 +152,11 @@
 //!    down to within a quarter of the width either side (between far towers; only the sky
 //!    that reaches the top row: sky seen in water is no horizon), so the
 //!    ground below a far tower recedes as the ground beside it (the tower's own skyline
-//!    would draw its ghost down to the ground). Physical fog reads that parameter as the
+//!    would draw its ghost down to the ground). With the image, what stands on that
+//!    ground (a pixel run of another material just above the ground's materials, rising
+//!    over the horizon or with the ground seen again above it, its foot at least a
+//!    sixteenth of the height below the horizon) keeps its foot's range up the column, as
+//!    an upright face does. Physical fog reads the fill's parameter as the
 //!    ground's 1/R, linear from `1/Rmax` to the sky's 1/1 km ([`Prepared::beyond_reach`],
 //!    `PreparedPhoto::metres`). The known range beside it (a near pole) is not used: it
 //!    says nothing of the background behind the pole, and blending it in would draw a
@@ -463,7 +467,14 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         let mask = beyond_reach.as_mut_slice();
         found.beyond_reach.iter().for_each(|&p| mask[p] = true);
         let s_max = (opts.sky_range_factor * f64::from(stats.r_max)) as f32;
-        reach::recede(&mut work, (&sky, mask), (w, h), (stats.r_max, s_max));
+        let size = (w, h);
+        reach::recede(
+            &mut work,
+            (&sky, mask),
+            size,
+            (stats.r_max, s_max),
+            guide.as_ref(),
+        );
         stats.beyond_reach = found.beyond_reach.len();
     }
     for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {

@@ -2,6 +2,7 @@
 //! shows are not sky (see the module docs of [`crate::prep`], step 4).
 
 use super::components::label_mask;
+use super::fill::ColourGuide;
 use super::ImageSkyRules;
 
 /// The pixels of the depth rules' sky left out of `sky`: the scene beyond the sensor's
@@ -62,6 +63,7 @@ pub(crate) fn recede(
     (sky, beyond): (&[bool], &[bool]),
     (w, h): (usize, usize),
     (r_max, s_max): (f32, f32),
+    guide: Option<&ColourGuide>,
 ) {
     let runs = runs_of(beyond, w, h);
     let is_sky = |y: Option<usize>, x: usize| y.is_none_or(|y| y >= h || sky[y * w + x]);
@@ -93,6 +95,130 @@ pub(crate) fn recede(
             work[y * w + r.x] = (lo + t * (hi - lo)).exp() as f32;
         }
     }
+    if let Some(guide) = guide {
+        stand_upright(work, &runs, &horizon, sky, (w, h), guide);
+    }
+}
+
+/// Half the width of the window whose scene just below the pixels beyond the reach gives
+/// a column the ground's colours, as a fraction of the image's width (two tones of one
+/// ground, a road and its markings, all seen somewhere along the reach's contour).
+const GROUND_WINDOW: f64 = 1.0 / 32.0;
+
+/// What stands on the ground beyond the reach stands where it meets the ground: a box, a
+/// facade, a car are upright, so their range up a column is that of their foot, not the
+/// ground's receding behind them ([`recede`] draws them as ground, fading into the sky
+/// from the foot up). Walking up each run that meets the scene below, a pixel of the
+/// ground's colours (one material, [`one_material`], with the scene just below the reach
+/// within [`GROUND_WINDOW`]) is ground; the pixels of another material just above ground
+/// are an object standing there, as far as its material goes on, and take the range of
+/// its lowest pixel where that is nearer, if it is upright: it rises above the horizon,
+/// or the ground is seen again above it. A flat surface of another material reaching the
+/// far scene (water up to the far shore) is neither. What lies above an object without
+/// ground between (a far tower behind a box, the box's top face) keeps [`recede`]'s range:
+/// its foot is hidden.
+fn stand_upright(
+    work: &mut [f32],
+    runs: &[Run],
+    horizon: &[Option<f64>],
+    sky: &[bool],
+    (w, h): (usize, usize),
+    guide: &ColourGuide,
+) {
+    let meets_scene = |r: &&Run| r.end < h && !sky[r.end * w + r.x];
+    // The scene just below each column's lowest run (runs come top to bottom).
+    let mut below: Vec<Option<usize>> = vec![None; w];
+    for r in runs.iter().filter(meets_scene) {
+        below[r.x] = Some(r.end * w + r.x);
+    }
+    let half = ((GROUND_WINDOW * w as f64).ceil() as usize).max(1);
+    let mut ground = Vec::new();
+    for r in runs.iter().filter(meets_scene) {
+        let Some(hz) = horizon[r.x] else { continue };
+        // One pixel of each material seen below the reach nearby.
+        ground.clear();
+        for &q in below[r.x.saturating_sub(half)..(r.x + half + 1).min(w)]
+            .iter()
+            .flatten()
+        {
+            if !ground.iter().any(|&g| one_material(guide, g, q)) {
+                ground.push(q);
+            }
+        }
+        let at = |y: usize| y * w + r.x;
+        let is_ground = |y: usize| ground.iter().any(|&q| one_material(guide, at(y), q));
+        // Walking up: `y` the lowest row walked; whether it is ground (the scene below
+        // the run counts as what the first pixels stand on).
+        let (mut y, mut on_ground) = (r.end, true);
+        while y > r.top {
+            let foot = y - 1;
+            y = foot;
+            if is_ground(foot) {
+                on_ground = true;
+                continue;
+            }
+            if !on_ground {
+                continue;
+            }
+            // An object from `foot` up to `y`; the foot's pixel may blend the ground below
+            // with the object above (an edge on the depth's grid).
+            let blend = |y: usize| y == foot && blends(guide, at(foot + 1), at(foot), at(foot - 1));
+            while y > r.top
+                && !is_ground(y - 1)
+                && (one_material(guide, at(y - 1), at(y)) || blend(y))
+            {
+                y -= 1;
+            }
+            let near_foot = foot as f64 - hz >= MIN_FOOT_BELOW_HORIZON * h as f64;
+            let over_horizon = (y as f64) < hz;
+            let ground_above = y > r.top && is_ground(y - 1);
+            let tall = foot + 1 - y >= MIN_OBJECT_ROWS;
+            if near_foot && tall && (over_horizon || ground_above) {
+                let v = work[at(foot)];
+                (y..=foot).for_each(|k| work[at(k)] = work[at(k)].min(v));
+            }
+            on_ground = false;
+        }
+    }
+}
+
+/// Least distance of an object's foot below the horizon, as a fraction of the image's
+/// height: nearer the horizon a row more or less is a factor on the range (with a 45°
+/// field of view, a sixteenth of the height is about 19 camera heights away).
+const MIN_FOOT_BELOW_HORIZON: f64 = 1.0 / 16.0;
+
+/// Fewest rows an object's run in one column must have to be taken as standing: one or two
+/// pixels of another material by the ground's far edge are the far scene's blend.
+const MIN_OBJECT_ROWS: usize = 3;
+
+/// Largest difference of chromaticity (each channel's share of the sum, linear RGB) between
+/// two pixels of one material, lit or shaded.
+const CHROMA_TOLERANCE: f32 = 0.04;
+/// Largest ratio of two pixels' brightness (the sum) for one material.
+const MAX_SHADING: f32 = 3.0;
+
+/// Whether pixel `m` lies between `a` and `b` in every channel (within a tenth of their
+/// difference): a blend of the two, as an edge resampled to a coarser grid is.
+fn blends(guide: &ColourGuide, a: usize, m: usize, b: usize) -> bool {
+    let (a, m, b) = (guide.colour_at(a), guide.colour_at(m), guide.colour_at(b));
+    (0..3).all(|c| {
+        let (lo, hi) = (a[c].min(b[c]), a[c].max(b[c]));
+        let slack = 0.1 * (hi - lo) + 1e-4;
+        (lo - slack..=hi + slack).contains(&m[c])
+    })
+}
+
+/// Whether pixels `p` and `q` look like one material: the same chromaticity, brightness
+/// within [`MAX_SHADING`] (a checkered or shaded ground, a face in light and shade), which
+/// a colour step does not allow (two tones of one lawn differ by 30 %).
+fn one_material(guide: &ColourGuide, p: usize, q: usize) -> bool {
+    let (a, b) = (guide.colour_at(p), guide.colour_at(q));
+    let (sa, sb) = (a.iter().sum::<f32>(), b.iter().sum::<f32>());
+    let floor = 1e-4;
+    if !(sa > floor && sb > floor) || sa.max(sb) > MAX_SHADING * sa.min(sb) {
+        return false;
+    }
+    (0..3).all(|c| (a[c] / sa - b[c] / sb).abs() <= CHROMA_TOLERANCE)
 }
 
 /// The sky's components that reach the top row: sky seen in water below the horizon (a
@@ -151,6 +277,8 @@ fn horizon_rows(runs: &[Run], under_sky: impl Fn(&Run) -> bool, w: usize) -> Vec
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::raster::RgbImage;
+    use std::ops::RangeInclusive;
 
     fn close(got: f32, want: f64) -> bool {
         (f64::from(got) - want).abs() < 1e-4 * want
@@ -185,7 +313,7 @@ mod tests {
         let sky = [true, false, false, false, false];
         let mut work = [f32::INFINITY, f32::NAN, f32::NAN, f32::NAN, 2.0];
         let beyond = [false, true, true, true, false];
-        recede(&mut work, (&sky, &beyond), (1, 5), (8.0, 128.0));
+        recede(&mut work, (&sky, &beyond), (1, 5), (8.0, 128.0), None);
         // The contour at row 3.5, the horizon at 0.5: t = 5/6, 1/2, 1/6 of ln 16 over ln 8.
         for (got, t) in work[1..4].iter().zip([5.0 / 6.0, 0.5, 1.0 / 6.0]) {
             let want = 8.0 * 16f64.powf(t);
@@ -209,7 +337,7 @@ mod tests {
             f32::INFINITY,
         ];
         let beyond = [false, false, true, true, false, false];
-        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 15.0));
+        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 15.0), None);
         assert!(close(work[2], 150f64.sqrt()), "{}", work[2]);
         assert_eq!(work[3], 15.0, "sky above and below: the sky's range");
     }
@@ -221,7 +349,7 @@ mod tests {
         // scene.
         let (w, h) = (3, 6);
         let (sky, mut work, beyond) = frame(w, h, |x, y| y == 0 || (y == 1 && x != 1));
-        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 40.0));
+        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 40.0), None);
         for y in 2..5 {
             let row = &work[y * w..y * w + 3];
             assert!(row[1] == row[0] && row[1] == row[2], "row {y}: {row:?}");
@@ -240,10 +368,102 @@ mod tests {
         // in the right column row 5 is sky seen in water, not joined to the sky above.
         let (w, h) = (3, 8);
         let (sky, mut work, beyond) = frame(w, h, |x, y| y < 2 || (x, y) == (2, 5));
-        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 40.0));
+        recede(&mut work, (&sky, &beyond), (w, h), (10.0, 40.0), None);
         // The horizon at 1.5, the contour at 6.5: row 4 is halfway up (the water's row
         // would have put the horizon at 5.5 and row 4 in the sky's range).
         let want = 10.0 * 4f64.powf(0.5);
         assert!(close(work[4 * w], want), "{} / {want}", work[4 * w]);
+    }
+
+    /// Two tones of one green lawn (the same chromaticity, 1.6 times as bright).
+    fn lawn(y: usize) -> [f32; 3] {
+        if (y / 3).is_multiple_of(2) {
+            [0.05, 0.1, 0.02]
+        } else {
+            [0.08, 0.16, 0.032]
+        }
+    }
+
+    /// [`recede`] on a `2 x 40` frame, the sky in rows 0-4 (of the right column, rows
+    /// `0..right_sky`), the scene in row 39, beyond the reach between, coloured by
+    /// `colour(x, y)` (the lawn where `None`); with the image as guide and without.
+    fn recede_with_and_without_the_image(
+        right_sky: usize,
+        colour: impl Fn(usize, usize) -> Option<[f32; 3]>,
+    ) -> (Vec<f32>, Vec<f32>) {
+        let (w, h) = (2, 40);
+        let is_sky = |x: usize, y: usize| y < if x == 1 { right_sky } else { 5 };
+        let (sky, mut work, beyond) = frame(w, h, is_sky);
+        let image = RgbImage::from_fn(w, h, |x, y| match colour(x, y) {
+            _ if is_sky(x, y) => [0.5, 0.6, 0.9],
+            Some(c) => c,
+            None => lawn(y),
+        });
+        let mut plain = work.clone();
+        let guide = ColourGuide::new(&image, 0.08);
+        recede(
+            &mut work,
+            (&sky, &beyond),
+            (w, h),
+            (10.0, 40.0),
+            Some(&guide),
+        );
+        recede(&mut plain, (&sky, &beyond), (w, h), (10.0, 40.0), None);
+        (work, plain)
+    }
+
+    /// Whether `work` is `plain` but in the right column's `rows`, which are `foot`.
+    fn moved_only(work: &[f32], plain: &[f32], rows: RangeInclusive<usize>, foot: f32) -> bool {
+        let standing = |p: usize| p % 2 == 1 && rows.contains(&(p / 2));
+        (0..work.len()).all(|p| work[p] == if standing(p) { foot } else { plain[p] })
+    }
+
+    #[test]
+    fn a_box_beyond_the_reach_stands_at_its_foot() {
+        // The right column: a slate box in rows 20-30 on the lawn, the lawn seen above it.
+        let (work, plain) = recede_with_and_without_the_image(5, |x, y| {
+            (x == 1 && (20..=30).contains(&y)).then_some([0.2, 0.25, 0.35])
+        });
+        assert!(
+            plain[2 * 20 + 1] > plain[2 * 30 + 1],
+            "without the image it recedes"
+        );
+        assert!(
+            moved_only(&work, &plain, 20..=30, plain[2 * 30 + 1]),
+            "{work:?}"
+        );
+    }
+
+    #[test]
+    fn a_tower_over_the_horizon_stands_at_its_foot_and_hides_what_is_behind() {
+        // The right column: a brown tower in rows 2-30 rising over the horizon (the sky
+        // comes down to row 4 on the left); then one on a slate box (rows 20-30), which
+        // neither rises over the horizon nor has the lawn above it: both recede.
+        let brown = [0.3, 0.15, 0.05];
+        let (work, plain) = recede_with_and_without_the_image(2, |x, y| {
+            (x == 1 && (2..=30).contains(&y)).then_some(brown)
+        });
+        assert!(
+            moved_only(&work, &plain, 2..=30, plain[2 * 30 + 1]),
+            "{work:?}"
+        );
+        let (work, plain) = recede_with_and_without_the_image(2, |x, y| match (x, y) {
+            (1, 20..=30) => Some([0.2, 0.25, 0.35]),
+            (1, 2..=19) => Some(brown),
+            _ => None,
+        });
+        assert_eq!(work, plain);
+    }
+
+    #[test]
+    fn water_up_to_the_far_shore_recedes() {
+        // The right column: a far city in rows 5-7 above water (rows 8-20) on the lawn:
+        // flat, below the horizon, no lawn above it.
+        let (work, plain) = recede_with_and_without_the_image(5, |x, y| match (x, y) {
+            (1, 5..=7) => Some([0.3, 0.3, 0.3]),
+            (1, 8..=20) => Some([0.4, 0.5, 0.7]),
+            _ => None,
+        });
+        assert_eq!(work, plain);
     }
 }
