@@ -441,7 +441,8 @@ fn grow_past_reclaimed(
 /// the sky over pixels of that sky that look like sky or glow (bright and smooth, whatever
 /// the hue: a sunset's orange under the blue), in the growth's colour steps (a textured
 /// cloud, the sky's rim at the skyline whose texture window sees the skyline), then
-/// [`REFINE_ROUNDS`] rounds more over bright pixels in those steps (the glow's rim).
+/// [`REFINE_ROUNDS`] rounds more over bright pixels in those steps (the glow's rim); of
+/// those reached, only the ones open to the sky above them ([`keep_open_to_the_sky`]).
 fn join_depth_sky(
     ev: &Evidence,
     sky: &mut [bool],
@@ -472,7 +473,36 @@ fn join_depth_sky(
         REFINE_ROUNDS,
         |p, q| depth_sky[q] && ev.step_ok(p, q) && ev.lum[q] >= ev.floor,
     );
-    region.iter().for_each(|&p| sky[p] = true);
+    keep_open_to_the_sky(ev, sky, &reached, width, height);
+}
+
+/// Adds to `sky` the pixels of `joined` open to the sky above them: in each column, those
+/// with only joined pixels above them up to the sky found (or the top row), each within
+/// the growth's colour step of the one above. Sky-coloured water beyond the reach (the
+/// sky's reflection, reached from the sky round the far city's towers or through a pale
+/// building standing in it) is under the far city, or under a building of another
+/// colour: it is the scene beyond the reach receding to the horizon, not sky. A sunset's
+/// glow, a cloud, the sky's rim are open.
+fn keep_open_to_the_sky(
+    ev: &Evidence,
+    sky: &mut [bool],
+    joined: &[bool],
+    width: usize,
+    height: usize,
+) {
+    for x in 0..width {
+        let mut open = true;
+        for y in 0..height {
+            let p = y * width + x;
+            if sky[p] {
+                open = true;
+            } else if joined[p] && open && (y == 0 || ev.step_ok(p - width, p)) {
+                sky[p] = true;
+            } else {
+                open = false;
+            }
+        }
+    }
 }
 
 /// The growth of one region from its seeds (already in it and `reached`), then its edge

@@ -318,3 +318,46 @@ fn a_sunsets_orange_sky_stays_sky() {
     let beyond = |y: usize| (0..w).all(|x| *p.beyond_reach.get(x, y));
     assert!((ground_from..known_from).all(beyond), "{:?}", p.stats);
 }
+
+/// Water beyond a phone's reach reflects the sky: sky-coloured, joined to the depth rules'
+/// sky, and reached from the sky through a pale far building that stands in it, across
+/// the water's lighter ripples. Under the far city it is not open to the sky above it, so
+/// it is the scene beyond the reach (which recedes to the horizon), not sky; taken for
+/// sky, it put the horizon at the near shore and fogged all the ground below it as sky.
+/// Nor is it under a second pale building, taken for sky (it glows), whose colour steps
+/// to the water's.
+#[test]
+fn water_under_the_far_city_is_not_sky() {
+    let (w, h) = (64, 96);
+    let (city_from, water_from, ground_from, known_from) = (30, 40, 56, 64);
+    let building = |x: usize, y: usize| (28..36).contains(&x) && (city_from..48).contains(&y);
+    let image = crate::raster::RgbImage::from_fn(w, h, |x, y| match y {
+        _ if building(x, y) => [0.72, 0.78, 0.9],
+        y if (8..14).contains(&x) && (city_from..water_from).contains(&y) => [0.74, 0.82, 0.97],
+        y if y < city_from => [0.7, 0.78, 0.92],
+        y if y < water_from => [0.2, 0.15, 0.12],
+        y if y < ground_from && y % 2 == 0 => [0.68, 0.75, 0.88],
+        y if y < ground_from => [0.6, 0.67, 0.8],
+        _ => [0.1 + 0.03 * ((x + y) % 5) as f32, 0.3, 0.1],
+    });
+    let range = ScalarMap::from_fn(w, h, |_, y| match y {
+        y if y < known_from => f32::NAN,
+        y => 8.0 - 6.0 * (y - known_from) as f32 / (h - known_from - 1) as f32,
+    });
+    let guides = Guides {
+        image: Some(&image),
+        ..Guides::default()
+    };
+    let p = prepare_guided(&range, guides, &PrepOptions::default()).unwrap();
+    let water =
+        |x: usize, y: usize| !(27..37).contains(&x) && (water_from..ground_from).contains(&y);
+    let water_sky = (0..w * h)
+        .filter(|&i| water(i % w, i / w) && p.sky.as_slice()[i])
+        .count();
+    assert_eq!(water_sky, 0, "{:?}", p.stats);
+    assert!(
+        (0..city_from).all(|y| (0..w).all(|x| *p.sky.get(x, y))),
+        "{:?}",
+        p.stats
+    );
+}
