@@ -286,6 +286,22 @@ fn the_street_beyond_the_sensors_reach_is_not_sky() {
     assert!(found as f64 > 0.97 * total as f64, "{found} of {total}");
 }
 
+/// Prepares a phone's depth of `image`'s frame with `image` as guide: range known from row
+/// `known_from` down, 8 m there to 2 m at the bottom row; unknown above (beyond the reach,
+/// and the sky).
+fn prepare_short_reach(image: &crate::raster::RgbImage, known_from: usize) -> Prepared {
+    let (w, h) = (image.width(), image.height());
+    let range = ScalarMap::from_fn(w, h, |_, y| match y {
+        y if y < known_from => f32::NAN,
+        y => 8.0 - 6.0 * (y - known_from) as f32 / (h - known_from - 1) as f32,
+    });
+    let guides = Guides {
+        image: Some(image),
+        ..Guides::default()
+    };
+    prepare_guided(&range, guides, &PrepOptions::default()).unwrap()
+}
+
 /// A sunset under a phone's short reach: the blue sky turns orange toward the horizon, in
 /// steps too small to see, above a band of green ground the sensor did not reach. The
 /// orange is not blue or grey, yet it is sky (reached from the blue, smooth and bright);
@@ -304,15 +320,7 @@ fn a_sunsets_orange_sky_stays_sky() {
         y if y < ground_from => orange,
         _ => [0.1 + 0.03 * ((x + y) % 5) as f32, 0.3, 0.1],
     });
-    let range = ScalarMap::from_fn(w, h, |_, y| match y {
-        y if y < known_from => f32::NAN,
-        y => 8.0 - 6.0 * (y - known_from) as f32 / (h - known_from - 1) as f32,
-    });
-    let guides = Guides {
-        image: Some(&image),
-        ..Guides::default()
-    };
-    let p = prepare_guided(&range, guides, &PrepOptions::default()).unwrap();
+    let p = prepare_short_reach(&image, known_from);
     let sky = |y: usize| (0..w).all(|x| *p.sky.get(x, y));
     assert!((0..ground_from).all(sky), "{:?}", p.stats);
     let beyond = |y: usize| (0..w).all(|x| *p.beyond_reach.get(x, y));
@@ -340,15 +348,7 @@ fn water_under_the_far_city_is_not_sky() {
         y if y < ground_from => [0.6, 0.67, 0.8],
         _ => [0.1 + 0.03 * ((x + y) % 5) as f32, 0.3, 0.1],
     });
-    let range = ScalarMap::from_fn(w, h, |_, y| match y {
-        y if y < known_from => f32::NAN,
-        y => 8.0 - 6.0 * (y - known_from) as f32 / (h - known_from - 1) as f32,
-    });
-    let guides = Guides {
-        image: Some(&image),
-        ..Guides::default()
-    };
-    let p = prepare_guided(&range, guides, &PrepOptions::default()).unwrap();
+    let p = prepare_short_reach(&image, known_from);
     let water =
         |x: usize, y: usize| !(27..37).contains(&x) && (water_from..ground_from).contains(&y);
     let water_sky = (0..w * h)
