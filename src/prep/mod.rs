@@ -49,11 +49,12 @@
 //!      leaked). The sky is the kept regions and, of the depth rules' sky, the admissible
 //!      pixels and those the sky reaches over pixels of it that look like sky or glow
 //!      (bright and smooth whatever the hue: a sunset's orange under the blue), in the
-//!      growth's colour steps, with the growth's edge refinement, and open to the sky
-//!      above them (in their column, only such pixels up to the sky, each in a colour step
-//!      of the one above: sky-coloured water under the far city is not); all of the depth
-//!      rules' sky when the image finds none (a sunset's orange sky alone is not blue or
-//!      grey). What is left of the depth rules' sky, in
+//!      growth's colour steps, with the growth's edge refinement, all of them open to
+//!      the sky above them (in their column, only such pixels up to the sky, each in a
+//!      colour step of the one above: sky-coloured water under the far city is not, nor
+//!      a light grey face under its top edge); all of the depth rules' sky when the image
+//!      finds none (a sunset's orange sky alone is not blue or grey). What is left of the
+//!      depth rules' sky, in
 //!      pieces larger than a gap (below), is the scene beyond the sensor's reach (a
 //!      time-of-flight camera stops at 8 m; the ground, the street and the city behind are
 //!      unknown and joined to the sky), filled in step 4. Finally each

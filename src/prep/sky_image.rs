@@ -442,7 +442,8 @@ fn grow_past_reclaimed(
 /// the hue: a sunset's orange under the blue), in the growth's colour steps (a textured
 /// cloud, the sky's rim at the skyline whose texture window sees the skyline), then
 /// [`REFINE_ROUNDS`] rounds more over bright pixels in those steps (the glow's rim); of
-/// those reached, only the ones open to the sky above them ([`keep_open_to_the_sky`]).
+/// all these, only the ones open to the sky above them ([`keep_open_to_the_sky`]: a light
+/// grey face beyond the reach is admissible, but has its top edge above it).
 fn join_depth_sky(
     ev: &Evidence,
     sky: &mut [bool],
@@ -450,11 +451,10 @@ fn join_depth_sky(
     width: usize,
     height: usize,
 ) {
-    for (p, s) in sky.iter_mut().enumerate() {
-        *s |= depth_sky[p] && ev.admissible(p);
-    }
-    let mut reached = sky.to_vec();
-    let mut region: Vec<usize> = (0..sky.len()).filter(|&p| sky[p]).collect();
+    let mut reached: Vec<bool> = (0..sky.len())
+        .map(|p| sky[p] || (depth_sky[p] && ev.admissible(p)))
+        .collect();
+    let mut region: Vec<usize> = (0..sky.len()).filter(|&p| reached[p]).collect();
     spread(
         &mut reached,
         &mut region,

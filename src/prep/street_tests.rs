@@ -333,7 +333,8 @@ fn a_sunsets_orange_sky_stays_sky() {
 /// it is the scene beyond the reach (which recedes to the horizon), not sky; taken for
 /// sky, it put the horizon at the near shore and fogged all the ground below it as sky.
 /// Nor is it under a second pale building, taken for sky (it glows), whose colour steps
-/// to the water's.
+/// to the water's; nor is a smooth light grey face in the water, too small to grow a
+/// region of its own, which looks like sky.
 #[test]
 fn water_under_the_far_city_is_not_sky() {
     let (w, h) = (64, 96);
@@ -342,6 +343,7 @@ fn water_under_the_far_city_is_not_sky() {
     let image = crate::raster::RgbImage::from_fn(w, h, |x, y| match y {
         _ if building(x, y) => [0.72, 0.78, 0.9],
         y if (8..14).contains(&x) && (city_from..water_from).contains(&y) => [0.74, 0.82, 0.97],
+        y if (48..54).contains(&x) && (44..52).contains(&y) => [0.75, 0.75, 0.75],
         y if y < city_from => [0.7, 0.78, 0.92],
         y if y < water_from => [0.2, 0.15, 0.12],
         y if y < ground_from && y % 2 == 0 => [0.68, 0.75, 0.88],
