@@ -436,8 +436,8 @@ fn grow_past_reclaimed(
     }
 }
 
-/// Adds to `sky` the pixels of the depth rules' sky that are admissible (a patch of sky
-/// between branches too small to be kept as a region of its own), and those reached from
+/// Adds to `sky` the pixels of the depth rules' sky that are admissible (smooth, bright,
+/// blue or grey, in a region too small to be kept on its own), and those reached from
 /// the sky over pixels of that sky that look like sky or glow (bright and smooth, whatever
 /// the hue: a sunset's orange under the blue), in the growth's colour steps (a textured
 /// cloud, the sky's rim at the skyline whose texture window sees the skyline), then
@@ -482,7 +482,8 @@ fn join_depth_sky(
 /// sky's reflection, reached from the sky round the far city's towers or through a pale
 /// building standing in it) is under the far city, or under a building of another
 /// colour: it is the scene beyond the reach receding to the horizon, not sky. A sunset's
-/// glow, a cloud, the sky's rim are open.
+/// glow, a cloud, the sky's rim are open; a patch of sky between branches is not (beyond
+/// the reach, it has the sky's range above the horizon all the same).
 fn keep_open_to_the_sky(
     ev: &Evidence,
     sky: &mut [bool],
