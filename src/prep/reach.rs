@@ -45,6 +45,14 @@ struct Run {
     end: usize,
 }
 
+impl Run {
+    /// Whether the pixel below the run is the scene (not the sky, not the image's bottom
+    /// border).
+    fn meets_scene(&self, sky: &[bool], (w, h): (usize, usize)) -> bool {
+        self.end < h && !sky[self.end * w + self.x]
+    }
+}
+
 /// Fills the pixels `beyond` (not sky) of `work`, linearly in log range from `r_max` (at
 /// least as far as the farthest range measured) to `s_max` (the sky's): what the sensor
 /// did not reach is the ground receding toward the horizon and what stands on it. In each
@@ -66,13 +74,12 @@ pub(crate) fn recede(
     guide: Option<&ColourGuide>,
 ) {
     let runs = runs_of(beyond, w, h);
-    let is_sky = |y: Option<usize>, x: usize| y.is_none_or(|y| y >= h || sky[y * w + x]);
     let open_sky = sky_from_the_top(sky, w, h);
     let horizon = horizon_rows(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w);
     let (lo, hi) = (f64::from(r_max).ln(), f64::from(s_max).ln());
     for r in &runs {
-        let above_sky = is_sky(r.top.checked_sub(1), r.x);
-        let below_sky = is_sky(Some(r.end), r.x);
+        let above_sky = r.top.checked_sub(1).is_none_or(|y| sky[y * w + r.x]);
+        let below_sky = !r.meets_scene(sky, (w, h));
         // The run's own ends: where each meets the scene or the sky.
         let own = |y: usize| {
             let (a, b) = (
@@ -125,7 +132,7 @@ fn stand_upright(
     (w, h): (usize, usize),
     guide: &ColourGuide,
 ) {
-    let meets_scene = |r: &&Run| r.end < h && !sky[r.end * w + r.x];
+    let meets_scene = |r: &&Run| r.meets_scene(sky, (w, h));
     // The scene just below each column's lowest run (runs come top to bottom).
     let mut below: Vec<Option<usize>> = vec![None; w];
     for r in runs.iter().filter(meets_scene) {
@@ -146,7 +153,10 @@ fn stand_upright(
             }
         }
         let at = |y: usize| y * w + r.x;
-        let is_ground = |y: usize| ground.iter().any(|&q| one_material(guide, at(y), q));
+        let on_the_ground: Vec<bool> = (r.top..r.end)
+            .map(|y| ground.iter().any(|&q| one_material(guide, at(y), q)))
+            .collect();
+        let is_ground = |y: usize| on_the_ground[y - r.top];
         // Walking up: `y` the lowest row walked; whether it is ground (the scene below
         // the run counts as what the first pixels stand on).
         let (mut y, mut on_ground) = (r.end, true);
