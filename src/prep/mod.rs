@@ -157,10 +157,10 @@
 //!    that reaches the top row: sky seen in water is no horizon), so the
 //!    ground below a far tower recedes as the ground beside it (the tower's own skyline
 //!    would draw its ghost down to the ground). With the image, what stands on that
-//!    ground (a pixel run of another material just above the ground's materials, rising
-//!    over the horizon or with the ground seen again above it, its foot at least a
-//!    sixteenth of the height below the horizon) keeps its foot's range up the column, as
-//!    an upright face does. Physical fog reads the fill's parameter as the
+//!    ground (a pixel run of another material just above the ground's materials, or the
+//!    last ground's below it as the colour drifts with distance, rising over the horizon
+//!    or with the ground seen again above it, its foot at least three rows of the grid
+//!    below the horizon) keeps its foot's range up the column, as an upright face does. Physical fog reads the fill's parameter as the
 //!    ground's 1/R, linear from `1/Rmax` to the sky's 1/1 km ([`Prepared::beyond_reach`],
 //!    `PreparedPhoto::metres`). The known range beside it (a near pole) is not used: it
 //!    says nothing of the background behind the pole, and blending it in would draw a

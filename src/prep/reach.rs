@@ -117,13 +117,14 @@ const GROUND_WINDOW: f64 = 1.0 / 32.0;
 /// ground's receding behind them ([`recede`] draws them as ground, fading into the sky
 /// from the foot up). Walking up each run that meets the scene below, a pixel of the
 /// ground's colours (one material, [`one_material`], with the scene just below the reach
-/// within [`GROUND_WINDOW`]) is ground; the pixels of another material just above ground
-/// are an object standing there, as far as its material goes on, and take the range of
-/// its lowest pixel where that is nearer, if it is upright: it rises above the horizon,
-/// or the ground is seen again above it. A flat surface of another material reaching the
-/// far scene (water up to the far shore) is neither. What lies above an object without
-/// ground between (a far tower behind a box, the box's top face) keeps [`recede`]'s range:
-/// its foot is hidden.
+/// within [`GROUND_WINDOW`], or with the last ground pixel below it in the column, as the
+/// ground's colour drifts with distance) is ground; the pixels of another material just
+/// above ground are an object standing there, as far as its material goes on, and take
+/// the range of its lowest pixel where that is nearer, if it is upright: it rises above
+/// the horizon, or the ground is seen again above it. A flat surface of another material
+/// reaching the far scene (water up to the far shore) is neither. What lies above an
+/// object without ground between (a far tower behind a box, the box's top face) keeps
+/// [`recede`]'s range: its foot is hidden.
 fn stand_upright(
     work: &mut [f32],
     runs: &[Run],
@@ -153,18 +154,21 @@ fn stand_upright(
             }
         }
         let at = |y: usize| y * w + r.x;
-        let on_the_ground: Vec<bool> = (r.top..r.end)
+        let of_the_ground: Vec<bool> = (r.top..r.end)
             .map(|y| ground.iter().any(|&q| one_material(guide, at(y), q)))
             .collect();
-        let is_ground = |y: usize| on_the_ground[y - r.top];
-        // Walking up: `y` the lowest row walked; whether it is ground (the scene below
-        // the run counts as what the first pixels stand on).
-        let (mut y, mut on_ground) = (r.end, true);
+        // The ground's colour drifts as it recedes (aerial perspective, a texture averaged
+        // to its mean): a pixel of the last ground seen below in the column is ground too.
+        let is_ground =
+            |y: usize, last: usize| of_the_ground[y - r.top] || one_material(guide, at(y), last);
+        // Walking up: `y` the lowest row walked; whether it is ground, and the last ground
+        // pixel (the scene below the run counts as what the first pixels stand on).
+        let (mut y, mut on_ground, mut last) = (r.end, true, at(r.end));
         while y > r.top {
             let foot = y - 1;
             y = foot;
-            if is_ground(foot) {
-                on_ground = true;
+            if is_ground(foot, last) {
+                (on_ground, last) = (true, at(foot));
                 continue;
             }
             if !on_ground {
@@ -174,14 +178,14 @@ fn stand_upright(
             // with the object above (an edge on the depth's grid).
             let blend = |y: usize| y == foot && blends(guide, at(foot + 1), at(foot), at(foot - 1));
             while y > r.top
-                && !is_ground(y - 1)
+                && !is_ground(y - 1, last)
                 && (one_material(guide, at(y - 1), at(y)) || blend(y))
             {
                 y -= 1;
             }
-            let near_foot = foot as f64 - hz >= MIN_FOOT_BELOW_HORIZON * h as f64;
+            let near_foot = foot as f64 - hz >= MIN_FOOT_ROWS_BELOW_HORIZON;
             let over_horizon = (y as f64) < hz;
-            let ground_above = y > r.top && is_ground(y - 1);
+            let ground_above = y > r.top && is_ground(y - 1, last);
             let tall = foot + 1 - y >= MIN_OBJECT_ROWS;
             if near_foot && tall && (over_horizon || ground_above) {
                 let v = work[at(foot)];
@@ -192,10 +196,13 @@ fn stand_upright(
     }
 }
 
-/// Least distance of an object's foot below the horizon, as a fraction of the image's
-/// height: nearer the horizon a row more or less is a factor on the range (with a 45°
-/// field of view, a sixteenth of the height is about 19 camera heights away).
-const MIN_FOOT_BELOW_HORIZON: f64 = 1.0 / 16.0;
+/// Least distance of an object's foot below the horizon, in rows of the depth's grid: the
+/// range on the ground goes as 1/(rows below the horizon), and the foot and the horizon
+/// are each known to about half a row, so at three rows the foot's range is known to about
+/// a third; nearer the horizon a row more or less is a factor. (A sixteenth of the height,
+/// 4 rows of a 1/8 map of a 512-row photo, left a tower 37 m from a phone reaching 8 m
+/// fading into the sky; 2 rows held ARCore's far city across the water too near.)
+const MIN_FOOT_ROWS_BELOW_HORIZON: f64 = 3.0;
 
 /// Fewest rows an object's run in one column must have to be taken as standing: one or two
 /// pixels of another material by the ground's far edge are the far scene's blend.
@@ -463,6 +470,47 @@ mod tests {
             _ => None,
         });
         assert_eq!(work, plain);
+    }
+
+    #[test]
+    fn a_box_stands_on_ground_whose_colour_drifts_with_distance() {
+        // The lawn turns yellow as it recedes (0.003 of red's share per row, 0.06 over the
+        // 20 rows up to the box): the ground below the reach no longer matches it there,
+        // the ground just below the box does, and the ground above it.
+        let drifted = |y: usize| {
+            let [r, g, b] = lawn(y);
+            let d = 0.0005 * (39 - y) as f32 * (r + g + b) / 0.17;
+            [r + d, g - d, b]
+        };
+        let slate = [0.2, 0.25, 0.35];
+        let (work, plain) = recede_with_and_without_the_image(5, |x, y| {
+            Some(if x == 1 && (12..=18).contains(&y) {
+                slate
+            } else {
+                drifted(y)
+            })
+        });
+        assert!(
+            moved_only(&work, &plain, 12..=18, plain[2 * 18 + 1]),
+            "{work:?}"
+        );
+    }
+
+    #[test]
+    fn a_foot_by_the_horizon_is_too_far_to_tell() {
+        // The horizon at row 4.5; a brown tower rising over it from a foot 2.5 rows below
+        // recedes, from 3.5 rows below it stands.
+        let brown = [0.3, 0.15, 0.05];
+        let tower = |foot: usize| {
+            move |x: usize, y: usize| (x == 1 && (2..=foot).contains(&y)).then_some(brown)
+        };
+        let (work, plain) = recede_with_and_without_the_image(2, tower(7));
+        assert_eq!(work, plain);
+        let (work, plain) = recede_with_and_without_the_image(2, tower(8));
+        assert!(
+            moved_only(&work, &plain, 2..=8, plain[2 * 8 + 1]),
+            "{work:?}"
+        );
     }
 
     #[test]
