@@ -160,7 +160,11 @@
 //!    ground (a pixel run of another material just above the ground's materials, or the
 //!    last ground's below it as the colour drifts with distance, rising over the horizon
 //!    or with the ground seen again above it, its foot at least three rows of the grid
-//!    below the horizon) keeps its foot's range up the column, as an upright face does. Physical fog reads the fill's parameter as the
+//!    below the horizon) keeps its foot's range up the column, as an upright face does;
+//!    and a surface the sensor reached in part (a region of one material under measured
+//!    pixels of its own in a quarter of its columns: a face just at the reach's limit,
+//!    measured here and there through the noise) is no scene beyond the reach but holes,
+//!    filled from what was reached. Physical fog reads the fill's parameter as the
 //!    ground's 1/R, linear from `1/Rmax` to the sky's 1/1 km ([`Prepared::beyond_reach`],
 //!    `PreparedPhoto::metres`). The known range beside it (a near pole) is not used: it
 //!    says nothing of the background behind the pole, and blending it in would draw a
@@ -417,11 +421,18 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
             guides.image = Some(&masked_image);
         }
     }
-    let found = find_sky(&work, w, h, guides, opts);
+    let mut found = find_sky(&work, w, h, guides, opts);
     let mut sky = found.sky;
     stats.sky_method = found.method;
     stats.sky_noise = found.noise.len();
     found.noise.iter().for_each(|&p| work[p] = f32::NAN);
+    let guide = guides
+        .image
+        .map(|i| fill::ColourGuide::new(i, opts.image_sky.max_step));
+    if let Some(guide) = &guide {
+        // Taken out of the scene beyond the reach, they stay NaN: holes.
+        reach::take_out_reached_in_part(&work, &sky, &mut found.beyond_reach, guide, (w, h));
+    }
     // Neither known nor a hole (as the sky) until the scene round it is filled.
     found
         .beyond_reach
@@ -455,9 +466,6 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         sky: &mut sky,
         ego: &mut ego,
     };
-    let guide = guides
-        .image
-        .map(|i| fill::ColourGuide::new(i, opts.image_sky.max_step));
     fill_holes(
         &mut work,
         &mut holes,

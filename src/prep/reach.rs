@@ -1,7 +1,7 @@
 //! The scene beyond the sensor's reach: unknown pixels joined to the sky that the image
 //! shows are not sky (see the module docs of [`crate::prep`], step 4).
 
-use super::components::label_mask;
+use super::components::{flood, label_mask};
 use super::fill::ColourGuide;
 use super::ImageSkyRules;
 
@@ -29,6 +29,59 @@ pub(crate) fn beyond_reach(
         }
     }
     beyond
+}
+
+/// Least share of a region's columns (of its bounding box) in which the sensor reached a
+/// pixel of its material just above it, for [`take_out_reached_in_part`].
+const MIN_REACHED_SHARE: f64 = 0.25;
+
+/// Takes out of `beyond` the pixels of surfaces the sensor reached in part, which are
+/// holes to fill from what was reached: a region of one material ([`one_material`], from
+/// pixel to pixel) under known pixels of its own material in at least
+/// [`MIN_REACHED_SHARE`] of its columns. Neither the ground nor an upright face is farther
+/// below a point of it that was reached, so such a region is no scene beyond the reach: a
+/// face just at the reach's limit (a box 8 m from a phone whose depth stops at 8.19 m) is
+/// measured in some pixels and lost in others by the noise, and receding between its
+/// measured pixels it would show as blotches. The ground at the reach's contour has a few
+/// such pixels where the noise crosses the limit, over a region as wide as the image.
+pub(crate) fn take_out_reached_in_part(
+    work: &[f32],
+    sky: &[bool],
+    beyond: &mut Vec<usize>,
+    guide: &ColourGuide,
+    (w, h): (usize, usize),
+) {
+    // 0: not beyond (or taken out); 1: beyond, in no region yet; 2: in a region.
+    let mut state = vec![0u8; w * h];
+    beyond.iter().for_each(|&p| state[p] = 1);
+    let known = |p: usize| work[p].is_finite() && !sky[p];
+    let (mut regions, mut reached) = (Vec::new(), false);
+    for &seed in beyond.iter() {
+        if state[seed] != 1 {
+            continue;
+        }
+        let c = flood(w, h, seed, &mut regions, |p, q| {
+            let take = state[q] == 1 && (p == q || one_material(guide, p, q));
+            if take {
+                state[q] = 2;
+            }
+            take
+        });
+        let pixels = &regions[c.start..c.start + c.len];
+        let under_reached = pixels
+            .iter()
+            .map(|&p| p as usize)
+            .filter(|&p| p >= w && known(p - w) && one_material(guide, p, p - w))
+            .count();
+        let columns = c.bbox[2] + 1 - c.bbox[0];
+        if under_reached as f64 >= MIN_REACHED_SHARE * columns as f64 {
+            pixels.iter().for_each(|&p| state[p as usize] = 0);
+            reached = true;
+        }
+    }
+    if reached {
+        beyond.retain(|&p| state[p] != 0);
+    }
 }
 
 /// Half the width of the window in which a column's horizon is looked for, as a fraction

@@ -363,3 +363,43 @@ fn water_under_the_far_city_is_not_sky() {
         p.stats
     );
 }
+
+/// A box's face just at a phone's reach (8 m, where its depth stops at 8.19 m), measured
+/// in scattered pixels and lost in the others by the noise, is a surface the sensor
+/// reached: filled from its own measured pixels, not the scene beyond the reach, which
+/// would recede between them and show as blotches. A ground pixel measured above a lost
+/// one (the noise crossing the limit at the reach's contour) leaves the ground beyond.
+#[test]
+fn a_face_at_the_reach_limit_is_filled_from_what_was_reached() {
+    let (w, h) = (64, 96);
+    let (ground_from, known_from) = (40, 70);
+    let face = |x: usize, y: usize| (20..44).contains(&x) && (30..60).contains(&y);
+    let image = crate::raster::RgbImage::from_fn(w, h, |x, y| match y {
+        _ if face(x, y) => [0.2, 0.25, 0.35],
+        y if y < ground_from => [0.35, 0.5, 0.9],
+        _ => [0.1 + 0.03 * ((x + y) % 5) as f32, 0.3, 0.1],
+    });
+    let measured = |x: usize, y: usize| {
+        (face(x, y) && x.is_multiple_of(3) && y.is_multiple_of(4))
+            || (x, y) == (5, 50)
+            || y >= known_from
+    };
+    let range = ScalarMap::from_fn(w, h, |x, y| match y {
+        _ if !measured(x, y) => f32::NAN,
+        y if y >= known_from => 8.0 - 6.0 * (y - known_from) as f32 / (h - known_from - 1) as f32,
+        _ => 8.0,
+    });
+    let guides = Guides {
+        image: Some(&image),
+        ..Guides::default()
+    };
+    let p = prepare_guided(&range, guides, &PrepOptions::default()).unwrap();
+    for (x, y) in (0..w).flat_map(|x| (30..known_from).map(move |y| (x, y))) {
+        let (r, beyond) = (*p.range.get(x, y), *p.beyond_reach.get(x, y));
+        if face(x, y) {
+            assert!(!beyond && (r - 8.0).abs() < 0.05, "face ({x}, {y}): {r}");
+        } else if y >= ground_from && !measured(x, y) {
+            assert!(beyond && r > 8.0, "ground ({x}, {y}): {r} {:?}", p.stats);
+        }
+    }
+}
