@@ -151,7 +151,9 @@
 //!    **The scene beyond the sensor's reach** (step 2; [`PrepStats::beyond_reach`]) is
 //!    at least as far as the farthest range measured and no farther than the sky: the
 //!    ground receding toward the horizon and what stands on it. In each column it goes
-//!    from `Rmax` where it meets the scene below to `Smax` at the horizon, linearly in log
+//!    from `Rmax` where it meets the scene below (with the image, above something nearer
+//!    than the reach, a box's top edge: where it meets the ground at the reach beside, for
+//!    the ground behind the box) to `Smax` at the horizon, linearly in log
 //!    range, and is `Smax` above the horizon; the horizon is the lowest row the sky comes
 //!    down to within a quarter of the width either side (between far towers; only the sky
 //!    that reaches the top row: sky seen in water is no horizon), so the

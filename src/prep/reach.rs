@@ -116,9 +116,12 @@ impl Run {
 /// neighbouring columns so that the ground below a far tower recedes as the ground beside
 /// it (a column's own skyline would draw the tower's ghost down to the ground); without
 /// one (no sky above any run nearby, or not above the run), the run recedes from its
-/// lower end to its upper end. The known
-/// range beside a run (a near pole) is not used: it says nothing of the background behind
-/// the pole, and blending it in would draw a clear halo round the pole.
+/// lower end to its upper end. With the image, a run standing on something nearer than
+/// the reach (a box's top edge) recedes from the reach's contour on the ground ([`Reach`])
+/// where it is the ground behind or rises over the horizon, and from halfway between
+/// where it is something else whose foot the box hides. The known range beside a run (a
+/// near pole) is not used: it says nothing of the background behind the pole, and
+/// blending it in would draw a clear halo round the pole.
 pub(crate) fn recede(
     work: &mut [f32],
     (sky, beyond): (&[bool], &[bool]),
@@ -129,6 +132,9 @@ pub(crate) fn recede(
     let runs = runs_of(beyond, w, h);
     let open_sky = sky_from_the_top(sky, w, h);
     let horizon = horizon_rows(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w);
+    let reach = Reach::new(&runs, work, sky, (w, h), r_max);
+    let half = ((GROUND_WINDOW * w as f64).ceil() as usize).max(1);
+    let mut ground = Vec::new();
     let (lo, hi) = (f64::from(r_max).ln(), f64::from(s_max).ln());
     for r in &runs {
         let above_sky = r.top.checked_sub(1).is_none_or(|y| sky[y * w + r.x]);
@@ -144,8 +150,26 @@ pub(crate) fn recede(
             let up = (n - k) / (n + 1.0); // 1 at the upper end's neighbour
             b + up * (a - b)
         };
-        // Boundaries between pixels: the contour with the scene below, the horizon.
-        let contour = r.end as f64 - 0.5;
+        // Boundaries between pixels: the contour with the scene below, the horizon. Above
+        // something nearer (a box's top edge), the ground seen behind it recedes from the
+        // reach's contour on the ground beside, and what rises over the horizon there,
+        // its foot hidden, is at the sky's range, as it is where nothing hides its foot.
+        // Another material below the horizon (a facade behind a pole) has its hidden foot
+        // between the top edge and the reach's contour: it recedes from halfway between.
+        let mut contour = r.end as f64 - 0.5;
+        if let Some(guide) =
+            guide.filter(|_| !below_sky && work[r.end * w + r.x] < AT_THE_REACH * r_max)
+        {
+            reach.ground_colours(r.x, half, guide, &mut ground);
+            let lowest = (r.end - 1) * w + r.x;
+            let over_horizon = horizon[r.x].is_some_and(|hz| contour < hz);
+            let behind = reach.contour(r.x).unwrap_or(f64::MIN).max(contour);
+            if over_horizon || ground.iter().any(|&q| one_material(guide, lowest, q)) {
+                contour = behind;
+            } else {
+                contour = 0.5 * (contour + behind);
+            }
+        }
         for y in r.top..r.end {
             let t = match horizon[r.x] {
                 _ if below_sky => 1.0,
@@ -156,7 +180,68 @@ pub(crate) fn recede(
         }
     }
     if let Some(guide) = guide {
-        stand_upright(work, &runs, &horizon, sky, (w, h), guide);
+        stand_upright(work, (&runs, &reach), &horizon, sky, (w, h), guide);
+    }
+}
+
+/// Least share of `Rmax` that the scene just below a run has where the run meets the
+/// ground at the sensor's reach (the noise of a phone's depth is a few per cent there);
+/// a run meeting something nearer stands on it (a box's top edge, a pole's).
+const AT_THE_REACH: f32 = 0.8;
+
+/// The ground at the sensor's reach: the columns whose lowest run meets the scene at the
+/// reach (at least [`AT_THE_REACH`] of `Rmax`), left to right, each with its contour (the
+/// boundary row above the scene) and the scene's pixel below it.
+struct Reach {
+    columns: Vec<(usize, f64, usize)>,
+}
+
+impl Reach {
+    fn new(runs: &[Run], work: &[f32], sky: &[bool], (w, h): (usize, usize), r_max: f32) -> Self {
+        let mut lowest: Vec<Option<&Run>> = vec![None; w];
+        for r in runs.iter().filter(|r| r.meets_scene(sky, (w, h))) {
+            lowest[r.x] = Some(r);
+        }
+        let columns = (lowest.iter().flatten())
+            .map(|r| (r.x, r.end as f64 - 0.5, r.end * w + r.x))
+            .filter(|&(_, _, below)| work[below] >= AT_THE_REACH * r_max)
+            .collect();
+        Reach { columns }
+    }
+
+    /// Column `x`'s contour: its own, or interpolated between the nearest columns at the
+    /// reach either side (a rolled camera tilts it); `None` without any.
+    fn contour(&self, x: usize) -> Option<f64> {
+        let i = self.columns.partition_point(|c| c.0 < x);
+        match (
+            i.checked_sub(1).map(|j| self.columns[j]),
+            self.columns.get(i),
+        ) {
+            (Some((a, ca, _)), Some(&(b, cb, _))) => {
+                Some(ca + (cb - ca) * (x - a) as f64 / (b - a) as f64)
+            }
+            (Some((_, c, _)), None) | (None, Some(&(_, c, _))) => Some(c),
+            (None, None) => None,
+        }
+    }
+
+    /// One pixel of each of the ground's materials ([`one_material`]) seen just below the
+    /// reach near column `x`, into `out`: within `half` columns of it, or else at the
+    /// nearest columns at the reach either side (under a wide box).
+    fn ground_colours(&self, x: usize, half: usize, guide: &ColourGuide, out: &mut Vec<usize>) {
+        out.clear();
+        let from = self.columns.partition_point(|c| c.0 + half < x);
+        let to = self.columns.partition_point(|c| c.0 <= x + half);
+        let near = if from < to {
+            &self.columns[from..to]
+        } else {
+            &self.columns[from.saturating_sub(1)..(from + 1).min(self.columns.len())]
+        };
+        for &(_, _, q) in near {
+            if !out.iter().any(|&g| one_material(guide, g, q)) {
+                out.push(q);
+            }
+        }
     }
 }
 
@@ -180,32 +265,17 @@ const GROUND_WINDOW: f64 = 1.0 / 32.0;
 /// [`recede`]'s range: its foot is hidden.
 fn stand_upright(
     work: &mut [f32],
-    runs: &[Run],
+    (runs, reach): (&[Run], &Reach),
     horizon: &[Option<f64>],
     sky: &[bool],
     (w, h): (usize, usize),
     guide: &ColourGuide,
 ) {
-    let meets_scene = |r: &&Run| r.meets_scene(sky, (w, h));
-    // The scene just below each column's lowest run (runs come top to bottom).
-    let mut below: Vec<Option<usize>> = vec![None; w];
-    for r in runs.iter().filter(meets_scene) {
-        below[r.x] = Some(r.end * w + r.x);
-    }
     let half = ((GROUND_WINDOW * w as f64).ceil() as usize).max(1);
     let mut ground = Vec::new();
-    for r in runs.iter().filter(meets_scene) {
+    for r in runs.iter().filter(|r| r.meets_scene(sky, (w, h))) {
         let Some(hz) = horizon[r.x] else { continue };
-        // One pixel of each material seen below the reach nearby.
-        ground.clear();
-        for &q in below[r.x.saturating_sub(half)..(r.x + half + 1).min(w)]
-            .iter()
-            .flatten()
-        {
-            if !ground.iter().any(|&g| one_material(guide, g, q)) {
-                ground.push(q);
-            }
-        }
+        reach.ground_colours(r.x, half, guide, &mut ground);
         let at = |y: usize| y * w + r.x;
         let of_the_ground: Vec<bool> = (r.top..r.end)
             .map(|y| ground.iter().any(|&q| one_material(guide, at(y), q)))
@@ -354,16 +424,16 @@ mod tests {
         (f64::from(got) - want).abs() < 1e-4 * want
     }
 
-    /// A `w x h` frame whose last row is the scene (range 5) and whose other pixels are
-    /// sky where `is_sky`, else beyond the reach: the sky mask, the range, the mask of the
-    /// pixels beyond.
+    /// A `w x h` frame whose last row is the scene at the reach (range 10, the tests'
+    /// `Rmax`) and whose other pixels are sky where `is_sky`, else beyond the reach: the
+    /// sky mask, the range, the mask of the pixels beyond.
     fn frame(
         w: usize,
         h: usize,
         is_sky: impl Fn(usize, usize) -> bool,
     ) -> (Vec<bool>, Vec<f32>, Vec<bool>) {
         let mut sky = vec![false; w * h];
-        let mut work = vec![5.0f32; w * h];
+        let mut work = vec![10.0f32; w * h];
         let mut beyond = vec![false; w * h];
         for p in 0..w * (h - 1) {
             if is_sky(p % w, p / w) {
@@ -410,6 +480,51 @@ mod tests {
         recede(&mut work, (&sky, &beyond), (w, h), (10.0, 15.0), None);
         assert!(close(work[2], 150f64.sqrt()), "{}", work[2]);
         assert_eq!(work[3], 15.0, "sky above and below: the sky's range");
+    }
+
+    #[test]
+    fn the_ground_behind_a_box_recedes_as_beside_it() {
+        // Three columns: the sky in row 0, beyond the reach rows 1-8 beside and 1-5 in the
+        // middle, where a near box (range 3) stands in rows 6-9; row 9 beside is the
+        // ground at the reach (range 10 = Rmax). Above the box the lawn behind it has the
+        // range of the lawn beside it, not the reach's; a slate face behind the box (its
+        // foot hidden) is farther than the reach at the box's top edge and nearer than the
+        // lawn there.
+        let (w, h) = (3, 10);
+        let box_ = |x: usize, y: usize| x == 1 && y >= 6;
+        let ground_behind = |behind: [f32; 3]| {
+            let (sky, mut work, mut beyond) = frame(w, h, |_, y| y == 0);
+            for p in (0..w * h).filter(|&p| box_(p % w, p / w)) {
+                (beyond[p], work[p]) = (false, 3.0);
+            }
+            let image = RgbImage::from_fn(w, h, |x, y| match (x, y) {
+                (_, 0) => [0.5, 0.6, 0.9],
+                _ if box_(x, y) => [0.6, 0.5, 0.1],
+                (1, _) => behind,
+                _ => lawn(y),
+            });
+            let guide = ColourGuide::new(&image, 0.08);
+            let mut plain = work.clone();
+            recede(
+                &mut work,
+                (&sky, &beyond),
+                (w, h),
+                (10.0, 40.0),
+                Some(&guide),
+            );
+            recede(&mut plain, (&sky, &beyond), (w, h), (10.0, 40.0), None);
+            (work, plain)
+        };
+        let (work, plain) = ground_behind(lawn(5));
+        for y in 1..6 {
+            let row = &work[y * w..y * w + 3];
+            assert!(row[1] == row[0] && row[1] == row[2], "row {y}: {row:?}");
+        }
+        assert!(work[5 * w + 1] > plain[5 * w + 1], "{plain:?}");
+        let lawn_behind = work[5 * w + 1];
+        let (work, plain) = ground_behind([0.2, 0.25, 0.35]);
+        let between = plain[5 * w + 1]..lawn_behind;
+        assert!(between.contains(&work[5 * w + 1]), "{work:?} {between:?}");
     }
 
     #[test]
