@@ -155,7 +155,7 @@
 //!    than the reach, a box's top edge: where it meets the ground at the reach beside, for
 //!    the ground behind the box) to `Smax` at the horizon, linearly in log
 //!    range, and is `Smax` above the horizon; the horizon is the lowest row the sky comes
-//!    down to within a quarter of the width either side (between far towers; only the sky
+//!    down to within half the width either side (between far towers; only the sky
 //!    that reaches the top row: sky seen in water is no horizon), so the
 //!    ground below a far tower recedes as the ground beside it (the tower's own skyline
 //!    would draw its ghost down to the ground). With the image, what stands on that

@@ -85,11 +85,15 @@ pub(crate) fn take_out_reached_in_part(
 }
 
 /// Half the width of the window in which a column's horizon is looked for, as a fraction
-/// of the image's width: wide enough that a city dense over several towers' width does
-/// not hide the horizon behind it, narrow enough that a horizon tilted by the camera's
-/// roll is taken near the column (on the phone evaluation a whole-width window and 0.25
-/// did equally; 0.05 left DEPTH16 view 1 a third more wrong, 0.0315 against 0.0237).
-const HORIZON_WINDOW: f64 = 0.25;
+/// of the image's width: wide enough that a far city hiding the horizon does not raise it
+/// (in a street the sky comes down to the horizon only at the street's end, in the middle
+/// of the frame; view 2 of the phone evaluation sees it only at its right edge, and a
+/// quarter of the width put the horizon 3 rows of a 1/8 map too high on the left), narrow
+/// enough that a horizon tilted by the camera's roll is taken near the column (the window
+/// puts it up to half the width times the roll's slope too low: 9 px of a 1024 px frame
+/// at 1°). Whole-width windows did better still on the (level) evaluation; 0.05 of the
+/// width left DEPTH16 view 1 a third more wrong.
+const HORIZON_WINDOW: f64 = 0.5;
 
 /// One vertical run of pixels beyond the reach: column `x`, rows `top..end`.
 struct Run {
@@ -525,6 +529,21 @@ mod tests {
         let (work, plain) = ground_behind([0.2, 0.25, 0.35]);
         let between = plain[5 * w + 1]..lawn_behind;
         assert!(between.contains(&work[5 * w + 1]), "{work:?} {between:?}");
+    }
+
+    #[test]
+    fn the_horizon_is_looked_for_half_the_width_either_side() {
+        // Ten columns under a far city that hides the sky below row 3, but for the
+        // street's end in column 9, where the sky comes down to row 5: columns within
+        // half the width of it (5 columns) have their horizon there, the others at the
+        // city's skyline.
+        let (w, h) = (10, 8);
+        let (sky, _, beyond) = frame(w, h, |x, y| y < if x == 9 { 5 } else { 3 });
+        let runs = runs_of(&beyond, w, h);
+        let horizon = horizon_rows(&runs, |r| r.top > 0 && sky[(r.top - 1) * w + r.x], w);
+        for (x, hz) in horizon.iter().enumerate() {
+            assert_eq!(*hz, Some(if x >= 4 { 4.5 } else { 2.5 }), "column {x}");
+        }
     }
 
     #[test]
