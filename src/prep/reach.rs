@@ -258,12 +258,13 @@ const GROUND_WINDOW: f64 = 1.0 / 32.0;
 /// facade, a car are upright, so their range up a column is that of their foot, not the
 /// ground's receding behind them ([`recede`] draws them as ground, fading into the sky
 /// from the foot up). Walking up each run that meets the scene below, a pixel of the
-/// ground's colours (one material, [`one_material`], with the scene just below the reach
-/// within [`GROUND_WINDOW`], or with the last ground pixel below it in the column, as the
-/// ground's colour drifts with distance) is ground; the pixels of another material just
+/// ground's colours (one material, [`one_material`], with the ground just below the reach
+/// nearby, [`Reach::ground_colours`], or with the last ground pixel below it in the
+/// column, as the ground's colour drifts with distance) is ground; the pixels of another material just
 /// above ground are an object standing there, as far as its material goes on, and take
 /// the range of its lowest pixel where that is nearer, if it is upright: it rises above
-/// the horizon, or the ground is seen again above it. A flat surface of another material
+/// the horizon, or the ground is seen again above it (or above its top face, which, seen
+/// from above, may be lit far brighter). A flat surface of another material
 /// reaching the far scene (water up to the far shore) is neither. What lies above an
 /// object without ground between (a far tower behind a box, the box's top face) keeps
 /// [`recede`]'s range: its foot is hidden.
@@ -310,10 +311,23 @@ fn stand_upright(
             {
                 y -= 1;
             }
+            let tall = foot + 1 - y >= MIN_OBJECT_ROWS;
+            // Its top face, seen from above, may be lit far brighter than its front: up to
+            // half as many rows of its chromaticity at any brightness, with the ground above.
+            let mut top = y;
+            while top > r.top
+                && 2 * (y - (top - 1)) <= foot + 1 - y
+                && !is_ground(top - 1, last)
+                && shaded_alike(guide, at(top - 1), at(top), MAX_FACE_SHADING)
+            {
+                top -= 1;
+            }
+            if top < y && top > r.top && is_ground(top - 1, last) {
+                y = top;
+            }
             let near_foot = foot as f64 - hz >= MIN_FOOT_ROWS_BELOW_HORIZON;
             let over_horizon = (y as f64) < hz;
             let ground_above = y > r.top && is_ground(y - 1, last);
-            let tall = foot + 1 - y >= MIN_OBJECT_ROWS;
             if near_foot && tall && (over_horizon || ground_above) {
                 let v = work[at(foot)];
                 (y..=foot).for_each(|k| work[at(k)] = work[at(k)].min(v));
@@ -340,6 +354,10 @@ const MIN_OBJECT_ROWS: usize = 3;
 const CHROMA_TOLERANCE: f32 = 0.04;
 /// Largest ratio of two pixels' brightness (the sum) for one material.
 const MAX_SHADING: f32 = 3.0;
+/// Largest ratio of brightness between an object's front and its top face above it: a
+/// box's sunlit top over its front in shade (3.7 times as bright on the phone evaluation's
+/// red box, whose top face hid the ground seen above it).
+const MAX_FACE_SHADING: f32 = 8.0;
 
 /// Whether pixel `m` lies between `a` and `b` in every channel (within a tenth of their
 /// difference): a blend of the two, as an edge resampled to a coarser grid is.
@@ -356,10 +374,16 @@ fn blends(guide: &ColourGuide, a: usize, m: usize, b: usize) -> bool {
 /// within [`MAX_SHADING`] (a checkered or shaded ground, a face in light and shade), which
 /// a colour step does not allow (two tones of one lawn differ by 30 %).
 fn one_material(guide: &ColourGuide, p: usize, q: usize) -> bool {
+    shaded_alike(guide, p, q, MAX_SHADING)
+}
+
+/// Whether pixels `p` and `q` have the same chromaticity (within [`CHROMA_TOLERANCE`]) and
+/// brightnesses within a factor `max_shading`.
+fn shaded_alike(guide: &ColourGuide, p: usize, q: usize, max_shading: f32) -> bool {
     let (a, b) = (guide.colour_at(p), guide.colour_at(q));
     let (sa, sb) = (a.iter().sum::<f32>(), b.iter().sum::<f32>());
     let floor = 1e-4;
-    if !(sa > floor && sb > floor) || sa.max(sb) > MAX_SHADING * sa.min(sb) {
+    if !(sa > floor && sb > floor) || sa.max(sb) > max_shading * sa.min(sb) {
         return false;
     }
     (0..3).all(|c| (a[c] / sa - b[c] / sb).abs() <= CHROMA_TOLERANCE)
@@ -679,6 +703,22 @@ mod tests {
         });
         assert!(
             moved_only(&work, &plain, 12..=18, plain[2 * 18 + 1]),
+            "{work:?}"
+        );
+    }
+
+    #[test]
+    fn a_box_seen_from_above_stands_with_its_top_face() {
+        // The right column: a red box's front in shade (rows 20-30) under its sunlit top
+        // face (row 19, 3.7 times as bright), the lawn seen above it.
+        let front = [0.2, 0.06, 0.05];
+        let (work, plain) = recede_with_and_without_the_image(5, |x, y| match (x, y) {
+            (1, 19) => Some(front.map(|c| 3.7 * c)),
+            (1, 20..=30) => Some(front),
+            _ => None,
+        });
+        assert!(
+            moved_only(&work, &plain, 19..=30, plain[2 * 30 + 1]),
             "{work:?}"
         );
     }
