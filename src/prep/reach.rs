@@ -531,17 +531,7 @@ mod tests {
                 (1, _) => behind,
                 _ => lawn(y),
             });
-            let guide = ColourGuide::new(&image, 0.08);
-            let mut plain = work.clone();
-            recede(
-                &mut work,
-                (&sky, &beyond),
-                (w, h),
-                (10.0, 40.0),
-                Some(&guide),
-            );
-            recede(&mut plain, (&sky, &beyond), (w, h), (10.0, 40.0), None);
-            (work, plain)
+            guided_and_plain(work, (&sky, &beyond), (w, h), &image)
         };
         let (work, plain) = ground_behind(lawn(5));
         for y in 1..6 {
@@ -621,22 +611,26 @@ mod tests {
     ) -> (Vec<f32>, Vec<f32>) {
         let (w, h) = (2, 40);
         let is_sky = |x: usize, y: usize| y < if x == 1 { right_sky } else { 5 };
-        let (sky, mut work, beyond) = frame(w, h, is_sky);
+        let (sky, work, beyond) = frame(w, h, is_sky);
         let image = RgbImage::from_fn(w, h, |x, y| match colour(x, y) {
             _ if is_sky(x, y) => [0.5, 0.6, 0.9],
             Some(c) => c,
             None => lawn(y),
         });
+        guided_and_plain(work, (&sky, &beyond), (w, h), &image)
+    }
+
+    /// [`recede`] of `work` (`Rmax` 10, `Smax` 40) with `image` as guide, and without.
+    fn guided_and_plain(
+        mut work: Vec<f32>,
+        (sky, beyond): (&[bool], &[bool]),
+        (w, h): (usize, usize),
+        image: &RgbImage,
+    ) -> (Vec<f32>, Vec<f32>) {
         let mut plain = work.clone();
-        let guide = ColourGuide::new(&image, 0.08);
-        recede(
-            &mut work,
-            (&sky, &beyond),
-            (w, h),
-            (10.0, 40.0),
-            Some(&guide),
-        );
-        recede(&mut plain, (&sky, &beyond), (w, h), (10.0, 40.0), None);
+        let guide = ColourGuide::new(image, 0.08);
+        recede(&mut work, (sky, beyond), (w, h), (10.0, 40.0), Some(&guide));
+        recede(&mut plain, (sky, beyond), (w, h), (10.0, 40.0), None);
         (work, plain)
     }
 
@@ -644,6 +638,19 @@ mod tests {
     fn moved_only(work: &[f32], plain: &[f32], rows: RangeInclusive<usize>, foot: f32) -> bool {
         let standing = |p: usize| p % 2 == 1 && rows.contains(&(p / 2));
         (0..work.len()).all(|p| work[p] == if standing(p) { foot } else { plain[p] })
+    }
+
+    /// Asserts that with the image the right column's `rows` stand at the range of their
+    /// lowest row, the frame of [`recede_with_and_without_the_image`] otherwise as
+    /// without it.
+    fn assert_stands(
+        right_sky: usize,
+        colour: impl Fn(usize, usize) -> Option<[f32; 3]>,
+        rows: RangeInclusive<usize>,
+    ) {
+        let (work, plain) = recede_with_and_without_the_image(right_sky, colour);
+        let foot = plain[2 * *rows.end() + 1];
+        assert!(moved_only(&work, &plain, rows, foot), "{work:?}");
     }
 
     #[test]
@@ -668,12 +675,10 @@ mod tests {
         // comes down to row 4 on the left); then one on a slate box (rows 20-30), which
         // neither rises over the horizon nor has the lawn above it: both recede.
         let brown = [0.3, 0.15, 0.05];
-        let (work, plain) = recede_with_and_without_the_image(2, |x, y| {
-            (x == 1 && (2..=30).contains(&y)).then_some(brown)
-        });
-        assert!(
-            moved_only(&work, &plain, 2..=30, plain[2 * 30 + 1]),
-            "{work:?}"
+        assert_stands(
+            2,
+            |x, y| (x == 1 && (2..=30).contains(&y)).then_some(brown),
+            2..=30,
         );
         let (work, plain) = recede_with_and_without_the_image(2, |x, y| match (x, y) {
             (1, 20..=30) => Some([0.2, 0.25, 0.35]),
@@ -694,16 +699,11 @@ mod tests {
             [r + d, g - d, b]
         };
         let slate = [0.2, 0.25, 0.35];
-        let (work, plain) = recede_with_and_without_the_image(5, |x, y| {
-            Some(if x == 1 && (12..=18).contains(&y) {
-                slate
-            } else {
-                drifted(y)
-            })
-        });
-        assert!(
-            moved_only(&work, &plain, 12..=18, plain[2 * 18 + 1]),
-            "{work:?}"
+        let box_ = |x: usize, y: usize| x == 1 && (12..=18).contains(&y);
+        assert_stands(
+            5,
+            |x, y| Some(if box_(x, y) { slate } else { drifted(y) }),
+            12..=18,
         );
     }
 
@@ -712,15 +712,12 @@ mod tests {
         // The right column: a red box's front in shade (rows 20-30) under its sunlit top
         // face (row 19, 3.7 times as bright), the lawn seen above it.
         let front = [0.2, 0.06, 0.05];
-        let (work, plain) = recede_with_and_without_the_image(5, |x, y| match (x, y) {
+        let colour = |x, y| match (x, y) {
             (1, 19) => Some(front.map(|c| 3.7 * c)),
             (1, 20..=30) => Some(front),
             _ => None,
-        });
-        assert!(
-            moved_only(&work, &plain, 19..=30, plain[2 * 30 + 1]),
-            "{work:?}"
-        );
+        };
+        assert_stands(5, colour, 19..=30);
     }
 
     #[test]
@@ -733,11 +730,7 @@ mod tests {
         };
         let (work, plain) = recede_with_and_without_the_image(2, tower(7));
         assert_eq!(work, plain);
-        let (work, plain) = recede_with_and_without_the_image(2, tower(8));
-        assert!(
-            moved_only(&work, &plain, 2..=8, plain[2 * 8 + 1]),
-            "{work:?}"
-        );
+        assert_stands(2, tower(8), 2..=8);
     }
 
     #[test]
