@@ -313,7 +313,8 @@ fn stand_upright(
             }
             let tall = foot + 1 - y >= MIN_OBJECT_ROWS;
             // Its top face, seen from above, may be lit far brighter than its front: up to
-            // half as many rows of its chromaticity at any brightness, with the ground above.
+            // half as many rows of its chromaticity, each within MAX_FACE_SHADING of the
+            // brightness of the one below, with the ground above.
             let mut top = y;
             while top > r.top
                 && 2 * (y - (top - 1)) <= foot + 1 - y
