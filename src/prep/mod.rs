@@ -481,8 +481,13 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         let mask = beyond_reach.as_mut_slice();
         found.beyond_reach.iter().for_each(|&p| mask[p] = true);
         let s_max = (opts.sky_range_factor * f64::from(stats.r_max)) as f32;
-        let range = (stats.r_max, s_max);
-        reach::recede(&mut work, (&sky, mask), (w, h), range, guide.as_ref());
+        reach::recede(
+            &mut work,
+            (&sky, mask),
+            (w, h),
+            (stats.r_max, s_max),
+            guide.as_ref(),
+        );
         stats.beyond_reach = found.beyond_reach.len();
     }
     for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {

@@ -55,19 +55,19 @@ pub(crate) fn take_out_reached_in_part(
     let mut state = vec![0u8; w * h];
     beyond.iter().for_each(|&p| state[p] = 1);
     let known = |p: usize| work[p].is_finite() && !sky[p];
-    let (mut regions, mut reached) = (Vec::new(), false);
+    let mut pixels = Vec::new();
     for &seed in beyond.iter() {
         if state[seed] != 1 {
             continue;
         }
-        let c = flood(w, h, seed, &mut regions, |p, q| {
+        pixels.clear();
+        let c = flood(w, h, seed, &mut pixels, |p, q| {
             let take = state[q] == 1 && (p == q || one_material(guide, p, q));
             if take {
                 state[q] = 2;
             }
             take
         });
-        let pixels = &regions[c.start..c.start + c.len];
         let under_reached = pixels
             .iter()
             .map(|&p| p as usize)
@@ -76,12 +76,9 @@ pub(crate) fn take_out_reached_in_part(
         let columns = c.bbox[2] + 1 - c.bbox[0];
         if under_reached as f64 >= MIN_REACHED_SHARE * columns as f64 {
             pixels.iter().for_each(|&p| state[p as usize] = 0);
-            reached = true;
         }
     }
-    if reached {
-        beyond.retain(|&p| state[p] != 0);
-    }
+    beyond.retain(|&p| state[p] != 0);
 }
 
 /// Half the width of the window in which a column's horizon is looked for, as a fraction
@@ -136,9 +133,7 @@ pub(crate) fn recede(
     let runs = runs_of(beyond, w, h);
     let open_sky = sky_from_the_top(sky, w, h);
     let horizon = horizon_rows(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w);
-    let reach = Reach::new(&runs, work, sky, (w, h), r_max);
-    let half = ((GROUND_WINDOW * w as f64).ceil() as usize).max(1);
-    let mut ground = Vec::new();
+    let reach = Reach::new(&runs, (work, sky), (w, h), r_max, guide);
     let (lo, hi) = (f64::from(r_max).ln(), f64::from(s_max).ln());
     for r in &runs {
         let above_sky = r.top.checked_sub(1).is_none_or(|y| sky[y * w + r.x]);
@@ -164,10 +159,10 @@ pub(crate) fn recede(
         if let Some(guide) =
             guide.filter(|_| !below_sky && work[r.end * w + r.x] < AT_THE_REACH * r_max)
         {
-            reach.ground_colours(r.x, half, guide, &mut ground);
             let lowest = (r.end - 1) * w + r.x;
             let over_horizon = horizon[r.x].is_some_and(|hz| contour < hz);
             let behind = reach.contour(r.x).unwrap_or(f64::MIN).max(contour);
+            let ground = reach.ground_colours(r.x);
             if over_horizon || ground.iter().any(|&q| one_material(guide, lowest, q)) {
                 contour = behind;
             } else {
@@ -195,13 +190,21 @@ const AT_THE_REACH: f32 = 0.8;
 
 /// The ground at the sensor's reach: the columns whose lowest run meets the scene at the
 /// reach (at least [`AT_THE_REACH`] of `Rmax`), left to right, each with its contour (the
-/// boundary row above the scene) and the scene's pixel below it.
+/// boundary row above the scene) and the scene's pixel below it; with the image, each
+/// column's ground colours.
 struct Reach {
     columns: Vec<(usize, f64, usize)>,
+    ground: Vec<Vec<usize>>,
 }
 
 impl Reach {
-    fn new(runs: &[Run], work: &[f32], sky: &[bool], (w, h): (usize, usize), r_max: f32) -> Self {
+    fn new(
+        runs: &[Run],
+        (work, sky): (&[f32], &[bool]),
+        (w, h): (usize, usize),
+        r_max: f32,
+        guide: Option<&ColourGuide>,
+    ) -> Self {
         let mut lowest: Vec<Option<&Run>> = vec![None; w];
         for r in runs.iter().filter(|r| r.meets_scene(sky, (w, h))) {
             lowest[r.x] = Some(r);
@@ -210,7 +213,15 @@ impl Reach {
             .map(|r| (r.x, r.end as f64 - 0.5, r.end * w + r.x))
             .filter(|&(_, _, below)| work[below] >= AT_THE_REACH * r_max)
             .collect();
-        Reach { columns }
+        let mut reach = Reach {
+            columns,
+            ground: Vec::new(),
+        };
+        if let Some(guide) = guide {
+            let half = ((GROUND_WINDOW * w as f64).ceil() as usize).max(1);
+            reach.ground = (0..w).map(|x| reach.ground_near(x, half, guide)).collect();
+        }
+        reach
     }
 
     /// Column `x`'s contour: its own, or interpolated between the nearest columns at the
@@ -230,10 +241,15 @@ impl Reach {
     }
 
     /// One pixel of each of the ground's materials ([`one_material`]) seen just below the
-    /// reach near column `x`, into `out`: within `half` columns of it, or else at the
+    /// reach near column `x` (given the image; empty without it).
+    fn ground_colours(&self, x: usize) -> &[usize] {
+        self.ground.get(x).map_or(&[], Vec::as_slice)
+    }
+
+    /// [`Reach::ground_colours`] of column `x`: within `half` columns of it, or else at the
     /// nearest columns at the reach either side (under a wide box).
-    fn ground_colours(&self, x: usize, half: usize, guide: &ColourGuide, out: &mut Vec<usize>) {
-        out.clear();
+    fn ground_near(&self, x: usize, half: usize, guide: &ColourGuide) -> Vec<usize> {
+        let mut out = Vec::new();
         let from = self.columns.partition_point(|c| c.0 + half < x);
         let to = self.columns.partition_point(|c| c.0 <= x + half);
         let near = if from < to {
@@ -246,6 +262,7 @@ impl Reach {
                 out.push(q);
             }
         }
+        out
     }
 }
 
@@ -276,11 +293,9 @@ fn stand_upright(
     (w, h): (usize, usize),
     guide: &ColourGuide,
 ) {
-    let half = ((GROUND_WINDOW * w as f64).ceil() as usize).max(1);
-    let mut ground = Vec::new();
     for r in runs.iter().filter(|r| r.meets_scene(sky, (w, h))) {
         let Some(hz) = horizon[r.x] else { continue };
-        reach.ground_colours(r.x, half, guide, &mut ground);
+        let ground = reach.ground_colours(r.x);
         let at = |y: usize| y * w + r.x;
         let of_the_ground: Vec<bool> = (r.top..r.end)
             .map(|y| ground.iter().any(|&q| one_material(guide, at(y), q)))
