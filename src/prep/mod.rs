@@ -326,6 +326,11 @@ pub struct Prepared {
     /// range recedes from `Rmax` to `Smax` linearly in log range, which physical fog reads
     /// as the ground's recession toward the horizon (`PreparedPhoto::metres`).
     pub beyond_reach: Grid<bool>,
+    /// The pixels of [`Prepared::beyond_reach`] whose range is the ground's recession
+    /// toward the horizon (and the sky's range above it), not that of something standing
+    /// on the ground, held at its foot's: the refinement interpolates them when it
+    /// upsamples the range ([`crate::refine::refine_prepared`]).
+    pub receding: Grid<bool>,
     /// What was found and timings.
     pub stats: PrepStats,
 }
@@ -477,17 +482,21 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         &mut stats,
     )?;
     let mut beyond_reach = Grid::filled(w, h, false);
+    let mut receding = Grid::filled(w, h, false);
     if !found.beyond_reach.is_empty() {
         let mask = beyond_reach.as_mut_slice();
         found.beyond_reach.iter().for_each(|&p| mask[p] = true);
         let s_max = (opts.sky_range_factor * f64::from(stats.r_max)) as f32;
-        reach::recede(
+        let held = reach::recede(
             &mut work,
             (&sky, mask),
             (w, h),
             (stats.r_max, s_max),
             guide.as_ref(),
         );
+        receding.as_mut_slice().copy_from_slice(mask);
+        held.iter()
+            .for_each(|&p| receding.as_mut_slice()[p] = false);
         stats.beyond_reach = found.beyond_reach.len();
     }
     for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {
@@ -518,6 +527,7 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         sky: Grid::from_vec(w, h, sky),
         filled: Grid::from_vec(w, h, filled),
         beyond_reach,
+        receding,
         stats,
     })
 }

@@ -122,14 +122,15 @@ impl Run {
 /// where it is the ground behind or rises over the horizon, and from halfway between
 /// where it is something else whose foot the box hides. The known range beside a run (a
 /// near pole) is not used: it says nothing of the background behind the pole, and
-/// blending it in would draw a clear halo round the pole.
+/// blending it in would draw a clear halo round the pole. Returns the pixels of what
+/// stands on the ground, held at its foot's range ([`stand_upright`]); the others recede.
 pub(crate) fn recede(
     work: &mut [f32],
     (sky, beyond): (&[bool], &[bool]),
     (w, h): (usize, usize),
     (r_max, s_max): (f32, f32),
     guide: Option<&ColourGuide>,
-) {
+) -> Vec<usize> {
     let runs = runs_of(beyond, w, h);
     let open_sky = sky_from_the_top(sky, w, h);
     let horizon = horizon_rows(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w);
@@ -178,8 +179,9 @@ pub(crate) fn recede(
             work[y * w + r.x] = (lo + t * (hi - lo)).exp() as f32;
         }
     }
-    if let Some(guide) = guide {
-        stand_upright(work, (&runs, &reach), &horizon, sky, (w, h), guide);
+    match guide {
+        Some(guide) => stand_upright(work, (&runs, &reach), &horizon, sky, (w, h), guide),
+        None => Vec::new(),
     }
 }
 
@@ -284,7 +286,7 @@ const GROUND_WINDOW: f64 = 1.0 / 32.0;
 /// from above, may be lit far brighter). A flat surface of another material
 /// reaching the far scene (water up to the far shore) is neither. What lies above an
 /// object without ground between (a far tower behind a box, the box's top face) keeps
-/// [`recede`]'s range: its foot is hidden.
+/// [`recede`]'s range: its foot is hidden. Returns the pixels held.
 fn stand_upright(
     work: &mut [f32],
     (runs, reach): (&[Run], &Reach),
@@ -292,7 +294,8 @@ fn stand_upright(
     sky: &[bool],
     (w, h): (usize, usize),
     guide: &ColourGuide,
-) {
+) -> Vec<usize> {
+    let mut held = Vec::new();
     for r in runs.iter().filter(|r| r.meets_scene(sky, (w, h))) {
         let Some(hz) = horizon[r.x] else { continue };
         let ground = reach.ground_colours(r.x);
@@ -346,11 +349,17 @@ fn stand_upright(
             let ground_above = y > r.top && is_ground(y - 1, last);
             if near_foot && tall && (over_horizon || ground_above) {
                 let v = work[at(foot)];
-                (y..=foot).for_each(|k| work[at(k)] = work[at(k)].min(v));
+                for p in (y..=foot).map(at) {
+                    if work[p] > v {
+                        work[p] = v;
+                        held.push(p);
+                    }
+                }
             }
             on_ground = false;
         }
     }
+    held
 }
 
 /// Least distance of an object's foot below the horizon, in rows of the depth's grid: the

@@ -38,6 +38,7 @@
 //! [`guided_range_reference`] is the same computation on the CPU in f64, the judge of the
 //! GPU passes (`Pipeline::refine_range`).
 
+mod beyond;
 mod step;
 
 pub use step::{

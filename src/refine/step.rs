@@ -4,6 +4,7 @@
 //! passes ([`crate::Renderer`]) and their f64 CPU references ([`CpuFilter`]) are
 //! interchangeable behind [`RangeFilter`].
 
+use super::beyond::RecedingCells;
 use super::{check_positive, nearest_to_image_size, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR};
 use crate::error::{Error, Result};
 use crate::io::depth::DepthFormat;
@@ -234,6 +235,19 @@ pub fn refine_range(
     opts: &RefineOptions,
     filter: &mut dyn RangeFilter,
 ) -> Result<ScalarMap> {
+    refine_with_masks(image, range, (filled, None), opts, filter)
+}
+
+/// [`refine_range`], with the receding ground beyond the sensor's reach and the sky (on
+/// the range's grid) interpolated when the range is upsampled
+/// ([`super::beyond::interpolate_receding`]).
+fn refine_with_masks(
+    image: &RgbImage,
+    range: &ScalarMap,
+    (filled, receding): (Option<&Grid<bool>>, Option<RecedingCells>),
+    opts: &RefineOptions,
+    filter: &mut dyn RangeFilter,
+) -> Result<ScalarMap> {
     opts.validate()?;
     let (w, h) = (image.width(), image.height());
     super::check_depth_size((w, h), (range.width(), range.height()))?;
@@ -253,7 +267,11 @@ pub fn refine_range(
     let positive = range.map(|&v| if v == 0.0 { nearest } else { v });
     check_positive(&positive)?;
     let mut out = if plan.upsample {
-        filter.upsample(image, &positive, opts.upsample_sigma_colour)?
+        let mut up = filter.upsample(image, &positive, opts.upsample_sigma_colour)?;
+        if let Some(masks) = receding {
+            super::beyond::interpolate_receding(&positive, masks, &mut up);
+        }
+        up
     } else {
         positive
     };
@@ -285,7 +303,8 @@ pub fn refine_range(
 }
 
 /// [`refine_range`] on a pre-processed range, in place: its range is refined with what
-/// pre-processing filled as the unreliable pixels, and its sky and filled masks are
+/// pre-processing filled as the unreliable pixels, the ground it found receding beyond the
+/// sensor's reach interpolated as it recedes ([`Prepared::receding`]), and its masks are
 /// brought to the image's size with it. Returns the plan that ran.
 pub fn refine_prepared(
     image: &RgbImage,
@@ -299,10 +318,15 @@ pub fn refine_prepared(
     if plan.is_empty() {
         return Ok(plan);
     }
-    prepared.range = refine_range(image, &prepared.range, Some(&prepared.filled), opts, filter)?;
+    let masks = (
+        Some(&prepared.filled),
+        Some((&prepared.receding, &prepared.sky)),
+    );
+    prepared.range = refine_with_masks(image, &prepared.range, masks, opts, filter)?;
     prepared.sky = nearest_to_image_size(&prepared.sky, w, h);
     prepared.filled = nearest_to_image_size(&prepared.filled, w, h);
     prepared.beyond_reach = nearest_to_image_size(&prepared.beyond_reach, w, h);
+    prepared.receding = nearest_to_image_size(&prepared.receding, w, h);
     Ok(plan)
 }
 
