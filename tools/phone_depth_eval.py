@@ -45,7 +45,7 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
     python3 tools/phone_depth_eval.py OUT_DIR [--brume target/release/brume]
         [--format arcore|android-depth16] [--size 1024x512] [--factor 8] [--fov 45]
         [--beta 0.02] [--position 0,1.7,0]
-        [--yaw 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
+        [--yaw 0] [--pitch 0] [--roll 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
         [--margin PX]  (passed to brume render)
         [--docs DIR]   (also copy fog_truth and fog_phone_none there as refine-phone-*.png)
 
@@ -55,6 +55,7 @@ Needs numpy, OpenCV and the brume binary (headless EGL; llvmpipe is fine). About
 
 import argparse
 import json
+import math
 import os
 import shutil
 import sys
@@ -63,7 +64,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stereo_refine_eval import (  # noqa: E402
-    cv2, near_edges, print_error_table, run, stats, tau_from_two_airlights,
+    cv2, near_edges, print_error_table, read_pfm, run, stats, tau_from_two_airlights,
     truth_from_zbuffer)
 
 MODES = ("none", "guided", "unreliable", "repair")
@@ -123,6 +124,39 @@ def write_phone(path, depth_m, fmt):
     cv2.imwrite(path, mm.astype(np.uint16))
 
 
+def render_scene(a, W, H, colour_path, zbuffer_path):
+    """``brume scene`` at W x H, its colour and z-buffer. With ``--roll``, rendered larger
+    at the same focal length and turned about the image's centre (a roll about the optical
+    axis of a pinhole camera turns its image and leaves each pixel's eye depth), nearest
+    pixel for both so that colour and depth stay one."""
+    if a.roll == 0.0:
+        W2, H2, fov = W, H, a.fov
+    else:
+        t = math.radians(abs(a.roll))
+        W2 = int(math.ceil(W * math.cos(t) + H * math.sin(t))) + 2
+        H2 = int(math.ceil(W * math.sin(t) + H * math.cos(t))) + 2
+        focal = (H / 2.0) / math.tan(math.radians(a.fov) / 2.0)
+        fov = math.degrees(2.0 * math.atan((H2 / 2.0) / focal))
+    big_colour, big_z = colour_path + ".big.png", zbuffer_path + ".big.pfm"
+    run([a.brume, "scene", "--fog", "none", "--size", f"{W2}x{H2}", "--yaw", str(a.yaw),
+         "--pitch", str(a.pitch), "--fov", str(fov), "--near", str(a.near), "--far",
+         str(a.far), "--position", a.position, "--out", big_colour, "--depth-out", big_z])
+    # Output pixel (x, y) samples the rendered one at the centre + rot(−roll)·(offset).
+    c = math.cos(math.radians(a.roll))
+    s = math.sin(math.radians(a.roll))
+    cx2, cy2, cx, cy = (W2 - 1) / 2.0, (H2 - 1) / 2.0, (W - 1) / 2.0, (H - 1) / 2.0
+    # Image rows grow downward, so a counter-clockwise turn of the camera turns the
+    # picture clockwise on the screen.
+    m = np.array([[c, -s, cx2 - c * cx + s * cy], [s, c, cy2 - s * cx - c * cy]])
+    flags = cv2.INTER_NEAREST | cv2.WARP_INVERSE_MAP
+    colour = cv2.warpAffine(cv2.imread(big_colour), m, (W, H), flags=flags)
+    zbuf = cv2.warpAffine(read_pfm(big_z).astype(np.float32), m, (W, H), flags=flags)
+    cv2.imwrite(colour_path, colour)
+    write_pfm(zbuffer_path, zbuf)
+    os.remove(big_colour)
+    os.remove(big_z)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out_dir")
@@ -137,6 +171,8 @@ def main():
     ap.add_argument("--position", default="0,1.7,0")
     ap.add_argument("--yaw", type=float, default=0.0)
     ap.add_argument("--pitch", type=float, default=0.0)
+    ap.add_argument("--roll", type=float, default=0.0,
+                    help="the camera turned about its axis (degrees, positive counter-clockwise)")
     ap.add_argument("--bleed", type=int, default=1, help="smoothing radius in cells (0: none)")
     ap.add_argument("--noise-base", type=float, default=0.01, help="relative noise at 0 m")
     ap.add_argument("--noise-per-m", type=float, default=0.0015,
@@ -156,10 +192,7 @@ def main():
     B = a.brume
 
     # 1. The photo and the truth.
-    run([B, "scene", "--fog", "none", "--size", f"{W}x{H}", "--yaw", str(a.yaw),
-         "--pitch", str(a.pitch), "--fov", str(a.fov), "--near", str(a.near), "--far",
-         str(a.far), "--position", a.position, "--out", o("left.png"),
-         "--depth-out", o("left_z.pfm")])
+    render_scene(a, W, H, o("left.png"), o("left_z.pfm"))
     _, sky, z, R_true = truth_from_zbuffer(o("left_z.pfm"), a.fov, a.near, a.far)
     tau_true = np.where(sky, 0.0, np.exp(-a.beta * R_true))
     write_pfm(o("truth_range.pfm"), np.where(sky, np.inf, R_true))
@@ -195,7 +228,8 @@ def main():
     results = {"setup": {"format": a.format, "size": [W, H], "factor": a.factor,
                          "fov_deg": a.fov,
                          "beta": a.beta, "position": a.position, "yaw": a.yaw,
-                         "pitch": a.pitch, "bleed": a.bleed, "noise_base": a.noise_base,
+                         "pitch": a.pitch, "roll": a.roll, "bleed": a.bleed,
+                         "noise_base": a.noise_base,
                          "noise_per_m": a.noise_per_m, "seed": a.seed,
                          "phone_unknown_fraction": float((~np.isfinite(z_phone)).mean()),
                          "sky_fraction": float(sky.mean()),
