@@ -155,10 +155,11 @@
 //!    than the reach, a box's top edge: where it meets the ground at the reach beside, for
 //!    the ground behind the box) to `Smax` at the horizon, linearly in log
 //!    range, and is `Smax` above the horizon; the horizon is the lowest row the sky comes
-//!    down to within half the width either side (between far towers; only the sky
-//!    that reaches the top row: sky seen in water is no horizon), so the
-//!    ground below a far tower recedes as the ground beside it (the tower's own skyline
-//!    would draw its ghost down to the ground). With the image, what stands on that
+//!    down to (between far towers; only the sky that reaches the top row: sky seen in
+//!    water is no horizon), along the tilt of the reach's contour on the ground across
+//!    the whole width where that tells the camera's roll, else level within half the
+//!    width either side, so the ground below a far tower recedes as the ground beside it
+//!    (the tower's own skyline would draw its ghost down to the ground). With the image, what stands on that
 //!    ground (a pixel run of another material just above the ground's materials, or the
 //!    last ground's below it as the colour drifts with distance, rising over the horizon
 //!    or with the ground seen again above it, its foot at least three rows of the grid
@@ -213,6 +214,7 @@ mod border;
 mod components;
 pub mod edt;
 mod fill;
+mod horizon;
 mod local;
 mod margin;
 mod options;

@@ -3,6 +3,7 @@
 
 use super::components::{flood, label_mask};
 use super::fill::ColourGuide;
+use super::horizon;
 use super::ImageSkyRules;
 
 /// The pixels of the depth rules' sky left out of `sky`: the scene beyond the sensor's
@@ -81,17 +82,6 @@ pub(crate) fn take_out_reached_in_part(
     beyond.retain(|&p| state[p] != 0);
 }
 
-/// Half the width of the window in which a column's horizon is looked for, as a fraction
-/// of the image's width: wide enough that a far city hiding the horizon does not raise it
-/// (in a street the sky comes down to the horizon only at the street's end, in the middle
-/// of the frame; view 2 of the phone evaluation sees it only at its right edge, and a
-/// quarter of the width put the horizon 3 rows of a 1/8 map too high on the left), narrow
-/// enough that a horizon tilted by the camera's roll is taken near the column (the window
-/// puts it up to half the width times the roll's slope too low: 9 px of a 1024 px frame
-/// at 1°). Whole-width windows did better still on the (level) evaluation; 0.05 of the
-/// width left DEPTH16 view 1 a third more wrong.
-const HORIZON_WINDOW: f64 = 0.5;
-
 /// One vertical run of pixels beyond the reach: column `x`, rows `top..end`.
 struct Run {
     x: usize,
@@ -111,13 +101,14 @@ impl Run {
 /// least as far as the farthest range measured) to `s_max` (the sky's): what the sensor
 /// did not reach is the ground receding toward the horizon and what stands on it. In each
 /// column the fill goes from `r_max` where a run meets the scene below it to `s_max` at
-/// the column's horizon, the lowest row the sky reaching the top row comes down to within
-/// [`HORIZON_WINDOW`] of it (between far towers), and is `s_max` above it; a run with the
-/// sky (or the image's bottom border) below it is `s_max`. The horizon is shared by
-/// neighbouring columns so that the ground below a far tower recedes as the ground beside
-/// it (a column's own skyline would draw the tower's ghost down to the ground); without
-/// one (no sky above any run nearby, or not above the run), the run recedes from its
-/// lower end to its upper end. With the image, a run standing on something nearer than
+/// the column's horizon ([`horizon::horizon_rows`]: the lowest row the sky reaching the
+/// top row comes down to, along the tilt of the reach's contour on the ground where that
+/// tells it, else level and nearby; between far towers), and is `s_max` above it; a run
+/// with the sky (or the image's bottom border) below it is `s_max`. The horizon is shared
+/// by neighbouring columns so that the ground below a far tower recedes as the ground
+/// beside it (a column's own skyline would draw the tower's ghost down to the ground);
+/// without one (no sky above any run nearby, or not above the run), the run recedes from
+/// its lower end to its upper end. With the image, a run standing on something nearer than
 /// the reach (a box's top edge) recedes from the reach's contour on the ground ([`Reach`])
 /// where it is the ground behind or rises over the horizon, and from halfway between
 /// where it is something else whose foot the box hides. The known range beside a run (a
@@ -133,8 +124,12 @@ pub(crate) fn recede(
 ) -> Vec<usize> {
     let runs = runs_of(beyond, w, h);
     let open_sky = sky_from_the_top(sky, w, h);
-    let horizon = horizon_rows(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w);
     let reach = Reach::new(&runs, (work, sky), (w, h), r_max, guide);
+    let contour: Vec<(usize, f64)> = reach.columns.iter().map(|c| (c.0, c.1)).collect();
+    let horizon = horizon::horizon_rows(
+        &skyline(&runs, |r| r.top > 0 && open_sky[(r.top - 1) * w + r.x], w),
+        horizon::tilt_of_contour(&contour, w),
+    );
     let (lo, hi) = (f64::from(r_max).ln(), f64::from(s_max).ln());
     for r in &runs {
         let above_sky = r.top.checked_sub(1).is_none_or(|y| sky[y * w + r.x]);
@@ -313,11 +308,11 @@ const GROUND_WINDOW: f64 = 1.0 / 32.0;
 /// from the foot up). Walking up each run that meets the scene below, a pixel of the
 /// ground's colours (one material, [`one_material`], with the ground just below the reach
 /// nearby, [`Reach::ground_colours`], or with the last ground pixel below it in the
-/// column, as the ground's colour drifts with distance) is ground; the pixels of another material just
-/// above ground are an object standing there, as far as its material goes on, and take
-/// the range of its lowest pixel where that is nearer, if it is upright: it rises above
-/// the horizon, or the ground is seen again above it (or above its top face, which, seen
-/// from above, may be lit far brighter). A flat surface of another material
+/// column, as the ground's colour drifts with distance) is ground; the pixels of another
+/// material just above ground are an object standing there, as far as its material goes
+/// on, and take the range of its lowest pixel where that is nearer, if it is upright: it
+/// rises above the horizon, or the ground is seen again above it (or above its top face,
+/// which, seen from above, may be lit far brighter). A flat surface of another material
 /// reaching the far scene (water up to the far shore) is neither. What lies above an
 /// object without ground between (a far tower behind a box, the box's top face) keeps
 /// [`recede`]'s range: its foot is hidden. Returns the pixels held.
@@ -482,23 +477,14 @@ fn runs_of(mask: &[bool], w: usize, h: usize) -> Vec<Run> {
     runs
 }
 
-/// Each column's horizon: the boundary row (between pixel rows, so `top - 0.5`) below
-/// the lowest sky pixel over a run that `under_sky` accepts (the sky reaching the top
-/// row above it), within [`HORIZON_WINDOW`] of the column; `None` without such a run
-/// nearby.
-fn horizon_rows(runs: &[Run], under_sky: impl Fn(&Run) -> bool, w: usize) -> Vec<Option<f64>> {
+/// Per column, the first row of the lowest run that `under_sky` accepts (under the sky
+/// that reaches the top row).
+fn skyline(runs: &[Run], under_sky: impl Fn(&Run) -> bool, w: usize) -> Vec<Option<usize>> {
     let mut skyline: Vec<Option<usize>> = vec![None; w];
     for r in runs.iter().filter(|r| under_sky(r)) {
         skyline[r.x] = skyline[r.x].max(Some(r.top));
     }
-    let half = ((HORIZON_WINDOW * w as f64).ceil() as usize).max(1);
-    (0..w)
-        .map(|x| {
-            let window = &skyline[x.saturating_sub(half)..(x + half + 1).min(w)];
-            let lowest = window.iter().flatten().max()?;
-            Some(*lowest as f64 - 0.5)
-        })
-        .collect()
+    skyline
 }
 
 #[cfg(test)]

@@ -123,7 +123,8 @@ fn the_horizon_is_looked_for_half_the_width_either_side() {
     let (w, h) = (10, 8);
     let (sky, _, beyond) = frame(w, h, |x, y| y < if x == 9 { 5 } else { 3 });
     let runs = runs_of(&beyond, w, h);
-    let horizon = horizon_rows(&runs, |r| r.top > 0 && sky[(r.top - 1) * w + r.x], w);
+    let skyline = skyline(&runs, |r| r.top > 0 && sky[(r.top - 1) * w + r.x], w);
+    let horizon = horizon::horizon_rows(&skyline, None);
     for (x, hz) in horizon.iter().enumerate() {
         assert_eq!(*hz, Some(if x >= 4 { 4.5 } else { 2.5 }), "column {x}");
     }
