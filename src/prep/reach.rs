@@ -366,7 +366,7 @@ fn stand_upright(
             while top > r.top
                 && 2 * (y - (top - 1)) <= foot + 1 - y
                 && !is_ground(top - 1, last)
-                && shaded_alike(guide, at(top - 1), at(top), MAX_FACE_SHADING)
+                && shaded_alike(guide, at(top - 1), at(top), FACE_LIGHTING)
             {
                 top -= 1;
             }
@@ -413,10 +413,22 @@ const MAX_SHADING: f32 = 3.0;
 /// red box, whose top face hid the ground seen above it).
 const MAX_FACE_SHADING: f32 = 8.0;
 
-/// Whether pixel `m` lies between `a` and `b` in every channel (within a tenth of their
-/// difference): a blend of the two, as an edge resampled to a coarser grid is.
+/// How far an object's top face may differ from its front: [`MAX_FACE_SHADING`] in
+/// brightness, and 1.5 times [`CHROMA_TOLERANCE`] in chromaticity (a face in the sun's
+/// light and one in the sky's differ in tint: 0.042 on the phone evaluation's grey box).
+const FACE_LIGHTING: (f32, f32) = (1.5 * CHROMA_TOLERANCE, MAX_FACE_SHADING);
+
+/// Whether pixel `m`'s chromaticity lies between `a`'s and `b`'s in every channel (within
+/// a tenth of their difference): a blend of the two, as an edge resampled to a coarser
+/// grid is (a mixture's chromaticity lies between its parts'; its brightness need not,
+/// where the object's shadow falls at its foot).
 fn blends(guide: &ColourGuide, a: usize, m: usize, b: usize) -> bool {
-    let (a, m, b) = (guide.colour_at(a), guide.colour_at(m), guide.colour_at(b));
+    let chroma = |p: usize| {
+        let c = guide.colour_at(p);
+        let sum = (c[0] + c[1] + c[2]).max(1e-6);
+        c.map(|v| v / sum)
+    };
+    let (a, m, b) = (chroma(a), chroma(m), chroma(b));
     (0..3).all(|c| {
         let (lo, hi) = (a[c].min(b[c]), a[c].max(b[c]));
         let slack = 0.1 * (hi - lo) + 1e-4;
@@ -428,19 +440,24 @@ fn blends(guide: &ColourGuide, a: usize, m: usize, b: usize) -> bool {
 /// within [`MAX_SHADING`] (a checkered or shaded ground, a face in light and shade), which
 /// a colour step does not allow (two tones of one lawn differ by 30 %).
 fn one_material(guide: &ColourGuide, p: usize, q: usize) -> bool {
-    shaded_alike(guide, p, q, MAX_SHADING)
+    shaded_alike(guide, p, q, (CHROMA_TOLERANCE, MAX_SHADING))
 }
 
-/// Whether pixels `p` and `q` have the same chromaticity (within [`CHROMA_TOLERANCE`]) and
-/// brightnesses within a factor `max_shading`.
-fn shaded_alike(guide: &ColourGuide, p: usize, q: usize, max_shading: f32) -> bool {
+/// Whether pixels `p` and `q` have the same chromaticity (each channel's share of the sum
+/// within `tolerance`) and brightnesses within a factor `max_shading`.
+fn shaded_alike(
+    guide: &ColourGuide,
+    p: usize,
+    q: usize,
+    (tolerance, max_shading): (f32, f32),
+) -> bool {
     let (a, b) = (guide.colour_at(p), guide.colour_at(q));
     let (sa, sb) = (a.iter().sum::<f32>(), b.iter().sum::<f32>());
     let floor = 1e-4;
     if !(sa > floor && sb > floor) || sa.max(sb) > max_shading * sa.min(sb) {
         return false;
     }
-    (0..3).all(|c| (a[c] / sa - b[c] / sb).abs() <= CHROMA_TOLERANCE)
+    (0..3).all(|c| (a[c] / sa - b[c] / sb).abs() <= tolerance)
 }
 
 /// The sky's components that reach the top row: sky seen in water below the horizon (a

@@ -291,6 +291,24 @@ fn a_box_seen_from_above_stands_with_its_top_face() {
 }
 
 #[test]
+fn a_grey_box_stands_on_its_shadowed_foot_with_its_sunlit_top() {
+    // The right column: a grey box's front in the sky's bluish light (rows 20-30), its
+    // foot's pixel (row 31) half lawn, half box and darker than either (its shadow), its
+    // top face (row 19) in the sun, 3.7 times as bright and warmer by 0.05 in each
+    // channel's share; the lawn above it.
+    let front = [0.057, 0.067, 0.074];
+    let lawn_below = lawn(31);
+    let foot: [f32; 3] = std::array::from_fn(|c| 0.6 * 0.5 * (lawn_below[c] + front[c]));
+    let colour = |x, y| match (x, y) {
+        (1, 19) => Some([0.245, 0.245, 0.235]),
+        (1, 20..=30) => Some(front),
+        (1, 31) => Some(foot),
+        _ => None,
+    };
+    assert_stands(5, colour, 19..=31);
+}
+
+#[test]
 fn a_foot_by_the_horizon_is_too_far_to_tell() {
     // The horizon at row 4.5; a brown tower rising over it from a foot 2.5 rows below
     // recedes, from 3.5 rows below it stands.
