@@ -18,7 +18,7 @@ const HORIZON_WINDOW: f64 = 0.5;
 /// lowest point of `skyline` (per column, the first row under the sky that reaches the top
 /// row, where there is one) along lines of slope `tilt` (rows per column) across the whole
 /// width, or, without a tilt, level within [`HORIZON_WINDOW`] of the column; `None`
-/// without a point of the skyline in reach.
+/// without a point of the skyline there.
 pub(super) fn horizon_rows(skyline: &[Option<usize>], tilt: Option<f64>) -> Vec<Option<f64>> {
     let w = skyline.len();
     let points: Vec<(usize, f64)> = (skyline.iter().enumerate())
@@ -65,26 +65,19 @@ pub(super) fn tilt_of_contour(contour: &[(usize, f64)], w: usize) -> Option<f64>
     let points: Vec<(f64, f64)> = (contour.iter())
         .map(|&(x, row)| ((x as f64 - centre) / w as f64, row))
         .collect();
-    let mut on_it = vec![true; points.len()];
-    let mut curve = None;
-    for _ in 0..3 {
-        let kept = points
-            .iter()
-            .zip(&on_it)
-            .filter(|(_, &k)| k)
-            .map(|(p, _)| *p);
-        let c = fit_parabola(kept)?;
-        on_it = (points.iter())
-            .map(|&(x, row)| (c.x + c.y * x + c.z * x * x - row).abs() <= CONTOUR_FIT_ROWS)
-            .collect();
-        curve = Some(c);
+    let near = |c: DVec3, (x, row): (f64, f64)| (c.x + c.y * x + c.z * x * x - row).abs();
+    let on_curve = |c: DVec3| -> Vec<(f64, f64)> {
+        (points.iter().copied())
+            .filter(|&p| near(c, p) <= CONTOUR_FIT_ROWS)
+            .collect()
+    };
+    let mut curve = fit_parabola(points.iter().copied())?;
+    for _ in 0..2 {
+        curve = fit_parabola(on_curve(curve).into_iter())?;
     }
-    let kept: Vec<f64> = (points.iter().zip(&on_it))
-        .filter(|(_, &k)| k)
-        .map(|(p, _)| p.0)
-        .collect();
-    let reaches = |side: f64| kept.iter().any(|&x| x * side >= 1.0 / 8.0);
-    let slope = curve?.y / w as f64;
+    let kept = on_curve(curve);
+    let reaches = |side: f64| kept.iter().any(|&(x, _)| x * side >= 1.0 / 8.0);
+    let slope = curve.y / w as f64;
     let most = 2 * kept.len() > points.len() && kept.len() >= 8;
     (most && reaches(-1.0) && reaches(1.0) && slope.abs() <= MAX_ROLL_DEG.to_radians().tan())
         .then_some(slope)

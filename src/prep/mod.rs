@@ -159,8 +159,8 @@
 //!    water is no horizon), along the tilt of the reach's contour on the ground across
 //!    the whole width where that tells the camera's roll, else level within half the
 //!    width either side, so the ground below a far tower recedes as the ground beside it
-//!    (the tower's own skyline would draw its ghost down to the ground). With the image, what stands on that
-//!    ground (a pixel run of another material just above the ground's materials, or the
+//!    (the tower's own skyline would draw its ghost down to the ground). With the image,
+//!    what stands on that ground (a pixel run of another material just above the ground's materials, or the
 //!    last ground's below it as the colour drifts with distance, rising over the horizon
 //!    or with the ground seen again above it, its foot at least three rows of the grid
 //!    below the horizon) keeps its foot's range up the column, as an upright face does;
@@ -496,9 +496,9 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
             (stats.r_max, s_max),
             guide.as_ref(),
         );
-        receding.as_mut_slice().copy_from_slice(mask);
-        held.iter()
-            .for_each(|&p| receding.as_mut_slice()[p] = false);
+        let receding = receding.as_mut_slice();
+        receding.copy_from_slice(mask);
+        held.iter().for_each(|&p| receding[p] = false);
         stats.beyond_reach = found.beyond_reach.len();
     }
     for (v, _) in work.iter_mut().zip(&ego).filter(|(_, &e)| e) {
