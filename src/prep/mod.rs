@@ -163,7 +163,8 @@
 //!    what stands on that ground (a pixel run of another material just above the ground's materials, or the
 //!    last ground's below it as the colour drifts with distance, rising over the horizon
 //!    or with the ground seen again above it, its foot at least three rows of the grid
-//!    below the horizon) keeps its foot's range up the column, as an upright face does;
+//!    below the horizon) keeps its foot's range up the column, as an upright face does,
+//!    and along the rows to its material beside it (up to a sixteenth of the width);
 //!    and a surface the sensor reached in part (a region of one material under measured
 //!    pixels of its own in a quarter of its columns: a face just at the reach's limit,
 //!    measured here and there through the noise) is no scene beyond the reach but holes,

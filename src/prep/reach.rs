@@ -174,11 +174,52 @@ pub(crate) fn recede(
             work[y * w + r.x] = (lo + t * (hi - lo)).exp() as f32;
         }
     }
-    match guide {
-        Some(guide) => stand_upright(work, (&runs, &reach), &horizon, sky, (w, h), guide),
-        None => Vec::new(),
+    let Some(guide) = guide else {
+        return Vec::new();
+    };
+    let mut held = stand_upright(work, (&runs, &reach), &horizon, sky, (w, h), guide);
+    spread_along_rows(work, &mut held, beyond, w, guide);
+    held
+}
+
+/// What stands is one object across its columns: a pixel beyond the reach beside a held
+/// one, of its material, is held at its range too, along the row as far as the material
+/// goes (a tower's edge columns, where the walk up the column met a blend or a box in
+/// front of its foot, would otherwise fade into the sky beside the rest of it).
+fn spread_along_rows(
+    work: &mut [f32],
+    held: &mut Vec<usize>,
+    beyond: &[bool],
+    w: usize,
+    guide: &ColourGuide,
+) {
+    let mut is_held = vec![false; work.len()];
+    held.iter().for_each(|&p| is_held[p] = true);
+    let mut frontier = held.clone();
+    let columns = ((SPREAD_WIDTH * w as f64).ceil() as usize).max(1);
+    for _ in 0..columns {
+        let mut next = Vec::new();
+        for p in frontier {
+            let (x, v) = (p % w, work[p]);
+            for q in [(x > 0).then(|| p - 1), (x + 1 < w).then_some(p + 1)]
+                .into_iter()
+                .flatten()
+            {
+                if beyond[q] && !is_held[q] && work[q] > v && one_material(guide, q, p) {
+                    work[q] = v;
+                    is_held[q] = true;
+                    next.push(q);
+                }
+            }
+        }
+        held.extend_from_slice(&next);
+        frontier = next;
     }
 }
+
+/// How far [`spread_along_rows`] carries a held range beside the columns whose walk held
+/// it, as a fraction of the image's width.
+const SPREAD_WIDTH: f64 = 1.0 / 16.0;
 
 /// Least share of `Rmax` that the scene just below a run has where the run meets the
 /// ground at the sensor's reach (the noise of a phone's depth is a few per cent there);

@@ -259,6 +259,44 @@ fn a_tower_over_the_horizon_stands_at_its_foot_and_hides_what_is_behind() {
 }
 
 #[test]
+fn a_tower_stands_across_its_columns() {
+    // 64 columns (a tower's range is carried 4 columns along its rows): the sky in rows
+    // 0-1, the lawn below the horizon (row 4.5, where the sky comes down at column 63),
+    // the scene at the reach in row 39. A brown tower in columns 20-29, rows 2-30,
+    // rises over the horizon and stands at its foot; in columns 20-22 a slate box
+    // (rows 24-33) hides its foot, so their walk stops at the box, but they are the
+    // tower's, beside its held columns. A brown patch of the same material 10 columns
+    // away (columns 40-41, rows 8-9, not upright) is not held from it, and a low brown
+    // wall in row 12 leading away from the tower (columns 30-45) only for 4 columns.
+    let (w, h) = (64, 40);
+    let is_sky = |x: usize, y: usize| y < 2 || (x == 63 && y < 5);
+    let brown = [0.3, 0.15, 0.05];
+    let (sky, work, beyond) = frame(w, h, is_sky);
+    let image = RgbImage::from_fn(w, h, |x, y| match (x, y) {
+        _ if is_sky(x, y) => [0.5, 0.6, 0.9],
+        (20..=22, 24..=33) => [0.2, 0.25, 0.35],
+        (20..=29, 2..=30) | (40..=41, 8..=9) | (30..=45, 12) => brown,
+        _ => lawn(y),
+    });
+    let (work, plain) = guided_and_plain(work, (&sky, &beyond), (w, h), &image);
+    let at = |x: usize, y: usize| y * w + x;
+    for y in 2..=23 {
+        for x in 20..=22 {
+            assert_eq!(work[at(x, y)], work[at(23, y)], "({x}, {y})");
+        }
+        assert!(work[at(20, y)] < plain[at(20, y)], "row {y} stands nearer");
+    }
+    assert_eq!(
+        work[at(33, 12)],
+        work[at(29, 12)],
+        "the wall beside the tower"
+    );
+    for (x, y) in [(40, 8), (41, 9), (34, 12), (35, 20), (15, 10)] {
+        assert_eq!(work[at(x, y)], plain[at(x, y)], "({x}, {y}) recedes");
+    }
+}
+
+#[test]
 fn a_box_stands_on_ground_whose_colour_drifts_with_distance() {
     // The lawn turns yellow as it recedes (0.003 of red's share per row, 0.06 over the
     // 20 rows up to the box): the ground below the reach no longer matches it there,
