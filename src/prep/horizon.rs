@@ -21,11 +21,8 @@ const HORIZON_WINDOW: f64 = 0.5;
 /// without a point of the skyline there.
 pub(super) fn horizon_rows(skyline: &[Option<usize>], tilt: Option<f64>) -> Vec<Option<f64>> {
     let w = skyline.len();
-    let points: Vec<(usize, f64)> = (skyline.iter().enumerate())
-        .filter_map(|(x, top)| top.map(|t| (x, t as f64 - 0.5)))
-        .collect();
     let Some(slope) = tilt else {
-        let half = ((HORIZON_WINDOW * w as f64).ceil() as usize).max(1);
+        let half = super::reach::columns_in(HORIZON_WINDOW, w);
         return (0..w)
             .map(|x| {
                 let window = &skyline[x.saturating_sub(half)..(x + half + 1).min(w)];
@@ -35,8 +32,8 @@ pub(super) fn horizon_rows(skyline: &[Option<usize>], tilt: Option<f64>) -> Vec<
     };
     // The line of that slope through the lowest point: every point of the skyline is
     // on or above it.
-    let offset = (points.iter())
-        .map(|&(x, row)| row - slope * x as f64)
+    let offset = (skyline.iter().enumerate())
+        .filter_map(|(x, top)| top.map(|t| t as f64 - 0.5 - slope * x as f64))
         .max_by(f64::total_cmp);
     (0..w)
         .map(|x| offset.map(|o| o + slope * x as f64))

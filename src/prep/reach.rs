@@ -196,8 +196,7 @@ fn spread_along_rows(
     let mut is_held = vec![false; work.len()];
     held.iter().for_each(|&p| is_held[p] = true);
     let mut frontier = held.clone();
-    let columns = ((SPREAD_WIDTH * w as f64).ceil() as usize).max(1);
-    for _ in 0..columns {
+    for _ in 0..columns_in(SPREAD_WIDTH, w) {
         let mut next = Vec::new();
         for p in frontier {
             let (x, v) = (p % w, work[p]);
@@ -264,7 +263,7 @@ impl Reach {
             .map(|r| (r.x, r.end as f64 - 0.5, r.end * w + r.x))
             .filter(|&(_, _, below)| work[below] >= AT_THE_REACH * r_max)
             .collect();
-        let half = ((CONTOUR_WINDOW * w as f64).ceil() as usize).max(1);
+        let half = columns_in(CONTOUR_WINDOW, w);
         let mut raised = vec![None; w];
         let mut columns = Vec::with_capacity(at_reach.len());
         for (i, &(x, contour, below)) in at_reach.iter().enumerate() {
@@ -284,7 +283,7 @@ impl Reach {
             ground: Vec::new(),
         };
         if let Some(guide) = guide {
-            let half = ((GROUND_WINDOW * w as f64).ceil() as usize).max(1);
+            let half = columns_in(GROUND_WINDOW, w);
             reach.ground = (0..w).map(|x| reach.ground_near(x, half, guide)).collect();
         }
         reach
@@ -464,11 +463,7 @@ const FACE_LIGHTING: (f32, f32) = (1.5 * CHROMA_TOLERANCE, MAX_FACE_SHADING);
 /// grid is (a mixture's chromaticity lies between its parts'; its brightness need not,
 /// where the object's shadow falls at its foot).
 fn blends(guide: &ColourGuide, a: usize, m: usize, b: usize) -> bool {
-    let chroma = |p: usize| {
-        let c = guide.colour_at(p);
-        let sum = (c[0] + c[1] + c[2]).max(1e-6);
-        c.map(|v| v / sum)
-    };
+    let chroma = |p: usize| shares(guide.colour_at(p));
     let (a, m, b) = (chroma(a), chroma(m), chroma(b));
     (0..3).all(|c| {
         let (lo, hi) = (a[c].min(b[c]), a[c].max(b[c]));
@@ -498,7 +493,19 @@ fn shaded_alike(
     if !(sa > floor && sb > floor) || sa.max(sb) > max_shading * sa.min(sb) {
         return false;
     }
-    (0..3).all(|c| (a[c] / sa - b[c] / sb).abs() <= tolerance)
+    let (a, b) = (shares(a), shares(b));
+    (0..3).all(|c| (a[c] - b[c]).abs() <= tolerance)
+}
+
+/// Each channel's share of the sum: a colour's chromaticity, whatever its brightness.
+fn shares(c: [f32; 3]) -> [f32; 3] {
+    let sum = (c[0] + c[1] + c[2]).max(1e-6);
+    c.map(|v| v / sum)
+}
+
+/// The columns in a `share` of a frame `w` wide, at least one.
+pub(super) fn columns_in(share: f64, w: usize) -> usize {
+    ((share * w as f64).ceil() as usize).max(1)
 }
 
 /// The sky's components that reach the top row: sky seen in water below the horizon (a

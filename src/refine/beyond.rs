@@ -1,5 +1,6 @@
 //! The ground beyond the sensor's reach, upsampled by interpolation.
 
+use super::nearest_cell;
 use crate::raster::{Grid, ScalarMap};
 
 /// The cells of the ground receding beyond the reach and the sky's, on the range's grid.
@@ -37,8 +38,8 @@ pub fn interpolate_receding(
             (y as f64 + 0.5) * scale[1] - 0.5,
         );
         // The cell whose masks the pixel took ([`super::nearest_to_image_size`]).
-        let own = (x as f64 * scale[0], y as f64 * scale[1]);
-        if !*receding.get((own.0 as usize).min(lw - 1), (own.1 as usize).min(lh - 1)) {
+        let own = (nearest_cell(x, scale[0], lw), nearest_cell(y, scale[1], lh));
+        if !*receding.get(own.0, own.1) {
             return keep;
         }
         let ((x0, x1), tx) = (taps(cx, lw), cx.clamp(0.0, (lw - 1) as f64).fract());

@@ -237,10 +237,17 @@ pub fn nearest_to_image_size<T: Copy + Send + Sync>(
         map.height() as f64 / height as f64,
     );
     Grid::par_from_fn(width, height, |x, y| {
-        let i = ((x as f64 * sx) as usize).min(map.width() - 1);
-        let j = ((y as f64 * sy) as usize).min(map.height() - 1);
-        *map.get(i, j)
+        *map.get(
+            nearest_cell(x, sx, map.width()),
+            nearest_cell(y, sy, map.height()),
+        )
     })
+}
+
+/// The cell of a grid `n` wide (cells per pixel `scale`) whose value pixel `p` takes in
+/// [`nearest_to_image_size`].
+fn nearest_cell(p: usize, scale: f64, n: usize) -> usize {
+    ((p as f64 * scale) as usize).min(n - 1)
 }
 
 /// The guide of one pixel: its sRGB-encoded colour, clamped to [0, 1], less
