@@ -258,6 +258,12 @@ fn main() -> Res<()> {
     seeds.put("exr", "blender.exr", blender);
     seeds.put("colour_image", "rgb.pfm", pfm("PF", 3, 2, &hdr, true, "\n"));
 
+    // gdepth: the small GDepth JPEGs of tests/data/gdepth/ (ext8.jpg in extended XMP).
+    for name in ["inv8.jpg", "lin16.jpg", "ext8.jpg"] {
+        let jpeg = std::fs::read(root.join("tests/data/gdepth").join(name))?;
+        seeds.put("gdepth", name, jpeg);
+    }
+
     // load_range: extension index (0 png, 1 pfm, 2 exr, 3 tif, 4 tiff, 5 npy, 6 jpg, 7 txt)
     // with bit 3 set when a calib.txt follows, two option bytes, then the calib's length
     // and text if any, then the file.

@@ -230,7 +230,7 @@ fn render_refuses_bad_files() {
             "nope.txt",
         ),
         r("--depth range.pfm", "--image"),
-        case("render --image im.png --out out.png", "", 2, "--depth"),
+        case("render --image im.png --out out.png", "", 1, "--depth"),
     ]);
 }
 

@@ -31,6 +31,7 @@ mod insert;
 mod io_demo;
 mod io_depth;
 mod io_exr_blocks;
+mod io_gdepth;
 mod io_image;
 mod io_limits;
 mod io_output;

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import brume
-from shared import assert_threads_match_serial, brume_bin
+from shared import REPO, assert_threads_match_serial, brume_bin
 
 H, W = 48, 64  # small: llvmpipe on 2 cores
 
@@ -468,6 +468,15 @@ def test_load_depth(tmp_path, range_m):
     # The loaders' errors name the keywords, here `format` (the library's `depth_format`).
     with pytest.raises(ValueError, match="invalid format = jpeg"):
         brume.load_depth(path, format="jpeg")
+
+
+def test_load_depth_of_a_portrait_jpeg():
+    """A phone's portrait JPEG (GDepth, written by ExifTool: tests/data/gdepth/): its own
+    scale and measure, the plane it encodes to half a 16-bit code."""
+    loaded, info = brume.load_depth(REPO / "tests/data/gdepth/lin16.jpg")
+    assert info["format"] == "gdepth" and info["kind"] == "range" and info["metric"]
+    y, x = np.mgrid[0:24, 0:32]
+    np.testing.assert_allclose(loaded, 1.5 + 0.25 * x + 0.5 * y, atol=19.25 / 65535)
 
 
 def pixel_radius2(h, w, focal):

@@ -166,10 +166,18 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             "(missing)",
             "a colour image to go with --depth",
         )),
+        // A phone's portrait photo carries its own depth map (GDepth).
+        (Some(image_path), None) if brume::io::depth::has_embedded_depth(image_path) => {
+            log::info!("{}: its embedded GDepth depth map", image_path.display());
+            let mut args = args.clone();
+            args.depth.depth = Some(image_path.clone());
+            load_scene(&args)
+        }
         (Some(_), None) => Err(Error::invalid(
             "--depth",
             "(missing)",
-            "a depth, range or disparity map to go with --image",
+            "a depth, range or disparity map to go with --image, or --transmittance-map (or \
+             --image a JPEG that embeds its depth map as GDepth, as a phone's portrait photo)",
         )),
     }
 }

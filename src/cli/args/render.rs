@@ -4,12 +4,12 @@ use super::*;
 
 /// `brume render`.
 #[derive(Args, Clone, Debug)]
-#[command(group(clap::ArgGroup::new("depth_source").args(["depth", "transmittance_map"])))]
 pub struct RenderArgs {
     /// Colour image: PNG or JPEG (8- or 16-bit sRGB), or OpenEXR or PFM (linear float, as
-    /// renderers and engines write). Without --image and --depth the built-in demo scene
-    /// is rendered.
-    #[arg(long, value_name = "PATH", requires = "depth_source")]
+    /// renderers and engines write). It needs --depth or --transmittance-map, but for a
+    /// JPEG that embeds its own depth map (GDepth: a phone's portrait photo). Without
+    /// --image and --depth the built-in demo scene is rendered.
+    #[arg(long, value_name = "PATH")]
     pub image: Option<PathBuf>,
 
     /// A transmittance map to apply instead of computing τ from a depth map: an 8- or

@@ -20,6 +20,8 @@ pub(super) enum Layout {
     Grey16,
     /// Any float map: PFM, EXR, float TIFF, `.npy`.
     Float,
+    /// A JPEG with a GDepth depth map in its XMP.
+    Embedded,
 }
 
 impl Layout {
@@ -31,6 +33,7 @@ impl Layout {
             Layout::Grey8 => matches!(raw, Raw::Grey8(_)),
             Layout::Grey16 => matches!(raw, Raw::Grey16(_)),
             Layout::Float => matches!(raw, Raw::Float { .. }),
+            Layout::Embedded => matches!(raw, Raw::Embedded(_)),
         }
     }
 
@@ -42,6 +45,7 @@ impl Layout {
             Layout::Grey8 => "an 8-bit grey PNG disparity",
             Layout::Grey16 => "a 16-bit grey PNG",
             Layout::Float => "a float map (.pfm, .exr, .tif, .tiff or .npy)",
+            Layout::Embedded => "a JPEG with a GDepth depth map",
         }
     }
 }
@@ -85,7 +89,7 @@ impl FormatRule {
 
 impl DepthFormat {
     /// Every format, in the order `--help` and errors list them.
-    pub const ALL: [DepthFormat; 11] = [
+    pub const ALL: [DepthFormat; 12] = [
         DepthFormat::Auto,
         DepthFormat::Middlebury2014,
         DepthFormat::Middlebury2006,
@@ -97,6 +101,7 @@ impl DepthFormat {
         DepthFormat::AndroidDepth16,
         DepthFormat::Arcore,
         DepthFormat::Cityscapes,
+        DepthFormat::Gdepth,
     ];
 
     /// What brume knows of this format (the module docs).
@@ -171,6 +176,11 @@ impl DepthFormat {
                 Kinds::Disparity,
                 None,
             ),
+            // Scaled by its own Near, Far and Units; its MeasureType says depth or range:
+            // the `gdepth` module.
+            DepthFormat::Gdepth => {
+                row("gdepth", Layout::Embedded, Depth, Kinds::DepthOrRange, None)
+            }
         }
     }
 

@@ -35,6 +35,7 @@ fn resolve_format(
         (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
         (F::Auto, Raw::Float { .. }) => F::Float,
         (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
+        (F::Auto, Raw::Embedded(_)) => F::Gdepth,
         // A camera file was given, or found for a `*_disparity.png`.
         (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
         (F::Auto, Raw::Grey16(_))
@@ -131,7 +132,7 @@ pub(super) fn interpret(
     pixel_scale: f64,
 ) -> Result<LoadedDepth> {
     let format = resolve_format(opts.format, &raw, &side, opts, path)?;
-    let kind = resolve_kind(format, opts.kind)?;
+    let kind = resolve_kind(format, opts.kind.or(raw.measured_kind()))?;
     let SideFiles { calib, camera } = side;
     if let (Some((_, camera_path)), false) = (&camera, format == DepthFormat::Cityscapes) {
         notes.push(format!(
@@ -231,6 +232,16 @@ pub(super) fn interpret(
             let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
             (range, units, k)
         }
+        (_, Raw::Embedded(e)) => {
+            notes.extend(e.notes);
+            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let range = to_range(
+                &e.map,
+                |v| v.is_finite().then_some(f64::from(v)),
+                k.as_ref(),
+            );
+            (range, e.units, k)
+        }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
     let unknown_pixels = range.as_slice().iter().filter(|v| v.is_nan()).count();
@@ -293,7 +304,7 @@ fn inverse_depth(
 }
 
 /// The units of a map whose unit nothing says (a float map, a z-buffer's planes).
-const FILE_UNITS: &str = "file units";
+pub(super) const FILE_UNITS: &str = "file units";
 
 /// Whether a range in `units` read as `format` is in trustworthy metres
 /// ([`LoadedDepth::metric`]): every conversion that yields metres does, except Middlebury

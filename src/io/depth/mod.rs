@@ -29,6 +29,7 @@ use crate::{Error, Result};
 mod android;
 mod cityscapes;
 mod format;
+mod gdepth;
 mod interpret;
 mod middlebury;
 mod png16;
@@ -53,6 +54,7 @@ pub use cityscapes::{
     FOCAL_RANGE_PX as CITYSCAPES_FOCAL_RANGE_PX,
     PRINCIPAL_POINT_RANGE_PX as CITYSCAPES_PRINCIPAL_POINT_RANGE_PX,
 };
+pub use gdepth::has_embedded_depth;
 pub use middlebury::{
     parse_calib, parse_calib_str, Calib, MIDDLEBURY2006_BASELINE_MM,
     MIDDLEBURY2006_DISPARITY_OFFSET_PX, MIDDLEBURY2006_FOCAL_PX,
@@ -143,6 +145,11 @@ pub enum DepthFormat {
     /// `{name}_camera.json` ([`DepthOptions::camera`], or found beside the file or in the
     /// dataset's `camera/` folder): Z = baseline·fx/d metres, then range.
     Cityscapes,
+    /// Google's depth map metadata (GDepth) in a JPEG's XMP, as a phone's portrait or
+    /// lens-blur photo carries it: an 8- or 16-bit image scaled by its `Near`, `Far`,
+    /// `Format` (RangeInverse or RangeLinear) and `Units`, depth or range as its
+    /// `MeasureType` says (see the `gdepth` module). `auto` picks it for a `.jpg`.
+    Gdepth,
 }
 
 impl FromStr for DepthFormat {
@@ -420,7 +427,7 @@ fn load_with_side_files(
     let ext = extension_of(name);
     let calib = middlebury::take_calib(&ext, opts, calib, &mut notes)?;
     let camera = cityscapes::take_camera(name, &ext, opts, camera, &mut notes)?;
-    let raw = decode_raw(bytes, name, &ext)?;
+    let raw = decode_raw(bytes, name, &ext, opts.format)?;
     interpret(raw, name, opts, SideFiles { calib, camera }, notes, 1.0)
 }
 
@@ -434,7 +441,7 @@ pub(crate) fn range_from_bytes(
     opts: &DepthOptions,
     pixel_scale: f64,
 ) -> Result<LoadedDepth> {
-    let raw = decode_raw(bytes, name, ext)?;
+    let raw = decode_raw(bytes, name, ext, opts.format)?;
     interpret(
         raw,
         name,

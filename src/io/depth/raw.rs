@@ -3,6 +3,8 @@
 
 use std::path::Path;
 
+use super::gdepth::{self, EmbeddedDepth};
+use super::{DepthFormat, DepthKind};
 use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::codec::png::{self, GreyPng};
 use crate::io::codec::{exr::parse_exr_scalar, npy::parse_npy_scalar, tiff::parse_tiff_scalar};
@@ -17,6 +19,8 @@ pub(super) enum Raw {
     Grey16(Grid<u16>),
     /// Float samples; a PFM may be a Middlebury 2014 disparity, other float files may not.
     Float { map: ScalarMap, from_pfm: bool },
+    /// A depth map a JPEG embeds as GDepth metadata, decoded by its own rules.
+    Embedded(EmbeddedDepth),
 }
 
 impl Raw {
@@ -27,6 +31,7 @@ impl Raw {
             Raw::Grey16(_) => "a 16-bit PNG",
             Raw::Float { from_pfm: true, .. } => "a float PFM",
             Raw::Float { .. } => "a float map",
+            Raw::Embedded(_) => "a JPEG's GDepth depth map",
         }
     }
 
@@ -36,12 +41,22 @@ impl Raw {
             Raw::Grey8(g) => (g.width(), g.height()),
             Raw::Grey16(g) => (g.width(), g.height()),
             Raw::Float { map, .. } => (map.width(), map.height()),
+            Raw::Embedded(e) => (e.map.width(), e.map.height()),
+        }
+    }
+
+    /// What the file itself says its values measure, where it says it.
+    pub(super) fn measured_kind(&self) -> Option<DepthKind> {
+        match self {
+            Raw::Embedded(e) => Some(e.kind),
+            _ => None,
         }
     }
 }
 
-/// Decodes `bytes` with the codec for extension `ext`.
-pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str) -> Result<Raw> {
+/// Decodes `bytes` with the codec for extension `ext`; a JPEG only as GDepth, which
+/// `format` must allow (the others' layouts are checked once the file is decoded).
+pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthFormat) -> Result<Raw> {
     match ext {
         "png" => Ok(match png::decode_grey(bytes, path)? {
             GreyPng::Grey8(g) => Raw::Grey8(g),
@@ -60,14 +75,21 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str) -> Result<Raw> {
         "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
         "tif" | "tiff" => Ok(float(parse_tiff_scalar(bytes, path)?)),
         "npy" => Ok(float(parse_npy_scalar(bytes, path)?)),
-        "jpg" | "jpeg" => Err(Error::format(
-            path,
-            "JPEG is lossy and cannot hold depth; expected .png, .pfm, .exr, .tif, .tiff or .npy",
-        )),
+        "jpg" | "jpeg" if !matches!(format, DepthFormat::Auto | DepthFormat::Gdepth) => {
+            Err(Error::format(
+                path,
+                format!(
+                    "`depth_format` {format} expects {}, found a JPEG",
+                    format.rule().layout.expected()
+                ),
+            ))
+        }
+        "jpg" | "jpeg" => Ok(Raw::Embedded(gdepth::decode(bytes, path)?)),
         _ => Err(Error::format(
             path,
             format!(
-                "unknown depth file extension `{ext}`; expected .png, .pfm, .exr, .tif, .tiff or .npy"
+                "unknown depth file extension `{ext}`; expected .png, .pfm, .exr, .tif, .tiff, \
+                 .npy, or a .jpg with GDepth metadata (a phone's portrait photo)"
             ),
         )),
     }

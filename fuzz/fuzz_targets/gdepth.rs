@@ -1,0 +1,11 @@
+//! A JPEG's GDepth depth map through the depth loader: the JPEG's header segments, its
+//! standard and extended XMP, the properties, the base64 data and the embedded image.
+#![no_main]
+
+use brume::io::depth::{load_range_from_bytes, DepthOptions};
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| {
+    let name = std::path::Path::new("portrait.jpg");
+    let _ = load_range_from_bytes(data, name, &DepthOptions::default(), None);
+});

@@ -1,0 +1,222 @@
+//! GDepth: the depth map a phone's portrait photo embeds in its JPEG, read from files
+//! ExifTool wrote (`tests/data/gdepth/`, `tools/gdepth_fixtures.py`) and checked against
+//! the specification's formulas on the plane each file encodes; the render that reads it
+//! from `--image` alone.
+
+use std::path::{Path, PathBuf};
+
+use brume::io::depth::{has_embedded_depth, load_range, load_range_from_bytes};
+use brume::io::depth::{DepthFormat, DepthKind, DepthOptions};
+use brume::Error;
+
+use crate::common;
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/gdepth")
+        .join(name)
+}
+
+/// The plane of `inv8.jpg` and `lin16.jpg`, metres, on their 32 x 24 grid.
+fn small_plane(x: usize, y: usize) -> f64 {
+    1.5 + 0.25 * x as f64 + 0.5 * y as f64
+}
+
+/// RangeInverse's d_n of depth `d` (the specification's encoding).
+fn inverse_d_n(d: f64, near: f64, far: f64) -> f64 {
+    far * (d - near) / (d * (far - near))
+}
+
+#[test]
+fn an_8_bit_range_inverse_map_is_within_half_a_code_of_its_plane() {
+    let loaded = load_range(&fixture("inv8.jpg"), &DepthOptions::default()).unwrap();
+    assert_eq!(loaded.format, DepthFormat::Gdepth);
+    assert_eq!(
+        loaded.kind,
+        DepthKind::Depth,
+        "no MeasureType: the optical axis"
+    );
+    assert!(loaded.metric, "no Units: metres, the format's default");
+    assert!(loaded.notes.iter().any(|n| n.contains("without Units")));
+    let range = &loaded.range;
+    assert_eq!(
+        (range.width(), range.height()),
+        (32, 24),
+        "the embedded map's own size"
+    );
+    assert_eq!(loaded.unknown_pixels, 0);
+    for y in 0..24 {
+        for x in 0..32 {
+            let (got, want) = (f64::from(*range.get(x, y)), small_plane(x, y));
+            let codes = (inverse_d_n(got, 1.5, 20.75) - inverse_d_n(want, 1.5, 20.75)) * 255.0;
+            assert!(codes.abs() <= 0.5 + 1e-4, "({x}, {y}): {got} for {want}");
+        }
+    }
+    // Near and far codes are exact.
+    assert!((f64::from(*range.get(0, 0)) - 1.5).abs() < 1e-5);
+    assert!((f64::from(*range.get(31, 23)) - 20.75).abs() < 1e-4);
+}
+
+#[test]
+fn a_16_bit_linear_map_in_millimetres_of_range() {
+    let loaded = load_range(&fixture("lin16.jpg"), &DepthOptions::default()).unwrap();
+    assert_eq!(loaded.kind, DepthKind::Range, "MeasureType OpticRay");
+    assert!(loaded.metric);
+    let half_code_m = (20.75 - 1.5) / 65535.0 / 2.0;
+    for y in 0..24 {
+        for x in 0..32 {
+            let got = f64::from(*loaded.range.get(x, y));
+            let want = small_plane(x, y);
+            assert!(
+                (got - want).abs() <= half_code_m + 1e-5,
+                "({x}, {y}): {got} for {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn depth_along_the_axis_becomes_range_with_the_field_of_view() {
+    let opts = DepthOptions {
+        fov: Some(60.0),
+        ..DepthOptions::default()
+    };
+    let plain = load_range(&fixture("inv8.jpg"), &DepthOptions::default()).unwrap();
+    let loaded = load_range(&fixture("inv8.jpg"), &opts).unwrap();
+    assert!(loaded.intrinsics.is_some());
+    let f = 12.0 / 30f64.to_radians().tan();
+    for (x, y) in [(0, 0), (31, 0), (16, 12), (5, 20)] {
+        let (dx, dy) = (x as f64 - 15.5, y as f64 - 11.5);
+        let ray = (1.0 + (dx * dx + dy * dy) / (f * f)).sqrt();
+        let depth = f64::from(*plain.range.get(x, y));
+        let range = f64::from(*loaded.range.get(x, y));
+        assert!((range - depth * ray).abs() < 1e-4 * range, "({x}, {y})");
+    }
+    // A user's kind wins over the file's.
+    let as_range = DepthOptions {
+        kind: Some(DepthKind::Range),
+        ..DepthOptions::default()
+    };
+    let loaded = load_range(&fixture("lin16.jpg"), &as_range).unwrap();
+    assert_eq!(loaded.kind, DepthKind::Range);
+    let refused = DepthOptions {
+        kind: Some(DepthKind::Disparity),
+        ..DepthOptions::default()
+    };
+    assert!(load_range(&fixture("inv8.jpg"), &refused).is_err());
+}
+
+#[test]
+fn an_extended_xmp_packet_is_put_together_from_its_segments() {
+    let loaded = load_range(&fixture("ext16.jpg"), &DepthOptions::default()).unwrap();
+    let range = &loaded.range;
+    assert_eq!((range.width(), range.height()), (320, 240));
+    // The plane plus up to 1 cm of noise, to half a 16-bit code (and f32 rounding: up to
+    // 0.01 code near 2 m).
+    let code = |d: f64| inverse_d_n(d, 2.0, 42.0) * 65535.0;
+    for y in (0..240).step_by(7) {
+        for x in (0..320).step_by(5) {
+            let got = code(f64::from(*range.get(x, y)));
+            let plane = 2.0 + 0.05 * x as f64 + 0.1 * y as f64;
+            assert!(
+                got >= code(plane) - 0.52 && got <= code(plane + 0.01) + 0.52,
+                "({x}, {y}): code {got} for {} to {}",
+                code(plane),
+                code(plane + 0.01)
+            );
+        }
+    }
+}
+
+#[test]
+fn extended_segments_in_any_order_give_the_same_map() {
+    let whole = load_range(&fixture("inv8.jpg"), &DepthOptions::default()).unwrap();
+    let split = load_range(&fixture("ext8.jpg"), &DepthOptions::default()).unwrap();
+    assert_eq!(whole.range.as_slice(), split.range.as_slice());
+}
+
+#[test]
+fn broken_gdepth_files_are_refused_by_name() {
+    let message = |bytes: &[u8]| match load_range_from_bytes(
+        bytes,
+        Path::new("p.jpg"),
+        &DepthOptions::default(),
+        None,
+    ) {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => {
+            assert!(matches!(e, Error::Format { .. }), "{e}");
+            e.to_string()
+        }
+    };
+    let plain = std::fs::read(fixture("no-depth.jpg")).unwrap();
+    assert!(message(&plain).contains("has none"));
+    assert!(!has_embedded_depth(&fixture("no-depth.jpg")));
+    assert!(has_embedded_depth(&fixture("ext16.jpg")));
+
+    // Cut inside the second extended segment: the header runs past the file.
+    let ext = std::fs::read(fixture("ext16.jpg")).unwrap();
+    assert!(message(&ext[..60_000]).contains("truncated JPEG"));
+
+    // A format the specification does not have, and a Near that is not a number.
+    let inv = std::fs::read(fixture("inv8.jpg")).unwrap();
+    let swap = |from: &str, to: &str| {
+        assert_eq!(from.len(), to.len(), "the segment keeps its length");
+        let at = inv
+            .windows(from.len())
+            .position(|w| w == from.as_bytes())
+            .unwrap();
+        let mut bytes = inv.clone();
+        bytes[at..at + to.len()].copy_from_slice(to.as_bytes());
+        bytes
+    };
+    let m = message(&swap(">RangeInverse<", ">RangeInvert!<"));
+    assert!(
+        m.contains("RangeInvert!") && m.contains("RangeLinear"),
+        "{m}"
+    );
+    let m = message(&swap(">1.5<", ">1,5<"));
+    assert!(m.contains("Near") && m.contains("1,5"), "{m}");
+}
+
+#[test]
+fn render_reads_a_portrait_photos_depth_from_the_image_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let photo = fixture("inv8.jpg");
+    let out = dir.path().join("out.png");
+    let run = common::brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            photo.to_str().unwrap(),
+            "--beta",
+            "0.05",
+            "--out",
+            out.to_str().unwrap(),
+            "--json",
+        ],
+    );
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    assert_eq!(report["depth_format"], "gdepth");
+    assert_eq!(report["width"], 64);
+    assert!(out.is_file());
+
+    // A JPEG without a depth map still needs --depth, and says so.
+    let plain = fixture("no-depth.jpg");
+    let run = common::brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            plain.to_str().unwrap(),
+            "--out",
+            "o.png",
+        ],
+    );
+    let err = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("--depth") && err.contains("GDepth"), "{err}");
+    assert!(!dir.path().join("o.png").exists());
+}
