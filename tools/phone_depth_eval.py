@@ -11,8 +11,12 @@ What it does, in one run:
    app saves it (``--format``): ARCore's Depth API (``acquireDepthImage16Bits``: 16-bit PNG,
    millimetres of z-depth, 0 unknown, 65.535 m at most; the default) or Camera2's
    ``DEPTH16`` from a time-of-flight sensor (13 bits of millimetres of range, 8.191 m at most,
-   the 3 confidence bits 0: full confidence). The model (its parameters are options; they
-   are assumptions, not measurements of one phone):
+   the 3 confidence bits 0: full confidence), or a portrait photo's GDepth (``gdepth``: the
+   photo as a JPEG whose XMP holds the z-depth as an 8-bit RangeInverse PNG from 1 m to
+   ``--gdepth-far``, which has no "unknown": the model's unknown cells below (the sky, all
+   beyond Far, and what the noise takes past it) are at Far; "surfaces without phone
+   depth" are the cells at Far). The model (its parameters are options; they are assumptions, not
+   measurements of one phone):
    - each cell is the mean depth (z, or range for DEPTH16) of the full-resolution pixels it
      covers (a coarse sensor or a depth-from-motion estimate mixes both sides of an edge:
      "flying pixels");
@@ -54,10 +58,12 @@ Needs numpy, OpenCV and the brume binary (headless EGL; llvmpipe is fine). About
 """
 
 import argparse
+import base64
 import json
 import math
 import os
 import shutil
+import struct
 import sys
 
 import numpy as np
@@ -68,8 +74,10 @@ from stereo_refine_eval import (  # noqa: E402
     truth_from_zbuffer)
 
 MODES = ("none", "guided", "unreliable", "repair")
-# The most each format holds, in metres: 16 and 13 bits of millimetres.
-REACH_M = {"arcore": 65.535, "android-depth16": 8.191}
+# The most each format holds, in metres: 16 and 13 bits of millimetres (GDepth: --gdepth-far).
+REACH_M = {"arcore": 65.535, "android-depth16": 8.191, "gdepth": None}
+# GDepth's nearest depth (its Near), metres: nearer than anything in the scene.
+GDEPTH_NEAR_M = 1.0
 
 
 def write_pfm(path, a):
@@ -105,15 +113,19 @@ def box_known(v, radius):
 
 
 def phone_depth(z, a):
-    """The phone's depth in metres at 1/factor (NaN unknown), as the docstring models it."""
-    reach = REACH_M[a.format]
+    """The phone's depth in metres at 1/factor (NaN unknown), as the docstring models it.
+    GDepth has no unknown: what is unknown here is at its Far."""
+    reach = a.gdepth_far if a.format == "gdepth" else REACH_M[a.format]
     mean, known_fraction = cell_mean(z, a.factor)
     mean[(known_fraction <= 0.5) | ~(mean <= reach)] = np.nan
     log_z = box_known(np.log(mean), a.bleed)
     rng = np.random.default_rng(a.seed)
     sigma = a.noise_base + a.noise_per_m * np.exp(log_z)
     noisy = np.exp(log_z + sigma * rng.standard_normal(log_z.shape))
-    return np.where(np.isfinite(noisy) & (noisy <= reach), noisy, np.nan)
+    known = np.isfinite(noisy) & (noisy <= reach)
+    if a.format == "gdepth":
+        return np.where(known, np.maximum(noisy, GDEPTH_NEAR_M), reach)
+    return np.where(known, noisy, np.nan)
 
 
 def write_phone(path, depth_m, fmt):
@@ -122,6 +134,29 @@ def write_phone(path, depth_m, fmt):
     top = 65535 if fmt == "arcore" else 8191
     mm = np.where(np.isfinite(depth_m), np.clip(np.round(depth_m * 1000.0), 1, top), 0)
     cv2.imwrite(path, mm.astype(np.uint16))
+
+
+def write_gdepth(path, photo_path, depth_m, far):
+    """The photo as a JPEG (quality 95) whose XMP carries the depth as GDepth: 8-bit
+    RangeInverse from GDEPTH_NEAR_M to ``far``, along the optical axis, in metres, as a
+    PNG (https://developers.google.com/depthmap-metadata)."""
+    near = GDEPTH_NEAR_M
+    d_n = far * (depth_m - near) / (depth_m * (far - near))
+    ok, png = cv2.imencode(".png", np.round(np.clip(d_n, 0, 1) * 255).astype(np.uint8))
+    xmp = ('<x:xmpmeta xmlns:x="adobe:ns:meta/"><rdf:RDF '
+           'xmlns:rdf="http://www.w3.org/1999/02/22-rdf-syntax-ns#"><rdf:Description '
+           'rdf:about="" xmlns:GDepth="http://ns.google.com/photos/1.0/depthmap/" '
+           f'GDepth:Format="RangeInverse" GDepth:Near="{near}" GDepth:Far="{far}" '
+           'GDepth:Units="m" GDepth:MeasureType="OpticalAxis" GDepth:Mime="image/png" '
+           f'GDepth:Data="{base64.b64encode(png.tobytes()).decode()}"/></rdf:RDF></x:xmpmeta>')
+    payload = b"http://ns.adobe.com/xap/1.0/\x00" + xmp.encode()
+    if len(payload) > 65533:
+        sys.exit("phone_depth_eval: the GDepth packet needs extended XMP: use a larger --factor")
+    ok, jpeg = cv2.imencode(".jpg", cv2.imread(photo_path), [cv2.IMWRITE_JPEG_QUALITY, 95])
+    jpeg = jpeg.tobytes()
+    app1 = b"\xff\xe1" + struct.pack(">H", len(payload) + 2) + payload
+    with open(path, "wb") as f:
+        f.write(jpeg[:2] + app1 + jpeg[2:])
 
 
 def render_scene(a, W, H, colour_path, zbuffer_path):
@@ -164,6 +199,8 @@ def main():
     ap.add_argument("--size", default="1024x512")
     ap.add_argument("--format", choices=sorted(REACH_M), default="arcore")
     ap.add_argument("--factor", type=int, default=8, help="the phone depth is this much smaller")
+    ap.add_argument("--gdepth-far", type=float, default=10.0,
+                    help="--format gdepth: the map's Far (m); the sky and what lies beyond are at it")
     ap.add_argument("--fov", type=float, default=45.0)
     ap.add_argument("--near", type=float, default=2.0)
     ap.add_argument("--far", type=float, default=1000.0)
@@ -198,10 +235,14 @@ def main():
     write_pfm(o("truth_range.pfm"), np.where(sky, np.inf, R_true))
 
     # 2. The phone's depth.
-    measured = z if a.format == "arcore" else R_true
+    measured = R_true if a.format == "android-depth16" else z
     z_phone = phone_depth(np.where(sky, np.nan, measured), a)
-    write_phone(o("phone.png"), z_phone, a.format)
-    unknown_full = np.kron(~np.isfinite(z_phone), np.ones((a.factor, a.factor), bool))
+    if a.format == "gdepth":
+        write_gdepth(o("phone.jpg"), o("left.png"), z_phone, a.gdepth_far)
+        unknown_full = np.kron(z_phone >= a.gdepth_far, np.ones((a.factor, a.factor), bool))
+    else:
+        write_phone(o("phone.png"), z_phone, a.format)
+        unknown_full = np.kron(~np.isfinite(z_phone), np.ones((a.factor, a.factor), bool))
 
     surf = ~sky
     # Truth edges: log z jumps by more than 0.05, or sky beside a surface.
@@ -218,11 +259,14 @@ def main():
     prep_opts = [] if a.margin is None else ["--margin", a.margin]
 
     depth_opts = ["--depth-format", a.format]
-    if a.format == "arcore":
+    if a.format in ("arcore", "gdepth"):
         depth_opts += ["--fov", str(a.fov)]
+    # A portrait photo is its own depth file.
+    photo, depth = ((o("phone.jpg"), o("phone.jpg")) if a.format == "gdepth"
+                    else (o("left.png"), o("phone.png")))
 
     def render(refine, out, extra):
-        run([B, "render", "--image", o("left.png"), "--depth", o("phone.png")] + depth_opts
+        run([B, "render", "--image", photo, "--depth", depth] + depth_opts
             + ["--beta", str(a.beta), "--refine", refine, "--out", out] + extra + prep_opts)
 
     results = {"setup": {"format": a.format, "size": [W, H], "factor": a.factor,

@@ -19,8 +19,15 @@
 //! the standard packet names a GUID (`xmpNote:HasExtendedXMP`), and segments of the
 //! extended packet carry that GUID, its full length and their offset in it.
 //!
-//! The format has no value for "unknown": a depth of 0 or less (a writer's code for
-//! nothing measured with `Near` 0) is unknown. The optional confidence map is not read.
+//! The format has no value for "unknown", and a depth map stops somewhere: a portrait
+//! mode clamps the sky and everything beyond its `Far` to `Far`. Read as a depth, that
+//! wall of haze at `Far` leaves the distant scene and the sky nearly clear (the phone
+//! evaluation of `tools/phone_depth_eval.py --format gdepth`). So a sample at the last
+//! code (d_n = 1: `Far`) is unknown, as beyond a time-of-flight sensor's reach, and
+//! pre-processing finds the sky in it and carries the scene on beyond the reach; so is a
+//! depth of 0 or less (a writer's code for nothing measured, with `Near` 0). A writer
+//! whose `Far` is its farthest measured depth loses those samples to the hole filling,
+//! which continues the scene round them. The optional confidence map is not read.
 //! Android's newer Dynamic Depth container (depth as an item appended to the JPEG) is not
 //! read either: such a file is refused with a message that says so.
 
@@ -155,12 +162,19 @@ pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
     ));
     let map = image.map(|d_n| {
         let depth = encoding.depth(d_n) * metres_per_unit;
-        if depth > 0.0 && depth.is_finite() {
+        if depth > 0.0 && depth.is_finite() && d_n < 1.0 {
             depth as f32
         } else {
             f32::NAN
         }
     });
+    let at_far = map.as_slice().iter().filter(|v| v.is_nan()).count();
+    if at_far > 0 {
+        notes.push(format!(
+            "{at_far} samples at Far or below 0 m unknown: Far is where the map stops (the \
+             sky and all beyond it), not a depth"
+        ));
+    }
     Ok(EmbeddedDepth {
         map,
         kind,
