@@ -1,7 +1,7 @@
-//! GDepth: the depth map a phone's portrait photo embeds in its JPEG, read from files
-//! ExifTool wrote (`tests/data/gdepth/`, `tools/gdepth_fixtures.py`) and checked against
-//! the specification's formulas on the plane each file encodes; the render that reads it
-//! from `--image` alone.
+//! GDepth and Dynamic Depth: the depth map a phone's portrait photo stores with its JPEG,
+//! read from files whose XMP ExifTool wrote (`tests/data/gdepth/`,
+//! `tools/gdepth_fixtures.py`) and checked against the specification's formulas on the
+//! plane each file encodes; the render that reads it from `--image` alone.
 
 use std::path::{Path, PathBuf};
 
@@ -155,6 +155,34 @@ fn extended_segments_in_any_order_give_the_same_map() {
 }
 
 #[test]
+fn a_dynamic_depth_container_gives_its_depth_item() {
+    let gdepth = load_range(&fixture("inv8.jpg"), &DepthOptions::default()).unwrap();
+    let loaded = load_range(&fixture("dd8.jpg"), &DepthOptions::default()).unwrap();
+    assert_eq!(loaded.format, DepthFormat::DynamicDepth);
+    assert_eq!(loaded.kind, DepthKind::Depth);
+    assert!(loaded.metric, "Units Meters");
+    // The same PNG as inv8.jpg's, found past the confidence item before it.
+    let bits = |m: &brume::raster::ScalarMap| -> Vec<u32> {
+        m.as_slice().iter().map(|v| v.to_bits()).collect()
+    };
+    assert_eq!(bits(&loaded.range), bits(&gdepth.range));
+    assert!(has_embedded_depth(&fixture("dd8.jpg")));
+    // Read as the other format, it is refused as that layout's mismatch.
+    let as_gdepth = DepthOptions {
+        format: DepthFormat::Gdepth,
+        ..DepthOptions::default()
+    };
+    let err = match load_range(&fixture("dd8.jpg"), &as_gdepth) {
+        Ok(_) => panic!("expected an error"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        err.contains("expects a JPEG with a GDepth depth map"),
+        "{err}"
+    );
+}
+
+#[test]
 fn broken_gdepth_files_are_refused_by_name() {
     let message = |bytes: &[u8]| match load_range_from_bytes(
         bytes,
@@ -196,6 +224,22 @@ fn broken_gdepth_files_are_refused_by_name() {
     );
     let m = message(&swap(">1.5<", ">1,5<"));
     assert!(m.contains("Near") && m.contains("1,5"), "{m}");
+
+    // Dynamic Depth: the depth item cut short, and a DepthURI that names no item.
+    let dd = std::fs::read(fixture("dd8.jpg")).unwrap();
+    let m = message(&dd[..dd.len() - 100]);
+    assert!(m.contains("runs past the file"), "{m}");
+    let at = dd
+        .windows(b">android/depthmap</DepthMap:DepthURI>".len())
+        .position(|w| w == b">android/depthmap</DepthMap:DepthURI>")
+        .unwrap();
+    let mut renamed = dd.clone();
+    renamed[at + 16] = b'X';
+    let m = message(&renamed);
+    assert!(
+        m.contains("android/depthmaX") && m.contains("no item"),
+        "{m}"
+    );
 }
 
 #[test]

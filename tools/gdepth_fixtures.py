@@ -16,6 +16,11 @@ against the specification's formulas without a second file:
   into an extended packet of two segments written in reverse order, the GUID in an
   element whose start tag declares its namespace: what a reader must accept beyond
   ExifTool's layout.
+- ``dd8.jpg``: the small photo in Android's Dynamic Depth layout: ExifTool writes the
+  XMP (``XMP-Device``: a ``Container:Directory`` of the primary image, length 0, a
+  confidence PNG and the depth PNG, with their lengths and ``DataURI``; a camera's
+  ``DepthMap`` with ``inv8.jpg``'s Format, Near and Far, ``Units`` Meters and its
+  ``DepthURI``), then this script appends the two PNGs after the JPEG in that order.
 - ``ext16.jpg``: 320 x 240 photo, 320 x 240 16-bit PNG, RangeInverse, Near 2 Far 42, the
   plane d = 2 + 0.05 x + 0.1 y m plus up to 1 cm of seeded noise (which keeps the PNG
   from compressing, so that the XMP needs extended segments).
@@ -100,6 +105,25 @@ def split_data(src, out):
     open(out, "wb").write(b"".join(parts) + jpeg[i:])
 
 
+def dynamic_depth(src, out, depth_png, tmp):
+    """``src`` with Dynamic Depth XMP by ExifTool and the confidence and depth PNGs appended."""
+    confidence = os.path.join(tmp, "confidence.png")
+    cv2.imwrite(confidence, np.full((24, 32), 255, np.uint8))
+    lengths = [os.path.getsize(confidence), os.path.getsize(depth_png)]
+    shutil.copy(src, out)
+    directory = ("{Directory=[{Item={Mime=image/jpeg,Length=0}},"
+                 f"{{Item={{Mime=image/png,Length={lengths[0]},DataURI=android/confidencemap}}}},"
+                 f"{{Item={{Mime=image/png,Length={lengths[1]},DataURI=android/depthmap}}}}]}}")
+    cameras = ("[{Camera={DepthMap={Format=RangeInverse,Near=1.5,Far=20.75,Units=Meters,"
+               "MeasureType=OpticalAxis,DepthURI=android/depthmap,"
+               "ConfidenceURI=android/confidencemap,ItemSemantic=Depth}}}]")
+    subprocess.run(["exiftool", "-q", "-overwrite_original", f"-XMP-Device:Container={directory}",
+                    f"-XMP-Device:Cameras={cameras}", out], check=True)
+    with open(out, "ab") as f:
+        for png in (confidence, depth_png):
+            f.write(open(png, "rb").read())
+
+
 def main(out_dir):
     os.makedirs(out_dir, exist_ok=True)
     tmp = tempfile.mkdtemp()
@@ -125,6 +149,7 @@ def main(out_dir):
     cv2.imwrite(ext16, samples(noisy, 2.0, 42.0, True, 16))
     embed(big, os.path.join(out_dir, "ext16.jpg"), ext16,
           ["Format=RangeInverse", "Near=2", "Far=42"])
+    dynamic_depth(small, os.path.join(out_dir, "dd8.jpg"), inv8, tmp)
     shutil.copy(small, os.path.join(out_dir, "no-depth.jpg"))
     shutil.rmtree(tmp)
 

@@ -1,5 +1,6 @@
-//! A JPEG's GDepth depth map through the depth loader: the JPEG's header segments, its
-//! standard and extended XMP, the properties, the base64 data and the embedded image.
+//! A portrait photo's JPEG through the depth loader: the JPEG's header segments, its
+//! standard and extended XMP, the properties, GDepth's base64 data, a Dynamic Depth
+//! container's items after the primary image, and the embedded depth image.
 #![no_main]
 
 use brume::io::depth::{load_range_from_bytes, DepthOptions};

@@ -16,7 +16,7 @@ use pyo3::types::PyDict;
 /// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
 /// beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
 /// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore', 'gdepth'
-/// (a phone's portrait JPEG with its depth map in GDepth metadata). kind:
+/// or 'dynamic-depth' (a phone's portrait JPEG with its depth map). kind:
 /// 'depth', 'range', 'disparity', 'zbuffer' or 'inverse' (a monocular estimator's
 /// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) (default:
 /// the format's). scale: metres per unit of a 16-bit PNG, of a float map, of a z-buffer's

@@ -166,9 +166,9 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             "(missing)",
             "a colour image to go with --depth",
         )),
-        // A phone's portrait photo carries its own depth map (GDepth).
+        // A phone's portrait photo carries its own depth map (GDepth or Dynamic Depth).
         (Some(image_path), None) if brume::io::depth::has_embedded_depth(image_path) => {
-            log::info!("{}: its embedded GDepth depth map", image_path.display());
+            log::info!("{}: its embedded depth map", image_path.display());
             let mut args = args.clone();
             args.depth.depth = Some(image_path.clone());
             load_scene(&args)
@@ -177,7 +177,8 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             "--depth",
             "(missing)",
             "a depth, range or disparity map to go with --image, or --transmittance-map (or \
-             --image a JPEG that embeds its depth map as GDepth, as a phone's portrait photo)",
+             --image a JPEG that carries its depth map, GDepth or Dynamic Depth, as a phone's \
+             portrait photo does)",
         )),
     }
 }

@@ -104,8 +104,8 @@ pub struct DepthArgs {
     /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (with --calib), 8-bit
     /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM, Android DEPTH16,
     /// ARCore, Cityscapes disparity with --camera, or --depth-scale), float EXR/TIFF/PFM,
-    /// or .npy; a phone's portrait photo, whose JPEG embeds its depth map as GDepth
-    /// (`render` and `view` read it from --image when --depth is not given). A photo
+    /// or .npy; a phone's portrait photo, whose JPEG carries its depth map (GDepth or
+    /// Dynamic Depth: `render` and `view` read it from --image when --depth is not given). A photo
     /// without a depth sensor: a monocular model's relative inverse depth (MiDaS, DPT,
     /// Depth Anything) with --depth-kind inverse.
     #[arg(long, value_name = "PATH")]
@@ -144,9 +144,10 @@ pub struct DepthReadingArgs {
     /// high 3 bits confidence, read as range), arcore (ARCore 16-bit depth PNG: mm along
     /// the optical axis, becomes range with --fov or --focal), cityscapes (16-bit
     /// disparity PNG, p > 0 is (p − 1)/256 px, with its camera file: see --camera; auto
-    /// picks it for a 16-bit PNG whose camera file is given or found), gdepth (a JPEG's
-    /// GDepth depth map, as phones embed in portrait photos: scaled by its own Near, Far
-    /// and Units, depth or range as its MeasureType says; auto picks it for a .jpg).
+    /// picks it for a 16-bit PNG whose camera file is given or found), gdepth or
+    /// dynamic-depth (a portrait photo's JPEG with its depth map in GDepth XMP or in a
+    /// Dynamic Depth container: scaled by its own Near, Far and Units, depth or range as
+    /// its MeasureType says; auto picks either for a .jpg).
     #[arg(
         long,
         value_name = "FORMAT",

@@ -21,7 +21,9 @@ pub(super) enum Layout {
     /// Any float map: PFM, EXR, float TIFF, `.npy`.
     Float,
     /// A JPEG with a GDepth depth map in its XMP.
-    Embedded,
+    GDepth,
+    /// A JPEG with a Dynamic Depth container.
+    DynamicDepth,
 }
 
 impl Layout {
@@ -33,7 +35,10 @@ impl Layout {
             Layout::Grey8 => matches!(raw, Raw::Grey8(_)),
             Layout::Grey16 => matches!(raw, Raw::Grey16(_)),
             Layout::Float => matches!(raw, Raw::Float { .. }),
-            Layout::Embedded => matches!(raw, Raw::Embedded(_)),
+            Layout::GDepth => matches!(raw, Raw::Embedded(e) if e.format == DepthFormat::Gdepth),
+            Layout::DynamicDepth => {
+                matches!(raw, Raw::Embedded(e) if e.format == DepthFormat::DynamicDepth)
+            }
         }
     }
 
@@ -45,7 +50,8 @@ impl Layout {
             Layout::Grey8 => "an 8-bit grey PNG disparity",
             Layout::Grey16 => "a 16-bit grey PNG",
             Layout::Float => "a float map (.pfm, .exr, .tif, .tiff or .npy)",
-            Layout::Embedded => "a JPEG with a GDepth depth map",
+            Layout::GDepth => "a JPEG with a GDepth depth map",
+            Layout::DynamicDepth => "a JPEG with a Dynamic Depth container",
         }
     }
 }
@@ -89,7 +95,7 @@ impl FormatRule {
 
 impl DepthFormat {
     /// Every format, in the order `--help` and errors list them.
-    pub const ALL: [DepthFormat; 12] = [
+    pub const ALL: [DepthFormat; 13] = [
         DepthFormat::Auto,
         DepthFormat::Middlebury2014,
         DepthFormat::Middlebury2006,
@@ -102,6 +108,7 @@ impl DepthFormat {
         DepthFormat::Arcore,
         DepthFormat::Cityscapes,
         DepthFormat::Gdepth,
+        DepthFormat::DynamicDepth,
     ];
 
     /// What brume knows of this format (the module docs).
@@ -178,9 +185,14 @@ impl DepthFormat {
             ),
             // Scaled by its own Near, Far and Units; its MeasureType says depth or range:
             // the `gdepth` module.
-            DepthFormat::Gdepth => {
-                row("gdepth", Layout::Embedded, Depth, Kinds::DepthOrRange, None)
-            }
+            DepthFormat::Gdepth => row("gdepth", Layout::GDepth, Depth, Kinds::DepthOrRange, None),
+            DepthFormat::DynamicDepth => row(
+                "dynamic-depth",
+                Layout::DynamicDepth,
+                Depth,
+                Kinds::DepthOrRange,
+                None,
+            ),
         }
     }
 

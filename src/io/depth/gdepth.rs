@@ -1,25 +1,29 @@
-//! Google's depth map metadata (`GDepth`): the depth map a phone camera's portrait or
-//! lens-blur mode embeds in its JPEG (Google Camera, and the camera apps that write the
-//! same XMP).
+//! The depth map a phone camera's portrait or lens-blur mode stores with its JPEG, in
+//! either of Google's two formats, both described in the JPEG's XMP (`xmp`):
 //!
-//! What the specification says (<https://developers.google.com/depthmap-metadata>): the
-//! XMP namespace `http://ns.google.com/photos/1.0/depthmap/` holds `Format`
-//! (`RangeInverse`, the default, or `RangeLinear`), `Near` and `Far` (the depth's least
-//! and greatest values, in `Units`: `m` by default, or `mm`), `Mime` (`image/png` or
-//! `image/jpeg`), `Data` (that image, base64: 8 or 16 grey bits, "stretched to fit the
-//! colour image") and `MeasureType` (`OpticalAxis`, the default: z-depth; or `OpticRay`:
-//! range). A sample v of b bits is d_n = v / (2^b − 1), and
+//! - GDepth, Google's depth map metadata (<https://developers.google.com/depthmap-metadata>):
+//!   the namespace `http://ns.google.com/photos/1.0/depthmap/` holds `Format`
+//!   (`RangeInverse`, the default, or `RangeLinear`), `Near` and `Far` (the depth's least
+//!   and greatest values, in `Units`: `m` by default, or `mm`), `Mime` (`image/png` or
+//!   `image/jpeg`), `Data` (that image, base64: 8 or 16 grey bits, "stretched to fit the
+//!   colour image") and `MeasureType` (`OpticalAxis`, the default: z-depth; or
+//!   `OpticRay`: range). The packet is over 64 KB but for a tiny map: extended XMP.
+//! - Dynamic Depth 1.0 (Android 10 on; the layout of AOSP's `dynamic_depth` library): a
+//!   `Device` whose `Container:Directory` lists the items appended after the primary
+//!   image, in order (`Item:Mime`, `Item:Length`, `Item:DataURI`; the primary image's
+//!   length is 0), and a camera's `DepthMap` (namespace
+//!   `http://ns.google.com/photos/dd/1.0/depthmap/`) with `Format`, `Near`, `Far`,
+//!   `Units` (`Meters`, `Diopters`: 1/m, or `None`), `MeasureType` and `DepthURI`, the
+//!   `DataURI` of the item that holds the depth image. The item starts after the primary
+//!   image's end-of-image marker plus the lengths of the items before it.
+//!
+//! A sample v of b bits is d_n = v / (2^b − 1), and
 //!
 //! - `RangeLinear`: d = Near + d_n (Far − Near);
 //! - `RangeInverse`: d = Far·Near / (Far − d_n (Far − Near)) (d_n = 0 at Near, 1 at Far;
 //!   more codes for near depths, as a z-buffer has).
 //!
-//! An XMP packet is at most 64 KB in a JPEG segment: a larger one (the depth image always
-//! is, but for a tiny map) is split as Adobe's XMP specification (part 3, 1.1.3.1) says:
-//! the standard packet names a GUID (`xmpNote:HasExtendedXMP`), and segments of the
-//! extended packet carry that GUID, its full length and their offset in it.
-//!
-//! The format has no value for "unknown", and a depth map stops somewhere: a portrait
+//! Neither format has a value for "unknown", and a depth map stops somewhere: a portrait
 //! mode clamps the sky and everything beyond its `Far` to `Far`. Read as a depth, that
 //! wall of haze at `Far` leaves the distant scene and the sky nearly clear (the phone
 //! evaluation of `tools/phone_depth_eval.py --format gdepth`). So a sample at the last
@@ -27,92 +31,237 @@
 //! pre-processing finds the sky in it and carries the scene on beyond the reach; so is a
 //! depth of 0 or less (a writer's code for nothing measured, with `Near` 0). A writer
 //! whose `Far` is its farthest measured depth loses those samples to the hole filling,
-//! which continues the scene round them. The optional confidence map is not read.
-//! Android's newer Dynamic Depth container (depth as an item appended to the JPEG) is not
-//! read either: such a file is refused with a message that says so.
+//! which continues the scene round them. The optional confidence maps are not read, nor
+//! Dynamic Depth's camera intrinsics (give `fov` for range).
 
 use std::path::Path;
 
 use base64::Engine;
 use image::DynamicImage;
 
-use super::DepthKind;
+use super::xmp::{is_jpeg, prefix_of, primary_end, property, xmp_packets, XmpPackets};
+use super::{DepthFormat, DepthKind};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
 const GDEPTH_NAMESPACE: &str = "http://ns.google.com/photos/1.0/depthmap/";
-const XMP_SIGNATURE: &[u8] = b"http://ns.adobe.com/xap/1.0/\0";
-const EXTENDED_XMP_SIGNATURE: &[u8] = b"http://ns.adobe.com/xmp/extension/\0";
-/// The GUID, full length and offset that lead each extended XMP segment's data.
-const EXTENDED_HEADER: usize = 32 + 4 + 4;
-/// JPEG markers: start of image, end of image, start of scan, APP1.
-const SOI: u8 = 0xD8;
-const EOI: u8 = 0xD9;
-const SOS: u8 = 0xDA;
-const APP1: u8 = 0xE1;
+const DYNAMIC_DEPTH_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/depthmap/";
+const CONTAINER_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/container/";
+const ITEM_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/item/";
 
-/// A depth map read from a JPEG's GDepth metadata.
+/// A depth map read from a JPEG's GDepth or Dynamic Depth metadata.
 pub(crate) struct EmbeddedDepth {
     /// The depth (or range) per sample in `units`, NaN where unknown; the embedded image's
     /// size, which may be smaller than the photo's.
     pub map: ScalarMap,
     /// What the values measure (`MeasureType`).
     pub kind: DepthKind,
-    /// `m` (the file's `m` or `mm`, converted), or the file's own units.
+    /// Which of the two formats described it.
+    pub format: DepthFormat,
+    /// `m` (the file's units converted), or the file's own units.
     pub units: String,
     /// What the file said that the user should know.
     pub notes: Vec<String>,
 }
 
-/// Whether `bytes` start as a JPEG does.
-fn is_jpeg(bytes: &[u8]) -> bool {
-    bytes.starts_with(&[0xFF, SOI])
-}
-
-/// Whether a file is a JPEG whose XMP has a GDepth depth map (read from its header
-/// segments only; any error is "no").
+/// Whether a file is a JPEG whose XMP describes a depth map, GDepth or Dynamic Depth (read
+/// from its header segments only; any error is "no").
 pub fn has_embedded_depth(path: &Path) -> bool {
     let Ok(bytes) = std::fs::read(path) else {
         return false;
     };
-    is_jpeg(&bytes) && xmp_packets(&bytes, path).is_ok_and(|xmp| prefix_of(&xmp.standard).is_some())
+    is_jpeg(&bytes)
+        && xmp_packets(&bytes, path).is_ok_and(|xmp| {
+            [GDEPTH_NAMESPACE, DYNAMIC_DEPTH_NAMESPACE]
+                .iter()
+                .any(|ns| prefix_of(&xmp.standard, ns).is_some())
+        })
 }
 
-/// Reads the GDepth depth map of the JPEG `bytes` (`path` names it in messages).
+/// The XMP's text, the standard packet first, then the extended one.
+struct Packets<'a> {
+    texts: Vec<&'a str>,
+}
+
+impl Packets<'_> {
+    fn prefix(&self, namespace: &str) -> Option<String> {
+        self.texts.iter().find_map(|t| prefix_of(t, namespace))
+    }
+
+    fn get(&self, prefix: &str, name: &str) -> Option<String> {
+        self.texts.iter().find_map(|t| property(t, prefix, name))
+    }
+}
+
+/// Where a file describes its depth map, and the depth image's bytes.
+struct Described {
+    format: DepthFormat,
+    /// `GDepth` or `Dynamic Depth`, for messages.
+    format_name: &'static str,
+    /// The prefix of the depth map's properties.
+    prefix: String,
+    image: Vec<u8>,
+    mime: String,
+}
+
+/// Reads the depth map that the JPEG `bytes` describe in their XMP, GDepth or Dynamic
+/// Depth (`path` names the file in messages).
 pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
     if !is_jpeg(bytes) {
         return Err(Error::format(
             path,
             "not a JPEG (no start-of-image marker 0xFFD8): a .jpg depth file is a phone's \
-             portrait photo with its GDepth depth map",
+             portrait photo with its depth map (GDepth or Dynamic Depth)",
         ));
     }
     let xmp = xmp_packets(bytes, path)?;
-    let Some(prefix) = prefix_of(&xmp.standard) else {
+    let extended = xmp.extended(path)?;
+    let texts = [Some(xmp.standard.as_str()), extended.as_deref()];
+    let packets = Packets {
+        texts: texts.into_iter().flatten().collect(),
+    };
+    let described = if let Some(prefix) = packets.prefix(GDEPTH_NAMESPACE) {
+        gdepth(&packets, prefix, path)?
+    } else if let Some(prefix) = packets.prefix(DYNAMIC_DEPTH_NAMESPACE) {
+        dynamic_depth(&packets, prefix, bytes, &xmp, path)?
+    } else {
         return Err(Error::format(
             path,
-            "a JPEG holds depth only as Google's depth map metadata (GDepth, the XMP \
-             namespace http://ns.google.com/photos/1.0/depthmap/ that a phone's portrait or \
-             lens-blur photo carries), and this one has none (Android's Dynamic Depth \
-             container is not read): expected a JPEG with GDepth, or a depth map as .png, \
-             .pfm, .exr, .tif, .tiff or .npy",
+            "a JPEG holds depth as a phone's portrait photo does, in XMP that describes it \
+             (GDepth: http://ns.google.com/photos/1.0/depthmap/, or Dynamic Depth: \
+             http://ns.google.com/photos/dd/1.0/depthmap/), and this one has none: expected \
+             such a JPEG, or a depth map as .png, .pfm, .exr, .tif, .tiff or .npy",
         ));
     };
-    let extended = xmp.extended(path)?;
-    let get = |name: &str| {
-        property(&xmp.standard, &prefix, name)
-            .or_else(|| extended.as_deref().and_then(|e| property(e, &prefix, name)))
+    to_depth(described, &packets, path)
+}
+
+/// GDepth: the properties, and the depth image from `Data`.
+fn gdepth(packets: &Packets, prefix: String, path: &Path) -> Result<Described> {
+    let get = |name: &str| packets.get(&prefix, name);
+    let required = |name: &str| get(name).ok_or_else(|| missing("GDepth", &prefix, name, path));
+    let mime = required("Mime")?;
+    let data = required("Data")?;
+    let compact: Vec<u8> = data.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
+    // Whitespace allowed: Android's base64 encoder breaks lines.
+    let image = base64::engine::general_purpose::STANDARD
+        .decode(&compact)
+        .map_err(|e| Error::format(path, format!("GDepth Data is not base64 ({e})")))?;
+    Ok(Described {
+        format: DepthFormat::Gdepth,
+        format_name: "GDepth",
+        prefix,
+        image,
+        mime: mime.trim().to_string(),
+    })
+}
+
+/// Dynamic Depth: the depth map's properties, and its item from the container appended
+/// after the primary image.
+fn dynamic_depth(
+    packets: &Packets,
+    prefix: String,
+    bytes: &[u8],
+    xmp: &XmpPackets,
+    path: &Path,
+) -> Result<Described> {
+    let uri = packets
+        .get(&prefix, "DepthURI")
+        .ok_or_else(|| missing("Dynamic Depth", &prefix, "DepthURI", path))?;
+    let broken = |what: String| Error::format(path, format!("Dynamic Depth {what}"));
+    let items = container_items(packets);
+    let Some(index) = items
+        .iter()
+        .position(|i| i.uri.as_deref() == Some(uri.trim()))
+    else {
+        return Err(broken(format!(
+            "DepthURI {uri:?} names no item of its Container:Directory ({} items)",
+            items.len()
+        )));
     };
-    let required = |name: &str| {
-        get(name).ok_or_else(|| {
+    let mut offset = 0usize;
+    for item in &items[..index] {
+        offset = offset.saturating_add(item.length);
+    }
+    let start = primary_end(bytes, xmp)
+        .ok_or_else(|| broken("file ends inside its primary image".into()))?;
+    let length = items[index].length;
+    let image = start
+        .checked_add(offset)
+        .and_then(|from| bytes.get(from..from.checked_add(length)?))
+        .ok_or_else(|| {
+            broken(format!(
+                "depth item of {length} bytes at {offset} after the primary image runs past \
+                 the file ({} bytes after it): a truncated file?",
+                bytes.len() - start
+            ))
+        })?;
+    Ok(Described {
+        format: DepthFormat::DynamicDepth,
+        format_name: "Dynamic Depth",
+        prefix,
+        image: image.to_vec(),
+        mime: items[index].mime.clone(),
+    })
+}
+
+/// One `Container:Item` of a Dynamic Depth directory.
+struct Item {
+    mime: String,
+    length: usize,
+    uri: Option<String>,
+}
+
+/// The items of the `Container:Directory`, in order (unreadable lengths as 0).
+fn container_items(packets: &Packets) -> Vec<Item> {
+    let (Some(container), Some(item)) = (
+        packets.prefix(CONTAINER_NAMESPACE),
+        packets.prefix(ITEM_NAMESPACE),
+    ) else {
+        return Vec::new();
+    };
+    let open = format!("<{container}:Item");
+    let mut items = Vec::new();
+    for text in &packets.texts {
+        let starts: Vec<usize> = text.match_indices(&open).map(|(at, _)| at).collect();
+        for (k, &at) in starts.iter().enumerate() {
+            let end = starts.get(k + 1).copied().unwrap_or(text.len());
+            let chunk = &text[at..end];
+            let get = |name: &str| property(chunk, &item, name).map(|v| v.trim().to_string());
+            items.push(Item {
+                mime: get("Mime").unwrap_or_default(),
+                length: get("Length").and_then(|l| l.parse().ok()).unwrap_or(0),
+                uri: get("DataURI"),
+            });
+        }
+    }
+    items
+}
+
+fn missing(format: &str, prefix: &str, name: &str, path: &Path) -> Error {
+    Error::format(
+        path,
+        format!("{format} metadata without {prefix}:{name}: expected the depth map's {name}"),
+    )
+}
+
+/// The depth map a file describes, read as its properties say.
+fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<EmbeddedDepth> {
+    let Described {
+        format: depth_format,
+        format_name,
+        prefix,
+        image,
+        mime,
+    } = described;
+    let get = |name: &str| packets.get(&prefix, name);
+    let number = |name: &str| -> Result<f64> {
+        let text = get(name).ok_or_else(|| {
             Error::format(
                 path,
-                format!("GDepth metadata without {prefix}:{name}: expected the depth map's {name}"),
+                format!("{format_name} metadata without {name}: expected the depth map's {name}"),
             )
-        })
-    };
-    let number = |name: &str| -> Result<f64> {
-        let text = required(name)?;
+        })?;
         text.trim()
             .parse::<f64>()
             .ok()
@@ -120,7 +269,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
             .ok_or_else(|| {
                 Error::format(
                     path,
-                    format!("GDepth {name} is {text:?}: expected a finite number"),
+                    format!("{format_name} {name} is {text:?}: expected a finite number"),
                 )
             })
     };
@@ -134,34 +283,37 @@ pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
         Some(other) => {
             return Err(Error::format(
                 path,
-                format!("GDepth MeasureType is {other:?}: expected OpticalAxis or OpticRay"),
+                format!("{format_name} MeasureType is {other:?}: expected OpticalAxis or OpticRay"),
             ))
         }
     };
-    let (metres_per_unit, units) = match get("Units").as_deref().map(str::trim) {
-        None => {
-            notes.push("GDepth without Units: metres (the format's default)".into());
-            (1.0, "m".to_string())
-        }
-        Some("m") => (1.0, "m".to_string()),
-        Some("mm") => (1e-3, "m".to_string()),
-        Some(other) => {
-            notes.push(format!(
-                "GDepth Units {other:?} is neither m nor mm: the depth is in file units"
-            ));
-            (1.0, super::interpret::FILE_UNITS.to_string())
-        }
+    let units = get("Units").map(|u| u.trim().to_string());
+    let to_metres: fn(f64) -> f64 = match units.as_deref() {
+        None | Some("m") | Some("Meters") => |d| d,
+        Some("mm") => |d| d * 1e-3,
+        Some("Diopters") => |d| 1.0 / d,
+        Some(_) => |d| d,
     };
-    let mime = required("Mime")?;
-    let data = required("Data")?;
-    let image = decode_data(&data, mime.trim(), path)?;
+    let unit_name = match units.as_deref() {
+        Some(other) if !matches!(other, "m" | "Meters" | "mm" | "Diopters") => {
+            notes.push(format!(
+                "{format_name} Units {other:?} is not a length: the depth is in file units"
+            ));
+            super::interpret::FILE_UNITS.to_string()
+        }
+        None => {
+            notes.push(format!("{format_name} without Units: metres (the default)"));
+            "m".to_string()
+        }
+        Some(_) => "m".to_string(),
+    };
+    let samples = decode_image(&image, &mime, format_name, path)?;
     notes.push(format!(
-        "GDepth {} map, {} {format}, Near {near} Far {far}",
-        image.describe(),
-        mime.trim()
+        "{format_name} {} map, {mime} {format}, Near {near} Far {far}",
+        samples.describe(),
     ));
-    let map = image.map(|d_n| {
-        let depth = encoding.depth(d_n) * metres_per_unit;
+    let map = samples.map(|d_n| {
+        let depth = to_metres(encoding.depth(d_n));
         if depth > 0.0 && depth.is_finite() && d_n < 1.0 {
             depth as f32
         } else {
@@ -178,7 +330,8 @@ pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
     Ok(EmbeddedDepth {
         map,
         kind,
-        units,
+        format: depth_format,
+        units: unit_name,
         notes,
     })
 }
@@ -194,7 +347,7 @@ impl Encoding {
         let bad = |what: &str| {
             Error::format(
                 path,
-                format!("GDepth Near {near} and Far {far}: expected {what}"),
+                format!("depth map's Near {near} and Far {far}: expected {what}"),
             )
         };
         match format {
@@ -206,7 +359,7 @@ impl Encoding {
             "RangeInverse" => Ok(Encoding::Inverse { near, far }),
             other => Err(Error::format(
                 path,
-                format!("GDepth Format is {other:?}: expected RangeInverse or RangeLinear"),
+                format!("depth map's Format is {other:?}: expected RangeInverse or RangeLinear"),
             )),
         }
     }
@@ -242,21 +395,18 @@ impl Samples {
     }
 }
 
-/// Decodes the base64 `Data` (whitespace allowed: Android's encoder breaks lines) as the
-/// grey image `mime` names.
-fn decode_data(data: &str, mime: &str, path: &Path) -> Result<Samples> {
-    let compact: Vec<u8> = data.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
-    let bytes = base64::engine::general_purpose::STANDARD
-        .decode(&compact)
-        .map_err(|e| Error::format(path, format!("GDepth Data is not base64 ({e})")))?;
+/// Decodes the depth image (the grey image `mime` names).
+fn decode_image(bytes: &[u8], mime: &str, format_name: &str, path: &Path) -> Result<Samples> {
     if !matches!(mime, "image/png" | "image/jpeg") {
         return Err(Error::format(
             path,
-            format!("GDepth Mime is {mime:?}: expected image/png or image/jpeg"),
+            format!(
+                "{format_name} depth image's Mime is {mime:?}: expected image/png or image/jpeg"
+            ),
         ));
     }
-    let name = format!("{} (its GDepth depth image)", path.display());
-    Ok(match crate::io::image::decode_any(&bytes, &name)? {
+    let name = format!("{} (its {format_name} depth image)", path.display());
+    Ok(match crate::io::image::decode_any(bytes, &name)? {
         DynamicImage::ImageLuma8(g) => Samples::Eight(grid(g)),
         DynamicImage::ImageLuma16(g) => Samples::Sixteen(grid(g)),
         // A grey picture saved in colour (Android's Bitmap.compress writes JPEG as YCbCr).
@@ -272,202 +422,9 @@ fn grid<T: image::Primitive>(img: image::ImageBuffer<image::Luma<T>, Vec<T>>) ->
     Grid::from_vec(w, h, img.into_raw())
 }
 
-/// The XMP of a JPEG: the standard packet (empty if none) and the segments of the
-/// extended one.
-struct XmpPackets<'a> {
-    standard: String,
-    extended: Vec<&'a [u8]>,
-}
-
-impl XmpPackets<'_> {
-    /// The extended packet the standard one names, put together from its segments;
-    /// `None` when it names none.
-    fn extended(&self, path: &Path) -> Result<Option<String>> {
-        let Some(guid) = property(&self.standard, "xmpNote", "HasExtendedXMP") else {
-            return Ok(None);
-        };
-        let guid = guid.trim().as_bytes();
-        let broken = |what: String| Error::format(path, format!("extended XMP {what}"));
-        let mut packet: Vec<u8> = Vec::new();
-        let mut filled = 0usize;
-        for segment in self.extended.iter().filter(|s| s.starts_with(guid)) {
-            let full = be_u32(&segment[32..36]) as usize;
-            let offset = be_u32(&segment[36..40]) as usize;
-            let chunk = &segment[EXTENDED_HEADER..];
-            if full > self.extended.iter().map(|s| s.len()).sum::<usize>() {
-                return Err(broken(format!(
-                    "says it is {full} bytes long, more than its segments hold"
-                )));
-            }
-            packet.resize(full, 0);
-            let end = offset.checked_add(chunk.len()).filter(|&e| e <= full);
-            let Some(end) = end else {
-                return Err(broken(format!(
-                    "segment at offset {offset} ({} bytes) ends past its length {full}",
-                    chunk.len()
-                )));
-            };
-            packet[offset..end].copy_from_slice(chunk);
-            filled += chunk.len();
-        }
-        if packet.is_empty() || filled < packet.len() {
-            return Err(broken(format!(
-                "{} is incomplete: {filled} of {} bytes (a truncated file?)",
-                String::from_utf8_lossy(guid),
-                packet.len()
-            )));
-        }
-        String::from_utf8(packet)
-            .map(Some)
-            .map_err(|_| broken("is not UTF-8 text".into()))
-    }
-}
-
-fn be_u32(b: &[u8]) -> u32 {
-    u32::from_be_bytes([b[0], b[1], b[2], b[3]])
-}
-
-/// The XMP segments of a JPEG's header (APP1 segments before the first scan).
-fn xmp_packets<'a>(bytes: &'a [u8], path: &Path) -> Result<XmpPackets<'a>> {
-    let truncated = || Error::format(path, "truncated JPEG: a header segment runs past the file");
-    let mut packets = XmpPackets {
-        standard: String::new(),
-        extended: Vec::new(),
-    };
-    let mut i = 2;
-    loop {
-        // Markers may be preceded by fill bytes 0xFF.
-        while bytes.get(i) == Some(&0xFF) && bytes.get(i + 1) == Some(&0xFF) {
-            i += 1;
-        }
-        let (Some(&0xFF), Some(&marker)) = (bytes.get(i), bytes.get(i + 1)) else {
-            return Err(Error::format(
-                path,
-                format!("not a JPEG header at byte {i}: expected a marker (0xFF ..)"),
-            ));
-        };
-        if marker == SOS || marker == EOI {
-            return Ok(packets);
-        }
-        // Markers without a length: TEM and the restart markers.
-        if marker == 0x01 || (0xD0..=0xD7).contains(&marker) {
-            i += 2;
-            continue;
-        }
-        let len = bytes.get(i + 2..i + 4).ok_or_else(truncated)?;
-        let len = usize::from(u16::from_be_bytes([len[0], len[1]]));
-        let payload = bytes.get(i + 4..i + 2 + len.max(2)).ok_or_else(truncated)?;
-        if marker == APP1 {
-            if let Some(xmp) = payload.strip_prefix(XMP_SIGNATURE) {
-                packets.standard = String::from_utf8_lossy(xmp).into_owned();
-            } else if let Some(ext) = payload.strip_prefix(EXTENDED_XMP_SIGNATURE) {
-                if ext.len() >= EXTENDED_HEADER {
-                    packets.extended.push(ext);
-                }
-            }
-        }
-        i += 2 + len;
-    }
-}
-
-/// The prefix the XMP binds to the GDepth namespace, if it does.
-fn prefix_of(xmp: &str) -> Option<String> {
-    let at = xmp.find(GDEPTH_NAMESPACE)?;
-    let before = xmp[..at].trim_end_matches(['"', '\'']).trim_end();
-    let before = before.strip_suffix('=')?.trim_end();
-    let start = before.rfind("xmlns:")? + "xmlns:".len();
-    let prefix = &before[start..];
-    (!prefix.is_empty() && !prefix.contains(char::is_whitespace)).then(|| prefix.to_string())
-}
-
-/// The value of property `prefix:name` in an XMP packet: an attribute
-/// (`prefix:name="value"`) or an element (`<prefix:name>value</prefix:name>`).
-fn property(xmp: &str, prefix: &str, name: &str) -> Option<String> {
-    let qualified = format!("{prefix}:{name}");
-    if let Some(text) = element_text(xmp, &qualified) {
-        return Some(text);
-    }
-    let mut from = 0;
-    while let Some(found) = xmp[from..].find(&qualified) {
-        let at = from + found;
-        from = at + qualified.len();
-        let preceded = xmp[..at].ends_with(|c: char| c.is_whitespace());
-        let rest = xmp[from..].trim_start();
-        let Some(rest) = rest.strip_prefix('=').map(str::trim_start) else {
-            continue;
-        };
-        let Some(quote) = rest.chars().next().filter(|c| *c == '"' || *c == '\'') else {
-            continue;
-        };
-        let value = &rest[1..];
-        if preceded {
-            return value.find(quote).map(|end| unescape(&value[..end]));
-        }
-    }
-    None
-}
-
-/// The text of the first element `<qualified …>text</qualified>` (its start tag may have
-/// attributes, such as a namespace declaration).
-fn element_text(xmp: &str, qualified: &str) -> Option<String> {
-    let open = format!("<{qualified}");
-    let mut from = 0;
-    while let Some(found) = xmp[from..].find(&open) {
-        let after = from + found + open.len();
-        from = after;
-        if !xmp[after..].starts_with(|c: char| c == '>' || c == '/' || c.is_whitespace()) {
-            continue;
-        }
-        let tag_end = after + xmp[after..].find('>')?;
-        if xmp[..tag_end].ends_with('/') {
-            return Some(String::new());
-        }
-        let text = &xmp[tag_end + 1..];
-        let end = text.find(&format!("</{qualified}>"))?;
-        return Some(unescape(&text[..end]));
-    }
-    None
-}
-
-/// The five predefined XML entities, as a property's text holds them.
-fn unescape(text: &str) -> String {
-    text.replace("&lt;", "<")
-        .replace("&gt;", ">")
-        .replace("&quot;", "\"")
-        .replace("&apos;", "'")
-        .replace("&amp;", "&")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn properties_are_read_as_attributes_and_elements() {
-        let xmp = r#"<rdf:Description xmlns:GDepth="http://ns.google.com/photos/1.0/depthmap/"
-            GDepth:Format="RangeLinear" GDepth:Near = '1.5'>
-            <GDepth:Far>12&amp;</GDepth:Far></rdf:Description>"#;
-        assert_eq!(prefix_of(xmp).as_deref(), Some("GDepth"));
-        assert_eq!(
-            property(xmp, "GDepth", "Format").as_deref(),
-            Some("RangeLinear")
-        );
-        assert_eq!(property(xmp, "GDepth", "Near").as_deref(), Some("1.5"));
-        assert_eq!(property(xmp, "GDepth", "Far").as_deref(), Some("12&"));
-        assert_eq!(property(xmp, "GDepth", "Mime"), None);
-        // A longer name that starts with the one asked for is another property.
-        let xmp = r#"<x GDepth:ConfidenceMime="image/png" GDepth:Mime="image/jpeg"/>"#;
-        assert_eq!(
-            property(xmp, "GDepth", "Mime").as_deref(),
-            Some("image/jpeg")
-        );
-        // An element whose start tag declares its namespace, and an empty one.
-        let xmp = r#"<xmpNote:HasExtendedXMP xmlns:xmpNote="http://ns.adobe.com/xmp/note/"
-            >A1B2</xmpNote:HasExtendedXMP><GDepth:Near/>"#;
-        let guid = property(xmp, "xmpNote", "HasExtendedXMP");
-        assert_eq!(guid.as_deref(), Some("A1B2"));
-        assert_eq!(property(xmp, "GDepth", "Near").as_deref(), Some(""));
-    }
 
     #[test]
     fn the_encodings_are_the_specifications() {

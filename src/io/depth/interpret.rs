@@ -35,7 +35,7 @@ fn resolve_format(
         (F::Auto, Raw::Float { from_pfm: true, .. }) if has_calib => F::Middlebury2014,
         (F::Auto, Raw::Float { .. }) => F::Float,
         (F::Auto, Raw::Grey8(_)) => F::Middlebury2006,
-        (F::Auto, Raw::Embedded(_)) => F::Gdepth,
+        (F::Auto, Raw::Embedded(e)) => e.format,
         // A camera file was given, or found for a `*_disparity.png`.
         (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
         (F::Auto, Raw::Grey16(_))

@@ -34,6 +34,7 @@ mod interpret;
 mod middlebury;
 mod png16;
 mod raw;
+mod xmp;
 
 use interpret::{interpret, SideFiles};
 use raw::decode_raw;
@@ -150,6 +151,11 @@ pub enum DepthFormat {
     /// `Format` (RangeInverse or RangeLinear) and `Units`, depth or range as its
     /// `MeasureType` says (see the `gdepth` module). `auto` picks it for a `.jpg`.
     Gdepth,
+    /// Android's Dynamic Depth (Android 10 on) in a JPEG: the depth image appended after
+    /// the primary image as an item of its `Container:Directory`, described by a camera's
+    /// `DepthMap` as GDepth describes its own (`Format`, `Near`, `Far`, `Units`,
+    /// `MeasureType`). `auto` picks it for a `.jpg` that carries it.
+    DynamicDepth,
 }
 
 impl FromStr for DepthFormat {

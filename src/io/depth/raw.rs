@@ -31,7 +31,8 @@ impl Raw {
             Raw::Grey16(_) => "a 16-bit PNG",
             Raw::Float { from_pfm: true, .. } => "a float PFM",
             Raw::Float { .. } => "a float map",
-            Raw::Embedded(_) => "a JPEG's GDepth depth map",
+            Raw::Embedded(e) if e.format == DepthFormat::Gdepth => "a JPEG's GDepth depth map",
+            Raw::Embedded(_) => "a JPEG's Dynamic Depth depth map",
         }
     }
 
@@ -75,7 +76,12 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
         "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
         "tif" | "tiff" => Ok(float(parse_tiff_scalar(bytes, path)?)),
         "npy" => Ok(float(parse_npy_scalar(bytes, path)?)),
-        "jpg" | "jpeg" if !matches!(format, DepthFormat::Auto | DepthFormat::Gdepth) => {
+        "jpg" | "jpeg"
+            if !matches!(
+                format,
+                DepthFormat::Auto | DepthFormat::Gdepth | DepthFormat::DynamicDepth
+            ) =>
+        {
             Err(Error::format(
                 path,
                 format!(
