@@ -161,11 +161,41 @@ fn a_dynamic_depth_container_gives_its_depth_item() {
     assert_eq!(loaded.format, DepthFormat::DynamicDepth);
     assert_eq!(loaded.kind, DepthKind::Depth);
     assert!(loaded.metric, "Units Meters");
-    // The same PNG as inv8.jpg's, found past the confidence item before it.
-    let bits = |m: &brume::raster::ScalarMap| -> Vec<u32> {
-        m.as_slice().iter().map(|v| v.to_bits()).collect()
+    // The same PNG as inv8.jpg's, found past the confidence item before it, turned into
+    // range by the camera's ImagingModel (60 and 62 px of the 64 x 48 photo, principal
+    // point 0.45, 0.55 of it) on the 32 x 24 map: no field of view needed.
+    let k = loaded.intrinsics.expect("the ImagingModel's intrinsics");
+    let (fx, fy, cx, cy) = (30.0, 31.0, 0.45 * 32.0 - 0.5, 0.55 * 24.0 - 0.5);
+    assert!(
+        (k.fx - fx).abs() < 1e-12 && (k.fy - fy).abs() < 1e-12,
+        "{k:?}"
+    );
+    assert!(
+        (k.cx - cx).abs() < 1e-12 && (k.cy - cy).abs() < 1e-12,
+        "{k:?}"
+    );
+    assert_eq!(loaded.unknown_pixels, gdepth.unknown_pixels);
+    for y in 0..24 {
+        for x in 0..32 {
+            let depth = f64::from(*gdepth.range.get(x, y));
+            let ray =
+                (1.0 + ((x as f64 - cx) / fx).powi(2) + ((y as f64 - cy) / fy).powi(2)).sqrt();
+            let range = f64::from(*loaded.range.get(x, y));
+            assert!(
+                (depth.is_nan() && range.is_nan()) || (range - depth * ray).abs() < 1e-5 * range,
+                "({x}, {y}): {range} for {depth} x {ray}"
+            );
+        }
+    }
+    assert!(loaded.warnings().is_empty(), "{:?}", loaded.warnings());
+    // A field of view given wins over the file's model.
+    let with_fov = DepthOptions {
+        fov: Some(60.0),
+        ..DepthOptions::default()
     };
-    assert_eq!(bits(&loaded.range), bits(&gdepth.range));
+    let given = load_range(&fixture("dd8.jpg"), &with_fov).unwrap();
+    let centred = given.intrinsics.unwrap();
+    assert!((centred.cx - 15.5).abs() < 1e-12 && (centred.fx - centred.fy).abs() < 1e-12);
     assert!(has_embedded_depth(&fixture("dd8.jpg")));
     // Read as the other format, it is refused as that layout's mismatch.
     let as_gdepth = DepthOptions {

@@ -20,7 +20,9 @@ against the specification's formulas without a second file:
   XMP (``XMP-Device``: a ``Container:Directory`` of the primary image, length 0, a
   confidence PNG and the depth PNG, with their lengths and ``DataURI``; a camera's
   ``DepthMap`` with ``inv8.jpg``'s Format, Near and Far, ``Units`` Meters and its
-  ``DepthURI``), then this script appends the two PNGs after the JPEG in that order.
+  ``DepthURI``, and its ``ImagingModel``: focal lengths 60 and 62 px of the 64 x 48
+  photo, principal point 0.45, 0.55), then this script appends the two PNGs after the
+  JPEG in that order.
 - ``ext16.jpg``: 320 x 240 photo, 320 x 240 16-bit PNG, RangeInverse, Near 2 Far 42, the
   plane d = 2 + 0.05 x + 0.1 y m plus up to 1 cm of seeded noise (which keeps the PNG
   from compressing, so that the XMP needs extended segments).
@@ -116,7 +118,9 @@ def dynamic_depth(src, out, depth_png, tmp):
                  f"{{Item={{Mime=image/png,Length={lengths[1]},DataURI=android/depthmap}}}}]}}")
     cameras = ("[{Camera={DepthMap={Format=RangeInverse,Near=1.5,Far=20.75,Units=Meters,"
                "MeasureType=OpticalAxis,DepthURI=android/depthmap,"
-               "ConfidenceURI=android/confidencemap,ItemSemantic=Depth}}}]")
+               "ConfidenceURI=android/confidencemap,ItemSemantic=Depth},"
+               "ImagingModel={FocalLengthX=60,FocalLengthY=62,ImageWidth=64,ImageHeight=48,"
+               "PrincipalPointX=0.45,PrincipalPointY=0.55}}}]")
     subprocess.run(["exiftool", "-q", "-overwrite_original", f"-XMP-Device:Container={directory}",
                     f"-XMP-Device:Cameras={cameras}", out], check=True)
     with open(out, "ab") as f:

@@ -15,8 +15,8 @@ What it does, in one run:
    photo as a JPEG whose XMP holds the z-depth as an 8-bit RangeInverse PNG from 1 m to
    ``--gdepth-far``, which has no "unknown": the model's unknown cells below (the sky, all
    beyond Far, and what the noise takes past it) are at Far; "surfaces without phone
-   depth" are the cells at Far). The model (its parameters are options; they are assumptions, not
-   measurements of one phone):
+   depth" are the cells at Far). The model (its parameters are options; they are
+   assumptions, not measurements of one phone):
    - each cell is the mean depth (z, or range for DEPTH16) of the full-resolution pixels it
      covers (a coarse sensor or a depth-from-motion estimate mixes both sides of an edge:
      "flying pixels");
@@ -47,7 +47,8 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
 
     pip install opencv-python-headless numpy
     python3 tools/phone_depth_eval.py OUT_DIR [--brume target/release/brume]
-        [--format arcore|android-depth16] [--size 1024x512] [--factor 8] [--fov 45]
+        [--format arcore|android-depth16|gdepth] [--gdepth-far 10] [--size 1024x512]
+        [--factor 8] [--fov 45]
         [--beta 0.02] [--position 0,1.7,0]
         [--yaw 0] [--pitch 0] [--roll 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
         [--margin PX]  (passed to brume render)

@@ -31,8 +31,12 @@
 //! pre-processing finds the sky in it and carries the scene on beyond the reach; so is a
 //! depth of 0 or less (a writer's code for nothing measured, with `Near` 0). A writer
 //! whose `Far` is its farthest measured depth loses those samples to the hole filling,
-//! which continues the scene round them. The optional confidence maps are not read, nor
-//! Dynamic Depth's camera intrinsics (give `fov` for range).
+//! which continues the scene round them. The optional confidence maps are not read.
+//!
+//! A Dynamic Depth camera's `ImagingModel` (focal lengths in pixels of an image
+//! `ImageWidth` x `ImageHeight`, the principal point as a fraction of it, 0.5 by default)
+//! gives the intrinsics, scaled to the depth map's grid: depth along the optical axis
+//! becomes range without a field of view (a `focal` or `fov` given wins).
 
 use std::path::Path;
 
@@ -40,7 +44,7 @@ use base64::Engine;
 use image::DynamicImage;
 
 use super::xmp::{is_jpeg, prefix_of, primary_end, property, xmp_packets, XmpPackets};
-use super::{DepthFormat, DepthKind};
+use super::{DepthFormat, DepthKind, Intrinsics};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
@@ -48,6 +52,8 @@ const GDEPTH_NAMESPACE: &str = "http://ns.google.com/photos/1.0/depthmap/";
 const DYNAMIC_DEPTH_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/depthmap/";
 const CONTAINER_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/container/";
 const ITEM_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/item/";
+const DEVICE_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/device/";
+const IMAGING_MODEL_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/imagingmodel/";
 
 /// A depth map read from a JPEG's GDepth or Dynamic Depth metadata.
 pub(crate) struct EmbeddedDepth {
@@ -58,6 +64,9 @@ pub(crate) struct EmbeddedDepth {
     pub kind: DepthKind,
     /// Which of the two formats described it.
     pub format: DepthFormat,
+    /// The depth camera's intrinsics on the map's grid, where the file gives them
+    /// (Dynamic Depth's `ImagingModel`).
+    pub intrinsics: Option<Intrinsics>,
     /// `m` (the file's units converted), or the file's own units.
     pub units: String,
     /// What the file said that the user should know.
@@ -102,6 +111,30 @@ struct Described {
     prefix: String,
     image: Vec<u8>,
     mime: String,
+    /// Dynamic Depth's `ImagingModel` of the depth map's camera, if it has one.
+    imaging_model: Option<ImagingModel>,
+}
+
+/// A Dynamic Depth camera's pinhole model: focal lengths in pixels of an image
+/// `size` wide and high, the principal point as a fraction of it.
+struct ImagingModel {
+    focal: [f64; 2],
+    size: [f64; 2],
+    principal: [f64; 2],
+}
+
+impl ImagingModel {
+    /// The model on a grid `width` x `height` (the depth map's, over the same view).
+    fn on_grid(&self, width: usize, height: usize) -> Intrinsics {
+        let (sx, sy) = (width as f64 / self.size[0], height as f64 / self.size[1]);
+        // A fraction of the image's extent to the pixel index whose centre is there.
+        Intrinsics {
+            fx: self.focal[0] * sx,
+            fy: self.focal[1] * sy,
+            cx: self.principal[0] * width as f64 - 0.5,
+            cy: self.principal[1] * height as f64 - 0.5,
+        }
+    }
 }
 
 /// Reads the depth map that the JPEG `bytes` describe in their XMP, GDepth or Dynamic
@@ -153,6 +186,7 @@ fn gdepth(packets: &Packets, prefix: String, path: &Path) -> Result<Described> {
         prefix,
         image,
         mime: mime.trim().to_string(),
+        imaging_model: None,
     })
 }
 
@@ -199,10 +233,72 @@ fn dynamic_depth(
     Ok(Described {
         format: DepthFormat::DynamicDepth,
         format_name: "Dynamic Depth",
+        imaging_model: imaging_model(packets, &prefix, path)?,
         prefix,
         image: image.to_vec(),
         mime: items[index].mime.clone(),
     })
+}
+
+/// The `ImagingModel` of the camera whose `DepthMap` this is (the `Device:Camera` element
+/// round its `DepthURI`; the whole packet without a `Device` namespace), if it has one:
+/// focal lengths and image size required, positive and finite; principal point 0.5, 0.5
+/// unless given.
+fn imaging_model(packets: &Packets, prefix: &str, path: &Path) -> Result<Option<ImagingModel>> {
+    let Some(model) = packets.prefix(IMAGING_MODEL_NAMESPACE) else {
+        return Ok(None);
+    };
+    let device = packets.prefix(DEVICE_NAMESPACE);
+    let Some(camera) = packets.texts.iter().find_map(|text| {
+        let at = text.find(&format!("{prefix}:DepthURI"))?;
+        let Some(device) = &device else {
+            return Some(*text);
+        };
+        let open = format!("<{device}:Camera");
+        let start = text[..at].rfind(&open)?;
+        let end = text[at..]
+            .find(&format!("</{device}:Camera>"))
+            .map_or(text.len(), |e| at + e);
+        Some(&text[start..end])
+    }) else {
+        return Ok(None);
+    };
+    let value = |name: &str, default: Option<f64>| -> Result<Option<f64>> {
+        let Some(text) = property(camera, &model, name) else {
+            return Ok(default);
+        };
+        let v = text
+            .trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite() && *v > 0.0);
+        v.map(Some).ok_or_else(|| {
+            Error::format(
+                path,
+                format!(
+                    "Dynamic Depth ImagingModel {name} is {text:?}: expected a positive number"
+                ),
+            )
+        })
+    };
+    let required = [
+        value("FocalLengthX", None)?,
+        value("FocalLengthY", None)?,
+        value("ImageWidth", None)?,
+        value("ImageHeight", None)?,
+    ];
+    let [Some(fx), Some(fy), Some(w), Some(h)] = required else {
+        return Ok(None);
+    };
+    let principal = [
+        value("PrincipalPointX", Some(0.5))?.unwrap_or(0.5),
+        value("PrincipalPointY", Some(0.5))?.unwrap_or(0.5),
+    ];
+    Ok(Some(ImagingModel {
+        focal: [fx, fy],
+        size: [w, h],
+        principal,
+    }))
 }
 
 /// One `Container:Item` of a Dynamic Depth directory.
@@ -253,6 +349,7 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
         prefix,
         image,
         mime,
+        imaging_model,
     } = described;
     let get = |name: &str| packets.get(&prefix, name);
     let number = |name: &str| -> Result<f64> {
@@ -327,7 +424,9 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
              sky and all beyond it), not a depth"
         ));
     }
+    let intrinsics = imaging_model.map(|m| m.on_grid(map.width(), map.height()));
     Ok(EmbeddedDepth {
+        intrinsics,
         map,
         kind,
         format: depth_format,

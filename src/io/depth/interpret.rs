@@ -234,7 +234,24 @@ pub(super) fn interpret(
         }
         (_, Raw::Embedded(e)) => {
             notes.extend(e.notes);
-            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let given = opts.focal.is_some() || opts.fov.is_some();
+            let k = match e.intrinsics {
+                Some(k) if !given && kind == DepthKind::Depth => {
+                    notes.push(format!(
+                        "intrinsics from the file's ImagingModel: fx {:.2} fy {:.2} px on the \
+                         map's grid",
+                        k.fx, k.fy
+                    ));
+                    Some(k)
+                }
+                Some(_) if given => {
+                    notes.push(
+                        "`focal` or `fov` given: used instead of the file's ImagingModel".into(),
+                    );
+                    depth_intrinsics(kind, opts, width, height, &mut notes)?
+                }
+                _ => depth_intrinsics(kind, opts, width, height, &mut notes)?,
+            };
             let range = to_range(
                 &e.map,
                 |v| v.is_finite().then_some(f64::from(v)),
