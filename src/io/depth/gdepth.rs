@@ -13,9 +13,10 @@
 //!   image, in order (`Item:Mime`, `Item:Length`, `Item:DataURI`; the primary image's
 //!   length is 0), and a camera's `DepthMap` (namespace
 //!   `http://ns.google.com/photos/dd/1.0/depthmap/`) with `Format`, `Near`, `Far`,
-//!   `Units` (`Meters`, `Diopters`: 1/m, or `None`), `MeasureType` and `DepthURI`, the
-//!   `DataURI` of the item that holds the depth image. The item starts after the primary
-//!   image's end-of-image marker plus the lengths of the items before it.
+//!   `Units` (`Meters`; `Diopters`, 1/m, is refused; `None`: file units), `MeasureType`
+//!   and `DepthURI`, the `DataURI` of the item that holds the depth image. The item
+//!   starts after the primary image's end-of-image marker plus the lengths of the items
+//!   before it.
 //!
 //! A sample v of b bits is d_n = v / (2^b − 1), and
 //!
@@ -353,12 +354,7 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
     } = described;
     let get = |name: &str| packets.get(&prefix, name);
     let number = |name: &str| -> Result<f64> {
-        let text = get(name).ok_or_else(|| {
-            Error::format(
-                path,
-                format!("{format_name} metadata without {name}: expected the depth map's {name}"),
-            )
-        })?;
+        let text = get(name).ok_or_else(|| missing(format_name, &prefix, name, path))?;
         text.trim()
             .parse::<f64>()
             .ok()
@@ -385,24 +381,28 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
         }
     };
     let units = get("Units").map(|u| u.trim().to_string());
-    let to_metres: fn(f64) -> f64 = match units.as_deref() {
-        None | Some("m") | Some("Meters") => |d| d,
-        Some("mm") => |d| d * 1e-3,
-        Some("Diopters") => |d| 1.0 / d,
-        Some(_) => |d| d,
-    };
-    let unit_name = match units.as_deref() {
-        Some(other) if !matches!(other, "m" | "Meters" | "mm" | "Diopters") => {
+    let (to_metres, unit_name): (fn(f64) -> f64, &str) = match units.as_deref() {
+        None => {
+            notes.push(format!("{format_name} without Units: metres (the default)"));
+            (|d| d, "m")
+        }
+        Some("m" | "Meters") => (|d| d, "m"),
+        Some("mm") => (|d| d * 1e-3, "m"),
+        Some("Diopters") => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "{format_name} Units Diopters (inverse metres) are not read: expected \
+                     Meters (GDepth: m or mm)"
+                ),
+            ))
+        }
+        Some(other) => {
             notes.push(format!(
                 "{format_name} Units {other:?} is not a length: the depth is in file units"
             ));
-            super::interpret::FILE_UNITS.to_string()
+            (|d| d, super::interpret::FILE_UNITS)
         }
-        None => {
-            notes.push(format!("{format_name} without Units: metres (the default)"));
-            "m".to_string()
-        }
-        Some(_) => "m".to_string(),
     };
     let samples = decode_image(&image, &mime, format_name, path)?;
     notes.push(format!(
@@ -430,7 +430,7 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
         map,
         kind,
         format: depth_format,
-        units: unit_name,
+        units: unit_name.to_string(),
         notes,
     })
 }

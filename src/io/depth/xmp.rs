@@ -14,7 +14,7 @@ const EXTENDED_XMP_SIGNATURE: &[u8] = b"http://ns.adobe.com/xmp/extension/\0";
 /// The GUID, full length and offset that lead each extended XMP segment's data.
 const EXTENDED_HEADER: usize = 32 + 4 + 4;
 /// JPEG markers: start of image, end of image, start of scan, APP1.
-pub(super) const SOI: u8 = 0xD8;
+const SOI: u8 = 0xD8;
 const EOI: u8 = 0xD9;
 const SOS: u8 = 0xDA;
 const APP1: u8 = 0xE1;
