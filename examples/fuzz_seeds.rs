@@ -259,8 +259,8 @@ fn main() -> Res<()> {
     seeds.put("colour_image", "rgb.pfm", pfm("PF", 3, 2, &hdr, true, "\n"));
 
     // gdepth: the small JPEGs of tests/data/gdepth/ (ext8.jpg in extended XMP, dd8.jpg
-    // Dynamic Depth).
-    for name in ["inv8.jpg", "lin16.jpg", "ext8.jpg", "dd8.jpg"] {
+    // Dynamic Depth, conf8.jpg with a confidence map).
+    for name in ["inv8.jpg", "lin16.jpg", "ext8.jpg", "dd8.jpg", "conf8.jpg"] {
         let jpeg = std::fs::read(root.join("tests/data/gdepth").join(name))?;
         seeds.put("gdepth", name, jpeg);
     }

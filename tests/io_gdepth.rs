@@ -213,6 +213,52 @@ fn a_dynamic_depth_container_gives_its_depth_item() {
 }
 
 #[test]
+fn min_confidence_drops_what_the_confidence_map_doubts() {
+    let with = |file: &str, min: Option<f64>| {
+        let opts = DepthOptions {
+            min_confidence: min,
+            ..DepthOptions::default()
+        };
+        load_range(&fixture(file), &opts).unwrap()
+    };
+    // Without a threshold the map is read whole: the scales of confidence differ.
+    let plain = with("conf8.jpg", None);
+    let inv8 = with("inv8.jpg", None);
+    assert_eq!(plain.unknown_pixels, inv8.unknown_pixels);
+    // Its right half is at 64/255 = 0.251: unknown below 0.5, kept at 0.25.
+    let half = with("conf8.jpg", Some(0.5));
+    for y in 0..24 {
+        for x in 0..32 {
+            let (got, whole) = (*half.range.get(x, y), *inv8.range.get(x, y));
+            if x >= 16 {
+                assert!(got.is_nan(), "({x}, {y})");
+            } else {
+                assert_eq!(got.to_bits(), whole.to_bits(), "({x}, {y})");
+            }
+        }
+    }
+    assert!(half
+        .notes
+        .iter()
+        .any(|n| n.contains("below `min_confidence` 0.5")));
+    assert_eq!(
+        with("conf8.jpg", Some(0.25)).unknown_pixels,
+        inv8.unknown_pixels
+    );
+    // Dynamic Depth's confidence item (all 1.0) keeps every sample at 1.
+    assert_eq!(
+        with("dd8.jpg", Some(1.0)).unknown_pixels,
+        with("dd8.jpg", None).unknown_pixels
+    );
+    // A file without a confidence map says the option did nothing.
+    let none = with("inv8.jpg", Some(0.5));
+    assert!(none
+        .warnings()
+        .iter()
+        .any(|w| w.contains("no confidence map")));
+}
+
+#[test]
 fn broken_gdepth_files_are_refused_by_name() {
     let message = |bytes: &[u8]| match load_range_from_bytes(
         bytes,

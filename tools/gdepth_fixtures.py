@@ -12,6 +12,8 @@ against the specification's formulas without a second file:
   Units (metres), no MeasureType (optical axis); depth d = 1.5 + 0.25 x + 0.5 y m.
 - ``lin16.jpg``: the same photo and plane, 16-bit PNG, RangeLinear, Near 1500 Far 20750,
   Units mm, MeasureType OpticRay (range).
+- ``conf8.jpg``: ``inv8.jpg`` with a confidence map (``GDepth:Confidence``, a PNG of the
+  same size: 255 (1.0) in the left half, 64 (0.251) in the right).
 - ``ext8.jpg``: ``inv8.jpg`` with its ``GDepth:Data`` moved by this script (not ExifTool)
   into an extended packet of two segments written in reverse order, the GUID in an
   element whose start tag declares its namespace: what a reader must accept beyond
@@ -140,6 +142,11 @@ def main(out_dir):
     embed(small, os.path.join(out_dir, "inv8.jpg"), inv8,
           ["Format=RangeInverse", "Near=1.5", "Far=20.75"])
     split_data(os.path.join(out_dir, "inv8.jpg"), os.path.join(out_dir, "ext8.jpg"))
+    conf = os.path.join(tmp, "conf8.png")
+    cv2.imwrite(conf, np.where(x < 16, 255, 64).astype(np.uint8))
+    embed(small, os.path.join(out_dir, "conf8.jpg"), inv8,
+          ["Format=RangeInverse", "Near=1.5", "Far=20.75", "ConfidenceMime=image/png",
+           f"Confidence<={conf}"])
     lin16 = os.path.join(tmp, "lin16.png")
     cv2.imwrite(lin16, samples(plane * 1000, 1500, 20750, False, 16))
     embed(small, os.path.join(out_dir, "lin16.jpg"), lin16,

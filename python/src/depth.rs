@@ -29,7 +29,8 @@ use pyo3::types::PyDict;
 /// projection (an OpenGL window depth in [0, 1]; near and far in the range's unit, far
 /// float('inf') for an infinite far plane); reversed_z: its depth is 1 at near and 0 at
 /// far (Unreal, Bevy, Godot 4), nothing drawn at 0. min_confidence: the lowest
-/// confidence in [0, 1] of an Android DEPTH16 sample that is kept. info: format, kind,
+/// confidence in [0, 1] of an Android DEPTH16 sample that is kept (of a portrait JPEG's
+/// sample, in its confidence map). info: format, kind,
 /// units, metric (whether the range is in trustworthy metres, which fog with beta or
 /// visibility needs), notes, unknown_pixels.
 #[pyfunction]

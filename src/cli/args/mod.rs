@@ -206,7 +206,9 @@ pub struct DepthReadingArgs {
 
     /// --depth-format android-depth16: samples whose DEPTH16 confidence is below this
     /// are unknown, from 0 (keep every measured sample) to 1 (only code 0, 100 %); code
-    /// c ≥ 1 means (c − 1)/7 [default: 0.5].
+    /// c ≥ 1 means (c − 1)/7 [default: 0.5]. A portrait photo's depth (gdepth,
+    /// dynamic-depth) with a confidence map: samples below this in it are unknown
+    /// [default: none dropped].
     #[arg(long, value_name = "C", allow_hyphen_values = true)]
     pub min_confidence: Option<f64>,
 }

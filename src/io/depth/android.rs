@@ -72,7 +72,9 @@ pub(super) fn min_confidence(
             "a confidence from 0 to 1 (DEPTH16 levels are 0, 1/7, …, 6/7 and 1)",
         ));
     }
-    if format != DepthFormat::AndroidDepth16 {
+    // A portrait photo's confidence map, where it has one, is read in `interpret`.
+    let embedded = matches!(format, DepthFormat::Gdepth | DepthFormat::DynamicDepth);
+    if format != DepthFormat::AndroidDepth16 && !embedded {
         notes.push(format!(
             "`min_confidence` ignored: {format} carries no confidence"
         ));

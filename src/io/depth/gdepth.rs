@@ -68,6 +68,9 @@ pub(crate) struct EmbeddedDepth {
     /// The depth camera's intrinsics on the map's grid, where the file gives them
     /// (Dynamic Depth's `ImagingModel`).
     pub intrinsics: Option<Intrinsics>,
+    /// Each sample's confidence in [0, 1] (the map's size), where the file has a
+    /// confidence map (RangeLinear over [0, 1], both specifications say).
+    pub confidence: Option<ScalarMap>,
     /// `m` (the file's units converted), or the file's own units.
     pub units: String,
     /// What the file said that the user should know.
@@ -112,6 +115,8 @@ struct Described {
     prefix: String,
     image: Vec<u8>,
     mime: String,
+    /// The confidence image's bytes and MIME type, if the file has one.
+    confidence: Option<(Vec<u8>, String)>,
     /// Dynamic Depth's `ImagingModel` of the depth map's camera, if it has one.
     imaging_model: Option<ImagingModel>,
 }
@@ -175,20 +180,34 @@ fn gdepth(packets: &Packets, prefix: String, path: &Path) -> Result<Described> {
     let get = |name: &str| packets.get(&prefix, name);
     let required = |name: &str| get(name).ok_or_else(|| missing("GDepth", &prefix, name, path));
     let mime = required("Mime")?;
-    let data = required("Data")?;
-    let compact: Vec<u8> = data.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
-    // Whitespace allowed: Android's base64 encoder breaks lines.
-    let image = base64::engine::general_purpose::STANDARD
-        .decode(&compact)
-        .map_err(|e| Error::format(path, format!("GDepth Data is not base64 ({e})")))?;
+    let image = base64_property("Data", &required("Data")?, path)?;
+    let confidence = match get("Confidence") {
+        Some(data) => {
+            let mime = get("ConfidenceMime").unwrap_or_else(|| "image/png".into());
+            Some((
+                base64_property("Confidence", &data, path)?,
+                mime.trim().to_string(),
+            ))
+        }
+        None => None,
+    };
     Ok(Described {
         format: DepthFormat::Gdepth,
         format_name: "GDepth",
         prefix,
         image,
         mime: mime.trim().to_string(),
+        confidence,
         imaging_model: None,
     })
+}
+
+/// A base64 property's bytes (whitespace allowed: Android's encoder breaks lines).
+fn base64_property(name: &str, data: &str, path: &Path) -> Result<Vec<u8>> {
+    let compact: Vec<u8> = data.bytes().filter(|b| !b.is_ascii_whitespace()).collect();
+    base64::engine::general_purpose::STANDARD
+        .decode(&compact)
+        .map_err(|e| Error::format(path, format!("GDepth {name} is not base64 ({e})")))
 }
 
 /// Dynamic Depth: the depth map's properties, and its item from the container appended
@@ -214,30 +233,46 @@ fn dynamic_depth(
             items.len()
         )));
     };
-    let mut offset = 0usize;
-    for item in &items[..index] {
-        offset = offset.saturating_add(item.length);
-    }
     let start = primary_end(bytes, xmp)
         .ok_or_else(|| broken("file ends inside its primary image".into()))?;
-    let length = items[index].length;
-    let image = start
-        .checked_add(offset)
-        .and_then(|from| bytes.get(from..from.checked_add(length)?))
-        .ok_or_else(|| {
-            broken(format!(
-                "depth item of {length} bytes at {offset} after the primary image runs past \
-                 the file ({} bytes after it): a truncated file?",
-                bytes.len() - start
-            ))
-        })?;
+    // An item's bytes: after the primary image, past the items before it.
+    let payload = |index: usize, what: &str| -> Result<Vec<u8>> {
+        let offset = items[..index]
+            .iter()
+            .fold(0usize, |o, item| o.saturating_add(item.length));
+        let length = items[index].length;
+        start
+            .checked_add(offset)
+            .and_then(|from| bytes.get(from..from.checked_add(length)?))
+            .map(<[u8]>::to_vec)
+            .ok_or_else(|| {
+                broken(format!(
+                    "{what} item of {length} bytes at {offset} after the primary image runs \
+                     past the file ({} bytes after it): a truncated file?",
+                    bytes.len() - start
+                ))
+            })
+    };
+    let confidence_uri = packets.get(&prefix, "ConfidenceURI");
+    let confidence = match confidence_uri.as_deref().map(str::trim) {
+        Some(uri) if !uri.is_empty() => {
+            let Some(at) = items.iter().position(|i| i.uri.as_deref() == Some(uri)) else {
+                return Err(broken(format!(
+                    "ConfidenceURI {uri:?} names no item of its Container:Directory"
+                )));
+            };
+            Some((payload(at, "confidence")?, items[at].mime.clone()))
+        }
+        _ => None,
+    };
     Ok(Described {
         format: DepthFormat::DynamicDepth,
         format_name: "Dynamic Depth",
         imaging_model: imaging_model(packets, &prefix, path)?,
         prefix,
-        image: image.to_vec(),
+        image: payload(index, "depth")?,
         mime: items[index].mime.clone(),
+        confidence,
     })
 }
 
@@ -350,6 +385,7 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
         prefix,
         image,
         mime,
+        confidence,
         imaging_model,
     } = described;
     let get = |name: &str| packets.get(&prefix, name);
@@ -425,7 +461,29 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
         ));
     }
     let intrinsics = imaging_model.map(|m| m.on_grid(map.width(), map.height()));
+    let confidence = match confidence {
+        Some((bytes, mime)) => {
+            let what = format!("{format_name} confidence");
+            let samples = decode_image(&bytes, &mime, &what, path)?;
+            let c = samples.map(|c| c as f32);
+            if (c.width(), c.height()) != (map.width(), map.height()) {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "{what} map is {}x{}: expected the depth map's size, {}x{}",
+                        c.width(),
+                        c.height(),
+                        map.width(),
+                        map.height()
+                    ),
+                ));
+            }
+            Some(c)
+        }
+        None => None,
+    };
     Ok(EmbeddedDepth {
+        confidence,
         intrinsics,
         map,
         kind,

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use super::cityscapes::{self, CityscapesCamera};
+use super::gdepth::EmbeddedDepth;
 use super::middlebury::{self, Calib};
 use super::raw::Raw;
 use super::{android, png16};
@@ -232,8 +233,9 @@ pub(super) fn interpret(
             let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
             (range, units, k)
         }
-        (_, Raw::Embedded(e)) => {
-            notes.extend(e.notes);
+        (_, Raw::Embedded(mut e)) => {
+            notes.extend(std::mem::take(&mut e.notes));
+            drop_unconfident(&mut e, opts.min_confidence, &mut notes);
             let given = opts.focal.is_some() || opts.fov.is_some();
             let k = match e.intrinsics {
                 Some(k) if !given && kind == DepthKind::Depth => {
@@ -318,6 +320,32 @@ fn inverse_depth(
         (d.is_finite() && d > 0.0).then(|| scale / d)
     };
     Ok((depth, units))
+}
+
+/// With `min_confidence` given, the samples of a portrait photo's depth whose confidence
+/// map puts them below it are unknown (none without it: the devices' scales of confidence
+/// differ); a note says how many, or that the file has no confidence map.
+fn drop_unconfident(e: &mut EmbeddedDepth, min_confidence: Option<f64>, notes: &mut Vec<String>) {
+    let Some(threshold) = min_confidence else {
+        return;
+    };
+    let Some(confidence) = &e.confidence else {
+        notes.push(format!(
+            "`min_confidence` ignored: this {} file has no confidence map",
+            e.format
+        ));
+        return;
+    };
+    let mut dropped = 0;
+    for (v, &c) in e.map.as_mut_slice().iter_mut().zip(confidence.as_slice()) {
+        if v.is_finite() && f64::from(c) < threshold {
+            *v = f32::NAN;
+            dropped += 1;
+        }
+    }
+    notes.push(format!(
+        "{dropped} samples below `min_confidence` {threshold} in the confidence map: unknown"
+    ));
 }
 
 /// The units of a map whose unit nothing says (a float map, a z-buffer's planes).

@@ -215,7 +215,8 @@ pub struct DepthOptions {
     pub fov: Option<f64>,
     /// Lowest confidence, in [0, 1], of an `android-depth16` sample that is kept; less
     /// confident samples are unknown. `None` takes
-    /// [`DEPTH16_DEFAULT_MIN_CONFIDENCE`].
+    /// [`DEPTH16_DEFAULT_MIN_CONFIDENCE`]. For `gdepth` and `dynamic-depth`, the lowest
+    /// value of the file's confidence map kept; `None` keeps every sample.
     pub min_confidence: Option<f64>,
 }
 
