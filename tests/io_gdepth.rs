@@ -276,6 +276,8 @@ fn broken_gdepth_files_are_refused_by_name() {
     assert!(message(&plain).contains("has none"));
     assert!(!has_embedded_depth(&fixture("no-depth.jpg")));
     assert!(has_embedded_depth(&fixture("ext16.jpg")));
+    // A device is read no further than the header's bound.
+    assert!(!has_embedded_depth(Path::new("/dev/zero")));
 
     // Cut inside the second extended segment: the header runs past the file.
     let ext = std::fs::read(fixture("ext16.jpg")).unwrap();

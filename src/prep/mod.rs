@@ -160,10 +160,11 @@
 //!    the whole width where that tells the camera's roll, else level within half the
 //!    width either side, so the ground below a far tower recedes as the ground beside it
 //!    (the tower's own skyline would draw its ghost down to the ground). With the image,
-//!    what stands on that ground (a pixel run of another material just above the ground's materials, or the
-//!    last ground's below it as the colour drifts with distance, rising over the horizon
-//!    or with the ground seen again above it, its foot at least three rows of the grid
-//!    below the horizon) keeps its foot's range up the column, as an upright face does,
+//!    what stands on that ground (a pixel run of another material just above the
+//!    ground's materials, or the last ground's below it as the colour drifts with
+//!    distance, rising over the horizon or with the ground seen again above it, its foot
+//!    at least three rows of the grid below the horizon) keeps its foot's range up the
+//!    column, as an upright face does,
 //!    and along the rows to its material beside it (up to a sixteenth of the width);
 //!    and a surface the sensor reached in part (a region of one material under measured
 //!    pixels of its own in a quarter of its columns: a face just at the reach's limit,

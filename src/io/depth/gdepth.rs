@@ -77,19 +77,22 @@ pub(crate) struct EmbeddedDepth {
     pub notes: Vec<String>,
 }
 
-/// Whether a file is a JPEG whose XMP describes a depth map, GDepth or Dynamic Depth (read
-/// from its header segments only; any error is "no").
+/// Whether a file is a JPEG whose header names a depth map's namespace, GDepth's or
+/// Dynamic Depth's, in its first [`HEAD_BYTES`] (any error is "no"; [`decode`] reads the
+/// file whole and checks it).
 pub fn has_embedded_depth(path: &Path) -> bool {
-    let Ok(bytes) = std::fs::read(path) else {
-        return false;
-    };
-    is_jpeg(&bytes)
-        && xmp_packets(&bytes, path).is_ok_and(|xmp| {
-            [GDEPTH_NAMESPACE, DYNAMIC_DEPTH_NAMESPACE]
-                .iter()
-                .any(|ns| prefix_of(&xmp.standard, ns).is_some())
-        })
+    use std::io::Read;
+    // Only the head, and bounded: the image given may be a pipe or a device, which the
+    // loaders read up to their limit only to refuse.
+    let mut head = Vec::new();
+    let read = std::fs::File::open(path).and_then(|f| f.take(HEAD_BYTES).read_to_end(&mut head));
+    let names = |ns: &str| head.windows(ns.len()).any(|w| w == ns.as_bytes());
+    read.is_ok() && is_jpeg(&head) && (names(GDEPTH_NAMESPACE) || names(DYNAMIC_DEPTH_NAMESPACE))
 }
+
+/// How much of a file [`has_embedded_depth`] reads: the standard XMP packet comes in the
+/// header's first segments, each at most 64 KB.
+const HEAD_BYTES: u64 = 1 << 20;
 
 /// The XMP's text, the standard packet first, then the extended one.
 struct Packets<'a> {
@@ -109,8 +112,6 @@ impl Packets<'_> {
 /// Where a file describes its depth map, and the depth image's bytes.
 struct Described {
     format: DepthFormat,
-    /// `GDepth` or `Dynamic Depth`, for messages.
-    format_name: &'static str,
     /// The prefix of the depth map's properties.
     prefix: String,
     image: Vec<u8>,
@@ -178,7 +179,8 @@ pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
 /// GDepth: the properties, and the depth image from `Data`.
 fn gdepth(packets: &Packets, prefix: String, path: &Path) -> Result<Described> {
     let get = |name: &str| packets.get(&prefix, name);
-    let required = |name: &str| get(name).ok_or_else(|| missing("GDepth", &prefix, name, path));
+    let required =
+        |name: &str| get(name).ok_or_else(|| missing(DepthFormat::Gdepth, &prefix, name, path));
     let mime = required("Mime")?;
     let image = base64_property("Data", &required("Data")?, path)?;
     let confidence = match get("Confidence") {
@@ -193,7 +195,6 @@ fn gdepth(packets: &Packets, prefix: String, path: &Path) -> Result<Described> {
     };
     Ok(Described {
         format: DepthFormat::Gdepth,
-        format_name: "GDepth",
         prefix,
         image,
         mime: mime.trim().to_string(),
@@ -221,7 +222,7 @@ fn dynamic_depth(
 ) -> Result<Described> {
     let uri = packets
         .get(&prefix, "DepthURI")
-        .ok_or_else(|| missing("Dynamic Depth", &prefix, "DepthURI", path))?;
+        .ok_or_else(|| missing(DepthFormat::DynamicDepth, &prefix, "DepthURI", path))?;
     let broken = |what: String| Error::format(path, format!("Dynamic Depth {what}"));
     let items = container_items(packets);
     let Some(index) = items
@@ -267,7 +268,6 @@ fn dynamic_depth(
     };
     Ok(Described {
         format: DepthFormat::DynamicDepth,
-        format_name: "Dynamic Depth",
         imaging_model: imaging_model(packets, &prefix, path)?,
         prefix,
         image: payload(index, "depth")?,
@@ -370,27 +370,38 @@ fn container_items(packets: &Packets) -> Vec<Item> {
     items
 }
 
-fn missing(format: &str, prefix: &str, name: &str, path: &Path) -> Error {
+fn missing(format: DepthFormat, prefix: &str, name: &str, path: &Path) -> Error {
     Error::format(
         path,
-        format!("{format} metadata without {prefix}:{name}: expected the depth map's {name}"),
+        format!(
+            "{} metadata without {prefix}:{name}: expected the depth map's {name}",
+            name_of(format)
+        ),
     )
+}
+
+/// The format's name in messages.
+fn name_of(format: DepthFormat) -> &'static str {
+    match format {
+        DepthFormat::DynamicDepth => "Dynamic Depth",
+        _ => "GDepth",
+    }
 }
 
 /// The depth map a file describes, read as its properties say.
 fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<EmbeddedDepth> {
     let Described {
         format: depth_format,
-        format_name,
         prefix,
         image,
         mime,
         confidence,
         imaging_model,
     } = described;
+    let format_name = name_of(depth_format);
     let get = |name: &str| packets.get(&prefix, name);
     let number = |name: &str| -> Result<f64> {
-        let text = get(name).ok_or_else(|| missing(format_name, &prefix, name, path))?;
+        let text = get(name).ok_or_else(|| missing(depth_format, &prefix, name, path))?;
         text.trim()
             .parse::<f64>()
             .ok()

@@ -45,11 +45,12 @@ impl XmpPackets<'_> {
         let broken = |what: String| Error::format(path, format!("extended XMP {what}"));
         let mut packet: Vec<u8> = Vec::new();
         let mut filled = 0usize;
+        let held: usize = self.extended.iter().map(|s| s.len()).sum();
         for segment in self.extended.iter().filter(|s| s.starts_with(guid)) {
             let full = be_u32(&segment[32..36]) as usize;
             let offset = be_u32(&segment[36..40]) as usize;
             let chunk = &segment[EXTENDED_HEADER..];
-            if full > self.extended.iter().map(|s| s.len()).sum::<usize>() {
+            if full > held {
                 return Err(broken(format!(
                     "says it is {full} bytes long, more than its segments hold"
                 )));
