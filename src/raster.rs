@@ -151,6 +151,123 @@ impl<T> Grid<T> {
     }
 }
 
+/// How a photo's stored pixels are turned to show upright: its EXIF orientation (TIFF tag
+/// 274), as viewers apply it. A phone held upright stores its sensor's landscape frame
+/// with [`Orientation::Rotate90`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Orientation {
+    /// Stored upright (EXIF 1, or no tag).
+    #[default]
+    Upright,
+    /// Mirrored left to right (EXIF 2).
+    MirrorLeftRight,
+    /// Turned 180° (EXIF 3).
+    Rotate180,
+    /// Mirrored top to bottom (EXIF 4).
+    MirrorTopBottom,
+    /// Turned 90° clockwise, then mirrored left to right: a transpose (EXIF 5).
+    Rotate90Mirror,
+    /// Turned 90° clockwise (EXIF 6).
+    Rotate90,
+    /// Turned 90° anticlockwise, then mirrored left to right (EXIF 7).
+    Rotate270Mirror,
+    /// Turned 90° anticlockwise (EXIF 8).
+    Rotate270,
+}
+
+impl Orientation {
+    /// The eight, in the order of their EXIF values 1 to 8.
+    const BY_EXIF: [Orientation; 8] = [
+        Orientation::Upright,
+        Orientation::MirrorLeftRight,
+        Orientation::Rotate180,
+        Orientation::MirrorTopBottom,
+        Orientation::Rotate90Mirror,
+        Orientation::Rotate90,
+        Orientation::Rotate270Mirror,
+        Orientation::Rotate270,
+    ];
+
+    /// The orientation of an EXIF value, 1 to 8; `None` for any other.
+    pub fn from_exif(value: u16) -> Option<Orientation> {
+        Self::BY_EXIF
+            .get(usize::from(value).checked_sub(1)?)
+            .copied()
+    }
+
+    /// Its EXIF value, 1 to 8.
+    pub fn exif(self) -> u16 {
+        let index = Self::BY_EXIF.iter().position(|&o| o == self);
+        1 + index.expect("all eight are listed") as u16
+    }
+
+    /// Whether turning upright swaps width and height.
+    pub fn swaps_axes(self) -> bool {
+        use Orientation as O;
+        matches!(
+            self,
+            O::Rotate90Mirror | O::Rotate90 | O::Rotate270Mirror | O::Rotate270
+        )
+    }
+
+    /// The orientation that turns an upright grid back to how it was stored.
+    pub fn inverse(self) -> Orientation {
+        match self {
+            Orientation::Rotate90 => Orientation::Rotate270,
+            Orientation::Rotate270 => Orientation::Rotate90,
+            other => other,
+        }
+    }
+
+    /// In words, for messages: what a viewer does to the stored pixels.
+    pub fn describe(self) -> &'static str {
+        use Orientation as O;
+        match self {
+            O::Upright => "upright",
+            O::MirrorLeftRight => "mirrored left to right",
+            O::Rotate180 => "turned 180°",
+            O::MirrorTopBottom => "mirrored top to bottom",
+            O::Rotate90Mirror => "turned 90° clockwise and mirrored",
+            O::Rotate90 => "turned 90° clockwise",
+            O::Rotate270Mirror => "turned 90° anticlockwise and mirrored",
+            O::Rotate270 => "turned 90° anticlockwise",
+        }
+    }
+
+    /// The stored pixel `(x, y)` that shows at `(u, v)` of the upright grid, for a stored
+    /// grid of `w x h`.
+    fn stored_pixel(self, u: usize, v: usize, w: usize, h: usize) -> (usize, usize) {
+        use Orientation as O;
+        match self {
+            O::Upright => (u, v),
+            O::MirrorLeftRight => (w - 1 - u, v),
+            O::Rotate180 => (w - 1 - u, h - 1 - v),
+            O::MirrorTopBottom => (u, h - 1 - v),
+            O::Rotate90Mirror => (v, u),
+            O::Rotate90 => (v, h - 1 - u),
+            O::Rotate270Mirror => (w - 1 - v, h - 1 - u),
+            O::Rotate270 => (w - 1 - v, u),
+        }
+    }
+}
+
+impl<T: Clone + Send + Sync> Grid<T> {
+    /// The grid turned upright by `orientation` (a copy; the same grid for
+    /// [`Orientation::Upright`]).
+    pub fn oriented(&self, orientation: Orientation) -> Self {
+        let (w, h) = (self.width, self.height);
+        let (uw, uh) = if orientation.swaps_axes() {
+            (h, w)
+        } else {
+            (w, h)
+        };
+        Grid::par_from_fn(uw, uh, |u, v| {
+            let (x, y) = orientation.stored_pixel(u, v, w, h);
+            self.get(x, y).clone()
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -163,5 +280,42 @@ mod tests {
             let expected = Grid::from_fn(2, h, |x, y| 10 * (h - 1 - y) + x);
             assert_eq!(g.as_slice(), expected.as_slice(), "height {h}");
         }
+    }
+
+    /// Against the image crate's own `apply_orientation`, an independent implementation of
+    /// the eight EXIF orientations, on a non-square grid of distinct values.
+    #[test]
+    fn oriented_matches_the_image_crates_exif_orientations() {
+        let (w, h) = (4u32, 3u32);
+        let value = |x: u32, y: u32| (10 * y + x + 1) as u16;
+        let grid = Grid::from_fn(w as usize, h as usize, |x, y| value(x as u32, y as u32));
+        for exif in 1..=8u8 {
+            let mut reference =
+                image::DynamicImage::ImageLuma16(image::ImageBuffer::from_fn(w, h, |x, y| {
+                    image::Luma([value(x, y)])
+                }));
+            let theirs = image::metadata::Orientation::from_exif(exif).unwrap();
+            reference.apply_orientation(theirs);
+            let reference = reference.into_luma16();
+            let ours = grid.oriented(Orientation::from_exif(u16::from(exif)).unwrap());
+            assert_eq!(
+                (ours.width() as u32, ours.height() as u32),
+                reference.dimensions(),
+                "EXIF {exif}"
+            );
+            assert_eq!(
+                ours.as_slice(),
+                reference.as_raw().as_slice(),
+                "EXIF {exif}"
+            );
+            assert_eq!(
+                Orientation::from_exif(u16::from(exif)).unwrap().exif(),
+                u16::from(exif)
+            );
+            let back = ours.oriented(Orientation::from_exif(u16::from(exif)).unwrap().inverse());
+            assert_eq!(back, grid, "EXIF {exif} turned back");
+        }
+        assert_eq!(Orientation::from_exif(0), None);
+        assert_eq!(Orientation::from_exif(9), None);
     }
 }

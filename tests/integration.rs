@@ -39,6 +39,7 @@ mod layered_fog;
 mod layered_table;
 mod limits;
 mod offset_layout;
+mod orientation;
 mod physical_units;
 mod prep_aloe;
 mod prep_edt;

@@ -25,6 +25,10 @@ against the specification's formulas without a second file:
   ``DepthURI``, and its ``ImagingModel``: focal lengths 60 and 62 px of the 64 x 48
   photo, principal point 0.45, 0.55), then this script appends the two PNGs after the
   JPEG in that order.
+- ``rot6.jpg`` and ``dd8-rot6.jpg``: ``inv8.jpg`` and ``dd8.jpg`` with an EXIF
+  Orientation of 6 (turned 90° clockwise to show: a phone held upright) that ExifTool
+  adds, the depth left as stored, as phones write it (ExifTool keeps the Dynamic Depth
+  items appended after the JPEG).
 - ``ext16.jpg``: 320 x 240 photo, 320 x 240 16-bit PNG, RangeInverse, Near 2 Far 42, the
   plane d = 2 + 0.05 x + 0.1 y m plus up to 1 cm of seeded noise (which keeps the PNG
   from compressing, so that the XMP needs extended segments).
@@ -130,6 +134,11 @@ def dynamic_depth(src, out, depth_png, tmp):
             f.write(open(png, "rb").read())
 
 
+def oriented(src, out, value):
+    """``src`` with the EXIF Orientation ``value`` written by ExifTool."""
+    subprocess.run(["exiftool", "-q", "-o", out, f"-IFD0:Orientation#={value}", src], check=True)
+
+
 def main(out_dir):
     os.makedirs(out_dir, exist_ok=True)
     tmp = tempfile.mkdtemp()
@@ -162,6 +171,9 @@ def main(out_dir):
           ["Format=RangeInverse", "Near=2", "Far=42"])
     dynamic_depth(small, os.path.join(out_dir, "dd8.jpg"), inv8, tmp)
     shutil.copy(small, os.path.join(out_dir, "no-depth.jpg"))
+    for name in ("inv8", "dd8"):
+        rotated = "rot6.jpg" if name == "inv8" else f"{name}-rot6.jpg"
+        oriented(os.path.join(out_dir, f"{name}.jpg"), os.path.join(out_dir, rotated), 6)
     shutil.rmtree(tmp)
 
 

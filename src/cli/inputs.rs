@@ -6,7 +6,6 @@ use super::args::{DepthArgs, DepthReadingArgs, PrepOptionArgs};
 use brume::io::depth::{self, DepthOptions, LoadedDepth};
 use brume::io::mask::{self, RangeMasks};
 use brume::prep::PrepOptions;
-use brume::raster::ScalarMap;
 use brume::{Error, Result};
 use std::path::{Path, PathBuf};
 
@@ -45,6 +44,7 @@ pub fn reading_options(args: &DepthReadingArgs) -> DepthOptions {
         reversed_z: args.reversed_z,
         fov: args.fov,
         min_confidence: args.min_confidence,
+        layout: args.depth_layout,
         ..DepthOptions::default()
     }
 }
@@ -112,12 +112,13 @@ pub fn prep_options(args: &PrepOptionArgs) -> Result<PrepOptions> {
 }
 
 /// Loads the `--sky-mask` and `--ego-mask` of `args`, if any, which must have the size of
-/// `range` (named `range_name` in messages) and not be set everywhere.
+/// the range of `depth` (named `range_name` in messages), turned as it was, and not be
+/// set everywhere.
 pub fn load_masks(
     args: &PrepOptionArgs,
-    range: &ScalarMap,
+    depth: &LoadedDepth,
     range_name: &str,
 ) -> Result<RangeMasks> {
     let sky = args.sky_mask.as_deref().map(|p| (p, args.sky_mask_format));
-    mask::load_range_masks(sky, args.ego_mask.as_deref(), range, range_name)
+    mask::load_range_masks(sky, args.ego_mask.as_deref(), depth, range_name)
 }

@@ -199,7 +199,7 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
         return brume::photo::preprocess(scene, &opts);
     }
     opts.prep = Some(prep_options(&args.prep)?);
-    let masks = load_masks(&args.prep, &scene.depth.range, &scene.depth_name)?;
+    let masks = load_masks(&args.prep, &scene.depth, &scene.depth_name)?;
     (opts.sky_mask, opts.ego_mask) = (masks.sky, masks.ego);
     let started = Instant::now();
     let prepared = brume::photo::preprocess(scene, &opts)?;

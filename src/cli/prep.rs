@@ -1,11 +1,13 @@
 //! `brume prep`: pre-process a range map on its own and show what happened.
 
 use super::args::{PrepArgs, RefineArgs};
-use super::inputs::{depth_inputs, load_depth, load_masks, prep_options};
-use brume::io::image;
+use super::inputs::{
+    depth_inputs, depth_options, load_depth, load_masks, prep_options, show_depth_notes,
+};
 use brume::io::output::{self, Outputs};
 use brume::photo::{Photo, PrepareOptions};
 use brume::prep::{self, Guides};
+use brume::raster::Grid;
 use brume::refine::{CpuFilter, RefineMode};
 use brume::{Error, Result};
 use serde_json::json;
@@ -29,29 +31,26 @@ pub fn run(args: &PrepArgs) -> Result<()> {
 
     // Everything is read and computed before the first output is staged: a bad input
     // leaves every output as it was.
-    let loaded = load_depth(&args.depth)?;
-    let depth_name = args
-        .depth
-        .depth
-        .as_ref()
-        .map(|p| p.display().to_string())
-        .unwrap_or_default();
-    if args.image.is_none() {
-        refuse_refinement_without_image(&args.refine)?;
-    }
+    // With an image, the depth is turned upright with it (its EXIF orientation).
+    let (photo, loaded) = match &args.image {
+        Some(path) => {
+            let mut photo = Photo::load(path, depth_path(args)?, &depth_options(&args.depth))?;
+            show_depth_notes(depth_path(args)?, &mut photo.depth);
+            let depth = photo.depth.clone();
+            (Some(photo), depth)
+        }
+        None => {
+            refuse_refinement_without_image(&args.refine)?;
+            (None, load_depth(&args.depth)?)
+        }
+    };
+    let depth_name = depth_path(args)?.display().to_string();
     let refine = args.refine.options(loaded.format)?;
-    let masks = load_masks(&args.prep, &loaded.range, &depth_name)?;
+    let masks = load_masks(&args.prep, &loaded, &depth_name)?;
     let mask_format = masks.sky_format;
     let mut refine_ms = 0.0;
-    let (loaded, prepared, airlight, plan) = match &args.image {
-        Some(path) => {
-            let photo = Photo {
-                image: image::load_linear_rgb(path)?,
-                depth: loaded,
-                image_name: path.display().to_string(),
-                depth_name,
-            };
-            photo.check_depth_fits()?;
+    let (loaded, prepared, airlight, plan) = match photo {
+        Some(photo) => {
             let opts = PrepareOptions {
                 prep: Some(opts),
                 sky_mask: masks.sky,
@@ -80,10 +79,15 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     let (w, h) = (prepared.range.width(), prepared.range.height());
     let measured = brume::refine::nearest_to_image_size(&loaded.range, w, h);
     let mut outputs = Outputs::new();
-    outputs.stage_scalar(&args.out, &prepared.range)?;
+    // Laid out as the --depth file, which it stands in for: a render with the photo turns
+    // it upright again.
+    let as_stored = loaded.turned.inverse();
+    outputs.stage_scalar(&args.out, &prepared.range.oriented(as_stored))?;
     if let Some(vis) = &args.vis {
         let (w, h, rgb) = prep::visualize(&measured, &prepared);
-        outputs.stage_png_rgb8(vis, w, h, &rgb)?;
+        let rgb = Grid::from_vec(w, h, rgb).oriented(as_stored);
+        let (w, h) = (rgb.width(), rgb.height());
+        outputs.stage_png_rgb8(vis, w, h, rgb.as_slice())?;
     }
     super::commit(outputs)?;
 
@@ -205,4 +209,10 @@ fn sky_method_name(m: prep::SkyMethod) -> &'static str {
         prep::SkyMethod::DepthAndImage => "the range and the image",
         prep::SkyMethod::Mask => "--sky-mask",
     }
+}
+
+/// The `--depth` that `prep` requires.
+fn depth_path(args: &PrepArgs) -> Result<&Path> {
+    let path = args.depth.depth.as_deref();
+    path.ok_or_else(|| Error::invalid("--depth", "(missing)", "a depth, range or disparity map"))
 }

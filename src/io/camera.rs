@@ -2,7 +2,7 @@
 //! along each pixel's ray, and stereo disparity turned into depth. Kept apart from file
 //! formats and dataset conventions, which only decide the numbers fed in here.
 
-use crate::raster::{Grid, ScalarMap};
+use crate::raster::{Grid, Orientation, ScalarMap};
 
 /// Pinhole intrinsics in pixels. Pixel `(x, y)` has its centre at integer coordinates
 /// `(x, y)`, row 0 at the top, as in Middlebury's `calib.txt`.
@@ -36,6 +36,25 @@ impl Intrinsics {
         let u = (x as f64 - self.cx) / self.fx;
         let v = (y as f64 - self.cy) / self.fy;
         (1.0 + u * u + v * v).sqrt()
+    }
+
+    /// The intrinsics of a `width x height` grid turned upright by `orientation`
+    /// ([`Grid::oriented`]): each upright pixel sees the ray its stored pixel saw.
+    pub fn oriented(&self, orientation: Orientation, width: usize, height: usize) -> Self {
+        use Orientation as O;
+        let (right, bottom) = (width as f64 - 1.0, height as f64 - 1.0);
+        let (fx, fy, cx, cy) = (self.fx, self.fy, self.cx, self.cy);
+        let (fx, fy, cx, cy) = match orientation {
+            O::Upright => (fx, fy, cx, cy),
+            O::MirrorLeftRight => (fx, fy, right - cx, cy),
+            O::Rotate180 => (fx, fy, right - cx, bottom - cy),
+            O::MirrorTopBottom => (fx, fy, cx, bottom - cy),
+            O::Rotate90Mirror => (fy, fx, cy, cx),
+            O::Rotate90 => (fy, fx, bottom - cy, cx),
+            O::Rotate270Mirror => (fy, fx, bottom - cy, right - cx),
+            O::Rotate270 => (fy, fx, cy, right - cx),
+        };
+        Intrinsics { fx, fy, cx, cy }
     }
 }
 
@@ -73,4 +92,34 @@ pub(crate) fn to_range<T: Copy>(
             None => f32::NAN,
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every upright pixel's ray stretch is its stored pixel's, for an off-centre,
+    /// non-square camera on a non-square grid, in all eight orientations.
+    #[test]
+    fn oriented_intrinsics_keep_each_pixels_ray() {
+        let (w, h) = (7, 4);
+        let k = Intrinsics {
+            fx: 5.0,
+            fy: 3.5,
+            cx: 2.25,
+            cy: 1.75,
+        };
+        let stored = Grid::from_fn(w, h, |x, y| k.range_per_depth(x, y));
+        for exif in 1..=8 {
+            let o = Orientation::from_exif(exif).unwrap();
+            let upright = stored.oriented(o);
+            let turned = k.oriented(o, w, h);
+            for v in 0..upright.height() {
+                for u in 0..upright.width() {
+                    let (want, got) = (*upright.get(u, v), turned.range_per_depth(u, v));
+                    assert!((want - got).abs() < 1e-12, "EXIF {exif} ({u}, {v})");
+                }
+            }
+        }
+    }
 }

@@ -5,10 +5,13 @@
 //! The format is told by the file's first bytes (its magic number), not by its name, as
 //! for PNG and JPEG before: the file name is only used in messages.
 //!
-//! Embedded ICC profiles, PNG `gAMA` chunks and EXIF orientation are ignored: inputs are
-//! taken as sRGB and as stored, so that the colour image stays aligned with a depth map
-//! that knows nothing of the orientation tag. An EXR's chromaticities are ignored too:
-//! its primaries are taken to be the output's.
+//! A colour image's EXIF orientation is applied, as viewers apply it: a phone photo held
+//! upright is stored sideways with a tag, and the fog's sky and horizon are found from the
+//! top of the upright frame ([`load_upright_rgb`] says which orientation was applied, so
+//! that its depth map is turned with it: [`crate::io::depth::PhotoLayout`]). Maps (depth,
+//! masks) are read as stored. Embedded ICC profiles and PNG `gAMA` chunks are ignored:
+//! inputs are taken as sRGB. An EXR's chromaticities are ignored too: its primaries are
+//! taken to be the output's.
 //!
 //! Float values: above 1 (HDR) they are kept; a NaN or infinite value is refused, naming
 //! the first pixel holding one (the fog's blur would spread it over its whole footprint);
@@ -19,13 +22,12 @@
 
 use std::path::Path;
 
-use image::metadata::Orientation;
 use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 
 use crate::io::codec::exr::parse_exr_rgb;
 use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::limits::check_size;
-use crate::raster::RgbImage;
+use crate::raster::{Orientation, RgbImage};
 use crate::{Error, Result};
 use rayon::prelude::*;
 
@@ -154,10 +156,18 @@ const COLOUR_FORMATS: &str =
 /// Loads a colour image as linear light: a PNG or JPEG (8- or 16-bit, grey or RGB, alpha
 /// dropped) converted from sRGB, or an OpenEXR or colour PFM taken as linear (see the
 /// module docs for the EXR channels read and for NaN and negative values). Errors name the
-/// file; sizes beyond `io::limits` are refused before the pixels are allocated.
+/// file; sizes beyond `io::limits` are refused before the pixels are allocated. The
+/// image is turned upright by its EXIF orientation ([`load_upright_rgb`]).
 pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
+    Ok(load_upright_rgb(path)?.0)
+}
+
+/// [`load_linear_rgb`], with the EXIF orientation it applied ([`Orientation::Upright`]
+/// for none, and for EXR and PFM, which have no such tag): what the photo's depth map is
+/// turned by.
+pub fn load_upright_rgb(path: &Path) -> Result<(RgbImage, Orientation)> {
     let bytes = crate::io::limits::read_file(path)?;
-    decode_linear_rgb(&bytes, &path.display().to_string())
+    decode_upright_rgb(&bytes, &path.display().to_string())
 }
 
 /// Same as [`load_linear_rgb`] for bytes already in memory (an embedded asset); `name`
@@ -169,15 +179,21 @@ pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
 /// that, a lone `Y` channel as grey. Which channels were used is logged. A file holding
 /// only depth is refused, with a hint to give it as the depth map.
 pub fn decode_linear_rgb(bytes: &[u8], name: &str) -> Result<RgbImage> {
+    Ok(decode_upright_rgb(bytes, name)?.0)
+}
+
+/// [`decode_linear_rgb`], with the EXIF orientation it applied.
+pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, Orientation)> {
     let path = Path::new(name);
+    let upright = |image| Ok((image, Orientation::Upright));
     if bytes.starts_with(&EXR_MAGIC) {
         let exr = parse_exr_rgb(bytes, path)?;
         log::info!("{name}: linear colour from EXR channels {}", exr.source);
-        return linear_float(exr.image, name);
+        return upright(linear_float(exr.image, name)?);
     }
     if is_pfm(bytes) {
         return match parse_pfm(bytes, path)? {
-            Pfm::Rgb(image) => linear_float(image, name),
+            Pfm::Rgb(image) => upright(linear_float(image, name)?),
             // One unnamed channel is, in practice, a disparity or depth map (Middlebury's
             // disp0.pfm), unlike an EXR's `Y`, which names luminance.
             Pfm::Grey(_) => Err(Error::format(
@@ -187,8 +203,17 @@ pub fn decode_linear_rgb(bytes: &[u8], name: &str) -> Result<RgbImage> {
             )),
         };
     }
-    let decoded = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
-    Ok(to_linear_rgb(&decoded))
+    let (mut decoded, orientation) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
+    if orientation != Orientation::Upright {
+        log::info!(
+            "{name}: {} upright, as its EXIF orientation says",
+            orientation.describe()
+        );
+        let exif = u8::try_from(orientation.exif()).expect("1 to 8");
+        let theirs = image::metadata::Orientation::from_exif(exif).expect("1 to 8");
+        decoded.apply_orientation(theirs);
+    }
+    Ok((to_linear_rgb(&decoded), orientation))
 }
 
 /// The first four bytes of every OpenEXR file.
@@ -256,13 +281,13 @@ pub(crate) fn finite_light<const N: usize>(
 /// Decodes PNG or JPEG bytes without any colour conversion; shared with the depth loaders
 /// so that 8- and 16-bit PNG depth maps keep their raw values.
 pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
-    decode_image(bytes, name, "a PNG or JPEG file", Role::Map)
+    let (image, _) = decode_image(bytes, name, "a PNG or JPEG file", Role::Map)?;
+    Ok(image)
 }
 
 /// What a decoded file is to brume, for the one thing that differs: a colour image's EXIF
-/// orientation decides how the output shows, and is warned about; a map's (depth,
-/// transmittance, mask, noise) is not, as it is read aligned with the image whatever
-/// its tag.
+/// orientation is read, to be applied; a map's (depth, transmittance, mask, noise) is
+/// not, as the map is read as stored and turned with its photo.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Role {
     Colour,
@@ -270,8 +295,14 @@ enum Role {
 }
 
 /// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
-/// is none of them, and the file's `role`.
-fn decode_image(bytes: &[u8], name: &str, expected: &str, role: Role) -> Result<DynamicImage> {
+/// is none of them, and the file's `role`; with a colour image's EXIF orientation (not
+/// applied).
+fn decode_image(
+    bytes: &[u8],
+    name: &str,
+    expected: &str,
+    role: Role,
+) -> Result<(DynamicImage, Orientation)> {
     let reader = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::io(name, e))?;
@@ -309,9 +340,15 @@ fn decode_image(bytes: &[u8], name: &str, expected: &str, role: Role) -> Result<
     };
     // The size is checked from the header, before the pixel buffer is allocated.
     let mut decoder = reader.into_decoder().map_err(cannot)?;
-    if role == Role::Colour {
-        warn_if_oriented(decoder.orientation(), name);
-    }
+    // An orientation that cannot be read is none, as for a viewer.
+    let orientation = match role {
+        Role::Colour => decoder
+            .orientation()
+            .ok()
+            .and_then(|o| Orientation::from_exif(o.to_exif().into()))
+            .unwrap_or_default(),
+        Role::Map => Orientation::Upright,
+    };
     let (w, h) = decoder.dimensions();
     check_size(
         Path::new(name),
@@ -326,29 +363,8 @@ fn decode_image(bytes: &[u8], name: &str, expected: &str, role: Role) -> Result<
     image::Limits::default()
         .reserve(decoder.total_bytes())
         .map_err(cannot)?;
-    DynamicImage::from_decoder(decoder).map_err(cannot)
-}
-
-/// Says that a file's EXIF orientation is not applied (see the module docs): a phone photo
-/// taken upright is stored sideways with a tag that viewers apply, so its fogged output,
-/// written as stored, would otherwise come out sideways without a word. An orientation
-/// that cannot be read is no orientation, as for a viewer.
-fn warn_if_oriented(orientation: image::ImageResult<Orientation>, name: &str) {
-    let shown = match orientation {
-        Ok(Orientation::NoTransforms) | Err(_) => return,
-        Ok(Orientation::Rotate90) => "turned 90° clockwise",
-        Ok(Orientation::Rotate180) => "turned 180°",
-        Ok(Orientation::Rotate270) => "turned 90° anticlockwise",
-        Ok(Orientation::FlipHorizontal) => "mirrored left to right",
-        Ok(Orientation::FlipVertical) => "mirrored top to bottom",
-        Ok(Orientation::Rotate90FlipH) => "turned 90° clockwise and mirrored",
-        Ok(Orientation::Rotate270FlipH) => "turned 90° anticlockwise and mirrored",
-    };
-    log::warn!(
-        "{name}: its EXIF orientation (viewers show it {shown}) is not applied: brume reads \
-         and writes the pixels as stored, aligned with the depth map, so the output shows \
-         as stored"
-    );
+    let image = DynamicImage::from_decoder(decoder).map_err(cannot)?;
+    Ok((image, orientation))
 }
 
 /// Refuses a PNG whose palette (`PLTE` chunk) is not whole RGB entries of 3 bytes, as the

@@ -23,7 +23,8 @@ use std::str::FromStr;
 
 use image::DynamicImage;
 
-use crate::raster::Grid;
+use crate::io::depth::LoadedDepth;
+use crate::raster::{Grid, Orientation};
 use crate::{Error, Result};
 
 /// The Cityscapes label id of the sky (`labelIds` PNGs).
@@ -171,23 +172,36 @@ pub struct RangeMasks {
 }
 
 /// Loads the sky mask `sky` (its path, and its format or `None` for the one its name
-/// announces) and the ego-vehicle mask `ego`, each checked against `range` (named
-/// `range_name` in messages) by [`check_mask`] as `sky_mask` and `ego_mask`.
+/// announces) and the ego-vehicle mask `ego`, each checked against the range of `depth`
+/// (named `range_name` in messages) by [`check_mask`] as `sky_mask` and `ego_mask`. A
+/// mask is turned as the depth map was to lie on its upright photo
+/// ([`LoadedDepth::turned`]), unless its shape is the turned map's already.
 pub fn load_range_masks(
     sky: Option<(&Path, Option<SkyMaskFormat>)>,
     ego: Option<&Path>,
-    range: &crate::raster::ScalarMap,
+    depth: &LoadedDepth,
     range_name: &str,
 ) -> Result<RangeMasks> {
+    let range = &depth.range;
+    let turn_like_depth = |m: Grid<bool>| {
+        let upright = (m.width(), m.height()) == (range.width(), range.height());
+        match depth.turned {
+            Orientation::Upright => m,
+            t if t.swaps_axes() && upright => m,
+            t => m.oriented(t),
+        }
+    };
     let mut masks = RangeMasks::default();
     if let Some((path, format)) = sky {
         let (m, format) = load_sky_mask(path, format)?;
+        let m = turn_like_depth(m);
         let what = ("sky_mask", path, "sky mask");
         check_mask(what, &m, range, range_name, &all_sky_hint(format))?;
         (masks.sky, masks.sky_format) = (Some(m), Some(format));
     }
     if let Some(path) = ego {
         let (m, format) = load_ego_mask(path, None)?;
+        let m = turn_like_depth(m);
         let what = ("ego_mask", path, "ego-vehicle mask");
         check_mask(what, &m, range, range_name, &all_ego_hint(format))?;
         masks.ego = Some(m);

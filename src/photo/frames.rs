@@ -297,7 +297,7 @@ fn frame_masks(opts: &FrameOptions, item: &Item, photo: &Photo) -> Result<Masks>
         .as_deref()
         .filter(|p| SkyMaskFormat::from_file_name(p) == SkyMaskFormat::CityscapesLabelIds);
     let ego = opts.ego_mask.as_deref().or(labels);
-    let masks = mask::load_range_masks(sky, ego, &photo.depth.range, &photo.depth_name)?;
+    let masks = mask::load_range_masks(sky, ego, &photo.depth, &photo.depth_name)?;
     Ok((masks.sky, masks.ego))
 }
 

@@ -45,9 +45,9 @@ pub use insert::{insert, Insertion, VirtualObject};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
 
 use crate::error::{Error, Result};
-use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
+use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoLayout};
 use crate::io::{demo, image};
-use crate::raster::{RgbImage, ScalarMap};
+use crate::raster::{Orientation, RgbImage, ScalarMap};
 use std::path::Path;
 
 /// A photograph (linear RGB) and its range, with where they came from.
@@ -77,12 +77,23 @@ impl Photo {
     ///
     /// Errors: the loaders', [`Error::OutOfMemory`], and [`Error::InvalidParameter`] for a
     /// depth map neither the image's size nor smaller by one factor.
+    ///
+    /// The image is turned upright by its EXIF orientation and the depth map with it
+    /// ([`DepthOptions::layout`] says how the map lies; `opts.photo` is set here).
     pub fn load(image_path: &Path, depth_path: &Path, opts: &DepthOptions) -> Result<Photo> {
         check_memory_before_loading(image_path)?;
-        let depth = depth::load_range(depth_path, opts)?;
+        let (image, orientation) = image::load_upright_rgb(image_path)?;
+        let opts = DepthOptions {
+            photo: Some(PhotoLayout::of_upright(
+                image.width(),
+                image.height(),
+                orientation,
+            )),
+            ..opts.clone()
+        };
         let photo = Photo {
-            image: image::load_linear_rgb(image_path)?,
-            depth,
+            image,
+            depth: depth::load_range(depth_path, &opts)?,
             image_name: image_path.display().to_string(),
             depth_name: depth_path.display().to_string(),
         };
@@ -123,6 +134,7 @@ impl Photo {
                 intrinsics: None,
                 notes: Vec::new(),
                 unknown_pixels,
+                turned: Orientation::Upright,
             },
             // The arguments' names, as the messages say them.
             image_name: "image".into(),
@@ -140,8 +152,9 @@ impl Photo {
     /// size than the image.
     pub fn load_transmittance(image_path: &Path, map_path: &Path) -> Result<Photo> {
         check_memory_before_loading(image_path)?;
-        let range = crate::compat::load_optical_depth(map_path)?;
-        let image = image::load_linear_rgb(image_path)?;
+        // The map is taken as the photo is stored, as a depth map is.
+        let (image, orientation) = image::load_upright_rgb(image_path)?;
+        let range = crate::compat::load_optical_depth(map_path)?.oriented(orientation);
         let (image_name, depth_name) = (image_path.display(), map_path.display());
         if (image.width(), image.height()) != (range.width(), range.height()) {
             return Err(Error::size_mismatch(
@@ -162,6 +175,7 @@ impl Photo {
                 intrinsics: None,
                 notes: vec!["transmittance map: its optical depth −ln τ, fogged at β = 1".into()],
                 unknown_pixels: 0,
+                turned: orientation,
             },
             image_name: image_name.to_string(),
             depth_name: depth_name.to_string(),

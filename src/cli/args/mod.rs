@@ -8,7 +8,7 @@
 use super::bench::BenchCommand;
 use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::egl::Platform;
-use brume::io::depth::{DepthFormat, DepthKind};
+use brume::io::depth::{DepthFormat, DepthKind, DepthLayout};
 use brume::io::mask::SkyMaskFormat;
 use brume::medium::haze;
 use brume::refine::RefineMode;
@@ -195,7 +195,8 @@ pub struct DepthReadingArgs {
     pub reversed_z: bool,
 
     /// Vertical field of view in degrees: of a z-buffer's projection, or of a depth map
-    /// (instead of --focal) to turn depth into range.
+    /// (instead of --focal) to turn depth into range; of the photo as shown upright (see
+    /// --depth-layout).
     #[arg(
         long,
         value_name = "DEG",
@@ -211,6 +212,15 @@ pub struct DepthReadingArgs {
     /// [default: none dropped].
     #[arg(long, value_name = "C", allow_hyphen_values = true)]
     pub min_confidence: Option<f64>,
+
+    /// How the depth map lies against an --image with an EXIF orientation (a phone photo
+    /// stored sideways with a tag; brume turns the image upright, as viewers show it):
+    /// stored (laid out as the image's stored pixels, as phones write depth: turned with
+    /// it), upright (made from the image as viewers show it, e.g. read by OpenCV: not
+    /// turned), or auto (stored, unless the map's shape fits only the upright image). --fov
+    /// is the upright image's vertical field of view.
+    #[arg(long, value_name = "LAYOUT", default_value = "auto")]
+    pub depth_layout: DepthLayout,
 }
 
 /// Options of the range pre-processing (paper 000, sec. 4.1).

@@ -155,6 +155,9 @@ pub(super) fn interpret(
     }
     let min_confidence = android::min_confidence(format, opts, &mut notes)?;
     let (width, height) = raw.size();
+    let turn = super::orient::turn_for_photo(opts, width, height, &mut notes);
+    // `fov` is the upright photo's: across the stored map's width when turning swaps them.
+    let fov_height = if turn.swaps_axes() { width } else { height };
     let metres = "m".to_string();
     let (range, units, intrinsics) = match (format, raw) {
         (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
@@ -173,24 +176,24 @@ pub(super) fn interpret(
             (range, metres, Some(k))
         }
         (_, Raw::Grey16(raw)) if kind == DepthKind::ZBuffer => {
-            let (depth, k, units) = zbuffer(opts, width, height, &mut notes)?;
+            let (depth, k, units) = zbuffer(opts, (width, height), fov_height, &mut notes)?;
             let window = 1.0 / f64::from(u16::MAX);
             let range = to_range(&raw, |v| depth(f64::from(v) * window), Some(&k));
             (range, units, Some(k))
         }
         (_, Raw::Float { map, .. }) if kind == DepthKind::ZBuffer => {
-            let (depth, k, units) = zbuffer(opts, width, height, &mut notes)?;
+            let (depth, k, units) = zbuffer(opts, (width, height), fov_height, &mut notes)?;
             let range = to_range(&map, |v| depth(f64::from(v)), Some(&k));
             (range, units, Some(k))
         }
         (_, Raw::Grey16(raw)) if kind == DepthKind::Inverse => {
-            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
             let (depth, units) = inverse_depth(opts, &mut notes)?;
             let range = to_range(&raw, |v| depth(f64::from(v)), k.as_ref());
             (range, units, k)
         }
         (_, Raw::Float { map, .. }) if kind == DepthKind::Inverse => {
-            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
             let (depth, units) = inverse_depth(opts, &mut notes)?;
             let range = to_range(&map, |v| depth(f64::from(v)), k.as_ref());
             (range, units, k)
@@ -210,13 +213,13 @@ pub(super) fn interpret(
         (DepthFormat::AndroidDepth16, Raw::Grey16(raw)) => {
             android::check_confidence(&raw, min_confidence, path, &mut notes)?;
             let scale = png16::scale(format, opts, &mut notes)?;
-            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
             let depth = |v: u16| android::metres(v, min_confidence, scale);
             (to_range(&raw, depth, k.as_ref()), metres, k)
         }
         (_, Raw::Grey16(raw)) => {
             let scale = png16::scale(format, opts, &mut notes)?;
-            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
             let depth = |v: u16| (v != 0).then_some(f64::from(v) * scale);
             (to_range(&raw, depth, k.as_ref()), metres, k)
         }
@@ -228,7 +231,7 @@ pub(super) fn interpret(
             (range, metres, Some(k))
         }
         (_, Raw::Float { map, .. }) => {
-            let k = depth_intrinsics(kind, opts, width, height, &mut notes)?;
+            let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
             let (scale, units) = vouched_scale(opts, "values", FILE_UNITS, &mut notes)?;
             let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
             (range, units, k)
@@ -250,9 +253,9 @@ pub(super) fn interpret(
                     notes.push(
                         "`focal` or `fov` given: used instead of the file's ImagingModel".into(),
                     );
-                    depth_intrinsics(kind, opts, width, height, &mut notes)?
+                    depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?
                 }
-                _ => depth_intrinsics(kind, opts, width, height, &mut notes)?,
+                _ => depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?,
             };
             let range = to_range(
                 &e.map,
@@ -263,6 +266,8 @@ pub(super) fn interpret(
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
+    let range = range.oriented(turn);
+    let intrinsics = intrinsics.map(|k| k.oriented(turn, width, height));
     let unknown_pixels = range.as_slice().iter().filter(|v| v.is_nan()).count();
     if unknown_pixels == range.len() {
         return Err(Error::NoValidDepth {
@@ -279,6 +284,7 @@ pub(super) fn interpret(
         intrinsics,
         notes,
         unknown_pixels,
+        turned: turn,
     })
 }
 
@@ -367,8 +373,8 @@ fn is_metric(format: DepthFormat, units: &str, opts: &DepthOptions) -> bool {
 /// field of view, and the range's units.
 fn zbuffer(
     opts: &DepthOptions,
-    width: usize,
-    height: usize,
+    (width, height): (usize, usize),
+    fov_height: usize,
     notes: &mut Vec<String>,
 ) -> Result<(impl Fn(f64) -> Option<f64>, Intrinsics, String)> {
     let needs = |name: &str, what: &str| {
@@ -411,7 +417,7 @@ fn zbuffer(
     // The range is in the units of the near and far planes.
     let (scale, units) = vouched_scale(opts, "near and far", FILE_UNITS, notes)?;
     let model = DepthModel::of_planes(near, far, reversed);
-    let k = Intrinsics::centred(focal_from_fov(fov, height), width, height);
+    let k = Intrinsics::centred(focal_from_fov(fov, fov_height), width, height);
     let depth = move |d: f64| {
         let drawn = d.is_finite() && (0.0..=1.0).contains(&d) && d != sky;
         drawn.then(|| model.eye_depth(d) * scale)
@@ -428,8 +434,8 @@ fn focal_from_fov(fov_deg: f64, height: usize) -> f64 {
 fn depth_intrinsics(
     kind: DepthKind,
     opts: &DepthOptions,
-    width: usize,
-    height: usize,
+    (width, height): (usize, usize),
+    fov_height: usize,
     notes: &mut Vec<String>,
 ) -> Result<Option<Intrinsics>> {
     let from_fov = match opts.fov {
@@ -441,7 +447,7 @@ fn depth_intrinsics(
                     "a vertical field of view strictly between 0 and 180 degrees",
                 ));
             }
-            Some(focal_from_fov(fov, height))
+            Some(focal_from_fov(fov, fov_height))
         }
         _ => None,
     };

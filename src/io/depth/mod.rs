@@ -23,7 +23,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-use crate::raster::ScalarMap;
+use crate::raster::{Orientation, ScalarMap};
 use crate::{Error, Result};
 
 mod android;
@@ -32,6 +32,7 @@ mod format;
 mod gdepth;
 mod interpret;
 mod middlebury;
+mod orient;
 mod png16;
 mod raw;
 mod xmp;
@@ -60,6 +61,7 @@ pub use middlebury::{
     parse_calib, parse_calib_str, Calib, MIDDLEBURY2006_BASELINE_MM,
     MIDDLEBURY2006_DISPARITY_OFFSET_PX, MIDDLEBURY2006_FOCAL_PX,
 };
+pub use orient::{DepthLayout, PhotoLayout};
 
 /// What the values of a map measure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -211,13 +213,19 @@ pub struct DepthOptions {
     /// near, nothing drawn at 1.
     pub reversed_z: bool,
     /// Vertical field of view in degrees: the focal length of a z-buffer, or of a depth
-    /// map when `focal` is not given.
+    /// map when `focal` is not given; the upright photo's when `photo` is given.
     pub fov: Option<f64>,
     /// Lowest confidence, in [0, 1], of an `android-depth16` sample that is kept; less
     /// confident samples are unknown. `None` takes
     /// [`DEPTH16_DEFAULT_MIN_CONFIDENCE`]. For `gdepth` and `dynamic-depth`, the lowest
     /// value of the file's confidence map kept; `None` keeps every sample.
     pub min_confidence: Option<f64>,
+    /// The photo the map goes with, as stored, when it has an EXIF orientation: the map is
+    /// turned upright with it as `layout` says, and `fov` is the upright photo's vertical
+    /// field of view. `None` (a map read on its own): the map as stored.
+    pub photo: Option<PhotoLayout>,
+    /// How the map lies against `photo`'s orientation.
+    pub layout: DepthLayout,
 }
 
 impl Default for DepthOptions {
@@ -236,6 +244,8 @@ impl Default for DepthOptions {
             reversed_z: false,
             fov: None,
             min_confidence: None,
+            photo: None,
+            layout: DepthLayout::Auto,
         }
     }
 }
@@ -267,6 +277,9 @@ pub struct LoadedDepth {
     pub notes: Vec<String>,
     /// Number of NaN pixels in `range`.
     pub unknown_pixels: usize,
+    /// How `range` was turned from the file's layout to lie on its upright photo
+    /// ([`DepthOptions::photo`]); [`Orientation::Upright`] when it was not.
+    pub turned: Orientation,
 }
 
 impl LoadedDepth {

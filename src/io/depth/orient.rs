@@ -1,0 +1,129 @@
+//! A depth map and the EXIF orientation of its photo: a phone stores its sensor's frame
+//! and a tag that viewers apply, and writes its depth (DEPTH16, GDepth, Dynamic Depth) in
+//! the stored frame; brume turns the photo upright ([`crate::io::image`]) and the map
+//! with it, unless the map is upright already.
+
+use std::fmt;
+use std::str::FromStr;
+
+use super::DepthOptions;
+use crate::raster::Orientation;
+use crate::{Error, Result};
+
+/// The photo a depth map goes with, as its file stores it: its stored size and the EXIF
+/// orientation that turns it upright. The loaders turn the map as the photo
+/// ([`DepthLayout`] says when).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PhotoLayout {
+    /// Stored width in pixels.
+    pub width: usize,
+    /// Stored height in pixels.
+    pub height: usize,
+    /// How the stored pixels turn upright.
+    pub orientation: Orientation,
+}
+
+impl PhotoLayout {
+    /// The layout of a photo loaded upright (`width x height`) that was turned by
+    /// `orientation`.
+    pub fn of_upright(width: usize, height: usize, orientation: Orientation) -> PhotoLayout {
+        let (width, height) = if orientation.swaps_axes() {
+            (height, width)
+        } else {
+            (width, height)
+        };
+        PhotoLayout {
+            width,
+            height,
+            orientation,
+        }
+    }
+}
+
+/// How a depth map is laid out against its photo's EXIF orientation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DepthLayout {
+    /// As the photo is stored (as phones write depth), unless its shape fits only the
+    /// upright photo (a map made from the photo as a viewer shows it, turned by 90°).
+    #[default]
+    Auto,
+    /// As the photo is stored: turned with it.
+    Stored,
+    /// Upright already (made from the photo as viewers show it, e.g. read by OpenCV's
+    /// `imread`, which applies the tag): not turned.
+    Upright,
+}
+
+impl FromStr for DepthLayout {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "auto" => Ok(DepthLayout::Auto),
+            "stored" => Ok(DepthLayout::Stored),
+            "upright" => Ok(DepthLayout::Upright),
+            _ => Err(Error::invalid("depth_layout", s, "auto, stored or upright")),
+        }
+    }
+}
+
+impl fmt::Display for DepthLayout {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            DepthLayout::Auto => "auto",
+            DepthLayout::Stored => "stored",
+            DepthLayout::Upright => "upright",
+        })
+    }
+}
+
+/// How a `width x height` map is turned to lie on its upright photo, with a note saying
+/// so: [`Orientation::Upright`] without a photo, for an upright photo, or for a map
+/// upright already.
+pub(super) fn turn_for_photo(
+    opts: &DepthOptions,
+    width: usize,
+    height: usize,
+    notes: &mut Vec<String>,
+) -> Orientation {
+    let photo = match opts.photo {
+        Some(photo) if photo.orientation != Orientation::Upright => photo,
+        photo => {
+            if opts.layout != DepthLayout::Auto {
+                let why = match photo {
+                    Some(_) => "the photo has no EXIF orientation to turn by",
+                    None => "the map is read without its photo, as stored",
+                };
+                notes.push(format!("`depth_layout` {} ignored: {why}", opts.layout));
+            }
+            return Orientation::Upright;
+        }
+    };
+    let shown = photo.orientation.describe();
+    let stored = (photo.width, photo.height);
+    let fits = |image| crate::refine::check_depth_size(image, (width, height)).is_ok();
+    let upright_by_shape =
+        photo.orientation.swaps_axes() && !fits(stored) && fits((stored.1, stored.0));
+    match opts.layout {
+        DepthLayout::Upright => {
+            notes.push(format!(
+                "taken as upright (`depth_layout` upright): not {shown} with the photo"
+            ));
+            Orientation::Upright
+        }
+        DepthLayout::Auto if upright_by_shape => {
+            notes.push(format!(
+                "upright already (its shape is the upright photo's): not {shown} with the \
+                 photo, as its EXIF orientation says"
+            ));
+            Orientation::Upright
+        }
+        DepthLayout::Auto | DepthLayout::Stored => {
+            notes.push(format!(
+                "{shown} with the photo, as its EXIF orientation says (the map taken as the \
+                 photo is stored; `depth_layout` upright if it was made upright)"
+            ));
+            photo.orientation
+        }
+    }
+}

@@ -1,0 +1,314 @@
+//! A photo's EXIF orientation: a phone held upright stores its sensor's frame sideways
+//! with a tag that viewers apply, and writes its depth (DEPTH16, GDepth, Dynamic Depth) as
+//! the photo is stored. brume turns the photo upright and the depth map with it, so that
+//! the sky, the horizon and the output are the upright photo's: a tagged pair fogs
+//! exactly as the upright pair does.
+
+use std::path::Path;
+
+use brume::io::depth::{load_range, DepthKind, DepthOptions};
+use brume::io::image::linear_to_srgb8;
+use brume::io::output::write_scalar;
+use brume::photo::Photo;
+use brume::prep::synthetic::street_scene;
+use brume::raster::{Grid, Orientation, ScalarMap};
+use image::ImageEncoder;
+
+use crate::common;
+
+const W: usize = 128;
+const H: usize = 80;
+
+/// A little-endian EXIF (TIFF) block, written here by hand from the TIFF 6.0 layout,
+/// holding one entry: orientation `value`.
+fn exif_orientation(value: u16) -> Vec<u8> {
+    let mut b = b"II*\0".to_vec();
+    b.extend(8u32.to_le_bytes()); // the first IFD
+    b.extend(1u16.to_le_bytes()); // one entry
+    b.extend(0x0112u16.to_le_bytes()); // Orientation
+    b.extend(3u16.to_le_bytes()); // SHORT
+    b.extend(1u32.to_le_bytes()); // one value, held in the entry
+    b.extend(u32::from(value).to_le_bytes());
+    b.extend(0u32.to_le_bytes()); // no next IFD
+    b
+}
+
+/// Writes 8-bit `pixels` (grey or RGB) as a PNG, with an EXIF orientation if given.
+fn write_png<const N: usize>(path: &Path, pixels: &Grid<[u8; N]>, exif: Option<u16>) {
+    let mut bytes = Vec::new();
+    let mut png = image::codecs::png::PngEncoder::new(&mut bytes);
+    if let Some(value) = exif {
+        png.set_exif_metadata(exif_orientation(value)).unwrap();
+    }
+    let colour = match N {
+        1 => image::ExtendedColorType::L8,
+        _ => image::ExtendedColorType::Rgb8,
+    };
+    let (w, h) = (pixels.width() as u32, pixels.height() as u32);
+    png.write_image(pixels.as_slice().as_flattened(), w, h, colour)
+        .unwrap();
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// The street frame upright: its 8-bit sRGB photo, its range (holes, sky unknown) and
+/// its true sky as a binary mask.
+fn street() -> (Grid<[u8; 3]>, ScalarMap, Grid<[u8; 1]>) {
+    let s = street_scene(W, H, 7);
+    let photo = s.image.map(|p| p.map(linear_to_srgb8));
+    let sky = s.sky.map(|&sky| [if sky { 255 } else { 0 }]);
+    (photo, s.range, sky)
+}
+
+/// What a camera stores for an upright grid under `orientation`: the grid that
+/// `orientation` turns into `upright`.
+fn stored<T: Clone + Send + Sync>(upright: &Grid<T>, orientation: Orientation) -> Grid<T> {
+    upright.oriented(orientation.inverse())
+}
+
+fn orientation(exif: u16) -> Orientation {
+    Orientation::from_exif(exif).unwrap()
+}
+
+/// Writes the street pair as stored under EXIF orientation `exif` (`None`: upright, no
+/// tag) as `{name}.png`, `{name}.pfm` and `{name}-sky.png`.
+fn write_pair(dir: &Path, name: &str, exif: Option<u16>) {
+    let (photo, range, sky) = street();
+    let o = exif.map_or(Orientation::Upright, orientation);
+    write_png(&dir.join(format!("{name}.png")), &stored(&photo, o), exif);
+    write_scalar(&dir.join(format!("{name}.pfm")), &stored(&range, o)).unwrap();
+    write_png(&dir.join(format!("{name}-sky.png")), &stored(&sky, o), None);
+}
+
+/// `brume render` of `image` and `depth` in `dir` with `extra` options: the output's
+/// size and 8-bit pixels, and the `--json` report.
+fn render(dir: &Path, image: &str, depth: &str, extra: &[&str]) -> ((u32, u32), Vec<u8>, String) {
+    let out = dir.join("out.png");
+    let mut args = vec![
+        "render", "--image", image, "--depth", depth, "--out", "out.png", "--json",
+    ];
+    args.extend(extra);
+    let run = common::brume(dir, &args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let fogged = image::open(&out).unwrap().into_rgb8();
+    std::fs::remove_file(&out).unwrap();
+    let report = String::from_utf8(run.stdout).unwrap();
+    (fogged.dimensions(), fogged.into_raw(), report)
+}
+
+#[test]
+fn a_tagged_photo_and_its_stored_depth_fog_as_the_upright_pair() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    write_pair(dir, "upright", None);
+    let (size, reference, _) = render(dir, "upright.png", "upright.pfm", &[]);
+    assert_eq!(size, (W as u32, H as u32));
+    // Two that swap the axes (a phone held upright, or the other way), the upside-down
+    // one, and a transpose.
+    for exif in [6, 8, 3, 5] {
+        let name = format!("exif{exif}");
+        write_pair(dir, &name, Some(exif));
+        let (image, depth) = (format!("{name}.png"), format!("{name}.pfm"));
+        let (size, fogged, report) = render(dir, &image, &depth, &[]);
+        assert_eq!(size, (W as u32, H as u32), "EXIF {exif}: the upright size");
+        assert!(
+            fogged == reference,
+            "EXIF {exif}: not the upright pair's fog"
+        );
+        let turned = format!("{} with the photo", orientation(exif).describe());
+        assert!(report.contains(&turned), "EXIF {exif}: {report}");
+    }
+}
+
+/// The same stored pair with the tag left out: the fog of the sideways frame, turned
+/// upright afterwards, is not the upright frame's (the sky and the horizon are looked for
+/// at the top of the frame), which is what turning it first is for.
+#[test]
+fn without_its_tag_the_sideways_frame_fogs_otherwise() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    write_pair(dir, "upright", None);
+    let (_, reference, _) = render(dir, "upright.png", "upright.pfm", &[]);
+    let (photo, range, _) = street();
+    let o = orientation(6);
+    write_png(&dir.join("sideways.png"), &stored(&photo, o), None);
+    write_scalar(&dir.join("sideways.pfm"), &stored(&range, o)).unwrap();
+    let (size, fogged, _) = render(dir, "sideways.png", "sideways.pfm", &[]);
+    assert_eq!(size, (H as u32, W as u32), "as stored");
+    let fogged = Grid::from_vec(H, W, fogged.chunks(3).map(|p| [p[0], p[1], p[2]]).collect());
+    let turned = fogged.oriented(o);
+    let differing = turned
+        .as_slice()
+        .iter()
+        .zip(reference.chunks(3))
+        .filter(|(a, b)| a.iter().zip(b.iter()).any(|(x, y)| x.abs_diff(*y) > 8))
+        .count();
+    assert!(
+        differing > W * H / 20,
+        "{differing} pixels differ by over 8 codes"
+    );
+}
+
+#[test]
+fn a_depth_map_upright_already_is_not_turned_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    write_pair(dir, "upright", None);
+    let (_, reference, _) = render(dir, "upright.png", "upright.pfm", &[]);
+    // Turned by 90°, the shape tells: the upright map fits only the upright photo.
+    write_pair(dir, "exif6", Some(6));
+    let (_, fogged, report) = render(dir, "exif6.png", "upright.pfm", &[]);
+    assert!(fogged == reference);
+    assert!(report.contains("upright already (its shape is the upright photo's)"));
+    // Turned by 180°, it cannot: --depth-layout says so, and without it the map is
+    // taken as stored, turned, and the fog is another.
+    write_pair(dir, "exif3", Some(3));
+    let upright = ["--depth-layout", "upright"];
+    let (_, fogged, report) = render(dir, "exif3.png", "upright.pfm", &upright);
+    assert!(fogged == reference);
+    assert!(
+        report.contains("taken as upright (--depth-layout upright)"),
+        "{report}"
+    );
+    let (_, fogged, _) = render(dir, "exif3.png", "upright.pfm", &[]);
+    assert!(fogged != reference);
+}
+
+#[test]
+fn a_sky_mask_is_turned_as_the_depth_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    write_pair(dir, "upright", None);
+    let mask = ["--sky-mask", "upright-sky.png"];
+    let (_, reference, _) = render(dir, "upright.png", "upright.pfm", &mask);
+    let (_, unmasked, _) = render(dir, "upright.png", "upright.pfm", &[]);
+    assert!(reference != unmasked, "the mask changes the fog");
+    for exif in [6, 3] {
+        let name = format!("exif{exif}");
+        write_pair(dir, &name, Some(exif));
+        let (image, depth) = (format!("{name}.png"), format!("{name}.pfm"));
+        // As stored (as the depth), and upright already (by its shape).
+        let mut masks = vec![format!("{name}-sky.png")];
+        if exif == 6 {
+            masks.push("upright-sky.png".into());
+        }
+        for mask in masks {
+            let (_, fogged, _) = render(dir, &image, &depth, &["--sky-mask", &mask]);
+            assert!(fogged == reference, "EXIF {exif}, {mask}");
+        }
+    }
+}
+
+/// `prep --out` stands in for its `--depth`: laid out as it, whatever the photo's tag,
+/// and the upright photo's prepared range once turned.
+#[test]
+fn prep_writes_its_range_as_the_depth_file_lies() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+    let prep = |image: &str, depth: &str| {
+        let args = ["prep", "--image", image, "--depth", depth, "--out", "p.pfm"];
+        let run = common::brume(dir, &args);
+        assert!(run.status.success(), "{}", common::stderr(&run));
+        match brume::io::depth::read_pfm(&dir.join("p.pfm")).unwrap() {
+            brume::io::depth::Pfm::Grey(map) => map,
+            _ => panic!("a one-channel PFM"),
+        }
+    };
+    write_pair(dir, "upright", None);
+    let reference = prep("upright.png", "upright.pfm");
+    write_pair(dir, "exif6", Some(6));
+    let prepared = prep("exif6.png", "exif6.pfm");
+    assert_eq!((prepared.width(), prepared.height()), (H, W), "as stored");
+    let bits = |m: &ScalarMap| m.as_slice().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&prepared.oriented(orientation(6))), bits(&reference));
+}
+
+/// `fov` is the upright photo's vertical field of view: across the stored map's width
+/// when the photo turns by 90°. Depth along the axis of a wall at 10 m becomes
+/// R = Z·sqrt(1 + ((u − cx)/f)² + ((v − cy)/f)²) on the upright grid, f from its height.
+#[test]
+fn the_field_of_view_is_the_upright_photos() {
+    let dir = tempfile::tempdir().unwrap();
+    let (photo, _, _) = street();
+    let o = orientation(6);
+    write_png(&dir.path().join("p.png"), &stored(&photo, o), Some(6));
+    let depth = dir.path().join("z.pfm");
+    write_scalar(&depth, &Grid::filled(H, W, 10.0)).unwrap();
+    let opts = DepthOptions {
+        kind: Some(DepthKind::Depth),
+        fov: Some(60.0),
+        ..DepthOptions::default()
+    };
+    let loaded = Photo::load(&dir.path().join("p.png"), &depth, &opts).unwrap();
+    let range = &loaded.depth.range;
+    assert_eq!((range.width(), range.height()), (W, H));
+    let f = H as f64 / 2.0 / 30f64.to_radians().tan();
+    let (cx, cy) = ((W as f64 - 1.0) / 2.0, (H as f64 - 1.0) / 2.0);
+    for (u, v) in [
+        (0, 0),
+        (W - 1, 0),
+        (0, H - 1),
+        (W / 2, H / 2),
+        (W - 1, H - 1),
+    ] {
+        let (a, b) = ((u as f64 - cx) / f, (v as f64 - cy) / f);
+        let want = 10.0 * (1.0 + a * a + b * b).sqrt();
+        let got = f64::from(*range.get(u, v));
+        assert!(
+            (got - want).abs() < 1e-4 * want,
+            "({u}, {v}): {got} for {want}"
+        );
+    }
+}
+
+fn gdepth(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/gdepth")
+        .join(name)
+}
+
+/// `rot6.jpg` is `inv8.jpg` with an Orientation of 6 that ExifTool added: the photo and
+/// its embedded depth come out turned 90° clockwise, each depth sample the stored one.
+#[test]
+fn a_portrait_photos_embedded_depth_turns_with_it() {
+    let stored = load_range(&gdepth("inv8.jpg"), &DepthOptions::default()).unwrap();
+    let (path, opts) = (gdepth("rot6.jpg"), DepthOptions::default());
+    let photo = Photo::load(&path, &path, &opts).unwrap();
+    assert_eq!((photo.image.width(), photo.image.height()), (48, 64));
+    let range = &photo.depth.range;
+    assert_eq!((range.width(), range.height()), (24, 32));
+    assert_eq!(photo.depth.turned, Orientation::Rotate90);
+    for v in 0..32 {
+        for u in 0..24 {
+            // Turned 90° clockwise: the upright top row is the stored left column, from
+            // the bottom up.
+            let want = stored.range.get(v, 23 - u);
+            assert_eq!(range.get(u, v).to_bits(), want.to_bits(), "({u}, {v})");
+        }
+    }
+
+    // Dynamic Depth's intrinsics turn too: the axes' focal lengths swap, and the stored
+    // principal point's y, from the bottom, becomes the upright x.
+    let k = load_range(&gdepth("dd8.jpg"), &opts)
+        .unwrap()
+        .intrinsics
+        .unwrap();
+    let path = gdepth("dd8-rot6.jpg");
+    let turned = Photo::load(&path, &path, &opts).unwrap().depth;
+    let t = turned.intrinsics.unwrap();
+    assert_eq!((t.fx, t.fy, t.cx, t.cy), (k.fy, k.fx, 23.0 - k.cy, k.cx));
+
+    // The render needs no --depth and writes the upright photo.
+    let dir = tempfile::tempdir().unwrap();
+    let image = gdepth("rot6.jpg");
+    let args = [
+        "render",
+        "--image",
+        image.to_str().unwrap(),
+        "--out",
+        "o.png",
+    ];
+    let run = common::brume(dir.path(), &args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let size = image::image_dimensions(dir.path().join("o.png")).unwrap();
+    assert_eq!(size, (48, 64));
+}
