@@ -219,7 +219,12 @@ pub struct DepthReadingArgs {
     /// it), upright (made from the image as viewers show it, e.g. read by OpenCV: not
     /// turned), or auto (stored, unless the map's shape fits only the upright image). --fov
     /// is the upright image's vertical field of view.
-    #[arg(long, value_name = "LAYOUT", default_value = "auto")]
+    #[arg(
+        long,
+        value_name = "LAYOUT",
+        allow_hyphen_values = true,
+        default_value = "auto"
+    )]
     pub depth_layout: DepthLayout,
 }
 
