@@ -312,3 +312,54 @@ fn a_portrait_photos_embedded_depth_turns_with_it() {
     let size = image::image_dimensions(dir.path().join("o.png")).unwrap();
     assert_eq!(size, (48, 64));
 }
+
+/// `f26.jpg` is `rot6.jpg` with a `FocalLengthIn35mmFormat` of 26 mm that ExifTool wrote:
+/// its depth along the axis becomes range through the focal length that gives the
+/// photo's diagonal the angle 26 mm gives a 36 x 24 mm frame's (43.27 mm), on the upright
+/// grid; a `fov` given wins.
+#[test]
+fn the_photos_35mm_focal_length_turns_its_depth_into_range() {
+    let opts = DepthOptions::default();
+    let rot6 = gdepth("rot6.jpg");
+    let depth = Photo::load(&rot6, &rot6, &opts).unwrap().depth;
+    assert!(depth.depth_as_range_warning().is_some(), "no focal length");
+    let path = gdepth("f26.jpg");
+    let loaded = Photo::load(&path, &path, &opts).unwrap().depth;
+    assert!(loaded.depth_as_range_warning().is_none());
+    let note = loaded
+        .notes
+        .iter()
+        .find(|n| n.contains("from the photo's EXIF"));
+    assert!(
+        note.is_some_and(|n| n.contains("26 mm")),
+        "{:?}",
+        loaded.notes
+    );
+    let check = |range: &ScalarMap, f: f64| {
+        let (cx, cy) = (11.5, 15.5);
+        for v in 0..32 {
+            for u in 0..24 {
+                let z = f64::from(*depth.range.get(u, v));
+                let got = f64::from(*range.get(u, v));
+                if z.is_nan() {
+                    assert!(got.is_nan(), "({u}, {v})");
+                    continue;
+                }
+                let (a, b) = ((u as f64 - cx) / f, (v as f64 - cy) / f);
+                let want = z * (1.0 + a * a + b * b).sqrt();
+                assert!(
+                    (got - want).abs() < 1e-5 * want,
+                    "({u}, {v}): {got} for {want}"
+                );
+            }
+        }
+    };
+    // The map is 24 x 32 upright, 40 px across its diagonal.
+    check(&loaded.range, 26.0 * 40.0 / 36f64.hypot(24.0));
+    let fov = DepthOptions {
+        fov: Some(50.0),
+        ..DepthOptions::default()
+    };
+    let given = Photo::load(&path, &path, &fov).unwrap().depth;
+    check(&given.range, 16.0 / 25f64.to_radians().tan());
+}

@@ -29,6 +29,8 @@ against the specification's formulas without a second file:
   Orientation of 6 (turned 90° clockwise to show: a phone held upright) that ExifTool
   adds, the depth left as stored, as phones write it (ExifTool keeps the Dynamic Depth
   items appended after the JPEG).
+- ``f26.jpg``: ``rot6.jpg`` with ``FocalLengthIn35mmFormat`` 26 (EXIF 0xA405) that ExifTool
+  adds: the focal length that turns its depth into range.
 - ``ext16.jpg``: 320 x 240 photo, 320 x 240 16-bit PNG, RangeInverse, Near 2 Far 42, the
   plane d = 2 + 0.05 x + 0.1 y m plus up to 1 cm of seeded noise (which keeps the PNG
   from compressing, so that the XMP needs extended segments).
@@ -134,9 +136,10 @@ def dynamic_depth(src, out, depth_png, tmp):
             f.write(open(png, "rb").read())
 
 
-def oriented(src, out, value):
-    """``src`` with the EXIF Orientation ``value`` written by ExifTool."""
-    subprocess.run(["exiftool", "-q", "-o", out, f"-IFD0:Orientation#={value}", src], check=True)
+def oriented(src, out, value, *more):
+    """``src`` with the EXIF Orientation ``value`` (and ``more`` tags) written by ExifTool."""
+    subprocess.run(["exiftool", "-q", "-o", out, f"-IFD0:Orientation#={value}", *more, src],
+                   check=True)
 
 
 def main(out_dir):
@@ -174,6 +177,8 @@ def main(out_dir):
     for name in ("inv8", "dd8"):
         rotated = "rot6.jpg" if name == "inv8" else f"{name}-rot6.jpg"
         oriented(os.path.join(out_dir, f"{name}.jpg"), os.path.join(out_dir, rotated), 6)
+    oriented(os.path.join(out_dir, "inv8.jpg"), os.path.join(out_dir, "f26.jpg"), 6,
+             "-ExifIFD:FocalLengthIn35mmFormat=26")
     shutil.rmtree(tmp)
 
 

@@ -8,7 +8,7 @@
 //! A colour image's EXIF orientation is applied, as viewers apply it: a phone photo held
 //! upright is stored sideways with a tag, and the fog's sky and horizon are found from the
 //! top of the upright frame ([`load_upright_rgb`] says which orientation was applied, so
-//! that its depth map is turned with it: [`crate::io::depth::PhotoLayout`]). Maps (depth,
+//! that its depth map is turned with it: [`crate::io::depth::PhotoGeometry`]). Maps (depth,
 //! masks) are read as stored. Embedded ICC profiles and PNG `gAMA` chunks are ignored:
 //! inputs are taken as sRGB. An EXR's chromaticities are ignored too: its primaries are
 //! taken to be the output's.
@@ -149,6 +149,44 @@ pub fn linear_to_srgb(v: f32) -> f32 {
     }
 }
 
+/// What a photo's EXIF says that brume uses. Unreadable EXIF is none, as for a viewer.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PhotoExif {
+    /// The orientation that turned the stored pixels upright.
+    pub orientation: Orientation,
+    /// `FocalLengthIn35mmFilm` in mm, where given and not 0 (the tag's "unknown").
+    pub focal_35mm: Option<f64>,
+}
+
+impl PhotoExif {
+    /// Reads the orientation (`Orientation`, IFD0) and the 35 mm equivalent focal length
+    /// (`FocalLengthIn35mmFilm`, Exif IFD) from an EXIF block (TIFF data).
+    fn parse(tiff: Vec<u8>, name: &str) -> PhotoExif {
+        let exif = match exif::Reader::new().read_raw(tiff) {
+            Ok(exif) => exif,
+            Err(e) => {
+                log::debug!("{name}: EXIF not read ({e})");
+                return PhotoExif::default();
+            }
+        };
+        let uint = |tag| {
+            let field = exif.get_field(tag, exif::In::PRIMARY)?;
+            field.value.get_uint(0)
+        };
+        let orientation = uint(exif::Tag::Orientation)
+            .and_then(|v| u16::try_from(v).ok())
+            .and_then(Orientation::from_exif)
+            .unwrap_or_default();
+        let focal_35mm = uint(exif::Tag::FocalLengthIn35mmFilm)
+            .filter(|&mm| mm > 0)
+            .map(f64::from);
+        PhotoExif {
+            orientation,
+            focal_35mm,
+        }
+    }
+}
+
 /// The formats [`load_linear_rgb`] reads, for messages.
 const COLOUR_FORMATS: &str =
     "a PNG or JPEG (sRGB), an OpenEXR (.exr, linear) or a colour PFM (`PF`, linear) file";
@@ -162,10 +200,9 @@ pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
     Ok(load_upright_rgb(path)?.0)
 }
 
-/// [`load_linear_rgb`], with the EXIF orientation it applied ([`Orientation::Upright`]
-/// for none, and for EXR and PFM, which have no such tag): what the photo's depth map is
-/// turned by.
-pub fn load_upright_rgb(path: &Path) -> Result<(RgbImage, Orientation)> {
+/// [`load_linear_rgb`], with what its EXIF says (none for EXR and PFM): the orientation
+/// it applied, which the photo's depth map is turned by, and its focal length.
+pub fn load_upright_rgb(path: &Path) -> Result<(RgbImage, PhotoExif)> {
     let bytes = crate::io::limits::read_file(path)?;
     decode_upright_rgb(&bytes, &path.display().to_string())
 }
@@ -182,10 +219,10 @@ pub fn decode_linear_rgb(bytes: &[u8], name: &str) -> Result<RgbImage> {
     Ok(decode_upright_rgb(bytes, name)?.0)
 }
 
-/// [`decode_linear_rgb`], with the EXIF orientation it applied.
-pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, Orientation)> {
+/// [`decode_linear_rgb`], with what its EXIF says.
+pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, PhotoExif)> {
     let path = Path::new(name);
-    let upright = |image| Ok((image, Orientation::Upright));
+    let upright = |image| Ok((image, PhotoExif::default()));
     if bytes.starts_with(&EXR_MAGIC) {
         let exr = parse_exr_rgb(bytes, path)?;
         log::info!("{name}: linear colour from EXR channels {}", exr.source);
@@ -203,7 +240,8 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, Orienta
             )),
         };
     }
-    let (mut decoded, orientation) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
+    let (mut decoded, exif) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
+    let orientation = exif.orientation;
     if orientation != Orientation::Upright {
         log::info!(
             "{name}: {} upright, as its EXIF orientation says",
@@ -213,7 +251,7 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, Orienta
         let theirs = image::metadata::Orientation::from_exif(exif).expect("1 to 8");
         decoded.apply_orientation(theirs);
     }
-    Ok((to_linear_rgb(&decoded), orientation))
+    Ok((to_linear_rgb(&decoded), exif))
 }
 
 /// The first four bytes of every OpenEXR file.
@@ -295,14 +333,14 @@ enum Role {
 }
 
 /// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
-/// is none of them, and the file's `role`; with a colour image's EXIF orientation (not
+/// is none of them, and the file's `role`; with a colour image's EXIF (its orientation not
 /// applied).
 fn decode_image(
     bytes: &[u8],
     name: &str,
     expected: &str,
     role: Role,
-) -> Result<(DynamicImage, Orientation)> {
+) -> Result<(DynamicImage, PhotoExif)> {
     let reader = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::io(name, e))?;
@@ -340,14 +378,12 @@ fn decode_image(
     };
     // The size is checked from the header, before the pixel buffer is allocated.
     let mut decoder = reader.into_decoder().map_err(cannot)?;
-    // An orientation that cannot be read is none, as for a viewer.
-    let orientation = match role {
-        Role::Colour => decoder
-            .orientation()
-            .ok()
-            .and_then(|o| Orientation::from_exif(o.to_exif().into()))
-            .unwrap_or_default(),
-        Role::Map => Orientation::Upright,
+    let exif = match role {
+        Role::Colour => match decoder.exif_metadata() {
+            Ok(Some(tiff)) => PhotoExif::parse(tiff, name),
+            _ => PhotoExif::default(),
+        },
+        Role::Map => PhotoExif::default(),
     };
     let (w, h) = decoder.dimensions();
     check_size(
@@ -364,7 +400,7 @@ fn decode_image(
         .reserve(decoder.total_bytes())
         .map_err(cannot)?;
     let image = DynamicImage::from_decoder(decoder).map_err(cannot)?;
-    Ok((image, orientation))
+    Ok((image, exif))
 }
 
 /// Refuses a PNG whose palette (`PLTE` chunk) is not whole RGB entries of 3 bytes, as the

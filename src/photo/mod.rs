@@ -45,7 +45,7 @@ pub use insert::{insert, Insertion, VirtualObject};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
 
 use crate::error::{Error, Result};
-use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoLayout};
+use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoGeometry};
 use crate::io::{demo, image};
 use crate::raster::{Orientation, RgbImage, ScalarMap};
 use std::path::Path;
@@ -82,12 +82,12 @@ impl Photo {
     /// ([`DepthOptions::layout`] says how the map lies; `opts.photo` is set here).
     pub fn load(image_path: &Path, depth_path: &Path, opts: &DepthOptions) -> Result<Photo> {
         check_memory_before_loading(image_path)?;
-        let (image, orientation) = image::load_upright_rgb(image_path)?;
+        let (image, exif) = image::load_upright_rgb(image_path)?;
         let opts = DepthOptions {
-            photo: Some(PhotoLayout::of_upright(
+            photo: Some(PhotoGeometry::of_upright(
                 image.width(),
                 image.height(),
-                orientation,
+                exif,
             )),
             ..opts.clone()
         };
@@ -153,7 +153,8 @@ impl Photo {
     pub fn load_transmittance(image_path: &Path, map_path: &Path) -> Result<Photo> {
         check_memory_before_loading(image_path)?;
         // The map is taken as the photo is stored, as a depth map is.
-        let (image, orientation) = image::load_upright_rgb(image_path)?;
+        let (image, exif) = image::load_upright_rgb(image_path)?;
+        let orientation = exif.orientation;
         let range = crate::compat::load_optical_depth(map_path)?.oriented(orientation);
         let (image_name, depth_name) = (image_path.display(), map_path.display());
         if (image.width(), image.height()) != (range.width(), range.height()) {

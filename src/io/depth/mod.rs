@@ -61,7 +61,7 @@ pub use middlebury::{
     parse_calib, parse_calib_str, Calib, MIDDLEBURY2006_BASELINE_MM,
     MIDDLEBURY2006_DISPARITY_OFFSET_PX, MIDDLEBURY2006_FOCAL_PX,
 };
-pub use orient::{DepthLayout, PhotoLayout};
+pub use orient::{DepthLayout, PhotoGeometry};
 
 /// What the values of a map measure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -220,10 +220,11 @@ pub struct DepthOptions {
     /// [`DEPTH16_DEFAULT_MIN_CONFIDENCE`]. For `gdepth` and `dynamic-depth`, the lowest
     /// value of the file's confidence map kept; `None` keeps every sample.
     pub min_confidence: Option<f64>,
-    /// The photo the map goes with, as stored, when it has an EXIF orientation: the map is
-    /// turned upright with it as `layout` says, and `fov` is the upright photo's vertical
-    /// field of view. `None` (a map read on its own): the map as stored.
-    pub photo: Option<PhotoLayout>,
+    /// The photo the map goes with, as stored, and what its EXIF says: the map is turned
+    /// upright with it as `layout` says, `fov` is the upright photo's vertical field of
+    /// view, and without `focal` or `fov` its 35 mm equivalent focal length turns depth
+    /// into range. `None` (a map read on its own): the map as stored.
+    pub photo: Option<PhotoGeometry>,
     /// How the map lies against `photo`'s orientation.
     pub layout: DepthLayout,
 }

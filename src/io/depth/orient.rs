@@ -1,41 +1,47 @@
-//! A depth map and the EXIF orientation of its photo: a phone stores its sensor's frame
-//! and a tag that viewers apply, and writes its depth (DEPTH16, GDepth, Dynamic Depth) in
-//! the stored frame; brume turns the photo upright ([`crate::io::image`]) and the map
-//! with it, unless the map is upright already.
+//! A depth map and its photo's EXIF: a phone stores its sensor's frame and an orientation
+//! tag that viewers apply, and writes its depth (DEPTH16, GDepth, Dynamic Depth) in the
+//! stored frame; brume turns the photo upright ([`crate::io::image`]) and the map with
+//! it, unless the map is upright already. The tag's 35 mm equivalent focal length gives
+//! the intrinsics that turn depth into range.
 
 use std::fmt;
 use std::str::FromStr;
 
 use super::DepthOptions;
+use crate::io::image::PhotoExif;
 use crate::raster::Orientation;
 use crate::{Error, Result};
 
-/// The photo a depth map goes with, as its file stores it: its stored size and the EXIF
-/// orientation that turns it upright. The loaders turn the map as the photo
-/// ([`DepthLayout`] says when).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct PhotoLayout {
+/// The photo a depth map goes with, as its file stores it and as its EXIF tells: its
+/// stored size, the orientation that turns it upright, its 35 mm equivalent focal length.
+/// The loaders turn the map as the photo ([`DepthLayout`] says when) and take the focal
+/// length where no `focal` or `fov` is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhotoGeometry {
     /// Stored width in pixels.
     pub width: usize,
     /// Stored height in pixels.
     pub height: usize,
     /// How the stored pixels turn upright.
     pub orientation: Orientation,
+    /// EXIF `FocalLengthIn35mmFilm`, mm: the focal length that gives a 35 mm film frame
+    /// (36 x 24 mm) the photo's diagonal angle of view.
+    pub focal_35mm: Option<f64>,
 }
 
-impl PhotoLayout {
-    /// The layout of a photo loaded upright (`width x height`) that was turned by
-    /// `orientation`.
-    pub fn of_upright(width: usize, height: usize, orientation: Orientation) -> PhotoLayout {
-        let (width, height) = if orientation.swaps_axes() {
+impl PhotoGeometry {
+    /// The geometry of a photo loaded upright (`width x height`) with its EXIF.
+    pub fn of_upright(width: usize, height: usize, exif: PhotoExif) -> PhotoGeometry {
+        let (width, height) = if exif.orientation.swaps_axes() {
             (height, width)
         } else {
             (width, height)
         };
-        PhotoLayout {
+        PhotoGeometry {
             width,
             height,
-            orientation,
+            orientation: exif.orientation,
+            focal_35mm: exif.focal_35mm,
         }
     }
 }
