@@ -222,17 +222,18 @@ fn main() -> Res<()> {
     );
     seeds.put("colour_image", "grey8.png", png8.clone());
     seeds.put("colour_image", "rgb.jpg", jpeg.clone());
-    // A phone photo's orientation tag, read (to warn that it is not applied) from a JPEG's
-    // APP1 and a PNG's eXIf chunk: EXIF is a TIFF structure of its own, in either byte order.
+    // A phone photo's orientation tag (applied) and 35 mm equivalent focal length, read from
+    // a JPEG's APP1 and a PNG's eXIf chunk: EXIF is a TIFF structure of its own, in either
+    // byte order.
     seeds.put(
         "colour_image",
         "exif-rotate90.jpg",
-        tagged(&rgb, 4, 4, exif_orientation(6, false), true)?,
+        tagged(&rgb, 4, 4, exif_orientation(6, Some(26), false), true)?,
     );
     seeds.put(
         "colour_image",
         "exif-mirror.png",
-        tagged(&rgb, 4, 4, exif_orientation(2, true), false)?,
+        tagged(&rgb, 4, 4, exif_orientation(2, Some(28), true), false)?,
     );
     // Renderers' linear float frames: flat R, G, B beside a depth Z; Blender's multilayer
     // names in half floats; a colour PFM.
@@ -605,8 +606,9 @@ fn tagged(rgb: &[u8], w: u32, h: u32, exif: Vec<u8>, jpeg: bool) -> Res<Vec<u8>>
     Ok(out)
 }
 
-/// An EXIF (TIFF) block with one entry, the orientation `value`.
-fn exif_orientation(value: u16, big_endian: bool) -> Vec<u8> {
+/// An EXIF block (TIFF) holding orientation `value` in IFD0 and, if given, a pointer to an
+/// Exif IFD holding `FocalLengthIn35mmFilm` `focal_35mm`, in either byte order.
+fn exif_orientation(value: u16, focal_35mm: Option<u16>, big_endian: bool) -> Vec<u8> {
     let u16b = |v: u16| {
         if big_endian {
             v.to_be_bytes()
@@ -626,15 +628,36 @@ fn exif_orientation(value: u16, big_endian: bool) -> Vec<u8> {
     } else {
         b"II".to_vec()
     };
+    // An entry whose one SHORT or LONG value is held in it.
+    let entry = |b: &mut Vec<u8>, tag: u16, long: Option<u32>, short: u16| {
+        b.extend(u16b(tag));
+        b.extend(u16b(if long.is_some() { 4 } else { 3 }));
+        b.extend(u32b(1));
+        match long {
+            Some(v) => b.extend(u32b(v)),
+            None => {
+                b.extend(u16b(short));
+                b.extend([0, 0]);
+            }
+        }
+    };
     b.extend(u16b(42));
     b.extend(u32b(8)); // the first IFD
-    b.extend(u16b(1)); // one entry
-    b.extend(u16b(0x0112)); // Orientation
-    b.extend(u16b(3)); // SHORT
-    b.extend(u32b(1)); // one value, held in the entry
-    b.extend(u16b(value));
-    b.extend([0, 0]);
+    let entries = 1 + u16::from(focal_35mm.is_some());
+    b.extend(u16b(entries));
+    entry(&mut b, 0x0112, None, value); // Orientation
+
+    // IFD0 ends at 8 + 2 + 12 entries + 4: the Exif IFD follows.
+    let exif_ifd = 8 + 2 + 12 * u32::from(entries) + 4;
+    if focal_35mm.is_some() {
+        entry(&mut b, 0x8769, Some(exif_ifd), 0); // ExifIFDPointer
+    }
     b.extend(u32b(0)); // no next IFD
+    if let Some(mm) = focal_35mm {
+        b.extend(u16b(1));
+        entry(&mut b, 0xA405, None, mm); // FocalLengthIn35mmFilm
+        b.extend(u32b(0));
+    }
     b
 }
 

@@ -48,13 +48,14 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
     pip install opencv-python-headless numpy
     python3 tools/phone_depth_eval.py OUT_DIR [--brume target/release/brume]
         [--format arcore|android-depth16|gdepth] [--gdepth-far 10] [--size 1024x512]
-        [--factor 8] [--fov 45]
+        [--factor 8] [--fov 45] [--camera-from flag|exif|none]
         [--beta 0.02] [--position 0,1.7,0]
         [--yaw 0] [--pitch 0] [--roll 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
         [--margin PX]  (passed to brume render)
         [--docs DIR]   (also copy fog_truth and fog_phone_none there as refine-phone-*.png)
 
-Needs numpy, OpenCV and the brume binary (headless EGL; llvmpipe is fine). About 10 s at
+``--camera-from exif`` needs ExifTool too (Debian: ``libimage-exiftool-perl``). Needs
+numpy, OpenCV and the brume binary (headless EGL; llvmpipe is fine). About 10 s at
 1024x512 on 2 cores.
 """
 
@@ -203,6 +204,12 @@ def main():
     ap.add_argument("--gdepth-far", type=float, default=10.0,
                     help="--format gdepth: the map's Far (m); the sky and what lies beyond are at it")
     ap.add_argument("--fov", type=float, default=45.0)
+    ap.add_argument("--camera-from", choices=["flag", "exif", "none"], default="flag",
+                    help="how brume learns the field of view that turns depth into range: "
+                         "flag (--fov), exif (as a phone writes the photo: its "
+                         "FocalLengthIn35mmFilm, from --fov by the diagonal and rounded to "
+                         "the mm, and Orientation 6 with the photo and its depth stored "
+                         "turned; written by ExifTool), none (depth used as range)")
     ap.add_argument("--near", type=float, default=2.0)
     ap.add_argument("--far", type=float, default=1000.0)
     ap.add_argument("--beta", type=float, default=0.02)
@@ -235,15 +242,28 @@ def main():
     tau_true = np.where(sky, 0.0, np.exp(-a.beta * R_true))
     write_pfm(o("truth_range.pfm"), np.where(sky, np.inf, R_true))
 
-    # 2. The phone's depth.
+    # 2. The phone's depth, and the photo as the phone stores it: upright, or (--camera-from
+    # exif) turned anticlockwise, with the tags that say so and give the focal length.
     measured = R_true if a.format == "android-depth16" else z
     z_phone = phone_depth(np.where(sky, np.nan, measured), a)
+    exif = a.camera_from == "exif"
+    stored = (lambda img: np.rot90(img, 1).copy()) if exif else (lambda img: img)
+    photo_png = o("left.png")
+    if exif:
+        photo_png = o("left_stored.png")
+        cv2.imwrite(photo_png, stored(cv2.imread(o("left.png"))))
     if a.format == "gdepth":
-        write_gdepth(o("phone.jpg"), o("left.png"), z_phone, a.gdepth_far)
+        write_gdepth(o("phone.jpg"), photo_png, stored(z_phone), a.gdepth_far)
         unknown_full = np.kron(z_phone >= a.gdepth_far, np.ones((a.factor, a.factor), bool))
     else:
-        write_phone(o("phone.png"), z_phone, a.format)
+        write_phone(o("phone.png"), stored(z_phone), a.format)
         unknown_full = np.kron(~np.isfinite(z_phone), np.ones((a.factor, a.factor), bool))
+    if exif:
+        focal_px = (H / 2) / np.tan(np.radians(a.fov) / 2)
+        f35 = int(round(focal_px * np.hypot(36, 24) / np.hypot(W, H)))
+        tagged = o("phone.jpg") if a.format == "gdepth" else photo_png
+        run(["exiftool", "-q", "-overwrite_original", "-IFD0:Orientation#=6",
+             f"-ExifIFD:FocalLengthIn35mmFormat={f35}", tagged])
 
     surf = ~sky
     # Truth edges: log z jumps by more than 0.05, or sky beside a surface.
@@ -260,18 +280,18 @@ def main():
     prep_opts = [] if a.margin is None else ["--margin", a.margin]
 
     depth_opts = ["--depth-format", a.format]
-    if a.format in ("arcore", "gdepth"):
+    if a.format in ("arcore", "gdepth") and a.camera_from == "flag":
         depth_opts += ["--fov", str(a.fov)]
     # A portrait photo is its own depth file.
     photo, depth = ((o("phone.jpg"), o("phone.jpg")) if a.format == "gdepth"
-                    else (o("left.png"), o("phone.png")))
+                    else (photo_png, o("phone.png")))
 
     def render(refine, out, extra):
         run([B, "render", "--image", photo, "--depth", depth] + depth_opts
             + ["--beta", str(a.beta), "--refine", refine, "--out", out] + extra + prep_opts)
 
     results = {"setup": {"format": a.format, "size": [W, H], "factor": a.factor,
-                         "fov_deg": a.fov,
+                         "fov_deg": a.fov, "camera_from": a.camera_from,
                          "beta": a.beta, "position": a.position, "yaw": a.yaw,
                          "pitch": a.pitch, "roll": a.roll, "bleed": a.bleed,
                          "noise_base": a.noise_base,
