@@ -256,6 +256,26 @@ fn min_confidence_drops_what_the_confidence_map_doubts() {
         .warnings()
         .iter()
         .any(|w| w.contains("no confidence map")));
+    // A threshold above every sample's confidence (conf-low.jpg's, all 64/255) leaves
+    // nothing: refused by name, with the highest confidence there is, rather than the
+    // loaders' bare "no valid depth".
+    let opts = DepthOptions {
+        min_confidence: Some(0.3),
+        ..DepthOptions::default()
+    };
+    let e = load_range(&fixture("conf-low.jpg"), &opts).unwrap_err();
+    let message = e.to_string();
+    assert!(matches!(e, Error::Format { .. }), "{message}");
+    assert!(message.contains("conf-low.jpg"), "{message}");
+    assert!(
+        message.contains("all 764 depth samples have a confidence below `min_confidence` 0.3")
+            && message.contains("the highest is 0.251"),
+        "{message}"
+    );
+    assert_eq!(
+        with("conf-low.jpg", Some(0.25)).unknown_pixels,
+        inv8.unknown_pixels
+    );
 }
 
 #[test]

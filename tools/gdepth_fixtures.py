@@ -14,6 +14,8 @@ against the specification's formulas without a second file:
   Units mm, MeasureType OpticRay (range).
 - ``conf8.jpg``: ``inv8.jpg`` with a confidence map (``GDepth:Confidence``, a PNG of the
   same size: 255 (1.0) in the left half, 64 (0.251) in the right).
+- ``conf-low.jpg``: ``inv8.jpg`` with a confidence map of 64 (0.251) everywhere, which a
+  ``--min-confidence`` above it leaves no sample of.
 - ``ext8.jpg``: ``inv8.jpg`` with its ``GDepth:Data`` moved by this script (not ExifTool)
   into an extended packet of two segments written in reverse order, the GUID in an
   element whose start tag declares its namespace: what a reader must accept beyond
@@ -159,6 +161,11 @@ def main(out_dir):
     embed(small, os.path.join(out_dir, "conf8.jpg"), inv8,
           ["Format=RangeInverse", "Near=1.5", "Far=20.75", "ConfidenceMime=image/png",
            f"Confidence<={conf}"])
+    low = os.path.join(tmp, "low.png")
+    cv2.imwrite(low, np.full((24, 32), 64, np.uint8))
+    embed(small, os.path.join(out_dir, "conf-low.jpg"), inv8,
+          ["Format=RangeInverse", "Near=1.5", "Far=20.75", "ConfidenceMime=image/png",
+           f"Confidence<={low}"])
     lin16 = os.path.join(tmp, "lin16.png")
     cv2.imwrite(lin16, samples(plane * 1000, 1500, 20750, False, 16))
     embed(small, os.path.join(out_dir, "lin16.jpg"), lin16,

@@ -310,7 +310,9 @@ def load_depth(
     far: Optional[float] = None,
     fov_y_deg: Optional[float] = None,
     min_confidence: Optional[float] = None,
-    reversed_z: bool = False
+    reversed_z: bool = False,
+    image: Optional[PathArg] = None,
+    layout: Optional[str] = None
 ) -> Tuple[Array, Dict[str, Any]]: ...
 def range_from_depth(
     depth: Array,

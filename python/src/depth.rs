@@ -4,13 +4,16 @@
 
 use super::arrays::{read_scalar_map, scalar_map_to_py, user_warning, FsPath};
 use super::{keyword_of, py_err};
-use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
+use brume::io::depth::{
+    self, DepthFormat, DepthKind, DepthLayout, DepthOptions, LoadedDepth, PhotoGeometry,
+};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 /// load_depth(path, camera=None, format=None, *, kind=None, scale=None, calib=None,
 /// focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None,
-/// fov_y_deg=None, min_confidence=None, reversed_z=False) -> (range_m, info)
+/// fov_y_deg=None, min_confidence=None, reversed_z=False, image=None, layout=None)
+/// -> (range_m, info)
 ///
 /// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown)
 /// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
@@ -30,11 +33,17 @@ use pyo3::types::PyDict;
 /// float('inf') for an infinite far plane); reversed_z: its depth is 1 at near and 0 at
 /// far (Unreal, Bevy, Godot 4), nothing drawn at 0. min_confidence: the lowest
 /// confidence in [0, 1] of an Android DEPTH16 sample that is kept (of a portrait JPEG's
-/// sample, in its confidence map). info: format, kind,
+/// sample, in its confidence map). image: the photo the map goes with (its header is
+/// read, not its pixels): the map is turned upright by the photo's EXIF orientation, as
+/// `brume render --image` turns both (read the photo upright too: PIL's
+/// ImageOps.exif_transpose, OpenCV's imread), and the photo's EXIF 35 mm equivalent focal
+/// length turns depth into range when neither focal_px nor fov_y_deg is given. layout:
+/// how the map lies against that orientation, 'auto' (default), 'stored' or 'upright'
+/// (brume render's --depth-layout). info: format, kind,
 /// units, metric (whether the range is in trustworthy metres, which fog with beta or
 /// visibility needs), notes, unknown_pixels.
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false))]
+#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn load_depth<'py>(
     py: Python<'py>,
@@ -52,7 +61,13 @@ pub(crate) fn load_depth<'py>(
     fov_y_deg: Option<f64>,
     min_confidence: Option<f64>,
     reversed_z: bool,
+    image: Option<FsPath>,
+    layout: Option<&str>,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
+    let photo = match image {
+        Some(path) => Some(py.detach(|| PhotoGeometry::read(&path.0)).map_err(py_err)?),
+        None => None,
+    };
     let opts = DepthOptions {
         format: match format {
             Some(f) => f.parse::<DepthFormat>().map_err(py_err)?,
@@ -61,6 +76,11 @@ pub(crate) fn load_depth<'py>(
         calib: calib.map(|p| p.0),
         camera: camera.map(|p| p.0),
         min_confidence,
+        photo,
+        layout: match layout {
+            Some(l) => l.parse::<DepthLayout>().map_err(py_err)?,
+            None => DepthLayout::Auto,
+        },
         ..geometry_options(
             kind,
             scale,

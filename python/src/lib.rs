@@ -58,7 +58,7 @@ fn py_err(e: brume::Error) -> PyErr {
 
 /// The library's fields whose keyword here has another name (the depth loaders' options
 /// as `load_depth` takes them, the focal length, field of view and λ with their units).
-const KEYWORDS: [(&str, &str); 8] = [
+const KEYWORDS: [(&str, &str); 9] = [
     ("depth_format", "format"),
     ("depth_kind", "kind"),
     ("depth_scale", "scale"),
@@ -67,6 +67,7 @@ const KEYWORDS: [(&str, &str); 8] = [
     ("disparity_offset", "disparity_offset_px"),
     ("fov", "fov_y_deg"),
     ("lambda", "lambda_px"),
+    ("depth_layout", "layout"),
 ];
 
 /// The keyword that sets the library's field `field`: its name, or its entry in

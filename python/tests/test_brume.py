@@ -483,6 +483,31 @@ def test_load_depth_of_a_portrait_jpeg():
     np.testing.assert_allclose(loaded[known], plane[known], atol=19.25 / 65535)
 
 
+def test_load_depth_with_its_photo_turns_and_uses_its_exif():
+    """image=: the photo's EXIF (ExifTool wrote f26.jpg's: Orientation 6, a phone held
+    upright, and FocalLengthIn35mmFormat 26) turns the map upright with it, as PIL's
+    exif_transpose turns the photo, and its focal length turns depth into range:
+    f = 26 mm · (the map's diagonal, 40 px) / 43.27 mm, the same as focal_px on the map
+    as stored, turned clockwise."""
+    from PIL import Image, ImageOps
+
+    path = REPO / "tests/data/gdepth/f26.jpg"
+    upright, info = brume.load_depth(path, image=path)
+    photo = ImageOps.exif_transpose(Image.open(path))
+    assert upright.shape == (32, 24) and photo.size == (48, 64)
+    assert any("from the photo's EXIF: 26 mm" in n for n in info["notes"]), info["notes"]
+    focal = 26 * 40 / np.hypot(36, 24)
+    stored, _ = brume.load_depth(path, focal_px=focal)
+    assert stored.shape == (24, 32)
+    np.testing.assert_allclose(upright, np.rot90(stored, -1), rtol=1e-6)
+    # Taken as upright already, the map is not turned, and says so.
+    as_is, info = brume.load_depth(path, image=path, layout="upright")
+    assert as_is.shape == (24, 32)
+    assert any("taken as upright (layout upright)" in n for n in info["notes"]), info["notes"]
+    with pytest.raises(ValueError, match="invalid layout = sideways"):
+        brume.load_depth(path, image=path, layout="sideways")
+
+
 def pixel_radius2(h, w, focal):
     """((x - cx)² + (y - cy)²) / f² at the pixel centres, the principal point at the
     image's centre."""

@@ -332,15 +332,14 @@ enum Role {
     Map,
 }
 
-/// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
-/// is none of them, and the file's `role`; with a colour image's EXIF (its orientation not
-/// applied).
-fn decode_image(
-    bytes: &[u8],
+/// PNG or JPEG bytes checked (their kind, a JPEG's end, a PNG's palette) and opened, no
+/// pixel decoded yet; `expected` is what the caller accepts, for the message on data that
+/// is none of them.
+fn open_decoder<'a>(
+    bytes: &'a [u8],
     name: &str,
     expected: &str,
-    role: Role,
-) -> Result<(DynamicImage, PhotoExif)> {
+) -> Result<(impl ImageDecoder + 'a, ImageFormat)> {
     let reader = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::io(name, e))?;
@@ -370,19 +369,56 @@ fn decode_image(
     if format == ImageFormat::Png {
         check_png_palette(bytes, name)?;
     }
-    let cannot = |e: image::ImageError| {
+    let decoder = reader.into_decoder().map_err(cannot_decode(format, name))?;
+    Ok((decoder, format))
+}
+
+/// The error of a PNG or JPEG the decoder gave up on.
+fn cannot_decode(format: ImageFormat, name: &str) -> impl Fn(image::ImageError) -> Error + '_ {
+    move |e| {
         Error::format(
             name,
             format!("cannot decode as {format:?}: {e}; the file may be truncated or corrupt"),
         )
-    };
+    }
+}
+
+/// The EXIF of an opened PNG or JPEG; none that cannot be read.
+fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> PhotoExif {
+    match decoder.exif_metadata() {
+        Ok(Some(tiff)) => PhotoExif::parse(tiff, name),
+        _ => PhotoExif::default(),
+    }
+}
+
+/// A photo's stored size and EXIF, read from its header without decoding its pixels
+/// (an EXR or PFM, which has no EXIF, is decoded for its size).
+pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
+    let bytes = crate::io::limits::read_file(path)?;
+    let name = path.display().to_string();
+    if bytes.starts_with(&EXR_MAGIC) || is_pfm(&bytes) {
+        let (image, exif) = decode_upright_rgb(&bytes, &name)?;
+        return Ok((image.width(), image.height(), exif));
+    }
+    let (mut decoder, _) = open_decoder(&bytes, &name, COLOUR_FORMATS)?;
+    let (w, h) = decoder.dimensions();
+    Ok((w as usize, h as usize, exif_of(&mut decoder, &name)))
+}
+
+/// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
+/// is none of them, and the file's `role`; with a colour image's EXIF (its orientation not
+/// applied).
+fn decode_image(
+    bytes: &[u8],
+    name: &str,
+    expected: &str,
+    role: Role,
+) -> Result<(DynamicImage, PhotoExif)> {
+    let (mut decoder, format) = open_decoder(bytes, name, expected)?;
+    let cannot = cannot_decode(format, name);
     // The size is checked from the header, before the pixel buffer is allocated.
-    let mut decoder = reader.into_decoder().map_err(cannot)?;
     let exif = match role {
-        Role::Colour => match decoder.exif_metadata() {
-            Ok(Some(tiff)) => PhotoExif::parse(tiff, name),
-            _ => PhotoExif::default(),
-        },
+        Role::Colour => exif_of(&mut decoder, name),
         Role::Map => PhotoExif::default(),
     };
     let (w, h) = decoder.dimensions();
@@ -398,7 +434,7 @@ fn decode_image(
     // The budget `ImageReader::decode` applies, which `into_decoder` leaves to its caller.
     image::Limits::default()
         .reserve(decoder.total_bytes())
-        .map_err(cannot)?;
+        .map_err(&cannot)?;
     let image = DynamicImage::from_decoder(decoder).map_err(cannot)?;
     Ok((image, exif))
 }

@@ -238,7 +238,7 @@ pub(super) fn interpret(
         }
         (_, Raw::Embedded(mut e)) => {
             notes.extend(std::mem::take(&mut e.notes));
-            drop_unconfident(&mut e, opts.min_confidence, &mut notes);
+            drop_unconfident(&mut e, opts.min_confidence, path, &mut notes)?;
             let given = opts.focal.is_some() || opts.fov.is_some();
             let k = match e.intrinsics {
                 Some(k) if !given && kind == DepthKind::Depth => {
@@ -330,28 +330,50 @@ fn inverse_depth(
 
 /// With `min_confidence` given, the samples of a portrait photo's depth whose confidence
 /// map puts them below it are unknown (none without it: the devices' scales of confidence
-/// differ); a note says how many, or that the file has no confidence map.
-fn drop_unconfident(e: &mut EmbeddedDepth, min_confidence: Option<f64>, notes: &mut Vec<String>) {
+/// differ); a note says how many, or that the file has no confidence map. A threshold that
+/// leaves no sample is refused, naming the highest confidence found, as for DEPTH16.
+fn drop_unconfident(
+    e: &mut EmbeddedDepth,
+    min_confidence: Option<f64>,
+    path: &Path,
+    notes: &mut Vec<String>,
+) -> Result<()> {
     let Some(threshold) = min_confidence else {
-        return;
+        return Ok(());
     };
     let Some(confidence) = &e.confidence else {
         notes.push(format!(
             "`min_confidence` ignored: this {} file has no confidence map",
             e.format
         ));
-        return;
+        return Ok(());
     };
-    let mut dropped = 0;
+    let (mut measured, mut dropped, mut best) = (0usize, 0usize, f64::NEG_INFINITY);
     for (v, &c) in e.map.as_mut_slice().iter_mut().zip(confidence.as_slice()) {
-        if v.is_finite() && f64::from(c) < threshold {
+        if !v.is_finite() {
+            continue;
+        }
+        let c = f64::from(c);
+        (measured, best) = (measured + 1, best.max(c));
+        if c < threshold {
             *v = f32::NAN;
             dropped += 1;
         }
     }
+    if dropped > 0 && dropped == measured {
+        return Err(Error::format(
+            path,
+            format!(
+                "all {measured} depth samples have a confidence below `min_confidence` \
+                 {threshold} in the file's confidence map (the highest is {best:.3}): \
+                 expected some at or above it; lower `min_confidence`"
+            ),
+        ));
+    }
     notes.push(format!(
         "{dropped} samples below `min_confidence` {threshold} in the confidence map: unknown"
     ));
+    Ok(())
 }
 
 /// The units of a map whose unit nothing says (a float map, a z-buffer's planes).

@@ -5,6 +5,7 @@
 //! the intrinsics that turn depth into range.
 
 use std::fmt;
+use std::path::Path;
 use std::str::FromStr;
 
 use super::DepthOptions;
@@ -43,6 +44,19 @@ impl PhotoGeometry {
             orientation: exif.orientation,
             focal_35mm: exif.focal_35mm,
         }
+    }
+
+    /// The geometry of the photo at `path`, read from its header: for a host that reads
+    /// the photo itself and gives brume only the depth file (it must then turn the photo
+    /// upright by the same orientation, as viewers and OpenCV's `imread` do).
+    pub fn read(path: &Path) -> Result<PhotoGeometry> {
+        let (width, height, exif) = crate::io::image::read_photo_header(path)?;
+        Ok(PhotoGeometry {
+            width,
+            height,
+            orientation: exif.orientation,
+            focal_35mm: exif.focal_35mm,
+        })
     }
 }
 
