@@ -70,13 +70,14 @@ fn orientation(exif: u16) -> Orientation {
 }
 
 /// Writes the street pair as stored under EXIF orientation `exif` (`None`: upright, no
-/// tag) as `{name}.png`, `{name}.pfm` and `{name}-sky.png`.
+/// tag) as `{name}.png`, `{name}.pfm` and `{name}-sky.png`. The mask carries the tag too,
+/// as a phone's PNG may: a map's own tag is not read (the map follows its photo).
 fn write_pair(dir: &Path, name: &str, exif: Option<u16>) {
     let (photo, range, sky) = street();
     let o = exif.map_or(Orientation::Upright, orientation);
     write_png(&dir.join(format!("{name}.png")), &stored(&photo, o), exif);
     write_scalar(&dir.join(format!("{name}.pfm")), &stored(&range, o)).unwrap();
-    write_png(&dir.join(format!("{name}-sky.png")), &stored(&sky, o), None);
+    write_png(&dir.join(format!("{name}-sky.png")), &stored(&sky, o), exif);
 }
 
 /// `brume render` of `image` and `depth` in `dir` with `extra` options: the output's
@@ -362,4 +363,32 @@ fn the_photos_35mm_focal_length_turns_its_depth_into_range() {
     };
     let given = Photo::load(&path, &path, &fov).unwrap().depth;
     check(&given.range, 16.0 / 25f64.to_radians().tan());
+}
+
+/// The aerial perspective's camera takes the field of view the EXIF gives: the depth's
+/// focal length is in the map's pixels (24 x 32, upright), the camera's in the photo's
+/// (48 x 64), so the field is the photo's 2·atan(64 / 2 / (2 f)), not twice as wide.
+#[test]
+fn the_aerial_camera_takes_the_exif_field_of_view_at_the_photos_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = gdepth("f26.jpg");
+    let args = [
+        "render",
+        "--image",
+        image.to_str().unwrap(),
+        "--medium",
+        "aerial",
+        "--turbidity",
+        "3",
+        "--json",
+        "--out",
+        "a.png",
+    ];
+    let run = common::brume(dir.path(), &args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let focal = 2.0 * 26.0 * 40.0 / 36f64.hypot(24.0);
+    let want = 2.0 * (32.0 / focal).atan().to_degrees();
+    let fov = report["fov"].as_f64().unwrap();
+    assert!((fov - want).abs() < 1e-6, "{fov} for {want}");
 }

@@ -98,9 +98,10 @@ pub fn refine_scene(
     })?;
     if prep.prepared.is_some() {
         // The measured range at the image's size, for the report's known pixels.
-        scene.depth.range = brume::refine::nearest_to_image_size(&scene.depth.range, w, h);
+        let measured = brume::refine::nearest_to_image_size(&scene.depth.range, w, h);
+        scene.depth.replace_range(measured);
     } else {
-        scene.depth.range = prep.range.clone();
+        scene.depth.replace_range(prep.range.clone());
     }
     log::info!(
         "range {}{} in {:.1} ms",

@@ -38,6 +38,18 @@ impl Intrinsics {
         (1.0 + u * u + v * v).sqrt()
     }
 
+    /// The intrinsics of the same view sampled `scale` times as finely (a map upsampled to
+    /// its image's size), pixel centres at integers on both grids.
+    pub fn scaled(&self, scale: f64) -> Self {
+        let at = |c: f64| (c + 0.5) * scale - 0.5;
+        Intrinsics {
+            fx: self.fx * scale,
+            fy: self.fy * scale,
+            cx: at(self.cx),
+            cy: at(self.cy),
+        }
+    }
+
     /// The intrinsics of a `width x height` grid turned upright by `orientation`
     /// ([`Grid::oriented`]): each upright pixel sees the ray its stored pixel saw.
     pub fn oriented(&self, orientation: Orientation, width: usize, height: usize) -> Self {

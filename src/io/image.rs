@@ -247,8 +247,8 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, PhotoEx
             "{name}: {} upright, as its EXIF orientation says",
             orientation.describe()
         );
-        let exif = u8::try_from(orientation.exif()).expect("1 to 8");
-        let theirs = image::metadata::Orientation::from_exif(exif).expect("1 to 8");
+        let code = u8::try_from(orientation.exif()).expect("1 to 8");
+        let theirs = image::metadata::Orientation::from_exif(code).expect("1 to 8");
         decoded.apply_orientation(theirs);
     }
     Ok((to_linear_rgb(&decoded), exif))
@@ -416,11 +416,11 @@ fn decode_image(
 ) -> Result<(DynamicImage, PhotoExif)> {
     let (mut decoder, format) = open_decoder(bytes, name, expected)?;
     let cannot = cannot_decode(format, name);
-    // The size is checked from the header, before the pixel buffer is allocated.
     let exif = match role {
         Role::Colour => exif_of(&mut decoder, name),
         Role::Map => PhotoExif::default(),
     };
+    // The size is checked from the header, before the pixel buffer is allocated.
     let (w, h) = decoder.dimensions();
     check_size(
         Path::new(name),

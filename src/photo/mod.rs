@@ -311,14 +311,7 @@ impl Photo {
     ) -> Option<depth::Intrinsics> {
         let (w, h) = (self.image.width(), self.image.height());
         if let Some(k) = self.depth.intrinsics {
-            let s = w as f64 / self.depth.range.width() as f64;
-            let at_image = |c: f64| (c + 0.5) * s - 0.5;
-            return Some(depth::Intrinsics {
-                fx: k.fx * s,
-                fy: k.fy * s,
-                cx: at_image(k.cx),
-                cy: at_image(k.cy),
-            });
+            return Some(k.scaled(w as f64 / self.depth.range.width() as f64));
         }
         let from_fov = |fov: f64| h as f64 / 2.0 / (fov.to_radians() / 2.0).tan();
         let focal = focal_px.or_else(|| fov_y_deg.map(from_fov))?;

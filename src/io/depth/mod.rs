@@ -284,6 +284,14 @@ pub struct LoadedDepth {
 }
 
 impl LoadedDepth {
+    /// Replaces the range by the same view at another size (a refinement's upsampling to
+    /// the image's), its intrinsics scaled to the new grid with it.
+    pub fn replace_range(&mut self, range: ScalarMap) {
+        let scale = range.width() as f64 / self.range.width() as f64;
+        self.intrinsics = self.intrinsics.map(|k| k.scaled(scale));
+        self.range = range;
+    }
+
     /// A warning when depth along the optical axis (given, or from a z-buffer or a
     /// monocular model's inverse depth) was used as range for want of `focal` or `fov`:
     /// range exceeds depth by 1/cos of the angle off the axis, so the fog is too thin away
