@@ -392,3 +392,36 @@ fn the_aerial_camera_takes_the_exif_field_of_view_at_the_photos_size() {
     let fov = report["fov"].as_f64().unwrap();
     assert!((fov - want).abs() < 1e-6, "{fov} for {want}");
 }
+
+/// A map of range needs no focal length, but the aerial perspective's camera does: it
+/// takes the photo's EXIF one at the photo's size (f26.jpg read as range: no intrinsics
+/// from the depth), 26 · 80 / 43.27 px over its 64 rows.
+#[test]
+fn the_aerial_camera_takes_the_exif_focal_length_beside_a_map_of_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = gdepth("f26.jpg");
+    let image = image.to_str().unwrap();
+    let args = [
+        "render",
+        "--image",
+        image,
+        "--depth",
+        image,
+        "--depth-kind",
+        "range",
+        "--medium",
+        "aerial",
+        "--turbidity",
+        "3",
+        "--json",
+        "--out",
+        "a.png",
+    ];
+    let run = common::brume(dir.path(), &args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let focal = 26.0 * 80.0 / 36f64.hypot(24.0);
+    let want = 2.0 * (32.0 / focal).atan().to_degrees();
+    let fov = report["fov"].as_f64().unwrap();
+    assert!((fov - want).abs() < 1e-6, "{fov} for {want}");
+}

@@ -7,7 +7,6 @@ use super::photo_args::{blur_from_args, PrepReport, Scene};
 use brume::atmosphere::Sensitivity;
 use brume::blur::Blur;
 use brume::camera::Camera;
-use brume::io::depth::LoadedDepth;
 use brume::io::output::Outputs;
 use brume::medium::{AerialPerspective, Medium};
 use brume::photo::{
@@ -61,21 +60,19 @@ fn turbidity(args: &RenderArgs, sun: Option<&PlacedSun>) -> Result<(f64, &'stati
     }
 }
 
-/// The camera whose rays give each pixel's zenith angle, for an image `height` rows
-/// tall ([`PhotoView::camera`]): the vertical field of view from `--fov`, else from the
-/// depth's focal length (its intrinsics: a Cityscapes camera file, the photo's EXIF) or
-/// `--focal`; the pitch from `--pitch` or `--horizon-row`.
-pub fn aerial_camera(args: &RenderArgs, height: usize, depth: &LoadedDepth) -> Result<Camera> {
-    // The depth's focal length is in its own pixels: a map smaller than the image (a
-    // phone's) sees the same field with fewer.
-    let per_depth_px = height as f64 / depth.range.height() as f64;
+/// The camera whose rays give each pixel's zenith angle ([`PhotoView::camera`]): the
+/// vertical field of view from `--fov`, else from the photo's focal length at its size
+/// (the depth's intrinsics: a Cityscapes camera file; `--focal`; the photo's EXIF:
+/// [`Scene::image_intrinsics`]); the pitch from `--pitch` or `--horizon-row`.
+pub fn aerial_camera(args: &RenderArgs, scene: &Scene) -> Result<Camera> {
+    let intrinsics = scene.image_intrinsics(args.depth.reading.focal, None);
     let view = PhotoView {
         fov_y_deg: args.depth.reading.fov,
-        focal_px: (depth.intrinsics.map(|i| i.fy * per_depth_px)).or(args.depth.reading.focal),
+        focal_px: intrinsics.map(|k| k.fy),
         pitch_deg: args.pitch,
         horizon_row: args.horizon_row,
     };
-    view.camera(height)
+    view.camera(scene.image.height())
 }
 
 /// `--retarget`, the paper's normalised radiance by default.
@@ -166,7 +163,7 @@ pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result
         Some(path) => Sensitivity::from_csv(path)?,
         None => Sensitivity::cie_srgb(),
     };
-    let camera = aerial_camera(args, scene.image.height(), &scene.depth)?;
+    let camera = aerial_camera(args, scene)?;
     let opts = AerialOptions {
         sun: sun.map(|s| [s.zenith, s.azimuth - s.heading]),
         ..aerial_options(args, turbidity, camera, sensitivity, blur_from_args(args))?

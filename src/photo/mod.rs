@@ -46,6 +46,7 @@ pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPho
 
 use crate::error::{Error, Result};
 use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoGeometry};
+use crate::io::image::PhotoExif;
 use crate::io::{demo, image};
 use crate::raster::{Orientation, RgbImage, ScalarMap};
 use std::path::Path;
@@ -62,6 +63,9 @@ pub struct Photo {
     pub image_name: String,
     /// The depth's name in messages (its path).
     pub depth_name: String,
+    /// What the image's EXIF said (its orientation, applied; its focal length); the
+    /// default for an image without one, or given as an array.
+    pub exif: PhotoExif,
 }
 
 /// Bytes per pixel that a render holds in system memory besides the GL textures: the
@@ -96,6 +100,7 @@ impl Photo {
             depth: depth::load_range(depth_path, &opts)?,
             image_name: image_path.display().to_string(),
             depth_name: depth_path.display().to_string(),
+            exif,
         };
         photo.check_depth_fits()?;
         Ok(photo)
@@ -139,6 +144,7 @@ impl Photo {
             // The arguments' names, as the messages say them.
             image_name: "image".into(),
             depth_name: "range_m".into(),
+            exif: PhotoExif::default(),
         };
         photo.check_depth_fits()?;
         Ok(photo)
@@ -180,6 +186,7 @@ impl Photo {
             },
             image_name: image_name.to_string(),
             depth_name: depth_name.to_string(),
+            exif,
         })
     }
 
@@ -191,6 +198,7 @@ impl Photo {
             depth: demo::demo_range()?,
             image_name: "built-in demo image".into(),
             depth_name: "built-in demo disparity".into(),
+            exif: PhotoExif::default(),
         })
     }
 
@@ -301,9 +309,10 @@ impl Photo {
 
     /// The photo's pinhole intrinsics at the image's size: those its depth was read with
     /// (scaled from the depth map's grid), else square pixels of `focal_px`, or of the
-    /// vertical field of view `fov_y_deg`, with the principal point at the centre; `None`
-    /// with none of them. What a virtual object's depth is stretched to range by
-    /// ([`VirtualObject::load`]).
+    /// vertical field of view `fov_y_deg`, or of its EXIF 35 mm equivalent focal length,
+    /// with the principal point at the centre; `None` with none of them. What a virtual
+    /// object's depth is stretched to range by ([`VirtualObject::load`]), and the aerial
+    /// perspective's camera.
     pub fn image_intrinsics(
         &self,
         focal_px: Option<f64>,
@@ -314,8 +323,10 @@ impl Photo {
             return Some(k.scaled(w as f64 / self.depth.range.width() as f64));
         }
         let from_fov = |fov: f64| h as f64 / 2.0 / (fov.to_radians() / 2.0).tan();
-        let focal = focal_px.or_else(|| fov_y_deg.map(from_fov))?;
-        Some(depth::Intrinsics::centred(focal, w, h))
+        match focal_px.or_else(|| fov_y_deg.map(from_fov)) {
+            Some(focal) => Some(depth::Intrinsics::centred(focal, w, h)),
+            None => (self.exif.focal_35mm).map(|f| depth::Intrinsics::of_35mm_equivalent(f, w, h)),
+        }
     }
 
     /// The depth map has the image's size, or is smaller by one factor on both sides (it

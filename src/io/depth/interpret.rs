@@ -447,18 +447,6 @@ fn zbuffer(
     Ok((depth, k, units))
 }
 
-/// The diagonal of a 35 mm film frame, 36 x 24 mm.
-const DIAGONAL_35MM: f64 = 43.266_615_305_567_87;
-
-/// The focal length in pixels of a `width x height` grid whose 35 mm equivalent focal
-/// length is `f35` mm. The equivalence is by the diagonal's angle of view, the convention
-/// camera makers follow (CIPA DCG-001); ExifTool's `FOV` matches the long side to 36 mm
-/// instead, 4 % narrower on a 4:3 frame. Assumes the grid is the whole frame the camera
-/// wrote the tag for (not a crop of it).
-fn focal_from_35mm(f35: f64, width: usize, height: usize) -> f64 {
-    f35 * (width as f64).hypot(height as f64) / DIAGONAL_35MM
-}
-
 /// The focal length in pixels of a vertical field of view over `height` pixels.
 fn focal_from_fov(fov_deg: f64, height: usize) -> f64 {
     height as f64 / 2.0 / (fov_deg.to_radians() / 2.0).tan()
@@ -501,14 +489,15 @@ fn depth_intrinsics(
         }
         (DepthKind::Range, None, _) => Ok(None),
         (_, None, Some(f35)) => {
-            let f = focal_from_35mm(f35, width, height);
+            let k = Intrinsics::of_35mm_equivalent(f35, width, height);
+            let f = k.fy;
             notes.push(format!(
                 "focal length from the photo's EXIF: {f35} mm in 35 mm terms (the diagonal's \
                  angle), {f:.2} px on the map's grid, a vertical field of view of {:.1}° \
                  upright; principal point assumed at the image centre",
                 2.0 * (fov_height as f64 / 2.0 / f).atan().to_degrees()
             ));
-            Ok(Some(Intrinsics::centred(f, width, height)))
+            Ok(Some(k))
         }
         (_, Some(f), _) => {
             let f = positive_option(f, "focal", "a positive focal length in pixels")?;

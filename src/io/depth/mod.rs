@@ -307,7 +307,8 @@ impl LoadedDepth {
         Some(format!(
             "depth along the optical axis used as range for want of `focal` or `fov`: {:.0} % \
              short in this {w}x{h} frame's corners at a 45° vertical field of view (less fog \
-             there than there should be); give `focal` or `fov`",
+             there than there should be); give `focal` or `fov` (or a photo whose EXIF has its \
+             35 mm equivalent focal length)",
             short * 100.0
         ))
     }
