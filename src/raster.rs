@@ -252,7 +252,15 @@ impl Orientation {
 }
 
 impl<T: Clone + Send + Sync> Grid<T> {
-    /// The grid turned upright by `orientation` (a copy; the same grid for
+    /// [`Grid::oriented`], taking the grid: no copy for [`Orientation::Upright`].
+    pub fn into_oriented(self, orientation: Orientation) -> Self {
+        match orientation {
+            Orientation::Upright => self,
+            o => self.oriented(o),
+        }
+    }
+
+    /// The grid turned upright by `orientation` (a copy; the same pixels for
     /// [`Orientation::Upright`]).
     pub fn oriented(&self, orientation: Orientation) -> Self {
         let (w, h) = (self.width, self.height);

@@ -365,17 +365,15 @@ fn the_photos_35mm_focal_length_turns_its_depth_into_range() {
     check(&given.range, 16.0 / 25f64.to_radians().tan());
 }
 
-/// The aerial perspective's camera takes the field of view the EXIF gives: the depth's
-/// focal length is in the map's pixels (24 x 32, upright), the camera's in the photo's
-/// (48 x 64), so the field is the photo's 2·atan(64 / 2 / (2 f)), not twice as wide.
-#[test]
-fn the_aerial_camera_takes_the_exif_field_of_view_at_the_photos_size() {
+/// The field of view `brume render --medium aerial` gives its camera for `f26.jpg` as its
+/// own depth, with `extra` depth options (`--json`'s `fov`).
+fn aerial_fov(extra: &[&str]) -> f64 {
     let dir = tempfile::tempdir().unwrap();
     let image = gdepth("f26.jpg");
-    let args = [
-        "render",
-        "--image",
-        image.to_str().unwrap(),
+    let image = image.to_str().unwrap();
+    let mut args = vec!["render", "--image", image, "--depth", image];
+    args.extend(extra);
+    args.extend([
         "--medium",
         "aerial",
         "--turbidity",
@@ -383,13 +381,21 @@ fn the_aerial_camera_takes_the_exif_field_of_view_at_the_photos_size() {
         "--json",
         "--out",
         "a.png",
-    ];
+    ]);
     let run = common::brume(dir.path(), &args);
     assert!(run.status.success(), "{}", common::stderr(&run));
     let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    report["fov"].as_f64().unwrap()
+}
+
+/// The aerial perspective's camera takes the field of view the EXIF gives: the depth's
+/// focal length is in the map's pixels (24 x 32, upright), the camera's in the photo's
+/// (48 x 64), so the field is the photo's 2·atan(64 / 2 / (2 f)), not twice as wide.
+#[test]
+fn the_aerial_camera_takes_the_exif_field_of_view_at_the_photos_size() {
     let focal = 2.0 * 26.0 * 40.0 / 36f64.hypot(24.0);
     let want = 2.0 * (32.0 / focal).atan().to_degrees();
-    let fov = report["fov"].as_f64().unwrap();
+    let fov = aerial_fov(&[]);
     assert!((fov - want).abs() < 1e-6, "{fov} for {want}");
 }
 
@@ -398,30 +404,8 @@ fn the_aerial_camera_takes_the_exif_field_of_view_at_the_photos_size() {
 /// from the depth), 26 · 80 / 43.27 px over its 64 rows.
 #[test]
 fn the_aerial_camera_takes_the_exif_focal_length_beside_a_map_of_range() {
-    let dir = tempfile::tempdir().unwrap();
-    let image = gdepth("f26.jpg");
-    let image = image.to_str().unwrap();
-    let args = [
-        "render",
-        "--image",
-        image,
-        "--depth",
-        image,
-        "--depth-kind",
-        "range",
-        "--medium",
-        "aerial",
-        "--turbidity",
-        "3",
-        "--json",
-        "--out",
-        "a.png",
-    ];
-    let run = common::brume(dir.path(), &args);
-    assert!(run.status.success(), "{}", common::stderr(&run));
-    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     let focal = 26.0 * 80.0 / 36f64.hypot(24.0);
     let want = 2.0 * (32.0 / focal).atan().to_degrees();
-    let fov = report["fov"].as_f64().unwrap();
+    let fov = aerial_fov(&["--depth-kind", "range"]);
     assert!((fov - want).abs() < 1e-6, "{fov} for {want}");
 }

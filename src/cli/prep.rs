@@ -7,7 +7,7 @@ use super::inputs::{
 use brume::io::output::{self, Outputs};
 use brume::photo::{Photo, PrepareOptions};
 use brume::prep::{self, Guides};
-use brume::raster::Grid;
+use brume::raster::{Grid, Orientation};
 use brume::refine::{CpuFilter, RefineMode};
 use brume::{Error, Result};
 use serde_json::json;
@@ -82,10 +82,13 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     // Laid out as the --depth file, which it stands in for: a render with the photo turns
     // it upright again.
     let as_stored = loaded.turned.inverse();
-    outputs.stage_scalar(&args.out, &prepared.range.oriented(as_stored))?;
+    match as_stored {
+        Orientation::Upright => outputs.stage_scalar(&args.out, &prepared.range)?,
+        o => outputs.stage_scalar(&args.out, &prepared.range.oriented(o))?,
+    }
     if let Some(vis) = &args.vis {
         let (w, h, rgb) = prep::visualize(&measured, &prepared);
-        let rgb = Grid::from_vec(w, h, rgb).oriented(as_stored);
+        let rgb = Grid::from_vec(w, h, rgb).into_oriented(as_stored);
         let (w, h) = (rgb.width(), rgb.height());
         outputs.stage_png_rgb8(vis, w, h, rgb.as_slice())?;
     }

@@ -24,7 +24,7 @@ use std::str::FromStr;
 use image::DynamicImage;
 
 use crate::io::depth::LoadedDepth;
-use crate::raster::{Grid, Orientation};
+use crate::raster::Grid;
 use crate::{Error, Result};
 
 /// The Cityscapes label id of the sky (`labelIds` PNGs).
@@ -186,9 +186,8 @@ pub fn load_range_masks(
     let turn_like_depth = |m: Grid<bool>| {
         let upright = (m.width(), m.height()) == (range.width(), range.height());
         match depth.turned {
-            Orientation::Upright => m,
             t if t.swaps_axes() && upright => m,
-            t => m.oriented(t),
+            t => m.into_oriented(t),
         }
     };
     let mut masks = RangeMasks::default();

@@ -161,7 +161,7 @@ impl Photo {
         // The map is taken as the photo is stored, as a depth map is.
         let (image, exif) = image::load_upright_rgb(image_path)?;
         let orientation = exif.orientation;
-        let range = crate::compat::load_optical_depth(map_path)?.oriented(orientation);
+        let range = crate::compat::load_optical_depth(map_path)?.into_oriented(orientation);
         let (image_name, depth_name) = (image_path.display(), map_path.display());
         if (image.width(), image.height()) != (range.width(), range.height()) {
             return Err(Error::size_mismatch(

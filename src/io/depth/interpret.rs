@@ -266,7 +266,7 @@ pub(super) fn interpret(
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
-    let range = range.oriented(turn);
+    let range = range.into_oriented(turn);
     let intrinsics = intrinsics.map(|k| k.oriented(turn, width, height));
     let unknown_pixels = range.as_slice().iter().filter(|v| v.is_nan()).count();
     if unknown_pixels == range.len() {
