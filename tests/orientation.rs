@@ -365,6 +365,41 @@ fn the_photos_35mm_focal_length_turns_its_depth_into_range() {
     check(&given.range, 16.0 / 25f64.to_radians().tan());
 }
 
+/// `f26-crop.jpg` is `f26.jpg` whose EXIF says the camera wrote 4032 x 2268, 16:9, where
+/// the photo is 4:3: cropped, its field of view is not the tag's, so the focal length is
+/// not used (the depth is used as range, with the warning), and the same aspect ratio
+/// (`f26.jpg` has none written) keeps it.
+#[test]
+fn a_cropped_photos_exif_focal_length_is_not_used() {
+    let path = gdepth("f26-crop.jpg");
+    let loaded = Photo::load(&path, &path, &DepthOptions::default()).unwrap();
+    assert_eq!(loaded.exif.focal_35mm, None);
+    assert_eq!(loaded.exif.orientation, Orientation::Rotate90);
+    assert!(loaded.depth.depth_as_range_warning().is_some());
+    let dir = tempfile::tempdir().unwrap();
+    let args = [
+        "render",
+        "--image",
+        path.to_str().unwrap(),
+        "--out",
+        "o.png",
+    ];
+    let run = common::brume(dir.path(), &args);
+    let err = common::stderr(&run);
+    assert!(run.status.success(), "{err}");
+    assert!(
+        err.contains("its EXIF focal length (26 mm in 35 mm terms) is not used")
+            && err.contains("the camera wrote 4032x2268"),
+        "{err}"
+    );
+    let kept = Photo::load(
+        &gdepth("f26.jpg"),
+        &gdepth("f26.jpg"),
+        &DepthOptions::default(),
+    );
+    assert_eq!(kept.unwrap().exif.focal_35mm, Some(26.0));
+}
+
 /// The field of view `brume render --medium aerial` gives its camera for `f26.jpg` as its
 /// own depth, with `extra` depth options (`--json`'s `fov`).
 fn aerial_fov(extra: &[&str]) -> f64 {

@@ -33,6 +33,8 @@ against the specification's formulas without a second file:
   items appended after the JPEG).
 - ``f26.jpg``: ``rot6.jpg`` with ``FocalLengthIn35mmFormat`` 26 (EXIF 0xA405) that ExifTool
   adds: the focal length that turns its depth into range.
+- ``f26-crop.jpg``: ``f26.jpg`` whose EXIF also says the camera wrote 4032 x 2268 (16:9),
+  another aspect ratio than its 64 x 48: a crop, whose focal length is not used.
 - ``ext16.jpg``: 320 x 240 photo, 320 x 240 16-bit PNG, RangeInverse, Near 2 Far 42, the
   plane d = 2 + 0.05 x + 0.1 y m plus up to 1 cm of seeded noise (which keeps the PNG
   from compressing, so that the XMP needs extended segments).
@@ -186,6 +188,9 @@ def main(out_dir):
         oriented(os.path.join(out_dir, f"{name}.jpg"), os.path.join(out_dir, rotated), 6)
     oriented(os.path.join(out_dir, "inv8.jpg"), os.path.join(out_dir, "f26.jpg"), 6,
              "-ExifIFD:FocalLengthIn35mmFormat=26")
+    oriented(os.path.join(out_dir, "inv8.jpg"), os.path.join(out_dir, "f26-crop.jpg"), 6,
+             "-ExifIFD:FocalLengthIn35mmFormat=26", "-ExifIFD:ExifImageWidth=4032",
+             "-ExifIFD:ExifImageHeight=2268")
     shutil.rmtree(tmp)
 
 

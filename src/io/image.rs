@@ -160,8 +160,11 @@ pub struct PhotoExif {
 
 impl PhotoExif {
     /// Reads the orientation (`Orientation`, IFD0) and the 35 mm equivalent focal length
-    /// (`FocalLengthIn35mmFilm`, Exif IFD) from an EXIF block (TIFF data).
-    fn parse(tiff: Vec<u8>, name: &str) -> PhotoExif {
+    /// (`FocalLengthIn35mmFilm`, Exif IFD) from an EXIF block (TIFF data) of an image
+    /// stored `size` (width, height). The focal length is dropped, with a warning, where
+    /// the size the camera wrote (`PixelXDimension` x `PixelYDimension`) has another
+    /// aspect ratio: the photo was cropped, and its field of view is not the tag's.
+    fn parse(tiff: Vec<u8>, name: &str, size: (u32, u32)) -> PhotoExif {
         let exif = match exif::Reader::new().read_raw(tiff) {
             Ok(exif) => exif,
             Err(e) => {
@@ -177,15 +180,34 @@ impl PhotoExif {
             .and_then(|v| u16::try_from(v).ok())
             .and_then(Orientation::from_exif)
             .unwrap_or_default();
-        let focal_35mm = uint(exif::Tag::FocalLengthIn35mmFilm)
+        let mut focal_35mm = uint(exif::Tag::FocalLengthIn35mmFilm)
             .filter(|&mm| mm > 0)
             .map(f64::from);
+        let written = uint(exif::Tag::PixelXDimension).zip(uint(exif::Tag::PixelYDimension));
+        if let (Some(f35), Some((w, h))) = (focal_35mm, written) {
+            let aspect = |(w, h): (u32, u32)| f64::from(w) / f64::from(h.max(1));
+            if (aspect((w, h)) / aspect(size) - 1.0).abs() > CROP_TOLERANCE {
+                log::warn!(
+                    "{name}: its EXIF focal length ({f35} mm in 35 mm terms) is not used: \
+                     the image is {}x{}, but the camera wrote {w}x{h} (a crop changes the \
+                     field of view); give the field of view (`fov`)",
+                    size.0,
+                    size.1
+                );
+                focal_35mm = None;
+            }
+        }
         PhotoExif {
             orientation,
             focal_35mm,
         }
     }
 }
+
+/// How far a photo's aspect ratio may be from the one its EXIF says the camera wrote,
+/// relatively, before it counts as cropped: sizes rounded to even pixels, or to a
+/// codec's blocks, stay within it.
+const CROP_TOLERANCE: f64 = 0.01;
 
 /// The formats [`load_linear_rgb`] reads, for messages.
 const COLOUR_FORMATS: &str =
@@ -385,8 +407,9 @@ fn cannot_decode(format: ImageFormat, name: &str) -> impl Fn(image::ImageError) 
 
 /// The EXIF of an opened PNG or JPEG; none that cannot be read.
 fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> PhotoExif {
+    let size = decoder.dimensions();
     match decoder.exif_metadata() {
-        Ok(Some(tiff)) => PhotoExif::parse(tiff, name),
+        Ok(Some(tiff)) => PhotoExif::parse(tiff, name, size),
         _ => PhotoExif::default(),
     }
 }
