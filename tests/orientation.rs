@@ -7,7 +7,7 @@
 use std::path::Path;
 
 use brume::io::depth::{load_range, DepthKind, DepthOptions};
-use brume::io::image::linear_to_srgb8;
+use brume::io::image::{decode_upright_rgb, linear_to_srgb8};
 use brume::io::output::write_scalar;
 use brume::photo::Photo;
 use brume::prep::synthetic::street_scene;
@@ -19,26 +19,49 @@ use crate::common;
 const W: usize = 128;
 const H: usize = 80;
 
-/// A little-endian EXIF (TIFF) block, written here by hand from the TIFF 6.0 layout,
-/// holding one entry: orientation `value`.
-fn exif_orientation(value: u16) -> Vec<u8> {
+/// A little-endian EXIF (TIFF) block, written here by hand from the TIFF 6.0 and Exif 2.3
+/// layouts: IFD0 holding orientation `value` and, with `focal_35mm`, a pointer to an Exif
+/// IFD holding `FocalLengthIn35mmFilm` and, if given, the size the camera wrote
+/// (`PixelXDimension`, `PixelYDimension`).
+fn exif_block(value: u16, focal_35mm: Option<(u16, Option<(u32, u32)>)>) -> Vec<u8> {
+    // An entry whose one value (SHORT, type 3, or LONG, 4) is held in it.
+    let entry = |b: &mut Vec<u8>, tag: u16, kind: u16, value: u32| {
+        b.extend(tag.to_le_bytes());
+        b.extend(kind.to_le_bytes());
+        b.extend(1u32.to_le_bytes());
+        match kind {
+            3 => b.extend((value as u16).to_le_bytes().into_iter().chain([0, 0])),
+            _ => b.extend(value.to_le_bytes()),
+        }
+    };
     let mut b = b"II*\0".to_vec();
     b.extend(8u32.to_le_bytes()); // the first IFD
-    b.extend(1u16.to_le_bytes()); // one entry
-    b.extend(0x0112u16.to_le_bytes()); // Orientation
-    b.extend(3u16.to_le_bytes()); // SHORT
-    b.extend(1u32.to_le_bytes()); // one value, held in the entry
-    b.extend(u32::from(value).to_le_bytes());
+    let entries = 1 + u16::from(focal_35mm.is_some());
+    b.extend(entries.to_le_bytes());
+    entry(&mut b, 0x0112, 3, u32::from(value)); // Orientation
+    if focal_35mm.is_some() {
+        // IFD0 ends at 8 + 2 + 12 per entry + 4: the Exif IFD follows.
+        entry(&mut b, 0x8769, 4, 8 + 2 + 12 * 2 + 4);
+    }
     b.extend(0u32.to_le_bytes()); // no next IFD
+    if let Some((focal, written)) = focal_35mm {
+        b.extend((1 + 2 * u16::from(written.is_some())).to_le_bytes());
+        if let Some((w, h)) = written {
+            entry(&mut b, 0xA002, 4, w); // PixelXDimension
+            entry(&mut b, 0xA003, 4, h); // PixelYDimension
+        }
+        entry(&mut b, 0xA405, 3, u32::from(focal)); // FocalLengthIn35mmFilm
+        b.extend(0u32.to_le_bytes());
+    }
     b
 }
 
-/// Writes 8-bit `pixels` (grey or RGB) as a PNG, with an EXIF orientation if given.
-fn write_png<const N: usize>(path: &Path, pixels: &Grid<[u8; N]>, exif: Option<u16>) {
+/// A PNG of `pixels` carrying the EXIF block `exif`, if any.
+fn png_bytes<const N: usize>(pixels: &Grid<[u8; N]>, exif: Option<Vec<u8>>) -> Vec<u8> {
     let mut bytes = Vec::new();
     let mut png = image::codecs::png::PngEncoder::new(&mut bytes);
-    if let Some(value) = exif {
-        png.set_exif_metadata(exif_orientation(value)).unwrap();
+    if let Some(exif) = exif {
+        png.set_exif_metadata(exif).unwrap();
     }
     let colour = match N {
         1 => image::ExtendedColorType::L8,
@@ -47,7 +70,13 @@ fn write_png<const N: usize>(path: &Path, pixels: &Grid<[u8; N]>, exif: Option<u
     let (w, h) = (pixels.width() as u32, pixels.height() as u32);
     png.write_image(pixels.as_slice().as_flattened(), w, h, colour)
         .unwrap();
-    std::fs::write(path, bytes).unwrap();
+    bytes
+}
+
+/// Writes 8-bit `pixels` (grey or RGB) as a PNG, with an EXIF orientation if given.
+fn write_png<const N: usize>(path: &Path, pixels: &Grid<[u8; N]>, exif: Option<u16>) {
+    let exif = exif.map(|value| exif_block(value, None));
+    std::fs::write(path, png_bytes(pixels, exif)).unwrap();
 }
 
 /// The street frame upright: its 8-bit sRGB photo, its range (holes, sky unknown) and
@@ -299,17 +328,7 @@ fn a_portrait_photos_embedded_depth_turns_with_it() {
     assert_eq!((t.fx, t.fy, t.cx, t.cy), (k.fy, k.fx, 23.0 - k.cy, k.cx));
 
     // The render needs no --depth and writes the upright photo.
-    let dir = tempfile::tempdir().unwrap();
-    let image = gdepth("rot6.jpg");
-    let args = [
-        "render",
-        "--image",
-        image.to_str().unwrap(),
-        "--out",
-        "o.png",
-    ];
-    let run = common::brume(dir.path(), &args);
-    assert!(run.status.success(), "{}", common::stderr(&run));
+    let (dir, _) = render_fixture("rot6.jpg", &[]);
     let size = image::image_dimensions(dir.path().join("o.png")).unwrap();
     assert_eq!(size, (48, 64));
 }
@@ -376,17 +395,8 @@ fn a_cropped_photos_exif_focal_length_is_not_used() {
     assert_eq!(loaded.exif.focal_35mm, None);
     assert_eq!(loaded.exif.orientation, Orientation::Rotate90);
     assert!(loaded.depth.depth_as_range_warning().is_some());
-    let dir = tempfile::tempdir().unwrap();
-    let args = [
-        "render",
-        "--image",
-        path.to_str().unwrap(),
-        "--out",
-        "o.png",
-    ];
-    let run = common::brume(dir.path(), &args);
+    let (_, run) = render_fixture("f26-crop.jpg", &[]);
     let err = common::stderr(&run);
-    assert!(run.status.success(), "{err}");
     assert!(
         err.contains("its EXIF focal length (26 mm in 35 mm terms) is not used")
             && err.contains("the camera wrote 4032x2268"),
@@ -400,25 +410,46 @@ fn a_cropped_photos_exif_focal_length_is_not_used() {
     assert_eq!(kept.unwrap().exif.focal_35mm, Some(26.0));
 }
 
+/// The focal length is kept where the camera wrote the same aspect ratio (resized, or
+/// turned without the tags swapped: the diagonal's angle is the same), or wrote no size
+/// (0 is "unknown"), and dropped where it wrote another (cropped).
+#[test]
+fn the_focal_length_of_a_photo_written_at_another_aspect_ratio_is_dropped() {
+    let photo = Grid::filled(64, 48, [90u8, 120, 150]);
+    let focal = |written| {
+        let png = png_bytes(&photo, Some(exif_block(1, Some((26, written)))));
+        let (_, exif) = decode_upright_rgb(&png, "p.png").unwrap();
+        exif.focal_35mm
+    };
+    assert_eq!(focal(None), Some(26.0));
+    assert_eq!(focal(Some((4032, 3024))), Some(26.0), "resized");
+    assert_eq!(focal(Some((3024, 4032))), Some(26.0), "turned");
+    assert_eq!(focal(Some((0, 0))), Some(26.0), "unknown");
+    assert_eq!(focal(Some((4032, 2268))), None, "16:9 of 4:3");
+    assert_eq!(focal(Some((4032, 3072))), None, "1.6 % off");
+}
+
+/// `brume render --image` of the fixture `name` with `extra` options, written to `o.png`
+/// in a new directory (returned with the run, which succeeded).
+fn render_fixture(name: &str, extra: &[&str]) -> (tempfile::TempDir, std::process::Output) {
+    let dir = tempfile::tempdir().unwrap();
+    let image = gdepth(name);
+    let mut args = vec!["render", "--image", image.to_str().unwrap()];
+    args.extend(extra);
+    args.extend(["--out", "o.png"]);
+    let run = common::brume(dir.path(), &args);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    (dir, run)
+}
+
 /// The field of view `brume render --medium aerial` gives its camera for `f26.jpg` as its
 /// own depth, with `extra` depth options (`--json`'s `fov`).
 fn aerial_fov(extra: &[&str]) -> f64 {
-    let dir = tempfile::tempdir().unwrap();
     let image = gdepth("f26.jpg");
-    let image = image.to_str().unwrap();
-    let mut args = vec!["render", "--image", image, "--depth", image];
+    let mut args = vec!["--depth", image.to_str().unwrap()];
     args.extend(extra);
-    args.extend([
-        "--medium",
-        "aerial",
-        "--turbidity",
-        "3",
-        "--json",
-        "--out",
-        "a.png",
-    ]);
-    let run = common::brume(dir.path(), &args);
-    assert!(run.status.success(), "{}", common::stderr(&run));
+    args.extend(["--medium", "aerial", "--turbidity", "3", "--json"]);
+    let (_, run) = render_fixture("f26.jpg", &args);
     let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
     report["fov"].as_f64().unwrap()
 }

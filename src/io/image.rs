@@ -724,45 +724,4 @@ mod tests {
             assert_eq!(*q, [p[0], p[1], p[2]].map(linear_to_srgb8));
         }
     }
-
-    /// A little-endian EXIF block written by hand from the TIFF 6.0 and Exif 2.3 layouts:
-    /// IFD0 pointing to an Exif IFD holding `FocalLengthIn35mmFilm` and, if given, the
-    /// size the camera wrote (`PixelXDimension`, `PixelYDimension`, as LONGs).
-    fn exif_block(focal_35mm: u16, written: Option<(u32, u32)>) -> Vec<u8> {
-        let entry = |b: &mut Vec<u8>, tag: u16, kind: u16, value: u32| {
-            b.extend(tag.to_le_bytes());
-            b.extend(kind.to_le_bytes());
-            b.extend(1u32.to_le_bytes());
-            b.extend(value.to_le_bytes());
-        };
-        let mut b = b"II*\0".to_vec();
-        b.extend(8u32.to_le_bytes());
-        b.extend(1u16.to_le_bytes());
-        let exif_ifd = 8 + 2 + 12 + 4;
-        entry(&mut b, 0x8769, 4, exif_ifd);
-        b.extend(0u32.to_le_bytes());
-        let count = if written.is_some() { 3u16 } else { 1 };
-        b.extend(count.to_le_bytes());
-        if let Some((w, h)) = written {
-            entry(&mut b, 0xA002, 4, w);
-            entry(&mut b, 0xA003, 4, h);
-        }
-        entry(&mut b, 0xA405, 3, u32::from(focal_35mm));
-        b.extend(0u32.to_le_bytes());
-        b
-    }
-
-    /// The focal length is kept where the camera wrote the same aspect ratio (resized, or
-    /// turned without the tags swapped: the diagonal's angle is the same), or wrote no size
-    /// (0 is "unknown"), and dropped where it wrote another (cropped).
-    #[test]
-    fn a_cropped_photos_focal_length_is_dropped() {
-        let focal = |written| PhotoExif::parse(exif_block(26, written), "p.jpg", (640, 480));
-        assert_eq!(focal(None).focal_35mm, Some(26.0));
-        assert_eq!(focal(Some((4032, 3024))).focal_35mm, Some(26.0), "resized");
-        assert_eq!(focal(Some((3024, 4032))).focal_35mm, Some(26.0), "turned");
-        assert_eq!(focal(Some((0, 0))).focal_35mm, Some(26.0), "unknown");
-        assert_eq!(focal(Some((4032, 2268))).focal_35mm, None, "16:9 of 4:3");
-        assert_eq!(focal(Some((4032, 3072))).focal_35mm, None, "1.6 % off");
-    }
 }

@@ -453,7 +453,8 @@ fn focal_from_fov(fov_deg: f64, height: usize) -> f64 {
 }
 
 /// Intrinsics for a depth map without calibration: from `focal` or `fov` where given, else
-/// from the photo's EXIF 35 mm equivalent focal length ([`super::PhotoGeometry::focal_35mm`]).
+/// from the photo's EXIF 35 mm equivalent focal length
+/// ([`crate::io::image::PhotoExif::focal_35mm`]).
 fn depth_intrinsics(
     kind: DepthKind,
     opts: &DepthOptions,
@@ -475,7 +476,7 @@ fn depth_intrinsics(
         _ => None,
     };
     let given = opts.focal.or(from_fov);
-    let from_exif = opts.photo.and_then(|p| p.focal_35mm);
+    let from_exif = opts.photo.and_then(|p| p.exif.focal_35mm);
     match (kind, given, from_exif) {
         (DepthKind::Range, Some(_), _) => {
             // `fov` may still serve the camera (aerial perspective): only `focal`, which

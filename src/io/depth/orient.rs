@@ -14,20 +14,19 @@ use crate::raster::Orientation;
 use crate::{Error, Result};
 
 /// The photo a depth map goes with, as its file stores it and as its EXIF tells: its
-/// stored size, the orientation that turns it upright, its 35 mm equivalent focal length.
-/// The loaders turn the map as the photo ([`DepthLayout`] says when) and take the focal
-/// length where no `focal` or `fov` is given.
+/// stored size, and the orientation that turns it upright and its 35 mm equivalent focal
+/// length. The loaders turn the map as the photo ([`DepthLayout`] says when) and take the
+/// focal length where no `focal` or `fov` is given.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PhotoGeometry {
     /// Stored width in pixels.
     pub width: usize,
     /// Stored height in pixels.
     pub height: usize,
-    /// How the stored pixels turn upright.
-    pub orientation: Orientation,
-    /// EXIF `FocalLengthIn35mmFilm`, mm: the focal length that gives a 35 mm film frame
-    /// (36 x 24 mm) the photo's diagonal angle of view.
-    pub focal_35mm: Option<f64>,
+    /// What its EXIF says: how the stored pixels turn upright, and
+    /// `FocalLengthIn35mmFilm` (the focal length that gives a 35 mm film frame, 36 x 24
+    /// mm, the photo's diagonal angle of view).
+    pub exif: PhotoExif,
 }
 
 impl PhotoGeometry {
@@ -41,8 +40,7 @@ impl PhotoGeometry {
         PhotoGeometry {
             width,
             height,
-            orientation: exif.orientation,
-            focal_35mm: exif.focal_35mm,
+            exif,
         }
     }
 
@@ -54,8 +52,7 @@ impl PhotoGeometry {
         Ok(PhotoGeometry {
             width,
             height,
-            orientation: exif.orientation,
-            focal_35mm: exif.focal_35mm,
+            exif,
         })
     }
 }
@@ -107,7 +104,7 @@ pub(super) fn turn_for_photo(
     notes: &mut Vec<String>,
 ) -> Orientation {
     let photo = match opts.photo {
-        Some(photo) if photo.orientation != Orientation::Upright => photo,
+        Some(photo) if photo.exif.orientation != Orientation::Upright => photo,
         photo => {
             if opts.layout != DepthLayout::Auto {
                 let why = match photo {
@@ -119,11 +116,11 @@ pub(super) fn turn_for_photo(
             return Orientation::Upright;
         }
     };
-    let shown = photo.orientation.describe();
+    let orientation = photo.exif.orientation;
+    let shown = orientation.describe();
     let stored = (photo.width, photo.height);
     let fits = |image| crate::refine::check_depth_size(image, (width, height)).is_ok();
-    let upright_by_shape =
-        photo.orientation.swaps_axes() && !fits(stored) && fits((stored.1, stored.0));
+    let upright_by_shape = orientation.swaps_axes() && !fits(stored) && fits((stored.1, stored.0));
     match opts.layout {
         DepthLayout::Upright => {
             notes.push(format!(
@@ -143,7 +140,7 @@ pub(super) fn turn_for_photo(
                 "{shown} with the photo, as its EXIF orientation says (the map taken as the \
                  photo is stored; `depth_layout` upright if it was made upright)"
             ));
-            photo.orientation
+            orientation
         }
     }
 }
