@@ -265,6 +265,12 @@ fn main() -> Res<()> {
         let jpeg = std::fs::read(root.join("tests/data/gdepth").join(name))?;
         seeds.put("gdepth", name, jpeg);
     }
+    // And an iPhone's portrait, whose depth is an image its MPF index lists (after a
+    // matte), and a depth image in metres.
+    for name in ["portrait.jpg", "depth-abs.jpg"] {
+        let jpeg = std::fs::read(root.join("tests/data/apple").join(name))?;
+        seeds.put("gdepth", &format!("apple-{name}"), jpeg);
+    }
 
     // load_range: extension index (0 png, 1 pfm, 2 exr, 3 tif, 4 tiff, 5 npy, 6 jpg, 7 txt)
     // with bit 3 set when a calib.txt follows, two option bytes, then the calib's length

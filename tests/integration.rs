@@ -28,6 +28,7 @@ mod gpu_errors;
 mod gpu_vs_cpu;
 mod host_pipeline;
 mod insert;
+mod io_apple;
 mod io_demo;
 mod io_depth;
 mod io_exr_blocks;

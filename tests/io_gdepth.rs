@@ -342,27 +342,10 @@ fn broken_gdepth_files_are_refused_by_name() {
 
 #[test]
 fn render_reads_a_portrait_photos_depth_from_the_image_alone() {
-    let dir = tempfile::tempdir().unwrap();
-    let photo = fixture("inv8.jpg");
-    let out = dir.path().join("out.png");
-    let run = common::brume(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            photo.to_str().unwrap(),
-            "--beta",
-            "0.05",
-            "--out",
-            out.to_str().unwrap(),
-            "--json",
-        ],
-    );
-    assert!(run.status.success(), "{}", common::stderr(&run));
-    let report: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
+    let (dir, report) = common::render_photo_alone(&fixture("inv8.jpg"), "0.05");
     assert_eq!(report["depth_format"], "gdepth");
     assert_eq!(report["width"], 64);
-    assert!(out.is_file());
+    assert!(dir.path().join("out.png").is_file());
 
     // A JPEG without a depth map still needs --depth, and says so.
     let plain = fixture("no-depth.jpg");

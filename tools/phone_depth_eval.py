@@ -15,7 +15,12 @@ What it does, in one run:
    photo as a JPEG whose XMP holds the z-depth as an 8-bit RangeInverse PNG from 1 m to
    ``--gdepth-far``, which has no "unknown": the model's unknown cells below (the sky, all
    beyond Far, and what the noise takes past it) are at Far; "surfaces without phone
-   depth" are the cells at Far). The model (its parameters are options; they are
+   depth" are the cells at Far), or an iPhone's portrait (``apple-depth``: the photo as a
+   JPEG followed by its disparity 1/z as an 8-bit grey JPEG (quality 95) in a Multi-Picture
+   Format image, codes 0..255 over 1/``--gdepth-far``..the largest disparity, Apple's
+   ``apdi`` and ``depthData`` XMP with ``Accuracy`` relative and the ``IntrinsicMatrix`` of
+   ``--fov``, so no ``--fov`` is passed; the unknown cells at code 0, as GDepth's at Far).
+   The model (its parameters are options; they are
    assumptions, not measurements of one phone):
    - each cell is the mean depth (z, or range for DEPTH16) of the full-resolution pixels it
      covers (a coarse sensor or a depth-from-motion estimate mixes both sides of an edge:
@@ -47,7 +52,7 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
 
     pip install opencv-python-headless numpy
     python3 tools/phone_depth_eval.py OUT_DIR [--brume target/release/brume]
-        [--format arcore|android-depth16|gdepth] [--gdepth-far 10] [--size 1024x512]
+        [--format arcore|android-depth16|gdepth|apple-depth] [--gdepth-far 10] [--size 1024x512]
         [--factor 8] [--fov 45] [--camera-from flag|exif|none]
         [--beta 0.02] [--position 0,1.7,0]
         [--yaw 0] [--pitch 0] [--roll 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
@@ -77,7 +82,9 @@ from stereo_refine_eval import (  # noqa: E402
 
 MODES = ("none", "guided", "unreliable", "repair")
 # The most each format holds, in metres: 16 and 13 bits of millimetres (GDepth: --gdepth-far).
-REACH_M = {"arcore": 65.535, "android-depth16": 8.191, "gdepth": None}
+REACH_M = {"arcore": 65.535, "android-depth16": 8.191, "gdepth": None, "apple-depth": None}
+# The formats whose map has no "unknown": it ends at --gdepth-far.
+PORTRAIT = ("gdepth", "apple-depth")
 # GDepth's nearest depth (its Near), metres: nearer than anything in the scene.
 GDEPTH_NEAR_M = 1.0
 
@@ -117,7 +124,7 @@ def box_known(v, radius):
 def phone_depth(z, a):
     """The phone's depth in metres at 1/factor (NaN unknown), as the docstring models it.
     GDepth has no unknown: what is unknown here is at its Far."""
-    reach = a.gdepth_far if a.format == "gdepth" else REACH_M[a.format]
+    reach = a.gdepth_far if a.format in PORTRAIT else REACH_M[a.format]
     mean, known_fraction = cell_mean(z, a.factor)
     mean[(known_fraction <= 0.5) | ~(mean <= reach)] = np.nan
     log_z = box_known(np.log(mean), a.bleed)
@@ -125,7 +132,7 @@ def phone_depth(z, a):
     sigma = a.noise_base + a.noise_per_m * np.exp(log_z)
     noisy = np.exp(log_z + sigma * rng.standard_normal(log_z.shape))
     known = np.isfinite(noisy) & (noisy <= reach)
-    if a.format == "gdepth":
+    if a.format in PORTRAIT:
         return np.where(known, np.maximum(noisy, GDEPTH_NEAR_M), reach)
     return np.where(known, noisy, np.nan)
 
@@ -159,6 +166,51 @@ def write_gdepth(path, photo_path, depth_m, far):
     app1 = b"\xff\xe1" + struct.pack(">H", len(payload) + 2) + payload
     with open(path, "wb") as f:
         f.write(jpeg[:2] + app1 + jpeg[2:])
+
+
+def write_apple(path, photo_path, depth_m, far, fov, turned):
+    """The photo as a JPEG (quality 95; with ``turned``, EXIF Orientation 6 by ExifTool)
+    followed by its disparity 1/z as an iPhone stores it: an 8-bit grey JPEG (quality 95),
+    codes 0..255 over 1/``far``..the largest disparity, with Apple's XMP (``NativeFormat``
+    hdis, ``Accuracy`` relative, the ``IntrinsicMatrix`` of ``fov`` on the stored frame),
+    listed by a Multi-Picture Format index (``tools/apple_depth_fixtures.py``)."""
+    from apple_depth_fixtures import with_mpf
+    disparity = 1.0 / depth_m
+    low, high = 1.0 / far, float(disparity.max())
+    codes = np.round(np.clip((disparity - low) / (high - low), 0, 1) * 255).astype(np.uint8)
+    ok, aux = cv2.imencode(".jpg", codes, [cv2.IMWRITE_JPEG_QUALITY, 95])
+    photo = cv2.imread(photo_path)
+    h, w = photo.shape[:2]
+    # --fov is the upright frame's vertical angle: its height is the stored width if turned.
+    f = ((w if turned else h) / 2) / math.tan(math.radians(fov) / 2)
+    matrix = "".join(f"<rdf:li>{v}</rdf:li>"
+                     for v in (f, 0, 0, 0, f, 0, (w - 1) / 2, (h - 1) / 2, 1))
+    xmp = ('<x:xmpmeta xmlns:x="adobe:ns:meta/"><rdf:RDF '
+           'xmlns:rdf="http://www.w3.org/1999/02/22-rdf-syntax-ns#"><rdf:Description '
+           'rdf:about="" xmlns:apdi="http://ns.apple.com/pixeldatainfo/1.0/" '
+           'xmlns:depthData="http://ns.apple.com/depthData/1.0/">'
+           '<apdi:NativeFormat>1751411059</apdi:NativeFormat>'
+           '<apdi:IntMinValue>0</apdi:IntMinValue><apdi:IntMaxValue>255</apdi:IntMaxValue>'
+           f'<apdi:FloatMinValue>{low:.6f}</apdi:FloatMinValue>'
+           f'<apdi:FloatMaxValue>{high:.6f}</apdi:FloatMaxValue>'
+           '<depthData:Accuracy>relative</depthData:Accuracy>'
+           f'<depthData:IntrinsicMatrixReferenceWidth>{w}</depthData:IntrinsicMatrixReferenceWidth>'
+           f'<depthData:IntrinsicMatrixReferenceHeight>{h}</depthData:IntrinsicMatrixReferenceHeight>'
+           f'<depthData:IntrinsicMatrix><rdf:Seq>{matrix}</rdf:Seq></depthData:IntrinsicMatrix>'
+           '</rdf:Description></rdf:RDF></x:xmpmeta>')
+    payload = b"http://ns.adobe.com/xap/1.0/\x00" + xmp.encode()
+    aux = aux.tobytes()
+    aux = aux[:2] + b"\xff\xe1" + struct.pack(">H", len(payload) + 2) + payload + aux[2:]
+    ok, primary = cv2.imencode(".jpg", photo, [cv2.IMWRITE_JPEG_QUALITY, 95])
+    primary = primary.tobytes()
+    if turned:
+        plain = path + ".primary.jpg"
+        with open(plain, "wb") as f:
+            f.write(primary)
+        run(["exiftool", "-q", "-overwrite_original", "-IFD0:Orientation#=6", plain])
+        primary = open(plain, "rb").read()
+        os.remove(plain)
+    with_mpf(primary, [aux], path, verify=False)
 
 
 def render_scene(a, W, H, colour_path, zbuffer_path):
@@ -202,7 +254,8 @@ def main():
     ap.add_argument("--format", choices=sorted(REACH_M), default="arcore")
     ap.add_argument("--factor", type=int, default=8, help="the phone depth is this much smaller")
     ap.add_argument("--gdepth-far", type=float, default=10.0,
-                    help="--format gdepth: the map's Far (m); the sky and what lies beyond are at it")
+                    help="--format gdepth or apple-depth: the map's farthest depth (m; GDepth's "
+                         "Far); the sky and what lies beyond are at it")
     ap.add_argument("--fov", type=float, default=45.0)
     ap.add_argument("--camera-from", choices=["flag", "exif", "none"], default="flag",
                     help="how brume learns the field of view that turns depth into range: "
@@ -252,13 +305,16 @@ def main():
     if exif:
         photo_png = o("left_stored.png")
         cv2.imwrite(photo_png, stored(cv2.imread(o("left.png"))))
-    if a.format == "gdepth":
+    if a.format == "apple-depth":
+        write_apple(o("phone.jpg"), photo_png, stored(z_phone), a.gdepth_far, a.fov, exif)
+        unknown_full = np.kron(z_phone >= a.gdepth_far, np.ones((a.factor, a.factor), bool))
+    elif a.format == "gdepth":
         write_gdepth(o("phone.jpg"), photo_png, stored(z_phone), a.gdepth_far)
         unknown_full = np.kron(z_phone >= a.gdepth_far, np.ones((a.factor, a.factor), bool))
     else:
         write_phone(o("phone.png"), stored(z_phone), a.format)
         unknown_full = np.kron(~np.isfinite(z_phone), np.ones((a.factor, a.factor), bool))
-    if exif:
+    if exif and a.format != "apple-depth":
         focal_px = (H / 2) / np.tan(np.radians(a.fov) / 2)
         f35 = int(round(focal_px * np.hypot(36, 24) / np.hypot(W, H)))
         tagged = o("phone.jpg") if a.format == "gdepth" else photo_png
@@ -283,7 +339,7 @@ def main():
     if a.format in ("arcore", "gdepth") and a.camera_from == "flag":
         depth_opts += ["--fov", str(a.fov)]
     # A portrait photo is its own depth file.
-    photo, depth = ((o("phone.jpg"), o("phone.jpg")) if a.format == "gdepth"
+    photo, depth = ((o("phone.jpg"), o("phone.jpg")) if a.format in PORTRAIT
                     else (photo_png, o("phone.png")))
 
     def render(refine, out, extra):

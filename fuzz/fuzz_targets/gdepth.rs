@@ -1,6 +1,7 @@
 //! A portrait photo's JPEG through the depth loader: the JPEG's header segments, its
 //! standard and extended XMP, the properties, GDepth's base64 data, a Dynamic Depth
-//! container's items after the primary image, and the embedded depth image.
+//! container's items after the primary image, an iPhone portrait's Multi-Picture index
+//! and its auxiliary images' XMP, and the embedded depth image.
 #![no_main]
 
 use brume::io::depth::{load_range_from_bytes, DepthOptions};

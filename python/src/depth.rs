@@ -18,8 +18,8 @@ use pyo3::types::PyDict;
 /// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown)
 /// through brume's loaders. camera: a Cityscapes {name}_camera.json (else looked for
 /// beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
-/// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore', 'gdepth'
-/// or 'dynamic-depth' (a phone's portrait JPEG with its depth map). kind:
+/// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore', 'gdepth',
+/// 'dynamic-depth' or 'apple-depth' (a phone's portrait JPEG with its depth map). kind:
 /// 'depth', 'range', 'disparity', 'zbuffer' or 'inverse' (a monocular estimator's
 /// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) (default:
 /// the format's). scale: metres per unit of a 16-bit PNG, of a float map, of a z-buffer's

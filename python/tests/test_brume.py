@@ -483,6 +483,23 @@ def test_load_depth_of_a_portrait_jpeg():
     np.testing.assert_allclose(loaded[known], plane[known], atol=19.25 / 65535)
 
 
+def test_load_depth_of_an_iphone_portrait():
+    """An iPhone's portrait JPEG (tests/data/apple/: its Multi-Picture index read back by
+    ExifTool): the disparity image after a matte, 1/m over 0.2..1.0 in 255 codes, made
+    range by its IntrinsicMatrix (fx 30 px on the 32 x 24 map, principal point 14.75,
+    12.75); the background rows at code 0 unknown. Computed here in numpy from the plane
+    the file encodes, to a code and a half of disparity."""
+    loaded, info = brume.load_depth(REPO / "tests/data/apple/portrait.jpg")
+    assert info["format"] == "apple-depth" and info["kind"] == "depth" and info["metric"]
+    assert loaded.shape == (24, 32)
+    assert np.isnan(loaded[:8]).all() and not np.isnan(loaded[8:]).any()
+    y, x = np.mgrid[8:24, 0:32].astype(np.float64)
+    z = 1.0 + 0.05 * x + 0.1 * (y - 8)
+    ray = np.sqrt(1.0 + ((x - 14.75) / 30.0) ** 2 + ((y - 12.75) / 30.0) ** 2)
+    depth = loaded[8:] / ray
+    assert np.abs(1.0 / depth - 1.0 / z).max() <= 1.5 * 0.8 / 255 + 1e-6
+
+
 def test_load_depth_with_its_photo_turns_and_uses_its_exif():
     """image=: the photo's EXIF (ExifTool wrote f26.jpg's: Orientation 6, a phone held
     upright, and FocalLengthIn35mmFormat 26) turns the map upright with it, as PIL's

@@ -38,6 +38,21 @@ pub fn brume(dir: &Path, args: &[&str]) -> std::process::Output {
         .expect("run brume")
 }
 
+/// Runs `brume render --image photo --beta B --json` with no `--depth` (a portrait photo
+/// is its own depth file), asserts that it succeeds, and returns its folder (where it
+/// wrote `out.png`) and its report.
+pub fn render_photo_alone(photo: &Path, beta: &str) -> (tempfile::TempDir, serde_json::Value) {
+    let dir = tempfile::tempdir().unwrap();
+    let image = photo.to_str().unwrap();
+    let args = [
+        "render", "--image", image, "--beta", beta, "--out", "out.png", "--json",
+    ];
+    let run = brume(dir.path(), &args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let report = serde_json::from_slice(&run.stdout).unwrap();
+    (dir, report)
+}
+
 /// Runs `brume render` on a small image with `flag path` (and nothing else but `--out`)
 /// and asserts that it is refused: exit 1, stderr holding every one of `needles`, and no
 /// output written.

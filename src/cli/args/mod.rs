@@ -147,7 +147,8 @@ pub struct DepthReadingArgs {
     /// picks it for a 16-bit PNG whose camera file is given or found), gdepth or
     /// dynamic-depth (a portrait photo's JPEG with its depth map in GDepth XMP or in a
     /// Dynamic Depth container: scaled by its own Near, Far and Units, depth or range as
-    /// its MeasureType says; auto picks either for a .jpg).
+    /// its MeasureType says), apple-depth (an iPhone's portrait JPEG: its disparity image
+    /// after the photo, in 1/m; auto picks any of the three for a .jpg).
     #[arg(
         long,
         value_name = "FORMAT",

@@ -73,7 +73,10 @@ pub(super) fn min_confidence(
         ));
     }
     // A portrait photo's confidence map, where it has one, is read in `interpret`.
-    let embedded = matches!(format, DepthFormat::Gdepth | DepthFormat::DynamicDepth);
+    let embedded = matches!(
+        format,
+        DepthFormat::Gdepth | DepthFormat::DynamicDepth | DepthFormat::AppleDepth
+    );
     if format != DepthFormat::AndroidDepth16 && !embedded {
         notes.push(format!(
             "`min_confidence` ignored: {format} carries no confidence"

@@ -24,6 +24,8 @@ pub(super) enum Layout {
     GDepth,
     /// A JPEG with a Dynamic Depth container.
     DynamicDepth,
+    /// A JPEG whose Multi-Picture index lists an image of Apple's depth.
+    AppleDepth,
 }
 
 impl Layout {
@@ -39,6 +41,9 @@ impl Layout {
             Layout::DynamicDepth => {
                 matches!(raw, Raw::Embedded(e) if e.format == DepthFormat::DynamicDepth)
             }
+            Layout::AppleDepth => {
+                matches!(raw, Raw::Embedded(e) if e.format == DepthFormat::AppleDepth)
+            }
         }
     }
 
@@ -52,6 +57,7 @@ impl Layout {
             Layout::Float => "a float map (.pfm, .exr, .tif, .tiff or .npy)",
             Layout::GDepth => "a JPEG with a GDepth depth map",
             Layout::DynamicDepth => "a JPEG with a Dynamic Depth container",
+            Layout::AppleDepth => "an iPhone's portrait JPEG with its depth image",
         }
     }
 }
@@ -95,7 +101,7 @@ impl FormatRule {
 
 impl DepthFormat {
     /// Every format, in the order `--help` and errors list them.
-    pub const ALL: [DepthFormat; 13] = [
+    pub const ALL: [DepthFormat; 14] = [
         DepthFormat::Auto,
         DepthFormat::Middlebury2014,
         DepthFormat::Middlebury2006,
@@ -109,6 +115,7 @@ impl DepthFormat {
         DepthFormat::Cityscapes,
         DepthFormat::Gdepth,
         DepthFormat::DynamicDepth,
+        DepthFormat::AppleDepth,
     ];
 
     /// What brume knows of this format (the module docs).
@@ -189,6 +196,14 @@ impl DepthFormat {
             DepthFormat::DynamicDepth => row(
                 "dynamic-depth",
                 Layout::DynamicDepth,
+                Depth,
+                Kinds::DepthOrRange,
+                None,
+            ),
+            // Disparity or depth as its NativeFormat says, made depth: the `apple` module.
+            DepthFormat::AppleDepth => row(
+                "apple-depth",
+                Layout::AppleDepth,
                 Depth,
                 Kinds::DepthOrRange,
                 None,

@@ -34,6 +34,9 @@
 //! whose `Far` is its farthest measured depth loses those samples to the hole filling,
 //! which continues the scene round them. The optional confidence maps are not read.
 //!
+//! A JPEG with neither is read as an iPhone's portrait, whose depth is an image of its
+//! own after the photo (the `apple` module).
+//!
 //! A Dynamic Depth camera's `ImagingModel` (focal lengths in pixels of an image
 //! `ImageWidth` x `ImageHeight`, the principal point as a fraction of it, 0.5 by default)
 //! gives the intrinsics, scaled to the depth map's grid: depth along the optical axis
@@ -44,7 +47,9 @@ use std::path::Path;
 use base64::Engine;
 use image::DynamicImage;
 
-use super::xmp::{is_jpeg, prefix_of, primary_end, property, xmp_packets, XmpPackets};
+use super::apple;
+use super::xmp::XmpPackets;
+use super::xmp::{finite_number, is_jpeg, prefix_of, primary_end, property, xmp_packets};
 use super::{DepthFormat, DepthKind, Intrinsics};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -78,8 +83,9 @@ pub(crate) struct EmbeddedDepth {
 }
 
 /// Whether a file is a JPEG whose header names a depth map's namespace, GDepth's or
-/// Dynamic Depth's, in its first [`HEAD_BYTES`] (any error is "no"; [`decode`] reads the
-/// file whole and checks it).
+/// Dynamic Depth's, in its first [`HEAD_BYTES`], or whose Multi-Picture index lists an
+/// image of Apple's depth (any error is "no"; [`decode`] reads the file whole and checks
+/// it).
 pub fn has_embedded_depth(path: &Path) -> bool {
     use std::io::Read;
     // Only the head, and bounded: the image given may be a pipe or a device, which the
@@ -87,7 +93,11 @@ pub fn has_embedded_depth(path: &Path) -> bool {
     let mut head = Vec::new();
     let read = std::fs::File::open(path).and_then(|f| f.take(HEAD_BYTES).read_to_end(&mut head));
     let names = |ns: &str| head.windows(ns.len()).any(|w| w == ns.as_bytes());
-    read.is_ok() && is_jpeg(&head) && (names(GDEPTH_NAMESPACE) || names(DYNAMIC_DEPTH_NAMESPACE))
+    read.is_ok()
+        && is_jpeg(&head)
+        && (names(GDEPTH_NAMESPACE)
+            || names(DYNAMIC_DEPTH_NAMESPACE)
+            || apple::has_apple_depth(path, &head))
 }
 
 /// How much of a file [`has_embedded_depth`] reads: the standard XMP packet comes in the
@@ -164,13 +174,23 @@ pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
         gdepth(&packets, prefix, path)?
     } else if let Some(prefix) = packets.prefix(DYNAMIC_DEPTH_NAMESPACE) {
         dynamic_depth(&packets, prefix, bytes, &xmp, path)?
+    } else if let Some(depth) = apple::decode(bytes, &xmp, path)? {
+        return Ok(depth);
     } else {
+        let listed = match xmp.mpf {
+            Some(_) => " (its Multi-Picture index lists no image of Apple's depth)",
+            None => "",
+        };
         return Err(Error::format(
             path,
-            "a JPEG holds depth as a phone's portrait photo does, in XMP that describes it \
-             (GDepth: http://ns.google.com/photos/1.0/depthmap/, or Dynamic Depth: \
-             http://ns.google.com/photos/dd/1.0/depthmap/), and this one has none: expected \
-             such a JPEG, or a depth map as .png, .pfm, .exr, .tif, .tiff or .npy",
+            format!(
+                "a JPEG holds depth as a phone's portrait photo does, in XMP that describes \
+                 it (GDepth: http://ns.google.com/photos/1.0/depthmap/, or Dynamic Depth: \
+                 http://ns.google.com/photos/dd/1.0/depthmap/) or as an iPhone's auxiliary \
+                 image (Apple's http://ns.apple.com/pixeldatainfo/1.0/ in a Multi-Picture \
+                 Format image), and this one has none{listed}: expected such a JPEG, or a \
+                 depth map as .png, .pfm, .exr, .tif, .tiff or .npy"
+            ),
         ));
     };
     to_depth(described, &packets, path)
@@ -402,16 +422,7 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
     let get = |name: &str| packets.get(&prefix, name);
     let number = |name: &str| -> Result<f64> {
         let text = get(name).ok_or_else(|| missing(depth_format, &prefix, name, path))?;
-        text.trim()
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| {
-                Error::format(
-                    path,
-                    format!("{format_name} {name} is {text:?}: expected a finite number"),
-                )
-            })
+        finite_number(&text, &format!("{format_name} {name}"), path)
     };
     let mut notes = Vec::new();
     let format = get("Format").unwrap_or_else(|| "RangeInverse".into());
@@ -540,14 +551,14 @@ impl Encoding {
     }
 }
 
-/// The embedded depth image's samples, normalised to [0, 1].
-enum Samples {
+/// The embedded depth image's samples, of 8 or 16 bits.
+pub(super) enum Samples {
     Eight(Grid<u8>),
     Sixteen(Grid<u16>),
 }
 
 impl Samples {
-    fn describe(&self) -> String {
+    pub(super) fn describe(&self) -> String {
         let (bits, w, h) = match self {
             Samples::Eight(g) => (8, g.width(), g.height()),
             Samples::Sixteen(g) => (16, g.width(), g.height()),
@@ -555,16 +566,30 @@ impl Samples {
         format!("{w}x{h} {bits}-bit")
     }
 
+    /// `f` of each sample's d_n = v / (2^bits − 1).
     fn map(&self, f: impl Fn(f64) -> f32) -> ScalarMap {
         match self {
             Samples::Eight(g) => g.map(|&v| f(f64::from(v) / f64::from(u8::MAX))),
             Samples::Sixteen(g) => g.map(|&v| f(f64::from(v) / f64::from(u16::MAX))),
         }
     }
+
+    /// `f` of each sample's code v.
+    pub(super) fn map_codes(&self, f: impl Fn(f64) -> f32) -> ScalarMap {
+        match self {
+            Samples::Eight(g) => g.map(|&v| f(f64::from(v))),
+            Samples::Sixteen(g) => g.map(|&v| f(f64::from(v))),
+        }
+    }
 }
 
 /// Decodes the depth image (the grey image `mime` names).
-fn decode_image(bytes: &[u8], mime: &str, format_name: &str, path: &Path) -> Result<Samples> {
+pub(super) fn decode_image(
+    bytes: &[u8],
+    mime: &str,
+    format_name: &str,
+    path: &Path,
+) -> Result<Samples> {
     if !matches!(mime, "image/png" | "image/jpeg") {
         return Err(Error::format(
             path,

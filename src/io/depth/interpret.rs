@@ -243,16 +243,18 @@ pub(super) fn interpret(
             let k = match e.intrinsics {
                 Some(k) if !given && kind == DepthKind::Depth => {
                     notes.push(format!(
-                        "intrinsics from the file's ImagingModel: fx {:.2} fy {:.2} px on the \
-                         map's grid",
-                        k.fx, k.fy
+                        "intrinsics from the file's {}: fx {:.2} fy {:.2} px on the map's grid",
+                        calibration_name(e.format),
+                        k.fx,
+                        k.fy
                     ));
                     Some(k)
                 }
                 Some(_) if given => {
-                    notes.push(
-                        "`focal` or `fov` given: used instead of the file's ImagingModel".into(),
-                    );
+                    notes.push(format!(
+                        "`focal` or `fov` given: used instead of the file's {}",
+                        calibration_name(e.format)
+                    ));
                     depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?
                 }
                 _ => depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?,
@@ -374,6 +376,14 @@ fn drop_unconfident(
         "{dropped} samples below `min_confidence` {threshold} in the confidence map: unknown"
     ));
     Ok(())
+}
+
+/// What a phone's JPEG calls the depth camera's intrinsics, for notes.
+fn calibration_name(format: DepthFormat) -> &'static str {
+    match format {
+        DepthFormat::AppleDepth => "IntrinsicMatrix",
+        _ => "ImagingModel",
+    }
 }
 
 /// The units of a map whose unit nothing says (a float map, a z-buffer's planes).

@@ -27,6 +27,7 @@ use crate::raster::{Orientation, ScalarMap};
 use crate::{Error, Result};
 
 mod android;
+mod apple;
 mod cityscapes;
 mod format;
 mod gdepth;
@@ -158,6 +159,12 @@ pub enum DepthFormat {
     /// `DepthMap` as GDepth describes its own (`Format`, `Near`, `Far`, `Units`,
     /// `MeasureType`). `auto` picks it for a `.jpg` that carries it.
     DynamicDepth,
+    /// An iPhone's portrait photo saved as JPEG: its disparity (or depth) is an auxiliary
+    /// JPEG after the photo, listed by the photo's Multi-Picture Format index and described
+    /// by Apple's pixel data info XMP (`NativeFormat`, codes `IntMinValue`..`IntMaxValue`
+    /// over `FloatMinValue`..`FloatMaxValue`, in 1/m or m), its camera's `IntrinsicMatrix`
+    /// beside it (see the `apple` module). `auto` picks it for a `.jpg` that carries it.
+    AppleDepth,
 }
 
 impl FromStr for DepthFormat {

@@ -19,7 +19,8 @@ pub(super) enum Raw {
     Grey16(Grid<u16>),
     /// Float samples; a PFM may be a Middlebury 2014 disparity, other float files may not.
     Float { map: ScalarMap, from_pfm: bool },
-    /// A depth map a JPEG embeds as GDepth metadata, decoded by its own rules.
+    /// A depth map a phone's JPEG embeds (GDepth, Dynamic Depth, Apple's), decoded by its
+    /// own rules.
     Embedded(EmbeddedDepth),
 }
 
@@ -31,8 +32,11 @@ impl Raw {
             Raw::Grey16(_) => "a 16-bit PNG",
             Raw::Float { from_pfm: true, .. } => "a float PFM",
             Raw::Float { .. } => "a float map",
-            Raw::Embedded(e) if e.format == DepthFormat::Gdepth => "a JPEG's GDepth depth map",
-            Raw::Embedded(_) => "a JPEG's Dynamic Depth depth map",
+            Raw::Embedded(e) => match e.format {
+                DepthFormat::Gdepth => "a JPEG's GDepth depth map",
+                DepthFormat::AppleDepth => "an iPhone portrait JPEG's depth image",
+                _ => "a JPEG's Dynamic Depth depth map",
+            },
         }
     }
 
@@ -79,7 +83,10 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
         "jpg" | "jpeg"
             if !matches!(
                 format,
-                DepthFormat::Auto | DepthFormat::Gdepth | DepthFormat::DynamicDepth
+                DepthFormat::Auto
+                    | DepthFormat::Gdepth
+                    | DepthFormat::DynamicDepth
+                    | DepthFormat::AppleDepth
             ) =>
         {
             Err(Error::format(
@@ -95,7 +102,7 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
             path,
             format!(
                 "unknown depth file extension `{ext}`; expected .png, .pfm, .exr, .tif, .tiff, \
-                 .npy, or a .jpg with GDepth metadata (a phone's portrait photo)"
+                 .npy, or a .jpg with its depth (a phone's portrait photo)"
             ),
         )),
     }

@@ -2,8 +2,9 @@
 //! segments, the standard packet and the extended one (Adobe's XMP specification, part 3,
 //! 1.1.3.1: a packet over 64 KB is split, the standard packet naming a GUID in
 //! `xmpNote:HasExtendedXMP`, each extended segment carrying that GUID, the full length
-//! and its offset), a property's value, and where the primary image ends (what a
-//! container appends follows it).
+//! and its offset), a property's value, where the primary image ends (what a container
+//! appends follows it), and the Multi-Picture Format index that lists the images after
+//! it (CIPA DC-007: an APP2 segment `MPF\0`).
 
 use std::path::Path;
 
@@ -11,13 +12,15 @@ use crate::{Error, Result};
 
 const XMP_SIGNATURE: &[u8] = b"http://ns.adobe.com/xap/1.0/\0";
 const EXTENDED_XMP_SIGNATURE: &[u8] = b"http://ns.adobe.com/xmp/extension/\0";
+const MPF_SIGNATURE: &[u8] = b"MPF\0";
 /// The GUID, full length and offset that lead each extended XMP segment's data.
 const EXTENDED_HEADER: usize = 32 + 4 + 4;
-/// JPEG markers: start of image, end of image, start of scan, APP1.
+/// JPEG markers: start of image, end of image, start of scan, APP1, APP2.
 const SOI: u8 = 0xD8;
 const EOI: u8 = 0xD9;
 const SOS: u8 = 0xDA;
 const APP1: u8 = 0xE1;
+const APP2: u8 = 0xE2;
 
 /// Whether `bytes` start as a JPEG does.
 pub(super) fn is_jpeg(bytes: &[u8]) -> bool {
@@ -32,6 +35,9 @@ pub(super) struct XmpPackets<'a> {
     extended: Vec<&'a [u8]>,
     /// Where the first scan (or the end of the image) begins: the header's end.
     header_end: usize,
+    /// The Multi-Picture Format index, if the header has one: the byte of the file its
+    /// TIFF starts at (its entries' offsets count from there) and the TIFF.
+    pub mpf: Option<(usize, &'a [u8])>,
 }
 
 impl XmpPackets<'_> {
@@ -90,6 +96,7 @@ pub(super) fn xmp_packets<'a>(bytes: &'a [u8], path: &Path) -> Result<XmpPackets
         standard: String::new(),
         extended: Vec::new(),
         header_end: 0,
+        mpf: None,
     };
     let mut i = 2;
     loop {
@@ -123,9 +130,28 @@ pub(super) fn xmp_packets<'a>(bytes: &'a [u8], path: &Path) -> Result<XmpPackets
                     packets.extended.push(ext);
                 }
             }
+        } else if marker == APP2 && packets.mpf.is_none() {
+            if let Some(tiff) = payload.strip_prefix(MPF_SIGNATURE) {
+                packets.mpf = Some((i + 4 + MPF_SIGNATURE.len(), tiff));
+            }
         }
         i += 2 + len;
     }
+}
+
+/// A property's `text` as a finite number, or an error that names the `property` (with its
+/// format: `GDepth Near`, `Apple depth apdi:FloatMinValue`) and the text.
+pub(super) fn finite_number(text: &str, property: &str, path: &Path) -> Result<f64> {
+    text.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            Error::format(
+                path,
+                format!("{property} is {text:?}: expected a finite number"),
+            )
+        })
 }
 
 /// The prefix the XMP binds to `namespace`, if it does.
