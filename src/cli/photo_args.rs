@@ -166,7 +166,7 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             "(missing)",
             "a colour image to go with --depth",
         )),
-        // A phone's portrait photo carries its own depth map (GDepth or Dynamic Depth).
+        // A phone's portrait photo carries its own depth map (GDepth, Dynamic Depth, Apple's).
         (Some(image_path), None) if brume::io::depth::has_embedded_depth(image_path) => {
             log::info!("{}: its embedded depth map", image_path.display());
             let mut args = args.clone();
@@ -177,8 +177,8 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             "--depth",
             "(missing)",
             "a depth, range or disparity map to go with --image, or --transmittance-map (or \
-             --image a JPEG that carries its depth map, GDepth or Dynamic Depth, as a phone's \
-             portrait photo does)",
+             --image a JPEG that carries its depth map, GDepth, Dynamic Depth or an iPhone's \
+             depth image, as a phone's portrait photo does)",
         )),
     }
 }

@@ -104,9 +104,9 @@ pub struct DepthArgs {
     /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (with --calib), 8-bit
     /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM, Android DEPTH16,
     /// ARCore, Cityscapes disparity with --camera, or --depth-scale), float EXR/TIFF/PFM,
-    /// or .npy; a phone's portrait photo, whose JPEG carries its depth map (GDepth or
-    /// Dynamic Depth: `render` and `view` read it from --image when --depth is not
-    /// given). A photo without a depth sensor: a monocular model's relative inverse depth
+    /// or .npy; a phone's portrait photo, whose JPEG carries its depth map (GDepth,
+    /// Dynamic Depth, an iPhone's depth image: `render` and `view` read it from --image
+    /// when --depth is not given). A photo without a depth sensor: a monocular model's relative inverse depth
     /// (MiDaS, DPT, Depth Anything) with --depth-kind inverse.
     #[arg(long, value_name = "PATH")]
     pub depth: Option<PathBuf>,

@@ -7,8 +7,8 @@ use super::*;
 pub struct RenderArgs {
     /// Colour image: PNG or JPEG (8- or 16-bit sRGB), or OpenEXR or PFM (linear float, as
     /// renderers and engines write). It needs --depth or --transmittance-map, but for a
-    /// JPEG that carries its own depth map (GDepth or Dynamic Depth: a phone's portrait
-    /// photo). Without --image and --depth the built-in demo scene is rendered.
+    /// JPEG that carries its own depth map (GDepth, Dynamic Depth or an iPhone's depth
+    /// image: a phone's portrait photo). Without --image and --depth the built-in demo scene is rendered.
     #[arg(long, value_name = "PATH")]
     pub image: Option<PathBuf>,
 

@@ -61,7 +61,8 @@ const ITEM_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/item/";
 const DEVICE_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/device/";
 const IMAGING_MODEL_NAMESPACE: &str = "http://ns.google.com/photos/dd/1.0/imagingmodel/";
 
-/// A depth map read from a JPEG's GDepth or Dynamic Depth metadata.
+/// A depth map read from a phone's JPEG: its GDepth or Dynamic Depth metadata, or an
+/// iPhone's depth image (the `apple` module).
 pub(crate) struct EmbeddedDepth {
     /// The depth (or range) per sample in `units`, NaN where unknown; the embedded image's
     /// size, which may be smaller than the photo's.
@@ -161,7 +162,7 @@ pub(crate) fn decode(bytes: &[u8], path: &Path) -> Result<EmbeddedDepth> {
         return Err(Error::format(
             path,
             "not a JPEG (no start-of-image marker 0xFFD8): a .jpg depth file is a phone's \
-             portrait photo with its depth map (GDepth or Dynamic Depth)",
+             portrait photo with its depth map (GDepth, Dynamic Depth or an iPhone's)",
         ));
     }
     let xmp = xmp_packets(bytes, path)?;
