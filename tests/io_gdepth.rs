@@ -69,6 +69,38 @@ fn an_8_bit_range_inverse_map_is_within_half_a_code_of_its_plane() {
     assert!((f64::from(*range.get(0, 0)) - 1.5).abs() < 1e-5);
 }
 
+/// `inv8-jpeg.jpg` holds `inv8.jpg`'s map as a JPEG of quality 100 (each code within one of
+/// the PNG's): a lossy image, whose codes within 3 of Far are read as Far, where the PNG's
+/// last code alone is.
+#[test]
+fn a_jpeg_depth_image_stops_within_three_codes_of_far() {
+    let loaded = load_range(&fixture("inv8-jpeg.jpg"), &DepthOptions::default()).unwrap();
+    let code = |x, y| (inverse_d_n(small_plane(x, y), 1.5, 20.75) * 255.0).round();
+    let samples = || (0..24).flat_map(|y| (0..32).map(move |x| (x, y)));
+    let at_least = |c: f64| samples().filter(|&(x, y)| code(x, y) >= c).count();
+    // The JPEG's one code either way decides the samples at 251 to 253.
+    let unknown = loaded.unknown_pixels;
+    assert!(
+        (at_least(253.0)..=at_least(251.0)).contains(&unknown),
+        "{unknown}"
+    );
+    assert!(loaded
+        .notes
+        .iter()
+        .any(|n| n.contains("within 3 codes of it")));
+    for (x, y) in samples() {
+        let got = f64::from(*loaded.range.get(x, y));
+        match code(x, y) {
+            c if c >= 254.0 => assert!(got.is_nan(), "({x}, {y}) at code {c}"),
+            c if c <= 250.0 => {
+                let moved = inverse_d_n(got, 1.5, 20.75) * 255.0 - c;
+                assert!(moved.abs() <= 1.0 + 1e-3, "({x}, {y}): {moved} codes");
+            }
+            _ => {}
+        }
+    }
+}
+
 #[test]
 fn a_16_bit_linear_map_in_millimetres_of_range() {
     let loaded = load_range(&fixture("lin16.jpg"), &DepthOptions::default()).unwrap();

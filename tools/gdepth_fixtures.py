@@ -16,6 +16,9 @@ against the specification's formulas without a second file:
   same size: 255 (1.0) in the left half, 64 (0.251) in the right).
 - ``conf-low.jpg``: ``inv8.jpg`` with a confidence map of 64 (0.251) everywhere, which a
   ``--min-confidence`` above it leaves no sample of.
+- ``inv8-jpeg.jpg``: ``inv8.jpg``'s map as a grey JPEG of quality 100 (``Mime``
+  image/jpeg): lossy, each code within one of the PNG's (checked here), so the codes
+  within three of Far are read as Far.
 - ``ext8.jpg``: ``inv8.jpg`` with its ``GDepth:Data`` moved by this script (not ExifTool)
   into an extended packet of two segments written in reverse order, the GUID in an
   element whose start tag declares its namespace: what a reader must accept beyond
@@ -72,10 +75,10 @@ def samples(d, near, far, inverse, bits):
     return np.round(d_n * top).astype(np.uint8 if bits == 8 else np.uint16)
 
 
-def embed(src, out, depth_png, tags):
+def embed(src, out, depth_png, tags, mime="image/png"):
     shutil.copy(src, out)
     args = ["exiftool", "-q", "-overwrite_original"] + [f"-XMP-GDepth:{t}" for t in tags]
-    args += ["-XMP-GDepth:Mime=image/png", f"-XMP-GDepth:DepthImage<={depth_png}", out]
+    args += [f"-XMP-GDepth:Mime={mime}", f"-XMP-GDepth:DepthImage<={depth_png}", out]
     subprocess.run(args, check=True)
 
 
@@ -158,6 +161,13 @@ def main(out_dir):
     embed(small, os.path.join(out_dir, "inv8.jpg"), inv8,
           ["Format=RangeInverse", "Near=1.5", "Far=20.75"])
     split_data(os.path.join(out_dir, "inv8.jpg"), os.path.join(out_dir, "ext8.jpg"))
+    inv8_jpeg = os.path.join(tmp, "inv8.jpeg")
+    codes = samples(plane, 1.5, 20.75, True, 8)
+    cv2.imwrite(inv8_jpeg, codes, [cv2.IMWRITE_JPEG_QUALITY, 100])
+    moved = np.abs(cv2.imread(inv8_jpeg, cv2.IMREAD_UNCHANGED).astype(int) - codes).max()
+    assert moved <= 1, f"the JPEG moved a code by {moved}"
+    embed(small, os.path.join(out_dir, "inv8-jpeg.jpg"), inv8_jpeg,
+          ["Format=RangeInverse", "Near=1.5", "Far=20.75"], "image/jpeg")
     conf = os.path.join(tmp, "conf8.png")
     cv2.imwrite(conf, np.where(x < 16, 255, 64).astype(np.uint8))
     embed(small, os.path.join(out_dir, "conf8.jpg"), inv8,

@@ -52,7 +52,8 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
 
     pip install opencv-python-headless numpy
     python3 tools/phone_depth_eval.py OUT_DIR [--brume target/release/brume]
-        [--format arcore|android-depth16|gdepth|apple-depth] [--gdepth-far 10] [--size 1024x512]
+        [--format arcore|android-depth16|gdepth|apple-depth] [--gdepth-far 10]
+        [--gdepth-mime png|jpeg] [--size 1024x512]
         [--factor 8] [--fov 45] [--camera-from flag|exif|none]
         [--beta 0.02] [--position 0,1.7,0]
         [--yaw 0] [--pitch 0] [--roll 0] [--bleed 1] [--noise-base 0.01] [--noise-per-m 0.0015] [--seed 0]
@@ -145,19 +146,25 @@ def write_phone(path, depth_m, fmt):
     cv2.imwrite(path, mm.astype(np.uint16))
 
 
-def write_gdepth(path, photo_path, depth_m, far):
+def write_gdepth(path, photo_path, depth_m, far, mime):
     """The photo as a JPEG (quality 95) whose XMP carries the depth as GDepth: 8-bit
     RangeInverse from GDEPTH_NEAR_M to ``far``, along the optical axis, in metres, as a
-    PNG (https://developers.google.com/depthmap-metadata)."""
+    PNG or (``mime`` jpeg) a grey JPEG of quality 95
+    (https://developers.google.com/depthmap-metadata)."""
     near = GDEPTH_NEAR_M
     d_n = far * (depth_m - near) / (depth_m * (far - near))
-    ok, png = cv2.imencode(".png", np.round(np.clip(d_n, 0, 1) * 255).astype(np.uint8))
+    codes = np.round(np.clip(d_n, 0, 1) * 255).astype(np.uint8)
+    if mime == "jpeg":
+        ok, image = cv2.imencode(".jpg", codes, [cv2.IMWRITE_JPEG_QUALITY, 95])
+    else:
+        ok, image = cv2.imencode(".png", codes)
     xmp = ('<x:xmpmeta xmlns:x="adobe:ns:meta/"><rdf:RDF '
            'xmlns:rdf="http://www.w3.org/1999/02/22-rdf-syntax-ns#"><rdf:Description '
            'rdf:about="" xmlns:GDepth="http://ns.google.com/photos/1.0/depthmap/" '
            f'GDepth:Format="RangeInverse" GDepth:Near="{near}" GDepth:Far="{far}" '
-           'GDepth:Units="m" GDepth:MeasureType="OpticalAxis" GDepth:Mime="image/png" '
-           f'GDepth:Data="{base64.b64encode(png.tobytes()).decode()}"/></rdf:RDF></x:xmpmeta>')
+           'GDepth:Units="m" GDepth:MeasureType="OpticalAxis" '
+           f'GDepth:Mime="image/{mime}" '
+           f'GDepth:Data="{base64.b64encode(image.tobytes()).decode()}"/></rdf:RDF></x:xmpmeta>')
     payload = b"http://ns.adobe.com/xap/1.0/\x00" + xmp.encode()
     if len(payload) > 65533:
         sys.exit("phone_depth_eval: the GDepth packet needs extended XMP: use a larger --factor")
@@ -256,6 +263,8 @@ def main():
     ap.add_argument("--gdepth-far", type=float, default=10.0,
                     help="--format gdepth or apple-depth: the map's farthest depth (m; GDepth's "
                          "Far); the sky and what lies beyond are at it")
+    ap.add_argument("--gdepth-mime", choices=["png", "jpeg"], default="png",
+                    help="--format gdepth: the depth image's codec (jpeg: quality 95, lossy)")
     ap.add_argument("--fov", type=float, default=45.0)
     ap.add_argument("--camera-from", choices=["flag", "exif", "none"], default="flag",
                     help="how brume learns the field of view that turns depth into range: "
@@ -309,7 +318,7 @@ def main():
         write_apple(o("phone.jpg"), photo_png, stored(z_phone), a.gdepth_far, a.fov, exif)
         unknown_full = np.kron(z_phone >= a.gdepth_far, np.ones((a.factor, a.factor), bool))
     elif a.format == "gdepth":
-        write_gdepth(o("phone.jpg"), photo_png, stored(z_phone), a.gdepth_far)
+        write_gdepth(o("phone.jpg"), photo_png, stored(z_phone), a.gdepth_far, a.gdepth_mime)
         unknown_full = np.kron(z_phone >= a.gdepth_far, np.ones((a.factor, a.factor), bool))
     else:
         write_phone(o("phone.png"), stored(z_phone), a.format)

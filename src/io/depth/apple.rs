@@ -20,13 +20,13 @@
 //! the intrinsic matrix. As GDepth's `Far`, the farthest code (the least disparity, the
 //! greatest depth) is where the map stops — a portrait's background as far as the two
 //! cameras could tell — and is read as unknown, so that pre-processing carries the scene
-//! on beyond it; so are the codes within [`STOP_TOLERANCE`] of it, which the lossy JPEG
-//! moved off it, and a disparity of 0 or less (infinitely far).
+//! on beyond it; so are the codes within [`LOSSY_STOP_CODES`] of 255 of it, which the
+//! lossy JPEG moved off it, and a disparity of 0 or less (infinitely far).
 
 use std::ops::Range;
 use std::path::Path;
 
-use super::gdepth::{decode_image, EmbeddedDepth};
+use super::gdepth::{decode_image, stopped, EmbeddedDepth, LOSSY_STOP_CODES};
 use super::xmp::{finite_number, prefix_of, property, xmp_packets, XmpPackets};
 use super::{DepthFormat, DepthKind, Intrinsics};
 use crate::{Error, Result};
@@ -35,12 +35,6 @@ use crate::{Error, Result};
 pub(super) const PIXEL_DATA_INFO: &str = "http://ns.apple.com/pixeldatainfo/1.0/";
 /// Apple's depth data: the map's accuracy and its camera's calibration.
 const DEPTH_DATA: &str = "http://ns.apple.com/depthData/1.0/";
-/// How near the farthest code (as a fraction of the code range) a code is where the map
-/// stops too: the stored image is a lossy JPEG, whose ringing beside an edge moves the
-/// flat background's codes by a few. 3 of 255 was the best of 0 to 8 on the street scene
-/// of `tools/phone_depth_eval.py --format apple-depth` at JPEG qualities 85, 95 and 100
-/// alike (the README's table).
-const STOP_TOLERANCE: f64 = 3.0 / 255.0;
 /// The MP Index IFD's tag of the image entries.
 const MP_ENTRY: u16 = 0xB002;
 /// The bytes of one MP entry.
@@ -198,7 +192,7 @@ fn to_depth(image: AppleImage, path: &Path) -> Result<EmbeddedDepth> {
     let samples = decode_image(image.bytes, "image/jpeg", "Apple", path)?;
     let scale = CodeScale::new(codes, values, image.recorded);
     let map = samples.map_codes(|code| scale.depth(code).map_or(f32::NAN, |d| d as f32));
-    let (recorded, tolerance) = (image.recorded, scale.tolerance);
+    let recorded = image.recorded;
     let what = match recorded {
         Recorded::Disparity => "disparity (1/m)",
         Recorded::Depth => "depth (m)",
@@ -215,9 +209,9 @@ fn to_depth(image: AppleImage, path: &Path) -> Result<EmbeddedDepth> {
     let unknown = map.as_slice().iter().filter(|v| v.is_nan()).count();
     if unknown > 0 {
         notes.push(format!(
-            "{unknown} samples at the farthest code (or within {tolerance} codes of it, where \
-             the JPEG's coding moved them) or of no positive {what} unknown: where the map \
-             stops (the background as far as the cameras could tell), not a depth"
+            "{unknown} samples at the farthest code (or within {LOSSY_STOP_CODES} of 255 of \
+             it, where the JPEG's coding moved them) or of no positive {what} unknown: where \
+             the map stops (the background as far as the cameras could tell), not a depth"
         ));
     }
     let prefix = prefix_of(&image.xmp, DEPTH_DATA);
@@ -250,8 +244,6 @@ struct CodeScale {
     recorded: Recorded,
     /// The code of the least disparity or the greatest depth: where the map stops.
     farthest: f64,
-    /// How near the farthest code a code is read as it ([`STOP_TOLERANCE`] of the range).
-    tolerance: f64,
 }
 
 impl CodeScale {
@@ -266,7 +258,6 @@ impl CodeScale {
             values,
             recorded,
             farthest,
-            tolerance: STOP_TOLERANCE * (codes[1] - codes[0]).abs(),
         }
     }
 
@@ -279,8 +270,8 @@ impl CodeScale {
             Recorded::Disparity => 1.0 / v,
             Recorded::Depth => v,
         };
-        let stopped = (code - self.farthest).abs() <= self.tolerance;
-        (!stopped && v > 0.0 && depth.is_finite()).then_some(depth)
+        let from_stop = (code - self.farthest).abs() / (c1 - c0).abs();
+        (!stopped(from_stop, true) && v > 0.0 && depth.is_finite()).then_some(depth)
     }
 }
 

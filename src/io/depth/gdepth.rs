@@ -32,7 +32,9 @@
 //! pre-processing finds the sky in it and carries the scene on beyond the reach; so is a
 //! depth of 0 or less (a writer's code for nothing measured, with `Near` 0). A writer
 //! whose `Far` is its farthest measured depth loses those samples to the hole filling,
-//! which continues the scene round them. The optional confidence maps are not read.
+//! which continues the scene round them. A JPEG depth image is lossy: its codes within
+//! [`LOSSY_STOP_CODES`] of 255 of `Far` are read as `Far` too ([`stopped`]). The optional
+//! confidence maps are read beside the depth, for `min_confidence` (in `interpret`).
 //!
 //! A JPEG with neither is read as an iPhone's portrait, whose depth is an image of its
 //! own after the photo (the `apple` module).
@@ -84,9 +86,8 @@ pub(crate) struct EmbeddedDepth {
 }
 
 /// Whether a file is a JPEG whose header names a depth map's namespace, GDepth's or
-/// Dynamic Depth's, in its first [`HEAD_BYTES`], or whose Multi-Picture index lists an
-/// image of Apple's depth (any error is "no"; [`decode`] reads the file whole and checks
-/// it).
+/// Dynamic Depth's, in its first MiB, or whose Multi-Picture index lists an image of
+/// Apple's depth (any error is "no"; the depth loader reads the file whole and checks it).
 pub fn has_embedded_depth(path: &Path) -> bool {
     use std::io::Read;
     // Only the head, and bounded: the image given may be a pipe or a device, which the
@@ -468,9 +469,10 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
         "{format_name} {} map, {mime} {format}, Near {near} Far {far}",
         samples.describe(),
     ));
+    let lossy = mime == "image/jpeg";
     let map = samples.map(|d_n| {
         let depth = to_metres(encoding.depth(d_n));
-        if depth > 0.0 && depth.is_finite() && d_n < 1.0 {
+        if depth > 0.0 && depth.is_finite() && !stopped(1.0 - d_n, lossy) {
             depth as f32
         } else {
             f32::NAN
@@ -478,9 +480,13 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
     });
     let at_far = map.as_slice().iter().filter(|v| v.is_nan()).count();
     if at_far > 0 {
+        let near_far = match lossy {
+            true => format!(" (or within {LOSSY_STOP_CODES} codes of it: a JPEG depth image)"),
+            false => String::new(),
+        };
         notes.push(format!(
-            "{at_far} samples at Far or below 0 m unknown: Far is where the map stops (the \
-             sky and all beyond it), not a depth"
+            "{at_far} samples at Far{near_far} or below 0 m unknown: Far is where the map \
+             stops (the sky and all beyond it), not a depth"
         ));
     }
     let intrinsics = imaging_model.map(|m| m.on_grid(map.width(), map.height()));
@@ -517,6 +523,24 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
 }
 
 /// The depth of a normalised sample d_n ∈ [0, 1], by the file's `Format`.
+/// How near the code where a map stops (GDepth's `Far`, an iPhone's farthest code) a
+/// sample of a lossy depth image (a JPEG) is read as stopped too, in codes of 255: a JPEG's
+/// ringing beside an edge lifts a flat background by a code or a few, and each sample so
+/// moved, read as a depth just short of the stop, is a clear blotch in the fog. 3 was the
+/// best of those tried (0 to 8) on the street scene of `tools/phone_depth_eval.py`
+/// (`--format apple-depth` at JPEG qualities 85, 95 and 100, `--format gdepth
+/// --gdepth-mime jpeg`): the README's tables.
+pub(super) const LOSSY_STOP_CODES: f64 = 3.0;
+
+/// Whether a sample `from_stop` of the code range (0 to 1) away from the code where the
+/// map stops is where it stops: at that code, or, in a `lossy` image, within
+/// [`LOSSY_STOP_CODES`] of 255 of it.
+pub(super) fn stopped(from_stop: f64, lossy: bool) -> bool {
+    let tolerance = if lossy { LOSSY_STOP_CODES / 255.0 } else { 0.0 };
+    // The margin keeps a code at the tolerance stopped whichever way the division rounds.
+    from_stop <= tolerance + 1e-9
+}
+
 enum Encoding {
     Linear { near: f64, far: f64 },
     Inverse { near: f64, far: f64 },
@@ -619,6 +643,21 @@ fn grid<T: image::Primitive>(img: image::ImageBuffer<image::Luma<T>, Vec<T>>) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A lossless image stops at its last code only; a JPEG within 3 codes of 255 of it.
+    #[test]
+    fn a_lossy_image_stops_near_its_last_code() {
+        let from_stop = |code: f64| (255.0 - code) / 255.0;
+        assert!(stopped(from_stop(255.0), false) && !stopped(from_stop(254.0), false));
+        assert!(
+            !stopped(1.0 / 65535.0, false),
+            "a 16-bit PNG's last code but one"
+        );
+        for code in [255.0, 254.0, 252.0] {
+            assert!(stopped(from_stop(code), true), "{code}");
+        }
+        assert!(!stopped(from_stop(251.0), true));
+    }
 
     #[test]
     fn the_encodings_are_the_specifications() {
