@@ -188,3 +188,84 @@ fn render_reads_an_iphone_portraits_depth_from_the_image_alone() {
     let out = dir.path().join("out.png");
     assert_eq!(image::image_dimensions(out).unwrap(), (48, 64));
 }
+
+/// The median of `f` over the box `x0..x1` x `y0..y1`, NaN left out.
+fn median_over(
+    (x0, x1, y0, y1): (usize, usize, usize, usize),
+    f: impl Fn(usize, usize) -> f64,
+) -> f64 {
+    let mut v: Vec<f64> = (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+        .map(|(x, y)| f(x, y))
+        .filter(|v| !v.is_nan())
+        .collect();
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+/// `iphone-x.jpg`: a real iPhone X portrait (iOS 12; `tests/data/apple/README.md`), its
+/// photo at a quarter of its size, its disparity image as the phone wrote it (576 x 768,
+/// 0.650879..2.509766 1/m). The expected values were computed apart, with OpenCV's decoder
+/// and numpy: the medians of the codes in a box on the vase (220) and on the wall behind it
+/// (29); 663 samples at the farthest code, 0, and 6 780 within 3 codes of it: the wall
+/// receding to the farthest sample, no clamp, so every sample is a depth (read as
+/// stopping there, the wall's brightest strip was taken for sky); the intrinsics are the
+/// file's `IntrinsicMatrix` of its 3024 x 4032 reference.
+#[test]
+fn a_real_iphone_portrait_is_read_and_fogged() {
+    let path = fixture("iphone-x.jpg");
+    let loaded = load_range(&path, &DepthOptions::default()).unwrap();
+    assert_eq!(loaded.format, DepthFormat::AppleDepth);
+    assert_eq!((loaded.range.width(), loaded.range.height()), (576, 768));
+    assert_eq!(loaded.unknown_pixels, 0);
+    let k = loaded.intrinsics.unwrap();
+    let (sx, sy) = (576.0 / 3024.0, 768.0 / 4032.0);
+    assert!((k.fx - 6112.78125 * sx).abs() < 1e-6 && (k.fy - 6112.78125 * sy).abs() < 1e-6);
+    assert!((k.cx - ((1524.835693359375 + 0.5) * sx - 0.5)).abs() < 1e-6);
+    assert!((k.cy - ((2027.0889892578125 + 0.5) * sy - 0.5)).abs() < 1e-6);
+    let depth = |x: usize, y: usize| {
+        let (dx, dy) = ((x as f64 - k.cx) / k.fx, (y as f64 - k.cy) / k.fy);
+        f64::from(*loaded.range.get(x, y)) / (1.0 + dx * dx + dy * dy).sqrt()
+    };
+    let (vase, wall) = ((250, 330, 400, 480), (480, 560, 100, 200));
+    let code_of = |z: f64| (1.0 / z - 0.650879) / (2.509766 - 0.650879) * 255.0;
+    assert!((code_of(median_over(vase, depth)) - 220.0).abs() <= 1.0 + 1e-3);
+    assert!((code_of(median_over(wall, depth)) - 29.0).abs() <= 1.0 + 1e-3);
+
+    // Fogged at β 0.5 m⁻¹ without blur, twice (airlight 0 and 1): out = τ·J + (1 − τ)·A,
+    // so τ = 1 − (out(A=1) − out(A=0)); on the photo's grid (1.3125 x the map's), τ is
+    // exp(−β R) of the range the loader gave, in the vase's and the wall's boxes.
+    let dir = tempfile::tempdir().unwrap();
+    let green = |airlight: &str| {
+        let out = dir.path().join(format!("out-{airlight}.pfm"));
+        let image = path.to_str().unwrap();
+        let args = ["render", "--image", image, "--beta", "0.5", "--lambda", "0"];
+        let run = common::brume(
+            dir.path(),
+            &[
+                &args[..],
+                &["--airlight", airlight, "--out", out.to_str().unwrap()],
+            ]
+            .concat(),
+        );
+        assert!(run.status.success(), "{}", common::stderr(&run));
+        match brume::io::depth::read_pfm(&out).unwrap() {
+            brume::io::depth::Pfm::Rgb(rgb) => rgb,
+            brume::io::depth::Pfm::Grey(_) => panic!("a colour PFM"),
+        }
+    };
+    let (dark, bright) = (green("0,0,0"), green("1,1,1"));
+    assert_eq!((dark.width(), dark.height()), (756, 1008));
+    let tau = |x: usize, y: usize| 1.0 - f64::from(bright.get(x, y)[1] - dark.get(x, y)[1]);
+    let on_photo = |(x0, x1, y0, y1): (usize, usize, usize, usize)| {
+        let s = 756.0 / 576.0;
+        let at = |v: usize| (v as f64 * s).round() as usize;
+        (at(x0), at(x1), at(y0), at(y1))
+    };
+    for region in [vase, wall] {
+        let range = median_over(region, |x, y| f64::from(*loaded.range.get(x, y)));
+        let got = median_over(on_photo(region), tau);
+        let want = (-0.5 * range).exp();
+        assert!((got - want).abs() < 0.01, "{region:?}: τ {got} for {want}");
+    }
+}

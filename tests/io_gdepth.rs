@@ -69,35 +69,48 @@ fn an_8_bit_range_inverse_map_is_within_half_a_code_of_its_plane() {
     assert!((f64::from(*range.get(0, 0)) - 1.5).abs() < 1e-5);
 }
 
-/// `inv8-jpeg.jpg` holds `inv8.jpg`'s map as a JPEG of quality 100 (each code within one of
-/// the PNG's): a lossy image, whose codes within 3 of Far are read as Far, where the PNG's
-/// last code alone is.
+/// `far8-jpeg.jpg` is a map clamped at Far (its top 6 rows, the sky) as a JPEG of quality
+/// 100, which moved some of those samples to the code below: a lossy image clamped there,
+/// whose codes within 3 of Far are read as Far. `inv8-jpeg.jpg` holds `inv8.jpg`'s plane,
+/// which only reaches Far (4 samples at it, 45 within 3 codes): its codes are depths.
 #[test]
-fn a_jpeg_depth_image_stops_within_three_codes_of_far() {
-    let loaded = load_range(&fixture("inv8-jpeg.jpg"), &DepthOptions::default()).unwrap();
+fn a_jpeg_depth_image_clamped_at_far_stops_within_three_codes_of_it() {
+    let loaded = load_range(&fixture("far8-jpeg.jpg"), &DepthOptions::default()).unwrap();
+    assert_eq!(
+        loaded.unknown_pixels,
+        6 * 32,
+        "the clamped rows, and only they"
+    );
+    assert!(loaded.notes.iter().any(|n| n.contains("clamped at Far")));
+    let plane = |x: usize, y: usize| 1.5 + 0.2 * x as f64 + 0.4 * (y as f64 - 6.0);
+    for y in 0..24 {
+        for x in 0..32 {
+            let got = f64::from(*loaded.range.get(x, y));
+            if y < 6 {
+                assert!(got.is_nan(), "({x}, {y})");
+                continue;
+            }
+            let codes =
+                (inverse_d_n(got, 1.5, 20.75) - inverse_d_n(plane(x, y), 1.5, 20.75)) * 255.0;
+            assert!(codes.abs() <= 1.5 + 1e-3, "({x}, {y}): {codes} codes");
+        }
+    }
+
+    let reaching = load_range(&fixture("inv8-jpeg.jpg"), &DepthOptions::default()).unwrap();
     let code = |x, y| (inverse_d_n(small_plane(x, y), 1.5, 20.75) * 255.0).round();
     let samples = || (0..24).flat_map(|y| (0..32).map(move |x| (x, y)));
     let at_least = |c: f64| samples().filter(|&(x, y)| code(x, y) >= c).count();
-    // The JPEG's one code either way decides the samples at 251 to 253.
-    let unknown = loaded.unknown_pixels;
+    // Only Far itself is unknown, where the JPEG left a sample at it.
     assert!(
-        (at_least(253.0)..=at_least(251.0)).contains(&unknown),
-        "{unknown}"
+        reaching.unknown_pixels <= at_least(254.0),
+        "{}",
+        reaching.unknown_pixels
     );
-    assert!(loaded
-        .notes
-        .iter()
-        .any(|n| n.contains("within 3 codes of it")));
-    for (x, y) in samples() {
-        let got = f64::from(*loaded.range.get(x, y));
-        match code(x, y) {
-            c if c >= 254.0 => assert!(got.is_nan(), "({x}, {y}) at code {c}"),
-            c if c <= 250.0 => {
-                let moved = inverse_d_n(got, 1.5, 20.75) * 255.0 - c;
-                assert!(moved.abs() <= 1.0 + 1e-3, "({x}, {y}): {moved} codes");
-            }
-            _ => {}
-        }
+    assert!(!reaching.notes.iter().any(|n| n.contains("clamped")));
+    for (x, y) in samples().filter(|&(x, y)| code(x, y) <= 253.0) {
+        let got = f64::from(*reaching.range.get(x, y));
+        let moved = inverse_d_n(got, 1.5, 20.75) * 255.0 - code(x, y);
+        assert!(moved.abs() <= 1.0 + 1e-3, "({x}, {y}): {moved} codes");
     }
 }
 

@@ -36,9 +36,16 @@ reads the index back: every ``MPImage`` it extracts must be the bytes written.
 The JPEG codec is lossy: OpenCV at quality 100 leaves the flat blocks exact and the
 plane within one code, which this script checks.
 
+With ``--real IMAGE``, it also writes ``iphone-x.jpg`` from a real iPhone portrait:
+``image-with-depth.jpg`` of Shuichi Tsutsumi's iOS-Depth-Sampler (MIT licence;
+https://github.com/shu223/iOS-Depth-Sampler, ``iOS-Depth-Sampler/Resources/``, commit
+a2e10669061a6a9d9de25e3aeb36a4b80ffd4599; an iPhone X on iOS 12, 3024 x 4032): its photo
+at a quarter of its size (OpenCV, quality 85) with the original's EXIF (ExifTool), and its
+disparity image, the MPF image 2 that ExifTool extracts, byte for byte, in a new index.
+
 Usage (Debian: ``apt install libimage-exiftool-perl``; ``pip install numpy opencv-python-headless``):
 
-    python3 tools/apple_depth_fixtures.py tests/data/apple
+    python3 tools/apple_depth_fixtures.py tests/data/apple [--real image-with-depth.jpg]
 """
 
 import os
@@ -152,7 +159,23 @@ def with_mpf(primary, aux, out, verify=True):
         assert read == image, f"{out}: ExifTool's MPImage{k} is not the image written"
 
 
-def main(out_dir):
+def real_portrait(src, out, tmp):
+    """``src`` (a real iPhone portrait JPEG) with its photo a quarter of its size, its EXIF
+    kept, and its MPF image 2 (the disparity) as it is."""
+    aux = subprocess.run(["exiftool", "-b", "-MPImage2", src], check=True,
+                         capture_output=True).stdout
+    assert b"http://ns.apple.com/pixeldatainfo/1.0/" in aux, "MPF image 2 is no Apple depth"
+    photo_path = os.path.join(tmp, "quarter.jpg")
+    image = cv2.imread(src)
+    h, w = image.shape[:2]
+    quarter = cv2.resize(image, (w // 4, h // 4), interpolation=cv2.INTER_AREA)
+    cv2.imwrite(photo_path, quarter, [cv2.IMWRITE_JPEG_QUALITY, 85])
+    subprocess.run(["exiftool", "-q", "-overwrite_original", "-tagsFromFile", src, "-exif:all",
+                    photo_path], check=True)
+    with_mpf(open(photo_path, "rb").read(), [aux], out)
+
+
+def main(out_dir, real=None):
     os.makedirs(out_dir, exist_ok=True)
     tmp = tempfile.mkdtemp()
     small = os.path.join(tmp, "small.jpg")
@@ -177,8 +200,16 @@ def main(out_dir):
     with_mpf(small_bytes, [depth], os.path.join(out_dir, "depth-abs.jpg"))
     with_mpf(small_bytes, [matte], os.path.join(out_dir, "matte-only.jpg"))
     with_mpf(small_bytes, [gain], os.path.join(out_dir, "gain-map.jpg"))
+    if real:
+        real_portrait(real, os.path.join(out_dir, "iphone-x.jpg"), tmp)
     shutil.rmtree(tmp)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "tests/data/apple")
+    args = sys.argv[1:]
+    real = None
+    if "--real" in args:
+        at = args.index("--real")
+        real = args[at + 1]
+        del args[at:at + 2]
+    main(args[0] if args else "tests/data/apple", real)

@@ -17,8 +17,11 @@ against the specification's formulas without a second file:
 - ``conf-low.jpg``: ``inv8.jpg`` with a confidence map of 64 (0.251) everywhere, which a
   ``--min-confidence`` above it leaves no sample of.
 - ``inv8-jpeg.jpg``: ``inv8.jpg``'s map as a grey JPEG of quality 100 (``Mime``
-  image/jpeg): lossy, each code within one of the PNG's (checked here), so the codes
-  within three of Far are read as Far.
+  image/jpeg): lossy, each code within one of the PNG's (checked here); its plane reaches
+  Far, no clamp.
+- ``far8-jpeg.jpg``: a map clamped at Far as a portrait mode writes it, as a grey JPEG of
+  quality 100: the top 6 rows at Far (the sky), below them d = 1.5 + 0.2 x + 0.4 (y − 6) m
+  (codes up to 247); the JPEG moves some of the Far samples off it by one (checked here).
 - ``ext8.jpg``: ``inv8.jpg`` with its ``GDepth:Data`` moved by this script (not ExifTool)
   into an extended packet of two segments written in reverse order, the GUID in an
   element whose start tag declares its namespace: what a reader must accept beyond
@@ -167,6 +170,14 @@ def main(out_dir):
     moved = np.abs(cv2.imread(inv8_jpeg, cv2.IMREAD_UNCHANGED).astype(int) - codes).max()
     assert moved <= 1, f"the JPEG moved a code by {moved}"
     embed(small, os.path.join(out_dir, "inv8-jpeg.jpg"), inv8_jpeg,
+          ["Format=RangeInverse", "Near=1.5", "Far=20.75"], "image/jpeg")
+    far8_jpeg = os.path.join(tmp, "far8.jpeg")
+    codes = samples(1.5 + 0.2 * x + 0.4 * np.maximum(y - 6, 0), 1.5, 20.75, True, 8)
+    codes[:6] = 255
+    cv2.imwrite(far8_jpeg, codes, [cv2.IMWRITE_JPEG_QUALITY, 100])
+    decoded = cv2.imread(far8_jpeg, cv2.IMREAD_UNCHANGED).astype(int)
+    assert np.abs(decoded - codes).max() <= 1 and (decoded[:6] < 255).any()
+    embed(small, os.path.join(out_dir, "far8-jpeg.jpg"), far8_jpeg,
           ["Format=RangeInverse", "Near=1.5", "Far=20.75"], "image/jpeg")
     conf = os.path.join(tmp, "conf8.png")
     cv2.imwrite(conf, np.where(x < 16, 255, 64).astype(np.uint8))

@@ -17,16 +17,19 @@
 //! The portrait mattes (person, skin, hair, …) are auxiliary images too, with a grey
 //! `NativeFormat`: not depth, skipped; so is anything else an MPF index lists (an HDR gain
 //! map). The depth is taken along the optical axis, as Apple's point clouds use it with
-//! the intrinsic matrix. As GDepth's `Far`, the farthest code (the least disparity, the
-//! greatest depth) is where the map stops — a portrait's background as far as the two
-//! cameras could tell — and is read as unknown, so that pre-processing carries the scene
-//! on beyond it; so are the codes within [`LOSSY_STOP_CODES`] of 255 of it, which the
-//! lossy JPEG moved off it, and a disparity of 0 or less (infinitely far).
+//! the intrinsic matrix. The codes are spread over the map's own least and greatest
+//! values, so some sample is always at the farthest code (the least disparity, the
+//! greatest depth); where the map is clamped there — a spike of samples at it, the
+//! background as far as the two cameras could tell — it is where the map stops, read as
+//! unknown with the codes the JPEG moved off it (the `stop` module), so that
+//! pre-processing carries the scene on beyond it. A disparity of 0 or less (infinitely
+//! far) is unknown too.
 
 use std::ops::Range;
 use std::path::Path;
 
-use super::gdepth::{decode_image, stopped, EmbeddedDepth, LOSSY_STOP_CODES};
+use super::gdepth::{decode_image, EmbeddedDepth};
+use super::stop;
 use super::xmp::{finite_number, prefix_of, property, xmp_packets, XmpPackets};
 use super::{DepthFormat, DepthKind, Intrinsics};
 use crate::{Error, Result};
@@ -190,7 +193,8 @@ fn to_depth(image: AppleImage, path: &Path) -> Result<EmbeddedDepth> {
         ));
     }
     let samples = decode_image(image.bytes, "image/jpeg", "Apple", path)?;
-    let scale = CodeScale::new(codes, values, image.recorded);
+    let mut scale = CodeScale::new(codes, values, image.recorded);
+    scale.stop = stop::lossy_stop(samples.codes().map(|code| scale.off_stop(code)));
     let map = samples.map_codes(|code| scale.depth(code).map_or(f32::NAN, |d| d as f32));
     let recorded = image.recorded;
     let what = match recorded {
@@ -207,12 +211,15 @@ fn to_depth(image: AppleImage, path: &Path) -> Result<EmbeddedDepth> {
         values[1]
     )];
     let unknown = map.as_slice().iter().filter(|v| v.is_nan()).count();
-    if unknown > 0 {
+    if scale.stop.is_some() {
         notes.push(format!(
-            "{unknown} samples at the farthest code (or within {LOSSY_STOP_CODES} of 255 of \
-             it, where the JPEG's coding moved them) or of no positive {what} unknown: where \
-             the map stops (the background as far as the cameras could tell), not a depth"
+            "{unknown} samples at the farthest code (or within {} of 255 of it, where the \
+             JPEG's coding moved them) or of no positive {what} unknown: the map is clamped \
+             there (the background as far as the cameras could tell), not a depth",
+            stop::LOSSY_STOP_CODES
         ));
+    } else if unknown > 0 {
+        notes.push(format!("{unknown} samples of no positive {what} unknown"));
     }
     let prefix = prefix_of(&image.xmp, DEPTH_DATA);
     let depth_data = |name: &str| prefix.as_ref().and_then(|p| property(&image.xmp, p, name));
@@ -242,8 +249,11 @@ struct CodeScale {
     codes: [f64; 2],
     values: [f64; 2],
     recorded: Recorded,
-    /// The code of the least disparity or the greatest depth: where the map stops.
+    /// The code of the least disparity or the greatest depth.
     farthest: f64,
+    /// How near the farthest code (a fraction of the code range) a code is where the map
+    /// stops, if it is clamped there ([`stop::lossy_stop`]); `None`: every code a depth.
+    stop: Option<f64>,
 }
 
 impl CodeScale {
@@ -258,7 +268,13 @@ impl CodeScale {
             values,
             recorded,
             farthest,
+            stop: None,
         }
+    }
+
+    /// How far `code` is from the farthest code, as a fraction of the code range.
+    fn off_stop(&self, code: f64) -> f64 {
+        (code - self.farthest).abs() / (self.codes[1] - self.codes[0]).abs()
     }
 
     /// The depth in metres of `code`; `None` where the map stops, or for no positive
@@ -270,8 +286,10 @@ impl CodeScale {
             Recorded::Disparity => 1.0 / v,
             Recorded::Depth => v,
         };
-        let from_stop = (code - self.farthest).abs() / (c1 - c0).abs();
-        (!stopped(from_stop, true) && v > 0.0 && depth.is_finite()).then_some(depth)
+        let stopped = self
+            .stop
+            .is_some_and(|t| stop::stopped(self.off_stop(code), t));
+        (!stopped && v > 0.0 && depth.is_finite()).then_some(depth)
     }
 }
 
@@ -370,26 +388,36 @@ fn names_apple_depth(head: &[u8]) -> bool {
 mod tests {
     use super::*;
 
-    /// Codes spread evenly over the values; the farthest code, and those within 3 of 255 of
-    /// it, are where the map stops.
+    /// Codes spread evenly over the values, every one a depth; clamped at the farthest
+    /// code, that code and those within 3 of 255 of it are where the map stops.
     #[test]
-    fn codes_are_depths_but_at_the_farthest() {
-        let disparity = CodeScale::new([0.0, 255.0], [0.2, 1.0], Recorded::Disparity);
-        assert_eq!(disparity.depth(255.0), Some(1.0));
+    fn codes_are_depths_but_where_clamped() {
+        let clamped = |mut scale: CodeScale| {
+            scale.stop = Some(stop::LOSSY_STOP_CODES / 255.0);
+            scale
+        };
+        let reaching = CodeScale::new([0.0, 255.0], [0.2, 1.0], Recorded::Disparity);
+        assert_eq!(reaching.depth(255.0), Some(1.0));
         let at = |code: f64| 1.0 / (0.2 + code / 255.0 * 0.8);
-        assert!((disparity.depth(100.0).unwrap() - at(100.0)).abs() < 1e-12);
+        for code in [0.0, 3.0, 100.0] {
+            assert!(
+                (reaching.depth(code).unwrap() - at(code)).abs() < 1e-12,
+                "{code}"
+            );
+        }
+        let disparity = clamped(reaching);
         for code in [0.0, 1.0, 3.0] {
             assert_eq!(disparity.depth(code), None, "{code}");
         }
         assert!((disparity.depth(4.0).unwrap() - at(4.0)).abs() < 1e-12);
         // A depth's farthest code is its greatest depth, at either end.
-        let depth = CodeScale::new([0.0, 255.0], [0.5, 8.5], Recorded::Depth);
+        let depth = clamped(CodeScale::new([0.0, 255.0], [0.5, 8.5], Recorded::Depth));
         assert_eq!(depth.depth(0.0), Some(0.5));
         assert_eq!(
             (depth.depth(253.0), depth.depth(251.0).is_some()),
             (None, true)
         );
-        let reversed = CodeScale::new([0.0, 255.0], [8.5, 0.5], Recorded::Depth);
+        let reversed = clamped(CodeScale::new([0.0, 255.0], [8.5, 0.5], Recorded::Depth));
         assert_eq!(
             (reversed.depth(0.0), reversed.depth(255.0)),
             (None, Some(0.5))

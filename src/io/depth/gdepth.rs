@@ -32,8 +32,8 @@
 //! pre-processing finds the sky in it and carries the scene on beyond the reach; so is a
 //! depth of 0 or less (a writer's code for nothing measured, with `Near` 0). A writer
 //! whose `Far` is its farthest measured depth loses those samples to the hole filling,
-//! which continues the scene round them. A JPEG depth image is lossy: its codes within
-//! [`LOSSY_STOP_CODES`] of 255 of `Far` are read as `Far` too ([`stopped`]). The optional
+//! which continues the scene round them. A JPEG depth image is lossy: clamped at `Far`,
+//! its codes that the coding moved off it are read as `Far` too (the `stop` module). The optional
 //! confidence maps are read beside the depth, for `min_confidence` (in `interpret`).
 //!
 //! A JPEG with neither is read as an iPhone's portrait, whose depth is an image of its
@@ -49,9 +49,9 @@ use std::path::Path;
 use base64::Engine;
 use image::DynamicImage;
 
-use super::apple;
 use super::xmp::XmpPackets;
 use super::xmp::{finite_number, is_jpeg, prefix_of, primary_end, property, xmp_packets};
+use super::{apple, stop};
 use super::{DepthFormat, DepthKind, Intrinsics};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -469,10 +469,16 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
         "{format_name} {} map, {mime} {format}, Near {near} Far {far}",
         samples.describe(),
     ));
-    let lossy = mime == "image/jpeg";
+    // Far is where the map stops, whether many samples are at it or few; in a JPEG, so
+    // are the codes its coding moved off it, if the map is clamped there.
+    let top = samples.top_code();
+    let tolerance = match mime == "image/jpeg" {
+        true => stop::lossy_stop(samples.codes().map(|v| (top - v) / top)).unwrap_or(0.0),
+        false => 0.0,
+    };
     let map = samples.map(|d_n| {
         let depth = to_metres(encoding.depth(d_n));
-        if depth > 0.0 && depth.is_finite() && !stopped(1.0 - d_n, lossy) {
+        if depth > 0.0 && depth.is_finite() && !stop::stopped(1.0 - d_n, tolerance) {
             depth as f32
         } else {
             f32::NAN
@@ -480,8 +486,11 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
     });
     let at_far = map.as_slice().iter().filter(|v| v.is_nan()).count();
     if at_far > 0 {
-        let near_far = match lossy {
-            true => format!(" (or within {LOSSY_STOP_CODES} codes of it: a JPEG depth image)"),
+        let near_far = match tolerance > 0.0 {
+            true => format!(
+                " (or within {} codes of it: a JPEG depth image clamped at Far)",
+                stop::LOSSY_STOP_CODES
+            ),
             false => String::new(),
         };
         notes.push(format!(
@@ -523,24 +532,6 @@ fn to_depth(described: Described, packets: &Packets, path: &Path) -> Result<Embe
 }
 
 /// The depth of a normalised sample d_n ∈ [0, 1], by the file's `Format`.
-/// How near the code where a map stops (GDepth's `Far`, an iPhone's farthest code) a
-/// sample of a lossy depth image (a JPEG) is read as stopped too, in codes of 255: a JPEG's
-/// ringing beside an edge lifts a flat background by a code or a few, and each sample so
-/// moved, read as a depth just short of the stop, is a clear blotch in the fog. 3 was the
-/// best of those tried (0 to 8) on the street scene of `tools/phone_depth_eval.py`
-/// (`--format apple-depth` at JPEG qualities 85, 95 and 100, `--format gdepth
-/// --gdepth-mime jpeg`): the README's tables.
-pub(super) const LOSSY_STOP_CODES: f64 = 3.0;
-
-/// Whether a sample `from_stop` of the code range (0 to 1) away from the code where the
-/// map stops is where it stops: at that code, or, in a `lossy` image, within
-/// [`LOSSY_STOP_CODES`] of 255 of it.
-pub(super) fn stopped(from_stop: f64, lossy: bool) -> bool {
-    let tolerance = if lossy { LOSSY_STOP_CODES / 255.0 } else { 0.0 };
-    // The margin keeps a code at the tolerance stopped whichever way the division rounds.
-    from_stop <= tolerance + 1e-9
-}
-
 enum Encoding {
     Linear { near: f64, far: f64 },
     Inverse { near: f64, far: f64 },
@@ -606,6 +597,22 @@ impl Samples {
             Samples::Sixteen(g) => g.map(|&v| f(f64::from(v))),
         }
     }
+
+    /// Each sample's code v.
+    pub(super) fn codes(&self) -> Box<dyn Iterator<Item = f64> + '_> {
+        match self {
+            Samples::Eight(g) => Box::new(g.as_slice().iter().map(|&v| f64::from(v))),
+            Samples::Sixteen(g) => Box::new(g.as_slice().iter().map(|&v| f64::from(v))),
+        }
+    }
+
+    /// The greatest code: 2^bits − 1.
+    pub(super) fn top_code(&self) -> f64 {
+        match self {
+            Samples::Eight(_) => f64::from(u8::MAX),
+            Samples::Sixteen(_) => f64::from(u16::MAX),
+        }
+    }
 }
 
 /// Decodes the depth image (the grey image `mime` names).
@@ -643,21 +650,6 @@ fn grid<T: image::Primitive>(img: image::ImageBuffer<image::Luma<T>, Vec<T>>) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A lossless image stops at its last code only; a JPEG within 3 codes of 255 of it.
-    #[test]
-    fn a_lossy_image_stops_near_its_last_code() {
-        let from_stop = |code: f64| (255.0 - code) / 255.0;
-        assert!(stopped(from_stop(255.0), false) && !stopped(from_stop(254.0), false));
-        assert!(
-            !stopped(1.0 / 65535.0, false),
-            "a 16-bit PNG's last code but one"
-        );
-        for code in [255.0, 254.0, 252.0] {
-            assert!(stopped(from_stop(code), true), "{code}");
-        }
-        assert!(!stopped(from_stop(251.0), true));
-    }
 
     #[test]
     fn the_encodings_are_the_specifications() {

@@ -36,6 +36,7 @@ mod middlebury;
 mod orient;
 mod png16;
 mod raw;
+mod stop;
 mod xmp;
 
 use interpret::{interpret, SideFiles};
