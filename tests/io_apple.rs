@@ -75,6 +75,19 @@ fn an_iphone_portraits_disparity_is_read_as_range_in_metres() {
             );
         }
     }
+    // A relative map rescaled to a distance known in the scene: the range times S.
+    let scaled = DepthOptions {
+        scale: Some(3.0),
+        ..DepthOptions::default()
+    };
+    let tripled = load_range(&fixture("portrait.jpg"), &scaled).unwrap();
+    for (a, b) in tripled.range.as_slice().iter().zip(range.as_slice()) {
+        assert!((a - 3.0 * b).abs() <= 1e-6 * a || (a.is_nan() && b.is_nan()));
+    }
+    assert!(tripled
+        .notes
+        .iter()
+        .any(|n| n.contains("depth x 3 = metres")));
 }
 
 #[test]

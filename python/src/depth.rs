@@ -23,8 +23,9 @@ use pyo3::types::PyDict;
 /// 'depth', 'range', 'disparity', 'zbuffer' or 'inverse' (a monocular estimator's
 /// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) (default:
 /// the format's). scale: metres per unit of a 16-bit PNG, of a float map, of a z-buffer's
-/// near and far (1 when they are in metres), or the metres of 1/(d + offset) of inverse
-/// depth; a float map, a z-buffer or inverse depth then counts as metric. calib: a
+/// near and far (1 when they are in metres), the metres of 1/(d + offset) of inverse
+/// depth, or a factor on a portrait JPEG's metres (an iPhone's relative map rescaled); a
+/// float map, a z-buffer, inverse depth or a portrait JPEG then counts as metric. calib: a
 /// Middlebury 2014 calib.txt (else calib.txt beside the file). focal_px and baseline_mm:
 /// a disparity's stereo geometry (disparity_offset_px added to the disparity first),
 /// focal_px or fov_y_deg (vertical) the intrinsics that turn depth along the optical axis

@@ -159,8 +159,10 @@ pub struct DepthReadingArgs {
 
     /// Metres per stored value of a 16-bit PNG (e.g. 0.001 for millimetres), of a float
     /// map (1 for a map already in metres), per unit of a z-buffer's --near and --far (1
-    /// when they are in metres), or the metres of 1/(d + offset) of inverse depth; a float
-    /// map, a z-buffer or inverse depth then counts as metric, for --beta.
+    /// when they are in metres), the metres of 1/(d + offset) of inverse depth, or a factor
+    /// on a portrait JPEG's metres (an iPhone's relative map rescaled to a distance known in
+    /// the scene); a float map, a z-buffer, inverse depth or a portrait JPEG then counts as
+    /// metric, for --beta.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub depth_scale: Option<f64>,
 

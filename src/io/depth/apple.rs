@@ -227,7 +227,7 @@ fn to_depth(image: AppleImage, path: &Path) -> Result<EmbeddedDepth> {
         notes.push(
             "Apple depth Accuracy is relative (or unsaid): the dual camera's estimate, right \
              in order but not in scale, so fog in physical units (beta, visibility) on it is \
-             approximate"
+             approximate; `depth_scale` rescales it to a distance known in the scene"
                 .into(),
         );
     }

@@ -259,12 +259,15 @@ pub(super) fn interpret(
                 }
                 _ => depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?,
             };
+            // A relative map's metres (an iPhone's dual camera) may be rescaled by one who
+            // knows a distance in the scene; a map in file units is made metric so.
+            let (scale, units) = vouched_scale(opts, "the file's depth", &e.units, &mut notes)?;
             let range = to_range(
                 &e.map,
-                |v| v.is_finite().then_some(f64::from(v)),
+                |v| v.is_finite().then_some(f64::from(v) * scale),
                 k.as_ref(),
             );
-            (range, e.units, k)
+            (range, units, k)
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };

@@ -201,8 +201,10 @@ pub struct DepthOptions {
     /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity); for
     /// a float map, metres per unit; for a z-buffer, metres per unit of `near` and `far`
     /// (1 when they are in metres); for relative inverse depth, the metres of
-    /// 1/(d + offset). Given for a float map, a z-buffer or inverse depth, it makes the
-    /// range metric ([`LoadedDepth::metric`]).
+    /// 1/(d + offset); for a phone's portrait JPEG, a factor on the metres it holds (an
+    /// iPhone's relative map rescaled to a distance known in the scene). Given for a float
+    /// map, a z-buffer, inverse depth or a portrait JPEG, it makes the range metric
+    /// ([`LoadedDepth::metric`]).
     pub scale: Option<f64>,
     /// Focal length in pixels.
     pub focal: Option<f64>,
