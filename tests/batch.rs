@@ -929,3 +929,41 @@ fn the_library_batch_writes_logs_and_reports_each_output() {
     let again = Batch::plan(&[root], None, opts).unwrap();
     assert_eq!((again.outputs(), again.skipped()), (0, 4));
 }
+
+/// A manifest of phone portraits needs no depth column: each JPEG is its own depth file
+/// (an iPhone's here, stored turned with EXIF Orientation 6), and each output is the bytes
+/// `brume render --image` writes from the JPEG alone.
+#[test]
+fn a_manifest_of_portrait_jpegs_reads_each_ones_own_depth() {
+    let dir = tempfile::tempdir().unwrap();
+    let portrait = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/apple/portrait-rot6.jpg");
+    std::fs::copy(&portrait, dir.path().join("p.jpg")).unwrap();
+    std::fs::write(dir.path().join("phone.csv"), "image\np.jpg\n").unwrap();
+    let batch = [
+        "batch",
+        "--manifest",
+        "phone.csv",
+        "--out",
+        "out",
+        "--beta",
+        "0.3",
+    ];
+    let run = brume(dir.path(), &batch);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let render = [
+        "render",
+        "--image",
+        "p.jpg",
+        "--beta",
+        "0.3",
+        "--out",
+        "render.png",
+    ];
+    let render = brume(dir.path(), &render);
+    assert!(render.status.success(), "{}", stderr(&render));
+    assert!(
+        std::fs::read(dir.path().join("out/p_foggy_beta_0.3.png")).unwrap()
+            == std::fs::read(dir.path().join("render.png")).unwrap(),
+        "batch and render differ"
+    );
+}

@@ -290,9 +290,10 @@ fn swap_component(path: &Path, from: &str, to: &str) -> Option<PathBuf> {
     Some(swapped)
 }
 
-/// The frames of a CSV manifest: a header naming the columns `image` and `depth`
-/// (required) and `camera`, `calib`, `sky_mask` (optional; empty cells allowed), then one
-/// row per frame. Relative paths are relative to the manifest's folder; outputs mirror
+/// The frames of a CSV manifest: a header naming the columns `image` (required), `depth`
+/// (required but for portrait JPEGs) and `camera`, `calib`, `sky_mask` (optional; empty
+/// cells allowed), then one row per frame. A JPEG image without a depth cell (or column)
+/// is its own depth file: a phone's portrait photo, which carries its depth map. Relative paths are relative to the manifest's folder; outputs mirror
 /// the images' folders relative to it. See [`parse_manifest`].
 pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
     let text = crate::io::limits::read_text(path)?;
@@ -302,10 +303,10 @@ pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
 /// [`read_manifest`] on the text of a manifest; `path` is the manifest's path, which names
 /// it in errors and whose folder relative paths are resolved against. Blank lines and
 /// lines starting with `#` are skipped, and a leading byte-order mark (as spreadsheets
-/// write) is ignored. Errors: no header, an unknown or repeated column, no `image` or
-/// `depth` column, a header and no rows, a row with another number of cells than the
-/// header, an empty image or depth cell. Every item returned has a non-empty image and
-/// depth path.
+/// write) is ignored. Errors: no header, an unknown or repeated column, no `image`
+/// column, a header and no rows, a row with another number of cells than the header, an
+/// empty image cell, no depth for an image that is not a JPEG. Every item returned has a
+/// non-empty image and depth path (the image's own, for a portrait JPEG without one).
 pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
     let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let base = path.parent().unwrap_or(Path::new("."));
@@ -336,9 +337,9 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
             )));
         }
     }
-    let (Some(image_col), Some(depth_col)) = (column("image"), column("depth")) else {
+    let Some(image_col) = column("image") else {
         return Err(bad(format!(
-            "the header `{header}` lacks the column `image` or `depth`"
+            "the header `{header}` lacks the column `image`"
         )));
     };
     let folder = absolute(base);
@@ -356,9 +357,15 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
                 .filter(|c| !c.is_empty())
                 .map(|c| base.join(c))
         };
-        let (Some(image), Some(depth)) = (cell(Some(image_col)), cell(Some(depth_col))) else {
+        let Some(image) = cell(Some(image_col)) else {
+            return Err(bad(format!("line {line}: the image cell is empty")));
+        };
+        let Some(depth) = cell(column("depth")).or_else(|| is_jpeg(&image).then(|| image.clone()))
+        else {
             return Err(bad(format!(
-                "line {line}: the image or depth cell is empty"
+                "line {line}: no depth for {}: expected a depth file in the `depth` cell (only \
+                 a phone's portrait JPEG carries its own depth map)",
+                image.display()
             )));
         };
         let out_dir = folder_under(&image, &folder);
@@ -383,6 +390,13 @@ pub fn parse_manifest(text: &str, path: &Path) -> Result<Vec<Item>> {
         )));
     }
     Ok(items)
+}
+
+/// Whether a path names a JPEG by its extension.
+fn is_jpeg(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("jpg") || e.eq_ignore_ascii_case("jpeg"))
 }
 
 /// The records of a manifest's CSV text with their line numbers, cells trimmed (quoted
@@ -702,11 +716,16 @@ mod tests {
             ),
             ("image,depth,colour\na,b,c\n", "unknown column `colour`"),
             ("image,depth,image\na,b,c\n", "the column `image` twice"),
-            ("image,camera\na,b\n", "lacks the column `image` or `depth`"),
+            ("depth,camera\na,b\n", "lacks the column `image`"),
             ("image,depth\na,b,c\n", "line 2: 3 cells, expected 2"),
+            ("image,depth\n ,b\n", "line 2: the image cell is empty"),
             (
-                "image,depth\na, \n",
-                "line 2: the image or depth cell is empty",
+                "image,depth\na.png, \n",
+                "line 2: no depth for /data/a.png: expected a depth file",
+            ),
+            (
+                "image\na.exr\n",
+                "only a phone's portrait JPEG carries its own",
             ),
         ] {
             let e = err(text);
@@ -715,6 +734,18 @@ mod tests {
                 "{text:?}: `{e}` should name the file and say `{needle}`"
             );
         }
+    }
+
+    /// A portrait JPEG without a depth cell, or in a manifest without the column, is its
+    /// own depth file.
+    #[test]
+    fn a_portrait_jpeg_is_its_own_depth() {
+        let path = Path::new("/data/frames.csv");
+        let items = parse_manifest("image,depth\np/a.jpg,\nb.JPEG,d.png\n", path).unwrap();
+        assert_eq!(items[0].depth, Path::new("/data/p/a.jpg"));
+        assert_eq!(items[1].depth, Path::new("/data/d.png"));
+        let items = parse_manifest("image\nIMG_1.jpg\n", path).unwrap();
+        assert_eq!(items[0].depth, items[0].image);
     }
 
     #[test]

@@ -24,7 +24,8 @@ pub struct BatchArgs {
     /// A CSV manifest: header image,depth[,camera][,calib][,sky_mask], one frame per row,
     /// paths relative to the manifest. Its depth files are read as --depth-format,
     /// --depth-scale, --depth-kind and the geometry flags say, for every row (KITTI:
-    /// --depth-format kitti; a float map in metres: --depth-scale 1).
+    /// --depth-format kitti; a float map in metres: --depth-scale 1). A phone's portrait
+    /// JPEG without a depth cell (or column) is its own depth file.
     #[arg(long, value_name = "CSV", allow_hyphen_values = true)]
     pub manifest: Option<PathBuf>,
 
