@@ -212,8 +212,8 @@ def write_apple(path, photo_path, depth_m, far, fov, turned):
     primary = primary.tobytes()
     if turned:
         plain = path + ".primary.jpg"
-        with open(plain, "wb") as f:
-            f.write(primary)
+        with open(plain, "wb") as fh:
+            fh.write(primary)
         run(["exiftool", "-q", "-overwrite_original", "-IFD0:Orientation#=6", plain])
         primary = open(plain, "rb").read()
         os.remove(plain)
@@ -271,7 +271,8 @@ def main():
                          "flag (--fov), exif (as a phone writes the photo: its "
                          "FocalLengthIn35mmFilm, from --fov by the diagonal and rounded to "
                          "the mm, and Orientation 6 with the photo and its depth stored "
-                         "turned; written by ExifTool), none (depth used as range)")
+                         "turned; written by ExifTool), none (depth used as range). "
+                         "apple-depth carries its IntrinsicMatrix: no --fov in any case")
     ap.add_argument("--near", type=float, default=2.0)
     ap.add_argument("--far", type=float, default=1000.0)
     ap.add_argument("--beta", type=float, default=0.02)

@@ -293,8 +293,9 @@ fn swap_component(path: &Path, from: &str, to: &str) -> Option<PathBuf> {
 /// The frames of a CSV manifest: a header naming the columns `image` (required), `depth`
 /// (required but for portrait JPEGs) and `camera`, `calib`, `sky_mask` (optional; empty
 /// cells allowed), then one row per frame. A JPEG image without a depth cell (or column)
-/// is its own depth file: a phone's portrait photo, which carries its depth map. Relative paths are relative to the manifest's folder; outputs mirror
-/// the images' folders relative to it. See [`parse_manifest`].
+/// is its own depth file: a phone's portrait photo, which carries its depth map. Relative
+/// paths are relative to the manifest's folder; outputs mirror the images' folders
+/// relative to it. See [`parse_manifest`].
 pub fn read_manifest(path: &Path) -> Result<Vec<Item>> {
     let text = crate::io::limits::read_text(path)?;
     parse_manifest(&text, path)

@@ -35,7 +35,7 @@ use super::{DepthFormat, DepthKind, Intrinsics};
 use crate::{Error, Result};
 
 /// Apple's pixel data info: what an auxiliary image's codes hold.
-pub(super) const PIXEL_DATA_INFO: &str = "http://ns.apple.com/pixeldatainfo/1.0/";
+const PIXEL_DATA_INFO: &str = "http://ns.apple.com/pixeldatainfo/1.0/";
 /// Apple's depth data: the map's accuracy and its camera's calibration.
 const DEPTH_DATA: &str = "http://ns.apple.com/depthData/1.0/";
 /// The MP Index IFD's tag of the image entries.
@@ -166,7 +166,7 @@ fn to_depth(image: AppleImage, path: &Path) -> Result<EmbeddedDepth> {
                     path,
                     format!(
                         "Apple depth image (image {} of its Multi-Picture index) without \
-                         apdi:{name}: expected the value its codes stand for",
+                         apdi:{name}: expected its codes' range and the values they stand for",
                         image.number
                     ),
                 )

@@ -33,8 +33,9 @@
 //! depth of 0 or less (a writer's code for nothing measured, with `Near` 0). A writer
 //! whose `Far` is its farthest measured depth loses those samples to the hole filling,
 //! which continues the scene round them. A JPEG depth image is lossy: clamped at `Far`,
-//! its codes that the coding moved off it are read as `Far` too (the `stop` module). The optional
-//! confidence maps are read beside the depth, for `min_confidence` (in `interpret`).
+//! its codes that the coding moved off it are read as `Far` too (the `stop` module). The
+//! optional confidence maps are read beside the depth, for `min_confidence` (in
+//! `interpret`).
 //!
 //! A JPEG with neither is read as an iPhone's portrait, whose depth is an image of its
 //! own after the photo (the `apple` module).
