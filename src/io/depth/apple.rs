@@ -340,9 +340,10 @@ fn rdf_items(text: &str) -> Vec<&str> {
 }
 
 /// Whether the JPEG at `path`, whose first bytes are `head`, lists an image of Apple's
-/// depth in its MPF index: each listed image's first [`IMAGE_HEAD_BYTES`] are read for
-/// the pixel data info namespace and a depth's `NativeFormat` (any error is "no";
-/// [`decode`] reads the file whole and checks it).
+/// depth in its MPF index: the first [`IMAGE_HEAD_BYTES`] of each of the first
+/// [`MAX_IMAGES_LOOKED_AT`] listed images are read for the pixel data info namespace and a
+/// depth's `NativeFormat` (any error is "no"; [`decode`] reads the file whole and checks
+/// it).
 pub(super) fn has_apple_depth(path: &Path, head: &[u8]) -> bool {
     use std::io::{Read, Seek, SeekFrom};
     let Ok(header) = xmp_packets(head, path) else {
@@ -354,7 +355,7 @@ pub(super) fn has_apple_depth(path: &Path, head: &[u8]) -> bool {
     let Ok(mut file) = std::fs::File::open(path) else {
         return false;
     };
-    images.iter().any(|span| {
+    images.iter().take(MAX_IMAGES_LOOKED_AT).any(|span| {
         let mut bytes = Vec::new();
         let read = file.seek(SeekFrom::Start(span.start as u64)).and_then(|_| {
             let len = (span.len() as u64).min(IMAGE_HEAD_BYTES);
@@ -366,6 +367,11 @@ pub(super) fn has_apple_depth(path: &Path, head: &[u8]) -> bool {
 
 /// How much of each MPF image [`has_apple_depth`] reads: its XMP comes in its header.
 const IMAGE_HEAD_BYTES: u64 = 64 << 10;
+
+/// How many MPF images [`has_apple_depth`] looks into: an iPhone lists a handful (the
+/// disparity, the mattes, a gain map), and an index of thousands of entries, each read
+/// again from the file, would make the quick check slow.
+const MAX_IMAGES_LOOKED_AT: usize = 32;
 
 /// Whether an image's first bytes name the pixel data info namespace and one of the
 /// `NativeFormat`s of depth, as a number or as its characters.
