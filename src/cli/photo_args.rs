@@ -204,8 +204,9 @@ pub fn preprocess(args: &RenderArgs, scene: &Scene) -> Result<PrepReport> {
     let started = Instant::now();
     let prepared = brume::photo::preprocess(scene, &opts)?;
     if let Some(p) = &prepared.prepared {
+        // Wall time of the whole step (the report's figure is the CPU time of its parts).
         log::info!(
-            "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms CPU",
+            "pre-processing: {} holes ({} px) filled, {} sky px, {:.1} ms wall",
             p.stats.holes,
             p.stats.hole_pixels,
             p.stats.sky_pixels,
