@@ -165,14 +165,18 @@ def write_gdepth(path, photo_path, depth_m, far, mime):
            'GDepth:Units="m" GDepth:MeasureType="OpticalAxis" '
            f'GDepth:Mime="image/{mime}" '
            f'GDepth:Data="{base64.b64encode(image.tobytes()).decode()}"/></rdf:RDF></x:xmpmeta>')
+    ok, jpeg = cv2.imencode(".jpg", cv2.imread(photo_path), [cv2.IMWRITE_JPEG_QUALITY, 95])
+    with open(path, "wb") as f:
+        f.write(with_xmp(jpeg.tobytes(), xmp, "GDepth"))
+
+
+def with_xmp(jpeg, xmp, what):
+    """``jpeg`` (bytes) with the XMP packet ``xmp`` in an APP1 segment after its
+    start-of-image marker; ``what`` names the packet if it needs extended XMP."""
     payload = b"http://ns.adobe.com/xap/1.0/\x00" + xmp.encode()
     if len(payload) > 65533:
-        sys.exit("phone_depth_eval: the GDepth packet needs extended XMP: use a larger --factor")
-    ok, jpeg = cv2.imencode(".jpg", cv2.imread(photo_path), [cv2.IMWRITE_JPEG_QUALITY, 95])
-    jpeg = jpeg.tobytes()
-    app1 = b"\xff\xe1" + struct.pack(">H", len(payload) + 2) + payload
-    with open(path, "wb") as f:
-        f.write(jpeg[:2] + app1 + jpeg[2:])
+        sys.exit(f"phone_depth_eval: the {what} packet needs extended XMP: use a larger --factor")
+    return jpeg[:2] + b"\xff\xe1" + struct.pack(">H", len(payload) + 2) + payload + jpeg[2:]
 
 
 def write_apple(path, photo_path, depth_m, far, fov, turned):
@@ -205,9 +209,7 @@ def write_apple(path, photo_path, depth_m, far, fov, turned):
            f'<depthData:IntrinsicMatrixReferenceHeight>{h}</depthData:IntrinsicMatrixReferenceHeight>'
            f'<depthData:IntrinsicMatrix><rdf:Seq>{matrix}</rdf:Seq></depthData:IntrinsicMatrix>'
            '</rdf:Description></rdf:RDF></x:xmpmeta>')
-    payload = b"http://ns.adobe.com/xap/1.0/\x00" + xmp.encode()
-    aux = aux.tobytes()
-    aux = aux[:2] + b"\xff\xe1" + struct.pack(">H", len(payload) + 2) + payload + aux[2:]
+    aux = with_xmp(aux.tobytes(), xmp, "Apple depth")
     ok, primary = cv2.imencode(".jpg", photo, [cv2.IMWRITE_JPEG_QUALITY, 95])
     primary = primary.tobytes()
     if turned:

@@ -102,29 +102,23 @@ pub(super) fn check_confidence(
     path: &Path,
     notes: &mut Vec<String>,
 ) -> Result<()> {
-    let (mut measured, mut dropped, mut best) = (0usize, 0usize, 0f64);
+    let mut tally = ConfidenceTally::new(min_confidence);
     for &sample in raw.as_slice() {
         let (mm, code) = split(sample);
-        if mm == 0 {
-            continue;
+        if mm != 0 {
+            tally.drops(confidence(code));
         }
-        measured += 1;
-        if confidence(code) < min_confidence {
-            dropped += 1;
-        }
-        best = best.max(confidence(code));
     }
-    if dropped > 0 && dropped == measured {
-        return Err(Error::format(
-            path,
-            format!(
-                "all {measured} DEPTH16 samples with a range have a confidence below \
-                 `min_confidence` {min_confidence} (the highest is {best:.3}): expected \
-                 some at or above it; lower `min_confidence`, or check that the file is \
-                 DEPTH16 (a plain millimetre map is `depth_format` arcore or nyu)"
-            ),
-        ));
-    }
+    tally.refuse_if_none_left(
+        "DEPTH16 samples with a range",
+        "",
+        ", or check that the file is DEPTH16 (a plain millimetre map is `depth_format` \
+         arcore or nyu)",
+        path,
+    )?;
+    let ConfidenceTally {
+        measured, dropped, ..
+    } = tally;
     if dropped > 0 {
         notes.push(format!(
             "{dropped} of {measured} DEPTH16 samples with a range are below \
@@ -132,6 +126,67 @@ pub(super) fn check_confidence(
         ));
     }
     Ok(())
+}
+
+/// The confidences of a map's measured samples as a `min_confidence` threshold meets
+/// them: how many were measured, how many it drops, and the highest (DEPTH16's codes, or
+/// a portrait photo's confidence map).
+pub(super) struct ConfidenceTally {
+    threshold: f64,
+    /// Samples counted.
+    pub measured: usize,
+    /// Samples below the threshold.
+    pub dropped: usize,
+    best: f64,
+}
+
+impl ConfidenceTally {
+    pub(super) fn new(threshold: f64) -> Self {
+        ConfidenceTally {
+            threshold,
+            measured: 0,
+            dropped: 0,
+            best: f64::NEG_INFINITY,
+        }
+    }
+
+    /// Counts a measured sample of confidence `c`; whether the threshold drops it.
+    pub(super) fn drops(&mut self, c: f64) -> bool {
+        let dropped = c < self.threshold;
+        self.measured += 1;
+        self.dropped += usize::from(dropped);
+        self.best = self.best.max(c);
+        dropped
+    }
+
+    /// Refuses a threshold that dropped every measured sample: then the file is not
+    /// empty, the threshold is too high for it, and the message says so, naming the
+    /// `samples` counted, `where_` their confidences are, the highest, and a `hint`.
+    pub(super) fn refuse_if_none_left(
+        &self,
+        samples: &str,
+        where_: &str,
+        hint: &str,
+        path: &Path,
+    ) -> Result<()> {
+        let ConfidenceTally {
+            threshold,
+            measured,
+            dropped,
+            best,
+        } = *self;
+        if dropped == 0 || dropped < measured {
+            return Ok(());
+        }
+        Err(Error::format(
+            path,
+            format!(
+                "all {measured} {samples} have a confidence below `min_confidence` \
+                 {threshold}{where_} (the highest is {best:.3}): expected some at or above \
+                 it; lower `min_confidence`{hint}"
+            ),
+        ))
+    }
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::android::ConfidenceTally;
 use super::cityscapes::{self, CityscapesCamera};
 use super::gdepth::EmbeddedDepth;
 use super::middlebury::{self, Calib};
@@ -353,30 +354,16 @@ fn drop_unconfident(
         ));
         return Ok(());
     };
-    let (mut measured, mut dropped, mut best) = (0usize, 0usize, f64::NEG_INFINITY);
+    let mut tally = ConfidenceTally::new(threshold);
     for (v, &c) in e.map.as_mut_slice().iter_mut().zip(confidence.as_slice()) {
-        if !v.is_finite() {
-            continue;
-        }
-        let c = f64::from(c);
-        (measured, best) = (measured + 1, best.max(c));
-        if c < threshold {
+        if v.is_finite() && tally.drops(f64::from(c)) {
             *v = f32::NAN;
-            dropped += 1;
         }
     }
-    if dropped > 0 && dropped == measured {
-        return Err(Error::format(
-            path,
-            format!(
-                "all {measured} depth samples have a confidence below `min_confidence` \
-                 {threshold} in the file's confidence map (the highest is {best:.3}): \
-                 expected some at or above it; lower `min_confidence`"
-            ),
-        ));
-    }
+    tally.refuse_if_none_left("depth samples", " in the file's confidence map", "", path)?;
     notes.push(format!(
-        "{dropped} samples below `min_confidence` {threshold} in the confidence map: unknown"
+        "{} samples below `min_confidence` {threshold} in the confidence map: unknown",
+        tally.dropped
     ));
     Ok(())
 }
