@@ -258,6 +258,27 @@ fn main() -> Res<()> {
     seeds.put("colour_image", "blender.exr", blender.clone());
     seeds.put("exr", "blender.exr", blender);
     seeds.put("colour_image", "rgb.pfm", pfm("PF", 3, 2, &hdr, true, "\n"));
+    // Photos with ICC profiles (tests/data/colour/): a gamma curve decoded by itself, a
+    // table curve, a profile that is none, a grey profile on RGB pixels.
+    for name in [
+        "gamma22-ramp.png",
+        "p3-flat.png",
+        "garbage-icc.png",
+        "grey-icc.png",
+    ] {
+        let png = std::fs::read(root.join("tests/data/colour").join(name))?;
+        seeds.put("colour_image", &format!("icc-{name}"), png);
+    }
+    // And a JPEG's APP2 profile, stored as it is (a PNG's is compressed, which mutations
+    // mostly break).
+    let ramp = std::fs::read(root.join("tests/data/colour/gamma22-ramp.png"))?;
+    let mut decoder = image::codecs::png::PngDecoder::new(std::io::Cursor::new(&ramp))?;
+    let icc = image::ImageDecoder::icc_profile(&mut decoder)?.expect("the ramp's profile");
+    let mut icc_jpeg = Vec::new();
+    let mut encoder = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut icc_jpeg, 90);
+    image::ImageEncoder::set_icc_profile(&mut encoder, icc)?;
+    image::ImageEncoder::write_image(encoder, &rgb, 4, 4, image::ExtendedColorType::Rgb8)?;
+    seeds.put("colour_image", "icc-gamma22.jpg", icc_jpeg);
 
     // gdepth: the small JPEGs of tests/data/gdepth/ (ext8.jpg in extended XMP, dd8.jpg
     // Dynamic Depth, conf8.jpg with a confidence map).

@@ -248,7 +248,7 @@ fn render_refuses_bad_outputs() {
         out("nodir/out.png", "--out nodir"),
         out("afile/out.png", "--out afile"),
         out("adir.png", "--out adir.png"),
-        case("render", "--out demo.jpg", 1, "--out demo.jpg"),
+        case("render", "--out demo.gif", 1, "--out demo.gif"),
     ]);
 }
 

@@ -16,6 +16,7 @@ mod cli;
 mod cli_bad_input;
 mod cli_scene;
 mod coarse;
+mod colour_profile;
 mod diffuse_shader;
 mod distance_fog;
 mod engine_camera;

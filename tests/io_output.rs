@@ -129,10 +129,13 @@ fn scalar_exr_has_one_y_channel() {
 #[test]
 fn unknown_extension_is_an_error_and_creates_nothing() {
     let dir = tempfile::tempdir().unwrap();
-    for name in ["o.jpg", "o", "o.tiff"] {
+    for name in ["o.gif", "o", "o.tiff"] {
         let err = write_rgba(&dir.path().join(name), &sample()).unwrap_err();
         assert!(matches!(err, Error::InvalidParameter { .. }), "{err}");
-        assert!(err.to_string().contains(".png, .pfm or .exr"), "{err}");
+        assert!(
+            err.to_string().contains(".png, .jpg, .jpeg, .pfm or .exr"),
+            "{err}"
+        );
     }
     let err = write_scalar(&dir.path().join("r.png"), &Grid::filled(1, 1, 1.0)).unwrap_err();
     assert!(err.to_string().contains(".pfm or .exr"), "{err}");

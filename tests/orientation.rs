@@ -418,7 +418,7 @@ fn the_focal_length_of_a_photo_written_at_another_aspect_ratio_is_dropped() {
     let photo = Grid::filled(64, 48, [90u8, 120, 150]);
     let focal = |written| {
         let png = png_bytes(&photo, Some(exif_block(1, Some((26, written)))));
-        let (_, exif) = decode_upright_rgb(&png, "p.png").unwrap();
+        let exif = decode_upright_rgb(&png, "p.png").unwrap().exif;
         exif.focal_35mm
     };
     assert_eq!(focal(None), Some(26.0));

@@ -40,8 +40,9 @@ With ``--real IMAGE``, it also writes ``iphone-x.jpg`` from a real iPhone portra
 ``image-with-depth.jpg`` of Shuichi Tsutsumi's iOS-Depth-Sampler (MIT licence;
 https://github.com/shu223/iOS-Depth-Sampler, ``iOS-Depth-Sampler/Resources/``, commit
 a2e10669061a6a9d9de25e3aeb36a4b80ffd4599; an iPhone X on iOS 12, 3024 x 4032): its photo
-at a quarter of its size (OpenCV, quality 85) with the original's EXIF (ExifTool), and its
-disparity image, the MPF image 2 that ExifTool extracts, byte for byte, in a new index.
+at a quarter of its size (OpenCV, quality 85) with the original's EXIF and ICC profile
+(Display P3; ExifTool), and its disparity image, the MPF image 2 that ExifTool extracts,
+byte for byte, in a new index.
 
 Usage (Debian: ``apt install libimage-exiftool-perl``; ``pip install numpy opencv-python-headless``):
 
@@ -161,7 +162,7 @@ def with_mpf(primary, aux, out, verify=True):
 
 def real_portrait(src, out, tmp):
     """``src`` (a real iPhone portrait JPEG) with its photo a quarter of its size, its EXIF
-    kept, and its MPF image 2 (the disparity) as it is."""
+    and ICC profile (Display P3) kept, and its MPF image 2 (the disparity) as it is."""
     aux = subprocess.run(["exiftool", "-b", "-MPImage2", src], check=True,
                          capture_output=True).stdout
     assert b"http://ns.apple.com/pixeldatainfo/1.0/" in aux, "MPF image 2 is no Apple depth"
@@ -171,7 +172,7 @@ def real_portrait(src, out, tmp):
     quarter = cv2.resize(image, (w // 4, h // 4), interpolation=cv2.INTER_AREA)
     cv2.imwrite(photo_path, quarter, [cv2.IMWRITE_JPEG_QUALITY, 85])
     subprocess.run(["exiftool", "-q", "-overwrite_original", "-tagsFromFile", src, "-exif:all",
-                    photo_path], check=True)
+                    "-icc_profile", photo_path], check=True)
     with_mpf(open(photo_path, "rb").read(), [aux], out)
 
 

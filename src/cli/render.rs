@@ -87,7 +87,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     };
     photo::capture(&mut rendered.image, &capture)?;
     let mut outputs = Outputs::new();
-    outputs.stage_rgba(&out, &rendered.image)?;
+    outputs.stage_photo(&out, &rendered.image, scene.profile.as_ref())?;
     super::commit(outputs)?;
 
     let report = Report {
@@ -167,7 +167,7 @@ fn output_path(args: &RenderArgs) -> Result<PathBuf> {
         _ => Err(Error::invalid(
             "--out",
             "(missing)",
-            "an output path ending in .png, .pfm or .exr when --image/--depth are given",
+            "an output path ending in .png, .jpg, .pfm or .exr when --image/--depth are given",
         )),
     }
 }

@@ -679,6 +679,7 @@ fn encode(
     Encode {
         path,
         image: fogged.image,
+        profile: frame.photo.profile.clone(),
         transmittance,
         record,
         capture,

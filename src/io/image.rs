@@ -9,9 +9,11 @@
 //! upright is stored sideways with a tag, and the fog's sky and horizon are found from the
 //! top of the upright frame ([`load_upright_rgb`] says which orientation was applied, so
 //! that its depth map is turned with it: [`crate::io::depth::PhotoGeometry`]). Maps (depth,
-//! masks) are read as stored. Embedded ICC profiles and PNG `gAMA` chunks are ignored:
-//! inputs are taken as sRGB. An EXR's chromaticities are ignored too: its primaries are
-//! taken to be the output's.
+//! masks) are read as stored. A colour image's embedded ICC profile is read
+//! ([`crate::io::colour_profile`]: Display P3 and the like are kept, and decoded by their
+//! own curves where those are not sRGB's); without one, a PNG or JPEG is taken as sRGB
+//! (PNG `gAMA` chunks are ignored). An EXR's chromaticities are ignored: its primaries
+//! are taken to be the output's.
 //!
 //! Float values: above 1 (HDR) they are kept; a NaN or infinite value is refused, naming
 //! the first pixel holding one (the fog's blur would spread it over its whole footprint);
@@ -26,6 +28,7 @@ use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 
 use crate::io::codec::exr::parse_exr_rgb;
 use crate::io::codec::pfm::{parse_pfm, Pfm};
+use crate::io::colour_profile::ColourProfile;
 use crate::io::limits::check_size;
 use crate::raster::{Orientation, RgbImage};
 use crate::{Error, Result};
@@ -223,12 +226,24 @@ const COLOUR_FORMATS: &str =
 /// file; sizes beyond `io::limits` are refused before the pixels are allocated. The
 /// image is turned upright by its EXIF orientation ([`load_upright_rgb`]).
 pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
-    Ok(load_upright_rgb(path)?.0)
+    Ok(load_upright_rgb(path)?.image)
 }
 
-/// [`load_linear_rgb`], with what its EXIF says (none for EXR and PFM): the orientation
-/// it applied, which the photo's depth map is turned by, and its focal length.
-pub fn load_upright_rgb(path: &Path) -> Result<(RgbImage, PhotoExif)> {
+/// A colour image as [`load_upright_rgb`] reads it: its pixels turned upright, what its
+/// EXIF says, and its colour profile.
+#[derive(Clone, Debug)]
+pub struct UprightPhoto {
+    /// Linear light, row 0 at the top of the upright frame.
+    pub image: RgbImage,
+    /// What its EXIF says (none for EXR and PFM): the orientation applied, which the
+    /// photo's depth map is turned by, and its focal length.
+    pub exif: PhotoExif,
+    /// Its embedded ICC profile, where it has a usable one, for its outputs to carry.
+    pub profile: Option<ColourProfile>,
+}
+
+/// [`load_linear_rgb`], with what its EXIF says and its colour profile.
+pub fn load_upright_rgb(path: &Path) -> Result<UprightPhoto> {
     let bytes = crate::io::limits::read_file(path)?;
     decode_upright_rgb(&bytes, &path.display().to_string())
 }
@@ -242,13 +257,19 @@ pub fn load_upright_rgb(path: &Path) -> Result<(RgbImage, PhotoExif)> {
 /// that, a lone `Y` channel as grey. Which channels were used is logged. A file holding
 /// only depth is refused, with a hint to give it as the depth map.
 pub fn decode_linear_rgb(bytes: &[u8], name: &str) -> Result<RgbImage> {
-    Ok(decode_upright_rgb(bytes, name)?.0)
+    Ok(decode_upright_rgb(bytes, name)?.image)
 }
 
-/// [`decode_linear_rgb`], with what its EXIF says.
-pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, PhotoExif)> {
+/// [`decode_linear_rgb`], with what its EXIF says and its colour profile.
+pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
     let path = Path::new(name);
-    let upright = |image| Ok((image, PhotoExif::default()));
+    let upright = |image| {
+        Ok(UprightPhoto {
+            image,
+            exif: PhotoExif::default(),
+            profile: None,
+        })
+    };
     if bytes.starts_with(&EXR_MAGIC) {
         let exr = parse_exr_rgb(bytes, path)?;
         log::info!("{name}: linear colour from EXR channels {}", exr.source);
@@ -266,7 +287,7 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, PhotoEx
             )),
         };
     }
-    let (mut decoded, exif) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
+    let (mut decoded, exif, profile) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
     let orientation = exif.orientation;
     if orientation != Orientation::Upright {
         log::info!(
@@ -277,7 +298,11 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<(RgbImage, PhotoEx
         let theirs = image::metadata::Orientation::from_exif(code).expect("1 to 8");
         decoded.apply_orientation(theirs);
     }
-    Ok((to_linear_rgb(&decoded), exif))
+    Ok(UprightPhoto {
+        image: to_linear_rgb(&decoded, profile.as_ref()),
+        exif,
+        profile,
+    })
 }
 
 /// The first four bytes of every OpenEXR file.
@@ -345,7 +370,7 @@ pub(crate) fn finite_light<const N: usize>(
 /// Decodes PNG or JPEG bytes without any colour conversion; shared with the depth loaders
 /// so that 8- and 16-bit PNG depth maps keep their raw values.
 pub(crate) fn decode_any(bytes: &[u8], name: &str) -> Result<DynamicImage> {
-    let (image, _) = decode_image(bytes, name, "a PNG or JPEG file", Role::Map)?;
+    let (image, ..) = decode_image(bytes, name, "a PNG or JPEG file", Role::Map)?;
     Ok(image)
 }
 
@@ -424,8 +449,8 @@ pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
     let bytes = crate::io::limits::read_file(path)?;
     let name = path.display().to_string();
     if bytes.starts_with(&EXR_MAGIC) || is_pfm(&bytes) {
-        let (image, exif) = decode_upright_rgb(&bytes, &name)?;
-        return Ok((image.width(), image.height(), exif));
+        let photo = decode_upright_rgb(&bytes, &name)?;
+        return Ok((photo.image.width(), photo.image.height(), photo.exif));
     }
     let (mut decoder, _) = open_decoder(&bytes, &name, COLOUR_FORMATS)?;
     let (w, h) = decoder.dimensions();
@@ -434,18 +459,18 @@ pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
 
 /// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
 /// is none of them, and the file's `role`; with a colour image's EXIF (its orientation not
-/// applied).
+/// applied) and colour profile.
 fn decode_image(
     bytes: &[u8],
     name: &str,
     expected: &str,
     role: Role,
-) -> Result<(DynamicImage, PhotoExif)> {
+) -> Result<(DynamicImage, PhotoExif, Option<ColourProfile>)> {
     let (mut decoder, format) = open_decoder(bytes, name, expected)?;
     let cannot = cannot_decode(format, name);
-    let exif = match role {
-        Role::Colour => exif_of(&mut decoder, name),
-        Role::Map => PhotoExif::default(),
+    let (exif, profile) = match role {
+        Role::Colour => (exif_of(&mut decoder, name), profile_of(&mut decoder, name)),
+        Role::Map => (PhotoExif::default(), None),
     };
     // The size is checked from the header, before the pixel buffer is allocated.
     let (w, h) = decoder.dimensions();
@@ -463,7 +488,20 @@ fn decode_image(
         .reserve(decoder.total_bytes())
         .map_err(&cannot)?;
     let image = DynamicImage::from_decoder(decoder).map_err(cannot)?;
-    Ok((image, exif))
+    Ok((image, exif, profile))
+}
+
+/// The colour profile of an opened PNG or JPEG ([`ColourProfile::from_icc`]); none where
+/// it has none or it cannot be used.
+fn profile_of(decoder: &mut impl ImageDecoder, name: &str) -> Option<ColourProfile> {
+    match decoder.icc_profile() {
+        Ok(Some(icc)) => ColourProfile::from_icc(icc, name),
+        Ok(None) => None,
+        Err(e) => {
+            log::warn!("{name}: its ICC colour profile cannot be read ({e}); taken as sRGB");
+            None
+        }
+    }
 }
 
 /// Refuses a PNG whose palette (`PLTE` chunk) is not whole RGB entries of 3 bytes, as the
@@ -585,8 +623,25 @@ fn hex_prefix(bytes: &[u8]) -> String {
         .join(" ")
 }
 
-fn to_linear_rgb(img: &DynamicImage) -> RgbImage {
+/// Linear light of a decoded PNG or JPEG: by its profile's own curves where it has them,
+/// else by sRGB's.
+fn to_linear_rgb(img: &DynamicImage, profile: Option<&ColourProfile>) -> RgbImage {
     let (w, h) = (img.width() as usize, img.height() as usize);
+    if let Some(p) = profile.filter(|p| p.has_own_curves()) {
+        let decode = |rgb| p.decode_rgb16(rgb).expect("a profile with its own curves");
+        let data = match img {
+            DynamicImage::ImageLuma8(_)
+            | DynamicImage::ImageLumaA8(_)
+            | DynamicImage::ImageRgb8(_)
+            | DynamicImage::ImageRgba8(_) => img
+                .to_rgb8()
+                .pixels()
+                .map(|px| decode(px.0.map(|c| u16::from(c) * 257)))
+                .collect(),
+            _ => img.to_rgb16().pixels().map(|px| decode(px.0)).collect(),
+        };
+        return RgbImage::from_vec(w, h, data);
+    }
     let is_8bit = matches!(
         img,
         DynamicImage::ImageLuma8(_)

@@ -8,6 +8,7 @@
 
 pub mod camera;
 pub mod codec;
+pub mod colour_profile;
 pub mod demo;
 pub mod depth;
 pub mod image;

@@ -16,13 +16,14 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard};
 
-use crate::io::codec::{exr, pfm, png};
+use crate::io::codec::{exr, jpeg, pfm, png};
+use crate::io::colour_profile::ColourProfile;
 use crate::io::image::linear_rgba_to_srgb8_rgb;
 use crate::raster::{RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
 /// Extensions [`write_rgba`] accepts.
-pub const IMAGE_EXTENSIONS: [&str; 3] = ["png", "pfm", "exr"];
+pub const IMAGE_EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "pfm", "exr"];
 /// Extensions [`write_scalar`] accepts.
 pub const SCALAR_EXTENSIONS: [&str; 2] = ["pfm", "exr"];
 /// Extensions [`write_png_rgb8`] accepts: it writes PNG bytes, so nothing else.
@@ -116,11 +117,18 @@ fn list_extensions(extensions: &[&str]) -> String {
 
 /// Writes a linear-light RGBA image, choosing the format by extension:
 /// `.png` 8-bit sRGB RGB (alpha dropped, values clamped to `[0, 1]` and rounded),
+/// `.jpg`/`.jpeg` the same pixels as a JPEG (quality [`jpeg::QUALITY`], 4:4:4),
 /// `.pfm` float RGB `PF` (linear, little-endian, rows bottom to top),
 /// `.exr` float RGBA (linear, 32-bit).
 pub fn write_rgba(path: &Path, img: &RgbaImage) -> Result<()> {
+    write_photo(path, img, None)
+}
+
+/// [`write_rgba`] for an image of a photo with the colour profile `profile`: a PNG or
+/// JPEG carries it ([`ColourProfile::icc`]), so that the image's colours are the photo's.
+pub fn write_photo(path: &Path, img: &RgbaImage, profile: Option<&ColourProfile>) -> Result<()> {
     let mut outputs = Outputs::new();
-    outputs.stage_rgba(path, img)?;
+    outputs.stage_photo(path, img, profile)?;
     outputs.commit()
 }
 
@@ -162,6 +170,26 @@ fn same_inode(a: &Path, b: &Path) -> bool {
 #[cfg(not(unix))]
 fn same_inode(_a: &Path, _b: &Path) -> bool {
     false
+}
+
+/// The size of 8-bit pixels `rgb` for `path`, checked: `width * height` of them, each
+/// side within an image file's 32 bits.
+fn rgb8_size(path: &Path, width: usize, height: usize, rgb: &[[u8; 3]]) -> Result<(u32, u32)> {
+    if rgb.len() != width * height {
+        return Err(Error::invalid(
+            "pixel count",
+            rgb.len(),
+            format!("{width}*{height} pixels for {}", path.display()),
+        ));
+    }
+    match (u32::try_from(width), u32::try_from(height)) {
+        (Ok(w), Ok(h)) => Ok((w, h)),
+        _ => Err(Error::invalid(
+            "image size",
+            format!("{width}x{height}"),
+            "at most 2^32-1 per side",
+        )),
+    }
 }
 
 fn extension_of(path: &Path) -> String {
@@ -215,10 +243,40 @@ impl Outputs {
 
     /// Stages a linear-light RGBA image for `path`, in the format [`write_rgba`] picks.
     pub fn stage_rgba(&mut self, path: &Path, img: &RgbaImage) -> Result<()> {
-        match extension_of(path).as_str() {
-            "png" => {
+        self.stage_photo(path, img, None)
+    }
+
+    /// Stages an image of a photo with the colour profile `profile`, as [`write_photo`]
+    /// writes it. A float output (EXR, PFM) holds no profile: where the photo's primaries
+    /// are not sRGB's, a warning says which its values are in.
+    pub fn stage_photo(
+        &mut self,
+        path: &Path,
+        img: &RgbaImage,
+        profile: Option<&ColourProfile>,
+    ) -> Result<()> {
+        let icc = profile.map(ColourProfile::icc);
+        let extension = extension_of(path);
+        if let ("pfm" | "exr", Some(p)) = (extension.as_str(), profile) {
+            if !p.primaries_are_srgb() {
+                log::warn!(
+                    "{}: its linear values are in the photo's primaries ({}), which a \
+                     {extension} file cannot say; read it as such, or write .png or .jpg, \
+                     which carry the profile",
+                    path.display(),
+                    p.description()
+                );
+            }
+        }
+        match extension.as_str() {
+            "png" | "jpg" | "jpeg" => {
                 let rgb = linear_rgba_to_srgb8_rgb(img.as_slice());
-                self.stage_png_rgb8(path, img.width(), img.height(), &rgb)
+                let (w, h) = rgb8_size(path, img.width(), img.height(), &rgb)?;
+                let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
+                match extension.as_str() {
+                    "png" => self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h, icc)),
+                    _ => self.stage_with(path, |out| jpeg::write_rgb8(out, &bytes, w, h, icc)),
+                }
             }
             "pfm" => self.stage_with(path, |w| pfm::write_rgba(w, img)),
             "exr" => self.stage_with(path, |w| exr::write_rgba(w, img)),
@@ -243,25 +301,9 @@ impl Outputs {
         height: usize,
         rgb: &[[u8; 3]],
     ) -> Result<()> {
-        if rgb.len() != width * height {
-            return Err(Error::invalid(
-                "pixel count",
-                rgb.len(),
-                format!("{width}*{height} pixels for {}", path.display()),
-            ));
-        }
-        let (w, h) = match (u32::try_from(width), u32::try_from(height)) {
-            (Ok(w), Ok(h)) => (w, h),
-            _ => {
-                return Err(Error::invalid(
-                    "PNG size",
-                    format!("{width}x{height}"),
-                    "at most 2^32-1 per side",
-                ))
-            }
-        };
+        let (w, h) = rgb8_size(path, width, height, rgb)?;
         let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
-        self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h))
+        self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h, None))
     }
 
     /// Runs `write` on a buffered temporary file next to `path` and keeps it for

@@ -45,6 +45,7 @@ pub use insert::{insert, Insertion, VirtualObject};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
 
 use crate::error::{Error, Result};
+use crate::io::colour_profile::ColourProfile;
 use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoGeometry};
 use crate::io::image::PhotoExif;
 use crate::io::{demo, image};
@@ -66,6 +67,9 @@ pub struct Photo {
     /// What the image's EXIF said (its orientation, applied; its focal length); the
     /// default for an image without one, or given as an array.
     pub exif: PhotoExif,
+    /// The image's colour profile, which its PNG and JPEG outputs carry; None for sRGB
+    /// (an image without one, or given as an array).
+    pub profile: Option<ColourProfile>,
 }
 
 /// Bytes per pixel that a render holds in system memory besides the GL textures: the
@@ -86,7 +90,11 @@ impl Photo {
     /// ([`DepthOptions::layout`] says how the map lies; `opts.photo` is set here).
     pub fn load(image_path: &Path, depth_path: &Path, opts: &DepthOptions) -> Result<Photo> {
         check_memory_before_loading(image_path)?;
-        let (image, exif) = image::load_upright_rgb(image_path)?;
+        let image::UprightPhoto {
+            image,
+            exif,
+            profile,
+        } = image::load_upright_rgb(image_path)?;
         let opts = DepthOptions {
             photo: Some(PhotoGeometry::of_upright(
                 image.width(),
@@ -101,6 +109,7 @@ impl Photo {
             image_name: image_path.display().to_string(),
             depth_name: depth_path.display().to_string(),
             exif,
+            profile,
         };
         photo.check_depth_fits()?;
         Ok(photo)
@@ -145,6 +154,7 @@ impl Photo {
             image_name: "image".into(),
             depth_name: "range_m".into(),
             exif: PhotoExif::default(),
+            profile: None,
         };
         photo.check_depth_fits()?;
         Ok(photo)
@@ -159,7 +169,11 @@ impl Photo {
     pub fn load_transmittance(image_path: &Path, map_path: &Path) -> Result<Photo> {
         check_memory_before_loading(image_path)?;
         // The map is taken as the photo is stored, as a depth map is.
-        let (image, exif) = image::load_upright_rgb(image_path)?;
+        let image::UprightPhoto {
+            image,
+            exif,
+            profile,
+        } = image::load_upright_rgb(image_path)?;
         let orientation = exif.orientation;
         let range = crate::compat::load_optical_depth(map_path)?.into_oriented(orientation);
         let (image_name, depth_name) = (image_path.display(), map_path.display());
@@ -187,6 +201,7 @@ impl Photo {
             image_name: image_name.to_string(),
             depth_name: depth_name.to_string(),
             exif,
+            profile,
         })
     }
 
@@ -199,6 +214,7 @@ impl Photo {
             image_name: "built-in demo image".into(),
             depth_name: "built-in demo disparity".into(),
             exif: PhotoExif::default(),
+            profile: None,
         })
     }
 

@@ -36,8 +36,10 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub depth: DepthArgs,
 
-    /// Output file: .png (8-bit sRGB), .pfm (float RGB, linear) or .exr (float RGBA,
-    /// linear). Default for the demo: brume-demo.png. Must not be one of the inputs.
+    /// Output file: .png (8-bit sRGB), .jpg/.jpeg (8-bit sRGB, quality 95), .pfm (float
+    /// RGB, linear) or .exr (float RGBA, linear). A PNG or JPEG carries the photo's ICC
+    /// colour profile (Display P3 ...). Default for the demo: brume-demo.png. Must not be
+    /// one of the inputs.
     #[arg(long, short, value_name = "PATH")]
     pub out: Option<PathBuf>,
 

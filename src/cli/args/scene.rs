@@ -42,7 +42,7 @@ pub enum ProfileKind {
 /// `brume scene`.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
-    /// Output: the fogged frame, .png (8-bit sRGB), .pfm or .exr (linear). With --frames
+    /// Output: the fogged frame, .png or .jpg (8-bit sRGB), .pfm or .exr (linear). With --frames
     /// N > 1, numbered files NAME_0001.png … are written instead.
     #[arg(long, short, value_name = "PATH", default_value = "brume-scene.png")]
     pub out: PathBuf,
@@ -52,7 +52,7 @@ pub struct SceneArgs {
     #[arg(long, value_name = "PATH")]
     pub depth_out: Option<PathBuf>,
 
-    /// Also write the fog-free frame (.png, .pfm or .exr).
+    /// Also write the fog-free frame (.png, .jpg, .pfm or .exr).
     #[arg(long, value_name = "PATH")]
     pub clear_out: Option<PathBuf>,
 

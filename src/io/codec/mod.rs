@@ -6,6 +6,7 @@
 
 #[cfg(feature = "codecs")]
 pub mod exr;
+pub mod jpeg;
 #[cfg(feature = "codecs")]
 pub mod npy;
 pub mod pfm;

@@ -48,14 +48,27 @@ fn first_channel<T: image::Primitive>(img: image::ImageBuffer<image::LumaA<T>, V
     Grid::from_vec(w, h, img.pixels().map(|p| p.0[0]).collect())
 }
 
-/// Encodes `bytes`, `w * h` RGB pixels of 8 bits each, row 0 at the top.
-pub(crate) fn write_rgb8(mut out: impl Write, bytes: &[u8], w: u32, h: u32) -> std::io::Result<()> {
+/// Encodes `bytes`, `w * h` RGB pixels of 8 bits each, row 0 at the top, carrying the
+/// ICC profile `icc` where given (an `iCCP` chunk).
+pub(crate) fn write_rgb8(
+    mut out: impl Write,
+    bytes: &[u8],
+    w: u32,
+    h: u32,
+    icc: Option<&[u8]>,
+) -> std::io::Result<()> {
     use image::ImageEncoder;
     // Encoded in memory, then written: the png crate turns the OS's errors into text
     // ("No space left on device (os error 28)" of kind `Other`), and a full disk must
     // stay a full disk for a long run to stop on it (`output::is_out_of_space`).
     let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
+    let mut encoder = image::codecs::png::PngEncoder::new(&mut png);
+    if let Some(icc) = icc {
+        encoder
+            .set_icc_profile(icc.to_vec())
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+    }
+    encoder
         .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
         .map_err(|e| std::io::Error::other(e.to_string()))?;
     out.write_all(&png)

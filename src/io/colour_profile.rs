@@ -1,0 +1,382 @@
+//! A photo's ICC colour profile, carried from the photo to the images brume writes of it.
+//!
+//! Phones write their photos in Display P3 (every iPhone since the 7, many Android
+//! phones), cameras and editors in Adobe RGB or ProPhoto, each saying so in an embedded
+//! ICC profile. Read as sRGB and written without a profile, such a photo's fogged output
+//! shows duller colours than the photo beside it, fog or no fog. So the profile goes with
+//! the photo:
+//!
+//! - **Matrix-shaper RGB with sRGB's tone curve** (Display P3, sRGB itself): the pixels
+//!   are decoded by the sRGB curve as before, which is that profile's own, so the fog
+//!   mixes linear light in the profile's primaries; PNG and JPEG outputs carry the
+//!   profile as it was.
+//! - **Matrix-shaper RGB with other curves** (Adobe RGB's gamma 2.2, ProPhoto's 1.8, a
+//!   linear profile): each channel is decoded by its own curve, to linear light in the
+//!   profile's primaries; outputs, encoded by sRGB's curve as always, carry those
+//!   primaries with sRGB's curve (a profile brume writes with moxcms).
+//! - **Other profiles** (lookup-table RGB profiles): their curves are not read, the fog
+//!   mixes values decoded by the sRGB curve (approximate, with a warning), and outputs
+//!   carry the profile, so that pixels the fog does not touch keep their colours.
+//! - **Unreadable or not RGB** (a CMYK or grey profile): ignored with a warning, the
+//!   photo taken as sRGB, as before.
+//!
+//! EXR and PFM outputs cannot hold an ICC profile: their linear values are in the
+//! profile's primaries, and [`ColourProfile::primaries_are_srgb`] lets a writer say so.
+
+use std::sync::Arc;
+
+use moxcms::{ColorProfile, DataColorSpace, ProfileText, ToneReprCurve};
+
+use crate::io::image::linear_to_srgb;
+
+/// An ICC colour profile read from a photo (see the module docs for what is done with
+/// each kind).
+#[derive(Clone, PartialEq)]
+pub struct ColourProfile {
+    /// The profile outputs carry.
+    icc: Arc<Vec<u8>>,
+    /// The profile's description ("Display P3"), or a placeholder.
+    description: String,
+    /// Per-channel decoding where the profile's curves are not sRGB's.
+    curves: Option<Arc<ChannelCurves>>,
+    /// Whether its primaries are sRGB's (within the rounding of ICC numbers).
+    srgb_primaries: bool,
+}
+
+/// How far, in 8-bit codes, a profile's curve may be from sRGB's at any code and still be
+/// read as sRGB's: a quarter code, so that decoding by either gives every 8-bit code back.
+const SRGB_CURVE_TOLERANCE_CODES: f32 = 0.25;
+
+/// How far (in CIE XYZ) a profile's colorants may be from sRGB's for its primaries to be
+/// sRGB's: profiles round them to s15Fixed16 and adapt them to D50 with their own matrix.
+const SRGB_PRIMARIES_TOLERANCE: f64 = 2e-3;
+
+/// Each channel's decoding to linear light at every 16-bit code (an 8-bit code `c` is
+/// 16-bit code `257 c`, the same value).
+#[derive(PartialEq)]
+struct ChannelCurves([Vec<f32>; 3]);
+
+impl std::fmt::Debug for ColourProfile {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ColourProfile")
+            .field("description", &self.description)
+            .field("icc_bytes", &self.icc.len())
+            .field("own_curves", &self.curves.is_some())
+            .field("srgb_primaries", &self.srgb_primaries)
+            .finish()
+    }
+}
+
+impl ColourProfile {
+    /// Reads the ICC profile `icc` embedded in the image `name`. None, with a warning,
+    /// where it cannot be read or is not an RGB profile: the image is then taken as sRGB.
+    pub fn from_icc(icc: Vec<u8>, name: &str) -> Option<ColourProfile> {
+        let parsed = match ColorProfile::new_from_slice(&icc) {
+            Ok(p) => p,
+            Err(e) => {
+                log::warn!(
+                    "{name}: its ICC colour profile ({} bytes) cannot be read ({e}); its \
+                     colours are taken as sRGB",
+                    icc.len()
+                );
+                return None;
+            }
+        };
+        let description = describe(&parsed);
+        if parsed.color_space != DataColorSpace::Rgb {
+            log::warn!(
+                "{name}: its ICC colour profile \"{description}\" is for {:?} data, not RGB; \
+                 its colours are taken as sRGB",
+                parsed.color_space
+            );
+            return None;
+        }
+        let srgb_primaries = has_srgb_primaries(&parsed);
+        if !parsed.is_matrix_shaper() {
+            log::warn!(
+                "{name}: its ICC colour profile \"{description}\" is a lookup-table profile, \
+                 whose curves brume does not read: the fog mixes its values as if encoded \
+                 by sRGB's curve (approximate); outputs carry the profile"
+            );
+            return Some(ColourProfile {
+                icc: Arc::new(icc),
+                description,
+                curves: None,
+                srgb_primaries,
+            });
+        }
+        let curves = match own_curves(&parsed) {
+            Ok(curves) => curves,
+            Err(why) => {
+                log::warn!(
+                    "{name}: the tone curves of its ICC colour profile \"{description}\" \
+                     cannot be evaluated ({why}); its colours are taken as sRGB"
+                );
+                return None;
+            }
+        };
+        let Some(curves) = curves else {
+            log::info!(
+                "{name}: colour profile \"{description}\" (sRGB's tone curve): the fog mixes \
+                 linear light in its primaries, and outputs carry it"
+            );
+            return Some(ColourProfile {
+                icc: Arc::new(icc),
+                description,
+                curves: None,
+                srgb_primaries,
+            });
+        };
+        match with_srgb_curves(&parsed) {
+            Ok(output_icc) => {
+                log::info!(
+                    "{name}: colour profile \"{description}\": each channel decoded by its \
+                     own tone curve; outputs carry its primaries with sRGB's curve"
+                );
+                Some(ColourProfile {
+                    icc: Arc::new(output_icc),
+                    description,
+                    curves: Some(Arc::new(curves)),
+                    srgb_primaries,
+                })
+            }
+            Err(e) => {
+                log::warn!(
+                    "{name}: its colour profile \"{description}\" cannot be rewritten with \
+                     sRGB's curve for the outputs ({e}); its colours are taken as sRGB"
+                );
+                None
+            }
+        }
+    }
+
+    /// The ICC profile that PNG and JPEG outputs of the photo carry.
+    pub fn icc(&self) -> &[u8] {
+        &self.icc
+    }
+
+    /// The profile's description, for messages ("Display P3").
+    pub fn description(&self) -> &str {
+        &self.description
+    }
+
+    /// Whether the photo's primaries are sRGB's, so that an output without a profile (EXR,
+    /// PFM) means the same colours.
+    pub fn primaries_are_srgb(&self) -> bool {
+        self.srgb_primaries
+    }
+
+    /// Whether the photo is decoded by its profile's own curves rather than sRGB's.
+    pub fn has_own_curves(&self) -> bool {
+        self.curves.is_some()
+    }
+
+    /// Linear light of a pixel's 16-bit codes (an 8-bit code `c` is `257 c`) by the
+    /// profile's own curves; None where the photo is decoded by sRGB's
+    /// ([`ColourProfile::has_own_curves`]).
+    pub(crate) fn decode_rgb16(&self, rgb: [u16; 3]) -> Option<[f32; 3]> {
+        let curves = self.curves.as_ref()?;
+        Some(std::array::from_fn(|i| curves.0[i][usize::from(rgb[i])]))
+    }
+}
+
+/// The profile's description: its English text where it has several, else its first.
+fn describe(p: &ColorProfile) -> String {
+    let text = match &p.description {
+        Some(ProfileText::PlainString(s)) => s.clone(),
+        Some(ProfileText::Localizable(all)) => all
+            .iter()
+            .find(|s| s.language.eq_ignore_ascii_case("en"))
+            .or(all.first())
+            .map(|s| s.value.clone())
+            .unwrap_or_default(),
+        Some(ProfileText::Description(d)) => d.ascii_string.clone(),
+        None => String::new(),
+    };
+    let text: String = text
+        .trim_matches(char::from(0))
+        .trim()
+        .chars()
+        .take(80)
+        .collect();
+    if text.is_empty() {
+        "(unnamed)".into()
+    } else {
+        text
+    }
+}
+
+/// Whether the colorants are sRGB's.
+fn has_srgb_primaries(p: &ColorProfile) -> bool {
+    let srgb = ColorProfile::new_srgb();
+    let close = |a: moxcms::Xyzd, b: moxcms::Xyzd| {
+        [a.x - b.x, a.y - b.y, a.z - b.z]
+            .iter()
+            .all(|d| d.abs() <= SRGB_PRIMARIES_TOLERANCE)
+    };
+    close(p.red_colorant, srgb.red_colorant)
+        && close(p.green_colorant, srgb.green_colorant)
+        && close(p.blue_colorant, srgb.blue_colorant)
+}
+
+/// Each channel's decoding at every 16-bit code, or None where all three curves are
+/// sRGB's (within [`SRGB_CURVE_TOLERANCE_CODES`]), so that the photo keeps sRGB's
+/// decoding, exactly as without a profile. Errors: a curve moxcms cannot evaluate, or
+/// one giving a value that is not finite.
+fn own_curves(p: &ColorProfile) -> std::result::Result<Option<ChannelCurves>, String> {
+    let trcs = [&p.red_trc, &p.green_trc, &p.blue_trc];
+    let mut tables: [Vec<f32>; 3] = Default::default();
+    let mut all_srgb = true;
+    for (table, trc) in tables.iter_mut().zip(trcs) {
+        let trc = trc.as_ref().ok_or("a channel has no curve")?;
+        *table = curve_table(trc)?;
+        all_srgb &= is_srgb_curve(table);
+    }
+    Ok((!all_srgb).then_some(ChannelCurves(tables)))
+}
+
+/// A curve's linear value at every 16-bit code, clamped to [0, 1].
+fn curve_table(trc: &ToneReprCurve) -> std::result::Result<Vec<f32>, String> {
+    if let ToneReprCurve::Parametric(params) = trc {
+        // moxcms indexes the first parameter without checking that there is one.
+        if params.is_empty() {
+            return Err("a parametric curve without parameters".into());
+        }
+    }
+    let curve = trc.make_linear_evaluator().map_err(|e| e.to_string())?;
+    (0..=u16::MAX)
+        .map(|code| {
+            let v = curve.evaluate_value(f32::from(code) / 65535.0);
+            if v.is_finite() {
+                Ok(v.clamp(0.0, 1.0))
+            } else {
+                Err(format!("{v} at code {code} of 65535"))
+            }
+        })
+        .collect()
+}
+
+/// Whether a curve (its 16-bit table) is sRGB's, compared at every 8-bit code in the
+/// encoded domain.
+fn is_srgb_curve(table: &[f32]) -> bool {
+    (0..=255u16).all(|c| {
+        let encoded = linear_to_srgb(table[usize::from(c) * 257]) * 255.0;
+        (encoded - f32::from(c)).abs() <= SRGB_CURVE_TOLERANCE_CODES
+    })
+}
+
+/// The profile with sRGB's curve on each channel and no lookup tables: what outputs,
+/// encoded by that curve, carry.
+fn with_srgb_curves(p: &ColorProfile) -> std::result::Result<Vec<u8>, moxcms::CmsError> {
+    let srgb = ColorProfile::new_srgb();
+    let mut out = p.clone();
+    out.red_trc = srgb.red_trc.clone();
+    out.green_trc = srgb.green_trc.clone();
+    out.blue_trc = srgb.blue_trc;
+    // A CICP tag would say the original transfer; the curves now say sRGB's.
+    out.cicp = None;
+    out.lut_a_to_b_perceptual = None;
+    out.lut_a_to_b_colorimetric = None;
+    out.lut_a_to_b_saturation = None;
+    out.lut_b_to_a_perceptual = None;
+    out.lut_b_to_a_colorimetric = None;
+    out.lut_b_to_a_saturation = None;
+    out.description = Some(ProfileText::PlainString(format!(
+        "{} primaries, sRGB curve (brume)",
+        describe(p)
+    )));
+    out.encode()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::image::srgb_to_linear;
+
+    fn read(p: &ColorProfile) -> Option<ColourProfile> {
+        ColourProfile::from_icc(p.encode().unwrap(), "test")
+    }
+
+    /// Display P3 has sRGB's curve: kept byte for byte, decoded as sRGB (exactly as
+    /// without a profile), its primaries not sRGB's.
+    #[test]
+    fn display_p3_is_kept_as_it_is() {
+        let icc = ColorProfile::new_display_p3().encode().unwrap();
+        let p = ColourProfile::from_icc(icc.clone(), "p3").expect("an RGB profile");
+        assert_eq!(p.icc(), icc.as_slice());
+        assert!(!p.has_own_curves());
+        assert!(!p.primaries_are_srgb());
+        assert_eq!(p.decode_rgb16([0, 1, 2]), None);
+    }
+
+    #[test]
+    fn srgb_is_srgb() {
+        let p = read(&ColorProfile::new_srgb()).expect("an RGB profile");
+        assert!(p.primaries_are_srgb() && !p.has_own_curves(), "{p:?}");
+    }
+
+    /// Adobe RGB's gamma 563/256 (ICC's u8Fixed8) decodes each code by its own curve, and
+    /// outputs carry Adobe's colorants with sRGB's curve.
+    #[test]
+    fn a_gamma_curve_decodes_by_itself_and_outputs_carry_srgb_curves() {
+        let adobe = ColorProfile::new_adobe_rgb();
+        let p = read(&adobe).expect("an RGB profile");
+        assert!(p.has_own_curves() && !p.primaries_are_srgb(), "{p:?}");
+        let gamma = 563.0 / 256.0;
+        for c in [0u8, 1, 10, 128, 200, 255] {
+            let want = (f64::from(c) / 255.0).powf(gamma) as f32;
+            let got = p.decode_rgb16([u16::from(c) * 257; 3]).unwrap();
+            for v in got {
+                assert!((v - want).abs() < 2e-5, "code {c}: {v} against {want}");
+            }
+        }
+        let out = ColorProfile::new_from_slice(p.icc()).unwrap();
+        for (a, b) in [
+            (out.red_colorant, adobe.red_colorant),
+            (out.green_colorant, adobe.green_colorant),
+            (out.blue_colorant, adobe.blue_colorant),
+        ] {
+            assert!((a.x - b.x).abs() + (a.y - b.y).abs() + (a.z - b.z).abs() < 1e-4);
+        }
+        let curve = curve_table(out.red_trc.as_ref().unwrap()).unwrap();
+        assert!(is_srgb_curve(&curve));
+        for c in [0u16, 3, 10, 128, 255] {
+            let srgb = srgb_to_linear(f32::from(c) / 255.0);
+            assert!(
+                (curve[usize::from(c) * 257] - srgb).abs() < 1e-4,
+                "code {c}"
+            );
+        }
+    }
+
+    #[test]
+    fn unreadable_and_non_rgb_profiles_are_ignored() {
+        assert!(ColourProfile::from_icc(vec![0; 200], "zeros").is_none());
+        assert!(ColourProfile::from_icc(Vec::new(), "empty").is_none());
+        let mut cmyk = ColorProfile::new_srgb();
+        cmyk.color_space = DataColorSpace::Cmyk;
+        assert!(read(&cmyk).is_none());
+    }
+
+    /// One step off sRGB's curve at a single code is not sRGB's; a table within a tenth
+    /// of a code everywhere is.
+    #[test]
+    fn the_srgb_curve_test_has_a_quarter_code_tolerance() {
+        let srgb: Vec<f32> = (0..=u16::MAX)
+            .map(|c| srgb_to_linear(f32::from(c) / 65535.0))
+            .collect();
+        assert!(is_srgb_curve(&srgb));
+        let mut near = srgb.clone();
+        let step = linear_to_srgb_code_step(&srgb, 100);
+        near[100 * 257] += 0.1 * step;
+        assert!(is_srgb_curve(&near));
+        let mut off = srgb;
+        off[100 * 257] += 0.5 * step;
+        assert!(!is_srgb_curve(&off));
+    }
+
+    /// The linear size of one 8-bit code's step at `code`.
+    fn linear_to_srgb_code_step(table: &[f32], code: usize) -> f32 {
+        table[(code + 1) * 257] - table[code * 257]
+    }
+}

@@ -1,0 +1,298 @@
+//! A photo's ICC colour profile, end to end: decoded by its own curves where they are not
+//! sRGB's, carried by the PNG and JPEG outputs of `render` and `batch`, a profile that is
+//! unreadable or not RGB ignored with a warning. The fixtures (`tests/data/colour/`,
+//! `tools/colour_profile_fixtures.py`) carry profiles packed from the ICC specification
+//! and checked by littleCMS; `iphone-x.jpg` carries a real iPhone's Display P3. Expected
+//! values come from the specification's formulas (a pure gamma of 563/256, sRGB's curve of
+//! IEC 61966-2-1) and the profiles' tags are read back by this file's own reader.
+
+use std::path::{Path, PathBuf};
+
+use brume::io::image::load_upright_rgb;
+use image::ImageDecoder;
+use serde_json::Value;
+
+use crate::common::{brume, stderr};
+
+fn fixture(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/colour")
+        .join(name)
+}
+
+fn profiles() -> Value {
+    serde_json::from_slice(&std::fs::read(fixture("profiles.json")).unwrap()).unwrap()
+}
+
+/// sRGB's encoding of linear light, IEC 61966-2-1.
+fn srgb_encode(v: f64) -> f64 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn srgb_decode(c: f64) -> f64 {
+    if c <= 0.040_45 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// The ICC profile an image file carries, as its decoder reads it (PNG `iCCP`, JPEG APP2).
+fn icc_of(path: &Path) -> Option<Vec<u8>> {
+    let mut decoder = image::ImageReader::open(path)
+        .unwrap()
+        .with_guessed_format()
+        .unwrap()
+        .into_decoder()
+        .unwrap();
+    decoder.icc_profile().unwrap()
+}
+
+/// A tag's data in an ICC profile, by the tag table (ICC.1 sec. 7.3).
+fn tag<'a>(icc: &'a [u8], signature: &[u8; 4]) -> &'a [u8] {
+    let be = |at: usize| u32::from_be_bytes(icc[at..at + 4].try_into().unwrap()) as usize;
+    (0..be(128))
+        .map(|k| 132 + 12 * k)
+        .find(|&at| &icc[at..at + 4] == signature)
+        .map(|at| &icc[be(at + 4)..be(at + 4) + be(at + 8)])
+        .unwrap_or_else(|| panic!("no {:?} tag", String::from_utf8_lossy(signature)))
+}
+
+fn s15f16(b: &[u8]) -> f64 {
+    f64::from(i32::from_be_bytes(b.try_into().unwrap())) / 65536.0
+}
+
+/// A colorant tag (`XYZ ` type): X, Y, Z.
+fn colorant(icc: &[u8], signature: &[u8; 4]) -> [f64; 3] {
+    let t = tag(icc, signature);
+    assert_eq!(&t[..4], b"XYZ ");
+    std::array::from_fn(|i| s15f16(&t[8 + 4 * i..12 + 4 * i]))
+}
+
+/// A curve tag's linear value at `x` in [0, 1]: a `para` (ICC.1 10.16, functions 0-4)
+/// or a `curv` (a gamma, or a table read by linear interpolation).
+fn curve_at(icc: &[u8], signature: &[u8; 4], x: f64) -> f64 {
+    let t = tag(icc, signature);
+    match &t[..4] {
+        b"para" => {
+            let kind = u16::from_be_bytes([t[8], t[9]]);
+            let p: Vec<f64> = (0..[1, 3, 4, 5, 7][usize::from(kind)])
+                .map(|i| s15f16(&t[12 + 4 * i..16 + 4 * i]))
+                .collect();
+            let (g, a, b, c, d) = (p[0], p[1], p[2], p[3], p[4]);
+            assert_eq!(kind, 3, "sRGB's curve is function 3");
+            if x >= d {
+                (a * x + b).powf(g)
+            } else {
+                c * x
+            }
+        }
+        b"curv" => {
+            let n = u32::from_be_bytes(t[8..12].try_into().unwrap()) as usize;
+            let entry = |i: usize| f64::from(u16::from_be_bytes([t[12 + 2 * i], t[13 + 2 * i]]));
+            match n {
+                1 => x.powf(entry(0) / 256.0),
+                _ => {
+                    let at = x * (n - 1) as f64;
+                    let i = (at.floor() as usize).min(n - 2);
+                    let f = at - i as f64;
+                    (entry(i) * (1.0 - f) + entry(i + 1) * f) / 65535.0
+                }
+            }
+        }
+        other => panic!("curve type {other:?}"),
+    }
+}
+
+/// Asserts that `icc` has the colorants `want` (profiles.json) and sRGB's curve on each
+/// channel, within a tenth of an 8-bit code.
+fn assert_primaries_with_srgb_curve(icc: &[u8], want: &Value) {
+    for (k, signature) in [b"rXYZ", b"gXYZ", b"bXYZ"].into_iter().enumerate() {
+        let got = colorant(icc, signature);
+        for (i, g) in got.into_iter().enumerate() {
+            let w = want[k][i].as_f64().unwrap();
+            assert!(
+                (g - w).abs() <= 2.0 / 65536.0,
+                "{signature:?}[{i}]: {g} for {w}"
+            );
+        }
+    }
+    for signature in [b"rTRC", b"gTRC", b"bTRC"] {
+        for code in 0..=255 {
+            let x = f64::from(code) / 255.0;
+            let encoded = srgb_encode(curve_at(icc, signature, x)) * 255.0;
+            assert!(
+                (encoded - f64::from(code)).abs() < 0.1,
+                "{signature:?} at code {code}: {encoded}"
+            );
+        }
+    }
+}
+
+/// Each code of the gamma-2.2 ramp decodes to (code/255)^(563/256), the profile's own
+/// curve, not sRGB's.
+#[test]
+fn a_gamma_profile_decodes_each_code_by_its_own_curve() {
+    let gamma = profiles()["gamma22"]["gamma"].as_f64().unwrap();
+    let photo = load_upright_rgb(&fixture("gamma22-ramp.png")).unwrap();
+    let profile = photo.profile.as_ref().expect("the ramp's profile");
+    assert!(profile.has_own_curves() && !profile.primaries_are_srgb());
+    assert_eq!(profile.description(), "Adobe RGB (1998) test");
+    for (i, px) in photo.image.as_slice().iter().enumerate() {
+        let codes = [i, 255 - i, (7 * i) % 256];
+        for (c, &v) in codes.into_iter().zip(px) {
+            let want = (c as f64 / 255.0).powf(gamma);
+            assert!(
+                (f64::from(v) - want).abs() < 2e-5,
+                "pixel {i}: {v} for {want}"
+            );
+        }
+    }
+    // Without a profile, the same code is sRGB's.
+    let srgb = load_upright_rgb(&fixture("garbage-icc.png")).unwrap();
+    assert!(srgb.profile.is_none());
+    let v = f64::from(srgb.image.as_slice()[0][0]);
+    assert!((v - srgb_decode(200.0 / 255.0)).abs() < 1e-6);
+}
+
+/// A 32 x 8 range file of 10 m everywhere, for the flat fixtures.
+fn flat_range(dir: &Path) {
+    let map = brume::raster::Grid::filled(32, 8, 10.0f32);
+    brume::io::output::write_scalar(&dir.join("r.pfm"), &map).unwrap();
+}
+
+/// Renders `image` over 10 m at β = 0.1 with airlight 0.5 into `out`; returns stderr.
+fn render_flat(dir: &Path, image: &Path, out: &str) -> String {
+    let image = image.to_str().unwrap();
+    let args = [
+        "render",
+        "--image",
+        image,
+        "--depth",
+        "r.pfm",
+        "--depth-kind",
+        "range",
+        "--depth-scale",
+        "1",
+        "--beta",
+        "0.1",
+        "--airlight",
+        "0.5,0.5,0.5",
+        "--out",
+        out,
+    ];
+    let run = brume(dir, &args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    stderr(&run)
+}
+
+/// The output's code of a flat photo whose channels decode to `linear`: τ = exp(−1) of
+/// it and 1 − τ of airlight 0.5, encoded by sRGB's curve (a flat image's blur changes
+/// nothing).
+fn fogged_codes(linear: [f64; 3]) -> [f64; 3] {
+    let t = (-1.0f64).exp();
+    linear.map(|j| (srgb_encode(t * j + (1.0 - t) * 0.5) * 255.0).round())
+}
+
+fn pixel(path: &Path, x: u32, y: u32) -> [f64; 3] {
+    let img = image::open(path).unwrap().to_rgb8();
+    img.get_pixel(x, y).0.map(f64::from)
+}
+
+fn assert_codes(got: [f64; 3], want: [f64; 3], within: f64, what: &str) {
+    for (g, w) in got.into_iter().zip(want) {
+        assert!((g - w).abs() <= within, "{what}: {got:?} for {want:?}");
+    }
+}
+
+/// A gamma-2.2 photo fogged: the PNG and the JPEG carry its primaries with sRGB's curve,
+/// and their codes are the fog of its own decoding, encoded by sRGB's.
+#[test]
+fn outputs_of_a_gamma_profile_carry_its_primaries_with_srgb_curves() {
+    let dir = tempfile::tempdir().unwrap();
+    flat_range(dir.path());
+    let p = profiles();
+    let gamma = p["gamma22"]["gamma"].as_f64().unwrap();
+    let want = fogged_codes([200.0, 120.0, 40.0].map(|c: f64| (c / 255.0).powf(gamma)));
+    for (out, within) in [("out.png", 0.0), ("out.jpg", 2.0)] {
+        let log = render_flat(dir.path(), &fixture("gamma22-flat.png"), out);
+        assert!(log.is_empty(), "no warning: {log}");
+        let out = dir.path().join(out);
+        assert_codes(pixel(&out, 16, 4), want, within, &out.display().to_string());
+        let icc = icc_of(&out).expect("the output carries a profile");
+        assert_primaries_with_srgb_curve(&icc, &p["gamma22"]["colorants"]);
+    }
+}
+
+/// Display P3 with sRGB's curve (a 1024-entry table): decoded as sRGB, the profile
+/// carried byte for byte.
+#[test]
+fn a_p3_profile_is_carried_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    flat_range(dir.path());
+    render_flat(dir.path(), &fixture("p3-flat.png"), "out.png");
+    let out = dir.path().join("out.png");
+    let want = fogged_codes([200.0, 120.0, 40.0].map(|c: f64| srgb_decode(c / 255.0)));
+    assert_codes(pixel(&out, 16, 4), want, 0.0, "p3");
+    assert_eq!(icc_of(&out), icc_of(&fixture("p3-flat.png")));
+}
+
+/// A profile that is not one, or not RGB: a warning naming the file, the photo read as
+/// sRGB, no profile written.
+#[test]
+fn an_unusable_profile_is_ignored_with_a_warning() {
+    let dir = tempfile::tempdir().unwrap();
+    flat_range(dir.path());
+    let want = fogged_codes([200.0, 120.0, 40.0].map(|c: f64| srgb_decode(c / 255.0)));
+    for (name, why) in [
+        ("garbage-icc.png", "cannot be read"),
+        ("grey-icc.png", "not RGB"),
+    ] {
+        let log = render_flat(dir.path(), &fixture(name), "out.png");
+        assert!(log.contains(name) && log.contains(why), "{log}");
+        assert!(log.contains("taken as sRGB"), "{log}");
+        let out = dir.path().join("out.png");
+        assert_codes(pixel(&out, 16, 4), want, 0.0, name);
+        assert_eq!(icc_of(&out), None, "{name}");
+    }
+}
+
+/// The real iPhone portrait's Display P3 profile goes into `render`'s PNG and `batch`'s
+/// output; an EXR, which cannot hold it, is written with a warning saying its primaries.
+#[test]
+fn a_real_iphone_photos_display_p3_reaches_render_and_batch() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/apple/iphone-x.jpg");
+    std::fs::copy(&src, dir.path().join("p.jpg")).unwrap();
+    let p3 = icc_of(&src).expect("the iPhone's profile");
+    let run = |args: &[&str]| {
+        let run = brume(dir.path(), args);
+        assert!(run.status.success(), "{}", stderr(&run));
+        stderr(&run)
+    };
+    let render = ["render", "--image", "p.jpg", "--beta", "0.3", "--out"];
+    run(&[&render[..], &["r.png"]].concat());
+    assert_eq!(icc_of(&dir.path().join("r.png")).as_ref(), Some(&p3));
+    let log = run(&[&render[..], &["r.exr"]].concat());
+    assert!(
+        log.contains("r.exr") && log.contains("(Display P3)"),
+        "{log}"
+    );
+    std::fs::write(dir.path().join("phone.csv"), "image\np.jpg\n").unwrap();
+    run(&[
+        "batch",
+        "--manifest",
+        "phone.csv",
+        "--out",
+        "o",
+        "--beta",
+        "0.3",
+    ]);
+    let batch = dir.path().join("o/p_foggy_beta_0.3.png");
+    assert_eq!(icc_of(&batch).as_ref(), Some(&p3));
+    assert!(std::fs::read(batch).unwrap() == std::fs::read(dir.path().join("r.png")).unwrap());
+}

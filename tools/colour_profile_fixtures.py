@@ -1,0 +1,177 @@
+#!/usr/bin/env python3
+"""Write the colour-profile test images of tests/data/colour/, independently of brume.
+
+The ICC profiles are packed here byte by byte from the ICC specification (ICC.1:2001-04,
+version 2: header, tag table, ``XYZ``, ``curv``, ``desc``, ``text`` types), not by a colour
+library, and each is checked by littleCMS (Pillow's ImageCms) against this script's own
+matrix arithmetic before it is used: a profile lcms reads differently fails here. The
+PNGs are written by Pillow (``icc_profile=``, an ``iCCP`` chunk).
+
+- ``gamma22-ramp.png``: 16 x 16, pixel i (row-major) = (i, 255 - i, 7 i mod 256), with an
+  "Adobe RGB (1998)" profile: Adobe's primaries and D65 white adapted to D50 (Bradford),
+  each channel's curve a pure gamma of 563/256 (one ``curv`` entry, u8Fixed8 0x0233).
+- ``gamma22-flat.png``: 32 x 8 of (200, 120, 40) with the same profile.
+- ``p3-flat.png``: 32 x 8 of (200, 120, 40) with a "Display P3" profile: DCI-P3 primaries,
+  D65 white, sRGB's curve as a table of 1024 16-bit entries (as HP's sRGB profile has it).
+- ``garbage-icc.png``: 32 x 8 of (200, 120, 40) whose ``iCCP`` chunk holds 200 bytes that
+  are no ICC profile.
+- ``grey-icc.png``: 32 x 8 of (200, 120, 40), an RGB image carrying a GRAY profile.
+- ``profiles.json``: for each profile, the colorants (D50 XYZ, as s15Fixed16 rounds them)
+  and the gamma, for tests/colour_profile.rs to compare with what brume writes.
+
+Run: ``python3 tools/colour_profile_fixtures.py tests/data/colour``.
+"""
+
+import io
+import json
+import os
+import struct
+import sys
+
+import numpy as np
+from PIL import Image, ImageCms
+
+D50 = np.array([0.9642, 1.0, 0.8249])
+BRADFORD = np.array([[0.8951, 0.2664, -0.1614],
+                     [-0.7502, 1.7135, 0.0367],
+                     [0.0389, -0.0685, 1.0296]])
+ADOBE = [(0.64, 0.33), (0.21, 0.71), (0.15, 0.06)]
+P3 = [(0.680, 0.320), (0.265, 0.690), (0.150, 0.060)]
+SRGB = [(0.64, 0.33), (0.30, 0.60), (0.15, 0.06)]
+D65_XY = (0.3127, 0.3290)
+GAMMA_U8F8 = 0x0233  # 563/256 = 2.19921875
+
+
+def xy_to_xyz(x, y):
+    return np.array([x / y, 1.0, (1 - x - y) / y])
+
+
+def rgb_to_xyz_d50(primaries):
+    """The RGB-to-XYZ matrix of ``primaries`` with a D65 white, adapted to D50 (Bradford),
+    as an ICC profile's colorants hold it (columns: red, green, blue)."""
+    white = xy_to_xyz(*D65_XY)
+    p = np.stack([xy_to_xyz(x, y) for x, y in primaries], axis=1)
+    m = p * np.linalg.solve(p, white)
+    cone_src, cone_dst = BRADFORD @ white, BRADFORD @ D50
+    adapt = np.linalg.inv(BRADFORD) @ np.diag(cone_dst / cone_src) @ BRADFORD
+    return adapt @ m
+
+
+def s15f16(v):
+    return struct.pack(">i", int(round(v * 65536)))
+
+
+def xyz_tag(xyz):
+    return b"XYZ \0\0\0\0" + b"".join(s15f16(v) for v in xyz)
+
+
+def curv_tag(entries):
+    return b"curv\0\0\0\0" + struct.pack(">I", len(entries)) + b"".join(
+        struct.pack(">H", e) for e in entries)
+
+
+def desc_tag(text):
+    ascii_ = text.encode("ascii") + b"\0"
+    return (b"desc\0\0\0\0" + struct.pack(">I", len(ascii_)) + ascii_
+            + struct.pack(">II", 0, 0) + struct.pack(">HB", 0, 0) + b"\0" * 67)
+
+
+def text_tag(text):
+    return b"text\0\0\0\0" + text.encode("ascii") + b"\0"
+
+
+def profile(colour_space, description, tags):
+    """An ICC v2 display profile: ``tags`` a list of (signature, data)."""
+    tags = [(b"desc", desc_tag(description)), (b"cprt", text_tag("No copyright, test data"))] + tags
+    table_size = 4 + 12 * len(tags)
+    offset = 128 + table_size
+    table, data = struct.pack(">I", len(tags)), b""
+    for sig, body in tags:
+        body += b"\0" * (-len(body) % 4)
+        table += sig + struct.pack(">II", offset + len(data), len(body))
+        data += body
+    size = 128 + table_size + len(data)
+    header = struct.pack(">I", size) + b"\0" * 4 + struct.pack(">I", 0x02100000)
+    header += b"mntr" + colour_space + b"XYZ " + struct.pack(">6H", 2026, 12, 5, 0, 0, 0)
+    header += b"acsp" + b"\0" * 24 + struct.pack(">I", 0)
+    header += b"".join(s15f16(v) for v in D50) + b"\0" * 4 + b"\0" * 16
+    header += b"\0" * (128 - len(header))
+    return header + table + data
+
+
+def srgb_curve_table(n=1024):
+    x = np.linspace(0, 1, n)
+    lin = np.where(x <= 0.04045, x / 12.92, ((x + 0.055) / 1.055) ** 2.4)
+    return [int(round(v * 65535)) for v in lin]
+
+
+def rgb_profile(description, primaries, curve):
+    m = rgb_to_xyz_d50(primaries)
+    tags = [(b"wtpt", xyz_tag(D50))]
+    tags += [(sig, xyz_tag(m[:, k])) for k, sig in enumerate([b"rXYZ", b"gXYZ", b"bXYZ"])]
+    tags += [(sig, curv_tag(curve)) for sig in [b"rTRC", b"gTRC", b"bTRC"]]
+    return profile(b"RGB ", description, tags), m
+
+
+def srgb_encode(v):
+    v = np.clip(v, 0, 1)
+    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * v ** (1 / 2.4) - 0.055)
+
+
+def check_with_lcms(icc, m, decode, name):
+    """lcms's sRGB rendition of a few colours through ``icc`` against this script's: decode
+    by the curve, to XYZ D50 by ``m``, to sRGB by sRGB's own adapted matrix."""
+    colours = np.array([[200, 120, 40], [30, 180, 90], [128, 128, 128], [250, 20, 220]],
+                       np.uint8)
+    src = ImageCms.ImageCmsProfile(io.BytesIO(icc))
+    to_srgb = ImageCms.buildTransform(src, ImageCms.createProfile("sRGB"), "RGB", "RGB",
+                                      renderingIntent=ImageCms.Intent.RELATIVE_COLORIMETRIC)
+    got = np.asarray(ImageCms.applyTransform(Image.fromarray(colours[None]), to_srgb))[0]
+    xyz = decode(colours / 255.0) @ m.T
+    srgb = np.clip(xyz @ np.linalg.inv(rgb_to_xyz_d50(SRGB)).T, 0, 1)
+    want = np.round(srgb_encode(srgb) * 255)
+    error = np.abs(got.astype(int) - want).max()
+    assert error <= 2, f"{name}: lcms differs by {error} codes:\n{got}\n{want}"
+
+
+def save(path, pixels, icc):
+    Image.fromarray(pixels).save(path, icc_profile=icc)
+
+
+def main(out_dir):
+    os.makedirs(out_dir, exist_ok=True)
+    gamma = GAMMA_U8F8 / 256
+    adobe, m_adobe = rgb_profile("Adobe RGB (1998) test", ADOBE, [GAMMA_U8F8])
+    check_with_lcms(adobe, m_adobe, lambda c: c ** gamma, "gamma 2.2")
+    p3, m_p3 = rgb_profile("Display P3 test", P3, srgb_curve_table())
+    check_with_lcms(p3, m_p3, lambda c: np.where(c <= 0.04045, c / 12.92,
+                                                 ((c + 0.055) / 1.055) ** 2.4), "P3")
+    grey = profile(b"GRAY", "Grey gamma 2.2 test", [(b"wtpt", xyz_tag(D50)),
+                                                    (b"kTRC", curv_tag([GAMMA_U8F8]))])
+    ImageCms.ImageCmsProfile(io.BytesIO(grey))  # lcms reads it
+
+    i = np.arange(256)
+    ramp = np.stack([i, 255 - i, (7 * i) % 256], axis=1).astype(np.uint8).reshape(16, 16, 3)
+    flat = np.zeros((8, 32, 3), np.uint8)
+    flat[:] = (200, 120, 40)
+    save(os.path.join(out_dir, "gamma22-ramp.png"), ramp, adobe)
+    save(os.path.join(out_dir, "gamma22-flat.png"), flat, adobe)
+    save(os.path.join(out_dir, "p3-flat.png"), flat, p3)
+    garbage = np.random.default_rng(5).integers(0, 256, 200, dtype=np.uint8).tobytes()
+    save(os.path.join(out_dir, "garbage-icc.png"), flat, garbage)
+    save(os.path.join(out_dir, "grey-icc.png"), flat, grey)
+    # Pillow gives back each profile as written.
+    for name, icc in [("gamma22-flat.png", adobe), ("p3-flat.png", p3),
+                      ("garbage-icc.png", garbage), ("grey-icc.png", grey)]:
+        assert Image.open(os.path.join(out_dir, name)).info["icc_profile"] == icc, name
+    quantised = lambda m: [[round(v * 65536) / 65536 for v in m[:, k]] for k in range(3)]
+    with open(os.path.join(out_dir, "profiles.json"), "w") as f:
+        json.dump({
+            "gamma22": {"gamma": gamma, "colorants": quantised(m_adobe)},
+            "p3": {"colorants": quantised(m_p3)},
+        }, f, indent=1)
+        f.write("\n")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "tests/data/colour")
