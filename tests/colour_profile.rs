@@ -261,14 +261,53 @@ fn an_unusable_profile_is_ignored_with_a_warning() {
     }
 }
 
+/// An EXR's `chromaticities` attribute (CIE xy of red, green, blue, white).
+fn exr_chromaticities(path: &Path) -> [[f64; 2]; 4] {
+    let meta = exr::meta::MetaData::read_from_file(path, false).unwrap();
+    let c = meta.headers[0]
+        .shared_attributes
+        .chromaticities
+        .expect("a chromaticities attribute");
+    [c.red, c.green, c.blue, c.white].map(|v| [f64::from(v.0), f64::from(v.1)])
+}
+
+/// Asserts chromaticities within 0.001 of `want` (the standards' figures).
+fn assert_chromaticities(got: [[f64; 2]; 4], want: [[f64; 2]; 4], what: &str) {
+    for (g, w) in got.iter().flatten().zip(want.iter().flatten()) {
+        assert!((g - w).abs() < 1e-3, "{what}: {got:?} for {want:?}");
+    }
+}
+
+const D65: [f64; 2] = [0.3127, 0.3290];
+
+/// An EXR of a gamma-2.2 photo says Adobe RGB's primaries (Adobe RGB (1998) sec. 4.3)
+/// and D65; a PFM, which cannot, is written with a warning naming them.
+#[test]
+fn float_outputs_say_the_photos_primaries() {
+    let dir = tempfile::tempdir().unwrap();
+    flat_range(dir.path());
+    render_flat(dir.path(), &fixture("gamma22-flat.png"), "out.exr");
+    let adobe = [[0.64, 0.33], [0.21, 0.71], [0.15, 0.06], D65];
+    assert_chromaticities(
+        exr_chromaticities(&dir.path().join("out.exr")),
+        adobe,
+        "EXR",
+    );
+    let log = render_flat(dir.path(), &fixture("gamma22-flat.png"), "out.pfm");
+    assert!(
+        log.contains("out.pfm") && log.contains("(Adobe RGB (1998) test)"),
+        "{log}"
+    );
+}
+
 /// The real iPhone portrait's Display P3 profile goes into `render`'s PNG and `batch`'s
-/// output; an EXR, which cannot hold it, is written with a warning saying its primaries.
+/// output, and its primaries (SMPTE EG 432-1) into an EXR.
 #[test]
 fn a_real_iphone_photos_display_p3_reaches_render_and_batch() {
     let dir = tempfile::tempdir().unwrap();
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/apple/iphone-x.jpg");
     std::fs::copy(&src, dir.path().join("p.jpg")).unwrap();
-    let p3 = icc_of(&src).expect("the iPhone's profile");
+    let icc = icc_of(&src).expect("the iPhone's profile");
     let run = |args: &[&str]| {
         let run = brume(dir.path(), args);
         assert!(run.status.success(), "{}", stderr(&run));
@@ -276,12 +315,10 @@ fn a_real_iphone_photos_display_p3_reaches_render_and_batch() {
     };
     let render = ["render", "--image", "p.jpg", "--beta", "0.3", "--out"];
     run(&[&render[..], &["r.png"]].concat());
-    assert_eq!(icc_of(&dir.path().join("r.png")).as_ref(), Some(&p3));
-    let log = run(&[&render[..], &["r.exr"]].concat());
-    assert!(
-        log.contains("r.exr") && log.contains("(Display P3)"),
-        "{log}"
-    );
+    assert_eq!(icc_of(&dir.path().join("r.png")).as_ref(), Some(&icc));
+    run(&[&render[..], &["r.exr"]].concat());
+    let p3 = [[0.680, 0.320], [0.265, 0.690], [0.150, 0.060], D65];
+    assert_chromaticities(exr_chromaticities(&dir.path().join("r.exr")), p3, "iPhone");
     std::fs::write(dir.path().join("phone.csv"), "image\np.jpg\n").unwrap();
     run(&[
         "batch",
@@ -293,6 +330,6 @@ fn a_real_iphone_photos_display_p3_reaches_render_and_batch() {
         "0.3",
     ]);
     let batch = dir.path().join("o/p_foggy_beta_0.3.png");
-    assert_eq!(icc_of(&batch).as_ref(), Some(&p3));
+    assert_eq!(icc_of(&batch).as_ref(), Some(&icc));
     assert!(std::fs::read(batch).unwrap() == std::fs::read(dir.path().join("r.png")).unwrap());
 }

@@ -41,6 +41,8 @@ pub struct ColourProfile {
     curves: Option<Arc<ChannelCurves>>,
     /// Whether its primaries are sRGB's (within the rounding of ICC numbers).
     srgb_primaries: bool,
+    /// CIE xy of its red, green and blue primaries and of its white.
+    chromaticities: [[f64; 2]; 4],
 }
 
 /// How far, in 8-bit codes, a profile's curve may be from sRGB's at any code and still be
@@ -92,6 +94,7 @@ impl ColourProfile {
             return None;
         }
         let srgb_primaries = has_srgb_primaries(&parsed);
+        let chromaticities = chromaticities_of(&parsed);
         if !parsed.is_matrix_shaper() {
             log::warn!(
                 "{name}: its ICC colour profile \"{description}\" is a lookup-table profile, \
@@ -103,6 +106,7 @@ impl ColourProfile {
                 description,
                 curves: None,
                 srgb_primaries,
+                chromaticities,
             });
         }
         let curves = match own_curves(&parsed) {
@@ -125,6 +129,7 @@ impl ColourProfile {
                 description,
                 curves: None,
                 srgb_primaries,
+                chromaticities,
             });
         };
         match with_srgb_curves(&parsed) {
@@ -138,6 +143,7 @@ impl ColourProfile {
                     description,
                     curves: Some(Arc::new(curves)),
                     srgb_primaries,
+                    chromaticities,
                 })
             }
             Err(e) => {
@@ -164,6 +170,15 @@ impl ColourProfile {
     /// PFM) means the same colours.
     pub fn primaries_are_srgb(&self) -> bool {
         self.srgb_primaries
+    }
+
+    /// CIE xy of the photo's red, green and blue primaries and of its white, as an
+    /// OpenEXR `chromaticities` attribute says them: the profile's colorants, which ICC
+    /// adapts to D50, taken back to the photo's white by the inverse of the profile's own
+    /// adaptation (`chad`), or, where it has none, of Bradford's from D65 (the white of
+    /// display profiles).
+    pub fn chromaticities(&self) -> [[f64; 2]; 4] {
+        self.chromaticities
     }
 
     /// Whether the photo is decoded by its profile's own curves rather than sRGB's.
@@ -204,6 +219,88 @@ fn describe(p: &ColorProfile) -> String {
     } else {
         text
     }
+}
+
+/// D50, the white of ICC's connection space.
+const D50: [f64; 3] = [0.9642, 1.0, 0.8249];
+/// D65 in XYZ (CIE 15: x 0.3127, y 0.3290).
+const D65: [f64; 3] = [0.3127 / 0.3290, 1.0, (1.0 - 0.3127 - 0.3290) / 0.3290];
+/// Bradford's cone response matrix.
+const BRADFORD: [[f64; 3]; 3] = [
+    [0.8951, 0.2664, -0.1614],
+    [-0.7502, 1.7135, 0.0367],
+    [0.0389, -0.0685, 1.0296],
+];
+
+/// How far a profile's `chad` may be from Bradford's adaptation of the white it implies
+/// (any element) for it to be taken as the adaptation ICC asks for: moxcms's own profiles
+/// store Bradford's cone matrix there instead.
+const CHAD_TOLERANCE: f64 = 2e-3;
+
+/// [`ColourProfile::chromaticities`] of a parsed profile.
+fn chromaticities_of(p: &ColorProfile) -> [[f64; 2]; 4] {
+    let chad = p.chromatic_adaptation.map(|m| m.v).filter(|&m| {
+        let white = apply(inverse(m), D50);
+        let expected = bradford(white, D50);
+        let off = (0..9).map(|k| (m[k / 3][k % 3] - expected[k / 3][k % 3]).abs());
+        off.fold(0.0, f64::max) <= CHAD_TOLERANCE
+    });
+    let to_d50 = chad.unwrap_or_else(|| bradford(D65, D50));
+    let back = inverse(to_d50);
+    let xy = |c: [f64; 3]| {
+        let xyz = apply(back, c);
+        let sum = xyz[0] + xyz[1] + xyz[2];
+        if sum.abs() < 1e-12 {
+            [0.0, 0.0]
+        } else {
+            [xyz[0] / sum, xyz[1] / sum]
+        }
+    };
+    let colorant = |c: moxcms::Xyzd| [c.x, c.y, c.z];
+    [
+        xy(colorant(p.red_colorant)),
+        xy(colorant(p.green_colorant)),
+        xy(colorant(p.blue_colorant)),
+        xy(D50),
+    ]
+}
+
+/// Bradford's adaptation from white `from` to white `to` (XYZ).
+fn bradford(from: [f64; 3], to: [f64; 3]) -> [[f64; 3]; 3] {
+    let (cone_from, cone_to) = (apply(BRADFORD, from), apply(BRADFORD, to));
+    let scale: [[f64; 3]; 3] = std::array::from_fn(|i| {
+        std::array::from_fn(|j| {
+            if i == j {
+                cone_to[i] / cone_from[i]
+            } else {
+                0.0
+            }
+        })
+    });
+    multiply(inverse(BRADFORD), multiply(scale, BRADFORD))
+}
+
+fn apply(m: [[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| (0..3).map(|k| m[i][k] * v[k]).sum())
+}
+
+fn multiply(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+/// The inverse of `m` by its adjugate; the identity for a singular matrix (a profile's
+/// adaptation is never singular: its columns are three whites' responses).
+fn inverse(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let cof = |r: usize, c: usize| {
+        let (r1, r2) = ((r + 1) % 3, (r + 2) % 3);
+        let (c1, c2) = ((c + 1) % 3, (c + 2) % 3);
+        m[r1][c1] * m[r2][c2] - m[r1][c2] * m[r2][c1]
+    };
+    let det: f64 = (0..3).map(|c| m[0][c] * cof(0, c)).sum();
+    if det.abs() < 1e-12 {
+        return std::array::from_fn(|i| std::array::from_fn(|j| f64::from(u8::from(i == j))));
+    }
+    std::array::from_fn(|i| std::array::from_fn(|j| cof(j, i) / det))
 }
 
 /// Whether the colorants are sRGB's.
@@ -307,6 +404,45 @@ mod tests {
         assert!(!p.has_own_curves());
         assert!(!p.primaries_are_srgb());
         assert_eq!(p.decode_rgb16([0, 1, 2]), None);
+    }
+
+    /// Display P3's primaries (SMPTE EG 432-1) and D65, from moxcms's profile (whose
+    /// `chad` is Bradford's cone matrix, not an adaptation: ignored), from the same with
+    /// the adaptation Apple's Display P3 profile holds (Bradford's from D65), and from
+    /// Adobe RGB's (without one).
+    #[test]
+    fn chromaticities_are_the_standards() {
+        let close = |got: [[f64; 2]; 4], want: [[f64; 2]; 4]| {
+            let near = got.iter().flatten().zip(want.iter().flatten());
+            assert!(
+                near.clone().all(|(g, w)| (g - w).abs() < 1e-3),
+                "{got:?} for {want:?}"
+            );
+        };
+        let d65 = [0.3127, 0.3290];
+        let p3 = [[0.680, 0.320], [0.265, 0.690], [0.150, 0.060], d65];
+        let mut moxcms_p3 = ColorProfile::new_display_p3();
+        close(read(&moxcms_p3).unwrap().chromaticities(), p3);
+        let apple_chad = [
+            [1.047882080078125, 0.022918701171875, -0.050201416015625],
+            [0.0295867919921875, 0.990478515625, -0.017059326171875],
+            [-0.0092315673828125, 0.01507568359375, 0.751678466796875],
+        ];
+        moxcms_p3.chromatic_adaptation = Some(moxcms::Matrix3d { v: apple_chad });
+        close(read(&moxcms_p3).unwrap().chromaticities(), p3);
+        // A real adaptation from another white is used: D50's own (identity) keeps the
+        // colorants' D50 chromaticities.
+        moxcms_p3.chromatic_adaptation = Some(moxcms::Matrix3d {
+            v: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        });
+        let white = read(&moxcms_p3).unwrap().chromaticities()[3];
+        assert!((white[0] - 0.3457).abs() < 1e-3 && (white[1] - 0.3585).abs() < 1e-3);
+        let mut adobe = ColorProfile::new_adobe_rgb();
+        adobe.chromatic_adaptation = None;
+        close(
+            read(&adobe).unwrap().chromaticities(),
+            [[0.64, 0.33], [0.21, 0.71], [0.15, 0.06], d65],
+        );
     }
 
     #[test]

@@ -247,8 +247,9 @@ impl Outputs {
     }
 
     /// Stages an image of a photo with the colour profile `profile`, as [`write_photo`]
-    /// writes it. A float output (EXR, PFM) holds no profile: where the photo's primaries
-    /// are not sRGB's, a warning says which its values are in.
+    /// writes it: a PNG or JPEG carries the profile, an EXR its primaries and white (its
+    /// `chromaticities`); a PFM, which holds neither, is written with a warning where the
+    /// photo's primaries are not sRGB's.
     pub fn stage_photo(
         &mut self,
         path: &Path,
@@ -257,12 +258,12 @@ impl Outputs {
     ) -> Result<()> {
         let icc = profile.map(ColourProfile::icc);
         let extension = extension_of(path);
-        if let ("pfm" | "exr", Some(p)) = (extension.as_str(), profile) {
+        if let ("pfm", Some(p)) = (extension.as_str(), profile) {
             if !p.primaries_are_srgb() {
                 log::warn!(
-                    "{}: its linear values are in the photo's primaries ({}), which a \
-                     {extension} file cannot say; read it as such, or write .png or .jpg, \
-                     which carry the profile",
+                    "{}: its linear values are in the photo's primaries ({}), which a PFM \
+                     file cannot say; read it as such, or write .exr, .png or .jpg, which \
+                     carry them",
                     path.display(),
                     p.description()
                 );
@@ -279,7 +280,10 @@ impl Outputs {
                 }
             }
             "pfm" => self.stage_with(path, |w| pfm::write_rgba(w, img)),
-            "exr" => self.stage_with(path, |w| exr::write_rgba(w, img)),
+            "exr" => {
+                let chromaticities = profile.map(ColourProfile::chromaticities);
+                self.stage_with(path, |w| exr::write_rgba(w, img, chromaticities))
+            }
             _ => check_image_output(path, "out"),
         }
     }

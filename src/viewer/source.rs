@@ -78,6 +78,14 @@ impl Source {
         }
     }
 
+    /// The photo's colour profile, which a saved frame carries (none for a scene).
+    pub fn profile(&self) -> Option<&brume::io::colour_profile::ColourProfile> {
+        match self {
+            Source::Photo(p) => p.profile.as_ref(),
+            Source::Scene(_) => None,
+        }
+    }
+
     /// Renders the frame at `time` in float and reads it back, top row first.
     pub fn render_to_image(&mut self, pipeline: &mut Pipeline, time: f64) -> Result<RgbaImage> {
         match self {
@@ -117,6 +125,7 @@ impl Source {
 /// A photo with depth and the medium on it.
 pub struct Photo {
     name: String,
+    profile: Option<brume::io::colour_profile::ColourProfile>,
     width: usize,
     height: usize,
     colour: Texture,
@@ -202,6 +211,7 @@ impl Photo {
         let (colour, depth) = upload(gl, &image, &depth)?;
         Ok(Photo {
             name: scene.image_name,
+            profile: scene.profile,
             width: image.width(),
             height: image.height(),
             colour,

@@ -640,8 +640,14 @@ fn dwa_over_claim(
     })
 }
 
-/// Writes an RGBA image as four 32-bit channels `R`, `G`, `B`, `A`.
-pub(crate) fn write_rgba(out: &mut BufWriter<&File>, img: &RgbaImage) -> std::io::Result<()> {
+/// Writes an RGBA image as four 32-bit channels `R`, `G`, `B`, `A`, with a
+/// `chromaticities` attribute (CIE xy of red, green, blue and white) where given: without
+/// one, OpenEXR's primaries are Rec. 709's (sRGB's).
+pub(crate) fn write_rgba(
+    out: &mut BufWriter<&File>,
+    img: &RgbaImage,
+    chromaticities: Option<[[f64; 2]; 4]>,
+) -> std::io::Result<()> {
     let channel = |c: usize| img.as_slice().iter().map(|p| p[c]).collect::<Vec<f32>>();
     let channels = [
         ("R", channel(0)),
@@ -649,14 +655,14 @@ pub(crate) fn write_rgba(out: &mut BufWriter<&File>, img: &RgbaImage) -> std::io
         ("B", channel(2)),
         ("A", channel(3)),
     ];
-    write_exr(out, img.width(), img.height(), channels)
+    write_exr(out, img.width(), img.height(), channels, chromaticities)
 }
 
 /// Writes a scalar map as one 32-bit channel named `Y`, which [`read_exr_scalar`] reads
 /// back.
 pub(crate) fn write_scalar(out: &mut BufWriter<&File>, map: &ScalarMap) -> std::io::Result<()> {
     let channels = [("Y", map.as_slice().to_vec())];
-    write_exr(out, map.width(), map.height(), channels)
+    write_exr(out, map.width(), map.height(), channels, None)
 }
 
 fn write_exr<const N: usize>(
@@ -664,6 +670,7 @@ fn write_exr<const N: usize>(
     width: usize,
     height: usize,
     channels: [(&str, Vec<f32>); N],
+    chromaticities: Option<[[f64; 2]; 4]>,
 ) -> std::io::Result<()> {
     use exr::prelude::{
         AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec,
@@ -679,14 +686,21 @@ fn write_exr<const N: usize>(
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(list),
     );
-    Image::from_layer(layer)
-        .write()
-        .to_buffered(out)
-        .map_err(|e| match e {
-            // The OS error as it is: a full disk must stay a full disk (`is_out_of_space`).
-            exr::error::Error::Io(io) => io,
-            e => std::io::Error::other(format!("OpenEXR encoder: {e}")),
-        })
+    let mut image = Image::from_layer(layer);
+    image.attributes.chromaticities = chromaticities.map(|[r, g, b, w]| {
+        let xy = |[x, y]: [f64; 2]| exr::math::Vec2(x as f32, y as f32);
+        exr::meta::attribute::Chromaticities {
+            red: xy(r),
+            green: xy(g),
+            blue: xy(b),
+            white: xy(w),
+        }
+    });
+    image.write().to_buffered(out).map_err(|e| match e {
+        // The OS error as it is: a full disk must stay a full disk (`is_out_of_space`).
+        exr::error::Error::Io(io) => io,
+        e => std::io::Error::other(format!("OpenEXR encoder: {e}")),
+    })
 }
 
 /// Reads the first channel (in [`Channels`] order) whose full name (`part.layer.leaf`)

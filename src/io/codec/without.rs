@@ -51,7 +51,11 @@ pub mod exr {
         )
     }
 
-    pub(crate) fn write_rgba(_: &mut BufWriter<&File>, _: &RgbaImage) -> std::io::Result<()> {
+    pub(crate) fn write_rgba(
+        _: &mut BufWriter<&File>,
+        _: &RgbaImage,
+        _: Option<[[f64; 2]; 4]>,
+    ) -> std::io::Result<()> {
         Err(unsupported())
     }
 
