@@ -1,7 +1,7 @@
 //! A photo's ICC colour profile, end to end: decoded by its own curves where they are not
 //! sRGB's, carried by the PNG and JPEG outputs of `render` and `batch`, a profile that is
 //! unreadable or not RGB ignored with a warning. The fixtures (`tests/data/colour/`,
-//! `tools/colour_profile_fixtures.py`) carry profiles packed from the ICC specification
+//! `tools/photo_metadata_fixtures.py`) carry profiles packed from the ICC specification
 //! and checked by littleCMS; `iphone-x.jpg` carries a real iPhone's Display P3. Expected
 //! values come from the specification's formulas (a pure gamma of 563/256, sRGB's curve of
 //! IEC 61966-2-1) and the profiles' tags are read back by this file's own reader.
@@ -139,7 +139,7 @@ fn assert_primaries_with_srgb_curve(icc: &[u8], want: &Value) {
 fn a_gamma_profile_decodes_each_code_by_its_own_curve() {
     let gamma = profiles()["gamma22"]["gamma"].as_f64().unwrap();
     let photo = load_upright_rgb(&fixture("gamma22-ramp.png")).unwrap();
-    let profile = photo.profile.as_ref().expect("the ramp's profile");
+    let profile = photo.metadata.profile().expect("the ramp's profile");
     assert!(profile.has_own_curves() && !profile.primaries_are_srgb());
     assert_eq!(profile.description(), "Adobe RGB (1998) test");
     for (i, px) in photo.image.as_slice().iter().enumerate() {
@@ -154,7 +154,7 @@ fn a_gamma_profile_decodes_each_code_by_its_own_curve() {
     }
     // Without a profile, the same code is sRGB's.
     let srgb = load_upright_rgb(&fixture("garbage-icc.png")).unwrap();
-    assert!(srgb.profile.is_none());
+    assert!(srgb.metadata.profile().is_none());
     let v = f64::from(srgb.image.as_slice()[0][0]);
     assert!((v - srgb_decode(200.0 / 255.0)).abs() < 1e-6);
 }

@@ -42,6 +42,7 @@ mod layered_table;
 mod limits;
 mod offset_layout;
 mod orientation;
+mod photo_exif;
 mod physical_units;
 mod prep_aloe;
 mod prep_edt;

@@ -220,7 +220,7 @@ pub fn run_aerial(
         renderer.render_fog(image, range, &look.medium, &frame, &photo.fog_blur())?;
     brume::photo::capture(&mut rendered.image, extras.capture)?;
     let mut outputs = Outputs::new();
-    outputs.stage_photo(out, &rendered.image, scene.profile.as_ref())?;
+    outputs.stage_photo(out, &rendered.image, &scene.metadata)?;
     super::commit(outputs)?;
     let m = &look.medium;
     let t = &rendered.times;

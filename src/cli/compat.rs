@@ -36,7 +36,7 @@ pub fn run_foggy_cityscapes(
     let (rgba, airlight, source) =
         brume::compat::foggy_cityscapes(&scene.image, &metres, fog.beta, args.airlight);
     let mut outputs = Outputs::new();
-    outputs.stage_photo(out, &rgba, scene.profile.as_ref())?;
+    outputs.stage_photo(out, &rgba, &scene.metadata)?;
     super::commit(outputs)?;
     let report = json!({
         "out": out.display().to_string(),

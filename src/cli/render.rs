@@ -87,7 +87,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     };
     photo::capture(&mut rendered.image, &capture)?;
     let mut outputs = Outputs::new();
-    outputs.stage_photo(&out, &rendered.image, scene.profile.as_ref())?;
+    outputs.stage_photo(&out, &rendered.image, &scene.metadata)?;
     super::commit(outputs)?;
 
     let report = Report {

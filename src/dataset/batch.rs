@@ -679,7 +679,7 @@ fn encode(
     Encode {
         path,
         image: fogged.image,
-        profile: frame.photo.profile.clone(),
+        metadata: frame.photo.metadata.clone(),
         transmittance,
         record,
         capture,

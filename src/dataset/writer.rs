@@ -16,8 +16,8 @@ use std::time::Instant;
 pub(super) struct Encode {
     pub(super) path: PathBuf,
     pub(super) image: RgbaImage,
-    /// The photo's colour profile, which the output carries.
-    pub(super) profile: Option<crate::io::colour_profile::ColourProfile>,
+    /// The photo's colour profile and EXIF, which the output carries.
+    pub(super) metadata: crate::io::metadata::PhotoMetadata,
     pub(super) transmittance: Option<(PathBuf, Vec<[u8; 3]>, usize, usize)>,
     pub(super) record: serde_json::Value,
     /// The capture after the fog, seeded for this output (applied on the writer thread).
@@ -61,7 +61,7 @@ fn write_one(job: &Encode, observe: &(dyn Fn(BatchEvent) + Sync)) -> Result<()> 
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
     }
     let mut outputs = Outputs::new();
-    outputs.stage_photo(&job.path, &job.image, job.profile.as_ref())?;
+    outputs.stage_photo(&job.path, &job.image, &job.metadata)?;
     if let Some((path, rgb, w, h)) = &job.transmittance {
         outputs.stage_png_rgb8(path, *w, *h, rgb)?;
     }
@@ -237,7 +237,7 @@ mod tests {
     // look like one.
     #[test]
     fn the_png_writer_keeps_the_os_error() {
-        let e = crate::io::codec::png::write_rgb8(Full, &[0; 12], 2, 2, None).unwrap_err();
+        let e = crate::io::codec::png::write_rgb8(Full, &[0; 12], 2, 2, None, None).unwrap_err();
         assert_eq!(e.kind(), std::io::ErrorKind::StorageFull, "{e}");
     }
 }

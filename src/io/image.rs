@@ -30,6 +30,7 @@ use crate::io::codec::exr::parse_exr_rgb;
 use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::colour_profile::ColourProfile;
 use crate::io::limits::check_size;
+use crate::io::metadata::PhotoMetadata;
 use crate::raster::{Orientation, RgbImage};
 use crate::{Error, Result};
 use rayon::prelude::*;
@@ -230,7 +231,7 @@ pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
 }
 
 /// A colour image as [`load_upright_rgb`] reads it: its pixels turned upright, what its
-/// EXIF says, and its colour profile.
+/// EXIF says, and the colour profile and EXIF block its outputs carry.
 #[derive(Clone, Debug)]
 pub struct UprightPhoto {
     /// Linear light, row 0 at the top of the upright frame.
@@ -238,8 +239,9 @@ pub struct UprightPhoto {
     /// What its EXIF says (none for EXR and PFM): the orientation applied, which the
     /// photo's depth map is turned by, and its focal length.
     pub exif: PhotoExif,
-    /// Its embedded ICC profile, where it has a usable one, for its outputs to carry.
-    pub profile: Option<ColourProfile>,
+    /// Its embedded ICC profile, where it has a usable one, and its EXIF block, for its
+    /// outputs to carry.
+    pub metadata: PhotoMetadata,
 }
 
 /// [`load_linear_rgb`], with what its EXIF says and its colour profile.
@@ -267,7 +269,7 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
         Ok(UprightPhoto {
             image,
             exif: PhotoExif::default(),
-            profile: None,
+            metadata: PhotoMetadata::default(),
         })
     };
     if bytes.starts_with(&EXR_MAGIC) {
@@ -287,7 +289,7 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
             )),
         };
     }
-    let (mut decoded, exif, profile) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
+    let (mut decoded, exif, metadata) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
     let orientation = exif.orientation;
     if orientation != Orientation::Upright {
         log::info!(
@@ -299,9 +301,9 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
         decoded.apply_orientation(theirs);
     }
     Ok(UprightPhoto {
-        image: to_linear_rgb(&decoded, profile.as_ref()),
+        image: to_linear_rgb(&decoded, metadata.profile()),
         exif,
-        profile,
+        metadata,
     })
 }
 
@@ -434,12 +436,12 @@ fn cannot_decode(format: ImageFormat, name: &str) -> impl Fn(image::ImageError) 
     }
 }
 
-/// The EXIF of an opened PNG or JPEG; none that cannot be read.
-fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> PhotoExif {
+/// The EXIF of an opened PNG or JPEG, and its block as stored; none that cannot be read.
+fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> (PhotoExif, Option<Vec<u8>>) {
     let size = decoder.dimensions();
     match decoder.exif_metadata() {
-        Ok(Some(tiff)) => PhotoExif::parse(tiff, name, size),
-        _ => PhotoExif::default(),
+        Ok(Some(tiff)) => (PhotoExif::parse(tiff.clone(), name, size), Some(tiff)),
+        _ => (PhotoExif::default(), None),
     }
 }
 
@@ -454,23 +456,30 @@ pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
     }
     let (mut decoder, _) = open_decoder(&bytes, &name, COLOUR_FORMATS)?;
     let (w, h) = decoder.dimensions();
-    Ok((w as usize, h as usize, exif_of(&mut decoder, &name)))
+    Ok((w as usize, h as usize, exif_of(&mut decoder, &name).0))
 }
 
 /// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
 /// is none of them, and the file's `role`; with a colour image's EXIF (its orientation not
-/// applied) and colour profile.
+/// applied), colour profile and EXIF block.
 fn decode_image(
     bytes: &[u8],
     name: &str,
     expected: &str,
     role: Role,
-) -> Result<(DynamicImage, PhotoExif, Option<ColourProfile>)> {
+) -> Result<(DynamicImage, PhotoExif, PhotoMetadata)> {
     let (mut decoder, format) = open_decoder(bytes, name, expected)?;
     let cannot = cannot_decode(format, name);
-    let (exif, profile) = match role {
-        Role::Colour => (exif_of(&mut decoder, name), profile_of(&mut decoder, name)),
-        Role::Map => (PhotoExif::default(), None),
+    let (exif, metadata) = match role {
+        Role::Colour => {
+            let (exif, block) = exif_of(&mut decoder, name);
+            let metadata = PhotoMetadata {
+                profile: profile_of(&mut decoder, name),
+                exif: block.map(std::sync::Arc::new),
+            };
+            (exif, metadata)
+        }
+        Role::Map => (PhotoExif::default(), PhotoMetadata::default()),
     };
     // The size is checked from the header, before the pixel buffer is allocated.
     let (w, h) = decoder.dimensions();
@@ -488,7 +497,7 @@ fn decode_image(
         .reserve(decoder.total_bytes())
         .map_err(&cannot)?;
     let image = DynamicImage::from_decoder(decoder).map_err(cannot)?;
-    Ok((image, exif, profile))
+    Ok((image, exif, metadata))
 }
 
 /// The colour profile of an opened PNG or JPEG ([`ColourProfile::from_icc`]); none where

@@ -14,6 +14,7 @@ pub mod depth;
 pub mod image;
 pub mod limits;
 pub mod mask;
+pub mod metadata;
 pub mod output;
 
 use crate::error::{Error, Result};

@@ -19,6 +19,7 @@ use std::sync::{Mutex, MutexGuard};
 use crate::io::codec::{exr, jpeg, pfm, png};
 use crate::io::colour_profile::ColourProfile;
 use crate::io::image::linear_rgba_to_srgb8_rgb;
+use crate::io::metadata::PhotoMetadata;
 use crate::raster::{RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
@@ -121,14 +122,15 @@ fn list_extensions(extensions: &[&str]) -> String {
 /// `.pfm` float RGB `PF` (linear, little-endian, rows bottom to top),
 /// `.exr` float RGBA (linear, 32-bit).
 pub fn write_rgba(path: &Path, img: &RgbaImage) -> Result<()> {
-    write_photo(path, img, None)
+    write_photo(path, img, &PhotoMetadata::default())
 }
 
-/// [`write_rgba`] for an image of a photo with the colour profile `profile`: a PNG or
-/// JPEG carries it ([`ColourProfile::icc`]), so that the image's colours are the photo's.
-pub fn write_photo(path: &Path, img: &RgbaImage, profile: Option<&ColourProfile>) -> Result<()> {
+/// [`write_rgba`] for an image of a photo with the colour profile and EXIF `metadata`: a
+/// PNG or JPEG carries both ([`ColourProfile::icc`], [`PhotoMetadata::exif_for_output`]),
+/// so that the image's colours, date and camera are the photo's.
+pub fn write_photo(path: &Path, img: &RgbaImage, metadata: &PhotoMetadata) -> Result<()> {
     let mut outputs = Outputs::new();
-    outputs.stage_photo(path, img, profile)?;
+    outputs.stage_photo(path, img, metadata)?;
     outputs.commit()
 }
 
@@ -243,19 +245,20 @@ impl Outputs {
 
     /// Stages a linear-light RGBA image for `path`, in the format [`write_rgba`] picks.
     pub fn stage_rgba(&mut self, path: &Path, img: &RgbaImage) -> Result<()> {
-        self.stage_photo(path, img, None)
+        self.stage_photo(path, img, &PhotoMetadata::default())
     }
 
-    /// Stages an image of a photo with the colour profile `profile`, as [`write_photo`]
-    /// writes it: a PNG or JPEG carries the profile, an EXR its primaries and white (its
-    /// `chromaticities`); a PFM, which holds neither, is written with a warning where the
-    /// photo's primaries are not sRGB's.
+    /// Stages an image of a photo with the colour profile and EXIF `metadata`, as
+    /// [`write_photo`] writes it: a PNG or JPEG carries the profile and the EXIF, an EXR
+    /// the profile's primaries and white (its `chromaticities`); a PFM, which holds
+    /// neither, is written with a warning where the photo's primaries are not sRGB's.
     pub fn stage_photo(
         &mut self,
         path: &Path,
         img: &RgbaImage,
-        profile: Option<&ColourProfile>,
+        metadata: &PhotoMetadata,
     ) -> Result<()> {
+        let profile = metadata.profile();
         let icc = profile.map(ColourProfile::icc);
         let extension = extension_of(path);
         if let ("pfm", Some(p)) = (extension.as_str(), profile) {
@@ -274,9 +277,14 @@ impl Outputs {
                 let rgb = linear_rgba_to_srgb8_rgb(img.as_slice());
                 let (w, h) = rgb8_size(path, img.width(), img.height(), &rgb)?;
                 let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
+                let exif = metadata.exif_for_output(w, h, &path.display().to_string());
                 match extension.as_str() {
-                    "png" => self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h, icc)),
-                    _ => self.stage_with(path, |out| jpeg::write_rgb8(out, &bytes, w, h, icc)),
+                    "png" => {
+                        self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h, icc, exif))
+                    }
+                    _ => {
+                        self.stage_with(path, |out| jpeg::write_rgb8(out, &bytes, w, h, icc, exif))
+                    }
                 }
             }
             "pfm" => self.stage_with(path, |w| pfm::write_rgba(w, img)),
@@ -307,7 +315,7 @@ impl Outputs {
     ) -> Result<()> {
         let (w, h) = rgb8_size(path, width, height, rgb)?;
         let bytes: Vec<u8> = rgb.iter().flatten().copied().collect();
-        self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h, None))
+        self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h, None, None))
     }
 
     /// Runs `write` on a buffered temporary file next to `path` and keeps it for

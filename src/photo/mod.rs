@@ -45,9 +45,9 @@ pub use insert::{insert, Insertion, VirtualObject};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
 
 use crate::error::{Error, Result};
-use crate::io::colour_profile::ColourProfile;
 use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoGeometry};
 use crate::io::image::PhotoExif;
+use crate::io::metadata::PhotoMetadata;
 use crate::io::{demo, image};
 use crate::raster::{Orientation, RgbImage, ScalarMap};
 use std::path::Path;
@@ -67,9 +67,9 @@ pub struct Photo {
     /// What the image's EXIF said (its orientation, applied; its focal length); the
     /// default for an image without one, or given as an array.
     pub exif: PhotoExif,
-    /// The image's colour profile, which its PNG and JPEG outputs carry; None for sRGB
-    /// (an image without one, or given as an array).
-    pub profile: Option<ColourProfile>,
+    /// The image's colour profile and EXIF block, which its PNG and JPEG outputs carry;
+    /// none for an image without them, or given as an array.
+    pub metadata: PhotoMetadata,
 }
 
 /// Bytes per pixel that a render holds in system memory besides the GL textures: the
@@ -93,7 +93,7 @@ impl Photo {
         let image::UprightPhoto {
             image,
             exif,
-            profile,
+            metadata,
         } = image::load_upright_rgb(image_path)?;
         let opts = DepthOptions {
             photo: Some(PhotoGeometry::of_upright(
@@ -109,7 +109,7 @@ impl Photo {
             image_name: image_path.display().to_string(),
             depth_name: depth_path.display().to_string(),
             exif,
-            profile,
+            metadata,
         };
         photo.check_depth_fits()?;
         Ok(photo)
@@ -154,7 +154,7 @@ impl Photo {
             image_name: "image".into(),
             depth_name: "range_m".into(),
             exif: PhotoExif::default(),
-            profile: None,
+            metadata: PhotoMetadata::default(),
         };
         photo.check_depth_fits()?;
         Ok(photo)
@@ -172,7 +172,7 @@ impl Photo {
         let image::UprightPhoto {
             image,
             exif,
-            profile,
+            metadata,
         } = image::load_upright_rgb(image_path)?;
         let orientation = exif.orientation;
         let range = crate::compat::load_optical_depth(map_path)?.into_oriented(orientation);
@@ -201,7 +201,7 @@ impl Photo {
             image_name: image_name.to_string(),
             depth_name: depth_name.to_string(),
             exif,
-            profile,
+            metadata,
         })
     }
 
@@ -214,7 +214,7 @@ impl Photo {
             image_name: "built-in demo image".into(),
             depth_name: "built-in demo disparity".into(),
             exif: PhotoExif::default(),
-            profile: None,
+            metadata: PhotoMetadata::default(),
         })
     }
 

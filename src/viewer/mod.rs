@@ -315,7 +315,7 @@ impl Viewer {
             .render_to_image(&mut self.pipeline, time)
             .and_then(|image| {
                 let mut outputs = Outputs::new();
-                outputs.stage_photo(&path, &image, self.source.profile())?;
+                outputs.stage_photo(&path, &image, &self.source.metadata())?;
                 crate::cli::commit(outputs)
             });
         self.message = Some(match result {

@@ -78,11 +78,12 @@ impl Source {
         }
     }
 
-    /// The photo's colour profile, which a saved frame carries (none for a scene).
-    pub fn profile(&self) -> Option<&brume::io::colour_profile::ColourProfile> {
+    /// The photo's colour profile and EXIF, which a saved frame carries (none for a
+    /// scene).
+    pub fn metadata(&self) -> brume::io::metadata::PhotoMetadata {
         match self {
-            Source::Photo(p) => p.profile.as_ref(),
-            Source::Scene(_) => None,
+            Source::Photo(p) => p.metadata.clone(),
+            Source::Scene(_) => Default::default(),
         }
     }
 
@@ -125,7 +126,7 @@ impl Source {
 /// A photo with depth and the medium on it.
 pub struct Photo {
     name: String,
-    profile: Option<brume::io::colour_profile::ColourProfile>,
+    metadata: brume::io::metadata::PhotoMetadata,
     width: usize,
     height: usize,
     colour: Texture,
@@ -211,7 +212,7 @@ impl Photo {
         let (colour, depth) = upload(gl, &image, &depth)?;
         Ok(Photo {
             name: scene.image_name,
-            profile: scene.profile,
+            metadata: scene.metadata,
             width: image.width(),
             height: image.height(),
             colour,

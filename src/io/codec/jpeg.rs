@@ -8,13 +8,14 @@ use std::io::Write;
 pub const QUALITY: u8 = 95;
 
 /// Encodes `bytes`, `w * h` RGB pixels of 8 bits each, row 0 at the top, carrying the
-/// ICC profile `icc` where given.
+/// ICC profile `icc` (APP2) and the EXIF block `exif` (APP1) where given.
 pub(crate) fn write_rgb8(
     mut out: impl Write,
     bytes: &[u8],
     w: u32,
     h: u32,
     icc: Option<&[u8]>,
+    exif: Option<Vec<u8>>,
 ) -> std::io::Result<()> {
     use image::ImageEncoder;
     // In memory first, as the PNG writer does, so that the OS's errors keep their kind.
@@ -23,6 +24,11 @@ pub(crate) fn write_rgb8(
     if let Some(icc) = icc {
         encoder
             .set_icc_profile(icc.to_vec())
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+    }
+    if let Some(exif) = exif {
+        encoder
+            .set_exif_metadata(exif)
             .map_err(|e| std::io::Error::other(e.to_string()))?;
     }
     encoder

@@ -49,13 +49,14 @@ fn first_channel<T: image::Primitive>(img: image::ImageBuffer<image::LumaA<T>, V
 }
 
 /// Encodes `bytes`, `w * h` RGB pixels of 8 bits each, row 0 at the top, carrying the
-/// ICC profile `icc` where given (an `iCCP` chunk).
+/// ICC profile `icc` and the EXIF block `exif` where given (`iCCP` and `eXIf` chunks).
 pub(crate) fn write_rgb8(
     mut out: impl Write,
     bytes: &[u8],
     w: u32,
     h: u32,
     icc: Option<&[u8]>,
+    exif: Option<Vec<u8>>,
 ) -> std::io::Result<()> {
     use image::ImageEncoder;
     // Encoded in memory, then written: the png crate turns the OS's errors into text
@@ -66,6 +67,11 @@ pub(crate) fn write_rgb8(
     if let Some(icc) = icc {
         encoder
             .set_icc_profile(icc.to_vec())
+            .map_err(|e| std::io::Error::other(e.to_string()))?;
+    }
+    if let Some(exif) = exif {
+        encoder
+            .set_exif_metadata(exif)
             .map_err(|e| std::io::Error::other(e.to_string()))?;
     }
     encoder

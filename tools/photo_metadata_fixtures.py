@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Write the colour-profile test images of tests/data/colour/, independently of brume.
+"""Write the photo-metadata test images of tests/data/colour/ (ICC colour profiles) and
+tests/data/exif/ (EXIF), independently of brume.
 
 The ICC profiles are packed here byte by byte from the ICC specification (ICC.1:2001-04,
 version 2: header, tag table, ``XYZ``, ``curv``, ``desc``, ``text`` types), not by a colour
@@ -19,14 +20,27 @@ PNGs are written by Pillow (``icc_profile=``, an ``iCCP`` chunk).
 - ``profiles.json``: for each profile, the colorants (D50 XYZ, as s15Fixed16 rounds them)
   and the gamma, for tests/colour_profile.rs to compare with what brume writes.
 
-Run: ``python3 tools/colour_profile_fixtures.py tests/data/colour``.
+In tests/data/exif/, ExifTool (12.57, Debian's ``libimage-exiftool-perl``) writes the
+EXIF of small Pillow images, and reads it back here:
+
+- ``rot6.jpg``: 24 x 16 stored (a gradient), EXIF Orientation 6 (upright 16 x 24), Make,
+  Model, DateTimeOriginal, ExifImageWidth/Height 24 x 16, GPS latitude and longitude, and
+  an 8 x 6 JPEG thumbnail in IFD1; little-endian (Intel) byte order.
+- ``big-endian.png``: 16 x 8, the same tags but the thumbnail and with Orientation 1, in
+  a PNG ``eXIf`` chunk, big-endian (Motorola) byte order.
+- ``broken.jpg``: ``rot6.jpg``'s pixels with an APP1 ``Exif`` segment whose TIFF block
+  is cut inside its first IFD's entries.
+
+Run: ``python3 tools/photo_metadata_fixtures.py tests/data``.
 """
 
 import io
 import json
 import os
 import struct
+import subprocess
 import sys
+import tempfile
 
 import numpy as np
 from PIL import Image, ImageCms
@@ -138,7 +152,59 @@ def save(path, pixels, icc):
     Image.fromarray(pixels).save(path, icc_profile=icc)
 
 
-def main(out_dir):
+EXIF_TAGS = ["-Make=brume test", "-Model=fixture", "-DateTimeOriginal=2026:07:14 06:30:00",
+             "-GPSLatitude=48.8566", "-GPSLatitudeRef=N", "-GPSLongitude=2.3522",
+             "-GPSLongitudeRef=E"]
+
+
+def exiftool(path, *args):
+    subprocess.run(["exiftool", "-q", "-overwrite_original", *args, path], check=True)
+
+
+def read_back(path):
+    out = subprocess.run(["exiftool", "-j", "-n", "-a", "-G1", path], check=True,
+                         capture_output=True).stdout
+    return json.loads(out)[0]
+
+
+def exif_fixtures(out_dir):
+    os.makedirs(out_dir, exist_ok=True)
+    y, x = np.mgrid[0:16, 0:24]
+    stored = np.stack([x * 10, y * 15, np.full_like(x, 128)], axis=2).astype(np.uint8)
+    rot6 = os.path.join(out_dir, "rot6.jpg")
+    Image.fromarray(stored).save(rot6, quality=95)
+    with tempfile.TemporaryDirectory() as tmp:
+        thumb = os.path.join(tmp, "thumb.jpg")
+        Image.fromarray(stored[::2, ::3]).save(thumb, quality=80)
+        exiftool(rot6, "-ExifByteOrder=Little-endian", "-IFD0:Orientation#=6",
+                 "-ExifImageWidth=24", "-ExifImageHeight=16", f"-ThumbnailImage<={thumb}",
+                 *EXIF_TAGS)
+    tags = read_back(rot6)
+    assert tags["IFD0:Orientation"] == 6 and tags["ExifIFD:ExifImageWidth"] == 24, tags
+    assert "IFD1:ThumbnailImage" in tags and tags["GPS:GPSLatitude"] > 48.8, tags
+
+    png = os.path.join(out_dir, "big-endian.png")
+    Image.fromarray(stored[:8, :16]).save(png)
+    exiftool(png, "-ExifByteOrder=Big-endian", "-IFD0:Orientation#=1",
+             "-ExifImageWidth=16", "-ExifImageHeight=8", *EXIF_TAGS)
+    tags = read_back(png)
+    assert tags["ExifIFD:DateTimeOriginal"] == "2026:07:14 06:30:00", tags
+
+    # The TIFF block cut inside IFD0's entries, its APP1 segment shortened to match.
+    data = open(rot6, "rb").read()
+    at = data.index(b"Exif\0\0")
+    length = struct.unpack(">H", data[at - 2:at])[0]
+    tiff_at = at + 6
+    ifd0 = struct.unpack("<I", data[tiff_at + 4:tiff_at + 8])[0]
+    cut = ifd0 + 2 + 5
+    broken = (data[:at - 2] + struct.pack(">H", 2 + 6 + cut) + data[at:tiff_at + cut]
+              + data[at - 2 + length:])
+    open(os.path.join(out_dir, "broken.jpg"), "wb").write(broken)
+
+
+def main(data_dir):
+    exif_fixtures(os.path.join(data_dir, "exif"))
+    out_dir = os.path.join(data_dir, "colour")
     os.makedirs(out_dir, exist_ok=True)
     gamma = GAMMA_U8F8 / 256
     adobe, m_adobe = rgb_profile("Adobe RGB (1998) test", ADOBE, [GAMMA_U8F8])
@@ -174,4 +240,4 @@ def main(out_dir):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1] if len(sys.argv) > 1 else "tests/data/colour")
+    main(sys.argv[1] if len(sys.argv) > 1 else "tests/data")
