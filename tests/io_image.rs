@@ -390,3 +390,65 @@ fn truncated_or_corrupt_float_images_are_format_errors_naming_the_file() {
         assert!(msg.contains(needle), "`{msg}` should mention `{needle}`");
     }
 }
+
+/// The first bytes of a HEIF file of major brand `brand`: an `ftyp` box of 24 bytes.
+fn heif_head(brand: &[u8; 4]) -> Vec<u8> {
+    let mut b = vec![0, 0, 0, 24];
+    b.extend_from_slice(b"ftyp");
+    b.extend_from_slice(brand);
+    b.extend_from_slice(&[0, 0, 0, 0]);
+    b.extend_from_slice(b"mif1heic");
+    b.extend_from_slice(&[0; 64]);
+    b
+}
+
+/// An iPhone's HEIC photo (or an AVIF) is refused with what to do instead, as an image,
+/// as a depth file and as `render --image` alone; other ISO media (an MP4) is not taken
+/// for one.
+#[test]
+fn heif_photos_are_refused_with_what_to_do() {
+    for brand in [b"heic", b"heix", b"mif1"] {
+        let bytes = heif_head(brand);
+        let err = decode_linear_rgb(&bytes, "IMG_0001.HEIC")
+            .unwrap_err()
+            .to_string();
+        let brand = std::str::from_utf8(brand).unwrap();
+        for needle in [
+            "IMG_0001.HEIC",
+            "HEIF",
+            brand,
+            "Most Compatible",
+            "heif-convert",
+        ] {
+            assert!(err.contains(needle), "`{err}` should mention `{needle}`");
+        }
+    }
+    let err = decode_linear_rgb(&heif_head(b"avif"), "a.avif")
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("AVIF") && err.contains("PNG or JPEG"), "{err}");
+    let mp4 = heif_head(b"isom");
+    let err = decode_linear_rgb(&mp4, "clip.mp4").unwrap_err().to_string();
+    assert!(
+        !err.contains("HEIF") && err.contains("unrecognised"),
+        "{err}"
+    );
+
+    let dir = tempfile::tempdir().unwrap();
+    let heic = dir.path().join("IMG_0001.HEIC");
+    std::fs::write(&heic, heif_head(b"heic")).unwrap();
+    let opts = brume::io::depth::DepthOptions::default();
+    let err = brume::io::depth::load_range(&heic, &opts).unwrap_err();
+    assert!(err.to_string().contains("Most Compatible"), "{err}");
+    let run = common::brume(
+        dir.path(),
+        &["render", "--image", "IMG_0001.HEIC", "--out", "o.png"],
+    );
+    let log = common::stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{log}");
+    assert!(
+        log.contains("HEIF") && !log.contains("--depth = (missing)"),
+        "{log}"
+    );
+    common::assert_render_refuses("--depth", &heic, &["IMG_0001.HEIC", "HEIF"]);
+}

@@ -173,13 +173,17 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             args.depth.depth = Some(image_path.clone());
             load_scene(&args)
         }
-        (Some(_), None) => Err(Error::invalid(
-            "--depth",
-            "(missing)",
-            "a depth, range or disparity map to go with --image, or --transmittance-map (or \
-             --image a JPEG that carries its depth map, GDepth, Dynamic Depth or an iPhone's \
-             depth image, as a phone's portrait photo does)",
-        )),
+        (Some(image_path), None) => {
+            // A HEIC portrait carries its depth too, but brume cannot decode it: say so.
+            brume::io::image::refuse_heif(image_path)?;
+            Err(Error::invalid(
+                "--depth",
+                "(missing)",
+                "a depth, range or disparity map to go with --image, or --transmittance-map \
+                 (or --image a JPEG that carries its depth map, GDepth, Dynamic Depth or an \
+                 iPhone's depth image, as a phone's portrait photo does)",
+            ))
+        }
     }
 }
 

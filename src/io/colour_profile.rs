@@ -27,7 +27,7 @@ use std::sync::Arc;
 
 use moxcms::{ColorProfile, DataColorSpace, ProfileText, ToneReprCurve};
 
-use crate::io::image::linear_to_srgb;
+use crate::io::srgb::linear_to_srgb;
 
 /// An ICC colour profile read from a photo (see the module docs for what is done with
 /// each kind).
@@ -73,86 +73,55 @@ impl ColourProfile {
     /// Reads the ICC profile `icc` embedded in the image `name`. None, with a warning,
     /// where it cannot be read or is not an RGB profile: the image is then taken as sRGB.
     pub fn from_icc(icc: Vec<u8>, name: &str) -> Option<ColourProfile> {
-        let parsed = match ColorProfile::new_from_slice(&icc) {
-            Ok(p) => p,
-            Err(e) => {
-                log::warn!(
-                    "{name}: its ICC colour profile ({} bytes) cannot be read ({e}); its \
-                     colours are taken as sRGB",
-                    icc.len()
-                );
-                return None;
-            }
-        };
+        let parsed = parse_rgb(&icc, name)?;
         let description = describe(&parsed);
-        if parsed.color_space != DataColorSpace::Rgb {
-            log::warn!(
-                "{name}: its ICC colour profile \"{description}\" is for {:?} data, not RGB; \
-                 its colours are taken as sRGB",
-                parsed.color_space
-            );
-            return None;
-        }
-        let srgb_primaries = has_srgb_primaries(&parsed);
-        let chromaticities = chromaticities_of(&parsed);
+        let profile = |icc: Vec<u8>, curves: Option<ChannelCurves>| ColourProfile {
+            icc: Arc::new(icc),
+            description: description.clone(),
+            curves: curves.map(Arc::new),
+            srgb_primaries: has_srgb_primaries(&parsed),
+            chromaticities: chromaticities_of(&parsed),
+        };
         if !parsed.is_matrix_shaper() {
             log::warn!(
                 "{name}: its ICC colour profile \"{description}\" is a lookup-table profile, \
                  whose curves brume does not read: the fog mixes its values as if encoded \
                  by sRGB's curve (approximate); outputs carry the profile"
             );
-            return Some(ColourProfile {
-                icc: Arc::new(icc),
-                description,
-                curves: None,
-                srgb_primaries,
-                chromaticities,
-            });
+            return Some(profile(icc, None));
         }
-        let curves = match own_curves(&parsed) {
-            Ok(curves) => curves,
+        match own_curves(&parsed) {
             Err(why) => {
                 log::warn!(
                     "{name}: the tone curves of its ICC colour profile \"{description}\" \
                      cannot be evaluated ({why}); its colours are taken as sRGB"
                 );
-                return None;
-            }
-        };
-        let Some(curves) = curves else {
-            log::info!(
-                "{name}: colour profile \"{description}\" (sRGB's tone curve): the fog mixes \
-                 linear light in its primaries, and outputs carry it"
-            );
-            return Some(ColourProfile {
-                icc: Arc::new(icc),
-                description,
-                curves: None,
-                srgb_primaries,
-                chromaticities,
-            });
-        };
-        match with_srgb_curves(&parsed) {
-            Ok(output_icc) => {
-                log::info!(
-                    "{name}: colour profile \"{description}\": each channel decoded by its \
-                     own tone curve; outputs carry its primaries with sRGB's curve"
-                );
-                Some(ColourProfile {
-                    icc: Arc::new(output_icc),
-                    description,
-                    curves: Some(Arc::new(curves)),
-                    srgb_primaries,
-                    chromaticities,
-                })
-            }
-            Err(e) => {
-                log::warn!(
-                    "{name}: its colour profile \"{description}\" cannot be rewritten with \
-                     sRGB's curve for the outputs ({e}); its colours are taken as sRGB"
-                );
                 None
             }
+            Ok(None) => {
+                log::info!(
+                    "{name}: colour profile \"{description}\" (sRGB's tone curve): the fog \
+                     mixes linear light in its primaries, and outputs carry it"
+                );
+                Some(profile(icc, None))
+            }
+            Ok(Some(curves)) => match with_srgb_curves(&parsed) {
+                Ok(output_icc) => {
+                    log::info!(
+                        "{name}: colour profile \"{description}\": each channel decoded by \
+                         its own tone curve; outputs carry its primaries with sRGB's curve"
+                    );
+                    Some(profile(output_icc, Some(curves)))
+                }
+                Err(e) => {
+                    log::warn!(
+                        "{name}: its colour profile \"{description}\" cannot be rewritten \
+                         with sRGB's curve for the outputs ({e}); its colours are taken as \
+                         sRGB"
+                    );
+                    None
+                }
+            },
         }
     }
 
@@ -193,6 +162,32 @@ impl ColourProfile {
         let curves = self.curves.as_ref()?;
         Some(std::array::from_fn(|i| curves.0[i][usize::from(rgb[i])]))
     }
+}
+
+/// The profile `icc` parsed, where it is an RGB profile; None, with a warning naming the
+/// image `name`, where it cannot be read or is for other data (CMYK, grey).
+fn parse_rgb(icc: &[u8], name: &str) -> Option<ColorProfile> {
+    let parsed = match ColorProfile::new_from_slice(icc) {
+        Ok(p) => p,
+        Err(e) => {
+            log::warn!(
+                "{name}: its ICC colour profile ({} bytes) cannot be read ({e}); its colours \
+                 are taken as sRGB",
+                icc.len()
+            );
+            return None;
+        }
+    };
+    if parsed.color_space != DataColorSpace::Rgb {
+        log::warn!(
+            "{name}: its ICC colour profile \"{}\" is for {:?} data, not RGB; its colours \
+             are taken as sRGB",
+            describe(&parsed),
+            parsed.color_space
+        );
+        return None;
+    }
+    Some(parsed)
 }
 
 /// The profile's description: its English text where it has several, else its first.
@@ -388,7 +383,7 @@ fn with_srgb_curves(p: &ColorProfile) -> std::result::Result<Vec<u8>, moxcms::Cm
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::image::srgb_to_linear;
+    use crate::io::srgb::srgb_to_linear;
 
     fn read(p: &ColorProfile) -> Option<ColourProfile> {
         ColourProfile::from_icc(p.encode().unwrap(), "test")

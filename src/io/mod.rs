@@ -16,6 +16,7 @@ pub mod limits;
 pub mod mask;
 pub mod metadata;
 pub mod output;
+pub mod srgb;
 
 use crate::error::{Error, Result};
 use std::fs::{DirEntry, FileType};

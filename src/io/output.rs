@@ -18,8 +18,8 @@ use std::sync::{Mutex, MutexGuard};
 
 use crate::io::codec::{exr, jpeg, pfm, png};
 use crate::io::colour_profile::ColourProfile;
-use crate::io::image::linear_rgba_to_srgb8_rgb;
 use crate::io::metadata::PhotoMetadata;
+use crate::io::srgb::linear_rgba_to_srgb8_rgb;
 use crate::raster::{RgbaImage, ScalarMap};
 use crate::{Error, Result};
 
