@@ -15,7 +15,7 @@
 //! lower. Exits 1 if a check fails.
 
 use brume::io::depth::DepthOptions;
-use brume::io::output::{write_rgba, write_scalar};
+use brume::io::output::{write_photo, write_scalar};
 use brume::photo::{self, FogOptions, Photo, PrepareOptions};
 use brume::Headless;
 use std::path::{Path, PathBuf};
@@ -71,7 +71,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let fog = FogOptions::visibility(visibility)?;
     let fogged = photo::fog(headless.renderer()?, &photo, &prepared, &fog)?;
     let tau = fogged.transmittance();
-    write_rgba(&out, &fogged.rendered.image)?;
+    // The photo's colour profile (Display P3 ...) and EXIF go with the fogged image.
+    write_photo(&out, &fogged.rendered.image, &photo.metadata)?;
     let tau_path = out.with_extension("transmittance.pfm");
     write_scalar(&tau_path, &tau)?;
     println!(

@@ -314,7 +314,9 @@ fn a_real_iphone_photos_display_p3_reaches_render_and_batch() {
         stderr(&run)
     };
     let render = ["render", "--image", "p.jpg", "--beta", "0.3", "--out"];
-    run(&[&render[..], &["r.png"]].concat());
+    let json = brume(dir.path(), &[&render[..], &["r.png", "--json"]].concat());
+    let report: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+    assert_eq!(report["colour_profile"], "Display P3");
     assert_eq!(icc_of(&dir.path().join("r.png")).as_ref(), Some(&icc));
     run(&[&render[..], &["r.exr"]].concat());
     let p3 = [[0.680, 0.320], [0.265, 0.690], [0.150, 0.060], D65];
@@ -329,6 +331,8 @@ fn a_real_iphone_photos_display_p3_reaches_render_and_batch() {
         "--beta",
         "0.3",
     ]);
+    let log = std::fs::read_to_string(dir.path().join("o/brume-batch-1-of-1.jsonl")).unwrap();
+    assert!(log.contains(r#""colour_profile":"Display P3""#), "{log}");
     let batch = dir.path().join("o/p_foggy_beta_0.3.png");
     assert_eq!(icc_of(&batch).as_ref(), Some(&icc));
     assert!(std::fs::read(batch).unwrap() == std::fs::read(dir.path().join("r.png")).unwrap());

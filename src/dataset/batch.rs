@@ -671,6 +671,7 @@ fn encode(
         "capture": opts.capture.to_json(),
         "warnings": frame.photo.depth.warnings(),
         "depth_notes": frame.photo.depth.notes,
+        "colour_profile": frame.photo.metadata.profile().map(|p| p.description()),
     });
     let capture = CaptureOptions {
         seed: opts.capture.seed ^ item.name_hash() ^ beta.to_bits(),

@@ -84,9 +84,10 @@ impl ColourProfile {
         };
         if !parsed.is_matrix_shaper() {
             log::warn!(
-                "{name}: its ICC colour profile \"{description}\" is a lookup-table profile, \
-                 whose curves brume does not read: the fog mixes its values as if encoded \
-                 by sRGB's curve (approximate); outputs carry the profile"
+                "{name}: its ICC colour profile \"{description}\" has no matrix and tone \
+                 curves (a lookup-table profile), which is all brume reads: the fog mixes \
+                 its values as if encoded by sRGB's curve (approximate); outputs carry the \
+                 profile"
             );
             return Some(profile(icc, None));
         }
@@ -478,6 +479,20 @@ mod tests {
                 "code {c}"
             );
         }
+    }
+
+    /// An RGB profile without a matrix and curves (lookup tables only): kept as it is,
+    /// the photo decoded by sRGB's curve.
+    #[test]
+    fn a_profile_without_curves_is_kept_as_it_is() {
+        let mut tables_only = ColorProfile::new_display_p3();
+        tables_only.red_trc = None;
+        tables_only.green_trc = None;
+        tables_only.blue_trc = None;
+        let icc = tables_only.encode().unwrap();
+        let p = ColourProfile::from_icc(icc.clone(), "luts").expect("an RGB profile");
+        assert_eq!(p.icc(), icc.as_slice());
+        assert!(!p.has_own_curves());
     }
 
     #[test]

@@ -9,7 +9,8 @@
 //! let photo = Photo::load("street.png".as_ref(), "street_depth.exr".as_ref(), &Default::default())?;
 //! let prepared = photo::prepare(&photo, &PrepareOptions::for_photo(&photo), headless.renderer()?)?;
 //! let fogged = photo::fog(headless.renderer()?, &photo, &prepared, &FogOptions::beta(0.02)?)?;
-//! brume::io::output::write_rgba("street_fog.png".as_ref(), &fogged.rendered.image)?;
+//! // The photo's colour profile and EXIF go with it.
+//! brume::io::output::write_photo("street_fog.png".as_ref(), &fogged.rendered.image, &photo.metadata)?;
 //! # Ok(()) }
 //! ```
 //!

@@ -42,8 +42,8 @@ pub enum ProfileKind {
 /// `brume scene`.
 #[derive(Args, Clone, Debug)]
 pub struct SceneArgs {
-    /// Output: the fogged frame, .png or .jpg (8-bit sRGB), .pfm or .exr (linear). With --frames
-    /// N > 1, numbered files NAME_0001.png … are written instead.
+    /// Output: the fogged frame, .png or .jpg (8-bit sRGB), .pfm or .exr (linear). With
+    /// --frames N > 1, numbered files NAME_0001.png … are written instead.
     #[arg(long, short, value_name = "PATH", default_value = "brume-scene.png")]
     pub out: PathBuf,
 
