@@ -279,6 +279,19 @@ fn main() -> Res<()> {
     image::ImageEncoder::set_icc_profile(&mut encoder, icc)?;
     image::ImageEncoder::write_image(encoder, &rgb, 4, 4, image::ExtendedColorType::Rgb8)?;
     seeds.put("colour_image", "icc-gamma22.jpg", icc_jpeg);
+    // exif_out: an output's size (two little-endian u16, the second x16), then the EXIF
+    // blocks ExifTool wrote (tests/data/exif/): little-endian with a thumbnail IFD,
+    // big-endian.
+    for (name, file) in [("le-thumb", "rot6.jpg"), ("be", "big-endian.png")] {
+        let bytes = std::fs::read(root.join("tests/data/exif").join(file))?;
+        let mut decoder = image::ImageReader::new(std::io::Cursor::new(&bytes))
+            .with_guessed_format()?
+            .into_decoder()?;
+        let block = image::ImageDecoder::exif_metadata(&mut decoder)?.expect("the fixture's");
+        let mut seed = vec![16, 0, 2, 0];
+        seed.extend_from_slice(&block);
+        seeds.put("exif_out", &format!("{name}.bin"), seed);
+    }
 
     // gdepth: the small JPEGs of tests/data/gdepth/ (ext8.jpg in extended XMP, dd8.jpg
     // Dynamic Depth, conf8.jpg with a confidence map).

@@ -12,7 +12,7 @@ use brume::io::image::load_upright_rgb;
 use image::ImageDecoder;
 use serde_json::Value;
 
-use crate::common::{brume, stderr};
+use crate::common::{self, brume, stderr};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -161,33 +161,13 @@ fn a_gamma_profile_decodes_each_code_by_its_own_curve() {
 
 /// A 32 x 8 range file of 10 m everywhere, for the flat fixtures.
 fn flat_range(dir: &Path) {
-    let map = brume::raster::Grid::filled(32, 8, 10.0f32);
-    brume::io::output::write_scalar(&dir.join("r.pfm"), &map).unwrap();
+    common::write_flat_range(dir, 32, 8);
 }
 
 /// Renders `image` over 10 m at β = 0.1 with airlight 0.5 into `out`; returns stderr.
 fn render_flat(dir: &Path, image: &Path, out: &str) -> String {
-    let image = image.to_str().unwrap();
-    let args = [
-        "render",
-        "--image",
-        image,
-        "--depth",
-        "r.pfm",
-        "--depth-kind",
-        "range",
-        "--depth-scale",
-        "1",
-        "--beta",
-        "0.1",
-        "--airlight",
-        "0.5,0.5,0.5",
-        "--out",
-        out,
-    ];
-    let run = brume(dir, &args);
-    assert!(run.status.success(), "{}", stderr(&run));
-    stderr(&run)
+    let fog = ["--beta", "0.1", "--airlight", "0.5,0.5,0.5"];
+    common::render_over_range(dir, image, out, &fog)
 }
 
 /// The output's code of a flat photo whose channels decode to `linear`: τ = exp(−1) of

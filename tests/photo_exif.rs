@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use exif::{In, Tag};
 use image::ImageDecoder;
 
-use crate::common::{brume, stderr};
+use crate::common::{self, brume, stderr};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -42,32 +42,12 @@ fn uint(exif: &exif::Exif, tag: Tag) -> Option<u32> {
     exif.get_field(tag, In::PRIMARY)?.value.get_uint(0)
 }
 
-/// Writes a range file of 10 m, `w x h`, as the photo is stored.
 fn range(dir: &Path, w: usize, h: usize) {
-    let map = brume::raster::Grid::filled(w, h, 10.0f32);
-    brume::io::output::write_scalar(&dir.join("r.pfm"), &map).unwrap();
+    common::write_flat_range(dir, w, h);
 }
 
 fn render(dir: &Path, image: &Path, out: &str) -> String {
-    let image = image.to_str().unwrap();
-    let args = [
-        "render",
-        "--image",
-        image,
-        "--depth",
-        "r.pfm",
-        "--depth-kind",
-        "range",
-        "--depth-scale",
-        "1",
-        "--beta",
-        "0.05",
-        "--out",
-        out,
-    ];
-    let run = brume(dir, &args);
-    assert!(run.status.success(), "{}", stderr(&run));
-    stderr(&run)
+    common::render_over_range(dir, image, out, &["--beta", "0.05"])
 }
 
 /// Asserts what the fixtures' tags say, and the output's size and upright orientation.

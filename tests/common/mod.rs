@@ -53,6 +53,36 @@ pub fn render_photo_alone(photo: &Path, beta: &str) -> (tempfile::TempDir, serde
     (dir, report)
 }
 
+/// Writes `r.pfm` in `dir`: a range of 10 m everywhere, `w x h` (as a photo is stored).
+pub fn write_flat_range(dir: &Path, w: usize, h: usize) {
+    let map = brume::raster::Grid::filled(w, h, 10.0f32);
+    brume::io::output::write_scalar(&dir.join("r.pfm"), &map).unwrap();
+}
+
+/// Runs `brume render --image image --depth r.pfm` (range in metres, in `dir`) with
+/// `fog` (`--beta` ...) into `out`, asserting that it succeeds; returns its stderr.
+pub fn render_over_range(dir: &Path, image: &Path, out: &str, fog: &[&str]) -> String {
+    let image = image.to_str().unwrap();
+    let depth = [
+        "--depth",
+        "r.pfm",
+        "--depth-kind",
+        "range",
+        "--depth-scale",
+        "1",
+    ];
+    let args = [
+        &["render", "--image", image][..],
+        &depth,
+        fog,
+        &["--out", out],
+    ]
+    .concat();
+    let run = brume(dir, &args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    stderr(&run)
+}
+
 /// Runs `brume render` on a small image with `flag path` (and nothing else but `--out`)
 /// and asserts that it is refused: exit 1, stderr holding every one of `needles`, and no
 /// output written.

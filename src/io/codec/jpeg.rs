@@ -17,22 +17,9 @@ pub(crate) fn write_rgb8(
     icc: Option<&[u8]>,
     exif: Option<Vec<u8>>,
 ) -> std::io::Result<()> {
-    use image::ImageEncoder;
     // In memory first, as the PNG writer does, so that the OS's errors keep their kind.
     let mut jpeg = Vec::new();
-    let mut encoder = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, QUALITY);
-    if let Some(icc) = icc {
-        encoder
-            .set_icc_profile(icc.to_vec())
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-    }
-    if let Some(exif) = exif {
-        encoder
-            .set_exif_metadata(exif)
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-    }
-    encoder
-        .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| std::io::Error::other(e.to_string()))?;
+    let encoder = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, QUALITY);
+    super::encode_rgb8(encoder, bytes, (w, h), icc, exif)?;
     out.write_all(&jpeg)
 }

@@ -17,3 +17,24 @@ pub mod tiff;
 mod without;
 #[cfg(not(feature = "codecs"))]
 pub use without::{exr, npy, tiff};
+
+/// Encodes the 8-bit RGB image `bytes` (`w * h` pixels, row 0 at the top) by `encoder`,
+/// with the ICC profile `icc` and the EXIF block `exif` where given.
+pub(crate) fn encode_rgb8<E: image::ImageEncoder>(
+    mut encoder: E,
+    bytes: &[u8],
+    (w, h): (u32, u32),
+    icc: Option<&[u8]>,
+    exif: Option<Vec<u8>>,
+) -> std::io::Result<()> {
+    let other = |e: image::error::UnsupportedError| std::io::Error::other(e.to_string());
+    if let Some(icc) = icc {
+        encoder.set_icc_profile(icc.to_vec()).map_err(other)?;
+    }
+    if let Some(exif) = exif {
+        encoder.set_exif_metadata(exif).map_err(other)?;
+    }
+    encoder
+        .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
+        .map_err(|e| std::io::Error::other(e.to_string()))
+}

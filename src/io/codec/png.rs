@@ -58,24 +58,11 @@ pub(crate) fn write_rgb8(
     icc: Option<&[u8]>,
     exif: Option<Vec<u8>>,
 ) -> std::io::Result<()> {
-    use image::ImageEncoder;
     // Encoded in memory, then written: the png crate turns the OS's errors into text
     // ("No space left on device (os error 28)" of kind `Other`), and a full disk must
     // stay a full disk for a long run to stop on it (`output::is_out_of_space`).
     let mut png = Vec::new();
-    let mut encoder = image::codecs::png::PngEncoder::new(&mut png);
-    if let Some(icc) = icc {
-        encoder
-            .set_icc_profile(icc.to_vec())
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-    }
-    if let Some(exif) = exif {
-        encoder
-            .set_exif_metadata(exif)
-            .map_err(|e| std::io::Error::other(e.to_string()))?;
-    }
-    encoder
-        .write_image(bytes, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| std::io::Error::other(e.to_string()))?;
+    let encoder = image::codecs::png::PngEncoder::new(&mut png);
+    super::encode_rgb8(encoder, bytes, (w, h), icc, exif)?;
     out.write_all(&png)
 }
