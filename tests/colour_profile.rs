@@ -43,13 +43,7 @@ fn srgb_decode(c: f64) -> f64 {
 
 /// The ICC profile an image file carries, as its decoder reads it (PNG `iCCP`, JPEG APP2).
 fn icc_of(path: &Path) -> Option<Vec<u8>> {
-    let mut decoder = image::ImageReader::open(path)
-        .unwrap()
-        .with_guessed_format()
-        .unwrap()
-        .into_decoder()
-        .unwrap();
-    decoder.icc_profile().unwrap()
+    common::image_decoder(path).icc_profile().unwrap()
 }
 
 /// A tag's data in an ICC profile, by the tag table (ICC.1 sec. 7.3).

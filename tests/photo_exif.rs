@@ -21,13 +21,7 @@ fn fixture(name: &str) -> PathBuf {
 /// The EXIF an image file carries, as its decoder reads it (JPEG APP1, PNG `eXIf`),
 /// parsed.
 fn exif_of(path: &Path) -> Option<exif::Exif> {
-    let mut decoder = image::ImageReader::open(path)
-        .unwrap()
-        .with_guessed_format()
-        .unwrap()
-        .into_decoder()
-        .unwrap();
-    let block = decoder.exif_metadata().unwrap()?;
+    let block = common::image_decoder(path).exif_metadata().unwrap()?;
     Some(exif::Reader::new().read_raw(block).unwrap())
 }
 

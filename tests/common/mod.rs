@@ -53,6 +53,16 @@ pub fn render_photo_alone(photo: &Path, beta: &str) -> (tempfile::TempDir, serde
     (dir, report)
 }
 
+/// An image file's decoder, opened (its format told by its bytes), for its metadata.
+pub fn image_decoder(path: &Path) -> impl ::image::ImageDecoder {
+    ::image::ImageReader::open(path)
+        .unwrap()
+        .with_guessed_format()
+        .unwrap()
+        .into_decoder()
+        .unwrap()
+}
+
 /// Writes `r.pfm` in `dir`: a range of 10 m everywhere, `w x h` (as a photo is stored).
 pub fn write_flat_range(dir: &Path, w: usize, h: usize) {
     let map = brume::raster::Grid::filled(w, h, 10.0f32);
