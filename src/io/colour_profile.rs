@@ -20,8 +20,10 @@
 //! - **Unreadable or not RGB** (a CMYK or grey profile): ignored with a warning, the
 //!   photo taken as sRGB, as before.
 //!
-//! EXR and PFM outputs cannot hold an ICC profile: their linear values are in the
-//! profile's primaries, and [`ColourProfile::primaries_are_srgb`] lets a writer say so.
+//! EXR and PFM outputs cannot hold an ICC profile, and their linear values are in the
+//! profile's primaries: an EXR says them in its `chromaticities`
+//! ([`ColourProfile::chromaticities`]); for a PFM, [`ColourProfile::primaries_are_srgb`]
+//! lets the writer warn.
 
 use std::sync::Arc;
 

@@ -38,8 +38,9 @@ pub struct RenderArgs {
 
     /// Output file: .png (8-bit sRGB), .jpg/.jpeg (8-bit sRGB, quality 95), .pfm (float
     /// RGB, linear) or .exr (float RGBA, linear). A PNG or JPEG carries the photo's ICC
-    /// colour profile (Display P3 ...). Default for the demo: brume-demo.png. Must not be
-    /// one of the inputs.
+    /// colour profile (Display P3 ...) and EXIF (date, camera, place; orientation 1, as
+    /// the output is upright). Default for the demo: brume-demo.png. Must not be one of
+    /// the inputs.
     #[arg(long, short, value_name = "PATH")]
     pub out: Option<PathBuf>,
 
