@@ -360,7 +360,7 @@ fn open_decoder<'a>(
         ));
     }
     if format == ImageFormat::Png {
-        check_png_palette(bytes, name)?;
+        check_png_chunks(bytes, name)?;
     }
     let decoder = reader.into_decoder().map_err(cannot_decode(format, name))?;
     Ok((decoder, format))
@@ -383,6 +383,15 @@ fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> (PhotoExif, Option<Ve
         Ok(Some(tiff)) => (PhotoExif::parse(tiff.clone(), name, size), Some(tiff)),
         _ => (PhotoExif::default(), None),
     }
+}
+
+/// A PNG's or JPEG's stored size from its header, after the checks every read of it makes
+/// (a JPEG's end, a PNG's palette and ICC profile), without decoding its pixels: for
+/// checks before a decode. Errors: the loaders'.
+pub fn image_dimensions(path: &Path) -> Result<(u32, u32)> {
+    let bytes = crate::io::limits::read_file(path)?;
+    let (decoder, _) = open_decoder(&bytes, &path.display().to_string(), "a PNG or JPEG file")?;
+    Ok(decoder.dimensions())
 }
 
 /// A photo's stored size and EXIF, read from its header without decoding its pixels
@@ -456,10 +465,12 @@ fn profile_of(decoder: &mut impl ImageDecoder, name: &str) -> Option<ColourProfi
 /// Refuses a PNG whose palette (`PLTE` chunk) is not whole RGB entries of 3 bytes, as the
 /// PNG specification requires: the png crate (0.18.1) accepts any length from 3 to 768
 /// bytes and then panics building its colour table from one that is not a multiple of 3
-/// (image-rs/image-png#694; found by the `sky_mask` fuzzer). The chunks are walked by
-/// their lengths from the signature; one that runs past the end stops the walk, and the
-/// decoder reports the truncation.
-fn check_png_palette(b: &[u8], name: &str) -> Result<()> {
+/// (image-rs/image-png#694; found by the `sky_mask` fuzzer). And one whose ICC profile
+/// (`iCCP` chunk, compressed) inflates beyond [`MAX_ICC_BYTES`]: the png crate inflates
+/// it whole when it opens the file, up to the decoder's memory limit (512 MiB), so a
+/// 400 KB file took 828 MB. The chunks are walked by their lengths from the signature;
+/// one that runs past the end stops the walk, and the decoder reports the truncation.
+fn check_png_chunks(b: &[u8], name: &str) -> Result<()> {
     let mut i = PNG_SIGNATURE_LEN;
     while let Some(head) = b.get(i..).and_then(|rest| rest.get(..8)) {
         let len = u32::from_be_bytes([head[0], head[1], head[2], head[3]]) as usize;
@@ -472,6 +483,11 @@ fn check_png_palette(b: &[u8], name: &str) -> Result<()> {
                      bytes; the file is corrupt"
                 ),
             ));
+        }
+        if kind == b"iCCP" {
+            if let Some(data) = b.get(i + 8..).and_then(|rest| rest.get(..len)) {
+                check_iccp_size(data, name)?;
+            }
         }
         if kind == b"IEND" {
             break;
@@ -487,6 +503,35 @@ fn check_png_palette(b: &[u8], name: &str) -> Result<()> {
 
 /// The length of the signature that starts every PNG file.
 const PNG_SIGNATURE_LEN: usize = 8;
+
+/// The largest ICC profile a PNG may inflate to: no colour library reads one larger
+/// (moxcms's own limit is 10 MB, for the largest CMYK press profiles).
+pub const MAX_ICC_BYTES: usize = 10 << 20;
+
+/// Refuses an `iCCP` chunk's data (a name, a NUL, the compression method, a zlib stream)
+/// whose profile inflates beyond [`MAX_ICC_BYTES`]. A chunk that is malformed otherwise is
+/// left to the decoder.
+fn check_iccp_size(data: &[u8], name: &str) -> Result<()> {
+    let Some(nul) = data.iter().take(81).position(|&c| c == 0) else {
+        return Ok(());
+    };
+    let Some(stream) = data.get(nul + 2..) else {
+        return Ok(());
+    };
+    match fdeflate::decompress_to_vec_bounded(stream, MAX_ICC_BYTES) {
+        Err(fdeflate::BoundedDecompressionError::OutputTooLarge { .. }) => Err(Error::format(
+            name,
+            format!(
+                "its ICC colour profile (iCCP chunk, {} bytes compressed) inflates beyond \
+                 {} MB, more than any profile holds: the file is corrupt or built to exhaust \
+                 memory; save the image again without its profile",
+                data.len(),
+                MAX_ICC_BYTES >> 20
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
 
 /// Fewest pixels per byte a JPEG can hold, with a margin: every 8x8 block of every scan
 /// costs at least one bit (a DC difference; progressive AC scans can skip blocks in runs),
@@ -638,7 +683,7 @@ mod tests {
     fn a_palette_of_partial_entries_is_refused_before_decoding() {
         for len in [4, 5, 521, 767] {
             let png = palette_png(&vec![7; len]);
-            let e = check_png_palette(&png, "m.png").unwrap_err().to_string();
+            let e = check_png_chunks(&png, "m.png").unwrap_err().to_string();
             assert!(
                 e.starts_with("m.png: ") && e.contains(&format!("PLTE chunk) of {len} bytes")),
                 "{e}"
@@ -648,16 +693,49 @@ mod tests {
             assert!(e.contains("PLTE"), "{e}");
         }
         for len in [3, 6, 768] {
-            assert!(check_png_palette(&palette_png(&vec![7; len]), "m.png").is_ok());
+            assert!(check_png_chunks(&palette_png(&vec![7; len]), "m.png").is_ok());
         }
         // Truncated files, and lengths that would overflow the walk, are left to the
         // decoder.
         let png = palette_png(&[1, 2, 3, 4]);
         for end in 0..png.len() {
-            let _ = check_png_palette(&png[..end], "m.png");
+            let _ = check_png_chunks(&png[..end], "m.png");
         }
         let mut huge = palette_png(&[1, 2, 3]);
         huge[8..12].copy_from_slice(&u32::MAX.to_be_bytes());
-        assert!(check_png_palette(&huge, "m.png").is_ok());
+        assert!(check_png_chunks(&huge, "m.png").is_ok());
+    }
+
+    /// A PNG of one 1x1 grey pixel with an `iCCP` chunk whose profile inflates to `size`
+    /// zero bytes (CRCs left at 0: the check reads lengths and types, and it refuses before
+    /// the decoder reads the chunks).
+    fn iccp_png(size: usize) -> Vec<u8> {
+        let chunk = |kind: &[u8], data: &[u8]| {
+            let mut c = (data.len() as u32).to_be_bytes().to_vec();
+            c.extend_from_slice(kind);
+            c.extend_from_slice(data);
+            c.extend_from_slice(&[0; 4]);
+            c
+        };
+        let mut iccp = b"bomb\0\0".to_vec();
+        iccp.extend(fdeflate::compress_to_vec(&vec![0; size]));
+        let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
+        png.extend(chunk(b"IHDR", &[0, 0, 0, 1, 0, 0, 0, 1, 8, 0, 0, 0, 0]));
+        png.extend(chunk(b"iCCP", &iccp));
+        png.extend(chunk(b"IEND", &[]));
+        png
+    }
+
+    /// A profile that inflates beyond 10 MB is refused before the png crate inflates it
+    /// (up to 512 MiB); one within is left to the decoder.
+    #[test]
+    fn an_iccp_chunk_that_inflates_beyond_any_profile_is_refused() {
+        let bomb = iccp_png(MAX_ICC_BYTES + 1);
+        assert!(bomb.len() < MAX_ICC_BYTES / 50, "{} bytes", bomb.len());
+        let e = decode_linear_rgb(&bomb, "bomb.png")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bomb.png") && e.contains("iCCP"), "{e}");
+        assert!(check_png_chunks(&iccp_png(MAX_ICC_BYTES), "ok.png").is_ok());
     }
 }

@@ -371,11 +371,9 @@ impl Photo {
 /// Refuses, from the image's header alone, an image whose render cannot fit in the memory
 /// left, before decoding it (a header that cannot be read is left to the loader to report).
 pub fn check_memory_before_loading(image_path: &Path) -> Result<()> {
-    let dims = ::image::ImageReader::open(image_path)
-        .ok()
-        .and_then(|r| r.with_guessed_format().ok())
-        .and_then(|r| r.into_dimensions().ok());
-    let Some((w, h)) = dims else {
+    // Through brume's reader, whose checks run before the decoder allocates anything (a
+    // PNG's ICC profile that inflates to hundreds of megabytes).
+    let Ok((w, h)) = image::image_dimensions(image_path) else {
         return Ok(());
     };
     crate::memory::check_fits(
