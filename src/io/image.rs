@@ -504,8 +504,8 @@ fn check_png_chunks(b: &[u8], name: &str) -> Result<()> {
 /// The length of the signature that starts every PNG file.
 const PNG_SIGNATURE_LEN: usize = 8;
 
-/// The largest ICC profile a PNG may inflate to: no colour library reads one larger
-/// (moxcms's own limit is 10 MB, for the largest CMYK press profiles).
+/// The largest ICC profile a PNG may inflate to: moxcms, which reads the profiles, reads
+/// none larger (its own limit, set for the largest CMYK press profiles).
 pub const MAX_ICC_BYTES: usize = 10 << 20;
 
 /// Refuses an `iCCP` chunk's data (a name, a NUL, the compression method, a zlib stream)
