@@ -58,7 +58,14 @@ const SRGB_PRIMARIES_TOLERANCE: f64 = 2e-3;
 /// Each channel's decoding to linear light at every 16-bit code (an 8-bit code `c` is
 /// 16-bit code `257 c`, the same value).
 #[derive(PartialEq)]
-struct ChannelCurves([Vec<f32>; 3]);
+pub(crate) struct ChannelCurves([Vec<f32>; 3]);
+
+impl ChannelCurves {
+    /// Linear light of a pixel's 16-bit codes.
+    pub(crate) fn decode(&self, rgb: [u16; 3]) -> [f32; 3] {
+        std::array::from_fn(|i| self.0[i][usize::from(rgb[i])])
+    }
+}
 
 impl std::fmt::Debug for ColourProfile {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -158,12 +165,9 @@ impl ColourProfile {
         self.curves.is_some()
     }
 
-    /// Linear light of a pixel's 16-bit codes (an 8-bit code `c` is `257 c`) by the
-    /// profile's own curves; None where the photo is decoded by sRGB's
-    /// ([`ColourProfile::has_own_curves`]).
-    pub(crate) fn decode_rgb16(&self, rgb: [u16; 3]) -> Option<[f32; 3]> {
-        let curves = self.curves.as_ref()?;
-        Some(std::array::from_fn(|i| curves.0[i][usize::from(rgb[i])]))
+    /// The profile's own curves, where the photo is decoded by them rather than sRGB's.
+    pub(crate) fn own_curves(&self) -> Option<&ChannelCurves> {
+        self.curves.as_deref()
     }
 }
 
@@ -401,7 +405,7 @@ mod tests {
         assert_eq!(p.icc(), icc.as_slice());
         assert!(!p.has_own_curves());
         assert!(!p.primaries_are_srgb());
-        assert_eq!(p.decode_rgb16([0, 1, 2]), None);
+        assert!(p.own_curves().is_none());
     }
 
     /// Display P3's primaries (SMPTE EG 432-1) and D65, from moxcms's profile (whose
@@ -459,7 +463,7 @@ mod tests {
         let gamma = 563.0 / 256.0;
         for c in [0u8, 1, 10, 128, 200, 255] {
             let want = (f64::from(c) / 255.0).powf(gamma) as f32;
-            let got = p.decode_rgb16([u16::from(c) * 257; 3]).unwrap();
+            let got = p.own_curves().unwrap().decode([u16::from(c) * 257; 3]);
             for v in got {
                 assert!((v - want).abs() < 2e-5, "code {c}: {v} against {want}");
             }

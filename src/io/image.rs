@@ -385,12 +385,11 @@ fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> (PhotoExif, Option<Ve
     }
 }
 
-/// A PNG's or JPEG's stored size from its header, after the checks every read of it makes
-/// (a JPEG's end, a PNG's palette and ICC profile), without decoding its pixels: for
-/// checks before a decode. Errors: the loaders'.
-pub fn image_dimensions(path: &Path) -> Result<(u32, u32)> {
-    let bytes = crate::io::limits::read_file(path)?;
-    let (decoder, _) = open_decoder(&bytes, &path.display().to_string(), "a PNG or JPEG file")?;
+/// The stored size of PNG or JPEG `bytes` (the file `name`) from its header, after the
+/// checks every read of it makes (a JPEG's end, a PNG's palette and ICC profile), without
+/// decoding its pixels: for checks before a decode. Errors: the loaders'.
+pub fn image_dimensions(bytes: &[u8], name: &str) -> Result<(u32, u32)> {
+    let (decoder, _) = open_decoder(bytes, name, "a PNG or JPEG file")?;
     Ok(decoder.dimensions())
 }
 
@@ -621,21 +620,6 @@ fn hex_prefix(bytes: &[u8]) -> String {
 /// else by sRGB's.
 fn to_linear_rgb(img: &DynamicImage, profile: Option<&ColourProfile>) -> RgbImage {
     let (w, h) = (img.width() as usize, img.height() as usize);
-    if let Some(p) = profile.filter(|p| p.has_own_curves()) {
-        let decode = |rgb| p.decode_rgb16(rgb).expect("a profile with its own curves");
-        let data = match img {
-            DynamicImage::ImageLuma8(_)
-            | DynamicImage::ImageLumaA8(_)
-            | DynamicImage::ImageRgb8(_)
-            | DynamicImage::ImageRgba8(_) => img
-                .to_rgb8()
-                .pixels()
-                .map(|px| decode(px.0.map(|c| u16::from(c) * 257)))
-                .collect(),
-            _ => img.to_rgb16().pixels().map(|px| decode(px.0)).collect(),
-        };
-        return RgbImage::from_vec(w, h, data);
-    }
     let is_8bit = matches!(
         img,
         DynamicImage::ImageLuma8(_)
@@ -643,16 +627,25 @@ fn to_linear_rgb(img: &DynamicImage, profile: Option<&ColourProfile>) -> RgbImag
             | DynamicImage::ImageRgb8(_)
             | DynamicImage::ImageRgba8(_)
     );
-    if is_8bit {
-        RgbImage::from_vec(w, h, srgb8_rgb_to_linear(img.to_rgb8().as_raw()))
-    } else {
-        let data = img
+    let data = match (profile.and_then(ColourProfile::own_curves), is_8bit) {
+        (Some(curves), true) => img
+            .to_rgb8()
+            .pixels()
+            .map(|px| curves.decode(px.0.map(|c| u16::from(c) * 257)))
+            .collect(),
+        (Some(curves), false) => img
+            .to_rgb16()
+            .pixels()
+            .map(|px| curves.decode(px.0))
+            .collect(),
+        (None, true) => srgb8_rgb_to_linear(img.to_rgb8().as_raw()),
+        (None, false) => img
             .to_rgb32f()
             .pixels()
             .map(|p| p.0.map(srgb_to_linear))
-            .collect();
-        RgbImage::from_vec(w, h, data)
-    }
+            .collect(),
+    };
+    RgbImage::from_vec(w, h, data)
 }
 
 #[cfg(test)]

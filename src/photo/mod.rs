@@ -90,12 +90,11 @@ impl Photo {
     /// The image is turned upright by its EXIF orientation and the depth map with it
     /// ([`DepthOptions::layout`] says how the map lies; `opts.photo` is set here).
     pub fn load(image_path: &Path, depth_path: &Path, opts: &DepthOptions) -> Result<Photo> {
-        check_memory_before_loading(image_path)?;
         let image::UprightPhoto {
             image,
             exif,
             metadata,
-        } = image::load_upright_rgb(image_path)?;
+        } = load_image_within_memory(image_path)?;
         let opts = DepthOptions {
             photo: Some(PhotoGeometry::of_upright(
                 image.width(),
@@ -168,13 +167,12 @@ impl Photo {
     /// would from the range. Errors: the loaders', the memory check, a map of another
     /// size than the image.
     pub fn load_transmittance(image_path: &Path, map_path: &Path) -> Result<Photo> {
-        check_memory_before_loading(image_path)?;
         // The map is taken as the photo is stored, as a depth map is.
         let image::UprightPhoto {
             image,
             exif,
             metadata,
-        } = image::load_upright_rgb(image_path)?;
+        } = load_image_within_memory(image_path)?;
         let orientation = exif.orientation;
         let range = crate::compat::load_optical_depth(map_path)?.into_oriented(orientation);
         let (image_name, depth_name) = (image_path.display(), map_path.display());
@@ -368,16 +366,27 @@ impl Photo {
     }
 }
 
-/// Refuses, from the image's header alone, an image whose render cannot fit in the memory
-/// left, before decoding it (a header that cannot be read is left to the loader to report).
-pub fn check_memory_before_loading(image_path: &Path) -> Result<()> {
+/// Reads the image file `image_path` once, refuses it from its header if a render of it
+/// cannot fit in the memory left ([`check_memory_before_decoding`]), and decodes it
+/// upright.
+fn load_image_within_memory(image_path: &Path) -> Result<image::UprightPhoto> {
+    let bytes = crate::io::limits::read_file(image_path)?;
+    let name = image_path.display().to_string();
+    check_memory_before_decoding(&bytes, &name)?;
+    image::decode_upright_rgb(&bytes, &name)
+}
+
+/// Refuses, from the header of the image file `name` (its `bytes`) alone, an image whose
+/// render cannot fit in the memory left, before decoding it (a header that cannot be read
+/// is left to the decoder to report).
+pub fn check_memory_before_decoding(bytes: &[u8], name: &str) -> Result<()> {
     // Through brume's reader, whose checks run before the decoder allocates anything (a
     // PNG's ICC profile that inflates to hundreds of megabytes).
-    let Ok((w, h)) = image::image_dimensions(image_path) else {
+    let Ok((w, h)) = image::image_dimensions(bytes, name) else {
         return Ok(());
     };
     crate::memory::check_fits(
-        &format!("rendering {} ({w}x{h})", image_path.display()),
+        &format!("rendering {name} ({w}x{h})"),
         CPU_BYTES_PER_PIXEL * u64::from(w) * u64::from(h),
         crate::memory::available(),
         &format!(
