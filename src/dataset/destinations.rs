@@ -10,13 +10,7 @@ use std::path::{Component, Path, PathBuf};
 /// A sky mask shared by the frames without their own has each such frame's size: refused
 /// up front, from the files' headers, rather than frame by frame.
 pub(super) fn check_sky_mask_size(mask: &Path, items: &[Item]) -> Result<()> {
-    let size = |path: &Path| {
-        ::image::ImageReader::open(path)
-            .and_then(|r| r.with_guessed_format())
-            .map_err(|e| Error::io(path, e))?
-            .into_dimensions()
-            .map_err(|e| Error::format(path, format!("cannot read its size: {e}")))
-    };
+    let size = crate::io::image::read_image_dimensions;
     let (mw, mh) = size(mask).map_err(|e| match e {
         Error::Io { .. } | Error::Format { .. } => Error::invalid(
             "sky_mask",

@@ -393,6 +393,37 @@ pub fn image_dimensions(bytes: &[u8], name: &str) -> Result<(u32, u32)> {
     Ok(decoder.dimensions())
 }
 
+/// The stored size of the PNG or JPEG file at `path`, from its header: for checks of many
+/// files before any is decoded. A PNG's is its first chunk (`IHDR`), so nothing after it
+/// is read (its ICC profile is not inflated); a JPEG is read whole, as the decoder does,
+/// and checked as [`image_dimensions`] checks it. Errors: the loaders'.
+pub fn read_image_dimensions(path: &Path) -> Result<(u32, u32)> {
+    use std::io::Read;
+    let mut head = [0; PNG_IHDR_END];
+    // A file that cannot be opened, or is shorter, gets its error from the whole read.
+    let read = std::fs::File::open(path).and_then(|mut f| f.read_exact(&mut head));
+    if let Some(size) = read.ok().and_then(|()| png_ihdr_size(&head)) {
+        return Ok(size);
+    }
+    let bytes = crate::io::limits::read_file(path)?;
+    image_dimensions(&bytes, &path.display().to_string())
+}
+
+/// Where a PNG's width and height end: the signature, `IHDR`'s length and type, then the
+/// two 32-bit numbers.
+const PNG_IHDR_END: usize = 24;
+
+/// The width and height in the `IHDR` chunk that starts a PNG, if `head` is one and both
+/// are non-zero (the specification's rule; anything else is left to the decoder's error).
+fn png_ihdr_size(head: &[u8; PNG_IHDR_END]) -> Option<(u32, u32)> {
+    if &head[..PNG_SIGNATURE_LEN] != b"\x89PNG\r\n\x1a\n" || &head[12..16] != b"IHDR" {
+        return None;
+    }
+    let number = |i: usize| u32::from_be_bytes([head[i], head[i + 1], head[i + 2], head[i + 3]]);
+    let (w, h) = (number(16), number(20));
+    (w > 0 && h > 0).then_some((w, h))
+}
+
 /// A photo's stored size and EXIF, read from its header without decoding its pixels
 /// (an EXR or PFM, which has no EXIF, is decoded for its size).
 pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
@@ -717,6 +748,27 @@ mod tests {
         png.extend(chunk(b"iCCP", &iccp));
         png.extend(chunk(b"IEND", &[]));
         png
+    }
+
+    /// A PNG's size is read from its first chunk alone: the header of a file cut short
+    /// after `IHDR` (which the decoder cannot open) is enough, and a profile that inflates
+    /// beyond any is not inflated; a JPEG is checked as a decode checks it.
+    #[test]
+    fn a_pngs_size_is_read_from_its_first_chunk() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut bomb = iccp_png(MAX_ICC_BYTES + 1);
+        bomb[16..24].copy_from_slice(&[0, 0, 0x1f, 0x40, 0, 0, 0x17, 0x70]);
+        let cut = dir.path().join("cut.png");
+        std::fs::write(&cut, &bomb[..PNG_IHDR_END]).unwrap();
+        assert_eq!(read_image_dimensions(&cut).unwrap(), (8000, 6000));
+        assert!(image_dimensions(&bomb[..PNG_IHDR_END], "cut.png").is_err());
+        let whole = dir.path().join("bomb.png");
+        std::fs::write(&whole, &bomb).unwrap();
+        assert_eq!(read_image_dimensions(&whole).unwrap(), (8000, 6000));
+        let short = dir.path().join("short.jpg");
+        std::fs::write(&short, b"\xff\xd8\xff\xe0").unwrap();
+        let e = read_image_dimensions(&short).unwrap_err().to_string();
+        assert!(e.contains("short.jpg") && e.contains("truncated"), "{e}");
     }
 
     /// A profile that inflates beyond 10 MB is refused before the png crate inflates it
