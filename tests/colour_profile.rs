@@ -311,3 +311,90 @@ fn a_real_iphone_photos_display_p3_reaches_render_and_batch() {
     assert_eq!(icc_of(&batch).as_ref(), Some(&icc));
     assert!(std::fs::read(batch).unwrap() == std::fs::read(dir.path().join("r.png")).unwrap());
 }
+
+/// The codes of the 16 x 16 ramp fixtures, pixel by pixel (row-major), over 255.
+fn ramp_values() -> impl Iterator<Item = [f64; 3]> {
+    (0..256).map(|i| [i, 255 - i, (7 * i) % 256].map(|c| f64::from(c) / 255.0))
+}
+
+/// A PNG that states its colour space by chunks instead of an ICC profile: `gAMA` 1 and
+/// `cICP` 1/8 (BT.709's primaries, linear) decode each code c to c/255, `cICP` ahead of
+/// the `gAMA` 1/2.2 and the gamma-2.2 ICC profile the second file also holds; `gAMA`
+/// 1/2.2 with sRGB's `cHRM` is sRGB (no profile, as libpng reads it); Display P3 by `cHRM`
+/// or `cICP` 12/13 is sRGB's curve with P3's primaries (SMPTE EG 432-1).
+#[test]
+fn png_colour_chunks_decode_by_the_specifications_precedence() {
+    for name in ["gama-linear-ramp.png", "cicp-linear-ramp.png"] {
+        let photo = load_upright_rgb(&fixture(name)).unwrap();
+        let profile = photo.metadata.profile().expect(name);
+        assert!(
+            profile.has_own_curves() && profile.primaries_are_srgb(),
+            "{name}"
+        );
+        for (i, (px, want)) in photo.image.as_slice().iter().zip(ramp_values()).enumerate() {
+            for (&v, w) in px.iter().zip(want) {
+                assert!((f64::from(v) - w).abs() < 2e-5, "{name} {i}: {v} for {w}");
+            }
+        }
+    }
+    let srgb = load_upright_rgb(&fixture("gama-srgb-flat.png")).unwrap();
+    assert!(srgb.metadata.profile().is_none());
+    let v = f64::from(srgb.image.as_slice()[0][0]);
+    assert!((v - srgb_decode(200.0 / 255.0)).abs() < 1e-6);
+    let p3 = [[0.68, 0.32], [0.265, 0.69], [0.15, 0.06], D65];
+    for name in ["chrm-p3-flat.png", "cicp-p3-flat.png"] {
+        let photo = load_upright_rgb(&fixture(name)).unwrap();
+        let profile = photo.metadata.profile().expect(name);
+        assert!(!profile.has_own_curves() && !profile.primaries_are_srgb());
+        assert_chromaticities(profile.chromaticities(), p3, name);
+        let v = f64::from(photo.image.as_slice()[0][0]);
+        assert!((v - srgb_decode(200.0 / 255.0)).abs() < 1e-6, "{name}");
+    }
+}
+
+/// A linear PNG (`gAMA` 1) fogged by next to nothing comes out as its codes encoded by
+/// sRGB's curve, exactly, with a profile of its primaries; Display P3 by `cICP` reaches
+/// the output as a profile with P3's colorants; an HDR PNG (`cICP` PQ) is refused, naming
+/// the file and what to do.
+#[test]
+fn png_colour_chunks_reach_the_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    common::write_flat_range(dir.path(), 16, 16);
+    let fog = ["--beta", "1e-6"];
+    common::render_over_range(
+        dir.path(),
+        &fixture("gama-linear-ramp.png"),
+        "lin.png",
+        &fog,
+    );
+    let out = image::open(dir.path().join("lin.png")).unwrap().to_rgb8();
+    for (px, want) in out.pixels().zip(ramp_values()) {
+        let want = want.map(|v| (srgb_encode(v) * 255.0).round());
+        assert_eq!(px.0.map(f64::from), want);
+    }
+    let icc = icc_of(&dir.path().join("lin.png")).expect("a profile");
+    assert_primaries_with_srgb_curve(&icc, &profiles()["srgb"]["colorants"]);
+    flat_range(dir.path());
+    render_flat(dir.path(), &fixture("cicp-p3-flat.png"), "p3.png");
+    let icc = icc_of(&dir.path().join("p3.png")).expect("a profile");
+    assert_primaries_with_srgb_curve(&icc, &profiles()["p3"]["colorants"]);
+    let pq = fixture("cicp-pq-flat.png");
+    let run = brume(
+        dir.path(),
+        &[
+            "render",
+            "--image",
+            pq.to_str().unwrap(),
+            "--depth",
+            "r.pfm",
+            "--out",
+            "pq.png",
+        ],
+    );
+    assert!(!dir.path().join("pq.png").exists());
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    for needle in ["cicp-pq-flat.png", "HDR", "PQ", "SDR"] {
+        assert!(err.contains(needle), "`{err}` should mention `{needle}`");
+    }
+}

@@ -43,7 +43,7 @@ import sys
 import tempfile
 
 import numpy as np
-from PIL import Image, ImageCms
+from PIL import Image, ImageCms, PngImagePlugin
 
 D50 = np.array([0.9642, 1.0, 0.8249])
 BRADFORD = np.array([[0.8951, 0.2664, -0.1614],
@@ -202,6 +202,36 @@ def exif_fixtures(out_dir):
     open(os.path.join(out_dir, "broken.jpg"), "wb").write(broken)
 
 
+def fixed(v):
+    """A PNG chunk's unsigned number of 1/100000 (gAMA, cHRM)."""
+    return struct.pack(">I", round(v * 100000))
+
+
+def png_colour_chunk_fixtures(out_dir, ramp, flat, adobe):
+    """PNGs stating their colour space by chunks other than iCCP; Pillow writes each chunk
+    (with its CRC) before the image data, as given."""
+    def save_with(name, pixels, chunks, icc=None):
+        info = PngImagePlugin.PngInfo()
+        for kind, data in chunks:
+            info.add(kind, data)
+        path = os.path.join(out_dir, name)
+        Image.fromarray(pixels).save(path, pnginfo=info, icc_profile=icc)
+        held = Image.open(path)
+        held.load()
+        if any(kind == b"gAMA" for kind, _ in chunks):
+            assert abs(held.info["gamma"] - struct.unpack(">I", dict(chunks)[b"gAMA"])[0]
+                       / 100000) < 1e-9, name
+    srgb_chrm = b"".join(fixed(v) for v in (0.3127, 0.329, 0.64, 0.33, 0.3, 0.6, 0.15, 0.06))
+    p3_chrm = b"".join(fixed(v) for v in (0.3127, 0.329, 0.68, 0.32, 0.265, 0.69, 0.15, 0.06))
+    save_with("gama-linear-ramp.png", ramp, [(b"gAMA", fixed(1.0))])
+    save_with("gama-srgb-flat.png", flat, [(b"gAMA", fixed(1 / 2.2)), (b"cHRM", srgb_chrm)])
+    save_with("chrm-p3-flat.png", flat, [(b"gAMA", fixed(1 / 2.2)), (b"cHRM", p3_chrm)])
+    save_with("cicp-p3-flat.png", flat, [(b"cICP", bytes([12, 13, 0, 1]))])
+    save_with("cicp-linear-ramp.png", ramp, [(b"cICP", bytes([1, 8, 0, 1])),
+                                             (b"gAMA", fixed(1 / 2.2))], adobe)
+    save_with("cicp-pq-flat.png", flat, [(b"cICP", bytes([9, 16, 0, 1]))])
+
+
 def main(data_dir):
     exif_fixtures(os.path.join(data_dir, "exif"))
     out_dir = os.path.join(data_dir, "colour")
@@ -230,11 +260,13 @@ def main(data_dir):
     for name, icc in [("gamma22-flat.png", adobe), ("p3-flat.png", p3),
                       ("garbage-icc.png", garbage), ("grey-icc.png", grey)]:
         assert Image.open(os.path.join(out_dir, name)).info["icc_profile"] == icc, name
+    png_colour_chunk_fixtures(out_dir, ramp, flat, adobe)
     quantised = lambda m: [[round(v * 65536) / 65536 for v in m[:, k]] for k in range(3)]
     with open(os.path.join(out_dir, "profiles.json"), "w") as f:
         json.dump({
             "gamma22": {"gamma": gamma, "colorants": quantised(m_adobe)},
             "p3": {"colorants": quantised(m_p3)},
+            "srgb": {"colorants": quantised(rgb_to_xyz_d50(SRGB))},
         }, f, indent=1)
         f.write("\n")
 

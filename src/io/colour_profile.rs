@@ -171,6 +171,57 @@ impl ColourProfile {
     }
 }
 
+/// A colour space a file states without an ICC profile (a PNG's `cICP`, or its `cHRM` and
+/// `gAMA`): chromaticities and one tone curve for the three channels.
+pub(crate) struct StatedColour {
+    /// CIE xy of the red, green and blue primaries.
+    pub primaries: [[f64; 2]; 3],
+    /// CIE xy of the white.
+    pub white: [f64; 2],
+    /// The decoding curve of every channel.
+    pub curve: ToneReprCurve,
+    /// What stated it, for messages and the profile's description.
+    pub description: String,
+}
+
+impl ColourProfile {
+    /// The colour space `stated` by the image `name`, as the ICC profile that says it
+    /// (written by moxcms: colorants adapted to D50 by Bradford's, and that adaptation as
+    /// its `chad`), read as [`ColourProfile::from_icc`] reads one. None where it is sRGB
+    /// (primaries and curve), or, with a warning, where moxcms cannot write it.
+    pub(crate) fn from_stated(stated: StatedColour, name: &str) -> Option<ColourProfile> {
+        let white = xy_to_xyz(stated.white);
+        let adapt = bradford(white, D50);
+        let colorants = multiply(adapt, rgb_to_xyz(stated.primaries.map(xy_to_xyz), white));
+        let column = |k: usize| moxcms::Xyzd {
+            x: colorants[0][k],
+            y: colorants[1][k],
+            z: colorants[2][k],
+        };
+        let mut p = ColorProfile::new_srgb();
+        p.cicp = None;
+        (p.red_colorant, p.green_colorant, p.blue_colorant) = (column(0), column(1), column(2));
+        p.chromatic_adaptation = Some(moxcms::Matrix3d { v: adapt });
+        p.red_trc = Some(stated.curve.clone());
+        p.green_trc = Some(stated.curve.clone());
+        p.blue_trc = Some(stated.curve);
+        p.description = Some(ProfileText::PlainString(stated.description));
+        if has_srgb_primaries(&p) && matches!(own_curves(&p), Ok(None)) {
+            return None;
+        }
+        match p.encode() {
+            Ok(icc) => ColourProfile::from_icc(icc, name),
+            Err(e) => {
+                log::warn!(
+                    "{name}: its colour space ({}) cannot be written as an ICC profile                      ({e}); its colours are taken as sRGB",
+                    describe(&p)
+                );
+                None
+            }
+        }
+    }
+}
+
 /// The profile `icc` parsed, where it is an RGB profile; None, with a warning naming the
 /// image `name`, where it cannot be read or is for other data (CMYK, grey).
 fn parse_rgb(icc: &[u8], name: &str) -> Option<ColorProfile> {
@@ -265,6 +316,19 @@ fn chromaticities_of(p: &ColorProfile) -> [[f64; 2]; 4] {
         xy(colorant(p.blue_colorant)),
         xy(D50),
     ]
+}
+
+/// XYZ of CIE xy `c`, at Y = 1.
+fn xy_to_xyz([x, y]: [f64; 2]) -> [f64; 3] {
+    [x / y, 1.0, (1.0 - x - y) / y]
+}
+
+/// The matrix from linear RGB to XYZ of primaries `rgb` (XYZ, any scale) whose sum is
+/// `white`: each primary's column scaled so that RGB (1, 1, 1) is the white.
+fn rgb_to_xyz(rgb: [[f64; 3]; 3], white: [f64; 3]) -> [[f64; 3]; 3] {
+    let columns: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| rgb[k][i]));
+    let scale = apply(inverse(columns), white);
+    std::array::from_fn(|i| std::array::from_fn(|k| columns[i][k] * scale[k]))
 }
 
 /// Bradford's adaptation from white `from` to white `to` (XYZ).

@@ -11,8 +11,8 @@
 //! that its depth map is turned with it: [`crate::io::depth::PhotoGeometry`]). Maps (depth,
 //! masks) are read as stored. A colour image's embedded ICC profile is read
 //! ([`crate::io::colour_profile`]: Display P3 and the like are kept, and decoded by their
-//! own curves where those are not sRGB's); without one, a PNG or JPEG is taken as sRGB
-//! (PNG `gAMA` chunks are ignored). An EXR's chromaticities are ignored: its primaries
+//! own curves where those are not sRGB's); a PNG's `cICP`, `gAMA` and `cHRM` chunks are
+//! read too ([`crate::io::png_chunks`]); with none of these, a PNG or JPEG is sRGB. An EXR's chromaticities are ignored: its primaries
 //! are taken to be the output's.
 //!
 //! Float values: above 1 (HDR) they are kept; a NaN or infinite value is refused, naming
@@ -31,6 +31,8 @@ use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::colour_profile::ColourProfile;
 use crate::io::limits::check_size;
 use crate::io::metadata::PhotoMetadata;
+pub use crate::io::png_chunks::MAX_ICC_BYTES;
+use crate::io::png_chunks::{check_png_chunks, png_colour, png_ihdr_size, PngColour, PNG_IHDR_END};
 use crate::raster::{Orientation, RgbImage};
 use crate::{Error, Result};
 
@@ -409,21 +411,6 @@ pub fn read_image_dimensions(path: &Path) -> Result<(u32, u32)> {
     image_dimensions(&bytes, &path.display().to_string())
 }
 
-/// Where a PNG's width and height end: the signature, `IHDR`'s length and type, then the
-/// two 32-bit numbers.
-const PNG_IHDR_END: usize = 24;
-
-/// The width and height in the `IHDR` chunk that starts a PNG, if `head` is one and both
-/// are non-zero (the specification's rule; anything else is left to the decoder's error).
-fn png_ihdr_size(head: &[u8; PNG_IHDR_END]) -> Option<(u32, u32)> {
-    if &head[..PNG_SIGNATURE_LEN] != b"\x89PNG\r\n\x1a\n" || &head[12..16] != b"IHDR" {
-        return None;
-    }
-    let number = |i: usize| u32::from_be_bytes([head[i], head[i + 1], head[i + 2], head[i + 3]]);
-    let (w, h) = (number(16), number(20));
-    (w > 0 && h > 0).then_some((w, h))
-}
-
 /// A photo's stored size and EXIF, read from its header without decoding its pixels
 /// (an EXR or PFM, which has no EXIF, is decoded for its size).
 pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
@@ -452,8 +439,16 @@ fn decode_image(
     let (exif, metadata) = match role {
         Role::Colour => {
             let (exif, block) = exif_of(&mut decoder, name);
+            let profile = match format {
+                ImageFormat::Png => match png_colour(bytes, name)? {
+                    PngColour::IccProfile => profile_of(&mut decoder, name),
+                    PngColour::Srgb => None,
+                    PngColour::Stated(profile) => Some(profile),
+                },
+                _ => profile_of(&mut decoder, name),
+            };
             let metadata = PhotoMetadata {
-                profile: profile_of(&mut decoder, name),
+                profile,
                 exif: block.map(std::sync::Arc::new),
             };
             (exif, metadata)
@@ -489,77 +484,6 @@ fn profile_of(decoder: &mut impl ImageDecoder, name: &str) -> Option<ColourProfi
             log::warn!("{name}: its ICC colour profile cannot be read ({e}); taken as sRGB");
             None
         }
-    }
-}
-
-/// Refuses a PNG whose palette (`PLTE` chunk) is not whole RGB entries of 3 bytes, as the
-/// PNG specification requires: the png crate (0.18.1) accepts any length from 3 to 768
-/// bytes and then panics building its colour table from one that is not a multiple of 3
-/// (image-rs/image-png#694; found by the `sky_mask` fuzzer). And one whose ICC profile
-/// (`iCCP` chunk, compressed) inflates beyond [`MAX_ICC_BYTES`]: the png crate inflates
-/// it whole when it opens the file, up to the decoder's memory limit (512 MiB), so a
-/// 400 KB file took 828 MB. The chunks are walked by their lengths from the signature;
-/// one that runs past the end stops the walk, and the decoder reports the truncation.
-fn check_png_chunks(b: &[u8], name: &str) -> Result<()> {
-    let mut i = PNG_SIGNATURE_LEN;
-    while let Some(head) = b.get(i..).and_then(|rest| rest.get(..8)) {
-        let len = u32::from_be_bytes([head[0], head[1], head[2], head[3]]) as usize;
-        let kind = &head[4..8];
-        if kind == b"PLTE" && !len.is_multiple_of(3) {
-            return Err(Error::format(
-                name,
-                format!(
-                    "PNG palette (PLTE chunk) of {len} bytes, not whole RGB entries of 3 \
-                     bytes; the file is corrupt"
-                ),
-            ));
-        }
-        if kind == b"iCCP" {
-            if let Some(data) = b.get(i + 8..).and_then(|rest| rest.get(..len)) {
-                check_iccp_size(data, name)?;
-            }
-        }
-        if kind == b"IEND" {
-            break;
-        }
-        // Length, type, data and CRC.
-        match i.checked_add(len).and_then(|j| j.checked_add(12)) {
-            Some(next) => i = next,
-            None => break,
-        }
-    }
-    Ok(())
-}
-
-/// The length of the signature that starts every PNG file.
-const PNG_SIGNATURE_LEN: usize = 8;
-
-/// The largest ICC profile a PNG may inflate to: moxcms, which reads the profiles, reads
-/// none larger (its own limit, set for the largest CMYK press profiles).
-pub const MAX_ICC_BYTES: usize = 10 << 20;
-
-/// Refuses an `iCCP` chunk's data (a name, a NUL, the compression method, a zlib stream)
-/// whose profile inflates beyond [`MAX_ICC_BYTES`]. A chunk that is malformed otherwise is
-/// left to the decoder.
-fn check_iccp_size(data: &[u8], name: &str) -> Result<()> {
-    let Some(nul) = data.iter().take(81).position(|&c| c == 0) else {
-        return Ok(());
-    };
-    let Some(stream) = data.get(nul + 2..) else {
-        return Ok(());
-    };
-    match fdeflate::decompress_to_vec_bounded(stream, MAX_ICC_BYTES) {
-        Err(fdeflate::BoundedDecompressionError::OutputTooLarge { .. }) => Err(Error::format(
-            name,
-            format!(
-                "its ICC colour profile (iCCP chunk, {} bytes compressed) inflates beyond \
-                 {} MB, more than any profile holds: the file is corrupt or built to exhaust \
-                 memory; save the image again without its profile",
-                data.len(),
-                MAX_ICC_BYTES >> 20
-            ),
-        )),
-        _ => Ok(()),
     }
 }
 

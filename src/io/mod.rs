@@ -16,6 +16,7 @@ pub mod limits;
 pub mod mask;
 pub mod metadata;
 pub mod output;
+pub(crate) mod png_chunks;
 pub mod srgb;
 
 use crate::error::{Error, Result};
