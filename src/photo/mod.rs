@@ -76,8 +76,9 @@ pub struct Photo {
 /// Bytes per pixel that a render holds in system memory besides the GL textures: the
 /// decoded colour (8-bit, then linear f32), the depth (raw, then range), pre-processing's
 /// maps, the normalised range, the read-back and the encoded output. Measured: a
-/// 4000x3000 render peaks at 1.12-1.18 GB on llvmpipe, 94-98 bytes per pixel, of which the
-/// textures (counted by the renderer's own check) are 36.
+/// 4000x3000 render peaks at 1.44 GB on llvmpipe (2026-12-05), 120 bytes per pixel, of
+/// which the textures (counted by the renderer's own check, with the coarse stage's
+/// levels) are 80.
 pub const CPU_BYTES_PER_PIXEL: u64 = 64;
 
 impl Photo {
