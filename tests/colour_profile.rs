@@ -398,3 +398,64 @@ fn png_colour_chunks_reach_the_outputs() {
         assert!(err.contains(needle), "`{err}` should mention `{needle}`");
     }
 }
+
+/// A 32 x 8 EXR of linear (0.5, 0.3, 0.1) whose `chromaticities` are `c` (red, green,
+/// blue, white), written by the exr crate.
+fn exr_with_chromaticities(path: &Path, c: [[f32; 2]; 4]) {
+    use exr::prelude::*;
+    let (w, h) = (32, 8);
+    let channels = |v: f32| FlatSamples::F32(vec![v; w * h]);
+    let list = [("R", 0.5), ("G", 0.3), ("B", 0.1)]
+        .map(|(name, v)| AnyChannel::new(name, channels(v)))
+        .to_vec();
+    let layer = Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(list.into()),
+    );
+    let mut image = Image::from_layer(layer);
+    let v = |[x, y]: [f32; 2]| Vec2(x, y);
+    image.attributes.chromaticities = Some(attribute::Chromaticities {
+        red: v(c[0]),
+        green: v(c[1]),
+        blue: v(c[2]),
+        white: v(c[3]),
+    });
+    image.write().to_file(path).unwrap();
+}
+
+/// An EXR in ACEScg (AP1 primaries, ACES's white near D60, as VFX tools write it): its
+/// values are in those primaries, which its EXR output says again and its PNG output's
+/// profile holds (colorants by the fixture script's Bradford arithmetic), the codes the
+/// fog of its values encoded by sRGB's curve; an EXR saying sRGB's gets no profile.
+#[test]
+fn an_exrs_chromaticities_reach_its_outputs() {
+    let dir = tempfile::tempdir().unwrap();
+    flat_range(dir.path());
+    let ap1 = [
+        [0.713, 0.293],
+        [0.165, 0.83],
+        [0.128, 0.044],
+        [0.32168, 0.33767],
+    ];
+    let input = dir.path().join("acescg.exr");
+    exr_with_chromaticities(&input, ap1);
+    render_flat(dir.path(), &input, "out.exr");
+    let want = ap1.map(|c| c.map(f64::from));
+    assert_chromaticities(exr_chromaticities(&dir.path().join("out.exr")), want, "EXR");
+    render_flat(dir.path(), &input, "out.png");
+    let out = dir.path().join("out.png");
+    assert_codes(
+        pixel(&out, 16, 4),
+        fogged_codes([0.5, 0.3, 0.1]),
+        0.0,
+        "ACEScg",
+    );
+    let icc = icc_of(&out).expect("a profile of AP1's primaries");
+    assert_primaries_with_srgb_curve(&icc, &profiles()["acescg"]["colorants"]);
+    let srgb = [[0.64, 0.33], [0.3, 0.6], [0.15, 0.06], [0.3127, 0.329]];
+    exr_with_chromaticities(&input, srgb);
+    render_flat(dir.path(), &input, "srgb.png");
+    assert_eq!(icc_of(&dir.path().join("srgb.png")), None);
+}

@@ -53,6 +53,10 @@ ADOBE = [(0.64, 0.33), (0.21, 0.71), (0.15, 0.06)]
 P3 = [(0.680, 0.320), (0.265, 0.690), (0.150, 0.060)]
 SRGB = [(0.64, 0.33), (0.30, 0.60), (0.15, 0.06)]
 D65_XY = (0.3127, 0.3290)
+# ACEScg's primaries (AP1) and white (SMPTE ST 2065-1, about D60), as an EXR's
+# chromaticities attribute says them.
+ACES_AP1 = [(0.713, 0.293), (0.165, 0.830), (0.128, 0.044)]
+ACES_WHITE_XY = (0.32168, 0.33767)
 GAMMA_U8F8 = 0x0233  # 563/256 = 2.19921875
 
 
@@ -60,10 +64,10 @@ def xy_to_xyz(x, y):
     return np.array([x / y, 1.0, (1 - x - y) / y])
 
 
-def rgb_to_xyz_d50(primaries):
-    """The RGB-to-XYZ matrix of ``primaries`` with a D65 white, adapted to D50 (Bradford),
-    as an ICC profile's colorants hold it (columns: red, green, blue)."""
-    white = xy_to_xyz(*D65_XY)
+def rgb_to_xyz_d50(primaries, white_xy=D65_XY):
+    """The RGB-to-XYZ matrix of ``primaries`` with a white (D65 unless given), adapted to
+    D50 (Bradford), as an ICC profile's colorants hold it (columns: red, green, blue)."""
+    white = xy_to_xyz(*white_xy)
     p = np.stack([xy_to_xyz(x, y) for x, y in primaries], axis=1)
     m = p * np.linalg.solve(p, white)
     cone_src, cone_dst = BRADFORD @ white, BRADFORD @ D50
@@ -267,6 +271,7 @@ def main(data_dir):
             "gamma22": {"gamma": gamma, "colorants": quantised(m_adobe)},
             "p3": {"colorants": quantised(m_p3)},
             "srgb": {"colorants": quantised(rgb_to_xyz_d50(SRGB))},
+            "acescg": {"colorants": quantised(rgb_to_xyz_d50(ACES_AP1, ACES_WHITE_XY))},
         }, f, indent=1)
         f.write("\n")
 

@@ -12,8 +12,9 @@
 //! masks) are read as stored. A colour image's embedded ICC profile is read
 //! ([`crate::io::colour_profile`]: Display P3 and the like are kept, and decoded by their
 //! own curves where those are not sRGB's); a PNG's `cICP`, `gAMA` and `cHRM` chunks are
-//! read too ([`crate::io::png_chunks`]); with none of these, a PNG or JPEG is sRGB. An EXR's chromaticities are ignored: its primaries
-//! are taken to be the output's.
+//! read too ([`crate::io::png_chunks`]); with none of these, a PNG or JPEG is sRGB. An
+//! EXR's `chromaticities` other than sRGB's (ACEScg's) become a profile of its primaries,
+//! which its outputs say; without them its primaries are taken to be sRGB's.
 //!
 //! Float values: above 1 (HDR) they are kept; a NaN or infinite value is refused, naming
 //! the first pixel holding one (the fog's blur would spread it over its whole footprint);
@@ -28,11 +29,13 @@ use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 
 use crate::io::codec::exr::parse_exr_rgb;
 use crate::io::codec::pfm::{parse_pfm, Pfm};
-use crate::io::colour_profile::ColourProfile;
+use crate::io::colour_profile::{ColourProfile, StatedColour};
 use crate::io::limits::check_size;
 use crate::io::metadata::PhotoMetadata;
 pub use crate::io::png_chunks::MAX_ICC_BYTES;
-use crate::io::png_chunks::{check_png_chunks, png_colour, png_ihdr_size, PngColour, PNG_IHDR_END};
+use crate::io::png_chunks::{
+    check_png_chunks, is_srgb_chrm, png_colour, png_ihdr_size, PngColour, PNG_IHDR_END,
+};
 use crate::raster::{Orientation, RgbImage};
 use crate::{Error, Result};
 
@@ -163,7 +166,14 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
     if bytes.starts_with(&EXR_MAGIC) {
         let exr = parse_exr_rgb(bytes, path)?;
         log::info!("{name}: linear colour from EXR channels {}", exr.source);
-        return upright(linear_float(exr.image, name)?);
+        return Ok(UprightPhoto {
+            image: linear_float(exr.image, name)?,
+            exif: PhotoExif::default(),
+            metadata: PhotoMetadata {
+                profile: exr.chromaticities.and_then(|c| exr_profile(c, name)),
+                exif: None,
+            },
+        });
     }
     if is_pfm(bytes) {
         return match parse_pfm(bytes, path)? {
@@ -193,6 +203,29 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
         exif,
         metadata,
     })
+}
+
+/// The profile of an EXR whose `chromaticities` (red, green, blue, white) are not sRGB's
+/// (ACEScg's, Display P3's): its linear values are in those primaries, which its outputs
+/// then say (see [`ColourProfile::from_stated`]).
+fn exr_profile([r, g, b, w]: [[f64; 2]; 4], name: &str) -> Option<ColourProfile> {
+    if is_srgb_chrm(&[w, r, g, b]) {
+        return None;
+    }
+    let xy = |c: [f64; 2]| format!("{:.3},{:.3}", c[0], c[1]);
+    let stated = StatedColour {
+        primaries: [r, g, b],
+        white: w,
+        curve: moxcms::ToneReprCurve::Parametric(vec![1.0]),
+        description: format!(
+            "EXR chromaticities R {} G {} B {} W {}",
+            xy(r),
+            xy(g),
+            xy(b),
+            xy(w)
+        ),
+    };
+    ColourProfile::from_stated(stated, name)
 }
 
 /// The first four bytes of every OpenEXR file.

@@ -250,7 +250,9 @@ const SRGB_CHRM: Chromaticities = [[0.3127, 0.329], [0.64, 0.33], [0.3, 0.6], [0
 /// writes them rounded to 1e-5, others to 1e-3 or 1e-4.
 const SRGB_CHRM_TOLERANCE: f64 = 1e-3;
 
-fn is_srgb_chrm(c: &Chromaticities) -> bool {
+/// Whether chromaticities (white, red, green, blue) are sRGB's, within
+/// [`SRGB_CHRM_TOLERANCE`].
+pub(crate) fn is_srgb_chrm(c: &Chromaticities) -> bool {
     let pairs = c.iter().flatten().zip(SRGB_CHRM.iter().flatten());
     pairs
         .into_iter()
@@ -303,7 +305,7 @@ fn cicp_colour(d: &[u8], name: &str) -> Result<Option<StatedColour>> {
 }
 
 /// CIE xy of a white and of red, green and blue primaries, in a `cHRM` chunk's order.
-type Chromaticities = [[f64; 2]; 4];
+pub(crate) type Chromaticities = [[f64; 2]; 4];
 
 /// The chromaticities of the `cICP` colour primaries brume reads (ITU-T H.273 table 2),
 /// with their name.

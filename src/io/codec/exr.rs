@@ -264,6 +264,9 @@ pub(crate) struct ExrColour {
     /// Which channels they came from, for the log: `R, G, B`,
     /// `ViewLayer.Combined.R, .G, .B` or `Y (grey)`.
     pub source: String,
+    /// The file's `chromaticities` attribute (CIE xy of red, green, blue and white), where
+    /// it has one: the primaries its values are in.
+    pub chromaticities: Option<[[f64; 2]; 4]>,
 }
 
 /// What [`parse_exr_rgb`] reads, for messages.
@@ -278,6 +281,10 @@ const EXR_COLOUR_CHANNELS: &str = "R, G and B (flat, or a layer's <layer>.R, \
 pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
     let meta = checked_meta(bytes, path)?;
     let channels = Channels::new(&meta);
+    let chromaticities = meta.headers[0]
+        .shared_attributes
+        .chromaticities
+        .map(|c| [c.red, c.green, c.blue, c.white].map(|v| [f64::from(v.0), f64::from(v.1)]));
     if let Some([r, g, b]) = channels.rgb() {
         for c in [r, g, b] {
             full_resolution(c, path)?;
@@ -292,6 +299,7 @@ pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
         return Ok(ExrColour {
             image: Grid::from_vec(w, h, pixels),
             source,
+            chromaticities,
         });
     }
     // Luminance-chroma images keep their colour in subsampled RY and BY channels; their Y
@@ -307,6 +315,7 @@ pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
         return Ok(ExrColour {
             image: Grid::from_vec(w, h, pixels),
             source: "Y (grey)".to_string(),
+            chromaticities,
         });
     }
     // The depth rules take a lone channel of any name: point at depth only when named so.

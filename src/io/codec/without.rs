@@ -38,6 +38,7 @@ pub mod exr {
     pub(crate) struct ExrColour {
         pub image: RgbImage,
         pub source: String,
+        pub chromaticities: Option<[[f64; 2]; 4]>,
     }
 
     pub(crate) fn parse_exr_rgb(_: &[u8], path: &Path) -> Result<ExrColour> {
