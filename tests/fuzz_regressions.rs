@@ -44,7 +44,12 @@ fn seeds_of_the_single_format_fuzzers_load() {
     for path in files("fuzz/seeds/colour_image") {
         // Kept on purpose to reach the refusal of an HDR PNG.
         let refused = path.ends_with("icc-cicp-pq-flat.png");
-        assert_eq!(load_linear_rgb(&path).is_err(), refused, "{}", path.display());
+        assert_eq!(
+            load_linear_rgb(&path).is_err(),
+            refused,
+            "{}",
+            path.display()
+        );
         checked += 1;
     }
     assert!(checked >= 15, "only {checked} seeds");
