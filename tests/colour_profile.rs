@@ -459,3 +459,80 @@ fn an_exrs_chromaticities_reach_its_outputs() {
     render_flat(dir.path(), &input, "srgb.png");
     assert_eq!(icc_of(&dir.path().join("srgb.png")), None);
 }
+
+/// XYZ to linear RGB of primaries `rgb` and white `w` (CIE xy), by this test's own
+/// arithmetic: the RGB-to-XYZ matrix whose columns, scaled, sum to the white, inverted.
+fn xyz_to_rgb(rgb: [[f64; 2]; 3], w: [f64; 2]) -> [[f64; 3]; 3] {
+    let xyz = |[x, y]: [f64; 2]| [x / y, 1.0, (1.0 - x - y) / y];
+    let m = columns_matrix(rgb.map(xyz));
+    let s = solve(m, xyz(w));
+    let scaled: [[f64; 3]; 3] = std::array::from_fn(|i| std::array::from_fn(|k| m[i][k] * s[k]));
+    invert(scaled)
+}
+
+/// The matrix whose columns are `columns`.
+fn columns_matrix(columns: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    std::array::from_fn(|i| std::array::from_fn(|k| columns[k][i]))
+}
+
+fn invert(m: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let det = m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0]);
+    let c = |r: usize, k: usize| {
+        let (r1, r2, k1, k2) = ((r + 1) % 3, (r + 2) % 3, (k + 1) % 3, (k + 2) % 3);
+        m[r1][k1] * m[r2][k2] - m[r1][k2] * m[r2][k1]
+    };
+    std::array::from_fn(|i| std::array::from_fn(|k| c(k, i) / det))
+}
+
+fn solve(m: [[f64; 3]; 3], v: [f64; 3]) -> [f64; 3] {
+    let inv = invert(m);
+    std::array::from_fn(|i| (0..3).map(|k| inv[i][k] * v[k]).sum())
+}
+
+/// Aerial perspective on a Display P3 photo integrates each channel's attenuation for the
+/// CIE observer in P3's primaries (SMPTE EG 432-1, D65; the matrix by this test's own
+/// arithmetic), so that it is the attenuation of the photo's own red, green and blue; an
+/// sRGB photo keeps the CIE observer in sRGB's, and a camera's own curves are kept.
+#[test]
+fn aerial_perspective_is_integrated_in_the_photos_primaries() {
+    use brume::atmosphere::{Channel, Sensitivity};
+    let dir = tempfile::tempdir().unwrap();
+    flat_range(dir.path());
+    let mut gpu = brume::Headless::new(None).unwrap();
+    let mut sensitivity_of = |image: &str, given: Sensitivity| {
+        let photo = brume::photo::Photo::load(
+            &fixture(image),
+            &dir.path().join("r.pfm"),
+            &brume::io::depth::DepthOptions::default(),
+        )
+        .unwrap();
+        let opts = brume::photo::PrepareOptions::for_photo(&photo);
+        let prepared = brume::photo::prepare(&photo, &opts, gpu.renderer().unwrap()).unwrap();
+        let camera = brume::camera::Camera::default();
+        let aerial = brume::photo::AerialOptions {
+            metres_per_unit: Some(500.0),
+            sensitivity: given,
+            ..brume::photo::AerialOptions::new(2.0, camera)
+        };
+        brume::photo::aerial(&photo, &prepared, &aerial)
+            .unwrap()
+            .sensitivity
+    };
+    let p3 = xyz_to_rgb([[0.68, 0.32], [0.265, 0.69], [0.15, 0.06]], D65);
+    let want = Sensitivity::cie_in(p3);
+    let got = sensitivity_of("p3-flat.png", Sensitivity::cie_srgb());
+    for c in Channel::ALL {
+        let peak = want.curve(c).iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (g, w) in got.curve(c).iter().zip(want.curve(c)) {
+            assert!((g - w).abs() < 2e-3 * peak, "{c:?}: {g} for {w}");
+        }
+    }
+    assert!(got != Sensitivity::cie_srgb());
+    let srgb = sensitivity_of("garbage-icc.png", Sensitivity::cie_srgb());
+    assert!(srgb == Sensitivity::cie_srgb());
+    let camera =
+        Sensitivity::from_samples(&[(400.0, [0.1, 0.5, 1.0]), (700.0, [1.0, 0.5, 0.0])]).unwrap();
+    assert!(sensitivity_of("p3-flat.png", camera.clone()) == camera);
+}

@@ -203,6 +203,13 @@ impl Sensitivity {
     /// The default camera: the CIE 1931 2° observer (Wyman-Sloan-Shirley fit) times
     /// [`XYZ_TO_LINEAR_SRGB`], signed curves whose response to D65 is r = g = b.
     pub fn cie_srgb() -> Self {
+        Sensitivity::cie_in(XYZ_TO_LINEAR_SRGB)
+    }
+
+    /// The CIE 1931 2° observer in linear RGB of other primaries, `xyz_to_rgb` (rows r, g,
+    /// b): the ideal camera whose raw values are a photo's own linear RGB, such as Display
+    /// P3's ([`crate::io::colour_profile::ColourProfile::xyz_to_rgb`]).
+    pub fn cie_in(xyz_to_rgb: [[f64; 3]; 3]) -> Self {
         let mut curves = [
             vec![0.0; GRID_LEN],
             vec![0.0; GRID_LEN],
@@ -210,7 +217,7 @@ impl Sensitivity {
         ];
         for i in 0..GRID_LEN {
             let xyz = cie_1931_xyz(grid_wavelength_nm(i));
-            for (curve, row) in curves.iter_mut().zip(XYZ_TO_LINEAR_SRGB) {
+            for (curve, row) in curves.iter_mut().zip(xyz_to_rgb) {
                 curve[i] = row[0] * xyz[0] + row[1] * xyz[1] + row[2] * xyz[2];
             }
         }

@@ -180,7 +180,7 @@ pub fn aerial_job(args: &RenderArgs, scene: &Scene, prep: &PrepReport) -> Result
             from_turbidity: args.from_turbidity,
             retarget: opts.retarget,
             sun,
-            sensitivity: opts.sensitivity,
+            sensitivity: photo.sensitivity.clone(),
         },
         light_source,
         photo,

@@ -160,6 +160,13 @@ impl ColourProfile {
         self.chromaticities
     }
 
+    /// The matrix from CIE XYZ to the photo's linear RGB (rows r, g, b), from its
+    /// [`ColourProfile::chromaticities`]: its white (XYZ with Y = 1) goes to r = g = b = 1.
+    pub fn xyz_to_rgb(&self) -> [[f64; 3]; 3] {
+        let [r, g, b, white] = self.chromaticities;
+        inverse(rgb_to_xyz([r, g, b].map(xy_to_xyz), xy_to_xyz(white)))
+    }
+
     /// Whether the photo is decoded by its profile's own curves rather than sRGB's.
     pub fn has_own_curves(&self) -> bool {
         self.curves.is_some()
