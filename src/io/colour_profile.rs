@@ -220,7 +220,8 @@ impl ColourProfile {
             Ok(icc) => ColourProfile::from_icc(icc, name),
             Err(e) => {
                 log::warn!(
-                    "{name}: its colour space ({}) cannot be written as an ICC profile                      ({e}); its colours are taken as sRGB",
+                    "{name}: its colour space ({}) cannot be written as an ICC profile \
+                     ({e}); its colours are taken as sRGB",
                     describe(&p)
                 );
                 None

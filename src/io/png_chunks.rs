@@ -51,7 +51,7 @@ fn chunks(b: &[u8]) -> impl Iterator<Item = Chunk<'_>> {
     std::iter::from_fn(move || {
         let i = next?;
         let head = b.get(i..).and_then(|rest| rest.get(..8))?;
-        let len = u32::from_be_bytes([head[0], head[1], head[2], head[3]]) as usize;
+        let len = be_u32(head) as usize;
         let kind = &head[4..8];
         // Length, type, data and CRC.
         next = i
