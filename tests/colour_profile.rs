@@ -199,6 +199,10 @@ fn outputs_of_a_gamma_profile_carry_its_primaries_with_srgb_curves() {
         assert_codes(pixel(&out, 16, 4), want, within, &out.display().to_string());
         let icc = icc_of(&out).expect("the output carries a profile");
         assert_primaries_with_srgb_curve(&icc, &p["gamma22"]["colorants"]);
+        // The photo's profile's creation date, not the moment of writing: one photo gives
+        // the same bytes every run.
+        let photo_icc = icc_of(&fixture("gamma22-flat.png")).unwrap();
+        assert_eq!(icc[24..36], photo_icc[24..36]);
     }
 }
 
@@ -374,6 +378,11 @@ fn png_colour_chunks_reach_the_outputs() {
     }
     let icc = icc_of(&dir.path().join("lin.png")).expect("a profile");
     assert_primaries_with_srgb_curve(&icc, &profiles()["srgb"]["colorants"]);
+    // A fixed creation date (2025-06-24 00:00:00), so that runs give the same bytes.
+    let date: Vec<u16> = (icc[24..36].chunks(2))
+        .map(|b| u16::from_be_bytes([b[0], b[1]]))
+        .collect();
+    assert_eq!(date, [2025, 6, 24, 0, 0, 0]);
     flat_range(dir.path());
     render_flat(dir.path(), &fixture("cicp-p3-flat.png"), "p3.png");
     let icc = icc_of(&dir.path().join("p3.png")).expect("a profile");

@@ -115,7 +115,7 @@ impl ColourProfile {
                 );
                 Some(profile(icc, None))
             }
-            Ok(Some(curves)) => match with_srgb_curves(&parsed) {
+            Ok(Some(curves)) => match with_srgb_curves(&parsed, creation_date(&icc)) {
                 Ok(output_icc) => {
                     log::info!(
                         "{name}: colour profile \"{description}\": each channel decoded by \
@@ -216,7 +216,7 @@ impl ColourProfile {
         if has_srgb_primaries(&p) && matches!(own_curves(&p), Ok(None)) {
             return None;
         }
-        match p.encode() {
+        match encode_dated(&p, STATED_PROFILE_DATE) {
             Ok(icc) => ColourProfile::from_icc(icc, name),
             Err(e) => {
                 log::warn!(
@@ -438,7 +438,10 @@ fn is_srgb_curve(table: &[f32]) -> bool {
 
 /// The profile with sRGB's curve on each channel and no lookup tables: what outputs,
 /// encoded by that curve, carry.
-fn with_srgb_curves(p: &ColorProfile) -> std::result::Result<Vec<u8>, moxcms::CmsError> {
+fn with_srgb_curves(
+    p: &ColorProfile,
+    date: [u8; 12],
+) -> std::result::Result<Vec<u8>, moxcms::CmsError> {
     let srgb = ColorProfile::new_srgb();
     let mut out = p.clone();
     out.red_trc = srgb.red_trc.clone();
@@ -456,7 +459,37 @@ fn with_srgb_curves(p: &ColorProfile) -> std::result::Result<Vec<u8>, moxcms::Cm
         "{} primaries, sRGB curve (brume)",
         describe(p)
     )));
-    out.encode()
+    encode_dated(&out, date)
+}
+
+/// Where an ICC profile's header holds its creation date and time (six big-endian 16-bit
+/// numbers).
+const ICC_DATE: std::ops::Range<usize> = 24..36;
+
+/// The creation date a profile `icc` holds (zeros where it is too short to hold one).
+fn creation_date(icc: &[u8]) -> [u8; 12] {
+    icc.get(ICC_DATE)
+        .and_then(|d| d.try_into().ok())
+        .unwrap_or_default()
+}
+
+/// The creation date of the profiles brume writes for a colour space a file states (a
+/// PNG's cICP, gAMA or cHRM; an EXR's chromaticities): fixed, 2025-06-24 00:00:00 (the PNG
+/// specification's third edition), so that one photo gives the same bytes every run.
+const STATED_PROFILE_DATE: [u8; 12] = [0x07, 0xe9, 0, 6, 0, 24, 0, 0, 0, 0, 0, 0];
+
+/// `p` encoded by moxcms with `date` as its creation date: moxcms writes the moment of
+/// encoding, which made every run's output of one photo differ. The profile's ID (an MD5
+/// of the profile, which the date is part of) is left 0, as moxcms leaves it: none.
+fn encode_dated(
+    p: &ColorProfile,
+    date: [u8; 12],
+) -> std::result::Result<Vec<u8>, moxcms::CmsError> {
+    let mut icc = p.encode()?;
+    if let Some(header) = icc.get_mut(ICC_DATE) {
+        header.copy_from_slice(&date);
+    }
+    Ok(icc)
 }
 
 #[cfg(test)]
