@@ -7,6 +7,8 @@
     >>> foggy, info = brume.fog(image, range_m, beta=0.02, return_info=True)
     >>> info["transmittance"], info["airlight"]               # the labels: I = J t + A (1 - t)
     >>> range_m, info = brume.load_depth("frankfurt_000000_000294_disparity.png")
+    >>> image, photo = brume.load_photo("IMG_0042.jpg")         # upright, by its profile
+    >>> brume.save_photo("foggy.jpg", brume.fog(image, range_m, beta=0.02), photo)
     >>> range_m, info = brume.range_from_depth(z_m, kind="depth", fov_y_deg=60.0)  # an array
     >>> r = brume.Renderer()                                  # one EGL context, many frames
     >>> t = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=0)
@@ -38,7 +40,9 @@ from ._brume import (
     fog,
     layered_fog,
     load_depth,
+    load_photo,
     range_from_depth,
+    save_photo,
 )
 from . import augment
 
@@ -46,6 +50,8 @@ __all__ = [
     "Renderer",
     "fog",
     "load_depth",
+    "load_photo",
+    "save_photo",
     "range_from_depth",
     "beta_quantile",
     "distance_fog",

@@ -22,6 +22,7 @@ mod depth;
 mod engine;
 mod gl_thread;
 mod photo_fog;
+mod photo_io;
 
 use arrays::{read_image, read_range, Colour, FsPath, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
@@ -554,6 +555,8 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fog, m)?)?;
     m.add_function(wrap_pyfunction!(depth::load_depth, m)?)?;
     m.add_function(wrap_pyfunction!(depth::range_from_depth, m)?)?;
+    m.add_function(wrap_pyfunction!(photo_io::load_photo, m)?)?;
+    m.add_function(wrap_pyfunction!(photo_io::save_photo, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
