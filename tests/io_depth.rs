@@ -573,6 +573,17 @@ fn sixteen_bit_png_without_format_or_scale_is_an_error() {
         load_range(&p, &DepthOptions::default()),
         "`depth_format` kitti, nyu or tum",
     );
+    // A monocular model's output (Depth Anything's 16-bit PNG) is pointed to its kind,
+    // which reads it.
+    expect_format_error(
+        load_range(&p, &DepthOptions::default()),
+        "Depth Anything or MiDaS: `depth_kind` inverse",
+    );
+    let inverse = DepthOptions {
+        kind: Some(DepthKind::Inverse),
+        ..DepthOptions::default()
+    };
+    assert!(load_range(&p, &inverse).is_ok());
     let err = expect_err(load_range(&p, &opts(DepthFormat::Png16)));
     // The library names the parameter; the CLI shows it as --depth-scale.
     assert!(err.to_string().contains("invalid depth_scale"), "{err}");

@@ -51,7 +51,8 @@ fn resolve_format(
                 path,
                 "16-bit PNG depth has no standard scale: give `depth_format` kitti, nyu or \
                  tum, or `depth_scale` with the metres per unit (a Cityscapes disparity: \
-                 `depth_format` cityscapes with `camera`)",
+                 `depth_format` cityscapes with `camera`; a monocular model's relative \
+                 inverse depth, Depth Anything or MiDaS: `depth_kind` inverse)",
             ))
         }
         (f, _) => f,
