@@ -7,6 +7,7 @@ use super::photo_fog::Labels;
 use super::{on_default_renderer, py_err, value_error, GlThread, ImageIn};
 use brume::atmosphere::Sensitivity;
 use brume::camera::Camera;
+use brume::io::colour_profile::ColourProfile;
 use brume::medium::{Medium, Pixel};
 use brume::photo::{
     self, AerialOptions, AerialPhoto, CaptureOptions, Photo, PhotoView, PrepareOptions, Retarget,
@@ -38,6 +39,9 @@ pub(crate) struct AerialArgs {
     pub horizon_sectors: i64,
     pub sun: Option<(f64, f64)>,
     pub sensitivity: Option<PathBuf>,
+    /// The photo's ICC profile (load_photo's `info["icc_profile"]`), whose primaries the
+    /// attenuation is integrated for.
+    pub icc_profile: Option<Vec<u8>>,
     pub blur: bool,
     pub lambda_px: f64,
     pub sigma0: f64,
@@ -243,7 +247,9 @@ pub(crate) fn aerial_frame(
 ) -> PyResult<Vec<(RgbaImage, Option<AerialInfo>)>> {
     args.check()?;
     let each = args.options(image.height)?;
-    let photo = Photo::from_range(image.linear(), range).map_err(py_err)?;
+    let mut photo = Photo::from_range(image.linear(), range).map_err(py_err)?;
+    photo.metadata.profile =
+        (args.icc_profile.clone()).and_then(|icc| ColourProfile::from_icc(icc, "icc_profile"));
     let prepared = photo::preprocess(&photo, &prepare).map_err(py_err)?;
     let refine = prepare.refine;
     let (photo, prepared) = gl
@@ -283,10 +289,10 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// aerial(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None,
 /// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None,
 /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
-/// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
-/// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-/// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict), or a list
-/// of those
+/// sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True,
+/// sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None,
+/// read_noise=None, jpeg_quality=None, seed=0, return_info=False) -> ndarray, or
+/// (ndarray, dict), or a list of those
 ///
 /// Paper 002's aerial perspective from the turbidity T (1-20) on a photo with its range
 /// in metres (`brume render --medium aerial`). turbidity may be a sequence: a list, one
@@ -299,7 +305,8 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// the horizon's linear RGB or a grey (default: from the sky pre-processing finds), taken at
 /// horizon_zenith_deg; horizon_sectors azimuth sectors of it; sun (zenith_deg,
 /// azimuth_deg clockwise from the image centre's heading) shapes them without a sky.
-/// sensitivity: a CSV lambda_nm,r,g,b (default CIE 1931 to linear sRGB). blur: the
+/// sensitivity: a CSV lambda_nm,r,g,b (default CIE 1931 to linear sRGB, or to the
+/// primaries of icc_profile: the photo's profile, bytes, as load_photo's info gives it). blur: the
 /// diffusion blur (lambda_px, sigma0); refine, the masks and the capture keywords as
 /// brume.fog. return_info=True also returns the labels of I = J·t + A·(1 - t) (before
 /// the blur and the capture), per pixel and channel: clear (J, float32 HxWx3 linear RGB:
@@ -309,7 +316,7 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 #[pyfunction]
 #[pyo3(
     signature = (*args, **kwargs),
-    text_signature = "(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
+    text_signature = "(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
 )]
 pub(crate) fn aerial(
     py: Python<'_>,

@@ -308,13 +308,13 @@ impl Renderer {
     /// aerial(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None,
     /// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None,
     /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
-    /// sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
-    /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None,
-    /// jpeg_quality=None, seed=0, return_info=False) -> ndarray, or (ndarray, dict), or a
-    /// list of those: as brume.aerial, on this renderer's context.
+    /// sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0,
+    /// refine=True, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None,
+    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False) -> ndarray, or
+    /// (ndarray, dict), or a list of those: as brume.aerial, on this renderer's context.
     #[pyo3(
-        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false),
-        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
+        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false),
+        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
     )]
     #[allow(clippy::too_many_arguments)]
     fn aerial<'py>(
@@ -336,6 +336,7 @@ impl Renderer {
         horizon_sectors: i64,
         sun: Option<(f64, f64)>,
         sensitivity: Option<FsPath>,
+        icc_profile: Option<Vec<u8>>,
         blur: bool,
         lambda_px: f64,
         sigma0: f64,
@@ -374,6 +375,7 @@ impl Renderer {
             horizon_sectors,
             sun,
             sensitivity: sensitivity.map(|p| p.0),
+            icc_profile,
             blur,
             lambda_px,
             sigma0,

@@ -93,3 +93,25 @@ def test_save_photo_writes_whole_files_or_none(tmp_path):
         brume.load_photo(tmp_path / "a.png", dtype="int8")
     with pytest.raises(OSError, match="missing.png"):
         brume.load_photo(tmp_path / "missing.png")
+
+
+def test_aerial_is_integrated_for_the_photos_primaries(tmp_path):
+    """brume.aerial given load_photo's icc_profile equals `brume render --medium aerial`
+    of the Display P3 photo within 1/255, which integrates the attenuation for P3's
+    primaries; without the profile (sRGB's primaries) the blue differs."""
+    range_m = np.full((8, 32), 5000.0, np.float32)
+    np.save(tmp_path / "r.npy", range_m)
+    cmd = [
+        str(brume_bin()), "render", "--image", str(COLOUR / "p3-flat.png"),
+        "--depth", str(tmp_path / "r.npy"), "--depth-kind", "range", "--depth-scale", "1",
+        "--medium", "aerial", "--turbidity", "2", "--fov", "50",
+        "--airlight", "0.9,0.9,0.9", "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    cli = np.asarray(Image.open(tmp_path / "cli.png"), int)
+    image, info = brume.load_photo(COLOUR / "p3-flat.png")
+    keywords = dict(turbidity=2.0, fov_y_deg=50.0, airlight=0.9)
+    p3 = brume.aerial(image, range_m, icc_profile=info["icc_profile"], **keywords)
+    assert np.abs(p3.astype(int) - cli).max() <= 1
+    srgb = brume.aerial(image, range_m, **keywords)
+    assert np.abs(srgb.astype(int) - cli)[..., 2].max() >= 2
