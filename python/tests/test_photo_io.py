@@ -84,8 +84,10 @@ def test_save_photo_writes_whole_files_or_none(tmp_path):
     brume.save_photo(tmp_path / "a.png", codes)
     assert np.array_equal(np.asarray(Image.open(tmp_path / "a.png")), codes)
     assert "icc_profile" not in Image.open(tmp_path / "a.png").info
-    with pytest.raises(ValueError, match="out.bmp"):
+    with pytest.raises(ValueError, match="invalid path = .*out.bmp"):
         brume.save_photo(tmp_path / "out.bmp", codes)
+    with pytest.raises(ValueError, match="an existing directory"):
+        brume.save_photo(tmp_path / "nope" / "c.png", codes)
     with pytest.raises(ValueError, match="exif"):
         brume.save_photo(tmp_path / "b.png", codes, {"exif": "not bytes"})
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.png"]
