@@ -187,7 +187,10 @@ fn failing_write_leaves_nothing_and_keeps_the_old_file() {
     let missing = dir.path().join("no/such/dir/o.png");
     let err = write_rgba(&missing, &sample()).unwrap_err();
     assert!(matches!(err, Error::Io { .. }), "{err}");
-    assert!(err.to_string().contains("o.png"), "{err}");
+    // Named by the path given and its missing folder, not by the temporary file's name.
+    let said = err.to_string();
+    assert!(said.contains("o.png: its folder") && said.contains("dir does not exist"));
+    assert!(!said.contains(".tmp"), "{said}");
     assert!(entries(dir.path()).is_empty());
 
     // A write that fails half-way (pixel count wrong) must not touch an existing file.

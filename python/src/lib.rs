@@ -58,8 +58,9 @@ fn py_err(e: brume::Error) -> PyErr {
 }
 
 /// The library's fields whose keyword here has another name (the depth loaders' options
-/// as `load_depth` takes them, the focal length, field of view and λ with their units).
-const KEYWORDS: [(&str, &str); 9] = [
+/// as `load_depth` takes them, the focal length, field of view and λ with their units,
+/// the file save_photo writes).
+const KEYWORDS: [(&str, &str); 10] = [
     ("depth_format", "format"),
     ("depth_kind", "kind"),
     ("depth_scale", "scale"),
@@ -69,6 +70,8 @@ const KEYWORDS: [(&str, &str); 9] = [
     ("fov", "fov_y_deg"),
     ("lambda", "lambda_px"),
     ("depth_layout", "layout"),
+    // The file save_photo writes, which the library's writers call `out`.
+    ("out", "path"),
 ];
 
 /// The keyword that sets the library's field `field`: its name, or its entry in

@@ -73,8 +73,6 @@ pub(crate) fn save_photo(
     image: &Bound<'_, PyAny>,
     info: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<()> {
-    // Its extension and folder, before the image is converted (named as this keyword).
-    brume::io::output::check_image_output(&path.0, "path").map_err(py_err)?;
     let image = read_image(image)?;
     let metadata = match info {
         Some(info) => metadata_of(info, &path.0.display().to_string())?,

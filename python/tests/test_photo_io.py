@@ -86,7 +86,7 @@ def test_save_photo_writes_whole_files_or_none(tmp_path):
     assert "icc_profile" not in Image.open(tmp_path / "a.png").info
     with pytest.raises(ValueError, match="invalid path = .*out.bmp"):
         brume.save_photo(tmp_path / "out.bmp", codes)
-    with pytest.raises(ValueError, match="an existing directory"):
+    with pytest.raises(OSError, match="its folder .*nope does not exist"):
         brume.save_photo(tmp_path / "nope" / "c.png", codes)
     with pytest.raises(ValueError, match="exif"):
         brume.save_photo(tmp_path / "b.png", codes, {"exif": "not bytes"})

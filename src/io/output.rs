@@ -84,6 +84,21 @@ pub fn check_destination(path: &Path, option: &str) -> Result<()> {
     }
 }
 
+/// Refuses a destination whose folder does not exist, saying so (the temporary file's
+/// creation would fail naming itself, a name the caller never gave).
+fn refuse_missing_folder(path: &Path) -> Result<()> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::io(
+            path,
+            std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("its folder {} does not exist", dir.display()),
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// Refuses a destination that is a read-only file: renaming onto it would replace it
 /// whatever its mode, and a file made read-only is one its owner protected.
 fn refuse_read_only(path: &Path, option: &str) -> Result<()> {
@@ -340,6 +355,7 @@ impl Outputs {
             ));
         }
         refuse_read_only(path, "output")?;
+        refuse_missing_folder(path)?;
         let tmp = create_temporary(path)?;
         // Pushed before writing so that an error below drops (removes) it with the set.
         self.staged.push(Staged {
