@@ -190,7 +190,7 @@ fn failing_write_leaves_nothing_and_keeps_the_old_file() {
     // Named by the path given and its missing folder, not by the temporary file's name.
     let said = err.to_string();
     assert!(said.contains("o.png: its folder") && said.contains("dir does not exist"));
-    assert!(!said.contains(".tmp"), "{said}");
+    assert!(!said.contains(".brume-"), "{said}");
     assert!(entries(dir.path()).is_empty());
 
     // A write that fails half-way (pixel count wrong) must not touch an existing file.
