@@ -356,6 +356,22 @@ fn png_colour_chunks_decode_by_the_specifications_precedence() {
     }
 }
 
+/// A 16-bit linear PNG (`gAMA` 1, packed by the fixture script and read back by OpenCV):
+/// each code c, most of which no 8-bit value gives, decodes to c/65535 through the
+/// profile's table of every 16-bit code.
+#[test]
+fn a_16_bit_linear_png_decodes_each_code() {
+    let photo = load_upright_rgb(&fixture("gama-linear-ramp16.png")).unwrap();
+    assert!(photo.metadata.profile().expect("gAMA 1").has_own_curves());
+    for (i, px) in photo.image.as_slice().iter().enumerate() {
+        let codes = [257 * i - i % 7, 65535 - 257 * i, (4099 * i) % 65536];
+        for (c, &v) in codes.into_iter().zip(px) {
+            let want = c as f64 / 65535.0;
+            assert!((f64::from(v) - want).abs() < 1e-6, "{i}: {v} for {want}");
+        }
+    }
+}
+
 /// A linear PNG (`gAMA` 1) fogged by next to nothing comes out as its codes encoded by
 /// sRGB's curve, exactly, with a profile of its primaries; Display P3 by `cICP` reaches
 /// the output as a profile with P3's colorants; an HDR PNG (`cICP` PQ) is refused, naming

@@ -41,6 +41,7 @@ import struct
 import subprocess
 import sys
 import tempfile
+import zlib
 
 import numpy as np
 from PIL import Image, ImageCms, PngImagePlugin
@@ -234,6 +235,40 @@ def png_colour_chunk_fixtures(out_dir, ramp, flat, adobe):
     save_with("cicp-linear-ramp.png", ramp, [(b"cICP", bytes([1, 8, 0, 1])),
                                              (b"gAMA", fixed(1 / 2.2))], adobe)
     save_with("cicp-pq-flat.png", flat, [(b"cICP", bytes([9, 16, 0, 1]))])
+    linear16_fixture(out_dir)
+
+
+def png_chunk(kind, data):
+    return (struct.pack(">I", len(data)) + kind + data
+            + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+
+
+def ramp16():
+    """The 16 x 16 ramp at 16 bits: pixel i = (257 i - i mod 7, 65535 - 257 i, 4099 i mod
+    65536), codes that no 8-bit value gives."""
+    i = np.arange(256, dtype=np.int64)
+    rgb = np.stack([257 * i - i % 7, 65535 - 257 * i, (4099 * i) % 65536], axis=1)
+    assert rgb.min() >= 0 and rgb.max() <= 65535
+    return rgb.astype(np.uint16).reshape(16, 16, 3)
+
+
+def linear16_fixture(out_dir):
+    """A 16-bit RGB PNG of linear light (gAMA 1.0), packed here (Pillow writes no 16-bit
+    RGB) and read back by OpenCV, whose decoder is not the one brume uses."""
+    pixels = ramp16()
+    h, w, _ = pixels.shape
+    rows = b"".join(b"\0" + pixels[y].astype(">u2").tobytes() for y in range(h))
+    png = (b"\x89PNG\r\n\x1a\n"
+           + png_chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, 2, 0, 0, 0))
+           + png_chunk(b"gAMA", fixed(1.0))
+           + png_chunk(b"IDAT", zlib.compress(rows, 9))
+           + png_chunk(b"IEND", b""))
+    path = os.path.join(out_dir, "gama-linear-ramp16.png")
+    with open(path, "wb") as f:
+        f.write(png)
+    import cv2
+    back = cv2.imread(path, cv2.IMREAD_UNCHANGED)[..., ::-1]
+    assert back.dtype == np.uint16 and np.array_equal(back, pixels), "OpenCV reads it back"
 
 
 def main(data_dir):

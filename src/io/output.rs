@@ -71,8 +71,8 @@ pub fn check_destination(path: &Path, option: &str) -> Result<()> {
         ));
     }
     refuse_read_only(path, option)?;
-    match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::invalid(
+    match missing_folder(path) {
+        Some(dir) => Err(Error::invalid(
             option,
             path.display(),
             format!(
@@ -80,22 +80,28 @@ pub fn check_destination(path: &Path, option: &str) -> Result<()> {
                 dir.display()
             ),
         )),
-        _ => Ok(()),
+        None => Ok(()),
     }
+}
+
+/// The folder of `path`, where it names one that does not exist.
+fn missing_folder(path: &Path) -> Option<&Path> {
+    path.parent()
+        .filter(|dir| !dir.as_os_str().is_empty() && !dir.is_dir())
 }
 
 /// Refuses a destination whose folder does not exist, saying so (the temporary file's
 /// creation would fail naming itself, a name the caller never gave).
 fn refuse_missing_folder(path: &Path) -> Result<()> {
-    match path.parent() {
-        Some(dir) if !dir.as_os_str().is_empty() && !dir.is_dir() => Err(Error::io(
+    match missing_folder(path) {
+        Some(dir) => Err(Error::io(
             path,
             std::io::Error::new(
                 std::io::ErrorKind::NotFound,
                 format!("its folder {} does not exist", dir.display()),
             ),
         )),
-        _ => Ok(()),
+        None => Ok(()),
     }
 }
 

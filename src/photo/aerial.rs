@@ -475,7 +475,8 @@ pub fn metres_per_unit(photo: &Photo, given: Option<f64>) -> Result<f64> {
 }
 
 /// The medium of `opts` with `metres_per_unit` over ranges up to `max_range` (in the
-/// photo's units), the horizon's light `light` at zenith angle `zenith` (radians).
+/// photo's units), the horizon's light `light` at zenith angle `zenith` (radians), its
+/// attenuation integrated for `sensitivity`.
 fn aerial_medium(
     opts: &AerialOptions,
     sensitivity: &Sensitivity,
