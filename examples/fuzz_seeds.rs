@@ -260,7 +260,7 @@ fn main() -> Res<()> {
     seeds.put("colour_image", "rgb.pfm", pfm("PF", 3, 2, &hdr, true, "\n"));
     // Photos with ICC profiles (tests/data/colour/): a gamma curve decoded by itself, a
     // table curve, a profile that is none, a grey profile on RGB pixels; and colour
-    // spaces stated by chunks (gAMA, cHRM, cICP, the HDR one refused).
+    // spaces stated by chunks (gAMA, cHRM, cICP, the HDR one refused); a WebP with both.
     for name in [
         "gamma22-ramp.png",
         "p3-flat.png",
@@ -270,6 +270,7 @@ fn main() -> Res<()> {
         "chrm-p3-flat.png",
         "cicp-linear-ramp.png",
         "cicp-pq-flat.png",
+        "gamma22-ramp.webp",
     ] {
         let png = std::fs::read(root.join("tests/data/colour").join(name))?;
         seeds.put("colour_image", &format!("icc-{name}"), png);

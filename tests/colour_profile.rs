@@ -561,3 +561,50 @@ fn aerial_perspective_is_integrated_in_the_photos_primaries() {
         Sensitivity::from_samples(&[(400.0, [0.1, 0.5, 1.0]), (700.0, [1.0, 0.5, 0.0])]).unwrap();
     assert!(sensitivity_of("p3-flat.png", camera.clone()) == camera);
 }
+
+/// A lossless WebP (libwebp through Pillow) of the gamma-2.2 ramp with its profile and
+/// EXIF Orientation 6: turned upright, each code decoded by the profile's own curve as
+/// the PNG's is, and the profile carried by the output; a WebP depth map is refused
+/// (maps are lossless data).
+#[test]
+fn a_webp_photo_is_read_with_its_profile_and_orientation() {
+    let gamma = profiles()["gamma22"]["gamma"].as_f64().unwrap();
+    let photo = load_upright_rgb(&fixture("gamma22-ramp.webp")).unwrap();
+    let profile = photo.metadata.profile().expect("the WebP's ICCP chunk");
+    assert_eq!(profile.description(), "Adobe RGB (1998) test");
+    assert_eq!(photo.exif.orientation.exif(), 6);
+    // Orientation 6 turns the stored image 90° clockwise: the upright pixel (x, y) is
+    // the stored pixel (y, 15 − x).
+    let (w, h) = (photo.image.width(), photo.image.height());
+    assert_eq!((w, h), (16, 16));
+    for y in 0..16 {
+        for x in 0..16 {
+            let i = (15 - x) * 16 + y;
+            let codes = [i, 255 - i, (7 * i) % 256];
+            let got = photo.image.get(x, y);
+            for (c, &v) in codes.into_iter().zip(got) {
+                let want = (c as f64 / 255.0).powf(gamma);
+                assert!(
+                    (f64::from(v) - want).abs() < 2e-5,
+                    "({x}, {y}): {v} for {want}"
+                );
+            }
+        }
+    }
+    let dir = tempfile::tempdir().unwrap();
+    common::write_flat_range(dir.path(), 16, 16);
+    let fog = ["--beta", "1e-6"];
+    common::render_over_range(dir.path(), &fixture("gamma22-ramp.webp"), "out.png", &fog);
+    let icc = icc_of(&dir.path().join("out.png")).expect("the profile carried");
+    assert_primaries_with_srgb_curve(&icc, &profiles()["gamma22"]["colorants"]);
+    // Named .png, so that the content, not the name, is refused.
+    let map = dir.path().join("d.png");
+    std::fs::copy(fixture("gamma22-ramp.webp"), &map).unwrap();
+    let e = brume::io::depth::load_range(&map, &brume::io::depth::DepthOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("d.png: this is a WebP image, which is not read"),
+        "{e}"
+    );
+}

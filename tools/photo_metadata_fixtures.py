@@ -236,6 +236,19 @@ def png_colour_chunk_fixtures(out_dir, ramp, flat, adobe):
                                              (b"gAMA", fixed(1 / 2.2))], adobe)
     save_with("cicp-pq-flat.png", flat, [(b"cICP", bytes([9, 16, 0, 1]))])
     linear16_fixture(out_dir)
+    webp_fixtures(out_dir, ramp, adobe)
+
+
+def webp_fixtures(out_dir, ramp, adobe):
+    """The gamma-2.2 ramp as a lossless WebP with its profile, and turned by EXIF
+    Orientation 6: Pillow (libwebp) writes both, and reads the pixels back exactly."""
+    exif = Image.Exif()
+    exif[0x0112] = 6
+    path = os.path.join(out_dir, "gamma22-ramp.webp")
+    Image.fromarray(ramp).save(path, lossless=True, icc_profile=adobe, exif=exif.tobytes())
+    held = Image.open(path)
+    assert np.array_equal(np.asarray(held.convert("RGB")), ramp), "lossless"
+    assert held.info["icc_profile"] == adobe and held.getexif()[0x0112] == 6
 
 
 def png_chunk(kind, data):

@@ -1,4 +1,5 @@
-//! Colour images, as linear light: PNG or JPEG in sRGB, decoded by the sRGB curve; and the
+//! Colour images, as linear light: PNG, JPEG or WebP (WebP with the `codecs` feature) in
+//! sRGB, decoded by the sRGB curve (or by their colour profile's); and the
 //! float images renderers, engines and 3D tools write, OpenEXR and colour PFM, whose
 //! values are linear already and are taken as they are (values above 1 included).
 //!
@@ -109,11 +110,11 @@ impl PhotoExif {
 const CROP_TOLERANCE: f64 = 0.01;
 
 /// The formats [`load_linear_rgb`] reads, for messages.
-const COLOUR_FORMATS: &str =
-    "a PNG or JPEG (sRGB), an OpenEXR (.exr, linear) or a colour PFM (`PF`, linear) file";
+const COLOUR_FORMATS: &str = "a PNG, JPEG or WebP (sRGB), an OpenEXR (.exr, linear) or a \
+     colour PFM (`PF`, linear) file";
 
-/// Loads a colour image as linear light: a PNG or JPEG (8- or 16-bit, grey or RGB, alpha
-/// dropped) converted from sRGB, or an OpenEXR or colour PFM taken as linear (see the
+/// Loads a colour image as linear light: a PNG, JPEG or WebP (8- or 16-bit, grey or RGB,
+/// alpha dropped) converted from sRGB, or an OpenEXR or colour PFM taken as linear (see the
 /// module docs for the EXR channels read and for NaN and negative values). Errors name the
 /// file; sizes beyond `io::limits` are refused before the pixels are allocated. The
 /// image is turned upright by its EXIF orientation ([`load_upright_rgb`]).
@@ -357,13 +358,14 @@ pub(crate) fn heif_refusal(name: &str, brand: &str) -> Error {
     )
 }
 
-/// PNG or JPEG bytes checked (their kind, a JPEG's end, a PNG's palette) and opened, no
-/// pixel decoded yet; `expected` is what the caller accepts, for the message on data that
-/// is none of them.
+/// PNG, JPEG or (for a colour image, with the `codecs` feature) WebP bytes checked (their
+/// kind, a JPEG's end, a PNG's palette) and opened, no pixel decoded yet; `expected` is
+/// what the caller accepts, for the message on data that is none of them.
 fn open_decoder<'a>(
     bytes: &'a [u8],
     name: &str,
     expected: &str,
+    role: Role,
 ) -> Result<(impl ImageDecoder + 'a, ImageFormat)> {
     if let Some(brand) = heif_brand(bytes) {
         return Err(heif_refusal(name, &brand));
@@ -380,11 +382,24 @@ fn open_decoder<'a>(
             ),
         ));
     };
-    if !matches!(format, ImageFormat::Png | ImageFormat::Jpeg) {
+    let readable = match format {
+        ImageFormat::Png | ImageFormat::Jpeg => true,
+        // A photo: maps are lossless data, which lossy WebP is not.
+        ImageFormat::WebP => role == Role::Colour,
+        _ => false,
+    };
+    if !readable {
         // Recognised by its magic number, but no decoder is built in for it.
         return Err(Error::format(
             name,
             format!("this is a {format:?} image, which is not read; expected {expected}"),
+        ));
+    }
+    if format == ImageFormat::WebP && !cfg!(feature = "codecs") {
+        return Err(Error::format(
+            name,
+            "this is a WebP image, which this build of brume does not read (its `codecs` \
+             feature is off): convert it to PNG or JPEG, or build brume with that feature",
         ));
     }
     if format == ImageFormat::Jpeg && !jpeg_reaches_end_marker(bytes) {
@@ -424,7 +439,7 @@ fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> (PhotoExif, Option<Ve
 /// checks every read of it makes (a JPEG's end, a PNG's palette and ICC profile), without
 /// decoding its pixels: for checks before a decode. Errors: the loaders'.
 pub fn image_dimensions(bytes: &[u8], name: &str) -> Result<(u32, u32)> {
-    let (decoder, _) = open_decoder(bytes, name, "a PNG or JPEG file")?;
+    let (decoder, _) = open_decoder(bytes, name, "a PNG, JPEG or WebP file", Role::Colour)?;
     Ok(decoder.dimensions())
 }
 
@@ -453,7 +468,7 @@ pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
         let photo = decode_upright_rgb(&bytes, &name)?;
         return Ok((photo.image.width(), photo.image.height(), photo.exif));
     }
-    let (mut decoder, _) = open_decoder(&bytes, &name, COLOUR_FORMATS)?;
+    let (mut decoder, _) = open_decoder(&bytes, &name, COLOUR_FORMATS, Role::Colour)?;
     let (w, h) = decoder.dimensions();
     Ok((w as usize, h as usize, exif_of(&mut decoder, &name).0))
 }
@@ -467,7 +482,7 @@ fn decode_image(
     expected: &str,
     role: Role,
 ) -> Result<(DynamicImage, PhotoExif, PhotoMetadata)> {
-    let (mut decoder, format) = open_decoder(bytes, name, expected)?;
+    let (mut decoder, format) = open_decoder(bytes, name, expected, role)?;
     let cannot = cannot_decode(format, name);
     let (exif, metadata) = match role {
         Role::Colour => {
