@@ -35,7 +35,8 @@ use crate::io::limits::check_size;
 use crate::io::metadata::PhotoMetadata;
 pub use crate::io::png_chunks::MAX_ICC_BYTES;
 use crate::io::png_chunks::{
-    check_png_chunks, is_srgb_chrm, png_colour, png_ihdr_size, PngColour, PNG_IHDR_END,
+    check_png_chunks, describe_chromaticities, is_srgb_chrm, png_colour, png_ihdr_size, PngColour,
+    PNG_IHDR_END,
 };
 use crate::raster::{Orientation, RgbImage};
 use crate::{Error, Result};
@@ -210,20 +211,17 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
 /// (ACEScg's, Display P3's): its linear values are in those primaries, which its outputs
 /// then say (see [`ColourProfile::from_stated`]).
 fn exr_profile([r, g, b, w]: [[f64; 2]; 4], name: &str) -> Option<ColourProfile> {
-    if is_srgb_chrm(&[w, r, g, b]) {
+    let chromaticities = [w, r, g, b];
+    if is_srgb_chrm(&chromaticities) {
         return None;
     }
-    let xy = |c: [f64; 2]| format!("{:.3},{:.3}", c[0], c[1]);
     let stated = StatedColour {
         primaries: [r, g, b],
         white: w,
         curve: moxcms::ToneReprCurve::Parametric(vec![1.0]),
         description: format!(
-            "EXR chromaticities R {} G {} B {} W {}",
-            xy(r),
-            xy(g),
-            xy(b),
-            xy(w)
+            "EXR chromaticities {}",
+            describe_chromaticities(&chromaticities)
         ),
     };
     ColourProfile::from_stated(stated, name)

@@ -201,10 +201,8 @@ fn gama_chrm_colour(gama: Option<u32>, chrm: Option<Chromaticities>, name: &str)
     }
     let [white, red, green, blue] = primaries.unwrap_or(SRGB_CHRM);
     let mut said = vec![];
-    if primaries.is_some() {
-        let xy = |c: [f64; 2]| format!("{:.3},{:.3}", c[0], c[1]);
-        let [r, g, b, w] = [red, green, blue, white].map(xy);
-        said.push(format!("cHRM R {r} G {g} B {b} W {w}"));
+    if let Some(c) = &primaries {
+        said.push(format!("cHRM {}", describe_chromaticities(c)));
     }
     if let Some(g) = gama {
         said.push(format!("gAMA {:.5}", f64::from(g) / 1e5));
@@ -249,6 +247,13 @@ const SRGB_CHRM: Chromaticities = [[0.3127, 0.329], [0.64, 0.33], [0.3, 0.6], [0
 /// How far (in CIE x or y) a `cHRM` chunk may be from sRGB's for it to say sRGB: libpng
 /// writes them rounded to 1e-5, others to 1e-3 or 1e-4.
 const SRGB_CHRM_TOLERANCE: f64 = 1e-3;
+
+/// Chromaticities (white, red, green, blue) as profile descriptions and messages say
+/// them: `R 0.680,0.320 G … B … W …`.
+pub(crate) fn describe_chromaticities([w, r, g, b]: &Chromaticities) -> String {
+    let xy = |c: &[f64; 2]| format!("{:.3},{:.3}", c[0], c[1]);
+    format!("R {} G {} B {} W {}", xy(r), xy(g), xy(b), xy(w))
+}
 
 /// Whether chromaticities (white, red, green, blue) are sRGB's, within
 /// [`SRGB_CHRM_TOLERANCE`].
