@@ -327,14 +327,22 @@ pub fn refuse_heif(path: &Path) -> Result<()> {
     use std::io::Read;
     let mut head = Vec::new();
     let read = std::fs::File::open(path).and_then(|f| f.take(12).read_to_end(&mut head));
-    match read.ok().and_then(|_| heif_brand(&head)) {
-        Some(brand) => Err(heif_refusal(&path.display().to_string(), &brand)),
+    match read {
+        Ok(_) => refuse_heif_bytes(&head, &path.display().to_string()),
+        Err(_) => Ok(()),
+    }
+}
+
+/// [`refuse_heif`] for the bytes (at least the first 12) of the file `name`.
+pub(crate) fn refuse_heif_bytes(bytes: &[u8], name: &str) -> Result<()> {
+    match heif_brand(bytes) {
+        Some(brand) => Err(heif_refusal(name, &brand)),
         None => Ok(()),
     }
 }
 
 /// The refusal of the HEIF file `name` of `brand`, with what to do instead.
-pub(crate) fn heif_refusal(name: &str, brand: &str) -> Error {
+fn heif_refusal(name: &str, brand: &str) -> Error {
     if brand.starts_with("avi") {
         return Error::format(
             name,
@@ -365,9 +373,7 @@ fn open_decoder<'a>(
     expected: &str,
     role: Role,
 ) -> Result<(impl ImageDecoder + 'a, ImageFormat)> {
-    if let Some(brand) = heif_brand(bytes) {
-        return Err(heif_refusal(name, &brand));
-    }
+    refuse_heif_bytes(bytes, name)?;
     let reader = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::io(name, e))?;

@@ -98,19 +98,16 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
             ))
         }
         "jpg" | "jpeg" => Ok(Raw::Embedded(gdepth::decode(bytes, path)?)),
-        _ => match crate::io::image::heif_brand(bytes) {
-            Some(brand) => Err(crate::io::image::heif_refusal(
-                &path.display().to_string(),
-                &brand,
-            )),
-            None => Err(Error::format(
+        _ => {
+            crate::io::image::refuse_heif_bytes(bytes, &path.display().to_string())?;
+            Err(Error::format(
                 path,
                 format!(
                     "unknown depth file extension `{ext}`; expected .png, .pfm, .exr, .tif, \
                      .tiff, .npy, or a .jpg with its depth (a phone's portrait photo)"
                 ),
-            )),
-        },
+            ))
+        }
     }
 }
 
