@@ -658,25 +658,20 @@ fn to_linear_rgb(img: &DynamicImage, profile: Option<&ColourProfile>) -> RgbImag
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::io::png_chunks::png_of_chunks;
 
     /// An 8-bit palette PNG of 2x1 pixels (indices 0, 1) whose PLTE chunk holds `palette`,
     /// CRCs left at 0 (the palette check reads only lengths and types).
     fn palette_png(palette: &[u8]) -> Vec<u8> {
-        let mut b = b"\x89PNG\r\n\x1a\n".to_vec();
-        let mut chunk = |kind: &[u8; 4], data: &[u8]| {
-            b.extend_from_slice(&(data.len() as u32).to_be_bytes());
-            b.extend_from_slice(kind);
-            b.extend_from_slice(data);
-            b.extend_from_slice(&[0; 4]);
-        };
-        chunk(b"IHDR", &[0, 0, 0, 2, 0, 0, 0, 1, 8, 3, 0, 0, 0]);
-        chunk(b"PLTE", palette);
-        chunk(
-            b"IDAT",
-            &[0x78, 0x01, 1, 3, 0, 0xfc, 0xff, 0, 0, 1, 0, 4, 0, 2],
-        );
-        chunk(b"IEND", &[]);
-        b
+        png_of_chunks(&[
+            (b"IHDR", &[0, 0, 0, 2, 0, 0, 0, 1, 8, 3, 0, 0, 0]),
+            (b"PLTE", palette),
+            (
+                b"IDAT",
+                &[0x78, 0x01, 1, 3, 0, 0xfc, 0xff, 0, 0, 1, 0, 4, 0, 2],
+            ),
+            (b"IEND", &[]),
+        ])
     }
 
     #[test]
@@ -710,20 +705,13 @@ mod tests {
     /// zero bytes (CRCs left at 0: the check reads lengths and types, and it refuses before
     /// the decoder reads the chunks).
     fn iccp_png(size: usize) -> Vec<u8> {
-        let chunk = |kind: &[u8], data: &[u8]| {
-            let mut c = (data.len() as u32).to_be_bytes().to_vec();
-            c.extend_from_slice(kind);
-            c.extend_from_slice(data);
-            c.extend_from_slice(&[0; 4]);
-            c
-        };
         let mut iccp = b"bomb\0\0".to_vec();
         iccp.extend(fdeflate::compress_to_vec(&vec![0; size]));
-        let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
-        png.extend(chunk(b"IHDR", &[0, 0, 0, 1, 0, 0, 0, 1, 8, 0, 0, 0, 0]));
-        png.extend(chunk(b"iCCP", &iccp));
-        png.extend(chunk(b"IEND", &[]));
-        png
+        png_of_chunks(&[
+            (b"IHDR", &[0, 0, 0, 1, 0, 0, 0, 1, 8, 0, 0, 0, 0]),
+            (b"iCCP", &iccp),
+            (b"IEND", &[]),
+        ])
     }
 
     /// A PNG's size is read from its first chunk alone: the header of a file cut short

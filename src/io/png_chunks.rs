@@ -330,22 +330,29 @@ fn cicp_primaries(code: u8) -> Option<(Chromaticities, &'static str)> {
     }
 }
 
+/// PNG bytes of the signature and `chunks` (type, data), CRCs left at 0: brume's own
+/// walks read only lengths and types, and its checks refuse before the decoder reads more.
+#[cfg(test)]
+pub(crate) fn png_of_chunks(chunks: &[(&[u8; 4], &[u8])]) -> Vec<u8> {
+    let mut png = PNG_SIGNATURE.to_vec();
+    for (kind, data) in chunks {
+        png.extend((data.len() as u32).to_be_bytes());
+        png.extend(*kind);
+        png.extend(*data);
+        png.extend([0; 4]);
+    }
+    png
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// PNG bytes of a signature, `IHDR` and `chunks` (CRCs left at 0: the walk reads
-    /// lengths and types).
+    /// PNG bytes of `IHDR` (a 1x1 RGB image) and `chunks`.
     fn png_of(chunks: &[(&[u8; 4], Vec<u8>)]) -> Vec<u8> {
-        let mut png = PNG_SIGNATURE.to_vec();
-        let ihdr = (b"IHDR", vec![0, 0, 0, 1, 0, 0, 0, 1, 8, 2, 0, 0, 0]);
-        for (kind, data) in std::iter::once(&ihdr).chain(chunks) {
-            png.extend((data.len() as u32).to_be_bytes());
-            png.extend(*kind);
-            png.extend(data);
-            png.extend([0; 4]);
-        }
-        png
+        let ihdr: (&[u8; 4], &[u8]) = (b"IHDR", &[0, 0, 0, 1, 0, 0, 0, 1, 8, 2, 0, 0, 0]);
+        let rest = chunks.iter().map(|(kind, data)| (*kind, data.as_slice()));
+        png_of_chunks(&std::iter::once(ihdr).chain(rest).collect::<Vec<_>>())
     }
 
     fn gama(g: u32) -> (&'static [u8; 4], Vec<u8>) {
