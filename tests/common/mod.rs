@@ -102,17 +102,19 @@ pub fn assert_render_refuses(flag: &str, path: &Path, needles: &[&str]) {
     ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
         .save(&image)
         .unwrap();
-    let out = dir.path().join("out.png");
-    let args = [
-        "render",
-        "--image",
-        image.to_str().unwrap(),
-        flag,
-        path.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    let run = brume(dir.path(), &args);
+    let (image, path) = (image.to_str().unwrap(), path.to_str().unwrap());
+    assert_render_refused(
+        dir.path(),
+        &["render", "--image", image, flag, path],
+        needles,
+    );
+}
+
+/// Runs `brume render` with `args` and `--out out.png` in `dir` and asserts that it is
+/// refused: exit 1, stderr holding every one of `needles`, and no output written.
+pub fn assert_render_refused(dir: &Path, args: &[&str], needles: &[&str]) {
+    let out = dir.join("out.png");
+    let run = brume(dir, &[args, &["--out", out.to_str().unwrap()]].concat());
     let err = stderr(&run);
     assert_eq!(run.status.code(), Some(1), "{err}");
     for needle in needles {
