@@ -196,6 +196,80 @@ fn brume_sky_then_brume_turbidity_round_trips() {
     }
 }
 
+/// A Display P3 sky photo (a Preetham sky taken to P3's primaries by the standards'
+/// matrices, IEC 61966-2-1's sRGB to XYZ and SMPTE EG 432-1's XYZ to P3, written as an EXR
+/// whose `chromaticities` say P3) gives its turbidity back through `brume turbidity` and
+/// the aerial medium's `turbidity_from_sky`: its luminance is weighted by P3's Y row. The
+/// same pixels read as sRGB (no `chromaticities`) take the blue zenith for darker than
+/// it is, and T 10 for about 10.1.
+#[test]
+fn a_display_p3_sky_is_read_in_its_own_primaries() {
+    const SRGB_TO_XYZ: [[f64; 3]; 3] = [
+        [0.4124, 0.3576, 0.1805],
+        [0.2126, 0.7152, 0.0722],
+        [0.0193, 0.1192, 0.9505],
+    ];
+    const XYZ_TO_P3: [[f64; 3]; 3] = [
+        [2.4935, -0.9314, -0.4027],
+        [-0.8295, 1.7627, 0.0236],
+        [0.0358, -0.0762, 0.9569],
+    ];
+    let row = |m: [[f64; 3]; 3], v: [f64; 3]| m.map(|r| r[0] * v[0] + r[1] * v[1] + r[2] * v[2]);
+    let (t, sun_deg) = (10.0, [60.0f64, 45.0f64]);
+    let [z, a] = sun_deg.map(f64::to_radians);
+    let srgb = render_sky_image(
+        &PreethamSky::new(t, z, a).unwrap(),
+        200,
+        &Fisheye::default(),
+    )
+    .unwrap();
+    let p3 = Grid::from_fn(200, 200, |x, y| {
+        let xyz = row(SRGB_TO_XYZ, srgb.get(x, y).map(f64::from));
+        let [r, g, b] = row(XYZ_TO_P3, xyz).map(|c| c as f32);
+        [r, g, b, 1.0]
+    });
+    let p3_photo = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/colour/p3-flat.png");
+    let metadata = brume::io::image::load_upright_rgb(&p3_photo)
+        .unwrap()
+        .metadata;
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    brume::io::output::write_photo(&d.join("p3.exr"), &p3, &metadata).unwrap();
+    write_rgba(&d.join("as-srgb.exr"), &p3).unwrap();
+
+    let [zs, as_] = sun_deg.map(|v| v.to_string());
+    let estimate = |name: &str| {
+        let args = [
+            "turbidity",
+            name,
+            "--sun-zenith",
+            &zs,
+            "--sun-azimuth",
+            &as_,
+        ];
+        json(&brume(d, &[&args[..], &["--json"]].concat()))
+    };
+    let e = estimate("p3.exr");
+    let got = e["turbidity"].as_f64().unwrap();
+    assert!((got - t).abs() <= 0.01, "{e}");
+    let weights: Vec<f64> = serde_json::from_value(e["luminance_weights"].clone()).unwrap();
+    let p3_y = [0.2290, 0.6917, 0.0793];
+    assert!(
+        weights.iter().zip(p3_y).all(|(w, y)| (w - y).abs() < 1e-3),
+        "{e}"
+    );
+    assert!(e["colour_profile"].is_string(), "{e}");
+    let from_sky = brume::photo::turbidity_from_sky(&d.join("p3.exr"), Some([z, a])).unwrap();
+    assert!((from_sky.turbidity - t).abs() <= 0.01, "{from_sky:?}");
+
+    let e = estimate("as-srgb.exr");
+    assert!(e["turbidity"].as_f64().unwrap() - t > 0.05, "{e}");
+    assert_eq!(
+        e["luminance_weights"],
+        serde_json::json!([0.2126, 0.7152, 0.0722])
+    );
+}
+
 #[test]
 fn bad_input_is_named() {
     let dir = tempfile::tempdir().unwrap();

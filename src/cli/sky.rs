@@ -3,9 +3,11 @@
 
 use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
 use super::sun::PlaceTimeArgs;
-use brume::io::image::load_linear_rgb;
+use brume::io::colour_profile::ColourProfile;
+use brume::io::image::load_upright_rgb;
 use brume::io::output::{self, Outputs};
 use brume::raster::Grid;
+use brume::raster::RgbImage;
 use brume::sky::clouds::{add_clouds, CloudOptions};
 use brume::sky::sun_position::PlacedSun;
 use brume::sky::turbidity::{self, SunSource, TurbidityEstimate};
@@ -393,17 +395,23 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
 
 /// Runs `brume turbidity`.
 pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
-    let opts = turbidity_options(args)?;
-    let image = load_linear_rgb(&args.image)?;
+    let mut opts = turbidity_options(args)?;
+    let photo = load_upright_rgb(&args.image)?;
+    opts.luminance = photo.metadata.luminance_weights();
     let name = args.image.display().to_string();
-    let e = sky::estimate_turbidity(&image, &name, &opts)?;
+    let e = sky::estimate_turbidity(&photo.image, &name, &opts)?;
+    let primaries = photo.metadata.profile().map(ColourProfile::description);
     if args.json {
-        outln!(
-            "{}",
-            report_json(&e, &args.image, image.width(), image.height())
-        );
+        let mut json = report_json(&e, &args.image, &photo.image);
+        json["colour_profile"] = primaries.into();
+        json["luminance_weights"] = opts.luminance.to_vec().into();
+        outln!("{json}");
     } else {
         print_report(&e, &args.image);
+        if let Some(name) = primaries {
+            let [r, g, b] = opts.luminance;
+            outln!("  luminance in its profile's primaries ({name}): Y = {r:.4} R + {g:.4} G + {b:.4} B");
+        }
     }
     Ok(())
 }
@@ -442,15 +450,15 @@ fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
     Ok(opts)
 }
 
-fn report_json(e: &TurbidityEstimate, path: &Path, width: usize, height: usize) -> String {
+fn report_json(e: &TurbidityEstimate, path: &Path, image: &RgbImage) -> serde_json::Value {
     let (source, blob) = match e.sun_source {
         SunSource::Given => ("given", None),
         SunSource::Detected { pixels } => ("detected", Some(pixels)),
     };
     json!({
         "image": path.display().to_string(),
-        "width": width,
-        "height": height,
+        "width": image.width(),
+        "height": image.height(),
         "turbidity": e.turbidity,
         "std": e.std,
         "std_of": if e.repeats > 1 { "repeats" } else { "fit" },
@@ -471,7 +479,6 @@ fn report_json(e: &TurbidityEstimate, path: &Path, width: usize, height: usize) 
         "prepare_ms": e.prepare_ms,
         "estimates": e.estimates.iter().map(|s| s.turbidity).collect::<Vec<_>>(),
     })
-    .to_string()
 }
 
 fn print_report(e: &TurbidityEstimate, path: &Path) {

@@ -167,6 +167,13 @@ impl ColourProfile {
         inverse(rgb_to_xyz([r, g, b].map(xy_to_xyz), xy_to_xyz(white)))
     }
 
+    /// The luminance of the photo's linear R, G, B: the Y row of its RGB to XYZ matrix
+    /// (summing to 1), e.g. 0.2290, 0.6917, 0.0793 for Display P3.
+    pub fn luminance_weights(&self) -> [f64; 3] {
+        let [r, g, b, white] = self.chromaticities;
+        rgb_to_xyz([r, g, b].map(xy_to_xyz), xy_to_xyz(white))[1]
+    }
+
     /// Whether the photo is decoded by its profile's own curves rather than sRGB's.
     pub fn has_own_curves(&self) -> bool {
         self.curves.is_some()
@@ -550,6 +557,23 @@ mod tests {
             read(&adobe).unwrap().chromaticities(),
             [[0.64, 0.33], [0.21, 0.71], [0.15, 0.06], d65],
         );
+    }
+
+    /// The Y rows the standards publish: IEC 61966-2-1's for sRGB, SMPTE EG 432-1's for
+    /// Display P3, Adobe RGB (1998)'s specification's.
+    #[test]
+    fn luminance_weights_are_the_standards() {
+        let cases = [
+            (ColorProfile::new_srgb(), [0.2126, 0.7152, 0.0722]),
+            (ColorProfile::new_display_p3(), [0.2290, 0.6917, 0.0793]),
+            (ColorProfile::new_adobe_rgb(), [0.2973, 0.6274, 0.0753]),
+        ];
+        for (profile, want) in cases {
+            let got = read(&profile).unwrap().luminance_weights();
+            let near = got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-3);
+            assert!(near, "{got:?} for {want:?}");
+            assert!((got.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{got:?}");
+        }
     }
 
     #[test]

@@ -41,6 +41,15 @@ impl PhotoMetadata {
         self.profile.as_ref()
     }
 
+    /// The luminance of the photo's linear R, G, B: its profile's
+    /// ([`ColourProfile::luminance_weights`]), or Rec. 709's for a photo without one (sRGB).
+    pub fn luminance_weights(&self) -> [f64; 3] {
+        self.profile().map_or(
+            crate::sky::REC709_LUMINANCE,
+            ColourProfile::luminance_weights,
+        )
+    }
+
     /// The EXIF block for an image `width x height` of the upright photo (see the module
     /// docs), or None where the photo had none or it cannot be carried; `name` is the
     /// output's, for the log.

@@ -556,15 +556,17 @@ pub fn dehaze(
 /// The turbidity of the fisheye sky photo at `path` (paper 002, sec. 3.4): the sun
 /// given as (zenith, azimuth) in radians in the fisheye's convention (azimuth 0 at the
 /// image's top, clockwise; a compass azimuth when north is at the top), or found from
-/// its saturated disc when `None`; the estimator's other options their defaults.
+/// its saturated disc when `None`; the luminance that of the photo's primaries (its
+/// colour profile's), the estimator's other options their defaults.
 pub fn turbidity_from_sky(path: &Path, sun: Option<[f64; 2]>) -> Result<TurbidityEstimate> {
-    let sky = crate::io::image::load_linear_rgb(path)?;
+    let sky = crate::io::image::load_upright_rgb(path)?;
     let name = path.display().to_string();
     let opts = TurbidityOptions {
         sun,
+        luminance: sky.metadata.luminance_weights(),
         ..TurbidityOptions::default()
     };
-    let estimate = estimate_turbidity(&sky, &name, &opts)?;
+    let estimate = estimate_turbidity(&sky.image, &name, &opts)?;
     log::info!(
         "{name}: turbidity {:.3} ± {:.3}",
         estimate.turbidity,

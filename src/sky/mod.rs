@@ -120,7 +120,15 @@ pub fn draw_sun_disc(
 /// Rec. 709 / sRGB luminance of linear RGB: the Y row of the sRGB to XYZ matrix
 /// (IEC 61966-2-1), the inverse of the matrix [`PreethamSky::rgb`] uses.
 pub fn luminance(rgb: [f32; 3]) -> f64 {
-    0.2126 * rgb[0] as f64 + 0.7152 * rgb[1] as f64 + 0.0722 * rgb[2] as f64
+    weighted_luminance(REC709_LUMINANCE, rgb)
+}
+
+/// The weights of [`luminance`]: linear R, G, B to Y for sRGB primaries.
+pub const REC709_LUMINANCE: [f64; 3] = [0.2126, 0.7152, 0.0722];
+
+/// The luminance of linear RGB by `weights`, the Y row of its primaries' RGB to XYZ.
+pub fn weighted_luminance(weights: [f64; 3], rgb: [f32; 3]) -> f64 {
+    dot(weights, rgb.map(f64::from))
 }
 
 pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {

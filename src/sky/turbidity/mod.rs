@@ -22,8 +22,9 @@
 //!    the patch's median are left out: the edge of a cloud across the reference.
 //! 4. **Samples.** N distinct usable pixels drawn uniformly by a seeded SplitMix64, one
 //!    stream per repetition, so a seed fixes every result.
-//! 5. **Ratios** (eq. 6, 8): observed q_i = Y_i/Y_ref, with Y the Rec. 709 luminance of
-//!    linear RGB; model m_i(T) = F(θi, γi; T)/F(θref, γref; T): Y_z cancels, so only the
+//! 5. **Ratios** (eq. 6, 8): observed q_i = Y_i/Y_ref, with Y the luminance of linear
+//!    RGB in the image's own primaries (`luminance`: Rec. 709's weights for sRGB, the
+//!    profile's for a Display P3 or Adobe RGB photo); model m_i(T) = F(θi, γi; T)/F(θref, γref; T): Y_z cancels, so only the
 //!    Perez luminance function is needed.
 //! 6. **RANSAC** against clouds (brighter and greyer than any clear sky) and other
 //!    outliers. A hypothesis is a minimal subset: one sample, whose single equation
@@ -135,6 +136,11 @@ pub struct TurbidityOptions {
     /// quantisation or haze in the reference pixels then scale s instead of biasing T.
     /// Off by default: eq. 8 as written.
     pub fit_level: bool,
+    /// The luminance Y of a pixel as weights of its linear R, G, B: the Y row of the
+    /// image's RGB-to-XYZ matrix ([`crate::io::colour_profile::ColourProfile::luminance_weights`]).
+    /// Default Rec. 709's, for sRGB primaries; a Display P3 sky read with them would
+    /// take its blue for darker than it is (T 10 estimated as 10.12).
+    pub luminance: [f64; 3],
 }
 
 impl Default for TurbidityOptions {
@@ -151,6 +157,7 @@ impl Default for TurbidityOptions {
             threshold: DEFAULT_THRESHOLD,
             hypotheses: DEFAULT_HYPOTHESES,
             fit_level: false,
+            luminance: super::REC709_LUMINANCE,
         }
     }
 }
@@ -204,6 +211,14 @@ impl TurbidityOptions {
         }
         if self.hypotheses < 2 {
             return Err(Error::invalid("hypotheses", self.hypotheses, "at least 2"));
+        }
+        let w = self.luminance;
+        if !(w.iter().all(|v| v.is_finite() && *v >= 0.0) && w.iter().sum::<f64>() > 0.0) {
+            return Err(Error::invalid(
+                "luminance",
+                format!("{w:?}"),
+                "weights of R, G, B ≥ 0, not all 0 (the Y row of the image's RGB to XYZ)",
+            ));
         }
         Ok(())
     }
@@ -421,7 +436,7 @@ impl TurbidityEstimator {
                     continue;
                 };
                 let rgb = *image.get(x, y);
-                let lum = super::luminance(rgb);
+                let lum = super::weighted_luminance(opts.luminance, rgb);
                 if theta > max_zenith || !is_usable(rgb, lum, clip) {
                     continue;
                 }
@@ -451,18 +466,20 @@ impl TurbidityEstimator {
         }
         let reference = opts.reference.unwrap_or([0.0, 0.0]);
         let (ref_patch, ref_y) =
-            reference_patch(image, fisheye, reference, sun, clip).ok_or_else(|| {
-                Error::format(
-                    name,
-                    format!(
-                        "the reference point (zenith {:.1}°, azimuth {:.1}°) has no usable \
+            reference_patch(image, fisheye, reference, sun, clip, opts.luminance).ok_or_else(
+                || {
+                    Error::format(
+                        name,
+                        format!(
+                            "the reference point (zenith {:.1}°, azimuth {:.1}°) has no usable \
                          pixel within {REFERENCE_RADIUS_PX} px (clipped or black): choose \
                          another with `reference_zenith`/`reference_azimuth`",
-                        reference[0].to_degrees(),
-                        reference[1].to_degrees()
-                    ),
-                )
-            })?;
+                            reference[0].to_degrees(),
+                            reference[1].to_degrees()
+                        ),
+                    )
+                },
+            )?;
         let patch_grid = (0..=GRID_STEPS)
             .map(|k| {
                 let p = Perez::luminance(grid_t(k));

@@ -84,6 +84,7 @@ pub(super) fn reference_patch(
     reference: [f64; 2],
     sun: [f64; 2],
     clip: f64,
+    luminance: [f64; 3],
 ) -> Option<(Vec<Geom>, f64)> {
     let size = image.width();
     let (px, py) = fisheye.pixel(size, reference[0], reference[1])?;
@@ -107,7 +108,7 @@ pub(super) fn reference_patch(
                 continue;
             };
             let rgb = *image.get(x, y);
-            let lum = super::super::luminance(rgb);
+            let lum = super::super::weighted_luminance(luminance, rgb);
             if !is_usable(rgb, lum, clip) {
                 continue;
             }
