@@ -127,4 +127,19 @@ fn horizon_sectors_match_the_reference() {
         let (l, rt) = (cpu.get(0, row), cpu.get(w - 1, row));
         assert!((l[0] - rt[0]).abs() > 0.05, "{l:?} {rt:?}");
     }
+    // One sector is one gain everywhere (the shader skips the azimuth): a tinted one.
+    let mut medium = aerial(4.0, 0.0);
+    medium.horizon_sectors = HorizonSectors::new(vec![[1.3, 1.1, 0.7]], 0.5, 1.0).unwrap();
+    let blur = Blur::default();
+    let gpu = r.render(&image, &range, &medium, &blur).unwrap();
+    let cpu = reference::render(&image, &range, &medium, &blur).unwrap();
+    let e = reference::rgb_error(&gpu.image, &cpu, 0);
+    let tol = FOG_PASS + F32_PER_PASS * f64::from(gpu.schedule.steps + 2);
+    assert!(e.max_abs <= tol, "one sector: {e:?}");
+    let plain = reference::render(&image, &range, &aerial(4.0, 0.0), &blur).unwrap();
+    let (tinted, untinted) = (cpu.get(0, h / 2), plain.get(0, h / 2));
+    assert!(
+        tinted[0] > untinted[0] && tinted[2] < untinted[2],
+        "{tinted:?}"
+    );
 }

@@ -2,13 +2,13 @@
 // (eq. 11) read from a table over distance, the airlight of the view direction
 // I∞(θ')·ζ(T, θ, θ') (eq. 12-13), θ the pixel's zenith angle from the camera's ray, and
 // the blur from the scattering optical depth −ln Γ̄ (all of it scatters), capped at 10.
-uniform sampler2D u_gamma;   // rows Γ_r, Γ_g, Γ_b over the table coordinate (R32F)
+uniform sampler2D u_gamma;   // Γ_r, Γ_g, Γ_b over the table coordinate (RGB32F, 1 row)
 uniform vec4 u_gamma_coord;  // (1/scale (1/m), 1/log span, largest distance (m), samples)
 uniform float u_metres;      // metres per unit of the range texture
 uniform vec3 u_horizon;      // I∞(θ'), linear RGB
 uniform vec3 u_gradation;    // (A, B, 1/(1 + A·e^(B/cos θ'))) of eq. 13
 uniform vec2 u_aerial_blur;  // (λ, 1 / the distance (m) that counts as 1 in the blur law)
-uniform sampler2D u_horizon_gain; // I∞'s gain by azimuth sector: rows r, g, b (R32F)
+uniform sampler2D u_horizon_gain; // I∞'s gain by azimuth sector (RGB32F, 1 row)
 uniform vec3 u_horizon_sectors;   // (centre azimuth (rad), 1 / sector width, sectors)
 
 const float AERIAL_MIN_COS = 0.0017453283; // cos(89.9°): eq. 13 diverges at the horizon
@@ -22,9 +22,7 @@ vec3 aerial_horizon_gain(vec3 ray) {
     d = mod(d + AERIAL_PI, 2.0 * AERIAL_PI) - AERIAL_PI;
     float n = u_horizon_sectors.z;
     float u = (d * u_horizon_sectors.y + 0.5 * n) / n;
-    return vec3(textureLod(u_horizon_gain, vec2(u, 0.5 / 3.0), 0.0).r,
-                textureLod(u_horizon_gain, vec2(u, 1.5 / 3.0), 0.0).r,
-                textureLod(u_horizon_gain, vec2(u, 2.5 / 3.0), 0.0).r);
+    return textureLod(u_horizon_gain, vec2(u, 0.5), 0.0).rgb;
 }
 
 MediumSample medium_sample(ivec2 pixel, float depth) {
@@ -32,9 +30,7 @@ MediumSample medium_sample(ivec2 pixel, float depth) {
     float x = log(1.0 + min(s, u_gamma_coord.z) * u_gamma_coord.x) * u_gamma_coord.y;
     float n = u_gamma_coord.w;
     float u = (0.5 + x * (n - 1.0)) / n;
-    vec3 gamma = vec3(textureLod(u_gamma, vec2(u, 0.5 / 3.0), 0.0).r,
-                      textureLod(u_gamma, vec2(u, 1.5 / 3.0), 0.0).r,
-                      textureLod(u_gamma, vec2(u, 2.5 / 3.0), 0.0).r);
+    vec3 gamma = textureLod(u_gamma, vec2(u, 0.5), 0.0).rgb;
     float cos_theta = clamp(normalize(brume_ray).y, AERIAL_MIN_COS, 1.0);
     float zeta = (1.0 + u_gradation.x * exp(u_gradation.y / cos_theta)) * u_gradation.z;
     float mean = (gamma.r + gamma.g + gamma.b) / 3.0;

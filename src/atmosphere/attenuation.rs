@@ -224,8 +224,8 @@ impl Aerial {
     }
 }
 
-/// Γ_r, Γ_g, Γ_b tabulated over distance for the GPU: a [`Lookup`] of
-/// [`AttenuationTable::SAMPLES`] x 3 texels (row c = channel c), `R32F`, bilinear,
+/// Γ_r, Γ_g, Γ_b tabulated over distance for the GPU: a three-channel [`Lookup`] of
+/// [`AttenuationTable::SAMPLES`] x 1 texels (`RGB32F`, one fetch for the three), bilinear,
 /// clamped to its edges.
 ///
 /// # The coordinate
@@ -258,7 +258,7 @@ impl Aerial {
 /// # In GLSL
 ///
 /// ```glsl
-/// uniform sampler2D table;        // lookup(): width n, height 3, bilinear, clamped
+/// uniform sampler2D table;        // lookup(): width n, height 1, RGB, bilinear, clamped
 /// uniform float inv_scale;        // 1.0 / scale_m()
 /// uniform float inv_log_span;     // 1.0 / log_span()
 /// uniform float max_distance;     // max_distance_m()
@@ -267,9 +267,7 @@ impl Aerial {
 /// vec3 attenuation(float s) {     // s: distance to the camera in metres
 ///     float x = log(1.0 + clamp(s, 0.0, max_distance) * inv_scale) * inv_log_span;
 ///     float u = (0.5 + x * (n - 1.0)) / n;
-///     return vec3(texture(table, vec2(u, 0.5 / 3.0)).r,
-///                 texture(table, vec2(u, 1.5 / 3.0)).r,
-///                 texture(table, vec2(u, 2.5 / 3.0)).r);
+///     return texture(table, vec2(u, 0.5)).rgb;
 /// }
 /// ```
 ///
@@ -313,17 +311,16 @@ impl AttenuationTable {
         }
         let scale_m = 1.0 / aerial.max_coefficient_per_m();
         let log_span = (max_distance_m / scale_m).ln_1p();
-        let mut values = vec![0.0f32; samples * 3];
-        for i in 0..samples {
-            let s = if i == samples - 1 {
-                max_distance_m
-            } else {
-                scale_m * (i as f64 / (samples - 1) as f64 * log_span).exp_m1()
-            };
-            for c in Channel::ALL {
-                values[c.index() * samples + i] = aerial.attenuation(c, s) as f32;
-            }
-        }
+        let values: Vec<[f32; 3]> = (0..samples)
+            .map(|i| {
+                let s = if i == samples - 1 {
+                    max_distance_m
+                } else {
+                    scale_m * (i as f64 / (samples - 1) as f64 * log_span).exp_m1()
+                };
+                Channel::ALL.map(|c| aerial.attenuation(c, s) as f32)
+            })
+            .collect();
         let spread = Channel::ALL.map(|c| {
             let w = &aerial.weights[c.index()];
             w.iter().map(|v| v.abs()).sum::<f64>() / w.iter().sum::<f64>()
@@ -355,7 +352,7 @@ impl AttenuationTable {
             log_span,
             spread,
             kink,
-            lookup: Lookup::new(samples, 3, values, Wrap::ClampToEdge)?,
+            lookup: Lookup::rgb(samples, 1, &values, Wrap::ClampToEdge)?,
         })
     }
 
@@ -406,16 +403,11 @@ impl AttenuationTable {
         (0.5 + self.coordinate(distance_m) * (n - 1.0)) / n
     }
 
-    /// The texture coordinate v of channel c's row: (c + ½)/3.
-    pub fn v_of_channel(channel: Channel) -> f64 {
-        (channel.index() as f64 + 0.5) / 3.0
-    }
-
-    /// Γ_c at `distance_m` as the GPU reads it: the lookup's bilinear sample at
-    /// (u_of_distance, v_of_channel).
+    /// Γ_c at `distance_m` as the GPU reads it: channel c of the lookup's bilinear sample
+    /// at (u_of_distance, ½).
     pub fn sample(&self, channel: Channel, distance_m: f64) -> f64 {
-        self.lookup
-            .sample(self.u_of_distance(distance_m), Self::v_of_channel(channel))
+        let u = self.u_of_distance(distance_m);
+        self.lookup.sample_channel(u, 0.5, channel.index())
     }
 
     /// The bound on |sample − Aerial::attenuation| for channel c over [0, s_max] (see the
@@ -633,18 +625,16 @@ mod tests {
         assert!((table.u_of_distance(30e3) - (n - 0.5) / n).abs() < 1e-15);
         assert_eq!(table.u_of_distance(-1.0), 0.5 / n);
         assert!((table.coordinate(table.scale_m()) - 2f64.ln() / table.log_span()).abs() < 1e-15);
-        assert_eq!(table.lookup().height(), 3);
+        assert_eq!(table.lookup().height(), 1);
+        assert_eq!(table.lookup().channels(), 3);
         assert_eq!(table.lookup().wrap(), Wrap::ClampToEdge);
-        for c in Channel::ALL {
-            assert!(
-                (AttenuationTable::v_of_channel(c) * 3.0 - 0.5 - c.index() as f64).abs() < 1e-15
-            );
-        }
         // Texel i is exactly the direct value at its distance.
         let aerial = Aerial::new(&Sensitivity::cie_srgb(), 3.0, 0.0).unwrap();
         for i in [0, 1, 17, 500, 1023] {
             let s = table.scale_m() * (i as f64 / (n - 1.0) * table.log_span()).exp_m1();
-            let texel = table.lookup().texel(i as i64, 1);
+            let texel = table
+                .lookup()
+                .texel_channel(i as i64, 0, Channel::G.index());
             assert!(
                 (texel - aerial.attenuation(Channel::G, s)).abs() < 1e-7,
                 "{i}"

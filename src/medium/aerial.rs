@@ -63,8 +63,8 @@ pub struct AerialPerspective {
 /// Per-channel gains of the horizon's light by azimuth: `count` sectors of equal width
 /// centred on an azimuth, linear between the sectors' centres, constant beyond the end
 /// ones. Azimuths as [`crate::sky::horizon_sectors::ray_azimuth`]: 0 along −z, π/2
-/// along +x. The GPU reads the gains from a `count` x 3 lookup (rows r, g, b) with the
-/// same bilinear filter as [`HorizonSectors::gain`].
+/// along +x. The GPU reads the gains from a `count` x 1 RGB lookup with the same bilinear
+/// filter as [`HorizonSectors::gain`].
 #[derive(Clone, Debug)]
 pub struct HorizonSectors {
     gains: Vec<[f32; 3]>,
@@ -102,11 +102,7 @@ impl HorizonSectors {
                 "a width in (0, 2π] radians about a finite centre",
             ));
         }
-        let n = gains.len();
-        let values = (0..3)
-            .flat_map(|c| gains.iter().map(move |g| g[c]))
-            .collect();
-        let lookup = Lookup::new(n, 3, values, Wrap::ClampToEdge)?;
+        let lookup = Lookup::rgb(gains.len(), 1, &gains, Wrap::ClampToEdge)?;
         Ok(HorizonSectors {
             gains,
             centre,
@@ -142,7 +138,7 @@ impl HorizonSectors {
     /// The gain at azimuth `azimuth` (radians), per channel.
     pub fn gain(&self, azimuth: f64) -> [f64; 3] {
         let u = self.coordinate(azimuth);
-        std::array::from_fn(|c| self.lookup.sample(u, (c as f64 + 0.5) / 3.0))
+        std::array::from_fn(|c| self.lookup.sample_channel(u, 0.5, c))
     }
 
     /// (centre, 1/width, count) for the shader.

@@ -94,7 +94,10 @@ fn upload_lookup(gl: &Arc<glow::Context>, lookup: &Lookup) -> Result<Texture> {
         gl,
         lookup.width(),
         lookup.height(),
-        TexelFormat::R32F,
+        match lookup.channels() {
+            3 => TexelFormat::Rgb32F,
+            _ => TexelFormat::R32F,
+        },
         Filter::Linear,
         Some(lookup.values()),
     )?;
