@@ -224,6 +224,38 @@ fn a_bad_frame_is_reported_and_skipped_and_the_run_fails() {
     assert_eq!(log.matches("\"status\":\"failed\"").count(), 2, "{log}");
 }
 
+/// Three loader threads write the bytes one writes, and log the outputs in the frames'
+/// order whatever the order the loaders finish in: each loader takes every third frame,
+/// the GPU takes them in turn. A bad frame among them fails alone.
+#[test]
+fn several_loaders_write_what_one_writes_in_the_same_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 5);
+    let bad = "disparity/train/bremen/bremen_000003_000019_disparity.png";
+    std::fs::write(root.join(bad), b"not a png").unwrap();
+    let run = |loaders: &str| {
+        let out = format!("out-{loaders}");
+        let args = ["batch", "cityscapes", "--out", &out, "--beta", "0.01"];
+        let run = brume(dir.path(), &[&args[..], &["--loaders", loaders]].concat());
+        assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+        let log = std::fs::read_to_string(dir.path().join(&out).join("brume-batch-1-of-1.jsonl"))
+            .unwrap();
+        let order: Vec<(String, String)> = log
+            .lines()
+            .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+            .map(|r| (r["image"].to_string(), r["status"].to_string()))
+            .collect();
+        (outputs(&dir.path().join(&out)), order)
+    };
+    let (one, one_order) = run("1");
+    let (three, three_order) = run("3");
+    assert_eq!(one.len(), 4);
+    assert!(one == three, "the outputs differ");
+    assert_eq!(one_order, three_order);
+    let failed = one_order.iter().filter(|(_, s)| s == "\"failed\"").count();
+    assert_eq!((one_order.len(), failed), (5, 1), "{one_order:?}");
+}
+
 #[test]
 fn bad_batch_options_are_refused_before_any_work() {
     let dir = tempfile::tempdir().unwrap();
@@ -254,6 +286,14 @@ fn bad_batch_options_are_refused_before_any_work() {
         (
             &["batch", "cityscapes", "--out", "o", "--near", "3"][..],
             "--depth-kind zbuffer",
+        ),
+        (
+            &["batch", "cityscapes", "--out", "o", "--loaders", "0"][..],
+            "--loaders",
+        ),
+        (
+            &["batch", "cityscapes", "--out", "o", "--loaders", "17"][..],
+            "--loaders",
         ),
     ] {
         let run = brume(dir.path(), args);
@@ -897,6 +937,16 @@ fn the_library_batch_writes_logs_and_reports_each_output() {
         Betas::Drawn("uniform:0.001,20".parse().unwrap()),
         "beta_dist",
     );
+    for loaders in [0, brume::dataset::MAX_LOADERS + 1] {
+        let opts = BatchOptions {
+            loaders,
+            ..opts.clone()
+        };
+        match Batch::plan(std::slice::from_ref(&root), None, opts) {
+            Err(brume::Error::InvalidParameter { name, .. }) => assert_eq!(name, "loaders"),
+            other => panic!("{loaders} loaders: {:?}", other.map(|b| b.outputs())),
+        }
+    }
 
     let batch = Batch::plan(std::slice::from_ref(&root), None, opts.clone()).unwrap();
     assert_eq!(

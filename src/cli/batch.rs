@@ -2,7 +2,9 @@
 //! summary. `--shard K/N` takes a deterministic share of the frames, for array jobs.
 
 use super::args::{BatchArgs, Compat};
-use brume::dataset::{self, Batch, BatchEvent, BatchOptions, BatchReport, Betas, Shard};
+use brume::dataset::{
+    self, Batch, BatchEvent, BatchOptions, BatchReport, Betas, Shard, MAX_LOADERS,
+};
 use brume::photo::{Conventions, FrameOptions};
 use brume::{Error, Renderer, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -26,6 +28,10 @@ pub fn plan(args: &BatchArgs) -> Result<Batch> {
         transmittance: args.transmittance,
         capture: super::capture::capture_options(&args.capture, args.prep.seed)?,
         frame: args.frame_options()?,
+        loaders: match args.loaders {
+            Some(n) => super::limits::count("--loaders", n, 1, MAX_LOADERS, "loader threads")?,
+            None => dataset::default_loaders(),
+        },
     };
     Batch::plan(&args.inputs, args.manifest.as_deref(), opts)
 }

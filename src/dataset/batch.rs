@@ -34,6 +34,7 @@ use crate::renderer::Renderer;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{sync_channel, Receiver, SyncSender};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// The thinnest fog a batch renders, m⁻¹: visibility 3,000 km, no fog a camera can see
@@ -71,6 +72,20 @@ pub struct BatchOptions {
     /// The camera after the fog; each output's noise is seeded by the seed, the frame's
     /// name and its β.
     pub capture: CaptureOptions,
+    /// Loader threads, each decoding and pre-processing every `loaders`-th frame ahead of
+    /// the GPU (1 to [`MAX_LOADERS`]): on a real GPU one loader cannot keep up. A lone
+    /// loader holds up to two frames in memory, several one each.
+    pub loaders: usize,
+}
+
+/// The most loader threads a batch runs.
+pub const MAX_LOADERS: usize = 16;
+
+/// The loader threads by default: a quarter of the cores (the pre-processing of each
+/// frame already runs on all of them in parts), from 1 to 4.
+pub fn default_loaders() -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (cores / 4).clamp(1, 4)
 }
 
 impl BatchOptions {
@@ -84,6 +99,7 @@ impl BatchOptions {
             transmittance: false,
             frame: FrameOptions::default(),
             capture: CaptureOptions::default(),
+            loaders: default_loaders(),
         }
     }
 }
@@ -132,6 +148,13 @@ impl Batch {
     /// own. Outputs already complete are skipped. Frames that cannot be assembled
     /// (missing disparity or camera) are not an error here: the run logs them as failed.
     pub fn plan(inputs: &[PathBuf], manifest: Option<&Path>, opts: BatchOptions) -> Result<Batch> {
+        if !(1..=MAX_LOADERS).contains(&opts.loaders) {
+            return Err(Error::invalid(
+                "loaders",
+                opts.loaders,
+                format!("1 to {MAX_LOADERS} loader threads"),
+            ));
+        }
         let bounds = checked_betas(&opts.betas)?;
         check_frame_options(&opts.frame, &bounds)?;
         if opts.out.exists() && !opts.out.is_dir() {
@@ -259,7 +282,6 @@ impl Batch {
             log.frame_failed(f, 0)?;
         }
         let started = Instant::now();
-        let (load_tx, load_rx) = sync_channel::<std::result::Result<Frame, Failed>>(1);
         let (event_tx, event_rx) = sync_channel::<Event>(2);
         let frames: Vec<Item> = pending.iter().map(|(i, _)| i.clone()).collect();
         let mut gpu = Gpu {
@@ -268,9 +290,9 @@ impl Batch {
             times: BatchReport::default(),
         };
         let (log, t) = std::thread::scope(|s| -> Result<(Log, BatchReport)> {
-            s.spawn(|| load_frames(&opts.frame, frames, load_tx));
+            let loaded = spawn_loaders(s, &opts.frame, frames, opts.loaders);
             let writer = s.spawn(move || write_outputs(event_rx, log));
-            gpu.render_frames(renderer, &pending, load_rx);
+            gpu.render_frames(renderer, &pending, loaded);
             let Gpu { times, events, .. } = gpu;
             drop(events); // ends the writer's loop
             let log = writer.join().expect("the writer thread does not panic")?;
@@ -510,14 +532,44 @@ fn outputs_complete(opts: &BatchOptions, item: &Item, beta: f64) -> bool {
         && (!opts.transmittance || item.transmittance_output(&opts.out, beta).is_file())
 }
 
-/// The loader thread: decodes and pre-processes each frame in turn, one ahead of the GPU.
-fn load_frames(
-    options: &FrameOptions,
+/// A frame loaded, or why it could not be.
+type Loaded = std::result::Result<Frame, Failed>;
+
+/// Starts `count` loader threads in `scope`: loader k decodes and pre-processes frames k,
+/// k + count, k + 2·count … in turn, one ahead of the GPU. Returns the frames in their
+/// order, each taken from the loader that has it: every loader has a channel of its own,
+/// so none runs far ahead (a lone loader two frames, several one each), and the GPU's
+/// order (and so the log's) is the frames' whatever their loading times.
+fn spawn_loaders<'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    options: &'scope FrameOptions,
     frames: Vec<Item>,
-    tx: SyncSender<std::result::Result<Frame, Failed>>,
+    count: usize,
+) -> impl Iterator<Item = Loaded> {
+    let count = count.min(frames.len()).max(1);
+    let frames = Arc::new(frames);
+    let receivers: Vec<Receiver<Loaded>> = (0..count)
+        .map(|k| {
+            // One loader keeps a frame in hand while the GPU renders another and one more
+            // in the channel; several keep one each, their number slack enough.
+            let (tx, rx) = sync_channel::<Loaded>(usize::from(count == 1));
+            let frames = Arc::clone(&frames);
+            scope.spawn(move || load_frames(options, frames.iter().skip(k).step_by(count), tx));
+            rx
+        })
+        .collect();
+    (0..frames.len()).map_while(move |i| receivers[i % count].recv().ok())
+}
+
+/// A loader thread: decodes and pre-processes each of `frames` in turn, until the GPU's
+/// side hangs up.
+fn load_frames<'a>(
+    options: &FrameOptions,
+    frames: impl Iterator<Item = &'a Item>,
+    tx: SyncSender<Loaded>,
 ) {
     for item in frames {
-        let loaded = Frame::load(&item, options).map_err(|error| Failed {
+        let loaded = Frame::load(item, options).map_err(|error| Failed {
             item: item.clone(),
             error,
         });
@@ -542,9 +594,9 @@ impl Gpu<'_> {
         &mut self,
         renderer: &mut Renderer,
         pending: &[(Item, Vec<f64>)],
-        rx: Receiver<std::result::Result<Frame, Failed>>,
+        loaded: impl Iterator<Item = Loaded>,
     ) {
-        for ((_, betas), loaded) in pending.iter().zip(rx) {
+        for ((_, betas), loaded) in pending.iter().zip(loaded) {
             let writer_alive = match loaded {
                 Ok(frame) => {
                     self.times.frames += 1;

@@ -66,6 +66,12 @@ pub struct BatchArgs {
     #[arg(long, value_name = "K/N", allow_hyphen_values = true)]
     pub shard: Option<String>,
 
+    /// Loader threads decoding and pre-processing frames ahead of the GPU, each every N-th
+    /// frame (1-16; each holds a frame in memory, a lone loader two) [default: a quarter
+    /// of the cores, 1 to 4]. On a real GPU a single loader is what limits the rate.
+    #[arg(long, value_name = "N", allow_hyphen_values = true)]
+    pub loaders: Option<i64>,
+
     /// Also write each output's transmittance τ as an 8-bit grey PNG
     /// ({name}_transmittance_beta_{β}.png).
     #[arg(long)]
