@@ -135,6 +135,8 @@ fn a_gamma_profile_decodes_each_code_by_its_own_curve() {
     let photo = load_upright_rgb(&fixture("gamma22-ramp.png")).unwrap();
     let profile = photo.metadata.profile().expect("the ramp's profile");
     assert!(profile.has_own_curves() && !profile.primaries_are_srgb());
+    // Own curves, but gamma 2.2, not linear light.
+    assert!(!profile.has_linear_curves() && !photo.linear_light);
     assert_eq!(profile.description(), "Adobe RGB (1998) test");
     for (i, px) in photo.image.as_slice().iter().enumerate() {
         let codes = [i, 255 - i, (7 * i) % 256];
@@ -335,6 +337,7 @@ fn png_colour_chunks_decode_by_the_specifications_precedence() {
             profile.has_own_curves() && profile.primaries_are_srgb(),
             "{name}"
         );
+        assert!(photo.linear_light && profile.has_linear_curves(), "{name}");
         for (i, (px, want)) in photo.image.as_slice().iter().zip(ramp_values()).enumerate() {
             for (&v, w) in px.iter().zip(want) {
                 assert!((f64::from(v) - w).abs() < 2e-5, "{name} {i}: {v} for {w}");
@@ -342,7 +345,7 @@ fn png_colour_chunks_decode_by_the_specifications_precedence() {
         }
     }
     let srgb = load_upright_rgb(&fixture("gama-srgb-flat.png")).unwrap();
-    assert!(srgb.metadata.profile().is_none());
+    assert!(srgb.metadata.profile().is_none() && !srgb.linear_light);
     let v = f64::from(srgb.image.as_slice()[0][0]);
     assert!((v - srgb_decode(200.0 / 255.0)).abs() < 1e-6);
     let p3 = [[0.68, 0.32], [0.265, 0.69], [0.15, 0.06], D65];
@@ -350,6 +353,10 @@ fn png_colour_chunks_decode_by_the_specifications_precedence() {
         let photo = load_upright_rgb(&fixture(name)).unwrap();
         let profile = photo.metadata.profile().expect(name);
         assert!(!profile.has_own_curves() && !profile.primaries_are_srgb());
+        assert!(
+            !photo.linear_light && !profile.has_linear_curves(),
+            "{name}"
+        );
         assert_chromaticities(profile.chromaticities(), p3, name);
         let v = f64::from(photo.image.as_slice()[0][0]);
         assert!((v - srgb_decode(200.0 / 255.0)).abs() < 1e-6, "{name}");

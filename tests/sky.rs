@@ -270,6 +270,44 @@ fn a_display_p3_sky_is_read_in_its_own_primaries() {
     );
 }
 
+/// A display-encoded sky photo (8-bit PNG) is estimated with a warning that a camera's
+/// tone curve is not its profile's; linear light (an EXR) without one. The JSON says
+/// which it was.
+#[test]
+fn a_display_encoded_sky_photo_is_warned_of() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sky = sky_image(4.0, 200);
+    let rgba = Grid::from_fn(200, 200, |x, y| {
+        let [r, g, b] = *sky.get(x, y);
+        // Exposed so that the PNG's codes do not clip.
+        [r / 20.0, g / 20.0, b / 20.0, 1.0]
+    });
+    write_rgba(&d.join("sky.png"), &rgba).unwrap();
+    write_rgba(&d.join("sky.exr"), &rgba).unwrap();
+    let (z, a) = (SUN_DEG[0].to_string(), SUN_DEG[1].to_string());
+    for (name, linear) in [("sky.png", false), ("sky.exr", true)] {
+        let args = [
+            "turbidity",
+            name,
+            "--sun-zenith",
+            &z,
+            "--sun-azimuth",
+            &a,
+            "--json",
+        ];
+        let o = brume(d, &args);
+        let e = json(&o);
+        assert_eq!(e["linear_light"], linear, "{name}: {e}");
+        let warned = stderr(&o).contains("display-encoded sky photo");
+        assert_eq!(warned, !linear, "{name}: {}", stderr(&o));
+        assert!(
+            (e["turbidity"].as_f64().unwrap() - 4.0).abs() < 0.05,
+            "{name}: {e}"
+        );
+    }
+}
+
 #[test]
 fn bad_input_is_named() {
     let dir = tempfile::tempdir().unwrap();

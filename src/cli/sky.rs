@@ -4,7 +4,6 @@
 use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
 use super::sun::PlaceTimeArgs;
 use brume::io::colour_profile::ColourProfile;
-use brume::io::image::load_upright_rgb;
 use brume::io::output::{self, Outputs};
 use brume::raster::Grid;
 use brume::raster::RgbImage;
@@ -396,7 +395,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
 /// Runs `brume turbidity`.
 pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
     let mut opts = turbidity_options(args)?;
-    let photo = load_upright_rgb(&args.image)?;
+    let photo = brume::photo::load_sky_photo(&args.image)?;
     opts.luminance = photo.metadata.luminance_weights();
     let name = args.image.display().to_string();
     let e = sky::estimate_turbidity(&photo.image, &name, &opts)?;
@@ -405,6 +404,7 @@ pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
         let mut json = report_json(&e, &args.image, &photo.image);
         json["colour_profile"] = primaries.into();
         json["luminance_weights"] = opts.luminance.to_vec().into();
+        json["linear_light"] = photo.linear_light.into();
         outln!("{json}");
     } else {
         print_report(&e, &args.image);

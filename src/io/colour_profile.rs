@@ -174,6 +174,15 @@ impl ColourProfile {
         rgb_to_xyz([r, g, b].map(xy_to_xyz), xy_to_xyz(white))[1]
     }
 
+    /// Whether the profile's curves are linear (gamma 1: a RAW developer's linear
+    /// output), so that the photo's codes are proportional to light.
+    pub fn has_linear_curves(&self) -> bool {
+        self.curves.as_deref().is_some_and(|c| {
+            let mid = c.decode([32768; 3]);
+            mid.iter().all(|v| (v - 32768.0 / 65535.0).abs() < 1e-3)
+        })
+    }
+
     /// Whether the photo is decoded by its profile's own curves rather than sRGB's.
     pub fn has_own_curves(&self) -> bool {
         self.curves.is_some()

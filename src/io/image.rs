@@ -135,6 +135,11 @@ pub struct UprightPhoto {
     /// Its embedded ICC profile, where it has a usable one, and its EXIF block, for its
     /// outputs to carry.
     pub metadata: PhotoMetadata,
+    /// Whether the file holds linear light: an EXR, a PFM, or an image whose profile's
+    /// curves are linear (a RAW developed to a linear TIFF or PNG). Otherwise its codes
+    /// are display-encoded, and a camera's tone curve may have bent them beyond what the
+    /// profile says.
+    pub linear_light: bool,
 }
 
 /// [`load_linear_rgb`], with what its EXIF says and the metadata its outputs carry.
@@ -163,6 +168,7 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
             image,
             exif: PhotoExif::default(),
             metadata: PhotoMetadata::default(),
+            linear_light: true,
         })
     };
     if bytes.starts_with(&EXR_MAGIC) {
@@ -175,6 +181,7 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
                 profile: exr.chromaticities.and_then(|c| exr_profile(c, name)),
                 exif: None,
             },
+            linear_light: true,
         });
     }
     if is_pfm(bytes) {
@@ -203,6 +210,9 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
     Ok(UprightPhoto {
         image: to_linear_rgb(&decoded, metadata.profile()),
         exif,
+        linear_light: metadata
+            .profile()
+            .is_some_and(ColourProfile::has_linear_curves),
         metadata,
     })
 }

@@ -31,9 +31,9 @@ mod insert;
 mod prepare;
 
 pub use aerial::{
-    aerial, dehaze, metres_per_unit, pitch_for_horizon_row, turbidity_from_sky, AerialOptions,
-    AerialPhoto, HorizonFrom, PhotoView, Retarget, ALTITUDE_RANGE_M, DEFAULT_HORIZON_ZENITH_DEG,
-    MAX_PITCH_DEG, TURBIDITY_RANGE,
+    aerial, dehaze, load_sky_photo, metres_per_unit, pitch_for_horizon_row, turbidity_from_sky,
+    AerialOptions, AerialPhoto, HorizonFrom, PhotoView, Retarget, ALTITUDE_RANGE_M,
+    DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG, TURBIDITY_RANGE,
 };
 pub use capture::{capture, CaptureOptions, SensorNoise};
 pub use distribution::BetaDistribution;
@@ -95,6 +95,7 @@ impl Photo {
             image,
             exif,
             metadata,
+            ..
         } = load_image_within_memory(image_path)?;
         let opts = DepthOptions {
             photo: Some(PhotoGeometry::of_upright(
@@ -173,6 +174,7 @@ impl Photo {
             image,
             exif,
             metadata,
+            ..
         } = load_image_within_memory(image_path)?;
         let orientation = exif.orientation;
         let range = crate::compat::load_optical_depth(map_path)?.into_oriented(orientation);
