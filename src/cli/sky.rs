@@ -5,8 +5,7 @@ use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
 use super::sun::PlaceTimeArgs;
 use brume::io::colour_profile::ColourProfile;
 use brume::io::output::{self, Outputs};
-use brume::raster::Grid;
-use brume::raster::RgbImage;
+use brume::raster::{Grid, RgbImage};
 use brume::sky::clouds::{add_clouds, CloudOptions};
 use brume::sky::sun_position::PlacedSun;
 use brume::sky::turbidity::{self, SunSource, TurbidityEstimate};
@@ -410,7 +409,8 @@ pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
         print_report(&e, &args.image);
         if let Some(name) = primaries {
             let [r, g, b] = opts.luminance;
-            outln!("  luminance in its profile's primaries ({name}): Y = {r:.4} R + {g:.4} G + {b:.4} B");
+            let weights = format!("Y = {r:.4} R + {g:.4} G + {b:.4} B");
+            outln!("  luminance in its profile's primaries ({name}): {weights}");
         }
     }
     Ok(())

@@ -585,7 +585,10 @@ pub fn load_sky_photo(path: &Path) -> Result<UprightPhoto> {
     let photo = crate::io::image::load_upright_rgb(path)?;
     if !photo.linear_light {
         log::warn!(
-            "{}: a display-encoded sky photo: the turbidity takes its codes for its colour              profile's curve (sRGB's without one) of linear light, which a camera's tone              curve is not; for a trustworthy T give linear light (an EXR, or the RAW              developed to a linear TIFF or PNG)",
+            "{}: a display-encoded sky photo: the turbidity takes its codes for its colour \
+             profile's curve (sRGB's without one) of linear light, which a camera's tone \
+             curve is not; for a trustworthy T give linear light (an EXR, or the RAW \
+             developed to a linear TIFF or PNG)",
             path.display()
         );
     }
