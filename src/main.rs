@@ -9,6 +9,7 @@ use clap::Parser;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    keep_freed_memory();
     let args = cli::Cli::parse();
     init_logging(args.verbose);
     cli::remove_temporaries_on_signals();
@@ -17,6 +18,27 @@ fn main() -> ExitCode {
         Err(e) => {
             errln!("brume: error: {}", cli::name_flags(e));
             ExitCode::FAILURE
+        }
+    }
+}
+
+/// Has glibc's malloc keep the memory brume frees for its next allocations instead of
+/// handing it back to the kernel. A photo's maps and images are tens to hundreds of MB;
+/// by default glibc maps each afresh and unmaps it on free, and the kernel zeroes every
+/// page again at its first touch (a fifth of a 12 MP render's CPU samples were the
+/// kernel's `clear_page`). Measured in the README, *Freed memory is kept*: about 12 %
+/// off a 12 MP render and a batch, for 5 % more peak memory. `MALLOC_MMAP_THRESHOLD_`
+/// or `MALLOC_TRIM_THRESHOLD_` in the environment are left to decide.
+fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    for (variable, parameter) in [
+        ("MALLOC_MMAP_THRESHOLD_", libc::M_MMAP_THRESHOLD),
+        ("MALLOC_TRIM_THRESHOLD_", libc::M_TRIM_THRESHOLD),
+    ] {
+        if std::env::var_os(variable).is_none() {
+            // SAFETY: before any thread is started; mallopt only sets glibc's thresholds
+            // (it returns 0, and changes nothing, for a value it refuses).
+            unsafe { libc::mallopt(parameter, libc::c_int::MAX) };
         }
     }
 }
