@@ -25,6 +25,7 @@ The engine fogs on a rendered frame and its depth buffer (window depth in [0, 1]
 Aerial perspective from turbidity on a photo with range in metres (paper 002):
 
     >>> hazy = brume.aerial(image, range_m, turbidity=4.0, fov_y_deg=50.0, pitch_deg=2.0)
+    >>> t = brume.turbidity_from_sky("fisheye.exr", sun=(40.0, 120.0))["turbidity"]
 
 The native part is ``brume._brume`` (Rust, PyO3); see the repository's README, "Python".
 """
@@ -43,6 +44,7 @@ from ._brume import (
     load_photo,
     range_from_depth,
     save_photo,
+    turbidity_from_sky,
 )
 from . import augment
 
@@ -57,6 +59,7 @@ __all__ = [
     "distance_fog",
     "layered_fog",
     "aerial",
+    "turbidity_from_sky",
     "Camera",
     "MatrixCamera",
     "augment",

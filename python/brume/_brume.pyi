@@ -299,6 +299,13 @@ def aerial(
 ) -> Any: ...
 def load_photo(path: PathArg, *, dtype: str = "uint8") -> Tuple[Array, Dict[str, Any]]: ...
 def save_photo(path: PathArg, image: Array, info: Optional[Dict[str, Any]] = None) -> None: ...
+def turbidity_from_sky(
+    path: PathArg,
+    *,
+    sun: Optional[Tuple[float, float]] = None,
+    seed: int = 0,
+    repeats: int = 10,
+) -> Dict[str, Any]: ...
 def load_depth(
     path: PathArg,
     camera: Optional[PathArg] = None,

@@ -23,6 +23,7 @@ mod engine;
 mod gl_thread;
 mod photo_fog;
 mod photo_io;
+mod sky_photo;
 
 use arrays::{read_image, read_range, Colour, FsPath, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
@@ -562,6 +563,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(depth::range_from_depth, m)?)?;
     m.add_function(wrap_pyfunction!(photo_io::load_photo, m)?)?;
     m.add_function(wrap_pyfunction!(photo_io::save_photo, m)?)?;
+    m.add_function(wrap_pyfunction!(sky_photo::turbidity_from_sky, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

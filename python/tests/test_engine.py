@@ -1,8 +1,11 @@
 """Tests of the engine fogs (brume.distance_fog, brume.layered_fog with brume.Camera and
-brume.MatrixCamera) and of brume.aerial: equality with the `brume scene` and `brume render
---medium aerial` programs, an engine's matrices written out in numpy, and the errors."""
+brume.MatrixCamera), of brume.aerial and brume.turbidity_from_sky: equality with the
+`brume scene`, `brume render --medium aerial` and `brume turbidity` programs, an engine's
+matrices written out in numpy, and the errors."""
 
+import json
 import subprocess
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -553,3 +556,36 @@ def test_aerial_errors(photo):
         brume.aerial(image, range_m[..., None], **ok)
     with pytest.raises(ValueError, match="^range_m: no valid depth value"):
         brume.aerial(image, np.full(range_m.shape, np.nan, np.float32), **ok)
+
+
+def test_turbidity_from_sky_equals_brume_turbidity(tmp_path):
+    """A Preetham sky from `brume sky` (T 5): the estimate is `brume turbidity --json`'s
+    number for number, near 5; a display-encoded PNG warns (UserWarning), the EXR does
+    not; bad values raise ValueError, a missing file OSError."""
+    sun = ("58.4", "-179.4")
+    for name in ["sky.exr", "sky.png"]:
+        subprocess.run(
+            [str(brume_bin()), "sky", "--turbidity", "5", "--sun-zenith", sun[0],
+             "--sun-azimuth", sun[1], "--size", "160", "--out", str(tmp_path / name)],
+            check=True, capture_output=True)  # fmt: skip
+    cli = subprocess.run(
+        [str(brume_bin()), "turbidity", str(tmp_path / "sky.exr"), "--sun-zenith", sun[0],
+         "--sun-azimuth", sun[1], "--json"],
+        check=True, capture_output=True, text=True)  # fmt: skip
+    want = json.loads(cli.stdout)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = brume.turbidity_from_sky(tmp_path / "sky.exr", sun=(58.4, -179.4))
+    for key in ["turbidity", "std", "inliers", "sun_zenith_deg", "usable_pixels",
+                "luminance_weights", "linear_light", "colour_profile", "sun_source"]:  # fmt: skip
+        assert got[key] == want[key], (key, got[key], want[key])
+    assert abs(got["turbidity"] - 5.0) < 0.01 and got["linear_light"]
+    with pytest.warns(UserWarning, match="display-encoded sky photo"):
+        png = brume.turbidity_from_sky(str(tmp_path / "sky.png"), sun=(58.4, -179.4))
+    assert abs(png["turbidity"] - 5.0) < 0.05 and not png["linear_light"]
+    with pytest.raises(ValueError, match="repeats"):
+        brume.turbidity_from_sky(tmp_path / "sky.exr", repeats=0)
+    with pytest.raises(ValueError, match="sun"):
+        brume.turbidity_from_sky(tmp_path / "sky.exr", sun=(95.0, 0.0))
+    with pytest.raises(OSError, match="missing.exr"):
+        brume.turbidity_from_sky(tmp_path / "missing.exr")

@@ -12,7 +12,7 @@ pub const MAX_FRAMES: u32 = 10_000;
 /// Timed runs per configuration of `bench speed` and `bench fog`.
 pub const MAX_RUNS: usize = 1_000;
 /// Estimations per image of `turbidity --repeats` and `bench turbidity --estimations`.
-pub const MAX_ESTIMATIONS: usize = 10_000;
+pub const MAX_ESTIMATIONS: usize = brume::sky::turbidity::MAX_REPEATS;
 /// Random sample points of one turbidity estimation (`--samples`).
 pub const MAX_SAMPLES: usize = 100_000;
 /// Sample points of a whole turbidity run (estimations × samples × skies): 7-10 µs each

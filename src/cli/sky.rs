@@ -3,9 +3,9 @@
 
 use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
 use super::sun::PlaceTimeArgs;
-use brume::io::colour_profile::ColourProfile;
 use brume::io::output::{self, Outputs};
-use brume::raster::{Grid, RgbImage};
+use brume::photo::SkyTurbidity;
+use brume::raster::Grid;
 use brume::sky::clouds::{add_clouds, CloudOptions};
 use brume::sky::sun_position::PlacedSun;
 use brume::sky::turbidity::{self, SunSource, TurbidityEstimate};
@@ -393,22 +393,13 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
 
 /// Runs `brume turbidity`.
 pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
-    let mut opts = turbidity_options(args)?;
-    let photo = brume::photo::load_sky_photo(&args.image)?;
-    opts.luminance = photo.metadata.luminance_weights();
-    let name = args.image.display().to_string();
-    let e = sky::estimate_turbidity(&photo.image, &name, &opts)?;
-    let primaries = photo.metadata.profile().map(ColourProfile::description);
+    let sky = brume::photo::estimate_sky_photo(&args.image, &turbidity_options(args)?)?;
     if args.json {
-        let mut json = report_json(&e, &args.image, &photo.image);
-        json["colour_profile"] = primaries.into();
-        json["luminance_weights"] = opts.luminance.to_vec().into();
-        json["linear_light"] = photo.linear_light.into();
-        outln!("{json}");
+        outln!("{}", report_json(&sky, &args.image));
     } else {
-        print_report(&e, &args.image);
-        if let Some(name) = primaries {
-            let [r, g, b] = opts.luminance;
+        print_report(&sky.estimate, &args.image);
+        if let Some(name) = &sky.colour_profile {
+            let [r, g, b] = sky.luminance;
             let weights = format!("Y = {r:.4} R + {g:.4} G + {b:.4} B");
             outln!("  luminance in its profile's primaries ({name}): {weights}");
         }
@@ -450,15 +441,16 @@ fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
     Ok(opts)
 }
 
-fn report_json(e: &TurbidityEstimate, path: &Path, image: &RgbImage) -> serde_json::Value {
+fn report_json(sky: &SkyTurbidity, path: &Path) -> serde_json::Value {
+    let e = &sky.estimate;
     let (source, blob) = match e.sun_source {
         SunSource::Given => ("given", None),
         SunSource::Detected { pixels } => ("detected", Some(pixels)),
     };
     json!({
         "image": path.display().to_string(),
-        "width": image.width(),
-        "height": image.height(),
+        "width": sky.size[0],
+        "height": sky.size[1],
         "turbidity": e.turbidity,
         "std": e.std,
         "std_of": if e.repeats > 1 { "repeats" } else { "fit" },
@@ -478,6 +470,9 @@ fn report_json(e: &TurbidityEstimate, path: &Path, image: &RgbImage) -> serde_js
         "ms_per_estimation": e.ms_per_estimation,
         "prepare_ms": e.prepare_ms,
         "estimates": e.estimates.iter().map(|s| s.turbidity).collect::<Vec<_>>(),
+        "colour_profile": sky.colour_profile,
+        "luminance_weights": sky.luminance,
+        "linear_light": sky.linear_light,
     })
 }
 

@@ -560,20 +560,51 @@ pub fn dehaze(
 /// its saturated disc when `None`; the luminance that of the photo's primaries (its
 /// colour profile's), the estimator's other options their defaults.
 pub fn turbidity_from_sky(path: &Path, sun: Option<[f64; 2]>) -> Result<TurbidityEstimate> {
-    let sky = load_sky_photo(path)?;
-    let name = path.display().to_string();
     let opts = TurbidityOptions {
         sun,
-        luminance: sky.metadata.luminance_weights(),
         ..TurbidityOptions::default()
     };
-    let estimate = estimate_turbidity(&sky.image, &name, &opts)?;
+    let sky = estimate_sky_photo(path, &opts)?;
     log::info!(
-        "{name}: turbidity {:.3} ± {:.3}",
-        estimate.turbidity,
-        estimate.std
+        "{}: turbidity {:.3} ± {:.3}",
+        path.display(),
+        sky.estimate.turbidity,
+        sky.estimate.std
     );
-    Ok(estimate)
+    Ok(sky.estimate)
+}
+
+/// A sky photo's turbidity ([`estimate_sky_photo`]) and what was read of the photo.
+#[derive(Clone, Debug)]
+pub struct SkyTurbidity {
+    /// The estimate.
+    pub estimate: TurbidityEstimate,
+    /// The photo's width and height, upright.
+    pub size: [usize; 2],
+    /// The weights of R, G, B that gave its luminance: its colour profile's Y row.
+    pub luminance: [f64; 3],
+    /// Its colour profile's description; `None` for sRGB.
+    pub colour_profile: Option<String>,
+    /// Whether it held linear light ([`UprightPhoto::linear_light`]).
+    pub linear_light: bool,
+}
+
+/// The turbidity of the fisheye sky photo at `path` by `opts`, whose `luminance` is
+/// replaced by the photo's primaries' ([`load_sky_photo`]).
+pub fn estimate_sky_photo(path: &Path, opts: &TurbidityOptions) -> Result<SkyTurbidity> {
+    let photo = load_sky_photo(path)?;
+    let opts = TurbidityOptions {
+        luminance: photo.metadata.luminance_weights(),
+        ..opts.clone()
+    };
+    let estimate = estimate_turbidity(&photo.image, &path.display().to_string(), &opts)?;
+    Ok(SkyTurbidity {
+        estimate,
+        size: [photo.image.width(), photo.image.height()],
+        luminance: opts.luminance,
+        colour_profile: photo.metadata.profile().map(|p| p.description().to_owned()),
+        linear_light: photo.linear_light,
+    })
 }
 
 /// The fisheye sky photo at `path` for the turbidity estimator, upright and in linear
@@ -584,15 +615,20 @@ pub fn turbidity_from_sky(path: &Path, sun: Option<[f64; 2]>) -> Result<Turbidit
 pub fn load_sky_photo(path: &Path) -> Result<UprightPhoto> {
     let photo = crate::io::image::load_upright_rgb(path)?;
     if !photo.linear_light {
-        log::warn!(
-            "{}: a display-encoded sky photo: the turbidity takes its codes for its colour \
-             profile's curve (sRGB's without one) of linear light, which a camera's tone \
-             curve is not; for a trustworthy T give linear light (an EXR, or the RAW \
-             developed to a linear TIFF or PNG)",
-            path.display()
-        );
+        log::warn!("{}", display_encoded_sky(path));
     }
     Ok(photo)
+}
+
+/// What [`load_sky_photo`] warns of a display-encoded sky photo at `path`.
+pub fn display_encoded_sky(path: &Path) -> String {
+    format!(
+        "{}: a display-encoded sky photo: the turbidity takes its codes for its colour \
+         profile's curve (sRGB's without one) of linear light, which a camera's tone curve \
+         is not; for a trustworthy T give linear light (an EXR, or the RAW developed to a \
+         linear TIFF or PNG)",
+        path.display()
+    )
 }
 
 /// The pitch (degrees) that puts the horizon on row `row` (0 at the top, centres at

@@ -31,9 +31,10 @@ mod insert;
 mod prepare;
 
 pub use aerial::{
-    aerial, dehaze, load_sky_photo, metres_per_unit, pitch_for_horizon_row, turbidity_from_sky,
-    AerialOptions, AerialPhoto, HorizonFrom, PhotoView, Retarget, ALTITUDE_RANGE_M,
-    DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG, TURBIDITY_RANGE,
+    aerial, dehaze, display_encoded_sky, estimate_sky_photo, load_sky_photo, metres_per_unit,
+    pitch_for_horizon_row, turbidity_from_sky, AerialOptions, AerialPhoto, HorizonFrom, PhotoView,
+    Retarget, SkyTurbidity, ALTITUDE_RANGE_M, DEFAULT_HORIZON_ZENITH_DEG, MAX_PITCH_DEG,
+    TURBIDITY_RANGE,
 };
 pub use capture::{capture, CaptureOptions, SensorNoise};
 pub use distribution::BetaDistribution;
