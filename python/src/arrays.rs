@@ -2,9 +2,7 @@
 //! the output) and range maps, copied with the GIL and converted without it.
 
 use super::value_error;
-use brume::io::image::{
-    linear_rgba_to_srgb8_rgb, linear_to_srgb, srgb8_rgb_to_linear, srgb_to_linear,
-};
+use brume::io::image::{linear_to_srgb, linear_to_srgb8_rgb, srgb8_rgb_to_linear, srgb_to_linear};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
@@ -356,17 +354,20 @@ pub(crate) enum ImageOut {
 }
 
 impl ImageOut {
-    /// brume's linear RGBA in the input's encoding: 8-bit sRGB exactly as brume's PNG
-    /// writer rounds it (clamped to [0, 1], NaN as 0), 16-bit sRGB likewise to the nearest
-    /// of 65535 codes, or linear floats as rendered.
-    pub(crate) fn encode(image: &brume::raster::RgbaImage, pixels: Pixels) -> ImageOut {
+    /// brume's linear RGB or RGBA in the input's encoding: 8-bit sRGB exactly as brume's
+    /// PNG writer rounds it (clamped to [0, 1], NaN as 0), 16-bit sRGB likewise to the
+    /// nearest of 65535 codes, or linear floats as rendered.
+    pub(crate) fn encode<const N: usize>(
+        image: &brume::raster::Grid<[f32; N]>,
+        pixels: Pixels,
+    ) -> ImageOut {
         let shape = (image.height(), image.width(), 3);
         let rgb = image.as_slice().iter().flat_map(|p| [p[0], p[1], p[2]]);
         match pixels {
             Pixels::Srgb8 => ImageOut::Srgb8(
                 Array3::from_shape_vec(
                     shape,
-                    linear_rgba_to_srgb8_rgb(image.as_slice()).into_flattened(),
+                    linear_to_srgb8_rgb(image.as_slice()).into_flattened(),
                 )
                 .expect("shape"),
             ),

@@ -44,8 +44,9 @@ pub(crate) fn load_photo<'py>(
     let photo = py
         .detach(|| brume::io::image::load_upright_rgb(&path.0))
         .map_err(py_err)?;
-    let rgba = with_alpha(&photo.image);
-    let image = py.detach(|| ImageOut::encode(&rgba, pixels)).into_py(py);
+    let image = py
+        .detach(|| ImageOut::encode(&photo.image, pixels))
+        .into_py(py);
     let info = PyDict::new(py);
     info.set_item("orientation", photo.exif.orientation.exif())?;
     info.set_item("focal_length_35mm", photo.exif.focal_35mm)?;

@@ -42,8 +42,8 @@ use crate::raster::{Orientation, RgbImage};
 use crate::{Error, Result};
 
 pub use crate::io::srgb::{
-    linear_rgba_to_srgb8_rgb, linear_to_srgb, linear_to_srgb8, srgb8_rgb_to_linear,
-    srgb8_to_linear_table, srgb_to_linear,
+    linear_rgba_to_srgb8_rgb, linear_to_srgb, linear_to_srgb8, linear_to_srgb8_rgb,
+    srgb8_rgb_to_linear, srgb8_to_linear_table, srgb_to_linear,
 };
 
 /// What a photo's EXIF says that brume uses. Unreadable EXIF is none, as for a viewer.

@@ -34,8 +34,16 @@ pub fn srgb8_rgb_to_linear(rgb: &[u8]) -> Vec<[f32; 3]> {
 /// The RGB of linear RGBA pixels as 8-bit sRGB (alpha dropped), by [`linear_to_srgb8`],
 /// on every core. `into_flattened` makes it interleaved bytes without a copy.
 pub fn linear_rgba_to_srgb8_rgb(rgba: &[[f32; 4]]) -> Vec<[u8; 3]> {
+    linear_to_srgb8_rgb(rgba)
+}
+
+/// [`linear_rgba_to_srgb8_rgb`] of pixels of `N` ≥ 3 channels (RGB or RGBA), the first
+/// three taken.
+pub fn linear_to_srgb8_rgb<const N: usize>(pixels: &[[f32; N]]) -> Vec<[u8; 3]> {
+    const { assert!(N >= 3, "an RGB or RGBA pixel") };
     crate::parallel::run(|| {
-        rgba.par_iter()
+        pixels
+            .par_iter()
             .map(|p| [p[0], p[1], p[2]].map(linear_to_srgb8))
             .collect()
     })
@@ -192,5 +200,7 @@ mod tests {
         for (p, q) in rgba.iter().zip(&encoded) {
             assert_eq!(*q, [p[0], p[1], p[2]].map(linear_to_srgb8));
         }
+        let rgb: Vec<[f32; 3]> = rgba.iter().map(|p| [p[0], p[1], p[2]]).collect();
+        assert_eq!(linear_to_srgb8_rgb(&rgb), encoded);
     }
 }
