@@ -312,6 +312,78 @@ fn a_display_encoded_sky_photo_is_warned_of() {
     }
 }
 
+/// A circular fisheye's frame, wider than tall with black around the sky's disc, is
+/// estimated on its image circle: the square found is where the disc was put, and the
+/// estimate is the square image's, number for number.
+#[test]
+fn a_circular_fisheyes_frame_is_estimated_on_its_image_circle() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let sky = sky_image(4.0, 200);
+    let frame = Grid::from_fn(320, 240, |x, y| {
+        let inside = (70..270).contains(&x) && (25..225).contains(&y);
+        let [r, g, b] = if inside {
+            *sky.get(x - 70, y - 25)
+        } else {
+            [0.0; 3]
+        };
+        [r, g, b, 1.0]
+    });
+    write_rgba(&d.join("frame.exr"), &frame).unwrap();
+    let square = Grid::from_fn(200, 200, |x, y| {
+        let [r, g, b] = *sky.get(x, y);
+        [r, g, b, 1.0]
+    });
+    write_rgba(&d.join("square.exr"), &square).unwrap();
+    let (z, a) = (SUN_DEG[0].to_string(), SUN_DEG[1].to_string());
+    let estimate = |name: &str| {
+        let args = [
+            "turbidity",
+            name,
+            "--sun-zenith",
+            &z,
+            "--sun-azimuth",
+            &a,
+            "--json",
+        ];
+        json(&brume(d, &args))
+    };
+    let (framed, alone) = (estimate("frame.exr"), estimate("square.exr"));
+    assert_eq!(
+        framed["image_circle"],
+        serde_json::json!({"x": 70, "y": 25, "side": 200})
+    );
+    assert!(alone["image_circle"].is_null(), "{alone}");
+    assert_eq!(framed["turbidity"], alone["turbidity"]);
+    assert!(
+        (framed["turbidity"].as_f64().unwrap() - 4.0).abs() < 0.01,
+        "{framed}"
+    );
+    // A rectangular photo of sky is no fisheye: refused, naming the file and what to do.
+    let wide = Grid::from_fn(320, 240, |x, y| {
+        let [r, g, b] = *sky.get(x % 200, y % 200);
+        [r, g, b, 1.0]
+    });
+    write_rgba(&d.join("wide.exr"), &wide).unwrap();
+    let o = brume(
+        d,
+        &[
+            "turbidity",
+            "wide.exr",
+            "--sun-zenith",
+            &z,
+            "--sun-azimuth",
+            &a,
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("wide.exr") && err.contains("not a disc"),
+        "{err}"
+    );
+}
+
 #[test]
 fn bad_input_is_named() {
     let dir = tempfile::tempdir().unwrap();

@@ -20,8 +20,9 @@ use pyo3::types::PyDict;
 /// (UserWarning): a camera's tone curve biases T; give linear light (an EXR, or the RAW
 /// developed to a linear TIFF or PNG). Returns turbidity, std, fit_std, repeats,
 /// samples, inliers, sun_zenith_deg, sun_azimuth_deg, sun_source ('given' or
-/// 'detected'), usable_pixels, colour_profile (None for sRGB), luminance_weights and
-/// linear_light.
+/// 'detected'), usable_pixels, colour_profile (None for sRGB), luminance_weights,
+/// linear_light and image_circle ((x, y, side) of the square estimated when the frame
+/// was a circular fisheye's, with black around its disc; None for a square image).
 #[pyfunction]
 #[pyo3(signature = (path, *, sun=None, seed=0, repeats=10))]
 pub(crate) fn turbidity_from_sky<'py>(
@@ -68,5 +69,6 @@ pub(crate) fn turbidity_from_sky<'py>(
     out.set_item("colour_profile", sky.colour_profile.as_deref())?;
     out.set_item("luminance_weights", sky.luminance.to_vec())?;
     out.set_item("linear_light", sky.linear_light)?;
+    out.set_item("image_circle", sky.circle.map(|c| (c.x, c.y, c.side)))?;
     Ok(out)
 }

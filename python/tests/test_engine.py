@@ -580,6 +580,7 @@ def test_turbidity_from_sky_equals_brume_turbidity(tmp_path):
                 "luminance_weights", "linear_light", "colour_profile", "sun_source"]:  # fmt: skip
         assert got[key] == want[key], (key, got[key], want[key])
     assert abs(got["turbidity"] - 5.0) < 0.01 and got["linear_light"]
+    assert got["image_circle"] is None and want["image_circle"] is None
     with pytest.warns(UserWarning, match="display-encoded sky photo"):
         png = brume.turbidity_from_sky(str(tmp_path / "sky.png"), sun=(58.4, -179.4))
     assert abs(png["turbidity"] - 5.0) < 0.05 and not png["linear_light"]

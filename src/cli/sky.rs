@@ -398,6 +398,15 @@ pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
         outln!("{}", report_json(&sky, &args.image));
     } else {
         print_report(&sky.estimate, &args.image);
+        if let Some(c) = sky.circle {
+            let [w, h] = sky.size;
+            outln!(
+                "  the image circle of the {w}x{h} frame: {} px wide at ({}, {})",
+                c.side,
+                c.x,
+                c.y
+            );
+        }
         if let Some(name) = &sky.colour_profile {
             let [r, g, b] = sky.luminance;
             let weights = format!("Y = {r:.4} R + {g:.4} G + {b:.4} B");
@@ -473,6 +482,7 @@ fn report_json(sky: &SkyTurbidity, path: &Path) -> serde_json::Value {
         "colour_profile": sky.colour_profile,
         "luminance_weights": sky.luminance,
         "linear_light": sky.linear_light,
+        "image_circle": sky.circle,
     })
 }
 

@@ -23,6 +23,7 @@ use crate::raster::{Grid, RgbImage, ScalarMap};
 use crate::sky::horizon_sectors::{
     horizon_light_by_azimuth, sun_gains, SectorGeometry, DEFAULT_SECTORS, MAX_SECTORS,
 };
+use crate::sky::image_circle::{find_image_circle, ImageCircle};
 use crate::sky::turbidity::{estimate_turbidity, TurbidityEstimate, TurbidityOptions};
 use std::f64::consts::PI;
 use std::path::{Path, PathBuf};
@@ -587,23 +588,45 @@ pub struct SkyTurbidity {
     pub colour_profile: Option<String>,
     /// Whether it held linear light ([`UprightPhoto::linear_light`]).
     pub linear_light: bool,
+    /// Where its image circle was found, when the frame was not square (a circular
+    /// fisheye's): the square estimated.
+    pub circle: Option<ImageCircle>,
 }
 
 /// The turbidity of the fisheye sky photo at `path` by `opts`, whose `luminance` is
-/// replaced by the photo's primaries' ([`load_sky_photo`]).
+/// replaced by the photo's primaries' ([`load_sky_photo`]). A frame that is not square
+/// is taken as a circular fisheye's and estimated on its image circle
+/// ([`find_image_circle`]).
 pub fn estimate_sky_photo(path: &Path, opts: &TurbidityOptions) -> Result<SkyTurbidity> {
     let photo = load_sky_photo(path)?;
+    let name = path.display().to_string();
     let opts = TurbidityOptions {
         luminance: photo.metadata.luminance_weights(),
         ..opts.clone()
     };
-    let estimate = estimate_turbidity(&photo.image, &path.display().to_string(), &opts)?;
+    let (w, h) = (photo.image.width(), photo.image.height());
+    let circle = (w != h)
+        .then(|| find_image_circle(&photo.image, &name))
+        .transpose()?;
+    let estimate = match circle {
+        Some(c) => {
+            log::info!(
+                "{name}: the image circle, {} px wide at ({}, {}), estimated",
+                c.side,
+                c.x,
+                c.y
+            );
+            estimate_turbidity(&c.crop(&photo.image), &name, &opts)?
+        }
+        None => estimate_turbidity(&photo.image, &name, &opts)?,
+    };
     Ok(SkyTurbidity {
         estimate,
-        size: [photo.image.width(), photo.image.height()],
+        size: [w, h],
         luminance: opts.luminance,
         colour_profile: photo.metadata.profile().map(|p| p.description().to_owned()),
         linear_light: photo.linear_light,
+        circle,
     })
 }
 

@@ -16,6 +16,7 @@
 //! - [`sun_position`]: the sun's zenith and azimuth from time and place (NREL's SPA).
 //! - [`horizon_sectors`]: a photo's horizon light by azimuth sector (sec. 4), or the
 //!   Preetham sky's by the sun's azimuth when the photo shows no sky.
+//! - [`image_circle`]: the sky's disc in a circular fisheye's rectangular frame.
 //!
 //! Angles are in radians throughout the library; the command line takes degrees.
 //!
@@ -28,6 +29,7 @@
 pub mod clouds;
 pub mod fisheye;
 pub mod horizon_sectors;
+pub mod image_circle;
 pub mod preetham;
 pub mod sun_position;
 pub mod turbidity;
