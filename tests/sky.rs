@@ -47,6 +47,21 @@ fn sky_image(t: f64, size: usize) -> brume::raster::RgbImage {
     .unwrap()
 }
 
+/// `brume turbidity NAME --json` in `dir`, the sun given as Table 1's.
+fn turbidity_with_table_1s_sun(dir: &Path, name: &str) -> Output {
+    let (z, a) = (SUN_DEG[0].to_string(), SUN_DEG[1].to_string());
+    let args = [
+        "turbidity",
+        name,
+        "--sun-zenith",
+        &z,
+        "--sun-azimuth",
+        &a,
+        "--json",
+    ];
+    brume(dir, &args)
+}
+
 fn options(repeats: usize) -> TurbidityOptions {
     TurbidityOptions {
         sun: Some(sun()),
@@ -285,18 +300,8 @@ fn a_display_encoded_sky_photo_is_warned_of() {
     });
     write_rgba(&d.join("sky.png"), &rgba).unwrap();
     write_rgba(&d.join("sky.exr"), &rgba).unwrap();
-    let (z, a) = (SUN_DEG[0].to_string(), SUN_DEG[1].to_string());
     for (name, linear) in [("sky.png", false), ("sky.exr", true)] {
-        let args = [
-            "turbidity",
-            name,
-            "--sun-zenith",
-            &z,
-            "--sun-azimuth",
-            &a,
-            "--json",
-        ];
-        let o = brume(d, &args);
+        let o = turbidity_with_table_1s_sun(d, name);
         let e = json(&o);
         assert_eq!(e["linear_light"], linear, "{name}: {e}");
         let err = stderr(&o);
@@ -335,19 +340,7 @@ fn a_circular_fisheyes_frame_is_estimated_on_its_image_circle() {
         [r, g, b, 1.0]
     });
     write_rgba(&d.join("square.exr"), &square).unwrap();
-    let (z, a) = (SUN_DEG[0].to_string(), SUN_DEG[1].to_string());
-    let estimate = |name: &str| {
-        let args = [
-            "turbidity",
-            name,
-            "--sun-zenith",
-            &z,
-            "--sun-azimuth",
-            &a,
-            "--json",
-        ];
-        json(&brume(d, &args))
-    };
+    let estimate = |name: &str| json(&turbidity_with_table_1s_sun(d, name));
     let (framed, alone) = (estimate("frame.exr"), estimate("square.exr"));
     assert_eq!(
         framed["image_circle"],
@@ -365,17 +358,7 @@ fn a_circular_fisheyes_frame_is_estimated_on_its_image_circle() {
         [r, g, b, 1.0]
     });
     write_rgba(&d.join("wide.exr"), &wide).unwrap();
-    let o = brume(
-        d,
-        &[
-            "turbidity",
-            "wide.exr",
-            "--sun-zenith",
-            &z,
-            "--sun-azimuth",
-            &a,
-        ],
-    );
+    let o = turbidity_with_table_1s_sun(d, "wide.exr");
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
     assert!(
