@@ -163,15 +163,20 @@ impl ColourProfile {
     /// The matrix from CIE XYZ to the photo's linear RGB (rows r, g, b), from its
     /// [`ColourProfile::chromaticities`]: its white (XYZ with Y = 1) goes to r = g = b = 1.
     pub fn xyz_to_rgb(&self) -> [[f64; 3]; 3] {
-        let [r, g, b, white] = self.chromaticities;
-        inverse(rgb_to_xyz([r, g, b].map(xy_to_xyz), xy_to_xyz(white)))
+        inverse(self.rgb_to_xyz())
     }
 
     /// The luminance of the photo's linear R, G, B: the Y row of its RGB to XYZ matrix
     /// (summing to 1), e.g. 0.2290, 0.6917, 0.0793 for Display P3.
     pub fn luminance_weights(&self) -> [f64; 3] {
+        self.rgb_to_xyz()[1]
+    }
+
+    /// The matrix from the photo's linear RGB to CIE XYZ, from its chromaticities: r = g
+    /// = b = 1 goes to its white with Y = 1.
+    fn rgb_to_xyz(&self) -> [[f64; 3]; 3] {
         let [r, g, b, white] = self.chromaticities;
-        rgb_to_xyz([r, g, b].map(xy_to_xyz), xy_to_xyz(white))[1]
+        rgb_to_xyz([r, g, b].map(xy_to_xyz), xy_to_xyz(white))
     }
 
     /// Whether the profile's curves are linear (gamma 1: a RAW developer's linear
