@@ -4,7 +4,6 @@
 
 use super::arrays::{user_warning, FsPath};
 use super::py_err;
-use brume::sky::turbidity::SunSource;
 use brume::sky::TurbidityOptions;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -60,11 +59,7 @@ pub(crate) fn turbidity_from_sky<'py>(
     out.set_item("inliers", e.inliers)?;
     out.set_item("sun_zenith_deg", e.sun_zenith.to_degrees())?;
     out.set_item("sun_azimuth_deg", e.sun_azimuth.to_degrees())?;
-    let source = match e.sun_source {
-        SunSource::Given => "given",
-        SunSource::Detected { .. } => "detected",
-    };
-    out.set_item("sun_source", source)?;
+    out.set_item("sun_source", e.sun_source.name())?;
     out.set_item("usable_pixels", e.usable_pixels)?;
     out.set_item("colour_profile", sky.colour_profile.as_deref())?;
     out.set_item("luminance_weights", sky.luminance.to_vec())?;

@@ -452,9 +452,9 @@ fn turbidity_options(args: &TurbidityArgs) -> Result<TurbidityOptions> {
 
 fn report_json(sky: &SkyTurbidity, path: &Path) -> serde_json::Value {
     let e = &sky.estimate;
-    let (source, blob) = match e.sun_source {
-        SunSource::Given => ("given", None),
-        SunSource::Detected { pixels } => ("detected", Some(pixels)),
+    let blob = match e.sun_source {
+        SunSource::Given => None,
+        SunSource::Detected { pixels } => Some(pixels),
     };
     json!({
         "image": path.display().to_string(),
@@ -470,7 +470,7 @@ fn report_json(sky: &SkyTurbidity, path: &Path) -> serde_json::Value {
         "level": e.level,
         "sun_zenith_deg": e.sun_zenith.to_degrees(),
         "sun_azimuth_deg": e.sun_azimuth.to_degrees(),
-        "sun_source": source,
+        "sun_source": e.sun_source.name(),
         "sun_pixels": blob,
         "reference_zenith_deg": e.reference[0].to_degrees(),
         "reference_azimuth_deg": e.reference[1].to_degrees(),

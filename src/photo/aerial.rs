@@ -598,6 +598,8 @@ pub struct SkyTurbidity {
 /// is taken as a circular fisheye's and estimated on its image circle
 /// ([`find_image_circle`]).
 pub fn estimate_sky_photo(path: &Path, opts: &TurbidityOptions) -> Result<SkyTurbidity> {
+    // The options are checked before the photo is read.
+    opts.validate()?;
     let photo = load_sky_photo(path)?;
     let name = path.display().to_string();
     let opts = TurbidityOptions {
@@ -608,7 +610,7 @@ pub fn estimate_sky_photo(path: &Path, opts: &TurbidityOptions) -> Result<SkyTur
     let circle = (w != h)
         .then(|| find_image_circle(&photo.image, &name))
         .transpose()?;
-    let estimate = match circle {
+    let sky = match circle {
         Some(c) => {
             log::info!(
                 "{name}: the image circle, {} px wide at ({}, {}), estimated",
@@ -616,10 +618,11 @@ pub fn estimate_sky_photo(path: &Path, opts: &TurbidityOptions) -> Result<SkyTur
                 c.x,
                 c.y
             );
-            estimate_turbidity(&c.crop(&photo.image), &name, &opts)?
+            std::borrow::Cow::Owned(c.crop(&photo.image))
         }
-        None => estimate_turbidity(&photo.image, &name, &opts)?,
+        None => std::borrow::Cow::Borrowed(&photo.image),
     };
+    let estimate = estimate_turbidity(&sky, &name, &opts)?;
     Ok(SkyTurbidity {
         estimate,
         size: [w, h],

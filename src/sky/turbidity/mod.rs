@@ -240,6 +240,16 @@ pub enum SunSource {
     },
 }
 
+impl SunSource {
+    /// `given` or `detected`, as reports say it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SunSource::Given => "given",
+            SunSource::Detected { .. } => "detected",
+        }
+    }
+}
+
 /// The sun found in an image by [`find_sun`].
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct SunDetection {
