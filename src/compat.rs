@@ -117,7 +117,7 @@ pub fn foggy_cityscapes_at(
     airlight: [f32; 3],
 ) -> crate::raster::RgbaImage {
     let fogged = blend_in_code_values(image, tau, airlight);
-    fogged.map(|p| [p[0], p[1], p[2], 1.0])
+    fogged.opaque()
 }
 
 /// The optical depth of τ = 1.

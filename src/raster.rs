@@ -13,6 +13,13 @@ pub struct Grid<T> {
 pub type RgbImage = Grid<[f32; 3]>;
 /// Linear-light RGBA, one `[r, g, b, a]` per pixel.
 pub type RgbaImage = Grid<[f32; 4]>;
+
+impl RgbImage {
+    /// The image with alpha 1 at every pixel, as brume's RGBA writers and uploads take it.
+    pub fn opaque(&self) -> RgbaImage {
+        self.map(|&[r, g, b]| [r, g, b, 1.0])
+    }
+}
 /// A scalar map (range, depth, disparity, rate). Unknown values are NaN unless a loader
 /// says otherwise.
 pub type ScalarMap = Grid<f32>;

@@ -1024,11 +1024,7 @@ fn prep_upsamples_and_refines_a_smaller_depth_map_like_the_gpu() {
     let image = brume::io::image::load_linear_rgb(&aloe("left.jpg")).unwrap();
     let (w, h) = (image.width() / 4 * 4, image.height() / 4 * 4);
     let image = brume::raster::Grid::from_fn(w, h, |x, y| *image.get(x, y));
-    brume::io::output::write_rgba(
-        &dir.path().join("left.png"),
-        &image.map(|&[r, g, b]| [r, g, b, 1.0]),
-    )
-    .unwrap();
+    brume::io::output::write_rgba(&dir.path().join("left.png"), &image.opaque()).unwrap();
     let full = brume::io::depth::load_range(&aloe("disparity.png"), &Default::default())
         .unwrap()
         .range;

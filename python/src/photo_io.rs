@@ -8,7 +8,6 @@ use super::arrays::{read_image, FsPath, ImageOut, Pixels};
 use super::py_err;
 use brume::io::colour_profile::ColourProfile;
 use brume::io::metadata::PhotoMetadata;
-use brume::raster::{RgbImage, RgbaImage};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -79,11 +78,8 @@ pub(crate) fn save_photo(
         Some(info) => metadata_of(info, &path.0.display().to_string())?,
         None => PhotoMetadata::default(),
     };
-    py.detach(|| {
-        let rgba = with_alpha(&image.linear());
-        brume::io::output::write_photo(&path.0, &rgba, &metadata)
-    })
-    .map_err(py_err)
+    py.detach(|| brume::io::output::write_photo(&path.0, &image.linear().opaque(), &metadata))
+        .map_err(py_err)
 }
 
 /// The colour profile and EXIF block of load_photo's `info`; either may be absent or
@@ -103,9 +99,4 @@ fn metadata_of(info: &Bound<'_, PyDict>, name: &str) -> PyResult<PhotoMetadata> 
         profile: bytes_of("icc_profile")?.and_then(|icc| ColourProfile::from_icc(icc, name)),
         exif: bytes_of("exif")?.map(Arc::new),
     })
-}
-
-/// An RGB image as brume's RGBA, alpha 1.
-fn with_alpha(rgb: &RgbImage) -> RgbaImage {
-    rgb.map(|p| [p[0], p[1], p[2], 1.0])
 }

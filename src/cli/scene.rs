@@ -10,7 +10,7 @@ use brume::io::output::{self, Outputs};
 use brume::medium::{
     DensityTable, DistanceFog, FogNoise, HeightProfile, LayeredFog, Medium, ProfileValues,
 };
-use brume::raster::{Grid, RgbaImage};
+use brume::raster::RgbaImage;
 use brume::scene::SceneRenderer;
 use brume::{Blur, Encoding, Error, FogBlur, GaussBlur, Input, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -444,10 +444,7 @@ fn noise_from_args(d: &super::args::DistanceArgs) -> Result<Option<FogNoise>> {
 
 /// A frame read back from GL (bottom row first) as an RGBA image whose top row is first.
 fn top_first_rgba(rgb: &brume::raster::RgbImage) -> RgbaImage {
-    let mut image: RgbaImage = Grid::from_fn(rgb.width(), rgb.height(), |x, y| {
-        let [r, g, b] = *rgb.get(x, y);
-        [r, g, b, 1.0]
-    });
+    let mut image = rgb.opaque();
     image.flip_rows();
     image
 }

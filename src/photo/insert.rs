@@ -286,7 +286,7 @@ fn read_object_exr(path: &Path, want_depth: bool) -> Result<(RgbaImage, Option<S
                 ),
             ))
         }
-        None => colour.image.map(|&[r, g, b]| [r, g, b, 1.0]),
+        None => colour.image.opaque(),
     };
     let depth = if want_depth {
         parse_exr_channel(&bytes, path, is_depth_channel)?.map(|(_, d)| d)
