@@ -3,8 +3,8 @@
 //!
 //! See the module docs of [`crate::prep`] for the method and its justification.
 
+use super::colour_step::{luminance, relative_step};
 use super::components::flood;
-use super::sky_image::{luminance, relative_step};
 use crate::raster::RgbImage;
 use crate::rng::SplitMix64;
 use crate::{Error, Result};

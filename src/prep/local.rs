@@ -52,38 +52,72 @@ pub(crate) fn remove_local(
     let cell = (span / 2).max(1);
     let medians = cell_medians(&disp, width, height, cell, span);
     let (cw, ch) = (width.div_ceil(cell), height.div_ceil(cell));
+    let around = medians_around(&medians, cw, ch);
     let factor = factor as f32;
     // 0: agrees (or unknown), 1: farther than every median, 2: nearer.
     let mut flag = vec![0u8; width * height];
     flag.par_chunks_mut(width)
         .enumerate()
         .for_each(|(y, flag)| {
-            let cy = y / cell;
+            let around = &around[(y / cell) * cw..];
             for (x, flag) in flag.iter_mut().enumerate() {
                 let d = disp[y * width + x];
-                if !d.is_finite() {
-                    continue;
-                }
-                let cx = x / cell;
-                let (mut any, mut supported, mut farther) = (false, false, true);
-                for ny in cy.saturating_sub(1)..(cy + 2).min(ch) {
-                    for nx in cx.saturating_sub(1)..(cx + 2).min(cw) {
-                        let m = medians[ny * cw + nx];
-                        if !m.is_finite() {
-                            continue;
-                        }
-                        any = true;
-                        let ratio = if d > m { d / m } else { m / d };
-                        supported |= ratio <= factor;
-                        farther &= d < m;
-                    }
-                }
-                if any && !supported {
-                    *flag = if farther { 1 } else { 2 };
+                if d.is_finite() {
+                    *flag = around[x / cell].disagreement(d, factor);
                 }
             }
         });
     remove_small_patches(work, &mut flag, width, height, span)
+}
+
+/// The known medians of the 3 x 3 cells round a cell, in increasing order.
+#[derive(Clone, Copy, Default)]
+struct Around {
+    medians: [f32; 9],
+    len: usize,
+}
+
+impl Around {
+    /// 0 when the disparity `d` is within `factor` (as a ratio, either way) of one of the
+    /// medians, or there is none; else 1 when it is below them all (farther), 2 when not.
+    fn disagreement(&self, d: f32, factor: f32) -> u8 {
+        let m = &self.medians[..self.len];
+        if m.is_empty() {
+            return 0;
+        }
+        // The ratio to a median grows away from `d` on either side (and rounding keeps
+        // that order), so the medians next to `d` decide whether any is near enough.
+        let above = m.partition_point(|&v| v < d);
+        let near_above = m.get(above).is_some_and(|&v| v / d <= factor);
+        let near_below = above > 0 && d / m[above - 1] <= factor;
+        if near_above || near_below {
+            0
+        } else if d < m[0] {
+            1
+        } else {
+            2
+        }
+    }
+}
+
+/// The [`Around`] of every cell of the `cw x ch` grid of `medians`, in raster order.
+fn medians_around(medians: &[f32], cw: usize, ch: usize) -> Vec<Around> {
+    let mut around = vec![Around::default(); cw * ch];
+    around.par_chunks_mut(cw).enumerate().for_each(|(cy, row)| {
+        for (cx, a) in row.iter_mut().enumerate() {
+            for ny in cy.saturating_sub(1)..(cy + 2).min(ch) {
+                for nx in cx.saturating_sub(1)..(cx + 2).min(cw) {
+                    let m = medians[ny * cw + nx];
+                    if m.is_finite() {
+                        a.medians[a.len] = m;
+                        a.len += 1;
+                    }
+                }
+            }
+            a.medians[..a.len].sort_unstable_by(f32::total_cmp);
+        }
+    });
+    around
 }
 
 /// The median disparity of the window of half-size `half` round the centre of every cell
@@ -171,6 +205,44 @@ fn remove_small_patches(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::rng::SplitMix64;
+
+    /// The test as the module docs state it, median by median: `Around` must agree with
+    /// it to the bit, near the factor's edge too.
+    #[test]
+    fn the_nearest_medians_decide_as_every_median_would() {
+        let mut rng = SplitMix64::new(11);
+        let factor = 1.5f32;
+        for case in 0..4000 {
+            let n = rng.below(10);
+            let mut around = Around::default();
+            for _ in 0..n {
+                around.medians[around.len] = 0.01 + rng.unit() as f32;
+                around.len += 1;
+            }
+            let medians = around.medians;
+            around.medians[..n].sort_unstable_by(f32::total_cmp);
+            // Now and then a disparity exactly a factor away from a median, or equal to one.
+            let d = match (case % 4, n) {
+                (0, 1..) => medians[0] * factor,
+                (1, 1..) => medians[n - 1] / factor,
+                (2, 1..) => medians[n / 2],
+                _ => 0.01 + 1.2 * rng.unit() as f32,
+            };
+            let (mut supported, mut farther) = (false, true);
+            for &m in &medians[..n] {
+                let ratio = if d > m { d / m } else { m / d };
+                supported |= ratio <= factor;
+                farther &= d < m;
+            }
+            let want = match (n, supported, farther) {
+                (0, ..) | (_, true, _) => 0,
+                (_, false, true) => 1,
+                (_, false, false) => 2,
+            };
+            assert_eq!(around.disagreement(d, factor), want, "d {d}, {medians:?}");
+        }
+    }
 
     /// A road (range rising toward a horizon), a building 50 m away on the upper half, a
     /// pole 3 px wide and 50 px tall 6 m away in front of it, a far blotch on the road and

@@ -213,6 +213,7 @@
 
 mod airlight;
 mod border;
+mod colour_step;
 mod components;
 pub mod edt;
 mod fill;
@@ -222,6 +223,7 @@ mod margin;
 mod options;
 mod outliers;
 mod range_class;
+mod rank;
 mod reach;
 mod sky;
 mod sky_image;

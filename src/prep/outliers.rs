@@ -14,19 +14,19 @@ const PERCENTILE: f64 = 0.99;
 /// `factor x` the 99th percentile of the finite values of `work` at the pixels where
 /// `include` is true; `None` when `factor` is 0 (the rule is off), when no such value is
 /// finite, or when the percentile is not positive (no meaningful "far" then).
-pub(crate) fn far_cut(work: &[f32], include: impl Fn(usize) -> bool, factor: f64) -> Option<f32> {
+pub(crate) fn far_cut(
+    work: &[f32],
+    include: impl Fn(usize) -> bool + Sync,
+    factor: f64,
+) -> Option<f32> {
     if factor == 0.0 {
         return None;
     }
-    let mut known: Vec<f32> = (0..work.len())
-        .filter(|&i| include(i) && work[i].is_finite())
-        .map(|i| work[i])
-        .collect();
-    if known.is_empty() {
-        return None;
-    }
-    let rank = ((known.len() as f64 * PERCENTILE).ceil() as usize).clamp(1, known.len());
-    let p99 = *known.select_nth_unstable_by(rank - 1, f32::total_cmp).1;
+    let p99 = super::rank::nth_kept(
+        work,
+        |i, v| v.is_finite() && include(i),
+        |n| ((n as f64 * PERCENTILE).ceil() as usize).clamp(1, n) - 1,
+    )?;
     (p99 > 0.0).then(|| (factor * f64::from(p99)).min(f64::from(f32::MAX)) as f32)
 }
 

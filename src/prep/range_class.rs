@@ -1,7 +1,6 @@
 //! What the range says about each pixel, for the image-guided sky detector: unknown,
 //! noise its neighbours do not back up, beyond the far-outlier cut, or confident.
 
-use super::outliers::neighbours8;
 use rayon::prelude::*;
 
 /// Relative tolerance within which two neighbouring ranges agree.
@@ -28,58 +27,95 @@ pub(crate) fn range_classes(
     height: usize,
     far_cut: Option<f32>,
 ) -> Vec<RangeClass> {
-    (0..work.len())
-        .into_par_iter()
-        .map(|p| {
-            let r = work[p];
-            if !r.is_finite() {
-                return RangeClass::Unknown;
+    let mut classes = vec![RangeClass::Unknown; work.len()];
+    // Row by row: each pixel's column and row without a division.
+    classes
+        .par_chunks_mut(width)
+        .enumerate()
+        .for_each(|(y, row)| {
+            let range = Neighbourhood {
+                work,
+                width,
+                height,
+            };
+            for (x, class) in row.iter_mut().enumerate() {
+                *class = range.class(x, y, far_cut);
             }
-            if far_cut.is_some_and(|c| r > c) {
-                return RangeClass::Far;
-            }
-            let (mut known, mut agree) = (0, 0);
-            for q in neighbours8(p, width, height).into_iter().flatten() {
-                let v = work[q];
-                if v.is_finite() {
-                    known += 1;
-                    agree += usize::from((v - r).abs() <= AGREE * r.abs());
-                }
-            }
-            if (agree >= 2 && 2 * agree >= known) || on_a_slope(work, width, height, p) {
-                RangeClass::Confident
-            } else {
-                RangeClass::Unsupported
-            }
-        })
-        .collect()
+        });
+    classes
 }
 
-/// Whether the range at `p` continues a surface that its neighbours on a line through it
-/// span: the mean of two opposite known neighbours within [`AGREE`] of it, on at least two
-/// of the four lines (a row, a column, the diagonals). Ground or water seen at a grazing
-/// angle changes range by more than 5 % from row to row near the horizon, so its vertical
-/// neighbours disagree with it, yet it lies between them; a matcher's noise does not.
-fn on_a_slope(work: &[f32], width: usize, height: usize, p: usize) -> bool {
-    let (x, y) = ((p % width) as isize, (p / width) as isize);
-    let at = |dx: isize, dy: isize| -> Option<f32> {
-        let (nx, ny) = (x + dx, y + dy);
-        if nx < 0 || ny < 0 || nx >= width as isize || ny >= height as isize {
-            return None;
-        }
-        let v = work[ny as usize * width + nx as usize];
-        v.is_finite().then_some(v)
-    };
-    let r = work[p];
-    let lines = [(1, 0), (0, 1), (1, 1), (1, -1)]
-        .into_iter()
-        .filter(|&(dx, dy)| match (at(dx, dy), at(-dx, -dy)) {
-            (Some(a), Some(b)) => ((a + b) / 2.0 - r).abs() <= AGREE * r.abs(),
-            _ => false,
-        })
-        .count();
-    lines >= 2
+/// The range map, read at a pixel's neighbours.
+struct Neighbourhood<'a> {
+    work: &'a [f32],
+    width: usize,
+    height: usize,
 }
+
+impl Neighbourhood<'_> {
+    /// The known value `dx, dy` from `(x, y)`, if in the map.
+    #[inline]
+    fn at(&self, x: usize, y: usize, dx: isize, dy: isize) -> Option<f32> {
+        let nx = x.checked_add_signed(dx).filter(|&nx| nx < self.width)?;
+        let ny = y.checked_add_signed(dy).filter(|&ny| ny < self.height)?;
+        let v = self.work[ny * self.width + nx];
+        v.is_finite().then_some(v)
+    }
+
+    /// The class of the pixel `(x, y)`.
+    fn class(&self, x: usize, y: usize, far_cut: Option<f32>) -> RangeClass {
+        let r = self.work[y * self.width + x];
+        if !r.is_finite() {
+            return RangeClass::Unknown;
+        }
+        if far_cut.is_some_and(|c| r > c) {
+            return RangeClass::Far;
+        }
+        let (mut known, mut agree) = (0, 0);
+        for (dx, dy) in NEIGHBOURS8 {
+            if let Some(v) = self.at(x, y, dx, dy) {
+                known += 1;
+                agree += usize::from((v - r).abs() <= AGREE * r.abs());
+            }
+        }
+        if (agree >= 2 && 2 * agree >= known) || self.on_a_slope(x, y, r) {
+            RangeClass::Confident
+        } else {
+            RangeClass::Unsupported
+        }
+    }
+
+    /// Whether the range `r` at `(x, y)` continues a surface that its neighbours on a line
+    /// through it span: the mean of two opposite known neighbours within [`AGREE`] of it,
+    /// on at least two of the four lines (a row, a column, the diagonals). Ground or water
+    /// seen at a grazing angle changes range by more than 5 % from row to row near the
+    /// horizon, so its vertical neighbours disagree with it, yet it lies between them; a
+    /// matcher's noise does not.
+    fn on_a_slope(&self, x: usize, y: usize, r: f32) -> bool {
+        let lines = [(1, 0), (0, 1), (1, 1), (1, -1)]
+            .into_iter()
+            .filter(
+                |&(dx, dy)| match (self.at(x, y, dx, dy), self.at(x, y, -dx, -dy)) {
+                    (Some(a), Some(b)) => ((a + b) / 2.0 - r).abs() <= AGREE * r.abs(),
+                    _ => false,
+                },
+            )
+            .count();
+        lines >= 2
+    }
+}
+
+/// The 8 neighbours as (dx, dy).
+const NEIGHBOURS8: [(isize, isize); 8] = [
+    (-1, -1),
+    (0, -1),
+    (1, -1),
+    (-1, 0),
+    (1, 0),
+    (-1, 1),
+    (0, 1),
+    (1, 1),
+];
 
 #[cfg(test)]
 mod tests {

@@ -7,6 +7,7 @@
 //! are large enough and do not reach the bottom row, then the gaps in the sky and a stereo
 //! matcher's streaks in it.
 
+use super::colour_step::{luminance, relative_step, texture};
 use super::components::{label_mask, neighbours4};
 use super::range_class::RangeClass;
 use super::ImageSkyRules;
@@ -18,6 +19,25 @@ const REFINE_ROUNDS: usize = 2;
 /// The sky may be this much darker than the seeds' median luminance.
 const SEED_DIMMING: f32 = 0.5;
 
+/// What a pixel's luminance, colour, texture and range say, a bit each, in
+/// [`Evidence::signs`]: the growth asks several of them of each pixel it looks at.
+const BRIGHT: u8 = 1;
+/// Blue or grey: its blue at least [`ImageSkyRules::min_blue_ratio`] of its red and green.
+const BLUE_OR_GREY: u8 = 2;
+/// Its texture at most [`ImageSkyRules::max_texture`].
+const SMOOTH: u8 = 4;
+/// Its range [`RangeClass::Confident`].
+const CONFIDENT: u8 = 8;
+
+/// `bit` if `holds`, else nothing.
+fn sign(holds: bool, bit: u8) -> u8 {
+    if holds {
+        bit
+    } else {
+        0
+    }
+}
+
 /// The per-pixel evidence of the detector.
 struct Evidence<'a> {
     colour: &'a [[f32; 3]],
@@ -26,33 +46,68 @@ struct Evidence<'a> {
     range: &'a [RangeClass],
     /// Luminance floor of the sky.
     floor: f32,
+    /// Each pixel's [`BRIGHT`], [`BLUE_OR_GREY`], [`SMOOTH`] and [`CONFIDENT`] bits for
+    /// this floor.
+    signs: Vec<u8>,
     /// Smallest luminance a relative step is measured against.
     eps: f32,
     rules: &'a ImageSkyRules,
 }
 
 impl Evidence<'_> {
-    /// Bright enough and blue or grey, and its range not confident.
-    fn looks_like_sky(&self, p: usize) -> bool {
-        self.range[p] != RangeClass::Confident && self.looks_like_sky_but_for_range(p)
+    /// Sets every pixel's signs, with `floor` as the sky's luminance floor.
+    fn set_signs(&mut self, floor: f32) {
+        self.floor = floor;
+        let mut signs = vec![0u8; self.lum.len()];
+        signs
+            .par_iter_mut()
+            .with_min_len(1 << 16)
+            .enumerate()
+            .for_each(|(p, s)| *s = self.signs_of(p));
+        self.signs = signs;
     }
 
-    /// Bright enough and blue or grey, whatever its range says.
-    fn looks_like_sky_but_for_range(&self, p: usize) -> bool {
+    /// Raises the sky's luminance floor to `floor`: only [`BRIGHT`] changes.
+    fn raise_floor(&mut self, floor: f32) {
+        self.floor = floor;
+        self.signs
+            .par_iter_mut()
+            .zip(&self.lum)
+            .with_min_len(1 << 16)
+            .for_each(|(s, &l)| *s = (*s & !BRIGHT) | sign(l >= floor, BRIGHT));
+    }
+
+    /// The signs of pixel `p` for the current floor.
+    fn signs_of(&self, p: usize) -> u8 {
         let c = self.colour[p];
-        self.lum[p] >= self.floor
-            && f64::from(c[2]) >= self.rules.min_blue_ratio * f64::from(c[0].max(c[1]))
+        let blue = f64::from(c[2]) >= self.rules.min_blue_ratio * f64::from(c[0].max(c[1]));
+        let smooth = f64::from(self.texture[p]) <= self.rules.max_texture;
+        sign(self.lum[p] >= self.floor, BRIGHT)
+            | sign(blue, BLUE_OR_GREY)
+            | sign(smooth, SMOOTH)
+            | sign(self.range[p] == RangeClass::Confident, CONFIDENT)
+    }
+
+    /// Whether `p` has every sign of `all` and none of `none`.
+    #[inline]
+    fn has(&self, p: usize, all: u8, none: u8) -> bool {
+        self.signs[p] & (all | none) == all
+    }
+
+    /// Bright enough and blue or grey, and its range not confident.
+    fn looks_like_sky(&self, p: usize) -> bool {
+        self.has(p, BRIGHT | BLUE_OR_GREY, CONFIDENT)
     }
 
     /// Bright enough and smooth, whatever its hue: the orange of a sunset's sky near the
     /// horizon, under the blue.
     fn glows(&self, p: usize) -> bool {
-        self.lum[p] >= self.floor && f64::from(self.texture[p]) <= self.rules.max_texture
+        self.has(p, BRIGHT | SMOOTH, 0)
     }
 
     /// Looks like sky, is smooth, and its range does not say otherwise.
     fn admissible(&self, p: usize) -> bool {
-        self.looks_like_sky(p) && f64::from(self.texture[p]) <= self.rules.max_texture
+        self.has(p, BRIGHT | BLUE_OR_GREY | SMOOTH, CONFIDENT)
     }
 
     /// The colours of `p` and `q` differ by at most `max_step`, relative.
@@ -61,73 +116,10 @@ impl Evidence<'_> {
     }
 }
 
-/// Largest channel difference of `p` and `q` over the brighter one's luminance (at least
-/// `eps`); NaN for non-finite colours, so that every test on it fails.
-pub(crate) fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize, eps: f32) -> f32 {
-    let (a, b) = (colour[p], colour[q]);
-    let d = (0..3).map(|c| (a[c] - b[c]).abs()).fold(0.0f32, f32::max);
-    let d = if a.iter().chain(&b).all(|v| v.is_finite()) {
-        d
-    } else {
-        f32::NAN
-    };
-    d / lum[p].max(lum[q]).max(eps)
-}
-
-/// Rec. 709 luminance of every pixel, clamped at 0 (NaN stays NaN).
-pub(crate) fn luminance(colour: &[[f32; 3]]) -> Vec<f32> {
-    let w = super::airlight::REC709_LUMA;
-    colour
-        .par_iter()
-        .map(|c| (w[0] * c[0] + w[1] * c[1] + w[2] * c[2]).max(0.0))
-        .collect()
-}
-
-/// The 3 x 3 mean (clipped at the borders) of each pixel's largest relative step to a
-/// 4-neighbour.
-fn texture(colour: &[[f32; 3]], lum: &[f32], width: usize, height: usize, eps: f32) -> Vec<f32> {
-    let step: Vec<f32> = (0..colour.len())
-        .into_par_iter()
-        .map(|p| {
-            neighbours4(p, p % width, p / width, width, height)
-                .into_iter()
-                .flatten()
-                .map(|q| relative_step(colour, lum, p, q, eps))
-                .fold(0.0f32, |m, s| if s.is_nan() { s } else { m.max(s) })
-        })
-        .collect();
-    box3(&step, width, height)
-}
-
-/// Mean over the 3 x 3 window clipped to the image, by two 1D passes.
-fn box3(v: &[f32], width: usize, height: usize) -> Vec<f32> {
-    let mut rows = vec![0.0f32; v.len()];
-    rows.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        for (x, out) in row.iter_mut().enumerate() {
-            let (x0, x1) = (x.saturating_sub(1), (x + 1).min(width - 1));
-            let s: f32 = (x0..=x1).map(|i| v[y * width + i]).sum();
-            *out = s / (x1 - x0 + 1) as f32;
-        }
-    });
-    let mut out = vec![0.0f32; v.len()];
-    out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        let (y0, y1) = (y.saturating_sub(1), (y + 1).min(height - 1));
-        for (x, out) in row.iter_mut().enumerate() {
-            let s: f32 = (y0..=y1).map(|j| rows[j * width + x]).sum();
-            *out = s / (y1 - y0 + 1) as f32;
-        }
-    });
-    out
-}
-
-/// Median of the finite values (upper median); `None` without any.
-fn median(values: impl Iterator<Item = f32>) -> Option<f32> {
-    let mut v: Vec<f32> = values.filter(|x| x.is_finite()).collect();
-    if v.is_empty() {
-        return None;
-    }
-    let mid = v.len() / 2;
-    Some(*v.select_nth_unstable_by(mid, f32::total_cmp).1)
+/// Upper median of the finite values of `values` at the pixels where `include` is true;
+/// `None` without any.
+fn median(values: &[f32], include: impl Fn(usize) -> bool + Sync) -> Option<f32> {
+    super::rank::nth_kept(values, |i, v| v.is_finite() && include(i), |n| n / 2)
 }
 
 /// What the image-guided detector found.
@@ -166,9 +158,8 @@ pub(crate) fn image_sky(
     // The floor is set by the scene (the pixels of confident range), not by the whole
     // image: in a frame mostly of sky the image's median is the sky's own, and the darker
     // half of it (the zenith) would fall below.
-    let scene = (0..lum.len()).filter(|&p| range[p] == RangeClass::Confident);
-    let Some(lum_median) = median(scene.map(|p| lum[p])).or_else(|| median(lum.iter().copied()))
-    else {
+    let scene = |p: usize| range[p] == RangeClass::Confident;
+    let Some(lum_median) = median(&lum, scene).or_else(|| median(&lum, |_| true)) else {
         return depth_only();
     };
     let eps = (0.01 * lum_median).max(1e-6);
@@ -177,15 +168,18 @@ pub(crate) fn image_sky(
         texture: texture(colour, &lum, width, height, eps),
         lum,
         range,
-        floor: (rules.min_brightness * f64::from(lum_median)) as f32,
+        floor: 0.0,
+        signs: Vec::new(),
         eps,
         rules,
     };
+    ev.set_signs((rules.min_brightness * f64::from(lum_median)) as f32);
     let seeds = seeds(&ev, depth_sky, width, height);
-    let Some(seed_lum) = median(seeds.iter().map(|&p| ev.lum[p])) else {
+    let seed_lums: Vec<f32> = seeds.iter().map(|&p| ev.lum[p]).collect();
+    let Some(seed_lum) = median(&seed_lums, |_| true) else {
         return depth_only();
     };
-    ev.floor = ev.floor.max(SEED_DIMMING * seed_lum);
+    ev.raise_floor(ev.floor.max(SEED_DIMMING * seed_lum));
     let mut sky = grow_regions(&ev, &seeds, width, height, min_area_fraction);
     // A sensor that does not reach the far scene (a phone's time-of-flight camera stops at
     // 8 m) leaves it unknown and joined to the sky, and the depth rules take it all for
@@ -200,10 +194,9 @@ pub(crate) fn image_sky(
     grow_past_reclaimed(&ev, &mut sky, &reclaimed, width, height);
     let beyond_reach = super::reach::beyond_reach(ev.rules, &mut sky, depth_sky, width, height);
     let noise = if sky.iter().any(|&s| s) {
-        (0..sky.len())
-            .into_par_iter()
-            .filter(|&p| !sky[p] && range[p] == RangeClass::Unsupported && ev.looks_like_sky(p))
-            .collect()
+        indices_where(sky.len(), |p| {
+            !sky[p] && range[p] == RangeClass::Unsupported && ev.looks_like_sky(p)
+        })
     } else {
         Vec::new()
     };
@@ -217,12 +210,25 @@ pub(crate) fn image_sky(
 /// Admissible pixels of the top rows, and the depth rules' sky where it looks like sky.
 fn seeds(ev: &Evidence, depth_sky: &[bool], width: usize, height: usize) -> Vec<usize> {
     let rows = ((ev.rules.seed_rows * height as f64).ceil() as usize).clamp(1, height);
-    (0..width * height)
+    indices_where(width * height, |p| {
+        (p < rows * width && ev.admissible(p)) || (depth_sky[p] && ev.looks_like_sky(p))
+    })
+}
+
+/// The pixels below `len` for which `test` holds, in order.
+fn indices_where(len: usize, test: impl Fn(usize) -> bool + Sync) -> Vec<usize> {
+    // A task a piece of the frame: rayon's own split of a 2-megapixel filter collects
+    // many small pieces, and costs more than the tests.
+    const TASK: usize = 1 << 16;
+    let pieces: Vec<Vec<usize>> = (0..len.div_ceil(TASK))
         .into_par_iter()
-        .filter(|&p| {
-            (p < rows * width && ev.admissible(p)) || (depth_sky[p] && ev.looks_like_sky(p))
+        .map(|t| {
+            (t * TASK..len.min((t + 1) * TASK))
+                .filter(|&p| test(p))
+                .collect()
         })
-        .collect()
+        .collect();
+    pieces.concat()
 }
 
 /// Grows one region from every seed not yet reached (see the module docs) and returns the
@@ -254,30 +260,26 @@ fn grow_regions(
     sky
 }
 
-/// The 4 directions as (dx, dy).
-const DIRS: [(isize, isize); 4] = [(-1, 0), (1, 0), (0, -1), (0, 1)];
-
-/// The pixel `k` steps from `p` in direction `d`, if in the image.
-#[inline]
-fn offset(p: usize, d: (isize, isize), k: usize, width: usize, height: usize) -> Option<usize> {
-    let x = (p % width) as isize + d.0 * k as isize;
-    let y = (p / width) as isize + d.1 * k as isize;
-    (x >= 0 && y >= 0 && (x as usize) < width && (y as usize) < height)
-        .then(|| y as usize * width + x as usize)
-}
-
 /// Breadth-first growth of `region` (its seeds already in it and `reached`), with jumps
 /// over thin occluders.
 fn grow(ev: &Evidence, reached: &mut [bool], region: &mut Vec<usize>, width: usize, height: usize) {
+    let jump = ev.rules.bridge_px + 1;
     let mut head = 0;
     while head < region.len() {
         let p = region[head];
         head += 1;
-        for d in DIRS {
-            for k in 1..=ev.rules.bridge_px + 1 {
-                let Some(q) = offset(p, d, k, width, height) else {
-                    break;
-                };
+        let (x, y) = (p % width, p / width);
+        // Left, right, up, down: how far the image goes, and the index's step.
+        let ways = [
+            (x, 1usize.wrapping_neg()),
+            (width - 1 - x, 1),
+            (y, width.wrapping_neg()),
+            (height - 1 - y, width),
+        ];
+        for (room, stride) in ways {
+            let mut q = p;
+            for _ in 0..jump.min(room) {
+                q = q.wrapping_add(stride);
                 if reached[q] {
                     break;
                 }
@@ -340,15 +342,13 @@ fn fill_gaps(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) {
             continue;
         }
         let pixels = comps.pixels_of(c);
-        let confident = pixels
-            .iter()
-            .any(|&p| ev.range[p as usize] == RangeClass::Confident);
+        let confident = pixels.iter().any(|&p| ev.has(p as usize, CONFIDENT, 0));
         if confident {
             continue;
         }
         let bright = pixels
             .iter()
-            .filter(|&&p| ev.lum[p as usize] >= ev.floor)
+            .filter(|&&p| ev.has(p as usize, BRIGHT, 0))
             .count();
         if c.len as f64 <= max_gap || 2 * bright >= c.len {
             pixels.iter().for_each(|&p| sky[p as usize] = true);
@@ -370,15 +370,13 @@ fn fill_gaps(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) {
 fn reclaim_vetoed(ev: &Evidence, sky: &mut [bool], width: usize, height: usize) -> Vec<usize> {
     let vetoed: Vec<bool> = (0..width * height)
         .into_par_iter()
-        .map(|p| {
-            !sky[p] && ev.range[p] == RangeClass::Confident && ev.looks_like_sky_but_for_range(p)
-        })
+        .map(|p| !sky[p] && ev.has(p, BRIGHT | BLUE_OR_GREY | CONFIDENT, 0))
         .collect();
     let mut reclaimed = Vec::new();
     if !vetoed.contains(&true) {
         return reclaimed;
     }
-    let smooth = |p: usize| f64::from(ev.texture[p]) <= ev.rules.max_texture;
+    let smooth = |p: usize| ev.has(p, SMOOTH, 0);
     let small_step = |p: usize, q: usize| {
         let step = relative_step(ev.colour, &ev.lum, p, q, ev.eps);
         f64::from(step) <= ev.rules.max_step / 2.0
@@ -452,9 +450,10 @@ fn join_depth_sky(
     height: usize,
 ) {
     let mut reached: Vec<bool> = (0..sky.len())
+        .into_par_iter()
         .map(|p| sky[p] || (depth_sky[p] && ev.admissible(p)))
         .collect();
-    let mut region: Vec<usize> = (0..sky.len()).filter(|&p| reached[p]).collect();
+    let mut region = indices_where(sky.len(), |p| reached[p]);
     spread(
         &mut reached,
         &mut region,
@@ -471,7 +470,7 @@ fn join_depth_sky(
         width,
         height,
         REFINE_ROUNDS,
-        |p, q| depth_sky[q] && ev.step_ok(p, q) && ev.lum[q] >= ev.floor,
+        |p, q| depth_sky[q] && ev.step_ok(p, q) && ev.has(q, BRIGHT, 0),
     );
     keep_open_to_the_sky(ev, sky, &reached, width, height);
 }
@@ -491,16 +490,17 @@ fn keep_open_to_the_sky(
     width: usize,
     height: usize,
 ) {
-    for x in 0..width {
-        let mut open = true;
-        for y in 0..height {
+    // Row by row (each column's state apart), as the pixels lie in memory.
+    let mut open = vec![true; width];
+    for y in 0..height {
+        for (x, open) in open.iter_mut().enumerate() {
             let p = y * width + x;
             if sky[p] {
-                open = true;
-            } else if joined[p] && open && (y == 0 || ev.step_ok(p - width, p)) {
+                *open = true;
+            } else if joined[p] && *open && (y == 0 || ev.step_ok(p - width, p)) {
                 sky[p] = true;
             } else {
-                open = false;
+                *open = false;
             }
         }
     }
@@ -558,14 +558,6 @@ mod tests {
         for (p, &s) in found.sky.iter().enumerate() {
             assert_eq!(s, p / w < 40, "pixel ({}, {})", p % w, p / w);
         }
-    }
-
-    #[test]
-    fn box3_is_a_clipped_mean() {
-        let v: Vec<f32> = (0..6).map(|i| i as f32).collect();
-        let b = box3(&v, 3, 2);
-        assert_eq!(b[0], (0.0 + 1.0 + 3.0 + 4.0) / 4.0);
-        assert_eq!(b[1], (0.0 + 1.0 + 2.0 + 3.0 + 4.0 + 5.0) / 6.0);
     }
 
     /// A smooth blue sky over rows 0..20, lighter toward the horizon.
