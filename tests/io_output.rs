@@ -126,6 +126,33 @@ fn scalar_exr_has_one_y_channel() {
     assert_eq!(d, map);
 }
 
+/// A map of many tiles, written several times (its tiles compressed in parallel): the
+/// same bytes each time, the tiles in increasing order as the header says.
+#[test]
+fn an_exr_is_the_same_bytes_each_time() {
+    use exr::meta::attribute::LineOrder;
+    let dir = tempfile::tempdir().unwrap();
+    // 64 x 64 tiles: 48 of them; values that do not compress alike.
+    let map = Grid::from_fn(512, 384, |x, y| {
+        ((x * 7919 + y * 104_729) % 1000) as f32 * 0.37
+    });
+    let bytes: Vec<Vec<u8>> = (0..4)
+        .map(|i| {
+            let path = dir.path().join(format!("r{i}.exr"));
+            write_scalar(&path, &map).unwrap();
+            std::fs::read(&path).unwrap()
+        })
+        .collect();
+    assert!(bytes.iter().all(|b| b == &bytes[0]), "the files differ");
+    let meta =
+        exr::meta::MetaData::read_from_buffered(std::io::Cursor::new(&bytes[0]), false).unwrap();
+    assert_eq!(meta.headers[0].line_order, LineOrder::Increasing);
+    assert_eq!(
+        brume::io::depth::read_exr_scalar(&dir.path().join("r0.exr")).unwrap(),
+        map
+    );
+}
+
 #[test]
 fn unknown_extension_is_an_error_and_creates_nothing() {
     let dir = tempfile::tempdir().unwrap();

@@ -689,10 +689,16 @@ fn write_exr<const N: usize>(
         .into_iter()
         .map(|(name, data)| AnyChannel::new(name, FlatSamples::F32(data)))
         .collect();
+    // Tiles in increasing order, not as the parallel compression finishes them: the same
+    // pixels give the same bytes (a dataset's checksums, a resumed batch's outputs).
+    let encoding = Encoding {
+        line_order: exr::meta::attribute::LineOrder::Increasing,
+        ..Encoding::FAST_LOSSLESS
+    };
     let layer = Layer::new(
         (width, height),
         LayerAttributes::default(),
-        Encoding::FAST_LOSSLESS,
+        encoding,
         AnyChannels::sort(list),
     );
     let mut image = Image::from_layer(layer);
