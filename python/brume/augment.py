@@ -43,7 +43,8 @@ class RandomFog:
     ``renderer`` (a :class:`brume.Renderer`) lets several transforms or workers share or
     own a context; by default the module's.
 
-    ``depth`` is the range in metres (HxW, the image's size or smaller by one factor).
+    ``depth`` is the range in metres (HxW, HxWx1 or 1xHxW, the image's size or smaller by
+    one factor).
     Fog whole frames and crop after: the airlight and the range of the sky come from the
     image the fog gets.
     Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and

@@ -6,8 +6,8 @@ use brume::io::image::{linear_to_srgb, linear_to_srgb8_rgb, srgb8_rgb_to_linear,
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{
-    IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyUntypedArray,
-    PyUntypedArrayMethods,
+    IntoPyArray, PyArrayDescrMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
+    PyUntypedArray, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::{PyTypeError, PyUserWarning};
 use pyo3::prelude::*;
@@ -82,6 +82,8 @@ pub(crate) enum Pixels {
     Linear32,
     /// float64 linear RGB.
     Linear64,
+    /// float16 linear RGB (a half-precision pipeline's tensors).
+    Linear16,
 }
 
 /// An image copied out of numpy (with the GIL), converted to linear light later (without).
@@ -109,8 +111,8 @@ fn dtype_name(array: &Bound<'_, PyUntypedArray>) -> String {
 pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
     let untyped = image.cast::<PyUntypedArray>().map_err(|_| {
         value_error(format!(
-            "image: expected a numpy array HxWx3 (uint8 or uint16 sRGB, or float32 or float64 \
-             linear RGB), got {}",
+            "image: expected a numpy array HxWx3 (uint8 or uint16 sRGB, or float32, float64 or \
+             float16 linear RGB), got {}",
             image
                 .get_type()
                 .name()
@@ -156,10 +158,17 @@ pub(crate) fn read_image(image: &Bound<'_, PyAny>) -> PyResult<ImageIn> {
             Pixels::Linear64,
             a.as_array().iter().map(|&v| v as f32).collect(),
         )
+    } else if dtype.is_equiv_to(&numpy::dtype::<half::f16>(py)) {
+        // Exact: every float16 is a float32.
+        let a: PyReadonlyArray3<half::f16> = image.extract()?;
+        (
+            Pixels::Linear16,
+            a.as_array().iter().map(|v| v.to_f32()).collect(),
+        )
     } else {
         return Err(value_error(format!(
-            "image: expected dtype uint8 or uint16 (sRGB code values), or float32 or float64 \
-             (linear RGB in [0, 1]), got {}",
+            "image: expected dtype uint8 or uint16 (sRGB code values), or float32, float64 \
+             or float16 (linear RGB in [0, 1]), got {}",
             dtype_name(untyped)
         )));
     };
@@ -255,22 +264,28 @@ pub(crate) fn read_scalar_map(
         ))
     })?;
     let shape = untyped.shape().to_vec();
-    if shape.len() != 2 || shape[0] == 0 || shape[1] == 0 {
+    let Some((height, width)) = map_size(&shape) else {
+        let hint = match shape.as_slice() {
+            [1, _, 1] => " (which axis is the height? pass the HxW array itself)",
+            _ => "",
+        };
         return Err(value_error(format!(
-            "{what}: expected shape HxW ({shape_is}), got {shape:?}"
+            "{what}: expected shape HxW ({shape_is}; HxWx1 and 1xHxW are taken too), got \
+             {shape:?}{hint}"
         )));
-    }
+    };
     let py = array.py();
     let dtype = untyped.dtype();
+    // Row by row whatever the axes: the singleton axis adds no values.
     let data: Vec<f32> = if dtype.is_equiv_to(&numpy::dtype::<f32>(py)) {
-        let a: PyReadonlyArray2<f32> = array.extract()?;
+        let a: PyReadonlyArrayDyn<f32> = array.extract()?;
         a.as_array().iter().copied().collect()
     } else if dtype.is_equiv_to(&numpy::dtype::<f64>(py)) {
-        let a: PyReadonlyArray2<f64> = array.extract()?;
+        let a: PyReadonlyArrayDyn<f64> = array.extract()?;
         a.as_array().iter().map(|&v| v as f32).collect()
     } else if dtype.is_equiv_to(&numpy::dtype::<half::f16>(py)) {
         // Exact: every float16 is a float32.
-        let a: PyReadonlyArray2<half::f16> = array.extract()?;
+        let a: PyReadonlyArrayDyn<half::f16> = array.extract()?;
         a.as_array().iter().map(|v| v.to_f32()).collect()
     } else {
         return Err(value_error(format!(
@@ -278,7 +293,22 @@ pub(crate) fn read_scalar_map(
             dtype_name(untyped)
         )));
     };
-    Ok(Grid::from_vec(shape[1], shape[0], data))
+    Ok(Grid::from_vec(width, height, data))
+}
+
+/// The (height, width) of a map's array shape: HxW, or with a channel axis of one, last
+/// (HxWx1: numpy's and albumentations' masks) or first (1xHxW: a torch depth tensor's
+/// `.numpy()`); `None` for any other shape, an empty one, or 1xNx1 (either could be the
+/// height).
+fn map_size(shape: &[usize]) -> Option<(usize, usize)> {
+    let (h, w) = match *shape {
+        [h, w] => (h, w),
+        [1, _, 1] => return None,
+        [h, w, 1] => (h, w),
+        [1, h, w] => (h, w),
+        _ => return None,
+    };
+    (h > 0 && w > 0).then_some((h, w))
 }
 
 /// A mask argument (`sky_mask`, `ego_mask`): an HxW numpy array of bool or integers
@@ -351,6 +381,7 @@ pub(crate) enum ImageOut {
     Srgb16(Array3<u16>),
     Linear32(Array3<f32>),
     Linear64(Array3<f64>),
+    Linear16(Array3<half::f16>),
 }
 
 impl ImageOut {
@@ -380,6 +411,11 @@ impl ImageOut {
             Pixels::Linear64 => ImageOut::Linear64(
                 Array3::from_shape_vec(shape, rgb.map(f64::from).collect()).expect("shape"),
             ),
+            // To the nearest float16 (ties to even); above 65504 it is infinite.
+            Pixels::Linear16 => ImageOut::Linear16(
+                Array3::from_shape_vec(shape, rgb.map(half::f16::from_f32).collect())
+                    .expect("shape"),
+            ),
         }
     }
 
@@ -389,6 +425,7 @@ impl ImageOut {
             ImageOut::Srgb16(a) => a.into_pyarray(py).into_any().unbind(),
             ImageOut::Linear32(a) => a.into_pyarray(py).into_any().unbind(),
             ImageOut::Linear64(a) => a.into_pyarray(py).into_any().unbind(),
+            ImageOut::Linear16(a) => a.into_pyarray(py).into_any().unbind(),
         }
     }
 }

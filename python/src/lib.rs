@@ -476,10 +476,10 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// compat=None, return_info=False) -> ndarray, or (ndarray, dict), or a list of those
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
-/// diffusion blur). image: HxWx3 uint8 or uint16 (sRGB code values) or float32 or
-/// float64 (linear RGB); the result has the same dtype and encoding. range_m: HxW metres
-/// from the camera centre (NaN or <= 0 unknown), the image's size or smaller by one
-/// factor. Exactly one of beta (extinction, 1/m), visibility (m) — either may be a
+/// diffusion blur). image: HxWx3 uint8 or uint16 (sRGB code values) or float32, float64
+/// or float16 (linear RGB); the result has the same dtype and encoding. range_m: HxW
+/// (or HxWx1, 1xHxW) metres from the camera centre (NaN or <= 0 unknown), the image's
+/// size or smaller by one factor. Exactly one of beta (extinction, 1/m), visibility (m) — either may be a
 /// sequence: one output each, in a list, from one pre-processing and refinement of the
 /// frame, each equal to the call with that value alone — or ka and/or ks: paper 000's
 /// absorption and scattering per unit of range normalised by its largest value (`brume render`'s

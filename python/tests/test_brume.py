@@ -68,12 +68,30 @@ def test_shapes_and_dtypes(image_u8, range_m):
     out64 = brume.fog(linear.astype(np.float64), range_m.astype(np.float64), beta=0.02)
     assert out64.dtype == np.float64
     np.testing.assert_allclose(out64, out32, atol=1e-6)
+    # float16, a half-precision pipeline's: read exactly as float32 of its values, and
+    # the result rounded to float16 as numpy rounds (to nearest, ties to even).
+    linear16 = linear.astype(np.float16)
+    out16 = brume.fog(linear16, range_m, beta=0.02)
+    assert out16.shape == image_u8.shape and out16.dtype == np.float16
+    np.testing.assert_array_equal(
+        out16, brume.fog(linear16.astype(np.float32), range_m, beta=0.02).astype(np.float16)
+    )
     # A non-contiguous view is read as the array it shows.
     flipped = np.ascontiguousarray(image_u8[:, ::-1])
     np.testing.assert_array_equal(
         brume.fog(image_u8[:, ::-1], range_m, beta=0.02, blur=False, airlight=(0.8, 0.8, 0.8)),
         brume.fog(flipped, range_m, beta=0.02, blur=False, airlight=(0.8, 0.8, 0.8)),
     )
+
+
+def test_a_range_with_a_channel_axis_of_one(image_u8, range_m):
+    # HxWx1 (numpy's, albumentations' masks) and 1xHxW (a torch depth tensor's .numpy()):
+    # the same range as HxW, here and as RandomFog's depth.
+    want = brume.fog(image_u8, range_m, beta=0.02, refine="none")
+    for shaped in (range_m[..., None], range_m[None]):
+        np.testing.assert_array_equal(brume.fog(image_u8, shaped, beta=0.02, refine="none"), want)
+    t = brume.augment.RandomFog(beta_range=(0.02, 0.02), refine="none", seed=1)
+    np.testing.assert_array_equal(t(image=image_u8, depth=range_m[..., None])["image"], want)
 
 
 def test_smaller_range_is_upsampled(image_u8, range_m):
@@ -352,12 +370,14 @@ def test_bad_arrays(image_u8, range_m):
         brume.fog(np.dstack([image_u8, image_u8[..., :1]]), range_m, beta=0.01)
     with pytest.raises(ValueError, match="grey"):
         brume.fog(image_u8[..., 0], range_m, beta=0.01)
-    with pytest.raises(ValueError, match="dtype uint8.*float32 or float64"):
+    with pytest.raises(ValueError, match="dtype uint8.*float32, float64 or float16"):
         brume.fog(image_u8.astype(np.int16), range_m, beta=0.01)
     with pytest.raises(ValueError, match="numpy array"):
         brume.fog([[1, 2, 3]], range_m, beta=0.01)
     with pytest.raises(ValueError, match="shape HxW"):
-        brume.fog(image_u8, range_m[..., None], beta=0.01)
+        brume.fog(image_u8, np.dstack([range_m, range_m]), beta=0.01)
+    with pytest.raises(ValueError, match="which axis is the height"):
+        brume.fog(image_u8[:1], range_m[:1].reshape(1, -1, 1), beta=0.01)
     with pytest.raises(ValueError, match="dtype float32"):
         brume.fog(image_u8, range_m.astype(np.int32), beta=0.01)
     # Named by the arguments: range_m and the image.

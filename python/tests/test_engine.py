@@ -553,7 +553,11 @@ def test_aerial_errors(photo):
         with pytest.raises(ValueError, match=message):
             brume.aerial(image, range_m, **kwargs)
     with pytest.raises(ValueError, match="range_m: expected shape"):
-        brume.aerial(image, range_m[..., None], **ok)
+        brume.aerial(image, np.dstack([range_m, range_m]), **ok)
+    # A channel axis of one is the map itself.
+    np.testing.assert_array_equal(
+        brume.aerial(image, range_m[..., None], **ok), brume.aerial(image, range_m, **ok)
+    )
     with pytest.raises(ValueError, match="^range_m: no valid depth value"):
         brume.aerial(image, np.full(range_m.shape, np.nan, np.float32), **ok)
 
