@@ -224,36 +224,43 @@ fn a_bad_frame_is_reported_and_skipped_and_the_run_fails() {
     assert_eq!(log.matches("\"status\":\"failed\"").count(), 2, "{log}");
 }
 
-/// Three loader threads write the bytes one writes, and log the outputs in the frames'
-/// order whatever the order the loaders finish in: each loader takes every third frame,
-/// the GPU takes them in turn. A bad frame among them fails alone.
+/// Three loader threads, or three writer threads, write the bytes one writes, and log the
+/// outputs in the frames' order whatever the order the loaders or the writers finish in:
+/// each loader takes every third frame, the GPU takes them in turn, and the writers' log
+/// waits for the outputs before. A bad frame among them fails alone.
 #[test]
-fn several_loaders_write_what_one_writes_in_the_same_order() {
+fn several_loaders_or_writers_write_what_one_writes_in_the_same_order() {
     let dir = tempfile::tempdir().unwrap();
     let root = cityscapes_dataset(dir.path(), 5);
     let bad = "disparity/train/bremen/bremen_000003_000019_disparity.png";
     std::fs::write(root.join(bad), b"not a png").unwrap();
-    let run = |loaders: &str| {
-        let out = format!("out-{loaders}");
-        let args = ["batch", "cityscapes", "--out", &out, "--beta", "0.01"];
-        let run = brume(dir.path(), &[&args[..], &["--loaders", loaders]].concat());
+    let run = |threads: [&str; 2]| {
+        let out = format!("out{}", threads.concat());
+        let args = ["batch", "cityscapes", "--out", &out, "--beta", "0.01,0.02"];
+        let extra = ["--transmittance", threads[0], threads[1]];
+        let run = brume(dir.path(), &[&args[..], &extra[..]].concat());
         assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
         let log = std::fs::read_to_string(dir.path().join(&out).join("brume-batch-1-of-1.jsonl"))
             .unwrap();
-        let order: Vec<(String, String)> = log
+        let order: Vec<(String, String, String)> = log
             .lines()
             .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
-            .map(|r| (r["image"].to_string(), r["status"].to_string()))
+            .map(|r| {
+                let field = |k: &str| r[k].to_string();
+                (field("image"), field("beta"), field("status"))
+            })
             .collect();
         (outputs(&dir.path().join(&out)), order)
     };
-    let (one, one_order) = run("1");
-    let (three, three_order) = run("3");
-    assert_eq!(one.len(), 4);
-    assert!(one == three, "the outputs differ");
-    assert_eq!(one_order, three_order);
-    let failed = one_order.iter().filter(|(_, s)| s == "\"failed\"").count();
-    assert_eq!((one_order.len(), failed), (5, 1), "{one_order:?}");
+    let (one, one_order) = run(["--loaders", "1"]);
+    assert_eq!(one.len(), 16, "4 frames, 2 β, each with its τ map");
+    let failed = one_order.iter().filter(|(.., s)| s == "\"failed\"").count();
+    assert_eq!((one_order.len(), failed), (9, 1), "{one_order:?}");
+    for threads in [["--loaders", "3"], ["--writers", "3"]] {
+        let (other, other_order) = run(threads);
+        assert!(one == other, "{threads:?}: the outputs differ");
+        assert_eq!(one_order, other_order, "{threads:?}");
+    }
 }
 
 #[test]
@@ -294,6 +301,14 @@ fn bad_batch_options_are_refused_before_any_work() {
         (
             &["batch", "cityscapes", "--out", "o", "--loaders", "17"][..],
             "--loaders",
+        ),
+        (
+            &["batch", "cityscapes", "--out", "o", "--writers", "0"][..],
+            "--writers",
+        ),
+        (
+            &["batch", "cityscapes", "--out", "o", "--writers", "17"][..],
+            "--writers",
         ),
     ] {
         let run = brume(dir.path(), args);
@@ -937,14 +952,22 @@ fn the_library_batch_writes_logs_and_reports_each_output() {
         Betas::Drawn("uniform:0.001,20".parse().unwrap()),
         "beta_dist",
     );
-    for loaders in [0, brume::dataset::MAX_LOADERS + 1] {
-        let opts = BatchOptions {
-            loaders,
-            ..opts.clone()
-        };
+    let with_loaders = |loaders| BatchOptions {
+        loaders,
+        ..opts.clone()
+    };
+    let with_writers = |writers| BatchOptions {
+        writers,
+        ..opts.clone()
+    };
+    let threads = [0, brume::dataset::MAX_LOADERS + 1]
+        .map(|n| ("loaders", n, with_loaders(n)))
+        .into_iter()
+        .chain([0, brume::dataset::MAX_WRITERS + 1].map(|n| ("writers", n, with_writers(n))));
+    for (field, n, opts) in threads {
         match Batch::plan(std::slice::from_ref(&root), None, opts) {
-            Err(brume::Error::InvalidParameter { name, .. }) => assert_eq!(name, "loaders"),
-            other => panic!("{loaders} loaders: {:?}", other.map(|b| b.outputs())),
+            Err(brume::Error::InvalidParameter { name, .. }) => assert_eq!(name, field),
+            other => panic!("{n} {field}: {:?}", other.map(|b| b.outputs())),
         }
     }
 

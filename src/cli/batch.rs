@@ -3,7 +3,7 @@
 
 use super::args::{BatchArgs, Compat};
 use brume::dataset::{
-    self, Batch, BatchEvent, BatchOptions, BatchReport, Betas, Shard, MAX_LOADERS,
+    self, Batch, BatchEvent, BatchOptions, BatchReport, Betas, Shard, MAX_LOADERS, MAX_WRITERS,
 };
 use brume::photo::{Conventions, FrameOptions};
 use brume::{Error, Renderer, Result};
@@ -31,6 +31,10 @@ pub fn plan(args: &BatchArgs) -> Result<Batch> {
         loaders: match args.loaders {
             Some(n) => super::limits::count("--loaders", n, 1, MAX_LOADERS, "loader threads")?,
             None => dataset::default_loaders(),
+        },
+        writers: match args.writers {
+            Some(n) => super::limits::count("--writers", n, 1, MAX_WRITERS, "writer threads")?,
+            None => dataset::default_writers(),
         },
     };
     Batch::plan(&args.inputs, args.manifest.as_deref(), opts)

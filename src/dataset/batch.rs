@@ -76,14 +76,34 @@ pub struct BatchOptions {
     /// the GPU (1 to [`MAX_LOADERS`]): on a real GPU one loader cannot keep up. A lone
     /// loader holds up to two frames in memory, several one each.
     pub loaders: usize,
+    /// Writer threads, each capturing, encoding and writing one output at a time (1 to
+    /// [`MAX_WRITERS`]); the log keeps the outputs' order. Each holds its output's image
+    /// (32 MB at 2048 x 1024): on a real GPU, with several loaders, one writer (about 40
+    /// ms of PNG encoding an output) sets the rate.
+    pub writers: usize,
 }
 
 /// The most loader threads a batch runs.
 pub const MAX_LOADERS: usize = 16;
 
+/// The most writer threads a batch runs.
+pub const MAX_WRITERS: usize = 16;
+
 /// The loader threads by default: a quarter of the cores (the pre-processing of each
 /// frame already runs on all of them in parts), from 1 to 4.
 pub fn default_loaders() -> usize {
+    quarter_of_the_cores()
+}
+
+/// The writer threads by default: a quarter of the cores, from 1 to 4, as the loaders
+/// (one on a machine of fewer than 8 cores, where the GPU's passes or the loaders fill
+/// them).
+pub fn default_writers() -> usize {
+    quarter_of_the_cores()
+}
+
+/// A quarter of the cores, from 1 to 4.
+fn quarter_of_the_cores() -> usize {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     (cores / 4).clamp(1, 4)
 }
@@ -100,6 +120,7 @@ impl BatchOptions {
             frame: FrameOptions::default(),
             capture: CaptureOptions::default(),
             loaders: default_loaders(),
+            writers: default_writers(),
         }
     }
 }
@@ -148,12 +169,18 @@ impl Batch {
     /// own. Outputs already complete are skipped. Frames that cannot be assembled
     /// (missing disparity or camera) are not an error here: the run logs them as failed.
     pub fn plan(inputs: &[PathBuf], manifest: Option<&Path>, opts: BatchOptions) -> Result<Batch> {
-        if !(1..=MAX_LOADERS).contains(&opts.loaders) {
-            return Err(Error::invalid(
-                "loaders",
-                opts.loaders,
-                format!("1 to {MAX_LOADERS} loader threads"),
-            ));
+        for (name, threads, max) in [
+            ("loaders", opts.loaders, MAX_LOADERS),
+            ("writers", opts.writers, MAX_WRITERS),
+        ] {
+            if !(1..=max).contains(&threads) {
+                let kind = name.trim_end_matches('s');
+                return Err(Error::invalid(
+                    name,
+                    threads,
+                    format!("1 to {max} {kind} threads"),
+                ));
+            }
         }
         let bounds = checked_betas(&opts.betas)?;
         check_frame_options(&opts.frame, &bounds)?;
@@ -291,7 +318,8 @@ impl Batch {
         };
         let (log, t) = std::thread::scope(|s| -> Result<(Log, BatchReport)> {
             let loaded = spawn_loaders(s, &opts.frame, frames, opts.loaders);
-            let writer = s.spawn(move || write_outputs(event_rx, log));
+            let writers = opts.writers;
+            let writer = s.spawn(move || write_outputs(event_rx, log, writers));
             gpu.render_frames(renderer, &pending, loaded);
             let Gpu { times, events, .. } = gpu;
             drop(events); // ends the writer's loop

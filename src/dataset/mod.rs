@@ -7,8 +7,8 @@ mod destinations;
 mod writer;
 
 pub use batch::{
-    check_beta, default_loaders, Batch, BatchEvent, BatchOptions, BatchReport, Betas, MAX_BETA,
-    MAX_LOADERS, MIN_BETA,
+    check_beta, default_loaders, default_writers, Batch, BatchEvent, BatchOptions, BatchReport,
+    Betas, MAX_BETA, MAX_LOADERS, MAX_WRITERS, MIN_BETA,
 };
 
 use crate::error::{Error, Result};

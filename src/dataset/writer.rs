@@ -7,9 +7,11 @@ use crate::io::output::{self, Outputs};
 use crate::photo::{capture, CaptureOptions};
 use crate::raster::RgbaImage;
 use serde_json::json;
+use std::collections::VecDeque;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::Receiver;
+use std::thread::ScopedJoinHandle;
 use std::time::Instant;
 
 /// One output for the writer thread.
@@ -37,23 +39,105 @@ pub(super) enum Event {
     },
 }
 
-/// The writer thread: captures, encodes and writes each output atomically, and logs it
-/// as soon as it is in place.
-pub(super) fn write_outputs(rx: Receiver<Event>, mut log: Log) -> Result<Log> {
-    for event in rx {
-        match event {
-            Event::Output(mut job) => {
-                let t = Instant::now();
-                let result = capture(&mut job.image, &job.capture)
-                    .and_then(|_| write_one(&job, log.observe));
-                log.report.encode_ms += t.elapsed().as_secs_f64() * 1e3;
-                log.output(&job.path, job.record, result)?;
+/// The writer thread: captures, encodes and writes each output atomically, up to
+/// `writers` at once on threads of its own, and logs each as soon as it and everything
+/// before it are in place or have failed, in the order the events came. An error that
+/// stops the run (a full disk, a log that cannot be written) still waits for the outputs
+/// at work and logs them.
+pub(super) fn write_outputs(rx: Receiver<Event>, mut log: Log, writers: usize) -> Result<Log> {
+    let observe = log.observe;
+    std::thread::scope(|s| {
+        let mut queue = VecDeque::new();
+        let run = || -> Result<()> {
+            for event in rx {
+                let Event::Output(job) = event else {
+                    queue.push_back(Queued::Event(Box::new(event)));
+                    continue;
+                };
+                while queue.iter().filter(|q| q.is_output()).count() >= writers {
+                    log_first(&mut queue, &mut log)?;
+                }
+                queue.push_back(Queued::output(s, job, observe));
+                while queue.front().is_some_and(Queued::is_done) {
+                    log_first(&mut queue, &mut log)?;
+                }
             }
-            Event::FrameFailed { failed, outputs } => log.frame_failed(&failed, outputs)?,
-            Event::FrameWarned { image, warnings } => log.frame_warned(&image, &warnings),
+            while !queue.is_empty() {
+                log_first(&mut queue, &mut log)?;
+            }
+            Ok(())
+        };
+        let stopped = run();
+        if stopped.is_err() {
+            while !queue.is_empty() {
+                // The run's first error is the one to report.
+                let _ = log_first(&mut queue, &mut log);
+            }
+        }
+        stopped.map(|()| log)
+    })
+}
+
+/// What waits in the writer's queue to be logged, in the order it came.
+enum Queued<'scope> {
+    /// An output at work (or done) on a writer thread.
+    Output {
+        path: PathBuf,
+        record: serde_json::Value,
+        work: ScopedJoinHandle<'scope, (Result<()>, f64)>,
+    },
+    /// A frame's failure or warnings.
+    Event(Box<Event>),
+}
+
+impl<'scope> Queued<'scope> {
+    /// Starts `job` on a writer thread of its own.
+    fn output<'env>(
+        s: &'scope std::thread::Scope<'scope, 'env>,
+        mut job: Encode,
+        observe: &'env (dyn Fn(BatchEvent) + Sync),
+    ) -> Queued<'scope> {
+        let (path, record) = (job.path.clone(), std::mem::take(&mut job.record));
+        let work = s.spawn(move || {
+            let t = Instant::now();
+            let result =
+                capture(&mut job.image, &job.capture).and_then(|_| write_one(&job, observe));
+            (result, t.elapsed().as_secs_f64() * 1e3)
+        });
+        Queued::Output { path, record, work }
+    }
+
+    fn is_output(&self) -> bool {
+        matches!(self, Queued::Output { .. })
+    }
+
+    /// Whether logging it would not wait.
+    fn is_done(&self) -> bool {
+        match self {
+            Queued::Output { work, .. } => work.is_finished(),
+            Queued::Event(_) => true,
         }
     }
-    Ok(log)
+}
+
+/// Logs the queue's first entry, waiting for its output if it is still at work.
+fn log_first(queue: &mut VecDeque<Queued>, log: &mut Log) -> Result<()> {
+    match queue.pop_front() {
+        Some(Queued::Output { path, record, work }) => {
+            let (result, ms) = work.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+            log.report.encode_ms += ms;
+            log.output(&path, record, result)
+        }
+        Some(Queued::Event(event)) => match *event {
+            Event::FrameFailed { failed, outputs } => log.frame_failed(&failed, outputs),
+            Event::FrameWarned { image, warnings } => {
+                log.frame_warned(&image, &warnings);
+                Ok(())
+            }
+            Event::Output(_) => unreachable!("outputs are queued at work"),
+        },
+        None => Ok(()),
+    }
 }
 
 fn write_one(job: &Encode, observe: &(dyn Fn(BatchEvent) + Sync)) -> Result<()> {
@@ -231,6 +315,69 @@ mod tests {
         fn flush(&mut self) -> std::io::Result<()> {
             Ok(())
         }
+    }
+
+    /// Outputs written by three writers at once, the first the slowest to encode (so the
+    /// later ones finish first), and one that cannot be written: the log has them in the
+    /// order they came, with the frames' events between them, and the bytes are one
+    /// writer's.
+    #[test]
+    fn several_writers_log_in_the_order_the_outputs_came() {
+        let dir = tempfile::tempdir().unwrap();
+        let blocked = dir.path().join("a-file");
+        std::fs::write(&blocked, b"").unwrap();
+        let sizes = [(1500, 1000), (8, 8), (16, 4), (8, 8), (4, 4)];
+        let path = |k: usize, root: &Path| match k {
+            3 => blocked.join("under-a-file.png"),
+            _ => root.join(format!("o{k}.png")),
+        };
+        let events = |root: &Path| -> Vec<Event> {
+            let mut events: Vec<Event> = (0..sizes.len())
+                .map(|k| {
+                    let (w, h) = sizes[k];
+                    Event::Output(Encode {
+                        path: path(k, root),
+                        image: RgbaImage::from_fn(w, h, |x, y| {
+                            [(x % 7) as f32 / 7.0, (y % 5) as f32 / 5.0, 0.5, 1.0]
+                        }),
+                        metadata: Default::default(),
+                        transmittance: None,
+                        record: json!({ "k": k }),
+                        capture: CaptureOptions::default(),
+                    })
+                })
+                .collect();
+            let warned = Event::FrameWarned {
+                image: root.join("frame.png"),
+                warnings: vec!["a warning".into()],
+            };
+            events.insert(2, warned);
+            events
+        };
+        let run = |writers: usize, name: &str| -> (Vec<serde_json::Value>, Vec<Vec<u8>>) {
+            let root = dir.path().join(name);
+            std::fs::create_dir(&root).unwrap();
+            let (tx, rx) = std::sync::mpsc::sync_channel(2);
+            let log = log_in(&root, &|_| {});
+            let sent = events(&root);
+            let writer = std::thread::spawn(move || write_outputs(rx, log, writers).unwrap());
+            sent.into_iter().for_each(|e| tx.send(e).unwrap());
+            drop(tx);
+            let log = writer.join().unwrap();
+            assert_eq!((log.report.written, log.report.failed_outputs), (4, 1));
+            assert_eq!(log.report.warned_frames, 1);
+            let records = std::fs::read_to_string(&log.path).unwrap();
+            let records = records.lines().map(|l| serde_json::from_str(l).unwrap());
+            let bytes = [0, 1, 2, 4].map(|k| std::fs::read(path(k, &root)).unwrap());
+            (records.collect(), bytes.to_vec())
+        };
+        let (one, one_bytes) = run(1, "one");
+        let (three, three_bytes) = run(3, "three");
+        assert_eq!(one, three);
+        assert!(one_bytes == three_bytes, "the outputs differ");
+        let order: Vec<_> = three.iter().map(|r| r["k"].as_u64()).collect();
+        assert_eq!(order, [0, 1, 2, 3, 4].map(Some));
+        assert_eq!(three[3]["status"], "failed", "{:?}", three[3]);
     }
 
     // The png crate turned the OS error into text of kind `Other`, so a full disk did not
