@@ -1040,3 +1040,32 @@ fn a_manifest_of_portrait_jpegs_reads_each_ones_own_depth() {
         "batch and render differ"
     );
 }
+
+/// The writers by default: a quarter of the cores (1 to 4), and at least two when the
+/// camera model draws noise or makes a JPEG round trip, which costs more an output than
+/// the GPU's passes.
+#[test]
+fn the_camera_model_gets_two_writers_by_default() {
+    use brume::dataset::default_writers;
+    use brume::photo::CaptureOptions;
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let plain = default_writers(&CaptureOptions::default());
+    assert_eq!(plain, (cores / 4).clamp(1, 4));
+    assert_eq!(plain, brume::dataset::default_loaders());
+    let exposure = CaptureOptions::from_parts(-0.5, None, None, None, 0).unwrap();
+    assert_eq!(
+        default_writers(&exposure),
+        plain,
+        "exposure alone costs nothing"
+    );
+    for costly in [
+        CaptureOptions::from_parts(0.0, Some(0.0005), None, None, 0).unwrap(),
+        CaptureOptions::from_parts(0.0, None, None, Some(85), 0).unwrap(),
+    ] {
+        assert_eq!(
+            default_writers(&costly),
+            plain.max(cores.min(2)),
+            "{costly:?}"
+        );
+    }
+}

@@ -21,12 +21,13 @@ pub fn plan(args: &BatchArgs) -> Result<Batch> {
         Some(dist) => Betas::Drawn(dist),
         None => Betas::Each(parse_betas(&args.beta)?),
     };
+    let capture = super::capture::capture_options(&args.capture, args.prep.seed)?;
     let opts = BatchOptions {
         out: args.out.clone(),
         betas,
         shard,
         transmittance: args.transmittance,
-        capture: super::capture::capture_options(&args.capture, args.prep.seed)?,
+        capture,
         frame: args.frame_options()?,
         loaders: match args.loaders {
             Some(n) => super::limits::count("--loaders", n, 1, MAX_LOADERS, "loader threads")?,
@@ -34,7 +35,7 @@ pub fn plan(args: &BatchArgs) -> Result<Batch> {
         },
         writers: match args.writers {
             Some(n) => super::limits::count("--writers", n, 1, MAX_WRITERS, "writer threads")?,
-            None => dataset::default_writers(),
+            None => dataset::default_writers(&capture),
         },
     };
     Batch::plan(&args.inputs, args.manifest.as_deref(), opts)

@@ -74,8 +74,9 @@ pub struct BatchArgs {
 
     /// Writer threads capturing, encoding and writing outputs, each one at a time (1-16;
     /// each holds an output's image, 32 MB at 2048 x 1024; the log keeps the outputs'
-    /// order) [default: a quarter of the cores, 1 to 4]. With a real GPU and several
-    /// loaders, one writer's PNG encoding is what limits the rate.
+    /// order) [default: a quarter of the cores, 1 to 4; at least 2 with --shot-noise-gain,
+    /// --read-noise or --jpeg-quality]. With a real GPU and several loaders, one writer's
+    /// PNG encoding is what limits the rate.
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub writers: Option<i64>,
 
