@@ -42,17 +42,9 @@ pub(crate) fn nth_kept(
     let rank = rank(n);
     assert!(rank < n, "rank {rank} of {n} values");
     let (bucket, below) = bucket_of(&counts, rank);
-    let (task, keep) = (task_len(values.len()), &keep);
-    let mut in_bucket: Vec<f32> = values
-        .par_chunks(task)
-        .enumerate()
-        .flat_map_iter(|(c, chunk)| {
-            chunk.iter().enumerate().filter_map(move |(j, &v)| {
-                let kept = (order_key(v) >> 16) as usize == bucket && keep(c * task + j, v);
-                kept.then_some(v)
-            })
-        })
-        .collect();
+    let mut in_bucket = crate::parallel::filter_in_order(values, |i, v| {
+        (order_key(v) >> 16) as usize == bucket && keep(i, v)
+    });
     Some(
         *in_bucket
             .select_nth_unstable_by(rank - below, f32::total_cmp)

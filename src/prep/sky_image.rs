@@ -194,7 +194,7 @@ pub(crate) fn image_sky(
     grow_past_reclaimed(&ev, &mut sky, &reclaimed, width, height);
     let beyond_reach = super::reach::beyond_reach(ev.rules, &mut sky, depth_sky, width, height);
     let noise = if sky.iter().any(|&s| s) {
-        indices_where(sky.len(), |p| {
+        crate::parallel::indices_in_order(sky.len(), |p| {
             !sky[p] && range[p] == RangeClass::Unsupported && ev.looks_like_sky(p)
         })
     } else {
@@ -210,25 +210,9 @@ pub(crate) fn image_sky(
 /// Admissible pixels of the top rows, and the depth rules' sky where it looks like sky.
 fn seeds(ev: &Evidence, depth_sky: &[bool], width: usize, height: usize) -> Vec<usize> {
     let rows = ((ev.rules.seed_rows * height as f64).ceil() as usize).clamp(1, height);
-    indices_where(width * height, |p| {
+    crate::parallel::indices_in_order(width * height, |p| {
         (p < rows * width && ev.admissible(p)) || (depth_sky[p] && ev.looks_like_sky(p))
     })
-}
-
-/// The pixels below `len` for which `test` holds, in order.
-fn indices_where(len: usize, test: impl Fn(usize) -> bool + Sync) -> Vec<usize> {
-    // A task a piece of the frame: rayon's own split of a 2-megapixel filter collects
-    // many small pieces, and costs more than the tests.
-    const TASK: usize = 1 << 16;
-    let pieces: Vec<Vec<usize>> = (0..len.div_ceil(TASK))
-        .into_par_iter()
-        .map(|t| {
-            (t * TASK..len.min((t + 1) * TASK))
-                .filter(|&p| test(p))
-                .collect()
-        })
-        .collect();
-    pieces.concat()
 }
 
 /// Grows one region from every seed not yet reached (see the module docs) and returns the
@@ -353,16 +337,13 @@ fn add_neighbours(
 
 /// The pixels of `region` with a 4-neighbour not `reached`, in the region's order.
 fn open_pixels(reached: &[bool], region: &[usize], width: usize, height: usize) -> Vec<usize> {
-    let open = move |&p: &usize| {
+    let open = |p: usize| {
         neighbours4(p, p % width, p / width, width, height)
             .into_iter()
             .flatten()
             .any(|q| !reached[q])
     };
-    region
-        .par_chunks(1 << 16)
-        .flat_map_iter(|chunk| chunk.iter().copied().filter(open))
-        .collect()
+    crate::parallel::filter_in_order(region, |_, p| open(p))
 }
 
 /// Turns the gaps of `sky` into sky (see the module docs).
@@ -489,7 +470,7 @@ fn join_depth_sky(
         .into_par_iter()
         .map(|p| sky[p] || (depth_sky[p] && ev.admissible(p)))
         .collect();
-    let mut region = indices_where(sky.len(), |p| reached[p]);
+    let mut region = crate::parallel::indices_in_order(sky.len(), |p| reached[p]);
     spread(
         &mut reached,
         &mut region,
