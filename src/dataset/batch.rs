@@ -92,7 +92,7 @@ pub const MAX_WRITERS: usize = 16;
 /// The loader threads by default: a quarter of the cores (the pre-processing of each
 /// frame already runs on all of them in parts), from 1 to 4.
 pub fn default_loaders() -> usize {
-    quarter_of_the_cores()
+    quarter_of(cores())
 }
 
 /// The writer threads by default for outputs captured with `capture`: a quarter of the
@@ -101,13 +101,17 @@ pub fn default_loaders() -> usize {
 /// passes even on llvmpipe: two writers on two cores took a third less time).
 pub fn default_writers(capture: &CaptureOptions) -> usize {
     let costly = capture.noise.is_some() || capture.jpeg_quality.is_some();
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    quarter_of_the_cores().max(if costly { cores.min(2) } else { 1 })
+    let cores = cores();
+    quarter_of(cores).max(if costly { cores.min(2) } else { 1 })
 }
 
-/// A quarter of the cores, from 1 to 4.
-fn quarter_of_the_cores() -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+/// The cores this process may use (1 if that cannot be told).
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// A quarter of `cores`, from 1 to 4.
+fn quarter_of(cores: usize) -> usize {
     (cores / 4).clamp(1, 4)
 }
 
