@@ -280,8 +280,8 @@ impl Renderer {
         };
         let (refined, times) = pass(&mut self.pipeline, &input)?;
         let framebuffer = Framebuffer::over(&gl, &[&refined], "the refined range")?;
-        let texels = framebuffer.read_rgba()?;
-        let mut out = Grid::from_vec(w, h, texels.iter().map(|t| t[0]).collect());
+        let texels = framebuffer.read_red()?;
+        let mut out = Grid::from_vec(w, h, texels);
         out.flip_rows();
         Ok((out, times))
     }

@@ -116,8 +116,7 @@ fn upsampling_into_a_kept_texture_matches_upsample_range() {
     let (w, h, k) = (96usize, 64usize, 4usize);
     let read = |texture: &Texture| -> ScalarMap {
         let framebuffer = Framebuffer::over(&gl, &[texture], "a test's range").unwrap();
-        let texels = framebuffer.read_rgba().unwrap();
-        let mut out = Grid::from_vec(w, h, texels.iter().map(|t| t[0]).collect());
+        let mut out = Grid::from_vec(w, h, framebuffer.read_red().unwrap());
         out.flip_rows();
         out
     };
@@ -170,6 +169,33 @@ fn upsampling_into_a_kept_texture_matches_upsample_range() {
                 .unwrap_err();
             assert!(e.to_string().contains("R32F"), "{e}");
         }
+    }
+}
+
+/// A range read back as its red channel alone (`Framebuffer::read_red`, how the
+/// refinement's result comes back): an R32F texture's values as stored, row 0 first, and,
+/// from a texture of four channels (read through RGBA where the driver offers no RED
+/// read of it), the red ones.
+#[test]
+fn red_read_back_is_the_stored_red_channel() {
+    use brume::gpu::framebuffer::Framebuffer;
+    use brume::gpu::texture::{Filter, TexelFormat, Texture};
+
+    let (_gl, mut headless) = renderer();
+    let r = headless.renderer().unwrap();
+    let gl = std::sync::Arc::clone(r.pipeline().gl());
+    // An odd width: rows of 4·37 bytes, which a pack alignment of 8 would pad.
+    let (w, h) = (37usize, 5usize);
+    let values: Vec<f32> = (0..w * h).map(|i| 0.5 + i as f32 * 1.25).collect();
+    let four: Vec<f32> = values.iter().flat_map(|&v| [v, -1.0, -2.0, -3.0]).collect();
+    let texture = |format, data: &[f32]| {
+        Texture::new(&gl, w, h, format, Filter::Nearest, Some(data)).unwrap()
+    };
+    let single = texture(TexelFormat::R32F, &values);
+    let rgba = texture(TexelFormat::Rgba32F, &four);
+    for (texture, what) in [(&single, "R32F"), (&rgba, "RGBA32F")] {
+        let framebuffer = Framebuffer::over(&gl, &[texture], "a test's range").unwrap();
+        assert_eq!(framebuffer.read_red().unwrap(), values, "{what}");
     }
 }
 

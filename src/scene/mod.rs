@@ -571,9 +571,7 @@ impl SceneFrame<'_> {
     pub fn read_depth(&self) -> Result<ScalarMap> {
         let fbo = self.renderer.copy_depth(self.targets())?;
         unbind_pack_buffer(&self.renderer.gl);
-        let rgba = fbo.read_rgba()?;
-        let depth = rgba.into_iter().map(|[d, ..]| d).collect();
-        Ok(Grid::from_vec(self.width, self.height, depth))
+        Ok(Grid::from_vec(self.width, self.height, fbo.read_red()?))
     }
 }
 
