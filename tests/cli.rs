@@ -295,6 +295,58 @@ fn info_reports_the_driver() {
     }
 }
 
+/// `brume completions`: the bash script, sourced by bash, completes a command, a flag and
+/// a flag's values; every shell's script names the commands and flags; a script that
+/// cannot be written whole (a full device) fails the command rather than pass for done.
+#[test]
+fn completion_scripts_complete_in_bash() {
+    let dir = tempfile::tempdir().unwrap();
+    for shell in ["bash", "zsh", "fish", "elvish", "powershell"] {
+        let o = brume(dir.path(), &["completions", shell]);
+        assert!(o.status.success(), "{shell}: {}", stderr(&o));
+        let script = String::from_utf8(o.stdout).unwrap();
+        for word in ["render", "batch", "turbidity", "beta", "refine"] {
+            assert!(script.contains(word), "{shell}'s script has no {word}");
+        }
+        if shell == "bash" {
+            fs::write(dir.path().join("brume.bash"), script).unwrap();
+        }
+    }
+    // What bash offers after `words`, the last being the one completed.
+    let complete = |words: &str| -> String {
+        let line = format!(
+            "source brume.bash; COMP_WORDS=({words}); COMP_CWORD=$((${{#COMP_WORDS[@]}} - 1)); \
+             _brume brume \"${{COMP_WORDS[COMP_CWORD]}}\" \"${{COMP_WORDS[COMP_CWORD-1]}}\"; \
+             echo \"${{COMPREPLY[*]}}\""
+        );
+        let o = Command::new("bash")
+            .args(["-c", &line])
+            .current_dir(dir.path())
+            .output()
+            .expect("run bash");
+        assert!(o.status.success(), "{words}: {}", stderr(&o));
+        String::from_utf8(o.stdout).unwrap().trim().to_string()
+    };
+    assert_eq!(complete("brume ren"), "render");
+    assert_eq!(complete("brume render --bet"), "--beta");
+    assert_eq!(
+        complete("brume batch --refine ''"),
+        "none guided unreliable repair"
+    );
+
+    let full = fs::OpenOptions::new()
+        .write(true)
+        .open("/dev/full")
+        .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_brume"))
+        .args(["completions", "bash"])
+        .stdout(full)
+        .output()
+        .unwrap();
+    assert!(!o.status.success(), "a script written to /dev/full passed");
+    assert!(stderr(&o).contains("standard output"), "{}", stderr(&o));
+}
+
 #[test]
 fn missing_input_file_is_named() {
     let dir = tempfile::tempdir().unwrap();

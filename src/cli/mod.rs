@@ -78,6 +78,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sky(a) => sky::run_sky(&a),
         Command::Turbidity(a) => sky::run_turbidity(&a),
         Command::Sun(a) => sun::run_sun(&a),
+        Command::Completions(a) => print_completions(a.shell),
         // CPU only: no GL context to open.
         Command::Bench(bench::BenchCommand::Turbidity(a)) => bench::run_turbidity(&a),
         Command::Bench(cmd) => {
@@ -104,7 +105,24 @@ fn opens_headless_context(command: &Command) -> bool {
         | Command::Prep(_)
         | Command::Sky(_)
         | Command::Turbidity(_)
-        | Command::Sun(_) => false,
+        | Command::Sun(_)
+        | Command::Completions(_) => false,
+    }
+}
+
+/// Prints `shell`'s completion script for the `brume` program on stdout. Unlike a
+/// report's, a failed write is an error: the script is redirected into a file the shell
+/// reads, and half of one must not pass for done (a reader that left, `| head`, is not).
+fn print_completions(shell: clap_complete::Shell) -> Result<()> {
+    use std::io::Write;
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut Cli::command(), "brume", &mut script);
+    let mut stdout = std::io::stdout().lock();
+    match stdout.write_all(&script).and_then(|()| stdout.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(Error::io("standard output", e))
+        }
+        _ => Ok(()),
     }
 }
 

@@ -88,6 +88,17 @@ pub enum Command {
     Turbidity(super::sky::TurbidityArgs),
     /// The sun's zenith and azimuth from place and time (NREL's SPA, paper 002 sec. 3.4).
     Sun(super::sun::SunArgs),
+    /// Print the shell's completion script for brume's commands and flags on stdout, e.g.
+    /// `brume completions bash > ~/.local/share/bash-completion/completions/brume`.
+    Completions(CompletionsArgs),
+}
+
+/// `brume completions`.
+#[derive(Args, Clone, Debug)]
+pub struct CompletionsArgs {
+    /// The shell the script is for.
+    #[arg(value_enum)]
+    pub shell: clap_complete::Shell,
 }
 
 /// `brume info`.
