@@ -10,8 +10,9 @@
 //! - [`turbidity`]: paper 002's Table 1, the turbidity estimator on Preetham sky images
 //!   (CPU only), clear and with synthetic clouds.
 //!
-//! [`report`] prints tables and writes CSV/JSON and [`plot`] draws the two figures; the
-//! command-line arguments and progress bars belong to the `brume` program (`src/cli`).
+//! [`report`] prints tables and writes CSV/JSON and `plot` (the `plots` feature) draws the
+//! two figures; the command-line arguments and progress bars belong to the `brume` program
+//! (`src/cli`).
 //!
 //! ```text
 //! brume bench accuracy --plot fig6.png --csv fig6.csv       # about 1.5 min at 641x555

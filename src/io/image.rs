@@ -13,7 +13,7 @@
 //! masks) are read as stored. A colour image's embedded ICC profile is read
 //! ([`crate::io::colour_profile`]: Display P3 and the like are kept, and decoded by their
 //! own curves where those are not sRGB's); a PNG's `cICP`, `gAMA` and `cHRM` chunks are
-//! read too ([`crate::io::png_chunks`]); with none of these, a PNG or JPEG is sRGB. An
+//! read too; with none of these, a PNG or JPEG is sRGB. An
 //! EXR's `chromaticities` other than sRGB's (ACEScg's) become a profile of its primaries,
 //! which its outputs say; without them its primaries are taken to be sRGB's.
 //!

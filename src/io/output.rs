@@ -4,8 +4,8 @@
 //!
 //! A command that writes several files stages them all in an [`Outputs`] set and renames
 //! them together once every one is complete: all are written or none is touched. Live
-//! temporaries are known to [`exit_removing_temporaries`], which a program's signal
-//! handler calls so that an interrupt leaves no `.brume-*.tmp` behind.
+//! temporaries are known to `exit_removing_temporaries` (the `cli` feature), which a
+//! program's signal handler calls so that an interrupt leaves no `.brume-*.tmp` behind.
 //!
 //! This module owns the path checks, that atomic write and the choice of format by
 //! extension; the bytes of each format come from its codec in `io::codec`, next to the
@@ -380,7 +380,7 @@ impl Outputs {
 
     /// Renames every staged file onto its destination. The renames run while the
     /// temporary registry is locked, so a signal handler using
-    /// [`exit_removing_temporaries`] sees either all of them done or none. After the
+    /// `exit_removing_temporaries` sees either all of them done or none. After the
     /// checks of staging, a rename fails only if the directory changed meanwhile; the
     /// files renamed before it then stay, the others are removed.
     pub fn commit(mut self) -> Result<()> {
