@@ -97,9 +97,12 @@ pub fn refine_scene(
         e
     })?;
     if prep.prepared.is_some() {
-        // The measured range at the image's size, for the report's known pixels.
-        let measured = brume::refine::nearest_to_image_size(&scene.depth.range, w, h);
-        scene.depth.replace_range(measured);
+        // The measured range at the image's size, for the report's known pixels (already
+        // there where the depth map has the image's size).
+        if (range.width(), range.height()) != (w, h) {
+            let measured = brume::refine::nearest_to_image_size(range, w, h);
+            scene.depth.replace_range(measured);
+        }
     } else {
         scene.depth.replace_range(prep.range.clone());
     }

@@ -5,11 +5,14 @@
 //! interchangeable behind [`RangeFilter`].
 
 use super::beyond::RecedingCells;
-use super::{check_positive, nearest_to_image_size, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR};
+use super::{
+    at_image_size, bring_to_image_size, check_positive, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR,
+};
 use crate::error::{Error, Result};
 use crate::io::depth::DepthFormat;
 use crate::prep::Prepared;
 use crate::raster::{Grid, RgbImage, ScalarMap};
+use std::borrow::Cow;
 
 /// Which refinement a range gets (`--refine`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -275,48 +278,59 @@ fn refine_with_masks(
         return Ok(range.clone());
     }
     // The ego vehicle's range 0 is not a range to filter (the filter reads log range): it
-    // is kept out at the nearest range and put back after.
-    let ego = range.map(|&v| v == 0.0);
-    let nearest = range
-        .as_slice()
-        .iter()
-        .copied()
-        .filter(|&v| v > 0.0)
-        .fold(f32::INFINITY, f32::min);
-    let positive = range.map(|&v| if v == 0.0 { nearest } else { v });
+    // is kept out at the nearest range and put back after. A range without any is read as
+    // it is, not copied (a copy is 48 MB at 12 MP).
+    let has_ego = range.as_slice().contains(&0.0);
+    let positive = if has_ego {
+        let nearest = range
+            .as_slice()
+            .iter()
+            .copied()
+            .filter(|&v| v > 0.0)
+            .fold(f32::INFINITY, f32::min);
+        Cow::Owned(range.map(|&v| if v == 0.0 { nearest } else { v }))
+    } else {
+        Cow::Borrowed(range)
+    };
     check_positive(&positive)?;
-    let mut out = if plan.upsample {
+    let measured = if plan.upsample {
         let mut up = filter.upsample(image, &positive, opts.upsample_sigma_colour)?;
         if let Some(masks) = receding {
             super::beyond::interpolate_receding(&positive, masks, &mut up);
         }
-        up
+        Cow::Owned(up)
     } else {
         positive
     };
-    if let Some(filter_opts) = &plan.guided {
-        let refined = filter.guided(image, &out, filter_opts)?;
-        let filled = filled.map(|f| nearest_to_image_size(f, w, h));
-        let is_filled = |x, y| filled.as_ref().is_some_and(|f| *f.get(x, y));
-        out = match plan.combine {
-            Combine::Guided => refined,
-            Combine::WhereFilled if filled.is_none() => refined,
-            Combine::WhereFilled => Grid::par_from_fn(w, h, |x, y| {
-                *if is_filled(x, y) { &refined } else { &out }.get(x, y)
-            }),
-            Combine::Repair => Grid::par_from_fn(w, h, |x, y| {
-                repair(*out.get(x, y), *refined.get(x, y), is_filled(x, y))
-            }),
-        };
-    }
-    let ego = nearest_to_image_size(&ego, w, h);
-    for (v, _) in out
-        .as_mut_slice()
-        .iter_mut()
-        .zip(ego.as_slice())
-        .filter(|(_, &e)| e)
-    {
-        *v = 0.0;
+    let mut out = match &plan.guided {
+        None => measured.into_owned(),
+        Some(filter_opts) => {
+            let refined = filter.guided(image, &measured, filter_opts)?;
+            let filled = filled.map(|f| at_image_size(f, w, h));
+            let is_filled = |x, y| filled.as_ref().is_some_and(|f| *f.get(x, y));
+            match plan.combine {
+                Combine::Guided => refined,
+                Combine::WhereFilled if filled.is_none() => refined,
+                Combine::WhereFilled => Grid::par_from_fn(w, h, |x, y| {
+                    *if is_filled(x, y) { &refined } else { &measured }.get(x, y)
+                }),
+                Combine::Repair => Grid::par_from_fn(w, h, |x, y| {
+                    repair(*measured.get(x, y), *refined.get(x, y), is_filled(x, y))
+                }),
+            }
+        }
+    };
+    if has_ego {
+        let ego = range.map(|&v| v == 0.0);
+        let ego = at_image_size(&ego, w, h);
+        for (v, _) in out
+            .as_mut_slice()
+            .iter_mut()
+            .zip(ego.as_slice())
+            .filter(|(_, &e)| e)
+        {
+            *v = 0.0;
+        }
     }
     Ok(out)
 }
@@ -342,15 +356,20 @@ pub fn refine_prepared(
         Some((&prepared.receding, &prepared.sky)),
     );
     prepared.range = refine_with_masks(image, &prepared.range, masks, opts, filter)?;
-    prepared.sky = nearest_to_image_size(&prepared.sky, w, h);
-    prepared.filled = nearest_to_image_size(&prepared.filled, w, h);
-    prepared.beyond_reach = nearest_to_image_size(&prepared.beyond_reach, w, h);
-    prepared.receding = nearest_to_image_size(&prepared.receding, w, h);
+    for mask in [
+        &mut prepared.sky,
+        &mut prepared.filled,
+        &mut prepared.beyond_reach,
+        &mut prepared.receding,
+    ] {
+        bring_to_image_size(mask, w, h);
+    }
     Ok(plan)
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::nearest_to_image_size;
     use super::*;
 
     /// Counts the calls, and upsamples by nearest / filters to a constant, so that the
@@ -410,6 +429,25 @@ mod tests {
         assert_eq!((out.width(), out.height()), (8, 8));
         assert_eq!(*out.get(6, 6), 0.0, "ego cell");
         assert_eq!(*out.get(1, 6), 7.0, "filtered elsewhere");
+    }
+
+    /// At the image's size (the range read in place, not copied, where it has no ego
+    /// pixel): the ego pixel stays 0, the rest is repaired; without one nothing is 0.
+    #[test]
+    fn at_the_image_size_the_ego_vehicle_stays_at_zero() {
+        let opts = RefineOptions {
+            mode: RefineMode::Repair,
+            ..RefineOptions::default()
+        };
+        for ego in [true, false] {
+            let range = Grid::from_fn(4, 3, |x, y| if ego && (x, y) == (2, 2) { 0.0 } else { 3.0 });
+            let mut fake = Fake::default();
+            let out = refine_range(&image(4, 3), &range, None, &opts, &mut fake).unwrap();
+            assert_eq!((fake.upsampled, fake.filtered), (0, 1));
+            assert_eq!(*out.get(2, 2), if ego { 0.0 } else { 3.0 }, "ego {ego}");
+            // The guide's 7 is 2.3 times the measured 3: repair keeps the measured range.
+            assert_eq!(*out.get(0, 0), 3.0, "ego {ego}");
+        }
     }
 
     #[test]
