@@ -158,9 +158,12 @@ fn transmittance_range(
         .fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], (&r, _)| {
             [lo.min(r), hi.max(r)]
         });
+    if near > far {
+        return None; // no pixel of known range
+    }
     let tau = |r: f32| haze.transmission(f64::from(r) / haze.range_unit);
     let fold = |pick: fn(f64, f64) -> f64, r: f32| tau(r).into_iter().reduce(pick);
-    Some([fold(f64::min, far)?, fold(f64::max, near)?]).filter(|_| near <= far)
+    Some([fold(f64::min, far)?, fold(f64::max, near)?])
 }
 
 fn output_path(args: &RenderArgs) -> Result<PathBuf> {
