@@ -244,31 +244,6 @@ pub fn nearest_to_image_size<T: Copy + Send + Sync>(
     })
 }
 
-/// [`nearest_to_image_size`], borrowed where `map` has that size already: no copy.
-pub(crate) fn at_image_size<T: Copy + Send + Sync>(
-    map: &Grid<T>,
-    width: usize,
-    height: usize,
-) -> std::borrow::Cow<'_, Grid<T>> {
-    if (map.width(), map.height()) == (width, height) {
-        std::borrow::Cow::Borrowed(map)
-    } else {
-        std::borrow::Cow::Owned(nearest_to_image_size(map, width, height))
-    }
-}
-
-/// Brings `map` to the image's size ([`nearest_to_image_size`]) in place: nothing is done
-/// where it has that size already.
-pub(crate) fn bring_to_image_size<T: Copy + Send + Sync>(
-    map: &mut Grid<T>,
-    width: usize,
-    height: usize,
-) {
-    if (map.width(), map.height()) != (width, height) {
-        *map = nearest_to_image_size(map, width, height);
-    }
-}
-
 /// The cell of a grid `n` wide (cells per pixel `scale`) whose value pixel `p` takes in
 /// [`nearest_to_image_size`].
 fn nearest_cell(p: usize, scale: f64, n: usize) -> usize {

@@ -5,9 +5,7 @@
 //! interchangeable behind [`RangeFilter`].
 
 use super::beyond::RecedingCells;
-use super::{
-    at_image_size, bring_to_image_size, check_positive, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR,
-};
+use super::{check_positive, nearest_to_image_size, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR};
 use crate::error::{Error, Result};
 use crate::io::depth::DepthFormat;
 use crate::prep::Prepared;
@@ -367,9 +365,29 @@ pub fn refine_prepared(
     Ok(plan)
 }
 
+/// [`nearest_to_image_size`], borrowed where `map` has that size already: no copy.
+fn at_image_size<T: Copy + Send + Sync>(
+    map: &Grid<T>,
+    width: usize,
+    height: usize,
+) -> Cow<'_, Grid<T>> {
+    if (map.width(), map.height()) == (width, height) {
+        Cow::Borrowed(map)
+    } else {
+        Cow::Owned(nearest_to_image_size(map, width, height))
+    }
+}
+
+/// Brings `map` to the image's size ([`nearest_to_image_size`]) in place: nothing is done
+/// where it has that size already.
+fn bring_to_image_size<T: Copy + Send + Sync>(map: &mut Grid<T>, width: usize, height: usize) {
+    if (map.width(), map.height()) != (width, height) {
+        *map = nearest_to_image_size(map, width, height);
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::super::nearest_to_image_size;
     use super::*;
 
     /// Counts the calls, and upsamples by nearest / filters to a constant, so that the
