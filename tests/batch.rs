@@ -131,6 +131,8 @@ fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
             r["gpu_ms"].as_f64().unwrap() > 0.0 && r["decode_ms"].as_f64().is_some(),
             "{r}"
         );
+        // Cityscapes disparity is repaired by default: the frame's refinement has a time.
+        assert!(r["refine_ms"].as_f64().unwrap() > 0.0, "{r}");
     }
 
     // A second run finds everything complete: it writes nothing and changes nothing.

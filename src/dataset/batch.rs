@@ -753,6 +753,7 @@ fn encode(
         "airlight_source": fogged.airlight_source,
         "decode_ms": frame.decode_ms,
         "prep_ms": frame.prep_ms,
+        "refine_ms": frame.refine_ms,
         "gpu_ms": fogged.gpu_ms,
         "render_ms": render_ms,
         "capture": opts.capture.to_json(),
