@@ -844,7 +844,11 @@ fn cityscapes_disparity_is_repaired_by_default() {
         let o = brume(dir.path(), &args);
         assert!(o.status.success(), "{}", stderr(&o));
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-        v["refine"]["mode"].as_str().unwrap().to_string()
+        let mode = v["refine"]["mode"].as_str().unwrap().to_string();
+        // The step's time: 0 where nothing ran (none, at the depth's own size).
+        let ms = v["refine_ms"].as_f64().unwrap();
+        assert_eq!(ms > 0.0, mode != "none", "{mode}: refine_ms {ms}");
+        mode
     };
     assert_eq!(mode(&[]), "repair");
     assert_eq!(mode(&["--refine", "none"]), "none");

@@ -66,19 +66,19 @@ pub fn guided_text(plan: &RefinePlan) -> String {
 /// Refines the scene's range with its image, in place ([`brume::refine::refine_prepared`]):
 /// the prepared range (or, with --no-prep, the loaded one) is upsampled to the image's
 /// size and/or guided-filtered, and the masks and measured range that go with it are
-/// brought to that size. Returns the plan that ran.
+/// brought to that size. Returns the plan that ran and its wall time in ms (0 for none).
 pub fn refine_scene(
     args: &RenderArgs,
     scene: &mut Scene,
     prep: &mut PrepReport,
     filter: &mut dyn RangeFilter,
-) -> Result<RefinePlan> {
+) -> Result<(RefinePlan, f64)> {
     let opts = args.refine.options(scene.depth.format)?;
     let (w, h) = (scene.image.width(), scene.image.height());
     let range = &scene.depth.range;
     let plan = opts.plan((w, h), (range.width(), range.height()));
     if plan.is_empty() {
-        return Ok(plan);
+        return Ok((plan, 0.0));
     }
     let started = Instant::now();
     prep.refine(scene, &opts, filter).map_err(|mut e| {
@@ -106,11 +106,11 @@ pub fn refine_scene(
     } else {
         scene.depth.replace_range(prep.range.clone());
     }
+    let ms = started.elapsed().as_secs_f64() * 1e3;
     log::info!(
-        "range {}{} in {:.1} ms",
+        "range {}{} in {ms:.1} ms",
         if plan.upsample { "upsampled, " } else { "" },
         guided_text(&plan),
-        started.elapsed().as_secs_f64() * 1e3
     );
-    Ok(plan)
+    Ok((plan, ms))
 }

@@ -36,7 +36,8 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let mut headless = super::open_renderer(egl)?;
     let depth_size = [scene.depth.range.width(), scene.depth.range.height()];
     let refine_mode = args.refine.options(scene.depth.format)?.mode.name();
-    let refined = super::refine::refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
+    let (refined, refine_ms) =
+        super::refine::refine_scene(args, &mut scene, &mut prep, headless.renderer()?)?;
     if args.transmittance_map.is_some() {
         // The map's τ as given: pre-processing found the sky for the airlight only, and
         // put no sky at Smax in what the fog reads, so physical fog moves no sky out
@@ -112,6 +113,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
             "upsampled": refined.upsample,
             "guided": refined.guided.map(|r| json!({"radius_px": r.radius_px, "epsilon": r.epsilon})),
         });
+        json["refine_ms"] = json!(refine_ms);
         json["insert"] = insert_json(args, inserted.as_ref());
         json["capture"] = capture.to_json();
         outln!("{json}");
