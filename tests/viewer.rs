@@ -101,8 +101,16 @@ fn std_dev(img: &RgbImage) -> f64 {
     (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / v.len() as f64).sqrt()
 }
 
+/// With and without the guided refinement (which the viewer runs at load on its window's
+/// context, as `brume render` runs it on its own).
 #[test]
 fn the_window_shows_what_render_writes_and_allocates_nothing_per_frame() {
+    for refine in ["none", "guided"] {
+        the_window_shows_what_render_writes(refine);
+    }
+}
+
+fn the_window_shows_what_render_writes(refine: &str) {
     let dir = tempfile::tempdir().unwrap();
     // The demo's half-size Aloe: it fits the virtual screen at zoom 1 beside the panel.
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -126,6 +134,7 @@ fn the_window_shows_what_render_writes_and_allocates_nothing_per_frame() {
         depth,
     ];
     view.extend_from_slice(HAZE);
+    view.extend_from_slice(&["--refine", refine]);
     let out = brume_in_window(dir.path(), &view);
     assert_ok("brume view", &out);
 
@@ -149,6 +158,7 @@ fn the_window_shows_what_render_writes_and_allocates_nothing_per_frame() {
         "render.png",
     ];
     render.extend_from_slice(HAZE);
+    render.extend_from_slice(&["--refine", refine]);
     assert_ok("brume render", &brume(dir.path(), &render));
 
     let shot = load_rgb(&dir.path().join("shot.png"));
@@ -164,7 +174,7 @@ fn the_window_shows_what_render_writes_and_allocates_nothing_per_frame() {
     let (max, mean) = differences(&shown, &written);
     assert!(
         max <= 2 && mean < 0.2,
-        "window vs render.png: max {max}, mean {mean:.3}"
+        "refine {refine}: window vs render.png: max {max}, mean {mean:.3}"
     );
 
     // Not blank, and fogged: the haze moves the picture away from the photo.

@@ -221,8 +221,7 @@ impl RangeFilter for crate::Renderer {
 }
 
 /// The CPU references of the GPU passes, in f64 (the same results within 1e-4): for a
-/// host without a GL context, `brume prep` and the viewer, whose pipeline is the fog's
-/// alone.
+/// host without a GL context, and `brume prep`, which opens none.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct CpuFilter;
 
