@@ -8,7 +8,12 @@ use rayon::prelude::*;
 /// `eps`); NaN for non-finite colours, so that every test on it fails.
 #[inline]
 pub(crate) fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize, eps: f32) -> f32 {
-    let (a, b) = (colour[p], colour[q]);
+    step_between(colour[p], colour[q], lum[p], lum[q], eps)
+}
+
+/// [`relative_step`] of two colours `a` and `b` of luminance `la` and `lb`.
+#[inline]
+fn step_between(a: [f32; 3], b: [f32; 3], la: f32, lb: f32, eps: f32) -> f32 {
     let d = (a[0] - b[0])
         .abs()
         .max((a[1] - b[1]).abs())
@@ -21,7 +26,7 @@ pub(crate) fn relative_step(colour: &[[f32; 3]], lum: &[f32], p: usize, q: usize
         & b[1].is_finite()
         & b[2].is_finite();
     let d = if finite { d } else { f32::NAN };
-    d / lum[p].max(lum[q]).max(eps)
+    d / la.max(lb).max(eps)
 }
 
 /// Rec. 709 luminance of every pixel, clamped at 0 (a NaN sum becomes 0 too: `max`
@@ -44,41 +49,90 @@ pub(crate) fn texture(
     height: usize,
     eps: f32,
 ) -> Vec<f32> {
-    let step = |p: usize, q: usize| relative_step(colour, lum, p, q, eps);
-    // A step is symmetric: each pair of neighbours is measured once, the vertical pairs
-    // here (the step from each pixel to the one below it), the horizontal ones per row.
-    let mut down = vec![0.0f32; width * height.saturating_sub(1)];
-    down.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        for (x, out) in row.iter_mut().enumerate() {
-            let p = y * width + x;
-            *out = step(p, p + width);
-        }
-    });
     let mut largest = vec![0.0f32; colour.len()];
+    // In bands of rows, each row's steps to the row below kept as the next row's steps
+    // above (a step is symmetric), and every step of a row taken over whole slices, which
+    // the compiler turns into vector code (with the box mean, 190 -> 120 ms at 12 MP on
+    // two cores, where each pixel asked its neighbours by index).
+    let band = TEXTURE_BAND_ROWS * width.max(1);
     largest
-        .par_chunks_mut(width)
+        .par_chunks_mut(band)
         .enumerate()
-        .for_each(|(y, row)| {
-            let across: Vec<f32> = (1..width)
-                .map(|x| step(y * width + x - 1, y * width + x))
-                .collect();
-            for (x, out) in row.iter_mut().enumerate() {
-                let neighbours = [
-                    x.checked_sub(1).map(|l| across[l]),
-                    across.get(x).copied(),
-                    y.checked_sub(1).map(|u| down[u * width + x]),
-                    (y + 1 < height).then(|| down[y * width + x]),
-                ];
-                *out = neighbours.into_iter().flatten().fold(0.0f32, |m, s| {
-                    if s.is_nan() {
-                        s
-                    } else {
-                        m.max(s)
-                    }
-                });
+        .for_each(|(b, rows)| {
+            let row = |y: usize| (&colour[y * width..][..width], &lum[y * width..][..width]);
+            let vertical = |y: usize, out: &mut Vec<f32>| {
+                let ((a, la), (c, lc)) = (row(y), row(y + 1));
+                steps_between(a, la, c, lc, eps, out);
+            };
+            let (mut up, mut down, mut across) = (Vec::new(), Vec::new(), Vec::new());
+            let first = b * TEXTURE_BAND_ROWS;
+            if first > 0 {
+                vertical(first - 1, &mut up);
+            }
+            for (i, out) in rows.chunks_mut(width).enumerate() {
+                let y = first + i;
+                let (c, l) = row(y);
+                steps_between(
+                    &c[1..],
+                    &l[1..],
+                    &c[..width - 1],
+                    &l[..width - 1],
+                    eps,
+                    &mut across,
+                );
+                down.clear();
+                if y + 1 < height {
+                    vertical(y, &mut down);
+                }
+                largest_of_row(out, &across, &up, &down);
+                std::mem::swap(&mut up, &mut down);
             }
         });
     box3(&largest, width, height)
+}
+
+/// Rows per parallel task of [`texture`]: each task measures the steps above its first row
+/// once more.
+const TEXTURE_BAND_ROWS: usize = 32;
+
+/// The relative steps from each colour of `a` to the one of `b` beside it, into `out`.
+fn steps_between(
+    a: &[[f32; 3]],
+    la: &[f32],
+    b: &[[f32; 3]],
+    lb: &[f32],
+    eps: f32,
+    out: &mut Vec<f32>,
+) {
+    out.clear();
+    out.extend(
+        a.iter()
+            .zip(b)
+            .zip(la.iter().zip(lb))
+            .map(|((&a, &b), (&la, &lb))| step_between(a, b, la, lb, eps)),
+    );
+}
+
+/// Each pixel's largest step of a row: `across[x]` between pixels x and x + 1 (empty for a
+/// one-pixel row), `up` and `down` to the rows above and below (empty at the image's
+/// edges), taken in the order left, right, up, down; a NaN is kept until a later step
+/// replaces it.
+fn largest_of_row(out: &mut [f32], across: &[f32], up: &[f32], down: &[f32]) {
+    let keep = |m: f32, s: f32| if s.is_nan() { s } else { m.max(s) };
+    out.fill(0.0);
+    if let Some(right_of) = out.get_mut(1..) {
+        right_of
+            .iter_mut()
+            .zip(across)
+            .for_each(|(m, &s)| *m = keep(*m, s));
+    }
+    out.iter_mut()
+        .zip(across)
+        .for_each(|(m, &s)| *m = keep(*m, s));
+    out.iter_mut().zip(up).for_each(|(m, &s)| *m = keep(*m, s));
+    out.iter_mut()
+        .zip(down)
+        .for_each(|(m, &s)| *m = keep(*m, s));
 }
 
 /// Mean over the 3 x 3 window clipped to the image, by two 1D passes.
@@ -155,6 +209,78 @@ mod tests {
                     let got = b[y * width + x];
                     assert!((got - want).abs() < 1e-6, "{width}x{height} ({x}, {y})");
                 }
+            }
+        }
+    }
+
+    /// Each pixel's largest relative step to a 4-neighbour, pixel by pixel, in the order
+    /// left, right, up, down.
+    fn largest_steps_by_pixel(
+        colour: &[[f32; 3]],
+        lum: &[f32],
+        width: usize,
+        height: usize,
+    ) -> Vec<f32> {
+        (0..width * height)
+            .map(|p| {
+                let (x, y) = (p % width, p / width);
+                let neighbours = [
+                    (x > 0).then(|| p - 1),
+                    (x + 1 < width).then(|| p + 1),
+                    (y > 0).then(|| p - width),
+                    (y + 1 < height).then(|| p + width),
+                ];
+                let mut m = 0.0f32;
+                for q in neighbours.into_iter().flatten() {
+                    let s = relative_step(colour, lum, p, q, 1e-3);
+                    m = if s.is_nan() { s } else { m.max(s) };
+                }
+                m
+            })
+            .collect()
+    }
+
+    /// The banded, sliced texture equals its definition to the bit: sizes across the
+    /// bands' edges, one-pixel rows and columns, and NaN and infinite colours, whose NaN
+    /// steps a later neighbour may replace.
+    #[test]
+    fn the_texture_is_its_definition_to_the_bit() {
+        let mut seed = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let sizes = [
+            (1, 1),
+            (1, 70),
+            (70, 1),
+            (2, 2),
+            (17, 33),
+            (9, 2 * TEXTURE_BAND_ROWS + 3),
+        ];
+        for (width, height) in sizes {
+            let colour: Vec<[f32; 3]> = (0..width * height)
+                .map(|_| match (next() * 40.0) as u32 {
+                    0 => [f32::NAN, 0.5, 0.5],
+                    1 => [0.5, f32::INFINITY, 0.5],
+                    _ => [next(), next(), next()],
+                })
+                .collect();
+            let lum = luminance(&colour);
+            let got = texture(&colour, &lum, width, height, 1e-3);
+            let want = box3(
+                &largest_steps_by_pixel(&colour, &lum, width, height),
+                width,
+                height,
+            );
+            for (p, (g, w)) in got.iter().zip(&want).enumerate() {
+                assert_eq!(
+                    g.to_bits(),
+                    w.to_bits(),
+                    "{width}x{height}, pixel {p}: {g} against {w}"
+                );
             }
         }
     }
