@@ -10,7 +10,12 @@ use std::process::ExitCode;
 
 fn main() -> ExitCode {
     keep_freed_memory();
-    let args = cli::Cli::parse();
+    let args = cli::Cli::try_parse().unwrap_or_else(|e| {
+        let argv: Vec<String> = std::env::args_os()
+            .map(|a| a.to_string_lossy().into_owned())
+            .collect();
+        cli::explain_parse_error(e, &argv).exit()
+    });
     init_logging(args.verbose);
     cli::remove_temporaries_on_signals();
     match cli::run(args) {

@@ -347,6 +347,61 @@ fn completion_scripts_complete_in_bash() {
     assert!(stderr(&o).contains("standard output"), "{}", stderr(&o));
 }
 
+/// A file without its flag (as most image tools take it) is refused by clap with a tip
+/// naming the flags that take it, those not given yet; a subcommand's option given to its
+/// parent names the subcommand; clap's own suggestion of a similar name is left alone.
+#[test]
+fn a_file_without_its_flag_gets_a_tip() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&[&str], &[&str], &[&str]); 6] = [
+        (
+            &["render", "photo.jpg", "depth.png"],
+            &[
+                "brume render takes its files by flag",
+                "'--image photo.jpg'",
+                "'--depth photo.jpg'",
+            ],
+            &[],
+        ),
+        (
+            &["render", "--image", "photo.jpg", "depth.png"],
+            &["'--depth depth.png'"],
+            &["--image depth.png"],
+        ),
+        (
+            &["view", "photo.jpg"],
+            &["brume view render takes its files", "'--image photo.jpg'"],
+            &[],
+        ),
+        (
+            &["view", "--image=photo.jpg"],
+            &["--image is an option of brume view render"],
+            &[],
+        ),
+        (
+            &["photo.jpg"],
+            &["brume render takes its files", "'--image photo.jpg'"],
+            &[],
+        ),
+        (
+            &["rendr", "photo.jpg"],
+            &["a similar subcommand exists: 'render'"],
+            &["takes its files"],
+        ),
+    ];
+    for (args, wanted, unwanted) in cases {
+        let o = brume(dir.path(), args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        for w in wanted {
+            assert!(err.contains(w), "{args:?}: {w:?} not in {err}");
+        }
+        for u in unwanted {
+            assert!(!err.contains(u), "{args:?}: {u:?} in {err}");
+        }
+    }
+}
+
 #[test]
 fn missing_input_file_is_named() {
     let dir = tempfile::tempdir().unwrap();

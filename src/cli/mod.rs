@@ -172,6 +172,94 @@ fn open_renderer(egl: Option<Platform>) -> Result<Headless> {
     Ok(r)
 }
 
+/// The files brume's commands take by flag, and what each is.
+const FILE_FLAGS: [(&str, &str); 2] = [
+    ("image", "the colour image"),
+    ("depth", "the depth, range or disparity map"),
+];
+
+/// clap's error with a tip where a file was given without its flag (`brume render
+/// photo.jpg`, or `brume view photo.jpg`, which clap reads as a subcommand) or a
+/// subcommand's option to its parent (`brume view --image photo.jpg`); any other error,
+/// or one clap already suggests a name for, as it is.
+pub fn explain_parse_error(mut error: clap::Error, argv: &[String]) -> clap::Error {
+    use clap::error::{ContextKind, ContextValue, ErrorKind};
+    let suggested = [ContextKind::SuggestedArg, ContextKind::SuggestedSubcommand]
+        .into_iter()
+        .any(|kind| error.get(kind).is_some());
+    let unexpected = [ContextKind::InvalidArg, ContextKind::InvalidSubcommand]
+        .into_iter()
+        .find_map(|kind| match error.get(kind) {
+            Some(ContextValue::String(arg)) => Some(arg.clone()),
+            _ => None,
+        });
+    let kind_fits = matches!(
+        error.kind(),
+        ErrorKind::UnknownArgument | ErrorKind::InvalidSubcommand
+    );
+    let tip = match unexpected {
+        Some(arg) if kind_fits && !suggested => flag_tip(&arg, argv),
+        _ => None,
+    };
+    if let Some(tip) = tip {
+        error.insert(
+            ContextKind::Suggested,
+            ContextValue::StyledStrs(vec![tip.into()]),
+        );
+    }
+    error
+}
+
+/// The tip of [`explain_parse_error`] for `arg`, which the command `argv` runs did not
+/// expect.
+fn flag_tip(arg: &str, argv: &[String]) -> Option<String> {
+    let mut command = Cli::command();
+    let mut words = vec!["brume".to_string()];
+    for word in argv.iter().skip(1) {
+        if let Some(sub) = command.find_subcommand(word).cloned() {
+            words.push(sub.get_name().to_string());
+            command = sub;
+        }
+    }
+    let takes = |command: &clap::Command, long: &str| {
+        command.get_arguments().any(|a| a.get_long() == Some(long))
+    };
+    if let Some(option) = arg.strip_prefix("--") {
+        let long = option.split('=').next().unwrap_or(option);
+        let sub = command.get_subcommands().find(|c| takes(c, long))?;
+        let owner = format!("{} {}", words.join(" "), sub.get_name());
+        return Some(format!(
+            "--{long} is an option of {owner}: '{owner} --{long} …'"
+        ));
+    }
+    let takes_files = |command: &clap::Command| FILE_FLAGS.iter().any(|(l, _)| takes(command, l));
+    if !takes_files(&command) {
+        let sub = command
+            .get_subcommands()
+            .find(|c| takes_files(c))
+            .cloned()?;
+        words.push(sub.get_name().to_string());
+        command = sub;
+    }
+    let given = |long: &str| {
+        let flag = format!("--{long}");
+        argv.iter()
+            .any(|a| *a == flag || a.starts_with(&format!("{flag}=")))
+    };
+    let choices: Vec<String> = FILE_FLAGS
+        .iter()
+        .filter(|(long, _)| takes(&command, long) && !given(long))
+        .map(|(long, what)| format!("'--{long} {arg}' ({what})"))
+        .collect();
+    (!choices.is_empty()).then(|| {
+        format!(
+            "{} takes its files by flag: {}",
+            words.join(" "),
+            choices.join(" or ")
+        )
+    })
+}
+
 /// Library fields whose flag is not the field's name with dashes.
 const FLAG_ALIASES: [(&str, &str); 16] = [
     ("local_outlier_factor", "--local-outliers"),
