@@ -54,7 +54,21 @@ fn init_logging(verbose: u8) {
         1 => "info",
         _ => "debug",
     };
-    env_logger::Builder::from_env(env_logger::Env::default().default_filter_or(level))
+    let env = env_logger::Env::default().default_filter_or(level);
+    let mut builder = env_logger::Builder::from_env(env);
+    // Through the writer that puts a line above a command's spinner; env_logger colours a
+    // writer of its own only when told to, as it would stderr by itself.
+    builder.target(env_logger::Target::Pipe(Box::new(cli::stages::LogWriter)));
+    if std::env::var_os("RUST_LOG_STYLE").is_none() {
+        use std::io::IsTerminal;
+        let colour = std::io::stderr().is_terminal() && std::env::var_os("NO_COLOR").is_none();
+        builder.write_style(if colour {
+            env_logger::WriteStyle::Always
+        } else {
+            env_logger::WriteStyle::Never
+        });
+    }
+    builder
         .format(|buf, record| {
             use std::io::Write;
             let level = record.level();

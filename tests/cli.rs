@@ -402,6 +402,54 @@ fn a_file_without_its_flag_gets_a_tip() {
     }
 }
 
+/// On a terminal (a pseudo-terminal from `script`, bsdutils, which `tools/setup.sh`
+/// installs) `render` shows the stage it is at and takes it off before the report; a log
+/// line goes above it. Where stderr is not a terminal nothing of it is written.
+#[test]
+fn render_shows_its_stage_on_a_terminal_only() {
+    let dir = tempfile::tempdir().unwrap();
+    let (image, depth) = small_scene(dir.path());
+    let bin = env!("CARGO_BIN_EXE_brume");
+    let command = format!(
+        "'{bin}' render --image '{}' --depth '{}' --depth-scale 1 --beta 0.02 --out fog.png",
+        image.display(),
+        depth.display()
+    );
+    let _lock = SERIAL.lock().unwrap_or_else(|e| e.into_inner());
+    let o = Command::new("script")
+        .args(["-qec", &command, "/dev/null"])
+        .current_dir(dir.path())
+        .env_remove("RUST_LOG")
+        .output()
+        .expect("run brume under script (bsdutils: bash tools/setup.sh installs it)");
+    drop(_lock);
+    let shown = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{shown}");
+    let stage = shown.find("reading the photo and its depth").expect(&shown);
+    let cleared = shown.rfind("\r\x1b[2K").expect(&shown);
+    let report = shown.find("wrote ").expect(&shown);
+    assert!(stage < cleared && cleared < report, "{shown:?}");
+    assert!(!shown[report..].contains("(0s)"), "{shown:?}");
+    // The depth along the optical axis without a focal length is warned of: on a line of
+    // its own (the spinner taken off first, not written into), with the spinner drawn
+    // again after it.
+    let warning = shown.find("WARN").expect(&shown);
+    let before = &shown[..warning];
+    let line_start = before.rfind("\x1b[2K").expect(&shown);
+    assert!(!before[line_start..].contains("reading"), "{shown:?}");
+    let line_end = warning + shown[warning..].find("\r\n").expect(&shown);
+    assert!(shown[line_end..report].contains("(0s)"), "{shown:?}");
+
+    let o = render_files(
+        dir.path(),
+        &image,
+        &depth,
+        &["--depth-scale", "1", "--beta", "0.02", "--out", "fog2.png"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("reading the photo"), "{}", stderr(&o));
+}
+
 #[test]
 fn missing_input_file_is_named() {
     let dir = tempfile::tempdir().unwrap();

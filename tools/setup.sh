@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Installs what brume needs at run time and in CI, if it is missing: Mesa's EGL and
 # OpenGL ES (llvmpipe works headless, no GPU or display needed), the X client libraries
-# `brume view` loads at run time and Xvfb for its window tests, the rustfmt/clippy
+# `brume view` loads at run time and Xvfb for its window tests, `script` (bsdutils: the
+# tests run `brume` on a pseudo-terminal to see its spinner), the rustfmt/clippy
 # components and the aarch64-linux-android target (for the Android app's check). Safe to
 # run again: it installs nothing that is already there.
 set -euo pipefail
 
 packages=(libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri
-    libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xvfb xauth)
+    libx11-6 libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xvfb xauth
+    bsdutils)
 
 missing=()
 for p in "${packages[@]}"; do
@@ -26,7 +28,7 @@ if ((${#missing[@]})); then
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 else
-    echo "setup: Mesa EGL/GLES, X libraries and Xvfb present"
+    echo "setup: Mesa EGL/GLES, X libraries, Xvfb and script present"
 fi
 
 # The Android app's target: CI checks the workspace for it (no NDK needed to check).

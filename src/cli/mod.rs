@@ -37,6 +37,7 @@ pub(crate) mod refine;
 pub(crate) mod render;
 pub(crate) mod scene;
 mod sky;
+pub(crate) mod stages;
 mod sun;
 #[cfg(all(feature = "viewer", not(target_os = "android")))]
 pub(crate) mod view;
@@ -140,6 +141,7 @@ pub enum Stream {
 /// redirection) are said once on stderr.
 pub fn write_stream(stream: Stream, text: std::fmt::Arguments) {
     use std::io::Write;
+    stages::clear_shown();
     let result = match stream {
         Stream::Out => std::io::stdout().lock().write_fmt(text),
         Stream::Err => std::io::stderr().lock().write_fmt(text),

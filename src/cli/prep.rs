@@ -32,6 +32,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     // Everything is read and computed before the first output is staged: a bad input
     // leaves every output as it was.
     // With an image, the depth is turned upright with it (its EXIF orientation).
+    let stages = super::stages::Stages::start("reading the depth");
     let (photo, loaded) = match &args.image {
         Some(path) => {
             let mut photo = Photo::load(path, depth_path(args)?, &depth_options(&args.depth))?;
@@ -48,6 +49,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     let refine = args.refine.options(loaded.format)?;
     let masks = load_masks(&args.prep, &loaded, &depth_name)?;
     let mask_format = masks.sky_format;
+    stages.at("pre-processing the depth");
     let mut refine_ms = 0.0;
     let (loaded, prepared, airlight, plan) = match photo {
         Some(photo) => {
@@ -59,6 +61,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
                 airlight: None,
             };
             let mut prepared = brume::photo::preprocess(&photo, &opts)?;
+            stages.at("refining the depth");
             let started = Instant::now();
             let plan = prepared.refine(&photo, &refine, &mut CpuFilter)?;
             refine_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -78,6 +81,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
     };
     let (w, h) = (prepared.range.width(), prepared.range.height());
     let measured = brume::refine::nearest_to_image_size(&loaded.range, w, h);
+    stages.at(&format!("writing {}", args.out.display()));
     let mut outputs = Outputs::new();
     // Laid out as the --depth file, which it stands in for: a render with the photo turns
     // it upright again.

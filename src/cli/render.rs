@@ -30,9 +30,12 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let out = output_path(args)?;
     output::check_image_output(&out, "--out")?;
     super::refuse_overlaps(&[("--out", &out)], &input_paths(args))?;
+    let stages = super::stages::Stages::start("reading the photo and its depth");
     let mut scene = load_scene(args)?;
 
+    stages.at("pre-processing the depth");
     let mut prep = preprocess(args, &scene)?;
+    stages.at("opening the GL context and refining the depth");
     let mut headless = super::open_renderer(egl)?;
     let depth_size = [scene.depth.range.width(), scene.depth.range.height()];
     let refine_mode = args.refine.options(scene.depth.format)?.mode.name();
@@ -47,6 +50,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
             p.stats.s_max = None;
         }
     }
+    stages.at("rendering");
     let inserted = insert_object(args, &mut scene, &mut prep)?;
     let capture = capture_options(&args.capture, args.prep.seed)?;
     let range = &prep.range;
@@ -87,6 +91,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         }
     };
     photo::capture(&mut rendered.image, &capture)?;
+    stages.at(&format!("writing {}", out.display()));
     let mut outputs = Outputs::new();
     outputs.stage_photo(&out, &rendered.image, &scene.metadata)?;
     super::commit(outputs)?;
