@@ -349,11 +349,13 @@ fn completion_scripts_complete_in_bash() {
 
 /// A file without its flag (as most image tools take it) is refused by clap with a tip
 /// naming the flags that take it, those not given yet; a subcommand's option given to its
-/// parent names the subcommand; clap's own suggestion of a similar name is left alone.
+/// parent names the subcommand; another tool's name for a flag names brume's instead of
+/// clap's nearest spelling (`--input` is not `--tint`); clap's own suggestion of a similar
+/// name is left alone otherwise.
 #[test]
 fn a_file_without_its_flag_gets_a_tip() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&[&str], &[&str], &[&str]); 6] = [
+    let cases: [(&[&str], &[&str], &[&str]); 8] = [
         (
             &["render", "photo.jpg", "depth.png"],
             &[
@@ -382,6 +384,16 @@ fn a_file_without_its_flag_gets_a_tip() {
             &["photo.jpg"],
             &["brume render takes its files", "'--image photo.jpg'"],
             &[],
+        ),
+        (
+            &["render", "--input", "photo.jpg"],
+            &["brume render takes --image for that (the colour image)"],
+            &["--tint"],
+        ),
+        (
+            &["render", "--fog=0.02"],
+            &["takes --beta for that", "--visibility"],
+            &["--fov"],
         ),
         (
             &["rendr", "photo.jpg"],
