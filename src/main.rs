@@ -14,7 +14,7 @@ fn main() -> ExitCode {
         let argv: Vec<String> = std::env::args_os()
             .map(|a| a.to_string_lossy().into_owned())
             .collect();
-        cli::explain_parse_error(e, &argv).exit()
+        cli::tips::explain_parse_error(e, &argv).exit()
     });
     init_logging(args.verbose);
     cli::remove_temporaries_on_signals();
