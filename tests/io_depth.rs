@@ -1033,6 +1033,12 @@ fn relative_inverse_depth_becomes_range() {
         (*d.range.get(1, 0), *d.range.get(2, 0)),
         (1.0 / 1000.0, 1.0 / 4000.0)
     );
+    // An 8-bit PNG (a monocular model's visualisation) is Middlebury 2006's disparity: the
+    // refusal says which files carry inverse depth.
+    let png8 = save_png8(dir.path(), "inverse8.png", 3, 1, &[0, 100, 200]);
+    let err = load_range(&png8, &opts).unwrap_err().to_string();
+    assert!(err.contains("middlebury2006"), "{err}");
+    assert!(err.contains("16-bit PNG or a float map"), "{err}");
     assert_eq!(
         "inverse-depth".parse::<DepthKind>().unwrap(),
         DepthKind::Inverse

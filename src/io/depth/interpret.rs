@@ -89,11 +89,19 @@ fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<Dep
     let rule = format.rule();
     let kind = requested.unwrap_or(rule.default_kind);
     if !rule.accepts(kind) {
-        let expected = if rule.default_kind == DepthKind::Disparity {
+        let mut expected = if rule.default_kind == DepthKind::Disparity {
             format!("disparity for `depth_format` {format}")
         } else {
             format!("depth or range for `depth_format` {format}")
         };
+        if kind == DepthKind::Inverse {
+            // An 8-bit PNG is read as Middlebury 2006's disparity: a monocular model's
+            // output saved as one (its visualisation) has lost most of its levels.
+            expected.push_str(
+                " (a monocular model's inverse depth is read from a 16-bit PNG or a float \
+                 map, .npy, .pfm, .exr or float TIFF: save its output as one of those)",
+            );
+        }
         return Err(Error::invalid("depth_kind", kind, expected));
     }
     Ok(kind)
