@@ -30,7 +30,10 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
     let out = output_path(args)?;
     output::check_image_output(&out, "--out")?;
     super::refuse_overlaps(&[("--out", &out)], &input_paths(args))?;
-    let stages = super::stages::Stages::start("reading the photo and its depth");
+    let stages = super::stages::Stages::start(match (&args.image, &args.depth.depth) {
+        (None, None) => "making the built-in demo scene",
+        _ => "reading the photo and its depth",
+    });
     let mut scene = load_scene(args)?;
 
     stages.at("pre-processing the depth");
