@@ -15,13 +15,14 @@ static SHOWN: Mutex<Option<ProgressBar>> = Mutex::new(None);
 /// says each stage itself (`-v`). Taken off before anything the program prints
 /// ([`clear_shown`], from `outln!` and the others) and when dropped (an error's line
 /// comes after it).
-pub struct Stages(Option<ProgressBar>);
+/// (Whether this one put up the spinner: [`SHOWN`] holds it, the one handle to it.)
+pub struct Stages(bool);
 
 impl Stages {
     /// Shows `first` as the stage.
     pub fn start(first: &str) -> Self {
         if log::log_enabled!(log::Level::Info) {
-            return Stages(None);
+            return Stages(false);
         }
         let bar = ProgressBar::with_draw_target(None, ProgressDrawTarget::stderr());
         let style = ProgressStyle::with_template("{spinner} {msg} ({elapsed})")
@@ -29,13 +30,13 @@ impl Stages {
         bar.set_style(style);
         bar.set_message(first.to_string());
         bar.enable_steady_tick(Duration::from_millis(100));
-        *shown() = Some(bar.clone());
-        Stages(Some(bar))
+        *shown() = Some(bar);
+        Stages(true)
     }
 
-    /// Shows `stage` as the stage.
+    /// Shows `stage` as the stage, while the spinner is up.
     pub fn at(&self, stage: &str) {
-        if let Some(bar) = &self.0 {
+        if let Some(bar) = shown().as_ref() {
             bar.set_message(stage.to_string());
         }
     }
@@ -43,7 +44,7 @@ impl Stages {
 
 impl Drop for Stages {
     fn drop(&mut self) {
-        if self.0.take().is_some() {
+        if self.0 {
             clear_shown();
         }
     }

@@ -4,11 +4,13 @@
 use super::Cli;
 use clap::CommandFactory;
 
+/// What `--image` takes.
+const IMAGE: &str = "the colour image";
+/// What `--depth` takes.
+const DEPTH: &str = "the depth, range or disparity map";
+
 /// The files brume's commands take by flag, and what each is.
-const FILE_FLAGS: [(&str, &str); 2] = [
-    ("image", "the colour image"),
-    ("depth", "the depth, range or disparity map"),
-];
+const FILE_FLAGS: [(&str, &str); 2] = [("image", IMAGE), ("depth", DEPTH)];
 
 /// Flags people type from other tools, and brume's flag for what they mean, with what it
 /// takes.
@@ -18,7 +20,7 @@ const FLAG_SYNONYMS: [(&[&str], &str, &str); 3] = [
             "input", "in", "img", "photo", "picture", "rgb", "color", "colour",
         ],
         "image",
-        "the colour image",
+        IMAGE,
     ),
     (
         &[
@@ -30,7 +32,7 @@ const FLAG_SYNONYMS: [(&[&str], &str, &str); 3] = [
             "range-map",
         ],
         "depth",
-        "the depth, range or disparity map",
+        DEPTH,
     ),
     (
         &["fog", "haze", "density", "extinction"],
@@ -100,6 +102,12 @@ fn command_of(argv: &[String]) -> (clap::Command, Vec<String>) {
     (command, words)
 }
 
+/// The name of the option `arg` (`--input=x` → `input`); `None` for a value.
+fn long_name(arg: &str) -> Option<&str> {
+    let option = arg.strip_prefix("--")?;
+    option.split('=').next()
+}
+
 /// Whether `command` has the option `--long`.
 fn takes(command: &clap::Command, long: &str) -> bool {
     command.get_arguments().any(|a| a.get_long() == Some(long))
@@ -107,8 +115,7 @@ fn takes(command: &clap::Command, long: &str) -> bool {
 
 /// The tip for another tool's name of a flag `command` has ([`FLAG_SYNONYMS`]).
 fn synonym_tip(arg: &str, command: &clap::Command, words: &[String]) -> Option<String> {
-    let option = arg.strip_prefix("--")?;
-    let name = option.split('=').next().unwrap_or(option);
+    let name = long_name(arg)?;
     let (_, flag, what) = FLAG_SYNONYMS
         .iter()
         .find(|(names, flag, _)| names.contains(&name) && takes(command, flag))?;
@@ -127,8 +134,7 @@ fn flag_tip(
     mut words: Vec<String>,
     argv: &[String],
 ) -> Option<String> {
-    if let Some(option) = arg.strip_prefix("--") {
-        let long = option.split('=').next().unwrap_or(option);
+    if let Some(long) = long_name(arg) {
         let sub = command.get_subcommands().find(|c| takes(c, long))?;
         let owner = format!("{} {}", words.join(" "), sub.get_name());
         return Some(format!(
@@ -144,11 +150,7 @@ fn flag_tip(
         words.push(sub.get_name().to_string());
         command = sub;
     }
-    let given = |long: &str| {
-        let flag = format!("--{long}");
-        argv.iter()
-            .any(|a| *a == flag || a.starts_with(&format!("{flag}=")))
-    };
+    let given = |long: &str| argv.iter().any(|a| long_name(a) == Some(long));
     let choices: Vec<String> = FILE_FLAGS
         .iter()
         .filter(|(long, _)| takes(&command, long) && !given(long))
