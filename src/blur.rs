@@ -86,7 +86,7 @@ impl FromStr for Precision {
 }
 
 /// How the diffusion blur runs.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Blur {
     /// Diffusion scheme.
     pub scheme: Scheme,

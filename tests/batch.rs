@@ -163,6 +163,56 @@ fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
 }
 
 #[test]
+fn a_run_with_other_settings_is_refused_and_changes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    cityscapes_dataset(dir.path(), 1);
+    let out = dir.path().join("out");
+    let run = |extra: &[&str]| {
+        let mut args = vec!["batch", "cityscapes", "--out", "out"];
+        args.extend_from_slice(extra);
+        brume(dir.path(), &args)
+    };
+    let record = || -> serde_json::Value {
+        let text = std::fs::read_to_string(out.join("brume-batch-settings.json")).unwrap();
+        serde_json::from_str(&text).unwrap()
+    };
+    let first = run(&["--beta", "0.01", "--lambda", "2"]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    let recorded = record();
+    assert_eq!(recorded["brume"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(recorded["settings"]["frame"]["fog"]["lambda"], 2.0);
+    let written = common::snapshot(&out);
+
+    // Skipping the outputs there would mix two fogs: refused, naming what differs.
+    let other = run(&["--beta", "0.01,0.02", "--lambda", "4", "--albedo", "0.8"]);
+    assert!(!other.status.success(), "other settings accepted");
+    let err = stderr(&other);
+    for expected in [
+        "--out",
+        "albedo 1.0 there, 0.8 here",
+        "fog.lambda 2.0 there, 4.0 here",
+    ] {
+        assert!(err.contains(expected), "{expected}: {err}");
+    }
+    assert_eq!(common::snapshot(&out), written, "the folder changed");
+
+    // The same settings, with another β and other threads: the new β's outputs only.
+    let more = run(&["--beta", "0.01,0.02", "--lambda", "2", "--loaders", "2"]);
+    assert!(more.status.success(), "{}", stderr(&more));
+    let summary = String::from_utf8_lossy(&more.stdout).into_owned();
+    assert!(
+        summary.contains("wrote 1 outputs") && summary.contains("skipped 1 already written"),
+        "{summary}"
+    );
+
+    // The record removed (the user's choice): other settings are taken, and recorded.
+    std::fs::remove_file(out.join("brume-batch-settings.json")).unwrap();
+    let anyway = run(&["--beta", "0.03", "--lambda", "4"]);
+    assert!(anyway.status.success(), "{}", stderr(&anyway));
+    assert_eq!(record()["settings"]["frame"]["fog"]["lambda"], 4.0);
+}
+
+#[test]
 fn shards_split_the_frames_with_no_overlap() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = manifest_of(&cityscapes_dataset(dir.path(), 6));

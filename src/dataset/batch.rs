@@ -21,6 +21,7 @@
 //! ```
 
 use super::destinations::{check_destinations, check_sky_mask_size};
+use super::settings::{check_settings, record_settings, settings_of};
 use super::writer::{write_outputs, Encode, Event, Log};
 use super::{find_cityscapes, read_manifest, Item, Shard};
 use crate::blur::Blur;
@@ -166,6 +167,8 @@ pub struct Batch {
     total: usize,
     /// Outputs of this shard already complete, skipped.
     skipped: usize,
+    /// The settings its outputs are made with ([`settings_of`]).
+    settings: serde_json::Value,
 }
 
 impl Batch {
@@ -173,8 +176,10 @@ impl Batch {
     /// `manifest` ([`read_manifest`]), checked before any file or folder is made: the
     /// options (each β, the masks exist, the blur's schedule at each β), a shared sky mask
     /// of every frame's size, every frame's outputs under [`BatchOptions::out`] and its
-    /// own. Outputs already complete are skipped. Frames that cannot be assembled
-    /// (missing disparity or camera) are not an error here: the run logs them as failed.
+    /// own, and that the outputs already in the folder were made with these settings
+    /// ([`SETTINGS_FILE`](super::SETTINGS_FILE)). Outputs already complete are skipped.
+    /// Frames that cannot be assembled (missing disparity or camera) are not an error
+    /// here: the run logs them as failed.
     pub fn plan(inputs: &[PathBuf], manifest: Option<&Path>, opts: BatchOptions) -> Result<Batch> {
         for (name, threads, max) in [
             ("loaders", opts.loaders, MAX_LOADERS),
@@ -209,6 +214,8 @@ impl Batch {
             Betas::Each(betas) => betas.clone(),
         };
         check_destinations(&opts.out, opts.transmittance, &items, &named)?;
+        let settings = settings_of(&opts);
+        check_settings(&opts.out, &settings)?;
         let total = items.len() + failures.len();
         failures.retain(|f| opts.shard.contains(&f.item));
         let mut skipped = 0;
@@ -235,6 +242,7 @@ impl Batch {
             failures,
             total,
             skipped,
+            settings,
         })
     }
 
@@ -282,6 +290,7 @@ impl Batch {
             failures,
             total,
             skipped,
+            settings,
         } = self;
         log::info!(
             "{total} frames found, {} in shard {}/{}; {outputs} outputs to write, {skipped} \
@@ -292,6 +301,7 @@ impl Batch {
         );
         std::fs::create_dir_all(&opts.out).map_err(|e| Error::io(&opts.out, e))?;
         let stale = output::remove_stale_temporaries(&opts.out)?;
+        record_settings(&opts.out, &settings)?;
         if stale > 0 {
             observe(BatchEvent::RemovedTemporaries {
                 count: stale,

@@ -4,12 +4,14 @@
 
 mod batch;
 mod destinations;
+mod settings;
 mod writer;
 
 pub use batch::{
     check_beta, default_loaders, default_writers, Batch, BatchEvent, BatchOptions, BatchReport,
     Betas, MAX_BETA, MAX_LOADERS, MAX_WRITERS, MIN_BETA,
 };
+pub use settings::{settings_of, SETTINGS_FILE};
 
 use crate::error::{Error, Result};
 use crate::photo::BetaDistribution;

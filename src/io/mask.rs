@@ -38,7 +38,8 @@ pub const CITYSCAPES_EGO_VEHICLE_LABEL_ID: u16 = 1;
 const PNG_SIGNATURE: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
 
 /// How a sky mask file encodes the sky.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum SkyMaskFormat {
     /// Non-zero = sky.
     Binary,

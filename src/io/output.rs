@@ -127,6 +127,14 @@ pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
     outputs.commit()
 }
 
+/// [`write_bytes`] unless a file is already at `path`: `Ok(false)` then, and nothing
+/// written. Of two processes writing one path at once, one writes it.
+pub fn write_bytes_unless_present(path: &Path, bytes: &[u8]) -> Result<bool> {
+    let mut outputs = Outputs::new();
+    outputs.stage_bytes(path, bytes)?;
+    outputs.rename_all(true)
+}
+
 /// `.png, .pfm or .exr`.
 fn list_extensions(extensions: &[&str]) -> String {
     let dotted: Vec<String> = extensions.iter().map(|e| format!(".{e}")).collect();
@@ -383,16 +391,33 @@ impl Outputs {
     /// `exit_removing_temporaries` sees either all of them done or none. After the
     /// checks of staging, a rename fails only if the directory changed meanwhile; the
     /// files renamed before it then stay, the others are removed.
-    pub fn commit(mut self) -> Result<()> {
+    pub fn commit(self) -> Result<()> {
+        self.rename_all(false).map(|_| ())
+    }
+
+    /// [`Outputs::commit`]; with `keep_existing`, a destination already present is kept
+    /// and its temporary removed (`Ok(false)`: not every file was renamed).
+    fn rename_all(mut self, keep_existing: bool) -> Result<bool> {
         let mut live = live_temporaries();
-        let mut result = Ok(());
+        let mut result = Ok(true);
         for staged in &mut self.staged {
             let tmp = staged.tmp.take().expect("each file is renamed once");
             live.retain(|p| p != tmp.path());
-            if let Err(e) = tmp.persist(&staged.dest) {
-                // Dropping e.file removes the temporary.
-                result = Err(Error::io(&staged.dest, e.error));
-                break;
+            let renamed = if keep_existing {
+                tmp.persist_noclobber(&staged.dest)
+            } else {
+                tmp.persist(&staged.dest)
+            };
+            // Dropping e.file removes the temporary.
+            match renamed {
+                Ok(_) => {}
+                Err(e) if keep_existing && e.error.kind() == std::io::ErrorKind::AlreadyExists => {
+                    result = Ok(false);
+                }
+                Err(e) => {
+                    result = Err(Error::io(&staged.dest, e.error));
+                    break;
+                }
             }
         }
         // Unlocked before `self` drops the files not renamed: their drop takes the lock.

@@ -44,7 +44,7 @@ pub const VISIBILITY_OPTICAL_DEPTH: f64 = 2.995_732_273_553_991;
 pub const DEFAULT_ALBEDO: f64 = 1.0;
 
 /// Fog in physical units: extinction β (m⁻¹) and single-scattering albedo (module docs).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct PhysicalFog {
     /// Extinction coefficient β = βa + βs in m⁻¹, > 0.
     pub beta: f64,

@@ -24,7 +24,7 @@ use crate::raster::RgbaImage;
 use crate::rng::SplitMix64;
 
 /// The Poisson-Gaussian noise of a sensor (see the module documentation).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct SensorNoise {
     /// K: the linear value of one photo-electron (1 / full-well electrons), in [0, 1];
     /// 0 for no shot noise. Shot noise has variance K·v at value v. 0.0005 is a small sensor at high ISO; 0.0001 a
@@ -35,7 +35,7 @@ pub struct SensorNoise {
 }
 
 /// What the camera does after the fog. `Default` does nothing: [`CaptureOptions::is_off`].
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct CaptureOptions {
     /// Exposure change in stops (the image times 2^stops); 0 keeps it.
     pub exposure_stops: f64,

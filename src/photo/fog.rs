@@ -11,7 +11,7 @@ use crate::raster::{Grid, ScalarMap};
 use crate::renderer::{Rendered, Renderer};
 
 /// How dense the haze is.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub enum Extinction {
     /// Paper 000's κa and κs per unit of normalised range (the largest range is 1).
     Normalised {
@@ -25,7 +25,7 @@ pub enum Extinction {
 }
 
 /// The fog a photo gets.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct FogOptions {
     /// How dense.
     pub extinction: Extinction,

@@ -38,7 +38,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 /// Whose conventions a frame's fog follows.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Conventions {
     /// brume's: the haze on linear light with the diffusion blur.
     #[default]
@@ -49,7 +50,7 @@ pub enum Conventions {
 }
 
 /// How every frame of a dataset is read, prepared and fogged.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct FrameOptions {
     /// How depth files are read; a frame's own camera or calibration file replaces
     /// [`DepthOptions::camera`] and [`DepthOptions::calib`].

@@ -9,16 +9,19 @@ use crate::raster::{Grid, ScalarMap};
 use crate::refine::{self, RangeFilter, RefineMode, RefineOptions, RefinePlan};
 
 /// How a photo's range is made ready for fog.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PrepareOptions {
     /// Hole filling, sky detection and the horizon margin ([`prep::prepare_guided`]);
     /// `None` uses the range as loaded (unknown pixels are then taken as the farthest).
     pub prep: Option<PrepOptions>,
     /// A sky mask on the depth map's grid (true = sky), e.g. from segmentation: replaces
-    /// the sky detection.
+    /// the sky detection. Not serialised (nor the ego mask): a photo's data, not a
+    /// setting.
+    #[serde(skip)]
     pub sky_mask: Option<Grid<bool>>,
     /// An ego-vehicle mask on the depth map's grid (true = the car's hood): range 0,
     /// never fogged.
+    #[serde(skip)]
     pub ego_mask: Option<Grid<bool>>,
     /// The image-guided refinement (upsampling of a smaller depth map always runs).
     pub refine: RefineOptions,

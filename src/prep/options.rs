@@ -5,7 +5,7 @@ use crate::{Error, Result};
 /// Which components of unknown pixels are sky under the depth rules. A component is sky
 /// when it passes every rule; of those, the `max_components` largest are kept. See the
 /// module docs.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct SkyRules {
     /// Minimum area, as a fraction of the image (default 0.01). Also the minimum area of
     /// each region the image-guided detector grows.
@@ -37,7 +37,7 @@ impl Default for SkyRules {
 
 /// Rules of the image-guided sky detector, used when [`super::prepare_guided`] is given the
 /// colour image (see the module docs, step 2, for what each one does).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct ImageSkyRules {
     /// Seeds are looked for in this top fraction of the rows (default 0.05; at least one
     /// row).
@@ -92,7 +92,7 @@ pub(super) const MIN_FAR_PATCH: usize = 16;
 pub(super) const MIN_LOCAL_SPAN: usize = 4;
 
 /// Options of [`super::prepare`]. The defaults are those documented on each field.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct PrepOptions {
     /// Sky detection rules on the range alone.
     pub sky: SkyRules,

@@ -63,7 +63,7 @@ pub const MAX_UPSAMPLING: f64 = 16.0;
 pub const ASPECT_TOLERANCE: f64 = 0.01;
 
 /// How to refine a range with its image.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Refine {
     /// Window radius r in full-resolution pixels (> 0).
     pub radius_px: f64,

@@ -13,8 +13,9 @@ use crate::raster::{Grid, RgbImage, ScalarMap};
 use std::borrow::Cow;
 
 /// Which refinement a range gets (`--refine`).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 #[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
 pub enum RefineMode {
     /// No refinement (a smaller depth map is still upsampled, guided).
     #[default]
@@ -109,7 +110,7 @@ pub fn repair(measured: f32, guided: f32, filled: bool) -> f32 {
 }
 
 /// How a photo's range is refined with its image.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct RefineOptions {
     /// Whether and where the guided filter runs.
     pub mode: RefineMode,

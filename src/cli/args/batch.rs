@@ -29,7 +29,9 @@ pub struct BatchArgs {
     #[arg(long, value_name = "CSV", allow_hyphen_values = true)]
     pub manifest: Option<PathBuf>,
 
-    /// Output folder (created); the input tree is mirrored under it.
+    /// Output folder (created); the input tree is mirrored under it. It records the
+    /// settings its outputs are made with (brume-batch-settings.json): a run with other
+    /// settings, which would mix two fogs in one dataset, is refused.
     #[arg(long, short, value_name = "DIR", allow_hyphen_values = true)]
     pub out: PathBuf,
 

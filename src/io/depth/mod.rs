@@ -66,7 +66,8 @@ pub use middlebury::{
 pub use orient::{DepthLayout, PhotoGeometry};
 
 /// What the values of a map measure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum DepthKind {
     /// Distance along the optical axis (the z coordinate in camera space).
     Depth,
@@ -118,7 +119,8 @@ impl fmt::Display for DepthKind {
 }
 
 /// How a depth file is laid out and scaled.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum DepthFormat {
     /// Guess from the extension, bit depth and the presence of a calibration file.
     Auto,
@@ -187,7 +189,7 @@ impl fmt::Display for DepthFormat {
 }
 
 /// How to read a depth file. `Default` guesses everything.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct DepthOptions {
     /// Layout and scale of the file; `Auto` guesses.
     pub format: DepthFormat,
@@ -233,7 +235,9 @@ pub struct DepthOptions {
     /// The photo the map goes with, as stored, and what its EXIF says: the map is turned
     /// upright with it as `layout` says, `fov` is the upright photo's vertical field of
     /// view, and without `focal` or `fov` its 35 mm equivalent focal length turns depth
-    /// into range. `None` (a map read on its own): the map as stored.
+    /// into range. `None` (a map read on its own): the map as stored. Not serialised: it
+    /// is the photo's, not a setting.
+    #[serde(skip)]
     pub photo: Option<PhotoGeometry>,
     /// How the map lies against `photo`'s orientation.
     pub layout: DepthLayout,

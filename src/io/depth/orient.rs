@@ -58,7 +58,8 @@ impl PhotoGeometry {
 }
 
 /// How a depth map is laid out against its photo's EXIF orientation.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum DepthLayout {
     /// As the photo is stored (as phones write depth), unless its shape fits only the
     /// upright photo (a map made from the photo as a viewer shows it, turned by 90°).
