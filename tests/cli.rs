@@ -355,7 +355,7 @@ fn completion_scripts_complete_in_bash() {
 #[test]
 fn a_file_without_its_flag_gets_a_tip() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&[&str], &[&str], &[&str]); 8] = [
+    let cases: [(&[&str], &[&str], &[&str]); 10] = [
         (
             &["render", "photo.jpg", "depth.png"],
             &[
@@ -394,6 +394,16 @@ fn a_file_without_its_flag_gets_a_tip() {
             &["render", "--fog=0.02"],
             &["takes --beta for that", "--visibility"],
             &["--fov"],
+        ),
+        (
+            &["render", "--out", "fog.png", "--force"],
+            &["brume render replaces the file --out names without asking"],
+            &["--focal"],
+        ),
+        (
+            &["batch", "frames", "--out", "foggy", "-y"],
+            &["brume batch writes the outputs missing under --out"],
+            &[],
         ),
         (
             &["rendr", "photo.jpg"],

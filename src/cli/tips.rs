@@ -41,6 +41,17 @@ const FLAG_SYNONYMS: [(&[&str], &str, &str); 3] = [
     ),
 ];
 
+/// Flags other tools take to replace their outputs (`convert`'s habit, ffmpeg's `-y`).
+const OVERWRITE_FLAGS: [&str; 7] = [
+    "--force",
+    "--overwrite",
+    "--yes",
+    "--clobber",
+    "--replace",
+    "-f",
+    "-y",
+];
+
 /// clap's error with a tip where a file was given without its flag (`brume render
 /// photo.jpg`, or `brume view photo.jpg`, which clap reads as a subcommand), a
 /// subcommand's option to its parent (`brume view --image photo.jpg`), or another tool's
@@ -64,7 +75,9 @@ pub fn explain_parse_error(mut error: clap::Error, argv: &[String]) -> clap::Err
     let tip = match unexpected {
         Some(arg) if kind_fits => {
             let (command, words) = command_of(argv);
-            match synonym_tip(&arg, &command, &words) {
+            match synonym_tip(&arg, &command, &words)
+                .or_else(|| overwrite_tip(&arg, &command, &words))
+            {
                 Some(tip) => {
                     // clap's usage line shows the flag it suggested in place.
                     error.remove(ContextKind::SuggestedArg);
@@ -124,6 +137,27 @@ fn synonym_tip(arg: &str, command: &clap::Command, words: &[String]) -> Option<S
         words.join(" "),
         words.join(" ")
     ))
+}
+
+/// The tip for a flag that asks to replace outputs ([`OVERWRITE_FLAGS`]), to a command
+/// with an `--out`: none is needed (clap's nearest name for `--force` is `--focal`).
+fn overwrite_tip(arg: &str, command: &clap::Command, words: &[String]) -> Option<String> {
+    let flag = arg.split('=').next()?;
+    if !(OVERWRITE_FLAGS.contains(&flag) && takes(command, "out")) {
+        return None;
+    }
+    let words = words.join(" ");
+    Some(if command.get_name() == "batch" {
+        format!(
+            "{words} writes the outputs missing under --out and keeps those there (each is \
+             complete): remove one to have it written again, or give another --out"
+        )
+    } else {
+        format!(
+            "{words} replaces the file --out names without asking (never one of its inputs, \
+             nor a read-only file): no flag is needed"
+        )
+    })
 }
 
 /// The tip of [`explain_parse_error`] for `arg`, which `command` (run as `words`) did not
