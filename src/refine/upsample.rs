@@ -1,0 +1,168 @@
+//! Joint bilateral upsampling of a depth map smaller than the image (Kopf, Cohen,
+//! Lischinski and Uyttendaele, SIGGRAPH 2007): the CPU reference of
+//! `glsl/refine/cells.frag` and `glsl/refine/upsample.frag`.
+
+use super::{cell_means, check_depth_size, check_positive};
+use crate::error::Result;
+use crate::io::image::linear_to_srgb;
+use crate::raster::{Grid, RgbImage, ScalarMap};
+
+/// Default σ of the colour weight of [`joint_bilateral_upsample_reference`], in
+/// sRGB-encoded values (measured on Aloe: 0.15 gives the smallest 95th-percentile error
+/// at 1/8 size; 0.05 follows texture into the range, 0.3 blurs across edges).
+pub const DEFAULT_UPSAMPLE_SIGMA_COLOUR: f64 = 0.15;
+
+/// Joint bilateral upsampling (Kopf, Cohen, Lischinski and Uyttendaele, SIGGRAPH 2007) of
+/// a range smaller than the image, the CPU reference of `glsl/refine/upsample.frag`: each
+/// pixel's log range is the mean over the 6 x 6 cells around it of their log range,
+/// weighted by a Gaussian of the distance (σ one cell) times a Gaussian of the colour
+/// difference (σ `sigma_colour`, sRGB-encoded RGB) between the pixel and the cell's mean
+/// colour, then moved toward the surface holding most of that weight by
+/// [`UPSAMPLE_SHIFT_STEPS`] mean-shift steps. Where the coarse cells straddle an edge of
+/// the image, a pixel takes the range of the cells on its side: on Aloe downsampled 8x
+/// with noise its 95th-percentile error is 0.61x bilinear upsampling's, where the guided
+/// filter's is 0.82x (tests/refine.rs).
+pub fn joint_bilateral_upsample_reference(
+    image: &RgbImage,
+    range: &ScalarMap,
+    sigma_colour: f64,
+) -> Result<ScalarMap> {
+    let (w, h) = (image.width(), image.height());
+    let (lw, lh) = (range.width(), range.height());
+    check_depth_size((w, h), (lw, lh))?;
+    check_positive(range)?;
+    let encoded = |p: [f32; 3]| p.map(|v| f64::from(linear_to_srgb(v.clamp(0.0, 1.0))));
+    let cells = image_at_depth_size_srgb(image, lw, lh);
+    // Once per cell, not at each of its 36 taps: a fifth less time.
+    let log_ranges = Grid::from_fn(lw, lh, |x, y| f64::from(*range.get(x, y)).ln());
+    let scale = [lw as f64 / w as f64, lh as f64 / h as f64];
+    let inv = 1.0 / (2.0 * sigma_colour * sigma_colour);
+    Ok(Grid::par_from_fn(w, h, |x, y| {
+        let colour = encoded(*image.get(x, y));
+        let centre = [
+            (x as f64 + 0.5) * scale[0] - 0.5,
+            (y as f64 + 0.5) * scale[1] - 0.5,
+        ];
+        let base = [centre[0].floor() as isize, centre[1].floor() as isize];
+        let mut taps = [(0.0f64, 0.0f64); 36];
+        let mut n = 0;
+        let (mut sum, mut weight) = (0.0, 0.0);
+        let (mut nearest, mut nearest_d2) = (0.0, f64::INFINITY);
+        for j in -2..=3 {
+            for i in -2..=3 {
+                let (qx, qy) = (base[0] + i, base[1] + j);
+                if qx < 0 || qy < 0 || qx >= lw as isize || qy >= lh as isize {
+                    continue;
+                }
+                let (qx, qy) = (qx as usize, qy as usize);
+                let cell = cells.get(qx, qy);
+                let log_range = *log_ranges.get(qx, qy);
+                let d = [qx as f64 - centre[0], qy as f64 - centre[1]];
+                let d2 = d[0] * d[0] + d[1] * d[1];
+                let dc2: f64 = (0..3).map(|c| (colour[c] - cell[c]).powi(2)).sum();
+                let wgt = (-0.5 * d2 - dc2 * inv).exp();
+                sum += wgt * log_range;
+                weight += wgt;
+                taps[n] = (wgt, log_range);
+                n += 1;
+                if d2 < nearest_d2 {
+                    nearest_d2 = d2;
+                    nearest = log_range;
+                }
+            }
+        }
+        let log_range = if weight > 1e-30 {
+            shift_to_dominant_surface(&taps[..n], sum / weight, weight)
+        } else {
+            nearest
+        };
+        log_range.exp() as f32
+    }))
+}
+
+/// σ of the mean shift's Gaussian in log range (a factor 1.35): taps of the pixel's own
+/// surface are within it, those of a surface behind or in front are not.
+pub const UPSAMPLE_SHIFT_SIGMA: f64 = 0.3;
+/// Mean-shift steps after the weighted mean.
+pub const UPSAMPLE_SHIFT_STEPS: usize = 2;
+/// The taps' weighted standard deviation in log range below which the mean is kept as it
+/// is (one surface: the steps would move it by less than 0.03 %).
+pub const UPSAMPLE_SHIFT_MIN_SPREAD: f64 = 0.03;
+
+/// The joint bilateral mean `mean` of the `(weight, log range)` taps, moved by mean shift
+/// (Comaniciu and Meer, TPAMI 2002) toward the surface that holds most of the weight: where
+/// the colour weights let taps of two surfaces through (the same colour on both sides of a
+/// depth edge, a coarse cell that averages both), the mean is a range neither surface has,
+/// which fog shows as a halo round the nearer one. Each step re-weights the taps by a
+/// Gaussian of their distance to the current estimate; the estimate starts nearer to the
+/// heavier surface, so it goes there. Where the taps agree it stays put; it is continuous
+/// in the taps (no choice of a winner). Measured on the phone evaluation
+/// (`tools/phone_depth_eval.py`): 3-11 % less transmittance error over the frame, 4-10 %
+/// near depth edges. `total` is the sum of the taps' weights, which the mean was taken with.
+fn shift_to_dominant_surface(taps: &[(f64, f64)], mean: f64, total: f64) -> f64 {
+    // Taps of one surface (a spread s much less than σ) would move the mean by about
+    // s³/σ², 3e-4 in log range at the cutoff: not worth the steps, which make the pass
+    // 1.7 times as long on llvmpipe where every pixel takes them.
+    let spread: f64 = taps.iter().map(|&(w, v)| w * (v - mean) * (v - mean)).sum();
+    if spread <= UPSAMPLE_SHIFT_MIN_SPREAD * UPSAMPLE_SHIFT_MIN_SPREAD * total {
+        return mean;
+    }
+    let inv = 1.0 / (2.0 * UPSAMPLE_SHIFT_SIGMA * UPSAMPLE_SHIFT_SIGMA);
+    let mut m = mean;
+    for _ in 0..UPSAMPLE_SHIFT_STEPS {
+        let (mut sum, mut weight) = (0.0, 0.0);
+        for &(w, v) in taps {
+            let wv = w * (-(v - m) * (v - m) * inv).exp();
+            sum += wv * (v - m);
+            weight += wv;
+        }
+        // Every tap too far from the estimate to count: keep it.
+        if weight <= 1e-30 {
+            break;
+        }
+        m += sum / weight;
+    }
+    m
+}
+
+/// The mean sRGB-encoded colour of each cell of a `width` x `height` grid over `image`
+/// (what `cells.frag` packs).
+fn image_at_depth_size_srgb(image: &RgbImage, width: usize, height: usize) -> Grid<[f64; 3]> {
+    cell_means(image, width, height, |v| {
+        f64::from(linear_to_srgb(v.clamp(0.0, 1.0)))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    // A depth edge the image does not show (one grey on both sides): the colour weights
+    // let both surfaces' cells through, and the joint bilateral mean of a pixel near the
+    // edge was a range neither surface has (a halo under fog). The mean shift takes each
+    // pixel a quarter of a cell or more from the edge to its own side's range.
+    #[test]
+    fn upsampling_takes_a_side_of_an_edge_the_colour_does_not_show() {
+        let (near, far) = (5.0f32, 50.0f32);
+        let low = Grid::from_fn(8, 4, |x, _| if x < 4 { near } else { far });
+        let image = RgbImage::from_fn(64, 32, |_, _| [0.5; 3]);
+        let up = joint_bilateral_upsample_reference(&image, &low, 0.15).unwrap();
+        // The plain mean at x = 29 (cell coordinate 3.25, the edge at 3.5): Gaussian
+        // weights of one cell at the cells' distances, 1.51 on the near side, 0.99 far.
+        let centre = (29.0 + 0.5) / 8.0 - 0.5;
+        let (mut sum, mut weight) = (0.0, 0.0);
+        for q in 1..=6 {
+            let d = f64::from(q) - centre;
+            let w = (-0.5 * d * d).exp();
+            sum += w * f64::from(if q < 4 { near } else { far }).ln();
+            weight += w;
+        }
+        let plain = (sum / weight).exp();
+        assert!(plain > 2.0 * f64::from(near), "{plain}");
+        for x in (0..64).filter(|&x| !(30..34).contains(&x)) {
+            let side = if x < 32 { near } else { far };
+            let got = *up.get(x, 16);
+            assert!((got / side - 1.0).abs() < 0.01, "x = {x}: {got} for {side}");
+        }
+    }
+}
