@@ -98,6 +98,34 @@ fn gpu_upsampling_matches_the_cpu_reference() {
     }
 }
 
+/// Where the cells around a pixel agree (a sky of one range, a wall facing the camera),
+/// the GPU interpolates them bilinearly as the reference does, and takes the joint
+/// bilateral mean by the edges of a near box and of the sky.
+#[test]
+fn gpu_upsampling_matches_the_cpu_reference_where_the_range_is_flat() {
+    let (_gl, mut headless) = renderer();
+    let r = headless.renderer().unwrap();
+    let image = common::noise_image(96, 64, 11);
+    let range = Grid::from_fn(96, 64, |x, y| {
+        if y < 20 {
+            1000.0
+        } else if (30..50).contains(&x) && y > 36 {
+            3.0
+        } else {
+            25.0 * (1.0 + 0.00005 * x as f32)
+        }
+    });
+    for k in [2usize, 4, 8] {
+        let low = Grid::from_fn(96 / k, 64 / k, |x, y| *range.get(k * x + k / 2, k * y));
+        let (gpu, _) = r
+            .upsample(&image, &low, DEFAULT_UPSAMPLE_SIGMA_COLOUR)
+            .unwrap();
+        let cpu = joint_bilateral_upsample_reference(&image, &low, DEFAULT_UPSAMPLE_SIGMA_COLOUR)
+            .unwrap();
+        assert_upsampling_agrees(&gpu, &cpu, &format!("flat, 1/{k}"));
+    }
+}
+
 /// A live app's upsampling (`Pipeline::upsample_range_into`, into one R32F texture kept
 /// between frames): every texel written, the same values as `upsample_range` (the same
 /// passes) and its CPU reference, frame after frame with a new guide and range; a texture

@@ -6,7 +6,9 @@
 // then moved by two mean-shift steps (a Gaussian of SHIFT_SIGMA in log range) toward the
 // surface that holds most of the weight, so that taps of two surfaces the colour lets
 // through do not make a range neither has (`shift_to_dominant_surface` in
-// src/refine/mod.rs, the CPU reference).
+// src/refine/upsample.rs, the CPU reference). Where cells.frag found the window's log
+// ranges within u_flat_spread of each other, the pixel takes their bilinear interpolation
+// instead, within that spread of any mean of them, from 4 cells instead of 36.
 
 const float SHIFT_SIGMA = 0.3;
 const int SHIFT_STEPS = 2;
@@ -16,6 +18,7 @@ const float SHIFT_MIN_SPREAD = 0.03;
 
 uniform sampler2D u_colour;
 uniform sampler2D u_cells;        // (r, g, b, log range) per cell
+uniform sampler2D u_flat;         // R: 1 where the window starting two cells before is flat
 uniform ivec2 u_low_size;
 uniform vec2 u_scale;             // cells per full-resolution pixel (x, y)
 uniform bool u_colour_srgb;
@@ -29,6 +32,17 @@ void main() {
     vec3 colour = u_colour_srgb ? clamp(c, 0.0, 1.0) : linear_to_srgb(c);
     vec2 centre = (vec2(p) + 0.5) * u_scale - 0.5;
     ivec2 base = ivec2(floor(centre));
+    ivec2 last = u_low_size - 1;
+    if (texelFetch(u_flat, clamp(base, ivec2(0), last), 0).r > 0.5) {
+        vec2 at = clamp(centre, vec2(0.0), vec2(last));
+        ivec2 lo = ivec2(floor(at));
+        ivec2 hi = min(lo + 1, last);
+        vec2 t = at - vec2(lo);
+        float top = mix(texelFetch(u_cells, lo, 0).a, texelFetch(u_cells, ivec2(hi.x, lo.y), 0).a, t.x);
+        float bottom = mix(texelFetch(u_cells, ivec2(lo.x, hi.y), 0).a, texelFetch(u_cells, hi, 0).a, t.x);
+        o_range = vec4(exp(mix(top, bottom, t.y)), 0.0, 0.0, 1.0);
+        return;
+    }
     float inv_colour = 1.0 / (2.0 * u_sigma_colour * u_sigma_colour);
     float sum = 0.0;
     float weight = 0.0;

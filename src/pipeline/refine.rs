@@ -10,7 +10,7 @@
 
 use super::{
     bind_texture, draw_fullscreen, set_int, set_value, Encoding, Pipeline, ProgramKey, UNIT_DEPTH,
-    UNIT_MAIN,
+    UNIT_MAIN, UNIT_SECOND,
 };
 use crate::error::Result;
 use crate::gpu::framebuffer::Framebuffer;
@@ -97,6 +97,7 @@ impl RefinePass {
                     "u_colour_size",
                     "u_cell",
                     "u_colour_srgb",
+                    "u_flat_spread",
                 ],
             ),
             RefinePass::Upsample => (
@@ -105,6 +106,7 @@ impl RefinePass {
                 &[
                     "u_colour",
                     "u_cells",
+                    "u_flat",
                     "u_low_size",
                     "u_scale",
                     "u_colour_srgb",
@@ -359,7 +361,8 @@ impl Pipeline {
         self.program(ProgramKey::Refine(RefinePass::Cells), None)?;
         self.program(ProgramKey::Refine(RefinePass::Upsample), None)?;
         let gl = Arc::clone(&self.gl);
-        let low = LowTargets::new(&gl, lw, lh, 1)?;
+        // The cells, and whether each one's window is flat.
+        let low = LowTargets::new(&gl, lw, lh, 2)?;
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let cell = [w as f32 / lw as f32, h as f32 / lh as f32];
         self.passes_into(
@@ -372,6 +375,8 @@ impl Pipeline {
                     low.framebuffer.bind_for_drawing();
                     pipeline.use_program(cells);
                     bind_cell_inputs(&gl, cells, input, cell, srgb);
+                    let spread = UniformValue::Float(crate::refine::UPSAMPLE_FLAT_SPREAD as f32);
+                    set_value(&gl, cells, "u_flat_spread", spread);
                     draw_fullscreen(&gl);
                 })?;
                 timer.pass(|| {
@@ -379,8 +384,10 @@ impl Pipeline {
                     pipeline.use_program(upsample);
                     bind_texture(&gl, UNIT_MAIN, Some(input.colour));
                     low.textures[0].bind(UNIT_DEPTH);
+                    low.textures[1].bind(UNIT_SECOND);
                     set_int(&gl, upsample, "u_colour", UNIT_MAIN as i32);
                     set_int(&gl, upsample, "u_cells", UNIT_DEPTH as i32);
+                    set_int(&gl, upsample, "u_flat", UNIT_SECOND as i32);
                     let low_size = [lw as i32, lh as i32];
                     set_value(&gl, upsample, "u_low_size", UniformValue::IVec2(low_size));
                     let scale = cell.map(|c| 1.0 / c);

@@ -47,8 +47,8 @@ pub use step::{
     RefineOptions, RefinePlan, REPAIR_FILLED_WEIGHT, REPAIR_NEARER,
 };
 pub use upsample::{
-    joint_bilateral_upsample_reference, DEFAULT_UPSAMPLE_SIGMA_COLOUR, UPSAMPLE_SHIFT_MIN_SPREAD,
-    UPSAMPLE_SHIFT_SIGMA, UPSAMPLE_SHIFT_STEPS,
+    joint_bilateral_upsample_reference, DEFAULT_UPSAMPLE_SIGMA_COLOUR, UPSAMPLE_FLAT_SPREAD,
+    UPSAMPLE_SHIFT_MIN_SPREAD, UPSAMPLE_SHIFT_SIGMA, UPSAMPLE_SHIFT_STEPS,
 };
 
 use crate::error::{Error, Result};
