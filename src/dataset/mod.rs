@@ -4,13 +4,15 @@
 
 mod batch;
 mod destinations;
+mod report;
 mod settings;
 mod writer;
 
 pub use batch::{
-    check_beta, default_loaders, default_writers, Batch, BatchEvent, BatchOptions, BatchReport,
-    Betas, MAX_BETA, MAX_LOADERS, MAX_WRITERS, MIN_BETA,
+    check_beta, default_loaders, default_writers, Batch, BatchOptions, Betas, MAX_BETA,
+    MAX_LOADERS, MAX_WRITERS, MIN_BETA,
 };
+pub use report::{BatchEvent, BatchReport};
 pub use settings::{settings_of, SETTINGS_FILE};
 
 use crate::error::{Error, Result};

@@ -1,7 +1,8 @@
 //! The writer thread of a batch run: each output captured, encoded and written
 //! atomically, then logged (one JSON line) as soon as it is in place or has failed.
 
-use super::batch::{BatchEvent, BatchReport, Failed};
+use super::batch::Failed;
+use super::report::{BatchEvent, BatchReport};
 use crate::error::{Error, Result};
 use crate::io::output::{self, Outputs};
 use crate::photo::{capture, CaptureOptions};
