@@ -213,6 +213,62 @@ fn a_run_with_other_settings_is_refused_and_changes_nothing() {
 }
 
 #[test]
+fn a_dry_run_lists_what_a_run_writes_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = cityscapes_dataset(dir.path(), 3);
+    std::fs::remove_file(root.join("disparity/train/aachen/aachen_000002_000019_disparity.png"))
+        .unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["batch", "cityscapes", "--out", "out", "--beta", "0.01,0.02"];
+        args.extend_from_slice(extra);
+        brume(dir.path(), &args)
+    };
+    let dry = run(&["--dry-run"]);
+    assert!(dry.status.success(), "{}", stderr(&dry));
+    let stdout = String::from_utf8_lossy(&dry.stdout).into_owned();
+    let lines: Vec<&str> = stdout.lines().collect();
+    assert_eq!(
+        lines[..4],
+        [
+            "out/leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit_foggy_beta_0.01.png",
+            "out/leftImg8bit/train/aachen/aachen_000000_000019_leftImg8bit_foggy_beta_0.02.png",
+            "out/leftImg8bit/train/bremen/bremen_000001_000019_leftImg8bit_foggy_beta_0.01.png",
+            "out/leftImg8bit/train/bremen/bremen_000001_000019_leftImg8bit_foggy_beta_0.02.png",
+        ]
+    );
+    for expected in [
+        "dry run, nothing written: 3 frames found, 4 outputs to write, 0 already written",
+        "1 frames that cannot be read",
+        "settings to be recorded in out/brume-batch-settings.json",
+    ] {
+        assert!(lines[4].contains(expected), "{expected}: {stdout}");
+    }
+    let err = stderr(&dry);
+    let missing = "aachen_000002_000019_leftImg8bit.png";
+    assert!(
+        err.contains("cannot read") && err.matches(missing).count() == 1,
+        "{err}"
+    );
+    assert!(!dir.path().join("out").exists(), "the dry run made --out");
+
+    // After a run, nothing is left to write, and the settings are the folder's.
+    assert!(
+        !run(&[]).status.success(),
+        "the missing frame fails the run"
+    );
+    let again = run(&["--dry-run"]);
+    let summary = String::from_utf8_lossy(&again.stdout).into_owned();
+    assert!(
+        summary.starts_with("dry run") && summary.contains("0 outputs to write, 4 already written"),
+        "{summary}"
+    );
+    assert!(summary.contains("the settings out/brume-batch-settings.json records"));
+    // Other settings are refused as a run refuses them.
+    let other = run(&["--dry-run", "--lambda", "3"]);
+    assert!(!other.status.success() && stderr(&other).contains("fog.lambda"));
+}
+
+#[test]
 fn shards_split_the_frames_with_no_overlap() {
     let dir = tempfile::tempdir().unwrap();
     let manifest = manifest_of(&cityscapes_dataset(dir.path(), 6));

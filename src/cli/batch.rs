@@ -13,10 +13,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// value names its flag, a manifest row whose outputs would leave `--out` or land on
 /// another frame's is refused, and nothing has been written when it fails.
 pub fn plan(args: &BatchArgs) -> Result<Batch> {
-    let shard = match &args.shard {
-        Some(s) => Shard::parse(s)?,
-        None => Shard::ALL,
-    };
+    let shard = plan_shard(args)?;
     let betas = match args.beta_dist {
         Some(dist) => Betas::Drawn(dist),
         None => Betas::Each(parse_betas(&args.beta)?),
@@ -39,6 +36,14 @@ pub fn plan(args: &BatchArgs) -> Result<Batch> {
         },
     };
     Batch::plan(&args.inputs, args.manifest.as_deref(), opts)
+}
+
+/// `--shard K/N` parsed, or every frame.
+fn plan_shard(args: &BatchArgs) -> Result<Shard> {
+    match &args.shard {
+        Some(s) => Shard::parse(s),
+        None => Ok(Shard::ALL),
+    }
 }
 
 /// Runs `batch` on `renderer`, with a progress bar, each failure on stderr as it happens
@@ -65,13 +70,7 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
             error,
             outputs,
         } => {
-            progress.suspend(|| {
-                errln!(
-                    "brume: error: skipped {}: {}",
-                    image.display(),
-                    super::batch_flags_shown(error)
-                )
-            });
+            progress.suspend(|| errln!("brume: error: skipped {}", frame_error(image, error)));
             progress.inc(outputs as u64);
         }
     };
@@ -80,6 +79,54 @@ pub fn run(batch: Batch, renderer: &mut Renderer) -> Result<()> {
     let report = report?;
     print_summary(&report);
     report.check()
+}
+
+/// `--dry-run`: the fogged images `batch` would write, one per line, and a summary; the
+/// frames that cannot be read on stderr, as a run shows them. Nothing is written.
+pub fn dry_run(batch: &Batch, args: &BatchArgs) -> Result<()> {
+    let mut unreadable = 0;
+    for (image, error) in batch.unassembled_frames() {
+        errln!("brume: error: cannot read {}", frame_error(image, error));
+        unreadable += 1;
+    }
+    for output in batch.planned_outputs() {
+        outln!("{}", output.display());
+    }
+    let record = args.out.join(dataset::SETTINGS_FILE);
+    let settings = match record.exists() {
+        true => format!("the settings {} records", record.display()),
+        false => format!("settings to be recorded in {}", record.display()),
+    };
+    let skipped = match unreadable {
+        0 => String::new(),
+        n => format!("; {n} frames that cannot be read (above), which a run logs as failed"),
+    };
+    let shard = match &args.shard {
+        Some(_) => {
+            let Shard { index, count } = plan_shard(args)?;
+            format!(" (this is shard {index}/{count})")
+        }
+        None => String::new(),
+    };
+    outln!(
+        "dry run, nothing written: {} frames found{shard}, {} outputs to write, {} already \
+         written{skipped}; {settings}",
+        batch.frames_found(),
+        batch.outputs(),
+        batch.skipped()
+    );
+    Ok(())
+}
+
+/// A frame's error with the frame's image named once: `image: why`, or `why` alone where
+/// it begins with the image's path (a file's error names its file).
+fn frame_error(image: &std::path::Path, error: &Error) -> String {
+    let why = super::batch_flags_shown(error);
+    let image = image.display().to_string();
+    match why.starts_with(&image) {
+        true => why,
+        false => format!("{image}: {why}"),
+    }
 }
 
 /// Shows each warning the first time its text comes (most datasets' frames share one

@@ -68,6 +68,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Info(a) => info::run(&a, cli.egl),
         Command::Batch(a) => {
             let plan = batch::plan(&a)?;
+            if a.dry_run {
+                return batch::dry_run(&plan, &a);
+            }
             let mut headless = open_renderer(cli.egl)?;
             batch::run(plan, headless.renderer()?)
         }

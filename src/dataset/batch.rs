@@ -262,6 +262,24 @@ impl Batch {
         self.skipped
     }
 
+    /// The fogged images this run will write, frame by frame and β by β (each frame's
+    /// τ maps beside them with [`BatchOptions::transmittance`]).
+    pub fn planned_outputs(&self) -> impl Iterator<Item = PathBuf> + '_ {
+        self.pending.iter().flat_map(move |(item, betas)| {
+            betas
+                .iter()
+                .map(move |&beta| item.foggy_output(&self.opts.out, beta))
+        })
+    }
+
+    /// The frames of this shard that cannot be assembled (a missing disparity or camera
+    /// file), each colour image with why: the run logs them as failed.
+    pub fn unassembled_frames(&self) -> impl Iterator<Item = (&Path, &Error)> {
+        self.failures
+            .iter()
+            .map(|f| (f.item.image.as_path(), &f.error))
+    }
+
     /// The run's log: one JSON object per output or failed frame, appended.
     pub fn log_path(&self) -> PathBuf {
         let Shard { index, count } = self.opts.shard;

@@ -82,6 +82,13 @@ pub struct BatchArgs {
     #[arg(long, value_name = "N", allow_hyphen_values = true)]
     pub writers: Option<i64>,
 
+    /// Check everything and list the fogged images a run would write, one per line, then
+    /// a summary (frames found, outputs to write and already written, frames that cannot
+    /// be read, the folder's settings): nothing is written, no folder made, no GL context
+    /// opened. For a look before a long job or an array of them.
+    #[arg(long)]
+    pub dry_run: bool,
+
     /// Also write each output's transmittance τ as an 8-bit grey PNG
     /// ({name}_transmittance_beta_{β}.png).
     #[arg(long)]
