@@ -531,6 +531,58 @@ fn metric_frames(dir: &Path, name: &str) {
     }
 }
 
+/// An output that is a file some frame reads (a manifest listing an earlier run's output
+/// beside its frame, into the same folder; an output's path that links to an input) is
+/// refused before any work, and the file is left as it was.
+#[test]
+fn an_output_that_a_frame_reads_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    metric_frames(dir.path(), "aloe");
+    let earlier = dir.path().join("aloe_foggy_beta_0.02.png");
+    std::fs::copy(dir.path().join("aloe.png"), &earlier).unwrap();
+    let rows = "image,depth\naloe.png,aloe_kitti.png\naloe_foggy_beta_0.02.png,aloe_kitti.png\n";
+    std::fs::write(dir.path().join("both.csv"), rows).unwrap();
+    let before = std::fs::read(&earlier).unwrap();
+    let batch = |csv: &str, out: &str| {
+        let args = [
+            "batch",
+            "--manifest",
+            csv,
+            "--out",
+            out,
+            "--beta",
+            "0.02",
+            "--depth-format",
+            "kitti",
+            "--fov",
+            "40",
+            "--transmittance",
+        ];
+        brume(dir.path(), &args)
+    };
+    let refused = batch("both.csv", ".");
+    assert!(!refused.status.success(), "an input taken as an output");
+    let err = stderr(&refused);
+    assert!(
+        err.contains("aloe.png") && err.contains("a file a frame reads"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&earlier).unwrap(), before);
+    // An output folder made beforehand, whose output path links to the photo.
+    std::fs::create_dir(dir.path().join("linked")).unwrap();
+    std::os::unix::fs::symlink(
+        dir.path().join("aloe.png"),
+        dir.path().join("linked/aloe_foggy_beta_0.02.png"),
+    )
+    .unwrap();
+    let linked = batch("kitti.csv", "linked");
+    assert!(
+        !linked.status.success(),
+        "an output through a link to an input"
+    );
+    assert!(stderr(&linked).contains("a file a frame reads"));
+}
+
 /// A manifest of KITTI depth, or of float range in metres, is read as the depth flags
 /// say for every row: each output is the bytes `brume render` writes with the same flags.
 /// Without them the frames fail, each naming the flag that would read it, and a frame's

@@ -37,8 +37,11 @@ pub(super) fn check_sky_mask_size(mask: &Path, items: &[Item]) -> Result<()> {
 
 /// Proves that every output of every frame (its fogged image at each of `betas`, and its
 /// transmittance map with `transmittance`) lies under `out` (after `..` and links are
-/// resolved) and that no two frames write one file (`X.png` and `X.jpg` in one folder, a
-/// row given twice, a folder given twice), before any work.
+/// resolved), that no two frames write one file (`X.png` and `X.jpg` in one folder, a
+/// row given twice, a folder given twice) and that none is a file a frame reads (a
+/// manifest that lists an earlier run's outputs beside their frames, into the same
+/// folder: `a_foggy_beta_0.01.png` was taken as `a.png`'s output, complete, and written
+/// over when its τ map was missing), before any work.
 pub(super) fn check_destinations(
     out: &Path,
     transmittance: bool,
@@ -86,7 +89,64 @@ pub(super) fn check_destinations(
             }
         }
     }
+    refuse_outputs_read(out, &owners, items)
+}
+
+/// Refuses an output (`owners`: each one's path under `out`, with the frame that writes
+/// it) that is a file some frame reads, through a link or not. Only outputs that exist
+/// can be: an input that does not is a frame that fails.
+fn refuse_outputs_read(out: &Path, owners: &HashMap<PathBuf, &Path>, items: &[Item]) -> Result<()> {
+    let mut read: HashMap<FileId, &Path> = HashMap::new();
+    for item in items {
+        let files = [Some(&item.image), Some(&item.depth)]
+            .into_iter()
+            .chain([&item.camera, &item.calib, &item.sky_mask].map(Option::as_ref))
+            .flatten();
+        for file in files {
+            if let Some(id) = file_id(file) {
+                read.insert(id, file);
+            }
+        }
+    }
+    let mut outputs: Vec<(&PathBuf, &&Path)> = owners.iter().collect();
+    outputs.sort();
+    for (path, writer) in outputs {
+        let output = out.join(path);
+        if let Some(input) = file_id(&output).and_then(|id| read.get(&id)) {
+            return Err(Error::invalid(
+                "inputs",
+                writer.display(),
+                format!(
+                    "a frame whose outputs are none of the inputs: it writes {}, which is \
+                     {}, a file a frame reads",
+                    output.display(),
+                    input.display()
+                ),
+            ));
+        }
+    }
     Ok(())
+}
+
+/// What makes two paths one file: the device and inode (a hard link is the file it
+/// links).
+#[cfg(unix)]
+type FileId = (u64, u64);
+/// What makes two paths one file: the canonical path.
+#[cfg(not(unix))]
+type FileId = PathBuf;
+
+/// `path`'s [`FileId`], following symbolic links; `None` where it does not exist.
+fn file_id(path: &Path) -> Option<FileId> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        path.canonicalize().ok()
+    }
 }
 
 /// `dir` with `.` and `x/..` removed, if it stays inside the folder it is relative to
