@@ -176,8 +176,8 @@ impl Batch {
     /// The frames of the Cityscapes trees under `inputs` ([`find_cityscapes`]) and of
     /// `manifest` ([`read_manifest`]), checked before any file or folder is made: the
     /// options (each β, the masks exist, the blur's schedule at each β), a shared sky mask
-    /// of every frame's size, every frame's outputs under [`BatchOptions::out`] and its
-    /// own, and that the outputs already in the folder were made with these settings
+    /// of every frame's size, every frame's outputs under [`BatchOptions::out`], its own
+    /// and none a file a frame reads, and that the outputs already in the folder were made with these settings
     /// ([`SETTINGS_FILE`](super::SETTINGS_FILE)). Outputs already complete are skipped.
     /// Frames that cannot be assembled (missing disparity or camera) are not an error
     /// here: the run logs them as failed.

@@ -74,15 +74,19 @@ pub(super) fn check_settings(out: &Path, settings: &Value) -> Result<()> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
         Err(e) => return Err(Error::io(&path, e)),
     };
-    let recorded: Value = serde_json::from_str(&text).map_err(|e| {
+    let not_a_record = |why: String| {
         Error::format(
             &path,
             format!(
-                "not brume's record of a batch's settings ({e}); remove it if the folder's \
+                "not brume's record of a batch's settings ({why}); remove it if the folder's \
                  outputs were made with these settings"
             ),
         )
-    })?;
+    };
+    let recorded: Value = serde_json::from_str(&text).map_err(|e| not_a_record(e.to_string()))?;
+    if !recorded["settings"].is_object() {
+        return Err(not_a_record("no \"settings\" object".into()));
+    }
     let mut differences = Vec::new();
     differ(&recorded["settings"], settings, "", &mut differences);
     if differences.is_empty() {
@@ -273,10 +277,12 @@ mod tests {
         let old = json!({ "brume": "0.0.1", "settings": settings });
         std::fs::write(&path, old.to_string()).unwrap();
         check_settings(dir.path(), &settings).unwrap();
-        std::fs::write(&path, "{\"brume\": ").unwrap();
-        let e = check_settings(dir.path(), &settings)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains(SETTINGS_FILE) && e.contains("remove it"), "{e}");
+        for broken in ["{\"brume\": ", "{\"brume\": \"0.1.0\"}", "[1]"] {
+            std::fs::write(&path, broken).unwrap();
+            let e = check_settings(dir.path(), &settings)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(SETTINGS_FILE) && e.contains("remove it"), "{e}");
+        }
     }
 }

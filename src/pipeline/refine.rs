@@ -333,7 +333,7 @@ impl Pipeline {
     /// that the caller made and keeps (a live app upsamples every frame, as the guide
     /// changes with each, without allocating an image-sized texture each time); every
     /// texel of `output` is written. Returns the passes' times (two passes). The low
-    /// grid's texture and the framebuffers are made for the call and freed with it.
+    /// grid's textures and the framebuffers are made for the call and freed with it.
     ///
     /// Errors: as [`Pipeline::upsample_range`], and [`crate::Error::InvalidParameter`]
     /// when `output` is not R32F or not of the image's size.
