@@ -88,7 +88,14 @@ pub(super) fn check_settings(out: &Path, settings: &Value) -> Result<()> {
         return Err(not_a_record("no \"settings\" object".into()));
     }
     let mut differences = Vec::new();
-    differ(&recorded["settings"], settings, "", &mut differences);
+    let defaults = settings_of(&BatchOptions::new(out.to_path_buf()));
+    differ(
+        &recorded["settings"],
+        settings,
+        &defaults,
+        "",
+        &mut differences,
+    );
     if differences.is_empty() {
         let version = recorded["brume"].as_str().unwrap_or("unknown");
         if version != env!("CARGO_PKG_VERSION") {
@@ -139,21 +146,21 @@ pub(super) fn record_settings(out: &Path, settings: &Value) -> Result<()> {
 }
 
 /// Appends to `differences` each setting under `path` whose value differs between `old`
-/// and `new`, as `path old there, new here`; objects are compared key by key.
-fn differ(old: &Value, new: &Value, path: &str, differences: &mut Vec<String>) {
+/// and `new`, as `path old there, new here`; objects are compared key by key. A setting
+/// `old` lacks (the brume that recorded it had no such option) counts as its value in
+/// `defaults`; one `new` lacks (an option this brume no longer has) is passed over.
+fn differ(old: &Value, new: &Value, defaults: &Value, path: &str, differences: &mut Vec<String>) {
     if let (Value::Object(o), Value::Object(n)) = (old, new) {
-        let mut keys: Vec<&String> = o.keys().chain(n.keys()).collect();
-        keys.sort();
-        keys.dedup();
-        for key in keys {
+        for (key, n) in n {
             let inner = match path {
                 "" => key.clone(),
                 _ => format!("{path}.{key}"),
             };
-            let absent = Value::Null;
+            let default = defaults.get(key).unwrap_or(&Value::Null);
             differ(
-                o.get(key).unwrap_or(&absent),
-                n.get(key).unwrap_or(&absent),
+                o.get(key).unwrap_or(default),
+                n,
+                default,
                 &inner,
                 differences,
             );
@@ -284,5 +291,35 @@ mod tests {
                 .to_string();
             assert!(e.contains(SETTINGS_FILE) && e.contains("remove it"), "{e}");
         }
+    }
+
+    /// A record by a brume that lacked an option counts it as its default; an option
+    /// this brume no longer has is passed over.
+    #[test]
+    fn an_option_the_record_lacks_counts_as_its_default() {
+        let dir = tempfile::tempdir().unwrap();
+        let current = options(dir.path());
+        let mut older = settings_of(&current);
+        let prep = older["frame"]["prepare"]["prep"].as_object_mut().unwrap();
+        prep.remove("border_band_fraction").unwrap();
+        prep.insert("retired_option".into(), json!(3));
+        let record = json!({ "brume": "0.0.1", "settings": older });
+        std::fs::write(dir.path().join(SETTINGS_FILE), record.to_string()).unwrap();
+        check_settings(dir.path(), &settings_of(&current)).unwrap();
+        let mut changed = current.clone();
+        changed
+            .frame
+            .prepare
+            .prep
+            .as_mut()
+            .unwrap()
+            .border_band_fraction = 0.3;
+        let e = check_settings(dir.path(), &settings_of(&changed))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("prepare.prep.border_band_fraction 0.15 there, 0.3 here"),
+            "{e}"
+        );
     }
 }
