@@ -94,25 +94,18 @@ pub(super) fn check_destinations(
 
 /// Refuses an output (`owners`: each one's path under `out`, with the frame that writes
 /// it) that is a file some frame reads, through a link or not. Only outputs that exist
-/// can be: an input that does not is a frame that fails.
+/// can be (an input that does not is a frame that fails), so a new folder's run looks up
+/// no input.
 fn refuse_outputs_read(out: &Path, owners: &HashMap<PathBuf, &Path>, items: &[Item]) -> Result<()> {
-    let mut read: HashMap<FileId, &Path> = HashMap::new();
-    for item in items {
-        let files = [Some(&item.image), Some(&item.depth)]
-            .into_iter()
-            .chain([&item.camera, &item.calib, &item.sky_mask].map(Option::as_ref))
-            .flatten();
-        for file in files {
-            if let Some(id) = file_id(file) {
-                read.insert(id, file);
-            }
-        }
-    }
     let mut outputs: Vec<(&PathBuf, &&Path)> = owners.iter().collect();
     outputs.sort();
+    let mut read = None;
     for (path, writer) in outputs {
         let output = out.join(path);
-        if let Some(input) = file_id(&output).and_then(|id| read.get(&id)) {
+        let Some(id) = file_id(&output) else {
+            continue;
+        };
+        if let Some(input) = read.get_or_insert_with(|| files_read(items)).get(&id) {
             return Err(Error::invalid(
                 "inputs",
                 writer.display(),
@@ -126,6 +119,23 @@ fn refuse_outputs_read(out: &Path, owners: &HashMap<PathBuf, &Path>, items: &[It
         }
     }
     Ok(())
+}
+
+/// Every file the frames read that exists, by its [`FileId`].
+fn files_read(items: &[Item]) -> HashMap<FileId, &Path> {
+    let mut read = HashMap::new();
+    for item in items {
+        let files = [Some(&item.image), Some(&item.depth)]
+            .into_iter()
+            .chain([&item.camera, &item.calib, &item.sky_mask].map(Option::as_ref))
+            .flatten();
+        for file in files {
+            if let Some(id) = file_id(file) {
+                read.insert(id, file.as_path());
+            }
+        }
+    }
+    read
 }
 
 /// What makes two paths one file: the device and inode (a hard link is the file it
