@@ -80,7 +80,6 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         }
     };
     let (w, h) = (prepared.range.width(), prepared.range.height());
-    let measured = brume::refine::nearest_to_image_size(&loaded.range, w, h);
     stages.at(&format!("writing {}", args.out.display()));
     let mut outputs = Outputs::new();
     // Laid out as the --depth file, which it stands in for: a render with the photo turns
@@ -91,6 +90,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         o => outputs.stage_scalar(&args.out, &prepared.range.oriented(o))?,
     }
     if let Some(vis) = &args.vis {
+        let measured = brume::refine::at_image_size(&loaded.range, w, h);
         let (w, h, rgb) = prep::visualize(&measured, &prepared);
         let rgb = Grid::from_vec(w, h, rgb).into_oriented(as_stored);
         let (w, h) = (rgb.width(), rgb.height());

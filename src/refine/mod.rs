@@ -54,6 +54,7 @@ pub use upsample::{
 use crate::error::{Error, Result};
 use crate::io::image::linear_to_srgb;
 use crate::raster::{Grid, RgbImage, ScalarMap};
+use std::borrow::Cow;
 
 /// Default window radius in full-resolution pixels: Foggy Cityscapes' 20 at 2048 x 1024.
 pub const DEFAULT_RADIUS_PX: f64 = 20.0;
@@ -247,6 +248,19 @@ pub fn nearest_to_image_size<T: Copy + Send + Sync>(
             nearest_cell(y, sy, map.height()),
         )
     })
+}
+
+/// [`nearest_to_image_size`], borrowed where `map` has that size already: no copy.
+pub fn at_image_size<T: Copy + Send + Sync>(
+    map: &Grid<T>,
+    width: usize,
+    height: usize,
+) -> Cow<'_, Grid<T>> {
+    if (map.width(), map.height()) == (width, height) {
+        Cow::Borrowed(map)
+    } else {
+        Cow::Owned(nearest_to_image_size(map, width, height))
+    }
 }
 
 /// The cell of a grid `n` wide (cells per pixel `scale`) whose value pixel `p` takes in

@@ -5,7 +5,9 @@
 //! interchangeable behind [`RangeFilter`].
 
 use super::beyond::RecedingCells;
-use super::{check_positive, nearest_to_image_size, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR};
+use super::{
+    at_image_size, check_positive, nearest_to_image_size, Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR,
+};
 use crate::error::{Error, Result};
 use crate::io::depth::DepthFormat;
 use crate::prep::Prepared;
@@ -363,19 +365,6 @@ pub fn refine_prepared(
         bring_to_image_size(mask, w, h);
     }
     Ok(plan)
-}
-
-/// [`nearest_to_image_size`], borrowed where `map` has that size already: no copy.
-fn at_image_size<T: Copy + Send + Sync>(
-    map: &Grid<T>,
-    width: usize,
-    height: usize,
-) -> Cow<'_, Grid<T>> {
-    if (map.width(), map.height()) == (width, height) {
-        Cow::Borrowed(map)
-    } else {
-        Cow::Owned(nearest_to_image_size(map, width, height))
-    }
 }
 
 /// Brings `map` to the image's size ([`nearest_to_image_size`]) in place: nothing is done
