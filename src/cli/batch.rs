@@ -13,7 +13,10 @@ use indicatif::{ProgressBar, ProgressStyle};
 /// value names its flag, a manifest row whose outputs would leave `--out` or land on
 /// another frame's is refused, and nothing has been written when it fails.
 pub fn plan(args: &BatchArgs) -> Result<Batch> {
-    let shard = plan_shard(args)?;
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s)?,
+        None => Shard::ALL,
+    };
     let betas = match args.beta_dist {
         Some(dist) => Betas::Drawn(dist),
         None => Betas::Each(parse_betas(&args.beta)?),
@@ -36,14 +39,6 @@ pub fn plan(args: &BatchArgs) -> Result<Batch> {
         },
     };
     Batch::plan(&args.inputs, args.manifest.as_deref(), opts)
-}
-
-/// `--shard K/N` parsed, or every frame.
-fn plan_shard(args: &BatchArgs) -> Result<Shard> {
-    match &args.shard {
-        Some(s) => Shard::parse(s),
-        None => Ok(Shard::ALL),
-    }
 }
 
 /// Runs `batch` on `renderer`, with a progress bar, each failure on stderr as it happens
@@ -101,11 +96,9 @@ pub fn dry_run(batch: &Batch, args: &BatchArgs) -> Result<()> {
         0 => String::new(),
         n => format!("; {n} frames that cannot be read (above), which a run logs as failed"),
     };
+    let Shard { index, count } = batch.shard();
     let shard = match &args.shard {
-        Some(_) => {
-            let Shard { index, count } = plan_shard(args)?;
-            format!(" (this is shard {index}/{count})")
-        }
+        Some(_) => format!(" (this is shard {index}/{count})"),
         None => String::new(),
     };
     outln!(

@@ -262,6 +262,11 @@ impl Batch {
         self.skipped
     }
 
+    /// The share of the frames this run takes.
+    pub fn shard(&self) -> Shard {
+        self.opts.shard
+    }
+
     /// The fogged images this run will write, frame by frame and β by β (each frame's
     /// τ maps beside them with [`BatchOptions::transmittance`]).
     pub fn planned_outputs(&self) -> impl Iterator<Item = PathBuf> + '_ {

@@ -4,6 +4,7 @@
 
 use super::Item;
 use crate::error::{Error, Result};
+use crate::io::output::{file_id, FileId};
 use std::collections::HashMap;
 use std::path::{Component, Path, PathBuf};
 
@@ -136,27 +137,6 @@ fn files_read(items: &[Item]) -> HashMap<FileId, &Path> {
         }
     }
     read
-}
-
-/// What makes two paths one file: the device and inode (a hard link is the file it
-/// links).
-#[cfg(unix)]
-type FileId = (u64, u64);
-/// What makes two paths one file: the canonical path.
-#[cfg(not(unix))]
-type FileId = PathBuf;
-
-/// `path`'s [`FileId`], following symbolic links; `None` where it does not exist.
-fn file_id(path: &Path) -> Option<FileId> {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
-    }
-    #[cfg(not(unix))]
-    {
-        path.canonicalize().ok()
-    }
 }
 
 /// `dir` with `.` and `x/..` removed, if it stays inside the folder it is relative to

@@ -188,19 +188,29 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-#[cfg(unix)]
 fn same_inode(a: &Path, b: &Path) -> bool {
-    // Hard links have different canonical paths but are the same file.
-    use std::os::unix::fs::MetadataExt;
-    match (a.metadata(), b.metadata()) {
-        (Ok(a), Ok(b)) => a.dev() == b.dev() && a.ino() == b.ino(),
-        _ => false,
-    }
+    matches!((file_id(a), file_id(b)), (Some(a), Some(b)) if a == b)
 }
 
+/// What makes two paths one file: the device and inode (a hard link is the file it
+/// links).
+#[cfg(unix)]
+pub type FileId = (u64, u64);
+/// What makes two paths one file: the canonical path.
 #[cfg(not(unix))]
-fn same_inode(_a: &Path, _b: &Path) -> bool {
-    false
+pub type FileId = PathBuf;
+
+/// `path`'s [`FileId`], following symbolic links; `None` where it does not exist.
+pub fn file_id(path: &Path) -> Option<FileId> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        path.canonicalize().ok()
+    }
 }
 
 /// The size of 8-bit pixels `rgb` for `path`, checked: `width * height` of them, each

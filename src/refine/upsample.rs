@@ -6,6 +6,7 @@ use super::{cell_means, check_depth_size, check_positive};
 use crate::error::Result;
 use crate::io::image::linear_to_srgb;
 use crate::raster::{Grid, RgbImage, ScalarMap};
+use crate::reference::bilinear;
 
 /// Default σ of the colour weight of [`joint_bilateral_upsample_reference`], in
 /// sRGB-encoded values (measured on Aloe: 0.15 gives the smallest 95th-percentile error
@@ -71,7 +72,7 @@ fn upsample(
         let base = [centre[0].floor() as isize, centre[1].floor() as isize];
         // A window starting left of or above the grid reads a part of the first one's.
         if *flat.get(base[0].max(0) as usize, base[1].max(0) as usize) {
-            return bilinear(&log_ranges, centre).exp() as f32;
+            return bilinear(&log_ranges, centre[0], centre[1]).exp() as f32;
         }
         let mut taps = [(0.0f64, 0.0f64); 36];
         let mut n = 0;
@@ -125,27 +126,6 @@ fn flat_windows(log_ranges: &Grid<f64>, spread: f64) -> Grid<bool> {
         }
         largest - least <= spread
     })
-}
-
-/// The bilinear interpolation of `grid` at `at` (cell coordinates, cell centres at whole
-/// numbers), clamped to the grid.
-fn bilinear(grid: &Grid<f64>, at: [f64; 2]) -> f64 {
-    let size = [grid.width(), grid.height()];
-    let mut lo = [0; 2];
-    let mut hi = [0; 2];
-    let mut t = [0.0; 2];
-    for a in 0..2 {
-        let c = at[a].clamp(0.0, (size[a] - 1) as f64);
-        lo[a] = c.floor() as usize;
-        hi[a] = (lo[a] + 1).min(size[a] - 1);
-        t[a] = c - lo[a] as f64;
-    }
-    let row = |y| {
-        let (a, b) = (*grid.get(lo[0], y), *grid.get(hi[0], y));
-        a + (b - a) * t[0]
-    };
-    let (top, bottom) = (row(lo[1]), row(hi[1]));
-    top + (bottom - top) * t[1]
 }
 
 /// σ of the mean shift's Gaussian in log range (a factor 1.35): taps of the pixel's own
