@@ -341,9 +341,8 @@ fn flag_of(field: &str, command: Option<&str>) -> Option<String> {
 /// Whether `flag` (`--name`) is a long option of `command` (`None`: of any command).
 fn is_flag(flag: &str, command: Option<&str>) -> bool {
     fn has(cmd: &clap::Command, flag: &str, nested: bool) -> bool {
-        cmd.get_arguments()
-            .filter_map(|a| a.get_long())
-            .any(|long| flag.strip_prefix("--") == Some(long))
+        flag.strip_prefix("--")
+            .is_some_and(|long| tips::takes(cmd, long))
             || (nested && cmd.get_subcommands().any(|sub| has(sub, flag, true)))
     }
     let cli = Cli::command();

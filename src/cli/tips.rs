@@ -122,7 +122,7 @@ fn long_name(arg: &str) -> Option<&str> {
 }
 
 /// Whether `command` has the option `--long`.
-fn takes(command: &clap::Command, long: &str) -> bool {
+pub(super) fn takes(command: &clap::Command, long: &str) -> bool {
     command.get_arguments().any(|a| a.get_long() == Some(long))
 }
 
