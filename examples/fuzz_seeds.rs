@@ -200,6 +200,27 @@ fn main() -> Res<()> {
         "int.npy",
         npy(1, "<i4", "(1, 2)", false, &[1, 0, 0, 0, 2, 0, 0, 0]),
     );
+    let le16: Vec<u8> = small
+        .iter()
+        .flat_map(|v| half::f16::from_f32(*v).to_le_bytes())
+        .collect();
+    let f_px = npy(1, "<f8", "()", false, &1234f64.to_le_bytes());
+    seeds.put(
+        "npz",
+        "savez_f2.npz",
+        npz(&[("arr_0", npy(1, "<f2", "(2, 3)", false, &le16))], false),
+    );
+    seeds.put(
+        "npz",
+        "depth_pro.npz",
+        npz(
+            &[
+                ("f_px", f_px),
+                ("depth", npy(1, "<f4", "(2, 3)", false, &le32)),
+            ],
+            true,
+        ),
+    );
 
     let rgb: Vec<u8> = (0..4 * 4 * 3).map(|i| (i * 37 % 256) as u8).collect();
     let rgba16: Vec<u8> = (0..2 * 2 * 4 * 2).map(|i| (i * 53 % 256) as u8).collect();
@@ -824,6 +845,23 @@ fn tiff(write: impl FnOnce(&mut TiffEncoder) -> tiff::TiffResult<()>) -> Res<Vec
     let mut buf = Cursor::new(Vec::new());
     write(&mut tiff::encoder::TiffEncoder::new(&mut buf)?)?;
     Ok(buf.into_inner())
+}
+
+/// A .npz archive as `np.savez` (stored) or `np.savez_compressed` (deflated) writes it.
+fn npz(arrays: &[(&str, Vec<u8>)], deflated: bool) -> Vec<u8> {
+    use std::io::Write;
+    let method = if deflated {
+        zip::CompressionMethod::Deflated
+    } else {
+        zip::CompressionMethod::Stored
+    };
+    let options = zip::write::SimpleFileOptions::default().compression_method(method);
+    let mut zip = zip::ZipWriter::new(Cursor::new(Vec::new()));
+    for (name, array) in arrays {
+        zip.start_file(format!("{name}.npy"), options).unwrap();
+        zip.write_all(array).unwrap();
+    }
+    zip.finish().unwrap().into_inner()
 }
 
 /// A .npy file as numpy writes it: header padded to a multiple of 64 bytes.

@@ -25,7 +25,7 @@ fn files(dir: &str) -> Vec<PathBuf> {
 #[test]
 fn seeds_of_the_single_format_fuzzers_load() {
     let mut checked = 0;
-    for target in ["pfm", "exr", "tiff", "npy"] {
+    for target in ["pfm", "exr", "tiff", "npy", "npz"] {
         for path in files(&format!("fuzz/seeds/{target}")) {
             let name = path.file_name().unwrap().to_string_lossy();
             // Kept on purpose to reach the refusals: colour PFM, integer TIFF and .npy.

@@ -849,7 +849,7 @@ fn npy_float32_and_float64() {
     );
     expect_format_error(
         load_range(&p, &DepthOptions::default()),
-        "float32 or float64",
+        "expected float16, float32 or float64 (or uint16",
     );
     let p = write(
         dir.path(),
@@ -863,6 +863,109 @@ fn npy_float32_and_float64() {
         &common::npy_bytes("<f4", "(6,)", false, &f32s),
     );
     expect_format_error(load_range(&p, &DepthOptions::default()), "(height, width)");
+}
+
+/// A `.npz` as numpy's `np.savez` (stored) or `np.savez_compressed` (deflated) writes it:
+/// one `.npy` member per array.
+fn npz_bytes(arrays: &[(&str, Vec<u8>)], deflated: bool) -> Vec<u8> {
+    use std::io::Write;
+    let method = if deflated {
+        zip::CompressionMethod::Deflated
+    } else {
+        zip::CompressionMethod::Stored
+    };
+    let options = zip::write::SimpleFileOptions::default().compression_method(method);
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    for (name, npy) in arrays {
+        zip.start_file(format!("{name}.npy"), options).unwrap();
+        zip.write_all(npy).unwrap();
+    }
+    zip.finish().unwrap().into_inner()
+}
+
+#[test]
+fn npy_float16_uint16_and_npz_archives() {
+    let dir = tempfile::tempdir().unwrap();
+    // float16, as a model run in half precision saves its depth.
+    let f16s: Vec<u8> = FLOATS
+        .iter()
+        .flat_map(|v| half::f16::from_f32(*v).to_le_bytes())
+        .collect();
+    let half_npy = common::npy_bytes("<f2", "(2, 3)", false, &f16s);
+    let p = write(dir.path(), "h.npy", &half_npy);
+    check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
+
+    // Depth Pro's output: `np.savez_compressed(path, depth=depth)`; a stored archive of one
+    // array (`np.savez(path, array)`, named arr_0); the depth picked among several.
+    let f32s: Vec<u8> = FLOATS.iter().flat_map(|v| v.to_le_bytes()).collect();
+    let npy = common::npy_bytes("<f4", "(2, 3)", false, &f32s);
+    let focal = common::npy_bytes("<f4", "(1, 1)", false, &1234f32.to_le_bytes());
+    for (name, arrays, deflated) in [
+        ("pro.npz", vec![("depth", half_npy.clone())], true),
+        ("one.npz", vec![("arr_0", npy.clone())], false),
+        (
+            "two.npz",
+            vec![("f_px", focal.clone()), ("depth", npy.clone())],
+            true,
+        ),
+    ] {
+        let p = write(dir.path(), name, &npz_bytes(&arrays, deflated));
+        check_float_map(&load_range(&p, &DepthOptions::default()).unwrap());
+    }
+    let p = write(
+        dir.path(),
+        "many.npz",
+        &npz_bytes(&[("a", npy.clone()), ("b", focal)], false),
+    );
+    expect_format_error(
+        load_range(&p, &DepthOptions::default()),
+        "holds 2 arrays (a, b) and none is named 'depth'",
+    );
+    let p = write(dir.path(), "none.npz", &npz_bytes(&[], false));
+    expect_format_error(load_range(&p, &DepthOptions::default()), "holds no array");
+    let p = write(
+        dir.path(),
+        "cut.npz",
+        &npz_bytes(&[("depth", npy)], true)[..60],
+    );
+    expect_format_error(load_range(&p, &DepthOptions::default()), "cut.npz");
+    let ints = common::npy_bytes("<i4", "(1, 1)", false, &[0, 0, 0, 1]);
+    let p = write(dir.path(), "int.npz", &npz_bytes(&[("depth", ints)], true));
+    expect_format_error(
+        load_range(&p, &DepthOptions::default()),
+        "array 'depth': array dtype is '<i4'",
+    );
+
+    // uint16 holds what a 16-bit PNG does (RealSense or Kinect millimetres saved with
+    // np.save): the same formats read it, and without one it has no scale.
+    let mm: Vec<u8> = [0u16, 1000, 2560, 65535, 7, 512]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let p = write(
+        dir.path(),
+        "mm.npy",
+        &common::npy_bytes("<u2", "(2, 3)", false, &mm),
+    );
+    let kitti = load_range(&p, &opts(DepthFormat::Kitti)).unwrap();
+    assert_eq!(kitti.unknown_pixels, 1);
+    assert!(kitti.range.get(0, 0).is_nan());
+    for (x, y, v) in [
+        (1, 0, 1000.0),
+        (2, 0, 2560.0),
+        (0, 1, 65535.0),
+        (2, 1, 512.0),
+    ] {
+        assert_eq!(*kitti.range.get(x, y), v / 256.0, "({x}, {y})");
+    }
+    expect_format_error(
+        load_range(&p, &DepthOptions::default()),
+        "16-bit depth (a PNG or a uint16 array) has no standard scale",
+    );
+    expect_format_error(
+        load_range(&p, &opts(DepthFormat::Float)),
+        "found 16-bit integers (a PNG or a uint16 array)",
+    );
 }
 
 #[test]
@@ -1518,7 +1621,7 @@ fn phone_formats_refuse_what_is_not_a_16_bit_grey_png() {
         assert!(msg.contains("found a float PFM"), "{msg}");
         let msg = expect_format_error(load_range(&jpg, &opts(format)), "d.jpg");
         assert!(
-            msg.contains("expects a 16-bit grey PNG, found a JPEG"),
+            msg.contains("expects a 16-bit grey PNG (or a uint16 .npy), found a JPEG"),
             "{msg}"
         );
         // What the values are: depth or range only.
@@ -1795,7 +1898,8 @@ fn phone_depth_errors_from_the_command_line() {
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("d8.png") && err.contains("expects a 16-bit grey PNG, found an 8-bit PNG"),
+        err.contains("d8.png")
+            && err.contains("expects a 16-bit grey PNG (or a uint16 .npy), found an 8-bit PNG"),
         "{err}"
     );
     let o = prep("d16.png", &["--depth-format", "depth16"]);
@@ -2039,7 +2143,7 @@ fn cityscapes_camera_errors_name_the_file_the_key_and_the_value() {
     let p8 = save_png8(dir.path(), "d8_disparity.png", 6, 4, &[9; 24]);
     expect_format_error(
         load_range(&p8, &with_camera),
-        "`depth_format` cityscapes expects a 16-bit grey PNG, found an 8-bit PNG",
+        "`depth_format` cityscapes expects a 16-bit grey PNG (or a uint16 .npy), found an 8-bit PNG",
     );
     let as_depth = DepthOptions {
         kind: Some(DepthKind::Depth),

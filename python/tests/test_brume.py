@@ -490,6 +490,29 @@ def test_load_depth(tmp_path, range_m):
         brume.load_depth(path, format="jpeg")
 
 
+def test_load_depth_of_numpy_archives_half_floats_and_millimetres(tmp_path, range_m):
+    """What numpy writes for the tools people run: Depth Pro's `np.savez_compressed(path,
+    depth=depth)` (float16 when the model runs in half precision), an archive of one
+    unnamed array, and a depth camera's uint16 millimetres saved with np.save."""
+    expected = range_m.astype(np.float16).astype(np.float32)
+    np.savez_compressed(tmp_path / "pro.npz", depth=range_m.astype(np.float16), f_px=1234.0)
+    np.savez(tmp_path / "one.npz", range_m.astype(np.float16))
+    for name in ("pro.npz", "one.npz"):
+        loaded, info = brume.load_depth(tmp_path / name, kind="range")
+        assert info["format"] == "float"
+        np.testing.assert_array_equal(loaded, expected)
+    mm = np.round(range_m * 1000).astype(np.uint16)
+    mm[0, :5] = 0  # no measurement
+    np.save(tmp_path / "mm.npy", mm)
+    loaded, info = brume.load_depth(tmp_path / "mm.npy", format="png16", scale=0.001, kind="range")
+    assert info["metric"] is True and info["unknown_pixels"] == 5
+    np.testing.assert_allclose(loaded[1:], mm[1:] / 1000.0, rtol=1e-6)
+    assert np.isnan(loaded[0, :5]).all()
+    np.savez(tmp_path / "two.npz", a=range_m, b=range_m)
+    with pytest.raises(ValueError, match=r"holds 2 arrays \(a, b\) and none is named 'depth'"):
+        brume.load_depth(tmp_path / "two.npz")
+
+
 def test_load_depth_of_a_portrait_jpeg():
     """A phone's portrait JPEG (GDepth, written by ExifTool: tests/data/gdepth/): its own
     scale and measure, the plane it encodes to half a 16-bit code, and its far corner at

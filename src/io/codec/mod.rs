@@ -18,6 +18,15 @@ mod without;
 #[cfg(not(feature = "codecs"))]
 pub use without::{exr, npy, tiff};
 
+/// A 2-D NumPy array as brume reads it (`npy::parse_npy`, `npy::parse_npz`).
+#[cfg_attr(not(feature = "codecs"), allow(dead_code))]
+pub(crate) enum NpyGrid {
+    /// float16, float32 or float64 values, as float32.
+    Float(crate::raster::ScalarMap),
+    /// uint16 values: no unit of their own, like a 16-bit PNG's.
+    Uint16(crate::raster::Grid<u16>),
+}
+
 /// Encodes the 8-bit RGB image `bytes` (`w * h` pixels, row 0 at the top) by `encoder`,
 /// with the ICC profile `icc` and the EXIF block `exif` where given.
 pub(crate) fn encode_rgb8<E: image::ImageEncoder>(

@@ -1,24 +1,105 @@
-//! NumPy `.npy` through the `npyz` crate: 2-D float32 or float64 arrays, read only (no
-//! output is written as `.npy`).
+//! NumPy `.npy` and `.npz` through the `npyz` and `zip` crates: 2-D float16, float32 or
+//! float64 arrays, or uint16 (a depth sensor's integer units, as a 16-bit PNG holds them);
+//! read only (no output is written as `.npy`).
 
+use std::io::{Cursor, Read};
 use std::path::Path;
 
+use super::NpyGrid;
 use crate::io::limits::check_size;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
-/// Reads a 2-D (or `h x w x 1`) float32 or float64 NumPy `.npy` array, C or Fortran order,
-/// no larger than `io::limits` allows.
+/// Reads a 2-D (or `h x w x 1`) float16, float32 or float64 NumPy `.npy` array, C or
+/// Fortran order, no larger than `io::limits` allows.
 pub fn read_npy_scalar(path: &Path) -> Result<ScalarMap> {
     let bytes = crate::io::limits::read_file(path)?;
     parse_npy_scalar(&bytes, path)
 }
 
-pub(crate) fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
+/// A float array from `.npy` bytes; an integer array is refused.
+fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
+    match parse_npy(bytes, path)? {
+        NpyGrid::Float(map) => Ok(map),
+        NpyGrid::Uint16(_) => Err(Error::format(
+            path,
+            "array dtype is uint16; expected float16, float32 or float64 here",
+        )),
+    }
+}
+
+/// A float or uint16 array from `.npy` bytes.
+pub(crate) fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyGrid> {
     check_header(bytes, path)?;
     let npy = npyz::NpyFile::new(bytes)
         .map_err(|e| Error::format(path, format!("not a valid .npy file: {e}")))?;
-    let shape = npy.shape().to_vec();
+    let (w, h) = grid_size(npy.shape(), path)?;
+    let dtype = npy.dtype().descr();
+    // Before the reader reserves room for every value a shorter file cannot hold.
+    if let Some(item) = npy.dtype().num_bytes() {
+        if bytes.len() < w * h * item {
+            return Err(Error::format(
+                path,
+                format!(
+                    "array shape ({h}, {w}) of {dtype} needs at least {} bytes of data, but the \
+                     file has {}; it is truncated",
+                    w * h * item,
+                    bytes.len()
+                ),
+            ));
+        }
+    }
+    let fortran = npy.order() == npyz::Order::Fortran;
+    let truncated = |e: std::io::Error| {
+        Error::format(
+            path,
+            format!("cannot read {h}*{w} values of {dtype}: {e}; the file may be truncated"),
+        )
+    };
+    let npy = match npy.try_data::<f32>() {
+        Ok(reader) => {
+            let values = reader.collect::<std::io::Result<_>>().map_err(truncated)?;
+            return grid(values, w, h, fortran, path).map(NpyGrid::Float);
+        }
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<f64>() {
+        Ok(reader) => {
+            let values = reader
+                .map(|v| v.map(|x| x as f32))
+                .collect::<std::io::Result<_>>()
+                .map_err(truncated)?;
+            return grid(values, w, h, fortran, path).map(NpyGrid::Float);
+        }
+        Err(npy) => npy,
+    };
+    let npy = match npy.try_data::<half::f16>() {
+        Ok(reader) => {
+            let values = reader
+                .map(|v| v.map(half::f16::to_f32))
+                .collect::<std::io::Result<_>>()
+                .map_err(truncated)?;
+            return grid(values, w, h, fortran, path).map(NpyGrid::Float);
+        }
+        Err(npy) => npy,
+    };
+    match npy.try_data::<u16>() {
+        Ok(reader) => {
+            let values = reader.collect::<std::io::Result<_>>().map_err(truncated)?;
+            grid(values, w, h, fortran, path).map(NpyGrid::Uint16)
+        }
+        Err(_) => Err(Error::format(
+            path,
+            format!(
+                "array dtype is {dtype}; expected float16, float32 or float64 (or uint16, \
+                 a depth sensor's integer units)"
+            ),
+        )),
+    }
+}
+
+/// Width and height of a `(h, w)` or `(h, w, 1)` shape within `io::limits`.
+fn grid_size(shape: &[u64], path: &Path) -> Result<(usize, usize)> {
     let (h, w) = match shape[..] {
         [h, w] | [h, w, 1] if h > 0 && w > 0 => (h, w),
         _ => {
@@ -30,42 +111,17 @@ pub(crate) fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
     };
     // Before anything is sized from the shape: a product of two 2^32 sides wraps to 0.
     check_size(path, "NPY", w, h)?;
-    let (h, w) = (h as usize, w as usize);
-    // The smallest accepted dtype takes 4 bytes a value: a shorter file cannot hold them,
-    // and the reader would otherwise reserve room for all of them first.
-    if bytes.len() < w * h * 4 {
-        return Err(Error::format(
-            path,
-            format!(
-                "array shape ({h}, {w}) needs at least {} bytes of float data, but the file has {}; it is truncated",
-                w * h * 4,
-                bytes.len()
-            ),
-        ));
-    }
-    let fortran = npy.order() == npyz::Order::Fortran;
-    let dtype = npy.dtype().descr();
-    let truncated = |e: std::io::Error| {
-        Error::format(
-            path,
-            format!("cannot read {h}*{w} values of {dtype}: {e}; the file may be truncated"),
-        )
-    };
-    let values: Vec<f32> = match npy.try_data::<f32>() {
-        Ok(reader) => reader.collect::<std::io::Result<_>>().map_err(truncated)?,
-        Err(npy) => match npy.try_data::<f64>() {
-            Ok(reader) => reader
-                .map(|v| v.map(|x| x as f32))
-                .collect::<std::io::Result<_>>()
-                .map_err(truncated)?,
-            Err(_) => {
-                return Err(Error::format(
-                    path,
-                    format!("array dtype is {dtype}; expected float32 or float64"),
-                ))
-            }
-        },
-    };
+    Ok((w as usize, h as usize))
+}
+
+/// The grid of `values` read in C (row-major) or Fortran (column-major) order.
+fn grid<T: Copy>(
+    values: Vec<T>,
+    w: usize,
+    h: usize,
+    fortran: bool,
+    path: &Path,
+) -> Result<Grid<T>> {
     if values.len() != w * h {
         return Err(Error::format(
             path,
@@ -78,6 +134,90 @@ pub(crate) fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
         Grid::from_vec(w, h, values)
     })
 }
+
+/// The name of the array an `.npz` archive holds that brume reads when it holds several:
+/// what Apple's Depth Pro writes (`np.savez_compressed(path, depth=depth)`).
+const NPZ_DEPTH_ARRAY: &str = "depth";
+
+/// Reads the depth array of a NumPy `.npz` archive (`np.savez`, stored, or
+/// `np.savez_compressed`, deflated): its only array, or the one named `depth`.
+pub(crate) fn parse_npz(bytes: &[u8], path: &Path) -> Result<NpyGrid> {
+    let bad = |e: zip::result::ZipError| {
+        Error::format(path, format!("not a valid .npz (zip) archive: {e}"))
+    };
+    let mut archive = zip::ZipArchive::new(Cursor::new(bytes)).map_err(bad)?;
+    let arrays: Vec<String> = archive
+        .file_names()
+        .filter_map(|n| n.strip_suffix(".npy"))
+        .map(str::to_owned)
+        .collect();
+    let name = match &arrays[..] {
+        [only] => only.clone(),
+        _ if arrays.iter().any(|a| a == NPZ_DEPTH_ARRAY) => NPZ_DEPTH_ARRAY.to_owned(),
+        [] => return Err(Error::format(path, "the .npz archive holds no array")),
+        _ => {
+            return Err(Error::format(
+                path,
+                format!(
+                    "the .npz archive holds {} arrays ({}) and none is named \
+                     '{NPZ_DEPTH_ARRAY}'; save the depth alone (np.save to a .npy, or \
+                     np.savez(path, {NPZ_DEPTH_ARRAY}=array))",
+                    arrays.len(),
+                    arrays.join(", ")
+                ),
+            ))
+        }
+    };
+    let member = archive.by_name(&format!("{name}.npy")).map_err(bad)?;
+    let npy = read_member(member, path, &name)?;
+    parse_npy(&npy, path).map_err(|e| match e {
+        Error::Format { path, detail } => Error::format(path, format!("array '{name}': {detail}")),
+        other => other,
+    })
+}
+
+/// The bytes of an archive member, no more than the array its header describes needs: a
+/// small deflated member may claim, or inflate to, far more than that.
+fn read_member(member: impl Read, path: &Path, name: &str) -> Result<Vec<u8>> {
+    let inflate = |e: std::io::Error| {
+        Error::format(
+            path,
+            format!("cannot inflate array '{name}' of the .npz: {e}"),
+        )
+    };
+    let mut member = member;
+    let mut npy = Vec::new();
+    (&mut member)
+        .take(NPY_PREAMBLE + MAX_HEADER as u64)
+        .read_to_end(&mut npy)
+        .map_err(inflate)?;
+    if let Some(len) = npy_len(&npy, path)? {
+        let rest = (len as u64).saturating_sub(npy.len() as u64);
+        member.take(rest).read_to_end(&mut npy).map_err(inflate)?;
+        npy.truncate(len);
+    }
+    Ok(npy)
+}
+
+/// The length of a whole `.npy` file from its first bytes (header and the data its shape
+/// and dtype need), once its header is known to be plain; `None` for a dtype without a
+/// fixed size, which `parse_npy` then names.
+fn npy_len(head: &[u8], path: &Path) -> Result<Option<usize>> {
+    check_header(head, path)?;
+    let mut data = head;
+    let header = npyz::NpyHeader::from_reader(&mut data)
+        .map_err(|e| Error::format(path, format!("not a valid .npy array: {e}")))?;
+    let header_len = head.len() - data.len();
+    let npy = npyz::NpyFile::with_header(header, data);
+    let (w, h) = grid_size(npy.shape(), path)?;
+    Ok(npy
+        .dtype()
+        .num_bytes()
+        .map(|item| header_len + w * h * item))
+}
+
+/// Bytes before a `.npy` header's text: magic, version and length (4 bytes from version 2).
+const NPY_PREAMBLE: u64 = 12;
 
 /// Longest .npy header text accepted: numpy's own `max_header_size` default, for the
 /// same reason (parsing a long Python literal is slow).
@@ -263,5 +403,60 @@ impl<'a> PlainHeader<'a> {
                 return Some(v);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn npy(descr: &str, fortran: bool, shape: &str, data: &[u8]) -> Vec<u8> {
+        let order = if fortran { "True" } else { "False" };
+        let header =
+            format!("{{'descr': '{descr}', 'fortran_order': {order}, 'shape': {shape}, }}\n");
+        let mut b = b"\x93NUMPY\x01\x00".to_vec();
+        b.extend_from_slice(&(header.len() as u16).to_le_bytes());
+        b.extend_from_slice(header.as_bytes());
+        b.extend_from_slice(data);
+        b
+    }
+
+    #[test]
+    fn an_archive_member_is_read_no_further_than_its_array() {
+        let array = npy("<f4", false, "(2, 3)", &[0; 24]);
+        // A deflated member may inflate to far more than its header's array: what follows
+        // must stay unread, or a few kB of zip would fill the memory.
+        let flood = std::io::repeat(0x55).take(64 << 20);
+        let path = Path::new("bomb.npz");
+        assert_eq!(read_member(&array[..], path, "depth").unwrap(), array);
+        let mut member = array.chain(flood);
+        assert_eq!(read_member(&mut member, path, "depth").unwrap(), array);
+        let unread = member.into_inner().1.limit();
+        assert!(
+            unread > (64 << 20) - 2 * MAX_HEADER as u64,
+            "{unread} bytes left"
+        );
+    }
+
+    #[test]
+    fn uint16_arrays_keep_their_values_in_either_order() {
+        let path = Path::new("u.npy");
+        let uint16 = |fortran, values: [u16; 6]| {
+            let data: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
+            match parse_npy(&npy(">u2", fortran, "(2, 3)", &data), path) {
+                Ok(NpyGrid::Uint16(grid)) => grid,
+                _ => panic!("not read as uint16"),
+            }
+        };
+        // Rows [1 2 3] and [4 5 65535], stored by rows and by columns.
+        let rows = uint16(false, [1, 2, 3, 4, 5, 65535]);
+        let columns = uint16(true, [1, 4, 2, 5, 3, 65535]);
+        for g in [rows, columns] {
+            assert_eq!((g.get(2, 0), g.get(0, 1), g.get(2, 1)), (&3, &4, &65535));
+        }
+        let message = parse_npy_scalar(&npy("<u2", false, "(1, 1)", &[0, 1]), path)
+            .unwrap_err()
+            .to_string();
+        assert!(message.contains("dtype is uint16; expected float16, float32 or float64 here"));
     }
 }

@@ -1,4 +1,4 @@
-//! The float formats of the `codecs` feature (OpenEXR, float TIFF, NumPy `.npy`) in a
+//! The float formats of the `codecs` feature (OpenEXR, float TIFF, NumPy `.npy`/`.npz`) in a
 //! build without it: the same functions, each refusing its file with what to do, so that
 //! a host that needs only PNG, JPEG and PFM builds none of their crates.
 
@@ -86,6 +86,7 @@ pub mod tiff {
 pub mod npy {
     use super::not_built;
     use crate::error::Result;
+    use crate::io::codec::NpyGrid;
     use crate::raster::ScalarMap;
     use std::path::Path;
 
@@ -94,7 +95,11 @@ pub mod npy {
         Err(not_built(path, "NumPy .npy"))
     }
 
-    pub(crate) fn parse_npy_scalar(_: &[u8], path: &Path) -> Result<ScalarMap> {
+    pub(crate) fn parse_npy(_: &[u8], path: &Path) -> Result<NpyGrid> {
         Err(not_built(path, "NumPy .npy"))
+    }
+
+    pub(crate) fn parse_npz(_: &[u8], path: &Path) -> Result<NpyGrid> {
+        Err(not_built(path, "NumPy .npz"))
     }
 }

@@ -16,9 +16,9 @@ pub(super) enum Layout {
     Pfm,
     /// An 8-bit grey PNG.
     Grey8,
-    /// A 16-bit grey PNG.
+    /// A 16-bit grey PNG, or a uint16 `.npy`/`.npz` array.
     Grey16,
-    /// Any float map: PFM, EXR, float TIFF, `.npy`.
+    /// Any float map: PFM, EXR, float TIFF, `.npy`, `.npz`.
     Float,
     /// A JPEG with a GDepth depth map in its XMP.
     GDepth,
@@ -53,8 +53,8 @@ impl Layout {
             Layout::Any => "a depth file",
             Layout::Pfm => "a `Pf` PFM disparity (disp0.pfm)",
             Layout::Grey8 => "an 8-bit grey PNG disparity",
-            Layout::Grey16 => "a 16-bit grey PNG",
-            Layout::Float => "a float map (.pfm, .exr, .tif, .tiff or .npy)",
+            Layout::Grey16 => "a 16-bit grey PNG (or a uint16 .npy)",
+            Layout::Float => "a float map (.pfm, .exr, .tif, .tiff, .npy or .npz)",
             Layout::GDepth => "a JPEG with a GDepth depth map",
             Layout::DynamicDepth => "a JPEG with a Dynamic Depth container",
             Layout::AppleDepth => "an iPhone's portrait JPEG with its depth image",

@@ -49,7 +49,7 @@ fn resolve_format(
         (F::Auto, Raw::Grey16(_)) => {
             return Err(Error::format(
                 path,
-                "16-bit PNG depth has no standard scale: give `depth_format` kitti, nyu or \
+                "16-bit depth (a PNG or a uint16 array) has no standard scale: give `depth_format` kitti, nyu or \
                  tum, or `depth_scale` with the metres per unit (a Cityscapes disparity: \
                  `depth_format` cityscapes with `camera`; a monocular model's relative \
                  inverse depth, Depth Anything or MiDaS: `depth_kind` inverse)",
@@ -99,7 +99,7 @@ fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<Dep
             // output saved as one (its visualisation) has lost most of its levels.
             expected.push_str(
                 " (a monocular model's inverse depth is read from a 16-bit PNG or a float \
-                 map, .npy, .pfm, .exr or float TIFF: save its output as one of those)",
+                 map, .npy, .npz, .pfm, .exr or float TIFF: save its output as one of those)",
             );
         }
         return Err(Error::invalid("depth_kind", kind, expected));

@@ -5,9 +5,11 @@ use std::path::Path;
 
 use super::gdepth::{self, EmbeddedDepth};
 use super::{DepthFormat, DepthKind};
+use crate::io::codec::npy::{parse_npy, parse_npz};
 use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::codec::png::{self, GreyPng};
-use crate::io::codec::{exr::parse_exr_scalar, npy::parse_npy_scalar, tiff::parse_tiff_scalar};
+use crate::io::codec::NpyGrid;
+use crate::io::codec::{exr::parse_exr_scalar, tiff::parse_tiff_scalar};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
@@ -15,7 +17,7 @@ use crate::{Error, Result};
 pub(super) enum Raw {
     /// 8-bit grey PNG samples.
     Grey8(Grid<u8>),
-    /// 16-bit grey PNG samples.
+    /// 16-bit grey PNG samples, or a uint16 NumPy array's.
     Grey16(Grid<u16>),
     /// Float samples; a PFM may be a Middlebury 2014 disparity, other float files may not.
     Float { map: ScalarMap, from_pfm: bool },
@@ -29,7 +31,7 @@ impl Raw {
     pub(super) fn describe(&self) -> &'static str {
         match self {
             Raw::Grey8(_) => "an 8-bit PNG",
-            Raw::Grey16(_) => "a 16-bit PNG",
+            Raw::Grey16(_) => "16-bit integers (a PNG or a uint16 array)",
             Raw::Float { from_pfm: true, .. } => "a float PFM",
             Raw::Float { .. } => "a float map",
             Raw::Embedded(e) => match e.format {
@@ -79,7 +81,8 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
         },
         "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
         "tif" | "tiff" => Ok(float(parse_tiff_scalar(bytes, path)?)),
-        "npy" => Ok(float(parse_npy_scalar(bytes, path)?)),
+        "npy" => Ok(from_npy(parse_npy(bytes, path)?)),
+        "npz" => Ok(from_npy(parse_npz(bytes, path)?)),
         "jpg" | "jpeg"
             if !matches!(
                 format,
@@ -104,10 +107,18 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
                 path,
                 format!(
                     "unknown depth file extension `{ext}`; expected .png, .pfm, .exr, .tif, \
-                     .tiff, .npy, or a .jpg with its depth (a phone's portrait photo)"
+                     .tiff, .npy, .npz, or a .jpg with its depth (a phone's portrait photo)"
                 ),
             ))
         }
+    }
+}
+
+/// A NumPy array's samples: uint16 ones as a 16-bit PNG's, which hold the same.
+fn from_npy(array: NpyGrid) -> Raw {
+    match array {
+        NpyGrid::Float(map) => float(map),
+        NpyGrid::Uint16(grid) => Raw::Grey16(grid),
     }
 }
 
