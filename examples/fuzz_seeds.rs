@@ -140,7 +140,7 @@ fn main() -> Res<()> {
         );
     }
 
-    use tiff::encoder::{colortype, compression as tc};
+    use tiff::encoder::{colortype, Compression as Tc, DeflateLevel};
     let f64s: Vec<f64> = small.iter().map(|&v| f64::from(v)).collect();
     let tiffs = [
         (
@@ -153,19 +153,14 @@ fn main() -> Res<()> {
         ),
         (
             "f32_lzw.tif",
-            tiff(|e| {
-                e.write_image_with_compression::<colortype::Gray32Float, _>(12, 9, tc::Lzw, &floats)
+            tiff_with(Tc::Lzw, |e| {
+                e.write_image::<colortype::Gray32Float>(12, 9, &floats)
             })?,
         ),
         (
             "f32_deflate.tif",
-            tiff(|e| {
-                e.write_image_with_compression::<colortype::Gray32Float, _>(
-                    3,
-                    2,
-                    tc::Deflate::default(),
-                    &small,
-                )
+            tiff_with(Tc::Deflate(DeflateLevel::default()), |e| {
+                e.write_image::<colortype::Gray32Float>(3, 2, &small)
             })?,
         ),
         (
@@ -281,7 +276,8 @@ fn main() -> Res<()> {
     seeds.put("colour_image", "rgb.pfm", pfm("PF", 3, 2, &hdr, true, "\n"));
     // Photos with ICC profiles (tests/data/colour/): a gamma curve decoded by itself, a
     // table curve, a profile that is none, a grey profile on RGB pixels; and colour
-    // spaces stated by chunks (gAMA, cHRM, cICP, the HDR one refused); a WebP with both.
+    // spaces stated by chunks (gAMA, cHRM, cICP, the HDR one refused); a WebP and a TIFF
+    // with both, a 16-bit and a float TIFF.
     for name in [
         "gamma22-ramp.png",
         "p3-flat.png",
@@ -292,6 +288,9 @@ fn main() -> Res<()> {
         "cicp-linear-ramp.png",
         "cicp-pq-flat.png",
         "gamma22-ramp.webp",
+        "gamma22-ramp.tif",
+        "ramp16.tif",
+        "ramp-float.tif",
     ] {
         let png = std::fs::read(root.join("tests/data/colour").join(name))?;
         seeds.put("colour_image", &format!("icc-{name}"), png);
@@ -840,10 +839,18 @@ fn exr_of(
 
 type TiffEncoder<'a> = tiff::encoder::TiffEncoder<&'a mut Cursor<Vec<u8>>>;
 
-/// The bytes of a TIFF that `write` encodes.
+/// The bytes of an uncompressed TIFF that `write` encodes.
 fn tiff(write: impl FnOnce(&mut TiffEncoder) -> tiff::TiffResult<()>) -> Res<Vec<u8>> {
+    tiff_with(tiff::encoder::Compression::Uncompressed, write)
+}
+
+/// The bytes of a TIFF that `write` encodes with `compression`.
+fn tiff_with(
+    compression: tiff::encoder::Compression,
+    write: impl FnOnce(&mut TiffEncoder) -> tiff::TiffResult<()>,
+) -> Res<Vec<u8>> {
     let mut buf = Cursor::new(Vec::new());
-    write(&mut tiff::encoder::TiffEncoder::new(&mut buf)?)?;
+    write(&mut tiff::encoder::TiffEncoder::new(&mut buf)?.with_compression(compression))?;
     Ok(buf.into_inner())
 }
 

@@ -560,15 +560,20 @@ fn aerial_perspective_is_integrated_in_the_photos_primaries() {
     assert!(sensitivity_of("p3-flat.png", camera.clone()) == camera);
 }
 
-/// A lossless WebP (libwebp through Pillow) of the gamma-2.2 ramp with its profile and
-/// EXIF Orientation 6: turned upright, each code decoded by the profile's own curve as
-/// the PNG's is, and the profile carried by the output; a WebP depth map is refused
-/// (maps are lossless data).
+/// A lossless WebP (libwebp through Pillow) and an LZW TIFF (Pillow) of the gamma-2.2 ramp
+/// with its profile and Orientation 6: turned upright, each code decoded by the profile's
+/// own curve as the PNG's is, and the profile carried by the output; as a depth map each
+/// is refused (maps are lossless data; a TIFF map is read by the float map reader).
 #[test]
-fn a_webp_photo_is_read_with_its_profile_and_orientation() {
+fn webp_and_tiff_photos_are_read_with_their_profile_and_orientation() {
+    check_turned_ramp_with_profile("gamma22-ramp.webp", "WebP");
+    check_turned_ramp_with_profile("gamma22-ramp.tif", "Tiff");
+}
+
+fn check_turned_ramp_with_profile(name: &str, kind: &str) {
     let gamma = profiles()["gamma22"]["gamma"].as_f64().unwrap();
-    let photo = load_upright_rgb(&fixture("gamma22-ramp.webp")).unwrap();
-    let profile = photo.metadata.profile().expect("the WebP's ICCP chunk");
+    let photo = load_upright_rgb(&fixture(name)).unwrap();
+    let profile = photo.metadata.profile().expect("the photo's ICC profile");
     assert_eq!(profile.description(), "Adobe RGB (1998) test");
     assert_eq!(photo.exif.orientation.exif(), 6);
     // Orientation 6 turns the stored image 90° clockwise: the upright pixel (x, y) is
@@ -592,17 +597,49 @@ fn a_webp_photo_is_read_with_its_profile_and_orientation() {
     let dir = tempfile::tempdir().unwrap();
     common::write_flat_range(dir.path(), 16, 16);
     let fog = ["--beta", "1e-6"];
-    common::render_over_range(dir.path(), &fixture("gamma22-ramp.webp"), "out.png", &fog);
+    common::render_over_range(dir.path(), &fixture(name), "out.png", &fog);
     let icc = icc_of(&dir.path().join("out.png")).expect("the profile carried");
     assert_primaries_with_srgb_curve(&icc, &profiles()["gamma22"]["colorants"]);
     // Named .png, so that the content, not the name, is refused.
     let map = dir.path().join("d.png");
-    std::fs::copy(fixture("gamma22-ramp.webp"), &map).unwrap();
+    std::fs::copy(fixture(name), &map).unwrap();
     let e = brume::io::depth::load_range(&map, &brume::io::depth::DepthOptions::default())
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("d.png: this is a WebP image, which is not read"),
+        e.contains(&format!("d.png: this is a {kind} image, which is not read")),
         "{e}"
     );
+}
+
+/// A 16-bit RGB TIFF without a profile (OpenCV) is sRGB, each code decoded by sRGB's curve
+/// at 16 bits; a float32 RGB TIFF is linear light, taken as it is (above 1 too).
+#[test]
+fn a_16_bit_tiff_is_srgb_and_a_float_tiff_linear() {
+    let srgb = |c: f64| {
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let codes = |i: usize| [257 * i - i % 7, 65535 - 257 * i, (4099 * i) % 65536];
+    let coded = load_upright_rgb(&fixture("ramp16.tif")).unwrap();
+    let linear = load_upright_rgb(&fixture("ramp-float.tif")).unwrap();
+    assert!(!coded.linear_light && linear.linear_light);
+    for i in 0..256 {
+        let (x, y) = (i % 16, i / 16);
+        for ((c, got), given) in codes(i)
+            .into_iter()
+            .zip(coded.image.get(x, y))
+            .zip(linear.image.get(x, y))
+        {
+            let want = srgb(c as f64 / 65535.0);
+            assert!(
+                (f64::from(*got) - want).abs() < 1e-5,
+                "({x}, {y}): {got} for {want}"
+            );
+            assert_eq!(*given, (c as f64 / 65535.0 * 4.0) as f32, "({x}, {y})");
+        }
+    }
 }

@@ -803,11 +803,26 @@ fn tiff_float_map() {
         .unwrap();
     check_float_map(&load_range(&path, &DepthOptions::default()).unwrap());
 
+    // 16-bit integers hold what a 16-bit PNG does; 8-bit ones no depth.
     let ints = dir.path().join("i.tiff");
     let mut enc = tiff::encoder::TiffEncoder::new(std::fs::File::create(&ints).unwrap()).unwrap();
-    enc.write_image::<tiff::encoder::colortype::Gray16>(1, 1, &[3])
+    enc.write_image::<tiff::encoder::colortype::Gray16>(2, 1, &[0, 2560])
         .unwrap();
-    expect_format_error(load_range(&ints, &DepthOptions::default()), "floats");
+    let kitti = load_range(&ints, &opts(DepthFormat::Kitti)).unwrap();
+    assert!(kitti.range.get(0, 0).is_nan());
+    assert_eq!(*kitti.range.get(1, 0), 10.0);
+    expect_format_error(
+        load_range(&ints, &DepthOptions::default()),
+        "16-bit depth (a PNG, a 16-bit TIFF or a uint16 array) has no standard scale",
+    );
+    let bytes = dir.path().join("b.tiff");
+    let mut enc = tiff::encoder::TiffEncoder::new(std::fs::File::create(&bytes).unwrap()).unwrap();
+    enc.write_image::<tiff::encoder::colortype::Gray8>(1, 1, &[3])
+        .unwrap();
+    expect_format_error(
+        load_range(&bytes, &DepthOptions::default()),
+        "expected 32- or 64-bit floats (or 16-bit integers",
+    );
 }
 
 #[test]
@@ -960,11 +975,11 @@ fn npy_float16_uint16_and_npz_archives() {
     }
     expect_format_error(
         load_range(&p, &DepthOptions::default()),
-        "16-bit depth (a PNG or a uint16 array) has no standard scale",
+        "16-bit depth (a PNG, a 16-bit TIFF or a uint16 array) has no standard scale",
     );
     expect_format_error(
         load_range(&p, &opts(DepthFormat::Float)),
-        "found 16-bit integers (a PNG or a uint16 array)",
+        "found 16-bit integers (a PNG, a 16-bit TIFF or a uint16 array)",
     );
 }
 
@@ -1621,7 +1636,9 @@ fn phone_formats_refuse_what_is_not_a_16_bit_grey_png() {
         assert!(msg.contains("found a float PFM"), "{msg}");
         let msg = expect_format_error(load_range(&jpg, &opts(format)), "d.jpg");
         assert!(
-            msg.contains("expects a 16-bit grey PNG (or a uint16 .npy), found a JPEG"),
+            msg.contains(
+                "expects a 16-bit grey PNG (or a 16-bit TIFF or uint16 .npy), found a JPEG"
+            ),
             "{msg}"
         );
         // What the values are: depth or range only.
@@ -1899,7 +1916,9 @@ fn phone_depth_errors_from_the_command_line() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
         err.contains("d8.png")
-            && err.contains("expects a 16-bit grey PNG (or a uint16 .npy), found an 8-bit PNG"),
+            && err.contains(
+                "expects a 16-bit grey PNG (or a 16-bit TIFF or uint16 .npy), found an 8-bit PNG"
+            ),
         "{err}"
     );
     let o = prep("d16.png", &["--depth-format", "depth16"]);
@@ -2143,7 +2162,7 @@ fn cityscapes_camera_errors_name_the_file_the_key_and_the_value() {
     let p8 = save_png8(dir.path(), "d8_disparity.png", 6, 4, &[9; 24]);
     expect_format_error(
         load_range(&p8, &with_camera),
-        "`depth_format` cityscapes expects a 16-bit grey PNG (or a uint16 .npy), found an 8-bit PNG",
+        "`depth_format` cityscapes expects a 16-bit grey PNG (or a 16-bit TIFF or uint16 .npy), found an 8-bit PNG",
     );
     let as_depth = DepthOptions {
         kind: Some(DepthKind::Depth),

@@ -44,7 +44,7 @@ import tempfile
 import zlib
 
 import numpy as np
-from PIL import Image, ImageCms, PngImagePlugin
+from PIL import Image, ImageCms, PngImagePlugin, TiffImagePlugin
 
 D50 = np.array([0.9642, 1.0, 0.8249])
 BRADFORD = np.array([[0.8951, 0.2664, -0.1614],
@@ -237,6 +237,7 @@ def png_colour_chunk_fixtures(out_dir, ramp, flat, adobe):
     save_with("cicp-pq-flat.png", flat, [(b"cICP", bytes([9, 16, 0, 1]))])
     linear16_fixture(out_dir)
     webp_fixtures(out_dir, ramp, adobe)
+    tiff_fixtures(out_dir, ramp, adobe)
 
 
 def webp_fixtures(out_dir, ramp, adobe):
@@ -249,6 +250,30 @@ def webp_fixtures(out_dir, ramp, adobe):
     held = Image.open(path)
     assert np.array_equal(np.asarray(held.convert("RGB")), ramp), "lossless"
     assert held.info["icc_profile"] == adobe and held.getexif()[0x0112] == 6
+
+
+def tiff_fixtures(out_dir, ramp, adobe):
+    """The gamma-2.2 ramp as an LZW TIFF with its profile and Orientation 6 (Pillow, as raw
+    converters write photos); the 16-bit ramp as a 16-bit RGB TIFF, and four times it over
+    65535 as a float32 RGB TIFF (linear light above 1, as HDR merges write), both by OpenCV,
+    whose TIFF writer (libtiff) is not the crate brume reads with."""
+    import cv2
+
+    ifd = TiffImagePlugin.ImageFileDirectory_v2()
+    ifd[0x0112] = 6
+    path = os.path.join(out_dir, "gamma22-ramp.tif")
+    Image.fromarray(ramp).save(path, compression="tiff_lzw", icc_profile=adobe, tiffinfo=ifd)
+    held = Image.open(path)
+    assert held.info["icc_profile"] == adobe and held.tag_v2[0x0112] == 6
+    # Pillow turns a TIFF upright as it loads it: 90° clockwise for Orientation 6.
+    assert np.array_equal(np.asarray(held.convert("RGB")), np.rot90(ramp, -1)), "lossless"
+    pixels = ramp16()
+    for name, data in (("ramp16.tif", pixels),
+                       ("ramp-float.tif", (pixels / 65535.0 * 4.0).astype(np.float32))):
+        path = os.path.join(out_dir, name)
+        assert cv2.imwrite(path, data[:, :, ::-1])
+        back = cv2.imread(path, cv2.IMREAD_UNCHANGED)[:, :, ::-1]
+        assert back.dtype == data.dtype and np.array_equal(back, data), name
 
 
 def png_chunk(kind, data):

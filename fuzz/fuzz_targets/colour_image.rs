@@ -1,5 +1,5 @@
-//! Colour images (PNG, JPEG; OpenEXR and colour PFM, told apart by their magic) decoded to
-//! linear light.
+//! Colour images (PNG, JPEG, WebP, TIFF; OpenEXR and colour PFM, told apart by their magic)
+//! decoded to linear light.
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

@@ -14,7 +14,7 @@ use pyo3::types::{PyBytes, PyDict};
 
 /// load_photo(path, *, dtype='uint8') -> (image, info)
 ///
-/// Reads a photo (PNG, JPEG, WebP, OpenEXR or colour PFM) as `brume render` reads it: turned
+/// Reads a photo (PNG, JPEG, WebP, TIFF, OpenEXR or colour PFM) as `brume render` reads it: turned
 /// upright by its EXIF orientation, decoded by its colour profile's own curves (an ICC
 /// profile, a PNG's cICP, gAMA or cHRM), to an HxWx3 array of dtype 'uint8' or 'uint16'
 /// (encoded by the sRGB curve, in the photo's primaries: what brume.fog takes and gives

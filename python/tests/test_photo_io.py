@@ -49,6 +49,16 @@ def test_a_photo_is_decoded_by_its_profiles_own_curve():
     assert info["colour_profile"] == "PNG gAMA 1.00000"
 
 
+def test_a_tiff_photo_reads_as_pillow_turns_it_with_its_profile():
+    """The LZW TIFF of the ramp with its profile and Orientation 6: upright as Pillow turns
+    it, each code decoded by the profile's curve; its tags are not carried as EXIF."""
+    linear, info = brume.load_photo(COLOUR / "gamma22-ramp.tif", dtype="float32")
+    pillow = np.asarray(Image.open(COLOUR / "gamma22-ramp.tif").convert("RGB"), float)
+    np.testing.assert_allclose(linear, (pillow / 255.0) ** GAMMA, atol=2e-5)
+    assert info["colour_profile"] == "Adobe RGB (1998) test"
+    assert info["orientation"] == 6 and info["exif"] is None
+
+
 def test_python_fogs_a_profiled_photo_as_brume_render_does(tmp_path):
     """The Adobe RGB patch fogged through load_photo, fog and save_photo: the codes of
     `brume render` within 1, and the same profile."""

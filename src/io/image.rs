@@ -1,7 +1,8 @@
-//! Colour images, as linear light: PNG, JPEG or WebP (WebP with the `codecs` feature) in
-//! sRGB, decoded by the sRGB curve (or by their colour profile's); and the
-//! float images renderers, engines and 3D tools write, OpenEXR and colour PFM, whose
-//! values are linear already and are taken as they are (values above 1 included).
+//! Colour images, as linear light: PNG, JPEG, WebP or TIFF (WebP and TIFF with the `codecs`
+//! feature) in sRGB, decoded by the sRGB curve (or by their colour profile's); and the
+//! float images renderers, engines and 3D tools write, OpenEXR, colour PFM and float
+//! TIFF, whose values are linear already and are taken as they are (values above 1
+//! included).
 //!
 //! The format is told by the file's first bytes (its magic number), not by its name, as
 //! for PNG and JPEG before: the file name is only used in messages.
@@ -31,6 +32,8 @@ use image::{DynamicImage, ImageDecoder, ImageFormat, ImageReader};
 use crate::io::codec::exr::parse_exr_rgb;
 use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::colour_profile::{ColourProfile, StatedColour};
+pub(crate) use crate::io::heif::refuse_heif_bytes;
+pub use crate::io::heif::{heif_brand, refuse_heif};
 use crate::io::limits::check_size;
 use crate::io::metadata::PhotoMetadata;
 pub use crate::io::png_chunks::MAX_ICC_BYTES;
@@ -111,14 +114,15 @@ impl PhotoExif {
 const CROP_TOLERANCE: f64 = 0.01;
 
 /// The formats [`load_linear_rgb`] reads, for messages.
-const COLOUR_FORMATS: &str = "a PNG, JPEG or WebP (sRGB), an OpenEXR (.exr, linear) or a \
-     colour PFM (`PF`, linear) file";
+const COLOUR_FORMATS: &str = "a PNG, JPEG, WebP or TIFF (sRGB), an OpenEXR (.exr, linear) \
+     or a colour PFM (`PF`, linear) file";
 
-/// Loads a colour image as linear light: a PNG, JPEG or WebP (8- or 16-bit, grey or RGB,
-/// alpha dropped) converted from sRGB, or an OpenEXR or colour PFM taken as linear (see the
-/// module docs for the EXR channels read and for NaN and negative values). Errors name the
-/// file; sizes beyond `io::limits` are refused before the pixels are allocated. The
-/// image is turned upright by its EXIF orientation ([`load_upright_rgb`]).
+/// Loads a colour image as linear light: a PNG, JPEG, WebP or TIFF (8- or 16-bit, grey or
+/// RGB, alpha dropped) converted from sRGB, or an OpenEXR, colour PFM or float TIFF taken
+/// as linear (see the module docs for the EXR channels read and for NaN and negative
+/// values). Errors name the file; sizes beyond `io::limits` are refused before the pixels
+/// are allocated. The image is turned upright by its EXIF orientation
+/// ([`load_upright_rgb`]).
 pub fn load_linear_rgb(path: &Path) -> Result<RgbImage> {
     Ok(load_upright_rgb(path)?.image)
 }
@@ -206,6 +210,21 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
         let code = u8::try_from(orientation.exif()).expect("1 to 8");
         let theirs = image::metadata::Orientation::from_exif(code).expect("1 to 8");
         decoded.apply_orientation(theirs);
+    }
+    if matches!(
+        decoded,
+        DynamicImage::ImageRgb32F(_) | DynamicImage::ImageRgba32F(_)
+    ) {
+        // A float TIFF, as HDR merges and renderers write: linear already, as an EXR.
+        let rgb = decoded.to_rgb32f();
+        let (w, h) = (rgb.width() as usize, rgb.height() as usize);
+        let image = RgbImage::from_vec(w, h, rgb.pixels().map(|p| p.0).collect());
+        return Ok(UprightPhoto {
+            image: linear_float(image, name)?,
+            exif,
+            metadata,
+            linear_light: true,
+        });
     }
     Ok(UprightPhoto {
         image: to_linear_rgb(&decoded, metadata.profile()),
@@ -315,65 +334,6 @@ enum Role {
     Map,
 }
 
-/// The major brands of HEIF files (ISO/IEC 23008-12): HEIC (HEVC-coded; an iPhone's
-/// default photo format since iOS 11), its image sequences and bursts, AVIF, and the
-/// format's own.
-const HEIF_BRANDS: [&[u8; 4]; 12] = [
-    b"heic", b"heix", b"hevc", b"hevx", b"heim", b"heis", b"hevm", b"hevs", b"mif1", b"msf1",
-    b"avif", b"avis",
-];
-
-/// The major brand of a HEIF file (its `ftyp` box, first in the file), where the bytes
-/// start like one.
-pub fn heif_brand(bytes: &[u8]) -> Option<String> {
-    let brand = bytes.get(8..12)?;
-    (bytes.get(4..8) == Some(b"ftyp") && HEIF_BRANDS.iter().any(|b| b.as_slice() == brand))
-        .then(|| String::from_utf8_lossy(brand).into_owned())
-}
-
-/// Refuses a HEIF file (an iPhone's HEIC photo) with what to do instead: brume has no
-/// HEVC decoder. Ok for any other file, or one that cannot be read (its loader says why).
-pub fn refuse_heif(path: &Path) -> Result<()> {
-    use std::io::Read;
-    let mut head = Vec::new();
-    let read = std::fs::File::open(path).and_then(|f| f.take(12).read_to_end(&mut head));
-    match read {
-        Ok(_) => refuse_heif_bytes(&head, &path.display().to_string()),
-        Err(_) => Ok(()),
-    }
-}
-
-/// [`refuse_heif`] for the bytes (at least the first 12) of the file `name`.
-pub(crate) fn refuse_heif_bytes(bytes: &[u8], name: &str) -> Result<()> {
-    match heif_brand(bytes) {
-        Some(brand) => Err(heif_refusal(name, &brand)),
-        None => Ok(()),
-    }
-}
-
-/// The refusal of the HEIF file `name` of `brand`, with what to do instead.
-fn heif_refusal(name: &str, brand: &str) -> Error {
-    if brand.starts_with("avi") {
-        return Error::format(
-            name,
-            format!(
-                "this is an AVIF image (brand `{brand}`), which brume does not read; convert it \
-                 to PNG or JPEG"
-            ),
-        );
-    }
-    Error::format(
-        name,
-        format!(
-            "this is a HEIF image (brand `{brand}`; HEIC is an iPhone's default photo \
-             format), which brume does not read: save the photo as JPEG (on an iPhone, \
-             Settings > Camera > Formats > Most Compatible; a portrait's JPEG keeps its depth \
-             map, which brume reads) or convert it (`heif-convert IMG.heic IMG.jpg`, then \
-             give its depth map with --depth)"
-        ),
-    )
-}
-
 /// PNG, JPEG or (for a colour image, with the `codecs` feature) WebP bytes checked (their
 /// kind, a JPEG's end, a PNG's palette) and opened, no pixel decoded yet; `expected` is
 /// what the caller accepts, for the message on data that is none of them.
@@ -398,8 +358,9 @@ fn open_decoder<'a>(
     };
     let readable = match format {
         ImageFormat::Png | ImageFormat::Jpeg => true,
-        // A photo: maps are lossless data, which lossy WebP is not.
-        ImageFormat::WebP => role == Role::Colour,
+        // A photo: maps are lossless data, which lossy WebP is not; a TIFF map is read
+        // by `io::codec::tiff`.
+        ImageFormat::WebP | ImageFormat::Tiff => role == Role::Colour,
         _ => false,
     };
     if !readable {
@@ -409,11 +370,14 @@ fn open_decoder<'a>(
             format!("this is a {format:?} image, which is not read; expected {expected}"),
         ));
     }
-    if format == ImageFormat::WebP && !cfg!(feature = "codecs") {
+    if matches!(format, ImageFormat::WebP | ImageFormat::Tiff) && !cfg!(feature = "codecs") {
         return Err(Error::format(
             name,
-            "this is a WebP image, which this build of brume does not read (its `codecs` \
-             feature is off): convert it to PNG or JPEG, or build brume with that feature",
+            format!(
+                "this is a {format:?} image, which this build of brume does not read (its \
+                 `codecs` feature is off): convert it to PNG or JPEG, or build brume with \
+                 that feature"
+            ),
         ));
     }
     if format == ImageFormat::Jpeg && !jpeg_reaches_end_marker(bytes) {
@@ -440,9 +404,18 @@ fn cannot_decode(format: ImageFormat, name: &str) -> impl Fn(image::ImageError) 
     }
 }
 
-/// The EXIF of an opened PNG or JPEG, and its block as stored; none that cannot be read.
-fn exif_of(decoder: &mut impl ImageDecoder, name: &str) -> (PhotoExif, Option<Vec<u8>>) {
+/// The EXIF of an opened image (`bytes`, of `format`), and its block as stored; none that
+/// cannot be read. A TIFF's tags are in the file's own directories, which are read but
+/// not copied to the outputs (they point into the file's pixel data).
+fn exif_of(
+    decoder: &mut impl ImageDecoder,
+    (bytes, format): (&[u8], ImageFormat),
+    name: &str,
+) -> (PhotoExif, Option<Vec<u8>>) {
     let size = decoder.dimensions();
+    if format == ImageFormat::Tiff {
+        return (PhotoExif::parse(bytes.to_vec(), name, size), None);
+    }
     match decoder.exif_metadata() {
         Ok(Some(tiff)) => (PhotoExif::parse(tiff.clone(), name, size), Some(tiff)),
         _ => (PhotoExif::default(), None),
@@ -482,9 +455,10 @@ pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
         let photo = decode_upright_rgb(&bytes, &name)?;
         return Ok((photo.image.width(), photo.image.height(), photo.exif));
     }
-    let (mut decoder, _) = open_decoder(&bytes, &name, COLOUR_FORMATS, Role::Colour)?;
+    let (mut decoder, format) = open_decoder(&bytes, &name, COLOUR_FORMATS, Role::Colour)?;
     let (w, h) = decoder.dimensions();
-    Ok((w as usize, h as usize, exif_of(&mut decoder, &name).0))
+    let exif = exif_of(&mut decoder, (&bytes, format), &name).0;
+    Ok((w as usize, h as usize, exif))
 }
 
 /// [`decode_any`], with what the caller accepts (`expected`) for the message on data that
@@ -500,13 +474,18 @@ fn decode_image(
     let cannot = cannot_decode(format, name);
     let (exif, metadata) = match role {
         Role::Colour => {
-            let (exif, block) = exif_of(&mut decoder, name);
+            let (exif, block) = exif_of(&mut decoder, (bytes, format), name);
             let profile = match format {
                 ImageFormat::Png => match png_colour(bytes, name)? {
                     PngColour::IccProfile => profile_of(&mut decoder, name),
                     PngColour::Srgb => None,
                     PngColour::Stated(profile) => Some(profile),
                 },
+                // The image crate's TIFF decoder drops a profile larger than its pixels
+                // allow for (a small image's); the tiff crate's own limits do not.
+                #[cfg(feature = "codecs")]
+                ImageFormat::Tiff => crate::io::codec::tiff::icc_profile(bytes, name)
+                    .and_then(|icc| ColourProfile::from_icc(icc, name)),
                 _ => profile_of(&mut decoder, name),
             };
             let metadata = PhotoMetadata {

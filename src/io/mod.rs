@@ -11,6 +11,7 @@ pub mod codec;
 pub mod colour_profile;
 pub mod demo;
 pub mod depth;
+pub(crate) mod heif;
 pub mod image;
 pub mod limits;
 pub mod mask;

@@ -5,8 +5,8 @@ use super::*;
 /// `brume render`.
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
-    /// Colour image: PNG, JPEG or WebP (8- or 16-bit sRGB, or by its ICC profile), or
-    /// OpenEXR or PFM (linear float, as renderers and engines write). It needs --depth or
+    /// Colour image: PNG, JPEG, WebP or TIFF (8- or 16-bit sRGB, or by its ICC profile),
+    /// or OpenEXR, PFM or float TIFF (linear float, as renderers and engines write). It needs --depth or
     /// --transmittance-map, but for a
     /// JPEG that carries its own depth map (GDepth, Dynamic Depth or an iPhone's depth
     /// image: a phone's portrait photo). Without --image and --depth the built-in demo scene is rendered.

@@ -18,9 +18,11 @@ mod without;
 #[cfg(not(feature = "codecs"))]
 pub use without::{exr, npy, tiff};
 
-/// A 2-D NumPy array as brume reads it (`npy::parse_npy`, `npy::parse_npz`).
+/// A one-channel map's samples as a float file decodes them (`npy::parse_npy`,
+/// `npy::parse_npz`, `tiff::parse_tiff`): floats, or 16-bit integers that hold what a
+/// 16-bit PNG does.
 #[cfg_attr(not(feature = "codecs"), allow(dead_code))]
-pub(crate) enum NpyGrid {
+pub(crate) enum MapSamples {
     /// float16, float32 or float64 values, as float32.
     Float(crate::raster::ScalarMap),
     /// uint16 values: no unit of their own, like a 16-bit PNG's.

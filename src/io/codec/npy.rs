@@ -5,7 +5,7 @@
 use std::io::{Cursor, Read};
 use std::path::Path;
 
-use super::NpyGrid;
+use super::MapSamples;
 use crate::io::limits::check_size;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -20,8 +20,8 @@ pub fn read_npy_scalar(path: &Path) -> Result<ScalarMap> {
 /// A float array from `.npy` bytes; an integer array is refused.
 fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
     match parse_npy(bytes, path)? {
-        NpyGrid::Float(map) => Ok(map),
-        NpyGrid::Uint16(_) => Err(Error::format(
+        MapSamples::Float(map) => Ok(map),
+        MapSamples::Uint16(_) => Err(Error::format(
             path,
             "array dtype is uint16; expected float16, float32 or float64 here",
         )),
@@ -29,7 +29,7 @@ fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
 }
 
 /// A float or uint16 array from `.npy` bytes.
-pub(crate) fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyGrid> {
+pub(crate) fn parse_npy(bytes: &[u8], path: &Path) -> Result<MapSamples> {
     check_header(bytes, path)?;
     let npy = npyz::NpyFile::new(bytes)
         .map_err(|e| Error::format(path, format!("not a valid .npy file: {e}")))?;
@@ -59,7 +59,7 @@ pub(crate) fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyGrid> {
     let npy = match npy.try_data::<f32>() {
         Ok(reader) => {
             let values = reader.collect::<std::io::Result<_>>().map_err(truncated)?;
-            return grid(values, w, h, fortran, path).map(NpyGrid::Float);
+            return grid(values, w, h, fortran, path).map(MapSamples::Float);
         }
         Err(npy) => npy,
     };
@@ -69,7 +69,7 @@ pub(crate) fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyGrid> {
                 .map(|v| v.map(|x| x as f32))
                 .collect::<std::io::Result<_>>()
                 .map_err(truncated)?;
-            return grid(values, w, h, fortran, path).map(NpyGrid::Float);
+            return grid(values, w, h, fortran, path).map(MapSamples::Float);
         }
         Err(npy) => npy,
     };
@@ -79,14 +79,14 @@ pub(crate) fn parse_npy(bytes: &[u8], path: &Path) -> Result<NpyGrid> {
                 .map(|v| v.map(half::f16::to_f32))
                 .collect::<std::io::Result<_>>()
                 .map_err(truncated)?;
-            return grid(values, w, h, fortran, path).map(NpyGrid::Float);
+            return grid(values, w, h, fortran, path).map(MapSamples::Float);
         }
         Err(npy) => npy,
     };
     match npy.try_data::<u16>() {
         Ok(reader) => {
             let values = reader.collect::<std::io::Result<_>>().map_err(truncated)?;
-            grid(values, w, h, fortran, path).map(NpyGrid::Uint16)
+            grid(values, w, h, fortran, path).map(MapSamples::Uint16)
         }
         Err(_) => Err(Error::format(
             path,
@@ -141,7 +141,7 @@ const NPZ_DEPTH_ARRAY: &str = "depth";
 
 /// Reads the depth array of a NumPy `.npz` archive (`np.savez`, stored, or
 /// `np.savez_compressed`, deflated): its only array, or the one named `depth`.
-pub(crate) fn parse_npz(bytes: &[u8], path: &Path) -> Result<NpyGrid> {
+pub(crate) fn parse_npz(bytes: &[u8], path: &Path) -> Result<MapSamples> {
     let bad = |e: zip::result::ZipError| {
         Error::format(path, format!("not a valid .npz (zip) archive: {e}"))
     };
@@ -444,7 +444,7 @@ mod tests {
         let uint16 = |fortran, values: [u16; 6]| {
             let data: Vec<u8> = values.iter().flat_map(|v| v.to_be_bytes()).collect();
             match parse_npy(&npy(">u2", fortran, "(2, 3)", &data), path) {
-                Ok(NpyGrid::Uint16(grid)) => grid,
+                Ok(MapSamples::Uint16(grid)) => grid,
                 _ => panic!("not read as uint16"),
             }
         };

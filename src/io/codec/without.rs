@@ -69,6 +69,7 @@ pub mod exr {
 pub mod tiff {
     use super::not_built;
     use crate::error::Result;
+    use crate::io::codec::MapSamples;
     use crate::raster::ScalarMap;
     use std::path::Path;
 
@@ -77,7 +78,7 @@ pub mod tiff {
         Err(not_built(path, "TIFF"))
     }
 
-    pub(crate) fn parse_tiff_scalar(_: &[u8], path: &Path) -> Result<ScalarMap> {
+    pub(crate) fn parse_tiff(_: &[u8], path: &Path) -> Result<MapSamples> {
         Err(not_built(path, "TIFF"))
     }
 }
@@ -86,7 +87,7 @@ pub mod tiff {
 pub mod npy {
     use super::not_built;
     use crate::error::Result;
-    use crate::io::codec::NpyGrid;
+    use crate::io::codec::MapSamples;
     use crate::raster::ScalarMap;
     use std::path::Path;
 
@@ -95,11 +96,11 @@ pub mod npy {
         Err(not_built(path, "NumPy .npy"))
     }
 
-    pub(crate) fn parse_npy(_: &[u8], path: &Path) -> Result<NpyGrid> {
+    pub(crate) fn parse_npy(_: &[u8], path: &Path) -> Result<MapSamples> {
         Err(not_built(path, "NumPy .npy"))
     }
 
-    pub(crate) fn parse_npz(_: &[u8], path: &Path) -> Result<NpyGrid> {
+    pub(crate) fn parse_npz(_: &[u8], path: &Path) -> Result<MapSamples> {
         Err(not_built(path, "NumPy .npz"))
     }
 }

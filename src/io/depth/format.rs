@@ -53,7 +53,7 @@ impl Layout {
             Layout::Any => "a depth file",
             Layout::Pfm => "a `Pf` PFM disparity (disp0.pfm)",
             Layout::Grey8 => "an 8-bit grey PNG disparity",
-            Layout::Grey16 => "a 16-bit grey PNG (or a uint16 .npy)",
+            Layout::Grey16 => "a 16-bit grey PNG (or a 16-bit TIFF or uint16 .npy)",
             Layout::Float => "a float map (.pfm, .exr, .tif, .tiff, .npy or .npz)",
             Layout::GDepth => "a JPEG with a GDepth depth map",
             Layout::DynamicDepth => "a JPEG with a Dynamic Depth container",

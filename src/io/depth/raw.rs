@@ -8,8 +8,8 @@ use super::{DepthFormat, DepthKind};
 use crate::io::codec::npy::{parse_npy, parse_npz};
 use crate::io::codec::pfm::{parse_pfm, Pfm};
 use crate::io::codec::png::{self, GreyPng};
-use crate::io::codec::NpyGrid;
-use crate::io::codec::{exr::parse_exr_scalar, tiff::parse_tiff_scalar};
+use crate::io::codec::MapSamples;
+use crate::io::codec::{exr::parse_exr_scalar, tiff::parse_tiff};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
@@ -31,7 +31,7 @@ impl Raw {
     pub(super) fn describe(&self) -> &'static str {
         match self {
             Raw::Grey8(_) => "an 8-bit PNG",
-            Raw::Grey16(_) => "16-bit integers (a PNG or a uint16 array)",
+            Raw::Grey16(_) => "16-bit integers (a PNG, a 16-bit TIFF or a uint16 array)",
             Raw::Float { from_pfm: true, .. } => "a float PFM",
             Raw::Float { .. } => "a float map",
             Raw::Embedded(e) => match e.format {
@@ -80,9 +80,9 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
             )),
         },
         "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
-        "tif" | "tiff" => Ok(float(parse_tiff_scalar(bytes, path)?)),
-        "npy" => Ok(from_npy(parse_npy(bytes, path)?)),
-        "npz" => Ok(from_npy(parse_npz(bytes, path)?)),
+        "tif" | "tiff" => Ok(from_samples(parse_tiff(bytes, path)?)),
+        "npy" => Ok(from_samples(parse_npy(bytes, path)?)),
+        "npz" => Ok(from_samples(parse_npz(bytes, path)?)),
         "jpg" | "jpeg"
             if !matches!(
                 format,
@@ -114,11 +114,11 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
     }
 }
 
-/// A NumPy array's samples: uint16 ones as a 16-bit PNG's, which hold the same.
-fn from_npy(array: NpyGrid) -> Raw {
+/// A NumPy array's or TIFF's samples: uint16 ones as a 16-bit PNG's, which hold the same.
+fn from_samples(array: MapSamples) -> Raw {
     match array {
-        NpyGrid::Float(map) => float(map),
-        NpyGrid::Uint16(grid) => Raw::Grey16(grid),
+        MapSamples::Float(map) => float(map),
+        MapSamples::Uint16(grid) => Raw::Grey16(grid),
     }
 }
 
