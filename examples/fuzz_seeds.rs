@@ -332,7 +332,7 @@ fn main() -> Res<()> {
         seeds.put("gdepth", &format!("apple-{name}"), jpeg);
     }
 
-    // load_range: extension index (0 png, 1 pfm, 2 exr, 3 tif, 4 tiff, 5 npy, 6 jpg, 7 txt)
+    // load_range: extension index (0 png, 1 pfm, 2 exr, 3 tif, 4 tiff, 5 npy, 6 jpg, 7 npz)
     // with bit 3 set when a calib.txt follows, two option bytes, then the calib's length
     // and text if any, then the file.
     let load = |head: u8, a: u8, b: u8, calib: Option<&str>, file: &[u8]| {
@@ -379,6 +379,12 @@ fn main() -> Res<()> {
         load(5, 2 << 3, 0, None, &npy(1, "<f4", "(2, 3)", false, &le32)),
     );
     seeds.put("load_range", "jpg.bin", load(6, 0, 0, None, &jpeg));
+    let mm: Vec<u8> = [0u16, 1000, 2560, 7]
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let uint16 = npz(&[("depth", npy(1, "<u2", "(2, 2)", false, &mm))], true);
+    seeds.put("load_range", "npz_kitti.bin", load(7, 3, 0, None, &uint16));
 
     // Cityscapes camera files: the dataset's own (every key), the keys brume reads alone,
     // the limits of each accepted range, and numbers in exponent form.

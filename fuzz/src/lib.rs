@@ -41,7 +41,7 @@ pub fn options(a: u8, b: u8) -> DepthOptions {
 }
 
 /// Extensions a `load_range` input may claim, chosen by the low 3 bits of its first byte.
-pub const EXTENSIONS: [&str; 8] = ["png", "pfm", "exr", "tif", "tiff", "npy", "jpg", "txt"];
+pub const EXTENSIONS: [&str; 8] = ["png", "pfm", "exr", "tif", "tiff", "npy", "jpg", "npz"];
 
 /// Runs the depth loader on a `load_range` input: byte 0 picks the extension (bits 0-2)
 /// and whether a calib.txt follows (bit 3); bytes 1-2 are [`options`]; then, with a
