@@ -14,9 +14,9 @@ use pyo3::types::{PyBytes, PyDict};
 
 /// load_photo(path, *, dtype='uint8') -> (image, info)
 ///
-/// Reads a photo (PNG, JPEG, WebP, TIFF, OpenEXR or colour PFM) as `brume render` reads it: turned
-/// upright by its EXIF orientation, decoded by its colour profile's own curves (an ICC
-/// profile, a PNG's cICP, gAMA or cHRM), to an HxWx3 array of dtype 'uint8' or 'uint16'
+/// Reads a photo (PNG, JPEG, WebP, TIFF, OpenEXR or colour PFM) as `brume render` reads
+/// it: turned upright by its EXIF orientation, decoded by its colour profile's own curves
+/// (an ICC profile, a PNG's cICP, gAMA or cHRM), to an HxWx3 array of dtype 'uint8' or 'uint16'
 /// (encoded by the sRGB curve, in the photo's primaries: what brume.fog takes and gives
 /// back) or 'float32' (linear light; an EXR's values above 1 kept). info: orientation
 /// (the EXIF orientation applied, 1 to 8), focal_length_35mm (or None), colour_profile

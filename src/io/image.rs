@@ -334,9 +334,9 @@ enum Role {
     Map,
 }
 
-/// PNG, JPEG or (for a colour image, with the `codecs` feature) WebP bytes checked (their
-/// kind, a JPEG's end, a PNG's palette) and opened, no pixel decoded yet; `expected` is
-/// what the caller accepts, for the message on data that is none of them.
+/// PNG, JPEG or (for a colour image, with the `codecs` feature) WebP or TIFF bytes checked
+/// (their kind, a JPEG's end, a PNG's palette) and opened, no pixel decoded yet;
+/// `expected` is what the caller accepts, for the message on data that is none of them.
 fn open_decoder<'a>(
     bytes: &'a [u8],
     name: &str,

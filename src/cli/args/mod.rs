@@ -116,9 +116,9 @@ pub struct DepthArgs {
     /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM, Android DEPTH16,
     /// ARCore, Cityscapes disparity with --camera, or --depth-scale), float EXR/TIFF/PFM,
     /// or NumPy .npy/.npz (float16/32/64; uint16 as a 16-bit PNG; an .npz's only array or
-    /// the one named `depth`, as Depth Pro writes); a phone's portrait photo, whose JPEG carries its depth map (GDepth,
-    /// Dynamic Depth, an iPhone's depth image: `render` and `view` read it from --image
-    /// when --depth is not given). A photo without a depth sensor: a monocular model's relative inverse depth
+    /// the one named `depth`, as Depth Pro writes); a phone's portrait photo, whose JPEG
+    /// carries its depth map (GDepth, Dynamic Depth, an iPhone's depth image: `render` and
+    /// `view` read it from --image when --depth is not given). A photo without a depth sensor: a monocular model's relative inverse depth
     /// (MiDaS, DPT, Depth Anything) with --depth-kind inverse.
     #[arg(long, value_name = "PATH")]
     pub depth: Option<PathBuf>,

@@ -6,8 +6,8 @@ use super::*;
 #[derive(Args, Clone, Debug)]
 pub struct RenderArgs {
     /// Colour image: PNG, JPEG, WebP or TIFF (8- or 16-bit sRGB, or by its ICC profile),
-    /// or OpenEXR, PFM or float TIFF (linear float, as renderers and engines write). It needs --depth or
-    /// --transmittance-map, but for a
+    /// or OpenEXR, PFM or float TIFF (linear float, as renderers and engines write). It
+    /// needs --depth or --transmittance-map, but for a
     /// JPEG that carries its own depth map (GDepth, Dynamic Depth or an iPhone's depth
     /// image: a phone's portrait photo). Without --image and --depth the built-in demo scene is rendered.
     #[arg(long, value_name = "PATH")]

@@ -29,6 +29,25 @@ pub(crate) enum MapSamples {
     Uint16(crate::raster::Grid<u16>),
 }
 
+#[cfg(feature = "codecs")]
+impl MapSamples {
+    /// The float map, where the file `path` holds one; `integers` says what else it holds
+    /// and what was expected.
+    pub(crate) fn floats(
+        self,
+        path: &std::path::Path,
+        integers: &str,
+    ) -> crate::Result<crate::raster::ScalarMap> {
+        match self {
+            MapSamples::Float(map) => Ok(map),
+            MapSamples::Uint16(_) => Err(crate::Error::format(
+                path,
+                format!("{integers} here (a float map)"),
+            )),
+        }
+    }
+}
+
 /// Encodes the 8-bit RGB image `bytes` (`w * h` pixels, row 0 at the top) by `encoder`,
 /// with the ICC profile `icc` and the EXIF block `exif` where given.
 pub(crate) fn encode_rgb8<E: image::ImageEncoder>(

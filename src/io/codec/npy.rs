@@ -14,18 +14,10 @@ use crate::{Error, Result};
 /// Fortran order, no larger than `io::limits` allows.
 pub fn read_npy_scalar(path: &Path) -> Result<ScalarMap> {
     let bytes = crate::io::limits::read_file(path)?;
-    parse_npy_scalar(&bytes, path)
-}
-
-/// A float array from `.npy` bytes; an integer array is refused.
-fn parse_npy_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
-    match parse_npy(bytes, path)? {
-        MapSamples::Float(map) => Ok(map),
-        MapSamples::Uint16(_) => Err(Error::format(
-            path,
-            "array dtype is uint16; expected float16, float32 or float64 here",
-        )),
-    }
+    parse_npy(&bytes, path)?.floats(
+        path,
+        "an array of dtype uint16; expected float16, float32 or float64",
+    )
 }
 
 /// A float or uint16 array from `.npy` bytes.
@@ -454,9 +446,17 @@ mod tests {
         for g in [rows, columns] {
             assert_eq!((g.get(2, 0), g.get(0, 1), g.get(2, 1)), (&3, &4, &65535));
         }
-        let message = parse_npy_scalar(&npy("<u2", false, "(1, 1)", &[0, 1]), path)
-            .unwrap_err()
-            .to_string();
-        assert!(message.contains("dtype is uint16; expected float16, float32 or float64 here"));
+        // A float map's reader (an inserted object's distance) refuses them, saying so.
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("u.npy");
+        std::fs::write(&file, npy("<u2", false, "(1, 1)", &[0, 1])).unwrap();
+        let message = read_npy_scalar(&file).unwrap_err().to_string();
+        assert!(
+            message.ends_with(
+                "u.npy: an array of dtype uint16; expected float16, float32 or float64 here \
+                 (a float map)"
+            ),
+            "{message}"
+        );
     }
 }

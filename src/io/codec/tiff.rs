@@ -13,17 +13,10 @@ use crate::{Error, Result};
 /// Reads a one-channel 32- or 64-bit float TIFF no larger than `io::limits` allows.
 pub fn read_tiff_scalar(path: &Path) -> Result<ScalarMap> {
     let bytes = crate::io::limits::read_file(path)?;
-    parse_tiff_scalar(&bytes, path)
-}
-
-fn parse_tiff_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
-    match parse_tiff(bytes, path)? {
-        MapSamples::Float(map) => Ok(map),
-        MapSamples::Uint16(_) => Err(Error::format(
-            path,
-            "TIFF samples are 16-bit integers; expected 32- or 64-bit floats here",
-        )),
-    }
+    parse_tiff(&bytes, path)?.floats(
+        path,
+        "a TIFF of 16-bit integers; expected 32- or 64-bit floats",
+    )
 }
 
 /// A one-channel float or 16-bit TIFF's samples.

@@ -49,10 +49,11 @@ fn resolve_format(
         (F::Auto, Raw::Grey16(_)) => {
             return Err(Error::format(
                 path,
-                "16-bit depth (a PNG, a 16-bit TIFF or a uint16 array) has no standard scale: give `depth_format` kitti, nyu or \
-                 tum, or `depth_scale` with the metres per unit (a Cityscapes disparity: \
-                 `depth_format` cityscapes with `camera`; a monocular model's relative \
-                 inverse depth, Depth Anything or MiDaS: `depth_kind` inverse)",
+                "16-bit depth (a PNG, a 16-bit TIFF or a uint16 array) has no standard scale: \
+                 give `depth_format` kitti, nyu or tum, or `depth_scale` with the metres per \
+                 unit (a Cityscapes disparity: `depth_format` cityscapes with `camera`; a \
+                 monocular model's relative inverse depth, Depth Anything or MiDaS: \
+                 `depth_kind` inverse)",
             ))
         }
         (f, _) => f,
