@@ -936,6 +936,55 @@ fn npy_float16_uint16_and_npz_archives() {
         load_range(&p, &DepthOptions::default()),
         "holds 2 arrays (a, b) and none is named 'depth'",
     );
+    // Depth Pro's prediction saved whole (`np.savez(path, **prediction)`): its focal length
+    // turns the depth into range as `focal` would, unless `focal` or `fov` is given.
+    let f_px = common::npy_bytes("<f4", "()", false, &800f32.to_le_bytes());
+    let depth = common::npy_bytes(
+        "<f4",
+        "(2, 3)",
+        false,
+        &[10f32; 6].map(f32::to_le_bytes).concat(),
+    );
+    let whole = [("depth", depth.clone()), ("focallength_px", f_px)];
+    let p = write(dir.path(), "whole.npz", &npz_bytes(&whole, true));
+    let plain = write(dir.path(), "plain.npy", &depth);
+    let with_focal = DepthOptions {
+        focal: Some(800.0),
+        ..DepthOptions::default()
+    };
+    let from_archive = load_range(&p, &DepthOptions::default()).unwrap();
+    let from_option = load_range(&plain, &with_focal).unwrap();
+    assert_eq!(from_archive.range.as_slice(), from_option.range.as_slice());
+    assert!(*from_archive.range.get(0, 0) > 10.0);
+    assert!(from_archive
+        .notes
+        .iter()
+        .any(|n| n.contains("'focallength_px': 800.00 px")));
+    let fov = DepthOptions {
+        fov: Some(60.0),
+        ..DepthOptions::default()
+    };
+    let overridden = load_range(&p, &fov).unwrap();
+    assert!(overridden
+        .notes
+        .iter()
+        .any(|n| n.contains("used instead of the archive's")));
+    assert_ne!(overridden.range.as_slice(), from_archive.range.as_slice());
+    let two = common::npy_bytes(
+        "<f8",
+        "(2,)",
+        false,
+        &[1f64, 2.0].map(f64::to_le_bytes).concat(),
+    );
+    let p = write(
+        dir.path(),
+        "two.npz",
+        &npz_bytes(&[("depth", depth), ("focallength_px", two)], false),
+    );
+    expect_format_error(
+        load_range(&p, &DepthOptions::default()),
+        "array 'focallength_px': shape [2]; expected one focal length in pixels",
+    );
     let p = write(dir.path(), "none.npz", &npz_bytes(&[], false));
     expect_format_error(load_range(&p, &DepthOptions::default()), "holds no array");
     let p = write(

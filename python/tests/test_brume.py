@@ -508,6 +508,14 @@ def test_load_depth_of_numpy_archives_half_floats_and_millimetres(tmp_path, rang
     assert info["metric"] is True and info["unknown_pixels"] == 5
     np.testing.assert_allclose(loaded[1:], mm[1:] / 1000.0, rtol=1e-6)
     assert np.isnan(loaded[0, :5]).all()
+    # Depth Pro's prediction saved whole: its focal length turns depth into range.
+    np.savez(tmp_path / "whole.npz", depth=range_m, focallength_px=np.float32(50.0))
+    np.save(tmp_path / "depth.npy", range_m)
+    whole, info = brume.load_depth(tmp_path / "whole.npz", kind="depth")
+    given, _ = brume.load_depth(tmp_path / "depth.npy", kind="depth", focal_px=50.0)
+    np.testing.assert_array_equal(whole, given)
+    assert (whole >= range_m).all() and (whole > range_m).any()
+    assert any("'focallength_px': 50.00 px" in n for n in info["notes"])
     np.savez(tmp_path / "two.npz", a=range_m, b=range_m)
     with pytest.raises(ValueError, match=r"holds 2 arrays \(a, b\) and none is named 'depth'"):
         brume.load_depth(tmp_path / "two.npz")

@@ -29,6 +29,19 @@ pub(crate) enum MapSamples {
     Uint16(crate::raster::Grid<u16>),
 }
 
+/// An `.npz` archive's depth map, and the focal length in pixels it holds beside it.
+#[cfg_attr(not(feature = "codecs"), allow(dead_code))]
+pub(crate) struct NpzDepth {
+    /// The depth array's samples.
+    pub samples: MapSamples,
+    /// The scalar array [`NPZ_FOCAL_ARRAY`], where the archive holds one.
+    pub focal_px: Option<f64>,
+}
+
+/// The name of the focal length in pixels Depth Pro's `infer` returns beside its depth:
+/// an archive saved as `np.savez(path, **prediction)` holds both.
+pub(crate) const NPZ_FOCAL_ARRAY: &str = "focallength_px";
+
 #[cfg(feature = "codecs")]
 impl MapSamples {
     /// The float map, where the file `path` holds one; `integers` says what else it holds

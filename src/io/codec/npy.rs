@@ -5,7 +5,7 @@
 use std::io::{Cursor, Read};
 use std::path::Path;
 
-use super::MapSamples;
+use super::{MapSamples, NpzDepth, NPZ_FOCAL_ARRAY};
 use crate::io::limits::check_size;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -132,8 +132,9 @@ fn grid<T: Copy>(
 const NPZ_DEPTH_ARRAY: &str = "depth";
 
 /// Reads the depth array of a NumPy `.npz` archive (`np.savez`, stored, or
-/// `np.savez_compressed`, deflated): its only array, or the one named `depth`.
-pub(crate) fn parse_npz(bytes: &[u8], path: &Path) -> Result<MapSamples> {
+/// `np.savez_compressed`, deflated): its only array, or the one named `depth`; and the
+/// focal length in pixels beside it, where it holds one named [`NPZ_FOCAL_ARRAY`].
+pub(crate) fn parse_npz(bytes: &[u8], path: &Path) -> Result<NpzDepth> {
     let bad = |e: zip::result::ZipError| {
         Error::format(path, format!("not a valid .npz (zip) archive: {e}"))
     };
@@ -162,10 +163,74 @@ pub(crate) fn parse_npz(bytes: &[u8], path: &Path) -> Result<MapSamples> {
     };
     let member = archive.by_name(&format!("{name}.npy")).map_err(bad)?;
     let npy = read_member(member, path, &name)?;
-    parse_npy(&npy, path).map_err(|e| match e {
+    let samples = parse_npy(&npy, path).map_err(|e| within(&name, e))?;
+    let focal_px = if name != NPZ_FOCAL_ARRAY && arrays.iter().any(|a| a == NPZ_FOCAL_ARRAY) {
+        let member = archive
+            .by_name(&format!("{NPZ_FOCAL_ARRAY}.npy"))
+            .map_err(bad)?;
+        // One value: a header and at most 8 bytes.
+        let mut npy = Vec::new();
+        member
+            .take(NPY_PREAMBLE + MAX_HEADER as u64 + 8)
+            .read_to_end(&mut npy)
+            .map_err(|e| Error::io(path, e))?;
+        Some(parse_focal(&npy, path).map_err(|e| within(NPZ_FOCAL_ARRAY, e))?)
+    } else {
+        None
+    };
+    Ok(NpzDepth { samples, focal_px })
+}
+
+/// `e`, a format error of the archive's array `name`, saying which.
+fn within(name: &str, e: Error) -> Error {
+    match e {
         Error::Format { path, detail } => Error::format(path, format!("array '{name}': {detail}")),
         other => other,
-    })
+    }
+}
+
+/// A focal length in pixels: one finite positive float, of any shape holding one value.
+fn parse_focal(bytes: &[u8], path: &Path) -> Result<f64> {
+    let shape = plain_shape(bytes, path)?.unwrap_or_default();
+    if shape.len() > 2 || shape.iter().any(|&d| d != 1) {
+        return Err(Error::format(
+            path,
+            format!(
+                "shape {shape:?}; expected one focal length in pixels (leave it out of the \
+                 archive, or give `focal`)"
+            ),
+        ));
+    }
+    let npy = npyz::NpyFile::new(bytes)
+        .map_err(|e| Error::format(path, format!("not a valid .npy array: {e}")))?;
+    let value = match npy.try_data::<f32>() {
+        Ok(values) => values
+            .map(|v| v.map(f64::from))
+            .collect::<std::io::Result<Vec<_>>>(),
+        Err(npy) => match npy.try_data::<f64>() {
+            Ok(values) => values.collect::<std::io::Result<Vec<_>>>(),
+            Err(npy) => {
+                return Err(Error::format(
+                    path,
+                    format!(
+                        "dtype is {}; expected a float focal length in pixels",
+                        npy.dtype().descr()
+                    ),
+                ))
+            }
+        },
+    };
+    match value.ok().as_deref() {
+        Some(&[f]) if f.is_finite() && f > 0.0 => Ok(f),
+        Some(&[f]) => Err(Error::format(
+            path,
+            format!("{f}; expected a finite focal length > 0 in pixels (or give `focal`)"),
+        )),
+        _ => Err(Error::format(
+            path,
+            "cannot read its value; the archive may be truncated",
+        )),
+    }
 }
 
 /// The bytes of an archive member, no more than the array its header describes needs: a
@@ -222,8 +287,24 @@ const MAX_HEADER: usize = 10_000;
 /// `{` took longer than the fuzzer's 10 s). So the header must be the plain dictionary
 /// numpy writes for an array, read here in linear time, and its shape within `io::limits`.
 fn check_header(bytes: &[u8], path: &Path) -> Result<()> {
-    if !bytes.starts_with(b"\x93NUMPY") || bytes.len() < 8 {
+    let Some(shape) = plain_shape(bytes, path)? else {
         return Ok(()); // npyz names what is wrong
+    };
+    // Any other shape is refused here too: npyz would multiply its dimensions first.
+    match shape[..] {
+        [h, w] | [h, w, 1] => check_size(path, "NPY", w, h),
+        _ => Err(Error::format(
+            path,
+            format!("array shape is {shape:?}; expected (height, width)"),
+        )),
+    }
+}
+
+/// The shape of a plain `.npy` header ([`check_header`]), read in linear time; `None` for
+/// bytes that do not start as one.
+fn plain_shape(bytes: &[u8], path: &Path) -> Result<Option<Vec<u64>>> {
+    if !bytes.starts_with(b"\x93NUMPY") || bytes.len() < 8 {
+        return Ok(None);
     }
     // Version 1 gives the header length in 2 bytes, later versions in 4.
     let (text_at, len): (usize, _) = match bytes[6] {
@@ -241,7 +322,7 @@ fn check_header(bytes: &[u8], path: &Path) -> Result<()> {
         ),
     };
     let Some(len) = len else {
-        return Ok(());
+        return Ok(None);
     };
     if len > MAX_HEADER {
         return Err(Error::format(
@@ -270,14 +351,7 @@ fn check_header(bytes: &[u8], path: &Path) -> Result<()> {
             ),
         )
     })?;
-    // Any other shape is refused here too: npyz would multiply its dimensions first.
-    match shape[..] {
-        [h, w] | [h, w, 1] => check_size(path, "NPY", w, h),
-        _ => Err(Error::format(
-            path,
-            format!("array shape is {shape:?}; expected (height, width)"),
-        )),
-    }
+    Ok(Some(shape))
 }
 
 /// A linear-time reader of the header numpy writes for a plain (not structured) dtype: a

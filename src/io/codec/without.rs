@@ -87,7 +87,7 @@ pub mod tiff {
 pub mod npy {
     use super::not_built;
     use crate::error::Result;
-    use crate::io::codec::MapSamples;
+    use crate::io::codec::{MapSamples, NpzDepth};
     use crate::raster::ScalarMap;
     use std::path::Path;
 
@@ -100,7 +100,7 @@ pub mod npy {
         Err(not_built(path, "NumPy .npy"))
     }
 
-    pub(crate) fn parse_npz(_: &[u8], path: &Path) -> Result<MapSamples> {
+    pub(crate) fn parse_npz(_: &[u8], path: &Path) -> Result<NpzDepth> {
         Err(not_built(path, "NumPy .npz"))
     }
 }

@@ -13,6 +13,7 @@ use super::{android, png16};
 use super::{finite_option, positive_option, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
 use crate::camera::{Camera, DepthModel};
 use crate::io::camera::{to_range, Intrinsics, Stereo};
+use crate::io::codec::NPZ_FOCAL_ARRAY;
 use crate::{Error, Result};
 
 /// The camera files that came with a depth map, parsed, with their paths.
@@ -241,8 +242,25 @@ pub(super) fn interpret(
             let range = to_range(&map, |d| stereo.depth_m(f64::from(d)), Some(&k));
             (range, metres, Some(k))
         }
-        (_, Raw::Float { map, .. }) => {
-            let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
+        (_, Raw::Float { map, focal_px, .. }) => {
+            let given = opts.focal.is_some() || opts.fov.is_some();
+            let k = match focal_px {
+                Some(f) if !given && kind == DepthKind::Depth => {
+                    notes.push(format!(
+                        "focal length from the archive's '{NPZ_FOCAL_ARRAY}': {f:.2} px; \
+                         principal point assumed at the image centre"
+                    ));
+                    Some(Intrinsics::centred(f, width, height))
+                }
+                Some(_) if given => {
+                    notes.push(format!(
+                        "`focal` or `fov` given: used instead of the archive's \
+                         '{NPZ_FOCAL_ARRAY}'"
+                    ));
+                    depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?
+                }
+                _ => depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?,
+            };
             let (scale, units) = vouched_scale(opts, "values", FILE_UNITS, &mut notes)?;
             let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
             (range, units, k)

@@ -426,6 +426,7 @@ pub fn range_from_map(map: ScalarMap, name: &str, opts: &DepthOptions) -> Result
     let raw = raw::Raw::Float {
         map,
         from_pfm: false,
+        focal_px: None,
     };
     let name = Path::new(name);
     interpret(raw, name, opts, SideFiles::default(), Vec::new(), 1.0)

@@ -20,7 +20,13 @@ pub(super) enum Raw {
     /// 16-bit grey PNG samples, or a uint16 NumPy array's.
     Grey16(Grid<u16>),
     /// Float samples; a PFM may be a Middlebury 2014 disparity, other float files may not.
-    Float { map: ScalarMap, from_pfm: bool },
+    /// `focal_px`: the focal length an `.npz` archive holds beside the map (Depth Pro's
+    /// `focallength_px`), on the map's grid.
+    Float {
+        map: ScalarMap,
+        from_pfm: bool,
+        focal_px: Option<f64>,
+    },
     /// A depth map a phone's JPEG embeds (GDepth, Dynamic Depth, Apple's), decoded by its
     /// own rules.
     Embedded(EmbeddedDepth),
@@ -73,6 +79,7 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
             Pfm::Grey(map) => Ok(Raw::Float {
                 map,
                 from_pfm: true,
+                focal_px: None,
             }),
             Pfm::Rgb(_) => Err(Error::format(
                 path,
@@ -82,7 +89,17 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
         "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
         "tif" | "tiff" => Ok(from_samples(parse_tiff(bytes, path)?)),
         "npy" => Ok(from_samples(parse_npy(bytes, path)?)),
-        "npz" => Ok(from_samples(parse_npz(bytes, path)?)),
+        "npz" => {
+            let archive = parse_npz(bytes, path)?;
+            Ok(match from_samples(archive.samples) {
+                Raw::Float { map, from_pfm, .. } => Raw::Float {
+                    map,
+                    from_pfm,
+                    focal_px: archive.focal_px,
+                },
+                integers => integers,
+            })
+        }
         "jpg" | "jpeg"
             if !matches!(
                 format,
@@ -126,5 +143,6 @@ fn float(map: ScalarMap) -> Raw {
     Raw::Float {
         map,
         from_pfm: false,
+        focal_px: None,
     }
 }
