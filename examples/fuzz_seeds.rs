@@ -210,7 +210,7 @@ fn main() -> Res<()> {
         "depth_pro.npz",
         npz(
             &[
-                ("f_px", f_px),
+                ("focallength_px", f_px),
                 ("depth", npy(1, "<f4", "(2, 3)", false, &le32)),
             ],
             true,
