@@ -243,24 +243,16 @@ pub(super) fn interpret(
             (range, metres, Some(k))
         }
         (_, Raw::Float { map, focal_px, .. }) => {
-            let given = opts.focal.is_some() || opts.fov.is_some();
-            let k = match focal_px {
-                Some(f) if !given && kind == DepthKind::Depth => {
-                    notes.push(format!(
-                        "focal length from the archive's '{NPZ_FOCAL_ARRAY}': {f:.2} px; \
-                         principal point assumed at the image centre"
-                    ));
-                    Some(Intrinsics::centred(f, width, height))
-                }
-                Some(_) if given => {
-                    notes.push(format!(
-                        "`focal` or `fov` given: used instead of the archive's \
-                         '{NPZ_FOCAL_ARRAY}'"
-                    ));
-                    depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?
-                }
-                _ => depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?,
-            };
+            let held = focal_px.map(|f| {
+                let said = format!(
+                    "focal length from the archive's '{NPZ_FOCAL_ARRAY}': {f:.2} px; \
+                     principal point assumed at the image centre"
+                );
+                (Intrinsics::centred(f, width, height), said)
+            });
+            let source = format!("archive's '{NPZ_FOCAL_ARRAY}'");
+            let size = (width, height);
+            let k = held_or_given(held, &source, kind, opts, size, fov_height, &mut notes)?;
             let (scale, units) = vouched_scale(opts, "values", FILE_UNITS, &mut notes)?;
             let range = to_range(&map, |v| Some(f64::from(v) * scale), k.as_ref());
             (range, units, k)
@@ -268,26 +260,16 @@ pub(super) fn interpret(
         (_, Raw::Embedded(mut e)) => {
             notes.extend(std::mem::take(&mut e.notes));
             drop_unconfident(&mut e, opts.min_confidence, path, &mut notes)?;
-            let given = opts.focal.is_some() || opts.fov.is_some();
-            let k = match e.intrinsics {
-                Some(k) if !given && kind == DepthKind::Depth => {
-                    notes.push(format!(
-                        "intrinsics from the file's {}: fx {:.2} fy {:.2} px on the map's grid",
-                        calibration_name(e.format),
-                        k.fx,
-                        k.fy
-                    ));
-                    Some(k)
-                }
-                Some(_) if given => {
-                    notes.push(format!(
-                        "`focal` or `fov` given: used instead of the file's {}",
-                        calibration_name(e.format)
-                    ));
-                    depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?
-                }
-                _ => depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?,
-            };
+            let source = format!("file's {}", calibration_name(e.format));
+            let held = e.intrinsics.map(|k| {
+                let said = format!(
+                    "intrinsics from the {source}: fx {:.2} fy {:.2} px on the map's grid",
+                    k.fx, k.fy
+                );
+                (k, said)
+            });
+            let size = (width, height);
+            let k = held_or_given(held, &source, kind, opts, size, fov_height, &mut notes)?;
             // A relative map's metres (an iPhone's dual camera) may be rescaled by one who
             // knows a distance in the scene; a map in file units is made metric so.
             let (scale, units) = vouched_scale(opts, "the file's depth", &e.units, &mut notes)?;
@@ -473,6 +455,34 @@ fn zbuffer(
         drawn.then(|| model.eye_depth(d) * scale)
     };
     Ok((depth, k, units))
+}
+
+/// The intrinsics a file holds beside its map (`held`, with the note saying so), for depth
+/// along the optical axis; `focal` or `fov` given wins over them, with a note naming
+/// their `source`; without them, [`depth_intrinsics`].
+fn held_or_given(
+    held: Option<(Intrinsics, String)>,
+    source: &str,
+    kind: DepthKind,
+    opts: &DepthOptions,
+    size: (usize, usize),
+    fov_height: usize,
+    notes: &mut Vec<String>,
+) -> Result<Option<Intrinsics>> {
+    let given = opts.focal.is_some() || opts.fov.is_some();
+    match held {
+        Some((k, said)) if !given && kind == DepthKind::Depth => {
+            notes.push(said);
+            Ok(Some(k))
+        }
+        Some(_) if given => {
+            notes.push(format!(
+                "`focal` or `fov` given: used instead of the {source}"
+            ));
+            depth_intrinsics(kind, opts, size, fov_height, notes)
+        }
+        _ => depth_intrinsics(kind, opts, size, fov_height, notes),
+    }
 }
 
 /// The focal length in pixels of a vertical field of view over `height` pixels.

@@ -86,19 +86,12 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
                 "PFM is `PF` (3 colour channels); a depth or disparity PFM must be `Pf` (1 channel)",
             )),
         },
-        "exr" => Ok(float(parse_exr_scalar(bytes, path)?)),
-        "tif" | "tiff" => Ok(from_samples(parse_tiff(bytes, path)?)),
-        "npy" => Ok(from_samples(parse_npy(bytes, path)?)),
+        "exr" => Ok(from_samples(MapSamples::Float(parse_exr_scalar(bytes, path)?), None)),
+        "tif" | "tiff" => Ok(from_samples(parse_tiff(bytes, path)?, None)),
+        "npy" => Ok(from_samples(parse_npy(bytes, path)?, None)),
         "npz" => {
             let archive = parse_npz(bytes, path)?;
-            Ok(match from_samples(archive.samples) {
-                Raw::Float { map, from_pfm, .. } => Raw::Float {
-                    map,
-                    from_pfm,
-                    focal_px: archive.focal_px,
-                },
-                integers => integers,
-            })
+            Ok(from_samples(archive.samples, archive.focal_px))
         }
         "jpg" | "jpeg"
             if !matches!(
@@ -131,18 +124,15 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
     }
 }
 
-/// A NumPy array's or TIFF's samples: uint16 ones as a 16-bit PNG's, which hold the same.
-fn from_samples(array: MapSamples) -> Raw {
+/// A float or integer file's samples (EXR, TIFF, NumPy): uint16 ones as a 16-bit PNG's,
+/// which hold the same; floats with the focal length in pixels an archive held beside them.
+fn from_samples(array: MapSamples, focal_px: Option<f64>) -> Raw {
     match array {
-        MapSamples::Float(map) => float(map),
+        MapSamples::Float(map) => Raw::Float {
+            map,
+            from_pfm: false,
+            focal_px,
+        },
         MapSamples::Uint16(grid) => Raw::Grey16(grid),
-    }
-}
-
-fn float(map: ScalarMap) -> Raw {
-    Raw::Float {
-        map,
-        from_pfm: false,
-        focal_px: None,
     }
 }
