@@ -1294,9 +1294,11 @@ fn prep_refuses_refinement_without_an_image() {
 
 /// A monocular estimator's relative inverse depth (`--depth-kind inverse`) fogs as the
 /// depth it inverts: paper 000's haze reads range over its largest value, so the unknown
-/// scale cancels; its sky (0) is found and fogged as the depth map's unknown sky is.
+/// scale cancels; its sky (0) is found and fogged as the depth map's unknown sky is. So
+/// does affine-invariant depth (`--depth-kind affine`, Marigold) with the scene's nearest
+/// and farthest depth as `--near` and `--far`, its sky at the far plane (1).
 #[test]
-fn relative_inverse_depth_fogs_as_the_depth_it_inverts() {
+fn relative_inverse_and_affine_depth_fog_as_the_depth_they_encode() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (24usize, 16usize);
     write_rgba(
@@ -1310,37 +1312,50 @@ fn relative_inverse_depth_fogs_as_the_depth_it_inverts() {
     let z = |x: usize, y: usize| (y >= 4).then(|| 40.0 / (y - 3) as f32 + 0.1 * x as f32);
     let depth = Grid::from_fn(w, h, |x, y| z(x, y).unwrap_or(f32::NAN));
     let inverse = Grid::from_fn(w, h, |x, y| z(x, y).map_or(0.0, |z| 3.0 / z));
+    // The farthest surface (42.3) a little short of the far plane, which is the sky's.
+    let (near, far) = (4.4f32, 43.0f32);
+    let affine = Grid::from_fn(w, h, |x, y| {
+        z(x, y).map_or(1.0, |z| (z - near) / (far - near))
+    });
     write_scalar(&dir.path().join("depth.pfm"), &depth).unwrap();
     write_scalar(&dir.path().join("inverse.pfm"), &inverse).unwrap();
-    let fog = |depth: &str, kind: &str, out: &str| {
-        let o = brume(
-            dir.path(),
-            &[
-                "render",
-                "--image",
-                "im.png",
-                "--depth",
-                depth,
-                "--depth-kind",
-                kind,
-                "--fov",
-                "45",
-                "--out",
-                out,
-            ],
-        );
+    write_scalar(&dir.path().join("affine.pfm"), &affine).unwrap();
+    let fog = |depth: &str, kind: &str, out: &str, extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "--image",
+            "im.png",
+            "--depth",
+            depth,
+            "--depth-kind",
+            kind,
+            "--fov",
+            "45",
+            "--out",
+            out,
+        ];
+        args.extend_from_slice(extra);
+        let o = brume(dir.path(), &args);
         assert!(o.status.success(), "{}", stderr(&o));
         brume::io::image::load_linear_rgb(&dir.path().join(out)).unwrap()
     };
-    let from_depth = fog("depth.pfm", "depth", "depth.pfm.out.pfm");
-    let from_inverse = fog("inverse.pfm", "inverse", "inverse.out.pfm");
-    let largest = from_depth
-        .as_slice()
-        .iter()
-        .zip(from_inverse.as_slice())
-        .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
-        .fold(0.0f32, f32::max);
+    let from_depth = fog("depth.pfm", "depth", "depth.pfm.out.pfm", &[]);
+    let largest_difference = |other: &brume::raster::RgbImage| {
+        from_depth
+            .as_slice()
+            .iter()
+            .zip(other.as_slice())
+            .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    let from_inverse = fog("inverse.pfm", "inverse", "inverse.out.pfm", &[]);
     // 3/(3/z) is z to an ulp or two.
+    let largest = largest_difference(&from_inverse);
+    assert!(largest < 1e-5, "{largest}");
+    let planes = ["--near", "4.4", "--far", "43"];
+    let from_affine = fog("affine.pfm", "affine", "affine.out.pfm", &planes);
+    // near + d·(far − near) is z to a few ulps of 43.
+    let largest = largest_difference(&from_affine);
     assert!(largest < 1e-5, "{largest}");
 }
 

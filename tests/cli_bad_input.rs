@@ -730,6 +730,18 @@ fn render_refuses_options_that_cannot_take_effect() {
         r("--reversed-z", "--reversed-z zbuffer"),
         case(
             "render --image im.png --depth range.pfm --out out.png",
+            "--depth-kind affine --near 1 --far 9 --reversed-z",
+            1,
+            "--reversed-z zbuffer",
+        ),
+        case(
+            "render --image im.png --depth range.pfm --out out.png",
+            "--depth-kind affine --far 10",
+            1,
+            "--near affine street",
+        ),
+        case(
+            "render --image im.png --depth range.pfm --out out.png",
             "--depth-kind zbuffer --near 1 --far 0.5 --fov 40",
             1,
             "--far 0.5 inf",

@@ -335,6 +335,14 @@ fn a_map_in_memory_reads_as_a_float_file_of_it() {
         ),
         (DepthKind::Inverse, geometry.clone()),
         (
+            DepthKind::Affine,
+            DepthOptions {
+                near: Some(1.5),
+                far: Some(40.0),
+                ..geometry.clone()
+            },
+        ),
+        (
             DepthKind::ZBuffer,
             DepthOptions {
                 near: Some(0.1),
@@ -1209,6 +1217,124 @@ fn relative_inverse_depth_becomes_range() {
     assert_eq!(
         "inverse-depth".parse::<DepthKind>().unwrap(),
         DepthKind::Inverse
+    );
+}
+
+/// A monocular estimator's affine-invariant depth (`depth_kind` affine, Marigold): depth =
+/// near + d·(far − near) along the optical axis, then range with `fov`; the far plane
+/// (d = 1, where the model clamps the sky) and NaN unknown, 0 (the nearest depth) known;
+/// a 16-bit PNG holds d·65535 and is read as png16 without a scale; `near` and `far` are
+/// required and checked; metres with `scale`.
+#[test]
+fn affine_invariant_depth_becomes_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h, fov, near, far) = (7usize, 5usize, 55.0f64, 2.5f64, 180.0f64);
+    let focal = h as f64 / 2.0 / (fov.to_radians() / 2.0).tan();
+    let ray = |x: usize, y: usize| {
+        let (u, v) = (
+            (x as f64 - (w as f64 - 1.0) / 2.0) / focal,
+            (y as f64 - (h as f64 - 1.0) / 2.0) / focal,
+        );
+        (1.0 + u * u + v * v).sqrt()
+    };
+    let values = [0.0f32, 0.125, 0.5, 0.9995, 1.0, f32::NAN, 0.75];
+    let map = Grid::from_fn(w, h, |x, y| values[(x + 2 * y) % values.len()]);
+    let pfm = dir.path().join("marigold.pfm");
+    write_scalar(&pfm, &map).unwrap();
+    for (scale, units) in [(None, "file units"), (Some(0.5), "m")] {
+        let opts = DepthOptions {
+            kind: Some(DepthKind::Affine),
+            fov: Some(fov),
+            near: Some(near),
+            far: Some(far),
+            scale,
+            ..DepthOptions::default()
+        };
+        let d = load_range(&pfm, &opts).unwrap();
+        assert_eq!((d.units.as_str(), d.metric), (units, scale.is_some()));
+        let s = scale.unwrap_or(1.0);
+        for y in 0..h {
+            for x in 0..w {
+                let v = *map.get(x, y);
+                let got = *d.range.get(x, y);
+                if v.is_finite() && v < 1.0 {
+                    let want = s * (near + f64::from(v) * (far - near)) * ray(x, y);
+                    let err = (f64::from(got) - want).abs();
+                    assert!(err <= 1e-6 * want, "({x}, {y}) {v}: {got} vs {want}");
+                } else {
+                    assert!(got.is_nan(), "({x}, {y}) {v}: {got}");
+                }
+            }
+        }
+    }
+    // Marigold's 16-bit PNG: d·65535, the last code the far plane.
+    let png = save_png16(dir.path(), "marigold.png", 4, 1, &[0, 16384, 65535, 65534]);
+    let opts = DepthOptions {
+        kind: Some(DepthKind::Affine),
+        near: Some(near),
+        far: Some(far),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&png, &opts).unwrap();
+    assert_eq!(d.format, DepthFormat::Png16);
+    let at = |code: f64| (near + code / 65535.0 * (far - near)) as f32;
+    assert_eq!(*d.range.get(0, 0), at(0.0));
+    assert_eq!(*d.range.get(1, 0), at(16384.0));
+    assert!(d.range.get(2, 0).is_nan());
+    assert!(
+        d.range.get(3, 0).is_nan(),
+        "13 codes below the last are the far plane"
+    );
+    assert!(d.notes.iter().any(|n| n.contains("affine-invariant")));
+    // Without the planes the map has no depth: refused, naming the option and a guess.
+    for (without, name) in [
+        (
+            DepthOptions {
+                near: None,
+                ..opts.clone()
+            },
+            "invalid near",
+        ),
+        (
+            DepthOptions {
+                far: None,
+                ..opts.clone()
+            },
+            "invalid far",
+        ),
+    ] {
+        let e = expect_err(load_range(&png, &without)).to_string();
+        assert!(
+            e.contains(name) && e.contains("2 and 200 for a street"),
+            "{e}"
+        );
+    }
+    for (near, far, name) in [(0.0, 10.0, "invalid near"), (5.0, 5.0, "invalid far")] {
+        let bad = DepthOptions {
+            near: Some(near),
+            far: Some(far),
+            ..opts.clone()
+        };
+        let e = expect_err(load_range(&png, &bad)).to_string();
+        assert!(e.contains(name), "{e}");
+    }
+    let far_inf = DepthOptions {
+        far: Some(f64::INFINITY),
+        ..opts.clone()
+    };
+    assert!(expect_err(load_range(&png, &far_inf))
+        .to_string()
+        .contains("a finite depth greater than near"));
+    // Its visualisation (8 bits) has lost the levels: the refusal says what to save.
+    let png8 = save_png8(dir.path(), "marigold8.png", 3, 1, &[0, 100, 200]);
+    let e = expect_err(load_range(&png8, &opts)).to_string();
+    assert!(e.contains("affine depth is read from a 16-bit PNG"), "{e}");
+    // A 16-bit map with neither scale nor kind points Marigold's users to this kind.
+    let plain = DepthOptions::default();
+    expect_format_error(load_range(&png, &plain), "Marigold: `depth_kind` affine");
+    assert_eq!(
+        "affine-invariant".parse::<DepthKind>().unwrap(),
+        DepthKind::Affine
     );
 }
 

@@ -22,12 +22,15 @@ use pyo3::types::PyDict;
 /// (else looked for beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
 /// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore', 'gdepth',
 /// 'dynamic-depth' or 'apple-depth' (a phone's portrait JPEG with its depth map). kind:
-/// 'depth', 'range', 'disparity', 'zbuffer' or 'inverse' (a monocular estimator's
-/// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) (default:
-/// the format's). scale: metres per unit of a 16-bit PNG, of a float map, of a z-buffer's
-/// near and far (1 when they are in metres), the metres of 1/(d + offset) of inverse
-/// depth, or a factor on a portrait JPEG's metres (an iPhone's relative map rescaled); a
-/// float map, a z-buffer, inverse depth or a portrait JPEG then counts as metric. calib: a
+/// 'depth', 'range', 'disparity', 'zbuffer', 'inverse' (a monocular estimator's
+/// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) or 'affine'
+/// (its affine-invariant depth d, Marigold: depth = near + d·(far − near), near and far
+/// the scene's nearest and farthest depth, required; d = 1 the sky; a 16-bit PNG holds
+/// d·65535) (default: the format's). scale: metres per unit of a 16-bit PNG, of a float
+/// map, of a z-buffer's or affine depth's near and far (1 when they are in metres), the
+/// metres of 1/(d + offset) of inverse depth, or a factor on a portrait JPEG's metres (an
+/// iPhone's relative map rescaled); a float map, a z-buffer, inverse or affine depth or a
+/// portrait JPEG then counts as metric. calib: a
 /// Middlebury 2014 calib.txt (else calib.txt beside the file). focal_px and baseline_mm:
 /// a disparity's stereo geometry (disparity_offset_px added to the disparity first),
 /// focal_px or fov_y_deg (vertical) the intrinsics that turn depth along the optical axis
@@ -108,7 +111,9 @@ pub(crate) fn load_depth<'py>(
 /// unknown. kind (required: an array does not say what it holds): 'depth' (along the
 /// optical axis; focal_px or fov_y_deg turn it into range), 'range', 'disparity'
 /// (focal_px and baseline_mm), 'inverse' (a monocular estimator's relative inverse depth,
-/// depth = 1/(d + disparity_offset_px)) or 'zbuffer' (near, far, fov_y_deg, reversed_z).
+/// depth = 1/(d + disparity_offset_px)), 'affine' (its affine-invariant depth, Marigold's
+/// prediction: depth = near + d·(far − near), d = 1 unknown) or 'zbuffer' (near, far,
+/// fov_y_deg, reversed_z).
 /// The other keywords are load_depth's. info: as load_depth's (format 'float').
 #[pyfunction]
 #[pyo3(signature = (depth, *, kind, scale=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=false))]

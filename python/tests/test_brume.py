@@ -668,6 +668,10 @@ def test_range_from_depth(tmp_path):
         # A monocular model's relative inverse depth with a shift: depth = 1/(d + offset).
         (1.0 / eye - 0.02, dict(kind="inverse", fov_y_deg=fov, disparity_offset_px=0.02),
          eye * ray_fov, ("relative units", False)),
+        # Marigold's affine-invariant depth: depth = near + d·(far − near), the scene's
+        # nearest and farthest depth given.
+        ((eye - 1.5) / 38.5, dict(kind="affine", near=1.5, far=40.0, fov_y_deg=fov, scale=1.0),
+         eye * ray_fov, ("m", True)),
         ((ndc + 1.0) / 2.0, dict(kind="zbuffer", near=near, far=far, fov_y_deg=fov),
          eye * ray_fov, ("file units", False)),
         (near / eye, dict(kind="zbuffer", near=near, far=float("inf"), fov_y_deg=fov,
@@ -694,6 +698,14 @@ def test_range_from_depth(tmp_path):
     sky[:5] = 0.0
     rng, info = brume.range_from_depth(sky, kind="inverse", fov_y_deg=fov)
     assert np.isnan(rng[:5]).all() and info["unknown_pixels"] == 5 * w
+    # Affine depth's sky: the far plane, 1, where Marigold clamps it.
+    marigold = (eye - 1.5) / 38.5
+    marigold[:5] = 1.0
+    rng, info = brume.range_from_depth(marigold, kind="affine", near=1.5, far=40.0, fov_y_deg=fov)
+    assert np.isnan(rng[:5]).all() and info["unknown_pixels"] == 5 * w
+    with pytest.raises(ValueError, match="invalid near = nothing") as error:
+        brume.range_from_depth(marigold, kind="affine", far=40.0)
+    assert "--" not in str(error.value)
     # The range fogs as any range in metres does.
     image = np.full((h, w, 3), 128, np.uint8)
     rng, _ = brume.range_from_depth(eye * 10, kind="depth", fov_y_deg=fov, scale=1.0)

@@ -147,18 +147,27 @@ pub(super) fn refuse_given(options: &[(&str, Option<String>)], expected: &str) -
 
 /// Depth options that only some inputs read, refused where none of them can.
 pub fn check_depth_options(depth: &DepthReadingArgs) -> Result<()> {
-    let zbuffer = depth.depth_kind == Some(depth::DepthKind::ZBuffer);
-    let planes = [
-        ("--near", shown(depth.near.filter(|_| !zbuffer))),
-        ("--far", shown(depth.far.filter(|_| !zbuffer))),
-        (
-            "--reversed-z",
-            (depth.reversed_z && !zbuffer).then(|| "given".to_string()),
-        ),
+    use depth::DepthKind::{Affine, ZBuffer};
+    let zbuffer = depth.depth_kind == Some(ZBuffer);
+    let planes = depth
+        .depth_kind
+        .is_some_and(|k| matches!(k, ZBuffer | Affine));
+    let given = [
+        ("--near", shown(depth.near.filter(|_| !planes))),
+        ("--far", shown(depth.far.filter(|_| !planes))),
     ];
     refuse_given(
-        &planes,
-        "--depth-kind zbuffer with it: only a z-buffer's projection has clipping planes",
+        &given,
+        "--depth-kind zbuffer or affine with it: only a z-buffer's projection has clipping \
+         planes, and only affine-invariant depth (Marigold) a nearest and farthest depth",
+    )?;
+    let reversed = [(
+        "--reversed-z",
+        (depth.reversed_z && !zbuffer).then(|| "given".to_string()),
+    )];
+    refuse_given(
+        &reversed,
+        "--depth-kind zbuffer with it: only a z-buffer's depth is reversed",
     )
 }
 

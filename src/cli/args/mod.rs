@@ -118,8 +118,10 @@ pub struct DepthArgs {
     /// or NumPy .npy/.npz (float16/32/64; uint16 as a 16-bit PNG; an .npz's only array or
     /// the one named `depth`, as Depth Pro writes); a phone's portrait photo, whose JPEG
     /// carries its depth map (GDepth, Dynamic Depth, an iPhone's depth image: `render` and
-    /// `view` read it from --image when --depth is not given). A photo without a depth sensor: a monocular model's relative inverse depth
-    /// (MiDaS, DPT, Depth Anything) with --depth-kind inverse.
+    /// `view` read it from --image when --depth is not given). A photo without a depth
+    /// sensor: a monocular model's relative inverse depth (MiDaS, DPT, Depth Anything) with
+    /// --depth-kind inverse, or its affine-invariant depth (Marigold) with --depth-kind
+    /// affine.
     #[arg(long, value_name = "PATH")]
     pub depth: Option<PathBuf>,
 
@@ -145,9 +147,11 @@ pub struct DepthArgs {
 pub struct DepthReadingArgs {
     /// What the depth values are: depth (along the optical axis), range (distance to the
     /// camera centre), disparity (px), zbuffer (a rendered frame's OpenGL window depth in
-    /// [0, 1], with --near, --far and --fov), or inverse (a monocular estimator's relative
+    /// [0, 1], with --near, --far and --fov), inverse (a monocular estimator's relative
     /// inverse depth, MiDaS or Depth Anything: depth ∝ 1/(d + --disparity-offset), 0 the
-    /// sky; metres with --depth-scale). Default: what the format implies.
+    /// sky; metres with --depth-scale), or affine (a monocular estimator's affine-invariant
+    /// depth, Marigold: 0 the scene's nearest depth, --near, and 1 its farthest, --far;
+    /// a 16-bit PNG holds d·65535). Default: what the format implies.
     #[arg(long, value_name = "KIND", allow_hyphen_values = true)]
     pub depth_kind: Option<DepthKind>,
 
@@ -171,10 +175,10 @@ pub struct DepthReadingArgs {
 
     /// Metres per stored value of a 16-bit PNG (e.g. 0.001 for millimetres), of a float
     /// map (1 for a map already in metres), per unit of a z-buffer's --near and --far (1
-    /// when they are in metres), the metres of 1/(d + offset) of inverse depth, or a factor
-    /// on a portrait JPEG's metres (an iPhone's relative map rescaled to a distance known in
-    /// the scene); a float map, a z-buffer, inverse depth or a portrait JPEG then counts as
-    /// metric, for --beta.
+    /// when they are in metres; also affine depth's), the metres of 1/(d + offset) of
+    /// inverse depth, or a factor on a portrait JPEG's metres (an iPhone's relative map
+    /// rescaled to a distance known in the scene); a float map, a z-buffer, inverse or
+    /// affine depth or a portrait JPEG then counts as metric, for --beta.
     #[arg(long, value_name = "S", allow_hyphen_values = true)]
     pub depth_scale: Option<f64>,
 
@@ -194,13 +198,14 @@ pub struct DepthReadingArgs {
     pub disparity_offset: Option<f64>,
 
     /// Near clipping plane of the projection that wrote a z-buffer (--depth-kind zbuffer),
-    /// in the scene's units: the range comes out in them (metres, for --beta, with
-    /// --depth-scale 1).
+    /// or the nearest depth in the scene, affine depth's 0 (--depth-kind affine), in the
+    /// scene's units: the range comes out in them (metres, for --beta, with --depth-scale
+    /// 1).
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub near: Option<f64>,
 
-    /// Far clipping plane of the projection that wrote a z-buffer; inf for an infinite far
-    /// plane.
+    /// Far clipping plane of the projection that wrote a z-buffer, inf for an infinite far
+    /// plane; or the farthest depth in the scene, affine depth's 1.
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub far: Option<f64>,
 

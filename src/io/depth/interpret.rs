@@ -43,7 +43,10 @@ fn resolve_format(
         (F::Auto, Raw::Grey16(_)) if has_camera => F::Cityscapes,
         (F::Auto, Raw::Grey16(_))
             if opts.scale.is_some()
-                || matches!(opts.kind, Some(DepthKind::ZBuffer | DepthKind::Inverse)) =>
+                || matches!(
+                    opts.kind,
+                    Some(DepthKind::ZBuffer | DepthKind::Inverse | DepthKind::Affine)
+                ) =>
         {
             F::Png16
         }
@@ -54,7 +57,8 @@ fn resolve_format(
                  give `depth_format` kitti, nyu or tum, or `depth_scale` with the metres per \
                  unit (a Cityscapes disparity: `depth_format` cityscapes with `camera`; a \
                  monocular model's relative inverse depth, Depth Anything or MiDaS: \
-                 `depth_kind` inverse)",
+                 `depth_kind` inverse; its affine-invariant depth, Marigold: `depth_kind` \
+                 affine with `near` and `far`)",
             ))
         }
         (f, _) => f,
@@ -96,13 +100,13 @@ fn resolve_kind(format: DepthFormat, requested: Option<DepthKind>) -> Result<Dep
         } else {
             format!("depth or range for `depth_format` {format}")
         };
-        if kind == DepthKind::Inverse {
+        if matches!(kind, DepthKind::Inverse | DepthKind::Affine) {
             // An 8-bit PNG is read as Middlebury 2006's disparity: a monocular model's
             // output saved as one (its visualisation) has lost most of its levels.
-            expected.push_str(
-                " (a monocular model's inverse depth is read from a 16-bit PNG or a float \
-                 map, .npy, .npz, .pfm, .exr or float TIFF: save its output as one of those)",
-            );
+            expected.push_str(&format!(
+                " (a monocular model's {kind} depth is read from a 16-bit PNG or a float \
+                 map, .npy, .npz, .pfm, .exr or float TIFF: save its output as one of those)"
+            ));
         }
         return Err(Error::invalid("depth_kind", kind, expected));
     }
@@ -153,10 +157,12 @@ pub(super) fn interpret(
             camera_path.display()
         ));
     }
-    if kind != DepthKind::ZBuffer && (opts.near.is_some() || opts.far.is_some()) {
+    let has_planes = matches!(kind, DepthKind::ZBuffer | DepthKind::Affine);
+    if !has_planes && (opts.near.is_some() || opts.far.is_some()) {
         notes.push(format!(
-            "`near` and `far` ignored: only a z-buffer's projection has clipping planes, and \
-             the file was read as {kind}"
+            "`near` and `far` ignored: only a z-buffer's projection has clipping planes and \
+             only affine-invariant depth a nearest and farthest depth, and the file was read \
+             as {kind}"
         ));
     }
     if kind != DepthKind::ZBuffer && opts.reversed_z {
@@ -198,16 +204,17 @@ pub(super) fn interpret(
             let range = to_range(&map, |v| depth(f64::from(v)), Some(&k));
             (range, units, Some(k))
         }
-        (_, Raw::Grey16(raw)) if kind == DepthKind::Inverse => {
+        (_, Raw::Grey16(raw)) if kind.is_monocular() => {
             let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
-            let (depth, units) = inverse_depth(opts, &mut notes)?;
-            let range = to_range(&raw, |v| depth(f64::from(v)), k.as_ref());
+            let (model, units) = Monocular::of(kind, opts, &mut notes)?;
+            let code = model.code_value();
+            let range = to_range(&raw, |v| model.depth(f64::from(v) * code), k.as_ref());
             (range, units, k)
         }
-        (_, Raw::Float { map, .. }) if kind == DepthKind::Inverse => {
+        (_, Raw::Float { map, .. }) if kind.is_monocular() => {
             let k = depth_intrinsics(kind, opts, (width, height), fov_height, &mut notes)?;
-            let (depth, units) = inverse_depth(opts, &mut notes)?;
-            let range = to_range(&map, |v| depth(f64::from(v)), k.as_ref());
+            let (model, units) = Monocular::of(kind, opts, &mut notes)?;
+            let range = to_range(&map, |v| model.depth(f64::from(v)), k.as_ref());
             (range, units, k)
         }
         (DepthFormat::Png16, Raw::Grey16(raw)) if kind == DepthKind::Disparity => {
@@ -322,26 +329,108 @@ fn vouched_scale(
     Ok((scale, "m".to_string()))
 }
 
-/// A monocular estimator's relative inverse depth d: depth = S/(d + offset) with S the
-/// `depth_scale` (metres: metric) or 1 (relative units), `disparity_offset` the shift
-/// (default 0); unknown where d + offset ≤ 0 (the sky) or not finite. With the units.
-fn inverse_depth(
-    opts: &DepthOptions,
-    notes: &mut Vec<String>,
-) -> Result<(impl Fn(f64) -> Option<f64>, String)> {
-    let offset = match opts.disparity_offset {
-        Some(o) => finite_option(o, "disparity_offset")?,
-        None => 0.0,
+/// How far below 1 an affine-invariant depth is taken as the far plane: the model clamps
+/// what lies beyond its farthest depth, the sky above all, to 1 (65535 in its 16-bit PNG),
+/// and the sky, unknown, is then found by pre-processing with the image, as inverse
+/// depth's is. 13 codes of the PNG; float16's last step below 1 (4.9e-4) stays known.
+const AFFINE_FAR_MARGIN: f64 = 2e-4;
+
+/// How a monocular estimator's relative map becomes depth.
+#[derive(Clone, Copy, Debug)]
+enum Monocular {
+    /// Relative inverse depth d (MiDaS, Depth Anything): depth = `scale`/(d + `offset`).
+    Inverse { offset: f64, scale: f64 },
+    /// Affine-invariant depth d (Marigold): depth = `scale`·(`near` + d·(`far` − `near`)).
+    Affine { near: f64, far: f64, scale: f64 },
+}
+
+impl DepthKind {
+    /// Whether the values are a monocular estimator's relative map ([`Monocular`]).
+    fn is_monocular(self) -> bool {
+        matches!(self, DepthKind::Inverse | DepthKind::Affine)
+    }
+}
+
+impl Monocular {
+    /// The conversion of a map of `kind` (inverse or affine) with its options, and the
+    /// units it leaves: `depth_scale` (metres: metric) or 1 (relative or file units).
+    /// Inverse depth's shift is `disparity_offset` (default 0); affine depth needs `near`
+    /// and `far`, which nothing in the map says.
+    fn of(kind: DepthKind, opts: &DepthOptions, notes: &mut Vec<String>) -> Result<(Self, String)> {
+        if kind == DepthKind::Inverse {
+            let offset = match opts.disparity_offset {
+                Some(o) => finite_option(o, "disparity_offset")?,
+                None => 0.0,
+            };
+            let (scale, units) = vouched_scale(opts, "1/(d + offset)", "relative units", notes)?;
+            notes.push(format!(
+                "relative inverse depth: depth = {scale}/(d + {offset}), unknown where \
+                 d + {offset} ≤ 0"
+            ));
+            return Ok((Monocular::Inverse { offset, scale }, units));
+        }
+        let (near, far) = affine_planes(opts)?;
+        let (scale, units) = vouched_scale(opts, "near and far", FILE_UNITS, notes)?;
+        notes.push(format!(
+            "affine-invariant depth: depth = {near} + d·({far} − {near}) (0 the nearest depth \
+             in the scene, 1 the farthest); unknown where not finite, and at the far plane \
+             (d ≥ {}), where the model puts the sky",
+            1.0 - AFFINE_FAR_MARGIN
+        ));
+        Ok((Monocular::Affine { near, far, scale }, units))
+    }
+
+    /// The depth of value `d`, `None` where unknown (not finite, not in front of the
+    /// camera, or at affine depth's far plane).
+    fn depth(self, d: f64) -> Option<f64> {
+        let depth = match self {
+            Monocular::Inverse { offset, scale } => scale / (d + offset),
+            Monocular::Affine { .. } if d >= 1.0 - AFFINE_FAR_MARGIN => return None,
+            Monocular::Affine { near, far, scale } => scale * (near + d * (far - near)),
+        };
+        (depth.is_finite() && depth > 0.0).then_some(depth)
+    }
+
+    /// The value one code of a 16-bit PNG stands for: affine depth is stored as d·65535
+    /// (Marigold's PNG); inverse depth keeps its codes, whose scale does not matter.
+    fn code_value(self) -> f64 {
+        match self {
+            Monocular::Inverse { .. } => 1.0,
+            Monocular::Affine { .. } => 1.0 / f64::from(u16::MAX),
+        }
+    }
+}
+
+/// Affine-invariant depth's `near` and `far`, required and checked (0 < near < far, both
+/// finite).
+fn affine_planes(opts: &DepthOptions) -> Result<(f64, f64)> {
+    let needs = |name: &str, what: &str| {
+        Error::invalid(
+            name,
+            "nothing",
+            format!(
+                "{what}: `depth_kind` affine maps 0 to `near` and 1 to `far`, which the model \
+                 chose for this image and does not give; give both (a guess serves: 2 and \
+                 200 for a street, 1 and 10 for a room; metres with `depth_scale` 1, and \
+                 without it only their ratio matters)"
+            ),
+        )
     };
-    let (scale, units) = vouched_scale(opts, "1/(d + offset)", "relative units", notes)?;
-    notes.push(format!(
-        "relative inverse depth: depth = {scale}/(d + {offset}), unknown where d + {offset} ≤ 0"
-    ));
-    let depth = move |d: f64| {
-        let d = d + offset;
-        (d.is_finite() && d > 0.0).then(|| scale / d)
-    };
-    Ok((depth, units))
+    let near = opts
+        .near
+        .ok_or_else(|| needs("near", "the nearest depth in the scene"))?;
+    let far = opts
+        .far
+        .ok_or_else(|| needs("far", "the farthest depth in the scene"))?;
+    let near = positive_option(near, "near", "a positive depth, the scene's nearest")?;
+    if !(far.is_finite() && far > near) {
+        return Err(Error::invalid(
+            "far",
+            far,
+            format!("a finite depth greater than near ({near}), the scene's farthest"),
+        ));
+    }
+    Ok((near, far))
 }
 
 /// With `min_confidence` given, the samples of a portrait photo's depth whose confidence

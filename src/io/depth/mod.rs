@@ -85,10 +85,16 @@ pub enum DepthKind {
     /// 1/(d + `disparity_offset`); 0 and below (the sky) is unknown. Not metric, unless
     /// `scale` gives the metres of 1/(d + offset).
     Inverse,
+    /// A monocular depth estimator's affine-invariant depth (Marigold): d ∈ [0, 1], 0 at
+    /// the nearest depth in the scene and 1 at the farthest, both chosen by the model for
+    /// each image and not known to it, so the caller gives them: depth = `near` +
+    /// d·(`far` − `near`) (a 16-bit PNG holds d·65535). In their units; metric with
+    /// `scale`.
+    Affine,
 }
 
 impl DepthKind {
-    const NAMES: &'static str = "depth, range, disparity, zbuffer or inverse";
+    const NAMES: &'static str = "depth, range, disparity, zbuffer, inverse or affine";
 }
 
 impl FromStr for DepthKind {
@@ -101,6 +107,7 @@ impl FromStr for DepthKind {
             "disparity" => Ok(DepthKind::Disparity),
             "zbuffer" => Ok(DepthKind::ZBuffer),
             "inverse" | "inverse-depth" | "inverse_depth" => Ok(DepthKind::Inverse),
+            "affine" | "affine-invariant" | "affine_invariant" => Ok(DepthKind::Affine),
             _ => Err(Error::invalid("depth_kind", s, DepthKind::NAMES)),
         }
     }
@@ -114,6 +121,7 @@ impl fmt::Display for DepthKind {
             DepthKind::Disparity => "disparity",
             DepthKind::ZBuffer => "zbuffer",
             DepthKind::Inverse => "inverse",
+            DepthKind::Affine => "affine",
         })
     }
 }
@@ -203,9 +211,10 @@ pub struct DepthOptions {
     /// Multiplier from raw 16-bit PNG values to metres (or to pixels of disparity); for
     /// a float map, metres per unit; for a z-buffer, metres per unit of `near` and `far`
     /// (1 when they are in metres); for relative inverse depth, the metres of
-    /// 1/(d + offset); for a phone's portrait JPEG, a factor on the metres it holds (an
-    /// iPhone's relative map rescaled to a distance known in the scene). Given for a float
-    /// map, a z-buffer, inverse depth or a portrait JPEG, it makes the range metric
+    /// 1/(d + offset); for affine-invariant depth, metres per unit of `near` and `far`;
+    /// for a phone's portrait JPEG, a factor on the metres it holds (an iPhone's relative
+    /// map rescaled to a distance known in the scene). Given for a float map, a z-buffer,
+    /// inverse or affine-invariant depth or a portrait JPEG, it makes the range metric
     /// ([`LoadedDepth::metric`]).
     pub scale: Option<f64>,
     /// Focal length in pixels.
@@ -214,11 +223,12 @@ pub struct DepthOptions {
     pub baseline: Option<f64>,
     /// Added to disparity before dividing (Middlebury `doffs`/`dmin`), in pixels.
     pub disparity_offset: Option<f64>,
-    /// Near clipping plane of a z-buffer's projection, in the range's units (metres with
-    /// `scale` 1).
+    /// Near clipping plane of a z-buffer's projection, or the nearest depth in the scene of
+    /// an affine-invariant map (its 0), in the range's units (metres with `scale` 1).
     pub near: Option<f64>,
-    /// Far clipping plane of a z-buffer's projection; `f64::INFINITY` for an infinite
-    /// far plane (engines' reversed-Z projections have one).
+    /// Far clipping plane of a z-buffer's projection, `f64::INFINITY` for an infinite
+    /// far plane (engines' reversed-Z projections have one); or the farthest depth in the
+    /// scene of an affine-invariant map (its 1).
     pub far: Option<f64>,
     /// Whether a z-buffer is reversed-Z: window depth 1 at the near plane and 0 at the far
     /// one (Unreal, Bevy, Godot 4), nothing drawn at 0. False: OpenGL's standard, 0 at
@@ -307,7 +317,7 @@ impl LoadedDepth {
     }
 
     /// A warning when depth along the optical axis (given, or from a z-buffer or a
-    /// monocular model's inverse depth) was used as range for want of `focal` or `fov`:
+    /// monocular model's inverse or affine-invariant depth) was used as range for want of `focal` or `fov`:
     /// range exceeds depth by 1/cos of the angle off the axis, so the fog is too thin away
     /// from the centre. It says by how much in this frame's corners at a 45° vertical field
     /// of view. `None` for range, or depth turned into range.
@@ -405,10 +415,10 @@ pub fn load_range_from_bytes(
     load_with_side_files(bytes, name, opts, calib, None)
 }
 
-/// A depth, range, disparity, inverse-depth or z-buffer map already in memory (a depth
-/// camera's frame, a monocular model's output, an engine's depth buffer read back), read
-/// as [`load_range`] reads a float file of it with `opts`: NaN or infinite unknown, the
-/// kind, scale and geometry from `opts`. `opts.format` is `Auto` or `Float` (other
+/// A depth, range, disparity, inverse or affine-invariant depth or z-buffer map already in
+/// memory (a depth camera's frame, a monocular model's output, an engine's depth buffer
+/// read back), read as [`load_range`] reads a float file of it with `opts`: NaN or
+/// infinite unknown, the kind, scale and geometry from `opts`. `opts.format` is `Auto` or `Float` (other
 /// formats name a file layout); no side file is read, so `calib` and `camera` are
 /// refused (give `focal` and `baseline`). `name` stands for the map in messages.
 pub fn range_from_map(map: ScalarMap, name: &str, opts: &DepthOptions) -> Result<LoadedDepth> {
