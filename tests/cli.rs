@@ -1359,6 +1359,72 @@ fn relative_inverse_and_affine_depth_fog_as_the_depth_they_encode() {
     assert!(largest < 1e-5, "{largest}");
 }
 
+/// Depth Pro's sky, clamped at 10 km, fogs as the unknown sky of the same map: found with
+/// the image, its colour the airlight. `--sky-beyond` does the same for a sky that is not
+/// clamped exactly (Depth Anything's metric models saturate toward their largest depth).
+#[test]
+fn a_models_clamped_or_saturated_sky_fogs_as_the_unknown_sky() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (24usize, 16usize);
+    write_rgba(
+        &dir.path().join("im.png"),
+        &Grid::from_fn(w, h, |x, y| match y < 5 {
+            true => [0.35, 0.5, 0.9, 1.0],
+            false => [0.2 + 0.02 * (x % 5) as f32, 0.4, 0.15, 1.0],
+        }),
+    )
+    .unwrap();
+    let z = |x: usize, y: usize| (y >= 5).then(|| 30.0 / (y - 4) as f32 + 0.1 * x as f32);
+    let map =
+        |sky: &dyn Fn(usize) -> f32| Grid::from_fn(w, h, |x, y| z(x, y).unwrap_or_else(|| sky(x)));
+    write_scalar(&dir.path().join("nan.pfm"), &map(&|_| f32::NAN)).unwrap();
+    write_scalar(&dir.path().join("clamped.pfm"), &map(&|_| 10_000.0)).unwrap();
+    write_scalar(
+        &dir.path().join("saturated.pfm"),
+        &map(&|x| 79.0 + 0.03 * x as f32),
+    )
+    .unwrap();
+    let fog = |depth: &str, extra: &[&str]| {
+        let out = format!("{depth}.png");
+        let mut args = vec![
+            "render",
+            "--image",
+            "im.png",
+            "--depth",
+            depth,
+            "--depth-kind",
+            "depth",
+            "--depth-scale",
+            "1",
+            "--fov",
+            "45",
+            "--beta",
+            "0.02",
+            "--json",
+            "--out",
+            &out,
+        ];
+        args.extend_from_slice(extra);
+        let o = brume(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (std::fs::read(dir.path().join(&out)).unwrap(), report)
+    };
+    let (unknown_sky, report) = fog("nan.pfm", &[]);
+    assert_eq!(report["airlight_source"], "sky", "{report}");
+    let (clamped, report) = fog("clamped.pfm", &[]);
+    assert_eq!(clamped, unknown_sky);
+    let notes = report["depth_notes"].to_string();
+    assert!(
+        notes.contains("a clamp") && notes.contains("--sky-beyond"),
+        "{notes}"
+    );
+    let (saturated, _) = fog("saturated.pfm", &["--sky-beyond", "78"]);
+    assert_eq!(saturated, unknown_sky);
+    // Without it the saturated sky is a far surface, fogged as one: not the same picture.
+    assert_ne!(fog("saturated.pfm", &[]).0, unknown_sky);
+}
+
 #[test]
 fn depth_taken_as_range_for_want_of_intrinsics_warns() {
     let dir = tempfile::tempdir().unwrap();

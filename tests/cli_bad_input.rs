@@ -740,6 +740,7 @@ fn render_refuses_options_that_cannot_take_effect() {
             1,
             "--near affine street",
         ),
+        r("--sky-beyond 0", "--sky-beyond 0 positive inf"),
         case(
             "render --image im.png --depth range.pfm --out out.png",
             "--depth-kind zbuffer --near 1 --far 0.5 --fov 40",

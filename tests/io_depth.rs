@@ -785,10 +785,22 @@ fn one_exr_holds_the_colour_and_the_depth() {
             (depth.format, depth.kind),
             (DepthFormat::Float, DepthKind::Depth)
         );
+        // Blender's background (1e10, where nothing was drawn) is a clamp: unknown, the
+        // sky; read as it is with `sky_beyond` inf.
+        let kept = DepthOptions {
+            sky_beyond: Some(f64::INFINITY),
+            ..DepthOptions::default()
+        };
+        let as_written = load_range(&path, &kept).unwrap();
         for i in 0..6 {
             let (x, y) = (i % 3, i / 3);
             assert_eq!(*image.get(x, y), [colour[i]; 3], "{name} {i}");
-            assert_eq!(*depth.range.get(x, y), z[i], "{name} {i}");
+            let got = *depth.range.get(x, y);
+            match z[i] {
+                1e10 => assert!(got.is_nan(), "{name} {i}: {got}"),
+                z => assert_eq!(got, z, "{name} {i}"),
+            }
+            assert_eq!(*as_written.range.get(x, y), z[i], "{name} {i}");
         }
         // Planar depth with a field of view becomes range: longer off the axis.
         let with_fov = DepthOptions {
@@ -1336,6 +1348,75 @@ fn affine_invariant_depth_becomes_range() {
         "affine-invariant".parse::<DepthKind>().unwrap(),
         DepthKind::Affine
     );
+}
+
+/// A model's sky at a depth of its own: a float map's largest value held exactly by at
+/// least 1 % of its samples, 10 times the mean of the others or more (Depth Pro clamps the
+/// sky at 10 km), is unknown, with a note; a plateau smaller than that, or not far enough
+/// beyond the rest, is a surface and kept. `sky_beyond` makes the range at or beyond it
+/// unknown instead (the clamp then kept), `inf` keeps every value, 0 or NaN is refused.
+#[test]
+fn a_clamped_sky_and_sky_beyond_are_unknown() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (20usize, 10usize);
+    // The top two rows (20 %) at the clamp; the scene 3 to 25.5 m below.
+    let scene = |x: usize, y: usize| 2.0 + x as f32 + 0.5 * y as f32;
+    let write = |name: &str, top: f32, rows: usize| {
+        let map = Grid::from_fn(w, h, |x, y| if y < rows { top } else { scene(x, y) });
+        let path = dir.path().join(name);
+        write_scalar(&path, &map).unwrap();
+        path
+    };
+    let range = DepthOptions {
+        kind: Some(DepthKind::Range),
+        ..DepthOptions::default()
+    };
+    let clamped = write("clamped.pfm", 10_000.0, 2);
+    let d = load_range(&clamped, &range).unwrap();
+    assert_eq!(d.unknown_pixels, 2 * w);
+    assert!((0..w).all(|x| d.range.get(x, 0).is_nan() && d.range.get(x, 1).is_nan()));
+    assert_eq!(*d.range.get(3, 4), scene(3, 4));
+    let note = d
+        .notes
+        .iter()
+        .find(|n| n.contains("a clamp"))
+        .expect("a note");
+    assert!(
+        note.contains("40 samples (20.0 %)") && note.contains("10000"),
+        "{note}"
+    );
+    // A single sample at a far value is not a clamp (the far-outlier rule is for it).
+    let speck = Grid::from_fn(w, h, |x, y| {
+        if (x, y) == (0, 0) {
+            10_000.0
+        } else {
+            scene(x, y)
+        }
+    });
+    let path = dir.path().join("speck.pfm");
+    write_scalar(&path, &speck).unwrap();
+    assert_eq!(load_range(&path, &range).unwrap().unknown_pixels, 0);
+    // A far wall at 3 times the mean, held by 20 % of the samples: a surface.
+    let wall = write("wall.pfm", 45.0, 2);
+    assert_eq!(load_range(&wall, &range).unwrap().unknown_pixels, 0);
+    // `sky_beyond`: the range at or beyond it, whatever the plateau.
+    let beyond = |b: f64| DepthOptions {
+        sky_beyond: Some(b),
+        ..range.clone()
+    };
+    let d = load_range(&wall, &beyond(30.0)).unwrap();
+    let at_or_beyond = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .filter(|&(x, y)| y < 2 || scene(x, y) >= 30.0)
+        .count();
+    assert_eq!(d.unknown_pixels, at_or_beyond);
+    assert!(d.notes.iter().any(|n| n.contains("beyond `sky_beyond` 30")));
+    let kept = load_range(&clamped, &beyond(f64::INFINITY)).unwrap();
+    assert_eq!(kept.unknown_pixels, 0);
+    for bad in [0.0, -1.0, f64::NAN] {
+        let e = expect_err(load_range(&clamped, &beyond(bad))).to_string();
+        assert!(e.contains("invalid sky_beyond"), "{e}");
+    }
 }
 
 /// Engines' z-buffers: reversed-Z (window depth 1 at near, 0 at far: Bevy and Unreal's

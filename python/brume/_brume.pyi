@@ -323,7 +323,8 @@ def load_depth(
     min_confidence: Optional[float] = None,
     reversed_z: bool = False,
     image: Optional[PathArg] = None,
-    layout: Optional[str] = None
+    layout: Optional[str] = None,
+    sky_beyond: Optional[float] = None,
 ) -> Tuple[Array, Dict[str, Any]]: ...
 def range_from_depth(
     depth: Array,
@@ -336,6 +337,7 @@ def range_from_depth(
     near: Optional[float] = None,
     far: Optional[float] = None,
     fov_y_deg: Optional[float] = None,
-    reversed_z: bool = False
+    reversed_z: bool = False,
+    sky_beyond: Optional[float] = None,
 ) -> Tuple[Array, Dict[str, Any]]: ...
 def beta_quantile(dist: str, p: float) -> float: ...

@@ -12,8 +12,8 @@ use pyo3::types::PyDict;
 
 /// load_depth(path, camera=None, format=None, *, kind=None, scale=None, calib=None,
 /// focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None,
-/// fov_y_deg=None, min_confidence=None, reversed_z=False, image=None, layout=None)
-/// -> (range_m, info)
+/// fov_y_deg=None, min_confidence=None, reversed_z=False, image=None, layout=None,
+/// sky_beyond=None) -> (range_m, info)
 ///
 /// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown)
 /// through brume's loaders: PNG, PFM, EXR, TIFF, a phone's portrait JPEG, or NumPy .npy
@@ -45,11 +45,16 @@ use pyo3::types::PyDict;
 /// ImageOps.exif_transpose, OpenCV's imread), and the photo's EXIF 35 mm equivalent focal
 /// length turns depth into range when neither focal_px nor fov_y_deg is given. layout:
 /// how the map lies against that orientation, 'auto' (default), 'stored' or 'upright'
-/// (brume render's --depth-layout). info: format, kind,
+/// (brume render's --depth-layout). sky_beyond: range at or beyond which a value is
+/// unknown, the sky, in the range's units (for a model that gives the sky a depth near
+/// its largest: Depth Anything's metric models, Marigold's ensembles); by default a float
+/// map's largest value is unknown when at least 1 % of its samples hold it exactly, 10
+/// times beyond the mean of the others or more (Depth Pro's sky clamped at 10 km, a
+/// renderer's background); float('inf') keeps every value. info: format, kind,
 /// units, metric (whether the range is in trustworthy metres, which fog with beta or
 /// visibility needs), notes, unknown_pixels.
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None))]
+#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn load_depth<'py>(
     py: Python<'py>,
@@ -69,6 +74,7 @@ pub(crate) fn load_depth<'py>(
     reversed_z: bool,
     image: Option<FsPath>,
     layout: Option<&str>,
+    sky_beyond: Option<f64>,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
     let photo = match image {
         Some(path) => Some(py.detach(|| PhotoGeometry::read(&path.0)).map_err(py_err)?),
@@ -93,6 +99,7 @@ pub(crate) fn load_depth<'py>(
             [focal_px, baseline_mm, disparity_offset_px],
             [near, far, fov_y_deg],
             reversed_z,
+            sky_beyond,
         )?
     };
     let loaded = py
@@ -102,8 +109,8 @@ pub(crate) fn load_depth<'py>(
 }
 
 /// range_from_depth(depth, *, kind, scale=None, focal_px=None, baseline_mm=None,
-/// disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=False)
-/// -> (range_m, info)
+/// disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=False,
+/// sky_beyond=None) -> (range_m, info)
 ///
 /// Reads an HxW float32, float64 or float16 array already in memory (a depth camera's frame, a
 /// monocular model's output, an engine's depth buffer) as range, exactly as load_depth
@@ -116,7 +123,7 @@ pub(crate) fn load_depth<'py>(
 /// fov_y_deg, reversed_z).
 /// The other keywords are load_depth's. info: as load_depth's (format 'float').
 #[pyfunction]
-#[pyo3(signature = (depth, *, kind, scale=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=false))]
+#[pyo3(signature = (depth, *, kind, scale=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, reversed_z=false, sky_beyond=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn range_from_depth<'py>(
     py: Python<'py>,
@@ -130,6 +137,7 @@ pub(crate) fn range_from_depth<'py>(
     far: Option<f64>,
     fov_y_deg: Option<f64>,
     reversed_z: bool,
+    sky_beyond: Option<f64>,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
     let opts = geometry_options(
         Some(kind),
@@ -137,6 +145,7 @@ pub(crate) fn range_from_depth<'py>(
         [focal_px, baseline_mm, disparity_offset_px],
         [near, far, fov_y_deg],
         reversed_z,
+        sky_beyond,
     )?;
     let map = read_scalar_map(
         depth,
@@ -159,6 +168,7 @@ fn geometry_options(
     [focal, baseline, disparity_offset]: [Option<f64>; 3],
     [near, far, fov]: [Option<f64>; 3],
     reversed_z: bool,
+    sky_beyond: Option<f64>,
 ) -> PyResult<DepthOptions> {
     Ok(DepthOptions {
         kind: kind
@@ -173,6 +183,7 @@ fn geometry_options(
         far,
         reversed_z,
         fov,
+        sky_beyond,
         ..DepthOptions::default()
     })
 }

@@ -698,6 +698,19 @@ def test_range_from_depth(tmp_path):
     sky[:5] = 0.0
     rng, info = brume.range_from_depth(sky, kind="inverse", fov_y_deg=fov)
     assert np.isnan(rng[:5]).all() and info["unknown_pixels"] == 5 * w
+    # Depth Pro's sky, clamped at 10 km: unknown, as a NaN sky; with sky_beyond, the range
+    # at or beyond it; float('inf') keeps every value.
+    clamped = eye.copy()
+    clamped[:5] = 10_000.0
+    rng, info = brume.range_from_depth(clamped, kind="range")
+    assert np.isnan(rng[:5]).all() and info["unknown_pixels"] == 5 * w
+    assert any("a clamp" in n and "sky_beyond" in n for n in info["notes"]), info["notes"]
+    rng, info = brume.range_from_depth(clamped, kind="range", sky_beyond=float("inf"))
+    assert info["unknown_pixels"] == 0
+    rng, info = brume.range_from_depth(eye, kind="range", sky_beyond=30.0)
+    assert info["unknown_pixels"] == int((eye >= 30.0).sum()) > 0
+    with pytest.raises(ValueError, match="invalid sky_beyond = 0"):
+        brume.range_from_depth(eye, kind="range", sky_beyond=0.0)
     # Affine depth's sky: the far plane, 1, where Marigold clamps it.
     marigold = (eye - 1.5) / 38.5
     marigold[:5] = 1.0

@@ -44,6 +44,7 @@ pub fn reading_options(args: &DepthReadingArgs) -> DepthOptions {
         reversed_z: args.reversed_z,
         fov: args.fov,
         min_confidence: args.min_confidence,
+        sky_beyond: args.sky_beyond,
         layout: args.depth_layout,
         ..DepthOptions::default()
     }

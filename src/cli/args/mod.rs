@@ -233,6 +233,17 @@ pub struct DepthReadingArgs {
     #[arg(long, value_name = "C", allow_hyphen_values = true)]
     pub min_confidence: Option<f64>,
 
+    /// Range at or beyond D is unknown, the sky (pre-processing then finds it with the
+    /// image and takes the airlight from it), in the range's units (metres with
+    /// --depth-scale): for a model that gives the sky a depth of its own, near its largest
+    /// (Depth Anything's metric models saturate toward 20 or 80 m; Marigold's ensembles
+    /// come just under --far). Default: a float map's largest value is unknown when at
+    /// least 1 % of its samples hold it exactly, 10 times beyond the mean of the others or
+    /// more (Depth Pro's sky, clamped at 10 km; Blender's background, 1e10); inf keeps
+    /// every value.
+    #[arg(long, value_name = "D", allow_hyphen_values = true)]
+    pub sky_beyond: Option<f64>,
+
     /// How the depth map lies against an --image with an EXIF orientation (a phone photo
     /// stored sideways with a tag; brume turns the image upright, as viewers show it):
     /// stored (laid out as the image's stored pixels, as phones write depth: turned with

@@ -249,7 +249,15 @@ pub(super) fn interpret(
             let range = to_range(&map, |d| stereo.depth_m(f64::from(d)), Some(&k));
             (range, metres, Some(k))
         }
-        (_, Raw::Float { map, focal_px, .. }) => {
+        (
+            _,
+            Raw::Float {
+                mut map, focal_px, ..
+            },
+        ) => {
+            if opts.sky_beyond.is_none() {
+                drop_clamp(&mut map, &mut notes);
+            }
             let held = focal_px.map(|f| {
                 let said = format!(
                     "focal length from the archive's '{NPZ_FOCAL_ARRAY}': {f:.2} px; \
@@ -289,6 +297,10 @@ pub(super) fn interpret(
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
+    let mut range = range;
+    if let Some(beyond) = opts.sky_beyond {
+        drop_sky_beyond(&mut range, beyond, &units, &mut notes)?;
+    }
     let range = range.into_oriented(turn);
     let intrinsics = intrinsics.map(|k| k.oriented(turn, width, height));
     let unknown_pixels = range.as_slice().iter().filter(|v| v.is_nan()).count();
@@ -431,6 +443,86 @@ fn affine_planes(opts: &DepthOptions) -> Result<(f64, f64)> {
         ));
     }
     Ok((near, far))
+}
+
+/// The least share of a float map's samples at its largest value that make it a clamp.
+const CLAMP_MIN_FRACTION: f64 = 0.01;
+/// How many times the mean of the other values a clamp lies beyond, at least.
+const CLAMP_MIN_RATIO: f64 = 10.0;
+
+/// Makes unknown the samples of a float depth or range map at its largest value when that
+/// value is a clamp, not a surface: held exactly by at least [`CLAMP_MIN_FRACTION`] of the
+/// samples and [`CLAMP_MIN_RATIO`] times the mean of the other known values or more. A
+/// model that clamps the sky (Depth Pro, at 10 km) or a renderer's background (Blender's
+/// 1e10) would otherwise be fogged as a wall that far, the sky not found and the airlight
+/// not taken from it. A note says how many and why.
+fn drop_clamp(map: &mut crate::raster::ScalarMap, notes: &mut Vec<String>) {
+    let known = |v: f32| v.is_finite() && v > 0.0;
+    let samples = map.as_slice();
+    let Some(top) = samples
+        .iter()
+        .copied()
+        .filter(|&v| known(v))
+        .reduce(f32::max)
+    else {
+        return;
+    };
+    let (mut at_top, mut others, mut sum) = (0usize, 0usize, 0.0f64);
+    for &v in samples.iter().filter(|&&v| known(v)) {
+        if v == top {
+            at_top += 1;
+        } else {
+            others += 1;
+            sum += f64::from(v);
+        }
+    }
+    let mean = sum / others.max(1) as f64;
+    let share = at_top as f64 / samples.len() as f64;
+    if share < CLAMP_MIN_FRACTION || others == 0 || f64::from(top) < CLAMP_MIN_RATIO * mean {
+        return;
+    }
+    map.as_mut_slice()
+        .iter_mut()
+        .filter(|v| **v == top)
+        .for_each(|v| *v = f32::NAN);
+    notes.push(format!(
+        "{at_top} samples ({:.1} %) hold the map's largest value, {top}, {:.0} times the mean \
+         of the others: a clamp (a model's sky, a renderer's background), taken as unknown, \
+         the sky (`sky_beyond` sets where the sky begins instead; inf keeps every value)",
+        100.0 * share,
+        f64::from(top) / mean
+    ));
+}
+
+/// Makes unknown the range at or beyond `beyond` (`sky_beyond`), with a note.
+fn drop_sky_beyond(
+    range: &mut crate::raster::ScalarMap,
+    beyond: f64,
+    units: &str,
+    notes: &mut Vec<String>,
+) -> Result<()> {
+    if beyond.is_nan() || beyond <= 0.0 {
+        return Err(Error::invalid(
+            "sky_beyond",
+            beyond,
+            "a positive range (the range's units), or inf to keep every value",
+        ));
+    }
+    if beyond.is_infinite() {
+        notes.push("`sky_beyond` inf: every value kept, no clamp looked for".to_string());
+        return Ok(());
+    }
+    let mut dropped = 0usize;
+    for v in range.as_mut_slice() {
+        if f64::from(*v) >= beyond {
+            *v = f32::NAN;
+            dropped += 1;
+        }
+    }
+    notes.push(format!(
+        "{dropped} samples at or beyond `sky_beyond` {beyond} {units}: unknown (the sky)"
+    ));
+    Ok(())
 }
 
 /// With `min_confidence` given, the samples of a portrait photo's depth whose confidence

@@ -242,6 +242,15 @@ pub struct DepthOptions {
     /// [`DEPTH16_DEFAULT_MIN_CONFIDENCE`]. For `gdepth` and `dynamic-depth`, the lowest
     /// value of the file's confidence map kept; `None` keeps every sample.
     pub min_confidence: Option<f64>,
+    /// Range at or beyond which a value is unknown, the sky, in the range's units (metres
+    /// when metric): for a model that gives the sky a depth of its own, near its largest
+    /// (Depth Anything's metric models saturate toward 20 or 80 m; Marigold's ensembles
+    /// come just under `far`), so that pre-processing finds the sky there with the image.
+    /// `None`: a float depth or range map's largest value is unknown when at least 1 % of
+    /// its samples hold it exactly, 10 times beyond the mean of the others or more (Depth
+    /// Pro's sky, clamped at 10 km; Blender's background, 1e10); `f64::INFINITY` keeps
+    /// every value.
+    pub sky_beyond: Option<f64>,
     /// The photo the map goes with, as stored, and what its EXIF says: the map is turned
     /// upright with it as `layout` says, `fov` is the upright photo's vertical field of
     /// view, and without `focal` or `fov` its 35 mm equivalent focal length turns depth
@@ -269,6 +278,7 @@ impl Default for DepthOptions {
             reversed_z: false,
             fov: None,
             min_confidence: None,
+            sky_beyond: None,
             photo: None,
             layout: DepthLayout::Auto,
         }
