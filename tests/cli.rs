@@ -1359,6 +1359,74 @@ fn relative_inverse_and_affine_depth_fog_as_the_depth_they_encode() {
     assert!(largest < 1e-5, "{largest}");
 }
 
+/// A monocular model gives the sky a depth, the farthest, where a sensor leaves it
+/// unknown: Depth Anything's relative inverse depth a small positive disparity (not 0), a
+/// Marigold ensemble's affine depth just under its far plane. Read as inverse or affine
+/// depth, the far tail may be sky, and the image finds it: the fog is that of the same
+/// depth with the sky unknown.
+#[test]
+fn a_monocular_maps_sky_in_its_far_tail_is_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (24usize, 16usize);
+    write_rgba(
+        &dir.path().join("im.png"),
+        &Grid::from_fn(w, h, |x, y| match y < 5 {
+            true => [0.35, 0.5, 0.9, 1.0],
+            false => [0.2 + 0.02 * (x % 5) as f32, 0.4, 0.15, 1.0],
+        }),
+    )
+    .unwrap();
+    let z = |x: usize, y: usize| (y >= 5).then(|| 30.0 / (y - 4) as f32 + 0.1 * x as f32);
+    let map = |surface: &dyn Fn(f32) -> f32, sky: &dyn Fn(usize) -> f32| {
+        Grid::from_fn(w, h, |x, y| z(x, y).map_or_else(|| sky(x), surface))
+    };
+    let (near, far) = (2.0f32, 400.0f32);
+    let maps = [
+        ("depth.pfm", map(&|z| z, &|_| f32::NAN)),
+        (
+            "inverse.pfm",
+            map(&|z| 3.0 / z, &|x| 0.002 + 0.00002 * x as f32),
+        ),
+        (
+            "affine.pfm",
+            map(&|z| (z - near) / (far - near), &|x| 0.97 + 0.001 * x as f32),
+        ),
+    ];
+    for (name, values) in &maps {
+        write_scalar(&dir.path().join(name), values).unwrap();
+    }
+    let fog = |depth: &str, kind: &str, extra: &[&str]| {
+        let out = format!("{depth}.out.pfm");
+        let mut args = vec![
+            "render",
+            "--image",
+            "im.png",
+            "--depth",
+            depth,
+            "--depth-kind",
+            kind,
+            "--fov",
+            "45",
+            "--out",
+            &out,
+        ];
+        args.extend_from_slice(extra);
+        let o = brume(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        brume::io::image::load_linear_rgb(&dir.path().join(&out)).unwrap()
+    };
+    let unknown_sky = fog("depth.pfm", "depth", &[]);
+    let largest_difference = |other: &brume::raster::RgbImage| {
+        (unknown_sky.as_slice().iter().zip(other.as_slice()))
+            .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
+            .fold(0.0f32, f32::max)
+    };
+    let inverse = fog("inverse.pfm", "inverse", &[]);
+    assert!(largest_difference(&inverse) < 1e-5);
+    let affine = fog("affine.pfm", "affine", &["--near", "2", "--far", "400"]);
+    assert!(largest_difference(&affine) < 1e-5);
+}
+
 /// Depth Pro's sky, clamped at 10 km, fogs as the unknown sky of the same map: found with
 /// the image, its colour the airlight. `--sky-beyond` does the same for a sky that is not
 /// clamped exactly (Depth Anything's metric models saturate toward their largest depth).

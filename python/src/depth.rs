@@ -47,7 +47,7 @@ use pyo3::types::PyDict;
 /// how the map lies against that orientation, 'auto' (default), 'stored' or 'upright'
 /// (brume render's --depth-layout). sky_beyond: range at or beyond which a value is
 /// unknown, the sky, in the range's units (for a model that gives the sky a depth near
-/// its largest: Depth Anything's metric models, Marigold's ensembles); by default a float
+/// its largest: Depth Anything's metric models); by default a float
 /// map's largest value is unknown when at least 1 % of its samples hold it exactly, 10
 /// times beyond the mean of the others or more (Depth Pro's sky clamped at 10 km, a
 /// renderer's background); float('inf') keeps every value. info: format, kind,

@@ -3,6 +3,7 @@
 
 use super::Photo;
 use crate::error::{Error, Result};
+use crate::io::depth::DepthKind;
 use crate::medium::haze::DEFAULT_AIRLIGHT;
 use crate::prep::{self, AirlightSource, Guides, PrepOptions, Prepared};
 use crate::raster::{Grid, ScalarMap};
@@ -115,12 +116,23 @@ pub fn preprocess(photo: &Photo, opts: &PrepareOptions) -> Result<PreparedPhoto>
         });
     };
     let (w, h) = (range.width(), range.height());
+    let monocular = matches!(photo.depth.kind, DepthKind::Inverse | DepthKind::Affine);
+    let sky_in_far_tail = prep_opts
+        .sky_in_far_tail
+        .or(monocular.then_some(prep::MONOCULAR_SKY_FACTOR));
     let (small, cell_opts);
     let (image, prep_opts) = if (photo.image.width(), photo.image.height()) == (w, h) {
-        (&photo.image, prep_opts)
+        cell_opts = PrepOptions {
+            sky_in_far_tail,
+            ..prep_opts.clone()
+        };
+        (&photo.image, &cell_opts)
     } else {
         small = refine::image_at_depth_size(&photo.image, w, h);
-        cell_opts = margin_in_cells(prep_opts, photo.image.width() as f64 / w as f64);
+        cell_opts = PrepOptions {
+            sky_in_far_tail,
+            ..margin_in_cells(prep_opts, photo.image.width() as f64 / w as f64)
+        };
         (&small, &cell_opts)
     };
     let guides = Guides {

@@ -239,7 +239,7 @@ use crate::raster::{Grid, RgbImage, ScalarMap};
 use crate::{Error, Result};
 
 pub use airlight::{estimate_airlight, AirlightEstimate, AirlightSource};
-pub use options::{ImageSkyRules, PrepOptions, SkyRules};
+pub use options::{ImageSkyRules, PrepOptions, SkyRules, MONOCULAR_SKY_FACTOR};
 use options::{MIN_FAR_PATCH, MIN_LOCAL_SPAN};
 pub use vis::visualize;
 
@@ -604,7 +604,7 @@ fn find_sky(work: &[f32], w: usize, h: usize, guides: Guides, opts: &PrepOptions
     let (depth_sky, classes) = rayon::join(
         || sky::depth_sky(work, &opts.sky, w, h),
         || {
-            let cut = outliers::far_cut(work, |_| true, opts.far_outlier_factor);
+            let cut = outliers::sky_candidate_cut(work, opts);
             range_class::range_classes(work, w, h, cut)
         },
     );

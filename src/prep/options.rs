@@ -133,7 +133,20 @@ pub struct PrepOptions {
     /// meet the sky) instead of being filled as holes. In [0, 1], default 0.15; 0 turns
     /// it off.
     pub border_band_fraction: f64,
+    /// A monocular model's map gives the sky a depth, the farthest, where a sensor leaves
+    /// it unknown: with `Some(k)`, known range above `k` times the lower quartile of the
+    /// known range may be sky, and the image-guided detector grows the sky over such pixels that
+    /// look like sky as over unknown ones (their range is kept where it does not). `None`
+    /// (the default) for measured depth; [`crate::photo::preprocess`] sets
+    /// [`MONOCULAR_SKY_FACTOR`] for inverse and affine-invariant depth. Finite and > 1.
+    pub sky_in_far_tail: Option<f64>,
 }
+
+/// [`PrepOptions::sky_in_far_tail`] for a monocular model's relative depth: beyond ten
+/// times the lower quartile of the range (the sky's depth in such a map is that of the
+/// farthest scene or more; a room is nowhere ten times deeper than its near quarter, so
+/// its white ceiling keeps the protection of its range).
+pub const MONOCULAR_SKY_FACTOR: f64 = 10.0;
 
 impl Default for PrepOptions {
     fn default() -> Self {
@@ -151,6 +164,7 @@ impl Default for PrepOptions {
             local_outlier_factor: 3.0,
             local_outlier_span: 0.025,
             border_band_fraction: 0.15,
+            sky_in_far_tail: None,
         }
     }
 }
@@ -192,6 +206,16 @@ impl PrepOptions {
             ));
         }
         check_fraction("far_patch_fraction", self.far_patch_fraction)?;
+        if let Some(k) = self
+            .sky_in_far_tail
+            .filter(|k| !(k.is_finite() && *k > 1.0))
+        {
+            return Err(Error::invalid(
+                "sky_in_far_tail",
+                k,
+                "a finite multiple of the range's lower quartile, greater than 1",
+            ));
+        }
         let f = self.local_outlier_factor;
         if !(f == 0.0 || (f > 1.0 && f.is_finite())) {
             return Err(Error::invalid(

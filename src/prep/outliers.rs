@@ -30,6 +30,23 @@ pub(crate) fn far_cut(
     (p99 > 0.0).then(|| (factor * f64::from(p99)).min(f64::from(f32::MAX)) as f32)
 }
 
+/// The range above which a known pixel may be sky for the image-guided detector (its
+/// [`super::range_class::RangeClass::Far`]): the far-outlier cut over the whole map, or,
+/// for a monocular model's map ([`super::PrepOptions::sky_in_far_tail`]), `k` times the
+/// lower quartile of the range where that is lower (a quartile, not the median: the sky
+/// may be half the frame, and its depth would be the median).
+pub(crate) fn sky_candidate_cut(work: &[f32], opts: &super::PrepOptions) -> Option<f32> {
+    let far = far_cut(work, |_| true, opts.far_outlier_factor);
+    let tail = opts.sky_in_far_tail.and_then(|k| {
+        let quartile = super::rank::nth_kept(work, |_, v| v.is_finite(), |n| n / 4)?;
+        Some((k * f64::from(quartile)).min(f64::from(f32::MAX)) as f32)
+    });
+    match (far, tail) {
+        (Some(f), Some(t)) => Some(f.min(t)),
+        (f, t) => f.or(t),
+    }
+}
+
 /// Makes unknown (NaN) every known pixel of `work` outside `sky` whose value exceeds `cut`
 /// and whose 8-connected patch of such pixels has fewer than `min_patch` pixels. Returns
 /// how many were removed.
@@ -91,6 +108,31 @@ pub(crate) fn neighbours8(p: usize, width: usize, height: usize) -> [Option<usiz
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The sky candidates' cut: the far-outlier cut, or for a monocular map ten times the
+    /// lower quartile where that is lower; an invalid factor is refused.
+    #[test]
+    fn a_monocular_maps_far_tail_may_be_sky() {
+        // A quarter of the map at 1, a quarter at 4, half (the sky) at 300.
+        let m: Vec<f32> = (0..100)
+            .map(|i| match i {
+                0..25 => 1.0,
+                25..50 => 4.0,
+                _ => 300.0,
+            })
+            .collect();
+        let mut opts = crate::prep::PrepOptions::default();
+        assert_eq!(sky_candidate_cut(&m, &opts), Some(600.0));
+        opts.sky_in_far_tail = Some(10.0);
+        assert_eq!(sky_candidate_cut(&m, &opts), Some(40.0));
+        opts.far_outlier_factor = 0.0;
+        assert_eq!(sky_candidate_cut(&m, &opts), Some(40.0));
+        for bad in [1.0, 0.5, f64::NAN, f64::INFINITY] {
+            opts.sky_in_far_tail = Some(bad);
+            let e = opts.validate().unwrap_err().to_string();
+            assert!(e.contains("sky_in_far_tail"), "{e}");
+        }
+    }
 
     #[test]
     fn specks_go_patches_stay() {

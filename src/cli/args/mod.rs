@@ -236,11 +236,11 @@ pub struct DepthReadingArgs {
     /// Range at or beyond D is unknown, the sky (pre-processing then finds it with the
     /// image and takes the airlight from it), in the range's units (metres with
     /// --depth-scale): for a model that gives the sky a depth of its own, near its largest
-    /// (Depth Anything's metric models saturate toward 20 or 80 m; Marigold's ensembles
-    /// come just under --far). Default: a float map's largest value is unknown when at
-    /// least 1 % of its samples hold it exactly, 10 times beyond the mean of the others or
-    /// more (Depth Pro's sky, clamped at 10 km; Blender's background, 1e10); inf keeps
-    /// every value.
+    /// (Depth Anything's metric models saturate toward 20 or 80 m). Default: a float map's
+    /// largest value is unknown when at least 1 % of its samples hold it exactly, 10 times
+    /// beyond the mean of the others or more (Depth Pro's sky, clamped at 10 km; Blender's
+    /// background, 1e10); inf keeps every value. Inverse and affine depth's far tail is
+    /// looked at for sky without it.
     #[arg(long, value_name = "D", allow_hyphen_values = true)]
     pub sky_beyond: Option<f64>,
 

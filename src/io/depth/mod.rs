@@ -244,8 +244,9 @@ pub struct DepthOptions {
     pub min_confidence: Option<f64>,
     /// Range at or beyond which a value is unknown, the sky, in the range's units (metres
     /// when metric): for a model that gives the sky a depth of its own, near its largest
-    /// (Depth Anything's metric models saturate toward 20 or 80 m; Marigold's ensembles
-    /// come just under `far`), so that pre-processing finds the sky there with the image.
+    /// (Depth Anything's metric models saturate toward 20 or 80 m), so that pre-processing
+    /// finds the sky there with the image (inverse and affine maps' far tail is looked at
+    /// for sky without it: [`crate::prep::PrepOptions::sky_in_far_tail`]).
     /// `None`: a float depth or range map's largest value is unknown when at least 1 % of
     /// its samples hold it exactly, 10 times beyond the mean of the others or more (Depth
     /// Pro's sky, clamped at 10 km; Blender's background, 1e10); `f64::INFINITY` keeps
