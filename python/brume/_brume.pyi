@@ -87,7 +87,8 @@ class Renderer:
         jpeg_quality: Optional[int] = None,
         seed: int = 0,
         compat: Optional[str] = None,
-        return_info: bool = False
+        return_info: bool = False,
+        monocular: bool = False,
     ) -> Any: ...
     def distance_fog(
         self,
@@ -204,7 +205,8 @@ def fog(
     jpeg_quality: Optional[int] = None,
     seed: int = 0,
     compat: Optional[str] = None,
-    return_info: bool = False
+    return_info: bool = False,
+    monocular: bool = False,
 ) -> Any: ...
 def distance_fog(
     image: Array,

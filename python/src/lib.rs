@@ -108,10 +108,11 @@ impl Renderer {
     /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
     /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
     /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
-    /// seed=0, compat=None, return_info=False) -> ndarray, or (ndarray, dict) with
+    /// seed=0, compat=None, return_info=False, monocular=False) -> ndarray, or
+    /// (ndarray, dict) with
     /// return_info, or a list of those for a sequence of betas or visibilities: as
     /// brume.fog, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false))]
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false, monocular=false))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -135,6 +136,7 @@ impl Renderer {
         seed: u64,
         compat: Option<&str>,
         return_info: bool,
+        monocular: bool,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
         let refine = refine.unwrap_or(default_refine.as_any());
@@ -156,6 +158,9 @@ impl Renderer {
         density.check_outputs_fit(image.width * image.height)?;
         let blur = (blur, lambda_px);
         let mut request = fog_request(density, airlight, blur, refine, capture, compat)?;
+        if let (true, Some(prep)) = (monocular, request.prepare.prep.as_mut()) {
+            prep.sky_in_far_tail = Some(brume::prep::MONOCULAR_SKY_FACTOR);
+        }
         let range = read_range(range_m)?;
         set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
@@ -473,7 +478,8 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
 /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
 /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0,
-/// compat=None, return_info=False) -> ndarray, or (ndarray, dict), or a list of those
+/// compat=None, return_info=False, monocular=False) -> ndarray, or (ndarray, dict), or a
+/// list of those
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 or uint16 (sRGB code values) or float32, float64
@@ -491,6 +497,10 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// sky_mask, ego_mask: HxW arrays of range_m's shape, bool or integers (non-zero = set),
 /// e.g. `labels == 23` of a Cityscapes labelIds image: the sky instead of its detection
 /// (its range the farthest, its colour the airlight's), and the car's hood (never fogged).
+/// monocular=True: range_m is a monocular model's relative depth (range_from_depth or
+/// load_depth with kind 'inverse' or 'affine'), whose sky has a depth, the farthest: its
+/// far tail (beyond 10 times the lower quartile) may be sky where the image says so, as
+/// `brume render` reads those kinds.
 ///
 /// The camera after the fog (all off by default): exposure_stops (the linear image times
 /// 2^stops), shot_noise_gain K (the linear value of one photo-electron: Poisson noise of
@@ -513,7 +523,7 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 #[pyfunction]
 #[pyo3(
     signature = (*args, **kwargs),
-    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=False)"
+    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=False, monocular=False)"
 )]
 fn fog(
     py: Python<'_>,

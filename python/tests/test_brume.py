@@ -711,6 +711,22 @@ def test_range_from_depth(tmp_path):
     assert info["unknown_pixels"] == int((eye >= 30.0).sum()) > 0
     with pytest.raises(ValueError, match="invalid sky_beyond = 0"):
         brume.range_from_depth(eye, kind="range", sky_beyond=0.0)
+    # A monocular model's sky at a small positive disparity: with monocular=True fog finds
+    # it in the far tail, as the same range with the sky unknown; without, it is a surface.
+    image = np.zeros((h, w, 3), np.uint8)
+    image[:12] = (150, 180, 240)
+    image[12:] = (60, 110, 50)
+    image[12:, ::3] = (70, 120, 55)
+    disparity = 3.0 / eye
+    disparity[:12] = 0.002 + 0.00002 * np.arange(w)
+    rng, _ = brume.range_from_depth(disparity, kind="inverse", fov_y_deg=fov)
+    unknown_sky = rng.copy()
+    unknown_sky[:12] = np.nan
+    want = brume.fog(image, unknown_sky, ks=0.75, refine="none")
+    got = brume.fog(image, rng, ks=0.75, refine="none", monocular=True)
+    assert np.abs(got.astype(int) - want.astype(int)).max() <= 1
+    plain = brume.fog(image, rng, ks=0.75, refine="none")
+    assert np.abs(plain.astype(int) - want.astype(int)).max() > 8
     # Affine depth's sky: the far plane, 1, where Marigold clamps it.
     marigold = (eye - 1.5) / 38.5
     marigold[:5] = 1.0

@@ -117,22 +117,17 @@ pub fn preprocess(photo: &Photo, opts: &PrepareOptions) -> Result<PreparedPhoto>
     };
     let (w, h) = (range.width(), range.height());
     let monocular = matches!(photo.depth.kind, DepthKind::Inverse | DepthKind::Affine);
-    let sky_in_far_tail = prep_opts
-        .sky_in_far_tail
-        .or(monocular.then_some(prep::MONOCULAR_SKY_FACTOR));
+    let prep_opts = &PrepOptions {
+        sky_in_far_tail: (prep_opts.sky_in_far_tail)
+            .or(monocular.then_some(prep::MONOCULAR_SKY_FACTOR)),
+        ..prep_opts.clone()
+    };
     let (small, cell_opts);
     let (image, prep_opts) = if (photo.image.width(), photo.image.height()) == (w, h) {
-        cell_opts = PrepOptions {
-            sky_in_far_tail,
-            ..prep_opts.clone()
-        };
-        (&photo.image, &cell_opts)
+        (&photo.image, prep_opts)
     } else {
         small = refine::image_at_depth_size(&photo.image, w, h);
-        cell_opts = PrepOptions {
-            sky_in_far_tail,
-            ..margin_in_cells(prep_opts, photo.image.width() as f64 / w as f64)
-        };
+        cell_opts = margin_in_cells(prep_opts, photo.image.width() as f64 / w as f64);
         (&small, &cell_opts)
     };
     let guides = Guides {

@@ -135,9 +135,9 @@ pub struct PrepOptions {
     pub border_band_fraction: f64,
     /// A monocular model's map gives the sky a depth, the farthest, where a sensor leaves
     /// it unknown: with `Some(k)`, known range above `k` times the lower quartile of the
-    /// known range may be sky, and the image-guided detector grows the sky over such pixels that
-    /// look like sky as over unknown ones (their range is kept where it does not). `None`
-    /// (the default) for measured depth; [`crate::photo::preprocess`] sets
+    /// known range may be sky, and the image-guided detector grows the sky over such
+    /// pixels that look like sky as over unknown ones (their range is kept where they do
+    /// not). `None` (the default) for measured depth; [`crate::photo::preprocess`] sets
     /// [`MONOCULAR_SKY_FACTOR`] for inverse and affine-invariant depth. Finite and > 1.
     pub sky_in_far_tail: Option<f64>,
 }

@@ -177,7 +177,7 @@ pub(super) fn interpret(
     // `fov` is the upright photo's: across the stored map's width when turning swaps them.
     let fov_height = if turn.swaps_axes() { width } else { height };
     let metres = "m".to_string();
-    let (range, units, intrinsics) = match (format, raw) {
+    let (mut range, units, intrinsics) = match (format, raw) {
         (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
             let (calib, calib_path) = calib.expect("checked by resolve_format");
             let (range, k) =
@@ -297,7 +297,6 @@ pub(super) fn interpret(
         }
         (_, Raw::Grey8(_)) => unreachable!("resolve_format sends 8-bit PNGs to Middlebury 2006"),
     };
-    let mut range = range;
     if let Some(beyond) = opts.sky_beyond {
         drop_sky_beyond(&mut range, beyond, &units, &mut notes)?;
     }
