@@ -1292,6 +1292,50 @@ fn prep_refuses_refinement_without_an_image() {
     }
 }
 
+/// A `w` x `h` photo of a blue sky over `sky_rows` rows above a green, striped ground, as
+/// `im.png` in `dir`.
+fn write_sky_over_ground(dir: &Path, (w, h): (usize, usize), sky_rows: usize) {
+    let photo = Grid::from_fn(w, h, |x, y| match y < sky_rows {
+        true => [0.35, 0.5, 0.9, 1.0],
+        false => [0.2 + 0.02 * (x % 5) as f32, 0.4, 0.15, 1.0],
+    });
+    write_rgba(&dir.join("im.png"), &photo).unwrap();
+}
+
+/// `brume render` of `im.png` in `dir` with the depth file and its `--depth-kind`, a 45°
+/// field of view and `extra` flags, into `out`: the output read back as linear RGB.
+fn fog_of_kind(
+    dir: &Path,
+    (depth, kind): (&str, &str),
+    out: &str,
+    extra: &[&str],
+) -> brume::raster::RgbImage {
+    let mut args = vec![
+        "render",
+        "--image",
+        "im.png",
+        "--depth",
+        depth,
+        "--depth-kind",
+        kind,
+        "--fov",
+        "45",
+        "--out",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    let o = brume(dir, &args);
+    assert!(o.status.success(), "{}", stderr(&o));
+    brume::io::image::load_linear_rgb(&dir.join(out)).unwrap()
+}
+
+/// The largest difference of two images of one size, over every channel.
+fn largest_difference(a: &brume::raster::RgbImage, b: &brume::raster::RgbImage) -> f32 {
+    (a.as_slice().iter().zip(b.as_slice()))
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
+        .fold(0.0f32, f32::max)
+}
+
 /// A monocular estimator's relative inverse depth (`--depth-kind inverse`) fogs as the
 /// depth it inverts: paper 000's haze reads range over its largest value, so the unknown
 /// scale cancels; its sky (0) is found and fogged as the depth map's unknown sky is. So
@@ -1301,14 +1345,7 @@ fn prep_refuses_refinement_without_an_image() {
 fn relative_inverse_and_affine_depth_fog_as_the_depth_they_encode() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (24usize, 16usize);
-    write_rgba(
-        &dir.path().join("im.png"),
-        &Grid::from_fn(w, h, |x, y| match y < 4 {
-            true => [0.35, 0.5, 0.9, 1.0],
-            false => [0.2 + 0.02 * (x % 5) as f32, 0.4, 0.15, 1.0],
-        }),
-    )
-    .unwrap();
+    write_sky_over_ground(dir.path(), (w, h), 4);
     let z = |x: usize, y: usize| (y >= 4).then(|| 40.0 / (y - 3) as f32 + 0.1 * x as f32);
     let depth = Grid::from_fn(w, h, |x, y| z(x, y).unwrap_or(f32::NAN));
     let inverse = Grid::from_fn(w, h, |x, y| z(x, y).map_or(0.0, |z| 3.0 / z));
@@ -1321,41 +1358,17 @@ fn relative_inverse_and_affine_depth_fog_as_the_depth_they_encode() {
     write_scalar(&dir.path().join("inverse.pfm"), &inverse).unwrap();
     write_scalar(&dir.path().join("affine.pfm"), &affine).unwrap();
     let fog = |depth: &str, kind: &str, out: &str, extra: &[&str]| {
-        let mut args = vec![
-            "render",
-            "--image",
-            "im.png",
-            "--depth",
-            depth,
-            "--depth-kind",
-            kind,
-            "--fov",
-            "45",
-            "--out",
-            out,
-        ];
-        args.extend_from_slice(extra);
-        let o = brume(dir.path(), &args);
-        assert!(o.status.success(), "{}", stderr(&o));
-        brume::io::image::load_linear_rgb(&dir.path().join(out)).unwrap()
+        fog_of_kind(dir.path(), (depth, kind), out, extra)
     };
     let from_depth = fog("depth.pfm", "depth", "depth.pfm.out.pfm", &[]);
-    let largest_difference = |other: &brume::raster::RgbImage| {
-        from_depth
-            .as_slice()
-            .iter()
-            .zip(other.as_slice())
-            .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
-            .fold(0.0f32, f32::max)
-    };
     let from_inverse = fog("inverse.pfm", "inverse", "inverse.out.pfm", &[]);
     // 3/(3/z) is z to an ulp or two.
-    let largest = largest_difference(&from_inverse);
+    let largest = largest_difference(&from_depth, &from_inverse);
     assert!(largest < 1e-5, "{largest}");
     let planes = ["--near", "4.4", "--far", "43"];
     let from_affine = fog("affine.pfm", "affine", "affine.out.pfm", &planes);
     // near + d·(far − near) is z to a few ulps of 43.
-    let largest = largest_difference(&from_affine);
+    let largest = largest_difference(&from_depth, &from_affine);
     assert!(largest < 1e-5, "{largest}");
 }
 
@@ -1368,14 +1381,7 @@ fn relative_inverse_and_affine_depth_fog_as_the_depth_they_encode() {
 fn a_monocular_maps_sky_in_its_far_tail_is_found() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (24usize, 16usize);
-    write_rgba(
-        &dir.path().join("im.png"),
-        &Grid::from_fn(w, h, |x, y| match y < 5 {
-            true => [0.35, 0.5, 0.9, 1.0],
-            false => [0.2 + 0.02 * (x % 5) as f32, 0.4, 0.15, 1.0],
-        }),
-    )
-    .unwrap();
+    write_sky_over_ground(dir.path(), (w, h), 5);
     let z = |x: usize, y: usize| (y >= 5).then(|| 30.0 / (y - 4) as f32 + 0.1 * x as f32);
     let map = |surface: &dyn Fn(f32) -> f32, sky: &dyn Fn(usize) -> f32| {
         Grid::from_fn(w, h, |x, y| z(x, y).map_or_else(|| sky(x), surface))
@@ -1396,35 +1402,18 @@ fn a_monocular_maps_sky_in_its_far_tail_is_found() {
         write_scalar(&dir.path().join(name), values).unwrap();
     }
     let fog = |depth: &str, kind: &str, extra: &[&str]| {
-        let out = format!("{depth}.out.pfm");
-        let mut args = vec![
-            "render",
-            "--image",
-            "im.png",
-            "--depth",
-            depth,
-            "--depth-kind",
-            kind,
-            "--fov",
-            "45",
-            "--out",
-            &out,
-        ];
-        args.extend_from_slice(extra);
-        let o = brume(dir.path(), &args);
-        assert!(o.status.success(), "{}", stderr(&o));
-        brume::io::image::load_linear_rgb(&dir.path().join(&out)).unwrap()
+        fog_of_kind(
+            dir.path(),
+            (depth, kind),
+            &format!("{depth}.out.pfm"),
+            extra,
+        )
     };
     let unknown_sky = fog("depth.pfm", "depth", &[]);
-    let largest_difference = |other: &brume::raster::RgbImage| {
-        (unknown_sky.as_slice().iter().zip(other.as_slice()))
-            .flat_map(|(a, b)| a.iter().zip(b).map(|(a, b)| (a - b).abs()))
-            .fold(0.0f32, f32::max)
-    };
     let inverse = fog("inverse.pfm", "inverse", &[]);
-    assert!(largest_difference(&inverse) < 1e-5);
+    assert!(largest_difference(&unknown_sky, &inverse) < 1e-5);
     let affine = fog("affine.pfm", "affine", &["--near", "2", "--far", "400"]);
-    assert!(largest_difference(&affine) < 1e-5);
+    assert!(largest_difference(&unknown_sky, &affine) < 1e-5);
 }
 
 /// Depth Pro's sky, clamped at 10 km, fogs as the unknown sky of the same map: found with
@@ -1434,14 +1423,7 @@ fn a_monocular_maps_sky_in_its_far_tail_is_found() {
 fn a_models_clamped_or_saturated_sky_fogs_as_the_unknown_sky() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h) = (24usize, 16usize);
-    write_rgba(
-        &dir.path().join("im.png"),
-        &Grid::from_fn(w, h, |x, y| match y < 5 {
-            true => [0.35, 0.5, 0.9, 1.0],
-            false => [0.2 + 0.02 * (x % 5) as f32, 0.4, 0.15, 1.0],
-        }),
-    )
-    .unwrap();
+    write_sky_over_ground(dir.path(), (w, h), 5);
     let z = |x: usize, y: usize| (y >= 5).then(|| 30.0 / (y - 4) as f32 + 0.1 * x as f32);
     let map =
         |sky: &dyn Fn(usize) -> f32| Grid::from_fn(w, h, |x, y| z(x, y).unwrap_or_else(|| sky(x)));

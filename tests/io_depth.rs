@@ -1157,6 +1157,16 @@ fn kind_and_format_parse_and_print() {
     assert!(err.contains("far") && err.contains("disparity"), "{err}");
 }
 
+/// Range over depth at pixel `(x, y)` of a `w` x `h` map with its principal point at the
+/// centre and focal length `focal` px: the length of the ray through it at depth 1.
+fn ray_length(x: usize, y: usize, (w, h): (usize, usize), focal: f64) -> f64 {
+    let (u, v) = (
+        (x as f64 - (w as f64 - 1.0) / 2.0) / focal,
+        (y as f64 - (h as f64 - 1.0) / 2.0) / focal,
+    );
+    (1.0 + u * u + v * v).sqrt()
+}
+
 /// A monocular estimator's relative inverse depth (`depth_kind` inverse): depth =
 /// S/(d + offset) along the optical axis, then range with `fov`; d + offset ≤ 0 (the
 /// sky) unknown; relative units, or metres with `scale`; a 16-bit PNG read as png16
@@ -1170,13 +1180,7 @@ fn relative_inverse_depth_becomes_range() {
     let map = Grid::from_fn(w, h, |x, y| values[(x + y) % values.len()]);
     let pfm = dir.path().join("inverse.pfm");
     write_scalar(&pfm, &map).unwrap();
-    let ray = |x: usize, y: usize| {
-        let (u, v) = (
-            (x as f64 - (w as f64 - 1.0) / 2.0) / focal,
-            (y as f64 - (h as f64 - 1.0) / 2.0) / focal,
-        );
-        (1.0 + u * u + v * v).sqrt()
-    };
+    let ray = |x: usize, y: usize| ray_length(x, y, (w, h), focal);
     for (scale, offset, units) in [
         (None, None, "relative units"),
         (Some(20.0), Some(0.75), "m"),
@@ -1242,13 +1246,7 @@ fn affine_invariant_depth_becomes_range() {
     let dir = tempfile::tempdir().unwrap();
     let (w, h, fov, near, far) = (7usize, 5usize, 55.0f64, 2.5f64, 180.0f64);
     let focal = h as f64 / 2.0 / (fov.to_radians() / 2.0).tan();
-    let ray = |x: usize, y: usize| {
-        let (u, v) = (
-            (x as f64 - (w as f64 - 1.0) / 2.0) / focal,
-            (y as f64 - (h as f64 - 1.0) / 2.0) / focal,
-        );
-        (1.0 + u * u + v * v).sqrt()
-    };
+    let ray = |x: usize, y: usize| ray_length(x, y, (w, h), focal);
     let values = [0.0f32, 0.125, 0.5, 0.9995, 1.0, f32::NAN, 0.75];
     let map = Grid::from_fn(w, h, |x, y| values[(x + 2 * y) % values.len()]);
     let pfm = dir.path().join("marigold.pfm");

@@ -108,10 +108,9 @@ impl Renderer {
     /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
     /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
     /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
-    /// seed=0, compat=None, return_info=False, monocular=False) -> ndarray, or
-    /// (ndarray, dict) with
-    /// return_info, or a list of those for a sequence of betas or visibilities: as
-    /// brume.fog, on this renderer's context.
+    /// seed=0, compat=None, return_info=False, monocular=False) -> ndarray, or (ndarray,
+    /// dict) with return_info, or a list of those for a sequence of betas or visibilities:
+    /// as brume.fog, on this renderer's context.
     #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false, monocular=false))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
