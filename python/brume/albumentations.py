@@ -36,9 +36,9 @@ class Fog(A.ImageOnlyTransform):
     """Fog of a random density on the image, from the sample's ``depth`` (HxW metres, the
     image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
-    ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur``, ``refine``
-    and ``compat`` are :func:`brume.fog`'s; ``airlight_range`` draws a grey airlight in it
-    instead, as :class:`brume.augment.RandomFog`'s. The image is uint8 sRGB or float32
+    ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur``,
+    ``refine``, ``compat`` and ``monocular`` are :func:`brume.fog`'s; ``airlight_range``
+    draws a grey airlight in it instead, as :class:`brume.augment.RandomFog`'s. The image is uint8 sRGB or float32
     linear RGB, as :func:`brume.fog` takes it: albumentations' ``ToFloat`` gives
     sRGB-encoded floats, which the fog would take for linear light, so put ``Fog`` before
     it.
@@ -54,6 +54,7 @@ class Fog(A.ImageOnlyTransform):
         blur: bool = True,
         refine: Any = True,
         compat: Optional[str] = None,
+        monocular: bool = False,
         p: float = 1.0,
     ) -> None:
         super().__init__(p=p)
@@ -64,6 +65,7 @@ class Fog(A.ImageOnlyTransform):
         self.blur = blur
         self.refine = refine
         self.compat = compat
+        self.monocular = bool(monocular)
 
     @property
     def targets_as_params(self) -> list:
@@ -96,6 +98,7 @@ class Fog(A.ImageOnlyTransform):
             blur=self.blur,
             refine=self.refine,
             compat=self.compat,
+            monocular=self.monocular,
             sky_mask=sky_mask,
             ego_mask=ego_mask,
         )
@@ -109,4 +112,5 @@ class Fog(A.ImageOnlyTransform):
             "blur",
             "refine",
             "compat",
+            "monocular",
         )

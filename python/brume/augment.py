@@ -44,7 +44,9 @@ class RandomFog:
     own a context; by default the module's.
 
     ``depth`` is the range in metres (HxW, HxWx1 or 1xHxW, the image's size or smaller by
-    one factor).
+    one factor); ``monocular=True`` when it comes from a monocular model's relative depth
+    (:func:`brume.range_from_depth` with ``kind='inverse'`` or ``'affine'``), whose sky has
+    a depth: :func:`brume.fog`'s ``monocular``.
     Fog whole frames and crop after: the airlight and the range of the sky come from the
     image the fog gets.
     Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and
@@ -82,6 +84,7 @@ class RandomFog:
         read_noise: Optional[float] = None,
         jpeg_quality: Optional[int] = None,
         return_info: bool = False,
+        monocular: bool = False,
     ) -> None:
         self.beta_range = _checked_betas(beta_range, beta_dist)
         if not 0.0 <= float(p) <= 1.0:
@@ -101,6 +104,7 @@ class RandomFog:
             jpeg_quality=jpeg_quality,
         )
         self.return_info = bool(return_info)
+        self.monocular = bool(monocular)
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self._worker: Optional[int] = None
@@ -159,6 +163,7 @@ class RandomFog:
             sky_mask=targets.get("sky_mask"),
             ego_mask=targets.get("ego_mask"),
             return_info=self.return_info,
+            monocular=self.monocular,
             **self.capture,
         )
         if self.return_info:
@@ -173,7 +178,8 @@ class RandomFog:
             f"RandomFog(beta_range={self.beta_range}, beta_dist={self.beta_dist!r}, p={self.p}, "
             f"airlight={self.airlight}, airlight_range={self.airlight_range}, "
             f"blur={self.blur}, refine={self.refine!r}, compat={self.compat!r}, "
-            f"capture={self.capture}, return_info={self.return_info})"
+            f"capture={self.capture}, return_info={self.return_info}, "
+            f"monocular={self.monocular})"
         )
 
     def _reseed_in_worker(self) -> None:

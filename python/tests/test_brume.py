@@ -727,6 +727,18 @@ def test_range_from_depth(tmp_path):
     assert np.abs(got.astype(int) - want.astype(int)).max() <= 1
     plain = brume.fog(image, rng, ks=0.75, refine="none")
     assert np.abs(plain.astype(int) - want.astype(int)).max() > 8
+    # RandomFog and albumentations' Fog pass monocular on to the fog.
+    from brume.albumentations import Fog as AlbumentationsFog
+
+    metric, _ = brume.range_from_depth(disparity, kind="inverse", fov_y_deg=fov, scale=20.0)
+    want = brume.fog(image, metric, beta=0.02, monocular=True)
+    random_fog = brume.augment.RandomFog(beta_dist="0.02", seed=0, monocular=True)
+    np.testing.assert_array_equal(random_fog(image=image, depth=metric)["image"], want)
+    assert "monocular=True" in repr(random_fog)
+    fog = AlbumentationsFog(beta_dist="0.02", monocular=True)
+    np.testing.assert_array_equal(fog.apply(image, beta=0.02, depth=metric), want)
+    assert "monocular" in fog.get_transform_init_args_names()
+    assert not np.array_equal(brume.fog(image, metric, beta=0.02), want)
     # Affine depth's sky: the far plane, 1, where Marigold clamps it.
     marigold = (eye - 1.5) / 38.5
     marigold[:5] = 1.0
