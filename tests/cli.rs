@@ -1306,10 +1306,16 @@ fn write_sky_over_ground(dir: &Path, (w, h): (usize, usize), sky_rows: usize) {
 /// field of view and `extra` flags, into `out`: the output read back as linear RGB.
 fn fog_of_kind(
     dir: &Path,
-    (depth, kind): (&str, &str),
+    depth: (&str, &str),
     out: &str,
     extra: &[&str],
 ) -> brume::raster::RgbImage {
+    render_of_kind(dir, depth, out, extra);
+    brume::io::image::load_linear_rgb(&dir.join(out)).unwrap()
+}
+
+/// [`fog_of_kind`]'s run of `brume render`, asserted to succeed, with its output.
+fn render_of_kind(dir: &Path, (depth, kind): (&str, &str), out: &str, extra: &[&str]) -> Output {
     let mut args = vec![
         "render",
         "--image",
@@ -1326,7 +1332,7 @@ fn fog_of_kind(
     args.extend_from_slice(extra);
     let o = brume(dir, &args);
     assert!(o.status.success(), "{}", stderr(&o));
-    brume::io::image::load_linear_rgb(&dir.join(out)).unwrap()
+    o
 }
 
 /// The largest difference of two images of one size, over every channel.
@@ -1436,27 +1442,9 @@ fn a_models_clamped_or_saturated_sky_fogs_as_the_unknown_sky() {
     .unwrap();
     let fog = |depth: &str, extra: &[&str]| {
         let out = format!("{depth}.png");
-        let mut args = vec![
-            "render",
-            "--image",
-            "im.png",
-            "--depth",
-            depth,
-            "--depth-kind",
-            "depth",
-            "--depth-scale",
-            "1",
-            "--fov",
-            "45",
-            "--beta",
-            "0.02",
-            "--json",
-            "--out",
-            &out,
-        ];
+        let mut args = vec!["--depth-scale", "1", "--beta", "0.02", "--json"];
         args.extend_from_slice(extra);
-        let o = brume(dir.path(), &args);
-        assert!(o.status.success(), "{}", stderr(&o));
+        let o = render_of_kind(dir.path(), (depth, "depth"), &out, &args);
         let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
         (std::fs::read(dir.path().join(&out)).unwrap(), report)
     };

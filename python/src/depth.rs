@@ -19,9 +19,10 @@ use pyo3::types::PyDict;
 /// through brume's loaders: PNG, PFM, EXR, TIFF, a phone's portrait JPEG, or NumPy .npy
 /// and .npz (float16/32/64, or uint16 read as a 16-bit PNG; an .npz's only array or the
 /// one named 'depth', as Depth Pro saves it). camera: a Cityscapes {name}_camera.json
-/// (else looked for beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
-/// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore', 'gdepth',
-/// 'dynamic-depth' or 'apple-depth' (a phone's portrait JPEG with its depth map). kind:
+/// (else looked for beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum',
+/// 'png16', 'float', 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16',
+/// 'arcore', 'gdepth', 'dynamic-depth' or 'apple-depth' (a phone's portrait JPEG with its
+/// depth map). kind:
 /// 'depth', 'range', 'disparity', 'zbuffer', 'inverse' (a monocular estimator's
 /// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) or 'affine'
 /// (its affine-invariant depth d, Marigold: depth = near + d·(far − near), near and far

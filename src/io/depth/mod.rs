@@ -328,9 +328,9 @@ impl LoadedDepth {
     }
 
     /// A warning when depth along the optical axis (given, or from a z-buffer or a
-    /// monocular model's inverse or affine-invariant depth) was used as range for want of `focal` or `fov`:
-    /// range exceeds depth by 1/cos of the angle off the axis, so the fog is too thin away
-    /// from the centre. It says by how much in this frame's corners at a 45° vertical field
+    /// monocular model's inverse or affine-invariant depth) was used as range for want of
+    /// `focal` or `fov`: range exceeds depth by 1/cos of the angle off the axis, so the fog
+    /// is too thin away from the centre. It says by how much in this frame's corners at a 45° vertical field
     /// of view. `None` for range, or depth turned into range.
     pub fn depth_as_range_warning(&self) -> Option<String> {
         if self.kind == DepthKind::Range || self.intrinsics.is_some() {
@@ -429,9 +429,9 @@ pub fn load_range_from_bytes(
 /// A depth, range, disparity, inverse or affine-invariant depth or z-buffer map already in
 /// memory (a depth camera's frame, a monocular model's output, an engine's depth buffer
 /// read back), read as [`load_range`] reads a float file of it with `opts`: NaN or
-/// infinite unknown, the kind, scale and geometry from `opts`. `opts.format` is `Auto` or `Float` (other
-/// formats name a file layout); no side file is read, so `calib` and `camera` are
-/// refused (give `focal` and `baseline`). `name` stands for the map in messages.
+/// infinite unknown, the kind, scale and geometry from `opts`. `opts.format` is `Auto` or
+/// `Float` (other formats name a file layout); no side file is read, so `calib` and
+/// `camera` are refused (give `focal` and `baseline`). `name` stands for the map in messages.
 pub fn range_from_map(map: ScalarMap, name: &str, opts: &DepthOptions) -> Result<LoadedDepth> {
     let side_file = |option: &str, path: &Option<PathBuf>| match path {
         Some(p) => Err(Error::invalid(
