@@ -98,21 +98,27 @@ fn gpu_upsampling_matches_the_cpu_reference() {
     }
 }
 
-/// Where the cells around a pixel agree (a sky of one range, a wall facing the camera),
-/// the GPU interpolates them bilinearly as the reference does, and takes the joint
-/// bilateral mean by the edges of a near box and of the sky.
+/// Where the cells around a pixel are flat (a sky of one range, a rough wall facing the
+/// camera) or smooth (the ground receding), the GPU interpolates them bilinearly as the
+/// reference does, and takes the joint bilateral mean by the edges of a near box and of the
+/// sky.
 #[test]
-fn gpu_upsampling_matches_the_cpu_reference_where_the_range_is_flat() {
+fn gpu_upsampling_matches_the_cpu_reference_where_the_range_is_flat_or_smooth() {
     let (_gl, mut headless) = renderer();
     let r = headless.renderer().unwrap();
     let image = common::noise_image(96, 64, 11);
     let range = Grid::from_fn(96, 64, |x, y| {
+        let below = (y as f32 - 20.0).max(0.0);
         if y < 20 {
             1000.0
         } else if (30..50).contains(&x) && y > 36 {
             3.0
+        } else if x < 60 {
+            // A wall flat within 0.0048 but rough: second differences up to 0.0096.
+            25.0 * (1.0 + 0.0012 * ((x * 7 + y * 13) % 5) as f32)
         } else {
-            25.0 * (1.0 + 0.00005 * x as f32)
+            // Smooth at 2 and 4x (a second difference of 0.0008 and 0.003 a cell), not at 8x.
+            25.0 * (-0.01 * below + 0.0001 * below * below).exp()
         }
     });
     for k in [2usize, 4, 8] {
@@ -122,7 +128,7 @@ fn gpu_upsampling_matches_the_cpu_reference_where_the_range_is_flat() {
             .unwrap();
         let cpu = joint_bilateral_upsample_reference(&image, &low, DEFAULT_UPSAMPLE_SIGMA_COLOUR)
             .unwrap();
-        assert_upsampling_agrees(&gpu, &cpu, &format!("flat, 1/{k}"));
+        assert_upsampling_agrees(&gpu, &cpu, &format!("flat or smooth, 1/{k}"));
     }
 }
 

@@ -7,8 +7,8 @@
 // surface that holds most of the weight, so that taps of two surfaces the colour lets
 // through do not make a range neither has (`shift_to_dominant_surface` in
 // src/refine/upsample.rs, the CPU reference). Where cells.frag found the window's log
-// ranges within u_flat_spread of each other, the pixel takes their bilinear interpolation
-// instead, within that spread of any mean of them, from 4 cells instead of 36.
+// ranges flat or smooth (no depth edge for the colour to place), the pixel takes their
+// bilinear interpolation instead, from 4 cells instead of 36.
 
 const float SHIFT_SIGMA = 0.3;
 const int SHIFT_STEPS = 2;
@@ -18,7 +18,7 @@ const float SHIFT_MIN_SPREAD = 0.03;
 
 uniform sampler2D u_colour;
 uniform sampler2D u_cells;        // (r, g, b, log range) per cell
-uniform sampler2D u_flat;         // R: 1 where the window starting two cells before is flat
+uniform sampler2D u_interpolated; // R: 1 where the window starting two cells before is flat or smooth
 uniform ivec2 u_low_size;
 uniform vec2 u_scale;             // cells per full-resolution pixel (x, y)
 uniform bool u_colour_srgb;
@@ -33,7 +33,10 @@ void main() {
     vec2 centre = (vec2(p) + 0.5) * u_scale - 0.5;
     ivec2 base = ivec2(floor(centre));
     ivec2 last = u_low_size - 1;
-    if (texelFetch(u_flat, clamp(base, ivec2(0), last), 0).r > 0.5) {
+    // Only between the outer cells' centres, as the CPU reference, whose rows run the
+    // other way: a window clamped at the edge would not be the same cells there.
+    bool inner = all(greaterThanEqual(base, ivec2(0))) && all(lessThan(base, last));
+    if (inner && texelFetch(u_interpolated, clamp(base, ivec2(0), last), 0).r > 0.5) {
         vec2 at = clamp(centre, vec2(0.0), vec2(last));
         ivec2 lo = ivec2(floor(at));
         ivec2 hi = min(lo + 1, last);
@@ -48,25 +51,25 @@ void main() {
     float weight = 0.0;
     float nearest = 0.0;
     float nearest_d2 = 1e30;
+    // Each tap has a fixed slot (a cell outside the grid weighs 0) so that every index is
+    // known when the loops are unrolled: the arrays stay in registers instead of memory
+    // indexed per pixel, which llvmpipe and many mobile GPUs make slow.
     float tap_weight[36];
     float tap_log_range[36];
-    int n = 0;
     for (int j = -2; j <= 3; ++j) {
         for (int i = -2; i <= 3; ++i) {
+            int k = (j + 2) * 6 + (i + 2);
             ivec2 q = base + ivec2(i, j);
-            if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, u_low_size))) {
-                continue;
-            }
-            vec4 cell = texelFetch(u_cells, q, 0);
+            bool inside = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, u_low_size));
+            vec4 cell = texelFetch(u_cells, clamp(q, ivec2(0), last), 0);
             vec2 d = vec2(q) - centre;
             vec3 dc = colour - cell.rgb;
-            float w = exp(-0.5 * dot(d, d) - dot(dc, dc) * inv_colour);
+            float w = inside ? exp(-0.5 * dot(d, d) - dot(dc, dc) * inv_colour) : 0.0;
             sum += w * cell.a;
             weight += w;
-            tap_weight[n] = w;
-            tap_log_range[n] = cell.a;
-            ++n;
-            if (dot(d, d) < nearest_d2) {
+            tap_weight[k] = w;
+            tap_log_range[k] = cell.a;
+            if (inside && dot(d, d) < nearest_d2) {
                 nearest_d2 = dot(d, d);
                 nearest = cell.a;
             }
@@ -77,7 +80,7 @@ void main() {
     if (weight > 1e-30) {
         log_range = sum / weight;
         float spread = 0.0;
-        for (int k = 0; k < n; ++k) {
+        for (int k = 0; k < 36; ++k) {
             float dv = tap_log_range[k] - log_range;
             spread += tap_weight[k] * dv * dv;
         }
@@ -86,7 +89,7 @@ void main() {
         for (int step = 0; step < steps; ++step) {
             float s = 0.0;
             float wsum = 0.0;
-            for (int k = 0; k < n; ++k) {
+            for (int k = 0; k < 36; ++k) {
                 float dv = tap_log_range[k] - log_range;
                 float w = tap_weight[k] * exp(-dv * dv * inv_shift);
                 s += w * dv;

@@ -98,6 +98,7 @@ impl RefinePass {
                     "u_cell",
                     "u_colour_srgb",
                     "u_flat_spread",
+                    "u_smooth_curvature",
                 ],
             ),
             RefinePass::Upsample => (
@@ -106,7 +107,7 @@ impl RefinePass {
                 &[
                     "u_colour",
                     "u_cells",
-                    "u_flat",
+                    "u_interpolated",
                     "u_low_size",
                     "u_scale",
                     "u_colour_srgb",
@@ -375,8 +376,10 @@ impl Pipeline {
                     low.framebuffer.bind_for_drawing();
                     pipeline.use_program(cells);
                     bind_cell_inputs(&gl, cells, input, cell, srgb);
-                    let spread = UniformValue::Float(crate::refine::UPSAMPLE_FLAT_SPREAD as f32);
-                    set_value(&gl, cells, "u_flat_spread", spread);
+                    let spread = crate::refine::UPSAMPLE_FLAT_SPREAD as f32;
+                    set_value(&gl, cells, "u_flat_spread", UniformValue::Float(spread));
+                    let bend = UniformValue::Float(crate::refine::UPSAMPLE_SMOOTH_CURVATURE as f32);
+                    set_value(&gl, cells, "u_smooth_curvature", bend);
                     draw_fullscreen(&gl);
                 })?;
                 timer.pass(|| {
@@ -387,7 +390,7 @@ impl Pipeline {
                     low.textures[1].bind(UNIT_SECOND);
                     set_int(&gl, upsample, "u_colour", UNIT_MAIN as i32);
                     set_int(&gl, upsample, "u_cells", UNIT_DEPTH as i32);
-                    set_int(&gl, upsample, "u_flat", UNIT_SECOND as i32);
+                    set_int(&gl, upsample, "u_interpolated", UNIT_SECOND as i32);
                     let low_size = [lw as i32, lh as i32];
                     set_value(&gl, upsample, "u_low_size", UniformValue::IVec2(low_size));
                     let scale = cell.map(|c| 1.0 / c);

@@ -49,6 +49,7 @@ pub use step::{
 pub use upsample::{
     joint_bilateral_upsample_reference, DEFAULT_UPSAMPLE_SIGMA_COLOUR, UPSAMPLE_FLAT_SPREAD,
     UPSAMPLE_SHIFT_MIN_SPREAD, UPSAMPLE_SHIFT_SIGMA, UPSAMPLE_SHIFT_STEPS,
+    UPSAMPLE_SMOOTH_CURVATURE,
 };
 
 use crate::error::{Error, Result};

@@ -24,33 +24,44 @@ pub const DEFAULT_UPSAMPLE_SIGMA_COLOUR: f64 = 0.15;
 /// with noise its 95th-percentile error is 0.61x bilinear upsampling's, where the guided
 /// filter's is 0.82x (tests/refine.rs).
 ///
-/// Where the 6 x 6 cells' log ranges are within [`UPSAMPLE_FLAT_SPREAD`] of each other
-/// (the sky, a wall facing the camera) the pixel takes their bilinear interpolation
-/// instead: any mean of them, weighted or shifted, lies between the least and the largest,
-/// so the two differ by less than that spread (0.5 % of the range), and the bilinear one
-/// reads 4 cells where the mean reads 36.
+/// Where the 6 x 6 cells' log ranges are within [`UPSAMPLE_FLAT_SPREAD`] of each other (the
+/// sky, a wall facing the camera) or smooth, with no second difference between neighbouring
+/// cells over [`UPSAMPLE_SMOOTH_CURVATURE`] (the ground receding), the pixel takes their
+/// bilinear interpolation instead: with no depth edge for the colour to place, the joint
+/// bilateral mean could only copy the image's texture into the range, and the bilinear
+/// one reads 4 cells where the mean reads 36.
 pub fn joint_bilateral_upsample_reference(
     image: &RgbImage,
     range: &ScalarMap,
     sigma_colour: f64,
 ) -> Result<ScalarMap> {
-    upsample(image, range, sigma_colour, UPSAMPLE_FLAT_SPREAD)
+    upsample(image, range, sigma_colour, true)
 }
 
 /// The spread of log range (the largest less the least) over a pixel's 6 x 6 cells up to
 /// which [`joint_bilateral_upsample_reference`] interpolates them bilinearly instead of
-/// taking their joint bilateral mean: 0.005, a range error of at most 0.5 %, which moves
-/// a transmittance τ = e^(−βR) by at most 0.005·βR·τ ≤ 0.0019 (half an 8-bit level). On a
-/// street frame with sky and phone depth (640x480 under 4000x3000) 45 % of the cells do.
+/// taking their joint bilateral mean: 0.005. Any mean of them, and the pixel's own range,
+/// lie between the least and the largest: a range error of at most 0.5 %, which moves a
+/// transmittance τ = e^(−βR) by at most 0.005·βR·τ ≤ 0.0019 (half an 8-bit level).
 pub const UPSAMPLE_FLAT_SPREAD: f64 = 0.005;
 
-/// [`joint_bilateral_upsample_reference`] with the cells interpolated where their spread
-/// is at most `flat_spread` (< 0: nowhere, the joint bilateral mean everywhere).
+/// The largest second difference of log range (|a − 2b + c| of three neighbouring cells in
+/// a row or a column) over a pixel's 6 x 6 cells up to which
+/// [`joint_bilateral_upsample_reference`] interpolates them bilinearly too: 0.005. The
+/// interpolation of a field so bent errs by at most a quarter of it; a step between two
+/// surfaces is a second difference of its height, so a step it smooths over is at most
+/// 0.5 % of the range, the bound of [`UPSAMPLE_FLAT_SPREAD`]. On a street frame with sky and
+/// its true range at 1/4 of 2048x1024, 41 % of the cells are flat (the sky, the walls
+/// facing the camera) and 77 % smooth (the ground too).
+pub const UPSAMPLE_SMOOTH_CURVATURE: f64 = 0.005;
+
+/// [`joint_bilateral_upsample_reference`], the cells interpolated where they are flat or
+/// smooth if `interpolate` (if not, the joint bilateral mean everywhere).
 fn upsample(
     image: &RgbImage,
     range: &ScalarMap,
     sigma_colour: f64,
-    flat_spread: f64,
+    interpolate: bool,
 ) -> Result<ScalarMap> {
     let (w, h) = (image.width(), image.height());
     let (lw, lh) = (range.width(), range.height());
@@ -60,7 +71,7 @@ fn upsample(
     let cells = image_at_depth_size_srgb(image, lw, lh);
     // Once per cell, not at each of its 36 taps: a fifth less time.
     let log_ranges = Grid::from_fn(lw, lh, |x, y| f64::from(*range.get(x, y)).ln());
-    let flat = flat_windows(&log_ranges, flat_spread);
+    let interpolated = interpolated_windows(&log_ranges, interpolate);
     let scale = [lw as f64 / w as f64, lh as f64 / h as f64];
     let inv = 1.0 / (2.0 * sigma_colour * sigma_colour);
     Ok(Grid::par_from_fn(w, h, |x, y| {
@@ -70,8 +81,13 @@ fn upsample(
             (y as f64 + 0.5) * scale[1] - 0.5,
         ];
         let base = [centre[0].floor() as isize, centre[1].floor() as isize];
-        // A window starting left of or above the grid reads a part of the first one's.
-        if *flat.get(base[0].max(0) as usize, base[1].max(0) as usize) {
+        // Only between the outer cells' centres: beyond them a window would be clamped, and
+        // the GPU, whose rows run bottom to top, clamps the other way.
+        let inner = |b: isize, cells: usize| b >= 0 && (b as usize) + 1 < cells;
+        if inner(base[0], lw)
+            && inner(base[1], lh)
+            && *interpolated.get(base[0] as usize, base[1] as usize)
+        {
             return bilinear(&log_ranges, centre[0], centre[1]).exp() as f32;
         }
         let mut taps = [(0.0f64, 0.0f64); 36];
@@ -112,19 +128,38 @@ fn upsample(
 
 /// Whether the log ranges of the 6 x 6 cells from (x − 2, y − 2) to (x + 3, y + 3) (those
 /// in the grid), the window of a pixel whose centre falls in [x, x + 1) x [y, y + 1), are
-/// within `spread` of each other.
-fn flat_windows(log_ranges: &Grid<f64>, spread: f64) -> Grid<bool> {
+/// flat (within [`UPSAMPLE_FLAT_SPREAD`]) or smooth (no second difference over
+/// [`UPSAMPLE_SMOOTH_CURVATURE`] of three cells in a row or a column of the window), where
+/// `interpolate`.
+fn interpolated_windows(log_ranges: &Grid<f64>, interpolate: bool) -> Grid<bool> {
     let (lw, lh) = (log_ranges.width(), log_ranges.height());
+    let v = |x: usize, y: usize| *log_ranges.get(x, y);
+    let bent = |a: f64, b: f64, c: f64| (a - 2.0 * b + c).abs() > UPSAMPLE_SMOOTH_CURVATURE;
     Grid::par_from_fn(lw, lh, |x, y| {
+        let (x0, x1) = (x.saturating_sub(2), (x + 4).min(lw));
+        let (y0, y1) = (y.saturating_sub(2), (y + 4).min(lh));
         let (mut least, mut largest) = (f64::INFINITY, f64::NEG_INFINITY);
-        for qy in y.saturating_sub(2)..(y + 4).min(lh) {
-            for qx in x.saturating_sub(2)..(x + 4).min(lw) {
-                let v = *log_ranges.get(qx, qy);
-                least = least.min(v);
-                largest = largest.max(v);
+        for qy in y0..y1 {
+            for qx in x0..x1 {
+                least = least.min(v(qx, qy));
+                largest = largest.max(v(qx, qy));
             }
         }
-        largest - least <= spread
+        let flat = largest - least <= UPSAMPLE_FLAT_SPREAD;
+        // Every cell of the window but its first and last of a line is a middle of three.
+        let across = || {
+            (y0..y1).any(|qy| {
+                (x0 + 1..x1.saturating_sub(1))
+                    .any(|qx| bent(v(qx - 1, qy), v(qx, qy), v(qx + 1, qy)))
+            })
+        };
+        let down = || {
+            (x0..x1).any(|qx| {
+                (y0 + 1..y1.saturating_sub(1))
+                    .any(|qy| bent(v(qx, qy - 1), v(qx, qy), v(qx, qy + 1)))
+            })
+        };
+        interpolate && (flat || !(across() || down()))
     })
 }
 
@@ -214,9 +249,17 @@ mod tests {
         }
     }
 
-    /// Where the cells around a pixel agree to within the spread, the bilinear
-    /// interpolation stands in for the joint bilateral mean: within that spread of it,
-    /// however the colour varies; elsewhere nothing changes.
+    /// A textured image: each pixel's colour from a pattern that repeats every 11 pixels.
+    fn textured(w: usize, h: usize) -> RgbImage {
+        Grid::from_fn(w, h, |x, y| {
+            let t = ((x * 7 + y * 13) % 11) as f32 / 11.0;
+            [t, 1.0 - t, 0.5 * t]
+        })
+    }
+
+    /// Where the cells around a pixel agree to within a spread, the bilinear interpolation
+    /// stands in for the joint bilateral mean: within that spread of it, however the colour
+    /// varies; by a depth edge nothing changes.
     #[test]
     fn a_flat_window_is_interpolated_within_its_spread() {
         // A sky of one range at the top, a wall with a slope of 0.04 % a cell, a near box.
@@ -225,12 +268,9 @@ mod tests {
             (5..=8, 7..=10) => 4.0,
             _ => 40.0 * (1.0 + 0.0004 * x as f32),
         });
-        let image = Grid::from_fn(128, 96, |x, y| {
-            let t = ((x * 7 + y * 13) % 11) as f32 / 11.0;
-            [t, 1.0 - t, 0.5 * t]
-        });
+        let image = textured(128, 96);
         let fast = joint_bilateral_upsample_reference(&image, &low, 0.15).unwrap();
-        let exact = upsample(&image, &low, 0.15, -1.0).unwrap();
+        let exact = upsample(&image, &low, 0.15, false).unwrap();
         let mut interpolated = 0;
         for (f, e) in fast.as_slice().iter().zip(exact.as_slice()) {
             let d = (f64::from(*f) / f64::from(*e)).ln().abs();
@@ -252,5 +292,52 @@ mod tests {
             step(100),
             step(101)
         );
+    }
+
+    /// A rough wall facing the camera (its cells within 0.5 % of each other, but with second
+    /// differences up to 1 %): flat though not smooth, interpolated all the same.
+    #[test]
+    fn a_rough_flat_window_is_interpolated() {
+        let low = Grid::from_fn(12, 12, |x, y| {
+            40.0 * (1.0 + 0.0012 * ((x * 7 + y * 13) % 5) as f32)
+        });
+        let image = textured(96, 96);
+        let fast = joint_bilateral_upsample_reference(&image, &low, 0.15).unwrap();
+        let exact = upsample(&image, &low, 0.15, false).unwrap();
+        let mut interpolated = 0;
+        for (f, e) in fast.as_slice().iter().zip(exact.as_slice()) {
+            let d = (f64::from(*f) / f64::from(*e)).ln().abs();
+            assert!(d <= UPSAMPLE_FLAT_SPREAD, "{f} against {e}");
+            interpolated += usize::from(f != e);
+        }
+        assert!(interpolated > 96 * 96 * 3 / 4, "{interpolated}");
+    }
+
+    /// The ground receding under a textured image: its cells span far more than a flat
+    /// spread but bend by less than [`UPSAMPLE_SMOOTH_CURVATURE`], so the pixels take their
+    /// interpolation, within an eighth of that bend (along the one axis that bends) of the
+    /// ground's own log range, where the joint bilateral mean follows the texture off it.
+    #[test]
+    fn a_smooth_window_is_interpolated_not_textured() {
+        // Log range falling 0.08 a row, bending by 0.002 a row (second difference 0.004).
+        let ground = |x: f64, y: f64| 4.0 + 0.001 * x - 0.08 * y + 0.002 * y * y;
+        let low = Grid::from_fn(16, 12, |x, y| ground(x as f64, y as f64).exp() as f32);
+        let image = textured(128, 96);
+        let fast = joint_bilateral_upsample_reference(&image, &low, 0.15).unwrap();
+        let exact = upsample(&image, &low, 0.15, false).unwrap();
+        let (mut worst_fast, mut worst_exact) = (0.0f64, 0.0f64);
+        // Between the first and last cells' centres, where the interpolation does not clamp.
+        for y in 4..92 {
+            for x in 4..124 {
+                let truth = ground((x as f64 + 0.5) / 8.0 - 0.5, (y as f64 + 0.5) / 8.0 - 0.5);
+                worst_fast = worst_fast.max((f64::from(*fast.get(x, y)).ln() - truth).abs());
+                worst_exact = worst_exact.max((f64::from(*exact.get(x, y)).ln() - truth).abs());
+            }
+        }
+        assert!(
+            worst_fast <= 0.004 / 8.0 + 1e-6,
+            "interpolated: {worst_fast}"
+        );
+        assert!(worst_exact > 4.0 * worst_fast, "mean: {worst_exact}");
     }
 }
