@@ -182,7 +182,8 @@ class Renderer:
         read_noise: Optional[float] = None,
         jpeg_quality: Optional[int] = None,
         seed: int = 0,
-        return_info: bool = False
+        return_info: bool = False,
+        monocular: bool = False
     ) -> Any: ...
 
 def fog(
@@ -297,7 +298,8 @@ def aerial(
     read_noise: Optional[float] = None,
     jpeg_quality: Optional[int] = None,
     seed: int = 0,
-    return_info: bool = False
+    return_info: bool = False,
+    monocular: bool = False
 ) -> Any: ...
 def load_photo(path: PathArg, *, dtype: str = "uint8") -> Tuple[Array, Dict[str, Any]]: ...
 def save_photo(path: PathArg, image: Array, info: Optional[Dict[str, Any]] = None) -> None: ...

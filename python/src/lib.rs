@@ -157,9 +157,7 @@ impl Renderer {
         density.check_outputs_fit(image.width * image.height)?;
         let blur = (blur, lambda_px);
         let mut request = fog_request(density, airlight, blur, refine, capture, compat)?;
-        if let (true, Some(prep)) = (monocular, request.prepare.prep.as_mut()) {
-            prep.sky_in_far_tail = Some(brume::prep::MONOCULAR_SKY_FACTOR);
-        }
+        photo_fog::set_monocular(&mut request.prepare, monocular);
         let range = read_range(range_m)?;
         set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
@@ -318,11 +316,12 @@ impl Renderer {
     /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
     /// sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0,
     /// refine=True, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None,
-    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False) -> ndarray, or
-    /// (ndarray, dict), or a list of those: as brume.aerial, on this renderer's context.
+    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False) ->
+    /// ndarray, or (ndarray, dict), or a list of those: as brume.aerial, on this renderer's
+    /// context.
     #[pyo3(
-        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false),
-        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False)"
+        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false, monocular=false),
+        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False)"
     )]
     #[allow(clippy::too_many_arguments)]
     fn aerial<'py>(
@@ -357,6 +356,7 @@ impl Renderer {
         jpeg_quality: Option<i64>,
         seed: u64,
         return_info: bool,
+        monocular: bool,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
         let refine = refine.unwrap_or(default_refine.as_any());
@@ -368,6 +368,7 @@ impl Renderer {
             seed,
         )?;
         let mut prepare = prepare_request(airlight, refine)?;
+        photo_fog::set_monocular(&mut prepare, monocular);
         let args = aerial_photo::AerialArgs {
             turbidities: turbidity.non_empty("turbidity")?.to_vec(),
             fov_y_deg,

@@ -94,6 +94,15 @@ pub(crate) fn prepare_request(
     Ok(prepare)
 }
 
+/// `monocular=True`: `range_m` is a monocular model's relative depth, whose sky may lie in
+/// its far tail (`brume::prep::PrepOptions::sky_in_far_tail`), as `brume render` reads it
+/// for `--depth-kind inverse` and `affine`.
+pub(crate) fn set_monocular(prepare: &mut PrepareOptions, monocular: bool) {
+    if let (true, Some(prep)) = (monocular, prepare.prep.as_mut()) {
+        prep.sky_in_far_tail = Some(brume::prep::MONOCULAR_SKY_FACTOR);
+    }
+}
+
 /// `return_info`'s labels of one output, as the dict Python gets.
 pub(crate) trait Labels {
     fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>>;

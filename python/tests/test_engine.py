@@ -385,6 +385,32 @@ def test_aerial_masks(tmp_path, photo):
         brume.aerial(image, range_m, ego_mask=ego[:, :10], **kw)
 
 
+def test_aerial_finds_a_monocular_models_sky_with_monocular():
+    """monocular=True as brume.fog takes it: a sky at a small positive disparity is found
+    in the far tail, and veiled as the same range with the sky unknown; without, it is a
+    surface some 150 m away."""
+    h, w = 48, 64
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    eye = 2.0 + 0.5 * x + 0.1 * y
+    image = np.zeros((h, w, 3), np.uint8)
+    image[:12] = (150, 180, 240)
+    image[12:] = (60, 110, 50)
+    image[12:, ::3] = (70, 120, 55)
+    disparity = 3.0 / eye
+    disparity[:12] = 0.006 + 0.00002 * np.arange(w)
+    range_m, _ = brume.range_from_depth(disparity, kind="inverse", fov_y_deg=50.0)
+    unknown_sky = range_m.copy()
+    unknown_sky[:12] = np.nan
+    kw = dict(turbidity=6.0, fov_y_deg=50.0, refine="none")
+    want = brume.aerial(image, unknown_sky, **kw)
+    got = brume.aerial(image, range_m, monocular=True, **kw)
+    assert np.abs(got.astype(int) - want.astype(int)).max() <= 1
+    plain = brume.aerial(image, range_m, **kw)
+    assert np.abs(plain.astype(int) - want.astype(int)).max() > 8
+    renderer = brume.Renderer()
+    np.testing.assert_array_equal(renderer.aerial(image, range_m, monocular=True, **kw), got)
+
+
 def test_aerial_turbidity_thickens_the_veil(photo):
     image, range_m = photo
     linear = srgb_to_linear(image / 255.0).astype(np.float32)
