@@ -202,3 +202,45 @@ fn coarse_from_is_checked_and_runs() {
     assert_eq!(report.rows.len(), 1);
     assert!(report.rows[0].median_ms.is_some_and(|ms| ms > 0.0));
 }
+
+/// `brume bench refine`: the guided filter, then the upsampling of the sawtooth range and
+/// of the procedural street's, each from 1/4 and 1/8 size, with figures; an image too small
+/// for the street is refused by its option.
+#[test]
+fn refine_bench_times_the_filter_and_both_upsamplings() {
+    let o = bench(&["refine", "--size", "128x64", "--runs", "1", "--json"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = v["rows"].as_array().unwrap();
+    let got: Vec<(&str, u64, u64)> = rows
+        .iter()
+        .map(|r| {
+            let size = r["range_size"].as_array().unwrap();
+            (
+                r["what"].as_str().unwrap(),
+                size[0].as_u64().unwrap(),
+                r["passes"].as_u64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        got,
+        [
+            ("guided filter", 128, 6),
+            ("upsample 1/4", 32, 2),
+            ("upsample 1/8", 16, 2),
+            ("upsample 1/4, street", 32, 2),
+            ("upsample 1/8, street", 16, 2),
+        ]
+    );
+    for r in rows {
+        assert!(r["median_ms"].as_f64().unwrap() > 0.0, "{r}");
+    }
+    let o = bench(&["refine", "--size", "40x40", "--runs", "1"]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("invalid --size = 40x40: expected an image of at least 64x64 px"),
+        "{err}"
+    );
+}

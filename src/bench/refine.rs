@@ -1,10 +1,13 @@
 //! The speed of image-guided refinement (issue 19's target: ≤ 100 ms at 2048 x 1024 on
 //! llvmpipe, GPU timer): the guided filter at the image's size, and joint bilateral
-//! upsampling of a range 4 and 8 times smaller, each `runs` times after one untimed run
-//! (llvmpipe compiles a shader at its first draw). The figure is the median of the runs'
+//! upsampling of a range 4 and 8 times smaller, of a sawtooth range under a textured image
+//! and of the procedural street's true range under its image (sky, receding ground,
+//! boxes: what a phone's depth holds, and where most windows are smooth), each `runs`
+//! times after one untimed run (llvmpipe compiles a shader at its first draw). The figure is the median of the runs'
 //! summed pass times, with the clock; the wall time includes the upload and the read-back.
 
 use crate::error::Result;
+use crate::prep::synthetic::street_scene;
 use crate::raster::Grid;
 use crate::refine::{Refine, DEFAULT_UPSAMPLE_SIGMA_COLOUR};
 use crate::renderer::Renderer;
@@ -13,7 +16,7 @@ use std::time::Instant;
 /// One configuration's figures.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct RefineBenchRow {
-    /// `guided filter` or `upsample 1/k`.
+    /// `guided filter`, `upsample 1/k` or `upsample 1/k, street`.
     pub what: String,
     /// The range's size (px).
     pub range_size: [usize; 2],
@@ -40,14 +43,24 @@ pub struct RefineBenchReport {
     pub rows: Vec<RefineBenchRow>,
 }
 
-/// Runs the benchmark at `width` x `height` (both multiples of 8 work best), `runs` timed
-/// runs per configuration.
+/// The smallest side the benchmark takes: the procedural street's.
+pub const MIN_REFINE_BENCH_SIDE: usize = 64;
+
+/// Runs the benchmark at `width` x `height` (both multiples of 8 work best, each at least
+/// [`MIN_REFINE_BENCH_SIDE`]), `runs` timed runs per configuration.
 pub fn run_refine_bench(
     renderer: &mut Renderer,
     width: usize,
     height: usize,
     runs: usize,
 ) -> Result<RefineBenchReport> {
+    if width.min(height) < MIN_REFINE_BENCH_SIDE {
+        return Err(crate::Error::invalid(
+            "size",
+            format!("{width}x{height}"),
+            format!("an image of at least {MIN_REFINE_BENCH_SIDE}x{MIN_REFINE_BENCH_SIDE} px"),
+        ));
+    }
     // A street-like frame: a bright sky, a dark road, textured façades.
     let image = Grid::from_fn(width, height, |x, y| {
         let t = ((x * 7 + y * 13) % 17) as f32 / 17.0;
@@ -76,6 +89,23 @@ pub fn run_refine_bench(
         let what = format!("upsample 1/{k}");
         rows.push(time_runs(runs, &what, &low, || {
             renderer.upsample(&image, &low, DEFAULT_UPSAMPLE_SIGMA_COLOUR)
+        })?);
+    }
+    let street = street_scene(width, height, 1);
+    // The sky and the wire, which have no range, as far as pre-processing puts the sky.
+    let sky = 3.0 * street.scene_max;
+    for k in [4usize, 8] {
+        let low = Grid::from_fn(width / k, height / k, |x, y| {
+            let v = *street.truth.get(k * x + k / 2, k * y + k / 2);
+            if v.is_finite() {
+                v
+            } else {
+                sky
+            }
+        });
+        let what = format!("upsample 1/{k}, street");
+        rows.push(time_runs(runs, &what, &low, || {
+            renderer.upsample(&street.image, &low, DEFAULT_UPSAMPLE_SIGMA_COLOUR)
         })?);
     }
     Ok(RefineBenchReport {
@@ -119,7 +149,7 @@ fn time_runs(
 /// The report as a text table.
 pub fn refine_table(report: &RefineBenchReport) -> String {
     let mut out = format!(
-        "refinement at {}x{} on {}, median of {} runs\n{:<16} {:>10} {:>7} {:>12} {:>14}\n",
+        "refinement at {}x{} on {}, median of {} runs\n{:<22} {:>10} {:>7} {:>12} {:>14}\n",
         report.size[0],
         report.size[1],
         report.renderer,
@@ -132,7 +162,7 @@ pub fn refine_table(report: &RefineBenchReport) -> String {
     );
     for r in &report.rows {
         out.push_str(&format!(
-            "{:<16} {:>10} {:>7} {:>9.1} {:<2} {:>14.1}\n",
+            "{:<22} {:>10} {:>7} {:>9.1} {:<2} {:>14.1}\n",
             r.what,
             format!("{}x{}", r.range_size[0], r.range_size[1]),
             r.passes,
