@@ -3,8 +3,9 @@
 //! upsampling of a range 4 and 8 times smaller, of a sawtooth range under a textured image
 //! and of the procedural street's true range under its image (sky, receding ground,
 //! boxes: what a phone's depth holds, and where most windows are smooth), each `runs`
-//! times after one untimed run (llvmpipe compiles a shader at its first draw). The figure is the median of the runs'
-//! summed pass times, with the clock; the wall time includes the upload and the read-back.
+//! times after one untimed run (llvmpipe compiles a shader at its first draw). The figure
+//! is the median of the runs' summed pass times, with the clock; the wall time includes the
+//! upload and the read-back.
 
 use crate::error::Result;
 use crate::prep::synthetic::street_scene;
