@@ -1,5 +1,6 @@
-"""What the test modules share: the `brume` program they compare the package with, and the
-check that calls on several threads give the serial results."""
+"""What the test modules share: the `brume` program they compare the package with, the
+check that calls on several threads give the serial results, and a monocular model's map
+of a sky over the ground."""
 
 import os
 import shutil
@@ -48,3 +49,17 @@ def assert_threads_match_serial(calls):
     for a, b in zip(serial, results):
         np.testing.assert_array_equal(a, b)
     return serial
+
+
+def sky_over_ground(eye, sky_disparity):
+    """A photo of a blue sky over striped grass, its top 12 rows the sky, and its relative
+    inverse depth as a monocular model writes it: 3 / eye below, `sky_disparity` (an array
+    of the width, small and positive, not 0) in the sky."""
+    h, w = eye.shape
+    image = np.zeros((h, w, 3), np.uint8)
+    image[:12] = (150, 180, 240)
+    image[12:] = (60, 110, 50)
+    image[12:, ::3] = (70, 120, 55)
+    disparity = 3.0 / eye
+    disparity[:12] = sky_disparity
+    return image, disparity

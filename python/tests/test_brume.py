@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import brume
-from shared import REPO, assert_threads_match_serial, brume_bin
+from shared import REPO, assert_threads_match_serial, brume_bin, sky_over_ground
 
 H, W = 48, 64  # small: llvmpipe on 2 cores
 
@@ -713,12 +713,7 @@ def test_range_from_depth(tmp_path):
         brume.range_from_depth(eye, kind="range", sky_beyond=0.0)
     # A monocular model's sky at a small positive disparity: with monocular=True fog finds
     # it in the far tail, as the same range with the sky unknown; without, it is a surface.
-    image = np.zeros((h, w, 3), np.uint8)
-    image[:12] = (150, 180, 240)
-    image[12:] = (60, 110, 50)
-    image[12:, ::3] = (70, 120, 55)
-    disparity = 3.0 / eye
-    disparity[:12] = 0.002 + 0.00002 * np.arange(w)
+    image, disparity = sky_over_ground(eye, 0.002 + 0.00002 * np.arange(w))
     rng, _ = brume.range_from_depth(disparity, kind="inverse", fov_y_deg=fov)
     unknown_sky = rng.copy()
     unknown_sky[:12] = np.nan

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import brume
-from shared import assert_threads_match_serial, brume_bin
+from shared import assert_threads_match_serial, brume_bin, sky_over_ground
 
 SIZE = (96, 64)  # W, H: small, llvmpipe on 2 cores
 CAMERA = dict(position=(0.0, 1.7, 0.0), yaw_deg=20.0, pitch_deg=-3.0, fov_y_deg=60.0,
@@ -392,12 +392,7 @@ def test_aerial_finds_a_monocular_models_sky_with_monocular():
     h, w = 48, 64
     y, x = np.mgrid[0:h, 0:w].astype(np.float64)
     eye = 2.0 + 0.5 * x + 0.1 * y
-    image = np.zeros((h, w, 3), np.uint8)
-    image[:12] = (150, 180, 240)
-    image[12:] = (60, 110, 50)
-    image[12:, ::3] = (70, 120, 55)
-    disparity = 3.0 / eye
-    disparity[:12] = 0.006 + 0.00002 * np.arange(w)
+    image, disparity = sky_over_ground(eye, 0.006 + 0.00002 * np.arange(w))
     range_m, _ = brume.range_from_depth(disparity, kind="inverse", fov_y_deg=50.0)
     unknown_sky = range_m.copy()
     unknown_sky[:12] = np.nan

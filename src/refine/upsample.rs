@@ -257,6 +257,24 @@ mod tests {
         })
     }
 
+    /// The upsampling of `low` under `image` with the interpolation and without (the joint
+    /// bilateral mean everywhere), asserted within [`UPSAMPLE_FLAT_SPREAD`] of each other
+    /// everywhere, and how many pixels differ.
+    fn interpolated_within_spread(
+        image: &RgbImage,
+        low: &ScalarMap,
+    ) -> (ScalarMap, ScalarMap, usize) {
+        let fast = joint_bilateral_upsample_reference(image, low, 0.15).unwrap();
+        let exact = upsample(image, low, 0.15, false).unwrap();
+        let mut interpolated = 0;
+        for (f, e) in fast.as_slice().iter().zip(exact.as_slice()) {
+            let d = (f64::from(*f) / f64::from(*e)).ln().abs();
+            assert!(d <= UPSAMPLE_FLAT_SPREAD, "{f} against {e}");
+            interpolated += usize::from(f != e);
+        }
+        (fast, exact, interpolated)
+    }
+
     /// Where the cells around a pixel agree to within a spread, the bilinear interpolation
     /// stands in for the joint bilateral mean: within that spread of it, however the colour
     /// varies; by a depth edge nothing changes.
@@ -269,14 +287,7 @@ mod tests {
             _ => 40.0 * (1.0 + 0.0004 * x as f32),
         });
         let image = textured(128, 96);
-        let fast = joint_bilateral_upsample_reference(&image, &low, 0.15).unwrap();
-        let exact = upsample(&image, &low, 0.15, false).unwrap();
-        let mut interpolated = 0;
-        for (f, e) in fast.as_slice().iter().zip(exact.as_slice()) {
-            let d = (f64::from(*f) / f64::from(*e)).ln().abs();
-            assert!(d <= UPSAMPLE_FLAT_SPREAD, "{f} against {e}");
-            interpolated += usize::from(f != e);
-        }
+        let (fast, exact, interpolated) = interpolated_within_spread(&image, &low);
         assert!(interpolated > 128 * 96 / 8, "{interpolated}");
         // By the box's edge the cells differ: the joint bilateral mean, to the bit.
         for (x, y) in [(44, 60), (70, 86), (38, 70)] {
@@ -302,14 +313,7 @@ mod tests {
             40.0 * (1.0 + 0.0012 * ((x * 7 + y * 13) % 5) as f32)
         });
         let image = textured(96, 96);
-        let fast = joint_bilateral_upsample_reference(&image, &low, 0.15).unwrap();
-        let exact = upsample(&image, &low, 0.15, false).unwrap();
-        let mut interpolated = 0;
-        for (f, e) in fast.as_slice().iter().zip(exact.as_slice()) {
-            let d = (f64::from(*f) / f64::from(*e)).ln().abs();
-            assert!(d <= UPSAMPLE_FLAT_SPREAD, "{f} against {e}");
-            interpolated += usize::from(f != e);
-        }
+        let (_, _, interpolated) = interpolated_within_spread(&image, &low);
         assert!(interpolated > 96 * 96 * 3 / 4, "{interpolated}");
     }
 
