@@ -15,45 +15,42 @@ use pyo3::types::PyDict;
 /// fov_y_deg=None, min_confidence=None, reversed_z=False, image=None, layout=None,
 /// sky_beyond=None) -> (range_m, info)
 ///
-/// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown)
-/// through brume's loaders: PNG, PFM, EXR, TIFF, a phone's portrait JPEG, or NumPy .npy
-/// and .npz (float16/32/64, or uint16 read as a 16-bit PNG; an .npz's only array or the
-/// one named 'depth', as Depth Pro saves it). camera: a Cityscapes {name}_camera.json
-/// (else looked for beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum',
-/// 'png16', 'float', 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16',
-/// 'arcore', 'gdepth', 'dynamic-depth' or 'apple-depth' (a phone's portrait JPEG with its
-/// depth map). kind:
-/// 'depth', 'range', 'disparity', 'zbuffer', 'inverse' (a monocular estimator's
-/// relative inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) or 'affine'
-/// (its affine-invariant depth d, Marigold: depth = near + d·(far − near), near and far
-/// the scene's nearest and farthest depth, required; d = 1 the sky; a 16-bit PNG holds
-/// d·65535) (default: the format's). scale: metres per unit of a 16-bit PNG, of a float
-/// map, of a z-buffer's or affine depth's near and far (1 when they are in metres), the
-/// metres of 1/(d + offset) of inverse depth, or a factor on a portrait JPEG's metres (an
-/// iPhone's relative map rescaled); a float map, a z-buffer, inverse or affine depth or a
-/// portrait JPEG then counts as metric. calib: a
-/// Middlebury 2014 calib.txt (else calib.txt beside the file). focal_px and baseline_mm:
-/// a disparity's stereo geometry (disparity_offset_px added to the disparity first),
-/// focal_px or fov_y_deg (vertical) the intrinsics that turn depth along the optical axis
-/// into range (principal point at the centre). near, far and fov_y_deg: a z-buffer's
-/// projection (an OpenGL window depth in [0, 1]; near and far in the range's unit, far
-/// float('inf') for an infinite far plane); reversed_z: its depth is 1 at near and 0 at
-/// far (Unreal, Bevy, Godot 4), nothing drawn at 0. min_confidence: the lowest
-/// confidence in [0, 1] of an Android DEPTH16 sample that is kept (of a portrait JPEG's
-/// sample, in its confidence map). image: the photo the map goes with (its header is
+/// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown) through
+/// brume's loaders: PNG, PFM, EXR, TIFF, a phone's portrait JPEG, or NumPy .npy and .npz
+/// (float16/32/64, or uint16 read as a 16-bit PNG; an .npz's only array or the one named
+/// 'depth', as Depth Pro saves it). camera: a Cityscapes {name}_camera.json (else looked
+/// for beside the file). format: 'auto' (default), 'kitti', 'nyu', 'tum', 'png16', 'float',
+/// 'cityscapes', 'middlebury2014', 'middlebury2006', 'android-depth16', 'arcore', 'gdepth',
+/// 'dynamic-depth' or 'apple-depth' (a phone's portrait JPEG with its depth map). kind:
+/// 'depth', 'range', 'disparity', 'zbuffer', 'inverse' (a monocular estimator's relative
+/// inverse depth d: depth = 1/(d + disparity_offset_px), 0 the sky) or 'affine' (its
+/// affine-invariant depth d, Marigold: depth = near + d·(far − near), near and far the
+/// scene's nearest and farthest depth, required; d = 1 the sky; a 16-bit PNG holds d·65535)
+/// (default: the format's). scale: metres per unit of a 16-bit PNG, of a float map, of a
+/// z-buffer's or affine depth's near and far (1 when they are in metres), the metres of
+/// 1/(d + offset) of inverse depth, or a factor on a portrait JPEG's metres (an iPhone's
+/// relative map rescaled); a float map, a z-buffer, inverse or affine depth or a portrait
+/// JPEG then counts as metric. calib: a Middlebury 2014 calib.txt (else calib.txt beside
+/// the file). focal_px and baseline_mm: a disparity's stereo geometry (disparity_offset_px
+/// added to the disparity first), focal_px or fov_y_deg (vertical) the intrinsics that turn
+/// depth along the optical axis into range (principal point at the centre). near, far and
+/// fov_y_deg: a z-buffer's projection (an OpenGL window depth in [0, 1]; near and far in
+/// the range's unit, far float('inf') for an infinite far plane); reversed_z: its depth is
+/// 1 at near and 0 at far (Unreal, Bevy, Godot 4), nothing drawn at 0. min_confidence: the
+/// lowest confidence in [0, 1] of an Android DEPTH16 sample that is kept (of a portrait
+/// JPEG's sample, in its confidence map). image: the photo the map goes with (its header is
 /// read, not its pixels): the map is turned upright by the photo's EXIF orientation, as
 /// `brume render --image` turns both (read the photo upright too: PIL's
 /// ImageOps.exif_transpose, OpenCV's imread), and the photo's EXIF 35 mm equivalent focal
-/// length turns depth into range when neither focal_px nor fov_y_deg is given. layout:
-/// how the map lies against that orientation, 'auto' (default), 'stored' or 'upright'
-/// (brume render's --depth-layout). sky_beyond: range at or beyond which a value is
-/// unknown, the sky, in the range's units (for a model that gives the sky a depth near
-/// its largest: Depth Anything's metric models); by default a float
-/// map's largest value is unknown when at least 1 % of its samples hold it exactly, 10
-/// times beyond the mean of the others or more (Depth Pro's sky clamped at 10 km, a
-/// renderer's background); float('inf') keeps every value. info: format, kind,
-/// units, metric (whether the range is in trustworthy metres, which fog with beta or
-/// visibility needs), notes, unknown_pixels.
+/// length turns depth into range when neither focal_px nor fov_y_deg is given. layout: how
+/// the map lies against that orientation, 'auto' (default), 'stored' or 'upright' (brume
+/// render's --depth-layout). sky_beyond: range at or beyond which a value is unknown, the
+/// sky, in the range's units (for a model that gives the sky a depth near its largest:
+/// Depth Anything's metric models); by default a float map's largest value is unknown when
+/// at least 1 % of its samples hold it exactly, 10 times beyond the mean of the others or
+/// more (Depth Pro's sky clamped at 10 km, a renderer's background); float('inf') keeps
+/// every value. info: format, kind, units, metric (whether the range is in trustworthy
+/// metres, which fog with beta or visibility needs), notes, unknown_pixels.
 #[pyfunction]
 #[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None))]
 #[allow(clippy::too_many_arguments)]

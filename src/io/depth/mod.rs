@@ -330,8 +330,8 @@ impl LoadedDepth {
     /// A warning when depth along the optical axis (given, or from a z-buffer or a
     /// monocular model's inverse or affine-invariant depth) was used as range for want of
     /// `focal` or `fov`: range exceeds depth by 1/cos of the angle off the axis, so the fog
-    /// is too thin away from the centre. It says by how much in this frame's corners at a 45° vertical field
-    /// of view. `None` for range, or depth turned into range.
+    /// is too thin away from the centre. It says by how much in this frame's corners at a
+    /// 45° vertical field of view. `None` for range, or depth turned into range.
     pub fn depth_as_range_warning(&self) -> Option<String> {
         if self.kind == DepthKind::Range || self.intrinsics.is_some() {
             return None;
