@@ -418,6 +418,9 @@ impl Hostile {
         gl.color_mask(false, true, true, false);
         gl.blend_func_separate(glow::ONE, glow::ONE, glow::DST_COLOR, glow::ZERO);
         gl.blend_equation_separate(glow::FUNC_SUBTRACT, glow::FUNC_REVERSE_SUBTRACT);
+        gl.depth_func(glow::GREATER);
+        gl.depth_mask(false);
+        gl.depth_range_f32(0.25, 0.75);
         gl.viewport(1, 2, 3, 4);
         gl.bind_framebuffer(glow::DRAW_FRAMEBUFFER, Some(self.draw_fbo));
         gl.bind_framebuffer(glow::READ_FRAMEBUFFER, Some(self.read_fbo));
@@ -466,6 +469,9 @@ unsafe fn calm(gl: &glow::Context, w: usize, h: usize) {
     gl.color_mask(true, true, true, true);
     gl.blend_func(glow::ONE, glow::ZERO);
     gl.blend_equation(glow::FUNC_ADD);
+    gl.depth_func(glow::LESS);
+    gl.depth_mask(true);
+    gl.depth_range_f32(0.0, 1.0);
     gl.viewport(0, 0, w as i32, h as i32);
     gl.bind_framebuffer(glow::FRAMEBUFFER, None);
     gl.bind_vertex_array(None);
@@ -515,6 +521,9 @@ unsafe fn snapshot(gl: &glow::Context) -> Vec<(String, Vec<i32>)> {
         ("blend equation rgb", glow::BLEND_EQUATION_RGB, 1),
         ("blend equation alpha", glow::BLEND_EQUATION_ALPHA, 1),
         ("cull face mode", glow::CULL_FACE_MODE, 1),
+        ("depth func", glow::DEPTH_FUNC, 1),
+        ("depth write mask", glow::DEPTH_WRITEMASK, 1),
+        ("depth range", glow::DEPTH_RANGE, 2),
         ("unpack alignment", glow::UNPACK_ALIGNMENT, 1),
         ("unpack row length", glow::UNPACK_ROW_LENGTH, 1),
         ("unpack skip rows", glow::UNPACK_SKIP_ROWS, 1),
@@ -561,14 +570,15 @@ fn assert_same_state(before: &[(String, Vec<i32>)], after: &[(String, Vec<i32>)]
 /// The hostile host (the contract's module docs): unit 9 active with a texture bound
 /// there, textures and sampler objects on every unit brume uses, `UNPACK_ROW_LENGTH` 7,
 /// alignment 1 and skips for unpack and pack, bound unpack and pack buffers, every
-/// capability the contract names on (`DITHER` too), a colour mask, blend state, a
-/// viewport, a scissor box, a vertex array and draw and read framebuffers of its own.
-/// Through a render (Haze, diffusion; and with the coarse stage), the engine passes with a medium that has a lookup
-/// texture (the distance fog and its noise: `fog` without blur, with each Gaussian, and
-/// `blend_fog`) and the CPU-buffer `Renderer` (uploads and a read-back), each call on a
-/// fresh pipeline (so that its first upload of the lookups meets the host's pixel
-/// store): the host's state is exactly as it left it after each, and the result is what
-/// a clean host gets, bit for bit.
+/// capability the contract names on (`DITHER` too), a colour mask, blend state, depth
+/// function, write mask and range, a viewport, a scissor box, a vertex array and draw and
+/// read framebuffers of its own. Through a render (Haze, diffusion; and with the coarse
+/// stage), the engine passes with a medium that has a lookup texture (the distance fog
+/// and its noise: `fog` without blur, with each Gaussian, and `blend_fog`), the
+/// CPU-buffer `Renderer` (uploads and a read-back) and the upsampling (its depth test),
+/// each call on a fresh pipeline (so that its first upload of the lookups meets the
+/// host's pixel store): the host's state is exactly as it left it after each, and the
+/// result is what a clean host gets, bit for bit.
 #[test]
 fn gl_state_contract() {
     use brume::medium::{DistanceFog, Medium};
@@ -709,6 +719,57 @@ fn gl_state_contract() {
         results.push(out.image);
     }
     assert_eq!(results[0].as_slice(), results[1].as_slice(), "Renderer");
+    // The upsampling (its passes' depth test) into an R32F texture the host keeps, from
+    // the range at half size.
+    let low = Grid::from_fn(w / 2, h / 2, |x, y| *host.range.get(2 * x, 2 * y));
+    let upsampled = brume::gpu::texture::Texture::new(
+        gl,
+        w,
+        h,
+        brume::gpu::texture::TexelFormat::R32F,
+        brume::gpu::texture::Filter::Nearest,
+        None,
+    )
+    .unwrap();
+    // SAFETY: host objects on the current context.
+    let (low_texture, upsampled_fbo) = unsafe {
+        let low_data = Upload::Float(glow::RED, low.as_slice());
+        let low_texture = texture(gl, w / 2, h / 2, glow::R32F, low_data);
+        (low_texture, framebuffer(gl, upsampled.raw()))
+    };
+    let refine_input = brume::pipeline::RefineInput {
+        colour: host.colour,
+        colour_encoding: Encoding::Linear,
+        width: w,
+        height: h,
+        range: low_texture,
+        range_width: w / 2,
+        range_height: h / 2,
+    };
+    let mut results = Vec::new();
+    for hostile_host in [false, true] {
+        let mut pipeline = Pipeline::new(Arc::clone(gl)).unwrap();
+        // SAFETY: state on the current context.
+        let before = unsafe {
+            calm(gl, w, h);
+            if hostile_host {
+                hostile.apply(gl);
+            }
+            snapshot(gl)
+        };
+        let sigma = brume::refine::DEFAULT_UPSAMPLE_SIGMA_COLOUR;
+        pipeline
+            .upsample_range_into(&refine_input, sigma, &upsampled)
+            .unwrap();
+        // SAFETY: state queries and a read-back on the current context.
+        unsafe {
+            assert_same_state(&before, &snapshot(gl), "upsample_range_into");
+            calm(gl, w, h);
+            results.push(read(gl, upsampled_fbo, (0, 0, w, h)));
+        }
+    }
+    assert!(results[0].as_slice().iter().all(|p| p[0] > 0.0));
+    assert_eq!(results[0].as_slice(), results[1].as_slice(), "upsampling");
     // The diffusion result is still right against the CPU reference.
     let haze_result = {
         let mut pipeline = Pipeline::new(Arc::clone(gl)).unwrap();
@@ -734,6 +795,8 @@ fn gl_state_contract() {
         gl.delete_framebuffer(fbo);
         gl.delete_texture(target);
         gl.delete_texture(fog_depth);
+        gl.delete_framebuffer(upsampled_fbo);
+        gl.delete_texture(low_texture);
     }
 }
 

@@ -94,7 +94,7 @@ fn gpu_upsampling_matches_the_cpu_reference() {
         let cpu = joint_bilateral_upsample_reference(&image, &low, DEFAULT_UPSAMPLE_SIGMA_COLOUR)
             .unwrap();
         assert_upsampling_agrees(&gpu, &cpu, &format!("1/{k}"));
-        assert_eq!(times.pass_ms.len(), 2);
+        assert_eq!(times.pass_ms.len(), 3);
     }
 }
 
@@ -186,8 +186,8 @@ fn upsampling_into_a_kept_texture_matches_upsample_range() {
         };
         let sigma = DEFAULT_UPSAMPLE_SIGMA_COLOUR;
         let times = pipeline.upsample_range_into(&input, sigma, &kept).unwrap();
-        // Two passes, or none where the pipeline's timing gives no figures.
-        assert!(matches!(times.pass_ms.len(), 0 | 2), "{times:?}");
+        // Three passes, or none where the pipeline's timing gives no figures.
+        assert!(matches!(times.pass_ms.len(), 0 | 3), "{times:?}");
         let (fresh, _) = pipeline.upsample_range(&input, sigma).unwrap();
         let (into, once) = (read(&kept), read(&fresh));
         assert!(into.as_slice().iter().all(|&v| v > 0.0), "frame {frame}");

@@ -1,11 +1,11 @@
-// Joint bilateral upsampling, pass 1 of 2 (Kopf et al. 2007): on the depth map's own grid,
+// Joint bilateral upsampling, pass 1 of 3 (Kopf et al. 2007): on the depth map's own grid,
 // each cell's colour (the sRGB-encoded colour averaged over the cell's full-resolution
 // pixels) and its log range, written as (r, g, b, log range); and whether the 6 x 6 cells
 // of the window that starts two cells before it (a pixel's in upsample.frag) are flat (log
 // ranges within u_flat_spread of each other) or smooth (no second difference of log range
 // along a row or a column of the window over u_smooth_curvature) (1) or neither (0): such
-// a pixel takes their bilinear interpolation (`interpolated_windows` in
-// src/refine/upsample.rs, the CPU reference).
+// a pixel takes their bilinear interpolation in interpolate.frag (`interpolated_windows`
+// in src/refine/upsample.rs, the CPU reference).
 
 uniform sampler2D u_colour;   // full resolution, RGB
 uniform sampler2D u_range;    // R: range > 0, on this grid

@@ -1,14 +1,13 @@
-// Joint bilateral upsampling, pass 2 of 2, at full resolution: the log range of the 6 x 6
-// cells around the pixel, each weighted by its distance (a Gaussian of one cell) and by
-// how far its colour is from the pixel's (a Gaussian of u_sigma_colour in sRGB-encoded
-// values): a pixel takes the range of the nearby cells that look like it, so an edge of
-// the image is an edge of the range even where the coarse cells straddle it. The mean is
-// then moved by two mean-shift steps (a Gaussian of SHIFT_SIGMA in log range) toward the
-// surface that holds most of the weight, so that taps of two surfaces the colour lets
-// through do not make a range neither has (`shift_to_dominant_surface` in
-// src/refine/upsample.rs, the CPU reference). Where cells.frag found the window's log
-// ranges flat or smooth (no depth edge for the colour to place), the pixel takes their
-// bilinear interpolation instead, from 4 cells instead of 36.
+// Joint bilateral upsampling, pass 3 of 3, at full resolution, over the pixels the depth
+// test lets through (those interpolate.frag did not interpolate): the log range of the
+// 6 x 6 cells around the pixel, each weighted by its distance (a Gaussian of one cell)
+// and by how far its colour is from the pixel's (a Gaussian of u_sigma_colour in
+// sRGB-encoded values): a pixel takes the range of the nearby cells that look like it,
+// so an edge of the image is an edge of the range even where the coarse cells straddle
+// it. The mean is then moved by two mean-shift steps (a Gaussian of SHIFT_SIGMA in log
+// range) toward the surface that holds most of the weight, so that taps of two surfaces
+// the colour lets through do not make a range neither has (`shift_to_dominant_surface`
+// in src/refine/upsample.rs, the CPU reference).
 
 const float SHIFT_SIGMA = 0.3;
 const int SHIFT_STEPS = 2;
@@ -18,7 +17,6 @@ const float SHIFT_MIN_SPREAD = 0.03;
 
 uniform sampler2D u_colour;
 uniform sampler2D u_cells;        // (r, g, b, log range) per cell
-uniform sampler2D u_interpolated; // R: 1 where the window starting two cells before is flat or smooth
 uniform ivec2 u_low_size;
 uniform vec2 u_scale;             // cells per full-resolution pixel (x, y)
 uniform bool u_colour_srgb;
@@ -33,19 +31,6 @@ void main() {
     vec2 centre = (vec2(p) + 0.5) * u_scale - 0.5;
     ivec2 base = ivec2(floor(centre));
     ivec2 last = u_low_size - 1;
-    // Only between the outer cells' centres, as the CPU reference, whose rows run the
-    // other way: a window clamped at the edge would not be the same cells there.
-    bool inner = all(greaterThanEqual(base, ivec2(0))) && all(lessThan(base, last));
-    if (inner && texelFetch(u_interpolated, clamp(base, ivec2(0), last), 0).r > 0.5) {
-        vec2 at = clamp(centre, vec2(0.0), vec2(last));
-        ivec2 lo = ivec2(floor(at));
-        ivec2 hi = min(lo + 1, last);
-        vec2 t = at - vec2(lo);
-        float top = mix(texelFetch(u_cells, lo, 0).a, texelFetch(u_cells, ivec2(hi.x, lo.y), 0).a, t.x);
-        float bottom = mix(texelFetch(u_cells, ivec2(lo.x, hi.y), 0).a, texelFetch(u_cells, hi, 0).a, t.x);
-        o_range = vec4(exp(mix(top, bottom, t.y)), 0.0, 0.0, 1.0);
-        return;
-    }
     float inv_colour = 1.0 / (2.0 * u_sigma_colour * u_sigma_colour);
     float sum = 0.0;
     float weight = 0.0;

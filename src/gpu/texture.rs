@@ -36,6 +36,10 @@ pub enum TexelFormat {
     /// 32-bit float depth (`DEPTH_COMPONENT32F`), a depth attachment; created with
     /// `TEXTURE_COMPARE_MODE` `NONE` so that shaders read the depth with `texelFetch`.
     Depth32F,
+    /// 16-bit depth (`DEPTH_COMPONENT16`), a depth attachment filled by drawing only (no
+    /// upload from f32): half the memory of [`TexelFormat::Depth32F`] where 0, ½ and 1
+    /// are all a pass compares.
+    Depth16,
     /// RGBA 8-bit unsigned normalised: a display target, filled by rendering only (no
     /// upload from f32).
     Rgba8,
@@ -53,6 +57,7 @@ impl TexelFormat {
             TexelFormat::Rgb32F => glow::RGB32F,
             TexelFormat::Srgb8Alpha8 => glow::SRGB8_ALPHA8,
             TexelFormat::Depth32F => glow::DEPTH_COMPONENT32F,
+            TexelFormat::Depth16 => glow::DEPTH_COMPONENT16,
             TexelFormat::Rgba8 => glow::RGBA8,
         }
     }
@@ -67,15 +72,26 @@ impl TexelFormat {
             TexelFormat::R32F | TexelFormat::R16F => glow::RED,
             TexelFormat::Rg32F | TexelFormat::Rg16F => glow::RG,
             TexelFormat::Rgb32F => glow::RGB,
-            TexelFormat::Depth32F => glow::DEPTH_COMPONENT,
+            TexelFormat::Depth32F | TexelFormat::Depth16 => glow::DEPTH_COMPONENT,
         }
+    }
+
+    /// Filled by rendering only: f32 data is not uploaded to it.
+    fn drawn_only(self) -> bool {
+        matches!(
+            self,
+            TexelFormat::Rgba8 | TexelFormat::Srgb8Alpha8 | TexelFormat::Depth16
+        )
     }
 
     /// Bytes per texel.
     pub fn bytes_per_texel(self) -> usize {
         let channel = match self {
             TexelFormat::Rgba8 | TexelFormat::Srgb8Alpha8 => 1,
-            TexelFormat::Rgba16F | TexelFormat::R16F | TexelFormat::Rg16F => 2,
+            TexelFormat::Rgba16F
+            | TexelFormat::R16F
+            | TexelFormat::Rg16F
+            | TexelFormat::Depth16 => 2,
             _ => 4,
         };
         channel * self.channels()
@@ -88,7 +104,10 @@ impl TexelFormat {
             | TexelFormat::Rgba16F
             | TexelFormat::Rgba8
             | TexelFormat::Srgb8Alpha8 => 4,
-            TexelFormat::R32F | TexelFormat::R16F | TexelFormat::Depth32F => 1,
+            TexelFormat::R32F
+            | TexelFormat::R16F
+            | TexelFormat::Depth32F
+            | TexelFormat::Depth16 => 1,
             TexelFormat::Rg32F | TexelFormat::Rg16F => 2,
             TexelFormat::Rgb32F => 3,
         }
@@ -124,11 +143,11 @@ impl Texture {
         filter: Filter,
         data: Option<&[f32]>,
     ) -> Result<Self> {
-        if matches!(format, TexelFormat::Rgba8 | TexelFormat::Srgb8Alpha8) && data.is_some() {
+        if format.drawn_only() && data.is_some() {
             return Err(Error::invalid(
                 "texture data",
                 "f32 values",
-                "none: an 8-bit texture is filled by rendering",
+                format!("none: a {format:?} texture is filled by rendering"),
             ));
         }
         if let Some(d) = data {
@@ -156,7 +175,7 @@ impl Texture {
             ] {
                 gl.tex_parameter_i32(glow::TEXTURE_2D, param, value);
             }
-            if format == TexelFormat::Depth32F {
+            if matches!(format, TexelFormat::Depth32F | TexelFormat::Depth16) {
                 gl.tex_parameter_i32(
                     glow::TEXTURE_2D,
                     glow::TEXTURE_COMPARE_MODE,
@@ -207,8 +226,9 @@ impl Texture {
     /// bottom row first. One upload per row, no staging copy.
     pub fn upload_flipped(&self, data: &[f32]) {
         assert!(
-            !matches!(self.format, TexelFormat::Rgba8 | TexelFormat::Srgb8Alpha8),
-            "f32 data cannot be uploaded to an 8-bit texture"
+            !self.format.drawn_only(),
+            "f32 data cannot be uploaded to a {:?} texture",
+            self.format
         );
         let row = self.width * self.format.channels();
         assert_eq!(data.len(), row * self.height, "texture data size");

@@ -158,7 +158,7 @@ impl PreparedPhoto {
         let beyond =
             beyond.filter(|b| (b.width(), b.height()) == (metres.width(), metres.height()));
         let w = metres.width();
-        Ok(Grid::from_fn(w, metres.height(), |x, y| {
+        Ok(Grid::par_from_fn(w, metres.height(), |x, y| {
             let r = f64::from(*metres.get(x, y));
             if r <= r_max {
                 return r as f32;

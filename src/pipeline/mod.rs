@@ -81,7 +81,8 @@
 //!   `SAMPLE_ALPHA_TO_COVERAGE`, `SAMPLE_COVERAGE`, `POLYGON_OFFSET_FILL` and `DITHER`
 //!   (all disabled during the passes: a float target must not be dithered), the colour
 //!   mask (all channels during the passes), the blend functions and equations
-//!   ([`Pipeline::blend_fog`] sets them), and on a desktop GL context
+//!   ([`Pipeline::blend_fog`] sets them), the depth function, write mask and range (the
+//!   upsampling's depth test sets them), and on a desktop GL context
 //!   `GL_FRAMEBUFFER_SRGB` (enabled during the passes, see [`crate::caps`]). Uploads,
 //!   read-backs and brume's texture and framebuffer creation, inside a call or not
 //!   ([`crate::Renderer`]'s uploads, [`Pipeline::refine_range`]'s output), bind on the
@@ -90,9 +91,9 @@
 //!   `PIXEL_UNPACK_BUFFER`/`PIXEL_PACK_BUFFER` for the transfer and put the host's values
 //!   back. Colour masks and blend state set per draw buffer (`glColorMaski`,
 //!   `glBlendFunci`) come back as draw buffer 0's. Nothing else is touched (clear colour,
-//!   stencil and depth functions, `SAMPLE_MASK`, buffers); brume's clears use the host's
-//!   clear colour on brume's own targets only. `tests/host_pipeline.rs` checks all of
-//!   this against a hostile host.
+//!   stencil state, the depth clear value, `SAMPLE_MASK`, buffers); brume's clears use
+//!   the host's clear colour on brume's own targets only. `tests/host_pipeline.rs` checks
+//!   all of this against a hostile host.
 //! - **Timing** ([`Pipeline::set_timing`]). [`Timing::Off`], the default: no query, no
 //!   `glFinish`, no wait; a call returns once its commands are issued (the GPU may still
 //!   be drawing), with its times unavailable. [`Timing::Deferred`]: a `GL_TIME_ELAPSED`

@@ -8,6 +8,7 @@
 //! module). Its textures are made for the call and freed with it but the output, which the
 //! caller owns.
 
+use super::state::set_depth_test;
 use super::{
     bind_texture, draw_fullscreen, set_int, set_value, Encoding, Pipeline, ProgramKey, UNIT_DEPTH,
     UNIT_MAIN, UNIT_SECOND,
@@ -28,6 +29,7 @@ pub(super) const MODEL_GLSL: &str = include_str!("../../glsl/refine/model.glsl")
 pub(super) const APPLY_FRAG: &str = include_str!("../../glsl/refine/apply.frag");
 pub(super) const CELLS_FRAG: &str = include_str!("../../glsl/refine/cells.frag");
 pub(super) const UPSAMPLE_FRAG: &str = include_str!("../../glsl/refine/upsample.frag");
+pub(super) const INTERPOLATE_FRAG: &str = include_str!("../../glsl/refine/interpolate.frag");
 
 /// The uniforms of the box pass over the moments: first its sources, one per texture of
 /// the [`LowTargets`] it reads (the box over one texture has the first), and last ε, only
@@ -56,6 +58,7 @@ pub(super) enum RefinePass {
     Box,
     Apply,
     Cells,
+    Interpolate,
     Upsample,
 }
 
@@ -101,13 +104,17 @@ impl RefinePass {
                     "u_smooth_curvature",
                 ],
             ),
+            RefinePass::Interpolate => (
+                "refine/interpolate.frag",
+                INTERPOLATE_FRAG,
+                &["u_cells", "u_interpolated", "u_low_size", "u_scale"],
+            ),
             RefinePass::Upsample => (
                 "refine/upsample.frag",
                 UPSAMPLE_FRAG,
                 &[
                     "u_colour",
                     "u_cells",
-                    "u_interpolated",
                     "u_low_size",
                     "u_scale",
                     "u_colour_srgb",
@@ -315,7 +322,7 @@ impl Pipeline {
     /// Upsamples `input.range`, smaller than the image by one factor
     /// ([`crate::refine::check_depth_size`]), to the image's size by joint bilateral
     /// upsampling guided by `input.colour` (`sigma_colour` in sRGB-encoded values; see
-    /// [`crate::refine::joint_bilateral_upsample_reference`]), in two passes. Returns an
+    /// [`crate::refine::joint_bilateral_upsample_reference`]), in three passes. Returns an
     /// R32F texture of the image's size that the caller owns, with the passes' times.
     /// [`Pipeline::upsample_range_into`] writes into a texture the caller keeps instead.
     pub fn upsample_range(
@@ -333,8 +340,10 @@ impl Pipeline {
     /// [`Pipeline::upsample_range`] into `output`, an R32F texture of the image's size
     /// that the caller made and keeps (a live app upsamples every frame, as the guide
     /// changes with each, without allocating an image-sized texture each time); every
-    /// texel of `output` is written. Returns the passes' times (two passes). The low
-    /// grid's textures and the framebuffers are made for the call and freed with it.
+    /// texel of `output` is written. Returns the passes' times (three passes). The low
+    /// grid's textures, a depth texture of the image's size (2 bytes a pixel: it marks
+    /// the pixels the bilinear interpolation took, which the depth test keeps from the 36
+    /// taps' pass) and the framebuffers are made for the call and freed with it.
     ///
     /// Errors: as [`Pipeline::upsample_range`], and [`crate::Error::InvalidParameter`]
     /// when `output` is not R32F or not of the image's size.
@@ -360,49 +369,64 @@ impl Pipeline {
         }
         let (lw, lh) = (input.range_width, input.range_height);
         self.program(ProgramKey::Refine(RefinePass::Cells), None)?;
+        self.program(ProgramKey::Refine(RefinePass::Interpolate), None)?;
         self.program(ProgramKey::Refine(RefinePass::Upsample), None)?;
         let gl = Arc::clone(&self.gl);
-        // The cells, and whether each one's window is flat.
+        // The cells, and whether each one's window is flat or smooth.
         let low = LowTargets::new(&gl, lw, lh, 2)?;
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let cell = [w as f32 / lw as f32, h as f32 / lh as f32];
-        self.passes_into(
-            output,
-            "upsampling the range",
-            |pipeline, timer, output_fb| {
-                let cells = pipeline.compiled(ProgramKey::Refine(RefinePass::Cells))?;
-                let upsample = pipeline.compiled(ProgramKey::Refine(RefinePass::Upsample))?;
-                timer.pass(|| {
-                    low.framebuffer.bind_for_drawing();
-                    pipeline.use_program(cells);
-                    bind_cell_inputs(&gl, cells, input, cell, srgb);
-                    let spread = crate::refine::UPSAMPLE_FLAT_SPREAD as f32;
-                    set_value(&gl, cells, "u_flat_spread", UniformValue::Float(spread));
-                    let bend = UniformValue::Float(crate::refine::UPSAMPLE_SMOOTH_CURVATURE as f32);
-                    set_value(&gl, cells, "u_smooth_curvature", bend);
-                    draw_fullscreen(&gl);
-                })?;
-                timer.pass(|| {
-                    output_fb.bind_for_drawing();
-                    pipeline.use_program(upsample);
-                    bind_texture(&gl, UNIT_MAIN, Some(input.colour));
-                    low.textures[0].bind(UNIT_DEPTH);
-                    low.textures[1].bind(UNIT_SECOND);
-                    set_int(&gl, upsample, "u_colour", UNIT_MAIN as i32);
-                    set_int(&gl, upsample, "u_cells", UNIT_DEPTH as i32);
-                    set_int(&gl, upsample, "u_interpolated", UNIT_SECOND as i32);
-                    let low_size = [lw as i32, lh as i32];
-                    set_value(&gl, upsample, "u_low_size", UniformValue::IVec2(low_size));
-                    let scale = cell.map(|c| 1.0 / c);
-                    set_value(&gl, upsample, "u_scale", UniformValue::Vec2(scale));
-                    set_int(&gl, upsample, "u_colour_srgb", srgb);
-                    let sigma = UniformValue::Float(sigma_colour as f32);
-                    set_value(&gl, upsample, "u_sigma_colour", sigma);
-                    draw_fullscreen(&gl);
-                })?;
-                Ok(())
-            },
-        )
+        // Written by the interpolation pass, read by the depth test of the 36 taps' pass.
+        let marks = Texture::new(&gl, w, h, TexelFormat::Depth16, Filter::Nearest, None)?;
+        let what = "the upsampled range";
+        let target = Framebuffer::with_depth(&gl, &[output.raw()], Some(marks.raw()), w, h, what)?;
+        let low_size = UniformValue::IVec2([lw as i32, lh as i32]);
+        let scale = UniformValue::Vec2(cell.map(|c| 1.0 / c));
+        let (times, ()) = self.timed("upsampling the range", |pipeline, timer| {
+            let cells = pipeline.compiled(ProgramKey::Refine(RefinePass::Cells))?;
+            let interpolate = pipeline.compiled(ProgramKey::Refine(RefinePass::Interpolate))?;
+            let upsample = pipeline.compiled(ProgramKey::Refine(RefinePass::Upsample))?;
+            timer.pass(|| {
+                low.framebuffer.bind_for_drawing();
+                pipeline.use_program(cells);
+                bind_cell_inputs(&gl, cells, input, cell, srgb);
+                let spread = crate::refine::UPSAMPLE_FLAT_SPREAD as f32;
+                set_value(&gl, cells, "u_flat_spread", UniformValue::Float(spread));
+                let bend = UniformValue::Float(crate::refine::UPSAMPLE_SMOOTH_CURVATURE as f32);
+                set_value(&gl, cells, "u_smooth_curvature", bend);
+                draw_fullscreen(&gl);
+            })?;
+            // Every pixel's depth written: 0 where it took the interpolation.
+            timer.pass(|| {
+                target.bind_for_drawing();
+                pipeline.use_program(interpolate);
+                low.textures[0].bind(UNIT_DEPTH);
+                low.textures[1].bind(UNIT_SECOND);
+                set_int(&gl, interpolate, "u_cells", UNIT_DEPTH as i32);
+                set_int(&gl, interpolate, "u_interpolated", UNIT_SECOND as i32);
+                set_value(&gl, interpolate, "u_low_size", low_size);
+                set_value(&gl, interpolate, "u_scale", scale);
+                set_depth_test(&gl, glow::ALWAYS, true);
+                draw_fullscreen(&gl);
+            })?;
+            // The fullscreen triangle's depth, 0.5, passes only where 1 was written.
+            timer.pass(|| {
+                pipeline.use_program(upsample);
+                bind_texture(&gl, UNIT_MAIN, Some(input.colour));
+                set_int(&gl, upsample, "u_colour", UNIT_MAIN as i32);
+                set_int(&gl, upsample, "u_cells", UNIT_DEPTH as i32);
+                set_value(&gl, upsample, "u_low_size", low_size);
+                set_value(&gl, upsample, "u_scale", scale);
+                set_int(&gl, upsample, "u_colour_srgb", srgb);
+                let sigma = UniformValue::Float(sigma_colour as f32);
+                set_value(&gl, upsample, "u_sigma_colour", sigma);
+                set_depth_test(&gl, glow::LESS, false);
+                draw_fullscreen(&gl);
+            })?;
+            Ok(())
+        })?;
+        drop(target);
+        Ok(times)
     }
 
     /// The upsampling's sizes and σ, before anything is made.

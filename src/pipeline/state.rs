@@ -48,6 +48,8 @@ pub(super) struct HostState {
     colour_mask: [bool; 4],
     /// Source and destination factors, colour then alpha, and the two equations.
     blend: [i32; 6],
+    /// `DEPTH_FUNC`, `DEPTH_WRITEMASK` and `DEPTH_RANGE` (the upsampling's depth test).
+    depth: (u32, bool, [f32; 2]),
 }
 
 /// Which optional pieces of state a call saves.
@@ -104,6 +106,11 @@ impl HostState {
                 framebuffer_srgb: scope.desktop.then(|| gl.is_enabled(FRAMEBUFFER_SRGB)),
                 colour_mask: gl.get_parameter_bool_array::<4>(glow::COLOR_WRITEMASK),
                 blend: BLEND_STATE.map(|p| gl.get_parameter_i32(p)),
+                depth: (
+                    gl.get_parameter_i32(glow::DEPTH_FUNC) as u32,
+                    gl.get_parameter_bool(glow::DEPTH_WRITEMASK),
+                    depth_range(gl),
+                ),
             }
         }
     }
@@ -141,7 +148,32 @@ impl HostState {
                 self.blend.map(|v| v as u32);
             gl.blend_func_separate(src_rgb, dst_rgb, src_alpha, dst_alpha);
             gl.blend_equation_separate(eq_rgb, eq_alpha);
+            let (func, write, [near, far]) = self.depth;
+            gl.depth_func(func);
+            gl.depth_mask(write);
+            gl.depth_range_f32(near, far);
         }
+    }
+}
+
+/// `DEPTH_RANGE`, near and far.
+fn depth_range(gl: &glow::Context) -> [f32; 2] {
+    let mut range = [0.0; 2];
+    // SAFETY: a state query on the current context.
+    unsafe { gl.get_parameter_f32_slice(glow::DEPTH_RANGE, &mut range) };
+    range
+}
+
+/// Enables the depth test of a pass with `func`, writing depth where `write`, over the
+/// whole depth range (the fullscreen triangle's depth is then 0.5), inside a
+/// [`HostState`] guard.
+pub(super) fn set_depth_test(gl: &glow::Context, func: u32, write: bool) {
+    // SAFETY: state setters on the current context.
+    unsafe {
+        gl.enable(glow::DEPTH_TEST);
+        gl.depth_func(func);
+        gl.depth_mask(write);
+        gl.depth_range_f32(0.0, 1.0);
     }
 }
 

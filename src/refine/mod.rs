@@ -239,16 +239,12 @@ pub fn nearest_to_image_size<T: Copy + Send + Sync>(
     if (map.width(), map.height()) == (width, height) {
         return map.clone();
     }
-    let (sx, sy) = (
-        map.width() as f64 / width as f64,
-        map.height() as f64 / height as f64,
-    );
-    Grid::par_from_fn(width, height, |x, y| {
-        *map.get(
-            nearest_cell(x, sx, map.width()),
-            nearest_cell(y, sy, map.height()),
-        )
-    })
+    let cells = |n: usize, to: usize| -> Vec<usize> {
+        let scale = n as f64 / to as f64;
+        (0..to).map(|p| nearest_cell(p, scale, n)).collect()
+    };
+    let (columns, rows) = (cells(map.width(), width), cells(map.height(), height));
+    Grid::par_from_fn(width, height, |x, y| *map.get(columns[x], rows[y]))
 }
 
 /// [`nearest_to_image_size`], borrowed where `map` has that size already: no copy.

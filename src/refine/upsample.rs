@@ -1,6 +1,6 @@
 //! Joint bilateral upsampling of a depth map smaller than the image (Kopf, Cohen,
 //! Lischinski and Uyttendaele, SIGGRAPH 2007): the CPU reference of
-//! `glsl/refine/cells.frag` and `glsl/refine/upsample.frag`.
+//! `glsl/refine/cells.frag`, `glsl/refine/interpolate.frag` and `glsl/refine/upsample.frag`.
 
 use super::{cell_means, check_depth_size, check_positive};
 use crate::error::Result;
