@@ -143,3 +143,35 @@ fn horizon_sectors_match_the_reference() {
         "{tinted:?}"
     );
 }
+
+/// One sector compiles without the sectors' code (no arc tangent, no lookup per pixel):
+/// its GLSL leaves `AERIAL_HORIZON_SECTORS` undefined and it sets neither the sectors'
+/// uniform nor their lookup; several sectors have all three.
+#[test]
+fn one_sector_leaves_the_sectors_code_out() {
+    use brume::medium::aerial::HorizonSectors;
+    use brume::medium::Medium;
+    let frame = brume::FrameInputs::default();
+    for (gains, several) in [
+        (vec![[1.0; 3]], false),
+        (vec![[1.3, 1.1, 0.7]], false),
+        (vec![[0.6, 0.7, 0.8], [1.6, 1.4, 1.2]], true),
+    ] {
+        let mut medium = aerial(4.0, 0.0);
+        medium.horizon_sectors = HorizonSectors::new(gains, 0.0, 0.5).unwrap();
+        let defined = medium.glsl().contains("#define AERIAL_HORIZON_SECTORS");
+        let uniform = medium
+            .uniforms(&frame)
+            .iter()
+            .any(|(name, _)| name == "u_horizon_sectors");
+        let lookup = medium
+            .lookups()
+            .iter()
+            .any(|(name, _)| name == "u_horizon_gain");
+        assert_eq!(
+            [defined, uniform, lookup],
+            [several; 3],
+            "several: {several}"
+        );
+    }
+}

@@ -8,12 +8,14 @@ uniform float u_metres;      // metres per unit of the range texture
 uniform vec3 u_horizon;      // I∞(θ'), linear RGB
 uniform vec3 u_gradation;    // (A, B, 1/(1 + A·e^(B/cos θ'))) of eq. 13
 uniform vec2 u_aerial_blur;  // (λ, 1 / the distance (m) that counts as 1 in the blur law)
-uniform sampler2D u_horizon_gain; // I∞'s gain by azimuth sector (RGB32F, 1 row)
-uniform vec3 u_horizon_sectors;   // (centre azimuth (rad), 1 / sector width, sectors)
 
 const float AERIAL_MIN_COS = 0.0017453283; // cos(89.9°): eq. 13 diverges at the horizon
 const float AERIAL_MAX_DEPTH = 10.0;       // τ = e^(−10): nothing left to blur
 const float AERIAL_PI = 3.14159265358979;
+
+#ifdef AERIAL_HORIZON_SECTORS
+uniform sampler2D u_horizon_gain; // I∞'s gain by azimuth sector (RGB32F, 1 row)
+uniform vec3 u_horizon_sectors;   // (centre azimuth (rad), 1 / sector width, sectors)
 
 // The horizon light's gain toward `ray`: its azimuth (0 along −z, π/2 along +x) placed
 // among the sectors, sector k's centre on texel k, linear between (HorizonSectors::gain).
@@ -24,6 +26,13 @@ vec3 aerial_horizon_gain(vec3 ray) {
     float u = (d * u_horizon_sectors.y + 0.5 * n) / n;
     return textureLod(u_horizon_gain, vec2(u, 0.5), 0.0).rgb;
 }
+#else
+// One sector: its gain is in u_horizon already (AerialPerspective's uniforms), which
+// spares each pixel an arc tangent and a lookup (a quarter of this pass on llvmpipe).
+vec3 aerial_horizon_gain(vec3 ray) {
+    return vec3(1.0);
+}
+#endif
 
 MediumSample medium_sample(ivec2 pixel, float depth) {
     float s = max(depth, 0.0) * u_metres;

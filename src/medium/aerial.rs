@@ -19,7 +19,9 @@
 //! I∞ may vary with azimuth (paper 002, sec. 4: brighter toward the sun):
 //! [`AerialPerspective::horizon_sectors`] holds per-sector gains over `horizon_light`
 //! ([`crate::sky::horizon_sectors`] finds them), interpolated linearly between the
-//! sectors' centres by the ray's azimuth; a single sector of gain 1 by default.
+//! sectors' centres by the ray's azimuth; a single sector of gain 1 by default. A single
+//! sector's gain is folded into the horizon's light, and the shader is compiled without
+//! the sectors' code (`AERIAL_HORIZON_SECTORS` undefined): no arc tangent per pixel.
 
 use super::{blur_from_optical_depth, Lookup, Medium, MediumSample, Pixel, UniformValue, Wrap};
 use crate::atmosphere::{
@@ -141,6 +143,14 @@ impl HorizonSectors {
         std::array::from_fn(|c| self.lookup.sample_channel(u, 0.5, c))
     }
 
+    /// The gain of a single sector, the same in every direction; `None` for several.
+    fn single_gain(&self) -> Option<[f32; 3]> {
+        match self.gains.as_slice() {
+            [gain] => Some(*gain),
+            _ => None,
+        }
+    }
+
     /// (centre, 1/width, count) for the shader.
     fn uniform_value(&self) -> [f32; 3] {
         [
@@ -186,8 +196,14 @@ impl Medium for AerialPerspective {
         "aerial".into()
     }
 
+    /// The sectors' code only where there are several (`AERIAL_HORIZON_SECTORS`): one
+    /// sector's gain goes into `u_horizon` instead.
     fn glsl(&self) -> std::borrow::Cow<'static, str> {
-        include_str!("../../glsl/medium/aerial.glsl").into()
+        const AERIAL_GLSL: &str = include_str!("../../glsl/medium/aerial.glsl");
+        match self.horizon_sectors.single_gain() {
+            Some(_) => AERIAL_GLSL.into(),
+            None => format!("#define AERIAL_HORIZON_SECTORS\n{AERIAL_GLSL}").into(),
+        }
     }
 
     fn uniforms(
@@ -195,7 +211,12 @@ impl Medium for AerialPerspective {
         _frame: &FrameInputs,
     ) -> Vec<(std::borrow::Cow<'static, str>, UniformValue)> {
         let t = &self.table;
-        super::static_names(vec![
+        let single = self.horizon_sectors.single_gain();
+        let horizon = match single {
+            Some(gain) => std::array::from_fn(|c| self.horizon_light[c] * gain[c]),
+            None => self.horizon_light,
+        };
+        let mut uniforms = vec![
             (
                 "u_gamma_coord",
                 UniformValue::Vec4([
@@ -206,17 +227,18 @@ impl Medium for AerialPerspective {
                 ]),
             ),
             ("u_metres", UniformValue::Float(self.metres_per_unit as f32)),
-            ("u_horizon", UniformValue::Vec3(self.horizon_light)),
+            ("u_horizon", UniformValue::Vec3(horizon)),
             ("u_gradation", UniformValue::Vec3(self.gradation_uniform())),
-            (
-                "u_horizon_sectors",
-                UniformValue::Vec3(self.horizon_sectors.uniform_value()),
-            ),
             (
                 "u_aerial_blur",
                 UniformValue::Vec2([self.lambda as f32, (1.0 / self.blur_range_m) as f32]),
             ),
-        ])
+        ];
+        if single.is_none() {
+            let sectors = UniformValue::Vec3(self.horizon_sectors.uniform_value());
+            uniforms.push(("u_horizon_sectors", sectors));
+        }
+        super::static_names(uniforms)
     }
 
     fn chromatic(&self) -> bool {
@@ -280,9 +302,10 @@ impl Medium for AerialPerspective {
     }
 
     fn lookups(&self) -> Vec<(std::borrow::Cow<'static, str>, super::Lookup)> {
-        super::static_names(vec![
-            ("u_gamma", self.table.lookup().clone()),
-            ("u_horizon_gain", self.horizon_sectors.lookup.clone()),
-        ])
+        let mut lookups = vec![("u_gamma", self.table.lookup().clone())];
+        if self.horizon_sectors.single_gain().is_none() {
+            lookups.push(("u_horizon_gain", self.horizon_sectors.lookup.clone()));
+        }
+        super::static_names(lookups)
     }
 }
