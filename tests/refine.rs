@@ -206,6 +206,61 @@ fn upsampling_into_a_kept_texture_matches_upsample_range() {
     }
 }
 
+/// The upsampling's depth texture of the image's size is kept between calls of one size
+/// (a live app upsamples every frame): a repeated call makes one GL object fewer than the
+/// first call at a new size (the low grid's textures and the framebuffers are made per
+/// call), and each change of size makes it again.
+#[test]
+fn upsampling_keeps_its_depth_texture_between_calls_of_one_size() {
+    use brume::gpu::texture::{Filter, TexelFormat, Texture};
+    use brume::pipeline::RefineInput;
+    use brume::Encoding;
+
+    let (_gl, mut headless) = renderer();
+    let r = headless.renderer().unwrap();
+    let pipeline = r.pipeline();
+    let gl = std::sync::Arc::clone(pipeline.gl());
+    let k = 4;
+    // A frame's textures and output, made before the count starts.
+    let frame = |w: usize, h: usize| {
+        let (image, range) = scene(w, h);
+        let low = Grid::from_fn(w / k, h / k, |x, y| *range.get(k * x, k * y));
+        let texture = |w, h, format, data: &[f32]| {
+            Texture::new(&gl, w, h, format, Filter::Nearest, Some(data)).unwrap()
+        };
+        let colour = texture(w, h, TexelFormat::Rgb32F, image.as_slice().as_flattened());
+        let range = texture(w / k, h / k, TexelFormat::R32F, low.as_slice());
+        let output = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None).unwrap();
+        (colour, range, output)
+    };
+    let mut made = |(colour, range, output): &(Texture, Texture, Texture)| {
+        let input = RefineInput {
+            colour: colour.raw(),
+            colour_encoding: Encoding::Linear,
+            width: output.width(),
+            height: output.height(),
+            range: range.raw(),
+            range_width: range.width(),
+            range_height: range.height(),
+        };
+        let before = brume::gpu::objects_created();
+        pipeline
+            .upsample_range_into(&input, DEFAULT_UPSAMPLE_SIGMA_COLOUR, output)
+            .unwrap();
+        brume::gpu::objects_created() - before
+    };
+    let (small, large) = (frame(64, 32), frame(96, 64));
+    made(&small); // the programs compiled
+    let first = made(&large);
+    let again = made(&large);
+    let back = made(&small);
+    assert_eq!(
+        (first, back),
+        (again + 1, again + 1),
+        "{first} {again} {back}"
+    );
+}
+
 /// A range read back as its red channel alone (`Framebuffer::read_red`, how the
 /// refinement's result comes back): an R32F texture's values as stored, row 0 first, and,
 /// from a texture of four channels (read through RGBA where the driver offers no RED

@@ -304,6 +304,9 @@ pub struct Pipeline {
     timer_anchor: std::cell::OnceCell<(Texture, Framebuffer)>,
     /// The copy of the last external image imported ([`Pipeline::import_external`]).
     imported: Option<external::ImportTarget>,
+    /// The upsampling's depth texture ([`Pipeline::upsample_range_into`]), kept between
+    /// calls of one image size.
+    upsample_marks: Option<Texture>,
     /// LINEAR, CLAMP_TO_EDGE: the Gaussian's bilinear taps, whatever the texture's own
     /// filter.
     linear_sampler: glow::Sampler,
@@ -349,6 +352,7 @@ impl Pipeline {
             host_target: None,
             timekeeper: Timekeeper::new(&gl, caps.disjoint_timer_query),
             imported: None,
+            upsample_marks: None,
             timer_anchor: std::cell::OnceCell::new(),
             linear_sampler,
             vao,

@@ -341,9 +341,10 @@ impl Pipeline {
     /// that the caller made and keeps (a live app upsamples every frame, as the guide
     /// changes with each, without allocating an image-sized texture each time); every
     /// texel of `output` is written. Returns the passes' times (three passes). The low
-    /// grid's textures, a depth texture of the image's size (2 bytes a pixel: it marks
-    /// the pixels the bilinear interpolation took, which the depth test keeps from the 36
-    /// taps' pass) and the framebuffers are made for the call and freed with it.
+    /// grid's textures and the framebuffers are made for the call and freed with it; the
+    /// depth texture of the image's size (2 bytes a pixel: it marks the pixels the
+    /// bilinear interpolation took, which the depth test keeps from the 36 taps' pass) is
+    /// kept by the pipeline for the next call of that size.
     ///
     /// Errors: as [`Pipeline::upsample_range`], and [`crate::Error::InvalidParameter`]
     /// when `output` is not R32F or not of the image's size.
@@ -376,10 +377,9 @@ impl Pipeline {
         let low = LowTargets::new(&gl, lw, lh, 2)?;
         let srgb = i32::from(input.colour_encoding == Encoding::Srgb);
         let cell = [w as f32 / lw as f32, h as f32 / lh as f32];
-        // Written by the interpolation pass, read by the depth test of the 36 taps' pass.
-        let marks = Texture::new(&gl, w, h, TexelFormat::Depth16, Filter::Nearest, None)?;
+        let marks = self.upsample_marks(w, h)?;
         let what = "the upsampled range";
-        let target = Framebuffer::with_depth(&gl, &[output.raw()], Some(marks.raw()), w, h, what)?;
+        let target = Framebuffer::with_depth(&gl, &[output.raw()], Some(marks), w, h, what)?;
         let low_size = UniformValue::IVec2([lw as i32, lh as i32]);
         let scale = UniformValue::Vec2(cell.map(|c| 1.0 / c));
         let (times, ()) = self.timed("upsampling the range", |pipeline, timer| {
@@ -427,6 +427,20 @@ impl Pipeline {
         })?;
         drop(target);
         Ok(times)
+    }
+
+    /// The upsampling's depth texture of `w x h` (written by the interpolation pass, read
+    /// by the depth test of the 36 taps' pass): the one kept from an earlier call of that
+    /// size, or a new one in its place.
+    fn upsample_marks(&mut self, w: usize, h: usize) -> Result<glow::Texture> {
+        let kept = self.upsample_marks.as_ref();
+        if kept.is_none_or(|t| (t.width(), t.height()) != (w, h)) {
+            // The old one freed before the new one is made.
+            self.upsample_marks = None;
+            let marks = Texture::new(&self.gl, w, h, TexelFormat::Depth16, Filter::Nearest, None)?;
+            self.upsample_marks = Some(marks);
+        }
+        Ok(self.upsample_marks.as_ref().expect("made above").raw())
     }
 
     /// The upsampling's sizes and σ, before anything is made.
