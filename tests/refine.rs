@@ -6,6 +6,7 @@
 
 use crate::common;
 
+use brume::gpu::texture::{Filter, TexelFormat, Texture};
 use brume::raster::{Grid, RgbImage, ScalarMap};
 use brume::refine::{
     guided_range_reference, joint_bilateral_upsample_reference, Refine,
@@ -132,6 +133,37 @@ fn gpu_upsampling_matches_the_cpu_reference_where_the_range_is_flat_or_smooth() 
     }
 }
 
+/// The guide `image` and the range `low` as textures of the pipeline's context, rows
+/// flipped as the `Renderer` uploads them.
+fn upsampling_textures(
+    gl: &std::sync::Arc<glow::Context>,
+    image: &RgbImage,
+    low: &ScalarMap,
+) -> (Texture, Texture) {
+    let texture = |w, h, format, data: &[f32]| {
+        let t = Texture::new(gl, w, h, format, Filter::Nearest, None).unwrap();
+        t.upload_flipped(data);
+        t
+    };
+    let (w, h) = (image.width(), image.height());
+    let colour = texture(w, h, TexelFormat::Rgb32F, image.as_slice().as_flattened());
+    let range = texture(low.width(), low.height(), TexelFormat::R32F, low.as_slice());
+    (colour, range)
+}
+
+/// The upsampling's input over the textures of [`upsampling_textures`].
+fn refine_input(colour: &Texture, range: &Texture) -> brume::pipeline::RefineInput {
+    brume::pipeline::RefineInput {
+        colour: colour.raw(),
+        colour_encoding: brume::Encoding::Linear,
+        width: colour.width(),
+        height: colour.height(),
+        range: range.raw(),
+        range_width: range.width(),
+        range_height: range.height(),
+    }
+}
+
 /// A live app's upsampling (`Pipeline::upsample_range_into`, into one R32F texture kept
 /// between frames): every texel written, the same values as `upsample_range` (the same
 /// passes) and its CPU reference, frame after frame with a new guide and range; a texture
@@ -139,9 +171,6 @@ fn gpu_upsampling_matches_the_cpu_reference_where_the_range_is_flat_or_smooth() 
 #[test]
 fn upsampling_into_a_kept_texture_matches_upsample_range() {
     use brume::gpu::framebuffer::Framebuffer;
-    use brume::gpu::texture::{Filter, TexelFormat, Texture};
-    use brume::pipeline::RefineInput;
-    use brume::Encoding;
 
     let (_gl, mut headless) = renderer();
     let r = headless.renderer().unwrap();
@@ -170,20 +199,8 @@ fn upsampling_into_a_kept_texture_matches_upsample_range() {
         let low = Grid::from_fn(w / k, h / k, |x, y| {
             *range.get(k * x + k / 2, k * y) * (1.0 + 0.1 * frame as f32)
         });
-        let colour = Texture::new(&gl, w, h, TexelFormat::Rgb32F, Filter::Nearest, None).unwrap();
-        colour.upload_flipped(image.as_slice().as_flattened());
-        let range_texture =
-            Texture::new(&gl, w / k, h / k, TexelFormat::R32F, Filter::Nearest, None).unwrap();
-        range_texture.upload_flipped(low.as_slice());
-        let input = RefineInput {
-            colour: colour.raw(),
-            colour_encoding: Encoding::Linear,
-            width: w,
-            height: h,
-            range: range_texture.raw(),
-            range_width: w / k,
-            range_height: h / k,
-        };
+        let (colour, range_texture) = upsampling_textures(&gl, &image, &low);
+        let input = refine_input(&colour, &range_texture);
         let sigma = DEFAULT_UPSAMPLE_SIGMA_COLOUR;
         let times = pipeline.upsample_range_into(&input, sigma, &kept).unwrap();
         // Three passes, or none where the pipeline's timing gives no figures.
@@ -212,10 +229,6 @@ fn upsampling_into_a_kept_texture_matches_upsample_range() {
 /// call), and each change of size makes it again.
 #[test]
 fn upsampling_keeps_its_depth_texture_between_calls_of_one_size() {
-    use brume::gpu::texture::{Filter, TexelFormat, Texture};
-    use brume::pipeline::RefineInput;
-    use brume::Encoding;
-
     let (_gl, mut headless) = renderer();
     let r = headless.renderer().unwrap();
     let pipeline = r.pipeline();
@@ -225,24 +238,12 @@ fn upsampling_keeps_its_depth_texture_between_calls_of_one_size() {
     let frame = |w: usize, h: usize| {
         let (image, range) = scene(w, h);
         let low = Grid::from_fn(w / k, h / k, |x, y| *range.get(k * x, k * y));
-        let texture = |w, h, format, data: &[f32]| {
-            Texture::new(&gl, w, h, format, Filter::Nearest, Some(data)).unwrap()
-        };
-        let colour = texture(w, h, TexelFormat::Rgb32F, image.as_slice().as_flattened());
-        let range = texture(w / k, h / k, TexelFormat::R32F, low.as_slice());
+        let (colour, range) = upsampling_textures(&gl, &image, &low);
         let output = Texture::new(&gl, w, h, TexelFormat::R32F, Filter::Nearest, None).unwrap();
         (colour, range, output)
     };
     let mut made = |(colour, range, output): &(Texture, Texture, Texture)| {
-        let input = RefineInput {
-            colour: colour.raw(),
-            colour_encoding: Encoding::Linear,
-            width: output.width(),
-            height: output.height(),
-            range: range.raw(),
-            range_width: range.width(),
-            range_height: range.height(),
-        };
+        let input = refine_input(colour, range);
         let before = brume::gpu::objects_created();
         pipeline
             .upsample_range_into(&input, DEFAULT_UPSAMPLE_SIGMA_COLOUR, output)
@@ -268,7 +269,6 @@ fn upsampling_keeps_its_depth_texture_between_calls_of_one_size() {
 #[test]
 fn red_read_back_is_the_stored_red_channel() {
     use brume::gpu::framebuffer::Framebuffer;
-    use brume::gpu::texture::{Filter, TexelFormat, Texture};
 
     let (_gl, mut headless) = renderer();
     let r = headless.renderer().unwrap();

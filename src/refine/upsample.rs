@@ -133,6 +133,9 @@ fn upsample(
 /// `interpolate`.
 fn interpolated_windows(log_ranges: &Grid<f64>, interpolate: bool) -> Grid<bool> {
     let (lw, lh) = (log_ranges.width(), log_ranges.height());
+    if !interpolate {
+        return Grid::filled(lw, lh, false);
+    }
     let v = |x: usize, y: usize| *log_ranges.get(x, y);
     let bent = |a: f64, b: f64, c: f64| (a - 2.0 * b + c).abs() > UPSAMPLE_SMOOTH_CURVATURE;
     Grid::par_from_fn(lw, lh, |x, y| {
@@ -159,7 +162,7 @@ fn interpolated_windows(log_ranges: &Grid<f64>, interpolate: bool) -> Grid<bool>
                     .any(|qy| bent(v(qx, qy - 1), v(qx, qy), v(qx, qy + 1)))
             })
         };
-        interpolate && (flat || !(across() || down()))
+        flat || !(across() || down())
     })
 }
 
