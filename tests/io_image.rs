@@ -452,3 +452,57 @@ fn heif_photos_are_refused_with_what_to_do() {
     );
     common::assert_render_refuses("--depth", &heic, &["IMG_0001.HEIC", "HEIF"]);
 }
+
+/// The size a render checks its memory by, before decoding, and the size a host's photo
+/// gives its depth map (`PhotoGeometry::read`), are those of the image the decoder reads:
+/// for an EXR, the part and layer it chooses, read from the headers alone; for a PFM, its
+/// header. A grey PFM is refused there as the decoder refuses it.
+#[test]
+fn float_images_give_their_size_from_their_headers() {
+    use brume::io::depth::PhotoGeometry;
+    use brume::io::image::image_dimensions;
+    use common::exr_sized_parts_bytes;
+    let dir = tempfile::tempdir().unwrap();
+    let ones = [1.0; 20];
+    // The chosen part (Combined) is 3x2; the one before it 5x4.
+    let exr = exr_sized_parts_bytes(vec![
+        (
+            (5, 4),
+            (
+                Some("ViewLayer.AO"),
+                vec![("R", f32s(&ones)), ("G", f32s(&ones)), ("B", f32s(&ones))],
+            ),
+        ),
+        (
+            (3, 2),
+            (
+                Some("ViewLayer.Combined"),
+                vec![("B", f32s(&BLUE)), ("G", f32s(&GREEN)), ("R", f32s(&RED))],
+            ),
+        ),
+    ]);
+    assert_planes(&decode_linear_rgb(&exr, "parts.exr").unwrap());
+    let grey = exr_sized_parts_bytes(vec![((4, 7), (None, vec![("Y", f32s(&[0.5; 28]))]))]);
+    // A PFM's header only: the data is not looked at.
+    let pfm = b"PF\n6000 4000\n-1.0\n".to_vec();
+    for (name, bytes, size) in [
+        ("parts.exr", &exr, (3, 2)),
+        ("grey.exr", &grey, (4, 7)),
+        ("frame.pfm", &pfm, (6000, 4000)),
+    ] {
+        assert_eq!(image_dimensions(bytes, name).unwrap(), size, "{name}");
+        let geometry = PhotoGeometry::read(&write(dir.path(), name, bytes)).unwrap();
+        let size = (size.0 as usize, size.1 as usize);
+        assert_eq!((geometry.width, geometry.height), size, "{name}");
+        assert_eq!(geometry.exif, Default::default(), "{name}");
+    }
+    let depth_only = exr_sized_parts_bytes(vec![((3, 2), (None, vec![("Z", f32s(&[2.0; 6]))]))]);
+    let grey_pfm = b"Pf\n3 2\n-1\n".to_vec();
+    for (name, bytes, needle) in [
+        ("z.exr", &depth_only, "no colour"),
+        ("d.pfm", &grey_pfm, "`PF`"),
+    ] {
+        let msg = expect_err(image_dimensions(bytes, name)).to_string();
+        assert!(msg.contains(name) && msg.contains(needle), "{msg}");
+    }
+}

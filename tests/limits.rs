@@ -124,26 +124,40 @@ fn negative_doffs_names_the_calib_file() {
 
 /// An image too large for the memory left is refused from its header, before it is
 /// decoded, with the size, what it needs, and what to do; the old error was
-/// "glGetError = 0x0505" after gigabytes had been allocated.
+/// "glGetError = 0x0505" after gigabytes had been allocated. An EXR or a PFM too: their
+/// headers went unread, and the render aborted on a failed allocation after decoding.
 #[test]
 fn an_image_too_large_for_memory_is_refused_with_sizes() {
     let dir = tempfile::tempdir().unwrap();
     let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big");
-    let script = format!(
-        "ulimit -v 3000000 && exec {} render --image {} --depth {} --depth-format kitti \
-         --no-prep --out out.png",
-        env!("CARGO_BIN_EXE_brume"),
-        data.join("flat-8000x6000.png").display(),
-        data.join("flat-8000x6000-depth16.png").display(),
-    );
-    let _lock = gl_lock();
-    let o = Command::new("sh")
-        .args(["-c", &script])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
-    assert_refused(&o, &["out of memory", "8000x6000", "GB", "smaller image"]);
-    assert!(!dir.path().join("out.png").exists());
+    // The header of an 8000x6000 colour PFM and one pixel: refused from the header before
+    // the decoder would find the data short.
+    let pfm = dir.path().join("flat-8000x6000.pfm");
+    let mut bytes = b"PF\n8000 6000\n-1.0\n".to_vec();
+    bytes.extend_from_slice(&[0; 12]);
+    std::fs::write(&pfm, bytes).unwrap();
+    let images = [
+        data.join("flat-8000x6000.png"),
+        data.join("flat-8000x6000-y.exr"),
+        pfm,
+    ];
+    for image in &images {
+        let script = format!(
+            "ulimit -v 3000000 && exec {} render --image {} --depth {} --depth-format kitti \
+             --no-prep --out out.png",
+            env!("CARGO_BIN_EXE_brume"),
+            image.display(),
+            data.join("flat-8000x6000-depth16.png").display(),
+        );
+        let _lock = gl_lock();
+        let o = Command::new("sh")
+            .args(["-c", &script])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_refused(&o, &["out of memory", "8000x6000", "GB", "smaller image"]);
+        assert!(!dir.path().join("out.png").exists());
+    }
 }
 
 /// The per-pixel estimate the memory check uses follows the textures the pipeline makes:

@@ -191,13 +191,7 @@ pub fn decode_upright_rgb(bytes: &[u8], name: &str) -> Result<UprightPhoto> {
     if is_pfm(bytes) {
         return match parse_pfm(bytes, path)? {
             Pfm::Rgb(image) => upright(linear_float(image, name)?),
-            // One unnamed channel is, in practice, a disparity or depth map (Middlebury's
-            // disp0.pfm), unlike an EXR's `Y`, which names luminance.
-            Pfm::Grey(_) => Err(Error::format(
-                path,
-                "PFM is `Pf` (one channel, usually depth or disparity); a colour PFM is `PF` \
-                 (3 channels)",
-            )),
+            Pfm::Grey(_) => Err(grey_pfm(path)),
         };
     }
     let (mut decoded, exif, metadata) = decode_image(bytes, name, COLOUR_FORMATS, Role::Colour)?;
@@ -264,6 +258,34 @@ pub(crate) const EXR_MAGIC: [u8; 4] = [0x76, 0x2f, 0x31, 0x01];
 fn is_pfm(bytes: &[u8]) -> bool {
     (bytes.starts_with(b"PF") || bytes.starts_with(b"Pf"))
         && bytes.get(2).is_none_or(|b| b.is_ascii_whitespace())
+}
+
+/// The refusal of a grey PFM as a colour image. One unnamed channel is, in practice, a
+/// disparity or depth map (Middlebury's disp0.pfm), unlike an EXR's `Y`, which names
+/// luminance.
+fn grey_pfm(path: &Path) -> Error {
+    Error::format(
+        path,
+        "PFM is `Pf` (one channel, usually depth or disparity); a colour PFM is `PF` \
+         (3 channels)",
+    )
+}
+
+/// The size of the colour image in the EXR or PFM file `bytes` from its header, as
+/// [`decode_upright_rgb`] would decode it (its errors, where the header is enough to
+/// tell); `None` for other files.
+fn float_image_size(bytes: &[u8], path: &Path) -> Option<Result<(usize, usize)>> {
+    if bytes.starts_with(&EXR_MAGIC) {
+        return Some(crate::io::codec::exr::exr_colour_size(bytes, path));
+    }
+    if is_pfm(bytes) {
+        let header = crate::io::codec::pfm::parse_header(bytes, path);
+        return Some(header.and_then(|h| match h.channels {
+            3 => Ok((h.width, h.height)),
+            _ => Err(grey_pfm(path)),
+        }));
+    }
+    None
 }
 
 /// Checks a float image's values as the module docs say: refuses the first NaN or
@@ -422,10 +444,15 @@ fn exif_of(
     }
 }
 
-/// The stored size of PNG or JPEG `bytes` (the file `name`) from its header, after the
-/// checks every read of it makes (a JPEG's end, a PNG's palette and ICC profile), without
-/// decoding its pixels: for checks before a decode. Errors: the loaders'.
+/// The stored size of image `bytes` (the file `name`) from its header, after the checks
+/// every read of it makes (a JPEG's end, a PNG's palette and ICC profile, an EXR's
+/// headers), without decoding its pixels: for checks before a decode. An EXR's or a PFM's
+/// is its colour image's, as [`decode_upright_rgb`] reads it. Errors: the loaders'.
 pub fn image_dimensions(bytes: &[u8], name: &str) -> Result<(u32, u32)> {
+    if let Some(size) = float_image_size(bytes, Path::new(name)) {
+        // Within io::limits' sides, which u32 holds.
+        return size.map(|(w, h)| (w as u32, h as u32));
+    }
     let (decoder, _) = open_decoder(bytes, name, "a PNG, JPEG or WebP file", Role::Colour)?;
     Ok(decoder.dimensions())
 }
@@ -447,13 +474,13 @@ pub fn read_image_dimensions(path: &Path) -> Result<(u32, u32)> {
 }
 
 /// A photo's stored size and EXIF, read from its header without decoding its pixels
-/// (an EXR or PFM, which has no EXIF, is decoded for its size).
+/// (an EXR or a PFM has no EXIF).
 pub fn read_photo_header(path: &Path) -> Result<(usize, usize, PhotoExif)> {
     let bytes = crate::io::limits::read_file(path)?;
     let name = path.display().to_string();
-    if bytes.starts_with(&EXR_MAGIC) || is_pfm(&bytes) {
-        let photo = decode_upright_rgb(&bytes, &name)?;
-        return Ok((photo.image.width(), photo.image.height(), photo.exif));
+    if let Some(size) = float_image_size(&bytes, path) {
+        let (w, h) = size?;
+        return Ok((w, h, PhotoExif::default()));
     }
     let (mut decoder, format) = open_decoder(&bytes, &name, COLOUR_FORMATS, Role::Colour)?;
     let (w, h) = decoder.dimensions();

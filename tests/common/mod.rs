@@ -273,10 +273,18 @@ pub type ExrPart<'a> = (Option<&'a str>, Vec<(&'a str, exr::prelude::FlatSamples
 /// `parts` (a multi-part file when there are several), as renderers and engines write
 /// them.
 pub fn exr_bytes(w: usize, h: usize, parts: Vec<ExrPart>) -> Vec<u8> {
+    exr_sized_parts_bytes(parts.into_iter().map(|p| ((w, h), p)).collect())
+}
+
+/// [`exr_bytes`] with a size for each part (`(width, height)`, pixels from the display
+/// window's corner); the display window is the largest.
+pub fn exr_sized_parts_bytes(parts: Vec<((usize, usize), ExrPart)>) -> Vec<u8> {
     use exr::prelude::*;
+    let w = parts.iter().map(|((w, _), _)| *w).max().unwrap_or(1);
+    let h = parts.iter().map(|((_, h), _)| *h).max().unwrap_or(1);
     let layers: Vec<Layer<AnyChannels<FlatSamples>>> = parts
         .into_iter()
-        .map(|(name, channels)| {
+        .map(|(size, (name, channels))| {
             let attributes = match name {
                 Some(name) => LayerAttributes::named(name),
                 None => LayerAttributes::default(),
@@ -286,7 +294,7 @@ pub fn exr_bytes(w: usize, h: usize, parts: Vec<ExrPart>) -> Vec<u8> {
                 .map(|(name, samples)| AnyChannel::new(name, samples))
                 .collect();
             Layer::new(
-                (w, h),
+                size,
                 attributes,
                 Encoding::SMALL_LOSSLESS,
                 AnyChannels::sort(list),

@@ -203,10 +203,18 @@ impl<'m> Channels<'m> {
     }
 }
 
-/// Reads the headers and checks every part against `io::limits` and the file's length.
-/// The decoder allocates for the size its header claims before reading any pixel, so the
-/// header is read and checked on its own first.
+/// Reads the headers and checks every part against `io::limits` and the file's length,
+/// and every DWA block's claims ([`check_dwa_blocks`]). The decoder allocates for the
+/// size its header claims before reading any pixel, so the header is read and checked on
+/// its own first.
 fn checked_meta(bytes: &[u8], path: &Path) -> Result<exr::meta::MetaData> {
+    let meta = checked_headers(bytes, path)?;
+    check_dwa_blocks(bytes, &meta, path)?;
+    Ok(meta)
+}
+
+/// The file's headers, each checked ([`check_header`]); its blocks are not looked at.
+fn checked_headers(bytes: &[u8], path: &Path) -> Result<exr::meta::MetaData> {
     let meta = exr::meta::MetaData::read_from_buffered(Cursor::new(bytes), false)
         .map_err(|e| cannot_read(path, e))?;
     for header in meta.headers.iter() {
@@ -215,7 +223,6 @@ fn checked_meta(bytes: &[u8], path: &Path) -> Result<exr::meta::MetaData> {
     if meta.headers.is_empty() {
         return Err(Error::format(path, "EXR file has no part; expected one"));
     }
-    check_dwa_blocks(bytes, &meta, path)?;
     Ok(meta)
 }
 
@@ -285,22 +292,62 @@ pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
         .shared_attributes
         .chromaticities
         .map(|c| [c.red, c.green, c.blue, c.white].map(|v| [f64::from(v.0), f64::from(v.1)]));
-    if let Some([r, g, b]) = channels.rgb() {
-        for c in [r, g, b] {
+    let (image, source) = match colour_channels(&channels, path)? {
+        ColourChannels::Rgb([r, g, b]) => {
+            let (w, h) = (r.header.layer_size.width(), r.header.layer_size.height());
+            // Only the three channels are kept: a multilayer file holds many more.
+            let pixels = decode_pixels([r, g, b], bytes, path, [f32::NAN; 3], |p, i, v| p[i] = v)?;
+            let source = match r.layer() {
+                "" => "R, G, B".to_string(),
+                layer => format!("{layer}.R, .G, .B"),
+            };
+            (Grid::from_vec(w, h, pixels), source)
+        }
+        ColourChannels::Grey(y) => {
+            let (w, h) = (y.header.layer_size.width(), y.header.layer_size.height());
+            let pixels = decode_pixels([y], bytes, path, [f32::NAN; 3], |p, _, v| *p = [v; 3])?;
+            (Grid::from_vec(w, h, pixels), "Y (grey)".to_string())
+        }
+    };
+    Ok(ExrColour {
+        image,
+        source,
+        chromaticities,
+    })
+}
+
+/// The size of the colour image [`parse_exr_rgb`] reads from the EXR file `bytes`, from
+/// its headers alone (every one checked as [`parse_exr_rgb`] checks them; no block is
+/// read): for a check of the memory a render of it needs, before it is decoded.
+pub(crate) fn exr_colour_size(bytes: &[u8], path: &Path) -> Result<(usize, usize)> {
+    let meta = checked_headers(bytes, path)?;
+    let channels = Channels::new(&meta);
+    let size = match colour_channels(&channels, path)? {
+        ColourChannels::Rgb([r, ..]) => r.header.layer_size,
+        ColourChannels::Grey(y) => y.header.layer_size,
+    };
+    Ok((size.width(), size.height()))
+}
+
+/// The channels an EXR file's colour is read from.
+enum ColourChannels<'c, 'm> {
+    /// One layer's `R`, `G` and `B`.
+    Rgb([&'c Channel<'m>; 3]),
+    /// A flat `Y`, as grey.
+    Grey(&'c Channel<'m>),
+}
+
+/// The colour channels of `channels`, chosen as [`parse_exr_rgb`] says, each at full
+/// resolution; an error saying what the file has instead when there are none.
+fn colour_channels<'c, 'm>(
+    channels: &'c Channels<'m>,
+    path: &Path,
+) -> Result<ColourChannels<'c, 'm>> {
+    if let Some(rgb) = channels.rgb() {
+        for c in rgb {
             full_resolution(c, path)?;
         }
-        let (w, h) = (r.header.layer_size.width(), r.header.layer_size.height());
-        // Only the three channels are kept: a multilayer file holds many more.
-        let pixels = decode_pixels([r, g, b], bytes, path, [f32::NAN; 3], |p, i, v| p[i] = v)?;
-        let source = match r.layer() {
-            "" => "R, G, B".to_string(),
-            layer => format!("{layer}.R, .G, .B"),
-        };
-        return Ok(ExrColour {
-            image: Grid::from_vec(w, h, pixels),
-            source,
-            chromaticities,
-        });
+        return Ok(ColourChannels::Rgb(rgb));
     }
     // Luminance-chroma images keep their colour in subsampled RY and BY channels; their Y
     // alone would silently lose it.
@@ -310,13 +357,7 @@ pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
     let grey = channels.first(|c| c.full == "Y" && channels.sibling(c, "X").is_none());
     if let Some(y) = grey.filter(|_| !chroma) {
         full_resolution(y, path)?;
-        let (w, h) = (y.header.layer_size.width(), y.header.layer_size.height());
-        let pixels = decode_pixels([y], bytes, path, [f32::NAN; 3], |p, _, v| *p = [v; 3])?;
-        return Ok(ExrColour {
-            image: Grid::from_vec(w, h, pixels),
-            source: "Y (grey)".to_string(),
-            chromaticities,
-        });
+        return Ok(ColourChannels::Grey(y));
     }
     // The depth rules take a lone channel of any name: point at depth only when named so.
     let depth = channels

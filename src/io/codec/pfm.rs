@@ -28,6 +28,61 @@ pub fn read_pfm(path: &Path) -> Result<Pfm> {
 /// height (within `io::limits`) and scale separated by whitespace, then one whitespace byte, then rows of
 /// 32-bit floats from the BOTTOM row to the top, little-endian if scale < 0.
 pub fn parse_pfm(bytes: &[u8], path: &Path) -> Result<Pfm> {
+    let PfmHeader {
+        channels,
+        width,
+        height,
+        scale,
+        data_start: start,
+    } = parse_header(bytes, path)?;
+    let data = &bytes[start.min(bytes.len())..];
+    let expected = width
+        .checked_mul(height)
+        .and_then(|n| n.checked_mul(channels * 4))
+        .ok_or_else(|| Error::format(path, format!("PFM size {width}x{height} is too large")))?;
+    if data.len() != expected {
+        return Err(Error::format(
+            path,
+            format!(
+                "expected {width}*{height}*{}4 = {expected} bytes of data, found {}",
+                if channels == 3 { "3*" } else { "" },
+                data.len()
+            ),
+        ));
+    }
+    let little = scale < 0.0;
+    let value = |i: usize| {
+        let b: [u8; 4] = data[4 * i..4 * i + 4].try_into().expect("4 bytes");
+        if little {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let index = |x: usize, y: usize, c: usize| ((height - 1 - y) * width + x) * channels + c;
+    Ok(if channels == 1 {
+        Pfm::Grey(Grid::from_fn(width, height, |x, y| value(index(x, y, 0))))
+    } else {
+        Pfm::Rgb(Grid::from_fn(width, height, |x, y| {
+            [0, 1, 2].map(|c| value(index(x, y, c)))
+        }))
+    })
+}
+
+/// What a PFM header says: the channels (1 for `Pf`, 3 for `PF`), the size (within
+/// `io::limits`), the scale (negative: little-endian) and where the data starts.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PfmHeader {
+    pub channels: usize,
+    pub width: usize,
+    pub height: usize,
+    pub scale: f64,
+    pub data_start: usize,
+}
+
+/// Parses the header at the start of `bytes` (the data after it is not looked at, so a
+/// prefix of the file is enough); `path` names the file in errors.
+pub(crate) fn parse_header(bytes: &[u8], path: &Path) -> Result<PfmHeader> {
     let mut header = HeaderTokens { bytes, pos: 0 };
     let magic = header.next(path, "the magic `Pf` or `PF`")?;
     let channels = match magic {
@@ -61,41 +116,16 @@ pub fn parse_pfm(bytes: &[u8], path: &Path) -> Result<Pfm> {
     };
     // Exactly one whitespace byte separates the header from the data; a writer on Windows
     // may have used "\r\n".
-    let mut start = header.pos + 1;
+    let mut data_start = header.pos + 1;
     if bytes.get(header.pos..header.pos + 2) == Some(b"\r\n".as_slice()) {
-        start += 1;
+        data_start += 1;
     }
-    let data = &bytes[start.min(bytes.len())..];
-    let expected = width
-        .checked_mul(height)
-        .and_then(|n| n.checked_mul(channels * 4))
-        .ok_or_else(|| Error::format(path, format!("PFM size {width}x{height} is too large")))?;
-    if data.len() != expected {
-        return Err(Error::format(
-            path,
-            format!(
-                "expected {width}*{height}*{}4 = {expected} bytes of data, found {}",
-                if channels == 3 { "3*" } else { "" },
-                data.len()
-            ),
-        ));
-    }
-    let little = scale < 0.0;
-    let value = |i: usize| {
-        let b: [u8; 4] = data[4 * i..4 * i + 4].try_into().expect("4 bytes");
-        if little {
-            f32::from_le_bytes(b)
-        } else {
-            f32::from_be_bytes(b)
-        }
-    };
-    let index = |x: usize, y: usize, c: usize| ((height - 1 - y) * width + x) * channels + c;
-    Ok(if channels == 1 {
-        Pfm::Grey(Grid::from_fn(width, height, |x, y| value(index(x, y, 0))))
-    } else {
-        Pfm::Rgb(Grid::from_fn(width, height, |x, y| {
-            [0, 1, 2].map(|c| value(index(x, y, c)))
-        }))
+    Ok(PfmHeader {
+        channels,
+        width,
+        height,
+        scale,
+        data_start,
     })
 }
 

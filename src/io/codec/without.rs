@@ -45,6 +45,10 @@ pub mod exr {
         Err(not_built(path, "OpenEXR"))
     }
 
+    pub(crate) fn exr_colour_size(_: &[u8], path: &Path) -> Result<(usize, usize)> {
+        Err(not_built(path, "OpenEXR"))
+    }
+
     fn unsupported() -> std::io::Error {
         std::io::Error::new(
             std::io::ErrorKind::Unsupported,
