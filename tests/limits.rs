@@ -160,6 +160,33 @@ fn an_image_too_large_for_memory_is_refused_with_sizes() {
     }
 }
 
+/// A depth map whose pre-processing cannot fit in the memory left is refused before its
+/// maps are allocated, where `brume prep` of an 8000x6000 map under `ulimit -v 700000`
+/// aborted the process on a failed allocation.
+#[test]
+fn a_depth_map_too_large_to_pre_process_is_refused_with_sizes() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big");
+    let script = format!(
+        "ulimit -v 700000 && exec {} prep --depth {} --depth-format kitti --fov 45 --out range.pfm",
+        env!("CARGO_BIN_EXE_brume"),
+        data.join("flat-8000x6000-depth16.png").display(),
+    );
+    let o = Command::new("sh")
+        .args(["-c", &script])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let mentions = [
+        "out of memory",
+        "pre-processing",
+        "8000x6000",
+        "smaller depth map",
+    ];
+    assert_refused(&o, &mentions);
+    assert!(!dir.path().join("range.pfm").exists());
+}
+
 /// The per-pixel estimate the memory check uses follows the textures the pipeline makes:
 /// two colour targets for a medium of uniform in-scattered light (ρ in their alpha, any
 /// τ), and the rate and a chromatic τ's pair on top for the others.
