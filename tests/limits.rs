@@ -187,6 +187,27 @@ fn a_depth_map_too_large_to_pre_process_is_refused_with_sizes() {
     assert!(!dir.path().join("range.pfm").exists());
 }
 
+/// A sky photo whose turbidity estimation cannot fit in the memory left is refused from
+/// its header, before it is decoded: a 4096x4096 EXR sky under `ulimit -v 1000000`
+/// aborted the process on a failed allocation.
+#[test]
+fn a_sky_photo_too_large_for_memory_is_refused_from_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big/flat-8000x6000-y.exr");
+    let script = format!(
+        "ulimit -v 2000000 && exec {} turbidity {} --sun-zenith 40 --sun-azimuth 0",
+        env!("CARGO_BIN_EXE_brume"),
+        sky.display(),
+    );
+    let o = Command::new("sh")
+        .args(["-c", &script])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let mentions = ["out of memory", "turbidity", "8000x6000", "smaller image"];
+    assert_refused(&o, &mentions);
+}
+
 /// The per-pixel estimate the memory check uses follows the textures the pipeline makes:
 /// two colour targets for a medium of uniform in-scattered light (ρ in their alpha, any
 /// τ), and the rate and a chromatic τ's pair on top for the others.

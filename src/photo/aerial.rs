@@ -633,13 +633,27 @@ pub fn estimate_sky_photo(path: &Path, opts: &TurbidityOptions) -> Result<SkyTur
     })
 }
 
+/// Bytes per pixel of a sky photo that the turbidity estimator holds besides the file's:
+/// the decoded image and its luminance, the usable pixels' directions and ratios. From
+/// `brume turbidity`'s peak RSS on 2048 x 2048 and 4096 x 4096 EXR skies: 53-55 bytes per
+/// pixel in all, 11 of them the file's; rounded up.
+const SKY_PHOTO_BYTES_PER_PIXEL: u64 = 48;
+
 /// The fisheye sky photo at `path` for the turbidity estimator, upright and in linear
 /// light, with a warning where its codes are display-encoded
 /// ([`UprightPhoto::linear_light`]): the estimator takes them for its profile's curve of
 /// linear light, and a camera's tone curve bends them (a mild contrast curve over a T 6
 /// sky gave 6.46, a stronger one 4.79).
 pub fn load_sky_photo(path: &Path) -> Result<UprightPhoto> {
-    let photo = crate::io::image::load_upright_rgb(path)?;
+    let bytes = crate::io::limits::read_file(path)?;
+    let name = path.display().to_string();
+    super::check_decoding_fits(
+        (&bytes, &name),
+        "estimating the turbidity of",
+        SKY_PHOTO_BYTES_PER_PIXEL,
+        "the estimator holds about {} bytes per pixel of the sky photo in memory",
+    )?;
+    let photo = crate::io::image::decode_upright_rgb(&bytes, &name)?;
     if !photo.linear_light {
         log::warn!("{}", display_encoded_sky(path));
     }

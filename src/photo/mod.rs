@@ -384,18 +384,35 @@ fn load_image_within_memory(image_path: &Path) -> Result<image::UprightPhoto> {
 /// render cannot fit in the memory left, before decoding it (a header that cannot be read
 /// is left to the decoder to report).
 pub fn check_memory_before_decoding(bytes: &[u8], name: &str) -> Result<()> {
+    check_decoding_fits(
+        (bytes, name),
+        "rendering",
+        CPU_BYTES_PER_PIXEL,
+        "a render holds about {} bytes per pixel in memory besides its textures",
+    )
+}
+
+/// [`check_memory_before_decoding`] for the work `doing` (a verb: "rendering") of
+/// `per_pixel` bytes per pixel of the image (the file's bytes aside, which are in memory
+/// already); `holds` says what holds them, with `{}` for the number.
+pub(crate) fn check_decoding_fits(
+    (bytes, name): (&[u8], &str),
+    doing: &str,
+    per_pixel: u64,
+    holds: &str,
+) -> Result<()> {
     // Through brume's reader, whose checks run before the decoder allocates anything (a
     // PNG's ICC profile that inflates to hundreds of megabytes).
     let Ok((w, h)) = image::image_dimensions(bytes, name) else {
         return Ok(());
     };
     crate::memory::check_fits(
-        &format!("rendering {name} ({w}x{h})"),
-        CPU_BYTES_PER_PIXEL * u64::from(w) * u64::from(h),
+        &format!("{doing} {name} ({w}x{h})"),
+        per_pixel * u64::from(w) * u64::from(h),
         crate::memory::available(),
         &format!(
-            "a render holds about {CPU_BYTES_PER_PIXEL} bytes per pixel in memory besides \
-             its textures: use a smaller image"
+            "{}: use a smaller image",
+            holds.replace("{}", &per_pixel.to_string())
         ),
     )
 }

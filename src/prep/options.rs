@@ -272,7 +272,7 @@ fn check_fraction(name: &str, v: f64) -> Result<()> {
 /// itself and its guides: without an image guide, and with one (whose sky finder keeps
 /// its luminance, texture and colour steps). From `brume prep`'s peak RSS: about 18 bytes
 /// per pixel in all without an image (4000 x 3000 and 8000 x 6000, the decoded range
-/// included), 59 with one (4000 x 3000, the decoded image included); rounded up.
+/// included), 60 with one (4000 x 3000, the decoded image included); rounded up.
 const PREP_BYTES_PER_PIXEL: [u64; 2] = [16, 40];
 
 /// Refuses, before its maps are allocated, a pre-processing of a `w x h` range that would
