@@ -208,6 +208,27 @@ fn a_sky_photo_too_large_for_memory_is_refused_from_its_header() {
     assert_refused(&o, &mentions);
 }
 
+/// Two images whose comparison cannot fit in the memory left are refused from their
+/// headers, before either is decoded: `brume compare` of two 8000x6000 photos took 7.5 GB
+/// (the SSIM's moments for the whole image; 1.4 GB now) and aborted the process on a
+/// failed allocation under `ulimit -v 1000000`.
+#[test]
+fn images_too_large_to_compare_are_refused_from_their_headers() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big/flat-8000x6000.png");
+    let script = format!(
+        "ulimit -v 1000000 && exec {bin} compare {image} {image}",
+        bin = env!("CARGO_BIN_EXE_brume"),
+        image = image.display(),
+    );
+    let o = Command::new("sh")
+        .args(["-c", &script])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert_refused(&o, &["out of memory", "comparing", "GB", "smaller images"]);
+}
+
 /// The per-pixel estimate the memory check uses follows the textures the pipeline makes:
 /// two colour targets for a medium of uniform in-scattered light (ρ in their alpha, any
 /// τ), and the rate and a chromatic τ's pair on top for the others.

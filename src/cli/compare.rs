@@ -2,24 +2,21 @@
 //! paper 002 compares a render with a photograph).
 
 use super::args::CompareArgs;
-use brume::io::image::load_linear_rgb;
-use brume::metrics::compare;
+use brume::metrics::compare_files;
 use brume::Result;
 use serde_json::json;
 
 pub fn run(args: &CompareArgs) -> Result<()> {
-    let a = load_linear_rgb(&args.a)?;
-    let b = load_linear_rgb(&args.b)?;
+    let (s, (width, height)) = compare_files(&args.a, &args.b)?;
     let (a_name, b_name) = (args.a.display().to_string(), args.b.display().to_string());
-    let s = compare(&a, &a_name, &b, &b_name)?;
     if args.json {
         outln!(
             "{}",
             json!({
                 "a": a_name,
                 "b": b_name,
-                "width": a.width(),
-                "height": a.height(),
+                "width": width,
+                "height": height,
                 "ssim": s.ssim,
                 "ssim_rgb": s.ssim_rgb,
                 "hsv_correlation": s.hsv_correlation,
