@@ -318,7 +318,7 @@ pub(crate) fn parse_exr_rgb(bytes: &[u8], path: &Path) -> Result<ExrColour> {
 
 /// The size of the colour image [`parse_exr_rgb`] reads from the EXR file `bytes`, from
 /// its headers alone (every one checked as [`parse_exr_rgb`] checks them; no block is
-/// read): for a check of the memory a render of it needs, before it is decoded.
+/// read): for a check of the memory the work on it needs, before it is decoded.
 pub(crate) fn exr_colour_size(bytes: &[u8], path: &Path) -> Result<(usize, usize)> {
     let meta = checked_headers(bytes, path)?;
     let channels = Channels::new(&meta);
