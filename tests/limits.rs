@@ -229,6 +229,28 @@ fn images_too_large_to_compare_are_refused_from_their_headers() {
     assert_refused(&o, &["out of memory", "comparing", "GB", "smaller images"]);
 }
 
+/// `bench speed` and `bench refine` at a `--size` whose image and textures cannot fit in
+/// the memory left are refused before they allocate them, naming the option: both
+/// aborted the process on a failed allocation of the 8000x6000 image under `ulimit -v
+/// 1000000`.
+#[test]
+fn image_benchmarks_too_large_for_memory_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for bench in ["speed", "refine"] {
+        let script = format!(
+            "ulimit -v 1000000 && exec {} bench {bench} --size 8000x6000 --runs 1",
+            env!("CARGO_BIN_EXE_brume"),
+        );
+        let _lock = gl_lock();
+        let o = Command::new("sh")
+            .args(["-c", &script])
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_refused(&o, &["out of memory", "--size 8000x6000", "smaller --size"]);
+    }
+}
+
 /// The per-pixel estimate the memory check uses follows the textures the pipeline makes:
 /// two colour targets for a medium of uniform in-scattered light (ρ in their alpha, any
 /// τ), and the rate and a chromatic τ's pair on top for the others.

@@ -60,6 +60,11 @@ pub struct RefineBenchArgs {
 /// Bytes per pixel of a `bench turbidity` sky held in memory (measured, README).
 const TURBIDITY_BENCH_BYTES_PER_PIXEL: u64 = 48;
 
+/// Bytes per pixel of `--size` that `bench speed` and `bench refine` hold in system
+/// memory on a software renderer, textures included: 92 and 85 (their peak RSS between
+/// 2000 x 1500 and 4000 x 3000), rounded up (README's limits table).
+const IMAGE_BENCH_BYTES_PER_PIXEL: u64 = 96;
+
 /// `brume bench turbidity`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct TurbidityBenchArgs {
@@ -353,6 +358,7 @@ impl SpeedArgs {
     /// The library options these arguments stand for.
     pub fn options(&self) -> Result<SpeedOptions> {
         let (width, height) = limits::parse_image_size("--size", &self.size)?;
+        limits::check_memory("--size", width, height, IMAGE_BENCH_BYTES_PER_PIXEL)?;
         let opts = SpeedOptions {
             configs: self.common.configs()?,
             width,
@@ -417,6 +423,7 @@ pub fn run(
         BenchCommand::Turbidity(t) => run_turbidity(t),
         BenchCommand::Refine(r) => {
             let (width, height) = limits::parse_image_size("--size", &r.size)?;
+            limits::check_memory("--size", width, height, IMAGE_BENCH_BYTES_PER_PIXEL)?;
             let runs = limits::count("--runs", r.runs, 1, MAX_RUNS, "timed runs")?;
             let report = run_refine_bench(renderer, width, height, runs)?;
             print_report(r.json, &refine_table(&report), &report)
