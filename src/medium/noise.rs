@@ -206,6 +206,10 @@ fn perlin(perm: &[u8; TABLE], period: usize, u: f64, v: f64) -> f64 {
     )
 }
 
+/// The largest side of a noise texture [`load_png`] reads, px: a texture that tiles needs
+/// no more, and an 8000 x 6000 one took the process past a memory limit into an abort.
+pub const MAX_NOISE_SIDE: u32 = 4096;
+
 /// Loads a noise texture from a PNG: grey or RGB (alpha ignored), 8 or 16 bits per
 /// sample, read as values in [0, 1] (`sample / 255` or `/ 65535`). Of an RGB file the red
 /// channel is used, as paper 001's listing reads `.x`. The image's top row becomes texture
@@ -219,7 +223,18 @@ pub fn load_png(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
             "not a PNG file; expected a grey or RGB PNG (8 or 16 bits) noise texture",
         ));
     }
-    let image = crate::io::image::decode_any(&bytes, &path.display().to_string())?;
+    let name = path.display().to_string();
+    let (w, h) = crate::io::image::image_dimensions(&bytes, &name)?;
+    if w.max(h) > MAX_NOISE_SIDE {
+        return Err(Error::format(
+            path,
+            format!(
+                "noise texture is {w}x{h} px; expected at most {MAX_NOISE_SIDE} px a side (it \
+                 tiles over the fog: 256 to 1024 px is usual)"
+            ),
+        ));
+    }
+    let image = crate::io::image::decode_any(&bytes, &name)?;
     let (w, h) = (image.width() as usize, image.height() as usize);
     let values: Vec<f32> = match &image {
         DynamicImage::ImageLuma8(_)
@@ -397,5 +412,18 @@ mod tests {
         std::fs::write(&text, b"not an image").unwrap();
         let e = load_png(&text).unwrap_err().to_string();
         assert!(e.contains("noise.png") && e.contains("expected"), "{e}");
+
+        // Refused from its header, before it is decoded; the largest side is read.
+        let wide = dir.path().join("wide.png");
+        image::GrayImage::new(MAX_NOISE_SIDE + 1, 1)
+            .save(&wide)
+            .unwrap();
+        let e = load_png(&wide).unwrap_err().to_string();
+        assert!(e.contains("wide.png") && e.contains("4097x1 px"), "{e}");
+        let widest = dir.path().join("widest.png");
+        image::GrayImage::new(MAX_NOISE_SIDE, 1)
+            .save(&widest)
+            .unwrap();
+        assert_eq!(load_png(&widest).unwrap().0, 4096);
     }
 }
