@@ -97,19 +97,11 @@ pub fn compare_files(a: &Path, b: &Path) -> Result<(Similarity, (usize, usize))>
         ))
     };
     let ((a_bytes, a_name), (b_bytes, b_name)) = (read(a)?, read(b)?);
-    let pixels: u64 = [(&a_bytes, &a_name), (&b_bytes, &b_name)]
-        .iter()
-        .filter_map(|(bytes, name)| image::image_dimensions(bytes, name).ok())
-        .map(|(w, h)| u64::from(w) * u64::from(h))
-        .sum();
-    crate::memory::check_fits(
-        &format!("comparing {a_name} with {b_name}"),
-        COMPARE_BYTES_PER_PIXEL * pixels,
-        crate::memory::available(),
-        &format!(
-            "a comparison holds about {COMPARE_BYTES_PER_PIXEL} bytes per pixel of each \
-             image: compare smaller images"
-        ),
+    crate::photo::check_decoding_fits(
+        &[(&a_bytes, &a_name), (&b_bytes, &b_name)],
+        "comparing",
+        COMPARE_BYTES_PER_PIXEL,
+        "a comparison holds about {} bytes per pixel of each image: compare smaller images",
     )?;
     let a_image = image::decode_linear_rgb(&a_bytes, &a_name)?;
     drop(a_bytes);

@@ -122,6 +122,25 @@ fn negative_doffs_names_the_calib_file() {
     assert_refused(&o, &["calib.txt: doffs = -50"]);
 }
 
+/// `brume args` run in `dir` with its address space limited to `kib` KiB (`ulimit -v`),
+/// as on a machine with that much memory left.
+fn brume_within(dir: &Path, kib: u64, args: &[&str]) -> Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!("ulimit -v {kib} && exec \"$0\" \"$@\""))
+        .arg(env!("CARGO_BIN_EXE_brume"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+/// The path of `name` among the large flat test images, as a string for an argument.
+fn big(name: &str) -> String {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big");
+    data.join(name).display().to_string()
+}
+
 /// An image too large for the memory left is refused from its header, before it is
 /// decoded, with the size, what it needs, and what to do; the old error was
 /// "glGetError = 0x0505" after gigabytes had been allocated. An EXR or a PFM too: their
@@ -129,7 +148,6 @@ fn negative_doffs_names_the_calib_file() {
 #[test]
 fn an_image_too_large_for_memory_is_refused_with_sizes() {
     let dir = tempfile::tempdir().unwrap();
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big");
     // The header of an 8000x6000 colour PFM and one pixel: refused from the header before
     // the decoder would find the data short.
     let pfm = dir.path().join("flat-8000x6000.pfm");
@@ -137,24 +155,24 @@ fn an_image_too_large_for_memory_is_refused_with_sizes() {
     bytes.extend_from_slice(&[0; 12]);
     std::fs::write(&pfm, bytes).unwrap();
     let images = [
-        data.join("flat-8000x6000.png"),
-        data.join("flat-8000x6000-y.exr"),
-        pfm,
+        big("flat-8000x6000.png"),
+        big("flat-8000x6000-y.exr"),
+        pfm.display().to_string(),
     ];
+    let depth = big("flat-8000x6000-depth16.png");
     for image in &images {
-        let script = format!(
-            "ulimit -v 3000000 && exec {} render --image {} --depth {} --depth-format kitti \
-             --no-prep --out out.png",
-            env!("CARGO_BIN_EXE_brume"),
-            image.display(),
-            data.join("flat-8000x6000-depth16.png").display(),
-        );
+        let args = [
+            "render",
+            "--image",
+            image,
+            "--depth",
+            &depth,
+            "--depth-format",
+            "kitti",
+        ];
+        let args = [&args[..], &["--no-prep", "--out", "out.png"]].concat();
         let _lock = gl_lock();
-        let o = Command::new("sh")
-            .args(["-c", &script])
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
+        let o = brume_within(dir.path(), 3_000_000, &args);
         assert_refused(&o, &["out of memory", "8000x6000", "GB", "smaller image"]);
         assert!(!dir.path().join("out.png").exists());
     }
@@ -166,17 +184,21 @@ fn an_image_too_large_for_memory_is_refused_with_sizes() {
 #[test]
 fn a_depth_map_too_large_to_pre_process_is_refused_with_sizes() {
     let dir = tempfile::tempdir().unwrap();
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big");
-    let script = format!(
-        "ulimit -v 700000 && exec {} prep --depth {} --depth-format kitti --fov 45 --out range.pfm",
-        env!("CARGO_BIN_EXE_brume"),
-        data.join("flat-8000x6000-depth16.png").display(),
+    let depth = big("flat-8000x6000-depth16.png");
+    let args = [
+        "prep",
+        "--depth",
+        &depth,
+        "--depth-format",
+        "kitti",
+        "--fov",
+        "45",
+    ];
+    let o = brume_within(
+        dir.path(),
+        700_000,
+        &[&args[..], &["--out", "range.pfm"]].concat(),
     );
-    let o = Command::new("sh")
-        .args(["-c", &script])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
     let mentions = [
         "out of memory",
         "pre-processing",
@@ -193,17 +215,16 @@ fn a_depth_map_too_large_to_pre_process_is_refused_with_sizes() {
 #[test]
 fn a_sky_photo_too_large_for_memory_is_refused_from_its_header() {
     let dir = tempfile::tempdir().unwrap();
-    let sky = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big/flat-8000x6000-y.exr");
-    let script = format!(
-        "ulimit -v 2000000 && exec {} turbidity {} --sun-zenith 40 --sun-azimuth 0",
-        env!("CARGO_BIN_EXE_brume"),
-        sky.display(),
-    );
-    let o = Command::new("sh")
-        .args(["-c", &script])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
+    let sky = big("flat-8000x6000-y.exr");
+    let args = [
+        "turbidity",
+        &sky,
+        "--sun-zenith",
+        "40",
+        "--sun-azimuth",
+        "0",
+    ];
+    let o = brume_within(dir.path(), 2_000_000, &args);
     let mentions = ["out of memory", "turbidity", "8000x6000", "smaller image"];
     assert_refused(&o, &mentions);
 }
@@ -215,17 +236,8 @@ fn a_sky_photo_too_large_for_memory_is_refused_from_its_header() {
 #[test]
 fn images_too_large_to_compare_are_refused_from_their_headers() {
     let dir = tempfile::tempdir().unwrap();
-    let image = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big/flat-8000x6000.png");
-    let script = format!(
-        "ulimit -v 1000000 && exec {bin} compare {image} {image}",
-        bin = env!("CARGO_BIN_EXE_brume"),
-        image = image.display(),
-    );
-    let o = Command::new("sh")
-        .args(["-c", &script])
-        .current_dir(dir.path())
-        .output()
-        .unwrap();
+    let image = big("flat-8000x6000.png");
+    let o = brume_within(dir.path(), 1_000_000, &["compare", &image, &image]);
     assert_refused(&o, &["out of memory", "comparing", "GB", "smaller images"]);
 }
 
@@ -237,16 +249,9 @@ fn images_too_large_to_compare_are_refused_from_their_headers() {
 fn image_benchmarks_too_large_for_memory_are_refused() {
     let dir = tempfile::tempdir().unwrap();
     for bench in ["speed", "refine"] {
-        let script = format!(
-            "ulimit -v 1000000 && exec {} bench {bench} --size 8000x6000 --runs 1",
-            env!("CARGO_BIN_EXE_brume"),
-        );
         let _lock = gl_lock();
-        let o = Command::new("sh")
-            .args(["-c", &script])
-            .current_dir(dir.path())
-            .output()
-            .unwrap();
+        let args = ["bench", bench, "--size", "8000x6000", "--runs", "1"];
+        let o = brume_within(dir.path(), 1_000_000, &args);
         assert_refused(&o, &["out of memory", "--size 8000x6000", "smaller --size"]);
     }
 }

@@ -648,10 +648,11 @@ pub fn load_sky_photo(path: &Path) -> Result<UprightPhoto> {
     let bytes = crate::io::limits::read_file(path)?;
     let name = path.display().to_string();
     super::check_decoding_fits(
-        (&bytes, &name),
+        &[(&bytes, &name)],
         "estimating the turbidity of",
         SKY_PHOTO_BYTES_PER_PIXEL,
-        "the estimator holds about {} bytes per pixel of the sky photo in memory",
+        "the estimator holds about {} bytes per pixel of the sky photo in memory: use a \
+         smaller image",
     )?;
     let photo = crate::io::image::decode_upright_rgb(&bytes, &name)?;
     if !photo.linear_light {

@@ -385,34 +385,44 @@ fn load_image_within_memory(image_path: &Path) -> Result<image::UprightPhoto> {
 /// is left to the decoder to report).
 pub fn check_memory_before_decoding(bytes: &[u8], name: &str) -> Result<()> {
     check_decoding_fits(
-        (bytes, name),
+        &[(bytes, name)],
         "rendering",
         CPU_BYTES_PER_PIXEL,
-        "a render holds about {} bytes per pixel in memory besides its textures",
+        "a render holds about {} bytes per pixel in memory besides its textures: use a \
+         smaller image",
     )
 }
 
-/// [`check_memory_before_decoding`] for the work `doing` (a verb: "rendering") of
-/// `per_pixel` bytes per pixel of the image (the file's bytes aside, which are in memory
-/// already); `holds` says what holds them, with `{}` for the number.
+/// [`check_memory_before_decoding`] for the work `doing` (a verb: "rendering") on the
+/// image `files` (each its bytes and name), of `per_pixel` bytes per pixel of each (the
+/// files' bytes aside, which are in memory already); `hint` says what holds them and what
+/// to do, with `{}` for the number.
 pub(crate) fn check_decoding_fits(
-    (bytes, name): (&[u8], &str),
+    files: &[(&[u8], &str)],
     doing: &str,
     per_pixel: u64,
-    holds: &str,
+    hint: &str,
 ) -> Result<()> {
-    // Through brume's reader, whose checks run before the decoder allocates anything (a
-    // PNG's ICC profile that inflates to hundreds of megabytes).
-    let Ok((w, h)) = image::image_dimensions(bytes, name) else {
-        return Ok(());
-    };
+    let mut pixels = 0;
+    let named: Vec<String> = files
+        .iter()
+        // Through brume's reader, whose checks run before the decoder allocates anything
+        // (a PNG's ICC profile that inflates to hundreds of megabytes).
+        .map(
+            |&(bytes, name)| match image::image_dimensions(bytes, name) {
+                Ok((w, h)) => {
+                    pixels += u64::from(w) * u64::from(h);
+                    format!("{name} ({w}x{h})")
+                }
+                // Left to the decoder to report.
+                Err(_) => name.to_string(),
+            },
+        )
+        .collect();
     crate::memory::check_fits(
-        &format!("{doing} {name} ({w}x{h})"),
-        per_pixel * u64::from(w) * u64::from(h),
+        &format!("{doing} {}", named.join(" with ")),
+        per_pixel * pixels,
         crate::memory::available(),
-        &format!(
-            "{}: use a smaller image",
-            holds.replace("{}", &per_pixel.to_string())
-        ),
+        &hint.replace("{}", &per_pixel.to_string()),
     )
 }
