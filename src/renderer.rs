@@ -9,7 +9,7 @@ use crate::caps::{Capabilities, EglInfo};
 use crate::egl::{GlContext, Platform};
 use crate::error::{Error, Result};
 use crate::gpu::framebuffer::Framebuffer;
-use crate::gpu::texture::{Filter, TexelFormat, Texture};
+use crate::gpu::texture::{TexelFormat, Texture};
 use crate::gpu::timer::{Clock, PassTimes, Timing};
 use crate::medium::Medium;
 use crate::pipeline::{Encoding, FogBlur, Frame, Input, Passes, Pipeline, RefineInput};
@@ -75,7 +75,7 @@ impl Uploads {
         // top row first, GL textures the bottom row first: the rows are uploaded upside
         // down (row by row from the caller's buffers, no staging copy), so that a medium
         // with a camera sees the sky at the top.
-        let colour = kept(
+        let colour = Texture::kept(
             &mut self.colour,
             gl,
             image.width(),
@@ -84,7 +84,7 @@ impl Uploads {
         )?;
         colour.upload_flipped(image.as_slice().as_flattened());
         let colour = colour.raw();
-        let depth = kept(
+        let depth = Texture::kept(
             &mut self.scalar,
             gl,
             scalar.width(),
@@ -94,34 +94,6 @@ impl Uploads {
         depth.upload_flipped(scalar.as_slice());
         Ok((colour, depth.raw()))
     }
-}
-
-/// The texture in `slot` if it is `width x height`, else a new one there (the old one
-/// freed first).
-fn kept<'a>(
-    slot: &'a mut Option<Texture>,
-    gl: &Arc<glow::Context>,
-    width: usize,
-    height: usize,
-    format: TexelFormat,
-) -> Result<&'a Texture> {
-    if slot
-        .as_ref()
-        .is_some_and(|t| (t.width(), t.height()) != (width, height))
-    {
-        *slot = None;
-    }
-    if slot.is_none() {
-        *slot = Some(Texture::new(
-            gl,
-            width,
-            height,
-            format,
-            Filter::Nearest,
-            None,
-        )?);
-    }
-    Ok(slot.as_ref().expect("just made"))
 }
 
 impl Renderer {

@@ -133,6 +133,35 @@ pub struct Texture {
 }
 
 impl Texture {
+    /// The texture in `slot` if it is `width x height`, else a new one of `format`
+    /// (nearest filtering, undefined content) put there, the old one freed first: for the
+    /// textures a caller keeps between calls of one size.
+    pub(crate) fn kept<'s>(
+        slot: &'s mut Option<Texture>,
+        gl: &Arc<glow::Context>,
+        width: usize,
+        height: usize,
+        format: TexelFormat,
+    ) -> Result<&'s Texture> {
+        if slot
+            .as_ref()
+            .is_some_and(|t| (t.width(), t.height()) != (width, height))
+        {
+            *slot = None;
+        }
+        if slot.is_none() {
+            *slot = Some(Texture::new(
+                gl,
+                width,
+                height,
+                format,
+                Filter::Nearest,
+                None,
+            )?);
+        }
+        Ok(slot.as_ref().expect("just made"))
+    }
+
     /// Allocates a `width x height` texture and fills it from `data` (f32, row 0 first,
     /// `format.channels()` per texel) or leaves it undefined when `data` is `None`.
     pub fn new(

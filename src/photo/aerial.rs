@@ -645,16 +645,15 @@ const SKY_PHOTO_BYTES_PER_PIXEL: u64 = 48;
 /// linear light, and a camera's tone curve bends them (a mild contrast curve over a T 6
 /// sky gave 6.46, a stronger one 4.79).
 pub fn load_sky_photo(path: &Path) -> Result<UprightPhoto> {
-    let bytes = crate::io::limits::read_file(path)?;
-    let name = path.display().to_string();
-    super::check_decoding_fits(
-        &[(&bytes, &name)],
-        "estimating the turbidity of",
-        SKY_PHOTO_BYTES_PER_PIXEL,
-        "the estimator holds about {} bytes per pixel of the sky photo in memory: use a \
-         smaller image",
-    )?;
-    let photo = crate::io::image::decode_upright_rgb(&bytes, &name)?;
+    let photo = super::load_checked(path, |bytes, name| {
+        super::check_decoding_fits(
+            &[(bytes, name)],
+            "estimating the turbidity of",
+            SKY_PHOTO_BYTES_PER_PIXEL,
+            "the estimator holds about {} bytes per pixel of the sky photo in memory: use \
+             a smaller image",
+        )
+    })?;
     if !photo.linear_light {
         log::warn!("{}", display_encoded_sky(path));
     }

@@ -374,9 +374,18 @@ impl Photo {
 /// cannot fit in the memory left ([`check_memory_before_decoding`]), and decodes it
 /// upright.
 fn load_image_within_memory(image_path: &Path) -> Result<image::UprightPhoto> {
-    let bytes = crate::io::limits::read_file(image_path)?;
-    let name = image_path.display().to_string();
-    check_memory_before_decoding(&bytes, &name)?;
+    load_checked(image_path, check_memory_before_decoding)
+}
+
+/// Reads the image file at `path` once, runs `check` on its bytes and name (a check of
+/// the memory its work needs, from its header), and decodes it upright.
+pub(crate) fn load_checked(
+    path: &Path,
+    check: impl FnOnce(&[u8], &str) -> Result<()>,
+) -> Result<image::UprightPhoto> {
+    let bytes = crate::io::limits::read_file(path)?;
+    let name = path.display().to_string();
+    check(&bytes, &name)?;
     image::decode_upright_rgb(&bytes, &name)
 }
 

@@ -433,14 +433,14 @@ impl Pipeline {
     /// by the depth test of the 36 taps' pass): the one kept from an earlier call of that
     /// size, or a new one in its place.
     fn upsample_marks(&mut self, w: usize, h: usize) -> Result<glow::Texture> {
-        let kept = self.upsample_marks.as_ref();
-        if kept.is_none_or(|t| (t.width(), t.height()) != (w, h)) {
-            // The old one freed before the new one is made.
-            self.upsample_marks = None;
-            let marks = Texture::new(&self.gl, w, h, TexelFormat::Depth16, Filter::Nearest, None)?;
-            self.upsample_marks = Some(marks);
-        }
-        Ok(self.upsample_marks.as_ref().expect("made above").raw())
+        let marks = Texture::kept(
+            &mut self.upsample_marks,
+            &self.gl,
+            w,
+            h,
+            TexelFormat::Depth16,
+        )?;
+        Ok(marks.raw())
     }
 
     /// The upsampling's sizes and σ, before anything is made.
