@@ -290,3 +290,20 @@ fn an_input_larger_than_any_image_is_refused_from_its_size() {
     let needles = ["d.png", "larger than any input brume takes", &limit];
     common::assert_render_refuses("--depth", &depth, &needles);
 }
+
+/// A float64 TIFF over the `tiff` crate's default decoding limit (256 MiB) is read: that
+/// limit refused an 8000x6000 float map stored as one strip, as PIL writes it, with "cannot
+/// read as TIFF: decoder limits exceeded", where `io::limits` lets 8192x8192 through.
+#[test]
+fn a_float_tiff_over_the_decoders_default_limit_is_read() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/big/flat-5800x5800-f64.tif");
+    let opts = DepthOptions {
+        kind: Some(brume::io::depth::DepthKind::Range),
+        ..DepthOptions::default()
+    };
+    let range = load_range(&path, &opts).unwrap().range;
+    assert_eq!((range.width(), range.height()), (5800, 5800));
+    for (x, y) in [(0, 0), (2900, 2900), (5799, 5799), (5799, 0)] {
+        assert_eq!(*range.get(x, y), 10.0, "pixel ({x}, {y})");
+    }
+}

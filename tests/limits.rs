@@ -209,6 +209,56 @@ fn a_depth_map_too_large_to_pre_process_is_refused_with_sizes() {
     assert!(!dir.path().join("range.pfm").exists());
 }
 
+/// A depth map whose decoding cannot fit in the memory left is refused from its header, in
+/// every format whose header gives its size, before the decoder allocates: `brume prep` of
+/// an 8000x6000 EXR or 16-bit PNG under `ulimit -v 400000` aborted the process on a failed
+/// allocation (the PFM and `.npy` here, a header and four bytes, were "truncated"; the
+/// float64 TIFF, over the `tiff` crate's default limit, "decoder limits exceeded").
+#[test]
+fn a_depth_map_too_large_to_decode_is_refused_from_its_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let pfm = dir.path().join("flat-8000x6000.pfm");
+    std::fs::write(&pfm, [&b"Pf\n8000 6000\n-1.0\n"[..], &[0; 4]].concat()).unwrap();
+    let npy = dir.path().join("flat-8000x6000.npy");
+    let mut header = b"{'descr': '<f4', 'fortran_order': False, 'shape': (6000, 8000), }".to_vec();
+    header.resize(118, b' ');
+    header.push(b'\n');
+    let npy_bytes = [&b"\x93NUMPY\x01\x00\x76\x00"[..], &header, &[0; 4]].concat();
+    std::fs::write(&npy, npy_bytes).unwrap();
+    let maps = [
+        (big("flat-8000x6000-depth16.png"), "8000x6000"),
+        (big("flat-8000x6000-y.exr"), "8000x6000"),
+        (big("flat-5800x5800-f64.tif"), "5800x5800"),
+        (pfm.display().to_string(), "8000x6000"),
+        (npy.display().to_string(), "8000x6000"),
+    ];
+    for (map, size) in &maps {
+        let args = [
+            "prep",
+            "--depth",
+            map,
+            "--depth-scale",
+            "0.001",
+            "--fov",
+            "45",
+        ];
+        let o = brume_within(
+            dir.path(),
+            400_000,
+            &[&args[..], &["--out", "range.pfm"]].concat(),
+        );
+        let mentions = [
+            "out of memory",
+            "reading the depth map",
+            map,
+            size,
+            "smaller depth map",
+        ];
+        assert_refused(&o, &mentions);
+        assert!(!dir.path().join("range.pfm").exists());
+    }
+}
+
 /// A sky photo whose turbidity estimation cannot fit in the memory left is refused from
 /// its header, before it is decoded: a 4096x4096 EXR sky under `ulimit -v 1000000`
 /// aborted the process on a failed allocation.

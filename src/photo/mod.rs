@@ -390,19 +390,19 @@ pub(crate) fn load_checked(
 }
 
 /// Refuses, from the header of the image file `name` (its `bytes`) alone, an image whose
-/// render cannot fit in the memory left, before decoding it (a header that cannot be read
-/// is left to the decoder to report).
+/// pre-processing and render cannot fit in the memory left, before decoding it (a header
+/// that cannot be read is left to the decoder to report).
 pub fn check_memory_before_decoding(bytes: &[u8], name: &str) -> Result<()> {
     check_decoding_fits(
         &[(bytes, name)],
-        "rendering",
+        "loading the photo",
         CPU_BYTES_PER_PIXEL,
-        "a render holds about {} bytes per pixel in memory besides its textures: use a \
-         smaller image",
+        "a photo holds about {} bytes per pixel in memory while it is pre-processed and \
+         rendered (textures aside): use a smaller image",
     )
 }
 
-/// [`check_memory_before_decoding`] for the work `doing` (a verb: "rendering") on the
+/// [`check_memory_before_decoding`] for the work `doing` ("loading the photo") on the
 /// image `files` (each its bytes and name), of `per_pixel` bytes per pixel of each (the
 /// files' bytes aside, which are in memory already); `hint` says what holds them and what
 /// to do, with `{}` for the number.

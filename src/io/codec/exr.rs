@@ -329,6 +329,14 @@ pub(crate) fn exr_colour_size(bytes: &[u8], path: &Path) -> Result<(usize, usize
     Ok((size.width(), size.height()))
 }
 
+/// The size of the depth channel [`parse_exr_scalar`] reads from the EXR file `bytes`,
+/// from its headers alone, if they can be read and name one (else the decoder's error).
+pub(crate) fn exr_depth_size(bytes: &[u8], path: &Path) -> Option<(usize, usize)> {
+    let meta = checked_headers(bytes, path).ok()?;
+    let size = Channels::new(&meta).depth()?.header.layer_size;
+    Some((size.width(), size.height()))
+}
+
 /// The channels an EXR file's colour is read from.
 enum ColourChannels<'c, 'm> {
     /// One layer's `R`, `G` and `B`.

@@ -90,6 +90,14 @@ pub(crate) fn parse_npy(bytes: &[u8], path: &Path) -> Result<MapSamples> {
     }
 }
 
+/// The width and height of the `.npy` array `bytes`, from its header alone, if it can be
+/// read (else the decoder's error).
+pub(crate) fn npy_size(bytes: &[u8], path: &Path) -> Option<(usize, usize)> {
+    check_header(bytes, path).ok()?;
+    let npy = npyz::NpyFile::new(bytes).ok()?;
+    grid_size(npy.shape(), path).ok()
+}
+
 /// Width and height of a `(h, w)` or `(h, w, 1)` shape within `io::limits`.
 fn grid_size(shape: &[u64], path: &Path) -> Result<(usize, usize)> {
     let (h, w) = match shape[..] {

@@ -23,7 +23,9 @@ pub fn read_tiff_scalar(path: &Path) -> Result<ScalarMap> {
 pub(crate) fn parse_tiff(bytes: &[u8], path: &Path) -> Result<MapSamples> {
     use tiff::decoder::{Decoder, DecodingResult};
     let bad = |e: tiff::TiffError| Error::format(path, format!("cannot read as TIFF: {e}"));
-    let mut decoder = Decoder::new(Cursor::new(bytes)).map_err(bad)?;
+    let mut decoder = Decoder::new(Cursor::new(bytes))
+        .map_err(bad)?
+        .with_limits(decoder_limits(bytes.len()));
     let (w, h) = decoder.dimensions().map_err(bad)?;
     check_size(path, "TIFF", u64::from(w), u64::from(h))?;
     let colour = decoder.colortype().map_err(bad)?;
@@ -49,6 +51,26 @@ pub(crate) fn parse_tiff(bytes: &[u8], path: &Path) -> Result<MapSamples> {
             ),
         )),
     }
+}
+
+/// The decoder's limits for a file of `file_len` bytes. Its defaults (256 MiB decoded,
+/// 128 MiB in one strip) refused an 8000x6000 float map stored as one strip, as PIL writes
+/// it, with "decoder limits exceeded"; `io::limits`' check of the size comes first instead.
+fn decoder_limits(file_len: usize) -> tiff::decoder::Limits {
+    let mut limits = tiff::decoder::Limits::default();
+    // The largest map `check_size` lets through, in 64-bit floats.
+    limits.decoding_buffer_size = crate::io::limits::MAX_PIXELS * 8;
+    // No strip or tile holds more than the file.
+    limits.intermediate_buffer_size = file_len;
+    limits
+}
+
+/// The width and height of the TIFF file `bytes`, from its first directory alone, if it
+/// can be read (else the decoder's error).
+pub(crate) fn tiff_size(bytes: &[u8]) -> Option<(usize, usize)> {
+    let mut decoder = tiff::decoder::Decoder::new(Cursor::new(bytes)).ok()?;
+    let (w, h) = decoder.dimensions().ok()?;
+    Some((w as usize, h as usize))
 }
 
 fn grid<T>(data: Vec<T>, w: usize, h: usize, path: &Path) -> Result<Grid<T>> {

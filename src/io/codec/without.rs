@@ -49,6 +49,10 @@ pub mod exr {
         Err(not_built(path, "OpenEXR"))
     }
 
+    pub(crate) fn exr_depth_size(_: &[u8], _: &Path) -> Option<(usize, usize)> {
+        None
+    }
+
     fn unsupported() -> std::io::Error {
         std::io::Error::new(
             std::io::ErrorKind::Unsupported,
@@ -85,6 +89,10 @@ pub mod tiff {
     pub(crate) fn parse_tiff(_: &[u8], path: &Path) -> Result<MapSamples> {
         Err(not_built(path, "TIFF"))
     }
+
+    pub(crate) fn tiff_size(_: &[u8]) -> Option<(usize, usize)> {
+        None
+    }
 }
 
 /// NumPy `.npy` without the `codecs` feature.
@@ -106,5 +114,9 @@ pub mod npy {
 
     pub(crate) fn parse_npz(_: &[u8], path: &Path) -> Result<NpzDepth> {
         Err(not_built(path, "NumPy .npz"))
+    }
+
+    pub(crate) fn npy_size(_: &[u8], _: &Path) -> Option<(usize, usize)> {
+        None
     }
 }

@@ -5,11 +5,13 @@ use std::path::Path;
 
 use super::gdepth::{self, EmbeddedDepth};
 use super::{DepthFormat, DepthKind};
-use crate::io::codec::npy::{parse_npy, parse_npz};
-use crate::io::codec::pfm::{parse_pfm, Pfm};
+use crate::io::codec::exr::{exr_depth_size, parse_exr_scalar};
+use crate::io::codec::npy::{npy_size, parse_npy, parse_npz};
+use crate::io::codec::pfm::{parse_header, parse_pfm, Pfm};
 use crate::io::codec::png::{self, GreyPng};
+use crate::io::codec::tiff::{parse_tiff, tiff_size};
 use crate::io::codec::MapSamples;
-use crate::io::codec::{exr::parse_exr_scalar, tiff::parse_tiff};
+use crate::io::png_chunks::{png_ihdr_size, PNG_IHDR_END};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
@@ -70,23 +72,26 @@ impl Raw {
 /// Decodes `bytes` with the codec for extension `ext`; a JPEG only as GDepth, which
 /// `format` must allow (the others' layouts are checked once the file is decoded).
 pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthFormat) -> Result<Raw> {
+    check_decoding_fits(bytes, path, ext)?;
     match ext {
         "png" => Ok(match png::decode_grey(bytes, path)? {
             GreyPng::Grey8(g) => Raw::Grey8(g),
             GreyPng::Grey16(g) => Raw::Grey16(g),
         }),
+        // A colour PFM is refused from its header, before its three channels are decoded.
+        "pfm" if parse_header(bytes, path)?.channels != 1 => Err(colour_pfm(path)),
         "pfm" => match parse_pfm(bytes, path)? {
             Pfm::Grey(map) => Ok(Raw::Float {
                 map,
                 from_pfm: true,
                 focal_px: None,
             }),
-            Pfm::Rgb(_) => Err(Error::format(
-                path,
-                "PFM is `PF` (3 colour channels); a depth or disparity PFM must be `Pf` (1 channel)",
-            )),
+            Pfm::Rgb(_) => Err(colour_pfm(path)),
         },
-        "exr" => Ok(from_samples(MapSamples::Float(parse_exr_scalar(bytes, path)?), None)),
+        "exr" => Ok(from_samples(
+            MapSamples::Float(parse_exr_scalar(bytes, path)?),
+            None,
+        )),
         "tif" | "tiff" => Ok(from_samples(parse_tiff(bytes, path)?, None)),
         "npy" => Ok(from_samples(parse_npy(bytes, path)?, None)),
         "npz" => {
@@ -122,6 +127,50 @@ pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthForm
             ))
         }
     }
+}
+
+fn colour_pfm(path: &Path) -> Error {
+    Error::format(
+        path,
+        "PFM is `PF` (3 colour channels); a depth or disparity PFM must be `Pf` (1 channel)",
+    )
+}
+
+/// Bytes per pixel that decoding a depth file and reading it as range take at their peak,
+/// besides the file's bytes, measured for 8000x6000 maps: 12 resident at most (a float64
+/// TIFF, whose samples are decoded whole before they become f32; 8.1 the others), and up
+/// to 13.6 of address space, which `ulimit -v` counts with the decoder's threads' arenas
+/// (11.2 an `.npy`, 11 an EXR, 9.6 a PFM or a float32 TIFF, 7.6 a 16-bit PNG).
+const DECODING_BYTES_PER_PIXEL: u64 = 14;
+
+/// Refuses a depth file whose decoding cannot fit in the memory left, from the size its
+/// header gives, before the decoder allocates for it. Files whose header cannot be read
+/// are left to the decoder's error; a phone JPEG's embedded map (a few hundred pixels a
+/// side) and an `.npz` member (read on its own, within `io::limits`) are not checked.
+fn check_decoding_fits(bytes: &[u8], path: &Path, ext: &str) -> Result<()> {
+    let size = match ext {
+        "png" => bytes
+            .first_chunk::<PNG_IHDR_END>()
+            .and_then(png_ihdr_size)
+            .map(|(w, h)| (w as usize, h as usize)),
+        "pfm" => parse_header(bytes, path).ok().map(|h| (h.width, h.height)),
+        "exr" => exr_depth_size(bytes, path),
+        "tif" | "tiff" => tiff_size(bytes),
+        "npy" => npy_size(bytes, path),
+        _ => None,
+    };
+    let Some((w, h)) = size else {
+        return Ok(());
+    };
+    crate::memory::check_fits(
+        &format!("reading the depth map {} ({w}x{h})", path.display()),
+        DECODING_BYTES_PER_PIXEL * w as u64 * h as u64,
+        crate::memory::available(),
+        &format!(
+            "reading a depth map holds about {DECODING_BYTES_PER_PIXEL} bytes per pixel \
+             besides its file: use a smaller depth map"
+        ),
+    )
 }
 
 /// A float or integer file's samples (EXR, TIFF, NumPy): uint16 ones as a 16-bit PNG's,
