@@ -366,7 +366,7 @@ fn open_decoder<'a>(
     role: Role,
 ) -> Result<(impl ImageDecoder + 'a, ImageFormat)> {
     refuse_heif_bytes(bytes, name)?;
-    let reader = ImageReader::new(std::io::Cursor::new(bytes))
+    let mut reader = ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|e| Error::io(name, e))?;
     let Some(format) = reader.format() else {
@@ -412,8 +412,22 @@ fn open_decoder<'a>(
     if format == ImageFormat::Png {
         check_png_chunks(bytes, name)?;
     }
+    reader.limits(decoder_limits(format));
     let decoder = reader.into_decoder().map_err(cannot_decode(format, name))?;
     Ok((decoder, format))
+}
+
+/// The image crate's memory limit for decoding an image of `format`. Its default, 512 MiB,
+/// holds any 8- or 16-bit image within `io::limits`, but refused an 8000x6000 float TIFF
+/// (576 MB in RGB f32) with "Memory limit exceeded"; a TIFF may take what the largest image
+/// `io::limits` allows takes in RGBA f32, 1 GiB. The memory left is checked before, from
+/// the header ([`crate::photo::check_memory_before_decoding`]).
+fn decoder_limits(format: ImageFormat) -> image::Limits {
+    let mut limits = image::Limits::default();
+    if format == ImageFormat::Tiff {
+        limits.max_alloc = Some(crate::io::limits::MAX_PIXELS as u64 * 16);
+    }
+    limits
 }
 
 /// The error of a PNG or JPEG the decoder gave up on.
@@ -535,7 +549,7 @@ fn decode_image(
         check_jpeg_holds(bytes.len(), w, h, name)?;
     }
     // The budget `ImageReader::decode` applies, which `into_decoder` leaves to its caller.
-    image::Limits::default()
+    decoder_limits(format)
         .reserve(decoder.total_bytes())
         .map_err(&cannot)?;
     let image = DynamicImage::from_decoder(decoder).map_err(cannot)?;
@@ -762,5 +776,17 @@ mod tests {
             .to_string();
         assert!(e.contains("bomb.png") && e.contains("iCCP"), "{e}");
         assert!(check_png_chunks(&iccp_png(MAX_ICC_BYTES), "ok.png").is_ok());
+    }
+
+    /// The largest TIFF `io::limits` lets through fits the decoder's limit in RGBA f32 (an
+    /// 8000x6000 float TIFF failed with "Memory limit exceeded" under the default 512 MiB,
+    /// which the other formats keep).
+    #[test]
+    fn the_largest_float_tiff_fits_the_decoders_limit() {
+        let rgba_f32 = crate::io::limits::MAX_PIXELS as u64 * 16;
+        assert!(decoder_limits(ImageFormat::Tiff).reserve(rgba_f32).is_ok());
+        assert!(decoder_limits(ImageFormat::Png)
+            .reserve(8000 * 6000 * 12)
+            .is_err());
     }
 }
