@@ -108,6 +108,22 @@ fn truncated_png_and_jpeg_are_errors_naming_the_file() {
     }
 }
 
+/// A TIFF photo of a variant the decoder does not read (64-bit floats) is refused as such,
+/// with what to do, not as "truncated or corrupt".
+#[test]
+fn an_unsupported_tiff_variant_is_named_not_called_corrupt() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("f64.tif");
+    let mut tiff = tiff::encoder::TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+    tiff.write_image::<tiff::encoder::colortype::RGB64Float>(2, 2, &[0.5; 12])
+        .unwrap();
+    let msg = expect_err(load_linear_rgb(&path)).to_string();
+    for part in ["f64.tif", "64 bits", "32-bit float", "convert it"] {
+        assert!(msg.contains(part), "{msg} should say {part}");
+    }
+    assert!(!msg.contains("corrupt"), "{msg}");
+}
+
 #[test]
 fn jpeg_cut_anywhere_is_an_error_but_trailing_data_is_fine() {
     let dir = tempfile::tempdir().unwrap();
@@ -377,6 +393,13 @@ fn truncated_or_corrupt_float_images_are_format_errors_naming_the_file() {
         expect_err(decode_linear_rgb(&corrupt, "bad.exr")),
         "bad.exr",
     );
+
+    // A feature flag the reader does not know is a feature it lacks, not damage.
+    let mut newer = exr.clone();
+    newer[5] |= 0x20;
+    let msg = expect_err(decode_linear_rgb(&newer, "newer.exr")).to_string();
+    assert!(msg.contains("feature is not read"), "{msg}");
+    assert!(!msg.contains("corrupt"), "{msg}");
 
     let pfm = [&b"PF\n2 2\n-1\n"[..], &[0u8; 4 * 3 * 3]].concat();
     assert_format_error_naming(expect_err(decode_linear_rgb(&pfm, "cut.pfm")), "cut.pfm");

@@ -433,10 +433,15 @@ fn decoder_limits(format: ImageFormat) -> image::Limits {
 /// The error of a PNG or JPEG the decoder gave up on.
 fn cannot_decode(format: ImageFormat, name: &str) -> impl Fn(image::ImageError) -> Error + '_ {
     move |e| {
-        Error::format(
-            name,
-            format!("cannot decode as {format:?}: {e}; the file may be truncated or corrupt"),
-        )
+        let why = match e {
+            // A variant the decoder does not read (a TIFF of 64-bit floats): not damage.
+            image::ImageError::Unsupported(_) => {
+                "brume reads 8- and 16-bit integer and 32-bit float samples: convert it (to \
+                 PNG, or to a float EXR or 32-bit float TIFF)"
+            }
+            _ => "the file may be truncated or corrupt",
+        };
+        Error::format(name, format!("cannot decode as {format:?}: {e}; {why}"))
     }
 }
 

@@ -227,10 +227,15 @@ fn checked_headers(bytes: &[u8], path: &Path) -> Result<exr::meta::MetaData> {
 }
 
 fn cannot_read(path: &Path, e: exr::error::Error) -> Error {
-    Error::format(
-        path,
-        format!("cannot read as OpenEXR: {e}; the file may be truncated or corrupt"),
-    )
+    let why = match e {
+        // A feature the reader lacks (deep data, subsampled channels): not damage.
+        exr::error::Error::NotSupported(_) => {
+            "this OpenEXR feature is not read: save the image as a flat (not deep) scanline \
+             or tiled image, each channel at full resolution"
+        }
+        _ => "the file may be truncated or corrupt",
+    };
+    Error::format(path, format!("cannot read as OpenEXR: {e}; {why}"))
 }
 
 pub(crate) fn parse_exr_scalar(bytes: &[u8], path: &Path) -> Result<ScalarMap> {
