@@ -421,3 +421,41 @@ fn refinement_without_pre_processing_says_what_needs_the_range_filled() {
     );
     assert!(!half.contains("`refine` none"), "{half}");
 }
+
+/// A refinement is refused before its filter runs when the memory its filter says it takes
+/// cannot be had: `brume prep` and `brume render` of a 4000x3000 Cityscapes frame under
+/// `ulimit -v` aborted the process on a failed allocation inside the refinement.
+#[test]
+fn a_refinement_that_cannot_fit_in_memory_is_refused_before_it_runs() {
+    use brume::refine::{refine_range, RangeFilter, RefineMode, RefineOptions};
+    /// A filter that says it takes a terabyte a pixel, and must not be run.
+    struct Huge;
+    impl RangeFilter for Huge {
+        fn upsample(&mut self, _: &RgbImage, _: &ScalarMap, _: f64) -> brume::Result<ScalarMap> {
+            panic!("upsample ran")
+        }
+        fn guided(&mut self, _: &RgbImage, _: &ScalarMap, _: &Refine) -> brume::Result<ScalarMap> {
+            panic!("guided filter ran")
+        }
+        fn bytes_per_pixel(&self) -> u64 {
+            1 << 40
+        }
+    }
+    let image = common::noise_image(16, 12, 3);
+    let range = Grid::from_fn(16, 12, |x, _| 5.0 + x as f32);
+    let opts = RefineOptions {
+        mode: RefineMode::Guided,
+        ..RefineOptions::default()
+    };
+    match refine_range(&image, &range, None, &opts, &mut Huge) {
+        Err(e @ brume::Error::OutOfMemory { .. }) => {
+            let msg = e.to_string();
+            assert!(msg.contains("refining the range of a 16x12 image"), "{msg}");
+            assert!(msg.contains("no refinement"), "{msg}");
+        }
+        other => panic!("{other:?}"),
+    }
+    // The CPU filter's own figure lets a small refinement run.
+    let refined = refine_range(&image, &range, None, &opts, &mut brume::refine::CpuFilter);
+    assert_eq!(refined.unwrap().width(), 16);
+}

@@ -207,7 +207,26 @@ pub trait RangeFilter {
     /// The guided filter of `range` (> 0, of the image's size) with `image` as guide
     /// ([`super::guided_range_reference`]).
     fn guided(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap>;
+    /// Bytes of system memory per pixel of the image that a refinement by this filter takes
+    /// at its peak, checked before it runs: [`CpuFilter`]'s figure unless a filter says.
+    fn bytes_per_pixel(&self) -> u64 {
+        CPU_FILTER_BYTES_PER_PIXEL
+    }
 }
+
+/// [`RangeFilter::bytes_per_pixel`] of [`CpuFilter`]: 13.9 bytes per pixel of address space
+/// measured (`ulimit -v`) for `brume prep --refine repair` or `guided` of a 4000x3000 frame
+/// from the start of the refinement to its end.
+const CPU_FILTER_BYTES_PER_PIXEL: u64 = 16;
+
+/// [`RangeFilter::bytes_per_pixel`] of the renderer on a software renderer, which keeps its
+/// textures in system memory: a 4000x3000 `brume render --refine repair` on llvmpipe aborted
+/// with 277 MB of address space left when it began (23 bytes per pixel), and passed with
+/// 297 MB (24.8).
+const SOFTWARE_GPU_FILTER_BYTES_PER_PIXEL: u64 = 28;
+
+/// [`RangeFilter::bytes_per_pixel`] of the renderer on a GPU: the refined range read back.
+const GPU_FILTER_BYTES_PER_PIXEL: u64 = 8;
 
 impl RangeFilter for crate::Renderer {
     fn upsample(
@@ -220,6 +239,13 @@ impl RangeFilter for crate::Renderer {
     }
     fn guided(&mut self, image: &RgbImage, range: &ScalarMap, opts: &Refine) -> Result<ScalarMap> {
         Ok(crate::Renderer::refine(self, image, range, opts)?.0)
+    }
+    fn bytes_per_pixel(&self) -> u64 {
+        if self.caps().software() {
+            SOFTWARE_GPU_FILTER_BYTES_PER_PIXEL
+        } else {
+            GPU_FILTER_BYTES_PER_PIXEL
+        }
     }
 }
 
@@ -260,6 +286,20 @@ pub fn refine_range(
     refine_with_masks(image, range, (filled, None), opts, filter)
 }
 
+/// Refuses a refinement of a `w`x`h` image that cannot fit in the memory left, before it
+/// allocates: `prep` and `render` aborted the process on a failed allocation there.
+fn check_memory(w: usize, h: usize, per_pixel: u64) -> Result<()> {
+    crate::memory::check_fits(
+        &format!("refining the range of a {w}x{h} image"),
+        per_pixel * w as u64 * h as u64,
+        crate::memory::available(),
+        &format!(
+            "the refinement holds about {per_pixel} bytes per pixel of the image: use a \
+             smaller image, or no refinement"
+        ),
+    )
+}
+
 /// [`refine_range`], with the receding ground beyond the sensor's reach and the sky (on
 /// the range's grid) interpolated when the range is upsampled
 /// ([`super::beyond::interpolate_receding`]).
@@ -277,6 +317,7 @@ fn refine_with_masks(
     if plan.is_empty() {
         return Ok(range.clone());
     }
+    check_memory(w, h, filter.bytes_per_pixel())?;
     // The ego vehicle's range 0 is not a range to filter (the filter reads log range): it
     // is kept out at the nearest range and put back after. A range without any is read as
     // it is, not copied (a copy is 48 MB at 12 MP).
