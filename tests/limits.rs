@@ -260,6 +260,23 @@ fn a_depth_map_too_large_to_decode_is_refused_from_its_header() {
     }
 }
 
+/// A file too large to hold in the memory left is refused with its size and what can be
+/// had, where the error said only "a.pfm: out of memory".
+#[test]
+fn a_file_too_large_to_read_says_how_large() {
+    let dir = tempfile::tempdir().unwrap();
+    // An 8000x6000 colour PFM of zeros, sparse: 576 MB long, nothing on disk.
+    let pfm = dir.path().join("a.pfm");
+    let header = b"PF\n8000 6000\n-1.0\n";
+    std::fs::write(&pfm, header).unwrap();
+    let file = std::fs::OpenOptions::new().write(true).open(&pfm).unwrap();
+    file.set_len(header.len() as u64 + 8000 * 6000 * 12)
+        .unwrap();
+    let o = brume_within(dir.path(), 400_000, &["compare", "a.pfm", "a.pfm"]);
+    let mentions = ["out of memory", "reading a.pfm", "576 MB", "smaller file"];
+    assert_refused(&o, &mentions);
+}
+
 /// A sky photo whose turbidity estimation cannot fit in the memory left is refused from
 /// its header, before it is decoded: a 4096x4096 EXR sky under `ulimit -v 1000000`
 /// aborted the process on a failed allocation.

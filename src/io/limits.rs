@@ -98,7 +98,7 @@ fn read_at_most(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
     if meta.is_file() {
         bytes
             .try_reserve_exact(meta.len() as usize)
-            .map_err(|_| Error::io(path, std::io::ErrorKind::OutOfMemory.into()))?;
+            .map_err(|_| cannot_hold(path, meta.len()))?;
     }
     (&mut file)
         .take(limit + 1)
@@ -114,6 +114,21 @@ fn read_at_most(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
         ));
     }
     Ok(bytes)
+}
+
+/// The error for a file of `len` bytes whose buffer could not be allocated: with its size
+/// and what could be had, where "out of memory" alone said neither.
+fn cannot_hold(path: &Path, len: u64) -> Error {
+    let human = crate::memory::human;
+    let left = crate::memory::available()
+        .map(|b| format!(", and only {} can be had", human(b)))
+        .unwrap_or_default();
+    Error::OutOfMemory {
+        what: format!("reading {}", path.display()),
+        detail: format!("needs {} to hold the file{left}", human(len)),
+        hint: "it is read whole before it is decoded: free memory, or give a smaller file"
+            .to_string(),
+    }
 }
 
 #[cfg(test)]
