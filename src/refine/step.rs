@@ -214,16 +214,16 @@ pub trait RangeFilter {
     }
 }
 
-/// [`RangeFilter::bytes_per_pixel`] of [`CpuFilter`]: 13.9 bytes per pixel of address space
-/// measured (`ulimit -v`) for `brume prep --refine repair` or `guided` of a 4000x3000 frame
-/// from the start of the refinement to its end.
-const CPU_FILTER_BYTES_PER_PIXEL: u64 = 16;
+/// [`RangeFilter::bytes_per_pixel`] of [`CpuFilter`]: `brume prep --refine repair` or
+/// `guided` of a 4000x3000 frame grew its resident memory by 20.0 bytes per pixel from the
+/// start of the refinement to its end (13.9 of address space, which `ulimit -v` counts).
+const CPU_FILTER_BYTES_PER_PIXEL: u64 = 22;
 
 /// [`RangeFilter::bytes_per_pixel`] of the renderer on a software renderer, which keeps its
-/// textures in system memory: a 4000x3000 `brume render --refine repair` on llvmpipe aborted
-/// with 277 MB of address space left when it began (23 bytes per pixel), and passed with
-/// 297 MB (24.8).
-const SOFTWARE_GPU_FILTER_BYTES_PER_PIXEL: u64 = 28;
+/// textures in system memory: a 4000x3000 `brume render --refine repair` on llvmpipe grew
+/// its resident memory by 31.2 bytes per pixel over the refinement (it aborted under
+/// `ulimit -v` with 23 bytes per pixel of address space left when it began).
+const SOFTWARE_GPU_FILTER_BYTES_PER_PIXEL: u64 = 34;
 
 /// [`RangeFilter::bytes_per_pixel`] of the renderer on a GPU: the refined range read back.
 const GPU_FILTER_BYTES_PER_PIXEL: u64 = 8;
