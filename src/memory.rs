@@ -4,12 +4,14 @@
 //!
 //! On a software renderer (llvmpipe) textures live in system memory, so the limit is the
 //! smallest of: the kernel's `MemAvailable`, the cgroup's memory limit less its usage
-//! (v2 `memory.max`, v1 `memory.limit_in_bytes`), and the address-space limit
+//! (v2 `memory.max`, v1 `memory.limit_in_bytes`; its clean file cache, which the kernel
+//! reclaims, not counted as used), and the address-space limit
 //! (`ulimit -v`) less the process's current size. A GPU's own memory cannot be queried
 //! portably in GLES; there brume reports `GL_OUT_OF_MEMORY` as [`Error::OutOfMemory`].
 
 use crate::error::{Error, Result};
 use std::fs;
+use std::path::Path;
 
 /// Bytes the system can still give this process, if any limit is known (Linux).
 pub fn available() -> Option<u64> {
@@ -63,30 +65,65 @@ fn kib_field(text: &str, key: &str) -> Option<u64> {
 
 fn cgroup_available() -> Option<u64> {
     let cgroups = fs::read_to_string("/proc/self/cgroup").ok()?;
+    cgroup_available_under(Path::new("/sys/fs/cgroup"), &cgroups)
+}
+
+/// What the memory cgroup that `cgroups` (the text of `/proc/self/cgroup`) names has left,
+/// its files under `root` (v2 or v1): its limit less its usage, where the usage counts the
+/// file cache as used. The kernel reclaims clean cache before it fails an allocation (as
+/// LXCFS counts it available): in a container whose reads had filled 957 MB of cache
+/// under a 2 GB limit, a 1.15 GB job was refused ("only 1.02 GB can be had") with nothing
+/// of brume's running. Cache that processes map (their code) or that waits to be written
+/// is counted as used.
+fn cgroup_available_under(root: &Path, cgroups: &str) -> Option<u64> {
     for line in cgroups.lines() {
         let mut parts = line.splitn(3, ':');
         let (_, controllers, path) = (parts.next()?, parts.next()?, parts.next()?);
-        let (limit, usage) = if controllers.is_empty() {
-            let dir = format!("/sys/fs/cgroup{path}");
-            (
-                read_number(&format!("{dir}/memory.max")),
-                read_number(&format!("{dir}/memory.current")),
-            )
+        let path = path.trim_start_matches('/');
+        let (dir, v1) = if controllers.is_empty() {
+            (root.join(path), false)
         } else if controllers.split(',').any(|c| c == "memory") {
-            let dir = format!("/sys/fs/cgroup/memory{path}");
-            (
-                read_number(&format!("{dir}/memory.limit_in_bytes")),
-                read_number(&format!("{dir}/memory.usage_in_bytes")),
-            )
+            (root.join("memory").join(path), true)
         } else {
             continue;
         };
-        // cgroup v1 writes "no limit" as a number near 2^63.
-        if let Some(limit) = limit.filter(|&l| l < 1 << 60) {
-            return Some(limit.saturating_sub(usage.unwrap_or(0)));
-        }
+        let [limit, usage] = if v1 {
+            ["memory.limit_in_bytes", "memory.usage_in_bytes"]
+        } else {
+            ["memory.max", "memory.current"]
+        };
+        // cgroup v1 writes "no limit" as a number near 2^63, v2 as "max".
+        let Some(limit) = read_number(&dir.join(limit)).filter(|&l| l < 1 << 60) else {
+            continue;
+        };
+        let usage = read_number(&dir.join(usage)).unwrap_or(0);
+        let stat = fs::read_to_string(dir.join("memory.stat")).unwrap_or_default();
+        return Some(limit.saturating_sub(usage.saturating_sub(reclaimable_cache(&stat, v1))));
     }
     None
+}
+
+/// The clean file cache that is not mapped, from a cgroup's `memory.stat` (v1's
+/// hierarchical `total_` fields, or v2's).
+fn reclaimable_cache(stat: &str, v1: bool) -> u64 {
+    let field = |v1_key: &str, v2_key: &str| {
+        let key = if v1 { v1_key } else { v2_key };
+        stat_field(stat, key).unwrap_or(0)
+    };
+    let cache =
+        field("total_active_file", "active_file") + field("total_inactive_file", "inactive_file");
+    let kept = field("total_mapped_file", "file_mapped")
+        + field("total_dirty", "file_dirty")
+        + field("total_writeback", "file_writeback");
+    cache.saturating_sub(kept)
+}
+
+/// A `key value` line of a cgroup's `memory.stat`.
+fn stat_field(text: &str, key: &str) -> Option<u64> {
+    text.lines().find_map(|line| {
+        let (k, v) = line.split_once(' ')?;
+        (k == key).then(|| v.trim().parse().ok())?
+    })
 }
 
 /// `ulimit -v` less the current virtual size (a conservative bound: llvmpipe reserves
@@ -107,7 +144,7 @@ fn address_space_available() -> Option<u64> {
     Some(soft.saturating_sub(size))
 }
 
-fn read_number(path: &str) -> Option<u64> {
+fn read_number(path: &Path) -> Option<u64> {
     fs::read_to_string(path).ok()?.trim().parse().ok()
 }
 
@@ -129,6 +166,59 @@ mod tests {
         assert!(err.contains("f16"), "{err}");
         assert!(check_fits("x", 10, Some(10), "").is_ok());
         assert!(check_fits("x", 10, None, "").is_ok());
+    }
+
+    /// The cgroup's usage less its clean, unmapped file cache, in both layouts.
+    #[test]
+    fn a_cgroup_leaves_its_reclaimable_file_cache_out_of_its_usage() {
+        let root = tempfile::tempdir().unwrap();
+        let write = |dir: &str, files: &[(&str, &str)]| {
+            let dir = root.path().join(dir);
+            fs::create_dir_all(&dir).unwrap();
+            for (name, text) in files {
+                fs::write(dir.join(name), text).unwrap();
+            }
+        };
+        // As measured in a v1 cgroup under a 2 GB limit after reading 1 GB of files twice
+        // (the second read made the cache active), with 10 MB mapped and 2 MB dirty added.
+        let stat = "cache 973676544\nactive_file 5\ntotal_cache 973676544\n\
+                    total_inactive_file 983040\ntotal_active_file 972693504\n\
+                    total_mapped_file 10000000\ntotal_dirty 2000000\ntotal_writeback 0\n";
+        write(
+            "memory/box",
+            &[
+                ("memory.limit_in_bytes", "2000000000\n"),
+                ("memory.usage_in_bytes", "974000000\n"),
+                ("memory.stat", stat),
+            ],
+        );
+        let v1 = "4:memory:/box\n0::/\n";
+        let cache = 983_040 + 972_693_504 - 10_000_000 - 2_000_000;
+        let left = 2_000_000_000 - (974_000_000 - cache);
+        assert_eq!(cgroup_available_under(root.path(), v1), Some(left));
+        let stat = "anon 100000000\nfile 500000000\nactive_file 100000000\n\
+                    inactive_file 400000000\nfile_mapped 50000000\nfile_dirty 0\n";
+        write(
+            "box2",
+            &[
+                ("memory.max", "1000000000\n"),
+                ("memory.current", "600000000\n"),
+                ("memory.stat", stat),
+            ],
+        );
+        let v2 = "0::/box2\n";
+        assert_eq!(cgroup_available_under(root.path(), v2), Some(850_000_000));
+        // No limit; a limit without a stat: the usage alone.
+        write(
+            "box3",
+            &[("memory.max", "max\n"), ("memory.current", "1\n")],
+        );
+        assert_eq!(cgroup_available_under(root.path(), "0::/box3\n"), None);
+        write(
+            "box4",
+            &[("memory.max", "100\n"), ("memory.current", "30\n")],
+        );
+        assert_eq!(cgroup_available_under(root.path(), "0::/box4\n"), Some(70));
     }
 
     #[test]

@@ -430,7 +430,7 @@ fn decoder_limits(format: ImageFormat) -> image::Limits {
     limits
 }
 
-/// The error of a PNG or JPEG the decoder gave up on.
+/// The error of an image the decoder gave up on: one it does not read, or a damaged one.
 fn cannot_decode(format: ImageFormat, name: &str) -> impl Fn(image::ImageError) -> Error + '_ {
     move |e| {
         let why = match e {
