@@ -222,7 +222,7 @@ fn a_depth_map_too_large_to_decode_is_refused_from_its_header() {
     std::fs::write(&pfm, [&b"Pf\n8000 6000\n-1.0\n"[..], &[0; 4]].concat()).unwrap();
     let npy = dir.path().join("flat-8000x6000.npy");
     let mut header = b"{'descr': '<f4', 'fortran_order': False, 'shape': (6000, 8000), }".to_vec();
-    header.resize(118, b' ');
+    header.resize(117, b' ');
     header.push(b'\n');
     let npy_bytes = [&b"\x93NUMPY\x01\x00\x76\x00"[..], &header, &[0; 4]].concat();
     std::fs::write(&npy, npy_bytes).unwrap();
