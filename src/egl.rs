@@ -35,6 +35,25 @@ const PLATFORM_SURFACELESS_MESA: egl::Enum = 0x31DD;
 const PLATFORM_DEVICE_EXT: egl::Enum = 0x313F;
 const DEBIAN_PACKAGES: &str = "libegl1 libegl-mesa0 libgles2 libgl1-mesa-dri";
 
+/// Memory below which a display that cannot be opened is likely to lack memory rather than
+/// a package: llvmpipe's `eglInitialize` failed with 167-208 MB left under `ulimit -v`
+/// (2 cores; more threads take more) and worked with 285 MB.
+const DRIVER_START_BYTES: u64 = 320_000_000;
+
+/// What to say of the memory `available` when no display could be opened: nothing, unless
+/// it is too little for a driver to start.
+fn low_memory_hint(available: Option<u64>) -> String {
+    match available {
+        Some(left) if left < DRIVER_START_BYTES => format!(
+            "; only {} of memory can be had, which may be too little for the driver to start \
+             (llvmpipe needs about {}): free memory or raise the limit",
+            crate::memory::human(left),
+            crate::memory::human(DRIVER_START_BYTES)
+        ),
+        _ => String::new(),
+    }
+}
+
 /// The platforms whose display this process, or a process it was forked from, opened, with
 /// the process that opened each.
 static OPENED: Mutex<Vec<(Platform, u32)>> = Mutex::new(Vec::new());
@@ -192,9 +211,10 @@ impl GlContext {
             ""
         };
         Err(Error::Egl(format!(
-            "no usable display (tried {}){default_hint}; on Debian/Ubuntu install Mesa's EGL \
-             and GLES with: apt-get install {DEBIAN_PACKAGES}",
-            tried.join("; ")
+            "no usable display (tried {}){default_hint}{}; on Debian/Ubuntu install Mesa's \
+             EGL and GLES with: apt-get install {DEBIAN_PACKAGES}",
+            tried.join("; "),
+            low_memory_hint(crate::memory::available())
         )))
     }
 
@@ -491,4 +511,22 @@ fn create_context(
         egl_vendor,
         egl_version,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A display that cannot be opened with little memory left says so, beside the
+    /// packages to install; with memory to spare, or none known, it says nothing of it.
+    #[test]
+    fn too_little_memory_is_named_when_no_display_opens() {
+        let hint = low_memory_hint(Some(167_000_000));
+        assert!(
+            hint.contains("only 167 MB") && hint.contains("320 MB"),
+            "{hint}"
+        );
+        assert_eq!(low_memory_hint(Some(4_000_000_000)), "");
+        assert_eq!(low_memory_hint(None), "");
+    }
 }
