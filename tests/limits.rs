@@ -185,29 +185,39 @@ fn an_image_too_large_for_memory_is_refused_with_sizes() {
 fn a_depth_map_too_large_to_pre_process_is_refused_with_sizes() {
     let dir = tempfile::tempdir().unwrap();
     let depth = big("flat-8000x6000-depth16.png");
-    let args = [
-        "prep",
-        "--depth",
-        &depth,
-        "--depth-format",
-        "kitti",
-        "--fov",
-        "45",
-    ];
     // Room to decode the map (672 MB from about 770 left), not to pre-process it.
-    let o = brume_within(
-        dir.path(),
-        900_000,
-        &[&args[..], &["--out", "range.pfm"]].concat(),
-    );
     let mentions = [
         "out of memory",
         "pre-processing",
         "8000x6000",
         "smaller depth map",
     ];
-    assert_refused(&o, &mentions);
-    assert!(!dir.path().join("range.pfm").exists());
+    assert_prep_refused(
+        dir.path(),
+        900_000,
+        &depth,
+        ["--depth-format", "kitti"],
+        &mentions,
+    );
+}
+
+/// Runs `brume prep` of `depth`, read as `format` (a flag and its value) says with a 45°
+/// field of view, under `kib` KiB of address space, and asserts that it is refused naming
+/// `mentions` and writes no output.
+fn assert_prep_refused(dir: &Path, kib: u64, depth: &str, format: [&str; 2], mentions: &[&str]) {
+    let args = [
+        "prep",
+        "--depth",
+        depth,
+        format[0],
+        format[1],
+        "--fov",
+        "45",
+        "--out",
+        "range.pfm",
+    ];
+    assert_refused(&brume_within(dir, kib, &args), mentions);
+    assert!(!dir.join("range.pfm").exists());
 }
 
 /// A depth map whose decoding cannot fit in the memory left is refused from its header, in
@@ -234,20 +244,6 @@ fn a_depth_map_too_large_to_decode_is_refused_from_its_header() {
         (npy.display().to_string(), "8000x6000"),
     ];
     for (map, size) in &maps {
-        let args = [
-            "prep",
-            "--depth",
-            map,
-            "--depth-scale",
-            "0.001",
-            "--fov",
-            "45",
-        ];
-        let o = brume_within(
-            dir.path(),
-            400_000,
-            &[&args[..], &["--out", "range.pfm"]].concat(),
-        );
         let mentions = [
             "out of memory",
             "reading the depth map",
@@ -255,8 +251,8 @@ fn a_depth_map_too_large_to_decode_is_refused_from_its_header() {
             size,
             "smaller depth map",
         ];
-        assert_refused(&o, &mentions);
-        assert!(!dir.path().join("range.pfm").exists());
+        let scale = ["--depth-scale", "0.001"];
+        assert_prep_refused(dir.path(), 400_000, map, scale, &mentions);
     }
 }
 
