@@ -13,7 +13,7 @@ use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
 use brume::Error;
 
-use crate::common;
+use crate::common::{self, npz_bytes};
 
 /// Expects an error without printing a (large) map if there is none.
 fn expect_err<T>(r: brume::Result<T>) -> Error {
@@ -898,24 +898,6 @@ fn npy_float32_and_float64() {
         &common::npy_bytes("<f4", "(6,)", false, &f32s),
     );
     expect_format_error(load_range(&p, &DepthOptions::default()), "(height, width)");
-}
-
-/// A `.npz` as numpy's `np.savez` (stored) or `np.savez_compressed` (deflated) writes it:
-/// one `.npy` member per array.
-fn npz_bytes(arrays: &[(&str, Vec<u8>)], deflated: bool) -> Vec<u8> {
-    use std::io::Write;
-    let method = if deflated {
-        zip::CompressionMethod::Deflated
-    } else {
-        zip::CompressionMethod::Stored
-    };
-    let options = zip::write::SimpleFileOptions::default().compression_method(method);
-    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
-    for (name, npy) in arrays {
-        zip.start_file(format!("{name}.npy"), options).unwrap();
-        zip.write_all(npy).unwrap();
-    }
-    zip.finish().unwrap().into_inner()
 }
 
 #[test]

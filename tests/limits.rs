@@ -256,6 +256,62 @@ fn a_depth_map_too_large_to_decode_is_refused_from_its_header() {
     }
 }
 
+/// A depth map a file holds is refused from its own header before it is inflated or
+/// decoded: an `.npz` member (a compressed member of one repeated value is a few hundred
+/// kilobytes for gigabytes of array: `brume prep` of a 559 kB `np.savez_compressed`
+/// 8000x6000 float64 map was killed under a 300-500 MB cgroup limit) and a phone JPEG's
+/// depth image (here `dd8.jpg`'s Dynamic Depth PNG, its header saying 8000x6000).
+#[test]
+fn a_depth_map_inside_a_file_is_refused_from_its_own_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let npy = npy_bytes("<f8", "(6000, 8000)", false, &[0; 8]);
+    let npz = dir.path().join("pro.npz");
+    std::fs::write(&npz, npz_bytes(&[("depth", npy)], true)).unwrap();
+    let jpeg = dir.path().join("portrait.jpg");
+    std::fs::write(&jpeg, with_depth_png_sized(8000, 6000)).unwrap();
+    let maps = [
+        (npz.display().to_string(), "pro.npz (its array 'depth')"),
+        (
+            jpeg.display().to_string(),
+            "portrait.jpg (its Dynamic Depth",
+        ),
+    ];
+    for (map, named) in &maps {
+        let mentions = ["out of memory", named, "8000x6000", "smaller depth map"];
+        let auto = ["--depth-format", "auto"];
+        assert_prep_refused(dir.path(), 400_000, map, auto, &mentions);
+    }
+}
+
+/// `dd8.jpg` (a Dynamic Depth JPEG whose depth PNG is appended last) with that PNG's
+/// header saying `width` x `height`, its checksum mended; the pixels stay 32x24's.
+fn with_depth_png_sized(width: u32, height: u32) -> Vec<u8> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/gdepth/dd8.jpg");
+    let mut bytes = std::fs::read(path).unwrap();
+    let ihdr = bytes.windows(4).rposition(|w| w == b"IHDR").unwrap();
+    bytes[ihdr + 4..ihdr + 8].copy_from_slice(&width.to_be_bytes());
+    bytes[ihdr + 8..ihdr + 12].copy_from_slice(&height.to_be_bytes());
+    let crc = crc32(&bytes[ihdr..ihdr + 17]);
+    bytes[ihdr + 17..ihdr + 21].copy_from_slice(&crc.to_be_bytes());
+    bytes
+}
+
+/// PNG's CRC-32 (ISO 3309), bit by bit.
+fn crc32(data: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &byte in data {
+        crc ^= u32::from(byte);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
 /// A file too large to hold in the memory left is refused with its size and what can be
 /// had, where the error said only "a.pfm: out of memory".
 #[test]

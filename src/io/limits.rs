@@ -116,6 +116,36 @@ fn read_at_most(path: &Path, limit: u64, what: &str) -> Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// Bytes per pixel that decoding a depth map and reading it as range take at their peak,
+/// besides the file's bytes, measured for 8000x6000 maps: 12 resident at most (a float64
+/// TIFF, whose samples are decoded whole before they become f32; 8.1 the others), and up
+/// to 13.6 of address space, which `ulimit -v` counts with the decoder's threads' arenas
+/// (11.2 an `.npy`, 11 an EXR, 9.6 a PFM or a float32 TIFF, 7.6 a 16-bit PNG).
+pub(crate) const MAP_DECODING_BYTES_PER_PIXEL: u64 = 14;
+
+/// Refuses to decode `name`, a depth map (or the map a file holds: an archive's member, a
+/// phone JPEG's depth image) of `width` x `height` from its header, when its decoding and
+/// the `held` bytes it needs first (an archive member inflated) cannot fit in the memory
+/// left: before the decoder allocates for it, so that the error names the map and its
+/// size where the allocator would abort the process or a cgroup kill it.
+pub(crate) fn check_map_decoding_fits(
+    name: &str,
+    width: usize,
+    height: usize,
+    held: u64,
+) -> Result<()> {
+    let pixels = width as u64 * height as u64;
+    crate::memory::check_fits(
+        &format!("reading the depth map {name} ({width}x{height})"),
+        held.saturating_add(MAP_DECODING_BYTES_PER_PIXEL.saturating_mul(pixels)),
+        crate::memory::available(),
+        &format!(
+            "reading a depth map holds about {MAP_DECODING_BYTES_PER_PIXEL} bytes per pixel \
+             besides its file: use a smaller depth map"
+        ),
+    )
+}
+
 /// The error for a file of `len` bytes whose buffer could not be allocated: with its size
 /// and what could be had, where "out of memory" alone said neither.
 fn cannot_hold(path: &Path, len: u64) -> Error {

@@ -235,6 +235,24 @@ pub fn npy_bytes(descr: &str, shape: &str, fortran: bool, data: &[u8]) -> Vec<u8
     b
 }
 
+/// A `.npz` as numpy's `np.savez` (stored) or `np.savez_compressed` (deflated) writes it:
+/// one `.npy` member per array.
+pub fn npz_bytes(arrays: &[(&str, Vec<u8>)], deflated: bool) -> Vec<u8> {
+    use std::io::Write;
+    let method = if deflated {
+        zip::CompressionMethod::Deflated
+    } else {
+        zip::CompressionMethod::Stored
+    };
+    let options = zip::write::SimpleFileOptions::default().compression_method(method);
+    let mut zip = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    for (name, npy) in arrays {
+        zip.start_file(format!("{name}.npy"), options).unwrap();
+        zip.write_all(npy).unwrap();
+    }
+    zip.finish().unwrap().into_inner()
+}
+
 /// The window-depth buffer a GL renderer would write for a simple world seen by `camera`
 /// (top row first, as the renderer takes buffers): the ground plane y = 0, a wall of
 /// height 6 at z = −40 for |x| < 8, a pillar at (−3, −12), and sky (depth 1) elsewhere.

@@ -6,7 +6,7 @@ use std::io::{Cursor, Read};
 use std::path::Path;
 
 use super::{MapSamples, NpzDepth, NPZ_FOCAL_ARRAY};
-use crate::io::limits::check_size;
+use crate::io::limits::{check_map_decoding_fits, check_size};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
@@ -256,7 +256,11 @@ fn read_member(member: impl Read, path: &Path, name: &str) -> Result<Vec<u8>> {
         .take(NPY_PREAMBLE + MAX_HEADER as u64)
         .read_to_end(&mut npy)
         .map_err(inflate)?;
-    if let Some(len) = npy_len(&npy, path)? {
+    if let Some((len, (w, h))) = npy_extent(&npy, path)? {
+        // Before the member is inflated: a compressed member of one repeated value is a
+        // few hundred kilobytes for gigabytes of array.
+        let member_name = format!("{} (its array '{name}')", path.display());
+        check_map_decoding_fits(&member_name, w, h, len as u64)?;
         let rest = (len as u64).saturating_sub(npy.len() as u64);
         member.take(rest).read_to_end(&mut npy).map_err(inflate)?;
         npy.truncate(len);
@@ -265,9 +269,9 @@ fn read_member(member: impl Read, path: &Path, name: &str) -> Result<Vec<u8>> {
 }
 
 /// The length of a whole `.npy` file from its first bytes (header and the data its shape
-/// and dtype need), once its header is known to be plain; `None` for a dtype without a
-/// fixed size, which `parse_npy` then names.
-fn npy_len(head: &[u8], path: &Path) -> Result<Option<usize>> {
+/// and dtype need) and its grid's size, once its header is known to be plain; `None` for
+/// a dtype without a fixed size, which `parse_npy` then names.
+fn npy_extent(head: &[u8], path: &Path) -> Result<Option<(usize, (usize, usize))>> {
     check_header(head, path)?;
     let mut data = head;
     let header = npyz::NpyHeader::from_reader(&mut data)
@@ -278,7 +282,7 @@ fn npy_len(head: &[u8], path: &Path) -> Result<Option<usize>> {
     Ok(npy
         .dtype()
         .num_bytes()
-        .map(|item| header_len + w * h * item))
+        .map(|item| (header_len + w * h * item, (w, h))))
 }
 
 /// Bytes before a `.npy` header's text: magic, version and length (4 bytes from version 2).

@@ -632,6 +632,10 @@ pub(super) fn decode_image(
         ));
     }
     let name = format!("{} (its {format_name} depth image)", path.display());
+    // Left to the decoder to report when its header cannot be read.
+    if let Ok((w, h)) = crate::io::image::image_dimensions(bytes, &name) {
+        crate::io::limits::check_map_decoding_fits(&name, w as usize, h as usize, 0)?;
+    }
     Ok(match crate::io::image::decode_any(bytes, &name)? {
         DynamicImage::ImageLuma8(g) => Samples::Eight(grid(g)),
         DynamicImage::ImageLuma16(g) => Samples::Sixteen(grid(g)),

@@ -11,6 +11,7 @@ use crate::io::codec::pfm::{parse_header, parse_pfm, Pfm};
 use crate::io::codec::png::{self, GreyPng};
 use crate::io::codec::tiff::{parse_tiff, tiff_size};
 use crate::io::codec::MapSamples;
+use crate::io::limits::check_map_decoding_fits;
 use crate::io::png_chunks::{png_ihdr_size, PNG_IHDR_END};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -136,17 +137,10 @@ fn colour_pfm(path: &Path) -> Error {
     )
 }
 
-/// Bytes per pixel that decoding a depth file and reading it as range take at their peak,
-/// besides the file's bytes, measured for 8000x6000 maps: 12 resident at most (a float64
-/// TIFF, whose samples are decoded whole before they become f32; 8.1 the others), and up
-/// to 13.6 of address space, which `ulimit -v` counts with the decoder's threads' arenas
-/// (11.2 an `.npy`, 11 an EXR, 9.6 a PFM or a float32 TIFF, 7.6 a 16-bit PNG).
-const DECODING_BYTES_PER_PIXEL: u64 = 14;
-
 /// Refuses a depth file whose decoding cannot fit in the memory left, from the size its
 /// header gives, before the decoder allocates for it. Files whose header cannot be read
-/// are left to the decoder's error; a phone JPEG's embedded map (a few hundred pixels a
-/// side) and an `.npz` member (read on its own, within `io::limits`) are not checked.
+/// are left to the decoder's error; an `.npz` member and a phone JPEG's depth image are
+/// checked as they are reached ([`parse_npz`], [`gdepth::decode_image`]).
 fn check_decoding_fits(bytes: &[u8], path: &Path, ext: &str) -> Result<()> {
     let size = match ext {
         "png" => bytes
@@ -162,15 +156,7 @@ fn check_decoding_fits(bytes: &[u8], path: &Path, ext: &str) -> Result<()> {
     let Some((w, h)) = size else {
         return Ok(());
     };
-    crate::memory::check_fits(
-        &format!("reading the depth map {} ({w}x{h})", path.display()),
-        DECODING_BYTES_PER_PIXEL * w as u64 * h as u64,
-        crate::memory::available(),
-        &format!(
-            "reading a depth map holds about {DECODING_BYTES_PER_PIXEL} bytes per pixel \
-             besides its file: use a smaller depth map"
-        ),
-    )
+    check_map_decoding_fits(&path.display().to_string(), w, h, 0)
 }
 
 /// A float or integer file's samples (EXR, TIFF, NumPy): uint16 ones as a 16-bit PNG's,
