@@ -25,6 +25,32 @@ pub fn available() -> Option<u64> {
     .min()
 }
 
+/// Refuses `needed` bytes for `what` when more than the memory left ([`available`]) are
+/// needed, once the allocator has handed back what it keeps of the memory freed
+/// ([`release_freed`]): the `brume` program keeps it for speed, and a long run (a batch, a
+/// host's renderer) holds hundreds of megabytes so, which it would reuse but the system
+/// counts as used.
+pub fn check_available(what: &str, needed: u64, hint: &str) -> Result<()> {
+    let mut left = available();
+    if left.is_some_and(|left| needed > left) && release_freed() {
+        left = available();
+    }
+    check_fits(what, needed, left, hint)
+}
+
+/// Hands the memory this process has freed but its allocator keeps (glibc's arenas) back
+/// to the system; true where that was done (Linux with glibc).
+pub fn release_freed() -> bool {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        // SAFETY: malloc_trim only returns free pages of glibc's arenas to the kernel.
+        unsafe { libc::malloc_trim(0) };
+        true
+    }
+    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+    false
+}
+
 /// Refuses `needed` bytes for `what` when more than `available` are left.
 pub fn check_fits(what: &str, needed: u64, available: Option<u64>, hint: &str) -> Result<()> {
     match available {

@@ -94,6 +94,16 @@ impl Uploads {
         depth.upload_flipped(scalar.as_slice());
         Ok((colour, depth.raw()))
     }
+
+    /// Bytes of the kept textures, which the next upload reuses or frees before it
+    /// allocates.
+    fn bytes(&self) -> u64 {
+        [&self.colour, &self.scalar]
+            .into_iter()
+            .flatten()
+            .map(Texture::bytes)
+            .sum()
+    }
 }
 
 impl Renderer {
@@ -126,6 +136,32 @@ impl Renderer {
     /// The clock [`Timing::Blocking`] times with.
     pub fn preferred_clock(&self) -> Clock {
         self.pipeline.preferred_clock()
+    }
+
+    /// Bytes of system memory the uploads' kept textures hold: a software renderer's, none
+    /// on a GPU (for the refinement's memory check).
+    pub(crate) fn kept_upload_bytes(&self) -> u64 {
+        if self.caps().software() {
+            self.uploads.bytes()
+        } else {
+            0
+        }
+    }
+
+    /// Bytes of the textures kept between frames ([`Renderer::free_kept_textures`]): the
+    /// next frame reuses them, or frees them before it makes others, so its memory check
+    /// does not count them again.
+    pub fn kept_texture_bytes(&self) -> u64 {
+        self.uploads.bytes() + self.pipeline.kept_diffusion_bytes()
+    }
+
+    /// Frees the textures kept between frames, the uploads' and the diffusion's targets
+    /// (80 bytes per pixel of the last frame in f32, in system memory on a software
+    /// renderer); the next frame makes them again. For a host that needs the memory for
+    /// other work between frames.
+    pub fn free_kept_textures(&mut self) {
+        self.uploads = Uploads::default();
+        self.pipeline.free_kept_targets();
     }
 
     /// The texture-in, framebuffer-out pipeline underneath.
@@ -306,14 +342,17 @@ impl Renderer {
     }
 
     /// On a software renderer, refuses a frame whose textures and read-back would not fit
-    /// in the memory left, before allocating any of it (see [`crate::memory`]).
+    /// in the memory left, before allocating any of it (see [`crate::memory`]). The
+    /// textures kept from the last frame are not counted twice: the frame reuses them, or
+    /// frees them before it allocates others.
     fn check_memory(&self, w: usize, h: usize, medium: &dyn Medium, blur: &Blur) -> Result<()> {
         if !self.caps().software() {
             return Ok(());
         }
         let coarse = blur.coarse_bytes_per_pixel(medium);
         let per_pixel = bytes_per_pixel(blur.precision, medium) + coarse;
-        let needed = per_pixel * (w as u64) * (h as u64);
+        let kept = self.kept_texture_bytes();
+        let needed = (per_pixel * (w as u64) * (h as u64)).saturating_sub(kept);
         let mut hint = format!(
             "this renderer keeps textures in system memory ({per_pixel} bytes per pixel here); "
         );
@@ -324,12 +363,7 @@ impl Renderer {
             hint.push_str("use ");
         }
         hint.push_str("a smaller image");
-        crate::memory::check_fits(
-            &format!("a {w}x{h} render"),
-            needed,
-            crate::memory::available(),
-            &hint,
-        )
+        crate::memory::check_available(&format!("a {w}x{h} render"), needed, &hint)
     }
 }
 

@@ -312,6 +312,114 @@ fn crc32(data: &[u8]) -> u32 {
     !crc
 }
 
+/// The textures a renderer keeps between frames are what its memory check leaves out (a
+/// batch's second frame was refused the 168 MB a 2048x1024 frame's textures take, which
+/// the first had left in place), and `free_kept_textures` frees them, to be made again by
+/// the next frame (as a batch does before it tries a frame refused memory alone).
+#[test]
+fn kept_textures_are_counted_and_freed() {
+    let (_lock, mut headless) = renderer();
+    let r = headless.renderer().unwrap();
+    let (w, h) = (64, 48);
+    let image = noise_image(w, h, 3);
+    let range = ramp_range(w, h);
+    let blur = Blur {
+        coarse_from: None,
+        ..Blur::default()
+    };
+    let render = |r: &mut brume::Renderer| {
+        r.render(&image, &range, &Haze::default(), &blur).unwrap();
+    };
+    assert_eq!(r.kept_texture_bytes(), 0);
+    render(r);
+    // The image (RGB32F) and the range (R32F) uploaded, and haze's two RGBA32F targets
+    // (its airlight is the same everywhere: one target holds τ·(E − L∞) and ρ).
+    assert_eq!(r.kept_texture_bytes(), (12 + 4 + 2 * 16) * (w * h) as u64);
+    let live = brume::gpu::live_objects();
+    r.free_kept_textures();
+    assert_eq!(r.kept_texture_bytes(), 0);
+    assert!(brume::gpu::live_objects() < live);
+    render(r);
+    assert_eq!(brume::gpu::live_objects(), live);
+}
+
+/// A batch's frame refused memory is tried again alone once the other frames are done,
+/// and refused a second time is one failure: the 8000x6000 photo here cannot be held in
+/// the memory left at all, the small frame beside it is written. (Under a 450 MB cgroup
+/// limit, two of three 2048x1024 frames failed, refused memory while the loader held the
+/// next frame; tried alone, every one is written.)
+#[test]
+fn a_frame_refused_memory_is_tried_again_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (64, 48);
+    save_png(
+        &dir.path().join("small.png").display().to_string(),
+        w,
+        h,
+        &vec![[90, 120, 150]; w * h],
+    );
+    let depth = vec![2560u16; w * h]; // 10 m as KITTI stores it
+    let bytes: Vec<u8> = depth.iter().flat_map(|v| v.to_ne_bytes()).collect();
+    let small_depth = dir.path().join("small-depth.png");
+    image::save_buffer(
+        &small_depth,
+        &bytes,
+        w as u32,
+        h as u32,
+        image::ColorType::L16,
+    )
+    .unwrap();
+    let manifest = format!(
+        "image,depth\nsmall.png,small-depth.png\n{},{}\n",
+        big("flat-8000x6000.png"),
+        big("flat-8000x6000-depth16.png")
+    );
+    std::fs::write(dir.path().join("frames.csv"), manifest).unwrap();
+    let args = [
+        "batch",
+        "--manifest",
+        "frames.csv",
+        "--depth-format",
+        "kitti",
+        "--fov",
+        "60",
+        "--beta",
+        "0.02",
+        "--out",
+        "foggy",
+    ];
+    let o = {
+        let _lock = gl_lock();
+        brume_within(dir.path(), 3_000_000, &args)
+    };
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("flat-8000x6000.png") && err.contains("tried again alone"),
+        "{err}"
+    );
+    assert!(
+        err.contains("1 frames and 0 outputs failed (1 outputs written)"),
+        "{err}"
+    );
+    let log = std::fs::read_to_string(dir.path().join("foggy/brume-batch-1-of-1.jsonl")).unwrap();
+    let statuses: Vec<&str> = log
+        .lines()
+        .map(|l| {
+            if l.contains("\"status\":\"ok\"") {
+                "ok"
+            } else {
+                "failed"
+            }
+        })
+        .collect();
+    assert_eq!(statuses, ["ok", "failed"], "{log}");
+    assert!(
+        log.contains("out of memory") && log.contains("8000x6000"),
+        "{log}"
+    );
+}
+
 /// A file too large to hold in the memory left is refused with its size and what can be
 /// had, where the error said only "a.pfm: out of memory".
 #[test]

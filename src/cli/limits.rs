@@ -87,10 +87,9 @@ pub fn parse_image_size(option: &str, text: &str) -> Result<(usize, usize)> {
 /// for the command, see the README) cannot fit in the memory left.
 pub fn check_memory(option: &str, width: usize, height: usize, bytes_per_pixel: u64) -> Result<()> {
     let pixels = width as u64 * height as u64;
-    brume::memory::check_fits(
+    brume::memory::check_available(
         &format!("{option} {width}x{height}"),
         pixels.saturating_mul(bytes_per_pixel),
-        brume::memory::available(),
         &format!(
             "this command holds about {bytes_per_pixel} bytes per pixel: give a smaller \
              {option}"

@@ -3,7 +3,8 @@
 //! frame and writing the last outputs run on their own threads while the GPU works.
 //! Outputs are written atomically and logged (JSON lines) as soon as each is in place, so
 //! a run that stops leaves only complete files, and the next run skips them. A [`Shard`]
-//! takes a deterministic share of the frames, for array jobs.
+//! takes a deterministic share of the frames, for array jobs. A frame refused memory
+//! while others were loaded beside it is tried again alone once they are done.
 //!
 //! ```no_run
 //! use brume::dataset::{Batch, BatchEvent, BatchOptions};
@@ -505,6 +506,14 @@ fn outputs_complete(opts: &BatchOptions, item: &Item, beta: f64) -> bool {
 /// A frame loaded, or why it could not be.
 type Loaded = std::result::Result<Frame, Failed>;
 
+/// `item`'s failure for `error`.
+fn failed(item: &Item, error: Error) -> Failed {
+    Failed {
+        item: item.clone(),
+        error,
+    }
+}
+
 /// Starts `count` loader threads in `scope`: loader k decodes and pre-processes frames k,
 /// k + count, k + 2·count … in turn, one ahead of the GPU. Returns the frames in their
 /// order, each taken from the loader that has it: every loader has a channel of its own,
@@ -539,10 +548,7 @@ fn load_frames<'a>(
     tx: SyncSender<Loaded>,
 ) {
     for item in frames {
-        let loaded = Frame::load(item, options).map_err(|error| Failed {
-            item: item.clone(),
-            error,
-        });
+        let loaded = Frame::load(item, options).map_err(|error| failed(item, error));
         if tx.send(loaded).is_err() {
             return;
         }
@@ -559,27 +565,87 @@ struct Gpu<'a> {
 
 impl Gpu<'_> {
     /// The GPU loop: every β of every frame, in the order the loader delivers them;
-    /// outputs and failures go to the writer thread as they come.
+    /// outputs and failures go to the writer thread as they come. A frame refused memory
+    /// before any of its outputs was made, while the loaders held others, is tried again
+    /// alone once they are done ([`Gpu::render_alone`]).
     fn render_frames(
         &mut self,
         renderer: &mut Renderer,
         pending: &[(Item, Vec<f64>)],
         loaded: impl Iterator<Item = Loaded>,
     ) {
-        for ((_, betas), loaded) in pending.iter().zip(loaded) {
-            let writer_alive = match loaded {
-                Ok(frame) => {
-                    self.times.frames += 1;
-                    self.times.decode_ms += frame.decode_ms;
-                    self.times.prep_ms += frame.prep_ms;
-                    self.frame_warned(&frame) && self.render_frame(renderer, frame, betas)
+        let mut short = Vec::new();
+        for ((item, betas), loaded) in pending.iter().zip(loaded) {
+            let was_loaded = loaded.is_ok();
+            let outcome = match loaded {
+                Ok(frame) => self.loaded_frame(renderer, frame, betas, true),
+                Err(failed) => Err(failed.error),
+            };
+            match outcome {
+                Ok(true) => {}
+                Ok(false) => return,
+                Err(Error::OutOfMemory { .. }) => short.push((item, betas, was_loaded)),
+                Err(error) => {
+                    if !self.frame_failed(failed(item, error), betas.len()) {
+                        return;
+                    }
                 }
-                Err(failed) => self.frame_failed(failed, betas.len()),
+            }
+        }
+        self.render_alone(renderer, &short);
+    }
+
+    /// Loads and renders each of `frames` (refused memory beside the frames loaded with
+    /// them: with `true` where it was loaded then) on this thread, one at a time, as a run
+    /// of one frame would; a second refusal is the frame's failure.
+    fn render_alone(&mut self, renderer: &mut Renderer, frames: &[(&Item, &Vec<f64>, bool)]) {
+        if let Some((first, ..)) = frames.first() {
+            let more = match frames.len() {
+                1 => String::new(),
+                n => format!(" (and {} more frames)", n - 1),
+            };
+            log::warn!(
+                "{}{more} ran out of memory beside the frames loaded and written with it: \
+                 tried again alone (fewer `loaders` hold less)",
+                first.image.display(),
+            );
+        }
+        let opts = self.opts;
+        for &(item, betas, was_loaded) in frames {
+            // The last frame's textures would be made again for this one anyway.
+            renderer.free_kept_textures();
+            // Counted, and its warnings sent, when it was first loaded.
+            let outcome = Frame::load(item, &opts.frame)
+                .and_then(|frame| self.loaded_frame(renderer, frame, betas, !was_loaded));
+            let writer_alive = match outcome {
+                Ok(alive) => alive,
+                Err(error) => self.frame_failed(failed(item, error), betas.len()),
             };
             if !writer_alive {
                 return;
             }
         }
+    }
+
+    /// Adds a loaded frame's times (and, when `first`, counts it and hands its warnings to
+    /// the writer), then renders it. False when the writer is gone; the error when the
+    /// frame failed before any of its outputs was sent (one after is handed on).
+    fn loaded_frame(
+        &mut self,
+        renderer: &mut Renderer,
+        frame: Frame,
+        betas: &[f64],
+        first: bool,
+    ) -> Result<bool> {
+        self.times.decode_ms += frame.decode_ms;
+        self.times.prep_ms += frame.prep_ms;
+        if first {
+            self.times.frames += 1;
+            if !self.frame_warned(&frame) {
+                return Ok(false);
+            }
+        }
+        self.render_frame(renderer, frame, betas)
     }
 
     /// Hands a frame's warnings, if it has any, to the writer; false when the writer is
@@ -602,16 +668,16 @@ impl Gpu<'_> {
     }
 
     /// Refines a frame once on the GPU, then renders its β values from one upload, each
-    /// output handed to the writer thread as soon as it is read back. A failure after some
-    /// outputs counts only those not sent. False when the writer is gone.
-    fn render_frame(&mut self, renderer: &mut Renderer, mut frame: Frame, betas: &[f64]) -> bool {
-        let fail = |item: &Item, error| Failed {
-            item: item.clone(),
-            error,
-        };
-        if let Err(e) = frame.refine(&self.opts.frame, renderer) {
-            return self.frame_failed(fail(&frame.item, e), betas.len());
-        }
+    /// output handed to the writer thread as soon as it is read back. False when the writer
+    /// is gone; the error when none of the outputs was sent (a failure after some counts
+    /// only those not sent, and is handed on here).
+    fn render_frame(
+        &mut self,
+        renderer: &mut Renderer,
+        mut frame: Frame,
+        betas: &[f64],
+    ) -> Result<bool> {
+        frame.refine(&self.opts.frame, renderer)?;
         self.times.refine_ms += frame.refine_ms;
         let (mut sent, mut writer_gone) = (0, false);
         let mut started = Instant::now();
@@ -638,10 +704,11 @@ impl Gpu<'_> {
             Ok(())
         });
         match result {
-            Ok(()) => true,
+            Ok(()) => Ok(true),
             // The writer is gone: the run is ending, nothing more to report.
-            Err(_) if writer_gone => false,
-            Err(error) => self.frame_failed(fail(&frame.item, error), betas.len() - sent),
+            Err(_) if writer_gone => Ok(false),
+            Err(error) if sent == 0 => Err(error),
+            Err(error) => Ok(self.frame_failed(failed(&frame.item, error), betas.len() - sent)),
         }
     }
 }

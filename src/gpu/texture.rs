@@ -318,6 +318,11 @@ impl Texture {
         self.format
     }
 
+    /// Bytes of its texels.
+    pub(crate) fn bytes(&self) -> u64 {
+        (self.width * self.height * self.format.bytes_per_texel()) as u64
+    }
+
     /// Binds the texture to texture unit `unit` and makes `unit` active (inside a pass,
     /// whose caller restores the host's units).
     pub fn bind(&self, unit: u32) {

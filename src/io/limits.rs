@@ -135,10 +135,9 @@ pub(crate) fn check_map_decoding_fits(
     held: u64,
 ) -> Result<()> {
     let pixels = width as u64 * height as u64;
-    crate::memory::check_fits(
+    crate::memory::check_available(
         &format!("reading the depth map {name} ({width}x{height})"),
         held.saturating_add(MAP_DECODING_BYTES_PER_PIXEL.saturating_mul(pixels)),
-        crate::memory::available(),
         &format!(
             "reading a depth map holds about {MAP_DECODING_BYTES_PER_PIXEL} bytes per pixel \
              besides its file: use a smaller depth map"

@@ -428,10 +428,9 @@ pub(crate) fn check_decoding_fits(
             },
         )
         .collect();
-    crate::memory::check_fits(
+    crate::memory::check_available(
         &format!("{doing} {}", named.join(" with ")),
         per_pixel * pixels,
-        crate::memory::available(),
         &hint.replace("{}", &per_pixel.to_string()),
     )
 }

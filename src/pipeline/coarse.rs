@@ -172,6 +172,18 @@ impl CoarseTargets {
             == ((width, height), precision, rate_in_alpha)
             && self.levels.len() >= count
     }
+
+    /// Bytes of their levels' texels.
+    pub(super) fn bytes(&self) -> u64 {
+        let level = |l: &Level| -> u64 {
+            l.d.iter()
+                .chain([&l.d0])
+                .chain(&l.rate)
+                .map(Texture::bytes)
+                .sum()
+        };
+        self.levels.iter().map(level).sum()
+    }
 }
 
 impl super::Pipeline {

@@ -386,6 +386,20 @@ impl Pipeline {
         Layout::of(medium).bytes_per_pixel(precision)
     }
 
+    /// Bytes of the diffusion's targets kept from the last frame (its coarse levels'
+    /// too), which the next frame reuses or frees before it allocates others.
+    pub(crate) fn kept_diffusion_bytes(&self) -> u64 {
+        let coarse = self.coarse.targets.as_ref().map_or(0, |c| c.bytes());
+        self.targets.as_ref().map_or(0, Targets::bytes) + coarse
+    }
+
+    /// Frees the diffusion's kept targets (its coarse levels' too): the next frame makes
+    /// them again.
+    pub(crate) fn free_kept_targets(&mut self) {
+        self.targets = None;
+        self.coarse.targets = None;
+    }
+
     /// The host's context.
     pub fn gl(&self) -> &Arc<glow::Context> {
         &self.gl

@@ -136,6 +136,17 @@ impl Targets {
     ) -> bool {
         (self.width, self.height, self.precision, self.layout) == (width, height, precision, layout)
     }
+
+    /// Bytes of their texels.
+    pub(super) fn bytes(&self) -> u64 {
+        let pair = self.tau_gb.iter().flatten();
+        self.f
+            .iter()
+            .chain(pair)
+            .chain(&self.rate)
+            .map(Texture::bytes)
+            .sum()
+    }
 }
 
 /// `textures`, then `more`: a framebuffer's attachments in order.

@@ -279,10 +279,9 @@ const PREP_BYTES_PER_PIXEL: [u64; 2] = [16, 40];
 /// not fit in the memory left ([`crate::memory`]), rather than let the allocator abort.
 pub(super) fn check_memory(w: usize, h: usize, guided: bool) -> Result<()> {
     let per_pixel = PREP_BYTES_PER_PIXEL[usize::from(guided)];
-    crate::memory::check_fits(
+    crate::memory::check_available(
         &format!("pre-processing a {w}x{h} range map"),
         per_pixel * w as u64 * h as u64,
-        crate::memory::available(),
         &format!(
             "pre-processing holds about {per_pixel} bytes per pixel of the depth map besides \
              it: use a smaller depth map"

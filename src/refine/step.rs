@@ -212,6 +212,12 @@ pub trait RangeFilter {
     fn bytes_per_pixel(&self) -> u64 {
         CPU_FILTER_BYTES_PER_PIXEL
     }
+    /// Bytes of system memory counted in [`RangeFilter::bytes_per_pixel`] that the filter
+    /// already holds from an earlier call and reuses, or frees before it allocates: none
+    /// unless a filter says.
+    fn kept_bytes(&self) -> u64 {
+        0
+    }
 }
 
 /// [`RangeFilter::bytes_per_pixel`] of [`CpuFilter`]: `brume prep --refine repair` or
@@ -246,6 +252,10 @@ impl RangeFilter for crate::Renderer {
         } else {
             GPU_FILTER_BYTES_PER_PIXEL
         }
+    }
+    /// The uploads' textures kept from the last frame, on a software renderer.
+    fn kept_bytes(&self) -> u64 {
+        self.kept_upload_bytes()
     }
 }
 
@@ -287,12 +297,12 @@ pub fn refine_range(
 }
 
 /// Refuses a refinement of a `w`x`h` image that cannot fit in the memory left, before it
-/// allocates: `prep` and `render` aborted the process on a failed allocation there.
-fn check_memory(w: usize, h: usize, per_pixel: u64) -> Result<()> {
-    crate::memory::check_fits(
+/// allocates: `prep` and `render` aborted the process on a failed allocation there. The
+/// `kept` bytes the filter holds already are not counted twice.
+fn check_memory(w: usize, h: usize, per_pixel: u64, kept: u64) -> Result<()> {
+    crate::memory::check_available(
         &format!("refining the range of a {w}x{h} image"),
-        per_pixel * w as u64 * h as u64,
-        crate::memory::available(),
+        (per_pixel * w as u64 * h as u64).saturating_sub(kept),
         &format!(
             "the refinement holds about {per_pixel} bytes per pixel of the image: use a \
              smaller image, or no refinement"
@@ -317,7 +327,7 @@ fn refine_with_masks(
     if plan.is_empty() {
         return Ok(range.clone());
     }
-    check_memory(w, h, filter.bytes_per_pixel())?;
+    check_memory(w, h, filter.bytes_per_pixel(), filter.kept_bytes())?;
     // The ego vehicle's range 0 is not a range to filter (the filter reads log range): it
     // is kept out at the nearest range and put back after. A range without any is read as
     // it is, not copied (a copy is 48 MB at 12 MP).
