@@ -280,12 +280,11 @@ pub(crate) fn check_outputs_fit(
     bytes_per_pixel: u64,
     hint: &str,
 ) -> PyResult<()> {
-    brume::memory::check_fits(
+    brume::memory::check_available(
         &format!("{outputs} outputs of {pixels} px each"),
         (outputs as u64)
             .saturating_mul(pixels as u64)
             .saturating_mul(bytes_per_pixel),
-        brume::memory::available(),
         hint,
     )
     .map_err(py_err)
