@@ -12,6 +12,7 @@
 use crate::error::{Error, Result};
 use std::fs;
 use std::path::Path;
+use std::sync::{Mutex, PoisonError};
 
 /// Bytes the system can still give this process, if any limit is known (Linux).
 pub fn available() -> Option<u64> {
@@ -25,17 +26,49 @@ pub fn available() -> Option<u64> {
     .min()
 }
 
-/// Refuses `needed` bytes for `what` when more than the memory left ([`available`]) are
-/// needed, once the allocator has handed back what it keeps of the memory freed
-/// ([`release_freed`]): the `brume` program keeps it for speed, and a long run (a batch, a
-/// host's renderer) holds hundreds of megabytes so, which it would reuse but the system
-/// counts as used.
+/// Refuses `needed` bytes for `what` when more than the memory left ([`available`], less
+/// what other threads' work has reserved) are needed, once the allocator has handed back
+/// what it keeps of the memory freed ([`release_freed`]): the `brume` program keeps it for
+/// speed, and a long run (a batch, a host's renderer) holds hundreds of megabytes so,
+/// which it would reuse but the system counts as used.
 pub fn check_available(what: &str, needed: u64, hint: &str) -> Result<()> {
-    let mut left = available();
-    if left.is_some_and(|left| needed > left) && release_freed() {
-        left = available();
+    reserve(what, needed, hint).map(drop)
+}
+
+/// Bytes that work on some thread was let take by [`reserve`] and may not have allocated
+/// yet.
+static RESERVED: Mutex<u64> = Mutex::new(0);
+
+/// Memory [`reserve`] let a piece of work take: every other check in the process counts it
+/// as taken until this is dropped, at the end of the work that allocates it. (While the
+/// work runs, what it has allocated is counted twice: checks on other threads err on the
+/// safe side.)
+#[must_use = "the memory is reserved until this is dropped"]
+#[derive(Debug)]
+pub struct Reservation {
+    bytes: u64,
+}
+
+impl Drop for Reservation {
+    fn drop(&mut self) {
+        let mut reserved = RESERVED.lock().unwrap_or_else(PoisonError::into_inner);
+        *reserved = reserved.saturating_sub(self.bytes);
     }
-    check_fits(what, needed, left, hint)
+}
+
+/// [`check_available`], and the memory reserved for the caller's work until the
+/// [`Reservation`] is dropped: two threads whose checks pass at one moment (a batch's
+/// loader and its GPU thread) cannot both take what is left.
+pub fn reserve(what: &str, needed: u64, hint: &str) -> Result<Reservation> {
+    let mut reserved = RESERVED.lock().unwrap_or_else(PoisonError::into_inner);
+    let unreserved = |reserved: u64| available().map(|left| left.saturating_sub(reserved));
+    let mut left = unreserved(*reserved);
+    if left.is_some_and(|left| needed > left) && release_freed() {
+        left = unreserved(*reserved);
+    }
+    check_fits(what, needed, left, hint)?;
+    *reserved = reserved.saturating_add(needed);
+    Ok(Reservation { bytes: needed })
 }
 
 /// Hands the memory this process has freed but its allocator keeps (glibc's arenas) back
@@ -177,6 +210,22 @@ fn read_number(path: &Path) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// What one thread reserved, another's check counts as taken until it is dropped (a
+    /// batch's loader and GPU thread both passed their checks at one moment and together
+    /// took more than a cgroup's limit: 2 runs of about 110 were killed).
+    #[test]
+    fn a_reservation_is_taken_from_other_checks_until_dropped() {
+        let Some(left) = available() else {
+            return; // no limit known on this system: nothing to reserve from
+        };
+        let most = left / 5 * 3;
+        let first = reserve("first", most, "").unwrap();
+        let e = check_available("second", most, "").unwrap_err();
+        assert!(matches!(e, Error::OutOfMemory { .. }), "{e}");
+        drop(first);
+        check_available("second", most, "").unwrap();
+    }
 
     #[test]
     fn too_large_is_refused_with_sizes_and_hint() {

@@ -97,7 +97,7 @@ pub fn compare_files(a: &Path, b: &Path) -> Result<(Similarity, (usize, usize))>
         ))
     };
     let ((a_bytes, a_name), (b_bytes, b_name)) = (read(a)?, read(b)?);
-    crate::photo::check_decoding_fits(
+    let _reserved = crate::photo::check_decoding_fits(
         &[(&a_bytes, &a_name), (&b_bytes, &b_name)],
         "comparing",
         COMPARE_BYTES_PER_PIXEL,

@@ -12,6 +12,7 @@ use crate::gpu::framebuffer::Framebuffer;
 use crate::gpu::texture::{TexelFormat, Texture};
 use crate::gpu::timer::{Clock, PassTimes, Timing};
 use crate::medium::Medium;
+use crate::memory::Reservation;
 use crate::pipeline::{Encoding, FogBlur, Frame, Input, Passes, Pipeline, RefineInput};
 use crate::raster::{Grid, RgbImage, RgbaImage, ScalarMap};
 use crate::refine::Refine;
@@ -197,9 +198,11 @@ impl Renderer {
         blur: &FogBlur,
     ) -> Result<Rendered> {
         self.check_frame(image, depth, medium, frame)?;
-        if let FogBlur::Diffusion(b) = blur {
-            self.check_memory(image.width(), image.height(), medium, b)?;
-        }
+        let size = (image.width(), image.height());
+        let _reserved = match blur {
+            FogBlur::Diffusion(b) => self.check_memory(size, medium, b)?,
+            _ => None,
+        };
         self.with_textures(image, depth, frame, |pipeline, input| {
             pipeline.fog_and_read(input, medium, blur)
         })
@@ -217,9 +220,13 @@ impl Renderer {
         mut each: impl FnMut(usize, Rendered) -> Result<()>,
     ) -> Result<()> {
         let frame = FrameInputs::default();
+        // One reservation at a time, the last one held while the media render in turn on
+        // the same textures (a dataset's are of one kind, and need the same).
+        let mut reserved = None;
         for medium in media {
             self.check_frame(image, depth, *medium, &frame)?;
-            self.check_memory(image.width(), image.height(), *medium, blur)?;
+            drop(reserved.take());
+            reserved = self.check_memory((image.width(), image.height()), *medium, blur)?;
         }
         let blur = FogBlur::Diffusion(*blur);
         let (w, h) = (image.width(), image.height());
@@ -342,12 +349,18 @@ impl Renderer {
     }
 
     /// On a software renderer, refuses a frame whose textures and read-back would not fit
-    /// in the memory left, before allocating any of it (see [`crate::memory`]). The
-    /// textures kept from the last frame are not counted twice: the frame reuses them, or
-    /// frees them before it allocates others.
-    fn check_memory(&self, w: usize, h: usize, medium: &dyn Medium, blur: &Blur) -> Result<()> {
+    /// in the memory left, before allocating any of it (see [`crate::memory`]), and
+    /// reserves that memory while the frame renders. The textures kept from the last frame
+    /// are not counted twice: the frame reuses them, or frees them before it allocates
+    /// others.
+    fn check_memory(
+        &self,
+        (w, h): (usize, usize),
+        medium: &dyn Medium,
+        blur: &Blur,
+    ) -> Result<Option<Reservation>> {
         if !self.caps().software() {
-            return Ok(());
+            return Ok(None);
         }
         let coarse = blur.coarse_bytes_per_pixel(medium);
         let per_pixel = bytes_per_pixel(blur.precision, medium) + coarse;
@@ -363,7 +376,7 @@ impl Renderer {
             hint.push_str("use ");
         }
         hint.push_str("a smaller image");
-        crate::memory::check_available(&format!("a {w}x{h} render"), needed, &hint)
+        crate::memory::reserve(&format!("a {w}x{h} render"), needed, &hint).map(Some)
     }
 }
 

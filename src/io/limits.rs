@@ -133,9 +133,9 @@ pub(crate) fn check_map_decoding_fits(
     width: usize,
     height: usize,
     held: u64,
-) -> Result<()> {
+) -> Result<crate::memory::Reservation> {
     let pixels = width as u64 * height as u64;
-    crate::memory::check_available(
+    crate::memory::reserve(
         &format!("reading the depth map {name} ({width}x{height})"),
         held.saturating_add(MAP_DECODING_BYTES_PER_PIXEL.saturating_mul(pixels)),
         &format!(

@@ -51,6 +51,7 @@ use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, 
 use crate::io::image::PhotoExif;
 use crate::io::metadata::PhotoMetadata;
 use crate::io::{demo, image};
+use crate::memory::Reservation;
 use crate::raster::{Orientation, RgbImage, ScalarMap};
 use std::path::Path;
 
@@ -374,18 +375,19 @@ impl Photo {
 /// cannot fit in the memory left ([`check_memory_before_decoding`]), and decodes it
 /// upright.
 fn load_image_within_memory(image_path: &Path) -> Result<image::UprightPhoto> {
-    load_checked(image_path, check_memory_before_decoding)
+    load_checked(image_path, reserve_before_decoding)
 }
 
 /// Reads the image file at `path` once, runs `check` on its bytes and name (a check of
-/// the memory its work needs, from its header), and decodes it upright.
+/// the memory its work needs, from its header, reserved while it is decoded), and decodes
+/// it upright.
 pub(crate) fn load_checked(
     path: &Path,
-    check: impl FnOnce(&[u8], &str) -> Result<()>,
+    check: impl FnOnce(&[u8], &str) -> Result<Reservation>,
 ) -> Result<image::UprightPhoto> {
     let bytes = crate::io::limits::read_file(path)?;
     let name = path.display().to_string();
-    check(&bytes, &name)?;
+    let _reserved = check(&bytes, &name)?;
     image::decode_upright_rgb(&bytes, &name)
 }
 
@@ -393,6 +395,11 @@ pub(crate) fn load_checked(
 /// pre-processing and render cannot fit in the memory left, before decoding it (a header
 /// that cannot be read is left to the decoder to report).
 pub fn check_memory_before_decoding(bytes: &[u8], name: &str) -> Result<()> {
+    reserve_before_decoding(bytes, name).map(drop)
+}
+
+/// [`check_memory_before_decoding`], the memory reserved until the reservation is dropped.
+fn reserve_before_decoding(bytes: &[u8], name: &str) -> Result<Reservation> {
     check_decoding_fits(
         &[(bytes, name)],
         "loading the photo",
@@ -411,7 +418,7 @@ pub(crate) fn check_decoding_fits(
     doing: &str,
     per_pixel: u64,
     hint: &str,
-) -> Result<()> {
+) -> Result<Reservation> {
     let mut pixels = 0;
     let named: Vec<String> = files
         .iter()
@@ -428,7 +435,7 @@ pub(crate) fn check_decoding_fits(
             },
         )
         .collect();
-    crate::memory::check_available(
+    crate::memory::reserve(
         &format!("{doing} {}", named.join(" with ")),
         per_pixel * pixels,
         &hint.replace("{}", &per_pixel.to_string()),

@@ -396,7 +396,7 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
     check_guide_sizes(range, &guides)?;
     let t0 = Instant::now();
     let (w, h) = (range.width(), range.height());
-    options::check_memory(w, h, guides.image.is_some())?;
+    let _reserved = options::check_memory(w, h, guides.image.is_some())?;
     let mut work: Vec<f32> = range
         .as_slice()
         .iter()

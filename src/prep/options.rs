@@ -277,9 +277,9 @@ const PREP_BYTES_PER_PIXEL: [u64; 2] = [16, 40];
 
 /// Refuses, before its maps are allocated, a pre-processing of a `w x h` range that would
 /// not fit in the memory left ([`crate::memory`]), rather than let the allocator abort.
-pub(super) fn check_memory(w: usize, h: usize, guided: bool) -> Result<()> {
+pub(super) fn check_memory(w: usize, h: usize, guided: bool) -> Result<crate::memory::Reservation> {
     let per_pixel = PREP_BYTES_PER_PIXEL[usize::from(guided)];
-    crate::memory::check_available(
+    crate::memory::reserve(
         &format!("pre-processing a {w}x{h} range map"),
         per_pixel * w as u64 * h as u64,
         &format!(

@@ -10,6 +10,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::io::depth::DepthFormat;
+use crate::memory::Reservation;
 use crate::prep::Prepared;
 use crate::raster::{Grid, RgbImage, ScalarMap};
 use std::borrow::Cow;
@@ -299,8 +300,8 @@ pub fn refine_range(
 /// Refuses a refinement of a `w`x`h` image that cannot fit in the memory left, before it
 /// allocates: `prep` and `render` aborted the process on a failed allocation there. The
 /// `kept` bytes the filter holds already are not counted twice.
-fn check_memory(w: usize, h: usize, per_pixel: u64, kept: u64) -> Result<()> {
-    crate::memory::check_available(
+fn check_memory(w: usize, h: usize, per_pixel: u64, kept: u64) -> Result<Reservation> {
+    crate::memory::reserve(
         &format!("refining the range of a {w}x{h} image"),
         (per_pixel * w as u64 * h as u64).saturating_sub(kept),
         &format!(
@@ -327,7 +328,7 @@ fn refine_with_masks(
     if plan.is_empty() {
         return Ok(range.clone());
     }
-    check_memory(w, h, filter.bytes_per_pixel(), filter.kept_bytes())?;
+    let _reserved = check_memory(w, h, filter.bytes_per_pixel(), filter.kept_bytes())?;
     // The ego vehicle's range 0 is not a range to filter (the filter reads log range): it
     // is kept out at the nearest range and put back after. A range without any is read as
     // it is, not copied (a copy is 48 MB at 12 MP).

@@ -260,7 +260,7 @@ fn read_member(member: impl Read, path: &Path, name: &str) -> Result<Vec<u8>> {
         // Before the member is inflated: a compressed member of one repeated value is a
         // few hundred kilobytes for gigabytes of array.
         let member_name = format!("{} (its array '{name}')", path.display());
-        check_map_decoding_fits(&member_name, w, h, len as u64)?;
+        let _reserved = check_map_decoding_fits(&member_name, w, h, len as u64)?;
         let rest = (len as u64).saturating_sub(npy.len() as u64);
         member.take(rest).read_to_end(&mut npy).map_err(inflate)?;
         npy.truncate(len);

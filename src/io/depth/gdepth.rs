@@ -633,9 +633,13 @@ pub(super) fn decode_image(
     }
     let name = format!("{} (its {format_name} depth image)", path.display());
     // Left to the decoder to report when its header cannot be read.
-    if let Ok((w, h)) = crate::io::image::image_dimensions(bytes, &name) {
-        crate::io::limits::check_map_decoding_fits(&name, w as usize, h as usize, 0)?;
-    }
+    let _reserved = match crate::io::image::image_dimensions(bytes, &name) {
+        Ok((w, h)) => {
+            let (w, h) = (w as usize, h as usize);
+            Some(crate::io::limits::check_map_decoding_fits(&name, w, h, 0)?)
+        }
+        Err(_) => None,
+    };
     Ok(match crate::io::image::decode_any(bytes, &name)? {
         DynamicImage::ImageLuma8(g) => Samples::Eight(grid(g)),
         DynamicImage::ImageLuma16(g) => Samples::Sixteen(grid(g)),

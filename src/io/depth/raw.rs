@@ -13,6 +13,7 @@ use crate::io::codec::tiff::{parse_tiff, tiff_size};
 use crate::io::codec::MapSamples;
 use crate::io::limits::check_map_decoding_fits;
 use crate::io::png_chunks::{png_ihdr_size, PNG_IHDR_END};
+use crate::memory::Reservation;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
 
@@ -73,7 +74,7 @@ impl Raw {
 /// Decodes `bytes` with the codec for extension `ext`; a JPEG only as GDepth, which
 /// `format` must allow (the others' layouts are checked once the file is decoded).
 pub(super) fn decode_raw(bytes: &[u8], path: &Path, ext: &str, format: DepthFormat) -> Result<Raw> {
-    check_decoding_fits(bytes, path, ext)?;
+    let _reserved = check_decoding_fits(bytes, path, ext)?;
     match ext {
         "png" => Ok(match png::decode_grey(bytes, path)? {
             GreyPng::Grey8(g) => Raw::Grey8(g),
@@ -141,7 +142,7 @@ fn colour_pfm(path: &Path) -> Error {
 /// header gives, before the decoder allocates for it. Files whose header cannot be read
 /// are left to the decoder's error; an `.npz` member and a phone JPEG's depth image are
 /// checked as they are reached ([`parse_npz`], [`gdepth::decode_image`]).
-fn check_decoding_fits(bytes: &[u8], path: &Path, ext: &str) -> Result<()> {
+fn check_decoding_fits(bytes: &[u8], path: &Path, ext: &str) -> Result<Option<Reservation>> {
     let size = match ext {
         "png" => bytes
             .first_chunk::<PNG_IHDR_END>()
@@ -154,9 +155,9 @@ fn check_decoding_fits(bytes: &[u8], path: &Path, ext: &str) -> Result<()> {
         _ => None,
     };
     let Some((w, h)) = size else {
-        return Ok(());
+        return Ok(None);
     };
-    check_map_decoding_fits(&path.display().to_string(), w, h, 0)
+    check_map_decoding_fits(&path.display().to_string(), w, h, 0).map(Some)
 }
 
 /// A float or integer file's samples (EXR, TIFF, NumPy): uint16 ones as a 16-bit PNG's,
