@@ -97,6 +97,24 @@ struct Renderer {
     gl: GlThread,
 }
 
+impl Renderer {
+    /// Runs `check` (of the memory a call's outputs need); where it refuses, frees the
+    /// textures the renderer keeps from the last frame (in system memory on a software
+    /// renderer, which the check counts as used although the next frame would reuse them)
+    /// and runs it again: a frame that fitted once fits again.
+    fn check_or_free_kept(&self, py: Python<'_>, check: impl Fn() -> PyResult<()>) -> PyResult<()> {
+        if check().is_ok() {
+            return Ok(());
+        }
+        py.detach(|| {
+            self.gl
+                .run(|h| h.renderer().map(|r| r.free_kept_textures()))
+        })?
+        .map_err(py_err)?;
+        check()
+    }
+}
+
 #[pymethods]
 impl Renderer {
     #[new]
@@ -154,7 +172,8 @@ impl Renderer {
         };
         let many = density.many();
         let image = read_image(image)?;
-        density.check_outputs_fit(image.width * image.height)?;
+        let area = image.width * image.height;
+        self.check_or_free_kept(py, || density.check_outputs_fit(area))?;
         let blur = (blur, lambda_px);
         let mut request = fog_request(density, airlight, blur, refine, capture, compat)?;
         photo_fog::set_monocular(&mut request.prepare, monocular);
@@ -390,12 +409,14 @@ impl Renderer {
             sigma0,
         };
         let image = read_image(image)?;
-        check_outputs_fit(
-            args.turbidities.len(),
-            image.width * image.height,
-            aerial_photo::OUTPUT_BYTES_PER_PIXEL,
-            "give fewer turbidities in one call: every output is held until it returns",
-        )?;
+        self.check_or_free_kept(py, || {
+            check_outputs_fit(
+                args.turbidities.len(),
+                image.width * image.height,
+                aerial_photo::OUTPUT_BYTES_PER_PIXEL,
+                "give fewer turbidities in one call: every output is held until it returns",
+            )
+        })?;
         let range = read_range(range_m)?;
         set_masks(&mut prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
