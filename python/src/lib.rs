@@ -101,7 +101,7 @@ impl Renderer {
     /// Runs `check` (of the memory a call's outputs need); where it refuses, frees the
     /// textures the renderer keeps from the last frame (in system memory on a software
     /// renderer, which the check counts as used although the next frame would reuse them)
-    /// and runs it again: a frame that fitted once fits again.
+    /// and runs it again.
     fn check_or_free_kept(&self, py: Python<'_>, check: impl Fn() -> PyResult<()>) -> PyResult<()> {
         if check().is_ok() {
             return Ok(());
