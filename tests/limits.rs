@@ -291,25 +291,9 @@ fn with_depth_png_sized(width: u32, height: u32) -> Vec<u8> {
     let ihdr = bytes.windows(4).rposition(|w| w == b"IHDR").unwrap();
     bytes[ihdr + 4..ihdr + 8].copy_from_slice(&width.to_be_bytes());
     bytes[ihdr + 8..ihdr + 12].copy_from_slice(&height.to_be_bytes());
-    let crc = crc32(&bytes[ihdr..ihdr + 17]);
+    let crc = crc32fast::hash(&bytes[ihdr..ihdr + 17]);
     bytes[ihdr + 17..ihdr + 21].copy_from_slice(&crc.to_be_bytes());
     bytes
-}
-
-/// PNG's CRC-32 (ISO 3309), bit by bit.
-fn crc32(data: &[u8]) -> u32 {
-    let mut crc = !0u32;
-    for &byte in data {
-        crc ^= u32::from(byte);
-        for _ in 0..8 {
-            crc = if crc & 1 == 1 {
-                (crc >> 1) ^ 0xEDB8_8320
-            } else {
-                crc >> 1
-            };
-        }
-    }
-    !crc
 }
 
 /// The textures a renderer keeps between frames are what its memory check leaves out (a
