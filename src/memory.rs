@@ -12,7 +12,7 @@
 use crate::error::{Error, Result};
 use std::fs;
 use std::path::Path;
-use std::sync::{Mutex, PoisonError};
+use std::sync::{Mutex, OnceLock, PoisonError};
 
 /// Bytes the system can still give this process, if any limit is known (Linux).
 pub fn available() -> Option<u64> {
@@ -71,9 +71,17 @@ pub fn reserve(what: &str, needed: u64, hint: &str) -> Result<Reservation> {
     Ok(Reservation { bytes: needed })
 }
 
-/// Hands the memory this process has freed but its allocator keeps (glibc's arenas) back
-/// to the system; true where that was done (Linux with glibc).
+/// Hands the memory this process has freed but its allocators keep (glibc's arenas, and a
+/// host's own allocator given to [`set_allocator_release`]) back to the system; true where
+/// that was done (Linux with glibc, or a host's release given).
 pub fn release_freed() -> bool {
+    let host = HOST_RELEASE.get().inspect(|release| release()).is_some();
+    let glibc = trim_glibc();
+    host || glibc
+}
+
+/// glibc's `malloc_trim`: true where it ran.
+fn trim_glibc() -> bool {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
         // SAFETY: malloc_trim only returns free pages of glibc's arenas to the kernel.
@@ -82,6 +90,19 @@ pub fn release_freed() -> bool {
     }
     #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
     false
+}
+
+/// The host's way to hand back what its allocator keeps, if it gave one.
+static HOST_RELEASE: OnceLock<fn()> = OnceLock::new();
+
+/// Tells brume how a host's own global allocator hands its freed memory back to the system
+/// (mimalloc's `mi_collect(true)`, jemalloc's purge): such allocators keep freed pages for a
+/// while, which the system counts as used, so a check on a long run (a renderer kept for a
+/// dataset's frames) would refuse memory the process already holds. [`release_freed`] calls
+/// it when a check would refuse, beside glibc's `malloc_trim`. Only the first call takes
+/// effect; false where a release was already set.
+pub fn set_allocator_release(release: fn()) -> bool {
+    HOST_RELEASE.set(release).is_ok()
 }
 
 /// Refuses `needed` bytes for `what` when more than `available` are left.
@@ -210,6 +231,29 @@ fn read_number(path: &Path) -> Option<u64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A host's allocator is asked to hand back its freed pages when a check would refuse (a Python renderer kept for three frames was refused the third under a
+    /// 450 MB limit while mimalloc still held the first two's pages).
+    #[test]
+    fn a_check_that_would_refuse_asks_the_hosts_allocator_first() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        static CALLS: AtomicUsize = AtomicUsize::new(0);
+        fn count() {
+            CALLS.fetch_add(1, Ordering::SeqCst);
+        }
+        assert!(set_allocator_release(count));
+        assert!(
+            !set_allocator_release(count),
+            "only the first release is taken"
+        );
+        if available().is_none() {
+            return; // no limit known on this system: no check refuses
+        }
+        // (Other tests' refusals may call it too, on their threads: only a rise is asserted.)
+        let before = CALLS.load(Ordering::SeqCst);
+        check_available("everything", u64::MAX, "").unwrap_err();
+        assert!(CALLS.load(Ordering::SeqCst) > before);
+    }
 
     /// What one thread reserved, another's check counts as taken until it is dropped (a
     /// batch's loader and GPU thread both passed their checks at one moment and together
