@@ -146,9 +146,10 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.sky_known_pixels
         );
         outln!(
-            "border bands: {} px continued, {} px sky; {} px beyond the depth's reach; ego \
-             vehicle {} px (range 0)",
+            "border bands: {} px continued ({} px of specks farther than their band \
+             dropped), {} px sky; {} px beyond the depth's reach; ego vehicle {} px (range 0)",
             s.border_filled,
+            s.border_islands,
             s.border_sky,
             s.beyond_reach,
             s.ego_pixels

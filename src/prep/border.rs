@@ -22,23 +22,103 @@
 //!   the run takes the median of the first half. The extrapolated disparity is kept within
 //!   a factor 1.5 of it, so a slope cannot create a spike, and the range within the
 //!   smallest and largest known range outside the sky; with non-positive range the run
-//!   takes the anchor's value.
+//!   takes the anchor's value. Toward the bottom border the disparity does not fall (the
+//!   slope is taken only where it rises): the ground comes nearer there, and a car's hood
+//!   reflecting the street, whose disparity falls toward the border, was continued
+//!   farther and farther, a light streak in each such column.
 //! - Other anchors (an ego-vehicle pixel, the sky on the other sides) and lines longer than
 //!   `max_depth`: the run is left to the hole filling.
+//! - *Islands* first: a matcher leaves specks of wrong values inside the band it cannot
+//!   match (on real Cityscapes frames runs of 1 to 22 px of disparity 0 to 4, 100 m to
+//!   infinitely far, among the unknown columns by a road 6 m away; between the unknown rows
+//!   of the hood at the bottom, its reflection of the street, 1.3 to 7 times the road's
+//!   range). Ended by one, the run continued the speck's range: a white blotch in the fog.
+//!   So, from the border inward and within `max_depth`, an *island* (known runs joined
+//!   across unknown gaps under [`ISLAND_GAP`]; along the bottom one run) with fewer than
+//!   [`SOLID_RUN`] known pixels, and fewer than the unknown stretch between it and the
+//!   border, is dropped (unknown, then part of the run) when its median range is more than
+//!   [`ISLAND_RATIO`] times what lies beyond it: the median of up to [`BEYOND`] known
+//!   pixels beyond it within `max_depth` (at least half as many: a sparse lidar map is
+//!   never judged), which must begin a wide surface ([`WIDE_RUN`]: a road, a facade, not
+//!   a post). Along the bottom, where the ground comes nearer toward the border, the
+//!   factor is [`BOTTOM_ISLAND_RATIO`] and what lies beyond is its continuation (as above)
+//!   at the island. The first island that is not dropped, or a longer run, ends the
+//!   search, and the run ends at it as before.
 //!
 //! Filled pixels are known for the sides that follow (a corner is reached from both).
 
-/// Largest ratio of the two halves' medians for a slope to be used, and the largest
-/// factor between the extrapolated disparity and the first half's median.
+/// Largest ratio of the two halves' medians for a slope to be used, and the largest factor
+/// between the extrapolated disparity and the first half's median.
 const MAX_RATIO: f32 = 1.5;
+
+/// The factor by which an island is farther than the surface beyond it to be dropped: a
+/// matcher's specks in Cityscapes' left band are 20 to 70 times as far as the road beyond
+/// them; a far facade's strip between the band and a car in front (1.7 times the car's
+/// range on brume's synthetic street) is a surface. As the local-outlier rule's factor.
+const ISLAND_RATIO: f32 = 3.0;
+
+/// [`ISLAND_RATIO`] on the bottom band, where the ground comes nearer toward the border.
+const BOTTOM_ISLAND_RATIO: f32 = 1.15;
+
+/// An island of a band line has fewer known pixels than this: one with more is the surface
+/// the band continues. The specks a matcher leaves in its unmatched band are runs of 1 to
+/// 22 px on Cityscapes frames, 36 px in all in one group.
+const SOLID_RUN: usize = 48;
+
+/// Known runs separated by unknown gaps shorter than this (px) are one island: a matcher's
+/// specks come in groups, and a far strip hard against a nearer surface belongs with it
+/// (on the synthetic SGBM view 2, 7 px of ground 50 m away, 7 px before a post 3.4 m away).
+const ISLAND_GAP: usize = 16;
+
+/// Known pixels beyond an island that say what the band meets: up to this many, at least
+/// half as many.
+const BEYOND: usize = 32;
+
+/// Along a row, what an island's band meets must be a surface that wide (px, three quarters
+/// of them known): a road or a facade runs on into the band; a post 34 px wide beside far
+/// ground (brume's synthetic SGBM view 2) does not, and the far ground there is no speck
+/// (taken for one, the band continued the post 144 px: that view's τ error in the band
+/// 0.057 → 0.11).
+const WIDE_RUN: usize = 64;
+
+/// The border a band line starts from.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Side {
+    Left,
+    Right,
+    Top,
+    Bottom,
+}
+
+impl Side {
+    /// The number of lines from this border and their length.
+    fn lines(self, (width, height): (usize, usize)) -> (usize, usize) {
+        match self {
+            Side::Left | Side::Right => (height, width),
+            Side::Top | Side::Bottom => (width, height),
+        }
+    }
+
+    /// The index of step `k` (from the border) on line `l`.
+    fn index(self, l: usize, k: usize, (width, height): (usize, usize)) -> usize {
+        match self {
+            Side::Left => l * width + k,
+            Side::Right => l * width + (width - 1 - k),
+            Side::Top => k * width + l,
+            Side::Bottom => (height - 1 - k) * width + l,
+        }
+    }
+}
 
 /// What [`fill_borders`] did.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct BorderFill {
-    /// Pixels given a range.
+    /// Pixels given a range (the islands dropped included).
     pub filled: usize,
     /// Pixels made sky.
     pub sky: usize,
+    /// Known pixels dropped as islands farther than the surface their band continues.
+    pub islands: usize,
 }
 
 /// Fills the border bands of `work` (unknown = NaN, sky pixels flagged in `sky`), as the
@@ -54,18 +134,20 @@ pub(crate) fn fill_borders(
 ) -> BorderFill {
     let mut out = BorderFill::default();
     let mut samples: Vec<(usize, f32)> = Vec::new();
-    // (number of lines, line length, index of step k on line l, whether the run below the
-    // top border takes the sky).
-    type At<'f> = &'f dyn Fn(usize, usize) -> usize;
-    let sides: [(usize, usize, At, bool); 4] = [
-        (height, width, &|l, k| l * width + k, false),
-        (height, width, &|l, k| l * width + (width - 1 - k), false),
-        (width, height, &|l, k| k * width + l, true),
-        (width, height, &|l, k| (height - 1 - k) * width + l, false),
-    ];
-    for (lines, len, at, top) in sides {
+    for side in [Side::Left, Side::Right, Side::Top, Side::Bottom] {
+        let (lines, len) = side.lines((width, height));
+        let at = |l: usize, k: usize| side.index(l, k, (width, height));
+        let (top, bottom) = (side == Side::Top, side == Side::Bottom);
+        let island_ratio = if bottom {
+            BOTTOM_ISLAND_RATIO
+        } else {
+            ISLAND_RATIO
+        };
         let limit = ((max_depth * len as f64) as usize).min(len.saturating_sub(1));
         for l in 0..lines {
+            let line = |k: usize| at(l, k);
+            let rule = (island_ratio, bottom);
+            out.islands += drop_far_islands(work, sky, &line, (len, limit), rule, &mut samples);
             let unknown = |k: usize| work[at(l, k)].is_nan() && !sky[at(l, k)];
             let run = (0..=limit).take_while(|&k| unknown(k)).count();
             if run == 0 || run > limit {
@@ -89,7 +171,7 @@ pub(crate) fn fill_borders(
                 }
                 samples.push((k, v));
             }
-            let value = continuation(&samples);
+            let value = continuation(&samples, bottom);
             for k in 0..run {
                 work[at(l, k)] = value(k).clamp(known.0, known.1);
                 filled[at(l, k)] = true;
@@ -100,9 +182,92 @@ pub(crate) fn fill_borders(
     out
 }
 
+/// Drops the islands of one band line (`at`: its step → index; `len` steps, the band at
+/// most `limit` of them), as the module docs say; returns the pixels dropped.
+fn drop_far_islands(
+    work: &mut [f32],
+    sky: &[bool],
+    at: &dyn Fn(usize) -> usize,
+    (len, limit): (usize, usize),
+    (ratio, never_farther): (f32, bool),
+    samples: &mut Vec<(usize, f32)>,
+) -> usize {
+    let known = |work: &[f32], k: usize| work[at(k)].is_finite() && !sky[at(k)];
+    let unknown = |work: &[f32], k: usize| work[at(k)].is_nan() && !sky[at(k)];
+    // Along the bottom a hood's reflections lie close to the road's pieces above them:
+    // there an island is one run.
+    let island_gap = if never_farther { 1 } else { ISLAND_GAP };
+    let mut dropped = 0;
+    let mut k = 0;
+    loop {
+        k += (k..=limit).take_while(|&j| unknown(work, j)).count();
+        if k > limit || !known(work, k) {
+            return dropped; // the band meets no surface (the sky, the ego vehicle) or ends
+        }
+        // The island: known runs from k on, joined across unknown gaps under ISLAND_GAP.
+        let (mut end, mut count) = (k, 0);
+        loop {
+            let n = (end..len).take_while(|&j| known(work, j)).count();
+            (end, count) = (end + n, count + n);
+            let gap = (end..len).take_while(|&j| unknown(work, j)).count();
+            if gap >= island_gap || end + gap >= len || !known(work, end + gap) {
+                break;
+            }
+            end += gap;
+        }
+        if count >= SOLID_RUN || count > k || end > limit {
+            // The surface the band continues, a piece of one that reaches nearly to the
+            // border (a speck lies well inside the band), or more than the band.
+            return dropped;
+        }
+        samples.clear();
+        samples.extend(
+            (end..(end + limit).min(len))
+                .take_while(|&j| !sky[at(j)] && work[at(j)] != f32::INFINITY)
+                .filter(|&j| known(work, j))
+                .map(|j| (j, work[at(j)]))
+                .take(BEYOND),
+        );
+        if samples.len() < BEYOND / 2 {
+            return dropped; // too little beyond it to judge it (a sparse map)
+        }
+        let start = samples[0].0;
+        let span = (start..(start + WIDE_RUN).min(len)).filter(|&j| known(work, j));
+        let wide = span.count() * 4 >= WIDE_RUN * 3;
+        if !never_farther && !wide {
+            // Beyond it an object, not a surface the band can be (a post: far ground seen
+            // beside it was taken for a speck and the band continued the post).
+            return dropped;
+        }
+        // At the bottom the ground comes nearer toward the border: the surface is judged
+        // where the island is. Along a row the surface may slope either way (a facade),
+        // and extrapolated over the gap to the island it made far strips look like specks:
+        // its median.
+        let surface = if never_farther {
+            continuation(samples, true)((k + end) / 2)
+        } else {
+            median_of(samples.iter().map(|&(_, r)| r).collect())
+        };
+        let island: Vec<usize> = (k..end).filter(|&j| known(work, j)).collect();
+        if median_of(island.iter().map(|&j| work[at(j)]).collect()) <= ratio * surface {
+            return dropped; // a surface of its own: the band ends at it
+        }
+        island.iter().for_each(|&j| work[at(j)] = f32::NAN);
+        dropped += count;
+        k = end;
+    }
+}
+
+/// The median (the upper one for an even count) of `values` (at least one).
+fn median_of(mut values: Vec<f32>) -> f32 {
+    let mid = values.len() / 2;
+    *values.select_nth_unstable_by(mid, f32::total_cmp).1
+}
+
 /// The range at step `k` of a line whose first known pixels are `samples` (step, range;
-/// at least one), as the module docs say.
-fn continuation(samples: &[(usize, f32)]) -> Box<dyn Fn(usize) -> f32> {
+/// at least one), as the module docs say; `never_farther`: nowhere farther than the
+/// samples' first half (the bottom band).
+fn continuation(samples: &[(usize, f32)], never_farther: bool) -> Box<dyn Fn(usize) -> f32> {
     let first = samples[0].1;
     if samples.iter().any(|&(_, r)| r <= 0.0) || samples.len() < 2 {
         return Box::new(move |_| first);
@@ -121,11 +286,14 @@ fn continuation(samples: &[(usize, f32)]) -> Box<dyn Fn(usize) -> f32> {
     };
     let (k1, d1) = stats(&samples[..half]);
     let (k2, d2) = stats(&samples[half..]);
-    let slope = if d1.max(d2) <= MAX_RATIO * d1.min(d2) && k2 > k1 {
+    let mut slope = if d1.max(d2) <= MAX_RATIO * d1.min(d2) && k2 > k1 {
         (d2 - d1) / (k2 - k1)
     } else {
         0.0
     };
+    if never_farther {
+        slope = slope.min(0.0); // toward the border (k falling) the disparity does not fall
+    }
     Box::new(move |k| {
         let d = (d1 + slope * (k as f32 - k1)).clamp(d1 / MAX_RATIO, d1 * MAX_RATIO);
         1.0 / d
@@ -176,13 +344,143 @@ mod tests {
         assert!((20..w).all(|x| sky[x] && sky[w + x]));
     }
 
+    /// One row: `cells` from the left border ('.' unknown, a digit d: range 10·d m, 'F' a
+    /// speck 500 m away, 'p' a pole 3 m away), then a facade 10 m away to the end of the row.
+    fn row(cells: &str, width: usize) -> Vec<f32> {
+        let mut line: Vec<f32> = cells
+            .chars()
+            .map(|c| match c {
+                '.' => f32::NAN,
+                'F' => 500.0,
+                'p' => 3.0,
+                d => 10.0 * d.to_digit(10).expect("a digit") as f32,
+            })
+            .collect();
+        line.resize(width, 10.0);
+        line
+    }
+
+    /// `line` filled as one image line (a row: its left band; a column: top then bottom),
+    /// no sky, bands up to half the line.
+    fn fill_line(line: &[f32], (w, h): (usize, usize)) -> (Vec<f32>, BorderFill) {
+        let mut work = line.to_vec();
+        let mut sky = vec![false; line.len()];
+        let mut filled = vec![false; line.len()];
+        let done = fill_borders(&mut work, &mut sky, &mut filled, (w, h), 0.5, (1.0, 1e4));
+        (work, done)
+    }
+
+    /// Cityscapes' left band: specks of far disparity among the unknown columns, which the
+    /// band used to continue (a white blotch by a road 6 m away), are dropped; the band
+    /// continues the facade beyond them.
+    #[test]
+    fn far_specks_in_a_band_are_dropped_and_the_band_continues_its_surface() {
+        let line = row("........FF.....F....FFF....................", 100);
+        let (work, done) = fill_line(&line, (100, 1));
+        assert_eq!(done.islands, 6, "{done:?}");
+        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
+    }
+
+    /// What is not a speck stays as it was, and ends the band: a strip less than
+    /// [`ISLAND_RATIO`] times as far as what is beyond it (a far facade before a car), a
+    /// piece at or near the border, a pole nearer than the facade, far ground beside a
+    /// post (brume's synthetic SGBM view 2), a speck hard against a post.
+    #[test]
+    fn surfaces_in_a_band_are_kept() {
+        let dots = |n: usize| ".".repeat(n);
+        // Far ground beside a post: what the band meets is no wide surface.
+        let beside_post = format!("{}FF{}{}{}", dots(12), dots(20), "p".repeat(20), dots(30));
+        // A speck hard against a post is one island with it, the post's.
+        let with_post = format!("........FF......pppppppp{}", dots(30));
+        for cells in [
+            "......22222.......",
+            "FF..........",
+            ".FFFF.........",
+            "......pp.....",
+            &beside_post,
+            &with_post,
+        ] {
+            let line = row(cells, 100);
+            let (work, done) = fill_line(&line, (100, 1));
+            assert_eq!(done.islands, 0, "{cells}: {done:?}");
+            for (k, (a, b)) in line.iter().zip(&work).enumerate() {
+                assert!(
+                    a.is_nan() || a.to_bits() == b.to_bits(),
+                    "{cells}: step {k}"
+                );
+            }
+        }
+        // A sparse map (a lidar's: one known pixel in 8) has too little beyond a speck to
+        // judge it.
+        let mut sparse: Vec<f32> = (0..80)
+            .map(|k| if k % 8 == 0 { 10.0 } else { f32::NAN })
+            .collect();
+        sparse[0] = f32::NAN;
+        sparse[4] = 500.0;
+        let (_, done) = fill_line(&sparse, (80, 1));
+        assert_eq!(done.islands, 0, "{done:?}");
+    }
+
+    /// A hood at the bottom reflecting the street: rows of 1.3 times the road's range among
+    /// its unknown rows are dropped (along the bottom the ground comes nearer), and the
+    /// band below the road continues it, never farther.
+    #[test]
+    fn a_hoods_reflection_in_the_bottom_band_is_dropped() {
+        let h = 80;
+        // Top to bottom: 50 rows of road receding upward, then the hood: unknown rows with
+        // 3 rows of reflection 1.3 times as far as the road's last row, 18 rows below it.
+        let road = |y: usize| 1.0 / (0.05 + 0.0005 * y as f32);
+        let mut column: Vec<f32> = (0..h)
+            .map(|y| if y < 50 { road(y) } else { f32::NAN })
+            .collect();
+        column[68..71].fill(1.3 * road(49));
+        let (work, done) = fill_line(&column, (1, h));
+        assert_eq!(done.islands, 3, "{done:?}");
+        for (y, &r) in work.iter().enumerate().skip(50) {
+            assert!(r <= road(49) * 1.0001, "row {y}: {r} vs {}", road(49));
+            assert!(
+                (r - road(y)).abs() / road(y) < 1e-3,
+                "row {y}: the road's plane"
+            );
+        }
+        // The same reflection in a side band is a surface of its own (under 3 times).
+        let line: Vec<f32> = column.iter().rev().copied().collect();
+        let (_, done) = fill_line(&line, (h, 1));
+        assert_eq!(done.islands, 0, "{done:?}");
+    }
+
+    /// Toward the bottom border a slope that recedes (a hood reflecting the street, whose
+    /// disparity falls toward the border) is not followed: the first half's median holds.
+    #[test]
+    fn the_bottom_band_never_continues_farther() {
+        // Steps 8..24 from the border, disparity rising away from it.
+        let s: Vec<(usize, f32)> = (8..24)
+            .map(|k| (k, 1.0 / (0.05 + 0.001 * k as f32)))
+            .collect();
+        let free = continuation(&s, false);
+        let held = continuation(&s, true);
+        assert!(free(0) > s[0].1, "{} {}", free(0), s[0].1);
+        let first_half = 1.0 / (0.05 + 0.001 * 11.5);
+        assert!(
+            (held(0) - first_half).abs() < 1e-3,
+            "{} {first_half}",
+            held(0)
+        );
+        // A slope toward nearer is followed alike.
+        let rising: Vec<(usize, f32)> = s.iter().map(|&(k, r)| (32 - k, r)).rev().collect();
+        assert_eq!(
+            continuation(&rising, true)(0),
+            continuation(&rising, false)(0)
+        );
+    }
+
     #[test]
     fn a_depth_edge_in_the_samples_gives_a_constant() {
         let mut s: Vec<(usize, f32)> = (5..13).map(|k| (k, 10.0)).collect();
         s.extend((13..21).map(|k| (k, 40.0)));
-        let f = continuation(&s);
+        let f = continuation(&s, false);
         assert_eq!(f(0), 10.0);
-        assert_eq!(continuation(&[(3, 7.0)])(0), 7.0);
-        assert_eq!(continuation(&[(3, 0.0), (4, 1.0)])(0), 0.0);
+        assert_eq!(continuation(&[(3, 7.0)], false)(0), 7.0);
+        assert_eq!(continuation(&[(3, 0.0), (4, 1.0)], false)(0), 0.0);
     }
 }

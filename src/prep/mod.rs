@@ -97,7 +97,8 @@
 //! 4. **Border bands** ([`PrepOptions::border_band_fraction`], see `border.rs`) are filled
 //!    first, line by line from each border: a run of unknown pixels continues the surface
 //!    it meets, linearly in disparity, or is sky when it runs down from the top border
-//!    into the sky ([`PrepStats::border_filled`], [`PrepStats::border_sky`]).
+//!    into the sky ([`PrepStats::border_filled`], [`PrepStats::border_sky`]), once the
+//!    far specks a matcher left in it are dropped ([`PrepStats::border_islands`]).
 //!
 //!    **Holes** (the components of unknown pixels outside the sky, far outliers included)
 //!    are filled by RANSAC (Fischler and Bolles 1981), as
@@ -286,10 +287,14 @@ pub struct PrepStats {
     /// with their neighbourhood; then filled, or sky).
     pub local_outliers: usize,
     /// Number of unknown pixels of border bands filled by continuing the surface they
-    /// meet.
+    /// meet (the islands dropped in them included).
     pub border_filled: usize,
     /// Number of unknown pixels of border bands made sky (they meet the sky).
     pub border_sky: usize,
+    /// Number of known values dropped inside border bands (short runs far beyond the surface
+    /// the band continues, a matcher's specks or a hood's reflection; see `border.rs`), then
+    /// filled with the band (counted in `border_filled`).
+    pub border_islands: usize,
     /// Number of unknown pixels of the scene beyond the sensor's reach (image-guided
     /// detection only: the depth rules took them for sky, the image does not join them to
     /// its sky), filled receding from `Rmax` into the sky.
@@ -473,7 +478,8 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
             opts.border_band_fraction,
             (r_min, stats.r_max),
         );
-        (stats.border_filled, stats.border_sky) = (b.filled, b.sky);
+        (stats.border_filled, stats.border_sky, stats.border_islands) =
+            (b.filled, b.sky, b.islands);
     }
     let mut holes = Holes {
         filled: &mut filled,
