@@ -232,8 +232,9 @@ fn read_number(path: &Path) -> Option<u64> {
 mod tests {
     use super::*;
 
-    /// A host's allocator is asked to hand back its freed pages when a check would refuse (a Python renderer kept for three frames was refused the third under a
-    /// 450 MB limit while mimalloc still held the first two's pages).
+    /// A host's allocator is asked to hand back its freed pages when a check would refuse
+    /// (a Python renderer kept for three frames was refused the third under a 450 MB limit
+    /// while mimalloc still held the first two's pages).
     #[test]
     fn a_check_that_would_refuse_asks_the_hosts_allocator_first() {
         use std::sync::atomic::{AtomicUsize, Ordering};

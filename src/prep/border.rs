@@ -183,20 +183,21 @@ pub(crate) fn fill_borders(
 }
 
 /// Drops the islands of one band line (`at`: its step → index; `len` steps, the band at
-/// most `limit` of them), as the module docs say; returns the pixels dropped.
+/// most `limit` of them; `ratio` the factor, `bottom` the bottom band's rules), as the
+/// module docs say; returns the pixels dropped.
 fn drop_far_islands(
     work: &mut [f32],
     sky: &[bool],
     at: &dyn Fn(usize) -> usize,
     (len, limit): (usize, usize),
-    (ratio, never_farther): (f32, bool),
+    (ratio, bottom): (f32, bool),
     samples: &mut Vec<(usize, f32)>,
 ) -> usize {
     let known = |work: &[f32], k: usize| work[at(k)].is_finite() && !sky[at(k)];
     let unknown = |work: &[f32], k: usize| work[at(k)].is_nan() && !sky[at(k)];
     // Along the bottom a hood's reflections lie close to the road's pieces above them:
     // there an island is one run.
-    let island_gap = if never_farther { 1 } else { ISLAND_GAP };
+    let island_gap = if bottom { 1 } else { ISLAND_GAP };
     let mut dropped = 0;
     let mut k = 0;
     loop {
@@ -204,7 +205,7 @@ fn drop_far_islands(
         if k > limit || !known(work, k) {
             return dropped; // the band meets no surface (the sky, the ego vehicle) or ends
         }
-        // The island: known runs from k on, joined across unknown gaps under ISLAND_GAP.
+        // The island: known runs from k on, joined across unknown gaps under `island_gap`.
         let (mut end, mut count) = (k, 0);
         loop {
             let n = (end..len).take_while(|&j| known(work, j)).count();
@@ -234,7 +235,7 @@ fn drop_far_islands(
         let start = samples[0].0;
         let span = (start..(start + WIDE_RUN).min(len)).filter(|&j| known(work, j));
         let wide = span.count() * 4 >= WIDE_RUN * 3;
-        if !never_farther && !wide {
+        if !bottom && !wide {
             // Beyond it an object, not a surface the band can be (a post: far ground seen
             // beside it was taken for a speck and the band continued the post).
             return dropped;
@@ -243,7 +244,7 @@ fn drop_far_islands(
         // where the island is. Along a row the surface may slope either way (a facade),
         // and extrapolated over the gap to the island it made far strips look like specks:
         // its median.
-        let surface = if never_farther {
+        let surface = if bottom {
             continuation(samples, true)((k + end) / 2)
         } else {
             median_of(samples.iter().map(|&(_, r)| r).collect())
