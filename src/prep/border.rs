@@ -75,10 +75,10 @@ const ISLAND_GAP: usize = 16;
 const BEYOND: usize = 32;
 
 /// Along a row, what an island's band meets must be a surface that wide (px, three quarters
-/// of them known): a road or a facade runs on into the band; a post 34 px wide beside far
-/// ground (brume's synthetic SGBM view 2) does not, and the far ground there is no speck
-/// (taken for one, the band continued the post 144 px: that view's τ error in the band
-/// 0.057 → 0.11).
+/// of them known, from where it first shows past other specks): a road or a facade runs on
+/// into the band; a post 34 px wide beside far ground (brume's synthetic SGBM view 2) does
+/// not, and the far ground there is no speck (taken for one, the band continued the post
+/// 144 px: that view's τ error in the band 0.057 → 0.11).
 const WIDE_RUN: usize = 64;
 
 /// The border a band line starts from.
@@ -232,22 +232,27 @@ fn drop_far_islands(
         if samples.len() < BEYOND / 2 {
             return dropped; // too little beyond it to judge it (a sparse map)
         }
-        let start = samples[0].0;
-        let span = (start..(start + WIDE_RUN).min(len)).filter(|&j| known(work, j));
-        let wide = span.count() * 4 >= WIDE_RUN * 3;
-        if !bottom && !wide {
-            // Beyond it an object, not a surface the band can be (a post: far ground seen
-            // beside it was taken for a speck and the band continued the post).
-            return dropped;
-        }
         // At the bottom the ground comes nearer toward the border: the surface is judged
         // where the island is. Along a row the surface may slope either way (a facade),
         // and extrapolated over the gap to the island it made far strips look like specks:
-        // its median.
+        // its median, which must begin a wide surface where it first shows (past other
+        // specks).
         let surface = if bottom {
             continuation(samples, true)((k + end) / 2)
         } else {
-            median_of(samples.iter().map(|&(_, r)| r).collect())
+            let median = median_of(samples.iter().map(|&(_, r)| r).collect());
+            let agrees = |r: f32| r <= MAX_RATIO * median && median <= MAX_RATIO * r;
+            let start = samples
+                .iter()
+                .find(|&&(_, r)| agrees(r))
+                .map_or(end, |s| s.0);
+            let span = (start..(start + WIDE_RUN).min(len)).filter(|&j| known(work, j));
+            if span.count() * 4 < WIDE_RUN * 3 {
+                // Beyond it an object, not a surface the band can be (a post: far ground
+                // seen beside it was taken for a speck and the band continued the post).
+                return dropped;
+            }
+            median
         };
         let island: Vec<usize> = (k..end).filter(|&j| known(work, j)).collect();
         if median_of(island.iter().map(|&j| work[at(j)]).collect()) <= ratio * surface {
@@ -379,6 +384,12 @@ mod tests {
         let line = row("........FF.....F....FFF....................", 100);
         let (work, done) = fill_line(&line, (100, 1));
         assert_eq!(done.islands, 6, "{done:?}");
+        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
+        // Groups of specks far apart: what lies beyond the first is judged where the
+        // facade shows, past the second.
+        let apart = format!("........FF{}FF{}", ".".repeat(20), ".".repeat(20));
+        let (work, done) = fill_line(&row(&apart, 120), (120, 1));
+        assert_eq!(done.islands, 4, "{done:?}");
         assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
     }
 
