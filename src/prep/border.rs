@@ -138,16 +138,10 @@ pub(crate) fn fill_borders(
         let (lines, len) = side.lines((width, height));
         let at = |l: usize, k: usize| side.index(l, k, (width, height));
         let (top, bottom) = (side == Side::Top, side == Side::Bottom);
-        let island_ratio = if bottom {
-            BOTTOM_ISLAND_RATIO
-        } else {
-            ISLAND_RATIO
-        };
         let limit = ((max_depth * len as f64) as usize).min(len.saturating_sub(1));
         for l in 0..lines {
             let line = |k: usize| at(l, k);
-            let rule = (island_ratio, bottom);
-            out.islands += drop_far_islands(work, sky, &line, (len, limit), rule, &mut samples);
+            out.islands += drop_far_islands(work, sky, &line, (len, limit), bottom, &mut samples);
             let unknown = |k: usize| work[at(l, k)].is_nan() && !sky[at(l, k)];
             let run = (0..=limit).take_while(|&k| unknown(k)).count();
             if run == 0 || run > limit {
@@ -183,21 +177,25 @@ pub(crate) fn fill_borders(
 }
 
 /// Drops the islands of one band line (`at`: its step → index; `len` steps, the band at
-/// most `limit` of them; `ratio` the factor, `bottom` the bottom band's rules), as the
-/// module docs say; returns the pixels dropped.
+/// most `limit` of them; `bottom`: the bottom band's rules), as the module docs say;
+/// returns the pixels dropped.
 fn drop_far_islands(
     work: &mut [f32],
     sky: &[bool],
     at: &dyn Fn(usize) -> usize,
     (len, limit): (usize, usize),
-    (ratio, bottom): (f32, bool),
+    bottom: bool,
     samples: &mut Vec<(usize, f32)>,
 ) -> usize {
     let known = |work: &[f32], k: usize| work[at(k)].is_finite() && !sky[at(k)];
     let unknown = |work: &[f32], k: usize| work[at(k)].is_nan() && !sky[at(k)];
-    // Along the bottom a hood's reflections lie close to the road's pieces above them:
-    // there an island is one run.
-    let island_gap = if bottom { 1 } else { ISLAND_GAP };
+    // Along the bottom an island is one run (a hood's reflections lie close to the road's
+    // pieces above them), judged by its own factor.
+    let (island_gap, ratio) = if bottom {
+        (1, BOTTOM_ISLAND_RATIO)
+    } else {
+        (ISLAND_GAP, ISLAND_RATIO)
+    };
     let mut dropped = 0;
     let mut k = 0;
     loop {
