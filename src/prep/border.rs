@@ -401,12 +401,17 @@ mod tests {
         // Far ground beside a post: what the band meets is no wide surface.
         let beside_post = format!("{}FF{}{}{}", dots(12), dots(20), "p".repeat(20), dots(30));
         // A speck hard against a post is one island with it, the post's.
-        let with_post = format!("........FF......pppppppp{}", dots(30));
+        let with_post = format!("........FF......pppppppp{}", dots(10));
+        // Each 20 px from the facade (a gap under 16 px would join it to the facade).
+        let strip = format!("......22222{}", dots(20));
+        let at_border = format!("FF{}", dots(20));
+        let near_border = format!(".FFFF{}", dots(20));
+        let pole = format!("......pp{}", dots(20));
         for cells in [
-            "......22222.......",
-            "FF..........",
-            ".FFFF.........",
-            "......pp.....",
+            &strip,
+            &at_border,
+            &near_border,
+            &pole,
             &beside_post,
             &with_post,
         ] {
