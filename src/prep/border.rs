@@ -47,6 +47,8 @@
 //!
 //! Filled pixels are known for the sides that follow (a corner is reached from both).
 
+use super::fill::median_in_place;
+
 /// Largest ratio of the two halves' medians for a slope to be used, and the largest factor
 /// between the extrapolated disparity and the first half's median.
 const MAX_RATIO: f32 = 1.5;
@@ -238,7 +240,8 @@ fn drop_far_islands(
         let surface = if bottom {
             continuation(samples, true)((k + end) / 2)
         } else {
-            let median = median_of(samples.iter().map(|&(_, r)| r).collect());
+            let mut ranges: Vec<f64> = samples.iter().map(|&(_, r)| f64::from(r)).collect();
+            let median = median_in_place(&mut ranges) as f32;
             let agrees = |r: f32| r <= MAX_RATIO * median && median <= MAX_RATIO * r;
             let start = samples
                 .iter()
@@ -253,19 +256,14 @@ fn drop_far_islands(
             median
         };
         let island: Vec<usize> = (k..end).filter(|&j| known(work, j)).collect();
-        if median_of(island.iter().map(|&j| work[at(j)]).collect()) <= ratio * surface {
+        let mut ranges: Vec<f64> = island.iter().map(|&j| f64::from(work[at(j)])).collect();
+        if median_in_place(&mut ranges) as f32 <= ratio * surface {
             return dropped; // a surface of its own: the band ends at it
         }
         island.iter().for_each(|&j| work[at(j)] = f32::NAN);
         dropped += count;
         k = end;
     }
-}
-
-/// The median (the upper one for an even count) of `values` (at least one).
-fn median_of(mut values: Vec<f32>) -> f32 {
-    let mid = values.len() / 2;
-    *values.select_nth_unstable_by(mid, f32::total_cmp).1
 }
 
 /// The range at step `k` of a line whose first known pixels are `samples` (step, range;
