@@ -2247,6 +2247,8 @@ fn assert_cityscapes_range(d: &LoadedDepth) {
     );
     let k = d.intrinsics.unwrap();
     assert_eq!((k.fx, k.fy, k.cx, k.cy), (20.0, 25.0, 3.5, 1.25));
+    // fx·baseline, for pre-processing's stereo occlusions.
+    assert_eq!(d.stereo_focal_baseline, Some(20.0 * 0.5));
 }
 
 /// The same load, NaN for NaN (`==` on the maps would fail on their unknown pixels).
@@ -2258,6 +2260,7 @@ fn assert_same_load(a: &LoadedDepth, b: &LoadedDepth) {
         (a.format, a.kind, a.metric, &a.notes, a.intrinsics),
         (b.format, b.kind, b.metric, &b.notes, b.intrinsics)
     );
+    assert_eq!(a.stereo_focal_baseline, b.stereo_focal_baseline);
 }
 
 #[test]

@@ -2,6 +2,8 @@
 
 use crate::common;
 
+use brume::io::depth::{DepthFormat, DepthOptions};
+use brume::photo::{Photo, PrepareOptions};
 use brume::prep::{prepare, ImageSkyRules, PrepOptions, SkyRules};
 use brume::raster::{Grid, ScalarMap};
 use brume::Error;
@@ -298,4 +300,103 @@ fn bad_options_are_invalid_parameters() {
         .jacobi_sweeps(),
         5
     );
+}
+
+/// A street pole before a wall, as a stereo matcher leaves it in a Cityscapes disparity:
+/// the wall (Z = 10 m, d = fx·B/Z = 5 px) unknown over the 20 px left of the pole (Z = 2 m,
+/// d = 25 px) that the right camera cannot see, and the pole's disparity reaching 2 px
+/// over the wall on every other row (a matcher's fattened, jagged edge). Loaded as a photo
+/// with its camera file, the occlusion is filled with the wall's range; filled as any
+/// hole (the same map as a 16-bit PNG in millimetres) it was not.
+#[test]
+fn a_cityscapes_pole_leaves_no_halo() {
+    const POLE: std::ops::Range<u32> = 60..66;
+    const OCCLUDED: std::ops::Range<u32> = 40..60;
+    let (w, h) = (96u32, 48u32);
+    let fattened = |x: u32, y: u32| y % 2 == 1 && (POLE.start - 2..POLE.start).contains(&x);
+    let disparity = |x: u32, y: u32| -> f64 {
+        if POLE.contains(&x) || fattened(x, y) {
+            25.0
+        } else if OCCLUDED.contains(&x) {
+            0.0
+        } else {
+            5.0
+        }
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let stored = image::ImageBuffer::from_fn(w, h, |x, y| {
+        let d = disparity(x, y);
+        image::Luma([if d == 0.0 {
+            0u16
+        } else {
+            (256.0 * d) as u16 + 1
+        }])
+    });
+    stored.save(dir.path().join("f_disparity.png")).unwrap();
+    let camera = r#"{"extrinsic": {"baseline": 0.5}, "intrinsic": {"fx": 100.0, "fy": 100.0, "u0": 48.0, "v0": 24.0}}"#;
+    std::fs::write(dir.path().join("f_camera.json"), camera).unwrap();
+    let millimetres = image::ImageBuffer::from_fn(w, h, |x, y| {
+        let d = disparity(x, y);
+        image::Luma([if d == 0.0 {
+            0u16
+        } else {
+            (50.0 / d * 1000.0) as u16
+        }])
+    });
+    millimetres.save(dir.path().join("f_depth.png")).unwrap();
+    let photo_image = image::RgbImage::from_fn(w, h, |x, y| {
+        if POLE.contains(&x) {
+            image::Rgb([10, 10, 12])
+        } else {
+            // Brick: a faint texture of rows.
+            let v = if y % 4 == 0 { 120 } else { 130 };
+            image::Rgb([v, v * 3 / 4, v / 2])
+        }
+    });
+    photo_image
+        .save(dir.path().join("f_leftImg8bit.png"))
+        .unwrap();
+    let load = |depth: &str, format: DepthFormat| {
+        let opts = DepthOptions {
+            format,
+            fov: Some(2.0 * (24.0f64 / 100.0).atan().to_degrees()),
+            scale: (format == DepthFormat::Png16).then_some(0.001),
+            ..DepthOptions::default()
+        };
+        Photo::load(
+            &dir.path().join("f_leftImg8bit.png"),
+            &dir.path().join(depth),
+            &opts,
+        )
+        .unwrap()
+    };
+    let prepare_options = PrepareOptions::default();
+    let stereo = load("f_disparity.png", DepthFormat::Auto);
+    assert_eq!(stereo.depth.format, DepthFormat::Cityscapes);
+    assert_eq!(stereo.depth.stereo_focal_baseline, Some(50.0));
+    let png = load("f_depth.png", DepthFormat::Png16);
+    assert_eq!(png.depth.stereo_focal_baseline, None);
+    let wall_error = |photo: &Photo| -> (f64, usize) {
+        let p = brume::photo::preprocess(photo, &prepare_options).unwrap();
+        let stats = p.prepared.as_ref().unwrap().stats.clone();
+        let (mut sum, mut n) = (0.0, 0);
+        for y in 0..h {
+            for x in OCCLUDED.start..POLE.start - 2 {
+                let wall = *photo
+                    .depth
+                    .range
+                    .get(OCCLUDED.start as usize - 1, y as usize);
+                let got = *p.range.get(x as usize, y as usize);
+                sum += f64::from((got / wall).ln().abs());
+                n += 1;
+            }
+        }
+        (sum / n as f64, stats.occluded)
+    };
+    let (as_occlusion, occluded) = wall_error(&stereo);
+    let (as_hole, none) = wall_error(&png);
+    assert_eq!(none, 0);
+    assert!(occluded >= (OCCLUDED.len() - 2) * h as usize, "{occluded}");
+    assert!(as_occlusion < 0.01, "mean |ln(R / R_wall)| {as_occlusion}");
+    assert!(as_hole > 0.3, "mean |ln(R / R_wall)| {as_hole} as a hole");
 }

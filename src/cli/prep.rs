@@ -75,7 +75,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
                 sky_mask: masks.sky.as_ref(),
                 ego_mask: masks.ego.as_ref(),
             };
-            let prepared = prep::prepare_guided(&loaded.range, guides, &opts)?;
+            let prepared = prep::prepare_guided(&loaded.range, guides, &opts.for_depth(&loaded))?;
             (loaded, prepared, None, None)
         }
     };
@@ -123,11 +123,12 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         outln!("{report}");
     } else {
         outln!(
-            "{} unknown px: {} holes ({} px; {} regions from their own colour) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
+            "{} unknown px: {} holes ({} px; {} regions from their own colour, {} px stereo occlusions) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
             loaded.unknown_pixels,
             s.holes,
             s.hole_pixels,
             s.colour_regions,
+            s.occluded,
             s.sky_components,
             s.sky_pixels,
             s.margin_pixels,

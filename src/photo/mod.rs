@@ -153,6 +153,7 @@ impl Photo {
                 notes: Vec::new(),
                 unknown_pixels,
                 turned: Orientation::Upright,
+                stereo_focal_baseline: None,
             },
             // The arguments' names, as the messages say them.
             image_name: "image".into(),
@@ -201,6 +202,7 @@ impl Photo {
                 notes: vec!["transmittance map: its optical depth −ln τ, fogged at β = 1".into()],
                 unknown_pixels: 0,
                 turned: orientation,
+                stereo_focal_baseline: None,
             },
             image_name: image_name.to_string(),
             depth_name: depth_name.to_string(),

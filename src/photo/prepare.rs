@@ -3,7 +3,6 @@
 
 use super::Photo;
 use crate::error::{Error, Result};
-use crate::io::depth::DepthKind;
 use crate::medium::haze::DEFAULT_AIRLIGHT;
 use crate::prep::{self, AirlightSource, Guides, PrepOptions, Prepared};
 use crate::raster::{Grid, ScalarMap};
@@ -116,12 +115,7 @@ pub fn preprocess(photo: &Photo, opts: &PrepareOptions) -> Result<PreparedPhoto>
         });
     };
     let (w, h) = (range.width(), range.height());
-    let monocular = matches!(photo.depth.kind, DepthKind::Inverse | DepthKind::Affine);
-    let prep_opts = &PrepOptions {
-        sky_in_far_tail: (prep_opts.sky_in_far_tail)
-            .or(monocular.then_some(prep::MONOCULAR_SKY_FACTOR)),
-        ..prep_opts.clone()
-    };
+    let prep_opts = &prep_opts.for_depth(&photo.depth);
     let (small, cell_opts);
     let (image, prep_opts) = if (photo.image.width(), photo.image.height()) == (w, h) {
         (&photo.image, prep_opts)

@@ -76,17 +76,44 @@ pub(crate) struct HoleFiller {
     /// The farthest a plane of the scene may be continued to: the farthest known range
     /// outside the sky.
     far_limit: f64,
+    /// Known pixels that occlude a stereo occlusion (empty: none).
+    occluders: Vec<bool>,
+    /// Whether the hole being filled leaves its edges to `occluders` out.
+    skip_occluders: bool,
 }
+
+/// A hole that holds a stereo occlusion is filled without its edges to the occluders when
+/// at least this many others are left (else with all of them, as any hole).
+const MIN_EDGES_BESIDE_OCCLUDERS: usize = 4;
+
+/// A region of one colour in such a hole is filled from its edges to known pixels of its
+/// own colour without those to the occluders when any others are left (the background of
+/// its colour beside it), else with them: a region whose colour only the occluder shows is
+/// the part of it the matcher missed. (Falling back below [`MIN_OWN_EDGES`] instead gave
+/// the rows of a textured wall, one edge to the wall each, the pole's fattened edge of the
+/// wall's colour, and a ramp.)
+const MIN_OWN_EDGES_BESIDE_OCCLUDERS: usize = 1;
 
 impl HoleFiller {
     /// A filler whose planes of the scene go no farther than `far_limit`, the farthest
-    /// known range outside the sky (as the border bands' continuation).
-    pub(crate) fn new(far_limit: f64) -> Self {
+    /// known range outside the sky (as the border bands' continuation), and that leaves
+    /// the known pixels marked in `occluders` (of the image's size, or empty) out of the
+    /// holes [`HoleFiller::skip_occluders`] names.
+    pub(crate) fn new(far_limit: f64, occluders: Vec<bool>) -> Self {
         HoleFiller {
             edges: Vec::new(),
             scratch: Vec::new(),
             far_limit,
+            occluders,
+            skip_occluders: false,
         }
+    }
+
+    /// Whether the holes filled next hold a stereo occlusion, whose occluders are then not
+    /// boundary values (unless fewer than [`MIN_EDGES_BESIDE_OCCLUDERS`] other edges are
+    /// left to a whole hole).
+    pub(crate) fn skip_occluders(&mut self, skip: bool) {
+        self.skip_occluders = skip && !self.occluders.is_empty();
     }
 
     /// Fills the hole made of `pixels` in `work` (known pixels finite, the hole's pixels
@@ -101,7 +128,14 @@ impl HoleFiller {
         trials: usize,
         rng: &mut SplitMix64,
     ) -> Result<()> {
-        self.collect_edges(work, (width, height), pixels, |_, _| true);
+        let all = |_, _| true;
+        self.collect_edges_beside_occluders(
+            work,
+            (width, height),
+            pixels,
+            all,
+            MIN_EDGES_BESIDE_OCCLUDERS,
+        );
         no_boundary_error(&self.edges, pixels)?;
         self.fit(trials, rng).apply(work, width, pixels);
         Ok(())
@@ -127,7 +161,8 @@ impl HoleFiller {
         trials: usize,
         rng: &mut SplitMix64,
     ) -> Result<usize> {
-        self.collect_edges(work, size, pixels, |_, _| true);
+        let all = |_, _| true;
+        self.collect_edges_beside_occluders(work, size, pixels, all, MIN_EDGES_BESIDE_OCCLUDERS);
         no_boundary_error(&self.edges, pixels)?;
         // The whole hole's surface, for what is not filled otherwise; among that, a region
         // whose own colour's edges disagree (a column of false matches on a face without
@@ -137,7 +172,14 @@ impl HoleFiller {
         let (mut ambiguous, mut rest) = (Vec::new(), Vec::new());
         let regions = guide.regions(size, pixels, state);
         for region in regions.iter() {
-            self.collect_edges(work, size, region, |p, q| guide.own_colour(p, q));
+            let own = |p, q| guide.own_colour(p, q);
+            self.collect_edges_beside_occluders(
+                work,
+                size,
+                region,
+                own,
+                MIN_OWN_EDGES_BESIDE_OCCLUDERS,
+            );
             if self.edges.len() < MIN_OWN_EDGES {
                 rest.extend_from_slice(region);
                 continue;
@@ -207,8 +249,28 @@ impl HoleFiller {
         close as f64 / self.edges.len() as f64
     }
 
+    /// The edges `keep` accepts (see [`HoleFiller::collect_edges`]): without those to
+    /// occluders when the hole holds an occlusion and at least `enough` others are left,
+    /// else all.
+    fn collect_edges_beside_occluders(
+        &mut self,
+        work: &[f32],
+        size: (usize, usize),
+        pixels: &[u32],
+        keep: impl Fn(usize, usize) -> bool + Copy,
+        enough: usize,
+    ) {
+        self.collect_edges(work, size, pixels, keep);
+        if self.skip_occluders && self.edges.len() < enough {
+            self.skip_occluders = false;
+            self.collect_edges(work, size, pixels, keep);
+            self.skip_occluders = true;
+        }
+    }
+
     /// Every (hole pixel `p`, known 4-neighbour `q`) pair that `keep(p, q)` accepts, as the
-    /// known pixel's position and value.
+    /// known pixel's position and value; `q` an occluder is left out while
+    /// [`HoleFiller::skip_occluders`] says so.
     fn collect_edges(
         &mut self,
         work: &[f32],
@@ -225,7 +287,8 @@ impl HoleFiller {
                 .flatten()
             {
                 let r = work[q];
-                if r.is_finite() && keep(p, q) {
+                let occluder = self.skip_occluders && self.occluders[q];
+                if r.is_finite() && !occluder && keep(p, q) {
                     let (qx, qy) = ((q % width) as i32, (q / width) as i32);
                     self.edges.push(Edge { x: qx, y: qy, r });
                 }
@@ -564,7 +627,7 @@ mod tests {
         let (w, h) = (5, 5);
         let mut m = vec![3.0f32; w * h];
         m[12] = f32::INFINITY;
-        let mut f = HoleFiller::new(100.0);
+        let mut f = HoleFiller::new(100.0, Vec::new());
         f.fill(&mut m, w, h, &[12], 8, &mut SplitMix64::new(1))
             .unwrap();
         assert_eq!(m[12], 3.0);
@@ -594,7 +657,7 @@ mod tests {
             .map(|p| p as u32)
             .collect();
         hole.iter().for_each(|&p| work[p as usize] = f32::INFINITY);
-        HoleFiller::new(100.0)
+        HoleFiller::new(100.0, Vec::new())
             .fill(&mut work, w, h, &hole, 32, &mut SplitMix64::new(5))
             .unwrap();
         let worst = hole.iter().fold(0.0f64, |m, &p| {
@@ -636,7 +699,7 @@ mod tests {
         assert!(ground(20, 4) > 2.0 * farthest_edge);
         for far_limit in [100.0, 40.0] {
             let mut work = start.clone();
-            HoleFiller::new(far_limit)
+            HoleFiller::new(far_limit, Vec::new())
                 .fill(&mut work, w, h, &hole, 32, &mut SplitMix64::new(5))
                 .unwrap();
             let want = ground(20, 4).min(far_limit);
@@ -670,7 +733,7 @@ mod tests {
     fn fill_by_colour(image: &RgbImage, work: &mut [f32], hole: &[u32], seed: u64) -> usize {
         let guide = ColourGuide::new(image, 0.08);
         let mut state = vec![Pixel::Other; work.len()];
-        HoleFiller::new(100.0)
+        HoleFiller::new(100.0, Vec::new())
             .fill_by_colour(
                 work,
                 (image.width(), image.height()),
@@ -687,7 +750,7 @@ mod tests {
     fn each_colour_continues_its_own_surface() {
         let (image, mut work, hole) = two_faces();
         let mut plain = work.clone();
-        HoleFiller::new(100.0)
+        HoleFiller::new(100.0, Vec::new())
             .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
             .unwrap();
         // Without the image the plane through both sides wins: a ramp across the hole.
@@ -721,7 +784,7 @@ mod tests {
             .filter(|p| p % 20 < 5)
             .for_each(|p| work[p] = 100.0);
         let mut plain = work.clone();
-        HoleFiller::new(100.0)
+        HoleFiller::new(100.0, Vec::new())
             .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
             .unwrap();
         assert_eq!(fill_by_colour(&image, &mut work, &hole, 3), 1);

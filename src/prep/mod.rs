@@ -149,6 +149,15 @@
 //!    from what is round them once the regions are, so a speck amid the background is
 //!    the background.
 //!
+//!    **Stereo occlusions** ([`PrepOptions::stereo_focal_baseline`], a left view's
+//!    matched disparity: Cityscapes): a run of unknown pixels in a row whose right side is
+//!    at least 1.25 times nearer than its left, at most about twice as wide as their
+//!    disparities differ, between measured sides (the left one a surface over 8 pixels),
+//!    is the background the right camera could not see. Its hole is filled without the
+//!    edges to the near surface right of such runs, the *occluder* (see `occlusion.rs`),
+//!    but for a colour region whose colour only the occluder shows (the pole the matcher
+//!    missed); [`PrepStats::occluded`] counts the runs' pixels.
+//!
 //!    **The scene beyond the sensor's reach** (step 2; [`PrepStats::beyond_reach`]) is
 //!    at least as far as the farthest range measured and no farther than the sky: the
 //!    ground receding toward the horizon and what stands on it. In each column it goes
@@ -218,9 +227,11 @@ mod colour_step;
 mod components;
 pub mod edt;
 mod fill;
+mod holes;
 mod horizon;
 mod local;
 mod margin;
+mod occlusion;
 mod options;
 mod outliers;
 mod range_class;
@@ -295,6 +306,9 @@ pub struct PrepStats {
     /// the band continues, a matcher's specks or a hood's reflection; see `border.rs`), then
     /// filled with the band (counted in `border_filled`).
     pub border_islands: usize,
+    /// Unknown pixels taken as stereo occlusions and filled from their background alone
+    /// ([`PrepOptions::stereo_focal_baseline`]; 0 without it).
+    pub occluded: usize,
     /// Number of unknown pixels of the scene beyond the sensor's reach (image-guided
     /// detection only: the depth rules took them for sky, the image does not join them to
     /// its sky), filled receding from `Rmax` into the sky.
@@ -481,12 +495,12 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         (stats.border_filled, stats.border_sky, stats.border_islands) =
             (b.filled, b.sky, b.islands);
     }
-    let mut holes = Holes {
+    let mut holes = holes::Holes {
         filled: &mut filled,
         sky: &mut sky,
         ego: &mut ego,
     };
-    fill_holes(
+    holes::fill_holes(
         &mut work,
         &mut holes,
         (w, h),
@@ -679,87 +693,6 @@ fn max_known_outside(work: &[f32], sky: &[bool]) -> Option<f32> {
         .filter(|(v, &s)| !s && v.is_finite())
         .map(|(&v, _)| v)
         .reduce(f32::max)
-}
-
-/// The masks [`fill_holes`] reads and extends. `ego` is empty without an ego mask.
-struct Holes<'m> {
-    filled: &'m mut [bool],
-    sky: &'m mut [bool],
-    ego: &'m mut [bool],
-}
-
-/// Fills every component of unknown pixels outside the sky and marks it in `filled`. A
-/// component with no known pixel round it (sky all round: a bird, a wire, outliers in the
-/// sky) has nothing to be filled from and is sky; with the ego vehicle round it (and no
-/// sky), it is the ego vehicle.
-fn fill_holes(
-    work: &mut [f32],
-    m: &mut Holes,
-    (w, h): (usize, usize),
-    guide: Option<&fill::ColourGuide>,
-    opts: &PrepOptions,
-    stats: &mut PrepStats,
-) -> Result<()> {
-    // Sky pixels are not boundary values: +inf is neither NaN (a hole) nor finite (data).
-    work.iter_mut()
-        .zip(m.sky.iter())
-        .filter(|(_, &s)| s)
-        .for_each(|(v, _)| *v = f32::INFINITY);
-    let comps = components::label_unknown(work, w, h);
-    let mut filler = fill::HoleFiller::new(f64::from(stats.r_max));
-    let mut state = vec![fill::Pixel::Other; if guide.is_some() { w * h } else { 0 }];
-    for c in &comps.list {
-        let pixels = comps.pixels_of(c);
-        if !has_known_neighbour(work, w, h, pixels) {
-            let touches = |mask: &[bool]| {
-                !mask.is_empty()
-                    && pixels.iter().any(|&p| {
-                        let p = p as usize;
-                        components::neighbours4(p, p % w, p / w, w, h)
-                            .into_iter()
-                            .flatten()
-                            .any(|q| mask[q])
-                    })
-            };
-            let into: &mut [bool] = if touches(m.ego) && !touches(m.sky) {
-                m.ego
-            } else {
-                m.sky
-            };
-            pixels.iter().for_each(|&p| into[p as usize] = true);
-            continue;
-        }
-        let mut rng = crate::rng::SplitMix64::for_stream(opts.seed, pixels[0] as u64);
-        match guide {
-            Some(guide) => {
-                stats.colour_regions += filler.fill_by_colour(
-                    work,
-                    (w, h),
-                    pixels,
-                    guide,
-                    &mut state,
-                    opts.ransac_samples,
-                    &mut rng,
-                )?
-            }
-            None => filler.fill(work, w, h, pixels, opts.ransac_samples, &mut rng)?,
-        }
-        pixels.iter().for_each(|&p| m.filled[p as usize] = true);
-        stats.holes += 1;
-        stats.hole_pixels += pixels.len();
-    }
-    Ok(())
-}
-
-/// Whether any 4-neighbour of `pixels` holds a finite value.
-fn has_known_neighbour(work: &[f32], w: usize, h: usize, pixels: &[u32]) -> bool {
-    pixels.iter().any(|&p| {
-        let p = p as usize;
-        components::neighbours4(p, p % w, p / w, w, h)
-            .into_iter()
-            .flatten()
-            .any(|q| work[q].is_finite())
-    })
 }
 
 /// Sets the sky pixels to `Smax` and counts them and their components; returns their

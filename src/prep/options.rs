@@ -1,5 +1,6 @@
 //! The options of pre-processing, with their defaults and checks.
 
+use crate::io::depth::{DepthKind, LoadedDepth};
 use crate::{Error, Result};
 
 /// Which components of unknown pixels are sky under the depth rules. A component is sky
@@ -140,6 +141,14 @@ pub struct PrepOptions {
     /// not). `None` (the default) for measured depth; [`crate::photo::preprocess`] sets
     /// [`MONOCULAR_SKY_FACTOR`] for inverse and affine-invariant depth. Finite and > 1.
     pub sky_in_far_tail: Option<f64>,
+    /// `Some(f·B)`, the focal length in pixels times the baseline in metres, when the range
+    /// comes from a *left* view's stereo disparity (d ≈ f·B / R): a run of unknown pixels
+    /// in a row whose right side is much nearer than its left, and about as wide as their
+    /// disparities differ, is the background the right camera could not see, and is filled
+    /// without the near surface beside it (see `src/prep/occlusion.rs`).
+    /// [`crate::photo::preprocess`] sets it for Cityscapes disparity; `None` (the default)
+    /// for any other map. Finite and > 0.
+    pub stereo_focal_baseline: Option<f64>,
 }
 
 /// [`PrepOptions::sky_in_far_tail`] for a monocular model's relative depth: beyond ten
@@ -165,11 +174,25 @@ impl Default for PrepOptions {
             local_outlier_span: 0.025,
             border_band_fraction: 0.15,
             sky_in_far_tail: None,
+            stereo_focal_baseline: None,
         }
     }
 }
 
 impl PrepOptions {
+    /// These options for `depth`, what its reading tells filled in where they leave it
+    /// open: [`MONOCULAR_SKY_FACTOR`] for a monocular model's inverse or affine-invariant
+    /// depth ([`Self::sky_in_far_tail`]), the stereo geometry of a left view's matched
+    /// disparity ([`Self::stereo_focal_baseline`]).
+    pub fn for_depth(&self, depth: &LoadedDepth) -> PrepOptions {
+        let monocular = matches!(depth.kind, DepthKind::Inverse | DepthKind::Affine);
+        PrepOptions {
+            sky_in_far_tail: (self.sky_in_far_tail).or(monocular.then_some(MONOCULAR_SKY_FACTOR)),
+            stereo_focal_baseline: self.stereo_focal_baseline.or(depth.stereo_focal_baseline),
+            ..self.clone()
+        }
+    }
+
     /// Checks every field; an out-of-domain one gives [`Error::InvalidParameter`].
     pub fn validate(&self) -> Result<()> {
         check_fraction("min_area_fraction", self.sky.min_area_fraction)?;
@@ -226,6 +249,16 @@ impl PrepOptions {
             ));
         }
         check_fraction("local_outlier_span", self.local_outlier_span)?;
+        if let Some(fb) = self
+            .stereo_focal_baseline
+            .filter(|fb| !(fb.is_finite() && *fb > 0.0))
+        {
+            return Err(Error::invalid(
+                "stereo_focal_baseline",
+                fb,
+                "a finite focal length in pixels times a baseline in metres, greater than 0",
+            ));
+        }
         check_fraction("border_band_fraction", self.border_band_fraction)
     }
 

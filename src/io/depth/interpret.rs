@@ -14,6 +14,7 @@ use super::{finite_option, positive_option, DepthFormat, DepthKind, DepthOptions
 use crate::camera::{Camera, DepthModel};
 use crate::io::camera::{to_range, Intrinsics, Stereo};
 use crate::io::codec::NPZ_FOCAL_ARRAY;
+use crate::raster::Orientation;
 use crate::{Error, Result};
 
 /// The camera files that came with a depth map, parsed, with their paths.
@@ -177,6 +178,7 @@ pub(super) fn interpret(
     // `fov` is the upright photo's: across the stored map's width when turning swaps them.
     let fov_height = if turn.swaps_axes() { width } else { height };
     let metres = "m".to_string();
+    let mut stereo_focal_baseline = None;
     let (mut range, units, intrinsics) = match (format, raw) {
         (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
             let (calib, calib_path) = calib.expect("checked by resolve_format");
@@ -187,6 +189,7 @@ pub(super) fn interpret(
         (DepthFormat::Cityscapes, Raw::Grey16(disp)) => {
             let (camera, _) = camera.expect("checked by resolve_format");
             let range = cityscapes::range(&disp, &camera, opts, &mut notes);
+            stereo_focal_baseline = Some(camera.baseline_m * camera.intrinsics.fx);
             (range, metres, Some(camera.intrinsics))
         }
         (DepthFormat::Middlebury2006, Raw::Grey8(disp)) => {
@@ -319,6 +322,8 @@ pub(super) fn interpret(
         notes,
         unknown_pixels,
         turned: turn,
+        // A turned map's left view is no longer on the left.
+        stereo_focal_baseline: stereo_focal_baseline.filter(|_| turn == Orientation::Upright),
     })
 }
 

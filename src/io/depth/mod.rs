@@ -316,6 +316,11 @@ pub struct LoadedDepth {
     /// How `range` was turned from the file's layout to lie on its upright photo
     /// ([`DepthOptions::photo`]); [`Orientation::Upright`] when it was not.
     pub turned: Orientation,
+    /// f·B, the focal length in pixels of `range`'s grid times the baseline in metres, of
+    /// a left view's stereo-matched disparity (Cityscapes), whose holes beside a nearer
+    /// surface are occlusions of the background
+    /// ([`crate::prep::PrepOptions::stereo_focal_baseline`]); `None` for other maps.
+    pub stereo_focal_baseline: Option<f64>,
 }
 
 impl LoadedDepth {
@@ -324,6 +329,7 @@ impl LoadedDepth {
     pub fn replace_range(&mut self, range: ScalarMap) {
         let scale = range.width() as f64 / self.range.width() as f64;
         self.intrinsics = self.intrinsics.map(|k| k.scaled(scale));
+        self.stereo_focal_baseline = self.stereo_focal_baseline.map(|fb| fb * scale);
         self.range = range;
     }
 
