@@ -349,8 +349,8 @@ fn a_cityscapes_pole_leaves_no_halo() {
             image::Rgb([10, 10, 12])
         } else {
             // Brick: a faint texture of rows.
-            let v = if y % 4 == 0 { 120 } else { 130 };
-            image::Rgb([v, v * 3 / 4, v / 2])
+            let v: u16 = if y % 4 == 0 { 120 } else { 130 };
+            image::Rgb([v, v * 3 / 4, v / 2].map(|c| c as u8))
         }
     });
     photo_image
