@@ -89,6 +89,7 @@ class Renderer:
         compat: Optional[str] = None,
         return_info: bool = False,
         monocular: bool = False,
+        stereo_focal_baseline: Optional[float] = None,
     ) -> Any: ...
     def distance_fog(
         self,
@@ -183,7 +184,8 @@ class Renderer:
         jpeg_quality: Optional[int] = None,
         seed: int = 0,
         return_info: bool = False,
-        monocular: bool = False
+        monocular: bool = False,
+        stereo_focal_baseline: Optional[float] = None
     ) -> Any: ...
 
 def fog(
@@ -208,6 +210,7 @@ def fog(
     compat: Optional[str] = None,
     return_info: bool = False,
     monocular: bool = False,
+    stereo_focal_baseline: Optional[float] = None,
 ) -> Any: ...
 def distance_fog(
     image: Array,
@@ -299,7 +302,8 @@ def aerial(
     jpeg_quality: Optional[int] = None,
     seed: int = 0,
     return_info: bool = False,
-    monocular: bool = False
+    monocular: bool = False,
+    stereo_focal_baseline: Optional[float] = None
 ) -> Any: ...
 def load_photo(path: PathArg, *, dtype: str = "uint8") -> Tuple[Array, Dict[str, Any]]: ...
 def save_photo(path: PathArg, image: Array, info: Optional[Dict[str, Any]] = None) -> None: ...

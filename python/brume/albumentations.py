@@ -37,7 +37,8 @@ class Fog(A.ImageOnlyTransform):
     image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
     ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur``,
-    ``refine``, ``compat`` and ``monocular`` are :func:`brume.fog`'s; ``airlight_range``
+    ``refine``, ``compat``, ``monocular`` and ``stereo_focal_baseline`` are
+    :func:`brume.fog`'s; ``airlight_range``
     draws a grey airlight in it instead, as :class:`brume.augment.RandomFog`'s. The image
     is uint8 sRGB or float32 linear RGB, as :func:`brume.fog` takes it: albumentations'
     ``ToFloat`` gives sRGB-encoded floats, which the fog would take for linear light, so
@@ -55,6 +56,7 @@ class Fog(A.ImageOnlyTransform):
         refine: Any = True,
         compat: Optional[str] = None,
         monocular: bool = False,
+        stereo_focal_baseline: Optional[float] = None,
         p: float = 1.0,
     ) -> None:
         super().__init__(p=p)
@@ -66,6 +68,7 @@ class Fog(A.ImageOnlyTransform):
         self.refine = refine
         self.compat = compat
         self.monocular = bool(monocular)
+        self.stereo_focal_baseline = stereo_focal_baseline
 
     @property
     def targets_as_params(self) -> list:
@@ -99,6 +102,7 @@ class Fog(A.ImageOnlyTransform):
             refine=self.refine,
             compat=self.compat,
             monocular=self.monocular,
+            stereo_focal_baseline=self.stereo_focal_baseline,
             sky_mask=sky_mask,
             ego_mask=ego_mask,
         )
@@ -113,4 +117,5 @@ class Fog(A.ImageOnlyTransform):
             "refine",
             "compat",
             "monocular",
+            "stereo_focal_baseline",
         )

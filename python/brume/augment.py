@@ -46,7 +46,10 @@ class RandomFog:
     ``depth`` is the range in metres (HxW, HxWx1 or 1xHxW, the image's size or smaller by
     one factor); ``monocular=True`` when it comes from a monocular model's relative depth
     (:func:`brume.range_from_depth` with ``kind='inverse'`` or ``'affine'``), whose sky has
-    a depth: :func:`brume.fog`'s ``monocular``.
+    a depth: :func:`brume.fog`'s ``monocular``; ``stereo_focal_baseline`` (f·B, px·m) when
+    it comes from a left view's stereo-matched disparity (a Cityscapes disparity:
+    :func:`brume.load_depth`'s info gives it), whose occlusions are then filled from their
+    background: :func:`brume.fog`'s.
     Fog whole frames and crop after: the airlight and the range of the sky come from the
     image the fog gets.
     Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and
@@ -85,6 +88,7 @@ class RandomFog:
         jpeg_quality: Optional[int] = None,
         return_info: bool = False,
         monocular: bool = False,
+        stereo_focal_baseline: Optional[float] = None,
     ) -> None:
         self.beta_range = _checked_betas(beta_range, beta_dist)
         if not 0.0 <= float(p) <= 1.0:
@@ -105,6 +109,7 @@ class RandomFog:
         )
         self.return_info = bool(return_info)
         self.monocular = bool(monocular)
+        self.stereo_focal_baseline = stereo_focal_baseline
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self._worker: Optional[int] = None
@@ -164,6 +169,7 @@ class RandomFog:
             ego_mask=targets.get("ego_mask"),
             return_info=self.return_info,
             monocular=self.monocular,
+            stereo_focal_baseline=self.stereo_focal_baseline,
             **self.capture,
         )
         if self.return_info:
@@ -179,7 +185,8 @@ class RandomFog:
             f"airlight={self.airlight}, airlight_range={self.airlight_range}, "
             f"blur={self.blur}, refine={self.refine!r}, compat={self.compat!r}, "
             f"capture={self.capture}, return_info={self.return_info}, "
-            f"monocular={self.monocular})"
+            f"monocular={self.monocular}, "
+            f"stereo_focal_baseline={self.stereo_focal_baseline})"
         )
 
     def _reseed_in_worker(self) -> None:

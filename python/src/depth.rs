@@ -50,7 +50,9 @@ use pyo3::types::PyDict;
 /// at least 1 % of its samples hold it exactly, 10 times beyond the mean of the others or
 /// more (Depth Pro's sky clamped at 10 km, a renderer's background); float('inf') keeps
 /// every value. info: format, kind, units, metric (whether the range is in trustworthy
-/// metres, which fog with beta or visibility needs), notes, unknown_pixels.
+/// metres, which fog with beta or visibility needs), notes, unknown_pixels,
+/// stereo_focal_baseline (f·B in px·m of a Cityscapes disparity, else None: give it to
+/// brume.fog as `brume render` uses it).
 #[pyfunction]
 #[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None))]
 #[allow(clippy::too_many_arguments)]
@@ -187,7 +189,7 @@ fn geometry_options(
 }
 
 /// The range as a numpy array and the info dict (format, kind, units, metric, notes
-/// naming this package's keywords, unknown_pixels).
+/// naming this package's keywords, unknown_pixels, stereo_focal_baseline).
 fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, Bound<'_, PyDict>)> {
     warn_of_depth_warnings(py, &loaded)?;
     let notes: Vec<String> = (loaded.notes.iter())
@@ -200,6 +202,7 @@ fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, B
     info.set_item("metric", loaded.metric)?;
     info.set_item("notes", notes)?;
     info.set_item("unknown_pixels", loaded.unknown_pixels)?;
+    info.set_item("stereo_focal_baseline", loaded.stereo_focal_baseline)?;
     Ok((scalar_map_to_py(py, loaded.range), info))
 }
 

@@ -136,10 +136,10 @@ impl Renderer {
     /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
     /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
     /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
-    /// seed=0, compat=None, return_info=False, monocular=False) -> ndarray, or (ndarray,
-    /// dict) with return_info, or a list of those for a sequence of betas or visibilities:
-    /// as brume.fog, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false, monocular=false))]
+    /// seed=0, compat=None, return_info=False, monocular=False, stereo_focal_baseline=None)
+    /// -> ndarray, or (ndarray, dict) with return_info, or a list of those for a sequence of
+    /// betas or visibilities: as brume.fog, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false, monocular=false, stereo_focal_baseline=None))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -164,6 +164,7 @@ impl Renderer {
         compat: Option<&str>,
         return_info: bool,
         monocular: bool,
+        stereo_focal_baseline: Option<f64>,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
         let refine = refine.unwrap_or(default_refine.as_any());
@@ -186,7 +187,7 @@ impl Renderer {
         self.check_or_free_kept(py, || density.check_outputs_fit(area))?;
         let blur = (blur, lambda_px);
         let mut request = fog_request(density, airlight, blur, refine, capture, compat)?;
-        photo_fog::set_monocular(&mut request.prepare, monocular);
+        photo_fog::set_depth_origin(&mut request.prepare, monocular, stereo_focal_baseline);
         let range = read_range(range_m)?;
         set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
         let pixels = image.pixels;
@@ -345,12 +346,12 @@ impl Renderer {
     /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
     /// sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0,
     /// refine=True, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None,
-    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False) ->
-    /// ndarray, or (ndarray, dict), or a list of those: as brume.aerial, on this renderer's
-    /// context.
+    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False,
+    /// stereo_focal_baseline=None) -> ndarray, or (ndarray, dict), or a list of those: as
+    /// brume.aerial, on this renderer's context.
     #[pyo3(
-        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false, monocular=false),
-        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False)"
+        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false, monocular=false, stereo_focal_baseline=None),
+        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False, stereo_focal_baseline=None)"
     )]
     #[allow(clippy::too_many_arguments)]
     fn aerial<'py>(
@@ -386,6 +387,7 @@ impl Renderer {
         seed: u64,
         return_info: bool,
         monocular: bool,
+        stereo_focal_baseline: Option<f64>,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
         let refine = refine.unwrap_or(default_refine.as_any());
@@ -397,7 +399,7 @@ impl Renderer {
             seed,
         )?;
         let mut prepare = prepare_request(airlight, refine)?;
-        photo_fog::set_monocular(&mut prepare, monocular);
+        photo_fog::set_depth_origin(&mut prepare, monocular, stereo_focal_baseline);
         let args = aerial_photo::AerialArgs {
             turbidities: turbidity.non_empty("turbidity")?.to_vec(),
             fov_y_deg,
@@ -509,8 +511,8 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
 /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
 /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0,
-/// compat=None, return_info=False, monocular=False) -> ndarray, or (ndarray, dict), or a
-/// list of those
+/// compat=None, return_info=False, monocular=False, stereo_focal_baseline=None) ->
+/// ndarray, or (ndarray, dict), or a list of those
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 or uint16 (sRGB code values) or float32, float64
@@ -531,7 +533,12 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// monocular=True: range_m is a monocular model's relative depth (range_from_depth or
 /// load_depth with kind 'inverse' or 'affine'), whose sky has a depth, the farthest: its
 /// far tail (beyond 10 times the lower quartile) may be sky where the image says so, as
-/// `brume render` reads those kinds.
+/// `brume render` reads those kinds. stereo_focal_baseline: f·B (focal length in px times
+/// baseline in m) when range_m comes from a left view's stereo-matched disparity
+/// (load_depth's info gives it for a Cityscapes disparity): a run of unknown range left of
+/// a nearer surface, the background the right camera could not see, is filled from that
+/// background, not the near surface (no clear halo left of a pole), as `brume render`
+/// fills a Cityscapes disparity.
 ///
 /// The camera after the fog (all off by default): exposure_stops (the linear image times
 /// 2^stops), shot_noise_gain K (the linear value of one photo-electron: Poisson noise of
@@ -554,7 +561,7 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 #[pyfunction]
 #[pyo3(
     signature = (*args, **kwargs),
-    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=False, monocular=False)"
+    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=False, monocular=False, stereo_focal_baseline=None)"
 )]
 fn fog(
     py: Python<'_>,

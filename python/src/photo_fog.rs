@@ -94,12 +94,22 @@ pub(crate) fn prepare_request(
     Ok(prepare)
 }
 
-/// `monocular=True`: `range_m` is a monocular model's relative depth, whose sky may lie in
-/// its far tail (`brume::prep::PrepOptions::sky_in_far_tail`), as `brume render` reads it
-/// for `--depth-kind inverse` and `affine`.
-pub(crate) fn set_monocular(prepare: &mut PrepareOptions, monocular: bool) {
-    if let (true, Some(prep)) = (monocular, prepare.prep.as_mut()) {
-        prep.sky_in_far_tail = Some(brume::prep::MONOCULAR_SKY_FACTOR);
+/// Where `range_m` came from, as `brume render` knows it from the file: `monocular=True`, a
+/// monocular model's relative depth, whose sky may lie in its far tail
+/// (`brume::prep::PrepOptions::sky_in_far_tail`, as for `--depth-kind inverse` and
+/// `affine`); `stereo_focal_baseline`, a left view's matched disparity with f·B (px·m),
+/// whose occlusions are filled from their background (as for a Cityscapes disparity;
+/// `load_depth`'s info gives it). Checked with pre-processing's options.
+pub(crate) fn set_depth_origin(
+    prepare: &mut PrepareOptions,
+    monocular: bool,
+    stereo_focal_baseline: Option<f64>,
+) {
+    if let Some(prep) = prepare.prep.as_mut() {
+        if monocular {
+            prep.sky_in_far_tail = Some(brume::prep::MONOCULAR_SKY_FACTOR);
+        }
+        prep.stereo_focal_baseline = stereo_focal_baseline;
     }
 }
 

@@ -476,7 +476,10 @@ def test_load_depth(tmp_path, range_m):
     np.testing.assert_array_equal(loaded, range_m)
     assert info["format"] == "float" and info["kind"] == "range"
     assert info["metric"] is False and info["unknown_pixels"] == 0
-    assert set(info) == {"format", "kind", "units", "metric", "notes", "unknown_pixels"}
+    assert set(info) == {
+        "format", "kind", "units", "metric", "notes", "unknown_pixels", "stereo_focal_baseline",
+    }  # fmt: skip
+    assert info["stereo_focal_baseline"] is None
     with pytest.raises(OSError, match="missing.npy"):
         brume.load_depth(tmp_path / "missing.npy")
     # A path as Python's file functions take it: str, os.PathLike or bytes.
@@ -819,6 +822,53 @@ def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine, density)
     cli = brume_render(tmp_path, image_u8, range_m, flags)
     ours = brume.fog(image_u8, range_m.astype(np.float32), blur=blur, refine=refine, **density)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
+
+
+def test_a_cityscapes_disparitys_occlusions_as_brume_render_fills_them(tmp_path):
+    """A pole (Z = 2 m, d = fx·B/Z = 25 px) before a wall (10 m, 5 px), the 20 px of wall
+    left of it unknown as a matcher leaves what the right camera cannot see, the pole's
+    disparity reaching 2 px over the wall on every other row: load_depth gives f·B, and
+    fog with it fills the occlusion with the wall's range, as `brume render` fills the
+    Cityscapes file; without it, the hole is a ramp to the pole."""
+    Image = pytest.importorskip("PIL.Image")
+    h, w, pole, band = 48, 96, (60, 66), (40, 60)
+    x = np.arange(w)[None, :].repeat(h, 0)
+    y = np.arange(h)[:, None].repeat(w, 1)
+    in_pole = (x >= pole[0]) & (x < pole[1])
+    fattened = (y % 2 == 1) & (x >= pole[0] - 2) & (x < pole[0])
+    disparity = np.where(in_pole | fattened, 25.0, 5.0)
+    disparity[(x >= band[0]) & (x < band[0] + 20) & ~fattened] = 0.0
+    stored = np.where(disparity > 0, disparity * 256 + 1, 0).astype(np.uint16)
+    Image.fromarray(stored).save(tmp_path / "f_disparity.png")
+    camera = '{"extrinsic": {"baseline": 0.5}, "intrinsic": {"fx": 100.0, "fy": 100.0, "u0": 48.0, "v0": 24.0}}'
+    (tmp_path / "f_camera.json").write_text(camera)
+    brick = np.where(y % 4 == 0, 120, 130)[..., None] * np.array([1.0, 0.75, 0.5])
+    image = np.where(in_pole[..., None], np.array([10, 10, 12]), brick).astype(np.uint8)
+    Image.fromarray(image).save(tmp_path / "f_leftImg8bit.png")
+
+    range_m, info = brume.load_depth(tmp_path / "f_disparity.png")
+    assert info["format"] == "cityscapes" and info["stereo_focal_baseline"] == 50.0
+    kw = dict(beta=0.05, refine="none", return_info=True)
+    fb = info["stereo_focal_baseline"]
+    ours, labels = brume.fog(image, range_m, stereo_focal_baseline=fb, **kw)
+    _, as_hole = brume.fog(image, range_m, **kw)
+    wall = range_m[:, band[0] - 1 : band[0]]
+    fill = slice(band[0], pole[0] - 2)
+    error = lambda got: np.abs(np.log(got[:, fill] / wall)).mean()  # noqa: E731
+    assert error(labels["range_m"]) < 0.01
+    assert error(as_hole["range_m"]) > 0.3
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "f_leftImg8bit.png"),
+        "--depth", str(tmp_path / "f_disparity.png"),
+        "--beta", "0.05", "--refine", "none",
+        "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
+    with pytest.raises(ValueError, match="stereo_focal_baseline"):
+        brume.fog(image, range_m, beta=0.05, stereo_focal_baseline=-1.0)
 
 
 @pytest.mark.parametrize("airlight", [None, (0.6, 0.65, 0.7)])
