@@ -457,6 +457,13 @@ pub(crate) enum Pixel {
     InRegion,
 }
 
+/// See [`ColourGuide::alike`]: the largest difference of chromaticity (a channel over the
+/// sum of the three) of one material.
+const MATERIAL_CHROMA_STEP: f32 = 0.03;
+
+/// See [`ColourGuide::alike`]: the largest ratio of the luminances of one material.
+const MATERIAL_LUMINANCE_RATIO: f32 = 2.0;
+
 /// The colour image as the hole fill reads it.
 pub(crate) struct ColourGuide<'a> {
     colour: &'a [[f32; 3]],
@@ -498,6 +505,37 @@ impl<'a> ColourGuide<'a> {
     /// The colour (linear RGB) of pixel `p`.
     pub(crate) fn colour_at(&self, p: usize) -> [f32; 3] {
         self.colour[p]
+    }
+
+    /// Whether the pixels `a` and `b` look of one material: their median colours (per
+    /// channel) of one chromaticity, within [`MATERIAL_CHROMA_STEP`] in each of r, g, b
+    /// over r + g + b, and within [`MATERIAL_LUMINANCE_RATIO`] of each other's luminance
+    /// (a face's shading changes across it: a glass facade of a Cityscapes frame was a
+    /// quarter brighter at the border than 40 px inward, of the same chromaticity).
+    pub(crate) fn alike(&self, a: &[usize], b: &[usize]) -> bool {
+        let (ca, cb) = (self.median_colour(a), self.median_colour(b));
+        let lum = |c: [f32; 3]| {
+            let w = super::airlight::REC709_LUMA;
+            (w[0] * c[0] + w[1] * c[1] + w[2] * c[2]).max(self.eps)
+        };
+        let chroma = |c: [f32; 3]| {
+            let sum = (c[0] + c[1] + c[2]).max(self.eps);
+            c.map(|v| v / sum)
+        };
+        let (la, lb) = (lum(ca), lum(cb));
+        let (xa, xb) = (chroma(ca), chroma(cb));
+        la.max(lb) <= MATERIAL_LUMINANCE_RATIO * la.min(lb)
+            && (0..3).all(|i| (xa[i] - xb[i]).abs() <= MATERIAL_CHROMA_STEP)
+    }
+
+    /// The per-channel median colour of `pixels` (at least one).
+    fn median_colour(&self, pixels: &[usize]) -> [f32; 3] {
+        let mut channel = Vec::with_capacity(pixels.len());
+        [0, 1, 2].map(|c| {
+            channel.clear();
+            channel.extend(pixels.iter().map(|&p| f64::from(self.colour[p][c])));
+            median_in_place(&mut channel) as f32
+        })
     }
 
     /// The hole `pixels` split into 4-connected regions of one colour (steps of at most

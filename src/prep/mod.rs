@@ -491,6 +491,7 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
             (w, h),
             opts.border_band_fraction,
             (r_min, stats.r_max),
+            guide.as_ref(),
         );
         (stats.border_filled, stats.border_sky, stats.border_islands) =
             (b.filled, b.sky, b.islands);
