@@ -56,7 +56,8 @@
 //!
 //! Filled pixels are known for the sides that follow (a corner is reached from both).
 
-use super::fill::{median_in_place, ColourGuide};
+use super::colour_guide::ColourGuide;
+use super::fill::median_in_place;
 
 /// Largest ratio of the two halves' medians for a slope to be used, and the largest factor
 /// between the extrapolated disparity and the first half's median.

@@ -2,7 +2,7 @@
 //! range round it ([`super::fill`]), a stereo occlusion from its background alone
 //! ([`super::occlusion`]).
 
-use super::{components, fill, occlusion, PrepOptions, PrepStats};
+use super::{colour_guide, components, fill, occlusion, PrepOptions, PrepStats};
 use crate::Result;
 
 /// The masks [`fill_holes`] reads and extends. `ego` is empty without an ego mask.
@@ -22,7 +22,7 @@ pub(super) fn fill_holes(
     work: &mut [f32],
     m: &mut Holes,
     (w, h): (usize, usize),
-    guide: Option<&fill::ColourGuide>,
+    guide: Option<&colour_guide::ColourGuide>,
     opts: &PrepOptions,
     stats: &mut PrepStats,
 ) -> Result<()> {
@@ -39,7 +39,7 @@ pub(super) fn fill_holes(
     stats.occluded = occlusions.count;
     let comps = components::label_unknown(work, w, h);
     let mut filler = fill::HoleFiller::new(f64::from(stats.r_max), occlusions.occluders);
-    let mut state = vec![fill::Pixel::Other; if guide.is_some() { w * h } else { 0 }];
+    let mut state = vec![colour_guide::Pixel::Other; if guide.is_some() { w * h } else { 0 }];
     for c in &comps.list {
         let pixels = comps.pixels_of(c);
         if !has_known_neighbour(work, w, h, pixels) {

@@ -223,6 +223,7 @@
 
 mod airlight;
 mod border;
+mod colour_guide;
 mod colour_step;
 mod components;
 pub mod edt;
@@ -461,7 +462,7 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
     found.noise.iter().for_each(|&p| work[p] = f32::NAN);
     let guide = guides
         .image
-        .map(|i| fill::ColourGuide::new(i, opts.image_sky.max_step));
+        .map(|i| colour_guide::ColourGuide::new(i, opts.image_sky.max_step));
     if let Some(guide) = &guide {
         // Taken out of the scene beyond the reach, they stay NaN: holes.
         reach::take_out_reached_in_part(&work, &sky, &mut found.beyond_reach, guide, (w, h));

@@ -1,8 +1,8 @@
 //! The scene beyond the sensor's reach: unknown pixels joined to the sky that the image
 //! shows are not sky (see the module docs of [`crate::prep`], step 4).
 
+use super::colour_guide::ColourGuide;
 use super::components::{flood, label_mask};
-use super::fill::ColourGuide;
 use super::horizon;
 use super::ImageSkyRules;
 
