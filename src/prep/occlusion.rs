@@ -11,7 +11,7 @@
 /// of ranges, for the run to be taken as an occlusion: a disparity step of a quarter. A
 /// textureless face turning away (a car's side) changes its range along a short run by
 /// less, and where it does not the width test below tells it apart.
-pub(crate) const OCCLUSION_NEARER: f32 = 1.25;
+const OCCLUSION_NEARER: f32 = 1.25;
 
 /// An occlusion is about as wide as its sides' disparities differ, Δd = f·B·(1/R_right −
 /// 1/R_left) pixels; a run is taken as one when at most `OCCLUSION_WIDTH_FACTOR · Δd +`
@@ -19,11 +19,16 @@ pub(crate) const OCCLUSION_NEARER: f32 = 1.25;
 /// nearer right side were 1.4 to 1.5 times Δd wide at the median (the matcher's consistency
 /// check widens them) and 2.4 times at the upper quartile; a slanted face's run is 1/g
 /// times its Δd for a disparity gradient g < 1, wider the more the face faces the camera.
-pub(crate) const OCCLUSION_WIDTH_FACTOR: f64 = 2.0;
+const OCCLUSION_WIDTH_FACTOR: f64 = 2.0;
 
 /// See [`OCCLUSION_WIDTH_FACTOR`]: narrow runs of a few pixels are occlusions whatever
 /// their Δd, which range's stretch off the optical axis makes up to a quarter too small.
-pub(crate) const OCCLUSION_WIDTH_SLACK_PX: f64 = 4.0;
+const OCCLUSION_WIDTH_SLACK_PX: f64 = 4.0;
+
+/// The measured pixels of like range (within [`OCCLUSION_NEARER`]) the background left of
+/// an occlusion must show in its row, next to it: a matcher's speck of a few pixels amid
+/// the road is no background.
+const OCCLUSION_BACKGROUND_PX: usize = 8;
 
 /// The runs of unknown pixels that are stereo occlusions, and the known pixels that occlude
 /// them.
@@ -38,11 +43,6 @@ pub(crate) struct Occlusions {
     /// How many pixels are in `occluded`.
     pub(crate) count: usize,
 }
-
-/// The measured pixels of like range (within [`OCCLUSION_NEARER`]) the background left of
-/// an occlusion must show in its row, next to it: a matcher's speck of a few pixels amid
-/// the road is no background.
-pub(crate) const OCCLUSION_BACKGROUND_PX: usize = 8;
 
 /// Finds the occlusions of `work` (row-major `w` x `h` range: known finite, unknown NaN,
 /// anything else, as the sky's +∞, neither), a left view's range from a disparity with
@@ -66,12 +66,7 @@ pub(crate) fn find(
         occluders: vec![false; w * h],
         count: 0,
     };
-    for (y, (row, filled)) in work
-        .chunks_exact(w)
-        .zip(filled.chunks_exact(w))
-        .enumerate()
-        .take(h)
-    {
+    for (y, (row, filled)) in work.chunks_exact(w).zip(filled.chunks_exact(w)).enumerate() {
         let mut x = 0;
         while x < w {
             if !row[x].is_nan() {
