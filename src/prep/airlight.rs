@@ -108,7 +108,7 @@ fn known_pixels(p: &Prepared) -> Vec<usize> {
 fn bright_luminance(colours: &[[f32; 3]]) -> f32 {
     let mut y: Vec<f32> = colours
         .iter()
-        .map(|c| c.iter().zip(REC709_LUMA).map(|(v, w)| v * w).sum())
+        .map(|&c| super::colour_step::luminance_of(c))
         .collect();
     if y.is_empty() {
         return 0.0;

@@ -264,8 +264,7 @@ fn drop_far_islands(
         let surface = if bottom {
             continuation(samples, true)((k + end) / 2)
         } else {
-            let mut ranges: Vec<f64> = samples.iter().map(|&(_, r)| f64::from(r)).collect();
-            let median = median_in_place(&mut ranges) as f32;
+            let median = median_of(samples.iter().map(|&(_, r)| r));
             let agrees = |r: f32| r <= MAX_RATIO * median && median <= MAX_RATIO * r;
             let start = samples
                 .iter()
@@ -289,8 +288,7 @@ fn drop_far_islands(
         if count > k && !speck_on_the_surface {
             return dropped;
         }
-        let mut ranges: Vec<f64> = island.iter().map(|&j| f64::from(work[at(j)])).collect();
-        if median_in_place(&mut ranges) as f32 <= ratio * surface {
+        if median_of(island.iter().map(|&j| work[at(j)])) <= ratio * surface {
             return dropped; // a surface of its own: the band ends at it
         }
         island.iter().for_each(|&j| work[at(j)] = f32::NAN);
@@ -331,11 +329,15 @@ fn specks_on(
     (island, run): (&[usize], &[usize]),
     ratio: f32,
 ) -> bool {
-    let median = |steps: &[usize]| {
-        let mut ranges: Vec<f64> = steps.iter().map(|&j| f64::from(work[at(j)])).collect();
-        median_in_place(&mut ranges) as f32
-    };
+    let median = |steps: &[usize]| median_of(steps.iter().map(|&j| work[at(j)]));
     guide.is_some_and(|g| median(island) > ratio * median(run) && alike(g, at, island, run))
+}
+
+/// The median of `ranges` (at least one; the upper one of an even count), by
+/// [`median_in_place`] on them widened to f64 (exact).
+fn median_of(ranges: impl Iterator<Item = f32>) -> f32 {
+    let mut wide: Vec<f64> = ranges.map(f64::from).collect();
+    median_in_place(&mut wide) as f32
 }
 
 /// Whether the image shows the surface beyond an island (the known pixels at steps

@@ -2,7 +2,7 @@
 //! regions of one colour ([`split`]), a known pixel of a region's own colour, two sets of
 //! pixels of one material ([`ColourGuide::alike`]).
 
-use super::colour_step::{luminance, relative_step};
+use super::colour_step::{luminance, luminance_of, relative_step};
 use super::components::flood;
 use super::fill::median_in_place;
 use crate::raster::RgbImage;
@@ -76,10 +76,7 @@ impl<'a> ColourGuide<'a> {
     /// quarter brighter at the border than 40 px inward, of the same chromaticity).
     pub(crate) fn alike(&self, a: &[usize], b: &[usize]) -> bool {
         let (ca, cb) = (self.median_colour(a), self.median_colour(b));
-        let lum = |c: [f32; 3]| {
-            let w = super::airlight::REC709_LUMA;
-            (w[0] * c[0] + w[1] * c[1] + w[2] * c[2]).max(self.eps)
-        };
+        let lum = |c: [f32; 3]| luminance_of(c).max(self.eps);
         let chroma = |c: [f32; 3]| {
             let sum = (c[0] + c[1] + c[2]).max(self.eps);
             c.map(|v| v / sum)

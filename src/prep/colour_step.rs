@@ -32,11 +32,17 @@ fn step_between(a: [f32; 3], b: [f32; 3], la: f32, lb: f32, eps: f32) -> f32 {
 /// Rec. 709 luminance of every pixel, clamped at 0 (a NaN sum becomes 0 too: `max`
 /// returns its other argument).
 pub(crate) fn luminance(colour: &[[f32; 3]]) -> Vec<f32> {
-    let w = super::airlight::REC709_LUMA;
     colour
         .par_iter()
-        .map(|c| (w[0] * c[0] + w[1] * c[1] + w[2] * c[2]).max(0.0))
+        .map(|&c| luminance_of(c).max(0.0))
         .collect()
+}
+
+/// The Rec. 709 luminance of one linear colour, not clamped.
+#[inline]
+pub(crate) fn luminance_of(c: [f32; 3]) -> f32 {
+    let w = super::airlight::REC709_LUMA;
+    w[0] * c[0] + w[1] * c[1] + w[2] * c[2]
 }
 
 /// The 3 x 3 mean (clipped at the borders) of each pixel's largest relative step to a
