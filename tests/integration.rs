@@ -46,6 +46,7 @@ mod photo_exif;
 mod physical_units;
 mod prep_aloe;
 mod prep_edt;
+mod prep_ground;
 mod prep_holes;
 mod prep_outdoor;
 mod prep_street;

@@ -13,7 +13,8 @@ What it does, in one run:
    point at ((W − 1)/2, (H − 1)/2), ``F = (H/2) / tan(fov/2)`` px. One scene unit is one metre.
 2. Runs OpenCV's StereoSGBM (semi-global matching, as Cityscapes' SGM) on the pair and writes
    its disparity as a Cityscapes disparity PNG (uint16, ``p = 256·d + 1``, 0 = invalid) with a
-   ``{name}_camera.json`` (baseline in metres, fx = fy = F, u0 = cx, v0 = cy). The TRUE
+   ``{name}_camera.json`` (baseline in metres, fx = fy = F, u0 = cx, v0 = cy; the mount: z the
+   eye's height over the level ground y = 0, pitch down positive, roll 0). The TRUE
    disparity ``F·B/z`` (0 for the sky) is written the same way, for reference.
 3. Measures brume's transmittance per pixel for each depth (truth disparity, SGBM disparity)
    and each ``--refine`` (none, guided, unreliable, repair = the default for Cityscapes disparity):
@@ -214,7 +215,10 @@ def main():
     d_true = np.where(sky, 0.0, F * a.baseline / z)
     tau_true = np.where(sky, 0.0, np.exp(-a.beta * R_true))
 
-    cam = {"extrinsic": {"baseline": a.baseline},
+    # The mount over the scene's level ground (y = 0) as a car's camera file gives it:
+    # height, pitch down positive (brume scene's --pitch is up positive, in degrees).
+    cam = {"extrinsic": {"baseline": a.baseline, "z": pos[1],
+                         "pitch": -math.radians(a.pitch), "roll": 0.0},
            "intrinsic": {"fx": F, "fy": F, "u0": cx, "v0": cy}}
     for name in ("truth", "sgbm"):
         with open(o(f"{name}_camera.json"), "w") as fh:

@@ -136,9 +136,10 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.s_max.map_or("-".to_string(), |v| format!("{v:.4}"))
         );
         outln!(
-            "sky from {}; {} far outliers removed{}, {} local outliers, {} px of matcher noise \
-             by the sky; {} known px in the sky replaced",
+            "sky from {}; {} px beyond the level road, {} far outliers removed{}, {} local \
+             outliers, {} px of matcher noise by the sky; {} known px in the sky replaced",
             sky_method_name(s.sky_method),
+            s.below_ground,
             s.far_outliers,
             s.far_cut
                 .map_or(String::new(), |c| format!(" (cut {c:.4})")),

@@ -6,7 +6,7 @@ use crate::raster::{Grid, Orientation, ScalarMap};
 
 /// Pinhole intrinsics in pixels. Pixel `(x, y)` has its centre at integer coordinates
 /// `(x, y)`, row 0 at the top, as in Middlebury's `calib.txt`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Intrinsics {
     /// Focal length along x, in pixels.
     pub fx: f64,
@@ -80,6 +80,78 @@ impl Intrinsics {
             O::Rotate270 => (fy, fx, cy, right - cx),
         };
         Intrinsics { fx, fy, cx, cy }
+    }
+}
+
+/// How a camera is mounted over level ground (a vehicle's camera, from its calibration):
+/// Cityscapes' `extrinsic.z`, `pitch` and `roll`, in the vehicle frame of ISO 8855 (x
+/// forward, y left, z up; the camera turned by roll about x, then pitch about y).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Mount {
+    /// Height of the optical centre above the ground, in metres.
+    pub height_m: f64,
+    /// Tilt of the optical axis below the level, in radians (down is positive).
+    pub pitch: f64,
+    /// Turn about the optical axis, in radians (the left side up is positive).
+    pub roll: f64,
+}
+
+impl Mount {
+    /// The rays of a camera with intrinsics `k` on this mount, for
+    /// [`LevelRays::sine_below_level`] pixel by pixel.
+    pub fn rays(&self, k: &Intrinsics) -> LevelRays {
+        let (sin_pitch, cos_pitch) = self.pitch.sin_cos();
+        let (sin_roll, cos_roll) = self.roll.sin_cos();
+        LevelRays {
+            k: *k,
+            sin_pitch,
+            cos_pitch,
+            sin_roll,
+            cos_roll,
+        }
+    }
+}
+
+/// A mounted camera's rays against the level ([`Mount::rays`]).
+#[derive(Clone, Copy, Debug)]
+pub struct LevelRays {
+    k: Intrinsics,
+    sin_pitch: f64,
+    cos_pitch: f64,
+    sin_roll: f64,
+    cos_roll: f64,
+}
+
+impl LevelRays {
+    /// The sine of the angle by which the ray through pixel `(x, y)` points below the
+    /// level: positive below the horizon, 0 on it, negative above. A ray of sine `s > 0`
+    /// meets level ground at range `height_m / s`.
+    pub fn sine_below_level(&self, x: usize, y: usize) -> f64 {
+        let (u, v) = self.uv(x, y);
+        self.down(u, v) / (1.0 + u * u + v * v).sqrt()
+    }
+
+    /// Whether some pixel of row `y` of a `width`-pixel row may point more than `sine`
+    /// below the level (`sine` ≥ 0): false lets a caller skip the row.
+    pub fn row_may_reach(&self, y: usize, width: usize, sine: f64) -> bool {
+        // The down component is linear along a row, so largest at an end, and the ray's
+        // length is at least 1.
+        let (first, last) = (self.uv(0, y), self.uv(width.saturating_sub(1), y));
+        self.down(first.0, first.1).max(self.down(last.0, last.1)) > sine
+    }
+
+    /// The down component of the ray (u, v, 1): (forward 1, left −u, up −v) in the
+    /// vehicle frame before the camera's turn, then turned by the roll and the pitch.
+    fn down(&self, u: f64, v: f64) -> f64 {
+        self.sin_pitch + self.cos_pitch * (v * self.cos_roll + u * self.sin_roll)
+    }
+
+    /// Pixel `(x, y)` on the plane at unit depth.
+    fn uv(&self, x: usize, y: usize) -> (f64, f64) {
+        (
+            (x as f64 - self.k.cx) / self.k.fx,
+            (y as f64 - self.k.cy) / self.k.fy,
+        )
     }
 }
 

@@ -154,6 +154,7 @@ impl Photo {
                 unknown_pixels,
                 turned: Orientation::Upright,
                 stereo_focal_baseline: None,
+                mount: None,
             },
             // The arguments' names, as the messages say them.
             image_name: "image".into(),
@@ -203,6 +204,7 @@ impl Photo {
                 unknown_pixels: 0,
                 turned: orientation,
                 stereo_focal_baseline: None,
+                mount: None,
             },
             image_name: image_name.to_string(),
             depth_name: depth_name.to_string(),

@@ -1,5 +1,6 @@
 //! The options of pre-processing, with their defaults and checks.
 
+use super::ground::Ground;
 use crate::io::depth::{DepthKind, LoadedDepth};
 use crate::{Error, Result};
 
@@ -149,6 +150,25 @@ pub struct PrepOptions {
     /// [`crate::photo::preprocess`] sets it for Cityscapes disparity; `None` (the default)
     /// for any other map. Finite and > 0.
     pub stereo_focal_baseline: Option<f64>,
+    /// The level ground under a camera of known mount (a vehicle's: a Cityscapes camera
+    /// file's height, pitch and roll with its intrinsics, on the range's grid): below the
+    /// horizon a ray meets the road at a range no measured value may exceed by much;
+    /// small patches of values beyond 2x it (and beyond the road falling 5 % away) are a
+    /// matcher's false matches and become holes (see `src/prep/ground.rs`).
+    /// [`crate::photo::preprocess`] sets it for Cityscapes disparity; `None` (the default)
+    /// for any other map.
+    pub ground: Option<Ground>,
+}
+
+/// The level ground of a depth map in metres whose camera's mount and intrinsics are
+/// known (a Cityscapes disparity with its camera file).
+fn ground_of(depth: &LoadedDepth) -> Option<Ground> {
+    let metres = depth.metric && depth.units == "m";
+    depth
+        .mount
+        .zip(depth.intrinsics)
+        .filter(|_| metres)
+        .map(|(mount, intrinsics)| Ground { mount, intrinsics })
 }
 
 /// [`PrepOptions::sky_in_far_tail`] for a monocular model's relative depth: beyond ten
@@ -175,6 +195,7 @@ impl Default for PrepOptions {
             border_band_fraction: 0.15,
             sky_in_far_tail: None,
             stereo_focal_baseline: None,
+            ground: None,
         }
     }
 }
@@ -189,6 +210,7 @@ impl PrepOptions {
         PrepOptions {
             sky_in_far_tail: (self.sky_in_far_tail).or(monocular.then_some(MONOCULAR_SKY_FACTOR)),
             stereo_focal_baseline: self.stereo_focal_baseline.or(depth.stereo_focal_baseline),
+            ground: self.ground.or_else(|| ground_of(depth)),
             ..self.clone()
         }
     }
@@ -258,6 +280,9 @@ impl PrepOptions {
                 fb,
                 "a finite focal length in pixels times a baseline in metres, greater than 0",
             ));
+        }
+        if let Some(ground) = &self.ground {
+            ground.validate()?;
         }
         check_fraction("border_band_fraction", self.border_band_fraction)
     }

@@ -130,8 +130,10 @@ pub struct DepthArgs {
     pub calib: Option<PathBuf>,
 
     /// Cityscapes NAME_camera.json (baseline in metres, intrinsics fx, fy, u0, v0) of a
-    /// NAME_disparity.png. Default: NAME_camera.json beside the disparity, or in the
-    /// dataset's layout (camera/SPLIT/CITY/ for disparity/SPLIT/CITY/).
+    /// NAME_disparity.png; its camera height and pitch (z, pitch, roll), when given, bound
+    /// the range below the horizon by the level road's (false matches beyond are
+    /// dropped). Default: NAME_camera.json beside the disparity, or in the dataset's
+    /// layout (camera/SPLIT/CITY/ for disparity/SPLIT/CITY/).
     #[arg(long, value_name = "PATH")]
     pub camera: Option<PathBuf>,
 

@@ -17,7 +17,7 @@ use std::path::{Component, Path, PathBuf};
 use serde_json::Value;
 
 use super::{DepthFormat, DepthOptions};
-use crate::io::camera::{to_range, Intrinsics};
+use crate::io::camera::{to_range, Intrinsics, Mount};
 use crate::io::limits::MAX_SIDE;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -44,6 +44,14 @@ pub const FOCAL_RANGE_PX: (f64, f64) = (1.0, 1e6);
 /// point may lie outside it; 10¹² is no camera's.
 pub const PRINCIPAL_POINT_RANGE_PX: (f64, f64) = (-(MAX_SIDE as f64), 2.0 * MAX_SIDE as f64);
 
+/// The camera heights above the ground accepted, in metres (`extrinsic.z`): 1 cm to 10 km.
+/// Cityscapes' car has 1.18 to 1.22 m.
+pub const HEIGHT_RANGE_M: (f64, f64) = (1e-2, 1e4);
+
+/// The pitches and rolls accepted, in radians (`extrinsic.pitch`, `roll`): a quarter turn
+/// either way. Cityscapes' are 0.038 to 0.05 (pitch) and 0 (roll).
+pub const TILT_RANGE_RAD: (f64, f64) = (-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);
+
 /// What brume reads from a Cityscapes `{name}_camera.json`. [`parse_camera_str`] accepts
 /// only values within [`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`] and
 /// [`PRINCIPAL_POINT_RANGE_PX`], so that depth baseline·fx/d and the ray stretch stay
@@ -55,6 +63,11 @@ pub struct CityscapesCamera {
     /// The left camera's intrinsics in pixels (`intrinsic.fx`, `fy` within
     /// [`FOCAL_RANGE_PX`]; `u0`, `v0` within [`PRINCIPAL_POINT_RANGE_PX`]).
     pub intrinsics: Intrinsics,
+    /// How the left camera is mounted over the road (`extrinsic.z`, `pitch` and `roll`,
+    /// the last 0 when absent), when the file gives its height and pitch: the level
+    /// ground's range along each ray bounds what a stereo matcher may measure below the
+    /// horizon ([`crate::prep::PrepOptions::ground`]).
+    pub mount: Option<Mount>,
 }
 
 impl CityscapesCamera {
@@ -77,7 +90,7 @@ pub fn parse_camera(path: &Path) -> Result<CityscapesCamera> {
 }
 
 /// Parses the text of a Cityscapes camera file; `path` names it in errors. Keys brume does
-/// not use (pitch, roll, the position …) are ignored. A value outside its range
+/// not use (yaw, the position along and across the car …) are ignored. A value outside its range
 /// ([`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`], [`PRINCIPAL_POINT_RANGE_PX`]) is an error
 /// naming the file, the key, the value and the range.
 pub fn parse_camera_str(text: &str, path: &Path) -> Result<CityscapesCamera> {
@@ -98,7 +111,27 @@ pub fn parse_camera_str(text: &str, path: &Path) -> Result<CityscapesCamera> {
     Ok(CityscapesCamera {
         baseline_m,
         intrinsics: Intrinsics { fx, fy, cx, cy },
+        mount: parse_mount(&json, path)?,
     })
+}
+
+/// The camera's mount over the road, when the file gives `extrinsic.z` and `pitch`; a
+/// value given out of its range is an error like the others'.
+fn parse_mount(json: &Value, path: &Path) -> Result<Option<Mount>> {
+    let given = |key: &str| json.get("extrinsic").and_then(|g| g.get(key)).is_some();
+    if !(given("z") && given("pitch")) {
+        return Ok(None);
+    }
+    let height = ("a height above the ground in metres", "m", HEIGHT_RANGE_M);
+    let tilt = ("an angle in radians", "rad", TILT_RANGE_RAD);
+    Ok(Some(Mount {
+        height_m: within(json, path, "extrinsic", "z", height)?,
+        pitch: within(json, path, "extrinsic", "pitch", tilt)?,
+        roll: match given("roll") {
+            true => within(json, path, "extrinsic", "roll", tilt)?,
+            false => 0.0,
+        },
+    }))
 }
 
 /// `json[group][key]` as a finite number; the error names the key, the value found and
@@ -355,6 +388,43 @@ mod tests {
                 "`{e}` should name the file and say `{needle}`"
             );
         }
+    }
+
+    /// The mount is read when the file gives the height and the pitch (roll 0 when
+    /// absent), is absent otherwise, and a value out of its range is refused by name.
+    #[test]
+    fn the_mount_is_read_when_given() {
+        let path = Path::new("c.json");
+        let with = |extrinsic: &str| {
+            let json = format!(
+                r#"{{"extrinsic": {{"baseline": 0.21{extrinsic}}},
+                    "intrinsic": {{"fx": 2262, "fy": 2265, "u0": 1097, "v0": 513}}}}"#
+            );
+            parse_camera_str(&json, path)
+        };
+        let mount = with(r#", "z": 1.22, "pitch": 0.038, "roll": -0.01, "yaw": 0.02"#);
+        let want = Mount {
+            height_m: 1.22,
+            pitch: 0.038,
+            roll: -0.01,
+        };
+        assert_eq!(mount.unwrap().mount, Some(want));
+        let no_roll = with(r#", "z": 1.22, "pitch": 0.038"#)
+            .unwrap()
+            .mount
+            .unwrap();
+        assert_eq!(no_roll.roll, 0.0);
+        assert_eq!(with(r#", "z": 1.22"#).unwrap().mount, None);
+        assert_eq!(with("").unwrap().mount, None);
+        let e = with(r#", "z": -1.2, "pitch": 0.04"#)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("extrinsic.z = -1.2: expected a height"), "{e}");
+        let e = with(r#", "z": 1.2, "pitch": 3"#).unwrap_err().to_string();
+        assert!(
+            e.contains("extrinsic.pitch = 3: expected an angle in radians"),
+            "{e}"
+        );
     }
 
     #[test]

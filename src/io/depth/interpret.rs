@@ -179,6 +179,7 @@ pub(super) fn interpret(
     let fov_height = if turn.swaps_axes() { width } else { height };
     let metres = "m".to_string();
     let mut stereo_focal_baseline = None;
+    let mut mount = None;
     let (mut range, units, intrinsics) = match (format, raw) {
         (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
             let (calib, calib_path) = calib.expect("checked by resolve_format");
@@ -190,6 +191,7 @@ pub(super) fn interpret(
             let (camera, _) = camera.expect("checked by resolve_format");
             let range = cityscapes::range(&disp, &camera, opts, &mut notes);
             stereo_focal_baseline = Some(camera.baseline_m * camera.intrinsics.fx);
+            mount = camera.mount;
             (range, metres, Some(camera.intrinsics))
         }
         (DepthFormat::Middlebury2006, Raw::Grey8(disp)) => {
@@ -324,6 +326,8 @@ pub(super) fn interpret(
         turned: turn,
         // A turned map's left view is no longer on the left.
         stereo_focal_baseline: stereo_focal_baseline.filter(|_| turn == Orientation::Upright),
+        // Its pitch and roll are the stored view's.
+        mount: mount.filter(|_| turn == Orientation::Upright),
     })
 }
 

@@ -23,6 +23,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
+use crate::io::camera::Mount;
 use crate::raster::{Orientation, ScalarMap};
 use crate::{Error, Result};
 
@@ -321,6 +322,10 @@ pub struct LoadedDepth {
     /// surface are occlusions of the background
     /// ([`crate::prep::PrepOptions::stereo_focal_baseline`]); `None` for other maps.
     pub stereo_focal_baseline: Option<f64>,
+    /// How the camera is mounted over the road (a Cityscapes camera file's height, pitch
+    /// and roll), with [`Self::intrinsics`] the level ground's range along each ray
+    /// ([`crate::prep::PrepOptions::ground`]); `None` for other maps and turned ones.
+    pub mount: Option<Mount>,
 }
 
 impl LoadedDepth {
