@@ -1064,6 +1064,45 @@ fn compare_reports_ssim_and_histogram_correlation() {
     assert_fails_cleanly(&missing, &["nope.png"]);
 }
 
+/// `brume render --medium aerial` of a Cityscapes disparity: the camera file gives the
+/// focal length and, by its mount, the pitch (0.04 rad down: 2.29° in the camera's up
+/// positive degrees), unless --pitch or --horizon-row give it.
+#[test]
+fn aerial_perspective_looks_down_as_the_cityscapes_camera_is_mounted() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let disparity = image::ImageBuffer::from_fn(48, 32, |_, _| image::Luma([5u16 * 256 + 1]));
+    disparity.save(d.join("f_disparity.png")).unwrap();
+    let camera = r#"{"extrinsic": {"baseline": 0.2, "z": 1.2, "pitch": 0.04},
+        "intrinsic": {"fx": 40.0, "fy": 40.0, "u0": 23.5, "v0": 15.5}}"#;
+    fs::write(d.join("f_camera.json"), camera).unwrap();
+    image::RgbImage::from_pixel(48, 32, image::Rgb([90, 95, 100]))
+        .save(d.join("f.png"))
+        .unwrap();
+    let pitch = |extra: &[&str]| {
+        let base = ["render", "--image", "f.png", "--depth", "f_disparity.png"];
+        let more = [
+            "--medium",
+            "aerial",
+            "--turbidity",
+            "3",
+            "--json",
+            "--out",
+            "o.png",
+        ];
+        let args: Vec<&str> = base.iter().chain(&more).chain(extra).copied().collect();
+        let o = brume(d, &args);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        fs::remove_file(d.join("o.png")).unwrap();
+        v["pitch"].as_f64().unwrap()
+    };
+    assert!((pitch(&[]) + 0.04f64.to_degrees()).abs() < 1e-9);
+    assert_eq!(pitch(&["--pitch", "1"]), 1.0);
+    // Row 15.5 of 32, the principal point's: level.
+    assert!(pitch(&["--horizon-row", "15.5"]).abs() < 1e-9);
+}
+
 /// `brume render --medium aerial`: a rendered frame's z-buffer as range in metres, the
 /// turbidity given or estimated from a sky `brume sky` drew, and retargeting.
 #[test]

@@ -90,6 +90,7 @@ class Renderer:
         return_info: bool = False,
         monocular: bool = False,
         stereo_focal_baseline: Optional[float] = None,
+        ground: Optional[Dict[str, float]] = None,
     ) -> Any: ...
     def distance_fog(
         self,
@@ -185,7 +186,8 @@ class Renderer:
         seed: int = 0,
         return_info: bool = False,
         monocular: bool = False,
-        stereo_focal_baseline: Optional[float] = None
+        stereo_focal_baseline: Optional[float] = None,
+        ground: Optional[Dict[str, float]] = None,
     ) -> Any: ...
 
 def fog(
@@ -211,6 +213,7 @@ def fog(
     return_info: bool = False,
     monocular: bool = False,
     stereo_focal_baseline: Optional[float] = None,
+    ground: Optional[Dict[str, float]] = None,
 ) -> Any: ...
 def distance_fog(
     image: Array,
@@ -303,7 +306,8 @@ def aerial(
     seed: int = 0,
     return_info: bool = False,
     monocular: bool = False,
-    stereo_focal_baseline: Optional[float] = None
+    stereo_focal_baseline: Optional[float] = None,
+    ground: Optional[Dict[str, float]] = None,
 ) -> Any: ...
 def load_photo(path: PathArg, *, dtype: str = "uint8") -> Tuple[Array, Dict[str, Any]]: ...
 def save_photo(path: PathArg, image: Array, info: Optional[Dict[str, Any]] = None) -> None: ...

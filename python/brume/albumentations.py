@@ -37,7 +37,7 @@ class Fog(A.ImageOnlyTransform):
     image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
     ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur``,
-    ``refine``, ``compat``, ``monocular`` and ``stereo_focal_baseline`` are
+    ``refine``, ``compat``, ``monocular``, ``stereo_focal_baseline`` and ``ground`` are
     :func:`brume.fog`'s; ``airlight_range``
     draws a grey airlight in it instead, as :class:`brume.augment.RandomFog`'s. The image
     is uint8 sRGB or float32 linear RGB, as :func:`brume.fog` takes it: albumentations'
@@ -57,6 +57,7 @@ class Fog(A.ImageOnlyTransform):
         compat: Optional[str] = None,
         monocular: bool = False,
         stereo_focal_baseline: Optional[float] = None,
+        ground: Optional[dict] = None,
         p: float = 1.0,
     ) -> None:
         super().__init__(p=p)
@@ -69,6 +70,7 @@ class Fog(A.ImageOnlyTransform):
         self.compat = compat
         self.monocular = bool(monocular)
         self.stereo_focal_baseline = stereo_focal_baseline
+        self.ground = ground
 
     @property
     def targets_as_params(self) -> list:
@@ -103,6 +105,7 @@ class Fog(A.ImageOnlyTransform):
             compat=self.compat,
             monocular=self.monocular,
             stereo_focal_baseline=self.stereo_focal_baseline,
+            ground=self.ground,
             sky_mask=sky_mask,
             ego_mask=ego_mask,
         )
@@ -118,4 +121,5 @@ class Fog(A.ImageOnlyTransform):
             "compat",
             "monocular",
             "stereo_focal_baseline",
+            "ground",
         )

@@ -49,7 +49,8 @@ class RandomFog:
     a depth: :func:`brume.fog`'s ``monocular``; ``stereo_focal_baseline`` (f·B, px·m) when
     it comes from a left view's stereo-matched disparity (a Cityscapes disparity:
     :func:`brume.load_depth`'s info gives it), whose occlusions are then filled from their
-    background: :func:`brume.fog`'s.
+    background, and ``ground`` (that info's ``ground``: the level road under a Cityscapes
+    camera), which bounds its range below the horizon: :func:`brume.fog`'s.
     Fog whole frames and crop after: the airlight and the range of the sky come from the
     image the fog gets.
     Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and
@@ -89,6 +90,7 @@ class RandomFog:
         return_info: bool = False,
         monocular: bool = False,
         stereo_focal_baseline: Optional[float] = None,
+        ground: Optional[dict] = None,
     ) -> None:
         self.beta_range = _checked_betas(beta_range, beta_dist)
         if not 0.0 <= float(p) <= 1.0:
@@ -110,6 +112,7 @@ class RandomFog:
         self.return_info = bool(return_info)
         self.monocular = bool(monocular)
         self.stereo_focal_baseline = stereo_focal_baseline
+        self.ground = ground
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self._worker: Optional[int] = None
@@ -170,6 +173,7 @@ class RandomFog:
             return_info=self.return_info,
             monocular=self.monocular,
             stereo_focal_baseline=self.stereo_focal_baseline,
+            ground=self.ground,
             **self.capture,
         )
         if self.return_info:
@@ -186,7 +190,8 @@ class RandomFog:
             f"blur={self.blur}, refine={self.refine!r}, compat={self.compat!r}, "
             f"capture={self.capture}, return_info={self.return_info}, "
             f"monocular={self.monocular}, "
-            f"stereo_focal_baseline={self.stereo_focal_baseline})"
+            f"stereo_focal_baseline={self.stereo_focal_baseline}, "
+            f"ground={self.ground})"
         )
 
     def _reseed_in_worker(self) -> None:

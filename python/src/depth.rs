@@ -3,7 +3,7 @@
 //! the loaders' messages and notes naming those keywords.
 
 use super::arrays::{read_scalar_map, scalar_map_to_py, user_warning, FsPath};
-use super::{keyword_of, py_err};
+use super::{keyword_of, photo_fog, py_err};
 use brume::io::depth::{
     self, DepthFormat, DepthKind, DepthLayout, DepthOptions, LoadedDepth, PhotoGeometry,
 };
@@ -52,7 +52,9 @@ use pyo3::types::PyDict;
 /// every value. info: format, kind, units, metric (whether the range is in trustworthy
 /// metres, which fog with beta or visibility needs), notes, unknown_pixels,
 /// stereo_focal_baseline (f·B in px·m of a Cityscapes disparity, else None: give it to
-/// brume.fog as `brume render` uses it).
+/// brume.fog as `brume render` uses it), ground (a Cityscapes camera file's mount over the
+/// road, a dict of height_m, pitch (down) and roll in radians and fx, fy, cx, cy on the
+/// range's grid, else None: give it to brume.fog too).
 #[pyfunction]
 #[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None))]
 #[allow(clippy::too_many_arguments)]
@@ -189,7 +191,7 @@ fn geometry_options(
 }
 
 /// The range as a numpy array and the info dict (format, kind, units, metric, notes
-/// naming this package's keywords, unknown_pixels, stereo_focal_baseline).
+/// naming this package's keywords, unknown_pixels, stereo_focal_baseline, ground).
 fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, Bound<'_, PyDict>)> {
     warn_of_depth_warnings(py, &loaded)?;
     let notes: Vec<String> = (loaded.notes.iter())
@@ -203,6 +205,14 @@ fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, B
     info.set_item("notes", notes)?;
     info.set_item("unknown_pixels", loaded.unknown_pixels)?;
     info.set_item("stereo_focal_baseline", loaded.stereo_focal_baseline)?;
+    // The level road as `brume render` takes it from the file.
+    let ground = brume::prep::PrepOptions::default()
+        .for_depth(&loaded)
+        .ground;
+    let ground = ground
+        .map(|g| photo_fog::ground_to_py(py, &g))
+        .transpose()?;
+    info.set_item("ground", ground)?;
     Ok((scalar_map_to_py(py, loaded.range), info))
 }
 

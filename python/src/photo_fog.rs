@@ -6,12 +6,14 @@ use super::arrays::{not_numbers, numbers, read_mask, scalar_map_to_py, Colour, I
 use super::gl_thread::GlThread;
 use super::{py_err, value_error};
 use brume::compat;
+use brume::io::camera::{Intrinsics, Mount};
 use brume::io::image::srgb_to_linear;
 use brume::medium::physical::{self, VISIBILITY_OPTICAL_DEPTH};
 use brume::photo::{
     self, CaptureOptions, Conventions, Extinction, FogOptions, FoggedPhoto, Photo, PrepareOptions,
     PreparedPhoto,
 };
+use brume::prep::Ground;
 use brume::raster::{RgbImage, RgbaImage, ScalarMap};
 use brume::refine::RefineMode;
 use brume::Headless;
@@ -99,18 +101,73 @@ pub(crate) fn prepare_request(
 /// (`brume::prep::PrepOptions::sky_in_far_tail`, as for `--depth-kind inverse` and
 /// `affine`); `stereo_focal_baseline`, a left view's matched disparity with f·B (px·m),
 /// whose occlusions are filled from their background (as for a Cityscapes disparity;
-/// `load_depth`'s info gives it). Checked with pre-processing's options.
+/// `load_depth`'s info gives it); `ground`, `load_depth`'s info['ground'] (the level road
+/// under a Cityscapes camera, [`ground_from_py`]). Checked with pre-processing's options.
 pub(crate) fn set_depth_origin(
     prepare: &mut PrepareOptions,
-    monocular: bool,
-    stereo_focal_baseline: Option<f64>,
-) {
+    (monocular, stereo_focal_baseline, ground): (bool, Option<f64>, Option<&Bound<'_, PyDict>>),
+) -> PyResult<()> {
+    let ground = ground_from_py(ground)?;
     if let Some(prep) = prepare.prep.as_mut() {
         if monocular {
             prep.sky_in_far_tail = Some(brume::prep::MONOCULAR_SKY_FACTOR);
         }
         prep.stereo_focal_baseline = stereo_focal_baseline;
+        prep.ground = ground;
     }
+    Ok(())
+}
+
+/// The keys of `ground`, as [`ground_to_py`] writes them.
+const GROUND_KEYS: &str = "height_m, pitch, roll, fx, fy, cx, cy";
+
+/// `ground` as `load_depth`'s info gives it ([`ground_to_py`]) as brume's [`Ground`]; a
+/// missing key or a value that is not a number is an error naming it.
+fn ground_from_py(ground: Option<&Bound<'_, PyDict>>) -> PyResult<Option<Ground>> {
+    let Some(dict) = ground else {
+        return Ok(None);
+    };
+    let get = |key: &str| -> PyResult<f64> {
+        let value = dict.get_item(key)?.ok_or_else(|| {
+            value_error(format!(
+                "ground: missing '{key}': expected load_depth's info['ground'], a dict of \
+                 {GROUND_KEYS}"
+            ))
+        })?;
+        value
+            .extract::<f64>()
+            .map_err(|_| value_error(format!("ground['{key}'] = {value}: expected a number")))
+    };
+    let mount = Mount {
+        height_m: get("height_m")?,
+        pitch: get("pitch")?,
+        roll: get("roll")?,
+    };
+    let intrinsics = Intrinsics {
+        fx: get("fx")?,
+        fy: get("fy")?,
+        cx: get("cx")?,
+        cy: get("cy")?,
+    };
+    Ok(Some(Ground { mount, intrinsics }))
+}
+
+/// `ground` as the dict `load_depth`'s info holds ([`GROUND_KEYS`]).
+pub(crate) fn ground_to_py<'py>(py: Python<'py>, ground: &Ground) -> PyResult<Bound<'py, PyDict>> {
+    let dict = PyDict::new(py);
+    let (m, k) = (&ground.mount, &ground.intrinsics);
+    for (key, value) in [
+        ("height_m", m.height_m),
+        ("pitch", m.pitch),
+        ("roll", m.roll),
+        ("fx", k.fx),
+        ("fy", k.fy),
+        ("cx", k.cx),
+        ("cy", k.cy),
+    ] {
+        dict.set_item(key, value)?;
+    }
+    Ok(dict)
 }
 
 /// `return_info`'s labels of one output, as the dict Python gets.

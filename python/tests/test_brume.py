@@ -478,8 +478,9 @@ def test_load_depth(tmp_path, range_m):
     assert info["metric"] is False and info["unknown_pixels"] == 0
     assert set(info) == {
         "format", "kind", "units", "metric", "notes", "unknown_pixels", "stereo_focal_baseline",
+        "ground",
     }  # fmt: skip
-    assert info["stereo_focal_baseline"] is None
+    assert info["stereo_focal_baseline"] is None and info["ground"] is None
     with pytest.raises(OSError, match="missing.npy"):
         brume.load_depth(tmp_path / "missing.npy")
     # A path as Python's file functions take it: str, os.PathLike or bytes.
@@ -869,6 +870,71 @@ def test_a_cityscapes_disparitys_occlusions_as_brume_render_fills_them(tmp_path)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
     with pytest.raises(ValueError, match="stereo_focal_baseline"):
         brume.fog(image, range_m, beta=0.05, stereo_focal_baseline=-1.0)
+
+
+def test_the_level_road_under_a_cityscapes_camera_as_brume_render_bounds_it(tmp_path):
+    """A level road seen from 1.2 m up, pitched 0.04 rad down, the band along the left
+    border unknown but for specks of 2 km touching the border on rows whose road is 4 to
+    7 m off: load_depth gives the camera's mount, and fog with it fills the specks with the
+    road, as `brume render` does with the camera file; without it they stay far."""
+    Image = pytest.importorskip("PIL.Image")
+    h, w, f, b, height, pitch = 96, 160, 200.0, 0.2, 1.2, 0.04
+    x = np.arange(w)[None, :].repeat(h, 0)
+    y = np.arange(h)[:, None].repeat(w, 1)
+    v = (y - 48.0) / f
+    drop = v * math.cos(pitch) + math.sin(pitch)
+    road_z = np.where(drop > 0, height / np.maximum(drop, 1e-9), np.inf)
+    disparity = f * b / np.minimum(road_z, 60.0)
+    speck = (x < 5) & (y >= 70) & (y < 78)
+    disparity[x < 24] = 0.0
+    disparity[speck] = 0.02
+    stored = np.where(disparity > 0, disparity * 256 + 1, 0).astype(np.uint16)
+    Image.fromarray(stored).save(tmp_path / "f_disparity.png")
+    camera = (
+        f'{{"extrinsic": {{"baseline": {b}, "z": {height}, "pitch": {pitch}}}, '
+        f'"intrinsic": {{"fx": {f}, "fy": {f}, "u0": 80.0, "v0": 48.0}}}}'
+    )
+    (tmp_path / "f_camera.json").write_text(camera)
+    colour = np.where((road_z < 60.0)[..., None], [90, 90, 95], [150, 110, 80])
+    image = colour.astype(np.uint8)
+    Image.fromarray(image).save(tmp_path / "f_leftImg8bit.png")
+
+    range_m, info = brume.load_depth(tmp_path / "f_disparity.png")
+    want = dict(height_m=height, pitch=pitch, roll=0.0, fx=f, fy=f, cx=80.0, cy=48.0)
+    assert info["ground"] == want
+    kw = dict(beta=0.02, refine="none", return_info=True)
+    ours, labels = brume.fog(image, range_m, ground=info["ground"], **kw)
+    _, unbounded = brume.fog(image, range_m, **kw)
+    road = road_z * np.sqrt(1.0 + ((x - 80.0) / f) ** 2 + v**2)
+    error = lambda got: np.abs(np.log(got[speck] / road[speck])).mean()  # noqa: E731
+    assert error(labels["range_m"]) < 0.05
+    assert error(unbounded["range_m"]) > 1.0
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "f_leftImg8bit.png"),
+        "--depth", str(tmp_path / "f_disparity.png"),
+        "--beta", "0.02", "--refine", "none",
+        "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
+    # RandomFog and albumentations' Fog pass it on to the fog.
+    from brume.albumentations import Fog as AlbumentationsFog
+
+    bounded = brume.fog(image, range_m, beta=0.02, refine="none", ground=info["ground"])
+    random_fog = brume.augment.RandomFog(
+        beta_dist="0.02", seed=0, refine="none", ground=info["ground"]
+    )
+    np.testing.assert_array_equal(random_fog(image=image, depth=range_m)["image"], bounded)
+    assert "ground={" in repr(random_fog)
+    fog = AlbumentationsFog(beta_dist="0.02", refine="none", ground=info["ground"])
+    np.testing.assert_array_equal(fog.apply(image, beta=0.02, depth=range_m), bounded)
+    assert "ground" in fog.get_transform_init_args_names()
+    with pytest.raises(ValueError, match="ground: missing 'cy'"):
+        brume.fog(image, range_m, beta=0.02, ground={k: want[k] for k in list(want)[:-1]})
+    with pytest.raises(ValueError, match="height_m"):
+        brume.fog(image, range_m, beta=0.02, ground=dict(want, height_m=-1.0))
 
 
 @pytest.mark.parametrize("airlight", [None, (0.6, 0.65, 0.7)])

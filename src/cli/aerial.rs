@@ -63,13 +63,18 @@ fn turbidity(args: &RenderArgs, sun: Option<&PlacedSun>) -> Result<(f64, &'stati
 /// The camera whose rays give each pixel's zenith angle ([`PhotoView::camera`]): the
 /// vertical field of view from `--fov`, else from the photo's focal length at its size
 /// (the depth's intrinsics: a Cityscapes camera file; `--focal`; the photo's EXIF:
-/// [`Scene::image_intrinsics`]); the pitch from `--pitch` or `--horizon-row`.
+/// [`Scene::image_intrinsics`]); the pitch from `--pitch` or `--horizon-row`, else from
+/// the camera file's mount (a vehicle's camera looks a little down), else level.
 pub fn aerial_camera(args: &RenderArgs, scene: &Scene) -> Result<Camera> {
     let intrinsics = scene.image_intrinsics(args.depth.reading.focal, None);
+    // The mount's pitch is down positive, the camera's up positive.
+    let mounted = (scene.depth.mount)
+        .filter(|_| args.horizon_row.is_none())
+        .map(|m| -m.pitch.to_degrees());
     let view = PhotoView {
         fov_y_deg: args.depth.reading.fov,
         focal_px: intrinsics.map(|k| k.fy),
-        pitch_deg: args.pitch,
+        pitch_deg: args.pitch.or(mounted),
         horizon_row: args.horizon_row,
     };
     view.camera(scene.image.height())

@@ -188,8 +188,9 @@ pub struct RenderArgs {
     #[arg(long, value_name = "M", allow_hyphen_values = true)]
     pub metres_per_unit: Option<f64>,
 
-    /// Aerial: the camera's pitch in degrees, in (-90, 90) (with the field of view, each
-    /// pixel's zenith angle) [default: 0].
+    /// Aerial: the camera's pitch in degrees, up positive, in (-90, 90) (with the field of
+    /// view, each pixel's zenith angle) [default: a Cityscapes camera file's pitch, else
+    /// 0].
     #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
     pub pitch: Option<f64>,
 
