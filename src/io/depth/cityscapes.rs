@@ -56,7 +56,7 @@ pub const TILT_RANGE_RAD: (f64, f64) = (-std::f64::consts::FRAC_PI_2, std::f64::
 /// only values within [`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`] and
 /// [`PRINCIPAL_POINT_RANGE_PX`], so that depth baseline·fx/d and the ray stretch stay
 /// finite and meaningful for every disparity a PNG can store.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct CityscapesCamera {
     /// Stereo baseline in metres (`extrinsic.baseline`), within [`BASELINE_RANGE_M`].
     pub baseline_m: f64,
@@ -68,6 +68,9 @@ pub struct CityscapesCamera {
     /// ground's range along each ray bounds what a stereo matcher may measure below the
     /// horizon ([`crate::prep::PrepOptions::ground`]).
     pub mount: Option<Mount>,
+    /// Why the mount the file gives is not used (a value out of its range or not a
+    /// number): the rest of the file is read all the same, as before brume read it.
+    pub mount_note: Option<String>,
 }
 
 impl CityscapesCamera {
@@ -108,15 +111,23 @@ pub fn parse_camera_str(text: &str, path: &Path) -> Result<CityscapesCamera> {
     let fy = within(&json, path, "intrinsic", "fy", focal)?;
     let cx = within(&json, path, "intrinsic", "u0", centre)?;
     let cy = within(&json, path, "intrinsic", "v0", centre)?;
+    let (mount, mount_note) = match parse_mount(&json, path) {
+        Ok(mount) => (mount, None),
+        Err(e) => (
+            None,
+            Some(format!("camera height and pitch not used ({e})")),
+        ),
+    };
     Ok(CityscapesCamera {
         baseline_m,
         intrinsics: Intrinsics { fx, fy, cx, cy },
-        mount: parse_mount(&json, path)?,
+        mount,
+        mount_note,
     })
 }
 
 /// The camera's mount over the road, when the file gives `extrinsic.z` and `pitch`; a
-/// value given out of its range is an error like the others'.
+/// value given out of its range is an error, which the caller turns into a note.
 fn parse_mount(json: &Value, path: &Path) -> Result<Option<Mount>> {
     let given = |key: &str| json.get("extrinsic").and_then(|g| g.get(key)).is_some();
     if !(given("z") && given("pitch")) {
@@ -306,6 +317,7 @@ pub(super) fn range(
                 .to_string(),
         );
     }
+    notes.extend(camera.mount_note.clone());
     let flat = raw.as_slice().iter().filter(|&&p| p == 1).count();
     if flat > 0 {
         notes.push(format!(
@@ -391,7 +403,7 @@ mod tests {
     }
 
     /// The mount is read when the file gives the height and the pitch (roll 0 when
-    /// absent), is absent otherwise, and a value out of its range is refused by name.
+    /// absent), is absent otherwise, and a value out of its range is named in a note.
     #[test]
     fn the_mount_is_read_when_given() {
         let path = Path::new("c.json");
@@ -416,14 +428,31 @@ mod tests {
         assert_eq!(no_roll.roll, 0.0);
         assert_eq!(with(r#", "z": 1.22"#).unwrap().mount, None);
         assert_eq!(with("").unwrap().mount, None);
-        let e = with(r#", "z": -1.2, "pitch": 0.04"#)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("extrinsic.z = -1.2: expected a height"), "{e}");
-        let e = with(r#", "z": 1.2, "pitch": 3"#).unwrap_err().to_string();
+        // A mount out of its range (a camera at the vehicle frame's origin) is not used,
+        // and says why; the file is read all the same.
+        let at_origin = with(r#", "z": 0, "pitch": 0.04"#).unwrap();
+        assert_eq!((at_origin.mount, at_origin.baseline_m), (None, 0.21));
+        let note = at_origin.mount_note.unwrap();
         assert!(
-            e.contains("extrinsic.pitch = 3: expected an angle in radians"),
-            "{e}"
+            note.contains("extrinsic.z = 0: expected a height"),
+            "{note}"
+        );
+        let note = with(r#", "z": 1.2, "pitch": 3"#)
+            .unwrap()
+            .mount_note
+            .unwrap();
+        assert!(
+            note.contains("extrinsic.pitch = 3: expected an angle in radians"),
+            "{note}"
+        );
+        let note = with(r#", "z": 1.2, "pitch": "up""#)
+            .unwrap()
+            .mount_note
+            .unwrap();
+        assert!(note.contains("expected a number"), "{note}");
+        assert_eq!(
+            with(r#", "z": 1.2, "pitch": 0.1"#).unwrap().mount_note,
+            None
         );
     }
 
