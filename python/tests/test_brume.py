@@ -825,6 +825,22 @@ def test_equals_brume_render(tmp_path, image_u8, range_m, blur, refine, density)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
 
 
+def render_cityscapes_frame(tmp_path, beta):
+    """`brume render` of the Cityscapes frame f_leftImg8bit.png with f_disparity.png (and
+    the camera file found beside it) in tmp_path, at extinction beta, unrefined, as
+    uint8 sRGB."""
+    Image = pytest.importorskip("PIL.Image")
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "f_leftImg8bit.png"),
+        "--depth", str(tmp_path / "f_disparity.png"),
+        "--beta", str(beta), "--refine", "none",
+        "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    return np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+
+
 def test_a_cityscapes_disparitys_occlusions_as_brume_render_fills_them(tmp_path):
     """A pole (Z = 2 m, d = fx·B/Z = 25 px) before a wall (10 m, 5 px), the 20 px of wall
     left of it unknown as a matcher leaves what the right camera cannot see, the pole's
@@ -858,15 +874,7 @@ def test_a_cityscapes_disparitys_occlusions_as_brume_render_fills_them(tmp_path)
     error = lambda got: np.abs(np.log(got[:, fill] / wall)).mean()  # noqa: E731
     assert error(labels["range_m"]) < 0.01
     assert error(as_hole["range_m"]) > 0.3
-    cmd = [
-        str(brume_bin()), "render",
-        "--image", str(tmp_path / "f_leftImg8bit.png"),
-        "--depth", str(tmp_path / "f_disparity.png"),
-        "--beta", "0.05", "--refine", "none",
-        "--out", str(tmp_path / "cli.png"),
-    ]  # fmt: skip
-    subprocess.run(cmd, check=True, capture_output=True)
-    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    cli = render_cityscapes_frame(tmp_path, 0.05)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
     with pytest.raises(ValueError, match="stereo_focal_baseline"):
         brume.fog(image, range_m, beta=0.05, stereo_focal_baseline=-1.0)
@@ -909,15 +917,7 @@ def test_the_level_road_under_a_cityscapes_camera_as_brume_render_bounds_it(tmp_
     error = lambda got: np.abs(np.log(got[speck] / road[speck])).mean()  # noqa: E731
     assert error(labels["range_m"]) < 0.05
     assert error(unbounded["range_m"]) > 1.0
-    cmd = [
-        str(brume_bin()), "render",
-        "--image", str(tmp_path / "f_leftImg8bit.png"),
-        "--depth", str(tmp_path / "f_disparity.png"),
-        "--beta", "0.02", "--refine", "none",
-        "--out", str(tmp_path / "cli.png"),
-    ]  # fmt: skip
-    subprocess.run(cmd, check=True, capture_output=True)
-    cli = np.asarray(Image.open(tmp_path / "cli.png").convert("RGB"))
+    cli = render_cityscapes_frame(tmp_path, 0.02)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
     # RandomFog and albumentations' Fog pass it on to the fog.
     from brume.albumentations import Fog as AlbumentationsFog
