@@ -1066,7 +1066,7 @@ fn compare_reports_ssim_and_histogram_correlation() {
 
 /// `brume render --medium aerial` of a Cityscapes disparity: the camera file gives the
 /// focal length and, by its mount, the pitch (0.04 rad down: 2.29° in the camera's up
-/// positive degrees), unless --pitch or --horizon-row give it.
+/// positive degrees), unless --pitch or --horizon-row give it; the report gives the mount.
 #[test]
 fn aerial_perspective_looks_down_as_the_cityscapes_camera_is_mounted() {
     let dir = tempfile::tempdir().unwrap();
@@ -1079,7 +1079,7 @@ fn aerial_perspective_looks_down_as_the_cityscapes_camera_is_mounted() {
     image::RgbImage::from_pixel(48, 32, image::Rgb([90, 95, 100]))
         .save(d.join("f.png"))
         .unwrap();
-    let pitch = |extra: &[&str]| {
+    let report = |extra: &[&str]| {
         let base = ["render", "--image", "f.png", "--depth", "f_disparity.png"];
         let more = [
             "--medium",
@@ -1095,9 +1095,16 @@ fn aerial_perspective_looks_down_as_the_cityscapes_camera_is_mounted() {
         assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
         let v: Value = serde_json::from_slice(&o.stdout).unwrap();
         fs::remove_file(d.join("o.png")).unwrap();
-        v["pitch"].as_f64().unwrap()
+        v
     };
-    assert!((pitch(&[]) + 0.04f64.to_degrees()).abs() < 1e-9);
+    let pitch = |extra: &[&str]| report(extra)["pitch"].as_f64().unwrap();
+    let mounted = report(&[]);
+    let mount = &mounted["camera_mount"];
+    assert_eq!(
+        (mount["height_m"].as_f64(), mount["pitch"].as_f64()),
+        (Some(1.2), Some(0.04))
+    );
+    assert!((mounted["pitch"].as_f64().unwrap() + 0.04f64.to_degrees()).abs() < 1e-9);
     assert_eq!(pitch(&["--pitch", "1"]), 1.0);
     // Row 15.5 of 32, the principal point's: level.
     assert!(pitch(&["--horizon-row", "15.5"]).abs() < 1e-9);

@@ -245,6 +245,7 @@ pub fn run_aerial(
                 "altitude": m.table.altitude_m(),
                 "metres_per_unit": m.metres_per_unit,
                 "pitch": m.camera.pitch_deg,
+                "camera_mount": scene.depth.mount,
                 "fov": m.camera.fov_y_deg,
                 "horizon_light": m.horizon_light,
                 "horizon_light_source": light_source,

@@ -251,6 +251,7 @@ impl Report<'_> {
             "depth_format": scene.depth.format.to_string(),
             "depth_kind": scene.depth.kind.to_string(),
             "depth_notes": scene.depth.notes,
+            "camera_mount": scene.depth.mount,
             "colour_profile": scene.metadata.profile().map(|p| p.description()),
             "sigma0": opts.blur.sigma0,
             "sigma_max": self.sigma_max(),
