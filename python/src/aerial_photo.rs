@@ -310,10 +310,11 @@ pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 /// primaries of icc_profile: the photo's profile, bytes, as load_photo's info gives it).
 /// blur: the diffusion blur (lambda_px, sigma0); refine, the masks, the capture keywords,
 /// monocular, stereo_focal_baseline and ground as brume.fog. return_info=True also returns
-/// the labels of I = J·t + A·(1 - t) (before the blur and the capture), per pixel and channel: clear
-/// (J, float32 HxWx3 linear RGB: the photo the medium veiled, its haze removed with
-/// from_turbidity), transmittance (t, HxWx3), airlight (A, HxWx3 linear RGB: the light the
-/// veil tends to, which follows the view direction), turbidity and sigma_max_px.
+/// the labels of I = J·t + A·(1 - t) (before the blur and the capture), per pixel and
+/// channel: clear (J, float32 HxWx3 linear RGB: the photo the medium veiled, its haze
+/// removed with from_turbidity), transmittance (t, HxWx3), airlight (A, HxWx3 linear RGB:
+/// the light the veil tends to, which follows the view direction), turbidity and
+/// sigma_max_px.
 #[pyfunction]
 #[pyo3(
     signature = (*args, **kwargs),

@@ -2,8 +2,8 @@
 //!
 //! A ray that points below the level from a camera `h` above the road meets the road at
 //! range `h / s`, `s` the sine of its angle below the level; whatever the ray sees stands
-//! on the road or over it, so no nearer than nothing and no farther than that, as long as
-//! the road does not fall away. On Cityscapes' frames the measured road lies within 2 % of
+//! on the road or over it, so it is no farther than that, as long as the road does not
+//! fall away. On Cityscapes' frames the measured road lies within 2 % of
 //! that range ([`Mount`] from the camera file). A stereo matcher's false matches in the
 //! band along the left border, which the right camera does not see, and a hood's
 //! reflection of the street are at 100 m to infinitely far on rows whose road is 3 to 15 m
