@@ -1066,9 +1066,9 @@ fn compare_reports_ssim_and_histogram_correlation() {
 
 /// `brume render --medium aerial` of a Cityscapes disparity: the camera file gives the
 /// focal length and, by its mount, the pitch (0.04 rad down: 2.29° in the camera's up
-/// positive degrees), unless --pitch or --horizon-row give it; the report gives the mount.
+/// positive degrees), unless --pitch or --horizon-row give it; the reports give the mount.
 #[test]
-fn aerial_perspective_looks_down_as_the_cityscapes_camera_is_mounted() {
+fn a_cityscapes_camera_mount_sets_the_aerial_pitch_and_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let d = dir.path();
     let disparity = image::ImageBuffer::from_fn(48, 32, |_, _| image::Luma([5u16 * 256 + 1]));
@@ -1108,6 +1108,25 @@ fn aerial_perspective_looks_down_as_the_cityscapes_camera_is_mounted() {
     assert_eq!(pitch(&["--pitch", "1"]), 1.0);
     // Row 15.5 of 32, the principal point's: level.
     assert!(pitch(&["--horizon-row", "15.5"]).abs() < 1e-9);
+    // `brume prep` says it in words.
+    let prep = brume(
+        d,
+        &[
+            "prep",
+            "--image",
+            "f.png",
+            "--depth",
+            "f_disparity.png",
+            "--out",
+            "p.pfm",
+        ],
+    );
+    assert!(prep.status.success(), "{}", stderr(&prep));
+    let words = String::from_utf8_lossy(&prep.stdout);
+    assert!(
+        words.contains("the camera 1.20 m over the road, 2.29° down, roll 0.00°: 0 px"),
+        "{words}"
+    );
 }
 
 /// `brume render --medium aerial`: a rendered frame's z-buffer as range in metres, the

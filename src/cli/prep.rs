@@ -136,11 +136,18 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.r_max,
             s.s_max.map_or("-".to_string(), |v| format!("{v:.4}"))
         );
+        let road = loaded.mount.map_or("no level road known".into(), |m| {
+            let (pitch, roll) = (m.pitch.to_degrees(), m.roll.to_degrees());
+            format!(
+                "the camera {:.2} m over the road, {pitch:.2}° down, roll {roll:.2}°: {} px \
+                 beyond the level road",
+                m.height_m, s.below_ground
+            )
+        });
         outln!(
-            "sky from {}; {} px beyond the level road, {} far outliers removed{}, {} local \
-             outliers, {} px of matcher noise by the sky; {} known px in the sky replaced",
+            "sky from {}; {road}, {} far outliers removed{}, {} local outliers, {} px of \
+             matcher noise by the sky; {} known px in the sky replaced",
             sky_method_name(s.sky_method),
-            s.below_ground,
             s.far_outliers,
             s.far_cut
                 .map_or(String::new(), |c| format!(" (cut {c:.4})")),
