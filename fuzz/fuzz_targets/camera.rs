@@ -7,7 +7,7 @@ use std::path::Path;
 
 use brume::io::depth::{
     parse_camera_str, CITYSCAPES_BASELINE_RANGE_M, CITYSCAPES_FOCAL_RANGE_PX,
-    CITYSCAPES_PRINCIPAL_POINT_RANGE_PX,
+    CITYSCAPES_HEIGHT_RANGE_M, CITYSCAPES_PRINCIPAL_POINT_RANGE_PX, CITYSCAPES_TILT_RANGE_RAD,
 };
 use libfuzzer_sys::fuzz_target;
 
@@ -38,6 +38,13 @@ fuzz_target!(|data: &[u8]| {
             );
             assert!(within(k.cx, CITYSCAPES_PRINCIPAL_POINT_RANGE_PX), "{c:?}");
             assert!(within(k.cy, CITYSCAPES_PRINCIPAL_POINT_RANGE_PX), "{c:?}");
+            // A mount is within its ranges, or left out with a note saying why.
+            if let Some(m) = c.mount {
+                assert!(within(m.height_m, CITYSCAPES_HEIGHT_RANGE_M), "{c:?}");
+                assert!(within(m.pitch, CITYSCAPES_TILT_RANGE_RAD), "{c:?}");
+                assert!(within(m.roll, CITYSCAPES_TILT_RANGE_RAD), "{c:?}");
+                assert!(c.mount_note.is_none(), "{c:?}");
+            }
             // The largest depth a 16-bit disparity can give (d = 1/256 px), and the ray
             // stretch at the far corner of the largest image, stay finite in f32.
             let z = c.depth_m(1.0 / 256.0).expect("d > 0 gives a depth");

@@ -93,9 +93,11 @@ pub fn parse_camera(path: &Path) -> Result<CityscapesCamera> {
 }
 
 /// Parses the text of a Cityscapes camera file; `path` names it in errors. Keys brume does
-/// not use (yaw, the position along and across the car …) are ignored. A value outside its range
-/// ([`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`], [`PRINCIPAL_POINT_RANGE_PX`]) is an error
-/// naming the file, the key, the value and the range.
+/// not use (yaw, the position along and across the car …) are ignored. A value outside its
+/// range ([`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`], [`PRINCIPAL_POINT_RANGE_PX`]) is an
+/// error naming the file, the key, the value and the range; a mount's
+/// ([`HEIGHT_RANGE_M`], [`TILT_RANGE_RAD`]) leaves the mount out and says so in
+/// [`CityscapesCamera::mount_note`].
 pub fn parse_camera_str(text: &str, path: &Path) -> Result<CityscapesCamera> {
     let json: Value = serde_json::from_str(text)
         .map_err(|e| Error::format(path, format!("not JSON ({e}): expected {EXPECTED}")))?;

@@ -56,8 +56,9 @@ pub use android::DEPTH16_DEFAULT_MIN_CONFIDENCE;
 pub use cityscapes::{
     camera_candidates, disparity_px as cityscapes_disparity_px, parse_camera, parse_camera_str,
     CityscapesCamera, BASELINE_RANGE_M as CITYSCAPES_BASELINE_RANGE_M,
-    FOCAL_RANGE_PX as CITYSCAPES_FOCAL_RANGE_PX,
+    FOCAL_RANGE_PX as CITYSCAPES_FOCAL_RANGE_PX, HEIGHT_RANGE_M as CITYSCAPES_HEIGHT_RANGE_M,
     PRINCIPAL_POINT_RANGE_PX as CITYSCAPES_PRINCIPAL_POINT_RANGE_PX,
+    TILT_RANGE_RAD as CITYSCAPES_TILT_RANGE_RAD,
 };
 pub use gdepth::has_embedded_depth;
 pub use middlebury::{
