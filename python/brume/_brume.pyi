@@ -337,6 +337,7 @@ def load_depth(
     image: Optional[PathArg] = None,
     layout: Optional[str] = None,
     sky_beyond: Optional[float] = None,
+    camera_mount: Optional[Tuple[float, ...]] = None,
 ) -> Tuple[Array, Dict[str, Any]]: ...
 def range_from_depth(
     depth: Array,

@@ -4,6 +4,7 @@
 
 use super::arrays::{read_scalar_map, scalar_map_to_py, user_warning, FsPath};
 use super::{keyword_of, photo_fog, py_err};
+use brume::io::camera::Mount;
 use brume::io::depth::{
     self, DepthFormat, DepthKind, DepthLayout, DepthOptions, LoadedDepth, PhotoGeometry,
 };
@@ -49,14 +50,17 @@ use pyo3::types::PyDict;
 /// Depth Anything's metric models); by default a float map's largest value is unknown when
 /// at least 1 % of its samples hold it exactly, 10 times beyond the mean of the others or
 /// more (Depth Pro's sky clamped at 10 km, a renderer's background); float('inf') keeps
-/// every value. info: format, kind, units, metric (whether the range is in trustworthy
+/// every value. camera_mount: (height_m, pitch_deg, roll_deg=0), the camera's mount over a
+/// level road (pitch down, roll left side up; `brume render --camera-mount`) for a map
+/// without a Cityscapes camera file, with intrinsics and metres: info's ground then gives
+/// it. info: format, kind, units, metric (whether the range is in trustworthy
 /// metres, which fog with beta or visibility needs), notes, unknown_pixels,
 /// stereo_focal_baseline (f·B in px·m of a Cityscapes disparity, else None: give it to
 /// brume.fog as `brume render` uses it), ground (a Cityscapes camera file's mount over the
-/// road, a dict of height_m, pitch (down) and roll in radians and fx, fy, cx, cy on the
+/// road, or camera_mount's, a dict of height_m, pitch (down) and roll in radians and fx, fy, cx, cy on the
 /// range's grid, else None: give it to brume.fog too).
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None))]
+#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None, camera_mount=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn load_depth<'py>(
     py: Python<'py>,
@@ -77,6 +81,7 @@ pub(crate) fn load_depth<'py>(
     image: Option<FsPath>,
     layout: Option<&str>,
     sky_beyond: Option<f64>,
+    camera_mount: Option<Vec<f64>>,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
     let photo = match image {
         Some(path) => Some(py.detach(|| PhotoGeometry::read(&path.0)).map_err(py_err)?),
@@ -95,6 +100,7 @@ pub(crate) fn load_depth<'py>(
             Some(l) => l.parse::<DepthLayout>().map_err(py_err)?,
             None => DepthLayout::Auto,
         },
+        camera_mount: camera_mount.map(|m| mount_of(&m)).transpose()?,
         ..geometry_options(
             kind,
             scale,
@@ -160,6 +166,13 @@ pub(crate) fn range_from_depth<'py>(
         .detach(|| depth::range_from_map(map, "depth", &opts))
         .map_err(py_err)?;
     range_and_info(py, loaded)
+}
+
+/// `camera_mount` as load_depth takes it, (height_m, pitch_deg, roll_deg = 0), as brume's
+/// [`Mount`], checked as `brume render --camera-mount` checks it.
+fn mount_of(values: &[f64]) -> PyResult<Mount> {
+    let text: Vec<String> = values.iter().map(f64::to_string).collect();
+    Mount::parse_degrees(&text.join(",")).map_err(py_err)
 }
 
 /// The options both functions take: what the values are, their scale, the stereo

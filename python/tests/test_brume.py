@@ -937,6 +937,28 @@ def test_the_level_road_under_a_cityscapes_camera_as_brume_render_bounds_it(tmp_
         brume.fog(image, range_m, beta=0.02, ground=dict(want, height_m=-1.0))
 
 
+def test_load_depth_camera_mount_gives_any_depth_map_the_level_road(tmp_path):
+    """camera_mount=(height_m, pitch_deg[, roll_deg]) as `--camera-mount`: info's ground
+    for a map with intrinsics (fov_y_deg) in metres; a map without intrinsics ignores it
+    with a note; a bad value is a ValueError naming the keyword."""
+    Image = pytest.importorskip("PIL.Image")
+    depth_mm = np.full((48, 64), 5000, dtype=np.uint16)
+    Image.fromarray(depth_mm).save(tmp_path / "d.png")
+    kw = dict(format="png16", scale=0.001)
+    _, info = brume.load_depth(tmp_path / "d.png", fov_y_deg=40.0, camera_mount=(1.2, 3.0), **kw)
+    ground = info["ground"]
+    assert (ground["height_m"], ground["roll"]) == (1.2, 0.0)
+    assert math.isclose(ground["pitch"], math.radians(3.0))
+    f = 24.0 / math.tan(math.radians(20.0))
+    assert math.isclose(ground["fy"], f) and math.isclose(ground["cy"], 23.5)
+    with pytest.warns(UserWarning) as caught:
+        _, info = brume.load_depth(tmp_path / "d.png", camera_mount=(1.2, 3.0, 1.0), **kw)
+    assert info["ground"] is None
+    assert any("camera_mount ignored" in str(w.message) for w in caught), caught
+    with pytest.raises(ValueError, match="camera_mount"):
+        brume.load_depth(tmp_path / "d.png", fov_y_deg=40.0, camera_mount=(1.2, 95.0), **kw)
+
+
 @pytest.mark.parametrize("airlight", [None, (0.6, 0.65, 0.7)])
 def test_foggy_cityscapes_compat_equals_brume_render(tmp_path, image_u8, range_m, airlight):
     flags = ["--refine", "none", "--beta", "0.02", "--compat", "foggy-cityscapes"]

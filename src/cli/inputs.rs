@@ -46,6 +46,7 @@ pub fn reading_options(args: &DepthReadingArgs) -> DepthOptions {
         min_confidence: args.min_confidence,
         sky_beyond: args.sky_beyond,
         layout: args.depth_layout,
+        camera_mount: args.camera_mount,
         ..DepthOptions::default()
     }
 }

@@ -96,7 +96,48 @@ pub struct Mount {
     pub roll: f64,
 }
 
+/// The camera heights over the road a [`Mount`] may have, in metres: 1 cm to 10 km.
+pub const MOUNT_HEIGHT_RANGE_M: (f64, f64) = (1e-2, 1e4);
+
+/// The pitches and rolls a [`Mount`] may have, in radians: a quarter turn either way.
+pub const MOUNT_TILT_RANGE_RAD: (f64, f64) =
+    (-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);
+
 impl Mount {
+    /// Parses `HEIGHT,PITCH[,ROLL]`: metres, then degrees (pitch down, roll left side up;
+    /// roll 0 when left out), as `brume render --camera-mount` takes it. A value out of
+    /// [`MOUNT_HEIGHT_RANGE_M`] or [`MOUNT_TILT_RANGE_RAD`] is an error naming the text.
+    pub fn parse_degrees(text: &str) -> crate::Result<Mount> {
+        let (lo, hi) = MOUNT_HEIGHT_RANGE_M;
+        let refused = || {
+            crate::Error::invalid(
+                "camera_mount",
+                text,
+                format!(
+                    "HEIGHT,PITCH[,ROLL]: a height over the road from {lo} to {hi} m, then a \
+                     pitch (down) and a roll (left side up) in degrees within ±90"
+                ),
+            )
+        };
+        let values: Vec<f64> = (text.split(',').map(|v| v.trim().parse::<f64>()))
+            .collect::<Result<_, _>>()
+            .map_err(|_| refused())?;
+        let angle = |deg: f64| (deg.abs() <= 90.0).then(|| deg.to_radians());
+        let (height_m, pitch, roll) = match values[..] {
+            [h, pitch] => (h, angle(pitch), Some(0.0)),
+            [h, pitch, roll] => (h, angle(pitch), angle(roll)),
+            _ => return Err(refused()),
+        };
+        match (pitch, roll) {
+            (Some(pitch), Some(roll)) if (lo..=hi).contains(&height_m) => Ok(Mount {
+                height_m,
+                pitch,
+                roll,
+            }),
+            _ => Err(refused()),
+        }
+    }
+
     /// The rays of a camera with intrinsics `k` on this mount, for
     /// [`LevelRays::sine_below_level`] pixel by pixel.
     pub fn rays(&self, k: &Intrinsics) -> LevelRays {

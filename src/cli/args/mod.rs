@@ -8,6 +8,7 @@
 use super::bench::BenchCommand;
 use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::egl::Platform;
+use brume::io::camera::Mount;
 use brume::io::depth::{DepthFormat, DepthKind, DepthLayout};
 use brume::io::mask::SkyMaskFormat;
 use brume::medium::haze;
@@ -259,6 +260,28 @@ pub struct DepthReadingArgs {
         default_value = "auto"
     )]
     pub depth_layout: DepthLayout,
+
+    /// The camera's height over a level road in metres and its pitch (down) and roll (left
+    /// side up) in degrees, HEIGHT,PITCH[,ROLL], for depth from a car's camera without a
+    /// Cityscapes camera file (or to replace that file's): below the horizon, small
+    /// patches of range far beyond the level road's are dropped as false matches (the
+    /// README's "The level road"). Needs the map's intrinsics (--focal, --fov or its
+    /// calibration) and metres.
+    #[arg(
+        long,
+        value_name = "HEIGHT,PITCH[,ROLL]",
+        allow_hyphen_values = true,
+        value_parser = parse_camera_mount
+    )]
+    pub camera_mount: Option<Mount>,
+}
+
+/// `--camera-mount HEIGHT,PITCH[,ROLL]`: metres and degrees, as a [`Mount`] (radians).
+pub fn parse_camera_mount(s: &str) -> std::result::Result<Mount, String> {
+    Mount::parse_degrees(s).map_err(|e| match e {
+        brume::Error::InvalidParameter { expected, .. } => format!("expected {expected}"),
+        other => other.to_string(),
+    })
 }
 
 /// Options of the range pre-processing (paper 000, sec. 4.1).

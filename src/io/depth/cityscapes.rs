@@ -17,7 +17,7 @@ use std::path::{Component, Path, PathBuf};
 use serde_json::Value;
 
 use super::{DepthFormat, DepthOptions};
-use crate::io::camera::{to_range, Intrinsics, Mount};
+use crate::io::camera::{to_range, Intrinsics, Mount, MOUNT_HEIGHT_RANGE_M, MOUNT_TILT_RANGE_RAD};
 use crate::io::limits::MAX_SIDE;
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -46,11 +46,11 @@ pub const PRINCIPAL_POINT_RANGE_PX: (f64, f64) = (-(MAX_SIDE as f64), 2.0 * MAX_
 
 /// The camera heights above the ground accepted, in metres (`extrinsic.z`): 1 cm to 10 km.
 /// Cityscapes' car has 1.18 to 1.22 m.
-pub const HEIGHT_RANGE_M: (f64, f64) = (1e-2, 1e4);
+pub const HEIGHT_RANGE_M: (f64, f64) = MOUNT_HEIGHT_RANGE_M;
 
 /// The pitches and rolls accepted, in radians (`extrinsic.pitch`, `roll`): a quarter turn
 /// either way. Cityscapes' are 0.038 to 0.05 (pitch) and 0 (roll).
-pub const TILT_RANGE_RAD: (f64, f64) = (-std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2);
+pub const TILT_RANGE_RAD: (f64, f64) = MOUNT_TILT_RANGE_RAD;
 
 /// What brume reads from a Cityscapes `{name}_camera.json`. [`parse_camera_str`] accepts
 /// only values within [`BASELINE_RANGE_M`], [`FOCAL_RANGE_PX`] and

@@ -12,7 +12,7 @@ use super::raw::Raw;
 use super::{android, png16};
 use super::{finite_option, positive_option, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
 use crate::camera::{Camera, DepthModel};
-use crate::io::camera::{to_range, Intrinsics, Stereo};
+use crate::io::camera::{to_range, Intrinsics, Mount, Stereo};
 use crate::io::codec::NPZ_FOCAL_ARRAY;
 use crate::raster::Orientation;
 use crate::{Error, Result};
@@ -314,6 +314,9 @@ pub(super) fn interpret(
         });
     }
     let metric = is_metric(format, &units, opts);
+    // A turned map's file mount is the stored view's; the one given is the upright photo's.
+    let mount = mount.filter(|_| turn == Orientation::Upright);
+    let mount = given_mount(opts, mount, intrinsics.is_some() && metric, &mut notes);
     Ok(LoadedDepth {
         range,
         format,
@@ -326,9 +329,30 @@ pub(super) fn interpret(
         turned: turn,
         // A turned map's left view is no longer on the left.
         stereo_focal_baseline: stereo_focal_baseline.filter(|_| turn == Orientation::Upright),
-        // Its pitch and roll are the stored view's.
-        mount: mount.filter(|_| turn == Orientation::Upright),
+        mount,
     })
+}
+
+/// The mount of the map: [`DepthOptions::camera_mount`] where given and `usable` (the
+/// map has intrinsics and metres: the level road's range needs both), else the file's.
+fn given_mount(
+    opts: &DepthOptions,
+    from_file: Option<Mount>,
+    usable: bool,
+    notes: &mut Vec<String>,
+) -> Option<Mount> {
+    match opts.camera_mount {
+        Some(_) if !usable => {
+            notes.push(
+                "`camera_mount` ignored: the level road's range needs the map's intrinsics \
+                 (`focal`, `fov` or its calibration) and range in metres"
+                    .to_string(),
+            );
+            from_file
+        }
+        Some(given) => Some(given),
+        None => from_file,
+    }
 }
 
 /// The multiplier to metres of a map whose unit nothing says (a float map, a z-buffer's

@@ -263,6 +263,11 @@ pub struct DepthOptions {
     pub photo: Option<PhotoGeometry>,
     /// How the map lies against `photo`'s orientation.
     pub layout: DepthLayout,
+    /// How the camera is mounted over a level road (a car's camera), for a map whose file
+    /// gives no mount or the wrong one: replaces a Cityscapes camera file's, and becomes
+    /// [`LoadedDepth::mount`] when the map has intrinsics and metres (else a note says it
+    /// is ignored). Its pitch and roll are the upright photo's.
+    pub camera_mount: Option<Mount>,
 }
 
 impl Default for DepthOptions {
@@ -284,6 +289,7 @@ impl Default for DepthOptions {
             sky_beyond: None,
             photo: None,
             layout: DepthLayout::Auto,
+            camera_mount: None,
         }
     }
 }
