@@ -151,17 +151,18 @@ pub struct PrepOptions {
     /// for any other map. Finite and > 0.
     pub stereo_focal_baseline: Option<f64>,
     /// The level ground under a camera of known mount (a vehicle's: a Cityscapes camera
-    /// file's height, pitch and roll with its intrinsics, on the range's grid): below the
-    /// horizon a ray meets the road at a range no measured value may exceed by much;
-    /// small patches of values beyond 2x it (and beyond the road falling 5 % away) are a
-    /// matcher's false matches and become holes (see `src/prep/ground.rs`).
-    /// [`crate::photo::preprocess`] sets it for Cityscapes disparity; `None` (the default)
-    /// for any other map.
+    /// file's height, pitch and roll, or `--camera-mount`'s, with the map's intrinsics, on
+    /// the range's grid): below the horizon a ray meets the road at a range no measured
+    /// value may exceed by much; small patches of values beyond 2x it (and beyond the road
+    /// falling 5 % away) are a matcher's false matches and become holes (see
+    /// `src/prep/ground.rs`).
+    /// [`crate::photo::preprocess`] sets it from [`LoadedDepth::mount`]; `None` (the
+    /// default) for any other map.
     pub ground: Option<Ground>,
 }
 
 /// The level ground of a depth map in metres whose camera's mount and intrinsics are
-/// known (a Cityscapes disparity with its camera file).
+/// known (a Cityscapes disparity with its camera file, or a map given `camera_mount`).
 fn ground_of(depth: &LoadedDepth) -> Option<Ground> {
     let metres = depth.metric && depth.units == "m";
     depth

@@ -329,9 +329,10 @@ pub struct LoadedDepth {
     /// surface are occlusions of the background
     /// ([`crate::prep::PrepOptions::stereo_focal_baseline`]); `None` for other maps.
     pub stereo_focal_baseline: Option<f64>,
-    /// How the camera is mounted over the road (a Cityscapes camera file's height, pitch
-    /// and roll), with [`Self::intrinsics`] the level ground's range along each ray
-    /// ([`crate::prep::PrepOptions::ground`]); `None` for other maps and turned ones.
+    /// How the camera is mounted over the road ([`DepthOptions::camera_mount`], or a
+    /// Cityscapes camera file's height, pitch and roll), with [`Self::intrinsics`] the
+    /// level ground's range along each ray ([`crate::prep::PrepOptions::ground`]); `None`
+    /// for other maps, and for a turned map without `camera_mount`.
     pub mount: Option<Mount>,
 }
 
