@@ -100,7 +100,10 @@ pub(crate) fn load_depth<'py>(
             Some(l) => l.parse::<DepthLayout>().map_err(py_err)?,
             None => DepthLayout::Auto,
         },
-        camera_mount: camera_mount.map(|m| mount_of(&m)).transpose()?,
+        // (height_m, pitch_deg, roll_deg = 0), checked as `--camera-mount` is.
+        camera_mount: (camera_mount.map(|m| Mount::from_degrees(&m)))
+            .transpose()
+            .map_err(py_err)?,
         ..geometry_options(
             kind,
             scale,
@@ -166,13 +169,6 @@ pub(crate) fn range_from_depth<'py>(
         .detach(|| depth::range_from_map(map, "depth", &opts))
         .map_err(py_err)?;
     range_and_info(py, loaded)
-}
-
-/// `camera_mount` as load_depth takes it, (height_m, pitch_deg, roll_deg = 0), as brume's
-/// [`Mount`], checked as `brume render --camera-mount` checks it.
-fn mount_of(values: &[f64]) -> PyResult<Mount> {
-    let text: Vec<String> = values.iter().map(f64::to_string).collect();
-    Mount::parse_degrees(&text.join(",")).map_err(py_err)
 }
 
 /// The options both functions take: what the values are, their scale, the stereo

@@ -118,8 +118,14 @@ pub(crate) fn set_depth_origin(
     Ok(())
 }
 
-/// The keys of `ground`, as [`ground_to_py`] writes them.
-const GROUND_KEYS: &str = "height_m, pitch, roll, fx, fy, cx, cy";
+/// The keys of `ground`, in the order of [`ground_values`].
+const GROUND_KEYS: [&str; 7] = ["height_m", "pitch", "roll", "fx", "fy", "cx", "cy"];
+
+/// `ground`'s numbers in the order of [`GROUND_KEYS`].
+fn ground_values(g: &Ground) -> [f64; 7] {
+    let (m, k) = (&g.mount, &g.intrinsics);
+    [m.height_m, m.pitch, m.roll, k.fx, k.fy, k.cx, k.cy]
+}
 
 /// `ground` as `load_depth`'s info gives it ([`ground_to_py`]) as brume's [`Ground`]; a
 /// missing key or a value that is not a number is an error naming it.
@@ -127,44 +133,32 @@ fn ground_from_py(ground: Option<&Bound<'_, PyDict>>) -> PyResult<Option<Ground>
     let Some(dict) = ground else {
         return Ok(None);
     };
-    let get = |key: &str| -> PyResult<f64> {
-        let value = dict.get_item(key)?.ok_or_else(|| {
+    let mut v = [0.0; 7];
+    for (value, key) in v.iter_mut().zip(GROUND_KEYS) {
+        let item = dict.get_item(key)?.ok_or_else(|| {
             value_error(format!(
-                "ground: missing '{key}': expected load_depth's info['ground'], a dict of \
-                 {GROUND_KEYS}"
+                "ground: missing '{key}': expected load_depth's info['ground'], a dict of {}",
+                GROUND_KEYS.join(", ")
             ))
         })?;
-        value
-            .extract::<f64>()
-            .map_err(|_| value_error(format!("ground['{key}'] = {value}: expected a number")))
-    };
-    let mount = Mount {
-        height_m: get("height_m")?,
-        pitch: get("pitch")?,
-        roll: get("roll")?,
-    };
-    let intrinsics = Intrinsics {
-        fx: get("fx")?,
-        fy: get("fy")?,
-        cx: get("cx")?,
-        cy: get("cy")?,
-    };
-    Ok(Some(Ground { mount, intrinsics }))
+        *value = (item.extract::<f64>())
+            .map_err(|_| value_error(format!("ground['{key}'] = {item}: expected a number")))?;
+    }
+    let [height_m, pitch, roll, fx, fy, cx, cy] = v;
+    Ok(Some(Ground {
+        mount: Mount {
+            height_m,
+            pitch,
+            roll,
+        },
+        intrinsics: Intrinsics { fx, fy, cx, cy },
+    }))
 }
 
 /// `ground` as the dict `load_depth`'s info holds ([`GROUND_KEYS`]).
 pub(crate) fn ground_to_py<'py>(py: Python<'py>, ground: &Ground) -> PyResult<Bound<'py, PyDict>> {
     let dict = PyDict::new(py);
-    let (m, k) = (&ground.mount, &ground.intrinsics);
-    for (key, value) in [
-        ("height_m", m.height_m),
-        ("pitch", m.pitch),
-        ("roll", m.roll),
-        ("fx", k.fx),
-        ("fy", k.fy),
-        ("cx", k.cx),
-        ("cy", k.cy),
-    ] {
+    for (key, value) in GROUND_KEYS.into_iter().zip(ground_values(ground)) {
         dict.set_item(key, value)?;
     }
     Ok(dict)

@@ -105,36 +105,38 @@ pub const MOUNT_TILT_RANGE_RAD: (f64, f64) =
 
 impl Mount {
     /// Parses `HEIGHT,PITCH[,ROLL]`: metres, then degrees (pitch down, roll left side up;
-    /// roll 0 when left out), as `brume render --camera-mount` takes it. A value out of
-    /// [`MOUNT_HEIGHT_RANGE_M`] or [`MOUNT_TILT_RANGE_RAD`] is an error naming the text.
+    /// roll 0 when left out), as `brume render --camera-mount` takes it
+    /// ([`Mount::from_degrees`]); text that is not two or three numbers is an error naming
+    /// it.
     pub fn parse_degrees(text: &str) -> crate::Result<Mount> {
-        let (lo, hi) = MOUNT_HEIGHT_RANGE_M;
-        let refused = || {
-            crate::Error::invalid(
-                "camera_mount",
-                text,
-                format!(
-                    "HEIGHT,PITCH[,ROLL]: a height over the road from {lo} to {hi} m, then a \
-                     pitch (down) and a roll (left side up) in degrees within ±90"
-                ),
-            )
-        };
         let values: Vec<f64> = (text.split(',').map(|v| v.trim().parse::<f64>()))
             .collect::<Result<_, _>>()
-            .map_err(|_| refused())?;
-        let angle = |deg: f64| (deg.abs() <= 90.0).then(|| deg.to_radians());
-        let (height_m, pitch, roll) = match values[..] {
+            .map_err(|_| mount_refused(text))?;
+        Mount::from_degrees(&values)
+    }
+
+    /// The mount of `[height_m, pitch_deg]` or `[height_m, pitch_deg, roll_deg]` (pitch
+    /// down, roll left side up). A height out of [`MOUNT_HEIGHT_RANGE_M`], an angle out of
+    /// [`MOUNT_TILT_RANGE_RAD`] or another count of values is an error naming them.
+    pub fn from_degrees(values: &[f64]) -> crate::Result<Mount> {
+        let (lo, hi) = MOUNT_TILT_RANGE_RAD;
+        let angle = |deg: f64| Some(deg.to_radians()).filter(|r| (lo..=hi).contains(r));
+        let (height_m, pitch, roll) = match *values {
             [h, pitch] => (h, angle(pitch), Some(0.0)),
             [h, pitch, roll] => (h, angle(pitch), angle(roll)),
-            _ => return Err(refused()),
+            _ => (f64::NAN, None, None),
         };
+        let (lo, hi) = MOUNT_HEIGHT_RANGE_M;
         match (pitch, roll) {
             (Some(pitch), Some(roll)) if (lo..=hi).contains(&height_m) => Ok(Mount {
                 height_m,
                 pitch,
                 roll,
             }),
-            _ => Err(refused()),
+            _ => {
+                let text: Vec<String> = values.iter().map(f64::to_string).collect();
+                Err(mount_refused(&text.join(",")))
+            }
         }
     }
 
@@ -151,6 +153,19 @@ impl Mount {
             cos_roll,
         }
     }
+}
+
+/// A mount given as `text` and refused ([`Mount::from_degrees`]).
+fn mount_refused(text: &str) -> crate::Error {
+    let (lo, hi) = MOUNT_HEIGHT_RANGE_M;
+    crate::Error::invalid(
+        "camera_mount",
+        text,
+        format!(
+            "HEIGHT,PITCH[,ROLL]: a height over the road from {lo} to {hi} m, then a pitch \
+             (down) and a roll (left side up) in degrees within ±90"
+        ),
+    )
 }
 
 /// A mounted camera's rays against the level ([`Mount::rays`]).
