@@ -12,7 +12,7 @@ const MAX_SCORED: usize = 1024;
 /// Plane candidates are only tried when the boundary has at least this many edges.
 const MIN_PLANE_EDGES: usize = 4;
 /// 1.4826 x MAD estimates the standard deviation of Gaussian data.
-const MAD_TO_SIGMA: f64 = 1.4826;
+pub(crate) const MAD_TO_SIGMA: f64 = 1.4826;
 
 /// One boundary edge: a known pixel `(x, y)` with range `r`, 4-adjacent to a hole pixel.
 #[derive(Clone, Copy, Debug)]
