@@ -498,26 +498,17 @@ mod tests {
         let truth = |y: usize| 1.0 / (0.1 + 0.002 * y as f32);
         for striped in [true, false] {
             let mut rng = crate::rng::SplitMix64::new(7);
-            let mut work = vec![f32::NAN; w * h];
+            let mut range = vec![f32::NAN; w * h];
             for y in 0..h {
                 for x in band..w {
                     if striped && (band + 6..band + 9).contains(&x) {
                         continue;
                     }
                     let noise = 1.0 + 0.03 * (2.0 * rng.unit() as f32 - 1.0);
-                    work[y * w + x] = truth(y) / noise;
+                    range[y * w + x] = truth(y) / noise;
                 }
             }
-            let (mut sky, mut filled) = (vec![false; w * h], vec![false; w * h]);
-            let done = fill_borders(
-                &mut work,
-                &mut sky,
-                &mut filled,
-                (w, h),
-                0.5,
-                (1.0, 1e4),
-                None,
-            );
+            let (work, done) = fill_line(&range, (w, h));
             assert_eq!(done.filled, band * h, "{done:?}");
             for y in 0..h {
                 for x in 0..band {
@@ -544,8 +535,8 @@ mod tests {
         line
     }
 
-    /// `line` filled as one image line (a row: its left band; a column: top then bottom),
-    /// no sky, bands up to half the line.
+    /// `line` filled as one image line (a row: its left band; a column: top then bottom)
+    /// or as an image of that size, no sky, bands up to half the line.
     fn fill_line(line: &[f32], size: (usize, usize)) -> (Vec<f32>, BorderFill) {
         fill_line_seen(line, size, None)
     }
