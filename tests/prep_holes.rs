@@ -93,12 +93,14 @@ fn border_and_tiny_holes() {
             // Corner pixels have only 2 boundary edges: a constant (error <= one slope
             // step, 0.15); the others get the plane.
             let corner = (x == 0 || x == w - 1) && (y == 0 || y == h - 1);
-            // The left run is continued linearly in disparity, this map is linear in
-            // range: 0.1 % off one pixel out.
+            // The left run is continued linearly in disparity with the median slope of
+            // the rows round it; this map is linear in range, not in disparity, so each
+            // row's slope differs a little from the next: up to 0.107 % off one pixel out
+            // with a neighbour's slope (0.092 % with its own).
             let tol = if corner {
                 0.16
             } else if x == 0 {
-                0.02
+                0.025
             } else {
                 1e-3
             };

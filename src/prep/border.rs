@@ -14,22 +14,24 @@
 //!   hole filling, which never fills from the sky.
 //! - An anchor with known range: the run continues the surface of the first known pixels
 //!   after it (up to `2 x max(4, min(run, 16))` pixels along the line, stopping at the
-//!   first unknown or sky pixel), extrapolated linearly *in disparity* `1/R`, where a
-//!   plane is affine along any line (a facade along a row, the road along a column: both
-//!   exact). The slope is the difference of the medians of the two halves of those
-//!   pixels over that of their median positions (the mean of the middle two for an even
-//!   count); when the halves differ by more than a factor 1.5 (a depth edge among them)
-//!   the run takes the median of the first half, as it does where the samples do not show
-//!   their slope (fewer than [`SLOPE_SAMPLES`], scattered about it by more than
-//!   [`SLOPE_SCATTER`] of the disparity, or the halves no more than [`SLOPE_SIGNIFICANCE`]
-//!   scatters apart: a matcher's noise, which extrapolated made each row of Cityscapes'
-//!   left band a stripe of its own). The extrapolated disparity is kept within
-//!   a factor 1.5 of it, so a slope cannot create a spike, and the range within the
-//!   smallest and largest known range outside the sky; with non-positive range the run
-//!   takes the anchor's value. Toward the bottom border the disparity does not fall (the
-//!   slope is taken only where it rises): the ground comes nearer there, and a car's hood
-//!   reflecting the street, whose disparity falls toward the border, was continued
-//!   farther and farther, a light streak in each such column.
+//!   first unknown or sky pixel), extrapolated linearly *in disparity* `1/R`, where a plane
+//!   is affine along any line (a facade along a row, the road along a column: both exact).
+//!   The slope is the difference of the medians of the two halves of those pixels over that
+//!   of their median positions (the mean of the middle two for an even count); when the
+//!   halves differ by more than a factor 1.5 (a depth edge among them) the run takes the
+//!   median of the first half, as it does where the samples do not show their slope (fewer
+//!   than [`SLOPE_SAMPLES`], scattered about it by more than [`SLOPE_SCATTER`] of the
+//!   disparity, or the halves no more than [`SLOPE_SIGNIFICANCE`] scatters apart: a
+//!   matcher's noise, which extrapolated made each row of Cityscapes' left band a stripe of
+//!   its own). A line then follows the median of the slopes so shown (0 where not) by the
+//!   lines within [`POOLED_LINES`] of it that continue its surface ([`SURFACE_RATIO`]): the
+//!   slope of a plane, the same on each line, and not one line's alone. The extrapolated
+//!   disparity is kept within a factor 1.5 of it, so a slope cannot create a spike, and the
+//!   range within the smallest and largest known range outside the sky; with non-positive
+//!   range the run takes the anchor's value. Toward the bottom border the disparity does
+//!   not fall (the slope is taken only where it rises): the ground comes nearer there, and
+//!   a car's hood reflecting the street, whose disparity falls toward the border, was
+//!   continued farther and farther, a light streak in each such column.
 //! - Other anchors (an ego-vehicle pixel, the sky on the other sides) and lines longer than
 //!   `max_depth`: the run is left to the hole filling.
 //! - *Islands* first: a matcher leaves specks of wrong values inside the band it cannot
@@ -73,14 +75,23 @@ const SLOPE_SAMPLES: usize = 8;
 
 /// A line's slope is followed only where its samples lie on it: their scatter about it
 /// (1.4826 x the median absolute residual, in disparity) at most this fraction of the
-/// disparity (brume's synthetic street frame, measured with 0.5 % noise: its left band's
-/// error 0.34 m, 0.23 m with every slope followed, 1.48 m with none; the lines by the
-/// bands of Cityscapes' SGM disparity scatter 0.2 to 4 %, 10th to 90th percentile, and
-/// 15 to 37 % of those with enough samples are followed)...
+/// disparity (brume's synthetic street frame, measured with 0.5 % noise, shows its
+/// facades' slopes: its left band's error 0.19 m, 0.23 m with every line's own slope
+/// followed, 1.48 m with none; the lines by the bands of Cityscapes' SGM disparity
+/// scatter 0.2 to 4 %, 10th to 90th percentile, and 15 to 37 % of those with enough
+/// samples show theirs)...
 const SLOPE_SCATTER: f32 = 0.005;
 
 /// ... and where the halves' medians differ by more than this many times that scatter.
 const SLOPE_SIGNIFICANCE: f32 = 3.0;
+
+/// A band line follows the median of the slopes of the lines this far either side of it
+/// (itself among them) that continue its surface.
+const POOLED_LINES: usize = 8;
+
+/// Two band lines continue one surface when their first disparities are within this
+/// factor of each other.
+const SURFACE_RATIO: f32 = 1.25;
 
 /// The factor by which an island is farther than the surface beyond it to be dropped: a
 /// matcher's specks in Cityscapes' left band are 20 to 70 times as far as the road beyond
@@ -171,7 +182,9 @@ pub(crate) fn fill_borders(
         let at = |l: usize, k: usize| side.index(l, k, (width, height));
         let (top, bottom) = (side == Side::Top, side == Side::Bottom);
         let limit = ((max_depth * len as f64) as usize).min(len.saturating_sub(1));
-        for l in 0..lines {
+        // Each line's run and fit first; filled once its neighbours' fits are known.
+        let mut fits: Vec<Option<(usize, LineFit)>> = vec![None; lines];
+        for (l, fit) in fits.iter_mut().enumerate() {
             let line = |k: usize| at(l, k);
             let lim = (len, limit);
             out.islands += drop_far_islands(work, sky, &line, lim, (bottom, guide), &mut samples);
@@ -198,15 +211,47 @@ pub(crate) fn fill_borders(
                 }
                 samples.push((k, v));
             }
-            let value = continuation(&samples, bottom);
+            *fit = Some((run, LineFit::of(&samples, bottom)));
+        }
+        for (l, &(run, fit)) in fits
+            .iter()
+            .enumerate()
+            .filter_map(|(l, f)| f.as_ref().map(|f| (l, f)))
+        {
+            let fit = fit.with_slope(pooled_slope(&fits, l, fit));
             for k in 0..run {
-                work[at(l, k)] = value(k).clamp(known.0, known.1);
+                work[at(l, k)] = fit.range_at(k).clamp(known.0, known.1);
                 filled[at(l, k)] = true;
             }
             out.filled += run;
         }
     }
     out
+}
+
+/// The median slope of the band lines within [`POOLED_LINES`] of line `l` that continue
+/// its surface (their first disparity within [`SURFACE_RATIO`] of its own `fit`'s), each
+/// as its own samples showed it (0 where they did not): a plane's disparity changes along
+/// a line by the same amount on every line, and a line whose few pixels show a slope that
+/// its neighbours' do not is the matcher's (two rows of Cityscapes' Düsseldorf road, 9.7
+/// to 8.7 m across the band, between rows at 7.8 to 8.0 m).
+fn pooled_slope(fits: &[Option<(usize, LineFit)>], l: usize, fit: LineFit) -> f32 {
+    let LineFit::Disparity { d1, .. } = fit else {
+        return 0.0;
+    };
+    let near = l.saturating_sub(POOLED_LINES)..(l + POOLED_LINES + 1).min(fits.len());
+    let mut slopes: Vec<f64> = fits[near]
+        .iter()
+        .filter_map(|f| match *f {
+            Some((_, LineFit::Disparity { d1: d, slope, .. }))
+                if d.max(d1) <= SURFACE_RATIO * d.min(d1) =>
+            {
+                Some(f64::from(slope))
+            }
+            _ => None,
+        })
+        .collect();
+    median_in_place(&mut slopes) as f32
 }
 
 /// Drops the islands of one band line (`at`: its step → index; `len` steps, the band at
@@ -281,7 +326,7 @@ fn drop_far_islands(
         // its median, which must begin a wide surface where it first shows (past other
         // specks).
         let surface = if bottom {
-            continuation(samples, true)((k + end) / 2)
+            LineFit::of(samples, true).range_at((k + end) / 2)
         } else {
             let median = median_of(samples.iter().map(|&(_, r)| r));
             let agrees = |r: f32| r <= MAX_RATIO * median && median <= MAX_RATIO * r;
@@ -378,43 +423,69 @@ fn alike(guide: &ColourGuide, at: &dyn Fn(usize) -> usize, a: &[usize], b: &[usi
     guide.alike(&pixels(a), &pixels(b))
 }
 
-/// The range at step `k` of a line whose first known pixels are `samples` (step, range;
-/// at least one), as the module docs say; `never_farther`: nowhere farther than the
-/// samples' first half (the bottom band).
-fn continuation(samples: &[(usize, f32)], never_farther: bool) -> Box<dyn Fn(usize) -> f32> {
-    let first = samples[0].1;
-    if samples.iter().any(|&(_, r)| r <= 0.0) || samples.len() < 2 {
-        return Box::new(move |_| first);
+/// How a band line continues the surface of its first known pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum LineFit {
+    /// One range all along the band.
+    Constant(f32),
+    /// The disparity `d1` at step `k1`, changing by `slope` per step, kept within a factor
+    /// [`MAX_RATIO`] of `d1`.
+    Disparity { k1: f32, d1: f32, slope: f32 },
+}
+
+impl LineFit {
+    /// The fit of a line whose first known pixels are `samples` (step, range; at least
+    /// one), as the module docs say; `never_farther`: nowhere farther than the samples'
+    /// first half (the bottom band).
+    fn of(samples: &[(usize, f32)], never_farther: bool) -> LineFit {
+        if samples.iter().any(|&(_, r)| r <= 0.0) || samples.len() < 2 {
+            return LineFit::Constant(samples[0].1);
+        }
+        let half = samples.len() / 2;
+        // The median of the disparities and of the steps (in order along the line; for an
+        // even count the mean of the middle two): exact for a plane either way it slopes.
+        let stats = |part: &[(usize, f32)]| {
+            let mut d: Vec<f32> = part.iter().map(|&(_, r)| 1.0 / r).collect();
+            d.sort_unstable_by(f32::total_cmp);
+            let n = part.len();
+            let (lo, hi) = ((n - 1) / 2, n / 2);
+            let med = 0.5 * (d[lo] + d[hi]);
+            let pos = 0.5 * (part[lo].0 + part[hi].0) as f32;
+            (pos, med)
+        };
+        let (k1, d1) = stats(&samples[..half]);
+        let (k2, d2) = stats(&samples[half..]);
+        let mut slope = if d1.max(d2) <= MAX_RATIO * d1.min(d2) && k2 > k1 {
+            (d2 - d1) / (k2 - k1)
+        } else {
+            0.0
+        };
+        if !shows_its_slope(samples, (k1, d1), slope, d2 - d1) {
+            slope = 0.0;
+        }
+        if never_farther {
+            slope = slope.min(0.0); // toward the border (k falling) the disparity does not fall
+        }
+        LineFit::Disparity { k1, d1, slope }
     }
-    let half = samples.len() / 2;
-    // The median of the disparities and of the steps (in order along the line; for an
-    // even count the mean of the middle two): exact for a plane either way it slopes.
-    let stats = |part: &[(usize, f32)]| {
-        let mut d: Vec<f32> = part.iter().map(|&(_, r)| 1.0 / r).collect();
-        d.sort_unstable_by(f32::total_cmp);
-        let n = part.len();
-        let (lo, hi) = ((n - 1) / 2, n / 2);
-        let med = 0.5 * (d[lo] + d[hi]);
-        let pos = 0.5 * (part[lo].0 + part[hi].0) as f32;
-        (pos, med)
-    };
-    let (k1, d1) = stats(&samples[..half]);
-    let (k2, d2) = stats(&samples[half..]);
-    let mut slope = if d1.max(d2) <= MAX_RATIO * d1.min(d2) && k2 > k1 {
-        (d2 - d1) / (k2 - k1)
-    } else {
-        0.0
-    };
-    if !shows_its_slope(samples, (k1, d1), slope, d2 - d1) {
-        slope = 0.0;
+
+    /// The same fit with another slope (a constant stays one).
+    fn with_slope(self, slope: f32) -> LineFit {
+        match self {
+            LineFit::Disparity { k1, d1, .. } => LineFit::Disparity { k1, d1, slope },
+            constant => constant,
+        }
     }
-    if never_farther {
-        slope = slope.min(0.0); // toward the border (k falling) the disparity does not fall
+
+    /// The range at step `k`.
+    fn range_at(&self, k: usize) -> f32 {
+        match *self {
+            LineFit::Constant(r) => r,
+            LineFit::Disparity { k1, d1, slope } => {
+                1.0 / (d1 + slope * (k as f32 - k1)).clamp(d1 / MAX_RATIO, d1 * MAX_RATIO)
+            }
+        }
     }
-    Box::new(move |k| {
-        let d = (d1 + slope * (k as f32 - k1)).clamp(d1 / MAX_RATIO, d1 * MAX_RATIO);
-        1.0 / d
-    })
 }
 
 /// Whether a line's `samples` (step, range) show the `slope` (per step, in disparity)
@@ -436,345 +507,5 @@ fn shows_its_slope(samples: &[(usize, f32)], (k1, d1): (f32, f32), slope: f32, r
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_left_band_continues_a_plane_and_top_rows_above_sky_are_sky() {
-        let (w, h) = (40, 20);
-        // A facade whose disparity is affine in x and y, the top 4 rows sky in columns
-        // 20.., a band of 6 unknown columns on the left, 2 unknown rows at the top.
-        let truth = |x: usize, y: usize| 1.0 / (0.02 + 0.001 * x as f32 + 0.0005 * y as f32);
-        let mut work = vec![0.0f32; w * h];
-        let mut sky = vec![false; w * h];
-        for y in 0..h {
-            for x in 0..w {
-                let i = y * w + x;
-                if x < 6 || y < 2 {
-                    work[i] = f32::NAN;
-                } else if y < 6 && x >= 20 {
-                    sky[i] = true;
-                    work[i] = f32::INFINITY;
-                } else {
-                    work[i] = truth(x, y);
-                }
-            }
-        }
-        let known = work.clone();
-        let mut filled = vec![false; w * h];
-        let done = fill_borders(
-            &mut work,
-            &mut sky,
-            &mut filled,
-            (w, h),
-            0.2,
-            (0.0, 1e9),
-            None,
-        );
-        assert_eq!(done.sky, 2 * 20, "{done:?}");
-        assert_eq!(done.filled, 6 * (h - 2) + 2 * 20, "{done:?}");
-        for y in 0..h {
-            for x in 0..w {
-                let i = y * w + x;
-                if known[i].is_finite() {
-                    assert_eq!(work[i].to_bits(), known[i].to_bits());
-                } else if !sky[i] {
-                    let e = (work[i] - truth(x, y)).abs() / truth(x, y);
-                    assert!(e < 1e-4, "({x}, {y}): {} vs {}", work[i], truth(x, y));
-                }
-            }
-        }
-        assert!((20..w).all(|x| sky[x] && sky[w + x]));
-    }
-
-    /// A road by a stereo pair's left band, measured with a matcher's noise (3 % in
-    /// disparity): each row's few first pixels (6, then a gap: the road striped with the
-    /// matcher's gaps) or its noisy run of 32 show no slope, and the band takes their
-    /// median, within the noise of the row's true range; followed, their slopes made
-    /// each row a stripe of its own, up to 1.5 times off.
-    #[test]
-    fn a_band_by_noisy_pixels_takes_their_median_not_their_slope() {
-        let (w, h, band) = (200, 40, 90);
-        let truth = |y: usize| 1.0 / (0.1 + 0.002 * y as f32);
-        for striped in [true, false] {
-            let mut rng = crate::rng::SplitMix64::new(7);
-            let mut range = vec![f32::NAN; w * h];
-            for y in 0..h {
-                for x in band..w {
-                    if striped && (band + 6..band + 9).contains(&x) {
-                        continue;
-                    }
-                    let noise = 1.0 + 0.03 * (2.0 * rng.unit() as f32 - 1.0);
-                    range[y * w + x] = truth(y) / noise;
-                }
-            }
-            let (work, done) = fill_line(&range, (w, h));
-            assert_eq!(done.filled, band * h, "{done:?}");
-            for y in 0..h {
-                for x in 0..band {
-                    let e = work[y * w + x] / truth(y) - 1.0;
-                    assert!(e.abs() < 0.035, "striped {striped}, ({x}, {y}): {e}");
-                }
-            }
-        }
-    }
-
-    /// One row: `cells` from the left border ('.' unknown, a digit d: range 10·d m, 'F' a
-    /// speck 500 m away, 'p' a pole 3 m away), then a facade 10 m away to the end of the row.
-    fn row(cells: &str, width: usize) -> Vec<f32> {
-        let mut line: Vec<f32> = cells
-            .chars()
-            .map(|c| match c {
-                '.' => f32::NAN,
-                'F' => 500.0,
-                'p' => 3.0,
-                d => 10.0 * d.to_digit(10).expect("a digit") as f32,
-            })
-            .collect();
-        line.resize(width, 10.0);
-        line
-    }
-
-    /// `line` filled as one image line (a row: its left band; a column: top then bottom)
-    /// or as an image of that size, no sky, bands up to half the line.
-    fn fill_line(line: &[f32], size: (usize, usize)) -> (Vec<f32>, BorderFill) {
-        fill_line_seen(line, size, None)
-    }
-
-    /// [`fill_line`] with the line's `image`, when given.
-    fn fill_line_seen(
-        line: &[f32],
-        (w, h): (usize, usize),
-        image: Option<&crate::raster::RgbImage>,
-    ) -> (Vec<f32>, BorderFill) {
-        let guide = image.map(|i| ColourGuide::new(i, 0.08));
-        let mut work = line.to_vec();
-        let mut sky = vec![false; line.len()];
-        let mut filled = vec![false; line.len()];
-        let done = fill_borders(
-            &mut work,
-            &mut sky,
-            &mut filled,
-            (w, h),
-            0.5,
-            (1.0, 1e4),
-            guide.as_ref(),
-        );
-        (work, done)
-    }
-
-    /// A speck longer than its distance to the border is taken for a piece of a surface
-    /// reaching the border, unless the image shows the surface beyond it there: of the
-    /// facade's chromaticity, a quarter brighter (its shading), it is a speck on the facade
-    /// (Cityscapes' Düsseldorf glass facade) and dropped, also where it is near enough to
-    /// the facade to be joined to it; of another colour (far ground), three times as
-    /// bright, or without the image it is kept; touching the border (no band before it),
-    /// kept.
-    #[test]
-    fn a_speck_the_image_shows_on_the_surface_beyond_is_dropped() {
-        let facade = [0.10f32, 0.15, 0.10];
-        let seen =
-            |cells: &str, speck: [f32; 3]| {
-                let line = row(cells, 160);
-                let image = crate::raster::Grid::from_fn(160, 1, |x, _| {
-                    if line[x] == 500.0 {
-                        speck
-                    } else {
-                        facade
-                    }
-                });
-                fill_line_seen(&line, (160, 1), Some(&image))
-            };
-        let near_border = format!("....{}{}", "F".repeat(10), ".".repeat(20));
-        let shaded = facade.map(|c| 1.25 * c);
-        let (work, done) = seen(&near_border, shaded);
-        assert_eq!(done.islands, 10, "{done:?}");
-        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
-        let ground = [0.12, 0.10, 0.05];
-        assert_eq!(seen(&near_border, ground).1.islands, 0);
-        let lit = facade.map(|c| 3.0 * c); // its chromaticity, but no shading of it
-        assert_eq!(seen(&near_border, lit).1.islands, 0);
-        assert_eq!(fill_line(&row(&near_border, 160), (160, 1)).1.islands, 0);
-        let at_border = format!("{}{}", "F".repeat(10), ".".repeat(20));
-        assert_eq!(seen(&at_border, shaded).1.islands, 0);
-        // 8 px from the facade, a gap the island would be joined across (and the facade
-        // then taken for its surface): specks on the facade are not joined to it.
-        let by_facade = format!("......{}........", "F".repeat(10));
-        let (work, done) = seen(&by_facade, shaded);
-        assert_eq!(done.islands, 10, "{done:?}");
-        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
-        assert_eq!(seen(&by_facade, ground).1.islands, 0);
-        // Nearer specks after them are no surface for them to lie on (not wide): joined,
-        // all are dropped (a Hamburg frame's road; taken for one, they ended the band).
-        let specks = format!("{}{}", "4".repeat(20), ".".repeat(30));
-        let by_specks = format!("......{}........{specks}", "F".repeat(10));
-        let (work, done) = seen(&by_specks, shaded);
-        assert_eq!(done.islands, 30, "{done:?}");
-        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
-    }
-
-    /// Cityscapes' left band: specks of far disparity among the unknown columns, which the
-    /// band used to continue (a white blotch by a road 6 m away), are dropped; the band
-    /// continues the facade beyond them.
-    #[test]
-    fn far_specks_in_a_band_are_dropped_and_the_band_continues_its_surface() {
-        let line = row("........FF.....F....FFF....................", 100);
-        let (work, done) = fill_line(&line, (100, 1));
-        assert_eq!(done.islands, 6, "{done:?}");
-        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
-        // Groups of specks far apart: what lies beyond the first is judged where the
-        // facade shows, past the second.
-        let apart = format!("........FF{}FF{}", ".".repeat(20), ".".repeat(20));
-        let (work, done) = fill_line(&row(&apart, 120), (120, 1));
-        assert_eq!(done.islands, 4, "{done:?}");
-        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{work:?}");
-        // A road striped with the matcher's gaps (half of it known, gaps of 4 px) is a
-        // surface all the same (Düsseldorf's road by the left band).
-        let striped = format!(
-            "............FFFFFF{}{}",
-            ".".repeat(20),
-            "1111....".repeat(12)
-        );
-        let (work, done) = fill_line(&row(&striped, 140), (140, 1));
-        assert_eq!(done.islands, 6, "{done:?}");
-        assert!(
-            work[..12].iter().all(|&r| (r - 10.0).abs() < 1e-4),
-            "{work:?}"
-        );
-    }
-
-    /// What is not a speck stays as it was, and ends the band: a strip less than
-    /// [`ISLAND_RATIO`] times as far as what is beyond it (a far facade before a car), a
-    /// piece at or near the border, a pole nearer than the facade, far ground beside a
-    /// post (brume's synthetic SGBM view 2), a speck hard against a post.
-    #[test]
-    fn surfaces_in_a_band_are_kept() {
-        let dots = |n: usize| ".".repeat(n);
-        // Far ground beside a post: what the band meets is no wide surface.
-        let beside_post = format!("{}FF{}{}{}", dots(12), dots(20), "p".repeat(20), dots(30));
-        // A speck hard against a post is one island with it, the post's.
-        let with_post = format!("........FF......pppppppp{}", dots(10));
-        // Each 20 px from the facade (a gap under 16 px would join it to the facade).
-        let strip = format!("......22222{}", dots(20));
-        let at_border = format!("FF{}", dots(20));
-        let near_border = format!(".FFFF{}", dots(20));
-        let pole = format!("......pp{}", dots(20));
-        for cells in [
-            &strip,
-            &at_border,
-            &near_border,
-            &pole,
-            &beside_post,
-            &with_post,
-        ] {
-            let line = row(cells, 100);
-            let (work, done) = fill_line(&line, (100, 1));
-            assert_eq!(done.islands, 0, "{cells}: {done:?}");
-            for (k, (a, b)) in line.iter().zip(&work).enumerate() {
-                assert!(
-                    a.is_nan() || a.to_bits() == b.to_bits(),
-                    "{cells}: step {k}"
-                );
-            }
-        }
-        // A sparse map (a lidar's: one known pixel in 8) has too little beyond a speck to
-        // judge it.
-        let mut sparse: Vec<f32> = (0..80)
-            .map(|k| if k % 8 == 0 { 10.0 } else { f32::NAN })
-            .collect();
-        sparse[0] = f32::NAN;
-        sparse[4] = 500.0;
-        let (_, done) = fill_line(&sparse, (80, 1));
-        assert_eq!(done.islands, 0, "{done:?}");
-    }
-
-    /// A hood at the bottom reflecting the street: rows of 1.3 times the road's range among
-    /// its unknown rows are dropped (along the bottom the ground comes nearer), and the
-    /// band below the road continues it, never farther.
-    #[test]
-    fn a_hoods_reflection_in_the_bottom_band_is_dropped() {
-        let h = 80;
-        // Top to bottom: 50 rows of road receding upward, then the hood: unknown rows with
-        // 3 rows of reflection 1.3 times as far as the road's last row, 18 rows below it.
-        let road = |y: usize| 1.0 / (0.05 + 0.0005 * y as f32);
-        let mut column: Vec<f32> = (0..h)
-            .map(|y| if y < 50 { road(y) } else { f32::NAN })
-            .collect();
-        column[68..71].fill(1.3 * road(49));
-        let (work, done) = fill_line(&column, (1, h));
-        assert_eq!(done.islands, 3, "{done:?}");
-        for (y, &r) in work.iter().enumerate().skip(50) {
-            assert!(r <= road(49) * 1.0001, "row {y}: {r} vs {}", road(49));
-            assert!(
-                (r - road(y)).abs() / road(y) < 1e-3,
-                "row {y}: the road's plane"
-            );
-        }
-        // The same reflection in a side band is a surface of its own (under 3 times).
-        let line: Vec<f32> = column.iter().rev().copied().collect();
-        let (_, done) = fill_line(&line, (h, 1));
-        assert_eq!(done.islands, 0, "{done:?}");
-    }
-
-    /// Toward the bottom border a slope that recedes (a hood reflecting the street, whose
-    /// disparity falls toward the border) is not followed: the first half's median holds.
-    #[test]
-    fn the_bottom_band_never_continues_farther() {
-        // Steps 8..24 from the border, disparity rising away from it.
-        let s: Vec<(usize, f32)> = (8..24)
-            .map(|k| (k, 1.0 / (0.05 + 0.001 * k as f32)))
-            .collect();
-        let free = continuation(&s, false);
-        let held = continuation(&s, true);
-        assert!(free(0) > s[0].1, "{} {}", free(0), s[0].1);
-        let first_half = 1.0 / (0.05 + 0.001 * 11.5);
-        assert!(
-            (held(0) - first_half).abs() < 1e-3,
-            "{} {first_half}",
-            held(0)
-        );
-        // A slope toward nearer is followed alike.
-        let rising: Vec<(usize, f32)> = s.iter().map(|&(k, r)| (32 - k, r)).rev().collect();
-        assert_eq!(
-            continuation(&rising, true)(0),
-            continuation(&rising, false)(0)
-        );
-    }
-
-    /// Each of the three conditions on following a slope, alone: a clean slope of 16
-    /// samples is followed; of 6, not (too few); with a 2 % scatter about it, not; a slope
-    /// of 0.24 % between the halves within a 0.3 % scatter, not (no more than its noise),
-    /// of 2 %, followed.
-    #[test]
-    fn a_slope_is_followed_only_where_the_samples_show_it() {
-        // Steps 10.., disparity 0.1 (1 + slope (k - 10)), times 1 ± noise alternately.
-        let line = |n: usize, slope: f32, noise: f32| -> Vec<(usize, f32)> {
-            (10..10 + n)
-                .map(|k| {
-                    let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-                    let d = 0.1 * (1.0 + slope * (k - 10) as f32) * (1.0 + sign * noise);
-                    (k, 1.0 / d)
-                })
-                .collect()
-        };
-        let followed = |s: &[(usize, f32)]| {
-            let f = continuation(s, false);
-            f(0) != f(100)
-        };
-        assert!(followed(&line(16, 0.02, 0.0)));
-        assert!(!followed(&line(6, 0.02, 0.0)));
-        assert!(!followed(&line(16, 0.02, 0.02)));
-        assert!(!followed(&line(16, 0.0003, 0.003)));
-        assert!(followed(&line(16, 0.0025, 0.003)));
-    }
-
-    #[test]
-    fn a_depth_edge_in_the_samples_gives_a_constant() {
-        let mut s: Vec<(usize, f32)> = (5..13).map(|k| (k, 10.0)).collect();
-        s.extend((13..21).map(|k| (k, 40.0)));
-        let f = continuation(&s, false);
-        assert_eq!(f(0), 10.0);
-        assert_eq!(continuation(&[(3, 7.0)], false)(0), 7.0);
-        assert_eq!(continuation(&[(3, 0.0), (4, 1.0)], false)(0), 0.0);
-    }
-}
+#[path = "border_tests.rs"]
+mod tests;
