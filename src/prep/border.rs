@@ -46,7 +46,7 @@
 //!   [`ISLAND_RATIO`] times what lies beyond it: the median of up to [`BEYOND`] known
 //!   pixels beyond it within `max_depth` (at least half as many: a sparse lidar map is
 //!   never judged), which must begin a wide surface ([`WIDE_RUN`]: a road, a facade, not
-//!   a post). Along the bottom, where the ground comes nearer toward the border, the
+//!   a post) where it first shows ([`SOLID_START`]). Along the bottom, where the ground comes nearer toward the border, the
 //!   factor is [`BOTTOM_ISLAND_RATIO`] and what lies beyond is its continuation (as above)
 //!   at the island. The first island that is not dropped, or a longer run, ends the
 //!   search, and the run ends at it as before.
@@ -122,6 +122,14 @@ const BEYOND: usize = 32;
 /// not, and the far ground there is no speck (taken for one, the band continued the post
 /// 144 px: that view's τ error in the band 0.057 → 0.11).
 const WIDE_RUN: usize = 64;
+
+/// Where the surface beyond an island first shows: the first of its pixels (agreeing with
+/// its median) that begins this many known pixels in a row, or, where none does (a road
+/// striped with the matcher's gaps), the first. Two pixels of a van's range on its window,
+/// 28 px before the van, were taken for where it began, and with the gap after them it
+/// was no wide surface: a speck of 300 m before them was kept and three rows of the band
+/// continued it (Cityscapes' Hamburg frame, rows 314-316: a white line over the van).
+const SOLID_START: usize = 8;
 
 /// The border a band line starts from.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -324,16 +332,18 @@ fn drop_far_islands(
         // where the island is. Along a row the surface may slope either way (a facade),
         // and extrapolated over the gap to the island it made far strips look like specks:
         // its median, which must begin a wide surface where it first shows (past other
-        // specks).
+        // specks, and past pieces of its range too small to begin it: see SOLID_START).
         let surface = if bottom {
             LineFit::of(samples, true).range_at((k + end) / 2)
         } else {
             let median = median_of(samples.iter().map(|&(_, r)| r));
             let agrees = |r: f32| r <= MAX_RATIO * median && median <= MAX_RATIO * r;
-            let start = samples
-                .iter()
-                .find(|&&(_, r)| agrees(r))
-                .map_or(end, |s| s.0);
+            let agreeing = || samples.iter().filter(|&&(_, r)| agrees(r)).map(|s| s.0);
+            let solid = |j: usize| (j..j + SOLID_START).all(|i| i < len && known(work, i));
+            let start = agreeing()
+                .find(|&j| solid(j))
+                .or_else(|| agreeing().next())
+                .unwrap_or(end);
             if !is_wide(start, &|j| known(work, j), len) {
                 // Beyond it an object, not a surface the band can be (a post: far ground
                 // seen beside it was taken for a speck and the band continued the post).

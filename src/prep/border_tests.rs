@@ -209,6 +209,15 @@ fn far_specks_in_a_band_are_dropped_and_the_band_continues_its_surface() {
         work[..12].iter().all(|&r| (r - 10.0).abs() < 1e-4),
         "{work:?}"
     );
+    // Two pixels of the facade's range 28 px before it do not begin it (Hamburg's van
+    // window): the specks before them are judged against the facade, and dropped.
+    let piece = format!("........FF{}11{}", ".".repeat(16), ".".repeat(28));
+    let (work, done) = fill_line(&row(&piece, 160), (160, 1));
+    assert_eq!(done.islands, 2, "{done:?}");
+    assert!(
+        work[..28].iter().all(|&r| (r - 10.0).abs() < 1e-4),
+        "{work:?}"
+    );
 }
 
 /// What is not a speck stays as it was, and ends the band: a strip less than
