@@ -45,11 +45,11 @@
 //!   border, is dropped (unknown, then part of the run) when its median range is more than
 //!   [`ISLAND_RATIO`] times what lies beyond it: the median of up to [`BEYOND`] known
 //!   pixels beyond it within `max_depth` (at least half as many: a sparse lidar map is
-//!   never judged), which must begin a wide surface ([`WIDE_RUN`]: a road, a facade, not
-//!   a post) where it first shows ([`SOLID_START`]). Along the bottom, where the ground comes nearer toward the border, the
-//!   factor is [`BOTTOM_ISLAND_RATIO`] and what lies beyond is its continuation (as above)
-//!   at the island. The first island that is not dropped, or a longer run, ends the
-//!   search, and the run ends at it as before.
+//!   never judged), which must begin a wide surface ([`WIDE_RUN`]: a road, a facade, not a
+//!   post) where it first shows ([`SOLID_START`]). Along the bottom, where the ground comes
+//!   nearer toward the border, the factor is [`BOTTOM_ISLAND_RATIO`] and what lies beyond
+//!   is its continuation (as above) at the island. The first island that is not dropped, or
+//!   a longer run, ends the search, and the run ends at it as before.
 //! - *With the image* (not along the bottom, whose factor is small): an island longer than
 //!   its stretch from the border (taken for a piece of a surface reaching the border) is
 //!   judged all the same when the image shows the surface beyond it there (the median
