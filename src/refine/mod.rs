@@ -39,9 +39,14 @@
 //! GPU passes (`Pipeline::refine_range`).
 
 mod beyond;
+mod edges;
 mod step;
 mod upsample;
 
+pub use edges::{
+    median_at_depth_edges, EDGE_COLOUR_EVIDENCE, EDGE_REACH_PX, EDGE_SIGMA_COLOUR, EDGE_STEP,
+    EDGE_WINDOW_PX,
+};
 pub use step::{
     refine_prepared, refine_range, repair, Combine, CpuFilter, RangeFilter, RefineMode,
     RefineOptions, RefinePlan, REPAIR_FILLED_WEIGHT, REPAIR_NEARER,

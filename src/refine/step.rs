@@ -29,11 +29,12 @@ pub enum RefineMode {
     /// it (holes, outliers, left-right mismatches, border bands); elsewhere the range is
     /// kept as measured.
     Unreliable,
-    /// The guided range where the measured range is much nearer than it, half of each
-    /// where pre-processing filled the range, the measured range elsewhere (see
-    /// [`repair`]): a stereo matcher's false matches in the sky and on textureless far
-    /// surfaces are repaired, the depth it got right is kept. The default for Cityscapes
-    /// disparity.
+    /// The measured range with its depth edges moved to the image's (a colour-weighted
+    /// median where a pixel is at a depth edge, which trims a matcher's fattened near
+    /// surfaces), then the guided range where that is much nearer than it, half of each
+    /// where pre-processing filled the range, that range elsewhere (see [`repair`]): a
+    /// stereo matcher's false matches in the sky and on textureless far surfaces are
+    /// repaired, the depth it got right is kept. The default for Cityscapes disparity.
     Repair,
 }
 
@@ -154,6 +155,7 @@ impl RefineOptions {
     pub fn plan(&self, image: (usize, usize), range: (usize, usize)) -> RefinePlan {
         RefinePlan {
             upsample: image != range,
+            edges: self.mode == RefineMode::Repair,
             guided: (self.mode != RefineMode::None).then_some(self.filter),
             combine: match self.mode {
                 RefineMode::Unreliable => Combine::WhereFilled,
@@ -169,6 +171,9 @@ impl RefineOptions {
 pub struct RefinePlan {
     /// The depth map is smaller than the image: joint bilateral upsampling first.
     pub upsample: bool,
+    /// The depth edges are moved to the image's before the guided filter
+    /// ([`super::median_at_depth_edges`], [`RefineMode::Repair`]).
+    pub edges: bool,
     /// The guided filter at the image's size, if on.
     pub guided: Option<Refine>,
     /// How the guided range and the measured one are combined.
@@ -225,6 +230,12 @@ pub trait RangeFilter {
 /// `guided` of a 4000x3000 frame grew its resident memory by 20.0 bytes per pixel from the
 /// start of the refinement to its end (13.9 of address space, which `ulimit -v` counts).
 const CPU_FILTER_BYTES_PER_PIXEL: u64 = 22;
+
+/// The bytes per pixel of the image that moving the depth edges
+/// ([`super::median_at_depth_edges`]) holds besides the filter's: the colour's 8-bit codes
+/// (3), the log range and its neighbourhood's farthest (4 each), the kept-out mask (1),
+/// the result (4).
+const EDGES_BYTES_PER_PIXEL: u64 = 16;
 
 /// [`RangeFilter::bytes_per_pixel`] of the renderer on a software renderer, which keeps its
 /// textures in system memory: a 4000x3000 `brume render --refine repair` on llvmpipe grew
@@ -328,7 +339,8 @@ fn refine_with_masks(
     if plan.is_empty() {
         return Ok(range.clone());
     }
-    let _reserved = check_memory(w, h, filter.bytes_per_pixel(), filter.kept_bytes())?;
+    let per_pixel = filter.bytes_per_pixel() + if plan.edges { EDGES_BYTES_PER_PIXEL } else { 0 };
+    let _reserved = check_memory(w, h, per_pixel, filter.kept_bytes())?;
     // The ego vehicle's range 0 is not a range to filter (the filter reads log range): it
     // is kept out at the nearest range and put back after. A range without any is read as
     // it is, not copied (a copy is 48 MB at 12 MP).
@@ -353,6 +365,17 @@ fn refine_with_masks(
         Cow::Owned(up)
     } else {
         positive
+    };
+    let measured = if plan.edges {
+        let ego = range.map(|&v| v == 0.0);
+        let ego = at_image_size(&ego, w, h);
+        let sky = receding.map(|(_, sky)| at_image_size(sky, w, h));
+        let kept_out = Grid::par_from_fn(w, h, |x, y| {
+            *ego.get(x, y) || sky.as_ref().is_some_and(|s| *s.get(x, y))
+        });
+        Cow::Owned(super::median_at_depth_edges(image, &measured, Some(&kept_out)).0)
+    } else {
+        measured
     };
     let mut out = match &plan.guided {
         None => measured.into_owned(),
