@@ -4,6 +4,7 @@
 //! See the module docs of [`crate::prep`] for the method and its justification.
 
 use super::colour_guide::{split, ColourGuide, Pixel};
+use super::occlusion::Occlusions;
 use crate::rng::SplitMix64;
 use crate::{Error, Result};
 
@@ -74,9 +75,10 @@ pub(crate) struct HoleFiller {
     /// The farthest a plane of the scene may be continued to: the farthest known range
     /// outside the sky.
     far_limit: f64,
-    /// Known pixels that occlude a stereo occlusion (empty: none).
-    occluders: Vec<bool>,
-    /// Whether the hole being filled leaves its edges to `occluders` out.
+    /// The stereo occlusions: their unknown pixels and the known pixels that occlude them
+    /// (empty: none).
+    occlusions: Occlusions,
+    /// Whether the hole being filled leaves its edges to the occluders out.
     skip_occluders: bool,
 }
 
@@ -95,23 +97,48 @@ const MIN_OWN_EDGES_BESIDE_OCCLUDERS: usize = 1;
 impl HoleFiller {
     /// A filler whose planes of the scene go no farther than `far_limit`, the farthest
     /// known range outside the sky (as the border bands' continuation), and that leaves
-    /// the known pixels marked in `occluders` (of the image's size, or empty) out of the
-    /// holes [`HoleFiller::skip_occluders`] names.
-    pub(crate) fn new(far_limit: f64, occluders: Vec<bool>) -> Self {
+    /// the occluders of `occlusions` (of the image's size, or none) out of the holes that
+    /// hold an occlusion ([`HoleFiller::begin_hole`]).
+    pub(crate) fn new(far_limit: f64, occlusions: Occlusions) -> Self {
         HoleFiller {
             edges: Vec::new(),
             scratch: Vec::new(),
             far_limit,
-            occluders,
+            occlusions,
             skip_occluders: false,
         }
     }
 
-    /// Whether the holes filled next hold a stereo occlusion, whose occluders are then not
-    /// boundary values (unless fewer than [`MIN_EDGES_BESIDE_OCCLUDERS`] other edges are
-    /// left to a whole hole).
-    pub(crate) fn skip_occluders(&mut self, skip: bool) {
-        self.skip_occluders = skip && !self.occluders.is_empty();
+    /// Applies `fit`, a fit to a whole hole or a piece of it, to `pixels`, except to a
+    /// pixel of a stereo occlusion while the hole's occluders are skipped: that continues
+    /// the background left of its run, the range of the run's known left end on its row.
+    /// A plane fitted to an occlusion along a pole is fitted to edges on one vertical line
+    /// (the background's, the occluders left out), which leave its slope across the run
+    /// to a few edges elsewhere: on a Cityscapes frame one sloped 0.38 m a pixel, and 13
+    /// rows of the wall beside a pole ramped from the wall's 24 m to the pole's 12.
+    fn apply_beside_occlusions(&self, fit: &Fit, work: &mut [f32], width: usize, pixels: &[u32]) {
+        let occluded = &self.occlusions.occluded;
+        for &p in pixels {
+            let p = p as usize;
+            work[p] = if self.skip_occluders && occluded[p] {
+                let row_start = p - p % width;
+                let left_end = (row_start..p).rev().find(|&q| !occluded[q]);
+                // `occlusion::find` takes a run only with a known pixel left of it.
+                left_end.map_or(f32::NAN, |q| work[q])
+            } else {
+                fit.at((p % width) as f64, (p / width) as f64) as f32
+            };
+        }
+    }
+
+    /// Sets whether the hole of `pixels` filled next holds a stereo occlusion: then its
+    /// occluders are not boundary values (unless fewer than [`MIN_EDGES_BESIDE_OCCLUDERS`]
+    /// other edges are left to a whole hole), and its occluded pixels that no region of
+    /// their own colour fills continue their row's background
+    /// ([`HoleFiller::apply_beside_occlusions`]).
+    pub(crate) fn begin_hole(&mut self, pixels: &[u32]) {
+        let occluded = &self.occlusions.occluded;
+        self.skip_occluders = !occluded.is_empty() && pixels.iter().any(|&p| occluded[p as usize]);
     }
 
     /// Fills the hole made of `pixels` in `work` (known pixels finite, the hole's pixels
@@ -135,7 +162,8 @@ impl HoleFiller {
             MIN_EDGES_BESIDE_OCCLUDERS,
         );
         no_boundary_error(&self.edges, pixels)?;
-        self.fit(trials, rng).apply(work, width, pixels);
+        let fit = self.fit(trials, rng);
+        self.apply_beside_occlusions(&fit, work, width, pixels);
         Ok(())
     }
 
@@ -190,14 +218,14 @@ impl HoleFiller {
             }
         }
         if fits.is_empty() {
-            whole.apply(work, size.0, pixels);
+            self.apply_beside_occlusions(&whole, work, size.0, pixels);
             return Ok(0);
         }
         // Applied once all are fitted: a filled region is not the boundary of the next.
         for (fit, region) in &fits {
             fit.apply(work, size.0, region);
         }
-        whole.apply(work, size.0, &ambiguous);
+        self.apply_beside_occlusions(&whole, work, size.0, &ambiguous);
         // The rest (regions too small to have edges of their own colour: texture), in
         // pieces. A speck amid regions of the background is the background, not the mean
         // of the whole hole; a large piece (a textured surface the matcher missed whole)
@@ -205,7 +233,7 @@ impl HoleFiller {
         let pieces = split(size, &rest, state, |_, _| true);
         for piece in pieces.iter() {
             if piece.len() > MAX_SPECK {
-                whole.apply(work, size.0, piece);
+                self.apply_beside_occlusions(&whole, work, size.0, piece);
             } else {
                 self.fill(work, size.0, size.1, piece, trials, rng)?;
             }
@@ -285,7 +313,7 @@ impl HoleFiller {
                 .flatten()
             {
                 let r = work[q];
-                let occluder = self.skip_occluders && self.occluders[q];
+                let occluder = self.skip_occluders && self.occlusions.occluders[q];
                 if r.is_finite() && !occluder && keep(p, q) {
                     let (qx, qy) = ((q % width) as i32, (q / width) as i32);
                     self.edges.push(Edge { x: qx, y: qy, r });
@@ -515,10 +543,59 @@ mod tests {
         let (w, h) = (5, 5);
         let mut m = vec![3.0f32; w * h];
         m[12] = f32::INFINITY;
-        let mut f = HoleFiller::new(100.0, Vec::new());
+        let mut f = HoleFiller::new(100.0, Occlusions::default());
         f.fill(&mut m, w, h, &[12], 8, &mut SplitMix64::new(1))
             .unwrap();
         assert_eq!(m[12], 3.0);
+    }
+
+    /// Row 0: a wall (20 m, 21 m at its end), a run of 4 unknown pixels taken as a stereo
+    /// occlusion, its occluder (5 m); row 1: unknown pixels of no occlusion.
+    fn wall_pole_and_run() -> (Vec<f32>, Occlusions, Fit) {
+        let n = f32::NAN;
+        let work = vec![
+            20.0, 21.0, n, n, n, n, 5.0, 5.0, //
+            20.0, n, n, n, n, n, 5.0, 5.0,
+        ];
+        let occlusions = Occlusions {
+            occluded: (0..16).map(|p| (2..6).contains(&p)).collect(),
+            occluders: (0..16).map(|p| p == 6 || p == 7).collect(),
+            count: 4,
+        };
+        // A plane sloped across the run, as one fitted to a whole hole along a pole.
+        let sloped = Fit {
+            model: Model::Plane {
+                a: 20.0,
+                b: -3.0,
+                c: 0.0,
+            },
+            origin: (1.0, 0.0),
+            lo: 0.0,
+            hi: 100.0,
+        };
+        (work, occlusions, sloped)
+    }
+
+    #[test]
+    fn an_occlusion_continues_its_rows_background_not_a_plane_across_it() {
+        let (mut work, occlusions, sloped) = wall_pole_and_run();
+        let run = [2u32, 3, 4, 5];
+        let other = [9u32, 10, 11, 12, 13];
+        let mut filler = HoleFiller::new(100.0, occlusions);
+        filler.begin_hole(&run);
+        filler.apply_beside_occlusions(&sloped, &mut work, 8, &[&run[..], &other[..]].concat());
+        assert_eq!(&work[2..6], &[21.0; 4]);
+        for p in other {
+            let expected = sloped.at(f64::from(p % 8), 1.0) as f32;
+            assert_eq!(work[p as usize], expected, "pixel {p}");
+        }
+        // The same pixels in a hole holding no occlusion take the plane.
+        let (mut work, occlusions, sloped) = wall_pole_and_run();
+        let mut filler = HoleFiller::new(100.0, occlusions);
+        filler.begin_hole(&other);
+        filler.apply_beside_occlusions(&sloped, &mut work, 8, &run);
+        assert_eq!(work[2], sloped.at(2.0, 0.0) as f32);
+        assert_eq!(work[5], 8.0);
     }
 
     /// The range of the ground 1.5 m below a level pinhole camera (focal 500 px, principal
@@ -545,7 +622,7 @@ mod tests {
             .map(|p| p as u32)
             .collect();
         hole.iter().for_each(|&p| work[p as usize] = f32::INFINITY);
-        HoleFiller::new(100.0, Vec::new())
+        HoleFiller::new(100.0, Occlusions::default())
             .fill(&mut work, w, h, &hole, 32, &mut SplitMix64::new(5))
             .unwrap();
         let worst = hole.iter().fold(0.0f64, |m, &p| {
@@ -587,7 +664,7 @@ mod tests {
         assert!(ground(20, 4) > 2.0 * farthest_edge);
         for far_limit in [100.0, 40.0] {
             let mut work = start.clone();
-            HoleFiller::new(far_limit, Vec::new())
+            HoleFiller::new(far_limit, Occlusions::default())
                 .fill(&mut work, w, h, &hole, 32, &mut SplitMix64::new(5))
                 .unwrap();
             let want = ground(20, 4).min(far_limit);
@@ -621,7 +698,7 @@ mod tests {
     fn fill_by_colour(image: &RgbImage, work: &mut [f32], hole: &[u32], seed: u64) -> usize {
         let guide = ColourGuide::new(image, 0.08);
         let mut state = vec![Pixel::Other; work.len()];
-        HoleFiller::new(100.0, Vec::new())
+        HoleFiller::new(100.0, Occlusions::default())
             .fill_by_colour(
                 work,
                 (image.width(), image.height()),
@@ -638,7 +715,7 @@ mod tests {
     fn each_colour_continues_its_own_surface() {
         let (image, mut work, hole) = two_faces();
         let mut plain = work.clone();
-        HoleFiller::new(100.0, Vec::new())
+        HoleFiller::new(100.0, Occlusions::default())
             .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
             .unwrap();
         // Without the image the plane through both sides wins: a ramp across the hole.
@@ -672,7 +749,7 @@ mod tests {
             .filter(|p| p % 20 < 5)
             .for_each(|p| work[p] = 100.0);
         let mut plain = work.clone();
-        HoleFiller::new(100.0, Vec::new())
+        HoleFiller::new(100.0, Occlusions::default())
             .fill(&mut plain, 20, 10, &hole, 8, &mut SplitMix64::new(3))
             .unwrap();
         assert_eq!(fill_by_colour(&image, &mut work, &hole, 3), 1);

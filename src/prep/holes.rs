@@ -38,7 +38,7 @@ pub(super) fn fill_holes(
         .unwrap_or_default();
     stats.occluded = occlusions.count;
     let comps = components::label_unknown(work, w, h);
-    let mut filler = fill::HoleFiller::new(f64::from(stats.r_max), occlusions.occluders);
+    let mut filler = fill::HoleFiller::new(f64::from(stats.r_max), occlusions);
     let mut state = vec![colour_guide::Pixel::Other; if guide.is_some() { w * h } else { 0 }];
     for c in &comps.list {
         let pixels = comps.pixels_of(c);
@@ -62,8 +62,7 @@ pub(super) fn fill_holes(
             continue;
         }
         let mut rng = crate::rng::SplitMix64::for_stream(opts.seed, pixels[0] as u64);
-        let occluded = &occlusions.occluded;
-        filler.skip_occluders(!occluded.is_empty() && pixels.iter().any(|&p| occluded[p as usize]));
+        filler.begin_hole(pixels);
         match guide {
             Some(guide) => {
                 stats.colour_regions += filler.fill_by_colour(
