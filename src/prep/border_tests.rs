@@ -391,3 +391,54 @@ fn a_slope_one_line_alone_shows_is_not_followed() {
     let over_road = image(&|y| y < 10, &|y| y < 10);
     assert!((0..h).all(|y| flat(&over_road, y) == (y >= 10)));
 }
+
+/// An image of `rows` (each as [`row`], `w` wide), its left band filled; returns the
+/// range and what was done.
+fn fill_rows(rows: &[String], w: usize) -> (Vec<f32>, BorderFill) {
+    let line: Vec<f32> = rows.iter().flat_map(|r| row(r, w)).collect();
+    fill_line(&line, (w, rows.len()))
+}
+
+/// A far speck under [`ISLAND_RATIO`] times the facade beyond it, on one row of the left
+/// band or on a few, has no counterpart on the rows beside it: the band continues the
+/// facade there as on those rows (Cityscapes' Aachen and Hamburg frames). A strip of
+/// that range on most of the rows round it, or 8 px long, is a surface and is kept, and
+/// so is a nearer speck (a pole's edge).
+#[test]
+fn a_lone_speck_in_a_band_is_dropped_and_a_strip_is_kept() {
+    let w = 60;
+    let band = ".".repeat(14);
+    let speck = format!("{}22{}", ".".repeat(8), ".".repeat(4));
+    let rows = |strip: std::ops::Range<usize>, cells: &str| -> Vec<String> {
+        (0..17)
+            .map(|y| {
+                if strip.contains(&y) {
+                    cells.to_string()
+                } else {
+                    band.clone()
+                }
+            })
+            .collect()
+    };
+    for lone in [8..9, 7..10] {
+        let (work, done) = fill_rows(&rows(lone.clone(), &speck), w);
+        assert_eq!(done.islands, 2 * lone.len(), "{lone:?}: {done:?}");
+        assert!(work.iter().all(|&r| (r - 10.0).abs() < 1e-4), "{lone:?}");
+    }
+    let long = format!("{}22222222{}", ".".repeat(4), ".".repeat(2));
+    let near = format!("{}pp{}", ".".repeat(8), ".".repeat(4));
+    let kept = [
+        (4..14, &speck, 20.0),
+        (8..9, &long, 20.0),
+        (8..9, &near, 3.0),
+    ];
+    for (strip, cells, range) in kept {
+        let (work, done) = fill_rows(&rows(strip.clone(), cells), w);
+        assert_eq!(done.islands, 0, "{strip:?}: {done:?}");
+        for y in strip {
+            assert!(work[y * w..y * w + 8]
+                .iter()
+                .all(|&r| (r - range).abs() < 1e-4));
+        }
+    }
+}
