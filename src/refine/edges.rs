@@ -26,6 +26,7 @@
 //! Measured on StereoSGBM with a known truth (`tools/stereo_refine_eval.py`) and on
 //! Cityscapes frames: see the README's *Fattened edges*.
 
+use crate::error::{Error, Result};
 use crate::io::srgb::linear_to_srgb8_rgb;
 use crate::raster::{Grid, RgbImage, ScalarMap};
 use std::collections::VecDeque;
@@ -65,13 +66,23 @@ const MAX_VOTES: usize = (2 * EDGE_WINDOW_PX / EDGE_WINDOW_STRIDE + 1).pow(2);
 /// of its window's ranges (see the module's doc). Pixels `kept_out` (the sky, the ego
 /// vehicle), and any range not finite or ≤ 0, neither vote nor change. Returns the new
 /// range and how many pixels changed.
+///
+/// Errors: [`Error::SizeMismatch`] when the image or the mask is not the range's size.
 pub fn median_at_depth_edges(
     image: &RgbImage,
     range: &ScalarMap,
     kept_out: Option<&Grid<bool>>,
-) -> (ScalarMap, usize) {
+) -> Result<(ScalarMap, usize)> {
     let (w, h) = (range.width(), range.height());
-    debug_assert_eq!((image.width(), image.height()), (w, h));
+    let sizes = [
+        Some(("the image", image.width(), image.height())),
+        kept_out.map(|m| ("the kept-out mask", m.width(), m.height())),
+    ];
+    for (name, gw, gh) in sizes.into_iter().flatten() {
+        if (gw, gh) != (w, h) {
+            return Err(Error::size_mismatch(name, (gw, gh), "the range", (w, h)));
+        }
+    }
     let is_kept_out = |i: usize| kept_out.is_some_and(|m| m.as_slice()[i]);
     let log_range: Vec<f32> = (range.as_slice().iter().enumerate())
         .map(|(i, &v)| {
@@ -107,7 +118,7 @@ pub fn median_at_depth_edges(
         .zip(range.as_slice())
         .filter(|(a, b)| a != b)
         .count();
-    (out, changed)
+    Ok((out, changed))
 }
 
 /// What a pixel's window votes with.

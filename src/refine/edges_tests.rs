@@ -26,7 +26,7 @@ fn pole(fat: usize, fat_right: usize) -> (RgbImage, ScalarMap) {
 #[test]
 fn a_fattened_pole_keeps_its_range_on_its_colour_alone() {
     let (image, range) = pole(4, 4);
-    let (out, changed) = median_at_depth_edges(&image, &range, None);
+    let (out, changed) = median_at_depth_edges(&image, &range, None).expect("sizes agree");
     for y in 0..24 {
         for x in 0..48 {
             let expected = if (20..30).contains(&x) { 10.0 } else { 30.0 };
@@ -63,7 +63,7 @@ fn a_pole_of_the_walls_colour_is_left_as_measured_where_its_votes_win() {
     // evidence, no move.
     let (_, range) = pole(0, 0);
     let image = Grid::filled(48, 24, grey(LIGHT));
-    let (out, _) = median_at_depth_edges(&image, &range, None);
+    let (out, _) = median_at_depth_edges(&image, &range, None).expect("sizes agree");
     assert_eq!(out.as_slice(), range.as_slice());
 }
 
@@ -82,7 +82,7 @@ fn a_range_without_depth_edges_is_kept_to_the_bit() {
     let range = Grid::from_fn(40, 30, |_, y| {
         5.0 * 1.02f32.powi(y as i32) * (1.0 + 0.03 * (random() - 0.5))
     });
-    let (out, changed) = median_at_depth_edges(&image, &range, None);
+    let (out, changed) = median_at_depth_edges(&image, &range, None).expect("sizes agree");
     assert_eq!(changed, 0);
     assert_eq!(out.as_slice(), range.as_slice());
 }
@@ -105,7 +105,7 @@ fn kept_out_pixels_neither_vote_nor_change() {
             *range.get_mut(x, y) = 0.0;
         }
     }
-    let (out, _) = median_at_depth_edges(&image, &range, Some(&sky));
+    let (out, _) = median_at_depth_edges(&image, &range, Some(&sky)).expect("sizes agree");
     for y in 0..24 {
         for x in 30..48 {
             assert_eq!(out.get(x, y), range.get(x, y), "({x}, {y})");
@@ -115,8 +115,14 @@ fn kept_out_pixels_neither_vote_nor_change() {
             assert_eq!(*out.get(x, y), expected, "({x}, {y})");
         }
     }
+    // A mask or an image of another size is refused, naming it.
+    let small = Grid::filled(47, 24, false);
+    let err = median_at_depth_edges(&image, &range, Some(&small)).unwrap_err();
+    assert!(err.to_string().contains("kept-out mask"), "{err}");
+    let err = median_at_depth_edges(&Grid::filled(48, 23, grey(0.5)), &range, None).unwrap_err();
+    assert!(err.to_string().contains("image"), "{err}");
     // Without the mask the sky outvotes the fattened pixels' 10 m.
-    let (unmasked, _) = median_at_depth_edges(&image, &range, None);
+    let (unmasked, _) = median_at_depth_edges(&image, &range, None).expect("sizes agree");
     assert_eq!(*unmasked.get(31, 5), 3000.0);
 }
 
@@ -219,7 +225,7 @@ fn the_step_is_the_plain_weighted_median_at_depth_edges() {
     let range = Grid::from_fn(w, h, |x, y| {
         [4.0, 9.0, 20.0, 9.0][label(x.saturating_sub(2), y) as usize] * (1.0 + 0.01 * random())
     });
-    let (out, changed) = median_at_depth_edges(&image, &range, None);
+    let (out, changed) = median_at_depth_edges(&image, &range, None).expect("sizes agree");
     let mut compared = 0;
     for y in 0..h {
         for x in 0..w {

@@ -373,7 +373,7 @@ fn refine_with_masks(
         let kept_out = Grid::par_from_fn(w, h, |x, y| {
             *ego.get(x, y) || sky.as_ref().is_some_and(|s| *s.get(x, y))
         });
-        Cow::Owned(super::median_at_depth_edges(image, &measured, Some(&kept_out)).0)
+        Cow::Owned(super::median_at_depth_edges(image, &measured, Some(&kept_out))?.0)
     } else {
         measured
     };
