@@ -1006,6 +1006,9 @@ fn cityscapes_disparity_is_repaired_by_default() {
         // The step's time: 0 where nothing ran (none, at the depth's own size).
         let ms = v["refine_ms"].as_f64().unwrap();
         assert_eq!(ms > 0.0, mode != "none", "{mode}: refine_ms {ms}");
+        // The depth edges are moved by `repair` alone.
+        let edges = v["refine"]["edges"].as_bool().unwrap();
+        assert_eq!(edges, mode == "repair", "{mode}");
         mode
     };
     assert_eq!(mode(&[]), "repair");

@@ -119,6 +119,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
             "mode": refine_mode,
             "depth_size": depth_size,
             "upsampled": refined.upsample,
+            "edges": refined.edges,
             "guided": refined.guided.map(|r| json!({"radius_px": r.radius_px, "epsilon": r.epsilon})),
         });
         json["refine_ms"] = json!(refine_ms);
