@@ -98,19 +98,19 @@ pub fn median_at_depth_edges(
     let colour = linear_to_srgb8_rgb(image.as_slice());
     let step = EDGE_STEP.ln();
     let weights = weight_table();
+    let votes = Votes {
+        range: range.as_slice(),
+        log_range: &log_range,
+        colour: &colour,
+        weights: &weights,
+        size: (w, h),
+    };
     let out = Grid::par_from_fn(w, h, |x, y| {
         let i = y * w + x;
         let l = log_range[i];
         if l.is_nan() || farthest[i] - l < step {
             *range.get(x, y)
         } else {
-            let votes = Votes {
-                range: range.as_slice(),
-                log_range: &log_range,
-                colour: &colour,
-                weights: &weights,
-                size: (w, h),
-            };
             votes.moved(x, y).unwrap_or(*range.get(x, y))
         }
     });
@@ -254,7 +254,7 @@ fn square_max(values: &[f32], (w, h): (usize, usize), r: usize) -> Vec<f32> {
     let mut out = vec![f32::NEG_INFINITY; w * h];
     crate::parallel::run(|| {
         (values.par_chunks_exact(w).zip(rows.par_chunks_exact_mut(w)))
-            .for_each(|(src, dst)| running_max(src.iter().copied(), r, dst.iter_mut()));
+            .for_each(|(src, dst)| running_max(src, r, dst));
         out.par_chunks_exact_mut(w)
             .enumerate()
             .for_each(|(y, dst)| {
@@ -270,19 +270,14 @@ fn square_max(values: &[f32], (w, h): (usize, usize), r: usize) -> Vec<f32> {
     out
 }
 
-/// Writes to `dst` the largest of `src`'s values within `r` of each position (NaN counts
-/// as none, −∞ where there is none), with a deque of the candidates: each value enters and
+/// Writes to `dst` the largest of `values` within `r` of each position (NaN counts as
+/// none, −∞ where there is none), with a deque of the candidates: each value enters and
 /// leaves once.
-fn running_max<'a>(
-    src: impl ExactSizeIterator<Item = f32>,
-    r: usize,
-    dst: impl Iterator<Item = &'a mut f32>,
-) {
-    let values: Vec<f32> = src.collect();
+fn running_max(values: &[f32], r: usize, dst: &mut [f32]) {
     let n = values.len();
     let mut candidates: VecDeque<usize> = VecDeque::new();
     let mut next = 0;
-    for (i, out) in dst.enumerate().take(n) {
+    for (i, out) in dst.iter_mut().enumerate().take(n) {
         while next < n && next <= i + r {
             let v = values[next];
             if !v.is_nan() {
