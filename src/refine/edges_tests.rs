@@ -1,5 +1,6 @@
 use super::*;
 use crate::io::srgb::linear_to_srgb8;
+use crate::rng::SplitMix64;
 
 fn grey(v: f32) -> [f32; 3] {
     [v; 3]
@@ -71,13 +72,8 @@ fn a_pole_of_the_walls_colour_is_left_as_measured_where_its_votes_win() {
 fn a_range_without_depth_edges_is_kept_to_the_bit() {
     // A textured image over a ground receding 2 % a row, with 3 % noise: no pixel has a
     // range 1.4x its own within reach.
-    let mut seed = 7u64;
-    let mut random = move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = SplitMix64::new(7);
+    let mut random = move || rng.unit() as f32;
     let image = Grid::from_fn(40, 30, |_, _| [random(), random(), random()]);
     let range = Grid::from_fn(40, 30, |_, y| {
         5.0 * 1.02f32.powi(y as i32) * (1.0 + 0.03 * (random() - 0.5))
@@ -211,13 +207,8 @@ fn plain(image: &RgbImage, range: &ScalarMap, x: usize, y: usize) -> Option<f64>
 #[test]
 fn the_step_is_the_plain_weighted_median_at_depth_edges() {
     // Blobs of four colours and three ranges, with colour noise, none of them kept out.
-    let mut seed = 11u64;
-    let mut random = move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 40) as f32 / (1u64 << 24) as f32
-    };
+    let mut rng = SplitMix64::new(11);
+    let mut random = move || rng.unit() as f32;
     let (w, h) = (37, 29);
     let label = |x: usize, y: usize| ((x / 7 + y / 5) % 4) as f32;
     let image = Grid::from_fn(w, h, |x, y| grey(0.1 + 0.2 * label(x, y) + 0.05 * random()));
