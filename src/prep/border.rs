@@ -294,8 +294,7 @@ fn drop_lone_specks(
         let (Some((run, _)), Some(anchor)) = (fits[l], anchors[l]) else {
             continue;
         };
-        let near = l.saturating_sub(POOLED_LINES)..(l + POOLED_LINES + 1).min(fits.len());
-        let mut others: Vec<f64> = (near.filter(|&n| n != l))
+        let mut others: Vec<f64> = (pooled_lines(l, fits.len()).filter(|&n| n != l))
             .filter_map(|n| anchors[n].map(f64::from))
             .collect();
         if others.len() < LONE_NEIGHBOURS {
@@ -305,7 +304,7 @@ fn drop_lone_specks(
         if anchor <= MAX_RATIO * median {
             continue;
         }
-        let agrees = |r: f32| r <= SURFACE_RATIO * median && median <= SURFACE_RATIO * r;
+        let agrees = |r: f32| within_factor(r, median, SURFACE_RATIO);
         let Some(start) = (run..=limit).find(|&k| known(work, l, k) && agrees(work[at(l, k)]))
         else {
             continue;
@@ -325,6 +324,16 @@ fn drop_lone_specks(
     dropped
 }
 
+/// The band lines within [`POOLED_LINES`] of line `l` (itself among them), of `lines`.
+fn pooled_lines(l: usize, lines: usize) -> std::ops::Range<usize> {
+    l.saturating_sub(POOLED_LINES)..(l + POOLED_LINES + 1).min(lines)
+}
+
+/// Whether the positive values `a` and `b` are within `factor` of each other, either way.
+fn within_factor(a: f32, b: f32, factor: f32) -> bool {
+    a <= factor * b && b <= factor * a
+}
+
 /// The median slope of the band lines within [`POOLED_LINES`] of line `l` that continue
 /// its surface (their first disparity within [`SURFACE_RATIO`] of its own `fit`'s), each
 /// as its own samples showed it (0 where they did not): a plane's disparity changes along
@@ -335,12 +344,11 @@ fn pooled_slope(fits: &[Option<(usize, LineFit)>], l: usize, fit: LineFit) -> f3
     let LineFit::Disparity { d1, .. } = fit else {
         return 0.0;
     };
-    let near = l.saturating_sub(POOLED_LINES)..(l + POOLED_LINES + 1).min(fits.len());
-    let mut slopes: Vec<f64> = fits[near]
+    let mut slopes: Vec<f64> = fits[pooled_lines(l, fits.len())]
         .iter()
         .filter_map(|f| match *f {
             Some((_, LineFit::Disparity { d1: d, slope, .. }))
-                if d.max(d1) <= SURFACE_RATIO * d.min(d1) =>
+                if within_factor(d, d1, SURFACE_RATIO) =>
             {
                 Some(f64::from(slope))
             }
@@ -425,7 +433,7 @@ fn drop_far_islands(
             LineFit::of(samples, true).range_at((k + end) / 2)
         } else {
             let median = median_of(samples.iter().map(|&(_, r)| r));
-            let agrees = |r: f32| r <= MAX_RATIO * median && median <= MAX_RATIO * r;
+            let agrees = |r: f32| within_factor(r, median, MAX_RATIO);
             let agreeing = || samples.iter().filter(|&&(_, r)| agrees(r)).map(|s| s.0);
             let solid = |j: usize| (j..j + SOLID_START).all(|i| i < len && known(work, i));
             let start = agreeing()
@@ -553,7 +561,7 @@ impl LineFit {
         };
         let (k1, d1) = stats(&samples[..half]);
         let (k2, d2) = stats(&samples[half..]);
-        let mut slope = if d1.max(d2) <= MAX_RATIO * d1.min(d2) && k2 > k1 {
+        let mut slope = if within_factor(d1, d2, MAX_RATIO) && k2 > k1 {
             (d2 - d1) / (k2 - k1)
         } else {
             0.0

@@ -345,6 +345,8 @@ fn refine_with_masks(
     // is kept out at the nearest range and put back after. A range without any is read as
     // it is, not copied (a copy is 48 MB at 12 MP).
     let has_ego = range.as_slice().contains(&0.0);
+    let ego_on_range_grid = has_ego.then(|| range.map(|&v| v == 0.0));
+    let ego = (ego_on_range_grid.as_ref()).map(|e| at_image_size(e, w, h));
     let positive = if has_ego {
         let nearest = range
             .as_slice()
@@ -367,13 +369,11 @@ fn refine_with_masks(
         positive
     };
     let measured = if plan.edges {
-        let ego = range.map(|&v| v == 0.0);
-        let ego = at_image_size(&ego, w, h);
         let sky = receding.map(|(_, sky)| at_image_size(sky, w, h));
-        let kept_out = Grid::par_from_fn(w, h, |x, y| {
-            *ego.get(x, y) || sky.as_ref().is_some_and(|s| *s.get(x, y))
-        });
-        Cow::Owned(super::median_at_depth_edges(image, &measured, Some(&kept_out))?.0)
+        let is = |mask: &Option<Cow<Grid<bool>>>, x, y| mask.as_ref().is_some_and(|m| *m.get(x, y));
+        let kept_out = (ego.is_some() || sky.is_some())
+            .then(|| Grid::par_from_fn(w, h, |x, y| is(&ego, x, y) || is(&sky, x, y)));
+        Cow::Owned(super::median_at_depth_edges(image, &measured, kept_out.as_ref())?.0)
     } else {
         measured
     };
@@ -395,9 +395,7 @@ fn refine_with_masks(
             }
         }
     };
-    if has_ego {
-        let ego = range.map(|&v| v == 0.0);
-        let ego = at_image_size(&ego, w, h);
+    if let Some(ego) = &ego {
         for (v, _) in out
             .as_mut_slice()
             .iter_mut()
