@@ -53,3 +53,11 @@ pub use pipeline::{Encoding, FogBlur, Frame, GaussBlur, Input, Output, Pipeline}
 pub use refine::Refine;
 pub use renderer::{Headless, Rendered, Renderer};
 pub use schedule::Scheme;
+
+/// A fingerprint of the sources this build was compiled from (`src/` and `glsl/`, 16 hex
+/// digits): two builds of one [`VERSION`] whose outputs may differ (a clone's commits
+/// between releases) have different fingerprints. A batch's settings record keeps it.
+pub const SOURCES: &str = env!("BRUME_SOURCES");
+
+/// brume's version, as its `Cargo.toml` gives it.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");

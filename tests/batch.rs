@@ -127,6 +127,11 @@ fn a_run_writes_every_frame_and_beta_and_the_next_run_resumes() {
     assert_eq!(records.len(), 4);
     for r in &records {
         assert_eq!(r["status"], "ok");
+        // Which build made each output, should a dataset ever mix two.
+        assert_eq!(
+            (&r["brume"], &r["sources"]),
+            (&brume::VERSION.into(), &brume::SOURCES.into())
+        );
         assert!(
             r["gpu_ms"].as_f64().unwrap() > 0.0 && r["decode_ms"].as_f64().is_some(),
             "{r}"
@@ -180,6 +185,7 @@ fn a_run_with_other_settings_is_refused_and_changes_nothing() {
     assert!(first.status.success(), "{}", stderr(&first));
     let recorded = record();
     assert_eq!(recorded["brume"], env!("CARGO_PKG_VERSION"));
+    assert_eq!(recorded["sources"], brume::SOURCES);
     assert_eq!(recorded["settings"]["frame"]["fog"]["lambda"], 2.0);
     let written = common::snapshot(&out);
 
@@ -205,8 +211,24 @@ fn a_run_with_other_settings_is_refused_and_changes_nothing() {
         "{summary}"
     );
 
+    // The same settings recorded by another build of this version: resumed, with a warning
+    // that names both builds.
+    let mut older = record();
+    older["sources"] = "0123456789abcdef".into();
+    let settings_file = out.join("brume-batch-settings.json");
+    std::fs::write(&settings_file, older.to_string()).unwrap();
+    let resumed = run(&["--beta", "0.01,0.02", "--lambda", "2"]);
+    assert!(resumed.status.success(), "{}", stderr(&resumed));
+    let warning = stderr(&resumed);
+    assert!(
+        warning.contains("another build of brume")
+            && warning.contains("0123456789abcdef")
+            && warning.contains(brume::SOURCES),
+        "{warning}"
+    );
+
     // The record removed (the user's choice): other settings are taken, and recorded.
-    std::fs::remove_file(out.join("brume-batch-settings.json")).unwrap();
+    std::fs::remove_file(&settings_file).unwrap();
     let anyway = run(&["--beta", "0.03", "--lambda", "4"]);
     assert!(anyway.status.success(), "{}", stderr(&anyway));
     assert_eq!(record()["settings"]["frame"]["fog"]["lambda"], 4.0);

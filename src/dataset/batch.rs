@@ -744,6 +744,8 @@ fn encode(
         "camera": item.camera.as_ref().map(|p| p.display().to_string()),
         "sky_mask": item.sky_mask.as_ref().map(|p| p.display().to_string()),
         "output": path.display().to_string(),
+        "brume": crate::VERSION,
+        "sources": crate::SOURCES,
         "beta": beta,
         "beta_dist": beta_dist,
         "visibility_m": -(0.05f64.ln()) / beta,

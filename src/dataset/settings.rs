@@ -10,7 +10,8 @@ use serde_json::{json, Value};
 use std::path::Path;
 
 /// The file in a batch's output folder that records its settings: `{"brume": version,
-/// "settings": {...}}`, the settings as [`settings_of`] gives them.
+/// "sources": fingerprint, "settings": {...}}` ([`crate::VERSION`], [`crate::SOURCES`]),
+/// the settings as [`settings_of`] gives them.
 pub const SETTINGS_FILE: &str = "brume-batch-settings.json";
 
 /// The most differences an error lists.
@@ -65,8 +66,8 @@ fn to_value(value: &impl serde::Serialize) -> Value {
 }
 
 /// Refuses `out` when its [`SETTINGS_FILE`] records other settings than `settings`, naming
-/// those that differ; warns when they were recorded by another version of brume. A
-/// folder without the file (new, or filled by a brume before it) passes.
+/// those that differ; warns when they were recorded by another version or build of brume.
+/// A folder without the file (new, or filled by a brume before it) passes.
 pub(super) fn check_settings(out: &Path, settings: &Value) -> Result<()> {
     let path = out.join(SETTINGS_FILE);
     let text = match std::fs::read_to_string(&path) {
@@ -97,13 +98,11 @@ pub(super) fn check_settings(out: &Path, settings: &Value) -> Result<()> {
         &mut differences,
     );
     if differences.is_empty() {
-        let version = recorded["brume"].as_str().unwrap_or("unknown");
-        if version != env!("CARGO_PKG_VERSION") {
+        if let Some(other) = other_build(&recorded) {
             log::warn!(
-                "{}'s outputs were made by brume {version} (this is {}) with these settings: \
-                 where brume changed since, its new outputs may differ from the old",
+                "{}'s outputs were made by {other} with these settings: where brume changed \
+                 since, its new outputs may differ from the old",
                 out.display(),
-                env!("CARGO_PKG_VERSION")
             );
         }
         return Ok(());
@@ -127,6 +126,25 @@ pub(super) fn check_settings(out: &Path, settings: &Value) -> Result<()> {
     ))
 }
 
+/// The build of brume that made `recorded`, as a warning names it with this one, when it
+/// is not this one: another version, or the same version from other sources (a record
+/// without a fingerprint was made before brume kept one, by an older build).
+fn other_build(recorded: &Value) -> Option<String> {
+    let version = recorded["brume"].as_str().unwrap_or("unknown");
+    let sources = recorded["sources"].as_str();
+    if version != crate::VERSION {
+        Some(format!("brume {version} (this is {})", crate::VERSION))
+    } else if sources != Some(crate::SOURCES) {
+        Some(format!(
+            "another build of brume {version} (sources {}; this is {})",
+            sources.unwrap_or("not recorded"),
+            crate::SOURCES
+        ))
+    } else {
+        None
+    }
+}
+
 /// Records `settings` in `out`'s [`SETTINGS_FILE`] if it has none, atomically; where
 /// another run (a shard started at the same time) recorded its own first, checks them as
 /// [`check_settings`] does.
@@ -135,7 +153,11 @@ pub(super) fn record_settings(out: &Path, settings: &Value) -> Result<()> {
     if path.exists() {
         return check_settings(out, settings);
     }
-    let record = json!({ "brume": env!("CARGO_PKG_VERSION"), "settings": settings });
+    let record = json!({
+        "brume": crate::VERSION,
+        "sources": crate::SOURCES,
+        "settings": settings
+    });
     let mut text = serde_json::to_string_pretty(&record).expect("JSON values serialise");
     text.push('\n');
     if output::write_bytes_unless_present(&path, text.as_bytes())? {
@@ -291,6 +313,29 @@ mod tests {
                 .to_string();
             assert!(e.contains(SETTINGS_FILE) && e.contains("remove it"), "{e}");
         }
+    }
+
+    /// Outputs made by another build of this version (a clone's earlier commit) are told
+    /// apart by their sources' fingerprint.
+    #[test]
+    fn another_build_of_this_version_is_named() {
+        let record = |version: &str, sources: Option<&str>| json!({ "brume": version, "sources": sources, "settings": {} });
+        assert_eq!(
+            other_build(&record(crate::VERSION, Some(crate::SOURCES))),
+            None
+        );
+        let other = other_build(&record(crate::VERSION, Some("0123456789abcdef"))).unwrap();
+        assert!(
+            other.contains("another build") && other.contains("0123456789abcdef"),
+            "{other}"
+        );
+        assert!(other.contains(crate::SOURCES), "{other}");
+        let unrecorded = other_build(&record(crate::VERSION, None)).unwrap();
+        assert!(unrecorded.contains("not recorded"), "{unrecorded}");
+        let older = other_build(&record("0.0.1", Some(crate::SOURCES))).unwrap();
+        assert!(older.contains("brume 0.0.1 (this is"), "{older}");
+        assert_eq!(crate::SOURCES.len(), 16);
+        assert!(crate::SOURCES.bytes().all(|b| b.is_ascii_hexdigit()));
     }
 
     /// A record by a brume that lacked an option counts it as its default; an option

@@ -37,7 +37,11 @@ pub use view::{ViewArgs, ViewSource, Zoom};
 ///
 /// Quick start: `brume render` renders the built-in demo scene to brume-demo.png.
 #[derive(Parser, Debug)]
-#[command(name = "brume", version, propagate_version = true)]
+#[command(
+    name = "brume",
+    version = concat!(env!("CARGO_PKG_VERSION"), " (sources ", env!("BRUME_SOURCES"), ")"),
+    propagate_version = true
+)]
 pub struct Cli {
     /// EGL display to open: surfaceless (Mesa, no window system), device (EGL device,
     /// the headless route on NVIDIA) or default (eglGetDisplay). Default: the first of
