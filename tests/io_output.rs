@@ -208,6 +208,114 @@ fn a_read_only_file_is_not_replaced() {
     write_rgba(&kept, &sample()).unwrap();
 }
 
+/// A link named as the output is kept and its file replaced, through a chain of
+/// relative and absolute links, into another folder, and where it leads to no file
+/// yet; a link to an existing file counts as present for `write_bytes_unless_present`.
+#[test]
+fn an_output_through_a_link_replaces_its_file_and_keeps_the_link() {
+    use std::os::unix::fs::symlink;
+    let dir = tempfile::tempdir().unwrap();
+    let (d, other) = (dir.path(), dir.path().join("other"));
+    std::fs::create_dir(&other).unwrap();
+    std::fs::write(other.join("file.png"), b"old").unwrap();
+    symlink("other/file.png", d.join("near.png")).unwrap();
+    symlink(d.join("near.png"), d.join("out.png")).unwrap();
+    write_bytes(&d.join("out.png"), b"new").unwrap();
+    assert_eq!(std::fs::read(other.join("file.png")).unwrap(), b"new");
+    for link in ["out.png", "near.png"] {
+        let meta = std::fs::symlink_metadata(d.join(link)).unwrap();
+        assert!(meta.file_type().is_symlink(), "{link} was replaced");
+    }
+    assert!(!brume::io::output::write_bytes_unless_present(&d.join("out.png"), b"newer").unwrap());
+    assert_eq!(std::fs::read(other.join("file.png")).unwrap(), b"new");
+
+    symlink("other/later.png", d.join("dangling.png")).unwrap();
+    write_bytes(&d.join("dangling.png"), b"made").unwrap();
+    assert_eq!(std::fs::read(other.join("later.png")).unwrap(), b"made");
+    assert!(std::fs::symlink_metadata(d.join("dangling.png"))
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(
+        entries(&other),
+        ["file.png", "later.png"],
+        "a temporary left"
+    );
+}
+
+/// A named pipe is written into (a reader gets the whole output) and stays a pipe; a
+/// link to a device (`/dev/null`) leaves the device as it is; no temporary is left.
+#[test]
+fn a_named_pipe_or_a_device_is_written_into_not_replaced() {
+    use std::io::Read;
+    use std::os::unix::fs::FileTypeExt;
+    let dir = tempfile::tempdir().unwrap();
+    let pipe = dir.path().join("pipe.png");
+    let c_path = std::ffi::CString::new(pipe.as_os_str().as_encoded_bytes()).unwrap();
+    // SAFETY: a valid NUL-terminated path; mkfifo reads nothing else.
+    assert_eq!(unsafe { libc::mkfifo(c_path.as_ptr(), 0o600) }, 0);
+    let reader = {
+        let pipe = pipe.clone();
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            std::fs::File::open(pipe)
+                .unwrap()
+                .read_to_end(&mut bytes)
+                .unwrap();
+            bytes
+        })
+    };
+    let output = vec![7u8; 200_000];
+    write_bytes(&pipe, &output).unwrap();
+    // Before the join: a reader of a replaced pipe would wait for a writer forever.
+    let kind = std::fs::symlink_metadata(&pipe).unwrap().file_type();
+    assert!(kind.is_fifo(), "the pipe was replaced");
+    assert_eq!(reader.join().unwrap(), output);
+
+    let mut names = vec!["pipe.png"];
+    let null = Path::new("/dev/null");
+    if std::fs::metadata(null).is_ok_and(|m| m.file_type().is_char_device()) {
+        std::os::unix::fs::symlink(null, dir.path().join("null.png")).unwrap();
+        write_bytes(&dir.path().join("null.png"), b"gone").unwrap();
+        let kind = std::fs::metadata(null).unwrap().file_type();
+        assert!(kind.is_char_device(), "/dev/null was replaced");
+        names.insert(0, "null.png");
+    }
+    assert_eq!(entries(dir.path()), names, "a temporary left");
+}
+
+// `render --out` through a symbolic link used to replace the link with a file and leave
+// the file it named as it was.
+#[test]
+fn render_through_a_link_writes_the_file_it_leads_to() {
+    let dir = tempfile::tempdir().unwrap();
+    ::image::RgbImage::from_pixel(8, 6, ::image::Rgb([90, 120, 150]))
+        .save(dir.path().join("im.png"))
+        .unwrap();
+    ::image::GrayImage::from_pixel(8, 6, ::image::Luma([100]))
+        .save(dir.path().join("d.png"))
+        .unwrap();
+    std::fs::create_dir(dir.path().join("results")).unwrap();
+    std::fs::write(dir.path().join("results/fog.png"), b"last run's").unwrap();
+    std::os::unix::fs::symlink("results/fog.png", dir.path().join("latest.png")).unwrap();
+    let args = [
+        "render",
+        "--image",
+        "im.png",
+        "--depth",
+        "d.png",
+        "--out",
+        "latest.png",
+    ];
+    let run = crate::common::brume(dir.path(), &args);
+    assert!(run.status.success(), "{}", crate::common::stderr(&run));
+    let link = std::fs::symlink_metadata(dir.path().join("latest.png")).unwrap();
+    assert!(link.file_type().is_symlink(), "the link was replaced");
+    let written = ::image::open(dir.path().join("results/fog.png")).unwrap();
+    assert_eq!((written.width(), written.height()), (8, 6));
+    assert_eq!(entries(&dir.path().join("results")), ["fog.png"]);
+}
+
 #[test]
 fn failing_write_leaves_nothing_and_keeps_the_old_file() {
     let dir = tempfile::tempdir().unwrap();

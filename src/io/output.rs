@@ -7,6 +7,10 @@
 //! temporaries are known to `exit_removing_temporaries` (the `cli` feature), which a
 //! program's signal handler calls so that an interrupt leaves no `.brume-*.tmp` behind.
 //!
+//! An output named by a symbolic link replaces the file the link leads to, and the link is
+//! kept (a rename onto the link would replace the link itself and leave its file as it
+//! was); one that is a named pipe or a device is written into, not replaced.
+//!
 //! This module owns the path checks, that atomic write and the choice of format by
 //! extension; the bytes of each format come from its codec in `io::codec`, next to the
 //! reader of the same format.
@@ -63,7 +67,8 @@ pub fn check_output(path: &Path, option: &str, extensions: &[&str]) -> Result<()
 /// directory (a rename onto one fails only after all the work is done), and it is not a
 /// read-only file.
 pub fn check_destination(path: &Path, option: &str) -> Result<()> {
-    if path.is_dir() {
+    let dest = followed_links(path);
+    if dest.is_dir() {
         return Err(Error::invalid(
             option,
             path.display(),
@@ -71,7 +76,7 @@ pub fn check_destination(path: &Path, option: &str) -> Result<()> {
         ));
     }
     refuse_read_only(path, option)?;
-    match missing_folder(path) {
+    match missing_folder(&dest) {
         Some(dir) => Err(Error::invalid(
             option,
             path.display(),
@@ -260,10 +265,13 @@ pub struct Outputs {
     staged: Vec<Staged>,
 }
 
-/// A complete temporary file (`None` once renamed) and where it goes.
+/// A complete temporary file (`None` once renamed) and where it goes: the file a link
+/// named leads to, renamed onto, or a named pipe or a device, written into
+/// (`streamed`).
 struct Staged {
     tmp: Option<tempfile::NamedTempFile>,
     dest: PathBuf,
+    streamed: bool,
 }
 
 impl Outputs {
@@ -357,9 +365,11 @@ impl Outputs {
         self.stage_with(path, |out| png::write_rgb8(out, &bytes, w, h, None, None))
     }
 
-    /// Runs `write` on a buffered temporary file next to `path` and keeps it for
-    /// [`Outputs::commit`]. A path already staged in this set, or one that is a directory,
-    /// is refused: two outputs of one command never land on one file.
+    /// Runs `write` on a buffered temporary file next to `path` (next to the file it
+    /// leads to, if it is a symbolic link; in the system's temporary folder, if it is a
+    /// named pipe or a device) and keeps it for [`Outputs::commit`]. A path already
+    /// staged in this set, or one that is a directory, is refused: two outputs of one
+    /// command never land on one file.
     pub fn stage_with(
         &mut self,
         path: &Path,
@@ -372,19 +382,26 @@ impl Outputs {
                 format!("a file other than the output {}", earlier.display()),
             ));
         }
-        if path.is_dir() {
+        let dest = followed_links(path);
+        if dest.is_dir() {
             return Err(Error::io(
                 path,
                 std::io::Error::other("is a directory, not a file to write"),
             ));
         }
         refuse_read_only(path, "output")?;
-        refuse_missing_folder(path)?;
-        let tmp = create_temporary(path)?;
+        refuse_missing_folder(&dest)?;
+        let streamed = is_pipe_or_device(&dest);
+        let tmp = if streamed {
+            create_temporary(&std::env::temp_dir(), path)?
+        } else {
+            create_temporary(folder_of(&dest), path)?
+        };
         // Pushed before writing so that an error below drops (removes) it with the set.
         self.staged.push(Staged {
             tmp: Some(tmp),
-            dest: path.to_path_buf(),
+            dest,
+            streamed,
         });
         let staged = self.staged.last().expect("just pushed");
         let tmp = staged.tmp.as_ref().expect("not yet renamed");
@@ -396,7 +413,9 @@ impl Outputs {
         tmp.as_file().sync_all().map_err(|e| Error::io(path, e))
     }
 
-    /// Renames every staged file onto its destination. The renames run while the
+    /// Renames every staged file onto its destination (writes it into a named pipe or a
+    /// device, which opening may wait for: a pipe, until a reader opens it). The renames
+    /// run while the
     /// temporary registry is locked, so a signal handler using
     /// `exit_removing_temporaries` sees either all of them done or none. After the
     /// checks of staging, a rename fails only if the directory changed meanwhile; the
@@ -413,19 +432,22 @@ impl Outputs {
         for staged in &mut self.staged {
             let tmp = staged.tmp.take().expect("each file is renamed once");
             live.retain(|p| p != tmp.path());
-            let renamed = if keep_existing {
-                tmp.persist_noclobber(&staged.dest)
-            } else {
-                tmp.persist(&staged.dest)
+            // Dropping the temporary (`e.file` of a failed rename) removes it.
+            let placed = match (staged.streamed, keep_existing) {
+                (true, true) => Err(std::io::ErrorKind::AlreadyExists.into()),
+                (true, false) => copy_into(&tmp, &staged.dest),
+                (false, true) => {
+                    (tmp.persist_noclobber(&staged.dest).map(drop)).map_err(|e| e.error)
+                }
+                (false, false) => tmp.persist(&staged.dest).map(drop).map_err(|e| e.error),
             };
-            // Dropping e.file removes the temporary.
-            match renamed {
-                Ok(_) => {}
-                Err(e) if keep_existing && e.error.kind() == std::io::ErrorKind::AlreadyExists => {
+            match placed {
+                Ok(()) => {}
+                Err(e) if keep_existing && e.kind() == std::io::ErrorKind::AlreadyExists => {
                     result = Ok(false);
                 }
                 Err(e) => {
-                    result = Err(Error::io(&staged.dest, e.error));
+                    result = Err(Error::io(&staged.dest, e));
                     break;
                 }
             }
@@ -461,13 +483,49 @@ fn live_temporaries() -> MutexGuard<'static, Vec<PathBuf>> {
     LIVE_TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Creates an empty temporary next to `path` and registers it, under the registry lock
-/// so that a signal handler never misses a file that exists.
-fn create_temporary(path: &Path) -> Result<tempfile::NamedTempFile> {
-    let dir = match path.parent() {
+/// How many symbolic links [`followed_links`] follows, as Linux's `MAXSYMLINKS`.
+const MAX_LINKS: usize = 40;
+
+/// Where writing to `path` lands: the end of the chain of symbolic links at `path` (which
+/// need not exist: a shell's `>` creates it), else `path` itself. Links of its folders
+/// need no following: a rename within a folder goes through them.
+fn followed_links(path: &Path) -> PathBuf {
+    let mut at = path.to_path_buf();
+    for _ in 0..MAX_LINKS {
+        let is_link = std::fs::symlink_metadata(&at).is_ok_and(|m| m.file_type().is_symlink());
+        match std::fs::read_link(&at) {
+            // An absolute target replaces the folder in `join`.
+            Ok(target) if is_link => at = folder_of(&at).join(target),
+            _ => break,
+        }
+    }
+    at
+}
+
+/// A named pipe, a device or a socket: not a file a rename may replace.
+fn is_pipe_or_device(path: &Path) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| !m.is_file() && !m.is_dir())
+}
+
+/// The folder `path` is in (`.` for a bare name).
+fn folder_of(path: &Path) -> &Path {
+    match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
-    };
+    }
+}
+
+/// Writes the complete temporary `tmp` into the named pipe or device `dest`.
+fn copy_into(tmp: &tempfile::NamedTempFile, dest: &Path) -> std::io::Result<()> {
+    let mut bytes = tmp.reopen()?;
+    let mut out = std::fs::OpenOptions::new().write(true).open(dest)?;
+    std::io::copy(&mut bytes, &mut out)?;
+    out.flush()
+}
+
+/// Creates an empty temporary in `dir` for the output `path` and registers it, under the
+/// registry lock so that a signal handler never misses a file that exists.
+fn create_temporary(dir: &Path, path: &Path) -> Result<tempfile::NamedTempFile> {
     let prefix = temporary_prefix();
     let mut builder = tempfile::Builder::new();
     builder.prefix(&prefix).suffix(TEMPORARY_SUFFIX);
