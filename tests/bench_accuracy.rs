@@ -80,6 +80,10 @@ fn json_and_csv_parse() {
     let json: serde_json::Value =
         serde_json::from_str(&report::accuracy_json(&report).unwrap()).expect("valid JSON");
     assert_eq!(json["benchmark"], "accuracy");
+    assert_eq!(
+        (&json["brume"], &json["sources"]),
+        (&brume::VERSION.into(), &brume::SOURCES.into())
+    );
     assert_eq!(json["width"], 64);
     assert!(json["renderer"].as_str().is_some_and(|s| !s.is_empty()));
     let rows = json["rows"].as_array().unwrap();

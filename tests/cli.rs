@@ -221,6 +221,7 @@ fn a_uniform_blur_works_on_a_cityscapes_disparity_and_ignores_it() {
     };
     let prepared = render("prepared.pfm", &[]);
     assert_eq!(prepared["medium"], "uniform_blur", "{prepared}");
+    assert_eq!(prepared["sources"], brume::SOURCES, "{prepared}");
     assert_eq!(prepared["airlight_source"], "none", "{prepared}");
     assert_eq!(prepared["airlight"], serde_json::json!([0.0, 0.0, 0.0]));
     assert!(prepared["transmittance_min"].is_null() && prepared["prep"].is_object());
@@ -283,6 +284,17 @@ fn info_reports_the_driver() {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!(v["renderer"].as_str().is_some_and(|s| !s.is_empty()));
     assert!(v["max_texture_size"].as_u64().unwrap() >= 2048);
+    assert_eq!(
+        (&v["brume"], &v["sources"]),
+        (&brume::VERSION.into(), &brume::SOURCES.into())
+    );
+    let text = brume(dir.path(), &["info"]);
+    let first = String::from_utf8_lossy(&text.stdout)
+        .lines()
+        .next()
+        .map(str::to_owned);
+    let build = format!("brume {} (sources {})", brume::VERSION, brume::SOURCES);
+    assert_eq!(first.as_deref(), Some(build.as_str()));
     for key in [
         "color_buffer_float",
         "color_buffer_half_float",

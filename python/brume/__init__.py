@@ -34,6 +34,7 @@ from ._brume import (
     Camera,
     MatrixCamera,
     Renderer,
+    __sources__,
     __version__,
     aerial,
     beta_quantile,
@@ -64,4 +65,5 @@ __all__ = [
     "MatrixCamera",
     "augment",
     "__version__",
+    "__sources__",
 ]

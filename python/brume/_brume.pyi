@@ -10,6 +10,8 @@ Array = NDArray[Any]
 PathArg = Union[str, bytes, "PathLike[str]", "PathLike[bytes]"]
 
 __version__: str
+# The fingerprint of the sources this build was compiled from (brume --version shows it).
+__sources__: str
 
 class Camera:
     """brume's perspective camera of a rendered frame (`brume scene`'s)."""

@@ -59,6 +59,13 @@ def range_m():
     return (5.0 + 115.0 * x / (W - 1) + 0.5 * y).astype(np.float32)
 
 
+def test_the_build_is_named():
+    """__sources__ tells two builds of one __version__ apart: 16 hex digits."""
+    assert isinstance(brume.__version__, str) and brume.__version__
+    assert len(brume.__sources__) == 16
+    int(brume.__sources__, 16)
+
+
 def test_shapes_and_dtypes(image_u8, range_m):
     out = brume.fog(image_u8, range_m, beta=0.02)
     assert out.shape == image_u8.shape and out.dtype == np.uint8
@@ -1116,7 +1123,7 @@ def test_type_stubs_match_the_module():
                 for p in inspect.signature(obj).parameters.values() if p.name != "self"]
 
     def public(names):
-        return {n for n in names if not n.startswith("_") or n == "__version__"}
+        return {n for n in names if not n.startswith("_") or n in ("__version__", "__sources__")}
 
     stubbed = set()
     for node in stub.body:
@@ -1141,8 +1148,8 @@ def test_type_stubs_match_the_module():
                     assert stub_params(item, True) == runtime_params(getattr(cls, item.name)), (
                         f"{node.name}.{item.name}")
             assert members == public(dir(cls)), node.name
-        elif isinstance(node, ast.AnnAssign) and node.target.id == "__version__":
-            stubbed.add("__version__")
+        elif isinstance(node, ast.AnnAssign) and node.target.id in ("__version__", "__sources__"):
+            stubbed.add(node.target.id)
     assert stubbed == public(dir(native)) - {"Array", "PathArg"}
 
 

@@ -177,11 +177,14 @@ fn csv_text(t: &str) -> String {
     }
 }
 
-/// A report wrapped with the benchmark's name, so that a JSON reader can tell them apart:
-/// `{"benchmark": "accuracy", "renderer": …, "rows": […]}`.
+/// A report wrapped with the benchmark's name, so that a JSON reader can tell them apart,
+/// and the build of brume that measured it ([`crate::VERSION`], [`crate::SOURCES`]):
+/// `{"benchmark": "accuracy", "brume": …, "sources": …, "renderer": …, "rows": […]}`.
 #[derive(Serialize)]
 struct Tagged<'a, T: Serialize> {
     benchmark: &'static str,
+    brume: &'static str,
+    sources: &'static str,
     #[serde(flatten)]
     report: &'a T,
 }
@@ -197,7 +200,13 @@ pub fn speed_json(report: &SpeedReport) -> Result<String> {
 }
 
 fn to_json<T: Serialize>(benchmark: &'static str, report: &T) -> Result<String> {
-    serde_json::to_string_pretty(&Tagged { benchmark, report }).map_err(|e| {
+    serde_json::to_string_pretty(&Tagged {
+        benchmark,
+        brume: crate::VERSION,
+        sources: crate::SOURCES,
+        report,
+    })
+    .map_err(|e| {
         Error::invalid(
             "report",
             "(not serialisable)",

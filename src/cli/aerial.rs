@@ -232,7 +232,7 @@ pub fn run_aerial(
     if args.json {
         outln!(
             "{}",
-            json!({
+            super::stamped(json!({
                 "width": image.width(),
                 "height": image.height(),
                 "medium": "aerial",
@@ -260,7 +260,7 @@ pub fn run_aerial(
                 "out": out.display().to_string(),
                 "insert": super::capture::insert_json(args, extras.inserted),
                 "capture": extras.capture.to_json(),
-            })
+            }))
         );
     } else {
         outln!(

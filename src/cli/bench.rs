@@ -504,13 +504,14 @@ fn print_report(json: bool, table: &str, report: &impl serde::Serialize) -> Resu
         out!("{table}");
         return Ok(());
     }
-    let text = serde_json::to_string_pretty(report).map_err(|e| {
+    let report = serde_json::to_value(report).map_err(|e| {
         Error::invalid(
             "report",
             "(not serialisable)",
             format!("serialisable data: {e}"),
         )
     })?;
+    let text = serde_json::to_string_pretty(&super::stamped(report)).expect("values serialise");
     err!("{table}");
     outln!("{text}");
     Ok(())

@@ -12,7 +12,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     if args.json {
         outln!(
             "{}",
-            json!({
+            super::stamped(json!({
                 "a": a_name,
                 "b": b_name,
                 "width": width,
@@ -21,7 +21,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
                 "ssim_rgb": s.ssim_rgb,
                 "hsv_correlation": s.hsv_correlation,
                 "hsv_correlation_hsv": s.hsv_correlation_hsv,
-            })
+            }))
         );
     } else {
         outln!(

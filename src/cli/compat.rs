@@ -49,7 +49,7 @@ pub fn run_foggy_cityscapes(
         "height": scene.image.height(),
     });
     if args.json {
-        outln!("{report}");
+        outln!("{}", super::stamped(report));
     } else {
         outln!(
             "wrote {} (Foggy Cityscapes' conventions: β = {} m⁻¹, blend in sRGB code values, \

@@ -9,9 +9,10 @@ pub fn run(args: &InfoArgs, egl: Option<Platform>) -> Result<()> {
     let renderer = super::open_renderer(egl)?;
     let caps = renderer.caps();
     if args.json {
+        let caps = serde_json::to_value(caps).expect("capabilities serialise");
         outln!(
             "{}",
-            serde_json::to_string_pretty(caps).expect("capabilities serialise")
+            serde_json::to_string_pretty(&super::stamped(caps)).expect("JSON values serialise")
         );
     } else {
         print_text(caps);
@@ -21,6 +22,7 @@ pub fn run(args: &InfoArgs, egl: Option<Platform>) -> Result<()> {
 
 fn print_text(c: &Capabilities) {
     let yes = |b: bool| if b { "yes" } else { "no" };
+    outln!("brume {} (sources {})", brume::VERSION, brume::SOURCES);
     if let Some(egl) = &c.egl {
         outln!("EGL platform       {}", egl.platform);
         outln!("EGL vendor         {} (EGL {})", egl.vendor, egl.version);

@@ -131,6 +131,17 @@ fn print_completions(shell: clap_complete::Shell) -> Result<()> {
     }
 }
 
+/// `report`, a JSON object, with the build of brume that made it (`brume`: the version,
+/// `sources`: the fingerprint of its sources, [`brume::SOURCES`]): figures and outputs of
+/// two builds of one version can differ.
+pub fn stamped(mut report: serde_json::Value) -> serde_json::Value {
+    if let Some(fields) = report.as_object_mut() {
+        fields.insert("brume".into(), brume::VERSION.into());
+        fields.insert("sources".into(), brume::SOURCES.into());
+    }
+    report
+}
+
 /// One of the program's standard streams.
 #[derive(Clone, Copy)]
 pub enum Stream {

@@ -121,7 +121,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         if let (Some(map), serde_json::Value::Object(more)) = (report.as_object_mut(), extra) {
             map.extend(more);
         }
-        outln!("{report}");
+        outln!("{}", super::stamped(report));
     } else {
         outln!(
             "{} unknown px: {} holes ({} px; {} regions from their own colour, {} px stereo occlusions) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",

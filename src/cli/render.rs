@@ -125,7 +125,7 @@ pub fn run(args: &RenderArgs, egl: Option<Platform>) -> Result<()> {
         json["refine_ms"] = json!(refine_ms);
         json["insert"] = insert_json(args, inserted.as_ref());
         json["capture"] = capture.to_json();
-        outln!("{json}");
+        outln!("{}", super::stamped(json));
     } else {
         report.print_summary();
         print_insert_and_capture(args, inserted.as_ref(), &capture);

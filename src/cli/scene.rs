@@ -118,7 +118,7 @@ pub fn run(args: &SceneArgs, egl: Option<Platform>) -> Result<()> {
     if args.json {
         outln!(
             "{}",
-            report_json(args, &camera, &blur, &renderer_name, &reports)
+            super::stamped(report_json(args, &camera, &blur, &renderer_name, &reports))
         );
     } else {
         print_summary(args, &blur, &renderer_name, &reports);

@@ -370,7 +370,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             "sun_disc_pixels": disc_pixels,
             "clouds": clouds,
         });
-        outln!("{report}");
+        outln!("{}", super::stamped(report));
     } else {
         outln!(
             "{}: {size}x{size} {} fisheye, T = {}, sun at θs = {}°, φs = {}°; zenith {:.4} \
@@ -395,7 +395,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
 pub fn run_turbidity(args: &TurbidityArgs) -> Result<()> {
     let sky = brume::photo::estimate_sky_photo(&args.image, &turbidity_options(args)?)?;
     if args.json {
-        outln!("{}", report_json(&sky, &args.image));
+        outln!("{}", super::stamped(report_json(&sky, &args.image)));
     } else {
         print_report(&sky.estimate, &args.image);
         if let Some(c) = sky.circle {

@@ -66,7 +66,7 @@ pub fn run_sun(args: &SunArgs) -> Result<()> {
     if args.json {
         outln!(
             "{}",
-            json!({
+            super::stamped(json!({
                 "time": args.time,
                 "julian_day": sun.julian_day,
                 "delta_t_s": sun.delta_t_s,
@@ -78,7 +78,7 @@ pub fn run_sun(args: &SunArgs) -> Result<()> {
                 "azimuth_deg": sun.azimuth_deg,
                 "right_ascension_deg": sun.right_ascension_deg,
                 "declination_deg": sun.declination_deg,
-            })
+            }))
         );
     } else {
         outln!(

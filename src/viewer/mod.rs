@@ -471,6 +471,8 @@ impl Viewer {
         let (w, h) = self.source.size();
         let (gpu, wall) = self.steady_medians();
         json!({
+            "brume": brume::VERSION,
+            "sources": brume::SOURCES,
             "renderer": self.renderer,
             "source": self.source.describe(),
             "image": [w, h],
