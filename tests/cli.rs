@@ -776,8 +776,10 @@ fn prep_writes_the_range_and_the_picture() {
     // Indoor: every unknown pixel is a hole, or (611 px of the left band) a border band
     // continued from the surfaces to its right; the true disparity has no specks in it.
     assert_eq!(v["border_islands"], 0, "{v}");
-    // Not a Cityscapes disparity: no stereo geometry, no occlusion rule.
-    assert_eq!(v["occluded"], 0, "{v}");
+    // A left view's disparity: the occlusion rule looks, but the leaves are about 1.2 times
+    // nearer than the cloth, under its 1.25, so it takes only a few dozen pixels.
+    let occluded = v["occluded"].as_u64().unwrap();
+    assert!((1..500).contains(&occluded), "{v}");
     assert_eq!(
         v["hole_pixels"].as_u64().unwrap() + v["border_filled"].as_u64().unwrap(),
         49_130,

@@ -252,6 +252,8 @@ fn middlebury2014_end_to_end() {
     assert!(d.notes.iter().any(|n| n.contains("calib.txt")));
     let k = d.intrinsics.unwrap();
     assert_eq!((k.fx, k.cx, k.cy), (1000.0, 1.5, 0.5));
+    // f·B of the left view (disp0), for pre-processing's stereo occlusions.
+    assert_eq!(d.stereo_focal_baseline, Some(1000.0 * 200.0 / 1000.0));
     let r = &d.range;
     assert!(r.get(2, 0).is_nan() && r.get(1, 1).is_nan());
     let expect = |x: f64, y: f64, disp: f64| {
@@ -474,6 +476,7 @@ fn middlebury2006_png_zero_is_unknown_and_defaults_apply() {
     };
     let d = load_range(&p, &custom).unwrap();
     assert!(close(*d.range.get(1, 0), 1.0));
+    assert_eq!(d.stereo_focal_baseline, Some(1000.0 * 100.0 / 1000.0));
     let bad = DepthOptions {
         disparity_offset: Some(-150.0),
         ..DepthOptions::default()
@@ -1064,11 +1067,33 @@ fn float_disparity_needs_focal_and_baseline() {
     // -5 + 6 > 0 is known, 0 + 6 too; x = 1 is the centre column.
     assert_eq!(d.unknown_pixels, 0);
     assert!(close(*d.range.get(1, 0), 100.0 * 50.0 / 1.0 / 1000.0));
+    assert_eq!(d.stereo_focal_baseline, Some(100.0 * 50.0 / 1000.0));
     let no_offset = DepthOptions {
         disparity_offset: None,
         ..full
     };
     assert_eq!(load_range(&p, &no_offset).unwrap().unknown_pixels, 2);
+}
+
+/// A matcher's disparity as a 16-bit PNG (KITTI's stereo layout: d = value / 256) reads with
+/// its focal length and baseline, and carries f·B for pre-processing's stereo occlusions.
+#[test]
+fn png16_disparity_reads_with_focal_and_baseline() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = save_png16(dir.path(), "disp.png", 3, 1, &[0, 256 * 10, 256 * 20]);
+    let opts = DepthOptions {
+        format: DepthFormat::Png16,
+        kind: Some(DepthKind::Disparity),
+        scale: Some(1.0 / 256.0),
+        focal: Some(100.0),
+        baseline: Some(500.0),
+        ..DepthOptions::default()
+    };
+    let d = load_range(&p, &opts).unwrap();
+    assert_eq!(d.unknown_pixels, 1);
+    // x = 1 is the centre column: range = depth = f·B/d there.
+    assert!(close(*d.range.get(1, 0), 100.0 * 0.5 / 10.0));
+    assert_eq!(d.stereo_focal_baseline, Some(100.0 * 500.0 / 1000.0));
 }
 
 #[test]

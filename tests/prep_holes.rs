@@ -308,8 +308,10 @@ fn bad_options_are_invalid_parameters() {
 /// the wall (Z = 10 m, d = fx·B/Z = 5 px) unknown over the 20 px left of the pole (Z = 2 m,
 /// d = 25 px) that the right camera cannot see, and the pole's disparity reaching 2 px
 /// over the wall on every other row (a matcher's fattened, jagged edge). Loaded as a photo
-/// with its camera file, the occlusion is filled with the wall's range; filled as any
-/// hole (the same map as a 16-bit PNG in millimetres) it was not.
+/// with its camera file, or as a float disparity with its focal length and baseline (a
+/// matcher's own output, which used to be filled as any hole), the occlusion is filled with
+/// the wall's range; filled as any hole (the same map as a 16-bit PNG in millimetres) it
+/// was not.
 #[test]
 fn a_cityscapes_pole_leaves_no_halo() {
     const POLE: std::ops::Range<u32> = 60..66;
@@ -378,6 +380,24 @@ fn a_cityscapes_pole_leaves_no_halo() {
     assert_eq!(stereo.depth.stereo_focal_baseline, Some(50.0));
     let png = load("f_depth.png", DepthFormat::Png16);
     assert_eq!(png.depth.stereo_focal_baseline, None);
+    let float_disparity = Grid::from_fn(w as usize, h as usize, |x, y| {
+        match disparity(x as u32, y as u32) {
+            0.0 => f32::INFINITY,
+            d => d as f32,
+        }
+    });
+    let float_path = dir.path().join("f_float.pfm");
+    brume::io::output::write_scalar(&float_path, &float_disparity).unwrap();
+    let float_opts = DepthOptions {
+        format: DepthFormat::Float,
+        kind: Some(brume::io::depth::DepthKind::Disparity),
+        focal: Some(100.0),
+        baseline: Some(500.0),
+        ..DepthOptions::default()
+    };
+    let image_path = dir.path().join("f_leftImg8bit.png");
+    let float = Photo::load(&image_path, &float_path, &float_opts).unwrap();
+    assert_eq!(float.depth.stereo_focal_baseline, Some(50.0));
     let wall_error = |photo: &Photo| -> (f64, usize) {
         let p = brume::photo::preprocess(photo, &prepare_options).unwrap();
         let stats = p.prepared.as_ref().unwrap().stats.clone();
@@ -400,5 +420,11 @@ fn a_cityscapes_pole_leaves_no_halo() {
     assert_eq!(none, 0);
     assert!(occluded >= (OCCLUDED.len() - 2) * h as usize, "{occluded}");
     assert!(as_occlusion < 0.01, "mean |ln(R / R_wall)| {as_occlusion}");
+    let (from_float, float_occluded) = wall_error(&float);
+    assert_eq!(float_occluded, occluded);
+    assert!(
+        from_float < 0.01,
+        "mean |ln(R / R_wall)| {from_float} from a float map"
+    );
     assert!(as_hole > 0.3, "mean |ln(R / R_wall)| {as_hole} as a hole");
 }

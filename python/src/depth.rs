@@ -55,7 +55,7 @@ use pyo3::types::PyDict;
 /// without a Cityscapes camera file, with intrinsics and metres: info's ground then gives
 /// it. info: format, kind, units, metric (whether the range is in trustworthy
 /// metres, which fog with beta or visibility needs), notes, unknown_pixels,
-/// stereo_focal_baseline (f·B in px·m of a Cityscapes disparity, else None: give it to
+/// stereo_focal_baseline (f·B in px·m of a disparity, else None: give it to
 /// brume.fog as `brume render` uses it), ground (a Cityscapes camera file's mount over the
 /// road, or camera_mount's, a dict of height_m, pitch (down) and roll in radians and fx, fy, cx, cy on the
 /// range's grid, else None: give it to brume.fog too).

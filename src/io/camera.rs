@@ -222,6 +222,12 @@ pub(crate) struct Stereo {
 }
 
 impl Stereo {
+    /// f·B in px·m: a disparity step between two depths is f·B·(1/Z₁ − 1/Z₂) px, whatever
+    /// the offset ([`crate::prep::PrepOptions::stereo_focal_baseline`]).
+    pub(crate) fn focal_baseline(&self) -> f64 {
+        self.focal * self.baseline_mm / 1000.0
+    }
+
     /// Depth in metres, `None` where the disparity cannot give one.
     pub(crate) fn depth_m(&self, d: f64) -> Option<f64> {
         let denom = d + self.offset;

@@ -147,8 +147,9 @@ pub struct PrepOptions {
     /// in a row whose right side is much nearer than its left, and about as wide as their
     /// disparities differ, is the background the right camera could not see, and is filled
     /// without the near surface beside it (see `src/prep/occlusion.rs`).
-    /// [`crate::photo::preprocess`] sets it for Cityscapes disparity; `None` (the default)
-    /// for any other map. Finite and > 0.
+    /// [`crate::photo::preprocess`] sets it for a disparity (Cityscapes, Middlebury, one
+    /// read with a focal length and baseline); `None` (the default) for any other map.
+    /// Finite and > 0.
     pub stereo_focal_baseline: Option<f64>,
     /// The level ground under a camera of known mount (a vehicle's: a Cityscapes camera
     /// file's height, pitch and roll, or `--camera-mount`'s, with the map's intrinsics, on

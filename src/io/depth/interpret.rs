@@ -183,8 +183,9 @@ pub(super) fn interpret(
     let (mut range, units, intrinsics) = match (format, raw) {
         (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
             let (calib, calib_path) = calib.expect("checked by resolve_format");
-            let (range, k) =
+            let (range, k, fb) =
                 middlebury::range_2014(&map, path, &calib, &calib_path, opts, &mut notes)?;
+            stereo_focal_baseline = Some(fb);
             (range, metres, Some(k))
         }
         (DepthFormat::Cityscapes, Raw::Grey16(disp)) => {
@@ -195,7 +196,8 @@ pub(super) fn interpret(
             (range, metres, Some(camera.intrinsics))
         }
         (DepthFormat::Middlebury2006, Raw::Grey8(disp)) => {
-            let (range, k) = middlebury::range_2006(&disp, opts, pixel_scale, &mut notes)?;
+            let (range, k, fb) = middlebury::range_2006(&disp, opts, pixel_scale, &mut notes)?;
+            stereo_focal_baseline = Some(fb);
             (range, metres, Some(k))
         }
         (_, Raw::Grey16(raw)) if kind == DepthKind::ZBuffer => {
@@ -225,6 +227,7 @@ pub(super) fn interpret(
         (DepthFormat::Png16, Raw::Grey16(raw)) if kind == DepthKind::Disparity => {
             let scale = png16::given_scale(opts)?;
             let stereo = Stereo::from_options(opts, format)?;
+            stereo_focal_baseline = Some(stereo.focal_baseline());
             let k = Intrinsics::centred(stereo.focal, width, height);
             notes.push("principal point assumed at the image centre".to_string());
             let depth = |v: u16| {
@@ -249,6 +252,7 @@ pub(super) fn interpret(
         }
         (_, Raw::Float { map, .. }) if kind == DepthKind::Disparity => {
             let stereo = Stereo::from_options(opts, format)?;
+            stereo_focal_baseline = Some(stereo.focal_baseline());
             let k = Intrinsics::centred(stereo.focal, width, height);
             notes.push("principal point assumed at the image centre".to_string());
             let range = to_range(&map, |d| stereo.depth_m(f64::from(d)), Some(&k));

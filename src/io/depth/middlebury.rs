@@ -241,7 +241,8 @@ pub(super) fn take_calib(
 }
 
 /// Range in metres from a Middlebury 2014 disparity map: focal, baseline, disparity
-/// offset and principal point all come from its `calib.txt`.
+/// offset and principal point all come from its `calib.txt`; with the stereo pair's f·B
+/// (px·m) for its occlusions.
 pub(super) fn range_2014(
     map: &ScalarMap,
     path: &Path,
@@ -249,7 +250,7 @@ pub(super) fn range_2014(
     calib_path: &Path,
     opts: &DepthOptions,
     notes: &mut Vec<String>,
-) -> Result<(ScalarMap, Intrinsics)> {
+) -> Result<(ScalarMap, Intrinsics, f64)> {
     check_calib_size(calib, calib_path, map, path)?;
     note_ignored_stereo_options(opts, notes);
     let stereo = Stereo {
@@ -260,7 +261,7 @@ pub(super) fn range_2014(
     let k = calib.intrinsics();
     check_doffs(map, calib, calib_path, path, notes)?;
     let range = to_range(map, |d| stereo.depth_m(f64::from(d)), Some(&k));
-    Ok((range, k))
+    Ok((range, k, stereo.focal_baseline()))
 }
 
 /// Z = baseline·f/(d + doffs) needs d + doffs > 0. When calib.txt's doffs makes that
@@ -311,13 +312,13 @@ pub(super) fn range_2006(
     opts: &DepthOptions,
     pixel_scale: f64,
     notes: &mut Vec<String>,
-) -> Result<(ScalarMap, Intrinsics)> {
+) -> Result<(ScalarMap, Intrinsics, f64)> {
     let (width, height) = (disp.width(), disp.height());
     let stereo = middlebury2006_stereo(opts, disp, notes)?;
     let k = Intrinsics::centred(stereo.focal / pixel_scale, width, height);
     notes.push("principal point assumed at the image centre".to_string());
     let depth = |d: u8| (d != 0).then(|| stereo.depth_m(f64::from(d))).flatten();
-    Ok((to_range(disp, depth, Some(&k)), k))
+    Ok((to_range(disp, depth, Some(&k)), k, stereo.focal_baseline()))
 }
 
 fn check_calib_size(calib: &Calib, calib_path: &Path, map: &ScalarMap, path: &Path) -> Result<()> {

@@ -324,10 +324,10 @@ pub struct LoadedDepth {
     /// How `range` was turned from the file's layout to lie on its upright photo
     /// ([`DepthOptions::photo`]); [`Orientation::Upright`] when it was not.
     pub turned: Orientation,
-    /// f·B, the focal length in pixels of `range`'s grid times the baseline in metres, of
-    /// a left view's stereo-matched disparity (Cityscapes), whose holes beside a nearer
-    /// surface are occlusions of the background
-    /// ([`crate::prep::PrepOptions::stereo_focal_baseline`]); `None` for other maps.
+    /// f·B (px·m) of a left view's disparity (Cityscapes, Middlebury, or any disparity read
+    /// with `focal` and `baseline`), whose holes beside a nearer surface are occlusions of
+    /// the background ([`crate::prep::PrepOptions::stereo_focal_baseline`]): `range`'s
+    /// grid's disparity steps are f·B·(1/Z₁ − 1/Z₂) px. `None` for other maps.
     pub stereo_focal_baseline: Option<f64>,
     /// How the camera is mounted over the road ([`DepthOptions::camera_mount`], or a
     /// Cityscapes camera file's height, pitch and roll), with [`Self::intrinsics`] the
