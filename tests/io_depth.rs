@@ -1096,6 +1096,61 @@ fn png16_disparity_reads_with_focal_and_baseline() {
     assert_eq!(d.stereo_focal_baseline, Some(100.0 * 500.0 / 1000.0));
 }
 
+/// A street's depth (near at the bottom, far toward the horizon) loads without a word; its
+/// inverse, a disparity or a monocular model's inverse depth read as depth, is named, with
+/// what to give instead. Read as what it is, or with too little known, it is not.
+#[test]
+fn a_map_whose_values_grow_toward_the_bottom_is_called_inverted() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (40, 60);
+    // A level road seen from 1.5 m: depth 1.5·f / (y − horizon) below the horizon at row
+    // 20, a far facade (80 m) above it.
+    let depth = |y: usize| {
+        if y > 22 {
+            1.5 * 50.0 / (y - 20) as f32
+        } else {
+            80.0
+        }
+    };
+    let street: ScalarMap = Grid::from_fn(w, h, |_, y| depth(y));
+    let inverse: ScalarMap = Grid::from_fn(w, h, |_, y| 1.0 / depth(y));
+    let load = |name: &str, map: &ScalarMap, opts: &DepthOptions| {
+        let path = dir.path().join(name);
+        write_scalar(&path, map).unwrap();
+        load_range(&path, opts).unwrap()
+    };
+    let plain = DepthOptions::default();
+    let d = load("street.pfm", &street, &plain);
+    assert_eq!(d.inverted_warning(), None);
+    assert!(!d.warnings().iter().any(|w| w.contains("bottom")));
+    let d = load("inverse.pfm", &inverse, &plain);
+    let warning = d
+        .inverted_warning()
+        .expect("an inverse depth read as depth is named");
+    for said in ["bottom", "`depth_kind` disparity", "`depth_kind` inverse"] {
+        assert!(warning.contains(said), "{said}: {warning}");
+    }
+    assert!(d.warnings().contains(&warning));
+    let as_inverse = DepthOptions {
+        kind: Some(DepthKind::Inverse),
+        fov: Some(50.0),
+        ..DepthOptions::default()
+    };
+    assert_eq!(
+        load("inverse.pfm", &inverse, &as_inverse).inverted_warning(),
+        None
+    );
+    // One known value in the bottom tenth: too few to judge.
+    let sparse: ScalarMap = Grid::from_fn(w, h, |x, y| {
+        if y < 30 || (y == h - 1 && x == 0) {
+            1.0 / depth(y)
+        } else {
+            f32::NAN
+        }
+    });
+    assert_eq!(load("sparse.pfm", &sparse, &plain).inverted_warning(), None);
+}
+
 #[test]
 fn range_kind_is_not_converted() {
     let dir = tempfile::tempdir().unwrap();

@@ -367,17 +367,72 @@ impl LoadedDepth {
         ))
     }
 
+    /// A warning when a depth or range map looks like a disparity or a monocular model's
+    /// inverse depth read as depth (the fog would then be thickest on what is nearest):
+    /// the median known value of the frame's bottom tenth of rows, where a photo's
+    /// nearest ground or table is, is over [`INVERTED_RATIO`] times that of the rows
+    /// from 30 to 50 % of its height, where its farthest surfaces and horizon are.
+    /// `None` for other kinds, which say what they are, and where either band has fewer
+    /// than [`INVERTED_MIN_SAMPLES`] known values.
+    pub fn inverted_warning(&self) -> Option<String> {
+        if !matches!(self.kind, DepthKind::Depth | DepthKind::Range) {
+            return None;
+        }
+        let h = self.range.height();
+        let bottom = median_known_in_rows(&self.range, h - h / 10..h)?;
+        let middle = median_known_in_rows(&self.range, h * 3 / 10..h / 2)?;
+        (f64::from(bottom) > INVERTED_RATIO * f64::from(middle)).then(|| {
+            format!(
+                "its values grow toward the bottom of the frame (median {bottom:.4} in the \
+                 bottom tenth of rows, {:.1} times the {middle:.4} at mid-height), as a \
+                 disparity's or an inverse depth's do, where depth and range shrink toward \
+                 the ground: read as {}, the fog is thickest on what is nearest. A disparity \
+                 needs `depth_kind` disparity with `focal` and `baseline`; a monocular \
+                 model's relative inverse depth (MiDaS, Depth Anything) `depth_kind` inverse",
+                bottom / middle,
+                self.kind
+            )
+        })
+    }
+
     /// What a host should show even to a user who reads no notes: the
-    /// [`depth_as_range_warning`](Self::depth_as_range_warning), and the notes of options
-    /// given but ignored (an option the user set to no effect is most often a mistake).
-    /// The other notes (assumptions such as a default principal point) stay in `notes`.
+    /// [`depth_as_range_warning`](Self::depth_as_range_warning), the
+    /// [`inverted_warning`](Self::inverted_warning), and the notes of options given but
+    /// ignored (an option the user set to no effect is most often a mistake). The other
+    /// notes (assumptions such as a default principal point) stay in `notes`.
     pub fn warnings(&self) -> Vec<String> {
         let ignored = self.notes.iter().filter(|n| is_ignored_option_note(n));
-        self.depth_as_range_warning()
+        self.inverted_warning()
             .into_iter()
+            .chain(self.depth_as_range_warning())
             .chain(ignored.cloned())
             .collect()
     }
+}
+
+/// How many times the bottom rows' median value must exceed the middle rows' for
+/// [`LoadedDepth::inverted_warning`]: a street's disparity or inverse depth is 10 to 20
+/// times larger on the road before the camera than at the horizon, its depth as many times
+/// smaller; a portrait's or a wall's are about even either way.
+pub const INVERTED_RATIO: f64 = 2.0;
+
+/// The fewest known values a band of rows must have for [`LoadedDepth::inverted_warning`]
+/// to judge it.
+pub const INVERTED_MIN_SAMPLES: usize = 64;
+
+/// The median of the known (finite, > 0) values of `map`'s `rows`; `None` below
+/// [`INVERTED_MIN_SAMPLES`] of them.
+fn median_known_in_rows(map: &ScalarMap, rows: std::ops::Range<usize>) -> Option<f32> {
+    let w = map.width();
+    let slice = &map.as_slice()[rows.start * w..rows.end * w];
+    let mut known: Vec<f32> = (slice.iter().copied())
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .collect();
+    if known.len() < INVERTED_MIN_SAMPLES {
+        return None;
+    }
+    let mid = known.len() / 2;
+    Some(*known.select_nth_unstable_by(mid, f32::total_cmp).1)
 }
 
 /// Whether a loader's note tells of an option (or a file) given and not used: they all
