@@ -413,10 +413,9 @@ impl Outputs {
         tmp.as_file().sync_all().map_err(|e| Error::io(path, e))
     }
 
-    /// Renames every staged file onto its destination (writes it into a named pipe or a
-    /// device, which opening may wait for: a pipe, until a reader opens it). The renames
-    /// run while the
-    /// temporary registry is locked, so a signal handler using
+    /// Renames every staged file onto its destination (first writes those for a named pipe
+    /// or a device into it, which may wait: a pipe, until a reader opens it). The renames
+    /// run while the temporary registry is locked, so a signal handler using
     /// `exit_removing_temporaries` sees either all of them done or none. After the
     /// checks of staging, a rename fails only if the directory changed meanwhile; the
     /// files renamed before it then stay, the others are removed.
@@ -427,34 +426,59 @@ impl Outputs {
     /// [`Outputs::commit`]; with `keep_existing`, a destination already present is kept
     /// and its temporary removed (`Ok(false)`: not every file was renamed).
     fn rename_all(mut self, keep_existing: bool) -> Result<bool> {
-        let mut live = live_temporaries();
         let mut result = Ok(true);
-        for staged in &mut self.staged {
+        // Pipes and devices first, outside the registry's lock: opening a pipe waits for
+        // its reader, and a signal handler must meanwhile be able to take the lock and
+        // exit. Their temporaries stay staged, removed when the set drops.
+        for staged in self.staged.iter().filter(|s| s.streamed) {
+            let tmp = staged.tmp.as_ref().expect("each file is placed once");
+            let placed = match keep_existing {
+                true => Err(std::io::ErrorKind::AlreadyExists.into()),
+                false => copy_into(tmp, &staged.dest),
+            };
+            if !settle(placed, &staged.dest, keep_existing, &mut result) {
+                return result;
+            }
+        }
+        let mut live = live_temporaries();
+        for staged in self.staged.iter_mut().filter(|s| !s.streamed) {
             let tmp = staged.tmp.take().expect("each file is renamed once");
             live.retain(|p| p != tmp.path());
-            // Dropping the temporary (`e.file` of a failed rename) removes it.
-            let placed = match (staged.streamed, keep_existing) {
-                (true, true) => Err(std::io::ErrorKind::AlreadyExists.into()),
-                (true, false) => copy_into(&tmp, &staged.dest),
-                (false, true) => {
-                    (tmp.persist_noclobber(&staged.dest).map(drop)).map_err(|e| e.error)
-                }
-                (false, false) => tmp.persist(&staged.dest).map(drop).map_err(|e| e.error),
+            // Dropping `e.file` of a failed rename removes the temporary.
+            let renamed = match keep_existing {
+                true => tmp.persist_noclobber(&staged.dest),
+                false => tmp.persist(&staged.dest),
             };
-            match placed {
-                Ok(()) => {}
-                Err(e) if keep_existing && e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    result = Ok(false);
-                }
-                Err(e) => {
-                    result = Err(Error::io(&staged.dest, e));
-                    break;
-                }
+            let placed = renamed.map(drop).map_err(|e| e.error);
+            if !settle(placed, &staged.dest, keep_existing, &mut result) {
+                break;
             }
         }
         // Unlocked before `self` drops the files not renamed: their drop takes the lock.
         drop(live);
         result
+    }
+}
+
+/// Folds one destination's outcome into `result`: with `keep_existing`, a destination
+/// already there is kept (not every file written); any other error is the result. Returns
+/// whether to go on with the others.
+fn settle(
+    placed: std::io::Result<()>,
+    dest: &Path,
+    keep_existing: bool,
+    result: &mut Result<bool>,
+) -> bool {
+    match placed {
+        Ok(()) => true,
+        Err(e) if keep_existing && e.kind() == std::io::ErrorKind::AlreadyExists => {
+            *result = Ok(false);
+            true
+        }
+        Err(e) => {
+            *result = Err(Error::io(dest, e));
+            false
+        }
     }
 }
 
@@ -695,6 +719,35 @@ fn resolve_destination(path: &Path) -> Option<PathBuf> {
 mod tests {
     use super::*;
     use std::time::Duration;
+
+    /// While an output waits for a named pipe's reader, the registry of temporaries is not
+    /// locked: Ctrl-C's handler takes that lock to remove them and exit, and would wait
+    /// for the reader too.
+    #[cfg(unix)]
+    #[test]
+    fn waiting_for_a_pipe_leaves_the_registry_unlocked() {
+        use std::io::Read;
+        let dir = tempfile::tempdir().unwrap();
+        let pipe = dir.path().join("pipe.png");
+        let c_path = std::ffi::CString::new(pipe.as_os_str().as_encoded_bytes()).unwrap();
+        // SAFETY: a valid NUL-terminated path; mkfifo reads nothing else.
+        assert_eq!(unsafe { libc::mkfifo(c_path.as_ptr(), 0o600) }, 0);
+        let writer = {
+            let pipe = pipe.clone();
+            std::thread::spawn(move || write_bytes(&pipe, b"fog"))
+        };
+        // Time for the writer to reach the pipe's open, where it waits for a reader.
+        std::thread::sleep(Duration::from_millis(300));
+        let unlocked = LIVE_TEMPORARIES.try_lock().is_ok();
+        let mut bytes = Vec::new();
+        File::open(&pipe).unwrap().read_to_end(&mut bytes).unwrap();
+        writer.join().unwrap().unwrap();
+        assert!(
+            unlocked,
+            "the registry was locked while waiting for the pipe's reader"
+        );
+        assert_eq!(bytes, b"fog");
+    }
 
     #[test]
     fn stale_temporaries_are_told_from_live_ones() {
