@@ -738,7 +738,15 @@ mod tests {
         };
         // Time for the writer to reach the pipe's open, where it waits for a reader.
         std::thread::sleep(Duration::from_millis(300));
-        let unlocked = LIVE_TEMPORARIES.try_lock().is_ok();
+        // Tried a few times: another test's writer may hold the lock for a moment; the
+        // waiting writer would hold it throughout.
+        let unlocked = (0..20).any(|_| {
+            let free = LIVE_TEMPORARIES.try_lock().is_ok();
+            if !free {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            free
+        });
         let mut bytes = Vec::new();
         File::open(&pipe).unwrap().read_to_end(&mut bytes).unwrap();
         writer.join().unwrap().unwrap();
