@@ -802,6 +802,17 @@ def test_range_from_depth(tmp_path):
     # A keyword given to no effect warns too: range needs no focal length.
     with pytest.warns(UserWarning, match="depth: focal_px ignored: the map already holds range"):
         brume.range_from_depth(np.full((4, 8), 5.0), kind="range", focal_px=500.0)
+    # A street's inverse depth given as depth (larger toward the bottom, the road) is named,
+    # with the keywords to give instead; its depth is not.
+    rows = np.arange(60, dtype=np.float32)[:, None]
+    street = np.broadcast_to(np.where(rows > 22, 75.0 / np.maximum(rows - 20, 1), 80.0),
+                             (60, 40)).astype(np.float32)
+    named = "grow toward the bottom.*focal_px and baseline_mm.*kind inverse"
+    with pytest.warns(UserWarning, match=named):
+        brume.range_from_depth(1.0 / street, kind="depth", fov_y_deg=45.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        brume.range_from_depth(street, kind="depth", fov_y_deg=45.0)
 
 
 # --- equality with the `brume render` program ------------------------------------------
