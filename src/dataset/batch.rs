@@ -651,7 +651,7 @@ impl Gpu<'_> {
     /// Hands a frame's warnings, if it has any, to the writer; false when the writer is
     /// gone.
     fn frame_warned(&self, frame: &Frame) -> bool {
-        let warnings = frame.photo.depth.warnings();
+        let warnings = frame.warnings().to_vec();
         if warnings.is_empty() {
             return true;
         }
@@ -761,7 +761,7 @@ fn encode(
         "gpu_ms": fogged.gpu_ms,
         "render_ms": render_ms,
         "capture": opts.capture.to_json(),
-        "warnings": frame.photo.depth.warnings(),
+        "warnings": frame.warnings(),
         "depth_notes": frame.photo.depth.notes,
         "colour_profile": frame.photo.metadata.profile().map(|p| p.description()),
     });

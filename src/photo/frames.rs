@@ -124,6 +124,9 @@ pub struct Frame {
     /// conventions the sky at least [`super::SKY_RANGE_M`] away: [`PreparedPhoto::metres`]):
     /// what every β reads, made once by [`Frame::refine`].
     metres: Option<ScalarMap>,
+    /// The depth's warnings ([`crate::io::depth::LoadedDepth::warnings`], which reads the
+    /// map), worked out once: the frame's event and every output's log record give them.
+    warnings: Vec<String>,
 }
 
 /// One β of a frame, fogged.
@@ -163,6 +166,7 @@ impl Frame {
         let decode_ms = elapsed_ms(started);
         let started = Instant::now();
         let prepared = preprocess(&photo, &prepare)?;
+        let warnings = photo.depth.warnings();
         Ok(Frame {
             item: item.clone(),
             photo,
@@ -171,7 +175,14 @@ impl Frame {
             prep_ms: elapsed_ms(started),
             refine_ms: 0.0,
             metres: None,
+            warnings,
         })
+    }
+
+    /// What the depth's loader says a user must see
+    /// ([`crate::io::depth::LoadedDepth::warnings`] of the depth as loaded).
+    pub fn warnings(&self) -> &[String] {
+        &self.warnings
     }
 
     /// Upsamples and refines the range with the image (by `filter`: the GPU's
