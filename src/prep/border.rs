@@ -25,7 +25,10 @@
 //!   matcher's noise, which extrapolated made each row of Cityscapes' left band a stripe of
 //!   its own). A line then follows the median of the slopes so shown (0 where not) by the
 //!   lines within [`POOLED_LINES`] of it that continue its surface ([`SURFACE_RATIO`]): the
-//!   slope of a plane, the same on each line, and not one line's alone. The extrapolated
+//!   slope of a plane, the same on each line, and not one line's alone. Its level is pooled
+//!   too: the line passes, at its innermost unknown step, through the median of what the
+//!   fits of those lines give there, taken in pairs at equal distances either side, so that
+//!   a plane changing from line to line keeps its value ([`pooled_range`]). The extrapolated
 //!   disparity is kept within a factor 1.5 of it, so a slope cannot create a spike, and the
 //!   range within the smallest and largest known range outside the sky; with non-positive
 //!   range the run takes the anchor's value. Toward the bottom border the disparity does
@@ -226,12 +229,15 @@ pub(crate) fn fill_borders(
             let lim = (len, limit);
             out.islands += drop_lone_specks(work, sky, &mut fits, &at, lim, &mut samples);
         }
-        for (l, &(run, fit)) in fits
-            .iter()
-            .enumerate()
-            .filter_map(|(l, f)| f.as_ref().map(|f| (l, f)))
-        {
-            let fit = fit.with_slope(pooled_slope(&fits, l, fit));
+        let sloped: Vec<Option<(usize, LineFit)>> = (fits.iter().enumerate())
+            .map(|(l, f)| f.map(|(run, fit)| (run, fit.with_slope(pooled_slope(&fits, l, fit)))))
+            .collect();
+        let mut values = Vec::new();
+        for (l, (run, fit)) in (sloped.iter().enumerate()).filter_map(|(l, f)| f.map(|f| (l, f))) {
+            let fit = fit.through(
+                run - 1,
+                pooled_range(&sloped, (l, fit), run - 1, &mut values),
+            );
             for k in 0..run {
                 work[at(l, k)] = fit.range_at(k).clamp(known.0, known.1);
                 filled[at(l, k)] = true;
@@ -356,6 +362,37 @@ fn pooled_slope(fits: &[Option<(usize, LineFit)>], l: usize, fit: LineFit) -> f3
         })
         .collect();
     median_in_place(&mut slopes) as f32
+}
+
+/// The range at step `k` of band line `l` (of `fit`): the median of what the fits of the
+/// lines within [`POOLED_LINES`] of it that continue its surface (as for [`pooled_slope`])
+/// give there, taken in pairs at equal distances either side (both or neither), so that
+/// a plane whose range changes from line to line (the road by a left band) keeps its
+/// value.
+///
+/// Each line's fit starts from its own first pixels, and a matcher's noise on them made
+/// every column of Cityscapes' bottom band a streak of its own (Düsseldorf's road: 5.3 to
+/// 7.4 m side by side on one row); a plane gives the same value from any of its lines.
+fn pooled_range(
+    fits: &[Option<(usize, LineFit)>],
+    (l, fit): (usize, LineFit),
+    k: usize,
+    values: &mut Vec<f64>,
+) -> f32 {
+    let first = fit.first_disparity();
+    let on_surface = |n: usize| {
+        fits[n]
+            .map(|(_, f)| f)
+            .filter(|f| within_factor(f.first_disparity(), first, SURFACE_RATIO))
+    };
+    values.clear();
+    values.push(f64::from(fit.range_at(k)));
+    for j in 1..=POOLED_LINES.min(l).min(fits.len() - 1 - l) {
+        if let (Some(a), Some(b)) = (on_surface(l - j), on_surface(l + j)) {
+            values.extend([f64::from(a.range_at(k)), f64::from(b.range_at(k))]);
+        }
+    }
+    median_in_place(values) as f32
 }
 
 /// Drops the islands of one band line (`at`: its step → index; `len` steps, the band at
@@ -580,6 +617,27 @@ impl LineFit {
         match self {
             LineFit::Disparity { k1, d1, .. } => LineFit::Disparity { k1, d1, slope },
             constant => constant,
+        }
+    }
+
+    /// The same fit (its slope) through range `r` at step `k`.
+    fn through(self, k: usize, r: f32) -> LineFit {
+        match self {
+            LineFit::Constant(_) => LineFit::Constant(r),
+            LineFit::Disparity { slope, .. } => LineFit::Disparity {
+                k1: k as f32,
+                d1: 1.0 / r,
+                slope,
+            },
+        }
+    }
+
+    /// The disparity where the fit starts, by which lines are judged to continue one
+    /// surface.
+    fn first_disparity(&self) -> f32 {
+        match *self {
+            LineFit::Constant(r) => 1.0 / r,
+            LineFit::Disparity { d1, .. } => d1,
         }
     }
 

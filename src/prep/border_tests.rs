@@ -83,6 +83,55 @@ fn a_band_by_noisy_pixels_takes_their_median_not_their_slope() {
     }
 }
 
+/// A bottom band below a road measured with a matcher's noise (3 % in disparity) and a
+/// pole standing on it: each column's continuation, taken from its own few pixels, made
+/// the band a streak per column (Cityscapes' Düsseldorf frame); the median of the
+/// columns round it on the same surface leaves it smooth, and the pole, nearer than the
+/// road beside it, keeps its own range.
+#[test]
+fn a_bottom_band_is_smooth_across_a_noisy_road_and_keeps_a_pole() {
+    let (w, h, band) = (120, 40, 8);
+    let road = |y: usize| 1.0 / (0.05 + 0.002 * y as f32);
+    let pole = |x: usize| (50..54).contains(&x);
+    let mut rng = crate::rng::SplitMix64::new(11);
+    let mut range = vec![f32::NAN; w * h];
+    for y in 0..h - band {
+        for x in 0..w {
+            let noise = 1.0 + 0.03 * (2.0 * rng.unit() as f32 - 1.0);
+            range[y * w + x] = if pole(x) { 3.0 } else { road(y) } / noise;
+        }
+    }
+    let mut work = range.clone();
+    let (mut sky, mut filled) = (vec![false; w * h], vec![false; w * h]);
+    let done = fill_borders(
+        &mut work,
+        &mut sky,
+        &mut filled,
+        (w, h),
+        0.25,
+        (1.0, 1e4),
+        None,
+    );
+    assert_eq!(done.filled, band * w, "{done:?}");
+    let mut steps = Vec::new();
+    for y in h - band..h {
+        for x in 0..w {
+            let r = work[y * w + x];
+            if pole(x) {
+                assert!((r / 3.0 - 1.0).abs() < 0.03, "pole ({x}, {y}): {r}");
+            } else {
+                let last = road(h - band - 1);
+                assert!(r < 1.1 * last && r > 0.8 * last, "road ({x}, {y}): {r}");
+            }
+            if x > 0 && pole(x) == pole(x - 1) {
+                steps.push((work[y * w + x - 1] / r - 1.0).abs());
+            }
+        }
+    }
+    let mean = steps.iter().sum::<f32>() / steps.len() as f32;
+    assert!(mean < 0.004, "mean step between columns {mean}");
+}
+
 /// One row: `cells` from the left border ('.' unknown, a digit d: range 10·d m, 'F' a
 /// speck 500 m away, 'p' a pole 3 m away), then a facade 10 m away to the end of the row.
 fn row(cells: &str, width: usize) -> Vec<f32> {

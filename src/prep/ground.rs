@@ -135,6 +135,33 @@ pub(super) fn drop_below_ground(
     dropped
 }
 
+/// Brings the values of `work` that the border bands `filled` (no value was measured
+/// there) no farther than the level road along their ray, where `ground`'s bound speaks
+/// (rays at least [`FALL_GRADE`] below the level). A band continues the surface its line
+/// meets, and on the rows near the car a matcher's noise there, continued, stood up to
+/// 1.2 times beyond the road (Cityscapes' bottom bands: the hood's unmeasured rows and
+/// the road above them). Returns how many values it brought nearer.
+pub(super) fn bands_on_the_road(
+    work: &mut [f32],
+    filled: &[bool],
+    (w, h): (usize, usize),
+    ground: &Ground,
+) -> usize {
+    let rays = ground.mount.rays(&ground.intrinsics);
+    let mut nearer = 0;
+    for y in (0..h).filter(|&y| rays.row_may_reach(y, w, FALL_GRADE)) {
+        for x in (0..w).filter(|&x| filled[y * w + x]) {
+            let s = rays.sine_below_level(x, y);
+            let road = (ground.mount.height_m / s) as f32;
+            if s > FALL_GRADE && work[y * w + x] > road {
+                work[y * w + x] = road;
+                nearer += 1;
+            }
+        }
+    }
+    nearer
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -202,6 +229,29 @@ mod tests {
         assert_eq!(drop_below_ground(&mut work, &sky, (w, h), &g), 0);
         work[p] = road[p] * 2.1;
         assert_eq!(drop_below_ground(&mut work, &sky, (w, h), &g), 1);
+    }
+
+    /// Band pixels beyond the level road are brought onto it, nearer ones kept, and so
+    /// are pixels that were measured and rows too near the horizon for the bound.
+    #[test]
+    fn bands_come_no_farther_than_the_road() {
+        let (g, w, h) = street();
+        let mut work = vec![100.0f32; w * h];
+        let mut filled = vec![false; w * h];
+        let (far, near, measured, high) = (44 * w + 5, 44 * w + 6, 44 * w + 7, 20 * w + 5);
+        work[near] = 2.0;
+        [far, near, high].iter().for_each(|&p| filled[p] = true);
+        assert_eq!(bands_on_the_road(&mut work, &filled, (w, h), &g), 1);
+        let road = road_range(&g, 5, 44) as f32;
+        assert!(
+            (work[far] / road - 1.0).abs() < 1e-5,
+            "{} vs {road}",
+            work[far]
+        );
+        assert_eq!(
+            (work[near], work[measured], work[high]),
+            (2.0, 100.0, 100.0)
+        );
     }
 
     /// A road falling away beyond a crest is a wide surface beyond the bound: kept.

@@ -103,7 +103,8 @@
 //!    first, line by line from each border: a run of unknown pixels continues the surface
 //!    it meets, linearly in disparity, or is sky when it runs down from the top border
 //!    into the sky ([`PrepStats::border_filled`], [`PrepStats::border_sky`]), once the
-//!    far specks a matcher left in it are dropped ([`PrepStats::border_islands`]).
+//!    far specks a matcher left in it are dropped ([`PrepStats::border_islands`]). With
+//!    the level road known, no band pixel is left farther than the road along its ray.
 //!
 //!    **Holes** (the components of unknown pixels outside the sky, far outliers included)
 //!    are filled by RANSAC (Fischler and Bolles 1981), as
@@ -511,6 +512,9 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         );
         (stats.border_filled, stats.border_sky, stats.border_islands) =
             (b.filled, b.sky, b.islands);
+        if let Some(ground) = &opts.ground {
+            ground::bands_on_the_road(&mut work, &filled, (w, h), ground);
+        }
     }
     let mut holes = holes::Holes {
         filled: &mut filled,
