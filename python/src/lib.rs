@@ -543,9 +543,9 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// background, not the near surface (no clear halo left of a pole), as `brume render`
 /// fills a Cityscapes disparity. ground: load_depth's info['ground'] (a dict of height_m,
 /// pitch, roll: the camera's mount over the road, from a Cityscapes camera file, and fx,
-/// fy, cx, cy: its intrinsics on range_m's grid): values beyond twice the level road's
-/// range below the horizon, in small patches, are false matches and are filled, as
-/// `brume render` does.
+/// fy, cx, cy: its intrinsics on range_m's grid): values below the horizon beyond the
+/// road falling 5 % away from the camera's level, in small patches, are false matches and
+/// are filled, as `brume render` does.
 ///
 /// The camera after the fog (all off by default): exposure_stops (the linear image times
 /// 2^stops), shot_noise_gain K (the linear value of one photo-electron: Poisson noise of

@@ -96,9 +96,10 @@
 //!    become unknown too ([`PrepStats::local_outliers`]); long structures (poles) stay.
 //!
 //!    **The level road** ([`PrepOptions::ground`], a vehicle camera's mount, see
-//!    `ground.rs`), before both: below the horizon, known values beyond twice the level
-//!    road's range along their ray (and beyond the road falling 5 % away), in 4-connected
-//!    patches under 1 % of the image, become unknown ([`PrepStats::below_ground`]).
+//!    `ground.rs`), before both: below the horizon, known values beyond the range at which
+//!    their ray would meet the road falling 5 % away from the camera's level, in
+//!    4-connected patches under 1 % of the image, become unknown
+//!    ([`PrepStats::below_ground`]).
 //! 4. **Border bands** ([`PrepOptions::border_band_fraction`], see `border.rs`) are filled
 //!    first, line by line from each border: a run of unknown pixels continues the surface
 //!    it meets, linearly in disparity, or is sky when it runs down from the top border
