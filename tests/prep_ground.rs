@@ -106,3 +106,65 @@ fn specks_beyond_the_road_are_filled_as_the_road() {
         "mean |ln(R / R_road)| {unbounded} without the mount"
     );
 }
+
+/// Rows at the bottom that the matcher left unknown (a car's hood).
+const HOOD: u32 = 10;
+
+/// The bottom band below the road comes out on the level road with the mount: there the
+/// road's last measured rows are 1.15 times too far (a matcher's bias on a dark road,
+/// within the bound), and the band, which continues them, would carry that on to the
+/// border; without the mount it does.
+#[test]
+fn a_bottom_band_comes_no_farther_than_the_road() {
+    let dir = tempfile::tempdir().unwrap();
+    let biased = |y: u32| (H - HOOD - 8..H - HOOD).contains(&y);
+    let disp = image::ImageBuffer::from_fn(W, H, |_, y| {
+        let d = match road_depth(y) {
+            _ if y >= H - HOOD => 0.0,
+            Some(z) if biased(y) => F * B / (1.15 * z),
+            z => F * B / z.map_or(60.0, |z| z.min(60.0)),
+        };
+        image::Luma([stored(d)])
+    });
+    disp.save(dir.path().join("f_disparity.png")).unwrap();
+    let colour = image::RgbImage::from_fn(W, H, |_, _| image::Rgb([90, 90, 95]));
+    colour.save(dir.path().join("f_leftImg8bit.png")).unwrap();
+    let intrinsic = format!(r#""intrinsic": {{"fx": {F}, "fy": {F}, "u0": {U0}, "v0": {V0}}}"#);
+    let with_mount = format!(
+        r#"{{"extrinsic": {{"baseline": {B}, "z": {HEIGHT}, "pitch": {PITCH}}}, {intrinsic}}}"#
+    );
+    let without = format!(r#"{{"extrinsic": {{"baseline": {B}}}, {intrinsic}}}"#);
+    // The largest R / R_road over the band's pixels once prepared.
+    let band_over_road = |camera: &str| -> f64 {
+        let camera_path = dir.path().join("c_camera.json");
+        std::fs::write(&camera_path, camera).unwrap();
+        let opts = DepthOptions {
+            camera: Some(camera_path),
+            ..DepthOptions::default()
+        };
+        let photo = Photo::load(
+            &dir.path().join("f_leftImg8bit.png"),
+            &dir.path().join("f_disparity.png"),
+            &opts,
+        )
+        .unwrap();
+        let p = brume::photo::preprocess(&photo, &PrepareOptions::default()).unwrap();
+        let mut worst: f64 = 0.0;
+        for y in H - HOOD..H {
+            for x in 0..W {
+                let u = (f64::from(x) - U0) / F;
+                let v = (f64::from(y) - V0) / F;
+                let road = road_depth(y).unwrap() * (1.0 + u * u + v * v).sqrt();
+                worst = worst.max(f64::from(*p.range.get(x as usize, y as usize)) / road);
+            }
+        }
+        worst
+    };
+    let bounded = band_over_road(&with_mount);
+    let unbounded = band_over_road(&without);
+    assert!(bounded < 1.01, "R / R_road up to {bounded} with the mount");
+    assert!(
+        unbounded > 1.1,
+        "R / R_road up to {unbounded} without the mount"
+    );
+}
