@@ -134,8 +134,9 @@ fn a_bottom_band_comes_no_farther_than_the_road() {
         r#"{{"extrinsic": {{"baseline": {B}, "z": {HEIGHT}, "pitch": {PITCH}}}, {intrinsic}}}"#
     );
     let without = format!(r#"{{"extrinsic": {{"baseline": {B}}}, {intrinsic}}}"#);
-    // The largest R / R_road over the band's pixels once prepared.
-    let band_over_road = |camera: &str| -> f64 {
+    // The largest R / R_road over the band's pixels once prepared, and how many the level
+    // road brought nearer.
+    let band_over_road = |camera: &str| -> (f64, usize) {
         let camera_path = dir.path().join("c_camera.json");
         std::fs::write(&camera_path, camera).unwrap();
         let opts = DepthOptions {
@@ -158,10 +159,14 @@ fn a_bottom_band_comes_no_farther_than_the_road() {
                 worst = worst.max(f64::from(*p.range.get(x as usize, y as usize)) / road);
             }
         }
-        worst
+        (worst, p.prepared.as_ref().unwrap().stats.border_on_road)
     };
-    let bounded = band_over_road(&with_mount);
-    let unbounded = band_over_road(&without);
+    let (bounded, on_road) = band_over_road(&with_mount);
+    let (unbounded, none) = band_over_road(&without);
+    assert!(
+        on_road > 0 && none == 0,
+        "{on_road} and {none} px brought onto the road"
+    );
     assert!(bounded < 1.01, "R / R_road up to {bounded} with the mount");
     assert!(
         unbounded > 1.1,

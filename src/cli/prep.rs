@@ -157,9 +157,11 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         );
         outln!(
             "border bands: {} px continued ({} px of specks farther than their band \
-             dropped), {} px sky; {} px beyond the depth's reach; ego vehicle {} px (range 0)",
+             dropped, {} px brought onto the level road), {} px sky; {} px beyond the \
+             depth's reach; ego vehicle {} px (range 0)",
             s.border_filled,
             s.border_islands,
+            s.border_on_road,
             s.border_sky,
             s.beyond_reach,
             s.ego_pixels

@@ -320,6 +320,9 @@ pub struct PrepStats {
     /// the band continues, a matcher's specks or a hood's reflection; see `border.rs`), then
     /// filled with the band (counted in `border_filled`).
     pub border_islands: usize,
+    /// Border band pixels brought no farther than the level road along their ray
+    /// ([`PrepOptions::ground`]; 0 without it; counted in `border_filled` too).
+    pub border_on_road: usize,
     /// Unknown pixels taken as stereo occlusions and filled from their background alone
     /// ([`PrepOptions::stereo_focal_baseline`]; 0 without it).
     pub occluded: usize,
@@ -514,7 +517,7 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         (stats.border_filled, stats.border_sky, stats.border_islands) =
             (b.filled, b.sky, b.islands);
         if let Some(ground) = &opts.ground {
-            ground::bands_on_the_road(&mut work, &filled, (w, h), ground);
+            stats.border_on_road = ground::bands_on_the_road(&mut work, &filled, (w, h), ground);
         }
     }
     let mut holes = holes::Holes {
