@@ -52,6 +52,43 @@ fn disparity(x: u32, y: u32) -> f64 {
     F * B / z
 }
 
+/// The camera files of the frames below: with the camera's mount over the road, and
+/// without it (baseline and intrinsics only).
+fn camera_files() -> [String; 2] {
+    let intrinsic = format!(r#""intrinsic": {{"fx": {F}, "fy": {F}, "u0": {U0}, "v0": {V0}}}"#);
+    [
+        format!(
+            r#"{{"extrinsic": {{"baseline": {B}, "z": {HEIGHT}, "pitch": {PITCH}}}, {intrinsic}}}"#
+        ),
+        format!(r#"{{"extrinsic": {{"baseline": {B}}}, {intrinsic}}}"#),
+    ]
+}
+
+/// The frame saved in `dir` (`f_disparity.png`, `f_leftImg8bit.png`) prepared with
+/// `camera` as its camera file.
+fn prepared(dir: &std::path::Path, camera: &str) -> brume::photo::PreparedPhoto {
+    let camera_path = dir.join("c_camera.json");
+    std::fs::write(&camera_path, camera).unwrap();
+    let opts = DepthOptions {
+        camera: Some(camera_path),
+        ..DepthOptions::default()
+    };
+    let photo = Photo::load(
+        &dir.join("f_leftImg8bit.png"),
+        &dir.join("f_disparity.png"),
+        &opts,
+    )
+    .unwrap();
+    brume::photo::preprocess(&photo, &PrepareOptions::default()).unwrap()
+}
+
+/// The level road's range through pixel (x, y).
+fn road_range(x: u32, y: u32) -> f64 {
+    let u = (f64::from(x) - U0) / F;
+    let v = (f64::from(y) - V0) / F;
+    road_depth(y).unwrap() * (1.0 + u * u + v * v).sqrt()
+}
+
 #[test]
 fn specks_beyond_the_road_are_filled_as_the_road() {
     let dir = tempfile::tempdir().unwrap();
@@ -62,35 +99,16 @@ fn specks_beyond_the_road_are_filled_as_the_road() {
         _ => image::Rgb([150, 110, 80]),
     });
     colour.save(dir.path().join("f_leftImg8bit.png")).unwrap();
-    let intrinsic = format!(r#""intrinsic": {{"fx": {F}, "fy": {F}, "u0": {U0}, "v0": {V0}}}"#);
-    let with_mount = format!(
-        r#"{{"extrinsic": {{"baseline": {B}, "z": {HEIGHT}, "pitch": {PITCH}}}, {intrinsic}}}"#
-    );
-    let without = format!(r#"{{"extrinsic": {{"baseline": {B}}}, {intrinsic}}}"#);
+    let [with_mount, without] = camera_files();
     // The mean |ln(R / R_road)| over the specks' pixels once prepared, and the count of
     // values dropped beyond the road.
     let speck_error = |camera: &str| -> (f64, usize) {
-        let camera_path = dir.path().join("c_camera.json");
-        std::fs::write(&camera_path, camera).unwrap();
-        let opts = DepthOptions {
-            camera: Some(camera_path),
-            ..DepthOptions::default()
-        };
-        let photo = Photo::load(
-            &dir.path().join("f_leftImg8bit.png"),
-            &dir.path().join("f_disparity.png"),
-            &opts,
-        )
-        .unwrap();
-        let p = brume::photo::preprocess(&photo, &PrepareOptions::default()).unwrap();
+        let p = prepared(dir.path(), camera);
         let (mut sum, mut n) = (0.0, 0);
         for y in 0..H {
             for x in (0..W).filter(|&x| speck(x, y)) {
-                let u = (f64::from(x) - U0) / F;
-                let v = (f64::from(y) - V0) / F;
-                let road = road_depth(y).unwrap() * (1.0 + u * u + v * v).sqrt();
                 let got = f64::from(*p.range.get(x as usize, y as usize));
-                sum += (got / road).ln().abs();
+                sum += (got / road_range(x, y)).ln().abs();
                 n += 1;
             }
         }
@@ -129,34 +147,16 @@ fn a_bottom_band_comes_no_farther_than_the_road() {
     disp.save(dir.path().join("f_disparity.png")).unwrap();
     let colour = image::RgbImage::from_fn(W, H, |_, _| image::Rgb([90, 90, 95]));
     colour.save(dir.path().join("f_leftImg8bit.png")).unwrap();
-    let intrinsic = format!(r#""intrinsic": {{"fx": {F}, "fy": {F}, "u0": {U0}, "v0": {V0}}}"#);
-    let with_mount = format!(
-        r#"{{"extrinsic": {{"baseline": {B}, "z": {HEIGHT}, "pitch": {PITCH}}}, {intrinsic}}}"#
-    );
-    let without = format!(r#"{{"extrinsic": {{"baseline": {B}}}, {intrinsic}}}"#);
+    let [with_mount, without] = camera_files();
     // The largest R / R_road over the band's pixels once prepared, and how many the level
     // road brought nearer.
     let band_over_road = |camera: &str| -> (f64, usize) {
-        let camera_path = dir.path().join("c_camera.json");
-        std::fs::write(&camera_path, camera).unwrap();
-        let opts = DepthOptions {
-            camera: Some(camera_path),
-            ..DepthOptions::default()
-        };
-        let photo = Photo::load(
-            &dir.path().join("f_leftImg8bit.png"),
-            &dir.path().join("f_disparity.png"),
-            &opts,
-        )
-        .unwrap();
-        let p = brume::photo::preprocess(&photo, &PrepareOptions::default()).unwrap();
+        let p = prepared(dir.path(), camera);
         let mut worst: f64 = 0.0;
         for y in H - HOOD..H {
             for x in 0..W {
-                let u = (f64::from(x) - U0) / F;
-                let v = (f64::from(y) - V0) / F;
-                let road = road_depth(y).unwrap() * (1.0 + u * u + v * v).sqrt();
-                worst = worst.max(f64::from(*p.range.get(x as usize, y as usize)) / road);
+                let got = f64::from(*p.range.get(x as usize, y as usize));
+                worst = worst.max(got / road_range(x, y));
             }
         }
         (worst, p.prepared.as_ref().unwrap().stats.border_on_road)
