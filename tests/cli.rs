@@ -776,10 +776,11 @@ fn prep_writes_the_range_and_the_picture() {
     // Indoor: every unknown pixel is a hole, or (611 px of the left band) a border band
     // continued from the surfaces to its right; the true disparity has no specks in it.
     assert_eq!(v["border_islands"], 0, "{v}");
-    // A left view's disparity: the occlusion rule looks, but the leaves are about 1.2 times
-    // nearer than the cloth, under its 1.25, so it takes only a few dozen pixels.
+    // A left view's disparity: the leaves are only about 1.2 times nearer than the cloth,
+    // under the occlusion rule's 1.25, but tens of pixels of disparity nearer, over its
+    // 8: the runs beside them are occlusions (4,650 px; 55 by the ratio alone).
     let occluded = v["occluded"].as_u64().unwrap();
-    assert!((1..500).contains(&occluded), "{v}");
+    assert!((4_000..5_500).contains(&occluded), "{v}");
     assert_eq!(
         v["hole_pixels"].as_u64().unwrap() + v["border_filled"].as_u64().unwrap(),
         49_130,

@@ -158,8 +158,9 @@
 //!
 //!    **Stereo occlusions** ([`PrepOptions::stereo_focal_baseline`], a left view's
 //!    matched disparity: Cityscapes, Middlebury, any read with a focal length and
-//!    baseline): a run of unknown pixels in a row whose right side is
-//!    at least 1.25 times nearer than its left, at most about twice as wide as their
+//!    baseline): a run of unknown pixels in a row whose right side is at least 1.25
+//!    times nearer than its left or 8 px of disparity nearer (close range), at most
+//!    about twice as wide as their
 //!    disparities differ, between measured sides (the left one a surface over 8 pixels),
 //!    is the background the right camera could not see. Its hole is filled without the
 //!    edges to the near surface right of such runs, the *occluder* (see `occlusion.rs`),

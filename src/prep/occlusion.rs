@@ -13,6 +13,11 @@
 /// less, and where it does not the width test below tells it apart.
 const OCCLUSION_NEARER: f32 = 1.25;
 
+/// ... or a disparity step of at least this many pixels, whatever the ratio: at close
+/// range a large step is a small ratio (Aloe's leaves are 1.2 times nearer than the cloth
+/// behind them, 56 px of disparity apart).
+const OCCLUSION_STEP_PX: f64 = 8.0;
+
 /// An occlusion is about as wide as its sides' disparities differ, Δd = f·B·(1/R_right −
 /// 1/R_left) pixels; a run is taken as one when at most `OCCLUSION_WIDTH_FACTOR · Δd +`
 /// [`OCCLUSION_WIDTH_SLACK_PX`] wide. On three real Cityscapes frames the runs with a
@@ -48,7 +53,8 @@ pub(crate) struct Occlusions {
 /// anything else, as the sky's +∞, neither), a left view's range from a disparity with
 /// `focal_baseline` = f·B (px·m, d ≈ f·B / R): per row, each run of unknown pixels with a
 /// known pixel on both sides, the right one at least [`OCCLUSION_NEARER`] times nearer
-/// than the left one, and at most `OCCLUSION_WIDTH_FACTOR · Δd + OCCLUSION_WIDTH_SLACK_PX`
+/// than the left one or [`OCCLUSION_STEP_PX`] of disparity nearer, and at most
+/// `OCCLUSION_WIDTH_FACTOR · Δd + OCCLUSION_WIDTH_SLACK_PX`
 /// wide (range taken as depth: off the optical axis Δd is up to a quarter too small at
 /// the corners of a 50° frame, as the slack allows). Both sides must be measured, not
 /// `filled` (a border band's continuation), the left one over
@@ -107,11 +113,12 @@ fn is_background(row: &[f32], filled: &[bool]) -> bool {
 /// Whether a run of `width` unknown pixels between known ranges `left` and `right` is an
 /// occlusion (see [`find`]).
 fn is_occlusion(left: f32, right: f32, width: usize, focal_baseline: f64) -> bool {
-    if !(left.is_finite() && right.is_finite() && right > 0.0) || left < right * OCCLUSION_NEARER {
+    if !(left.is_finite() && right.is_finite() && right > 0.0) {
         return false;
     }
     let step_px = focal_baseline * (1.0 / f64::from(right) - 1.0 / f64::from(left));
-    width as f64 <= OCCLUSION_WIDTH_FACTOR * step_px + OCCLUSION_WIDTH_SLACK_PX
+    (left >= right * OCCLUSION_NEARER || step_px >= OCCLUSION_STEP_PX)
+        && width as f64 <= OCCLUSION_WIDTH_FACTOR * step_px + OCCLUSION_WIDTH_SLACK_PX
 }
 
 /// Marks the run `[start, end)` of the row beginning at `base` occluded and its occluder
@@ -182,6 +189,24 @@ mod tests {
         let wide = |n: usize| row(&[(NAN, n), (10.0, 4)]);
         assert_eq!(find_in(&wide(14)).count, 14);
         assert_eq!(find_in(&wide(15)).count, 0);
+    }
+
+    /// At close range a large disparity step is a small ratio: a surface 1.18 times
+    /// nearer than the background (17 m against 20) is 8.8 px of disparity nearer with
+    /// f·B = 1000 px·m, and the run beside it is an occlusion; with f·B = 100 (0.9 px, a
+    /// face turning away) it is not.
+    #[test]
+    fn a_large_disparity_step_is_an_occlusion_below_the_ratio() {
+        let values = row(&[(NAN, 12), (17.0, 4)]);
+        let found = |fb: f64| find(&values, &vec![false; values.len()], (values.len(), 1), fb);
+        assert_eq!(found(1000.0).count, 12);
+        assert_eq!(found(100.0).count, 0);
+        // Wider than 2 · 8.8 + 4 px: no occlusion, whatever the step.
+        let wide = row(&[(NAN, 22), (17.0, 4)]);
+        assert_eq!(
+            find(&wide, &vec![false; wide.len()], (wide.len(), 1), 1000.0).count,
+            0
+        );
     }
 
     /// A run at the border, or beside the sky (+∞), has no two known sides.
