@@ -797,6 +797,35 @@ fn prep_writes_the_range_and_the_picture() {
     assert!(dir.path().join("range.exr").exists());
 }
 
+/// Aloe's disparity mirrored is a right view's: read with `--stereo-view right` its
+/// occlusions are found right of the leaves, as many as the left view has left of them;
+/// read as a left view's (the default), the runs it takes are others (the projector's
+/// shadows right of the leaves, mirrored).
+#[test]
+fn prep_reads_a_right_views_disparity() {
+    let dir = tempfile::tempdir().unwrap();
+    let disparity = image::open(aloe("disparity.png")).unwrap();
+    disparity
+        .fliph()
+        .save(dir.path().join("right.png"))
+        .unwrap();
+    let occluded = |depth: &str, view: &[&str]| -> (u64, Value) {
+        let mut args = vec!["prep", "--depth", depth, "--out", "range.pfm", "--json"];
+        args.extend_from_slice(view);
+        let o = brume(dir.path(), &args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        (v["occluded"].as_u64().unwrap(), v["stereo_view"].clone())
+    };
+    let left = occluded(aloe("disparity.png").to_str().unwrap(), &[]);
+    let right = occluded("right.png", &["--stereo-view", "right"]);
+    let as_left = occluded("right.png", &[]);
+    assert_eq!(left.1, "left");
+    assert_eq!(right.1, "right");
+    assert_eq!(right.0, left.0, "the left view's occlusions, mirrored");
+    assert!(as_left.0 != left.0, "{} {}", as_left.0, left.0);
+}
+
 #[test]
 fn prep_finds_the_sky_of_an_outdoor_scene_and_render_uses_it() {
     let dir = tempfile::tempdir().unwrap();

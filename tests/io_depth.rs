@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use brume::io::depth::{
     load_cityscapes, load_cityscapes_from_bytes, load_range, load_range_from_bytes, parse_calib,
     parse_camera_str, parse_pfm, range_from_map, read_pfm, DepthFormat, DepthKind, DepthOptions,
-    LoadedDepth, Pfm, DEPTH16_DEFAULT_MIN_CONFIDENCE,
+    LoadedDepth, Pfm, StereoView, DEPTH16_DEFAULT_MIN_CONFIDENCE,
 };
 use brume::io::output::write_scalar;
 use brume::raster::{Grid, ScalarMap};
@@ -265,6 +265,69 @@ fn middlebury2014_end_to_end() {
     assert!(close(*r.get(0, 1), expect(0.0, 1.0, 90.0)));
     assert!(close(*r.get(3, 1), expect(3.0, 1.0, 30.0)));
     assert!(r.get(0, 0) > r.get(0, 1), "bigger disparity is nearer");
+}
+
+/// A right view's map (`disp1.pfm`, or any with `stereo_view` right) is aligned with the
+/// right camera: its range is taken from cam1's principal point (10 px right of cam0's in
+/// this calib.txt), and notes say so; `disp10.pfm` is no right view, and `stereo_view`
+/// left reads `disp1.pfm` as a left one. A map that is no disparity notes the option
+/// ignored.
+#[test]
+fn middlebury2014_right_view_takes_cam1() {
+    let dir = middlebury2014_dir(4, 2, &[90.0, 80.0, 40.0, 30.0, 10.0, 20.0, 50.0, 60.0]);
+    let left = load_range(&dir.path().join("disp0.pfm"), &DepthOptions::default()).unwrap();
+    for name in ["disp1.pfm", "disp10.pfm"] {
+        std::fs::copy(dir.path().join("disp0.pfm"), dir.path().join(name)).unwrap();
+    }
+    let right = load_range(&dir.path().join("disp1.pfm"), &DepthOptions::default()).unwrap();
+    let k = right.intrinsics.unwrap();
+    assert_eq!((k.fx, k.cx, k.cy), (1000.0, 11.5, 0.5));
+    assert!(
+        right.notes.iter().any(|n| n.contains("cam1")),
+        "{:?}",
+        right.notes
+    );
+    assert!(right
+        .notes
+        .iter()
+        .any(|n| n.contains("right of nearer surfaces")));
+    assert_eq!(right.stereo_focal_baseline, left.stereo_focal_baseline);
+    assert_eq!(
+        (left.stereo_view, right.stereo_view),
+        (StereoView::Left, StereoView::Right)
+    );
+    let opts = |view| DepthOptions {
+        stereo_view: Some(view),
+        ..DepthOptions::default()
+    };
+    let as_view = |path: &str, view| load_range(&dir.path().join(path), &opts(view)).unwrap();
+    let given = as_view("disp0.pfm", StereoView::Right);
+    assert_eq!(
+        (given.intrinsics, given.stereo_view),
+        (right.intrinsics, StereoView::Right)
+    );
+    assert_eq!(
+        as_view("disp1.pfm", StereoView::Left).intrinsics,
+        left.intrinsics
+    );
+    let depth = dir.path().join("depth.exr");
+    write_scalar(&depth, &Grid::from_fn(4, 2, |x, _| 1.0 + x as f32)).unwrap();
+    let not_disparity = load_range(&depth, &opts(StereoView::Right)).unwrap();
+    assert_eq!(not_disparity.stereo_view, StereoView::Left);
+    assert!(
+        (not_disparity.notes.iter()).any(|n| n.starts_with("`stereo_view` right ignored")),
+        "{:?}",
+        not_disparity.notes
+    );
+    let z = |disp: f64| 200.0 * 1000.0 / (disp + 10.0) / 1000.0;
+    let ray = |x: f64, cx: f64| (1.0 + (x - cx).powi(2) / 1000.0f64.powi(2)).sqrt();
+    // Top row, column 0: disparity 10, half a pixel above the principal point.
+    let expect = |cx: f64| z(10.0) * (ray(0.0, cx).powi(2) + 0.25e-6).sqrt();
+    assert!(close(*right.range.get(0, 0), expect(11.5)));
+    assert!(close(*left.range.get(0, 0), expect(1.5)));
+    assert!(right.range.get(0, 0) > left.range.get(0, 0));
+    let other = load_range(&dir.path().join("disp10.pfm"), &DepthOptions::default()).unwrap();
+    assert_eq!(other.intrinsics, left.intrinsics);
 }
 
 #[test]

@@ -2,7 +2,7 @@
 
 use crate::common;
 
-use brume::io::depth::{DepthFormat, DepthOptions};
+use brume::io::depth::{DepthFormat, DepthOptions, StereoView};
 use brume::photo::{Photo, PrepareOptions};
 use brume::prep::{prepare, ImageSkyRules, PrepOptions, SkyRules};
 use brume::raster::{Grid, ScalarMap};
@@ -310,8 +310,9 @@ fn bad_options_are_invalid_parameters() {
 /// over the wall on every other row (a matcher's fattened, jagged edge). Loaded as a photo
 /// with its camera file, or as a float disparity with its focal length and baseline (a
 /// matcher's own output, which used to be filled as any hole), the occlusion is filled with
-/// the wall's range; filled as any hole (the same map as a 16-bit PNG in millimetres) it
-/// was not.
+/// the wall's range, and so is the right view's mirrored one (right of the pole) read as a
+/// right view's; filled as any hole (the same map as a 16-bit PNG in millimetres, or the
+/// right view's read as a left one) it was not.
 #[test]
 fn a_cityscapes_pole_leaves_no_halo() {
     const POLE: std::ops::Range<u32> = 60..66;
@@ -398,23 +399,42 @@ fn a_cityscapes_pole_leaves_no_halo() {
     let image_path = dir.path().join("f_leftImg8bit.png");
     let float = Photo::load(&image_path, &float_path, &float_opts).unwrap();
     assert_eq!(float.depth.stereo_focal_baseline, Some(50.0));
-    let wall_error = |photo: &Photo| -> (f64, usize) {
+    let mirrored = Grid::from_fn(w as usize, h as usize, |x, y| {
+        *float_disparity.get(w as usize - 1 - x, y)
+    });
+    let mirrored_path = dir.path().join("f_right.pfm");
+    brume::io::output::write_scalar(&mirrored_path, &mirrored).unwrap();
+    let right_image = dir.path().join("f_right.png");
+    image::imageops::flip_horizontal(&photo_image)
+        .save(&right_image)
+        .unwrap();
+    let right_opts = DepthOptions {
+        stereo_view: Some(StereoView::Right),
+        ..float_opts.clone()
+    };
+    let right = Photo::load(&right_image, &mirrored_path, &right_opts).unwrap();
+    assert_eq!(right.depth.stereo_view, StereoView::Right);
+    let as_left = Photo::load(&right_image, &mirrored_path, &float_opts).unwrap();
+    let wall_error_at = |photo: &Photo, column: &dyn Fn(u32) -> usize| -> (f64, usize) {
         let p = brume::photo::preprocess(photo, &prepare_options).unwrap();
         let stats = p.prepared.as_ref().unwrap().stats.clone();
         let (mut sum, mut n) = (0.0, 0);
-        for y in 0..h {
+        // Row 0's run is no occlusion: the top band continues row 1's fattened edge over
+        // its two pixels beside the pole, and a band's continuation is no occluder.
+        for y in 1..h {
             for x in OCCLUDED.start..POLE.start - 2 {
                 let wall = *photo
                     .depth
                     .range
-                    .get(OCCLUDED.start as usize - 1, y as usize);
-                let got = *p.range.get(x as usize, y as usize);
+                    .get(column(OCCLUDED.start - 1), y as usize);
+                let got = *p.range.get(column(x), y as usize);
                 sum += f64::from((got / wall).ln().abs());
                 n += 1;
             }
         }
         (sum / n as f64, stats.occluded)
     };
+    let wall_error = |photo: &Photo| wall_error_at(photo, &|x| x as usize);
     let (as_occlusion, occluded) = wall_error(&stereo);
     let (as_hole, none) = wall_error(&png);
     assert_eq!(none, 0);
@@ -427,4 +447,14 @@ fn a_cityscapes_pole_leaves_no_halo() {
         "mean |ln(R / R_wall)| {from_float} from a float map"
     );
     assert!(as_hole > 0.3, "mean |ln(R / R_wall)| {as_hole} as a hole");
+    let mirror = |x: u32| (w - 1 - x) as usize;
+    let (from_right, right_occluded) = wall_error_at(&right, &mirror);
+    assert_eq!(right_occluded, occluded);
+    assert!(
+        from_right < 0.01,
+        "mean |ln(R / R_wall)| {from_right} from a right view"
+    );
+    let (right_as_left, none) = wall_error_at(&as_left, &mirror);
+    assert_eq!(none, 0, "a right view read as a left one");
+    assert!(right_as_left > 0.3, "{right_as_left}");
 }

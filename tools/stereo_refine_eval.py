@@ -49,6 +49,8 @@ Usage (from the repository root, after ``cargo build --release --bin brume``):
         [--size 1024x512] [--fov 45] [--baseline 0.5] [--beta 0.02]
         [--position 0,1.7,0] [--yaw 0] [--pitch 0] [--num-disparities 144 per 1024 px of width]
         [--refine-radius PX] [--refine-eps EPS] [--seed N]   (passed to brume render)
+        [--view left|right] [--read-as left|right]   (the right view's disparity, the
+            mirrored pair's SGBM mirrored back, and which view brume is told it is)
         [--docs DIR]   (also copy the four foggy PNGs there as refine-sgbm-{truth,none,guided,repair}.png)
 
 Needs: numpy, opencv-python-headless (``pip install opencv-python-headless numpy``), and the
@@ -179,9 +181,20 @@ def main():
     ap.add_argument("--block-size", type=int, default=5)
     ap.add_argument("--right", action="store_true",
                     help="give brume the right view (--right): its left-right check")
+    ap.add_argument("--view", choices=("left", "right"), default="left",
+                    help="whose disparity brume is given: the right view's is SGBM's on the "
+                         "mirrored pair, mirrored back (its occlusions lie right of nearer "
+                         "surfaces, its unmatched band at the right border)")
+    ap.add_argument("--read-as", choices=("left", "right"), default=None,
+                    help="the view brume is told the disparity is of (--stereo-view) "
+                         "[--view's]: --view right --read-as left measures a right view "
+                         "read as a left one")
     ap.add_argument("--edge-px", type=int, default=5)
     ap.add_argument("--docs", default=None)
     a = ap.parse_args()
+    if a.right and a.view == "right":
+        sys.exit("stereo_refine_eval: --right gives brume the other view for its left-right "
+                 "check, which is the left one with --view right: not supported")
 
     os.makedirs(a.out_dir, exist_ok=True)
     o = lambda n: os.path.join(a.out_dir, n)  # noqa: E731
@@ -207,9 +220,11 @@ def main():
               "--far", str(a.far)]
     run([B] + common + ["--position", ",".join(map(str, pos)), "--out", o("left.png"),
                         "--depth-out", o("left_z.pfm")])
-    run([B] + common + ["--position", ",".join(map(str, pos_r)), "--out", o("right.png")])
+    run([B] + common + ["--position", ",".join(map(str, pos_r)), "--out", o("right.png"),
+                        "--depth-out", o("right_z.pfm")])
+    view = o(f"{a.view}.png")
 
-    F, sky, z, R_true = truth_from_zbuffer(o("left_z.pfm"), a.fov, a.near, a.far)
+    F, sky, z, R_true = truth_from_zbuffer(o(f"{a.view}_z.pfm"), a.fov, a.near, a.far)
     cx, cy = (W - 1) / 2.0, (H - 1) / 2.0
     xs = np.meshgrid(np.arange(W), np.arange(H))[0]
     d_true = np.where(sky, 0.0, F * a.baseline / z)
@@ -233,7 +248,12 @@ def main():
         minDisparity=0, numDisparities=a.num_disparities, blockSize=bs,
         P1=8 * 3 * bs * bs, P2=32 * 3 * bs * bs, disp12MaxDiff=1, uniquenessRatio=10,
         speckleWindowSize=100, speckleRange=2, mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY)
-    d_sgbm = sgbm.compute(L, Rimg).astype(np.float64) / 16.0
+    if a.view == "left":
+        d_sgbm = sgbm.compute(L, Rimg).astype(np.float64) / 16.0
+    else:
+        mirrored = sgbm.compute(np.ascontiguousarray(Rimg[:, ::-1]),
+                                np.ascontiguousarray(L[:, ::-1]))
+        d_sgbm = mirrored[:, ::-1].astype(np.float64) / 16.0
     d_sgbm[d_sgbm <= 0] = 0.0
     write_cityscapes(o("sgbm_disparity.png"), d_sgbm)
     valid = d_sgbm > 0
@@ -250,13 +270,15 @@ def main():
 
     # Masks: truth edges (disparity jump > 1 px or sky/surface), dilated by edge_px.
     near_edge = near_edges(d_true, 1.0, sky, a.edge_px)
-    band = xs < a.num_disparities
+    band = xs < a.num_disparities if a.view == "left" else xs >= W - a.num_disparities
+    band_name = (f"left band x<{a.num_disparities}" if a.view == "left"
+                 else f"right band x>={W - a.num_disparities}")
     masks = {
         "all": np.ones((H, W), bool),
         "near edges (5 px)": near_edge,
         "sky": sky,
         "surfaces, not near edges": surf & ~near_edge,
-        f"left band x<{a.num_disparities}": band,
+        band_name: band,
         "SGBM good (valid, <=3 px off)": surf & valid & (dd <= 3),
         "SGBM bad (invalid or >3 px off)": surf & ~(valid & (dd <= 3)),
     }
@@ -264,7 +286,7 @@ def main():
     # 3. τ per condition.
     def tau_of(depth, refine, tag):
         def render(airlight, out):
-            run([B, "render", "--image", o("left.png"), "--depth", o(depth),
+            run([B, "render", "--image", view, "--depth", o(depth),
                  "--depth-format", "cityscapes", "--camera",
                  o(depth.replace("_disparity.png", "_camera.json")),
                  "--beta", str(a.beta), "--lambda", "0", "--airlight", airlight,
@@ -272,6 +294,8 @@ def main():
         return tau_from_two_airlights(render, lambda A: o(f"tau_{tag}_A{A}.pfm"))
 
     right_opts = ["--right", o("right.png")] if a.right else []
+    if (a.read_as or a.view) == "right":
+        right_opts += ["--stereo-view", "right"]
     conds = [("truth disparity, refine none", "truth_disparity.png", "none", "truth_none"),
              ("truth disparity, refine guided", "truth_disparity.png", "guided", "truth_guided"),
              ("SGBM, refine none", "sgbm_disparity.png", "none", "sgbm_none"),
@@ -282,6 +306,7 @@ def main():
     results = {"setup": {"size": [W, H], "fov_deg": a.fov, "focal_px": F,
                          "baseline_m": a.baseline, "beta": a.beta, "position": pos,
                          "yaw": a.yaw, "pitch": a.pitch, "near": a.near, "far": a.far,
+                         "view": a.view, "read_as": a.read_as or a.view,
                          "refine_options": refine_opts,
                          "sgbm": {"numDisparities": a.num_disparities, "blockSize": bs,
                                   "mode": "SGBM_3WAY", "uniquenessRatio": 10,
@@ -305,7 +330,7 @@ def main():
             ("fog_sgbm_guided.png", "sgbm_disparity.png", "guided"),
             ("fog_sgbm_repair.png", "sgbm_disparity.png", "repair")]
     for out, depth, refine in fogs:
-        run([B, "render", "--image", o("left.png"), "--depth", o(depth),
+        run([B, "render", "--image", view, "--depth", o(depth),
              "--depth-format", "cityscapes", "--camera",
              o(depth.replace("_disparity.png", "_camera.json")), "--beta", str(a.beta),
              "--refine", refine, "--out", o(out)] + refine_opts + right_opts)

@@ -92,6 +92,7 @@ class Renderer:
         return_info: bool = False,
         monocular: bool = False,
         stereo_focal_baseline: Optional[float] = None,
+        stereo_view: Optional[str] = None,
         ground: Optional[Dict[str, float]] = None,
     ) -> Any: ...
     def distance_fog(
@@ -189,6 +190,7 @@ class Renderer:
         return_info: bool = False,
         monocular: bool = False,
         stereo_focal_baseline: Optional[float] = None,
+        stereo_view: Optional[str] = None,
         ground: Optional[Dict[str, float]] = None,
     ) -> Any: ...
 
@@ -215,6 +217,7 @@ def fog(
     return_info: bool = False,
     monocular: bool = False,
     stereo_focal_baseline: Optional[float] = None,
+    stereo_view: Optional[str] = None,
     ground: Optional[Dict[str, float]] = None,
 ) -> Any: ...
 def distance_fog(
@@ -309,6 +312,7 @@ def aerial(
     return_info: bool = False,
     monocular: bool = False,
     stereo_focal_baseline: Optional[float] = None,
+    stereo_view: Optional[str] = None,
     ground: Optional[Dict[str, float]] = None,
 ) -> Any: ...
 def load_photo(path: PathArg, *, dtype: str = "uint8") -> Tuple[Array, Dict[str, Any]]: ...
@@ -340,6 +344,7 @@ def load_depth(
     layout: Optional[str] = None,
     sky_beyond: Optional[float] = None,
     camera_mount: Optional[Tuple[float, ...]] = None,
+    stereo_view: Optional[str] = None,
 ) -> Tuple[Array, Dict[str, Any]]: ...
 def range_from_depth(
     depth: Array,

@@ -37,7 +37,8 @@ class Fog(A.ImageOnlyTransform):
     image's size or smaller by one factor): β uniform in ``beta_range`` (1/m), or drawn
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
     ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur``,
-    ``refine``, ``compat``, ``monocular``, ``stereo_focal_baseline`` and ``ground`` are
+    ``refine``, ``compat``, ``monocular``, ``stereo_focal_baseline``, ``stereo_view`` and
+    ``ground`` are
     :func:`brume.fog`'s; ``airlight_range``
     draws a grey airlight in it instead, as :class:`brume.augment.RandomFog`'s. The image
     is uint8 sRGB or float32 linear RGB, as :func:`brume.fog` takes it: albumentations'
@@ -57,6 +58,7 @@ class Fog(A.ImageOnlyTransform):
         compat: Optional[str] = None,
         monocular: bool = False,
         stereo_focal_baseline: Optional[float] = None,
+        stereo_view: Optional[str] = None,
         ground: Optional[dict] = None,
         p: float = 1.0,
     ) -> None:
@@ -70,6 +72,7 @@ class Fog(A.ImageOnlyTransform):
         self.compat = compat
         self.monocular = bool(monocular)
         self.stereo_focal_baseline = stereo_focal_baseline
+        self.stereo_view = stereo_view
         self.ground = ground
 
     @property
@@ -105,6 +108,7 @@ class Fog(A.ImageOnlyTransform):
             compat=self.compat,
             monocular=self.monocular,
             stereo_focal_baseline=self.stereo_focal_baseline,
+            stereo_view=self.stereo_view,
             ground=self.ground,
             sky_mask=sky_mask,
             ego_mask=ego_mask,
@@ -121,5 +125,6 @@ class Fog(A.ImageOnlyTransform):
             "compat",
             "monocular",
             "stereo_focal_baseline",
+            "stereo_view",
             "ground",
         )

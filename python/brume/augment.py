@@ -47,10 +47,11 @@ class RandomFog:
     one factor); ``monocular=True`` when it comes from a monocular model's relative depth
     (:func:`brume.range_from_depth` with ``kind='inverse'`` or ``'affine'``), whose sky has
     a depth: :func:`brume.fog`'s ``monocular``; ``stereo_focal_baseline`` (f·B, px·m) when
-    it comes from a left view's stereo-matched disparity (a Cityscapes disparity:
+    it comes from a stereo-matched disparity (a Cityscapes disparity:
     :func:`brume.load_depth`'s info gives it), whose occlusions are then filled from their
-    background, and ``ground`` (that info's ``ground``: the level road under a Cityscapes
-    camera), which bounds its range below the horizon: :func:`brume.fog`'s.
+    background on the side ``stereo_view`` says (``'left'``, the default, or ``'right'``;
+    that info gives it too), and ``ground`` (that info's ``ground``: the level road under a
+    Cityscapes camera), which bounds its range below the horizon: :func:`brume.fog`'s.
     Fog whole frames and crop after: the airlight and the range of the sky come from the
     image the fog gets.
     Extra keyword targets (masks, boxes) pass through unchanged; ``sky_mask`` and
@@ -90,6 +91,7 @@ class RandomFog:
         return_info: bool = False,
         monocular: bool = False,
         stereo_focal_baseline: Optional[float] = None,
+        stereo_view: Optional[str] = None,
         ground: Optional[dict] = None,
     ) -> None:
         self.beta_range = _checked_betas(beta_range, beta_dist)
@@ -112,6 +114,7 @@ class RandomFog:
         self.return_info = bool(return_info)
         self.monocular = bool(monocular)
         self.stereo_focal_baseline = stereo_focal_baseline
+        self.stereo_view = stereo_view
         self.ground = ground
         self.seed = seed
         self.rng = np.random.default_rng(seed)
@@ -173,6 +176,7 @@ class RandomFog:
             return_info=self.return_info,
             monocular=self.monocular,
             stereo_focal_baseline=self.stereo_focal_baseline,
+            stereo_view=self.stereo_view,
             ground=self.ground,
             **self.capture,
         )
@@ -191,6 +195,7 @@ class RandomFog:
             f"capture={self.capture}, return_info={self.return_info}, "
             f"monocular={self.monocular}, "
             f"stereo_focal_baseline={self.stereo_focal_baseline}, "
+            f"stereo_view={self.stereo_view!r}, "
             f"ground={self.ground})"
         )
 

@@ -287,38 +287,34 @@ pub(crate) fn aerial_frame(
 pub(crate) const HORIZON_ZENITH_DEG: f64 = DEFAULT_HORIZON_ZENITH_DEG;
 
 /// aerial(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None,
-/// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None,
-/// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
-/// sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True,
-/// sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None,
-/// read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False,
-/// stereo_focal_baseline=None, ground=None) -> ndarray, or (ndarray, dict), or a list of
-/// those
+/// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None,
+/// airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None,
+/// icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
+/// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
+/// seed=0, return_info=False, monocular=False, stereo_focal_baseline=None, stereo_view=None,
+/// ground=None) -> ndarray, or (ndarray, dict), or a list of those
 ///
-/// Paper 002's aerial perspective from the turbidity T (1-20) on a photo with its range
-/// in metres (`brume render --medium aerial`). turbidity may be a sequence: a list, one
-/// output each, from one pre-processing and refinement of the frame. image and range_m
-/// as for brume.fog. One of fov_y_deg (vertical field of view) or focal_px gives each
-/// pixel's zenith angle, with
-/// pitch_deg (default 0) or horizon_row (the image row of the horizon, 0 at the top).
-/// altitude_m: above sea level. from_turbidity: the photo's own turbidity, its haze
-/// removed first (retargeting, retarget 'normalised' (eq. 26) or 'radiance'). airlight:
-/// the horizon's linear RGB or a grey (default: from the sky pre-processing finds), taken at
-/// horizon_zenith_deg; horizon_sectors azimuth sectors of it; sun (zenith_deg,
-/// azimuth_deg clockwise from the image centre's heading) shapes them without a sky.
-/// sensitivity: a CSV lambda_nm,r,g,b (default CIE 1931 to linear sRGB, or to the
-/// primaries of icc_profile: the photo's profile, bytes, as load_photo's info gives it).
-/// blur: the diffusion blur (lambda_px, sigma0); refine, the masks, the capture keywords,
-/// monocular, stereo_focal_baseline and ground as brume.fog. return_info=True also returns
-/// the labels of I = J·t + A·(1 - t) (before the blur and the capture), per pixel and
-/// channel: clear (J, float32 HxWx3 linear RGB: the photo the medium veiled, its haze
-/// removed with from_turbidity), transmittance (t, HxWx3), airlight (A, HxWx3 linear RGB:
-/// the light the veil tends to, which follows the view direction), turbidity and
-/// sigma_max_px.
+/// Paper 002's aerial perspective from the turbidity T (1-20) on a photo with its range in metres
+/// (`brume render --medium aerial`). turbidity may be a sequence: a list, one output each, from one
+/// pre-processing and refinement of the frame. image and range_m as for brume.fog. One of fov_y_deg
+/// (vertical field of view) or focal_px gives each pixel's zenith angle, with pitch_deg (default 0)
+/// or horizon_row (the image row of the horizon, 0 at the top). altitude_m: above sea level.
+/// from_turbidity: the photo's own turbidity, its haze removed first (retargeting, retarget
+/// 'normalised' (eq. 26) or 'radiance'). airlight: the horizon's linear RGB or a grey (default:
+/// from the sky pre-processing finds), taken at horizon_zenith_deg; horizon_sectors azimuth sectors
+/// of it; sun (zenith_deg, azimuth_deg clockwise from the image centre's heading) shapes them
+/// without a sky. sensitivity: a CSV lambda_nm,r,g,b (default CIE 1931 to linear sRGB, or to the
+/// primaries of icc_profile: the photo's profile, bytes, as load_photo's info gives it). blur: the
+/// diffusion blur (lambda_px, sigma0); refine, the masks, the capture keywords, monocular,
+/// stereo_focal_baseline, stereo_view and ground as brume.fog. return_info=True also returns the
+/// labels of I = J·t + A·(1 - t) (before the blur and the capture), per pixel and channel: clear
+/// (J, float32 HxWx3 linear RGB: the photo the medium veiled, its haze removed with
+/// from_turbidity), transmittance (t, HxWx3), airlight (A, HxWx3 linear RGB: the light the veil
+/// tends to, which follows the view direction), turbidity and sigma_max_px.
 #[pyfunction]
 #[pyo3(
     signature = (*args, **kwargs),
-    text_signature = "(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False, stereo_focal_baseline=None, ground=None)"
+    text_signature = "(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False, stereo_focal_baseline=None, stereo_view=None, ground=None)"
 )]
 pub(crate) fn aerial(
     py: Python<'_>,

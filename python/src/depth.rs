@@ -6,7 +6,7 @@ use super::arrays::{read_scalar_map, scalar_map_to_py, user_warning, FsPath};
 use super::{keyword_of, photo_fog, py_err};
 use brume::io::camera::Mount;
 use brume::io::depth::{
-    self, DepthFormat, DepthKind, DepthLayout, DepthOptions, LoadedDepth, PhotoGeometry,
+    self, DepthFormat, DepthKind, DepthLayout, DepthOptions, LoadedDepth, PhotoGeometry, StereoView,
 };
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -14,7 +14,7 @@ use pyo3::types::PyDict;
 /// load_depth(path, camera=None, format=None, *, kind=None, scale=None, calib=None,
 /// focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None,
 /// fov_y_deg=None, min_confidence=None, reversed_z=False, image=None, layout=None,
-/// sky_beyond=None) -> (range_m, info)
+/// sky_beyond=None, camera_mount=None, stereo_view=None) -> (range_m, info)
 ///
 /// Reads a depth, range or disparity file as range (float32 HxW, NaN where unknown) through
 /// brume's loaders: PNG, PFM, EXR, TIFF, a phone's portrait JPEG, or NumPy .npy and .npz
@@ -53,14 +53,17 @@ use pyo3::types::PyDict;
 /// every value. camera_mount: (height_m, pitch_deg, roll_deg=0), the camera's mount over a
 /// level road (pitch down, roll left side up; `brume render --camera-mount`) for a map
 /// without a Cityscapes camera file, with intrinsics and metres: info's ground then gives
-/// it. info: format, kind, units, metric (whether the range is in trustworthy
+/// it. stereo_view: 'left' or 'right', the camera a disparity is aligned with (brume
+/// render's --stereo-view; default: 'right' for a Middlebury 2014 disp1.pfm, else 'left').
+/// info: format, kind, units, metric (whether the range is in trustworthy
 /// metres, which fog with beta or visibility needs), notes, unknown_pixels,
-/// stereo_focal_baseline (f·B in px·m of a disparity, else None: give it to
-/// brume.fog as `brume render` uses it), ground (a Cityscapes camera file's mount over the
+/// stereo_focal_baseline (f·B in px·m of a disparity, else None) and stereo_view ('left'
+/// or 'right' for a disparity, else None; give both to brume.fog as `brume render` uses
+/// them), ground (a Cityscapes camera file's mount over the
 /// road, or camera_mount's, a dict of height_m, pitch (down) and roll in radians and fx, fy, cx, cy on the
 /// range's grid, else None: give it to brume.fog too).
 #[pyfunction]
-#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None, camera_mount=None))]
+#[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None, camera_mount=None, stereo_view=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn load_depth<'py>(
     py: Python<'py>,
@@ -82,6 +85,7 @@ pub(crate) fn load_depth<'py>(
     layout: Option<&str>,
     sky_beyond: Option<f64>,
     camera_mount: Option<Vec<f64>>,
+    stereo_view: Option<&str>,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
     let photo = match image {
         Some(path) => Some(py.detach(|| PhotoGeometry::read(&path.0)).map_err(py_err)?),
@@ -102,6 +106,9 @@ pub(crate) fn load_depth<'py>(
         },
         // (height_m, pitch_deg, roll_deg = 0), checked as `--camera-mount` is.
         camera_mount: (camera_mount.map(|m| Mount::from_degrees(&m)))
+            .transpose()
+            .map_err(py_err)?,
+        stereo_view: (stereo_view.map(str::parse::<StereoView>))
             .transpose()
             .map_err(py_err)?,
         ..geometry_options(
@@ -200,7 +207,8 @@ fn geometry_options(
 }
 
 /// The range as a numpy array and the info dict (format, kind, units, metric, notes
-/// naming this package's keywords, unknown_pixels, stereo_focal_baseline, ground).
+/// naming this package's keywords, unknown_pixels, stereo_focal_baseline, stereo_view,
+/// ground).
 fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, Bound<'_, PyDict>)> {
     warn_of_depth_warnings(py, &loaded)?;
     let notes: Vec<String> = (loaded.notes.iter())
@@ -214,6 +222,8 @@ fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, B
     info.set_item("notes", notes)?;
     info.set_item("unknown_pixels", loaded.unknown_pixels)?;
     info.set_item("stereo_focal_baseline", loaded.stereo_focal_baseline)?;
+    let view = (loaded.stereo_focal_baseline).map(|_| loaded.stereo_view.to_string());
+    info.set_item("stereo_view", view)?;
     // The level road as `brume render` takes it from the file.
     let ground = brume::prep::PrepOptions::default()
         .for_depth(&loaded)

@@ -134,12 +134,12 @@ impl Renderer {
     }
 
     /// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
-    /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
-    /// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
-    /// seed=0, compat=None, return_info=False, monocular=False, stereo_focal_baseline=None,
-    /// ground=None) -> ndarray, or (ndarray, dict) with return_info, or a list of those for
-    /// a sequence of betas or visibilities: as brume.fog, on this renderer's context.
-    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false, monocular=false, stereo_focal_baseline=None, ground=None))]
+    /// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None, exposure_stops=0.0,
+    /// shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None,
+    /// return_info=False, monocular=False, stereo_focal_baseline=None, stereo_view=None,
+    /// ground=None) -> ndarray, or (ndarray, dict) with return_info, or a list of those for a
+    /// sequence of betas or visibilities: as brume.fog, on this renderer's context.
+    #[pyo3(signature = (image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=true, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=false, monocular=false, stereo_focal_baseline=None, stereo_view=None, ground=None))]
     #[allow(clippy::too_many_arguments)]
     fn fog(
         &self,
@@ -165,6 +165,7 @@ impl Renderer {
         return_info: bool,
         monocular: bool,
         stereo_focal_baseline: Option<f64>,
+        stereo_view: Option<&str>,
         ground: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
@@ -188,7 +189,7 @@ impl Renderer {
         self.check_or_free_kept(py, || density.check_outputs_fit(area))?;
         let blur = (blur, lambda_px);
         let mut request = fog_request(density, airlight, blur, refine, capture, compat)?;
-        let origin = (monocular, stereo_focal_baseline, ground);
+        let origin = (monocular, (stereo_focal_baseline, stereo_view), ground);
         photo_fog::set_depth_origin(&mut request.prepare, origin)?;
         let range = read_range(range_m)?;
         set_masks(&mut request.prepare, &range, sky_mask, ego_mask)?;
@@ -344,16 +345,16 @@ impl Renderer {
     }
 
     /// aerial(image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None,
-    /// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None,
-    /// retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None,
-    /// sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0,
-    /// refine=True, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None,
-    /// read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False,
-    /// stereo_focal_baseline=None, ground=None) -> ndarray, or (ndarray, dict), or a list
-    /// of those: as brume.aerial, on this renderer's context.
+    /// horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None,
+    /// airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None,
+    /// icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=True, sky_mask=None,
+    /// ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None,
+    /// seed=0, return_info=False, monocular=False, stereo_focal_baseline=None, stereo_view=None,
+    /// ground=None) -> ndarray, or (ndarray, dict), or a list of those: as brume.aerial, on this
+    /// renderer's context.
     #[pyo3(
-        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false, monocular=false, stereo_focal_baseline=None, ground=None),
-        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False, stereo_focal_baseline=None, ground=None)"
+        signature = (image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=aerial_photo::HORIZON_ZENITH_DEG, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=true, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=false, monocular=false, stereo_focal_baseline=None, stereo_view=None, ground=None),
+        text_signature = "($self, image, range_m, *, turbidity, fov_y_deg=None, focal_px=None, pitch_deg=None, horizon_row=None, altitude_m=0.0, metres_per_unit=1.0, from_turbidity=None, retarget=None, airlight=None, horizon_zenith_deg=85.0, horizon_sectors=8, sun=None, sensitivity=None, icc_profile=None, blur=True, lambda_px=8.0, sigma0=1.0, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, return_info=False, monocular=False, stereo_focal_baseline=None, stereo_view=None, ground=None)"
     )]
     #[allow(clippy::too_many_arguments)]
     fn aerial<'py>(
@@ -390,6 +391,7 @@ impl Renderer {
         return_info: bool,
         monocular: bool,
         stereo_focal_baseline: Option<f64>,
+        stereo_view: Option<&str>,
         ground: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Py<PyAny>> {
         let default_refine = pyo3::types::PyBool::new(py, true);
@@ -402,7 +404,8 @@ impl Renderer {
             seed,
         )?;
         let mut prepare = prepare_request(airlight, refine)?;
-        photo_fog::set_depth_origin(&mut prepare, (monocular, stereo_focal_baseline, ground))?;
+        let origin = (monocular, (stereo_focal_baseline, stereo_view), ground);
+        photo_fog::set_depth_origin(&mut prepare, origin)?;
         let args = aerial_photo::AerialArgs {
             turbidities: turbidity.non_empty("turbidity")?.to_vec(),
             fov_y_deg,
@@ -511,11 +514,11 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
     Ok(DEFAULT_RENDERER.get_or_init(|| renderer))
 }
 
-/// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None,
-/// blur=True, lambda_px=None, refine=True, sky_mask=None, ego_mask=None,
-/// exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0,
-/// compat=None, return_info=False, monocular=False, stereo_focal_baseline=None,
-/// ground=None) -> ndarray, or (ndarray, dict), or a list of those
+/// fog(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True,
+/// lambda_px=None, refine=True, sky_mask=None, ego_mask=None, exposure_stops=0.0,
+/// shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None,
+/// return_info=False, monocular=False, stereo_focal_baseline=None, stereo_view=None, ground=None)
+/// -> ndarray, or (ndarray, dict), or a list of those
 ///
 /// Fogs a photo with its range in metres (paper 000's haze in physical units, with the
 /// diffusion blur). image: HxWx3 uint8 or uint16 (sRGB code values) or float32, float64
@@ -537,11 +540,13 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 /// load_depth with kind 'inverse' or 'affine'), whose sky has a depth, the farthest: its
 /// far tail (beyond 10 times the lower quartile) may be sky where the image says so, as
 /// `brume render` reads those kinds. stereo_focal_baseline: f·B (focal length in px times
-/// baseline in m) when range_m comes from a left view's stereo-matched disparity
-/// (load_depth's info gives it for a Cityscapes disparity): a run of unknown range left of
-/// a nearer surface, the background the right camera could not see, is filled from that
-/// background, not the near surface (no clear halo left of a pole), as `brume render`
-/// fills a Cityscapes disparity. ground: load_depth's info['ground'] (a dict of height_m,
+/// baseline in m) when range_m comes from a stereo-matched disparity (load_depth's info
+/// gives it for a Cityscapes disparity): a run of unknown range beside a nearer surface,
+/// the background the other camera could not see, is filled from that background, not the
+/// near surface (no clear halo beside a pole), as `brume render` fills a Cityscapes
+/// disparity. stereo_view: 'left' (default) or 'right', the view the disparity is of
+/// (load_depth's info gives it): those runs lie left of nearer surfaces in a left view,
+/// right of them in a right view. ground: load_depth's info['ground'] (a dict of height_m,
 /// pitch, roll: the camera's mount over the road, from a Cityscapes camera file, and fx,
 /// fy, cx, cy: its intrinsics on range_m's grid): values below the horizon beyond the
 /// road falling 5 % away from the camera's level, in small patches, are false matches and
@@ -568,7 +573,7 @@ fn default_renderer(py: Python<'_>) -> PyResult<&'static Py<Renderer>> {
 #[pyfunction]
 #[pyo3(
     signature = (*args, **kwargs),
-    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=False, monocular=False, stereo_focal_baseline=None, ground=None)"
+    text_signature = "(image, range_m, *, beta=None, visibility=None, ka=None, ks=None, airlight=None, blur=True, lambda_px=None, refine=None, sky_mask=None, ego_mask=None, exposure_stops=0.0, shot_noise_gain=None, read_noise=None, jpeg_quality=None, seed=0, compat=None, return_info=False, monocular=False, stereo_focal_baseline=None, stereo_view=None, ground=None)"
 )]
 fn fog(
     py: Python<'_>,

@@ -7,6 +7,7 @@ use super::gl_thread::GlThread;
 use super::{py_err, value_error};
 use brume::compat;
 use brume::io::camera::{Intrinsics, Mount};
+use brume::io::depth::StereoView;
 use brume::io::image::srgb_to_linear;
 use brume::medium::physical::{self, VISIBILITY_OPTICAL_DEPTH};
 use brume::photo::{
@@ -96,23 +97,33 @@ pub(crate) fn prepare_request(
     Ok(prepare)
 }
 
+/// A disparity's f·B (px·m) and view, as the Python keywords give them.
+pub(crate) type Stereo<'a> = (Option<f64>, Option<&'a str>);
+
 /// Where `range_m` came from, as `brume render` knows it from the file: `monocular=True`, a
 /// monocular model's relative depth, whose sky may lie in its far tail
 /// (`brume::prep::PrepOptions::sky_in_far_tail`, as for `--depth-kind inverse` and
-/// `affine`); `stereo_focal_baseline`, a left view's matched disparity with f·B (px·m),
-/// whose occlusions are filled from their background (as for a Cityscapes disparity;
-/// `load_depth`'s info gives it); `ground`, `load_depth`'s info['ground'] (the level road
-/// under a Cityscapes camera, [`ground_from_py`]). Checked with pre-processing's options.
+/// `affine`); `stereo_focal_baseline`, a stereo-matched disparity with f·B (px·m), whose
+/// occlusions are filled from their background, on the side of nearer surfaces that
+/// `stereo_view` says ('left', the default, or 'right'; `load_depth`'s info gives both);
+/// `ground`, `load_depth`'s info['ground'] (the level road under a Cityscapes camera,
+/// [`ground_from_py`]). Checked with pre-processing's options.
 pub(crate) fn set_depth_origin(
     prepare: &mut PrepareOptions,
-    (monocular, stereo_focal_baseline, ground): (bool, Option<f64>, Option<&Bound<'_, PyDict>>),
+    (monocular, stereo, ground): (bool, Stereo<'_>, Option<&Bound<'_, PyDict>>),
 ) -> PyResult<()> {
     let ground = ground_from_py(ground)?;
+    let (stereo_focal_baseline, view) = stereo;
+    let view = view
+        .map(str::parse::<StereoView>)
+        .transpose()
+        .map_err(py_err)?;
     if let Some(prep) = prepare.prep.as_mut() {
         if monocular {
             prep.sky_in_far_tail = Some(brume::prep::MONOCULAR_SKY_FACTOR);
         }
         prep.stereo_focal_baseline = stereo_focal_baseline;
+        prep.stereo_view = view;
         prep.ground = ground;
     }
     Ok(())

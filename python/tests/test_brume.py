@@ -485,9 +485,10 @@ def test_load_depth(tmp_path, range_m):
     assert info["metric"] is False and info["unknown_pixels"] == 0
     assert set(info) == {
         "format", "kind", "units", "metric", "notes", "unknown_pixels", "stereo_focal_baseline",
-        "ground",
+        "stereo_view", "ground",
     }  # fmt: skip
     assert info["stereo_focal_baseline"] is None and info["ground"] is None
+    assert info["stereo_view"] is None
     with pytest.raises(OSError, match="missing.npy"):
         brume.load_depth(tmp_path / "missing.npy")
     # A path as Python's file functions take it: str, os.PathLike or bytes.
@@ -896,6 +897,25 @@ def test_a_cityscapes_disparitys_occlusions_as_brume_render_fills_them(tmp_path)
     assert np.abs(ours.astype(np.int32) - cli.astype(np.int32)).max() <= 1
     with pytest.raises(ValueError, match="stereo_focal_baseline"):
         brume.fog(image, range_m, beta=0.05, stereo_focal_baseline=-1.0)
+
+    # The right view's frame: the same mirrored, its occlusion right of the pole.
+    Image.fromarray(stored[:, ::-1]).save(tmp_path / "r_disparity.png")
+    (tmp_path / "r_camera.json").write_text(camera)
+    right_m, right = brume.load_depth(tmp_path / "r_disparity.png", stereo_view="right")
+    assert right["stereo_view"] == "right" and info["stereo_view"] == "left"
+    image_r = np.ascontiguousarray(image[:, ::-1])
+    origin = dict(stereo_focal_baseline=right["stereo_focal_baseline"])
+    _, as_right = brume.fog(image_r, right_m, stereo_view=right["stereo_view"], **origin, **kw)
+    _, as_left = brume.fog(image_r, right_m, **origin, **kw)
+    # Row 0's run is no occlusion (the top band continues row 1's fattened edge beside the
+    # pole), and a plane fitted to a hole whose other edges lie on one column fills it.
+    mirrored = lambda got: got[1:, ::-1]  # noqa: E731
+    wall_r = mirrored(right_m)[:, band[0] - 1 : band[0]]
+    error_r = lambda got: np.abs(np.log(mirrored(got)[:, fill] / wall_r)).mean()  # noqa: E731
+    assert error_r(as_right["range_m"]) < 0.01
+    assert error_r(as_left["range_m"]) > 0.3
+    with pytest.raises(ValueError, match="stereo_view"):
+        brume.fog(image_r, right_m, stereo_view="centre", **origin, **kw)
 
 
 def test_the_level_road_under_a_cityscapes_camera_as_brume_render_bounds_it(tmp_path):

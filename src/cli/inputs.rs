@@ -47,6 +47,7 @@ pub fn reading_options(args: &DepthReadingArgs) -> DepthOptions {
         sky_beyond: args.sky_beyond,
         layout: args.depth_layout,
         camera_mount: args.camera_mount,
+        stereo_view: args.stereo_view,
         ..DepthOptions::default()
     }
 }

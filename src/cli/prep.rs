@@ -112,6 +112,7 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             "depth_format": loaded.format.to_string(), "depth_kind": loaded.kind.to_string(),
             "depth_notes": loaded.notes, "unknown_pixels": loaded.unknown_pixels,
             "camera_mount": loaded.mount,
+            "stereo_view": loaded.stereo_focal_baseline.map(|_| loaded.stereo_view),
             "airlight": airlight.map(|a| a.0),
             "airlight_source": airlight.map(|a| a.1),
             "sky_mask": args.prep.sky_mask.as_ref().map(|p| p.display().to_string()),

@@ -253,6 +253,7 @@ impl Report<'_> {
             "depth_kind": scene.depth.kind.to_string(),
             "depth_notes": scene.depth.notes,
             "camera_mount": scene.depth.mount,
+            "stereo_view": scene.depth.stereo_focal_baseline.map(|_| scene.depth.stereo_view),
             "colour_profile": scene.metadata.profile().map(|p| p.description()),
             "sigma0": opts.blur.sigma0,
             "sigma_max": self.sigma_max(),

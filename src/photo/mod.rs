@@ -47,7 +47,9 @@ pub use insert::{insert, Insertion, VirtualObject};
 pub use prepare::{prepare, preprocess, AirlightFrom, PrepareOptions, PreparedPhoto};
 
 use crate::error::{Error, Result};
-use crate::io::depth::{self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoGeometry};
+use crate::io::depth::{
+    self, DepthFormat, DepthKind, DepthOptions, LoadedDepth, PhotoGeometry, StereoView,
+};
 use crate::io::image::PhotoExif;
 use crate::io::metadata::PhotoMetadata;
 use crate::io::{demo, image};
@@ -154,6 +156,7 @@ impl Photo {
                 unknown_pixels,
                 turned: Orientation::Upright,
                 stereo_focal_baseline: None,
+                stereo_view: StereoView::Left,
                 mount: None,
             },
             // The arguments' names, as the messages say them.
@@ -204,6 +207,7 @@ impl Photo {
                 unknown_pixels: 0,
                 turned: orientation,
                 stereo_focal_baseline: None,
+                stereo_view: StereoView::Left,
                 mount: None,
             },
             image_name: image_name.to_string(),

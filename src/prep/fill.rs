@@ -122,9 +122,13 @@ impl HoleFiller {
             let p = p as usize;
             work[p] = if self.skip_occluders && occluded[p] {
                 let row_start = p - p % width;
-                let left_end = (row_start..p).rev().find(|&q| !occluded[q]);
-                // `occlusion::find` takes a run only with a known pixel left of it.
-                left_end.map_or(f32::NAN, |q| work[q])
+                let end = if self.occlusions.background_right {
+                    (p..row_start + width).find(|&q| !occluded[q])
+                } else {
+                    (row_start..p).rev().find(|&q| !occluded[q])
+                };
+                // `occlusion::find` takes a run only with a known pixel on its background's side.
+                end.map_or(f32::NAN, |q| work[q])
             } else {
                 fit.at((p % width) as f64, (p / width) as f64) as f32
             };
@@ -560,6 +564,7 @@ mod tests {
         let occlusions = Occlusions {
             occluded: (0..16).map(|p| (2..6).contains(&p)).collect(),
             occluders: (0..16).map(|p| p == 6 || p == 7).collect(),
+            background_right: false,
             count: 4,
         };
         // A plane sloped across the run, as one fitted to a whole hole along a pole.
@@ -596,6 +601,21 @@ mod tests {
         filler.apply_beside_occlusions(&sloped, &mut work, 8, &run);
         assert_eq!(work[2], sloped.at(2.0, 0.0) as f32);
         assert_eq!(work[5], 8.0);
+    }
+
+    /// A right view's occlusion, the row mirrored: its background is right of the run.
+    #[test]
+    fn a_right_views_occlusion_continues_the_background_right_of_it() {
+        let (mut work, mut occlusions, sloped) = wall_pole_and_run();
+        work[..8].reverse();
+        occlusions.occluded[..8].reverse();
+        occlusions.occluders[..8].reverse();
+        occlusions.background_right = true;
+        let run = [2u32, 3, 4, 5];
+        let mut filler = HoleFiller::new(100.0, occlusions);
+        filler.begin_hole(&run);
+        filler.apply_beside_occlusions(&sloped, &mut work, 8, &run);
+        assert_eq!(&work[2..6], &[21.0; 4]);
     }
 
     /// The range of the ground 1.5 m below a level pinhole camera (focal 500 px, principal

@@ -34,7 +34,14 @@ pub(super) fn fill_holes(
     // Before labelling, which marks the unknown pixels visited (+inf).
     let occlusions = opts
         .stereo_focal_baseline
-        .map(|fb| occlusion::find(work, m.filled, (w, h), fb))
+        .map(|fb| {
+            occlusion::find(
+                work,
+                m.filled,
+                (w, h),
+                (fb, opts.stereo_view.unwrap_or_default()),
+            )
+        })
         .unwrap_or_default();
     stats.occluded = occlusions.count;
     let comps = components::label_unknown(work, w, h);

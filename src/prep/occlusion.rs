@@ -1,13 +1,21 @@
 //! Stereo occlusions: in a left view's disparity, the background just left of a nearer
 //! surface is seen by the left camera only, so a matcher leaves it unknown, a band as wide
-//! as the two surfaces' disparities differ. Filled as any hole, it took the range of
-//! whatever won the vote on its boundary, often the near surface beside it (on real
-//! Cityscapes frames about half of such pixels took the nearer side's range), which drew a
-//! pole twice its width in clear air: a halo. Here such a band is found row by row and the
-//! near surface beside it, the *occluder*, is kept out of its fill (see [`find`]); the hole
-//! filling then continues the background the band belongs to.
+//! as the two surfaces' disparities differ; in a right view's, the band lies right of the
+//! nearer surface. Filled as any hole, it took the range of whatever won the vote on its
+//! boundary, often the near surface beside it (on real Cityscapes frames about half of
+//! such pixels took the nearer side's range), which drew a pole twice its width in clear
+//! air: a halo. Here such a band is found row by row and the near surface beside it, the
+//! *occluder*, is kept out of its fill (see [`find`]); the hole filling then continues the
+//! background the band belongs to.
+//!
+//! Only the view's own side is looked at: on Middlebury 2006 Aloe's left view, the unknown
+//! runs right of the leaves (the projector's shadows on the cloth, 9,031 px of runs that
+//! pass the tests below) are no stereo occlusions, and continuing their rows' background
+//! drew stripes across a hole where the next row's run was not one.
 
-/// How much nearer than the left side of an unknown run its right side must be, a ratio
+use crate::io::depth::StereoView;
+
+/// How much nearer than the background side of an unknown run its other side must be, a ratio
 /// of ranges, for the run to be taken as an occlusion: a disparity step of a quarter. A
 /// textureless face turning away (a car's side) changes its range along a short run by
 /// less, and where it does not the width test below tells it apart.
@@ -30,7 +38,7 @@ const OCCLUSION_WIDTH_FACTOR: f64 = 2.0;
 /// their Δd, which range's stretch off the optical axis makes up to a quarter too small.
 const OCCLUSION_WIDTH_SLACK_PX: f64 = 4.0;
 
-/// The measured pixels of like range (within [`OCCLUSION_NEARER`]) the background left of
+/// The measured pixels of like range (within [`OCCLUSION_NEARER`]) the background beside
 /// an occlusion must show in its row, next to it: a matcher's speck of a few pixels amid
 /// the road is no background.
 const OCCLUSION_BACKGROUND_PX: usize = 8;
@@ -41,61 +49,143 @@ const OCCLUSION_BACKGROUND_PX: usize = 8;
 pub(crate) struct Occlusions {
     /// Unknown pixels in a run taken as an occlusion.
     pub(crate) occluded: Vec<bool>,
-    /// Known pixels of the near surface right of such a run: from the run's right end for
-    /// as many pixels as the run is wide, while they stay nearer than the geometric mean of
-    /// the run's two sides (a thin pole's whole width, not the background beyond it).
+    /// Known pixels of the near surface beside such a run (right of a left view's, left of
+    /// a right view's): from the run's end for as many pixels as the run is wide, while
+    /// they stay nearer than the geometric mean of the run's two sides (a thin pole's whole
+    /// width, not the background beyond it).
     pub(crate) occluders: Vec<bool>,
+    /// Whether the background is right of the runs (a right view's), not left of them.
+    pub(crate) background_right: bool,
     /// How many pixels are in `occluded`.
     pub(crate) count: usize,
 }
 
 /// Finds the occlusions of `work` (row-major `w` x `h` range: known finite, unknown NaN,
-/// anything else, as the sky's +∞, neither), a left view's range from a disparity with
+/// anything else, as the sky's +∞, neither), a range from `view`'s stereo disparity with
 /// `focal_baseline` = f·B (px·m, d ≈ f·B / R): per row, each run of unknown pixels with a
-/// known pixel on both sides, the right one at least [`OCCLUSION_NEARER`] times nearer
-/// than the left one or [`OCCLUSION_STEP_PX`] of disparity nearer, and at most
-/// `OCCLUSION_WIDTH_FACTOR · Δd + OCCLUSION_WIDTH_SLACK_PX`
-/// wide (range taken as depth: off the optical axis Δd is up to a quarter too small at
-/// the corners of a 50° frame, as the slack allows). Both sides must be measured, not
-/// `filled` (a border band's continuation), the left one over
-/// [`OCCLUSION_BACKGROUND_PX`]: on a Cityscapes frame a speck of 4 px at 22 m amid the
-/// road at 9 m, continued to the border by the left band, was taken for the background of
-/// the road beside it, a white wedge.
+/// known pixel on both sides, one of them (the occluder's) at least [`OCCLUSION_NEARER`]
+/// times nearer than the other (the background's) or [`OCCLUSION_STEP_PX`] of disparity
+/// nearer, and at most `OCCLUSION_WIDTH_FACTOR · Δd + OCCLUSION_WIDTH_SLACK_PX` wide (range
+/// taken as depth: off the optical axis Δd is up to a quarter too small at the corners of
+/// a 50° frame, as the slack allows). Both sides must be measured, not `filled` (a border
+/// band's continuation), the background's over [`OCCLUSION_BACKGROUND_PX`]: on a
+/// Cityscapes frame a speck of 4 px at 22 m amid the road at 9 m, continued to the border
+/// by the left band, was taken for the background of the road beside it, a white wedge.
+/// A left view's runs have their background on the left; a right view's, found in the
+/// mirrored row, on the right.
 pub(crate) fn find(
     work: &[f32],
     filled: &[bool],
     (w, h): (usize, usize),
-    focal_baseline: f64,
+    (focal_baseline, view): (f64, StereoView),
 ) -> Occlusions {
     let mut found = Occlusions {
         occluded: vec![false; w * h],
         occluders: vec![false; w * h],
+        background_right: view == StereoView::Right,
         count: 0,
     };
+    let mut mirrored = found.background_right.then(|| Mirrored::new(w));
     for (y, (row, filled)) in work.chunks_exact(w).zip(filled.chunks_exact(w)).enumerate() {
-        let mut x = 0;
-        while x < w {
-            if !row[x].is_nan() {
-                x += 1;
-                continue;
+        let span = y * w..(y + 1) * w;
+        found.count += match &mut mirrored {
+            None => find_in_row(
+                row,
+                filled,
+                focal_baseline,
+                &mut found.occluded[span.clone()],
+                &mut found.occluders[span],
+            ),
+            Some(m) => {
+                let count = m.find_in_row(row, filled, focal_baseline);
+                m.copy_to(&mut found, span);
+                count
             }
-            let start = x;
-            while x < w && row[x].is_nan() {
-                x += 1;
-            }
-            if start == 0 || x == w || filled[x] {
-                continue;
-            }
-            let (left, right) = (row[start - 1], row[x]);
-            let width = x - start;
-            if is_occlusion(left, right, width, focal_baseline)
-                && is_background(&row[..start], &filled[..start])
-            {
-                mark(&mut found, row, (y * w, start, x), width);
-            }
-        }
+        };
     }
     found
+}
+
+/// One row mirrored, and what [`find_in_row`] marks in it: a right view's occlusions.
+struct Mirrored {
+    row: Vec<f32>,
+    filled: Vec<bool>,
+    occluded: Vec<bool>,
+    occluders: Vec<bool>,
+}
+
+impl Mirrored {
+    fn new(w: usize) -> Self {
+        Mirrored {
+            row: vec![0.0; w],
+            filled: vec![false; w],
+            occluded: vec![false; w],
+            occluders: vec![false; w],
+        }
+    }
+
+    /// [`find_in_row`] in `row` mirrored: the runs whose background is right of them.
+    fn find_in_row(&mut self, row: &[f32], filled: &[bool], focal_baseline: f64) -> usize {
+        self.row
+            .iter_mut()
+            .zip(row.iter().rev())
+            .for_each(|(m, &r)| *m = r);
+        (self.filled.iter_mut().zip(filled.iter().rev())).for_each(|(m, &f)| *m = f);
+        self.occluded.fill(false);
+        self.occluders.fill(false);
+        find_in_row(
+            &self.row,
+            &self.filled,
+            focal_baseline,
+            &mut self.occluded,
+            &mut self.occluders,
+        )
+    }
+
+    /// Sets `found`'s row `span` to what was found, mirrored back.
+    fn copy_to(&self, found: &mut Occlusions, span: std::ops::Range<usize>) {
+        let marks = self.occluded.iter().rev().zip(self.occluders.iter().rev());
+        for (p, (&occluded, &occluder)) in span.zip(marks) {
+            found.occluded[p] = occluded;
+            found.occluders[p] = occluder;
+        }
+    }
+}
+
+/// [`find`] in one row for the runs whose background is left of them, marking their pixels
+/// in `occluded` and their occluders in `occluders`; returns how many pixels it took.
+fn find_in_row(
+    row: &[f32],
+    filled: &[bool],
+    focal_baseline: f64,
+    occluded: &mut [bool],
+    occluders: &mut [bool],
+) -> usize {
+    let w = row.len();
+    let mut count = 0;
+    let mut x = 0;
+    while x < w {
+        if !row[x].is_nan() {
+            x += 1;
+            continue;
+        }
+        let start = x;
+        while x < w && row[x].is_nan() {
+            x += 1;
+        }
+        if start == 0 || x == w || filled[x] {
+            continue;
+        }
+        let (left, right) = (row[start - 1], row[x]);
+        let width = x - start;
+        if is_occlusion(left, right, width, focal_baseline)
+            && is_background(&row[..start], &filled[..start])
+        {
+            mark(row, (start, x), occluded, occluders);
+            count += width;
+        }
+    }
+    count
 }
 
 /// Whether the last [`OCCLUSION_BACKGROUND_PX`] pixels of `row` (ending at an occlusion)
@@ -121,24 +211,18 @@ fn is_occlusion(left: f32, right: f32, width: usize, focal_baseline: f64) -> boo
         && width as f64 <= OCCLUSION_WIDTH_FACTOR * step_px + OCCLUSION_WIDTH_SLACK_PX
 }
 
-/// Marks the run `[start, end)` of the row beginning at `base` occluded and its occluder
-/// right of it.
-fn mark(
-    found: &mut Occlusions,
-    row: &[f32],
-    (base, start, end): (usize, usize, usize),
-    width: usize,
-) {
-    found.occluded[base + start..base + end].fill(true);
-    found.count += end - start;
+/// Marks the run `[start, end)` of `row` in `occluded`, and its occluder right of it in
+/// `occluders`.
+fn mark(row: &[f32], (start, end): (usize, usize), occluded: &mut [bool], occluders: &mut [bool]) {
+    occluded[start..end].fill(true);
     let (left, right) = (f64::from(row[start - 1]), f64::from(row[end]));
     let nearer_than = (left * right).sqrt();
-    for x in (end..row.len()).take(width) {
+    for x in (end..row.len()).take(end - start) {
         let r = row[x];
         if !(r.is_finite() && f64::from(r) < nearer_than) {
             break;
         }
-        found.occluders[base + x] = true;
+        occluders[x] = true;
     }
 }
 
@@ -161,7 +245,17 @@ mod tests {
     }
 
     fn find_in(values: &[f32]) -> Occlusions {
-        find(values, &vec![false; values.len()], (values.len(), 1), 100.0)
+        find_as(values, StereoView::Left)
+    }
+
+    /// [`find`] in `values`, one row of `view`'s disparity with f·B = 100 px·m.
+    fn find_as(values: &[f32], view: StereoView) -> Occlusions {
+        find(
+            values,
+            &vec![false; values.len()],
+            (values.len(), 1),
+            (100.0, view),
+        )
     }
 
     /// A background at 20 m, a pole at 5 m: Δd = 100·(1/5 − 1/20) = 15 px; the run left of
@@ -177,18 +271,54 @@ mod tests {
         assert!(!o.occluders[run.start - 1] && !o.occluded[run.start - 1]);
     }
 
-    /// The same run with the near side on the left is no occlusion of a left view, nor is a
-    /// run whose sides are within the ratio, nor one far wider than the disparity step.
+    /// The same run with the near side on the left is no occlusion of a left view, but
+    /// one of a right view: its background (measured over as many pixels as a left view's
+    /// must be) is right of it, its occluder the pole left of it. A run whose sides are
+    /// within the ratio is none, nor is one far wider than the disparity step.
     #[test]
     fn other_runs_are_not_occlusions() {
-        let mirrored = row(&[(5.0, 3), (NAN, 12), (20.0, 4)]);
+        let mirrored = row(&[(5.0, 3), (NAN, 12), (20.0, OCCLUSION_BACKGROUND_PX)]);
         assert_eq!(find_in(&mirrored).count, 0);
+        let o = find_as(&mirrored, StereoView::Right);
+        let (pole, run) = (LEAD..LEAD + 3, LEAD + 3..LEAD + 15);
+        assert_eq!(o.count, 12);
+        assert!(o.background_right && run.clone().all(|x| o.occluded[x]));
+        assert!(pole.clone().all(|x| o.occluders[x]));
+        assert!(
+            !o.occluders[pole.start - 1],
+            "the background left of the pole"
+        );
+        let left_view_run = row(&[(NAN, 12), (5.0, 3), (20.0, 4)]);
+        assert_eq!(find_as(&left_view_run, StereoView::Right).count, 0);
         let close = row(&[(NAN, 6), (17.0, 4)]);
         assert_eq!(find_in(&close).count, 0);
         // Δd = 100·(1/10 − 1/20) = 5 px: up to 14 px wide.
         let wide = |n: usize| row(&[(NAN, n), (10.0, 4)]);
         assert_eq!(find_in(&wide(14)).count, 14);
         assert_eq!(find_in(&wide(15)).count, 0);
+    }
+
+    /// A right view's row is found as the mirrored left view's: every row of these tests
+    /// mirrored has the same row's occlusions and occluders, mirrored.
+    #[test]
+    fn a_right_view_is_a_mirrored_left_view() {
+        let rows = [
+            row(&[(NAN, 12), (5.0, 3), (20.0, 4)]),
+            row(&[(NAN, 3), (5.0, 10)]),
+            row(&[(NAN, 6), (17.0, 4)]),
+            row(&[(5.0, 3), (NAN, 12), (20.0, 30)]),
+            row(&[(NAN, 5), (8.0, 4), (NAN, 4), (30.0, 9)]),
+        ];
+        let flip = |v: &[bool]| v.iter().rev().copied().collect::<Vec<_>>();
+        for values in rows {
+            let left = find_in(&values);
+            let mirrored: Vec<f32> = values.iter().rev().copied().collect();
+            let right = find_as(&mirrored, StereoView::Right);
+            assert_eq!(flip(&right.occluded), left.occluded, "{values:?}");
+            assert_eq!(flip(&right.occluders), left.occluders, "{values:?}");
+            assert_eq!(right.count, left.count);
+            assert!(right.background_right && !left.background_right);
+        }
     }
 
     /// At close range a large disparity step is a small ratio: a surface 1.18 times
@@ -198,13 +328,26 @@ mod tests {
     #[test]
     fn a_large_disparity_step_is_an_occlusion_below_the_ratio() {
         let values = row(&[(NAN, 12), (17.0, 4)]);
-        let found = |fb: f64| find(&values, &vec![false; values.len()], (values.len(), 1), fb);
+        let found = |fb: f64| {
+            find(
+                &values,
+                &vec![false; values.len()],
+                (values.len(), 1),
+                (fb, StereoView::Left),
+            )
+        };
         assert_eq!(found(1000.0).count, 12);
         assert_eq!(found(100.0).count, 0);
         // Wider than 2 · 8.8 + 4 px: no occlusion, whatever the step.
         let wide = row(&[(NAN, 22), (17.0, 4)]);
         assert_eq!(
-            find(&wide, &vec![false; wide.len()], (wide.len(), 1), 1000.0).count,
+            find(
+                &wide,
+                &vec![false; wide.len()],
+                (wide.len(), 1),
+                (1000.0, StereoView::Left)
+            )
+            .count,
             0
         );
     }
@@ -235,7 +378,7 @@ mod tests {
         let v = row(&[(NAN, 6), (5.0, 3)]);
         let with_filled = |f: &dyn Fn(usize) -> bool| {
             let filled: Vec<bool> = (0..v.len()).map(f).collect();
-            find(&v, &filled, (v.len(), 1), 100.0).count
+            find(&v, &filled, (v.len(), 1), (100.0, StereoView::Left)).count
         };
         assert_eq!(with_filled(&|_| false), 6);
         assert_eq!(with_filled(&|x| x < LEAD), 0, "a band's continuation");

@@ -1,7 +1,7 @@
 //! The options of pre-processing, with their defaults and checks.
 
 use super::ground::Ground;
-use crate::io::depth::{DepthKind, LoadedDepth};
+use crate::io::depth::{DepthKind, LoadedDepth, StereoView};
 use crate::{Error, Result};
 
 /// Which components of unknown pixels are sky under the depth rules. A component is sky
@@ -143,14 +143,19 @@ pub struct PrepOptions {
     /// [`MONOCULAR_SKY_FACTOR`] for inverse and affine-invariant depth. Finite and > 1.
     pub sky_in_far_tail: Option<f64>,
     /// `Some(f·B)`, the focal length in pixels times the baseline in metres, when the range
-    /// comes from a *left* view's stereo disparity (d ≈ f·B / R): a run of unknown pixels
-    /// in a row whose right side is much nearer than its left, and about as wide as their
-    /// disparities differ, is the background the right camera could not see, and is filled
-    /// without the near surface beside it (see `src/prep/occlusion.rs`).
+    /// comes from a stereo disparity (d ≈ f·B / R): a run of unknown pixels in a row beside
+    /// a much nearer surface, left of it in a left view and right of it in a right view
+    /// ([`Self::stereo_view`]), and about as wide as their disparities differ, is the
+    /// background the other camera could not see, and is filled without the near surface
+    /// beside it (see `src/prep/occlusion.rs`).
     /// [`crate::photo::preprocess`] sets it for a disparity (Cityscapes, Middlebury, one
     /// read with a focal length and baseline); `None` (the default) for any other map.
     /// Finite and > 0.
     pub stereo_focal_baseline: Option<f64>,
+    /// Which view of its stereo pair the disparity is of, and so on which side of a nearer
+    /// surface its occlusions lie: `None` (the default) takes [`LoadedDepth::stereo_view`]
+    /// in [`Self::for_depth`], else the left view.
+    pub stereo_view: Option<StereoView>,
     /// The level ground under a camera of known mount (a vehicle's: a Cityscapes camera
     /// file's height, pitch and roll, or `--camera-mount`'s, with the map's intrinsics, on
     /// the range's grid): below the horizon a ray meets the road at a range no measured
@@ -197,6 +202,7 @@ impl Default for PrepOptions {
             border_band_fraction: 0.15,
             sky_in_far_tail: None,
             stereo_focal_baseline: None,
+            stereo_view: None,
             ground: None,
         }
     }
@@ -205,13 +211,14 @@ impl Default for PrepOptions {
 impl PrepOptions {
     /// These options for `depth`, what its reading tells filled in where they leave it
     /// open: [`MONOCULAR_SKY_FACTOR`] for a monocular model's inverse or affine-invariant
-    /// depth ([`Self::sky_in_far_tail`]), the stereo geometry of a left view's matched
-    /// disparity ([`Self::stereo_focal_baseline`]).
+    /// depth ([`Self::sky_in_far_tail`]), the stereo geometry of a matched disparity
+    /// ([`Self::stereo_focal_baseline`], [`Self::stereo_view`]).
     pub fn for_depth(&self, depth: &LoadedDepth) -> PrepOptions {
         let monocular = matches!(depth.kind, DepthKind::Inverse | DepthKind::Affine);
         PrepOptions {
             sky_in_far_tail: (self.sky_in_far_tail).or(monocular.then_some(MONOCULAR_SKY_FACTOR)),
             stereo_focal_baseline: self.stereo_focal_baseline.or(depth.stereo_focal_baseline),
+            stereo_view: self.stereo_view.or(Some(depth.stereo_view)),
             ground: self.ground.or_else(|| ground_of(depth)),
             ..self.clone()
         }

@@ -9,7 +9,7 @@ use super::bench::BenchCommand;
 use brume::blur::{DEFAULT_RHO_MAX, DEFAULT_SIGMA0};
 use brume::egl::Platform;
 use brume::io::camera::Mount;
-use brume::io::depth::{DepthFormat, DepthKind, DepthLayout};
+use brume::io::depth::{DepthFormat, DepthKind, DepthLayout, StereoView};
 use brume::io::mask::SkyMaskFormat;
 use brume::medium::haze;
 use brume::refine::RefineMode;
@@ -117,16 +117,15 @@ pub struct InfoArgs {
 /// Where the depth comes from and how to read it.
 #[derive(Args, Debug, Clone)]
 pub struct DepthArgs {
-    /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (with --calib), 8-bit
-    /// disparity PNG (Middlebury 2006), 16-bit PNG (KITTI, NYU, TUM, Android DEPTH16,
-    /// ARCore, Cityscapes disparity with --camera, or --depth-scale), float EXR/TIFF/PFM,
-    /// or NumPy .npy/.npz (float16/32/64; uint16 as a 16-bit PNG; an .npz's only array or
-    /// the one named `depth`, as Depth Pro writes); a phone's portrait photo, whose JPEG
-    /// carries its depth map (GDepth, Dynamic Depth, an iPhone's depth image: `render` and
-    /// `view` read it from --image when --depth is not given). A photo without a depth
-    /// sensor: a monocular model's relative inverse depth (MiDaS, DPT, Depth Anything) with
-    /// --depth-kind inverse, or its affine-invariant depth (Marigold) with --depth-kind
-    /// affine.
+    /// Depth, range or disparity map: Middlebury 2014 disp0.pfm (or the right view's disp1.pfm,
+    /// with cam1's intrinsics; --calib), 8-bit disparity PNG (Middlebury 2006), 16-bit PNG (KITTI,
+    /// NYU, TUM, Android DEPTH16, ARCore, Cityscapes disparity with --camera, or --depth-scale),
+    /// float EXR/TIFF/PFM, or NumPy .npy/.npz (float16/32/64; uint16 as a 16-bit PNG; an .npz's
+    /// only array or the one named `depth`, as Depth Pro writes); a phone's portrait photo, whose
+    /// JPEG carries its depth map (GDepth, Dynamic Depth, an iPhone's depth image: `render` and
+    /// `view` read it from --image when --depth is not given). A photo without a depth sensor: a
+    /// monocular model's relative inverse depth (MiDaS, DPT, Depth Anything) with --depth-kind
+    /// inverse, or its affine-invariant depth (Marigold) with --depth-kind affine.
     #[arg(long, value_name = "PATH")]
     pub depth: Option<PathBuf>,
 
@@ -278,6 +277,15 @@ pub struct DepthReadingArgs {
         value_parser = parse_camera_mount
     )]
     pub camera_mount: Option<Mount>,
+
+    /// Which camera of the stereo pair a disparity is aligned with, left or right: a
+    /// matcher leaves unknown the background next to a nearer surface that the other camera
+    /// cannot see, left of it in a left view, right of it in a right view, and that band
+    /// is filled from its background. Default: right for a Middlebury 2014 disp1.pfm
+    /// (read with cam1's intrinsics), else left (Cityscapes, Middlebury's disp0.pfm and
+    /// 2006 disp1.png, OpenCV's matchers).
+    #[arg(long, value_name = "left|right", allow_hyphen_values = true)]
+    pub stereo_view: Option<StereoView>,
 }
 
 /// `--camera-mount HEIGHT,PITCH[,ROLL]`: metres and degrees, as a [`Mount`] (radians).

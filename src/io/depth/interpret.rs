@@ -179,12 +179,13 @@ pub(super) fn interpret(
     let fov_height = if turn.swaps_axes() { width } else { height };
     let metres = "m".to_string();
     let mut stereo_focal_baseline = None;
+    let view = super::stereo_view_for(format, path, opts);
     let mut mount = None;
     let (mut range, units, intrinsics) = match (format, raw) {
         (DepthFormat::Middlebury2014, Raw::Float { map, .. }) => {
             let (calib, calib_path) = calib.expect("checked by resolve_format");
             let (range, k, fb) =
-                middlebury::range_2014(&map, path, &calib, &calib_path, opts, &mut notes)?;
+                middlebury::range_2014(&map, (path, view), &calib, &calib_path, opts, &mut notes)?;
             stereo_focal_baseline = Some(fb);
             (range, metres, Some(k))
         }
@@ -321,6 +322,10 @@ pub(super) fn interpret(
     // A turned map's file mount is the stored view's; the one given is the upright photo's.
     let mount = mount.filter(|_| turn == Orientation::Upright);
     let mount = given_mount(opts, mount, intrinsics.is_some() && metric, &mut notes);
+    // A turned map's occlusions lie along its columns, not its rows.
+    let stereo_focal_baseline = stereo_focal_baseline.filter(|_| turn == Orientation::Upright);
+    let stereo_view =
+        super::kept_stereo_view(view, stereo_focal_baseline.is_some(), opts, &mut notes);
     Ok(LoadedDepth {
         range,
         format,
@@ -331,8 +336,8 @@ pub(super) fn interpret(
         notes,
         unknown_pixels,
         turned: turn,
-        // A turned map's left view is no longer on the left.
-        stereo_focal_baseline: stereo_focal_baseline.filter(|_| turn == Orientation::Upright),
+        stereo_focal_baseline,
+        stereo_view,
         mount,
     })
 }

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::{finite_option, positive_option, DepthFormat, DepthOptions};
+use super::{finite_option, positive_option, DepthFormat, DepthOptions, StereoView};
 use crate::io::camera::{to_range, Intrinsics, Stereo};
 use crate::raster::{Grid, ScalarMap};
 use crate::{Error, Result};
@@ -53,13 +53,32 @@ pub struct Calib {
 impl Calib {
     /// The left camera's intrinsics, which `disp0.pfm` is aligned with.
     pub fn intrinsics(&self) -> Intrinsics {
-        Intrinsics {
-            fx: self.cam0[0][0],
-            fy: self.cam0[1][1],
-            cx: self.cam0[0][2],
-            cy: self.cam0[1][2],
-        }
+        intrinsics_of(&self.cam0)
     }
+
+    /// The right camera's intrinsics, which `disp1.pfm` is aligned with: its principal
+    /// point is `doffs` pixels right of the left one's.
+    pub fn right_intrinsics(&self) -> Intrinsics {
+        intrinsics_of(&self.cam1)
+    }
+}
+
+fn intrinsics_of(cam: &[[f64; 3]; 3]) -> Intrinsics {
+    Intrinsics {
+        fx: cam[0][0],
+        fy: cam[1][1],
+        cx: cam[0][2],
+        cy: cam[1][2],
+    }
+}
+
+/// Whether `path` names a right view's disparity in Middlebury 2014's layout: `disp1.pfm`
+/// (or `disp1GT.pfm`, an algorithm's `disp1NAME.pfm`), not `disp0.pfm` nor `disp10.pfm`.
+pub(super) fn is_right_view(path: &Path) -> bool {
+    let stem = path.file_stem().map(|s| s.to_string_lossy());
+    stem.as_deref()
+        .and_then(|s| s.strip_prefix("disp1"))
+        .is_some_and(|rest| !rest.starts_with(|c: char| c.is_ascii_digit()))
 }
 
 /// Reads and checks a Middlebury 2014 `calib.txt`.
@@ -124,17 +143,23 @@ pub fn parse_calib_str(text: &str, path: &Path) -> Result<Calib> {
     Ok(calib)
 }
 
-fn check_calib(c: &Calib, path: &Path) -> Result<()> {
-    let k = c.intrinsics();
+/// `k`, the intrinsics of `cam` in the `calib.txt` at `path`, if its focal lengths are
+/// positive.
+fn check_focal(k: &Intrinsics, cam: &str, path: &Path) -> Result<Intrinsics> {
     if k.fx <= 0.0 || k.fy <= 0.0 {
         return Err(Error::format(
             path,
             format!(
-                "cam0 focal lengths are {} and {}; expected positive values",
+                "{cam} focal lengths are {} and {}; expected positive values",
                 k.fx, k.fy
             ),
         ));
     }
+    Ok(*k)
+}
+
+fn check_calib(c: &Calib, path: &Path) -> Result<()> {
+    check_focal(&c.intrinsics(), "cam0", path)?;
     if c.baseline <= 0.0 {
         return Err(Error::format(
             path,
@@ -240,12 +265,13 @@ pub(super) fn take_calib(
     Ok(Some((parsed, calib_path.to_path_buf())))
 }
 
-/// Range in metres from a Middlebury 2014 disparity map: focal, baseline, disparity
-/// offset and principal point all come from its `calib.txt`; with the stereo pair's f·B
-/// (px·m) for its occlusions.
+/// Range in metres from a Middlebury 2014 disparity map at `path`, of `view`: focal,
+/// baseline, disparity offset and principal point all come from its `calib.txt`, the right
+/// camera's `cam1` for a right view's map; with the stereo pair's f·B (px·m) for its
+/// occlusions.
 pub(super) fn range_2014(
     map: &ScalarMap,
-    path: &Path,
+    (path, view): (&Path, StereoView),
     calib: &Calib,
     calib_path: &Path,
     opts: &DepthOptions,
@@ -253,12 +279,17 @@ pub(super) fn range_2014(
 ) -> Result<(ScalarMap, Intrinsics, f64)> {
     check_calib_size(calib, calib_path, map, path)?;
     note_ignored_stereo_options(opts, notes);
+    let k = if view == StereoView::Right {
+        notes.push("the right view's disparity: cam1's intrinsics".to_string());
+        check_focal(&calib.right_intrinsics(), "cam1", calib_path)?
+    } else {
+        calib.intrinsics()
+    };
     let stereo = Stereo {
-        focal: calib.cam0[0][0],
+        focal: k.fx,
         baseline_mm: calib.baseline,
         offset: calib.doffs,
     };
-    let k = calib.intrinsics();
     check_doffs(map, calib, calib_path, path, notes)?;
     let range = to_range(map, |d| stereo.depth_m(f64::from(d)), Some(&k));
     Ok((range, k, stereo.focal_baseline()))

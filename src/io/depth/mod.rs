@@ -128,13 +128,50 @@ impl fmt::Display for DepthKind {
     }
 }
 
+/// Which camera of a rectified stereo pair a disparity map is aligned with. The
+/// background next to a nearer surface that the other camera cannot see, which a matcher
+/// leaves unknown, lies left of that surface in a left view's map and right of it in a
+/// right view's ([`crate::prep::PrepOptions::stereo_view`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StereoView {
+    /// The left camera's: Cityscapes', Middlebury 2014's `disp0.pfm` and 2006's
+    /// `disp1.png`, OpenCV's matchers'.
+    #[default]
+    Left,
+    /// The right camera's: Middlebury 2014's `disp1.pfm` and 2006's `disp5.png`.
+    Right,
+}
+
+impl FromStr for StereoView {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "left" => Ok(StereoView::Left),
+            "right" => Ok(StereoView::Right),
+            _ => Err(Error::invalid("stereo_view", s, "left or right")),
+        }
+    }
+}
+
+impl fmt::Display for StereoView {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            StereoView::Left => "left",
+            StereoView::Right => "right",
+        })
+    }
+}
+
 /// How a depth file is laid out and scaled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum DepthFormat {
     /// Guess from the extension, bit depth and the presence of a calibration file.
     Auto,
-    /// Middlebury 2014: `disp0.pfm` disparity plus `calib.txt`.
+    /// Middlebury 2014: `disp0.pfm` disparity (or the right view's `disp1.pfm`) plus
+    /// `calib.txt`.
     Middlebury2014,
     /// Middlebury 2005/2006: 8-bit disparity PNG, `0` unknown, no calibration file.
     Middlebury2006,
@@ -268,6 +305,10 @@ pub struct DepthOptions {
     /// [`LoadedDepth::mount`] when the map has intrinsics and metres (else a note says it
     /// is ignored). Its pitch and roll are the upright photo's.
     pub camera_mount: Option<Mount>,
+    /// Which view a disparity is of; `None`: the right one for a Middlebury 2014 map named
+    /// `disp1.pfm` (as the dataset names it; its range then takes `cam1`'s intrinsics),
+    /// else the left one. Ignored, with a note, for any other kind of map.
+    pub stereo_view: Option<StereoView>,
 }
 
 impl Default for DepthOptions {
@@ -290,6 +331,7 @@ impl Default for DepthOptions {
             photo: None,
             layout: DepthLayout::Auto,
             camera_mount: None,
+            stereo_view: None,
         }
     }
 }
@@ -324,11 +366,15 @@ pub struct LoadedDepth {
     /// How `range` was turned from the file's layout to lie on its upright photo
     /// ([`DepthOptions::photo`]); [`Orientation::Upright`] when it was not.
     pub turned: Orientation,
-    /// f·B (px·m) of a left view's disparity (Cityscapes, Middlebury, or any disparity read
-    /// with `focal` and `baseline`), whose holes beside a nearer surface are occlusions of
-    /// the background ([`crate::prep::PrepOptions::stereo_focal_baseline`]): `range`'s
-    /// grid's disparity steps are f·B·(1/Z₁ − 1/Z₂) px. `None` for other maps.
+    /// f·B (px·m) of a stereo pair's disparity (Cityscapes, Middlebury, or any disparity
+    /// read with `focal` and `baseline`; a left or a right view's), whose holes beside a
+    /// nearer surface are occlusions of the background
+    /// ([`crate::prep::PrepOptions::stereo_focal_baseline`]): `range`'s grid's disparity
+    /// steps are f·B·(1/Z₁ − 1/Z₂) px. `None` for other maps.
     pub stereo_focal_baseline: Option<f64>,
+    /// Which view of its stereo pair a disparity is of ([`DepthOptions::stereo_view`]):
+    /// where its occlusions lie. [`StereoView::Left`] for other maps.
+    pub stereo_view: StereoView,
     /// How the camera is mounted over the road ([`DepthOptions::camera_mount`], or a
     /// Cityscapes camera file's height, pitch and roll), with [`Self::intrinsics`] the
     /// level ground's range along each ray ([`crate::prep::PrepOptions::ground`]); `None`
@@ -408,6 +454,45 @@ impl LoadedDepth {
             .chain(ignored.cloned())
             .collect()
     }
+}
+
+/// The view of a disparity read as `format` from `path` ([`DepthOptions::stereo_view`]):
+/// as given, else the right one for a Middlebury 2014 `disp1.pfm`, else the left one.
+fn stereo_view_for(format: DepthFormat, path: &Path, opts: &DepthOptions) -> StereoView {
+    let named_right = format == DepthFormat::Middlebury2014 && middlebury::is_right_view(path);
+    opts.stereo_view.unwrap_or(if named_right {
+        StereoView::Right
+    } else {
+        StereoView::Left
+    })
+}
+
+/// The view a loaded map keeps: `view` for a disparity whose occlusions pre-processing
+/// looks for (`stereo`), noted when it is the right one; else the left one, noting a
+/// `stereo_view` given to no effect.
+fn kept_stereo_view(
+    view: StereoView,
+    stereo: bool,
+    opts: &DepthOptions,
+    notes: &mut Vec<String>,
+) -> StereoView {
+    if !stereo {
+        if let Some(given) = opts.stereo_view {
+            notes.push(format!(
+                "`stereo_view` {given} ignored: only an upright stereo disparity has its \
+                 occlusions looked for"
+            ));
+        }
+        return StereoView::Left;
+    }
+    if view == StereoView::Right {
+        notes.push(
+            "read as the right view's disparity: its occlusions are looked for right of \
+             nearer surfaces"
+                .to_string(),
+        );
+    }
+    view
 }
 
 /// How many times the bottom rows' median value must exceed the middle rows' for
