@@ -546,6 +546,17 @@ fn middlebury2006_png_zero_is_unknown_and_defaults_apply() {
     };
     let err = expect_err(load_range(&p, &bad));
     assert!(err.to_string().contains("-150"), "{err}");
+    // The datasets' views are numbered from the left: disp1.png the left one's, disp5.png
+    // the right one's.
+    for (name, view) in [
+        ("disp1.png", StereoView::Left),
+        ("disp5.png", StereoView::Right),
+        ("disp50.png", StereoView::Left),
+    ] {
+        let p = save_png8(dir.path(), name, 3, 1, &[0, 100, 200]);
+        let d = load_range(&p, &DepthOptions::default()).unwrap();
+        assert_eq!(d.stereo_view, view, "{name}");
+    }
 }
 
 #[test]

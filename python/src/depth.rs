@@ -54,7 +54,8 @@ use pyo3::types::PyDict;
 /// level road (pitch down, roll left side up; `brume render --camera-mount`) for a map
 /// without a Cityscapes camera file, with intrinsics and metres: info's ground then gives
 /// it. stereo_view: 'left' or 'right', the camera a disparity is aligned with (brume
-/// render's --stereo-view; default: 'right' for a Middlebury 2014 disp1.pfm, else 'left').
+/// render's --stereo-view; default: 'right' for a Middlebury 2014 disp1.pfm or 2006
+/// disp5.png, else 'left').
 /// info: format, kind, units, metric (whether the range is in trustworthy
 /// metres, which fog with beta or visibility needs), notes, unknown_pixels,
 /// stereo_focal_baseline (f·B in px·m of a disparity, else None) and stereo_view ('left'

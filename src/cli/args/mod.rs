@@ -282,8 +282,8 @@ pub struct DepthReadingArgs {
     /// matcher leaves unknown the background next to a nearer surface that the other camera
     /// cannot see, left of it in a left view, right of it in a right view, and that band
     /// is filled from its background. Default: right for a Middlebury 2014 disp1.pfm
-    /// (read with cam1's intrinsics), else left (Cityscapes, Middlebury's disp0.pfm and
-    /// 2006 disp1.png, OpenCV's matchers).
+    /// (read with cam1's intrinsics) or 2006 disp5.png, else left (Cityscapes, Middlebury's
+    /// disp0.pfm and 2006 disp1.png, OpenCV's matchers).
     #[arg(long, value_name = "left|right", allow_hyphen_values = true)]
     pub stereo_view: Option<StereoView>,
 }

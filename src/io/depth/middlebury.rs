@@ -72,12 +72,19 @@ fn intrinsics_of(cam: &[[f64; 3]; 3]) -> Intrinsics {
     }
 }
 
-/// Whether `path` names a right view's disparity in Middlebury 2014's layout: `disp1.pfm`
-/// (or `disp1GT.pfm`, an algorithm's `disp1NAME.pfm`), not `disp0.pfm` nor `disp10.pfm`.
-pub(super) fn is_right_view(path: &Path) -> bool {
+/// Whether `path`, read as `format`, names a right view's disparity as the Middlebury
+/// datasets name it: 2014's `disp1.pfm` (or `disp1GT.pfm`, an algorithm's
+/// `disp1NAME.pfm`; not `disp0.pfm` nor `disp10.pfm`), 2005 and 2006's `disp5.png` (their
+/// views are numbered 1 to 5 from left to right, and their left one is `disp1.png`).
+pub(super) fn names_right_view(format: DepthFormat, path: &Path) -> bool {
+    let prefix = match format {
+        DepthFormat::Middlebury2014 => "disp1",
+        DepthFormat::Middlebury2006 => "disp5",
+        _ => return false,
+    };
     let stem = path.file_stem().map(|s| s.to_string_lossy());
     stem.as_deref()
-        .and_then(|s| s.strip_prefix("disp1"))
+        .and_then(|s| s.strip_prefix(prefix))
         .is_some_and(|rest| !rest.starts_with(|c: char| c.is_ascii_digit()))
 }
 

@@ -306,8 +306,9 @@ pub struct DepthOptions {
     /// is ignored). Its pitch and roll are the upright photo's.
     pub camera_mount: Option<Mount>,
     /// Which view a disparity is of; `None`: the right one for a Middlebury 2014 map named
-    /// `disp1.pfm` (as the dataset names it; its range then takes `cam1`'s intrinsics),
-    /// else the left one. Ignored, with a note, for any other kind of map.
+    /// `disp1.pfm` (its range then takes `cam1`'s intrinsics) or a 2005/2006 one named
+    /// `disp5.png`, as the datasets name them, else the left one. Ignored, with a note, for
+    /// any other kind of map.
     pub stereo_view: Option<StereoView>,
 }
 
@@ -457,14 +458,15 @@ impl LoadedDepth {
 }
 
 /// The view of a disparity read as `format` from `path` ([`DepthOptions::stereo_view`]):
-/// as given, else the right one for a Middlebury 2014 `disp1.pfm`, else the left one.
+/// as given, else the right one for a Middlebury 2014 `disp1.pfm` or 2006 `disp5.png`,
+/// else the left one.
 fn stereo_view_for(format: DepthFormat, path: &Path, opts: &DepthOptions) -> StereoView {
-    let named_right = format == DepthFormat::Middlebury2014 && middlebury::is_right_view(path);
-    opts.stereo_view.unwrap_or(if named_right {
-        StereoView::Right
-    } else {
-        StereoView::Left
-    })
+    opts.stereo_view
+        .unwrap_or(if middlebury::names_right_view(format, path) {
+            StereoView::Right
+        } else {
+            StereoView::Left
+        })
 }
 
 /// The view a loaded map keeps: `view` for a disparity whose occlusions pre-processing
