@@ -794,7 +794,8 @@ fn a_transmittance_map_is_applied_as_given() {
 }
 
 /// `--right`: a disparity whose match in the right image has another colour fails Foggy
-/// Cityscapes' left-right check (12/255) and is taken as unknown; true matches pass. And
+/// Cityscapes' left-right check (12/255) and is taken as unknown; true matches pass. A
+/// right view's disparity (`--stereo-view right`) is checked against the left image. And
 /// `--refine unreliable` keeps every measured range that pre-processing did not fill: τ
 /// there is exp(−βR) of the disparity, to f32.
 #[test]
@@ -834,6 +835,21 @@ fn left_right_check_and_refining_only_the_unreliable() {
         notes.contains("1 px failed the left-right check"),
         "{notes}"
     );
+    // The same map as the right view's disparity, the left image the other one: right(x)
+    // matches left(x + 4), and the pixel of 9 px does not.
+    let failed = |extra: &[&str]| {
+        let mut args = vec!["--beta", "0.01", "--out", "o.pfm", "--json", "--right"];
+        args.extend_from_slice(&["left.png"]);
+        args.extend_from_slice(extra);
+        json(&render(dir.path(), "right.png", &args))["depth_notes"].to_string()
+    };
+    let as_right = failed(&["--stereo-view", "right"]);
+    assert!(
+        as_right.contains("1 px failed the left-right check"),
+        "{as_right}"
+    );
+    let as_left = failed(&[]);
+    assert!(!as_left.contains("1 px failed"), "{as_left}");
 
     // --refine unreliable (run directly: the helper above gives --refine none).
     let white = Grid::filled(w, h, [1.0f32, 1.0, 1.0, 1.0]);

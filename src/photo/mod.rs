@@ -278,8 +278,10 @@ impl Photo {
     }
 
     /// Takes the disparities that fail the left-right photoconsistency check against
-    /// `right`, the stereo pair's right image ([`crate::prep::stereo`]), as unknown, for
-    /// pre-processing to fill from reliable neighbours; the depth's notes say how many.
+    /// `right`, the stereo pair's other image ([`crate::prep::stereo`]): the right one for a
+    /// left view's disparity, the left one for a right view's
+    /// ([`LoadedDepth::stereo_view`], checked mirrored), as unknown, for pre-processing to
+    /// fill from reliable neighbours; the depth's notes say how many.
     /// For a Cityscapes disparity only, read again from `depth_path` in pixels. Errors
     /// name `right`. Only when asked for: on brume's scene matched by StereoSGBM it flagged
     /// correct pixels too and made τ worse (README, "Real depth").
@@ -303,13 +305,23 @@ impl Photo {
         );
         let right_image = image::load_linear_rgb(right)?;
         let (w, h) = (self.image.width(), self.image.height());
-        let stereo = crate::prep::stereo::inconsistent_pixels;
-        let bad = stereo(
-            &self.image,
-            &right_image,
-            &disparity,
+        // A right view's check is a left view's in the mirrored pair.
+        let (as_left, mirrored_image);
+        let view = if self.depth.stereo_view == StereoView::Right {
+            as_left = Orientation::MirrorLeftRight;
+            mirrored_image = self.image.oriented(as_left);
+            &mirrored_image
+        } else {
+            as_left = Orientation::Upright;
+            &self.image
+        };
+        let bad = crate::prep::stereo::inconsistent_pixels(
+            view,
+            &right_image.into_oriented(as_left),
+            &disparity.into_oriented(as_left),
             crate::prep::stereo::DEFAULT_THRESHOLD,
         )
+        .map(|bad| bad.into_oriented(as_left))
         .map_err(|e| match e {
             Error::SizeMismatch { .. } => Error::invalid(
                 "right",

@@ -245,7 +245,8 @@ pub struct RenderArgs {
     pub refine: RefineArgs,
 
     /// The right image of a stereo pair whose left disparity is --depth (Cityscapes
-    /// format): pixels whose colour differs from their match in it by more than 12/255
+    /// format), or its left image with a right view's disparity (--stereo-view right):
+    /// pixels whose colour differs from their match in it by more than 12/255
     /// (Foggy Cityscapes' left-right photoconsistency) are unreliable, taken as unknown
     /// and filled from their reliable neighbours (not found automatically: measured on
     /// rendered stereo it also flags correct pixels, see the README).
