@@ -111,7 +111,8 @@ impl HoleFiller {
 
     /// Applies `fit`, a fit to a whole hole or a piece of it, to `pixels`, except to a
     /// pixel of a stereo occlusion while the hole's occluders are skipped: that continues
-    /// the background left of its run, the range of the run's known left end on its row.
+    /// the background beside its run, the range of the run's known end on its row on the
+    /// background's side (left in a left view, right in a right view).
     /// A plane fitted to an occlusion along a pole is fitted to edges on one vertical line
     /// (the background's, the occluders left out), which leave its slope across the run
     /// to a few edges elsewhere: on a Cityscapes frame one sloped 0.38 m a pixel, and 13
