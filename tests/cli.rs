@@ -800,7 +800,7 @@ fn prep_writes_the_range_and_the_picture() {
 /// Aloe's disparity mirrored is a right view's: read with `--stereo-view right` its
 /// occlusions are found right of the leaves, as many as the left view has left of them;
 /// read as a left view's (the default), the runs it takes are others (the projector's
-/// shadows right of the leaves, mirrored).
+/// shadows right of the leaves, mirrored). The words say which view it was.
 #[test]
 fn prep_reads_a_right_views_disparity() {
     let dir = tempfile::tempdir().unwrap();
@@ -824,6 +824,13 @@ fn prep_reads_a_right_views_disparity() {
     assert_eq!(right.1, "right");
     assert_eq!(right.0, left.0, "the left view's occlusions, mirrored");
     assert!(as_left.0 != left.0, "{} {}", as_left.0, left.0);
+    let args = ["prep", "--depth", "right.png", "--stereo-view", "right"];
+    let o = brume(dir.path(), &[&args[..], &["--out", "range.pfm"]].concat());
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("px stereo occlusions of a right view"),
+        "{text}"
+    );
 }
 
 #[test]

@@ -125,12 +125,16 @@ pub fn run(args: &PrepArgs) -> Result<()> {
         outln!("{}", super::stamped(report));
     } else {
         outln!(
-            "{} unknown px: {} holes ({} px; {} regions from their own colour, {} px stereo occlusions) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
+            "{} unknown px: {} holes ({} px; {} regions from their own colour, {} px stereo occlusions{}) filled, {} sky components ({} px), {} margin px; Rmax {:.4}, Smax {}",
             loaded.unknown_pixels,
             s.holes,
             s.hole_pixels,
             s.colour_regions,
             s.occluded,
+            match (loaded.stereo_focal_baseline, loaded.stereo_view) {
+                (Some(_), brume::io::depth::StereoView::Right) => " of a right view",
+                _ => "",
+            },
             s.sky_components,
             s.sky_pixels,
             s.margin_pixels,
