@@ -180,7 +180,7 @@ def main():
                     help="passed to brume render: the hole fill's RANSAC draws [its default]")
     ap.add_argument("--block-size", type=int, default=5)
     ap.add_argument("--right", action="store_true",
-                    help="give brume the right view (--right): its left-right check")
+                    help="give brume the pair's other view (--right): its left-right check")
     ap.add_argument("--view", choices=("left", "right"), default="left",
                     help="whose disparity brume is given: the right view's is SGBM's on the "
                          "mirrored pair, mirrored back (its occlusions lie right of nearer "
@@ -192,9 +192,6 @@ def main():
     ap.add_argument("--edge-px", type=int, default=5)
     ap.add_argument("--docs", default=None)
     a = ap.parse_args()
-    if a.right and a.view == "right":
-        sys.exit("stereo_refine_eval: --right gives brume the other view for its left-right "
-                 "check, which is the left one with --view right: not supported")
 
     os.makedirs(a.out_dir, exist_ok=True)
     o = lambda n: os.path.join(a.out_dir, n)  # noqa: E731
@@ -293,7 +290,8 @@ def main():
                  "--refine", refine, "--out", out] + refine_opts + right_opts)
         return tau_from_two_airlights(render, lambda A: o(f"tau_{tag}_A{A}.pfm"))
 
-    right_opts = ["--right", o("right.png")] if a.right else []
+    other = "right.png" if a.view == "left" else "left.png"
+    right_opts = ["--right", o(other)] if a.right else []
     if (a.read_as or a.view) == "right":
         right_opts += ["--stereo-view", "right"]
     conds = [("truth disparity, refine none", "truth_disparity.png", "none", "truth_none"),

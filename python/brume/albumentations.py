@@ -38,9 +38,8 @@ class Fog(A.ImageOnlyTransform):
     from ``beta_dist`` (``brume batch --beta-dist``'s ``"uniform:LOW,HIGH"``,
     ``"lognormal:MU,SIGMA"``), with probability ``p``. ``airlight``, ``blur``,
     ``refine``, ``compat``, ``monocular``, ``stereo_focal_baseline``, ``stereo_view`` and
-    ``ground`` are
-    :func:`brume.fog`'s; ``airlight_range``
-    draws a grey airlight in it instead, as :class:`brume.augment.RandomFog`'s. The image
+    ``ground`` are :func:`brume.fog`'s; ``airlight_range`` draws a grey airlight in it
+    instead, as :class:`brume.augment.RandomFog`'s. The image
     is uint8 sRGB or float32 linear RGB, as :func:`brume.fog` takes it: albumentations'
     ``ToFloat`` gives sRGB-encoded floats, which the fog would take for linear light, so
     put ``Fog`` before it.
