@@ -838,8 +838,8 @@ fn left_right_check_and_refining_only_the_unreliable() {
     // The same map as the right view's disparity, the left image the other one: right(x)
     // matches left(x + 4), and the pixel of 9 px does not.
     let failed = |extra: &[&str]| {
-        let mut args = vec!["--beta", "0.01", "--out", "o.pfm", "--json", "--right"];
-        args.extend_from_slice(&["left.png"]);
+        let mut args = vec!["--beta", "0.01", "--out", "o.pfm", "--json"];
+        args.extend_from_slice(&["--right", "left.png"]);
         args.extend_from_slice(extra);
         json(&render(dir.path(), "right.png", &args))["depth_notes"].to_string()
     };
