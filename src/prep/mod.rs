@@ -156,17 +156,17 @@
 //!    from what is round them once the regions are, so a speck amid the background is
 //!    the background.
 //!
-//!    **Stereo occlusions** ([`PrepOptions::stereo_focal_baseline`], a matched
-//!    disparity: Cityscapes, Middlebury, any read with a focal length and baseline): a
-//!    run of unknown pixels in a row whose one side is at least 1.25 times nearer than
-//!    the other or 8 px of disparity nearer (close range), at most about twice as wide as
-//!    their disparities differ, between measured sides (the far one a surface over 8
-//!    pixels), is the background the other camera could not see: left of the nearer
-//!    surface in a left view, right of it in a right view (both are looked for, whichever
-//!    view the map is of). Its hole is filled without the edges to the near surface beside
+//!    **Stereo occlusions** ([`PrepOptions::stereo_focal_baseline`], a matched disparity:
+//!    Cityscapes, Middlebury, any read with a focal length and baseline): a run of unknown
+//!    pixels in a row whose one side is at least 1.25 times nearer than the other or 8 px
+//!    of disparity nearer (close range), at most about twice as wide as their disparities
+//!    differ, between measured sides (the far one a surface over 8 pixels), is the
+//!    background the other camera could not see: left of the nearer surface in a left view,
+//!    right of it in a right view (the map's view, [`PrepOptions::stereo_view`], says which
+//!    side is looked at). Its hole is filled without the edges to the near surface beside
 //!    such runs, the *occluder* (see `occlusion.rs`), but for a colour region whose colour
-//!    only the occluder shows (the pole the matcher missed); [`PrepStats::occluded`]
-//!    counts the runs' pixels.
+//!    only the occluder shows (the pole the matcher missed); [`PrepStats::occluded`] counts
+//!    the runs' pixels.
 //!
 //!    **The scene beyond the sensor's reach** (step 2; [`PrepStats::beyond_reach`]) is
 //!    at least as far as the farthest range measured and no farther than the sky: the
