@@ -85,20 +85,19 @@ pub(crate) fn find(
         background_right: view == StereoView::Right,
         count: 0,
     };
-    let mut mirrored = found.background_right.then(|| Mirrored::new(w));
+    let mut mirrored = found.background_right.then(|| MirroredRow::new(w));
     for (y, (row, filled)) in work.chunks_exact(w).zip(filled.chunks_exact(w)).enumerate() {
         let span = y * w..(y + 1) * w;
+        let occluded = &mut found.occluded[span.clone()];
+        let occluders = &mut found.occluders[span];
         found.count += match &mut mirrored {
-            None => find_in_row(
-                row,
-                filled,
-                focal_baseline,
-                &mut found.occluded[span.clone()],
-                &mut found.occluders[span],
-            ),
+            None => find_in_row(row, filled, focal_baseline, occluded, occluders),
             Some(m) => {
-                let count = m.find_in_row(row, filled, focal_baseline);
-                m.copy_to(&mut found, span);
+                m.load(row, filled);
+                let count = find_in_row(&m.row, &m.filled, focal_baseline, occluded, occluders);
+                // The marks were made in the mirrored row: turn them back.
+                occluded.reverse();
+                occluders.reverse();
                 count
             }
         };
@@ -106,49 +105,25 @@ pub(crate) fn find(
     found
 }
 
-/// One row mirrored, and what [`find_in_row`] marks in it: a right view's occlusions.
-struct Mirrored {
+/// A row and its `filled` flags mirrored, where a right view's runs have their background
+/// on the left, as [`find_in_row`] looks for them.
+struct MirroredRow {
     row: Vec<f32>,
     filled: Vec<bool>,
-    occluded: Vec<bool>,
-    occluders: Vec<bool>,
 }
 
-impl Mirrored {
+impl MirroredRow {
     fn new(w: usize) -> Self {
-        Mirrored {
+        MirroredRow {
             row: vec![0.0; w],
             filled: vec![false; w],
-            occluded: vec![false; w],
-            occluders: vec![false; w],
         }
     }
 
-    /// [`find_in_row`] in `row` mirrored: the runs whose background is right of them.
-    fn find_in_row(&mut self, row: &[f32], filled: &[bool], focal_baseline: f64) -> usize {
-        self.row
-            .iter_mut()
-            .zip(row.iter().rev())
-            .for_each(|(m, &r)| *m = r);
+    /// Holds `row` and `filled` mirrored.
+    fn load(&mut self, row: &[f32], filled: &[bool]) {
+        (self.row.iter_mut().zip(row.iter().rev())).for_each(|(m, &r)| *m = r);
         (self.filled.iter_mut().zip(filled.iter().rev())).for_each(|(m, &f)| *m = f);
-        self.occluded.fill(false);
-        self.occluders.fill(false);
-        find_in_row(
-            &self.row,
-            &self.filled,
-            focal_baseline,
-            &mut self.occluded,
-            &mut self.occluders,
-        )
-    }
-
-    /// Sets `found`'s row `span` to what was found, mirrored back.
-    fn copy_to(&self, found: &mut Occlusions, span: std::ops::Range<usize>) {
-        let marks = self.occluded.iter().rev().zip(self.occluders.iter().rev());
-        for (p, (&occluded, &occluder)) in span.zip(marks) {
-            found.occluded[p] = occluded;
-            found.occluders[p] = occluder;
-        }
     }
 }
 
