@@ -306,17 +306,13 @@ impl Photo {
         let right_image = image::load_linear_rgb(right)?;
         let (w, h) = (self.image.width(), self.image.height());
         // A right view's check is a left view's in the mirrored pair.
-        let (as_left, mirrored_image);
-        let view = if self.depth.stereo_view == StereoView::Right {
-            as_left = Orientation::MirrorLeftRight;
-            mirrored_image = self.image.oriented(as_left);
-            &mirrored_image
-        } else {
-            as_left = Orientation::Upright;
-            &self.image
+        let as_left = match self.depth.stereo_view {
+            StereoView::Left => Orientation::Upright,
+            StereoView::Right => Orientation::MirrorLeftRight,
         };
+        let mirrored = (as_left != Orientation::Upright).then(|| self.image.oriented(as_left));
         let bad = crate::prep::stereo::inconsistent_pixels(
-            view,
+            mirrored.as_ref().unwrap_or(&self.image),
             &right_image.into_oriented(as_left),
             &disparity.into_oriented(as_left),
             crate::prep::stereo::DEFAULT_THRESHOLD,
