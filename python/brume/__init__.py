@@ -10,6 +10,7 @@
     >>> image, photo = brume.load_photo("IMG_0042.jpg")         # upright, by its profile
     >>> brume.save_photo("foggy.jpg", brume.fog(image, range_m, beta=0.02), photo)
     >>> range_m, info = brume.range_from_depth(z_m, kind="depth", fov_y_deg=60.0)  # an array
+    >>> range_m[brume.left_right_mismatches(left, right, disparity_px)] = np.nan  # filled
     >>> r = brume.Renderer()                                  # one EGL context, many frames
     >>> t = brume.augment.RandomFog(beta_range=(0.005, 0.03), seed=0)
     >>> out = t(image=image, depth=range_m)                   # {"image", "depth", "beta"}
@@ -41,6 +42,7 @@ from ._brume import (
     distance_fog,
     fog,
     layered_fog,
+    left_right_mismatches,
     load_depth,
     load_photo,
     range_from_depth,
@@ -56,6 +58,7 @@ __all__ = [
     "load_photo",
     "save_photo",
     "range_from_depth",
+    "left_right_mismatches",
     "beta_quantile",
     "distance_fog",
     "layered_fog",

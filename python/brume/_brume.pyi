@@ -360,4 +360,12 @@ def range_from_depth(
     reversed_z: bool = False,
     sky_beyond: Optional[float] = None,
 ) -> Tuple[Array, Dict[str, Any]]: ...
+def left_right_mismatches(
+    image: Array,
+    other: Array,
+    disparity_px: Array,
+    *,
+    stereo_view: str = "left",
+    threshold: Optional[float] = None,
+) -> Array: ...
 def beta_quantile(dist: str, p: float) -> float: ...

@@ -2,12 +2,16 @@
 //! (`brume::io::depth`) with every option of `brume render`'s depth flags as a keyword, and
 //! the loaders' messages and notes naming those keywords.
 
-use super::arrays::{read_scalar_map, scalar_map_to_py, user_warning, FsPath};
+use super::arrays::{read_image, read_scalar_map, scalar_map_to_py, user_warning, FsPath};
 use super::{keyword_of, photo_fog, py_err};
 use brume::io::camera::Mount;
 use brume::io::depth::{
     self, DepthFormat, DepthKind, DepthLayout, DepthOptions, LoadedDepth, PhotoGeometry, StereoView,
 };
+use brume::prep::stereo::mismatches_of_view;
+use numpy::ndarray::Array2;
+use numpy::IntoPyArray;
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -248,4 +252,60 @@ fn warn_of_depth_warnings(py: Python<'_>, loaded: &LoadedDepth) -> PyResult<()> 
         user_warning(py, message)?;
     }
     Ok(())
+}
+
+/// left_right_mismatches(image, other, disparity_px, *, stereo_view='left', threshold=None)
+/// -> ndarray
+///
+/// Foggy Cityscapes' left-right photoconsistency check (brume render's --right): the
+/// pixels of image whose disparity points to a colour of other, the stereo pair's other
+/// image, that differs by more than threshold (in sRGB code values, [0, 1]; default 12/255)
+/// in some channel. image and other as brume.fog takes an image (uint8/uint16 sRGB or float
+/// linear, HxWx3), of one size; disparity_px: float HxW in pixels, aligned with image, NaN
+/// or <= 0 where unknown (a Cityscapes disparity PNG p: (p - 1) / 256 where p > 0).
+/// stereo_view: the view image and disparity_px belong to, 'left' (other is the right
+/// image, the match at x - d) or 'right' (other is the left image, the match at x + d).
+/// Returns a bool HxW array, True where the disparity is unreliable: set the range there to
+/// NaN and brume.fog fills it from reliable neighbours. Unknown disparities, and matches
+/// outside other, are False.
+#[pyfunction]
+#[pyo3(signature = (image, other, disparity_px, *, stereo_view="left", threshold=None))]
+pub(crate) fn left_right_mismatches(
+    py: Python<'_>,
+    image: &Bound<'_, PyAny>,
+    other: &Bound<'_, PyAny>,
+    disparity_px: &Bound<'_, PyAny>,
+    stereo_view: &str,
+    threshold: Option<f32>,
+) -> PyResult<Py<PyAny>> {
+    let threshold = threshold.unwrap_or(brume::prep::stereo::DEFAULT_THRESHOLD);
+    let view = stereo_view.parse::<StereoView>().map_err(py_err)?;
+    let image = read_image(image)?.linear();
+    let (w, h) = (image.width(), image.height());
+    let other = read_image(other)?.linear();
+    let disparity = read_scalar_map(
+        disparity_px,
+        "disparity_px",
+        "disparities in pixels",
+        "the image's",
+        "pixels; NaN or <= 0 where unknown",
+    )?;
+    for (name, size) in [
+        ("other", (other.width(), other.height())),
+        ("disparity_px", (disparity.width(), disparity.height())),
+    ] {
+        if size != (w, h) {
+            return Err(PyValueError::new_err(format!(
+                "{name}: expected the image's size, {h}x{w} (HxW), got {}x{}",
+                size.1, size.0
+            )));
+        }
+    }
+    let check = || mismatches_of_view(&image, &other, &disparity, view, threshold);
+    let bad = py.detach(check).map_err(py_err)?;
+    Ok(Array2::from_shape_vec((h, w), bad.into_vec())
+        .expect("shape")
+        .into_pyarray(py)
+        .into_any()
+        .unbind())
 }

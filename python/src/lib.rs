@@ -622,6 +622,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(fog, m)?)?;
     m.add_function(wrap_pyfunction!(depth::load_depth, m)?)?;
     m.add_function(wrap_pyfunction!(depth::range_from_depth, m)?)?;
+    m.add_function(wrap_pyfunction!(depth::left_right_mismatches, m)?)?;
     m.add_function(wrap_pyfunction!(photo_io::load_photo, m)?)?;
     m.add_function(wrap_pyfunction!(photo_io::save_photo, m)?)?;
     m.add_function(wrap_pyfunction!(sky_photo::turbidity_from_sky, m)?)?;

@@ -1,6 +1,7 @@
 """Tests of the Python package: shapes and dtypes, the physics checked in numpy, the
 errors, the augmentation's seeding, and equality with the `brume render` program."""
 
+import json
 import math
 import os
 import subprocess
@@ -916,6 +917,80 @@ def test_a_cityscapes_disparitys_occlusions_as_brume_render_fills_them(tmp_path)
     assert error_r(as_left["range_m"]) > 0.3
     with pytest.raises(ValueError, match="stereo_view"):
         brume.fog(image_r, right_m, stereo_view="centre", **origin, **kw)
+
+
+def left_right_reference(image, other, disparity, sign, threshold=12 / 255):
+    """Foggy Cityscapes' left-right check in numpy, on uint8 sRGB codes: image's pixel x
+    against other's colour at x + sign·d (linear between its two nearest columns); unknown
+    disparities and matches outside other pass. Also how far each pixel's largest
+    difference lies from the threshold, to leave ties out of a comparison."""
+    h, w = disparity.shape
+    codes, other_codes = image / 255.0, other / 255.0
+    x = np.arange(w)[None, :].repeat(h, 0)
+    rows = np.arange(h)[:, None].repeat(w, 1)
+    known = np.isfinite(disparity) & (disparity > 0)
+    xr = x + sign * np.where(known, disparity, 0.0)
+    seen = known & (xr >= 0) & (xr <= w - 1)
+    x0 = np.clip(np.floor(xr), 0, w - 1).astype(int)
+    x1 = np.minimum(x0 + 1, w - 1)
+    t = (xr - x0)[..., None]
+    match = other_codes[rows, x0] * (1 - t) + other_codes[rows, x1] * t
+    diff = np.abs(codes - match).max(axis=2)
+    return seen & (diff > threshold), np.abs(diff - threshold)
+
+
+def test_left_right_mismatches_as_numpy_and_brume_render_find_them(tmp_path):
+    """A textured pair 4 px apart: true disparities pass, wrong ones (9, 13.5 px, and
+    random ones) fail where their match has another colour, as a numpy check finds them, for
+    a left view and for the right view's disparity against the left image; and as many as
+    `brume render --right` drops from the Cityscapes file."""
+    Image = pytest.importorskip("PIL.Image")
+    rng = np.random.default_rng(7)
+    h, w = 12, 64
+    u = np.arange(w + 4)[None, :] * 0.9 + np.arange(h)[:, None]
+    scene = (127 + 100 * np.sin(u))[..., None] * np.array([1.0, 0.8, 0.5]) + 10
+    left = np.ascontiguousarray(scene[:, :w]).astype(np.uint8)
+    right = np.ascontiguousarray(scene[:, 4:]).astype(np.uint8)  # right(x) = left(x + 4)
+    disparity = np.full((h, w), 4.0)
+    wrong = rng.random((h, w)) < 0.2
+    disparity[wrong] = rng.choice([9.0, 13.5, 2.25, 30.0], size=wrong.sum())
+    disparity[3, 5], disparity[4, 6] = np.nan, 0.0
+    for view, image, other, sign in [("left", left, right, -1), ("right", right, left, 1)]:
+        got = brume.left_right_mismatches(image, other, disparity, stereo_view=view)
+        assert got.dtype == np.bool_ and got.shape == (h, w)
+        expected, margin = left_right_reference(image, other, disparity, sign)
+        away = margin > 1e-3
+        np.testing.assert_array_equal(got[away], expected[away], err_msg=view)
+        assert not got[disparity == 4.0].any(), view
+        assert 0.05 * wrong.sum() < got.sum() <= wrong.sum(), (view, got.sum())
+
+    # brume render --right on the same frame as a Cityscapes file.
+    stored = np.where(disparity > 0, disparity * 256 + 1, 0).astype(np.uint16)
+    Image.fromarray(stored).save(tmp_path / "f_disparity.png")
+    camera = '{"extrinsic": {"baseline": 0.2}, "intrinsic": {"fx": 100.0, "fy": 100.0, "u0": 32.0, "v0": 6.0}}'
+    (tmp_path / "f_camera.json").write_text(camera)
+    Image.fromarray(left).save(tmp_path / "f_leftImg8bit.png")
+    Image.fromarray(right).save(tmp_path / "f_right.png")
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "f_leftImg8bit.png"),
+        "--depth", str(tmp_path / "f_disparity.png"),
+        "--right", str(tmp_path / "f_right.png"),
+        "--beta", "0.01", "--refine", "none", "--json",
+        "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    report = json.loads(subprocess.run(cmd, check=True, capture_output=True).stdout)
+    ours = brume.left_right_mismatches(left, right, disparity).sum()
+    assert f"{ours} px failed the left-right check" in " ".join(report["depth_notes"])
+
+    with pytest.raises(ValueError, match="stereo_view"):
+        brume.left_right_mismatches(left, right, disparity, stereo_view="centre")
+    with pytest.raises(ValueError, match="other"):
+        brume.left_right_mismatches(left, right[:, 1:], disparity)
+    with pytest.raises(ValueError, match="disparity_px"):
+        brume.left_right_mismatches(left, right, disparity[1:])
+    with pytest.raises(ValueError, match="threshold"):
+        brume.left_right_mismatches(left, right, disparity, threshold=0.0)
 
 
 def test_the_level_road_under_a_cityscapes_camera_as_brume_render_bounds_it(tmp_path):

@@ -305,19 +305,13 @@ impl Photo {
         );
         let right_image = image::load_linear_rgb(right)?;
         let (w, h) = (self.image.width(), self.image.height());
-        // A right view's check is a left view's in the mirrored pair.
-        let as_left = match self.depth.stereo_view {
-            StereoView::Left => Orientation::Upright,
-            StereoView::Right => Orientation::MirrorLeftRight,
-        };
-        let mirrored = (as_left != Orientation::Upright).then(|| self.image.oriented(as_left));
-        let bad = crate::prep::stereo::inconsistent_pixels(
-            mirrored.as_ref().unwrap_or(&self.image),
-            &right_image.into_oriented(as_left),
-            &disparity.into_oriented(as_left),
+        let bad = crate::prep::stereo::mismatches_of_view(
+            &self.image,
+            &right_image,
+            &disparity,
+            self.depth.stereo_view,
             crate::prep::stereo::DEFAULT_THRESHOLD,
         )
-        .map(|bad| bad.into_oriented(as_left))
         .map_err(|e| match e {
             Error::SizeMismatch { .. } => Error::invalid(
                 "right",

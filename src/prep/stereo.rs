@@ -7,11 +7,46 @@
 //! camera cannot see (8 % of the frame), all of it right.
 
 use crate::error::{Error, Result};
+use crate::io::depth::StereoView;
 use crate::io::image::linear_to_srgb;
-use crate::raster::{Grid, RgbImage};
+use crate::raster::{Grid, Orientation, RgbImage};
 
 /// Foggy Cityscapes' threshold: 12 of 255 code values.
 pub const DEFAULT_THRESHOLD: f32 = 12.0 / 255.0;
+
+/// The pixels of `image` (linear RGB), the view `disparity` is aligned with (`view`), whose
+/// disparity points to a colour of `other`, the pair's other image, that differs by more than
+/// `threshold` in some channel's sRGB code value: [`inconsistent_pixels`] for a left view, and
+/// for a right view the same check on the mirrored pair (its match lies at x + d in the left
+/// image), its verdict mirrored back. Errors: sizes that differ, a threshold outside (0, 1].
+pub fn mismatches_of_view(
+    image: &RgbImage,
+    other: &RgbImage,
+    disparity: &Grid<f32>,
+    view: StereoView,
+    threshold: f32,
+) -> Result<Grid<bool>> {
+    if !(threshold > 0.0 && threshold <= 1.0) {
+        return Err(Error::invalid(
+            "threshold",
+            threshold,
+            "a code value difference in (0, 1] (Foggy Cityscapes: 12/255)",
+        ));
+    }
+    match view {
+        StereoView::Left => inconsistent_pixels(image, other, disparity, threshold),
+        StereoView::Right => {
+            let mirror = Orientation::MirrorLeftRight;
+            inconsistent_pixels(
+                &image.oriented(mirror),
+                &other.oriented(mirror),
+                &disparity.oriented(mirror),
+                threshold,
+            )
+            .map(|bad| bad.into_oriented(mirror))
+        }
+    }
+}
 
 /// The pixels of `left` (linear RGB) whose disparity `disparity` (px, left image's; NaN
 /// or ≤ 0 where unknown, and pixels whose match is outside the right image, are left
@@ -86,5 +121,40 @@ mod tests {
             .filter(|&x| *bad.get(x, 1))
             .count();
         assert_eq!(wrong, 0, "true matches pass");
+    }
+
+    /// A right view's disparity points to x + d in the left image: the true disparity
+    /// passes as a right view's and fails as a left view's; a wrong one fails; a threshold
+    /// outside (0, 1] is refused by name.
+    #[test]
+    fn a_right_view_is_checked_against_the_left_image_at_x_plus_d() {
+        let (w, h) = (40, 2);
+        let texture = |u: f32| {
+            let v = 0.5 + 0.4 * (u * 0.7).sin();
+            [v, 0.2, v * 0.5]
+        };
+        let right = Grid::from_fn(w, h, |x, _| texture(x as f32));
+        let left = Grid::from_fn(w, h, |x, _| texture(x as f32 - 3.0));
+        let mut disparity = Grid::filled(w, h, 3.0f32);
+        *disparity.get_mut(10, 0) = 7.0;
+        let check =
+            |view| mismatches_of_view(&right, &left, &disparity, view, DEFAULT_THRESHOLD).unwrap();
+        let as_right = check(StereoView::Right);
+        assert!(*as_right.get(10, 0), "the wrong disparity");
+        let wrong = (0..w - 3)
+            .filter(|&x| x != 10 && *as_right.get(x, 0))
+            .count();
+        assert_eq!(wrong, 0, "true matches pass");
+        assert!(
+            !*as_right.get(w - 2, 1),
+            "x + d past the border has no witness"
+        );
+        let as_left = check(StereoView::Left);
+        let flagged = (3..w).filter(|&x| *as_left.get(x, 1)).count();
+        assert!(flagged > 20, "read as a left view, {flagged} px flagged");
+        for threshold in [0.0, -1.0, 1.5, f32::NAN] {
+            let err = mismatches_of_view(&right, &left, &disparity, StereoView::Right, threshold);
+            assert!(err.unwrap_err().to_string().contains("threshold"));
+        }
     }
 }
