@@ -222,7 +222,7 @@ impl Error {
             },
             Error::Prep(detail) => Error::Prep(text(detail)),
             Error::OutOfMemory { what, detail, hint } => Error::OutOfMemory {
-                what,
+                what: text(what),
                 detail,
                 hint: text(hint),
             },

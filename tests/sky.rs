@@ -390,6 +390,8 @@ fn bad_input_is_named() {
         (&["--sun-zenith", "90"][..], "--sun-zenith"),
         (&["--sun-zenith", "-5"][..], "--sun-zenith"),
         (&["--size", "0"][..], "--size"),
+        (&["--size", "16385"][..], "--size"),
+        (&["--size", "-2"][..], "--size"),
         (&["--clouds", "2"][..], "--clouds"),
         (&["--sun-disc", "-1"][..], "--sun-disc"),
         (&["--cloud-seed", "-1"][..], "--cloud-seed"),

@@ -27,6 +27,7 @@ Aerial perspective from turbidity on a photo with range in metres (paper 002):
 
     >>> hazy = brume.aerial(image, range_m, turbidity=4.0, fov_y_deg=50.0, pitch_deg=2.0)
     >>> t = brume.turbidity_from_sky("fisheye.exr", sun=(40.0, 120.0))["turbidity"]
+    >>> sky, info = brume.render_sky(4.0, sun=(40.0, 120.0), clouds=0.2)  # kcd/m², float32
 
 The native part is ``brume._brume`` (Rust, PyO3); see the repository's README, "Python".
 """
@@ -46,6 +47,7 @@ from ._brume import (
     load_depth,
     load_photo,
     range_from_depth,
+    render_sky,
     save_photo,
     turbidity_from_sky,
 )
@@ -64,6 +66,7 @@ __all__ = [
     "layered_fog",
     "aerial",
     "turbidity_from_sky",
+    "render_sky",
     "Camera",
     "MatrixCamera",
     "augment",

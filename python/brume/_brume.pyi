@@ -324,6 +324,19 @@ def turbidity_from_sky(
     seed: int = 0,
     repeats: int = 10,
 ) -> Dict[str, Any]: ...
+def render_sky(
+    turbidity: float,
+    *,
+    sun: Tuple[float, float],
+    size: int = 500,
+    lens: str = "equidistant",
+    counter_clockwise: bool = False,
+    azimuth_offset_deg: float = 0.0,
+    sun_disc_deg: Optional[float] = None,
+    clouds: Optional[float] = None,
+    cloud_seed: int = 0,
+    dtype: str = "float32",
+) -> Tuple[Array, Dict[str, Any]]: ...
 def load_depth(
     path: PathArg,
     camera: Optional[PathArg] = None,

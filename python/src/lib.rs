@@ -626,6 +626,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(photo_io::load_photo, m)?)?;
     m.add_function(wrap_pyfunction!(photo_io::save_photo, m)?)?;
     m.add_function(wrap_pyfunction!(sky_photo::turbidity_from_sky, m)?)?;
+    m.add_function(wrap_pyfunction!(sky_photo::render_sky, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // The version alone does not tell two builds apart whose outputs differ.

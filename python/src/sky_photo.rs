@@ -1,10 +1,12 @@
 //! `brume.turbidity_from_sky`: paper 002's turbidity of a fisheye sky photo, as `brume
 //! turbidity` estimates it (the photo read in its own primaries, a warning where its
-//! codes are display-encoded).
+//! codes are display-encoded); `brume.render_sky`: the synthetic sky photo `brume sky`
+//! draws.
 
-use super::arrays::{user_warning, FsPath};
+use super::arrays::{user_warning, FsPath, ImageOut, Pixels};
 use super::py_err;
-use brume::sky::TurbidityOptions;
+use brume::sky::clouds::CloudOptions;
+use brume::sky::{render_sky_photo, Fisheye, Lens, SkyExposure, SkyPhotoOptions, TurbidityOptions};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -66,4 +68,105 @@ pub(crate) fn turbidity_from_sky<'py>(
     out.set_item("linear_light", sky.linear_light)?;
     out.set_item("image_circle", sky.circle.map(|c| (c.x, c.y, c.side)))?;
     Ok(out)
+}
+
+/// render_sky(turbidity, *, sun, size=500, lens='equidistant', counter_clockwise=False,
+/// azimuth_offset_deg=0.0, sun_disc_deg=None, clouds=None, cloud_seed=0, dtype='float32')
+/// -> (image, info)
+///
+/// A synthetic fisheye sky photo, as `brume sky` draws it: the Preetham sky of turbidity T
+/// in [1, 20] under the sun at sun = (zenith, azimuth) in degrees, zenith in [0, 90),
+/// through a square fisheye of size px (the sky on its inscribed circle, black outside;
+/// lens 'equidistant', 'equisolid', 'orthographic' or 'stereographic'; azimuth 0 at the
+/// image's top plus azimuth_offset_deg, clockwise unless counter_clockwise). sun_disc_deg:
+/// also a white disc of this angular radius in [0, 45] around the sun (0.27 is the real
+/// sun's), brighter than any exposure shows. clouds: also cover this fraction of the sky,
+/// in [0, 0.9], with synthetic clouds seeded by cloud_seed. dtype: 'float32', HxWx3 linear
+/// sRGB in kcd/m² (a pixel's Rec. 709 luminance is the model's Y; what brume sky writes to
+/// an EXR or PFM), or 'uint8', sRGB code values exposed so that the brightest channel of
+/// the sky more than 2 degrees beyond the sun is 0.9 (its PNG). info: exposure (the factor
+/// applied for uint8, else None), sun_disc_pixels, clouds (coverage, pixels, opaque; or
+/// None), zenith_luminance_kcd_m2, zenith_chromaticity (x, y). save_photo writes it, and
+/// turbidity_from_sky estimates T back from the file.
+#[pyfunction]
+#[pyo3(signature = (turbidity, *, sun, size=500, lens="equidistant", counter_clockwise=false, azimuth_offset_deg=0.0, sun_disc_deg=None, clouds=None, cloud_seed=0, dtype="float32"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn render_sky<'py>(
+    py: Python<'py>,
+    turbidity: f64,
+    sun: (f64, f64),
+    size: usize,
+    lens: &str,
+    counter_clockwise: bool,
+    azimuth_offset_deg: f64,
+    sun_disc_deg: Option<f64>,
+    clouds: Option<f64>,
+    cloud_seed: u64,
+    dtype: &str,
+) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
+    let (pixels, exposure) = match dtype {
+        "float32" => (Pixels::Linear32, SkyExposure::Physical),
+        "uint8" => (Pixels::Srgb8, SkyExposure::Display),
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "dtype: expected 'float32' (linear, kcd/m²) or 'uint8' (sRGB, exposed for \
+                 display), got {other:?}"
+            )))
+        }
+    };
+    if !azimuth_offset_deg.is_finite() {
+        return Err(PyValueError::new_err(format!(
+            "invalid azimuth_offset_deg = {azimuth_offset_deg}: expected degrees, finite"
+        )));
+    }
+    let opts = SkyPhotoOptions {
+        turbidity,
+        sun_zenith: sun.0.to_radians(),
+        sun_azimuth: sun.1.to_radians(),
+        size,
+        fisheye: Fisheye {
+            lens: (lens.parse::<Lens>())
+                .map_err(|e| PyValueError::new_err(format!("lens: {e}")))?,
+            counter_clockwise,
+            azimuth_offset: azimuth_offset_deg.to_radians(),
+        },
+        sun_disc: sun_disc_deg.map(f64::to_radians),
+        clouds: clouds.map(|coverage| CloudOptions {
+            coverage,
+            seed: cloud_seed,
+            ..CloudOptions::default()
+        }),
+        exposure,
+    };
+    // The library names its fields; here the keywords (the angles in degrees, as the
+    // library's messages show them).
+    let keyword = |field: &str| match field {
+        "sun_zenith" | "sun_azimuth" => Some("sun".to_owned()),
+        "sun_disc" => Some("sun_disc_deg".to_owned()),
+        "coverage" => Some("clouds".to_owned()),
+        _ => None,
+    };
+    let photo =
+        (py.detach(|| render_sky_photo(&opts))).map_err(|e| py_err(e.rename_options(keyword)))?;
+    let image = py
+        .detach(|| ImageOut::encode(&photo.image, pixels))
+        .into_py(py);
+    let info = PyDict::new(py);
+    info.set_item("exposure", photo.exposure)?;
+    info.set_item("sun_disc_pixels", photo.sun_disc_pixels)?;
+    let clouds = match &photo.clouds {
+        Some(c) => {
+            let d = PyDict::new(py);
+            d.set_item("coverage", c.coverage)?;
+            d.set_item("pixels", c.pixels)?;
+            d.set_item("opaque", c.opaque)?;
+            Some(d)
+        }
+        None => None,
+    };
+    info.set_item("clouds", clouds)?;
+    info.set_item("zenith_luminance_kcd_m2", photo.zenith_luminance)?;
+    let [x, y] = photo.zenith_chromaticity;
+    info.set_item("zenith_chromaticity", (x, y))?;
+    Ok((image, info))
 }

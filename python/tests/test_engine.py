@@ -1,9 +1,11 @@
 """Tests of the engine fogs (brume.distance_fog, brume.layered_fog with brume.Camera and
-brume.MatrixCamera), of brume.aerial and brume.turbidity_from_sky: equality with the
-`brume scene`, `brume render --medium aerial` and `brume turbidity` programs, an engine's
+brume.MatrixCamera), of brume.aerial, brume.turbidity_from_sky and brume.render_sky:
+equality with the `brume scene`, `brume render --medium aerial`, `brume turbidity` and
+`brume sky` programs, an engine's
 matrices written out in numpy, and the errors."""
 
 import json
+import math
 import subprocess
 import warnings
 from pathlib import Path
@@ -615,3 +617,65 @@ def test_turbidity_from_sky_equals_brume_turbidity(tmp_path):
         brume.turbidity_from_sky(tmp_path / "sky.exr", sun=(95.0, 0.0))
     with pytest.raises(OSError, match="missing.exr"):
         brume.turbidity_from_sky(tmp_path / "missing.exr")
+
+
+def preetham_zenith_luminance(t, sun_zenith_deg):
+    """Preetham, Shirley and Smits (1999), appendix: the zenith luminance Y_z in kcd/m²."""
+    chi = (4.0 / 9.0 - t / 120.0) * (math.pi - 2.0 * math.radians(sun_zenith_deg))
+    return (4.0453 * t - 4.9710) * math.tan(chi) - 0.2155 * t + 2.4192
+
+
+def test_render_sky_equals_brume_sky_and_gives_its_turbidity_back(tmp_path):
+    """render_sky (T 4, clouds, a sun disc) equals `brume sky`'s EXR (float32, kcd/m²) and
+    PNG (uint8, exposed) and its JSON; the zenith pixel's Rec. 709 luminance is Preetham's
+    Y_z written here; saved by save_photo, turbidity_from_sky gives T back; bad values raise
+    ValueError naming the keyword."""
+    Image = pytest.importorskip("PIL.Image")
+    sun, size = (50.0, 30.0), 161  # odd: the centre pixel looks at the zenith
+    options = ["--turbidity", "4", "--sun-zenith", "50", "--sun-azimuth", "30",
+               "--size", str(size), "--clouds", "0.2", "--cloud-seed", "3",
+               "--sun-disc", "0.5", "--json"]  # fmt: skip
+    kw = dict(sun=sun, size=size, clouds=0.2, cloud_seed=3, sun_disc_deg=0.5)
+    for name, dtype in [("sky.exr", "float32"), ("sky.png", "uint8")]:
+        cli = subprocess.run(
+            [str(brume_bin()), "sky", *options, "--out", str(tmp_path / name)],
+            check=True, capture_output=True, text=True)  # fmt: skip
+        report = json.loads(cli.stdout)
+        image, info = brume.render_sky(4.0, dtype=dtype, **kw)
+        assert image.dtype == np.dtype(dtype) and image.shape == (size, size, 3)
+        if dtype == "uint8":
+            written = np.asarray(Image.open(tmp_path / name).convert("RGB"))
+            np.testing.assert_array_equal(image, written)
+            assert info["exposure"] == pytest.approx(report["exposure"], rel=1e-12)
+        else:
+            written, _ = brume.load_photo(tmp_path / name, dtype="float32")
+            np.testing.assert_allclose(image, written, rtol=1e-6)
+            assert info["exposure"] is None
+        assert info["clouds"] == report["clouds"]
+        assert info["sun_disc_pixels"] == report["sun_disc_pixels"] >= 1
+        assert info["zenith_luminance_kcd_m2"] == report["zenith_luminance_kcd_m2"]
+
+    clear, info = brume.render_sky(4.0, sun=sun, size=size)
+    y_z = preetham_zenith_luminance(4.0, sun[0])
+    centre = clear[size // 2, size // 2].astype(np.float64)
+    assert centre @ np.array([0.2126, 0.7152, 0.0722]) == pytest.approx(y_z, rel=1e-4)
+    assert info["zenith_luminance_kcd_m2"] == pytest.approx(y_z, rel=1e-9)
+    assert (clear[0, 0] == 0).all(), "black outside the horizon circle"
+    brume.save_photo(tmp_path / "mine.exr", clear)
+    t = brume.turbidity_from_sky(tmp_path / "mine.exr", sun=sun)["turbidity"]
+    assert abs(t - 4.0) < 0.01, t
+
+    for keyword, value, named in [
+        ("sun", (95.0, 0.0), "sun"),
+        ("sun_disc_deg", 50.0, "sun_disc_deg"),
+        ("clouds", 2.0, "clouds"),
+        ("size", 0, "size"),
+        ("lens", "fish", "lens"),
+        ("dtype", "uint16", "dtype"),
+        ("azimuth_offset_deg", float("nan"), "azimuth_offset_deg"),
+    ]:
+        args = {"sun": sun, "size": 16, keyword: value}
+        with pytest.raises(ValueError, match=named):
+            brume.render_sky(4.0, **args)
+    with pytest.raises(ValueError, match="turbidity"):
+        brume.render_sky(0.5, sun=sun, size=16)

@@ -5,21 +5,14 @@ use super::limits::{self, MAX_ESTIMATIONS, MAX_SAMPLES};
 use super::sun::PlaceTimeArgs;
 use brume::io::output::{self, Outputs};
 use brume::photo::SkyTurbidity;
-use brume::raster::Grid;
-use brume::sky::clouds::{add_clouds, CloudOptions};
+use brume::sky::clouds::CloudOptions;
 use brume::sky::sun_position::PlacedSun;
 use brume::sky::turbidity::{self, SunSource, TurbidityEstimate};
-use brume::sky::{self, Fisheye, Lens, PreethamSky, TurbidityOptions};
+use brume::sky::{render_sky_photo, Fisheye, Lens, SkyExposure, SkyPhotoOptions, TurbidityOptions};
 use brume::{Error, Result};
 use clap::Args;
 use serde_json::json;
 use std::path::{Path, PathBuf};
-
-/// The largest image side `brume sky` renders, px.
-const MAX_SIZE: i64 = 16384;
-/// Bytes per pixel `brume sky` holds: the linear RGB sky, its RGBA copy for the writer and
-/// the encoded output (measured, README's limits table).
-const SKY_BYTES_PER_PIXEL: u64 = 56;
 
 /// The fisheye convention, shared by `brume sky` and `brume turbidity`.
 #[derive(Args, Debug, Clone)]
@@ -277,24 +270,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
         }
     };
     let size = usize::try_from(args.size)
-        .ok()
-        .filter(|&s| (1..=MAX_SIZE as usize).contains(&s))
-        .ok_or_else(|| {
-            Error::invalid("--size", args.size, format!("a side in 1..={MAX_SIZE} px"))
-        })?;
-    limits::check_memory("--size", size, size, SKY_BYTES_PER_PIXEL)?;
-    let (zenith, azimuth) = (sun_zenith_deg.to_radians(), sun_azimuth_deg.to_radians());
-    let model = PreethamSky::new(args.turbidity, zenith, azimuth)?;
-    let disc = match args.sun_disc {
-        Some(d) if !(d.is_finite() && (0.0..=45.0).contains(&d)) => {
-            return Err(Error::invalid(
-                "--sun-disc",
-                d,
-                "an angular radius in [0, 45] degrees",
-            ))
-        }
-        d => d.map(f64::to_radians),
-    };
+        .map_err(|_| Error::invalid("--size", args.size, "a side in px ≥ 1"))?;
     let cloud_seed = seed("--cloud-seed", args.cloud_seed)?;
     if args.clouds.is_none() && cloud_seed != 0 {
         return Err(Error::invalid(
@@ -304,52 +280,37 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
         ));
     }
     output::check_image_output(&args.out, "--out")?;
-
-    let mut image = sky::render_sky_image(&model, size, &fisheye)?;
-    // The library names the coverage as its field; here it is --clouds.
-    let clouds_flag = |e: Error| e.rename_options(|f| (f == "coverage").then(|| "--clouds".into()));
-    let clouds = match args.clouds {
-        Some(coverage) => {
-            let opts = CloudOptions {
-                coverage,
-                seed: cloud_seed,
-                ..CloudOptions::default()
-            };
-            Some(add_clouds(&mut image, &fisheye, &opts).map_err(clouds_flag)?)
-        }
-        None => None,
-    };
-    let disc_pixels = match disc {
-        Some(r) => Some(sky::draw_sun_disc(
-            &mut image, &fisheye, zenith, azimuth, r,
-        )?),
-        None => None,
-    };
     let png = args
         .out
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("png"));
-    let exposure = if png {
-        sky::display_exposure(&image, &fisheye, zenith, azimuth, disc.unwrap_or(0.0))
-    } else {
-        None
+    let opts = SkyPhotoOptions {
+        turbidity: args.turbidity,
+        sun_zenith: sun_zenith_deg.to_radians(),
+        sun_azimuth: sun_azimuth_deg.to_radians(),
+        size,
+        fisheye,
+        sun_disc: args.sun_disc.map(f64::to_radians),
+        clouds: args.clouds.map(|coverage| CloudOptions {
+            coverage,
+            seed: cloud_seed,
+            ..CloudOptions::default()
+        }),
+        exposure: if png {
+            SkyExposure::Display
+        } else {
+            SkyExposure::Physical
+        },
     };
-    let scale = exposure.unwrap_or(1.0) as f32;
-    let rgba = Grid::from_fn(size, size, |x, y| {
-        let p = image.get(x, y);
-        let inside = fisheye.pixel_direction(size, x, y).is_some();
-        [
-            p[0] * scale,
-            p[1] * scale,
-            p[2] * scale,
-            if inside { 1.0 } else { 0.0 },
-        ]
-    });
+    // The library names the coverage as its field; here it is --clouds.
+    let clouds_flag = |e: Error| e.rename_options(|f| (f == "coverage").then(|| "--clouds".into()));
+    let photo = render_sky_photo(&opts).map_err(clouds_flag)?;
     let mut outputs = Outputs::new();
-    outputs.stage_rgba(&args.out, &rgba)?;
+    outputs.stage_rgba(&args.out, &photo.image)?;
     super::commit(outputs)?;
 
-    let (xz, yz) = model.zenith_chromaticity();
+    let [xz, yz] = photo.zenith_chromaticity;
+    let exposure = photo.exposure;
     if args.json {
         let report = json!({
             "out": args.out.display().to_string(),
@@ -363,12 +324,12 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
                 "counter_clockwise": fisheye.counter_clockwise,
                 "azimuth_offset_deg": fisheye.azimuth_offset.to_degrees(),
             },
-            "zenith_luminance_kcd_m2": model.zenith_luminance(),
+            "zenith_luminance_kcd_m2": photo.zenith_luminance,
             "zenith_chromaticity": [xz, yz],
             "units": if png { "sRGB 8-bit, scaled by exposure" } else { "linear sRGB, kcd/m2" },
             "exposure": exposure,
-            "sun_disc_pixels": disc_pixels,
-            "clouds": clouds,
+            "sun_disc_pixels": photo.sun_disc_pixels,
+            "clouds": photo.clouds,
         });
         outln!("{}", super::stamped(report));
     } else {
@@ -380,7 +341,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             args.turbidity,
             sun_zenith_deg,
             sun_azimuth_deg,
-            model.zenith_luminance(),
+            photo.zenith_luminance,
             match exposure {
                 Some(e) => format!("; PNG exposure ×{e:.4} (brightest sky 2° from the sun → 0.9)"),
                 None if png => String::new(),

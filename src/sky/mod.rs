@@ -9,7 +9,9 @@
 //!   pixels to (θ, φ) and back under a documented default convention (equidistant,
 //!   zenith at the centre, azimuth 0 at the top, clockwise), with options to change it.
 //! - [`render_sky_image`] draws the model through a fisheye; [`clouds`] adds seeded
-//!   synthetic clouds for the estimator's tests and benchmark.
+//!   synthetic clouds for the estimator's tests and benchmark; [`photo`] makes the whole
+//!   synthetic sky photo (`brume sky`): clouds, a sun disc, an exposure, the horizon as
+//!   alpha.
 //! - [`turbidity`]: the estimator of sec. 3.4: random sample points, luminance ratios to a
 //!   reference point against the model's F(θi, γi)/F(θref, γref) (eq. 6, 8), RANSAC
 //!   against clouds, Levenberg-Marquardt refinement of T in [1, 20].
@@ -30,11 +32,13 @@ pub mod clouds;
 pub mod fisheye;
 pub mod horizon_sectors;
 pub mod image_circle;
+pub mod photo;
 pub mod preetham;
 pub mod sun_position;
 pub mod turbidity;
 
 pub use fisheye::{Fisheye, Lens};
+pub use photo::{render_sky_photo, SkyExposure, SkyPhoto, SkyPhotoOptions};
 pub use preetham::PreethamSky;
 pub use turbidity::{estimate_turbidity, TurbidityEstimate, TurbidityOptions};
 
