@@ -4,8 +4,8 @@
 //! depth files, `brume::Headless` for the EGL context; `engine` the engine fogs on a
 //! frame and its depth buffer (`brume::medium`, `brume::camera`), `aerial_photo` paper
 //! 002's aerial perspective (`brume::photo::aerial`), `photo_fog` `brume.fog`'s request and
-//! labels, `depth` `brume.load_depth`, `arrays` numpy in and out, `gl_thread` the EGL
-//! context's own thread.
+//! labels, `depth` `brume.load_depth`, `metrics` `brume.compare`, `arrays` numpy in and
+//! out, `gl_thread` the EGL context's own thread.
 //!
 //! **Threads.** A [`Renderer`] owns one GL thread (`gl_thread`), which opens brume's
 //! headless EGL context and keeps it for the renderer's life; Python calls wait for it with
@@ -31,6 +31,7 @@ mod arrays;
 mod depth;
 mod engine;
 mod gl_thread;
+mod metrics;
 mod photo_fog;
 mod photo_io;
 mod sky_photo;
@@ -628,6 +629,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sky_photo::turbidity_from_sky, m)?)?;
     m.add_function(wrap_pyfunction!(sky_photo::render_sky, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
+    m.add_function(wrap_pyfunction!(metrics::compare, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // The version alone does not tell two builds apart whose outputs differ.
     m.add("__sources__", brume::SOURCES)?;

@@ -1274,3 +1274,72 @@ def test_renderer_closes(image_u8, range_m):
         with brume.Renderer() as renderer:
             renderer.fog(image_u8, range_m)
     assert renderer.closed
+
+
+def ssim_reference(x, y):
+    """Wang et al.'s SSIM of two grey float64 images in [0, 1], written with OpenCV's
+    Gaussian filter: 11x11 window, sigma 1.5, K1 0.01, K2 0.03, L 1, the mean over the
+    windows wholly inside the image."""
+    cv2 = pytest.importorskip("cv2")
+    blur = lambda im: cv2.GaussianBlur(im, (11, 11), 1.5)[5:-5, 5:-5]  # noqa: E731
+    mx, my = blur(x), blur(y)
+    vx, vy, cxy = blur(x * x) - mx**2, blur(y * y) - my**2, blur(x * y) - mx * my
+    c1, c2 = 0.01**2, 0.03**2
+    s = (2 * mx * my + c1) * (2 * cxy + c2) / ((mx**2 + my**2 + c1) * (vx + vy + c2))
+    return s.mean()
+
+
+def hsv_correlation_reference(a, b, bins=64):
+    """The correlation of 64-bin hue, saturation and value histograms of two RGB images
+    in [0, 1], HSV by OpenCV (hue in degrees)."""
+    cv2 = pytest.importorskip("cv2")
+
+    def histograms(im):
+        hsv = cv2.cvtColor(im.astype(np.float32), cv2.COLOR_RGB2HSV).astype(np.float64)
+        hsv[..., 0] /= 360
+        index = np.minimum((hsv * bins).astype(int), bins - 1)
+        return [np.bincount(index[..., c].ravel(), minlength=bins) for c in range(3)]
+
+    return [np.corrcoef(p, q)[0, 1] for p, q in zip(histograms(a), histograms(b))]
+
+
+def test_compare_is_ssim_and_hsv_correlation_as_numpy_and_brume_compare_say(tmp_path):
+    """brume.compare of a linear photo with its fogged self and with a noisy copy: SSIM per
+    channel of the sRGB values as written here with OpenCV's Gaussian (1e-6), the HSV
+    histograms' correlation as numpy's (1e-9; float images, whose hues fall on no bin's
+    edge, as 8-bit codes' often do exactly); of 8-bit PNGs, `brume compare`'s JSON number
+    for number; sizes that differ or under 11 px raise."""
+    Image = pytest.importorskip("PIL.Image")
+    rng = np.random.default_rng(5)
+    y, x = np.mgrid[0:H, 0:W]
+    shown = np.stack([0.5 + 0.35 * np.sin(x / 5.0), 0.4 + 0.25 * np.cos(y / 3.0),
+                      0.2 + (x + y) / 150.0], axis=2)  # fmt: skip
+    a = srgb_to_linear(shown).astype(np.float32)
+    noisy = np.clip(a + rng.normal(0, 0.03, a.shape), 0, 1).astype(np.float32)
+    foggy = brume.fog(a, np.full((H, W), 5.0, np.float32) + x, beta=0.05, refine="none")
+    for b in [noisy, foggy]:
+        got = brume.compare(a, b)
+        sa, sb = linear_to_srgb(a), linear_to_srgb(np.clip(b, 0, 1))
+        want = [ssim_reference(sa[..., c], sb[..., c]) for c in range(3)]
+        np.testing.assert_allclose(got["ssim_rgb"], want, atol=1e-6)
+        assert got["ssim"] == pytest.approx(np.mean(want), abs=1e-6) and got["ssim"] < 0.99
+        hsv = hsv_correlation_reference(sa, sb)
+        np.testing.assert_allclose(got["hsv_correlation_hsv"], hsv, atol=1e-9)
+    assert brume.compare(a, a)["ssim"] == pytest.approx(1.0, abs=1e-12)
+
+    a8 = (linear_to_srgb(a) * 255 + 0.5).astype(np.uint8)
+    foggy8 = brume.fog(a8, np.full((H, W), 5.0, np.float32) + x, beta=0.05, refine="none")
+    Image.fromarray(a8).save(tmp_path / "a.png")
+    Image.fromarray(foggy8).save(tmp_path / "b.png")
+    cli = subprocess.run(
+        [str(brume_bin()), "compare", str(tmp_path / "a.png"), str(tmp_path / "b.png"), "--json"],
+        check=True, capture_output=True, text=True)  # fmt: skip
+    report = json.loads(cli.stdout)
+    got = brume.compare(a8, foggy8)
+    for key in ["ssim", "ssim_rgb", "hsv_correlation", "hsv_correlation_hsv"]:
+        assert got[key] == report[key], key
+
+    with pytest.raises(ValueError, match="b"):
+        brume.compare(a, a[:, 1:])
+    with pytest.raises(ValueError, match="11x11"):
+        brume.compare(a[:8, :8], a[:8, :8])
