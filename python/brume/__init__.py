@@ -28,6 +28,7 @@ Aerial perspective from turbidity on a photo with range in metres (paper 002):
     >>> hazy = brume.aerial(image, range_m, turbidity=4.0, fov_y_deg=50.0, pitch_deg=2.0)
     >>> t = brume.turbidity_from_sky("fisheye.exr", sun=(40.0, 120.0))["turbidity"]
     >>> sky, info = brume.render_sky(4.0, sun=(40.0, 120.0), clouds=0.2)  # kcd/m², float32
+    >>> s = brume.sun_position(48.85, 2.35, "2024-06-21T10:00:00+02:00")  # NREL's SPA
 
 The native part is ``brume._brume`` (Rust, PyO3); see the repository's README, "Python".
 """
@@ -50,6 +51,7 @@ from ._brume import (
     range_from_depth,
     render_sky,
     save_photo,
+    sun_position,
     turbidity_from_sky,
 )
 from . import augment
@@ -69,6 +71,7 @@ __all__ = [
     "aerial",
     "turbidity_from_sky",
     "render_sky",
+    "sun_position",
     "Camera",
     "MatrixCamera",
     "augment",

@@ -337,6 +337,16 @@ def render_sky(
     cloud_seed: int = 0,
     dtype: str = "float32",
 ) -> Tuple[Array, Dict[str, Any]]: ...
+def sun_position(
+    latitude_deg: float,
+    longitude_deg: float,
+    time: Any,
+    *,
+    altitude_m: float = 0.0,
+    pressure_hpa: float = 1013.25,
+    temperature_c: float = 12.0,
+    delta_t_s: Optional[float] = None,
+) -> Dict[str, Any]: ...
 def load_depth(
     path: PathArg,
     camera: Optional[PathArg] = None,

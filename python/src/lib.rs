@@ -35,6 +35,7 @@ mod metrics;
 mod photo_fog;
 mod photo_io;
 mod sky_photo;
+mod sun;
 
 use arrays::{read_image, read_range, Colour, FsPath, ImageIn, ImageOut};
 use brume::photo::BetaDistribution;
@@ -628,6 +629,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(photo_io::save_photo, m)?)?;
     m.add_function(wrap_pyfunction!(sky_photo::turbidity_from_sky, m)?)?;
     m.add_function(wrap_pyfunction!(sky_photo::render_sky, m)?)?;
+    m.add_function(wrap_pyfunction!(sun::sun_position, m)?)?;
     m.add_function(wrap_pyfunction!(beta_quantile, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::compare, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -679,3 +679,58 @@ def test_render_sky_equals_brume_sky_and_gives_its_turbidity_back(tmp_path):
             brume.render_sky(4.0, **args)
     with pytest.raises(ValueError, match="turbidity"):
         brume.render_sky(0.5, sun=sun, size=16)
+
+
+def test_sun_position_is_the_spa_papers_example_and_brume_sun(tmp_path):
+    """sun_position at Reda and Andreas' worked example (Golden, Colorado, 2003-10-17
+    12:30:30 UTC−7, 1830.14 m, 820 hPa, 11 °C, ΔT 67 s) gives their apparent zenith
+    50.11162° and azimuth 194.34024° (1e-5), from a string or an aware datetime; pvlib's
+    SPA at 400 random places and instants to 1e-6°; elsewhere it equals `brume sun --json`
+    number for number; bad values raise ValueError naming the keyword."""
+    from datetime import datetime, timedelta, timezone
+
+    place = dict(altitude_m=1830.14, pressure_hpa=820.0, temperature_c=11.0, delta_t_s=67.0)
+    local = datetime(2003, 10, 17, 12, 30, 30, tzinfo=timezone(timedelta(hours=-7)))
+    for time in ["2003-10-17T12:30:30-07:00", local]:
+        s = brume.sun_position(39.742476, -105.1786, time, **place)
+        assert abs(s["apparent_zenith_deg"] - 50.11162) < 1e-5, s
+        assert abs(s["azimuth_deg"] - 194.34024) < 1e-5, s
+        assert abs(s["declination_deg"] - -9.316179) < 1e-6, s
+        assert s["zenith_deg"] > s["apparent_zenith_deg"] and s["delta_t_s"] == 67.0
+
+    # pvlib's SPA at 400 random places and instants (tests/data/sun, from
+    # tools/sun_reference.py): within 1e-6 degrees.
+    rows = (Path(__file__).resolve().parents[2] / "tests/data/sun/pvlib_spa.csv").read_text()
+    header, *rows = [r.split(",") for r in rows.splitlines() if not r.startswith("#")]
+    worst = 0.0
+    for row in map(dict, (zip(header, r) for r in rows)):
+        keywords = {k: float(row[k]) for k in ["altitude_m", "pressure_hpa", "temperature_c",
+                                                "delta_t_s"]}  # fmt: skip
+        s = brume.sun_position(
+            float(row["latitude_deg"]), float(row["longitude_deg"]), row["time"], **keywords
+        )
+        for key in ["zenith_deg", "apparent_zenith_deg", "azimuth_deg"]:
+            worst = max(worst, abs(s[key] - float(row[key])))
+    assert len(rows) == 400 and worst < 1e-6, worst
+
+    time = "2024-06-21T10:00:00+02:00"
+    cli = subprocess.run(
+        [str(brume_bin()), "sun", "--latitude", "48.85", "--longitude", "2.35",
+         "--time", time, "--json"],
+        check=True, capture_output=True, text=True)  # fmt: skip
+    want = json.loads(cli.stdout)
+    got = brume.sun_position(48.85, 2.35, time)
+    for key in got:
+        assert got[key] == want[key], key
+
+    for args, named in [
+        ((95.0, 0.0, time), "latitude_deg"),
+        ((0.0, 200.0, time), "longitude_deg"),
+        ((0.0, 0.0, "2024-06-21 10:00"), "time"),
+        ((0.0, 0.0, datetime(2024, 6, 21, 10)), "naive"),
+        ((0.0, 0.0, 1718956800), "time"),
+    ]:
+        with pytest.raises(ValueError, match=named):
+            brume.sun_position(*args)
+    with pytest.raises(ValueError, match="delta_t_s"):
+        brume.sun_position(0.0, 0.0, time, delta_t_s=1e6)
