@@ -315,6 +315,19 @@ def aerial(
     stereo_view: Optional[str] = None,
     ground: Optional[Dict[str, float]] = None,
 ) -> Any: ...
+def prepare(
+    image: Array,
+    range_m: Array,
+    *,
+    refine: Union[bool, str, None] = None,
+    sky_mask: Optional[Array] = None,
+    ego_mask: Optional[Array] = None,
+    airlight: Optional[Union[float, Sequence[float]]] = None,
+    monocular: bool = False,
+    stereo_focal_baseline: Optional[float] = None,
+    stereo_view: Optional[str] = None,
+    ground: Optional[Dict[str, float]] = None,
+) -> Tuple[Array, Dict[str, Any]]: ...
 def load_photo(path: PathArg, *, dtype: str = "uint8") -> Tuple[Array, Dict[str, Any]]: ...
 def save_photo(path: PathArg, image: Array, info: Optional[Dict[str, Any]] = None) -> None: ...
 def turbidity_from_sky(

@@ -375,6 +375,16 @@ pub(crate) fn scalar_map_to_py(py: Python<'_>, map: ScalarMap) -> Py<PyAny> {
         .unbind()
 }
 
+/// A mask as a bool HxW array, row 0 at the top.
+pub(crate) fn mask_to_py(py: Python<'_>, mask: Grid<bool>) -> Py<PyAny> {
+    let (w, h) = (mask.width(), mask.height());
+    Array2::from_shape_vec((h, w), mask.into_vec())
+        .expect("shape")
+        .into_pyarray(py)
+        .into_any()
+        .unbind()
+}
+
 /// What a fogged frame goes back to Python as.
 pub(crate) enum ImageOut {
     Srgb8(Array3<u8>),

@@ -2,15 +2,15 @@
 //! (`brume::io::depth`) with every option of `brume render`'s depth flags as a keyword, and
 //! the loaders' messages and notes naming those keywords.
 
-use super::arrays::{read_image, read_scalar_map, scalar_map_to_py, user_warning, FsPath};
+use super::arrays::{
+    mask_to_py, read_image, read_scalar_map, scalar_map_to_py, user_warning, FsPath,
+};
 use super::{keyword_of, photo_fog, py_err};
 use brume::io::camera::Mount;
 use brume::io::depth::{
     self, DepthFormat, DepthKind, DepthLayout, DepthOptions, LoadedDepth, PhotoGeometry, StereoView,
 };
 use brume::prep::stereo::mismatches_of_view;
-use numpy::ndarray::Array2;
-use numpy::IntoPyArray;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -303,9 +303,5 @@ pub(crate) fn left_right_mismatches(
     }
     let check = || mismatches_of_view(&image, &other, &disparity, view, threshold);
     let bad = py.detach(check).map_err(py_err)?;
-    Ok(Array2::from_shape_vec((h, w), bad.into_vec())
-        .expect("shape")
-        .into_pyarray(py)
-        .into_any()
-        .unbind())
+    Ok(mask_to_py(py, bad))
 }

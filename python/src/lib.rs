@@ -34,6 +34,7 @@ mod gl_thread;
 mod metrics;
 mod photo_fog;
 mod photo_io;
+mod prepare;
 mod sky_photo;
 mod sun;
 
@@ -622,6 +623,7 @@ fn _brume(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(engine::layered_fog, m)?)?;
     m.add_function(wrap_pyfunction!(aerial_photo::aerial, m)?)?;
     m.add_function(wrap_pyfunction!(fog, m)?)?;
+    m.add_function(wrap_pyfunction!(prepare::prepare, m)?)?;
     m.add_function(wrap_pyfunction!(depth::load_depth, m)?)?;
     m.add_function(wrap_pyfunction!(depth::range_from_depth, m)?)?;
     m.add_function(wrap_pyfunction!(depth::left_right_mismatches, m)?)?;

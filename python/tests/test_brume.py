@@ -1343,3 +1343,55 @@ def test_compare_is_ssim_and_hsv_correlation_as_numpy_and_brume_compare_say(tmp_
         brume.compare(a, a[:, 1:])
     with pytest.raises(ValueError, match="11x11"):
         brume.compare(a[:8, :8], a[:8, :8])
+
+
+def test_prepare_is_brume_prep_and_the_range_fog_reads(tmp_path):
+    """A monocular model's map of a sky over striped grass, metric, with a hole punched in
+    the grass: prepare gives the range `brume prep --image` writes (equal), finite
+    everywhere, and the ranges brume.fog's labels say it read with ks and with beta (its
+    physical_range_m; unrefined: equal; repaired on the CPU against the GPU: 1e-4); its sky
+    mask holds the sky rows, its filled mask the hole; bad keywords raise ValueError."""
+    Image = pytest.importorskip("PIL.Image")
+    h, w = 48, 64
+    y, x = np.mgrid[0:h, 0:w].astype(np.float64)
+    eye = 2.0 + 0.3 * x + 0.2 * y
+    image, disparity = sky_over_ground(eye, 0.002 + 0.00002 * np.arange(w))
+    metric, _ = brume.range_from_depth(disparity, kind="inverse", fov_y_deg=60.0, scale=20.0)
+    metric[30:36, 20:30] = np.nan
+    for refine in ["none", "repair"]:
+        got, info = brume.prepare(image, metric, refine=refine, monocular=True)
+        assert got.dtype == np.float32 and got.shape == (h, w) and np.isfinite(got).all()
+        assert info["refine"] == refine and not info["upsampled"]
+        assert info["sky"][:12].all() and not info["sky"][14:].any(), refine
+        assert info["filled"][30:36, 20:30].all() and info["holes"] >= 1
+        assert info["filled"].sum() == info["hole_pixels"]
+        kw = dict(refine=refine, monocular=True, return_info=True)
+        _, physical = brume.fog(image, metric, beta=0.02, **kw)
+        _, normalised = brume.fog(image, metric, ks=0.75, **kw)
+        rtol = 1e-6 if refine == "none" else 1e-4
+        np.testing.assert_allclose(info["physical_range_m"], physical["range_m"], rtol=rtol)
+        np.testing.assert_allclose(got, normalised["range_m"], rtol=rtol)
+        assert (info["physical_range_m"][0] == 1000.0).all() and got[0, 0] < 1000.0
+        assert info["airlight"] == pytest.approx(physical["airlight"], abs=1e-7)
+
+    # brume prep --image of the same frame (its monocular map read as inverse depth).
+    Image.fromarray(image).save(tmp_path / "image.png")
+    np.save(tmp_path / "inverse.npy", disparity.astype(np.float32))
+    cmd = [
+        str(brume_bin()), "prep", "--image", str(tmp_path / "image.png"),
+        "--depth", str(tmp_path / "inverse.npy"), "--depth-kind", "inverse",
+        "--fov", "60", "--depth-scale", "20", "--out", str(tmp_path / "prep.pfm"),
+    ]  # fmt: skip
+    subprocess.run(cmd, check=True, capture_output=True)
+    rng, _ = brume.range_from_depth(disparity, kind="inverse", fov_y_deg=60.0, scale=20.0)
+    got, _ = brume.prepare(image, rng, monocular=True)
+    written, _ = brume.load_depth(tmp_path / "prep.pfm", kind="range", scale=1.0,
+                                  sky_beyond=float("inf"))  # fmt: skip
+    np.testing.assert_array_equal(got, written)
+
+    with pytest.raises(ValueError, match="refine"):
+        brume.prepare(image, metric, refine="sharpen")
+    with pytest.raises(ValueError, match="sky_mask"):
+        brume.prepare(image, metric, sky_mask=np.ones((h, w), bool))
+    with pytest.raises(ValueError, match="stereo_view"):
+        brume.prepare(image, metric, stereo_focal_baseline=50.0, stereo_view="up")
