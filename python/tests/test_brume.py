@@ -1349,8 +1349,9 @@ def test_prepare_is_brume_prep_and_the_range_fog_reads(tmp_path):
     """A monocular model's map of a sky over striped grass, metric, with a hole punched in
     the grass: prepare gives the range `brume prep --image` writes (equal), finite
     everywhere, and the ranges brume.fog's labels say it read with ks and with beta (its
-    physical_range_m; unrefined: equal; repaired on the CPU against the GPU: 1e-4); its sky
-    mask holds the sky rows, its filled mask the hole; bad keywords raise ValueError."""
+    physical_range_m; unrefined: equal; repaired on the CPU against the GPU: 1e-4), also
+    from a map half the image's size; its sky mask holds the sky rows, its filled mask the
+    hole; bad keywords raise ValueError."""
     Image = pytest.importorskip("PIL.Image")
     h, w = 48, 64
     y, x = np.mgrid[0:h, 0:w].astype(np.float64)
@@ -1373,6 +1374,14 @@ def test_prepare_is_brume_prep_and_the_range_fog_reads(tmp_path):
         np.testing.assert_allclose(got, normalised["range_m"], rtol=rtol)
         assert (info["physical_range_m"][0] == 1000.0).all() and got[0, 0] < 1000.0
         assert info["airlight"] == pytest.approx(physical["airlight"], abs=1e-7)
+
+    # A map half the image's size is upsampled, guided by it, masks and all.
+    big = np.repeat(np.repeat(image, 2, axis=0), 2, axis=1)
+    got, info = brume.prepare(big, metric, monocular=True)
+    assert got.shape == info["sky"].shape == info["filled"].shape == (2 * h, 2 * w)
+    assert info["upsampled"] and np.isfinite(got).all()
+    _, physical = brume.fog(big, metric, beta=0.02, monocular=True, return_info=True)
+    np.testing.assert_allclose(info["physical_range_m"], physical["range_m"], rtol=1e-4)
 
     # brume prep --image of the same frame (its monocular map read as inverse depth).
     Image.fromarray(image).save(tmp_path / "image.png")
