@@ -365,20 +365,11 @@ fn nonzero<T: numpy::Element + Copy + Default + PartialEq>(
     Ok(a.as_array().iter().map(|&v| v != T::default()).collect())
 }
 
-/// A map (range, transmittance) as a float32 HxW array, row 0 at the top as brume keeps it.
-pub(crate) fn scalar_map_to_py(py: Python<'_>, map: ScalarMap) -> Py<PyAny> {
+/// A map (range and transmittance as float32, a mask as bool) as an HxW array, row 0 at
+/// the top as brume keeps it.
+pub(crate) fn grid_to_py<T: numpy::Element>(py: Python<'_>, map: Grid<T>) -> Py<PyAny> {
     let (w, h) = (map.width(), map.height());
     Array2::from_shape_vec((h, w), map.into_vec())
-        .expect("shape")
-        .into_pyarray(py)
-        .into_any()
-        .unbind()
-}
-
-/// A mask as a bool HxW array, row 0 at the top.
-pub(crate) fn mask_to_py(py: Python<'_>, mask: Grid<bool>) -> Py<PyAny> {
-    let (w, h) = (mask.width(), mask.height());
-    Array2::from_shape_vec((h, w), mask.into_vec())
         .expect("shape")
         .into_pyarray(py)
         .into_any()

@@ -2,9 +2,7 @@
 //! (`brume::io::depth`) with every option of `brume render`'s depth flags as a keyword, and
 //! the loaders' messages and notes naming those keywords.
 
-use super::arrays::{
-    mask_to_py, read_image, read_scalar_map, scalar_map_to_py, user_warning, FsPath,
-};
+use super::arrays::{grid_to_py, read_image, read_scalar_map, user_warning, FsPath};
 use super::{keyword_of, photo_fog, py_err};
 use brume::io::camera::Mount;
 use brume::io::depth::{
@@ -237,7 +235,7 @@ fn range_and_info(py: Python<'_>, loaded: LoadedDepth) -> PyResult<(Py<PyAny>, B
         .map(|g| photo_fog::ground_to_py(py, &g))
         .transpose()?;
     info.set_item("ground", ground)?;
-    Ok((scalar_map_to_py(py, loaded.range), info))
+    Ok((grid_to_py(py, loaded.range), info))
 }
 
 /// Warns (Python's `UserWarning`) of what the loader says a user must see: depth along the
@@ -303,5 +301,5 @@ pub(crate) fn left_right_mismatches(
     }
     let check = || mismatches_of_view(&image, &other, &disparity, view, threshold);
     let bad = py.detach(check).map_err(py_err)?;
-    Ok(mask_to_py(py, bad))
+    Ok(grid_to_py(py, bad))
 }

@@ -2,7 +2,7 @@
 //! the calling thread, refinement and fog on the GL thread, the capture after it), the
 //! keywords checked into brume's options, and `return_info`'s labels.
 
-use super::arrays::{not_numbers, numbers, read_mask, scalar_map_to_py, Colour, ImageOut};
+use super::arrays::{grid_to_py, not_numbers, numbers, read_mask, Colour, ImageOut};
 use super::gl_thread::GlThread;
 use super::{py_err, value_error};
 use brume::compat;
@@ -481,8 +481,8 @@ pub(crate) struct FogInfo {
 impl Labels for FogInfo {
     fn into_py<'py>(self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let info = PyDict::new(py);
-        info.set_item("transmittance", scalar_map_to_py(py, self.transmittance))?;
-        info.set_item("range_m", scalar_map_to_py(py, self.range_m))?;
+        info.set_item("transmittance", grid_to_py(py, self.transmittance))?;
+        info.set_item("range_m", grid_to_py(py, self.range_m))?;
         info.set_item("airlight", self.airlight.map(f64::from).to_vec())?;
         info.set_item("airlight_source", self.airlight_source)?;
         info.set_item("beta", self.beta)?;

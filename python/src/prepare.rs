@@ -1,7 +1,7 @@
 //! `brume.prepare`: a photo's range pre-processed and refined as `brume.fog` would read it,
 //! without the fog (`brume prep` with an image), CPU only: no GL context.
 
-use super::arrays::{mask_to_py, read_image, read_range, scalar_map_to_py, Colour};
+use super::arrays::{grid_to_py, read_image, read_range, Colour};
 use super::photo_fog::{self, prepare_request, set_masks};
 use super::py_err;
 use brume::photo::{self, Photo};
@@ -60,7 +60,7 @@ pub(crate) fn prepare<'py>(
         .map_err(py_err)?;
     let (prepared, physical) = prepared;
     let info = PyDict::new(py);
-    info.set_item("physical_range_m", scalar_map_to_py(py, physical))?;
+    info.set_item("physical_range_m", grid_to_py(py, physical))?;
     info.set_item("airlight", prepared.airlight.map(f64::from).to_vec())?;
     info.set_item("airlight_source", prepared.airlight_from.name())?;
     info.set_item("refine", opts.refine.mode.name())?;
@@ -84,9 +84,9 @@ pub(crate) fn prepare<'py>(
         for (key, n) in counts {
             info.set_item(key, n)?;
         }
-        info.set_item("sky", mask_to_py(py, p.sky))?;
-        info.set_item("filled", mask_to_py(py, p.filled))?;
-        info.set_item("beyond_reach", mask_to_py(py, p.beyond_reach))?;
+        info.set_item("sky", grid_to_py(py, p.sky))?;
+        info.set_item("filled", grid_to_py(py, p.filled))?;
+        info.set_item("beyond_reach", grid_to_py(py, p.beyond_reach))?;
     }
-    Ok((scalar_map_to_py(py, prepared.range), info))
+    Ok((grid_to_py(py, prepared.range), info))
 }
