@@ -686,7 +686,8 @@ def test_sun_position_is_the_spa_papers_example_and_brume_sun(tmp_path):
     12:30:30 UTC−7, 1830.14 m, 820 hPa, 11 °C, ΔT 67 s) gives their apparent zenith
     50.11162° and azimuth 194.34024° (1e-5), from a string or an aware datetime; pvlib's
     SPA at 400 random places and instants to 1e-6°; elsewhere it equals `brume sun --json`
-    number for number; bad values raise ValueError naming the keyword."""
+    number for number, and its sun in render_sky draws `brume sky --latitude … --heading`'s
+    sky; bad values raise ValueError naming the keyword."""
     from datetime import datetime, timedelta, timezone
 
     place = dict(altitude_m=1830.14, pressure_hpa=820.0, temperature_c=11.0, delta_t_s=67.0)
@@ -722,6 +723,17 @@ def test_sun_position_is_the_spa_papers_example_and_brume_sun(tmp_path):
     got = brume.sun_position(48.85, 2.35, time)
     for key in got:
         assert got[key] == want[key], key
+
+    # The sun of a place in render_sky: the heading at the fisheye's top as its azimuth
+    # offset, as `brume sky --latitude … --heading` draws it.
+    sky = tmp_path / "sky.exr"
+    subprocess.run(
+        [str(brume_bin()), "sky", "--turbidity", "3", "--latitude", "48.85", "--longitude",
+         "2.35", "--time", time, "--heading", "30", "--size", "65", "--out", str(sky)],
+        check=True, capture_output=True)  # fmt: skip
+    sun = (got["apparent_zenith_deg"], got["azimuth_deg"])
+    drawn, _ = brume.render_sky(3.0, sun=sun, size=65, azimuth_offset_deg=30.0)
+    np.testing.assert_array_equal(drawn, brume.load_photo(sky, dtype="float32")[0])
 
     for args, named in [
         ((95.0, 0.0, time), "latitude_deg"),
