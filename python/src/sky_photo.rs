@@ -95,15 +95,23 @@ pub(crate) fn render_sky<'py>(
     py: Python<'py>,
     turbidity: f64,
     sun: (f64, f64),
-    size: usize,
+    size: i64,
     lens: &str,
     counter_clockwise: bool,
     azimuth_offset_deg: f64,
     sun_disc_deg: Option<f64>,
     clouds: Option<f64>,
-    cloud_seed: u64,
+    cloud_seed: i128,
     dtype: &str,
 ) -> PyResult<(Py<PyAny>, Bound<'py, PyDict>)> {
+    // Signed, so that a negative value reaches an error that names its keyword.
+    let size = usize::try_from(size)
+        .map_err(|_| PyValueError::new_err(format!("invalid size = {size}: expected px ≥ 1")))?;
+    let cloud_seed = u64::try_from(cloud_seed).map_err(|_| {
+        PyValueError::new_err(format!(
+            "invalid cloud_seed = {cloud_seed}: expected a whole number from 0 to 2^64 - 1"
+        ))
+    })?;
     let (pixels, exposure) = match dtype {
         "float32" => (Pixels::Linear32, SkyExposure::Physical),
         "uint8" => (Pixels::Srgb8, SkyExposure::Display),

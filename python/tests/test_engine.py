@@ -670,6 +670,8 @@ def test_render_sky_equals_brume_sky_and_gives_its_turbidity_back(tmp_path):
         ("sun_disc_deg", 50.0, "sun_disc_deg"),
         ("clouds", 2.0, "clouds"),
         ("size", 0, "size"),
+        ("size", -5, "size"),
+        ("cloud_seed", -1, "cloud_seed"),
         ("lens", "fish", "lens"),
         ("dtype", "uint16", "dtype"),
         ("azimuth_offset_deg", float("nan"), "azimuth_offset_deg"),
