@@ -365,6 +365,17 @@ fn nonzero<T: numpy::Element + Copy + Default + PartialEq>(
     Ok(a.as_array().iter().map(|&v| v != T::default()).collect())
 }
 
+/// A seed keyword `name` as brume's u64. Taken from Python as a wider signed int, so that a
+/// negative or too large one is a ValueError naming the keyword (pyo3's own conversion to an
+/// unsigned int raises an OverflowError that names nothing).
+pub(crate) fn seed_of(name: &str, value: i128) -> PyResult<u64> {
+    u64::try_from(value).map_err(|_| {
+        value_error(format!(
+            "invalid {name} = {value}: expected a whole number from 0 to 2^64 - 1"
+        ))
+    })
+}
+
 /// A map (range and transmittance as float32, a mask as bool) as an HxW array, row 0 at
 /// the top as brume keeps it.
 pub(crate) fn grid_to_py<T: numpy::Element>(py: Python<'_>, map: Grid<T>) -> Py<PyAny> {

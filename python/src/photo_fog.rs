@@ -36,14 +36,14 @@ pub(crate) fn capture_request(
     shot_noise_gain: Option<f64>,
     read_noise: Option<f64>,
     jpeg_quality: Option<i64>,
-    seed: u64,
+    seed: i128,
 ) -> PyResult<CaptureOptions> {
     CaptureOptions::from_parts(
         exposure_stops,
         shot_noise_gain,
         read_noise,
         jpeg_quality,
-        seed,
+        super::arrays::seed_of("seed", seed)?,
     )
     .map_err(py_err)
 }

@@ -3,7 +3,7 @@
 //! codes are display-encoded); `brume.render_sky`: the synthetic sky photo `brume sky`
 //! draws.
 
-use super::arrays::{user_warning, FsPath, ImageOut, Pixels};
+use super::arrays::{seed_of, user_warning, FsPath, ImageOut, Pixels};
 use super::py_err;
 use brume::sky::clouds::CloudOptions;
 use brume::sky::{render_sky_photo, Fisheye, Lens, SkyExposure, SkyPhotoOptions, TurbidityOptions};
@@ -30,15 +30,19 @@ pub(crate) fn turbidity_from_sky<'py>(
     py: Python<'py>,
     path: FsPath,
     sun: Option<(f64, f64)>,
-    seed: u64,
-    repeats: usize,
+    seed: i128,
+    repeats: i64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if !(1..=brume::sky::turbidity::MAX_REPEATS).contains(&repeats) {
+    let seed = seed_of("seed", seed)?;
+    let max = brume::sky::turbidity::MAX_REPEATS;
+    let Some(repeats) = usize::try_from(repeats)
+        .ok()
+        .filter(|r| (1..=max).contains(r))
+    else {
         return Err(PyValueError::new_err(format!(
-            "invalid repeats = {repeats}: expected 1 to {} estimations",
-            brume::sky::turbidity::MAX_REPEATS
+            "invalid repeats = {repeats}: expected 1 to {max} estimations"
         )));
-    }
+    };
     let opts = TurbidityOptions {
         sun: sun.map(|(z, a)| [z.to_radians(), a.to_radians()]),
         seed,
@@ -107,11 +111,7 @@ pub(crate) fn render_sky<'py>(
     // Signed, so that a negative value reaches an error that names its keyword.
     let size = usize::try_from(size)
         .map_err(|_| PyValueError::new_err(format!("invalid size = {size}: expected px ≥ 1")))?;
-    let cloud_seed = u64::try_from(cloud_seed).map_err(|_| {
-        PyValueError::new_err(format!(
-            "invalid cloud_seed = {cloud_seed}: expected a whole number from 0 to 2^64 - 1"
-        ))
-    })?;
+    let cloud_seed = seed_of("cloud_seed", cloud_seed)?;
     let (pixels, exposure) = match dtype {
         "float32" => (Pixels::Linear32, SkyExposure::Physical),
         "uint8" => (Pixels::Srgb8, SkyExposure::Display),

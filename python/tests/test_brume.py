@@ -1148,6 +1148,8 @@ def test_capture_exposure_and_jpeg(image_u8, range_m):
         (dict(shot_noise_gain=-1.0), "shot_noise_gain"),
         (dict(read_noise=float("nan")), "read_noise"),
         (dict(exposure_stops=50.0), "exposure_stops"),
+        (dict(seed=-1), "invalid seed = -1: expected a whole number"),
+        (dict(seed=2**64), "invalid seed = 18446744073709551616"),
     ]:
         with pytest.raises(ValueError, match=message):
             brume.fog(image_u8, range_m, **opts, **kwargs)

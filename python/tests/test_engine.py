@@ -515,6 +515,7 @@ def test_engine_fog_errors():
         (dict(light_direction=(0.0, 0.0, 0.0)), "light_direction"),
         (dict(noise="missing_tile.png"), "noise.*missing_tile.png"),
         (dict(noise=3), "invalid noise"),
+        (dict(noise_seed=-1), "invalid noise_seed = -1"),
     ]
     for kwargs, message in distance_cases:
         with pytest.raises(ValueError, match=message):
@@ -571,6 +572,7 @@ def test_aerial_errors(photo):
         (dict(ok, refine="sometimes"), "invalid refine"),
         (dict(ok, sigma0=0.0), "invalid sigma0 = 0"),
         (dict(ok, sigma0=float("nan")), "invalid sigma0"),
+        (dict(ok, seed=-3), "invalid seed = -3"),
     ]
     for kwargs, message in cases:
         with pytest.raises(ValueError, match=message):
@@ -613,6 +615,10 @@ def test_turbidity_from_sky_equals_brume_turbidity(tmp_path):
     assert abs(png["turbidity"] - 5.0) < 0.05 and not png["linear_light"]
     with pytest.raises(ValueError, match="repeats"):
         brume.turbidity_from_sky(tmp_path / "sky.exr", repeats=0)
+    with pytest.raises(ValueError, match="invalid repeats = -2"):
+        brume.turbidity_from_sky(tmp_path / "sky.exr", repeats=-2)
+    with pytest.raises(ValueError, match="invalid seed = -1"):
+        brume.turbidity_from_sky(tmp_path / "sky.exr", seed=-1)
     with pytest.raises(ValueError, match="sun"):
         brume.turbidity_from_sky(tmp_path / "sky.exr", sun=(95.0, 0.0))
     with pytest.raises(OSError, match="missing.exr"):
