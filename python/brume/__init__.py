@@ -5,8 +5,8 @@
     >>> foggy = brume.fog(linear, range_m, visibility=150.0)  # float32 linear in, float32 out
     >>> foggy = brume.fog(image, relative_depth, ks=0.75)       # paper 000's normalised haze
     >>> foggy, info = brume.fog(image, range_m, beta=0.02, return_info=True)
-    >>> filled, info = brume.prepare(image, range_m)  # the range fog reads, without the fog
     >>> info["transmittance"], info["airlight"]               # the labels: I = J t + A (1 - t)
+    >>> filled, info = brume.prepare(image, range_m)  # the range fog reads, without the fog
     >>> range_m, info = brume.load_depth("frankfurt_000000_000294_disparity.png")
     >>> image, photo = brume.load_photo("IMG_0042.jpg")         # upright, by its profile
     >>> brume.save_photo("foggy.jpg", brume.fog(image, range_m, beta=0.02), photo)
