@@ -151,7 +151,6 @@ pub(crate) fn render_sky<'py>(
     let keyword = |field: &str| match field {
         "sun_zenith" | "sun_azimuth" => Some("sun".to_owned()),
         "sun_disc" => Some("sun_disc_deg".to_owned()),
-        "coverage" => Some("clouds".to_owned()),
         _ => None,
     };
     let photo =

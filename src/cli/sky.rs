@@ -302,9 +302,7 @@ pub fn run_sky(args: &SkyArgs) -> Result<()> {
             SkyExposure::Physical
         },
     };
-    // The library names the coverage as its field; here it is --clouds.
-    let clouds_flag = |e: Error| e.rename_options(|f| (f == "coverage").then(|| "--clouds".into()));
-    let photo = render_sky_photo(&opts).map_err(clouds_flag)?;
+    let photo = render_sky_photo(&opts)?;
     let mut outputs = Outputs::new();
     outputs.stage_rgba(&args.out, &photo.image)?;
     super::commit(outputs)?;

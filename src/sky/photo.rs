@@ -90,8 +90,9 @@ pub struct SkyPhoto {
 }
 
 /// Renders the sky `opts` asks for. Errors name the option (`size`, `sun_disc`, the
-/// model's and the clouds' fields) and what was expected; a size the machine's memory
-/// cannot hold is refused before anything is allocated.
+/// model's fields, `clouds` for the clouds' coverage, their other fields) and what was
+/// expected; a size the machine's memory cannot hold is refused before anything is
+/// allocated.
 pub fn render_sky_photo(opts: &SkyPhotoOptions) -> Result<SkyPhoto> {
     let size = opts.size;
     if !(1..=MAX_SIDE).contains(&size) {
@@ -120,8 +121,11 @@ pub fn render_sky_photo(opts: &SkyPhotoOptions) -> Result<SkyPhoto> {
     let model = PreethamSky::new(opts.turbidity, zenith, azimuth)?;
     let fisheye = &opts.fisheye;
     let mut image = render_sky_image(&model, size, fisheye)?;
+    // The coverage is what `clouds` sets; the hosts call it so.
+    let coverage_as_clouds =
+        |e: Error| e.rename_options(|f| (f == "coverage").then(|| "clouds".into()));
     let clouds = (opts.clouds.as_ref())
-        .map(|c| add_clouds(&mut image, fisheye, c))
+        .map(|c| add_clouds(&mut image, fisheye, c).map_err(coverage_as_clouds))
         .transpose()?;
     let sun_disc_pixels = (opts.sun_disc)
         .map(|r| draw_sun_disc(&mut image, fisheye, zenith, azimuth, r))
@@ -192,9 +196,20 @@ mod tests {
         assert!(brightest.fold(0.0, f32::max) > 1.0, "the sun clips");
     }
 
+    /// Each bad option is refused by its name; the clouds' coverage as `clouds`.
     #[test]
     fn bad_options_are_named() {
         let cases = [
+            (
+                SkyPhotoOptions {
+                    clouds: Some(CloudOptions {
+                        coverage: 2.0,
+                        ..CloudOptions::default()
+                    }),
+                    ..Default::default()
+                },
+                "invalid clouds = 2",
+            ),
             (
                 SkyPhotoOptions {
                     size: 0,
