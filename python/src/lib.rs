@@ -4,8 +4,10 @@
 //! depth files, `brume::Headless` for the EGL context; `engine` the engine fogs on a
 //! frame and its depth buffer (`brume::medium`, `brume::camera`), `aerial_photo` paper
 //! 002's aerial perspective (`brume::photo::aerial`), `photo_fog` `brume.fog`'s request and
-//! labels, `depth` `brume.load_depth`, `metrics` `brume.compare`, `arrays` numpy in and
-//! out, `gl_thread` the EGL context's own thread.
+//! labels, `prepare` `brume.prepare`, `depth` `brume.load_depth` and
+//! `brume.left_right_mismatches`, `photo_io` photos read and written, `sky_photo`
+//! `brume.turbidity_from_sky` and `brume.render_sky`, `sun` `brume.sun_position`, `metrics`
+//! `brume.compare`, `arrays` numpy in and out, `gl_thread` the EGL context's own thread.
 //!
 //! **Threads.** A [`Renderer`] owns one GL thread (`gl_thread`), which opens brume's
 //! headless EGL context and keeps it for the renderer's life; Python calls wait for it with
