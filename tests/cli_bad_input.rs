@@ -747,7 +747,7 @@ fn render_refuses_options_that_cannot_take_effect() {
             1,
             "--far 0.5 inf",
         ),
-        r("--right im.png", "--right im.png Cityscapes"),
+        r("--right im.png", "--right im.png disparity range.pfm"),
         r("--no-prep --sky-mask allsky.png", "--sky-mask --no-prep"),
         r("--sky-mask allsky.png", "--sky-mask allsky.png sky"),
         case(

@@ -39,6 +39,7 @@ mod io_limits;
 mod io_output;
 mod layered_fog;
 mod layered_table;
+mod left_right;
 mod limits;
 mod offset_layout;
 mod orientation;

@@ -993,6 +993,41 @@ def test_left_right_mismatches_as_numpy_and_brume_render_find_them(tmp_path):
         brume.left_right_mismatches(left, right, disparity, threshold=0.0)
 
 
+def test_left_right_check_on_the_real_aloe_pair(tmp_path):
+    """Middlebury's Aloe pair (tests/data/aloe: two JPEG views and the left view's ground
+    truth, 0 unknown): the mask equals the numpy check away from ties; its ground truth
+    fails at a minority of the pixels the check compares; and `brume render --right` reads
+    the Middlebury 2006 PNG's disparity in pixels and drops as many."""
+    Image = pytest.importorskip("PIL.Image")
+    aloe = REPO / "tests/data/aloe"
+    left = np.asarray(Image.open(aloe / "left.jpg").convert("RGB"))
+    right = np.asarray(Image.open(aloe / "right.jpg").convert("RGB"))
+    stored = np.asarray(Image.open(aloe / "disparity.png"))
+    disparity = np.where(stored > 0, stored.astype(np.float64), np.nan)
+
+    got = brume.left_right_mismatches(left, right, disparity)
+    expected, margin = left_right_reference(left, right, disparity, -1)
+    away = margin > 1e-3
+    np.testing.assert_array_equal(got[away], expected[away])
+    x = np.arange(disparity.shape[1])[None, :]
+    checked = np.isfinite(disparity) & (x - np.nan_to_num(disparity) >= 0)
+    assert 0.1 < got.sum() / checked.sum() < 0.3, got.sum() / checked.sum()
+
+    # The views as PIL decoded them: JPEG decoders differ by a code here and there.
+    Image.fromarray(left).save(tmp_path / "left.png")
+    Image.fromarray(right).save(tmp_path / "right.png")
+    cmd = [
+        str(brume_bin()), "render",
+        "--image", str(tmp_path / "left.png"), "--depth", str(aloe / "disparity.png"),
+        "--right", str(tmp_path / "right.png"),
+        "--ks", "0.5", "--refine", "none", "--json", "--out", str(tmp_path / "cli.png"),
+    ]  # fmt: skip
+    report = json.loads(subprocess.run(cmd, check=True, capture_output=True).stdout)
+    notes = " ".join(report["depth_notes"])
+    assert f"{got.sum()} px failed the left-right check" in notes
+    assert f"of the {checked.sum()} px checked" in notes
+
+
 def test_the_level_road_under_a_cityscapes_camera_as_brume_render_bounds_it(tmp_path):
     """A level road seen from 1.2 m up, pitched 0.04 rad down, the band along the left
     border unknown but for specks of 2 km touching the border on rows whose road is 4 to

@@ -155,10 +155,11 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
             Ok(scene)
         }
         (Some(image_path), Some(depth_path)) => {
-            let mut scene = Scene::load(image_path, depth_path, &depth_options(&args.depth))?;
-            show_depth_notes(depth_path, &mut scene.depth);
+            let opts = depth_options(&args.depth);
+            let mut scene = Scene::load(image_path, depth_path, &opts)?;
             check_metric(args, &scene)?;
-            super::refine::drop_left_right_mismatches(args, &mut scene)?;
+            super::refine::drop_left_right_mismatches(args, &opts, &mut scene)?;
+            show_depth_notes(depth_path, &mut scene.depth);
             Ok(scene)
         }
         (None, Some(_)) => Err(Error::invalid(

@@ -4,19 +4,36 @@
 //! references (see `brume::refine`).
 
 use super::args::{RefineArgs, RenderArgs};
-use brume::io::depth::DepthFormat;
+use brume::io::depth::{DepthFormat, DepthOptions};
 use brume::photo::{Photo as Scene, PreparedPhoto as PrepReport};
 use brume::refine::{RangeFilter, RefineMode, RefineOptions, RefinePlan};
 use brume::{Error, Refine, Result};
 use std::time::Instant;
 
 /// With a right image (`--right`), takes the disparities that fail the left-right check
-/// as unknown ([`Scene::drop_left_right_mismatches`]).
-pub fn drop_left_right_mismatches(args: &RenderArgs, scene: &mut Scene) -> Result<()> {
+/// as unknown ([`Scene::drop_left_right_mismatches`]), with a warning when most failed.
+pub fn drop_left_right_mismatches(
+    args: &RenderArgs,
+    opts: &DepthOptions,
+    scene: &mut Scene,
+) -> Result<()> {
     let (Some(right), Some(depth)) = (&args.right, &args.depth.depth) else {
         return Ok(());
     };
-    scene.drop_left_right_mismatches(depth, right)
+    let check = scene.drop_left_right_mismatches(depth, opts, right)?;
+    if check.mostly_failed() {
+        log::warn!(
+            "{}: {} of {} px failed the left-right check against {}: is that the pair's \
+             other view, is this the {} view's disparity (--stereo-view), and in the \
+             image's pixels?",
+            depth.display(),
+            check.failed,
+            check.checked,
+            right.display(),
+            scene.depth.stereo_view,
+        );
+    }
+    Ok(())
 }
 
 impl RefineArgs {

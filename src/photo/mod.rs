@@ -77,6 +77,26 @@ pub struct Photo {
     pub metadata: PhotoMetadata,
 }
 
+/// What [`Photo::drop_left_right_mismatches`] did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LeftRightCheck {
+    /// Pixels of known range whose disparity failed the check, now unknown.
+    pub failed: usize,
+    /// Pixels the check compared: of known range, with a disparity whose match lies inside
+    /// the other image ([`crate::prep::stereo::has_match_inside`]).
+    pub checked: usize,
+}
+
+impl LeftRightCheck {
+    /// Whether most pixels failed: true matches fail for a minority even on compressed,
+    /// differently exposed real pairs (a fifth of Middlebury's Aloe JPEG pair's ground
+    /// truth), wrong ones for most. A pair given the wrong way round (a right view's
+    /// disparity read as a left view's, or the other image not the pair's) fails so.
+    pub fn mostly_failed(&self) -> bool {
+        2 * self.failed > self.checked
+    }
+}
+
 /// Bytes per pixel that a render holds in system memory besides the GL textures: the
 /// decoded colour (8-bit, then linear f32), the depth (raw, then range), pre-processing's
 /// maps, the normalised range, the read-back and the encoded output. Measured: a
@@ -281,30 +301,45 @@ impl Photo {
     /// `right`, the stereo pair's other image ([`crate::prep::stereo`]): the right one for a
     /// left view's disparity, the left one for a right view's
     /// ([`LoadedDepth::stereo_view`], checked mirrored), as unknown, for pre-processing to
-    /// fill from reliable neighbours; the depth's notes say how many.
-    /// For a Cityscapes disparity only, read again from `depth_path` in pixels. Errors
-    /// name `right`. Only when asked for: on brume's scene matched by StereoSGBM it flagged
-    /// correct pixels too and made τ worse (README, "Real depth").
-    pub fn drop_left_right_mismatches(&mut self, depth_path: &Path, right: &Path) -> Result<()> {
-        if self.depth.format != DepthFormat::Cityscapes {
+    /// fill from reliable neighbours; the depth's notes say how many. The disparity is read
+    /// again in pixels from `depth_path` with `opts`, as [`Photo::load`] read it
+    /// ([`depth::load_disparity_px`]: any stereo disparity, of the image's size).
+    /// Returns how many pixels failed. Errors name `right`: a depth that holds no stereo
+    /// disparity ([`LoadedDepth::not_a_stereo_disparity`]), a disparity or a right image
+    /// of another size than the image. Only when asked for: on brume's scene matched by StereoSGBM it flagged correct
+    /// pixels too and made τ worse (README, "Real depth").
+    pub fn drop_left_right_mismatches(
+        &mut self,
+        depth_path: &Path,
+        opts: &DepthOptions,
+        right: &Path,
+    ) -> Result<LeftRightCheck> {
+        if let Some(why) = self.depth.not_a_stereo_disparity() {
             return Err(Error::invalid(
                 "right",
                 right.display(),
-                "a Cityscapes disparity as the depth with it (the left-right check reads the \
-                 disparity in pixels)",
+                format!(
+                    "a stereo pair's disparity as the depth with it ({}: {why})",
+                    depth_path.display()
+                ),
             ));
         }
-        let bytes = crate::io::limits::read_file(depth_path)?;
-        let raw = image::decode_any(&bytes, &depth_path.display().to_string())?.to_luma16();
-        let disparity = crate::raster::Grid::from_vec(
-            raw.width() as usize,
-            raw.height() as usize,
-            raw.pixels()
-                .map(|p| depth::cityscapes_disparity_px(p[0]).map_or(f32::NAN, |d| d as f32))
-                .collect(),
-        );
-        let right_image = image::load_linear_rgb(right)?;
+        let disparity = depth::load_disparity_px(depth_path, opts, &self.depth)?;
         let (w, h) = (self.image.width(), self.image.height());
+        if (disparity.width(), disparity.height()) != (w, h) {
+            return Err(Error::invalid(
+                "right",
+                right.display(),
+                format!(
+                    "a disparity of the image's size, {w}x{h}, as the depth with it ({} is \
+                     {}x{})",
+                    depth_path.display(),
+                    disparity.width(),
+                    disparity.height()
+                ),
+            ));
+        }
+        let right_image = image::load_linear_rgb(right)?;
         let bad = crate::prep::stereo::mismatches_of_view(
             &self.image,
             &right_image,
@@ -320,6 +355,14 @@ impl Photo {
             ),
             e => e,
         })?;
+        let view = self.depth.stereo_view;
+        let checked = (0..h)
+            .flat_map(|y| (0..w).map(move |x| (x, y)))
+            .filter(|&(x, y)| {
+                self.depth.range.get(x, y).is_finite()
+                    && crate::prep::stereo::has_match_inside(x, *disparity.get(x, y), w, view)
+            })
+            .count();
         let mut dropped = 0;
         let range = self.depth.range.as_mut_slice().iter_mut();
         for (v, _) in range
@@ -331,10 +374,15 @@ impl Photo {
         }
         self.depth.unknown_pixels += dropped;
         self.depth.notes.push(format!(
-            "{dropped} px failed the left-right check against {} (> 12/255) and are unknown",
-            right.display()
+            "{dropped} px failed the left-right check against {} (> 12/255) and are unknown: \
+             {:.1} % of the {checked} px checked (of known range, their match inside it)",
+            right.display(),
+            100.0 * dropped as f64 / checked.max(1) as f64
         ));
-        Ok(())
+        Ok(LeftRightCheck {
+            failed: dropped,
+            checked,
+        })
     }
 
     /// The photo's pinhole intrinsics at the image's size: those its depth was read with

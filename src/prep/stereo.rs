@@ -48,6 +48,17 @@ pub fn mismatches_of_view(
     }
 }
 
+/// Whether the pixel in column `x` of a row `width` px wide, of `view`, has a disparity `d`
+/// whose match lies inside the other image (at x − d for a left view, x + d for a right
+/// view): the pixels the check compares; it leaves the others alone.
+pub fn has_match_inside(x: usize, d: f32, width: usize, view: StereoView) -> bool {
+    let from_edge = match view {
+        StereoView::Left => x,
+        StereoView::Right => width - 1 - x,
+    };
+    d.is_finite() && d > 0.0 && from_edge as f32 >= d
+}
+
 /// The pixels of `left` (linear RGB) whose disparity `disparity` (px, left image's; NaN
 /// or ≤ 0 where unknown, and pixels whose match is outside the right image, are left
 /// alone) points to a colour of `right` that differs
@@ -78,13 +89,10 @@ pub fn inconsistent_pixels(
     let right_codes = right.map(|p| encode(*p));
     Ok(Grid::from_fn(w, h, |x, y| {
         let d = *disparity.get(x, y);
-        if !(d.is_finite() && d > 0.0) {
+        if !has_match_inside(x, d, w, StereoView::Left) {
             return false;
         }
         let xr = x as f32 - d;
-        if xr < 0.0 {
-            return false;
-        }
         let x0 = xr.floor() as usize;
         let x1 = (x0 + 1).min(w - 1);
         let t = xr - x0 as f32;
@@ -155,6 +163,21 @@ mod tests {
         for threshold in [0.0, -1.0, 1.5, f32::NAN] {
             let err = mismatches_of_view(&right, &left, &disparity, StereoView::Right, threshold);
             assert!(err.unwrap_err().to_string().contains("threshold"));
+        }
+    }
+
+    /// A match inside the other image: at x − d ≥ 0 for a left view, x + d ≤ w − 1 for a
+    /// right one; unknown and non-positive disparities have none.
+    #[test]
+    fn a_match_lies_inside_the_other_image_or_not() {
+        let w = 10;
+        assert!(has_match_inside(3, 3.0, w, StereoView::Left));
+        assert!(!has_match_inside(3, 3.5, w, StereoView::Left));
+        assert!(has_match_inside(6, 3.0, w, StereoView::Right));
+        assert!(!has_match_inside(7, 3.0, w, StereoView::Right));
+        for d in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+            assert!(!has_match_inside(5, d, w, StereoView::Left), "{d}");
+            assert!(!has_match_inside(5, d, w, StereoView::Right), "{d}");
         }
     }
 }

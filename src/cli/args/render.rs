@@ -244,12 +244,14 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub refine: RefineArgs,
 
-    /// The right image of a stereo pair whose left disparity is --depth (Cityscapes
-    /// format), or its left image with a right view's disparity (--stereo-view right):
-    /// pixels whose colour differs from their match in it by more than 12/255
-    /// (Foggy Cityscapes' left-right photoconsistency) are unreliable, taken as unknown
-    /// and filled from their reliable neighbours (not found automatically: measured on
-    /// rendered stereo it also flags correct pixels, see the README).
+    /// The right image of a stereo pair whose left view's disparity is --depth (any
+    /// stereo disparity of the image's size: Cityscapes, Middlebury, a 16-bit PNG or float
+    /// map read as --depth-kind disparity), or its left image with a right view's
+    /// disparity (--stereo-view right): pixels whose colour differs from their match in
+    /// it by more than 12/255 (Foggy Cityscapes' left-right photoconsistency) are
+    /// unreliable, taken as unknown and filled from their reliable neighbours. Not found
+    /// automatically: it also flags correct pixels; on the real Aloe pair it made τ better,
+    /// on rendered stereo worse (see the README).
     #[arg(long, value_name = "PATH")]
     pub right: Option<PathBuf>,
 

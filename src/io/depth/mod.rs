@@ -30,6 +30,7 @@ use crate::{Error, Result};
 mod android;
 mod apple;
 mod cityscapes;
+mod disparity;
 mod format;
 mod gdepth;
 mod interpret;
@@ -40,6 +41,7 @@ mod raw;
 mod stop;
 mod xmp;
 
+pub use disparity::load_disparity_px;
 use interpret::{interpret, SideFiles};
 use raw::decode_raw;
 
