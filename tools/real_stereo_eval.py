@@ -17,7 +17,8 @@ JPEGs, the left view's structured-light disparity, 0 where unknown).
    the left-right check (``--right``), brume renders with λ = 0 and airlights 0 and 1, so
    τ = 1 − (out(A=1) − out(A=0)) exactly; the table gives |τ − τ_true| (mean / 95th
    percentile) over all known pixels, those within 5 px of a truth edge (disparity step > 1 px),
-   the rest, and the pixels where SGBM is good (valid, ≤ 3 px off) and bad.
+   the rest, the band along the left border that SGBM cannot match (x < numDisparities), and
+   the pixels where SGBM is good (valid, ≤ 3 px off) and bad.
 4. Foggy images (β, default airlight and λ) from the truth, SGBM unrefined, SGBM repaired,
    and SGBM repaired after the left-right check, side by side.
 
@@ -108,6 +109,7 @@ def main():
         "all known": known,
         f"near edges ({a.edge_px} px)": near_edge,
         "not near edges": known & ~near_edge,
+        f"left band x<{num}": known & (np.arange(W)[None, :] < num),
         "SGBM good (valid, <=3 px off)": known & valid & (dd <= 3),
         "SGBM bad (invalid or >3 px off)": known & ~(valid & (dd <= 3)),
     }
