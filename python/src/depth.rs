@@ -62,9 +62,12 @@ use pyo3::types::PyDict;
 /// metres, which fog with beta or visibility needs), notes, unknown_pixels,
 /// stereo_focal_baseline (f·B in px·m of a disparity, else None) and stereo_view ('left'
 /// or 'right' for a disparity, else None; give both to brume.fog as `brume render` uses
-/// them), ground (a Cityscapes camera file's mount over the
-/// road, or camera_mount's, a dict of height_m, pitch (down) and roll in radians and fx, fy, cx, cy on the
-/// range's grid, else None: give it to brume.fog too).
+/// them), disparity_px (a stereo disparity's values in pixels as the file holds them,
+/// float32 HxW, NaN where unknown or not positive: left_right_mismatches' input; else
+/// None, also for a disparity turned upright by image), ground (a Cityscapes camera
+/// file's mount over the road, or camera_mount's, a dict of height_m, pitch (down) and
+/// roll in radians and fx, fy, cx, cy on the range's grid, else None: give it to
+/// brume.fog too).
 #[pyfunction]
 #[pyo3(signature = (path, camera=None, format=None, *, kind=None, scale=None, calib=None, focal_px=None, baseline_mm=None, disparity_offset_px=None, near=None, far=None, fov_y_deg=None, min_confidence=None, reversed_z=false, image=None, layout=None, sky_beyond=None, camera_mount=None, stereo_view=None))]
 #[allow(clippy::too_many_arguments)]
@@ -123,10 +126,20 @@ pub(crate) fn load_depth<'py>(
             sky_beyond,
         )?
     };
-    let loaded = py
-        .detach(|| depth::load_range(&path.0, &opts))
+    let (loaded, disparity) = py
+        .detach(|| {
+            let loaded = depth::load_range(&path.0, &opts)?;
+            // The left-right check's input, read back only where the file holds one.
+            let disparity = match loaded.not_a_stereo_disparity() {
+                None => Some(depth::load_disparity_px(&path.0, &opts, &loaded)?),
+                Some(_) => None,
+            };
+            Ok::<_, brume::Error>((loaded, disparity))
+        })
         .map_err(py_err)?;
-    range_and_info(py, loaded)
+    let (range, info) = range_and_info(py, loaded)?;
+    info.set_item("disparity_px", disparity.map(|d| grid_to_py(py, d)))?;
+    Ok((range, info))
 }
 
 /// range_from_depth(depth, *, kind, scale=None, focal_px=None, baseline_mm=None,
@@ -175,10 +188,18 @@ pub(crate) fn range_from_depth<'py>(
         "one value per pixel",
         "NaN or infinite where unknown",
     )?;
-    let loaded = py
-        .detach(|| depth::range_from_map(map, "depth", &opts))
+    let (loaded, disparity) = py
+        .detach(|| {
+            // A disparity's values, as load_depth gives a file's.
+            let disparity =
+                (opts.kind == Some(DepthKind::Disparity)).then(|| depth::known_disparities(&map));
+            let loaded = depth::range_from_map(map, "depth", &opts)?;
+            Ok::<_, brume::Error>((loaded, disparity))
+        })
         .map_err(py_err)?;
-    range_and_info(py, loaded)
+    let (range, info) = range_and_info(py, loaded)?;
+    info.set_item("disparity_px", disparity.map(|d| grid_to_py(py, d)))?;
+    Ok((range, info))
 }
 
 /// The options both functions take: what the values are, their scale, the stereo

@@ -486,10 +486,10 @@ def test_load_depth(tmp_path, range_m):
     assert info["metric"] is False and info["unknown_pixels"] == 0
     assert set(info) == {
         "format", "kind", "units", "metric", "notes", "unknown_pixels", "stereo_focal_baseline",
-        "stereo_view", "ground",
+        "stereo_view", "disparity_px", "ground",
     }  # fmt: skip
     assert info["stereo_focal_baseline"] is None and info["ground"] is None
-    assert info["stereo_view"] is None
+    assert info["stereo_view"] is None and info["disparity_px"] is None
     with pytest.raises(OSError, match="missing.npy"):
         brume.load_depth(tmp_path / "missing.npy")
     # A path as Python's file functions take it: str, os.PathLike or bytes.
@@ -700,7 +700,13 @@ def test_range_from_depth(tmp_path):
         np.save(tmp_path / "map.npy", values.astype(np.float32))
         from_file, file_info = brume.load_depth(tmp_path / "map.npy", **keywords)
         np.testing.assert_array_equal(rng, from_file)
+        disparity, file_disparity = info.pop("disparity_px"), file_info.pop("disparity_px")
         assert info == file_info
+        if keywords["kind"] == "disparity":  # the array's values, as the file's
+            np.testing.assert_array_equal(disparity, file_disparity)
+            np.testing.assert_array_equal(disparity, values.astype(np.float32))
+        else:
+            assert disparity is None and file_disparity is None
 
     # Unknown values: NaN and infinite; the sky of inverse depth (d + offset <= 0).
     holes = eye.copy()
@@ -982,6 +988,13 @@ def test_left_right_mismatches_as_numpy_and_brume_render_find_them(tmp_path):
     report = json.loads(subprocess.run(cmd, check=True, capture_output=True).stdout)
     ours = brume.left_right_mismatches(left, right, disparity).sum()
     assert f"{ours} px failed the left-right check" in " ".join(report["depth_notes"])
+    # load_depth's disparity_px: (p − 1)/256, NaN where p is 0 (and p = 1, d = 0).
+    _, info = brume.load_depth(tmp_path / "f_disparity.png")
+    want = np.where(disparity > 0, disparity, np.nan).astype(np.float32)
+    np.testing.assert_array_equal(info["disparity_px"], want)
+    _, info = brume.range_from_depth(disparity, kind="disparity", focal_px=100.0,
+                                     baseline_mm=200.0)  # fmt: skip
+    np.testing.assert_array_equal(info["disparity_px"], disparity.astype(np.float32))
 
     with pytest.raises(ValueError, match="stereo_view"):
         brume.left_right_mismatches(left, right, disparity, stereo_view="centre")
@@ -995,7 +1008,8 @@ def test_left_right_mismatches_as_numpy_and_brume_render_find_them(tmp_path):
 
 def test_left_right_check_on_the_real_aloe_pair(tmp_path):
     """Middlebury's Aloe pair (tests/data/aloe: two JPEG views and the left view's ground
-    truth, 0 unknown): the mask equals the numpy check away from ties; its ground truth
+    truth, 0 unknown): load_depth gives the disparity as stored; the mask equals the numpy
+    check away from ties; its ground truth
     fails at a minority of the pixels the check compares; and `brume render --right` reads
     the Middlebury 2006 PNG's disparity in pixels and drops as many."""
     Image = pytest.importorskip("PIL.Image")
@@ -1005,7 +1019,10 @@ def test_left_right_check_on_the_real_aloe_pair(tmp_path):
     stored = np.asarray(Image.open(aloe / "disparity.png"))
     disparity = np.where(stored > 0, stored.astype(np.float64), np.nan)
 
-    got = brume.left_right_mismatches(left, right, disparity)
+    # load_depth gives the file's disparity in pixels beside the range.
+    range_m, info = brume.load_depth(aloe / "disparity.png")
+    np.testing.assert_array_equal(info["disparity_px"], disparity.astype(np.float32))
+    got = brume.left_right_mismatches(left, right, info["disparity_px"])
     expected, margin = left_right_reference(left, right, disparity, -1)
     away = margin > 1e-3
     np.testing.assert_array_equal(got[away], expected[away])

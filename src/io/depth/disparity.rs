@@ -15,8 +15,8 @@ use crate::{Error, Result};
 /// read with `opts` into `loaded`: a Cityscapes disparity ((p − 1)/256), a Middlebury 2014
 /// PFM or 2006 PNG, a 16-bit PNG times `depth_scale` or a float map read as
 /// [`DepthKind::Disparity`]. Row 0 at the top, on the file's grid; NaN where the file says
-/// unknown (0 in a PNG, a non-finite float) and where the disparity is not positive
-/// (the check has no match to look up there).
+/// unknown (0 in a PNG, a non-finite float). A float map's values below 0 are kept: with a
+/// disparity offset they give a depth (the left-right check takes them as unknown).
 ///
 /// Errors name `depth` (the path) for a map that is not a stereo pair's disparity
 /// ([`LoadedDepth::not_a_stereo_disparity`]), and the codec's errors.
@@ -34,13 +34,8 @@ pub fn load_disparity_px(
     }
     let bytes = crate::io::limits::read_file(path)?;
     let raw = decode_raw(&bytes, path, &extension_of(path), loaded.format)?;
-    let known = |d: f64| {
-        if d.is_finite() && d > 0.0 {
-            d as f32
-        } else {
-            f32::NAN
-        }
-    };
+    // A PNG's 0 is its unknown.
+    let known = |d: f64| if d > 0.0 { d as f32 } else { f32::NAN };
     match (loaded.format, raw) {
         (DepthFormat::Cityscapes, Raw::Grey16(p)) => {
             Ok(p.map(|&p| cityscapes::disparity_px(p).map_or(f32::NAN, |d| d as f32)))
@@ -50,7 +45,7 @@ pub fn load_disparity_px(
             let scale = png16::given_scale(opts)?;
             Ok(v.map(|&v| known(f64::from(v) * scale)))
         }
-        (_, Raw::Float { map, .. }) => Ok(map.map(|&d| known(f64::from(d)))),
+        (_, Raw::Float { map, .. }) => Ok(known_disparities(&map)),
         (format, raw) => Err(Error::invalid(
             "depth",
             path.display(),
@@ -60,6 +55,13 @@ pub fn load_disparity_px(
             ),
         )),
     }
+}
+
+/// A float disparity map as [`load_disparity_px`] returns one: NaN where a value is not
+/// finite (a float map's unknown). For a disparity held in memory, as
+/// [`super::range_from_map`] reads one.
+pub fn known_disparities(map: &ScalarMap) -> ScalarMap {
+    map.map(|&d| if d.is_finite() { d } else { f32::NAN })
 }
 
 impl LoadedDepth {

@@ -41,7 +41,7 @@ mod raw;
 mod stop;
 mod xmp;
 
-pub use disparity::load_disparity_px;
+pub use disparity::{known_disparities, load_disparity_px};
 use interpret::{interpret, SideFiles};
 use raw::decode_raw;
 
