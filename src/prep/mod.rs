@@ -124,7 +124,9 @@
 //!    trials draws one constant (a boundary value; all boundary values are tried when
 //!    there are no more of them than trials) and, through three boundary samples, a plane
 //!    in range `R = a + b x + c y` and a plane of the scene `1/R = a + b x + c y` (only
-//!    for boundaries of at least 4 edges; collinear triplets are skipped). A plane of the
+//!    for boundaries of at least 4 edges; three on one column give the plane through the
+//!    two farthest apart that is level along the rows, three on one row the one level down
+//!    the columns, other collinear triplets are skipped). A plane of the
 //!    scene is affine in inverse depth in a pinhole image, and so nearly in inverse
 //!    range: the ground behind an occluder grows as `1/(y - y_horizon)`, which a plane in
 //!    range fills as a ramp, its middle too far (60 % in the unit test). Long boundaries
