@@ -419,9 +419,12 @@ fn a_cityscapes_pole_leaves_no_halo() {
         let p = brume::photo::preprocess(photo, &prepare_options).unwrap();
         let stats = p.prepared.as_ref().unwrap().stats.clone();
         let (mut sum, mut n) = (0.0, 0);
-        // Row 0's run is no occlusion: the top band continues row 1's fattened edge over
-        // its two pixels beside the pole, and a band's continuation is no occluder.
-        for y in 1..h {
+        // Every row, row 0 too, whose run is no occlusion (the top band continues row 1's
+        // fattened edge over its two pixels beside the pole, and a band's continuation is
+        // no occluder): the whole hole's plane there rested on the wall's column of edges
+        // and one pole edge, a ramp in the mirrored frame, until a plane sloped across a
+        // column had to beat the one level along it by 2δ (`prep::fill`).
+        for y in 0..h {
             for x in OCCLUDED.start..POLE.start - 2 {
                 let wall = *photo
                     .depth

@@ -10,6 +10,11 @@ use crate::{Error, Result};
 
 /// Boundaries longer than this are scored on an evenly strided subset of this many edges.
 const MAX_SCORED: usize = 1024;
+/// A plane sloped across a line of edges wins over the best plane level along one only
+/// when its score is lower by this many truncation scales δ: its slope across the line
+/// rests on the few edges off it, and one (a pole's edge beside a column of a wall's, a
+/// table's edge beside a band's column) tilted a whole band or row into a ramp.
+const SLOPE_ACROSS_COST: f64 = 2.0;
 /// Plane candidates are only tried when the boundary has at least this many edges.
 const MIN_PLANE_EDGES: usize = 4;
 /// 1.4826 x MAD estimates the standard deviation of Gaussian data.
@@ -215,7 +220,7 @@ impl HoleFiller {
                 rest.extend_from_slice(region);
                 continue;
             }
-            let fit = self.fit(trials, rng);
+            let fit = self.fit_region(trials, rng);
             if self.agreement(&fit) >= MIN_AGREEMENT {
                 fits.push((fit, region));
             } else {
@@ -248,9 +253,19 @@ impl HoleFiller {
 
     /// The RANSAC fit to the collected edges (at least one).
     fn fit(&mut self, trials: usize, rng: &mut SplitMix64) -> Fit {
+        self.fit_with(trials, rng, SLOPE_ACROSS_COST)
+    }
+
+    /// [`HoleFiller::fit`] for a region of one colour: its edges are its own colour's, and
+    /// a sloped plane competes with a level one on its score alone.
+    fn fit_region(&mut self, trials: usize, rng: &mut SplitMix64) -> Fit {
+        self.fit_with(trials, rng, 0.0)
+    }
+
+    fn fit_with(&mut self, trials: usize, rng: &mut SplitMix64, slope_cost: f64) -> Fit {
         let origin = self.origin();
         let delta = self.robust_scale();
-        let model = self.ransac(origin, delta, trials, rng);
+        let model = self.ransac(origin, delta, trials, rng, slope_cost);
         let (lo, mut hi) = self.value_range();
         // A plane of the scene continued past its farthest edge recedes (the ground toward
         // the horizon, where the sky and not a known pixel bounds the hole): as far as
@@ -358,37 +373,60 @@ impl HoleFiller {
     }
 
     /// RANSAC: the candidate with the lowest truncated-L1 boundary jump. Constants are tried
-    /// first, so a plane must be strictly better to win.
-    fn ransac(&self, origin: (f64, f64), delta: f64, trials: usize, rng: &mut SplitMix64) -> Model {
+    /// first, so a plane must be strictly better to win; a plane sloped across a line of
+    /// edges must also beat the best plane level along one (three edges on one column or
+    /// row) by [`SLOPE_ACROSS_COST`] truncation scales.
+    fn ransac(
+        &self,
+        origin: (f64, f64),
+        delta: f64,
+        trials: usize,
+        rng: &mut SplitMix64,
+        slope_cost: f64,
+    ) -> Model {
         let n = self.edges.len();
-        let mut best = (f64::INFINITY, Model::Constant(self.edges[0].r as f64));
-        let mut consider = |m: Model| {
+        let none = (f64::INFINITY, Model::Constant(self.edges[0].r as f64));
+        let (mut constant, mut level, mut sloped) = (none, none, none);
+        let consider = |best: &mut (f64, Model), m: Model| {
             let s = self.score(&m, origin, delta);
             if s < best.0 {
-                best = (s, m);
+                *best = (s, m);
             }
         };
         if n <= trials {
-            self.edges
-                .iter()
-                .for_each(|e| consider(Model::Constant(e.r as f64)));
+            (self.edges.iter()).for_each(|e| consider(&mut constant, Model::Constant(e.r as f64)));
         } else {
-            (0..trials).for_each(|_| consider(Model::Constant(self.edges[rng.below(n)].r as f64)));
+            (0..trials).for_each(|_| {
+                consider(
+                    &mut constant,
+                    Model::Constant(self.edges[rng.below(n)].r as f64),
+                )
+            });
         }
         if n >= MIN_PLANE_EDGES {
             for _ in 0..trials {
                 let t = [rng.below(n), rng.below(n), rng.below(n)].map(|i| self.edges[i]);
                 for inverse in [false, true] {
-                    if let Some(m) = plane_through(&t, origin, inverse) {
-                        consider(m);
+                    match plane_through(&t, origin, inverse) {
+                        Some((m, true)) => consider(&mut level, m),
+                        Some((m, false)) => consider(&mut sloped, m),
+                        None => {}
                     }
                 }
             }
         }
-        let (score, model) = best;
-        match self.refit_plane(&model, origin, delta) {
-            Some(m) if self.score(&m, origin, delta) <= score => m,
-            _ => model,
+        if sloped.0 < constant.0 && sloped.0 + slope_cost * delta < level.0 {
+            let (score, model) = sloped;
+            return match self.refit_plane(&model, origin, delta) {
+                Some(m) if self.score(&m, origin, delta) <= score => m,
+                _ => model,
+            };
+        }
+        // A level plane is kept as drawn: a least-squares refit would slope it again.
+        if level.0 < constant.0 {
+            level.1
+        } else {
+            constant.1
         }
     }
 
@@ -476,12 +514,13 @@ const AGREEMENT_TOLERANCE: f64 = 0.25;
 /// Pieces of the rest of at most this many pixels are filled from what is round them.
 const MAX_SPECK: usize = 256;
 
-/// The plane through three boundary edges; for three on one column (or one row), the
-/// plane through the two farthest apart that is level across it (a band along a side of
-/// the image has edges on one column only: a plane through three of them, one elsewhere
-/// or none, could not follow the surface down the column); `None` if they are otherwise
-/// collinear (integer coordinates: the doubled triangle area is then exactly 0).
-fn plane_through(t: &[Edge; 3], origin: (f64, f64), inverse: bool) -> Option<Model> {
+/// The plane through three boundary edges, and whether it is level across a line: for
+/// three on one column (or one row), the plane through the two farthest apart that is
+/// level across it (a band along a side of the image has edges on one column only: a
+/// plane through three of them, one elsewhere or none, could not follow the surface down
+/// the column); `None` if they are otherwise collinear (integer coordinates: the doubled
+/// triangle area is then exactly 0).
+fn plane_through(t: &[Edge; 3], origin: (f64, f64), inverse: bool) -> Option<(Model, bool)> {
     if inverse && t.iter().any(|e| e.r <= 0.0) {
         return None;
     }
@@ -489,12 +528,10 @@ fn plane_through(t: &[Edge; 3], origin: (f64, f64), inverse: bool) -> Option<Mod
     let area2 = (t[1].x - t[0].x) as i64 * (t[2].y - t[0].y) as i64
         - (t[2].x - t[0].x) as i64 * (t[1].y - t[0].y) as i64;
     if area2 == 0 {
-        return level_plane_along_a_line(t, origin, inverse);
+        return level_plane_along_a_line(t, origin, inverse).map(|m| (m, true));
     }
-    Some(Model::affine(
-        inverse,
-        solve3(rows, t.map(|e| e.fitted(inverse)))?,
-    ))
+    let m = Model::affine(inverse, solve3(rows, t.map(|e| e.fitted(inverse)))?);
+    Some((m, false))
 }
 
 /// The plane through three edges on one column that does not change along the rows (or
