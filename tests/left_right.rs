@@ -38,6 +38,7 @@ fn disparity(x: usize, y: usize) -> f32 {
     }
 }
 
+/// `brume render --json`'s depth notes for the pair with `--right` and `args`.
 fn depth_notes(dir: &Path, args: &[&str]) -> String {
     let mut all = vec!["render", "--image", "left.png", "--right", "right.png"];
     all.extend_from_slice(args);

@@ -306,8 +306,9 @@ impl Photo {
     /// ([`depth::load_disparity_px`]: any stereo disparity, of the image's size).
     /// Returns how many pixels failed. Errors name `right`: a depth that holds no stereo
     /// disparity ([`LoadedDepth::not_a_stereo_disparity`]), a disparity or a right image
-    /// of another size than the image. Only when asked for: on brume's scene matched by StereoSGBM it flagged correct
-    /// pixels too and made τ worse (README, "Real depth").
+    /// of another size than the image. Only when asked for: on brume's scene and on
+    /// Middlebury's Aloe pair, matched by StereoSGBM, it flagged correct pixels too and made
+    /// τ worse (README, "Real depth").
     pub fn drop_left_right_mismatches(
         &mut self,
         depth_path: &Path,

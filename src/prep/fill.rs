@@ -251,7 +251,8 @@ impl HoleFiller {
         Ok(fits.len())
     }
 
-    /// The RANSAC fit to the collected edges (at least one).
+    /// The RANSAC fit to the collected edges (at least one) of a whole hole, a sloped plane
+    /// paying [`SLOPE_ACROSS_COST`] against a level one.
     fn fit(&mut self, trials: usize, rng: &mut SplitMix64) -> Fit {
         self.fit_with(trials, rng, SLOPE_ACROSS_COST)
     }
@@ -262,6 +263,8 @@ impl HoleFiller {
         self.fit_with(trials, rng, 0.0)
     }
 
+    /// The RANSAC fit, a sloped plane paying `slope_cost` truncation scales against the
+    /// best level one, clamped to the edges' values.
     fn fit_with(&mut self, trials: usize, rng: &mut SplitMix64, slope_cost: f64) -> Fit {
         let origin = self.origin();
         let delta = self.robust_scale();

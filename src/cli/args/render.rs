@@ -250,8 +250,8 @@ pub struct RenderArgs {
     /// disparity (--stereo-view right): pixels whose colour differs from their match in
     /// it by more than 12/255 (Foggy Cityscapes' left-right photoconsistency) are
     /// unreliable, taken as unknown and filled from their reliable neighbours. Not found
-    /// automatically: it also flags correct pixels; on the real Aloe pair it made τ better,
-    /// on rendered stereo worse (see the README).
+    /// automatically: it also flags correct pixels, and on rendered stereo and on the real
+    /// Aloe pair it made τ a little worse (see the README).
     #[arg(long, value_name = "PATH")]
     pub right: Option<PathBuf>,
 

@@ -8,7 +8,6 @@ use std::path::Path;
 use super::raw::{decode_raw, Raw};
 use super::{cityscapes, extension_of, png16, DepthFormat, DepthKind, DepthOptions, LoadedDepth};
 use crate::raster::{Orientation, ScalarMap};
-
 use crate::{Error, Result};
 
 /// The disparity in pixels of the stereo depth file at `path`, which [`super::load_range`]
