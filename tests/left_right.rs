@@ -107,19 +107,22 @@ fn maps_the_check_cannot_read_are_refused() {
     write_pair(dir.path());
     let depth = Grid::from_fn(W, H, |_, _| 5.0f32);
     write_scalar(&dir.path().join("depth.pfm"), &depth).unwrap();
-    common::assert_render_refused(
-        dir.path(),
-        &[
+    let refused = |depth: &str, needles: &[&str]| {
+        let args = [
             "render",
             "--image",
             "left.png",
             "--right",
             "right.png",
             "--depth",
-            "depth.pfm",
+            depth,
             "--ks",
             "0.5",
-        ],
+        ];
+        common::assert_render_refused(dir.path(), &args, needles);
+    };
+    refused(
+        "depth.pfm",
         &[
             "--right",
             "depth.pfm",
@@ -129,19 +132,8 @@ fn maps_the_check_cannot_read_are_refused() {
     );
     let half = image::GrayImage::from_pixel(W as u32 / 2, H as u32 / 2, image::Luma([2]));
     half.save(dir.path().join("half.png")).unwrap();
-    common::assert_render_refused(
-        dir.path(),
-        &[
-            "render",
-            "--image",
-            "left.png",
-            "--right",
-            "right.png",
-            "--depth",
-            "half.png",
-            "--ks",
-            "0.5",
-        ],
+    refused(
+        "half.png",
         &["--right", "the image's size, 40x12", "half.png is 20x6"],
     );
 }
