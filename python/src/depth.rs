@@ -63,7 +63,7 @@ use pyo3::types::PyDict;
 /// stereo_focal_baseline (f·B in px·m of a disparity, else None) and stereo_view ('left'
 /// or 'right' for a disparity, else None; give both to brume.fog as `brume render` uses
 /// them), disparity_px (a stereo disparity's values in pixels as the file holds them,
-/// float32 HxW, NaN where unknown or not positive: left_right_mismatches' input; else
+/// float32 HxW, NaN where unknown: left_right_mismatches' input; else
 /// None, also for a disparity turned upright by image), ground (a Cityscapes camera
 /// file's mount over the road, or camera_mount's, a dict of height_m, pitch (down) and
 /// roll in radians and fx, fy, cx, cy on the range's grid, else None: give it to
