@@ -4,7 +4,7 @@
 //! And on the real Middlebury Aloe pair, whose ground truth must fail far less often than
 //! the same truth 3 px off.
 
-use brume::io::depth::DepthOptions;
+use brume::io::depth::{self, DepthFormat, DepthKind, DepthOptions};
 use brume::io::output::{write_rgba, write_scalar};
 use brume::photo::Photo;
 use brume::raster::Grid;
@@ -96,6 +96,54 @@ fn every_disparity_layout_takes_the_check() {
             notes.contains("\"1 px failed the left-right check"),
             "{name}: {notes}"
         );
+    }
+}
+
+/// `load_range_and_disparity` decodes once what `load_range` and `load_disparity_px` read
+/// in two passes: the same range, and the disparity in the file's pixels as written (the
+/// 16-bit PNG's times its scale); a depth map gives no disparity.
+#[test]
+fn range_and_disparity_in_one_read() {
+    let dir = tempfile::tempdir().unwrap();
+    let grey16 = image::ImageBuffer::<image::Luma<u16>, _>::from_fn(W as u32, H as u32, |x, y| {
+        image::Luma([(disparity(x as usize, y as usize) * 4.0) as u16])
+    });
+    grey16.save(dir.path().join("disp16.png")).unwrap();
+    let float = Grid::from_fn(W, H, disparity);
+    write_scalar(&dir.path().join("disp.pfm"), &float).unwrap();
+    write_scalar(&dir.path().join("depth.pfm"), &float).unwrap();
+    let geometry = DepthOptions {
+        kind: Some(DepthKind::Disparity),
+        focal: Some(1000.0),
+        baseline: Some(100.0),
+        ..DepthOptions::default()
+    };
+    let png16 = DepthOptions {
+        format: DepthFormat::Png16,
+        scale: Some(0.25),
+        ..geometry.clone()
+    };
+    let cases = [
+        ("disp16.png", png16, true),
+        ("disp.pfm", geometry, true),
+        ("depth.pfm", DepthOptions::default(), false),
+    ];
+    for (name, opts, is_disparity) in cases {
+        let path = dir.path().join(name);
+        let (loaded, disparity_px) = depth::load_range_and_disparity(&path, &opts).unwrap();
+        assert_eq!(
+            loaded.range,
+            depth::load_range(&path, &opts).unwrap().range,
+            "{name}"
+        );
+        match disparity_px {
+            Some(d) => {
+                assert!(is_disparity, "{name} gave a disparity");
+                assert_eq!(d, float, "{name}");
+                assert_eq!(d, depth::load_disparity_px(&path, &opts, &loaded).unwrap());
+            }
+            None => assert!(!is_disparity, "{name} gave no disparity"),
+        }
     }
 }
 

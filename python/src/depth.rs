@@ -127,15 +127,7 @@ pub(crate) fn load_depth<'py>(
         )?
     };
     let (loaded, disparity) = py
-        .detach(|| {
-            let loaded = depth::load_range(&path.0, &opts)?;
-            // The left-right check's input, read back only where the file holds one.
-            let disparity = match loaded.not_a_stereo_disparity() {
-                None => Some(depth::load_disparity_px(&path.0, &opts, &loaded)?),
-                Some(_) => None,
-            };
-            Ok::<_, brume::Error>((loaded, disparity))
-        })
+        .detach(|| depth::load_range_and_disparity(&path.0, &opts))
         .map_err(py_err)?;
     let (range, info) = range_and_info(py, loaded)?;
     info.set_item("disparity_px", disparity.map(|d| grid_to_py(py, d)))?;

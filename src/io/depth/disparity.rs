@@ -33,6 +33,34 @@ pub fn load_disparity_px(
     }
     let bytes = crate::io::limits::read_file(path)?;
     let raw = decode_raw(&bytes, path, &extension_of(path), loaded.format)?;
+    disparity_of_samples(raw, path, opts, loaded)
+}
+
+/// [`super::load_range`] and, where the file holds a stereo pair's disparity, its pixels
+/// as [`load_disparity_px`] reads them (`None` for other maps, as
+/// [`LoadedDepth::not_a_stereo_disparity`] says), the file decoded once. The decoded
+/// samples are held beside the range while it is computed: a 16-bit PNG's two bytes per
+/// pixel, a float map's four.
+pub fn load_range_and_disparity(
+    path: &Path,
+    opts: &DepthOptions,
+) -> Result<(LoadedDepth, Option<ScalarMap>)> {
+    let (loaded, samples) = super::load_file(path, opts, super::Keep::Samples)?;
+    let disparity = match (loaded.not_a_stereo_disparity(), samples) {
+        (None, Some(raw)) => Some(disparity_of_samples(raw, path, opts, &loaded)?),
+        _ => None,
+    };
+    Ok((loaded, disparity))
+}
+
+/// The disparity in pixels of the samples decoded from `path`, which was read into
+/// `loaded`: [`load_disparity_px`]'s conversions.
+fn disparity_of_samples(
+    raw: Raw,
+    path: &Path,
+    opts: &DepthOptions,
+    loaded: &LoadedDepth,
+) -> Result<ScalarMap> {
     // A PNG's 0 is its unknown.
     let known = |d: f64| if d > 0.0 { d as f32 } else { f32::NAN };
     match (loaded.format, raw) {

@@ -41,9 +41,9 @@ mod raw;
 mod stop;
 mod xmp;
 
-pub use disparity::{known_disparities, load_disparity_px};
+pub use disparity::{known_disparities, load_disparity_px, load_range_and_disparity};
 use interpret::{interpret, SideFiles};
-use raw::decode_raw;
+use raw::{decode_raw, Raw};
 
 // The file readers live with their writers in `io::codec`; they stay reachable here, where
 // callers loading depth have always found them.
@@ -551,11 +551,25 @@ fn finite_option(value: f64, name: &str) -> Result<f64> {
 /// Loads a depth, range or disparity file and returns a range map with NaN for unknown
 /// pixels. See [`DepthFormat`] for the layouts and [`DepthOptions`] for the knobs.
 pub fn load_range(path: &Path, opts: &DepthOptions) -> Result<LoadedDepth> {
+    load_file(path, opts, Keep::RangeOnly).map(|(loaded, _)| loaded)
+}
+
+/// What [`load_file`] keeps of the decoded samples besides the range.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Keep {
+    RangeOnly,
+    /// A copy of the samples as the file stores them (a stereo disparity's pixels).
+    Samples,
+}
+
+/// [`load_range`], and with [`Keep::Samples`] the decoded samples before they were
+/// interpreted (`None` for a phone's embedded map, which is never a stereo disparity).
+fn load_file(path: &Path, opts: &DepthOptions, keep: Keep) -> Result<(LoadedDepth, Option<Raw>)> {
     let bytes = crate::io::limits::read_file(path)?;
     let ext = extension_of(path);
     let calib = read_side_file(middlebury::calib_file(path, &ext, opts))?;
     let camera = read_side_file(cityscapes::camera_file(path, &ext, opts)?)?;
-    load_with_side_files(&bytes, path, opts, side(&calib), side(&camera))
+    load_with_side_files(&bytes, path, opts, side(&calib), side(&camera), keep)
 }
 
 /// A side file read by [`read_side_file`], borrowed as the loaders take it.
@@ -586,7 +600,7 @@ pub fn load_range_from_bytes(
     opts: &DepthOptions,
     calib: Option<(&Path, &str)>,
 ) -> Result<LoadedDepth> {
-    load_with_side_files(bytes, name, opts, calib, None)
+    load_with_side_files(bytes, name, opts, calib, None, Keep::RangeOnly).map(|(loaded, _)| loaded)
 }
 
 /// A depth, range, disparity, inverse or affine-invariant depth or z-buffer map already in
@@ -607,7 +621,7 @@ pub fn range_from_map(map: ScalarMap, name: &str, opts: &DepthOptions) -> Result
     };
     side_file("calib", &opts.calib)?;
     side_file("camera", &opts.camera)?;
-    let raw = raw::Raw::Float {
+    let raw = Raw::Float {
         map,
         from_pfm: false,
         focal_px: None,
@@ -640,7 +654,8 @@ pub fn load_cityscapes_from_bytes(
         camera: Some(camera.0.to_path_buf()),
         ..DepthOptions::default()
     };
-    load_with_side_files(disparity, name, &opts, None, Some(camera))
+    load_with_side_files(disparity, name, &opts, None, Some(camera), Keep::RangeOnly)
+        .map(|(loaded, _)| loaded)
 }
 
 /// The loaders' common path: the side files are parsed if the format uses them (or noted
@@ -651,13 +666,19 @@ fn load_with_side_files(
     opts: &DepthOptions,
     calib: Option<(&Path, &str)>,
     camera: Option<(&Path, &str)>,
-) -> Result<LoadedDepth> {
+    keep: Keep,
+) -> Result<(LoadedDepth, Option<Raw>)> {
     let mut notes = Vec::new();
     let ext = extension_of(name);
     let calib = middlebury::take_calib(&ext, opts, calib, &mut notes)?;
     let camera = cityscapes::take_camera(name, &ext, opts, camera, &mut notes)?;
     let raw = decode_raw(bytes, name, &ext, opts.format)?;
-    interpret(raw, name, opts, SideFiles { calib, camera }, notes, 1.0)
+    let samples = match keep {
+        Keep::Samples => raw.samples(),
+        Keep::RangeOnly => None,
+    };
+    let loaded = interpret(raw, name, opts, SideFiles { calib, camera }, notes, 1.0)?;
+    Ok((loaded, samples))
 }
 
 /// Decodes embedded depth bytes as if read from a file with extension `ext`. `pixel_scale`

@@ -37,6 +37,25 @@ pub(super) enum Raw {
 }
 
 impl Raw {
+    /// A copy of the samples as decoded; `None` for an embedded map (decoded by its own
+    /// rules, never a stereo pair's disparity).
+    pub(super) fn samples(&self) -> Option<Raw> {
+        match self {
+            Raw::Grey8(g) => Some(Raw::Grey8(g.clone())),
+            Raw::Grey16(g) => Some(Raw::Grey16(g.clone())),
+            Raw::Float {
+                map,
+                from_pfm,
+                focal_px,
+            } => Some(Raw::Float {
+                map: map.clone(),
+                from_pfm: *from_pfm,
+                focal_px: *focal_px,
+            }),
+            Raw::Embedded(_) => None,
+        }
+    }
+
     /// The kind of file, for messages.
     pub(super) fn describe(&self) -> &'static str {
         match self {
