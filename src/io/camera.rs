@@ -169,7 +169,7 @@ fn mount_refused(text: &str) -> crate::Error {
 }
 
 /// A mounted camera's rays against the level ([`Mount::rays`]).
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LevelRays {
     k: Intrinsics,
     sin_pitch: f64,
@@ -183,6 +183,11 @@ impl LevelRays {
     /// level: positive below the horizon, 0 on it, negative above. A ray of sine `s > 0`
     /// meets level ground at range `height_m / s`.
     pub fn sine_below_level(&self, x: usize, y: usize) -> f64 {
+        self.sine_below_level_at(x as f64, y as f64)
+    }
+
+    /// [`LevelRays::sine_below_level`] at a position in pixels that need not be whole.
+    pub fn sine_below_level_at(&self, x: f64, y: f64) -> f64 {
         let (u, v) = self.uv(x, y);
         self.down(u, v) / (1.0 + u * u + v * v).sqrt()
     }
@@ -192,7 +197,10 @@ impl LevelRays {
     pub fn row_may_reach(&self, y: usize, width: usize, sine: f64) -> bool {
         // The down component is linear along a row, so largest at an end, and the ray's
         // length is at least 1.
-        let (first, last) = (self.uv(0, y), self.uv(width.saturating_sub(1), y));
+        let (first, last) = (
+            self.uv(0.0, y as f64),
+            self.uv(width.saturating_sub(1) as f64, y as f64),
+        );
         self.down(first.0, first.1).max(self.down(last.0, last.1)) > sine
     }
 
@@ -203,11 +211,8 @@ impl LevelRays {
     }
 
     /// Pixel `(x, y)` on the plane at unit depth.
-    fn uv(&self, x: usize, y: usize) -> (f64, f64) {
-        (
-            (x as f64 - self.k.cx) / self.k.fx,
-            (y as f64 - self.k.cy) / self.k.fy,
-        )
+    fn uv(&self, x: f64, y: f64) -> (f64, f64) {
+        ((x - self.k.cx) / self.k.fx, (y - self.k.cy) / self.k.fy)
     }
 }
 

@@ -4,6 +4,7 @@
 //! See the module docs of [`crate::prep`] for the method and its justification.
 
 use super::colour_guide::{split, ColourGuide, Pixel};
+use super::ground::Road;
 use super::occlusion::Occlusions;
 use crate::rng::SplitMix64;
 use crate::{Error, Result};
@@ -49,6 +50,8 @@ pub(crate) enum Model {
     /// inverse depth is affine in the pixel's position), infinitely far where it reaches
     /// its horizon.
     InversePlane { a: f64, b: f64, c: f64 },
+    /// The level road under a camera of known mount; `origin` is the hole's.
+    Road { road: Road, origin: (f64, f64) },
 }
 
 impl Model {
@@ -69,6 +72,7 @@ impl Model {
                 d if d > 0.0 => 1.0 / d,
                 _ => f64::INFINITY,
             },
+            Model::Road { road, origin } => road.range_at(origin.0 + dx, origin.1 + dy),
         }
     }
 }
@@ -85,6 +89,8 @@ pub(crate) struct HoleFiller {
     occlusions: Occlusions,
     /// Whether the hole being filled leaves its edges to the occluders out.
     skip_occluders: bool,
+    /// The level road, a candidate for every hole, when the camera's mount is known.
+    road: Option<Road>,
 }
 
 /// A hole that holds a stereo occlusion is filled without its edges to the occluders when
@@ -111,7 +117,15 @@ impl HoleFiller {
             far_limit,
             occlusions,
             skip_occluders: false,
+            road: None,
         }
+    }
+
+    /// Offers the level road (a vehicle camera's, [`super::PrepOptions::ground`]) to every
+    /// hole as a candidate beside the planes drawn from its boundary.
+    pub(crate) fn with_road(mut self, road: Option<Road>) -> Self {
+        self.road = road;
+        self
     }
 
     /// Applies `fit`, a fit to a whole hole or a piece of it, to `pixels`, except to a
@@ -274,7 +288,7 @@ impl HoleFiller {
         // the horizon, where the sky and not a known pixel bounds the hole): as far as
         // the scene's farthest range, not only the boundary's. In a hole enclosed by
         // known pixels an affine 1/R lies between its values on the boundary anyway.
-        if matches!(model, Model::InversePlane { .. }) {
+        if matches!(model, Model::InversePlane { .. } | Model::Road { .. }) {
             hi = hi.max(self.far_limit);
         }
         Fit {
@@ -418,6 +432,10 @@ impl HoleFiller {
                 }
             }
         }
+        // The road is level across every line, as a plane through a line of edges is.
+        if let Some(road) = self.road {
+            consider(&mut level, Model::Road { road, origin });
+        }
         if sloped.0 < constant.0 && sloped.0 + slope_cost * delta < level.0 {
             let (score, model) = sloped;
             return match self.refit_plane(&model, origin, delta) {
@@ -450,7 +468,7 @@ impl HoleFiller {
     /// Least-squares plane through the inliers (residual < delta) of a winning plane.
     fn refit_plane(&self, m: &Model, origin: (f64, f64), delta: f64) -> Option<Model> {
         let inverse = match m {
-            Model::Constant(_) => return None,
+            Model::Constant(_) | Model::Road { .. } => return None,
             Model::Plane { .. } => false,
             Model::InversePlane { .. } => true,
         };

@@ -15,7 +15,7 @@
 //! (Cityscapes' Düsseldorf frame: light patches in the fog).
 
 use super::components;
-use crate::io::camera::{Intrinsics, Mount};
+use crate::io::camera::{Intrinsics, LevelRays, Mount};
 use crate::{Error, Result};
 
 /// How steeply the road may fall away from the camera's level before the bound speaks:
@@ -101,6 +101,34 @@ impl Ground {
             return f64::INFINITY;
         }
         self.mount.height_m / (s - FALL_GRADE)
+    }
+}
+
+/// The level road itself as a surface a hole may be filled with ([`super::fill`]): a
+/// hole on the road (a wet road's reflection, water level with it, asphalt without
+/// texture) that a matcher left, or filled with false matches of what stands beside it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Road {
+    rays: LevelRays,
+    height: f64,
+}
+
+impl Road {
+    /// The road under `ground`'s camera.
+    pub(crate) fn of(ground: &Ground) -> Road {
+        Road {
+            rays: ground.mount.rays(&ground.intrinsics),
+            height: ground.mount.height_m,
+        }
+    }
+
+    /// The road's range along the ray through pixel position `(x, y)`, `+inf` at and
+    /// above the horizon.
+    pub(crate) fn range_at(&self, x: f64, y: f64) -> f64 {
+        match self.rays.sine_below_level_at(x, y) {
+            s if s > 0.0 => self.height / s,
+            _ => f64::INFINITY,
+        }
     }
 }
 

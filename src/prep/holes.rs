@@ -2,7 +2,7 @@
 //! range round it ([`super::fill`]), a stereo occlusion from its background alone
 //! ([`super::occlusion`]).
 
-use super::{colour_guide, components, fill, occlusion, PrepOptions, PrepStats};
+use super::{colour_guide, components, fill, ground, occlusion, PrepOptions, PrepStats};
 use crate::Result;
 
 /// The masks [`fill_holes`] reads and extends. `ego` is empty without an ego mask.
@@ -45,7 +45,8 @@ pub(super) fn fill_holes(
         .unwrap_or_default();
     stats.occluded = occlusions.count;
     let comps = components::label_unknown(work, w, h);
-    let mut filler = fill::HoleFiller::new(f64::from(stats.r_max), occlusions);
+    let mut filler = fill::HoleFiller::new(f64::from(stats.r_max), occlusions)
+        .with_road(opts.ground.as_ref().map(ground::Road::of));
     let mut state = vec![colour_guide::Pixel::Other; if guide.is_some() { w * h } else { 0 }];
     for c in &comps.list {
         let pixels = comps.pixels_of(c);

@@ -127,7 +127,9 @@
 //!    for boundaries of at least 4 edges; three on one column give the plane through the
 //!    two farthest apart that is level along the rows, three on one row the one level down
 //!    the columns, other collinear triplets are skipped; for a whole hole a sloped plane
-//!    must score 2 delta below the best level one). A plane of the
+//!    must score 2 delta below the best level one). With the level road known
+//!    ([`PrepOptions::ground`]), the road itself, range `h / s` along each ray, is a
+//!    candidate of every hole, scored as a level plane. A plane of the
 //!    scene is affine in inverse depth in a pinhole image, and so nearly in inverse
 //!    range: the ground behind an occluder grows as `1/(y - y_horizon)`, which a plane in
 //!    range fills as a ramp, its middle too far (60 % in the unit test). Long boundaries
