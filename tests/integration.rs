@@ -49,6 +49,7 @@ mod prep_aloe;
 mod prep_edt;
 mod prep_ground;
 mod prep_holes;
+mod prep_lidar;
 mod prep_outdoor;
 mod prep_street;
 mod refine;

@@ -24,7 +24,8 @@ use pyo3::types::{PyBool, PyDict};
 /// beyond the sensor's reach), airlight (linear RGB) and airlight_source, refine (the mode
 /// that ran), upsampled, and the pre-processing's counts
 /// (holes, hole_pixels, colour_regions, occluded, sky_pixels, sky_components,
-/// margin_pixels, far_outliers, local_outliers, below_ground, border_filled, border_sky).
+/// margin_pixels, far_outliers, local_outliers, below_ground, border_filled, border_sky,
+/// scan_gaps, scan_unlike).
 /// A depth-completion label for a dataset, or a check of what the fog will see.
 #[pyfunction]
 #[pyo3(signature = (image, range_m, *, refine=None, sky_mask=None, ego_mask=None, airlight=None, monocular=false, stereo_focal_baseline=None, stereo_view=None, ground=None))]
@@ -80,6 +81,8 @@ pub(crate) fn prepare<'py>(
             ("below_ground", s.below_ground),
             ("border_filled", s.border_filled),
             ("border_sky", s.border_sky),
+            ("scan_gaps", s.scan_gaps),
+            ("scan_unlike", s.scan_unlike),
         ];
         for (key, n) in counts {
             info.set_item(key, n)?;

@@ -171,6 +171,14 @@ pub fn run(args: &PrepArgs) -> Result<()> {
             s.beyond_reach,
             s.ego_pixels
         );
+        if s.scan_gaps > 0 {
+            outln!(
+                "scan lines: {} px between them filled, {} px unlike their colour round \
+                 them dropped",
+                s.scan_gaps,
+                s.scan_unlike
+            );
+        }
         outln!(
             "CPU time: fill {:.1} ms, sky {:.1} ms, margin {:.1} ms, total {:.1} ms",
             s.fill_ms,

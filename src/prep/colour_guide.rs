@@ -64,6 +64,16 @@ impl<'a> ColourGuide<'a> {
         relative_step(self.colour, &self.lum, p, q, self.eps) <= self.own_step
     }
 
+    /// The relative colour step from pixel `p` to pixel `q`.
+    pub(super) fn step(&self, p: usize, q: usize) -> f32 {
+        relative_step(self.colour, &self.lum, p, q, self.eps)
+    }
+
+    /// Whether a [`ColourGuide::step`] is more than one region takes: an edge.
+    pub(super) fn is_edge(&self, step: f32) -> bool {
+        step > self.region_step
+    }
+
     /// The colour (linear RGB) of pixel `p`.
     pub(crate) fn colour_at(&self, p: usize) -> [f32; 3] {
         self.colour[p]

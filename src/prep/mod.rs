@@ -100,6 +100,14 @@
 //!    their ray would meet the road falling 5 % away from the camera's level, in
 //!    4-connected patches under 1 % of the image, become unknown
 //!    ([`PrepStats::below_ground`]).
+//!
+//!    **Scan lines** (a LiDAR's map as KITTI stores it, see `scan.rs`): when most unknown
+//!    pixels lie in short runs down a column between two known ones, the depth rules read
+//!    those gaps as known (step 2), the scene beyond the reach is only what lies over the
+//!    scanner's top line, and a region reached below it counts as reached; here the known
+//!    pixels whose range is unlike that of their colour's round them go (the background
+//!    seen past an object's edge, [`PrepStats::scan_unlike`]) and each gap is filled from
+//!    its ends, in 1/R or split at the image's colour edge ([`PrepStats::scan_gaps`]).
 //! 4. **Border bands** ([`PrepOptions::border_band_fraction`], see `border.rs`) are filled
 //!    first, line by line from each border: a run of unknown pixels continues the surface
 //!    it meets, linearly in disparity, or is sky when it runs down from the top border
@@ -254,6 +262,7 @@ mod outliers;
 mod range_class;
 mod rank;
 mod reach;
+mod scan;
 mod sky;
 mod sky_image;
 pub mod stereo;
@@ -330,6 +339,12 @@ pub struct PrepStats {
     /// Border band pixels brought no farther than the level road along their ray
     /// ([`PrepOptions::ground`]; 0 without it; counted in `border_filled` too).
     pub border_on_road: usize,
+    /// Pixels between a scanner's lines (a LiDAR's map, see `scan.rs`) filled from the
+    /// lines above and below them.
+    pub scan_gaps: usize,
+    /// Known pixels of a scanner's map whose range is unlike that of the pixels of their
+    /// colour round them (a background seen past an object's edge), made unknown first.
+    pub scan_unlike: usize,
     /// Unknown pixels taken as stereo occlusions and filled from their background alone
     /// ([`PrepOptions::stereo_focal_baseline`]; 0 without it).
     pub occluded: usize,
@@ -479,7 +494,11 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
             guides.image = Some(&masked_image);
         }
     }
-    let mut found = find_sky(&work, w, h, guides, opts);
+    let scan_lines = scan::find_lines(&work, (w, h));
+    let mut found = sky::find_sky(&work, scan_lines.as_ref(), (w, h), guides, opts);
+    if let Some(lines) = &scan_lines {
+        lines.keep_beyond_reach_over_line(&mut found.beyond_reach);
+    }
     let mut sky = found.sky;
     stats.sky_method = found.method;
     stats.sky_noise = found.noise.len();
@@ -489,7 +508,9 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
         .map(|i| colour_guide::ColourGuide::new(i, opts.image_sky.max_step));
     if let Some(guide) = &guide {
         // Taken out of the scene beyond the reach, they stay NaN: holes.
-        reach::take_out_reached_in_part(&work, &sky, &mut found.beyond_reach, guide, (w, h));
+        let scanned = scan_lines.is_some();
+        let beyond = &mut found.beyond_reach;
+        reach::take_out_reached_in_part(&work, &sky, beyond, guide, (w, h), scanned);
     }
     // Neither known nor a hole (as the sky) until the scene round it is filled.
     found
@@ -507,6 +528,13 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
     }
     remove_far_outliers(&mut work, &sky, w, h, opts, &mut stats);
     remove_local_outliers(&mut work, &sky, w, h, opts, &mut stats);
+    if let Some(lines) = &scan_lines {
+        if let Some(guide) = &guide {
+            stats.scan_unlike =
+                scan::drop_points_unlike_their_colour(&mut work, &sky, guide, (w, h));
+        }
+        stats.scan_gaps = scan::fill_gaps(&mut work, &lines.gaps, &sky, guide.as_ref(), (w, h));
+    }
     stats.r_max = max_known_outside(&work, &sky)
         .ok_or_else(|| no_range_outside_the_sky(&sky, &ego, (w, h)))?;
     let mut filled = vec![false; w * h];
@@ -620,60 +648,6 @@ fn check_guide_sizes(range: &ScalarMap, guides: &Guides) -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// What [`find_sky`] decided.
-struct FoundSky {
-    /// The sky mask before hole filling.
-    sky: Vec<bool>,
-    /// How it was decided.
-    method: SkyMethod,
-    /// Known pixels that are matcher noise in slivers of sky (image-guided only).
-    noise: Vec<usize>,
-    /// Unknown pixels of the scene beyond the sensor's reach (image-guided only).
-    beyond_reach: Vec<usize>,
-}
-
-/// The sky: the user's mask; else, unless detection is off, the depth rules, joined by the
-/// image-guided detector when there is an image.
-fn find_sky(work: &[f32], w: usize, h: usize, guides: Guides, opts: &PrepOptions) -> FoundSky {
-    let found = |sky, method| FoundSky {
-        sky,
-        method,
-        noise: Vec::new(),
-        beyond_reach: Vec::new(),
-    };
-    if let Some(mask) = guides.sky_mask {
-        return found(mask.as_slice().to_vec(), SkyMethod::Mask);
-    }
-    if !opts.detect_sky || opts.sky.max_components == 0 {
-        return found(vec![false; w * h], SkyMethod::Off);
-    }
-    let Some(image) = guides.image else {
-        return found(sky::depth_sky(work, &opts.sky, w, h), SkyMethod::Depth);
-    };
-    // Independent: the depth rules' flood fill runs on one core beside the per-pixel
-    // range classes.
-    let (depth_sky, classes) = rayon::join(
-        || sky::depth_sky(work, &opts.sky, w, h),
-        || {
-            let cut = outliers::sky_candidate_cut(work, opts);
-            range_class::range_classes(work, w, h, cut)
-        },
-    );
-    let image_sky = sky_image::image_sky(
-        image,
-        &classes,
-        &depth_sky,
-        &opts.image_sky,
-        opts.sky.min_area_fraction,
-    );
-    FoundSky {
-        sky: image_sky.sky,
-        method: SkyMethod::DepthAndImage,
-        noise: image_sky.noise,
-        beyond_reach: image_sky.beyond_reach,
-    }
 }
 
 /// Removes the far outliers among the known pixels outside the sky (see [`outliers`]).

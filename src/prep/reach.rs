@@ -45,12 +45,16 @@ const MIN_REACHED_SHARE: f64 = 0.25;
 /// measured in some pixels and lost in others by the noise, and receding between its
 /// measured pixels it would show as blotches. The ground at the reach's contour has a few
 /// such pixels where the noise crosses the limit, over a region as wide as the image.
+/// A `scanned` map's (a LiDAR's, `scan.rs`) known pixels of the region's material below it
+/// count too: above its top line the scanner does not look, and a near tower's face
+/// measured below the line goes on up.
 pub(crate) fn take_out_reached_in_part(
     work: &[f32],
     sky: &[bool],
     beyond: &mut Vec<usize>,
     guide: &ColourGuide,
     (w, h): (usize, usize),
+    scanned: bool,
 ) {
     // 0: not beyond (or taken out); 1: beyond, in no region yet; 2: in a region.
     let mut state = vec![0u8; w * h];
@@ -69,10 +73,13 @@ pub(crate) fn take_out_reached_in_part(
             }
             take
         });
+        let reached = |p: usize, q: usize| known(q) && one_material(guide, p, q);
         let under_reached = pixels
             .iter()
             .map(|&p| p as usize)
-            .filter(|&p| p >= w && known(p - w) && one_material(guide, p, p - w))
+            .filter(|&p| {
+                (p >= w && reached(p, p - w)) || (scanned && p + w < w * h && reached(p, p + w))
+            })
             .count();
         let columns = c.bbox[2] + 1 - c.bbox[0];
         if under_reached as f64 >= MIN_REACHED_SHARE * columns as f64 {

@@ -1,7 +1,8 @@
 //! Sky from the range alone (the depth rules): which components of unknown pixels are sky.
 
 use super::components::{label_mask, Component, Components};
-use super::SkyRules;
+use super::scan::ScanLines;
+use super::{outliers, range_class, sky_image, Guides, PrepOptions, SkyMethod, SkyRules};
 
 /// The sky mask under the depth rules: every pixel of the components of unknown (NaN)
 /// pixels of `work` that [`select_sky`] keeps.
@@ -47,6 +48,69 @@ pub(crate) fn is_sky_candidate(
         && c.top_pixels as f64 >= rules.min_top_fraction * width as f64
         && c.len as f64 >= rules.min_bbox_fill * c.bbox_area() as f64
         && !(rules.reject_bottom && c.reaches_bottom(height))
+}
+
+/// What [`find_sky`] decided.
+pub(super) struct FoundSky {
+    /// The sky mask before hole filling.
+    pub(super) sky: Vec<bool>,
+    /// How it was decided.
+    pub(super) method: SkyMethod,
+    /// Known pixels that are matcher noise in slivers of sky (image-guided only).
+    pub(super) noise: Vec<usize>,
+    /// Unknown pixels of the scene beyond the sensor's reach (image-guided only).
+    pub(super) beyond_reach: Vec<usize>,
+}
+
+/// The sky: the user's mask; else, unless detection is off, the depth rules (which read a
+/// scanned map's unknown pixels below its top line as known, [`ScanLines::closed`]),
+/// joined by the image-guided detector when there is an image.
+pub(super) fn find_sky(
+    work: &[f32],
+    lines: Option<&ScanLines>,
+    (w, h): (usize, usize),
+    guides: Guides,
+    opts: &PrepOptions,
+) -> FoundSky {
+    let found = |sky, method| FoundSky {
+        sky,
+        method,
+        noise: Vec::new(),
+        beyond_reach: Vec::new(),
+    };
+    if let Some(mask) = guides.sky_mask {
+        return found(mask.as_slice().to_vec(), SkyMethod::Mask);
+    }
+    if !opts.detect_sky || opts.sky.max_components == 0 {
+        return found(vec![false; w * h], SkyMethod::Off);
+    }
+    let closed = lines.map(|l| l.closed(work));
+    let rules_input = closed.as_deref().unwrap_or(work);
+    let Some(image) = guides.image else {
+        return found(depth_sky(rules_input, &opts.sky, w, h), SkyMethod::Depth);
+    };
+    // Independent: the depth rules' flood fill runs on one core beside the per-pixel
+    // range classes.
+    let (depth_sky, classes) = rayon::join(
+        || depth_sky(rules_input, &opts.sky, w, h),
+        || {
+            let cut = outliers::sky_candidate_cut(work, opts);
+            range_class::range_classes(work, w, h, cut)
+        },
+    );
+    let image_sky = sky_image::image_sky(
+        image,
+        &classes,
+        &depth_sky,
+        &opts.image_sky,
+        opts.sky.min_area_fraction,
+    );
+    FoundSky {
+        sky: image_sky.sky,
+        method: SkyMethod::DepthAndImage,
+        noise: image_sky.noise,
+        beyond_reach: image_sky.beyond_reach,
+    }
 }
 
 #[cfg(test)]

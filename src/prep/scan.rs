@@ -1,0 +1,283 @@
+//! Scan lines: a LiDAR's points projected into the camera (KITTI's depth maps) know a
+//! pixel on each line the scanner swept and none between, a few rows apart; none above
+//! its top beam; and, the scanner above and behind the camera and the projection without
+//! an occlusion test, the background it saw past a nearer object's edge on the object.
+//!
+//! Left as they are, the unknown rows between the lines join into one component over the
+//! whole frame: the depth rules find no sky in it (it reaches the bottom), the scene above
+//! the top beam is never the scene beyond the sensor's reach, and the holes between lines
+//! are long strips that one surface fills along the row (a streak of a box's range over
+//! the ground beside it). So the lines are found first ([`find_lines`]): gaps, unknown
+//! runs down a column between two known pixels no more than [`max_gap`] rows apart, and
+//! the top line. The depth rules read every unknown pixel below the top line as known
+//! ([`ScanLines::closed`]); the scene beyond the reach is only what lies over it
+//! ([`ScanLines::keep_beyond_reach_over_line`]). Once the outliers are gone, the points
+//! unlike the points of their colour round them go
+//! ([`drop_points_unlike_their_colour`]), and each gap is filled from its two ends
+//! ([`fill_gaps`]): linearly in 1/R (a plane of the scene is affine in inverse depth)
+//! where they are of one surface or the image shows no edge between them, else each end
+//! up to the image's colour edge; without the image, a gap between two surfaces is left
+//! to the hole fill.
+
+use super::colour_guide::ColourGuide;
+
+/// Gaps are at most this fraction of the height ([`MIN_MAX_GAP`] rows at least): KITTI's
+/// lines are about 5 to 7 rows apart at 375 rows (0.4° to 0.5° between beams, a focal
+/// length of 721 px), 12 at the most here.
+const MAX_GAP_FRACTION: f64 = 1.0 / 32.0;
+/// See [`MAX_GAP_FRACTION`].
+const MIN_MAX_GAP: usize = 4;
+/// A map is scanned when at least this share of the unknown pixels below each column's
+/// first known pixel lie in gaps (a stereo matcher's holes are blobs and bands: a few
+/// percent of theirs do) ...
+const SCANNED_SHARE: f64 = 0.5;
+/// ... and they are most of the pixels there (a left-right check leaves a stereo map
+/// known in four pixels of five, its failures scattered in short runs).
+const SCANNED_UNKNOWN_SHARE: f64 = 0.5;
+/// A gap whose ends are within this ratio of each other is on one surface.
+const SAME_SURFACE_RATIO: f32 = 1.5;
+
+/// The longest gap in a map of `height` rows.
+fn max_gap(height: usize) -> usize {
+    ((height as f64 * MAX_GAP_FRACTION).round() as usize).max(MIN_MAX_GAP)
+}
+
+/// A scanned map's gaps and top line.
+pub(crate) struct ScanLines {
+    /// The unknown pixels between two lines down a column.
+    pub(crate) gaps: Vec<bool>,
+    /// Each column's topmost known row, `h` in a column no line crosses.
+    own_top: Vec<usize>,
+    /// Each column's top line: the topmost known row of the columns within [`max_gap`] of
+    /// it (a column between two returns of a line, or left of the scanner's view, takes
+    /// the line of the nearest column a line crosses).
+    top_line: Vec<usize>,
+}
+
+impl ScanLines {
+    /// `work` as the depth rules read it: every unknown pixel below its column's topmost
+    /// known one known (the gaps, a run without returns, the rows below the last line),
+    /// and in a column no line crosses every one below the top line, so that the scene
+    /// over the lines is one region, not joined to the bottom through the lines.
+    pub(crate) fn closed(&self, work: &[f32]) -> Vec<f32> {
+        let w = self.top_line.len();
+        let h = work.len() / w;
+        let line = |x: usize| match self.own_top[x] {
+            y if y < h => y,
+            _ => self.top_line[x],
+        };
+        let below = |p: usize| p / w >= line(p % w);
+        (0..work.len())
+            .map(|p| {
+                if below(p) && work[p].is_nan() {
+                    1.0
+                } else {
+                    work[p]
+                }
+            })
+            .collect()
+    }
+
+    /// Keeps of the scene beyond the sensor's reach (`beyond`, see `reach.rs`) the pixels
+    /// over the top line: what no beam reached there is the far skyline; below the line it
+    /// is a face between returns, a hole.
+    pub(crate) fn keep_beyond_reach_over_line(&self, beyond: &mut Vec<usize>) {
+        let w = self.top_line.len();
+        beyond.retain(|&p| p / w < self.top_line[p % w]);
+    }
+}
+
+/// The gaps between scan lines of `work` (unknown pixels NaN) and its top line, or `None`
+/// when the map is not scanned ([`SCANNED_SHARE`], [`SCANNED_UNKNOWN_SHARE`]).
+pub(crate) fn find_lines(work: &[f32], (w, h): (usize, usize)) -> Option<ScanLines> {
+    let longest = max_gap(h);
+    let mut gaps = vec![false; w * h];
+    let (mut in_gaps, mut below_first, mut known) = (0usize, 0usize, 0usize);
+    for x in 0..w {
+        let mut last_known: Option<usize> = None;
+        for y in 0..h {
+            if work[y * w + x].is_nan() {
+                below_first += usize::from(last_known.is_some());
+                continue;
+            }
+            known += usize::from(last_known.is_some());
+            if let Some(above) = last_known.filter(|&a| y - a > 1 && y - a - 1 <= longest) {
+                (above + 1..y).for_each(|g| gaps[g * w + x] = true);
+                in_gaps += y - above - 1;
+            }
+            last_known = Some(y);
+        }
+    }
+    let sparse = below_first as f64 >= SCANNED_UNKNOWN_SHARE * (below_first + known) as f64;
+    let scanned = sparse && in_gaps as f64 >= SCANNED_SHARE * below_first as f64;
+    scanned.then(|| {
+        let top: Vec<Option<usize>> = (0..w)
+            .map(|x| (0..h).find(|&y| work[y * w + x].is_finite()))
+            .collect();
+        ScanLines {
+            gaps,
+            own_top: top.iter().map(|t| t.unwrap_or(h)).collect(),
+            top_line: top_line(&top, h),
+        }
+    })
+}
+
+/// Each column's top line ([`ScanLines::top_line`]) from its topmost known row `top`; `h`
+/// where no column has a known pixel.
+fn top_line(top: &[Option<usize>], h: usize) -> Vec<usize> {
+    let w = top.len();
+    let crossed: Vec<usize> = (0..w).filter(|&x| top[x].is_some()).collect();
+    let nearest_line = |x: usize| {
+        let i = crossed.partition_point(|&c| c < x);
+        let candidates = [i.checked_sub(1), (i < crossed.len()).then_some(i)];
+        candidates
+            .into_iter()
+            .flatten()
+            .map(|i| crossed[i])
+            .min_by_key(|&c| c.abs_diff(x))
+            .and_then(|c| top[c])
+            .unwrap_or(h)
+    };
+    let reach = max_gap(h);
+    (0..w)
+        .map(|x| {
+            let window = x.saturating_sub(reach)..(x + reach + 1).min(w);
+            window
+                .filter_map(|c| top[c])
+                .min()
+                .unwrap_or_else(|| nearest_line(x))
+        })
+        .collect()
+}
+
+/// A point is unlike its colour's points round it when its 1/R is off their median by
+/// more than this factor ...
+const UNLIKE_RATIO: f32 = 1.5;
+/// ... and they are at least this many.
+const MIN_ALIKE: usize = 4;
+
+/// Makes unknown the known pixels of `work` outside `sky` whose range is off by more than
+/// [`UNLIKE_RATIO`] from the median of the known pixels of their own colour within
+/// [`max_gap`] of them: the background a scanner above and behind the camera sees past a
+/// nearer object's edge, projected onto the object's face (the projection has no
+/// occlusion test), and the object's points projected onto the background beside it. The
+/// ground receding and a face seen at a slant change slowly among points of one colour.
+/// Returns how many it dropped.
+pub(crate) fn drop_points_unlike_their_colour(
+    work: &mut [f32],
+    sky: &[bool],
+    guide: &ColourGuide,
+    (w, h): (usize, usize),
+) -> usize {
+    let (rx, ry) = (max_gap(h), max_gap(h) / 4);
+    let known = |p: usize| work[p].is_finite() && work[p] > 0.0 && !sky[p];
+    let unlike: Vec<usize> = crate::parallel::indices_in_order(w * h, |p| {
+        if !known(p) {
+            return false;
+        }
+        let (x, y) = (p % w, p / w);
+        let mut alike: Vec<f32> = Vec::new();
+        for qy in y.saturating_sub(ry)..(y + ry + 1).min(h) {
+            for qx in x.saturating_sub(rx)..(x + rx + 1).min(w) {
+                let q = qy * w + qx;
+                if q != p && known(q) && guide.own_colour(p, q) {
+                    alike.push(1.0 / work[q]);
+                }
+            }
+        }
+        if alike.len() < MIN_ALIKE {
+            return false;
+        }
+        let mid = alike.len() / 2;
+        let median = *alike.select_nth_unstable_by(mid, f32::total_cmp).1;
+        let own = 1.0 / work[p];
+        own * UNLIKE_RATIO < median || own > UNLIKE_RATIO * median
+    });
+    unlike.iter().for_each(|&p| work[p] = f32::NAN);
+    unlike.len()
+}
+
+/// Fills the `gaps` of `work` outside `sky` from the known pixels at their ends (see the
+/// module docs); `guide` splits a gap between two surfaces at its colour edge. Returns how
+/// many pixels it filled.
+pub(crate) fn fill_gaps(
+    work: &mut [f32],
+    gaps: &[bool],
+    sky: &[bool],
+    guide: Option<&ColourGuide>,
+    (w, h): (usize, usize),
+) -> usize {
+    let mut filled = 0;
+    for x in 0..w {
+        let mut y = 0;
+        while y < h {
+            if !gaps[y * w + x] {
+                y += 1;
+                continue;
+            }
+            let top = y;
+            while y < h && gaps[y * w + x] {
+                y += 1;
+            }
+            // A gap lies between two known pixels: `top - 1` and `y`.
+            let (above, below) = ((top - 1) * w + x, y * w + x);
+            let column = (top..y).map(|r| r * w + x);
+            let measured = |v: f32| v.is_finite() && v > 0.0;
+            if column.clone().any(|p| sky[p]) || !(measured(work[above]) && measured(work[below])) {
+                continue;
+            }
+            filled += fill_one(work, (above, below), column, guide);
+        }
+    }
+    filled
+}
+
+/// Fills one gap, `column`, between the known pixels `ends` (above, below); returns how many pixels it filled (0 when its ends are of two surfaces and there
+/// is no image to tell where one meets the other).
+fn fill_one(
+    work: &mut [f32],
+    (above, below): (usize, usize),
+    column: impl Iterator<Item = usize> + Clone,
+    guide: Option<&ColourGuide>,
+) -> usize {
+    let (a, b) = (work[above], work[below]);
+    let one_surface = a.max(b) <= SAME_SURFACE_RATIO * a.min(b);
+    let pixels: Vec<usize> = std::iter::once(above).chain(column).collect();
+    let edge = guide.filter(|_| !one_surface).and_then(|guide| {
+        let steps = pixels.iter().zip(pixels.iter().skip(1).chain([&below]));
+        let (k, step) = steps
+            .map(|(&p, &q)| guide.step(p, q))
+            .enumerate()
+            .max_by(|s, t| s.1.total_cmp(&t.1))?;
+        Some((k, guide.is_edge(step)))
+    });
+    match edge {
+        // Two surfaces: each keeps its side of the colour edge.
+        Some((k, true)) => {
+            for (i, &p) in pixels.iter().enumerate().skip(1) {
+                work[p] = if i <= k { a } else { b };
+            }
+        }
+        // One surface, or two the image does not tell apart: the ground near the horizon
+        // recedes by a factor of two and more from one line to the next.
+        Some((_, false)) => interpolate(work, &pixels[1..], a, b),
+        None if one_surface => interpolate(work, &pixels[1..], a, b),
+        None => return 0,
+    }
+    pixels.len() - 1
+}
+
+/// Fills `gap` (pixels down a column) between ends of range `a` (above) and `b` (below)
+/// linearly in 1/R.
+fn interpolate(work: &mut [f32], gap: &[usize], a: f32, b: f32) {
+    let (ia, ib) = (1.0 / a, 1.0 / b);
+    let rows = (gap.len() + 1) as f32;
+    for (k, &p) in gap.iter().enumerate() {
+        let t = (k + 1) as f32 / rows;
+        work[p] = 1.0 / (ia + t * (ib - ia));
+    }
+}
+
+#[cfg(test)]
+#[path = "scan_tests.rs"]
+mod tests;
