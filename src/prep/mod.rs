@@ -103,11 +103,12 @@
 //!
 //!    **Scan lines** (a LiDAR's map as KITTI stores it, see `scan.rs`): when most unknown
 //!    pixels lie in short runs down a column between two known ones, the depth rules read
-//!    those gaps as known (step 2), the scene beyond the reach is only what lies over the
-//!    scanner's top line, and a region reached below it counts as reached; here the known
-//!    pixels whose range is unlike that of their colour's round them go (the background
-//!    seen past an object's edge, [`PrepStats::scan_unlike`]) and each gap is filled from
-//!    its ends, in 1/R or split at the image's colour edge ([`PrepStats::scan_gaps`]).
+//!    what lies below the scanner's top line as known (step 2), the scene beyond the reach
+//!    is only what lies over it, and a region reached below it counts as reached; here the
+//!    known pixels whose range is unlike that of their colour's round them go (the
+//!    background seen past an object's edge, [`PrepStats::scan_unlike`]) and each gap is
+//!    filled from its ends, in 1/R or split at the image's colour edge
+//!    ([`PrepStats::scan_gaps`]).
 //! 4. **Border bands** ([`PrepOptions::border_band_fraction`], see `border.rs`) are filled
 //!    first, line by line from each border: a run of unknown pixels continues the surface
 //!    it meets, linearly in disparity, or is sky when it runs down from the top border

@@ -89,11 +89,12 @@ pub(crate) fn take_out_reached_in_part(
     beyond.retain(|&p| state[p] != 0);
 }
 
-/// One vertical run of pixels beyond the reach: column `x`, rows `top..end`.
-struct Run {
-    x: usize,
-    top: usize,
-    end: usize,
+/// One vertical run of pixels (beyond the reach, or a gap between scan lines): column
+/// `x`, rows `top..end`.
+pub(super) struct Run {
+    pub(super) x: usize,
+    pub(super) top: usize,
+    pub(super) end: usize,
 }
 
 impl Run {
@@ -530,7 +531,7 @@ fn sky_from_the_top(sky: &[bool], w: usize, h: usize) -> Vec<bool> {
 }
 
 /// The vertical runs of `mask`, column by column.
-fn runs_of(mask: &[bool], w: usize, h: usize) -> Vec<Run> {
+pub(super) fn runs_of(mask: &[bool], w: usize, h: usize) -> Vec<Run> {
     let mut runs = Vec::new();
     for x in 0..w {
         let mut y = 0;

@@ -90,8 +90,35 @@ impl ScanLines {
 /// The gaps between scan lines of `work` (unknown pixels NaN) and its top line, or `None`
 /// when the map is not scanned ([`SCANNED_SHARE`], [`SCANNED_UNKNOWN_SHARE`]).
 pub(crate) fn find_lines(work: &[f32], (w, h): (usize, usize)) -> Option<ScanLines> {
+    // Counted first: most maps are not scanned, and need no mask of their gaps.
+    let (in_gaps, below_first, known) = walk_gaps(work, (w, h), |_, _| {});
+    let sparse = below_first as f64 >= SCANNED_UNKNOWN_SHARE * (below_first + known) as f64;
+    let scanned = sparse && in_gaps as f64 >= SCANNED_SHARE * below_first as f64;
+    scanned.then(|| {
+        let mut gaps = vec![false; w * h];
+        walk_gaps(work, (w, h), |x, rows| {
+            rows.for_each(|y| gaps[y * w + x] = true)
+        });
+        let top: Vec<Option<usize>> = (0..w)
+            .map(|x| (0..h).find(|&y| work[y * w + x].is_finite()))
+            .collect();
+        ScanLines {
+            gaps,
+            own_top: top.iter().map(|t| t.unwrap_or(h)).collect(),
+            top_line: top_line(&top, h),
+        }
+    })
+}
+
+/// Calls `gap(x, rows)` for each gap of `work` down column `x`, and returns how many
+/// pixels lie in gaps, how many unknown and how many known ones lie below each column's
+/// first known pixel.
+fn walk_gaps(
+    work: &[f32],
+    (w, h): (usize, usize),
+    mut gap: impl FnMut(usize, std::ops::Range<usize>),
+) -> (usize, usize, usize) {
     let longest = max_gap(h);
-    let mut gaps = vec![false; w * h];
     let (mut in_gaps, mut below_first, mut known) = (0usize, 0usize, 0usize);
     for x in 0..w {
         let mut last_known: Option<usize> = None;
@@ -102,24 +129,13 @@ pub(crate) fn find_lines(work: &[f32], (w, h): (usize, usize)) -> Option<ScanLin
             }
             known += usize::from(last_known.is_some());
             if let Some(above) = last_known.filter(|&a| y - a > 1 && y - a - 1 <= longest) {
-                (above + 1..y).for_each(|g| gaps[g * w + x] = true);
+                gap(x, above + 1..y);
                 in_gaps += y - above - 1;
             }
             last_known = Some(y);
         }
     }
-    let sparse = below_first as f64 >= SCANNED_UNKNOWN_SHARE * (below_first + known) as f64;
-    let scanned = sparse && in_gaps as f64 >= SCANNED_SHARE * below_first as f64;
-    scanned.then(|| {
-        let top: Vec<Option<usize>> = (0..w)
-            .map(|x| (0..h).find(|&y| work[y * w + x].is_finite()))
-            .collect();
-        ScanLines {
-            gaps,
-            own_top: top.iter().map(|t| t.unwrap_or(h)).collect(),
-            top_line: top_line(&top, h),
-        }
-    })
+    (in_gaps, below_first, known)
 }
 
 /// Each column's top line ([`ScanLines::top_line`]) from its topmost known row `top`; `h`
@@ -208,26 +224,16 @@ pub(crate) fn fill_gaps(
     (w, h): (usize, usize),
 ) -> usize {
     let mut filled = 0;
-    for x in 0..w {
-        let mut y = 0;
-        while y < h {
-            if !gaps[y * w + x] {
-                y += 1;
-                continue;
-            }
-            let top = y;
-            while y < h && gaps[y * w + x] {
-                y += 1;
-            }
-            // A gap lies between two known pixels: `top - 1` and `y`.
-            let (above, below) = ((top - 1) * w + x, y * w + x);
-            let column = (top..y).map(|r| r * w + x);
-            let measured = |v: f32| v.is_finite() && v > 0.0;
-            if column.clone().any(|p| sky[p]) || !(measured(work[above]) && measured(work[below])) {
-                continue;
-            }
-            filled += fill_one(work, (above, below), column, guide);
+    for run in super::reach::runs_of(gaps, w, h) {
+        // A gap lies between two known pixels: `top - 1` and `end`.
+        let (x, top, end) = (run.x, run.top, run.end);
+        let (above, below) = ((top - 1) * w + x, end * w + x);
+        let column = (top..end).map(|r| r * w + x);
+        let measured = |v: f32| v.is_finite() && v > 0.0;
+        if column.clone().any(|p| sky[p]) || !(measured(work[above]) && measured(work[below])) {
+            continue;
         }
+        filled += fill_one(work, (above, below), column, guide);
     }
     filled
 }

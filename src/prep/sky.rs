@@ -1,4 +1,6 @@
-//! Sky from the range alone (the depth rules): which components of unknown pixels are sky.
+//! Sky from the range alone (the depth rules): which components of unknown pixels are sky;
+//! and the sky pre-processing settles on ([`find_sky`]): the user's mask, the depth rules,
+//! or the depth rules joined by the image-guided detector.
 
 use super::components::{label_mask, Component, Components};
 use super::scan::ScanLines;
