@@ -174,11 +174,12 @@ const MIN_ALIKE: usize = 4;
 
 /// Makes unknown the known pixels of `work` outside `sky` whose range is off by more than
 /// [`UNLIKE_RATIO`] from the median of the known pixels of their own colour within
-/// [`max_gap`] of them: the background a scanner above and behind the camera sees past a
-/// nearer object's edge, projected onto the object's face (the projection has no
-/// occlusion test), and the object's points projected onto the background beside it. The
-/// ground receding and a face seen at a slant change slowly among points of one colour.
-/// Returns how many it dropped.
+/// [`max_gap`] of them along the row (a quarter of that up and down: the range of the
+/// ground near the horizon changes fast down the rows): the background a scanner above
+/// and behind the camera sees past a nearer object's edge, projected onto the object's
+/// face (the projection has no occlusion test), and the object's points projected onto
+/// the background beside it. The ground receding and a face seen at a slant change slowly
+/// along a row among points of one colour. Returns how many it dropped.
 pub(crate) fn drop_points_unlike_their_colour(
     work: &mut [f32],
     sky: &[bool],
@@ -238,8 +239,9 @@ pub(crate) fn fill_gaps(
     filled
 }
 
-/// Fills one gap, `column`, between the known pixels `ends` (above, below); returns how many pixels it filled (0 when its ends are of two surfaces and there
-/// is no image to tell where one meets the other).
+/// Fills one gap, `column`, between the known pixels `ends` (above, below); returns how
+/// many pixels it filled (0 when its ends are of two surfaces and there is no image to
+/// tell where one meets the other).
 fn fill_one(
     work: &mut [f32],
     (above, below): (usize, usize),
