@@ -54,7 +54,7 @@ fn range(x: u32, y: u32, z: f64) -> f64 {
 }
 
 /// What the scanner stored: its lines, one return in ten dropped, nothing beyond its
-/// reach; on the box's four left columns below the horizon, the road behind the box.
+/// reach; on the box's two left columns below the horizon, the road behind the box.
 fn scanned(x: u32, y: u32) -> u16 {
     if y < TOP_LINE || !(y - TOP_LINE).is_multiple_of(LINES) || (x * 7 + y * 13).is_multiple_of(10)
     {
@@ -114,15 +114,6 @@ fn scan_lines_are_filled_between_and_the_box_goes_on_above_the_top_line() {
     let n = errors.len() as f64;
     let mean = errors.iter().sum::<f64>() / n;
     let off = errors.iter().filter(|&&e| e > 0.05).count() as f64 / n;
-    eprintln!(
-        "DBG mean {mean} off {off} stats {:?}",
-        (
-            stats.scan_gaps,
-            stats.scan_unlike,
-            stats.holes,
-            stats.beyond_reach
-        )
-    );
     assert!(mean < 0.01, "mean |ln(R / R_true)| {mean}");
     assert!(
         off < 0.01,
