@@ -26,10 +26,11 @@ brume makes of it.
    edges, surfaces above the top beam, and the pixels a point of the background reached
    past a nearer surface (the projected depth over 1.5 times the truth).
 4. Foggy images (β, default airlight and λ) from the truth and from the scan with each
-   mode, side by side with the scan.
+   mode, two by two (the truth and none above, guided and repair below), and the scan.
 
 Outputs (in OUT_DIR): left.png, left_z.pfm, lidar_view_z.pfm, lidar.png (the KITTI map),
-err_*.png (|τ error| × 4), fog_*.png, fog_side_by_side.png, results.json.
+truth_kitti.png, scan.png (the known pixels, nearer brighter), err_*.png (|τ error| × 4),
+fog_*.png, fog_side_by_side.png, results.json.
 
 Usage (from the repository root, after ``cargo build --release --bin brume``):
 
@@ -191,9 +192,7 @@ def main():
     results["tau_abs_error"] = errors
 
     # 4. Foggy images.
-    with open(o("truth_camera.json"), "w") as fh:
-        json.dump({"extrinsic": {"baseline": 0.5}, "intrinsic": {"fx": F, "fy": F, "u0": cx,
-                                                                  "v0": cy}}, fh)
+    # The truth as a KITTI map (depths past 256 m stored as 256 m, the format's largest).
     truth_z = np.where(sky, 0, np.clip(np.round(256.0 * z), 1, 65535)).astype(np.uint16)
     cv2.imwrite(o("truth_kitti.png"), truth_z)
     sheet = []
@@ -215,7 +214,7 @@ def main():
     print(f"scene {W}x{H}, fov {a.fov}°, F = {F:.1f} px, beta {a.beta}/m; scan: {a.beams} "
           f"beams {a.top}°..{a.bottom}°, {known.mean():.1%} of pixels known, "
           f"{int(past_edge.sum())} px of background seen past a nearer edge")
-    print_error_table(42, list(errors), {k: v for k, v in errors.items()}, masks)
+    print_error_table(42, list(errors), errors, masks)
 
 
 if __name__ == "__main__":
