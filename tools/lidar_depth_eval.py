@@ -54,8 +54,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stereo_refine_eval import (  # noqa: E402
-    cv2, near_edges, print_error_table, read_pfm, run, stats, tau_from_two_airlights,
-    truth_from_zbuffer)
+    add_scene_arguments, cv2, near_edges, print_error_table, run, stats,
+    tau_from_two_airlights, truth_from_zbuffer)
 
 
 def scan(a, z_lidar, F_lidar, rng):
@@ -98,15 +98,7 @@ def project_kitti(points_cam, F, W, H):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("out_dir")
-    ap.add_argument("--brume", default="target/release/brume")
-    ap.add_argument("--size", default="1024x512")
-    ap.add_argument("--fov", type=float, default=45.0)
-    ap.add_argument("--near", type=float, default=2.0)
-    ap.add_argument("--far", type=float, default=1000.0)
-    ap.add_argument("--beta", type=float, default=0.02)
-    ap.add_argument("--position", default="0,1.7,0")
-    ap.add_argument("--yaw", type=float, default=0.0)
+    add_scene_arguments(ap)
     ap.add_argument("--beams", type=int, default=64)
     ap.add_argument("--top", type=float, default=2.0, help="top beam's elevation, degrees")
     ap.add_argument("--bottom", type=float, default=-24.8, help="bottom beam's, degrees")

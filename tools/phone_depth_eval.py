@@ -78,8 +78,8 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stereo_refine_eval import (  # noqa: E402
-    cv2, near_edges, print_error_table, read_pfm, run, stats, tau_from_two_airlights,
-    truth_from_zbuffer)
+    add_scene_arguments, cv2, near_edges, print_error_table, read_pfm, run, stats,
+    tau_from_two_airlights, truth_from_zbuffer)
 
 MODES = ("none", "guided", "unreliable", "repair")
 # The most each format holds, in metres: 16 and 13 bits of millimetres (GDepth: --gdepth-far).
@@ -257,9 +257,7 @@ def render_scene(a, W, H, colour_path, zbuffer_path):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("out_dir")
-    ap.add_argument("--brume", default="target/release/brume")
-    ap.add_argument("--size", default="1024x512")
+    add_scene_arguments(ap)
     ap.add_argument("--format", choices=sorted(REACH_M), default="arcore")
     ap.add_argument("--factor", type=int, default=8, help="the phone depth is this much smaller")
     ap.add_argument("--gdepth-far", type=float, default=10.0,
@@ -267,7 +265,6 @@ def main():
                          "Far); the sky and what lies beyond are at it")
     ap.add_argument("--gdepth-mime", choices=["png", "jpeg"], default="png",
                     help="--format gdepth: the depth image's codec (jpeg: quality 95, lossy)")
-    ap.add_argument("--fov", type=float, default=45.0)
     ap.add_argument("--camera-from", choices=["flag", "exif", "none"], default="flag",
                     help="how brume learns the field of view that turns depth into range: "
                          "flag (--fov), exif (as a phone writes the photo: its "
@@ -275,11 +272,6 @@ def main():
                          "the mm, and Orientation 6 with the photo and its depth stored "
                          "turned; written by ExifTool), none (depth used as range). "
                          "apple-depth carries its IntrinsicMatrix: no --fov in any case")
-    ap.add_argument("--near", type=float, default=2.0)
-    ap.add_argument("--far", type=float, default=1000.0)
-    ap.add_argument("--beta", type=float, default=0.02)
-    ap.add_argument("--position", default="0,1.7,0")
-    ap.add_argument("--yaw", type=float, default=0.0)
     ap.add_argument("--pitch", type=float, default=0.0)
     ap.add_argument("--roll", type=float, default=0.0,
                     help="the camera turned about its axis (degrees, positive counter-clockwise)")

@@ -158,8 +158,9 @@ def stats(err, mask):
     return (float(e.mean()), float(np.percentile(e, 95)), int(e.size))
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+def add_scene_arguments(ap):
+    """The options every evaluation on brume's rendered scene takes: where it writes, the
+    brume binary, the frame, its z-buffer's planes, the fog's β and the camera's place."""
     ap.add_argument("out_dir")
     ap.add_argument("--brume", default="target/release/brume")
     ap.add_argument("--size", default="1024x512")
@@ -167,10 +168,15 @@ def main():
     ap.add_argument("--near", type=float, default=2.0,
                     help="near plane (m): large enough for a fine z-buffer far away")
     ap.add_argument("--far", type=float, default=1000.0)
-    ap.add_argument("--baseline", type=float, default=0.5, help="metres (= scene units)")
     ap.add_argument("--beta", type=float, default=0.02)
     ap.add_argument("--position", default="0,1.7,0")
     ap.add_argument("--yaw", type=float, default=0.0)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    add_scene_arguments(ap)
+    ap.add_argument("--baseline", type=float, default=0.5, help="metres (= scene units)")
     ap.add_argument("--pitch", type=float, default=0.0)
     ap.add_argument("--num-disparities", type=int, default=None,
                     help="SGBM search range, px, a multiple of 16 [144 per 1024 px of width]")
