@@ -216,9 +216,10 @@ fn real_aloe_pair_truth_fails_far_less_than_a_shifted_truth() {
     let failed = |depth: &str| {
         let depth = dir.path().join(depth);
         let opts = DepthOptions::default();
-        let mut photo = Photo::load(&dir.path().join("left.png"), &depth, &opts).unwrap();
+        let (mut photo, disparity) =
+            Photo::load_stereo(&dir.path().join("left.png"), &depth, &opts).unwrap();
         photo
-            .drop_left_right_mismatches(&depth, &opts, &dir.path().join("right.png"))
+            .drop_left_right_mismatches(disparity.as_ref(), &dir.path().join("right.png"))
             .unwrap()
     };
     let (truth, shifted) = (failed("truth.png"), failed("shifted.png"));
@@ -239,9 +240,10 @@ fn real_aloe_pair_truth_fails_far_less_than_a_shifted_truth() {
     // Read the wrong way round (the right image as the left view), most pixels fail.
     let opts = DepthOptions::default();
     let truth_path = dir.path().join("truth.png");
-    let mut swapped = Photo::load(&dir.path().join("right.png"), &truth_path, &opts).unwrap();
+    let (mut swapped, disparity) =
+        Photo::load_stereo(&dir.path().join("right.png"), &truth_path, &opts).unwrap();
     let check = swapped
-        .drop_left_right_mismatches(&truth_path, &opts, &dir.path().join("left.png"))
+        .drop_left_right_mismatches(disparity.as_ref(), &dir.path().join("left.png"))
         .unwrap();
     assert!(check.mostly_failed(), "{check:?}");
 }

@@ -156,9 +156,15 @@ pub fn load_scene(args: &RenderArgs) -> Result<Scene> {
         }
         (Some(image_path), Some(depth_path)) => {
             let opts = depth_options(&args.depth);
-            let mut scene = Scene::load(image_path, depth_path, &opts)?;
+            // The left-right check reads the disparity as stored, decoded with the range.
+            let (mut scene, disparity) = match args.right {
+                Some(_) => Scene::load_stereo(image_path, depth_path, &opts)?,
+                None => (Scene::load(image_path, depth_path, &opts)?, None),
+            };
             check_metric(args, &scene)?;
-            super::refine::drop_left_right_mismatches(args, &opts, &mut scene)?;
+            if let Some(right) = &args.right {
+                super::refine::drop_left_right_mismatches(&mut scene, disparity.as_ref(), right)?;
+            }
             show_depth_notes(depth_path, &mut scene.depth);
             Ok(scene)
         }

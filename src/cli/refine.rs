@@ -4,29 +4,28 @@
 //! references (see `brume::refine`).
 
 use super::args::{RefineArgs, RenderArgs};
-use brume::io::depth::{DepthFormat, DepthOptions};
+use brume::io::depth::DepthFormat;
 use brume::photo::{Photo as Scene, PreparedPhoto as PrepReport};
+use brume::raster::ScalarMap;
 use brume::refine::{RangeFilter, RefineMode, RefineOptions, RefinePlan};
 use brume::{Error, Refine, Result};
+use std::path::Path;
 use std::time::Instant;
 
-/// With a right image (`--right`), takes the disparities that fail the left-right check
-/// as unknown ([`Scene::drop_left_right_mismatches`]), with a warning when most failed.
+/// Takes the disparities that fail the left-right check against `right` (`--right`) as
+/// unknown ([`Scene::drop_left_right_mismatches`]), with a warning when most failed.
 pub fn drop_left_right_mismatches(
-    args: &RenderArgs,
-    opts: &DepthOptions,
     scene: &mut Scene,
+    disparity: Option<&ScalarMap>,
+    right: &Path,
 ) -> Result<()> {
-    let (Some(right), Some(depth)) = (&args.right, &args.depth.depth) else {
-        return Ok(());
-    };
-    let check = scene.drop_left_right_mismatches(depth, opts, right)?;
+    let check = scene.drop_left_right_mismatches(disparity, right)?;
     if check.mostly_failed() {
         log::warn!(
             "{}: {} of {} px failed the left-right check against {}: is that the pair's \
              other view, is this the {} view's disparity (--stereo-view), and in the \
              image's pixels?",
-            depth.display(),
+            scene.depth_name,
             check.failed,
             check.checked,
             right.display(),

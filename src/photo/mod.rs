@@ -115,6 +115,27 @@ impl Photo {
     /// The image is turned upright by its EXIF orientation and the depth map with it
     /// ([`DepthOptions::layout`] says how the map lies; `opts.photo` is set here).
     pub fn load(image_path: &Path, depth_path: &Path, opts: &DepthOptions) -> Result<Photo> {
+        Photo::load_keeping(image_path, depth_path, opts, false).map(|(photo, _)| photo)
+    }
+
+    /// [`Photo::load`], and where the depth is a stereo pair's disparity, that disparity in
+    /// pixels as the file stores it ([`depth::load_range_and_disparity`], the file decoded
+    /// once), for [`Photo::drop_left_right_mismatches`]; `None` for other depth maps.
+    pub fn load_stereo(
+        image_path: &Path,
+        depth_path: &Path,
+        opts: &DepthOptions,
+    ) -> Result<(Photo, Option<ScalarMap>)> {
+        Photo::load_keeping(image_path, depth_path, opts, true)
+    }
+
+    /// [`Photo::load`], with the disparity in pixels too when `disparity` asks for it.
+    fn load_keeping(
+        image_path: &Path,
+        depth_path: &Path,
+        opts: &DepthOptions,
+        disparity: bool,
+    ) -> Result<(Photo, Option<ScalarMap>)> {
         let image::UprightPhoto {
             image,
             exif,
@@ -129,16 +150,21 @@ impl Photo {
             )),
             ..opts.clone()
         };
+        let (depth, disparity_px) = if disparity {
+            depth::load_range_and_disparity(depth_path, &opts)?
+        } else {
+            (depth::load_range(depth_path, &opts)?, None)
+        };
         let photo = Photo {
             image,
-            depth: depth::load_range(depth_path, &opts)?,
+            depth,
             image_name: image_path.display().to_string(),
             depth_name: depth_path.display().to_string(),
             exif,
             metadata,
         };
         photo.check_depth_fits()?;
-        Ok(photo)
+        Ok((photo, disparity_px))
     }
 
     /// A photo from arrays: `image` linear RGB and `range_m` the distance from the camera
@@ -301,9 +327,9 @@ impl Photo {
     /// `right`, the stereo pair's other image ([`crate::prep::stereo`]): the right one for a
     /// left view's disparity, the left one for a right view's
     /// ([`LoadedDepth::stereo_view`], checked mirrored), as unknown, for pre-processing to
-    /// fill from reliable neighbours; the depth's notes say how many. The disparity is read
-    /// again in pixels from `depth_path` with `opts`, as [`Photo::load`] read it
-    /// ([`depth::load_disparity_px`]: any stereo disparity, of the image's size).
+    /// fill from reliable neighbours; the depth's notes say how many. `disparity` is the
+    /// depth's disparity in pixels as [`Photo::load_stereo`] returned it with this photo
+    /// (any stereo disparity, of the image's size; `None` for a depth that holds none).
     /// Returns how many pixels failed. Errors name `right`: a depth that holds no stereo
     /// disparity ([`LoadedDepth::not_a_stereo_disparity`]), a disparity or a right image
     /// of another size than the image. Only when asked for: on brume's scene and on
@@ -311,21 +337,25 @@ impl Photo {
     /// τ worse (README, "Real depth").
     pub fn drop_left_right_mismatches(
         &mut self,
-        depth_path: &Path,
-        opts: &DepthOptions,
+        disparity: Option<&ScalarMap>,
         right: &Path,
     ) -> Result<LeftRightCheck> {
-        if let Some(why) = self.depth.not_a_stereo_disparity() {
-            return Err(Error::invalid(
+        let not_a_disparity = |why: String| {
+            Error::invalid(
                 "right",
                 right.display(),
                 format!(
                     "a stereo pair's disparity as the depth with it ({}: {why})",
-                    depth_path.display()
+                    self.depth_name
                 ),
-            ));
+            )
+        };
+        if let Some(why) = self.depth.not_a_stereo_disparity() {
+            return Err(not_a_disparity(why));
         }
-        let disparity = depth::load_disparity_px(depth_path, opts, &self.depth)?;
+        let disparity = disparity.ok_or_else(|| {
+            not_a_disparity("its disparity in pixels was not given with it".into())
+        })?;
         let (w, h) = (self.image.width(), self.image.height());
         if (disparity.width(), disparity.height()) != (w, h) {
             return Err(Error::invalid(
@@ -334,7 +364,7 @@ impl Photo {
                 format!(
                     "a disparity of the image's size, {w}x{h}, as the depth with it ({} is \
                      {}x{})",
-                    depth_path.display(),
+                    self.depth_name,
                     disparity.width(),
                     disparity.height()
                 ),
@@ -344,7 +374,7 @@ impl Photo {
         let bad = crate::prep::stereo::mismatches_of_view(
             &self.image,
             &right_image,
-            &disparity,
+            disparity,
             self.depth.stereo_view,
             crate::prep::stereo::DEFAULT_THRESHOLD,
         )
