@@ -94,13 +94,24 @@ pub(crate) fn filter_in_order<T: Copy + Send + Sync>(
 /// The indices below `len` that `keep` keeps, in order, tested as [`filter_in_order`]
 /// tests.
 pub(crate) fn indices_in_order(len: usize, keep: impl Fn(usize) -> bool + Sync) -> Vec<usize> {
+    indices_in_order_with(len, || (), |_, i| keep(i))
+}
+
+/// [`indices_in_order`] with a scratch value from `init` that `keep` may reuse from one
+/// index to the next: one per piece, rather than an allocation per index.
+pub(crate) fn indices_in_order_with<S>(
+    len: usize,
+    init: impl Fn() -> S + Sync,
+    keep: impl Fn(&mut S, usize) -> bool + Sync,
+) -> Vec<usize> {
     use rayon::prelude::*;
-    let keep = &keep;
+    let (init, keep) = (&init, &keep);
     (0..len.div_ceil(FILTER_PIECE))
         .into_par_iter()
         .flat_map_iter(|c| {
             let piece = c * FILTER_PIECE..len.min((c + 1) * FILTER_PIECE);
-            piece.filter(move |&i| keep(i))
+            let mut scratch = init();
+            piece.filter(move |&i| keep(&mut scratch, i))
         })
         .collect()
 }

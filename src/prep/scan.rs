@@ -188,12 +188,12 @@ pub(crate) fn drop_points_unlike_their_colour(
 ) -> usize {
     let (rx, ry) = (max_gap(h), max_gap(h) / 4);
     let known = |p: usize| work[p].is_finite() && work[p] > 0.0 && !sky[p];
-    let unlike: Vec<usize> = crate::parallel::indices_in_order(w * h, |p| {
+    let unlike: Vec<usize> = crate::parallel::indices_in_order_with(w * h, Vec::new, |alike, p| {
         if !known(p) {
             return false;
         }
         let (x, y) = (p % w, p / w);
-        let mut alike: Vec<f32> = Vec::new();
+        alike.clear();
         for qy in y.saturating_sub(ry)..(y + ry + 1).min(h) {
             for qx in x.saturating_sub(rx)..(x + rx + 1).min(w) {
                 let q = qy * w + qx;
