@@ -8,8 +8,11 @@
 //! the top beam is never the scene beyond the sensor's reach, and the holes between lines
 //! are long strips that one surface fills along the row (a streak of a box's range over
 //! the ground beside it). So the lines are found first ([`find_lines`]): gaps, unknown
-//! runs down a column between two known pixels no more than [`max_gap`] rows apart, and
-//! the top line. The depth rules read every unknown pixel below the top line as known
+//! runs down a column between two pixels on lines no more than [`max_gap`] rows apart, and
+//! the top line. A real scanner's line is a row of dots 2 to 4 px apart, most columns
+//! missing it, so a pixel within [`dot_reach`] of a known one along its row lies on the
+//! line ([`on_lines`]), and a line's dots are joined along the row ([`join_dots`]) before
+//! the gaps down the columns are filled. The depth rules read every unknown pixel below the top line as known
 //! ([`ScanLines::closed`]); the scene beyond the reach is only what lies over it
 //! ([`ScanLines::keep_beyond_reach_over_line`]). Once the outliers are gone, the points
 //! unlike the points of their colour round them go
@@ -87,16 +90,43 @@ impl ScanLines {
     }
 }
 
+/// The points of one line lie at most this many pixels apart along a row, twice this
+/// and one in images this wide (in pixels) and more: KITTI's HDL-64E returns a point
+/// every 0.08° to 0.35° of azimuth, 1 to 4 px at its focal length of 721 px in 1242
+/// columns, a line's dots 2 to 3 px apart on the road and more where a return is lost.
+const DOT_REACH_WIDTH: f64 = 600.0;
+/// See [`DOT_REACH_WIDTH`]: the fewest pixels a line's dots may be apart.
+const MIN_DOT_REACH: usize = 2;
+
+/// How far from a line's dot along its row a pixel lies on the line.
+fn dot_reach(width: usize) -> usize {
+    ((width as f64 / DOT_REACH_WIDTH).round() as usize).max(MIN_DOT_REACH)
+}
+
+/// Which pixels of `work` lie on a scan line: known, or within [`dot_reach`] of a known
+/// pixel along the row (a line of a scanner's dots, not every column crossed).
+fn on_lines(work: &[f32], (w, h): (usize, usize)) -> Vec<bool> {
+    let reach = dot_reach(w);
+    let mut on = vec![false; w * h];
+    for (row, on) in work.chunks_exact(w).zip(on.chunks_exact_mut(w)) {
+        for x in (0..w).filter(|&x| row[x].is_finite()) {
+            on[x.saturating_sub(reach)..(x + reach + 1).min(w)].fill(true);
+        }
+    }
+    on
+}
+
 /// The gaps between scan lines of `work` (unknown pixels NaN) and its top line, or `None`
 /// when the map is not scanned ([`SCANNED_SHARE`], [`SCANNED_UNKNOWN_SHARE`]).
 pub(crate) fn find_lines(work: &[f32], (w, h): (usize, usize)) -> Option<ScanLines> {
+    let on = on_lines(work, (w, h));
     // Counted first: most maps are not scanned, and need no mask of their gaps.
-    let (in_gaps, below_first, known) = walk_gaps(work, (w, h), |_, _| {});
+    let (in_gaps, below_first, known) = walk_gaps(&on, (w, h), |_, _| {});
     let sparse = below_first as f64 >= SCANNED_UNKNOWN_SHARE * (below_first + known) as f64;
     let scanned = sparse && in_gaps as f64 >= SCANNED_SHARE * below_first as f64;
     scanned.then(|| {
         let mut gaps = vec![false; w * h];
-        walk_gaps(work, (w, h), |x, rows| {
+        walk_gaps(&on, (w, h), |x, rows| {
             rows.for_each(|y| gaps[y * w + x] = true)
         });
         let top: Vec<Option<usize>> = (0..w)
@@ -110,11 +140,11 @@ pub(crate) fn find_lines(work: &[f32], (w, h): (usize, usize)) -> Option<ScanLin
     })
 }
 
-/// Calls `gap(x, rows)` for each gap of `work` down column `x`, and returns how many
-/// pixels lie in gaps, how many unknown and how many known ones lie below each column's
-/// first known pixel.
+/// Calls `gap(x, rows)` for each gap between the pixels `on` a line down column `x`, and
+/// returns how many pixels lie in gaps, how many off and how many on a line lie below each
+/// column's first pixel on one.
 fn walk_gaps(
-    work: &[f32],
+    on: &[bool],
     (w, h): (usize, usize),
     mut gap: impl FnMut(usize, std::ops::Range<usize>),
 ) -> (usize, usize, usize) {
@@ -123,7 +153,7 @@ fn walk_gaps(
     for x in 0..w {
         let mut last_known: Option<usize> = None;
         for y in 0..h {
-            if work[y * w + x].is_nan() {
+            if !on[y * w + x] {
                 below_first += usize::from(last_known.is_some());
                 continue;
             }
@@ -215,8 +245,9 @@ pub(crate) fn drop_points_unlike_their_colour(
 }
 
 /// Fills the `gaps` of `work` outside `sky` from the known pixels at their ends (see the
-/// module docs); `guide` splits a gap between two surfaces at its colour edge. Returns how
-/// many pixels it filled.
+/// module docs), once each line's dots are joined along their rows ([`join_dots`]);
+/// `guide` splits a gap between two surfaces at its colour edge. Returns how many pixels
+/// it filled.
 pub(crate) fn fill_gaps(
     work: &mut [f32],
     gaps: &[bool],
@@ -224,7 +255,7 @@ pub(crate) fn fill_gaps(
     guide: Option<&ColourGuide>,
     (w, h): (usize, usize),
 ) -> usize {
-    let mut filled = 0;
+    let mut filled = join_dots(work, sky, guide, (w, h));
     for run in super::reach::runs_of(gaps, w, h) {
         // A gap lies between two known pixels: `top - 1` and `end`.
         let (x, top, end) = (run.x, run.top, run.end);
@@ -239,9 +270,37 @@ pub(crate) fn fill_gaps(
     filled
 }
 
-/// Fills one gap, `column`, between the known pixels `ends` (above, below); returns how
-/// many pixels it filled (0 when its ends are of two surfaces and there is no image to
-/// tell where one meets the other).
+/// Fills the unknown pixels between two known dots of a line along its row, no more than
+/// twice [`dot_reach`] apart and with nothing but unknown pixels (no sky, nothing beyond
+/// the reach) between them, as [`fill_gaps`] fills a gap down a column. Returns how many
+/// pixels it filled.
+fn join_dots(
+    work: &mut [f32],
+    sky: &[bool],
+    guide: Option<&ColourGuide>,
+    (w, h): (usize, usize),
+) -> usize {
+    let longest = 2 * dot_reach(w);
+    let measured = |v: f32| v.is_finite() && v > 0.0;
+    let mut filled = 0;
+    for y in 0..h {
+        let row = y * w..(y + 1) * w;
+        let dots: Vec<usize> = row.filter(|&p| measured(work[p]) && !sky[p]).collect();
+        for pair in dots.windows(2) {
+            let (left, right) = (pair[0], pair[1]);
+            let between = left + 1..right;
+            let open = between.clone().all(|p| work[p].is_nan() && !sky[p]);
+            if !between.is_empty() && between.len() <= longest && open {
+                filled += fill_one(work, (left, right), between, guide);
+            }
+        }
+    }
+    filled
+}
+
+/// Fills one gap, `column` (or a run along a row), between the known pixels `ends` (above,
+/// below; left, right); returns how many pixels it filled (0 when its ends are of two
+/// surfaces and there is no image to tell where one meets the other).
 fn fill_one(
     work: &mut [f32],
     (above, below): (usize, usize),

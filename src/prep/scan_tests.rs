@@ -35,6 +35,40 @@ fn lines_a_few_rows_apart_are_found_and_blobs_are_not() {
     assert!(find_lines(&blob, (W, H)).is_none());
 }
 
+#[test]
+fn dotted_lines_are_found_and_their_gaps_filled() {
+    // KITTI's lines are dots two to four pixels apart, each line's dots at other columns
+    // (here every third column, shifted by one from line to line): down most columns a
+    // line is missing, and the runs between the known pixels are three times as long.
+    let w = 30;
+    let map: Vec<f32> = (0..w * H)
+        .map(|p| {
+            let (x, y) = (p % w, p / w);
+            match y % 4 == 0 && x % 3 == (y / 4) % 3 {
+                true => ground(y),
+                false => f32::NAN,
+            }
+        })
+        .collect();
+    let mut work = map.clone();
+    let gaps = find_lines(&work, (w, H)).expect("scanned").gaps;
+    let image = RgbImage::from_fn(w, H, |_, _| [0.1, 0.5, 0.1]);
+    let guide = ColourGuide::new(&image, 0.08);
+    fill_gaps(&mut work, &gaps, &vec![false; w * H], Some(&guide), (w, H));
+    // Every pixel between the first and the last line, but beside the first and the last
+    // dot of a row (no dot beyond them to join), is the ground's range.
+    for p in (0..w * H).filter(|&p| p / w <= 36 && (3..w - 3).contains(&(p % w))) {
+        let want = ground(p / w);
+        assert!(
+            (work[p] / want - 1.0).abs() < 1e-5,
+            "({}, {}): {} for {want}",
+            p % w,
+            p / w,
+            work[p]
+        );
+    }
+}
+
 /// The ground seen by a level camera: 1/R grows linearly down the rows below the horizon
 /// (row -2 here), as any plane's inverse depth does.
 fn ground(y: usize) -> f32 {
