@@ -90,13 +90,14 @@ impl ScanLines {
     }
 }
 
-/// The points of one line lie at most this many pixels apart along a row, twice this
-/// and one in images this wide (in pixels) and more: KITTI's HDL-64E returns a point
+/// A pixel lies on a line within one pixel in this many of the image's width of one of
+/// its dots, along the row ([`MIN_DOT_REACH`] at least): KITTI's HDL-64E returns a point
 /// every 0.08° to 0.35° of azimuth, 1 to 4 px at its focal length of 721 px in 1242
-/// columns, a line's dots 2 to 3 px apart on the road and more where a return is lost.
-const DOT_REACH_WIDTH: f64 = 600.0;
-/// See [`DOT_REACH_WIDTH`]: the fewest pixels a line's dots may be apart.
-const MIN_DOT_REACH: usize = 2;
+/// columns, its dots 2 to 4 px apart on the road and twice that where one is lost; within
+/// 3 px of a dot, a line whose dots are up to 7 px apart leaves no column off it.
+const DOT_REACH_WIDTH: f64 = 400.0;
+/// See [`DOT_REACH_WIDTH`]: the least reach, in pixels.
+const MIN_DOT_REACH: usize = 3;
 
 /// How far from a line's dot along its row a pixel lies on the line.
 fn dot_reach(width: usize) -> usize {
