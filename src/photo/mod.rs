@@ -129,12 +129,12 @@ impl Photo {
         Photo::load_keeping(image_path, depth_path, opts, true)
     }
 
-    /// [`Photo::load`], with the disparity in pixels too when `disparity` asks for it.
+    /// [`Photo::load`], with the disparity in pixels too when `keep_disparity` asks for it.
     fn load_keeping(
         image_path: &Path,
         depth_path: &Path,
         opts: &DepthOptions,
-        disparity: bool,
+        keep_disparity: bool,
     ) -> Result<(Photo, Option<ScalarMap>)> {
         let image::UprightPhoto {
             image,
@@ -150,7 +150,7 @@ impl Photo {
             )),
             ..opts.clone()
         };
-        let (depth, disparity_px) = if disparity {
+        let (depth, disparity_px) = if keep_disparity {
             depth::load_range_and_disparity(depth_path, &opts)?
         } else {
             (depth::load_range(depth_path, &opts)?, None)
