@@ -498,7 +498,9 @@ fn prepare_on_pool(range: &ScalarMap, guides: Guides, opts: &PrepOptions) -> Res
     let scan_lines = scan::find_lines(&work, (w, h));
     let mut found = sky::find_sky(&work, scan_lines.as_ref(), (w, h), guides, opts);
     if let Some(lines) = &scan_lines {
-        lines.keep_beyond_reach_over_line(&mut found.beyond_reach);
+        // The image or a mask found the sky: what is left over the line is the scene.
+        let sky_seen = matches!(found.method, SkyMethod::DepthAndImage | SkyMethod::Mask);
+        lines.keep_beyond_reach_over_line(&mut found.beyond_reach, sky_seen);
     }
     let mut sky = found.sky;
     stats.sky_method = found.method;

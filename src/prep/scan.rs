@@ -12,8 +12,9 @@
 //! the top line. A real scanner's line is a row of dots 2 to 4 px apart, most columns
 //! missing it, so a pixel within [`dot_reach`] of a known one along its row lies on the
 //! line ([`on_lines`]), and a line's dots are joined along the row ([`join_dots`]) before
-//! the gaps down the columns are filled. The depth rules read every unknown pixel below the top line as known
-//! ([`ScanLines::closed`]); the scene beyond the reach is only what lies over it
+//! the gaps down the columns are filled. The depth rules read every unknown pixel below
+//! the top line as known ([`ScanLines::closed`]); the scene beyond the reach is only what
+//! lies over it
 //! ([`ScanLines::keep_beyond_reach_over_line`]). Once the outliers are gone, the points
 //! unlike the points of their colour round them go
 //! ([`drop_points_unlike_their_colour`]), and each gap is filled from its two ends
@@ -84,9 +85,29 @@ impl ScanLines {
     /// Keeps of the scene beyond the sensor's reach (`beyond`, see `reach.rs`) the pixels
     /// over the top line: what no beam reached there is the far skyline; below the line it
     /// is a face between returns, a hole.
-    pub(crate) fn keep_beyond_reach_over_line(&self, beyond: &mut Vec<usize>) {
+    ///
+    /// When the image or a mask has found the sky (`sky_seen`), so that what is left over the line
+    /// is the scene, and the top beam's row is known ([`top_beam`]), a column whose line
+    /// reaches the beam met a surface there, which goes on up (a street's trees and
+    /// houses): over it lies no scene beyond the reach but a hole, filled from below. The
+    /// scene beyond the reach is kept over columns whose line lies under the beam, where
+    /// the upper beams met nothing, by the majority of the columns round each
+    /// ([`BEAM_COLUMNS_FRACTION`]), so that a gap in a tree's crown leaves no strip.
+    pub(crate) fn keep_beyond_reach_over_line(&self, beyond: &mut Vec<usize>, sky_seen: bool) {
         let w = self.top_line.len();
-        beyond.retain(|&p| p / w < self.top_line[p % w]);
+        let h = self.gaps.len() / w;
+        let beam = sky_seen.then(|| top_beam(&self.own_top, h)).flatten();
+        let under_beam = match beam {
+            Some(beam) => {
+                let margin = max_gap(h) as f64;
+                let met_nothing: Vec<bool> = (0..w)
+                    .map(|x| self.top_line[x] as f64 >= beam[x] + margin)
+                    .collect();
+                majority_round(&met_nothing, ((w as f64) * BEAM_COLUMNS_FRACTION) as usize)
+            }
+            None => vec![true; w],
+        };
+        beyond.retain(|&p| p / w < self.top_line[p % w] && under_beam[p % w]);
     }
 }
 
@@ -167,6 +188,138 @@ fn walk_gaps(
         }
     }
     (in_gaps, below_first, known)
+}
+
+/// The top beam is fitted to the topmost known row of this many bins across the width.
+const BEAM_BINS: usize = 24;
+/// A bin agrees with the beam's fit within this many rows.
+const BEAM_TOLERANCE_ROWS: f64 = 2.0;
+/// The beam's row is known when at least this share of the bins agree with its fit, the
+/// first and the last quarter of the width among them: along a street the top beam meets
+/// trees, houses and vans across most of the width (a real KITTI frame: 18 and 16 bins of
+/// 24, its two cameras), in an open scene a few near towers, and a fit through them and
+/// the boxes' tops below the beam agrees with fewer (brume's scene, 11 in view 2).
+const BEAM_AGREEING_SHARE: f64 = 0.6;
+/// Whether the upper beams met nothing over a column is the majority's of the columns
+/// within this fraction of the width of it.
+const BEAM_COLUMNS_FRACTION: f64 = 1.0 / 32.0;
+
+/// The row of the scanner's top beam in each column: a quadratic in the column (the
+/// beam's cone seen by the camera, tilted as the scanner is mounted: on a real KITTI frame
+/// row 145 at the left, 122 at the right) fitted to the topmost known row of each of
+/// [`BEAM_BINS`] bins across the width. A bin whose columns met nothing in the top beam
+/// lies lower, so the fit is made again on the bins on or over it until none drops out.
+/// `None` where too few bins agree ([`BEAM_AGREEING_SHARE`]): no surface within the reach
+/// rose into the top beam across enough of the image to tell its row.
+fn top_beam(own_top: &[usize], h: usize) -> Option<Vec<f64>> {
+    let w = own_top.len();
+    let bins: Vec<(f64, f64)> = (0..BEAM_BINS)
+        .filter_map(|b| {
+            let columns = b * w / BEAM_BINS..(b + 1) * w / BEAM_BINS;
+            let x = columns
+                .filter(|&x| own_top[x] < h)
+                .min_by_key(|&x| own_top[x])?;
+            Some((x as f64, own_top[x] as f64))
+        })
+        .collect();
+    let mut kept = bins.clone();
+    let fit = loop {
+        let fit = quadratic_fit(&kept)?;
+        let on_or_over: Vec<(f64, f64)> = bins
+            .iter()
+            .copied()
+            .filter(|&(x, y)| y <= fit(x) + BEAM_TOLERANCE_ROWS)
+            .collect();
+        if on_or_over.len() == kept.len() {
+            break fit;
+        }
+        kept = on_or_over;
+    };
+    let agreeing: Vec<f64> = bins
+        .iter()
+        .filter(|&&(x, y)| (y - fit(x)).abs() <= BEAM_TOLERANCE_ROWS)
+        .map(|&(x, _)| x)
+        .collect();
+    let quarter = w as f64 / 4.0;
+    let spread = agreeing.first().is_some_and(|&x| x < quarter)
+        && agreeing.last().is_some_and(|&x| x >= 3.0 * quarter);
+    let enough = agreeing.len() as f64 >= BEAM_AGREEING_SHARE * BEAM_BINS as f64;
+    (spread && enough).then(|| (0..w).map(|x| fit(x as f64)).collect())
+}
+
+/// The least-squares quadratic through `points` (x, y), as a function of x; `None` for
+/// fewer than three points or points that do not fix one.
+fn quadratic_fit(points: &[(f64, f64)]) -> Option<impl Fn(f64) -> f64> {
+    if points.len() < 3 {
+        return None;
+    }
+    // x centred and scaled to about [-1, 1], for the normal equations' conditioning.
+    let n = points.len() as f64;
+    let mid = points.iter().map(|p| p.0).sum::<f64>() / n;
+    let half = points
+        .iter()
+        .map(|p| (p.0 - mid).abs())
+        .fold(0.0, f64::max)
+        .max(1.0);
+    let t = move |x: f64| (x - mid) / half;
+    let mut a = [[0.0f64; 4]; 3];
+    for &(x, y) in points {
+        let powers = [1.0, t(x), t(x) * t(x)];
+        for (row, &pi) in a.iter_mut().zip(&powers) {
+            for (cell, &pj) in row.iter_mut().zip(&powers) {
+                *cell += pi * pj;
+            }
+            row[3] += pi * y;
+        }
+    }
+    let c = solve3(a)?;
+    Some(move |x: f64| c[0] + c[1] * t(x) + c[2] * t(x) * t(x))
+}
+
+/// The solution of three linear equations (each row: three coefficients and the right
+/// side), by Gaussian elimination with partial pivoting; `None` when they are singular.
+fn solve3(mut a: [[f64; 4]; 3]) -> Option<[f64; 3]> {
+    for col in 0..3 {
+        let pivot = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[pivot][col].abs() < 1e-12 {
+            return None;
+        }
+        a.swap(col, pivot);
+        let pivot_row = a[col];
+        for row in a.iter_mut().skip(col + 1) {
+            let f = row[col] / pivot_row[col];
+            for (cell, &p) in row.iter_mut().zip(&pivot_row).skip(col) {
+                *cell -= f * p;
+            }
+        }
+    }
+    let mut c = [0.0; 3];
+    for row in (0..3).rev() {
+        let rest: f64 = (row + 1..3).map(|k| a[row][k] * c[k]).sum();
+        c[row] = (a[row][3] - rest) / a[row][row];
+    }
+    Some(c)
+}
+
+/// Each entry of `flags` replaced by the majority of those within `reach` of it (itself
+/// included; a tie keeps it).
+fn majority_round(flags: &[bool], reach: usize) -> Vec<bool> {
+    let n = flags.len();
+    let mut count = vec![0usize; n + 1];
+    for (i, &f) in flags.iter().enumerate() {
+        count[i + 1] = count[i] + usize::from(f);
+    }
+    (0..n)
+        .map(|i| {
+            let (lo, hi) = (i.saturating_sub(reach), (i + reach + 1).min(n));
+            let set = count[hi] - count[lo];
+            match (2 * set).cmp(&(hi - lo)) {
+                std::cmp::Ordering::Greater => true,
+                std::cmp::Ordering::Less => false,
+                std::cmp::Ordering::Equal => flags[i],
+            }
+        })
+        .collect()
 }
 
 /// Each column's top line ([`ScanLines::top_line`]) from its topmost known row `top`; `h`
@@ -262,13 +415,18 @@ pub(crate) fn fill_gaps(
         let (x, top, end) = (run.x, run.top, run.end);
         let (above, below) = ((top - 1) * w + x, end * w + x);
         let column = (top..end).map(|r| r * w + x);
-        let measured = |v: f32| v.is_finite() && v > 0.0;
         if column.clone().any(|p| sky[p]) || !(measured(work[above]) && measured(work[below])) {
             continue;
         }
         filled += fill_one(work, (above, below), column, guide);
     }
     filled
+}
+
+/// Whether `v` is a measured range (neither unknown, nor the scene beyond the reach, nor
+/// the sky).
+fn measured(v: f32) -> bool {
+    v.is_finite() && v > 0.0
 }
 
 /// Fills the unknown pixels between two known dots of a line along its row, no more than
@@ -282,7 +440,6 @@ fn join_dots(
     (w, h): (usize, usize),
 ) -> usize {
     let longest = 2 * dot_reach(w);
-    let measured = |v: f32| v.is_finite() && v > 0.0;
     let mut filled = 0;
     for y in 0..h {
         let row = y * w..(y + 1) * w;

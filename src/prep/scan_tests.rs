@@ -185,8 +185,72 @@ fn beyond_the_reach_is_over_the_top_line() {
         .collect();
     let lines = find_lines(&map, (w, h)).expect("scanned");
     let mut beyond: Vec<usize> = (0..w * h).filter(|&p| map[p].is_nan()).collect();
-    lines.keep_beyond_reach_over_line(&mut beyond);
+    lines.keep_beyond_reach_over_line(&mut beyond, false);
     assert_eq!(beyond, (0..12 * w).collect::<Vec<_>>());
     let closed = lines.closed(&map);
     assert!((0..w * h).all(|p| closed[p].is_nan() == (p / w < 12)));
+}
+
+/// A scan along a street: walls on both sides reach the scanner's top beam, tilted (row 8
+/// at the left, 11 at the right); the middle third, open, returns from row 24 down.
+fn street(w: usize, h: usize, open: std::ops::Range<usize>) -> Vec<f32> {
+    (0..w * h)
+        .map(|p| {
+            let (x, y) = (p % w, p / w);
+            let top = if open.contains(&x) { 24 } else { 8 + x / 32 };
+            match y >= top && (y - top).is_multiple_of(4) {
+                true => 10.0,
+                false => f32::NAN,
+            }
+        })
+        .collect()
+}
+
+/// Over the top beam only the open part, which the upper beams swept and met nothing
+/// in, is beyond the reach; over the walls, which go on up, lie holes. Without the image's
+/// sky (whose pixels would then be among them), or with the beam met in too few columns
+/// to tell its row, everything over the line stays beyond the reach.
+#[test]
+fn over_the_top_beam_only_what_met_nothing_is_beyond_the_reach() {
+    let (w, h) = (96, 40);
+    let over_line = |lines: &ScanLines| -> Vec<usize> {
+        (0..w * h)
+            .filter(|&p| p / w < lines.top_line[p % w])
+            .collect()
+    };
+    let map = street(w, h, 32..64);
+    let lines = find_lines(&map, (w, h)).expect("scanned");
+    let mut beyond = over_line(&lines);
+    lines.keep_beyond_reach_over_line(&mut beyond, true);
+    // The open part less the line's reach into it (the walls' top line) on each side.
+    let want: Vec<usize> = (0..w * h)
+        .filter(|&p| (36..60).contains(&(p % w)) && p / w < 24)
+        .collect();
+    assert_eq!(beyond, want);
+
+    let mut without_sky = over_line(&lines);
+    lines.keep_beyond_reach_over_line(&mut without_sky, false);
+    assert_eq!(without_sky, over_line(&lines));
+
+    // Walls over a third of the width only: the beam's row is not told.
+    let map = street(w, h, 32..96);
+    let lines = find_lines(&map, (w, h)).expect("scanned");
+    let mut beyond = over_line(&lines);
+    lines.keep_beyond_reach_over_line(&mut beyond, true);
+    assert_eq!(beyond, over_line(&lines));
+}
+
+/// The least-squares quadratic recovers one from exact points, and refuses too few.
+#[test]
+fn a_quadratic_is_fitted_through_its_points() {
+    let q = |x: f64| 145.0 - 0.02 * x + 1e-5 * x * x;
+    let points: Vec<(f64, f64)> = (0..24)
+        .map(|b| (b as f64 * 50.0, q(b as f64 * 50.0)))
+        .collect();
+    let fit = quadratic_fit(&points).expect("fitted");
+    for x in [0.0, 333.0, 1241.0] {
+        assert!((fit(x) - q(x)).abs() < 1e-9, "{x}: {} for {}", fit(x), q(x));
+    }
+    assert!(quadratic_fit(&points[..2]).is_none());
+    assert!(quadratic_fit(&[(5.0, 1.0); 4]).is_none());
 }
