@@ -14,9 +14,9 @@
 //! line ([`on_lines`]), and a line's dots are joined along the row ([`join_dots`]) before
 //! the gaps down the columns are filled. The depth rules read every unknown pixel below
 //! the top line as known ([`ScanLines::closed`]); the scene beyond the reach is only what
-//! lies over it
-//! ([`ScanLines::keep_beyond_reach_over_line`]). Once the outliers are gone, the points
-//! unlike the points of their colour round them go
+//! lies over it, and over the columns whose line reaches the scanner's top beam not even
+//! that ([`ScanLines::keep_beyond_reach_over_line`]). Once the outliers are gone, the
+//! points unlike the points of their colour round them go
 //! ([`drop_points_unlike_their_colour`]), and each gap is filled from its two ends
 //! ([`fill_gaps`]): linearly in 1/R (a plane of the scene is affine in inverse depth)
 //! where they are of one surface or the image shows no edge between them, else each end
@@ -86,12 +86,12 @@ impl ScanLines {
     /// over the top line: what no beam reached there is the far skyline; below the line it
     /// is a face between returns, a hole.
     ///
-    /// When the image or a mask has found the sky (`sky_seen`), so that what is left over the line
-    /// is the scene, and the top beam's row is known ([`top_beam`]), a column whose line
-    /// reaches the beam met a surface there, which goes on up (a street's trees and
-    /// houses): over it lies no scene beyond the reach but a hole, filled from below. The
-    /// scene beyond the reach is kept over columns whose line lies under the beam, where
-    /// the upper beams met nothing, by the majority of the columns round each
+    /// When the image or a mask has found the sky (`sky_seen`), so that what is left over
+    /// the line is the scene, and the top beam's row is known ([`top_beam`]), a column
+    /// whose line reaches the beam met a surface there, which goes on up (a street's trees
+    /// and houses): over it lies no scene beyond the reach but a hole, filled from below.
+    /// The scene beyond the reach is kept over columns whose line lies under the beam,
+    /// where the upper beams met nothing, by the majority of the columns round each
     /// ([`BEAM_COLUMNS_FRACTION`]), so that a gap in a tree's crown leaves no strip.
     pub(crate) fn keep_beyond_reach_over_line(&self, beyond: &mut Vec<usize>, sky_seen: bool) {
         let w = self.top_line.len();
@@ -225,7 +225,8 @@ fn top_beam(own_top: &[usize], h: usize) -> Option<Vec<f64>> {
     let mut kept = bins.clone();
     let fit = loop {
         let fit = quadratic_fit(&kept)?;
-        let on_or_over: Vec<(f64, f64)> = bins
+        // Taken from the bins kept so far: the set only shrinks, and the loop ends.
+        let on_or_over: Vec<(f64, f64)> = kept
             .iter()
             .copied()
             .filter(|&(x, y)| y <= fit(x) + BEAM_TOLERANCE_ROWS)
