@@ -54,7 +54,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stereo_refine_eval import (  # noqa: E402
-    add_scene_arguments, cv2, near_edges, print_error_table, run, stats,
+    add_scene_arguments, cv2, near_edges, print_error_table, regions, run, stats,
     tau_from_two_airlights, truth_from_zbuffer)
 
 
@@ -151,14 +151,10 @@ def main():
     above_top = np.degrees(np.arctan((cy - ys) / F)) > a.top + 0.5
     surf = ~sky
     near_edge = near_edges(np.log(np.where(sky, 1e9, z)), 0.05, sky, a.edge_px)
-    masks = {
-        "all": np.ones((H, W), bool),
-        f"near edges ({a.edge_px} px)": near_edge,
-        "sky": sky,
-        "surfaces, not near edges": surf & ~near_edge,
+    masks = regions(near_edge, sky, a.edge_px, {
         "surfaces above the top beam": surf & above_top,
         "background points past an edge": past_edge,
-    }
+    })
 
     # 3. τ per refinement.
     def tau_of(refine):

@@ -78,7 +78,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from stereo_refine_eval import (  # noqa: E402
-    add_scene_arguments, cv2, near_edges, print_error_table, read_pfm, run, stats,
+    add_scene_arguments, cv2, near_edges, print_error_table, read_pfm, regions, run, stats,
     tau_from_two_airlights, truth_from_zbuffer)
 
 MODES = ("none", "guided", "unreliable", "repair")
@@ -328,13 +328,9 @@ def main():
     surf = ~sky
     # Truth edges: log z jumps by more than 0.05, or sky beside a surface.
     near_edge = near_edges(np.log(np.where(sky, 1.0, z)), 0.05, sky, edge_px)
-    masks = {
-        "all": np.ones((H, W), bool),
-        f"near edges ({edge_px} px)": near_edge,
-        "sky": sky,
-        "surfaces, not near edges": surf & ~near_edge,
+    masks = regions(near_edge, sky, edge_px, {
         "surfaces without phone depth": surf & unknown_full,
-    }
+    })
 
     # 3. τ per refinement.
     prep_opts = [] if a.margin is None else ["--margin", a.margin]

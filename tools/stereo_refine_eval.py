@@ -129,6 +129,18 @@ def near_edges(field, jump, sky, edge_px):
     return cv2.dilate(e.astype(np.uint8), np.ones((k, k), np.uint8)) > 0
 
 
+def regions(near_edge, sky, edge_px, extra):
+    """The regions every evaluation on brume's scene reports (all pixels, those within
+    ``edge_px`` of a truth edge, the sky, the surfaces away from edges), then ``extra``."""
+    return {
+        "all": np.ones(sky.shape, bool),
+        f"near edges ({edge_px} px)": near_edge,
+        "sky": sky,
+        "surfaces, not near edges": ~sky & ~near_edge,
+        **extra,
+    }
+
+
 def tau_from_two_airlights(render, path_for):
     """τ (green channel) from two renders without blur, ``render(airlight, out_path)`` with
     airlight 0 and 1: out = τ·J + (1 − τ)·A, so τ = 1 − (out(A=1) − out(A=0)) whatever J."""
@@ -276,15 +288,11 @@ def main():
     band = xs < a.num_disparities if a.view == "left" else xs >= W - a.num_disparities
     band_name = (f"left band x<{a.num_disparities}" if a.view == "left"
                  else f"right band x>={W - a.num_disparities}")
-    masks = {
-        "all": np.ones((H, W), bool),
-        "near edges (5 px)": near_edge,
-        "sky": sky,
-        "surfaces, not near edges": surf & ~near_edge,
+    masks = regions(near_edge, sky, a.edge_px, {
         band_name: band,
         "SGBM good (valid, <=3 px off)": surf & valid & (dd <= 3),
         "SGBM bad (invalid or >3 px off)": surf & ~(valid & (dd <= 3)),
-    }
+    })
 
     # 3. τ per condition.
     def tau_of(depth, refine, tag):
